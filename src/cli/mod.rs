@@ -1,0 +1,45 @@
+//! Command-line interface: argument parsing, progress output and exit codes.
+//!
+//! Exit codes: 0 success, 1 bad input or a run that did not succeed, 2 internal error.
+
+mod simulate;
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+/// Fit and predict human gait with rigid foot-ground contact models.
+#[derive(Debug, Parser)]
+#[command(name = "footfall", version, about)]
+struct Cli {
+    /// Print nothing but errors.
+    #[arg(long, global = true)]
+    quiet: bool,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Simulate the model forward through a phase sequence.
+    Simulate(simulate::Args),
+}
+
+/// Failure classes mapped to exit codes.
+pub enum Failure {
+    /// Bad user input or a run that did not succeed (exit 1).
+    User(anyhow::Error),
+}
+
+pub fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Simulate(args) => simulate::run(args, cli.quiet),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(Failure::User(e)) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(1)
+        }
+    }
+}

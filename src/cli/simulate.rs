@@ -1,0 +1,215 @@
+//! `footfall simulate`: forward simulation through a phase sequence.
+
+use super::Failure;
+use anyhow::{anyhow, Context};
+use footfall::controls::ControlTable;
+use footfall::integrate::IntegratorSettings;
+use footfall::model::gait::COORDINATES;
+use footfall::model::{GaitModel, RowKind};
+use footfall::phases::{InitialState, PhaseSequence};
+use footfall::runfolder::RunFolder;
+use footfall::simulate::{simulate, SimulationResult, SimulationSettings};
+use std::fmt::Write as _;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Arguments of `footfall simulate`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Model file (JSON).
+    #[arg(long, default_value = "models/opensim_subject01.json")]
+    model: PathBuf,
+    /// Foot file (JSON) or a bundled foot name: `ellipse`, `double-circle`.
+    #[arg(long, default_value = "ellipse")]
+    foot: String,
+    /// Phase sequence file (JSON) with the contacts and durations of each phase.
+    #[arg(long)]
+    phase_set: PathBuf,
+    /// Control table (CSV: `time,<control names>`); default: every control at 0.025
+    /// (excitations) or 0 (torques).
+    #[arg(long)]
+    controls: Option<PathBuf>,
+    /// Initial state (JSON: q, qd, optional a); default: the phase file's `initial_state`.
+    #[arg(long)]
+    initial: Option<PathBuf>,
+    /// Output folder.
+    #[arg(long, default_value = "runs/simulate")]
+    out: PathBuf,
+    /// Replace the output folder if it exists.
+    #[arg(long)]
+    overwrite: bool,
+    /// Output grid step (s).
+    #[arg(long, default_value_t = 0.001)]
+    dt: f64,
+    /// Relative and absolute integrator tolerance.
+    #[arg(long, default_value_t = 1e-8)]
+    tol: f64,
+}
+
+/// Resolve a foot argument: a bundled name or a file path.
+pub fn foot_path(arg: &str) -> PathBuf {
+    match arg {
+        "ellipse" => PathBuf::from("models/feet/ellipse.json"),
+        "double-circle" | "double_circle" => PathBuf::from("models/feet/double_circle.json"),
+        other => PathBuf::from(other),
+    }
+}
+
+pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
+    run_inner(args, quiet).map_err(Failure::User)
+}
+
+fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
+    let started = Instant::now();
+    let foot = foot_path(&args.foot);
+    let model = GaitModel::load(&args.model, &foot)?;
+    let seq = PhaseSequence::load(&args.phase_set)?;
+    let sets = seq.resolve(&model, &args.phase_set)?;
+    let init: InitialState = match &args.initial {
+        Some(p) => footfall::model::spec::read_json(p)?,
+        None => seq.initial_state.clone().ok_or_else(|| {
+            anyhow!("{}: no `initial_state` in the phase file and no --initial given", args.phase_set.display())
+        })?,
+    };
+    let src = args.initial.as_ref().unwrap_or(&args.phase_set).display().to_string();
+    let nq = model.nq();
+    for (field, v, n) in [("q", &init.q, nq), ("qd", &init.qd, nq)] {
+        if v.len() != n {
+            return Err(anyhow!("{src}: initial state field '{field}' has {} values, expected {n} ({})", v.len(), COORDINATES.join(", ")));
+        }
+        if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+            return Err(anyhow!("{src}: initial state field '{field}[{i}]' is not finite"));
+        }
+    }
+    let a = match &init.a {
+        Some(a) if a.len() != model.na() => {
+            return Err(anyhow!("{src}: initial state field 'a' has {} values, expected {}", a.len(), model.na()))
+        }
+        Some(a) => a.clone(),
+        None => vec![0.01; model.na()],
+    };
+    let mut x0 = init.q.clone();
+    x0.extend(&init.qd);
+    x0.extend(&a);
+    let controls = match &args.controls {
+        Some(p) => ControlTable::load_csv(p, &model.control_names())?,
+        None => {
+            let v = if model.na() > 0 { 0.025 } else { 0.0 };
+            ControlTable::constant(model.control_names(), vec![v; model.nu()])
+        }
+    };
+    let settings = SimulationSettings {
+        output_step: args.dt,
+        integrator: IntegratorSettings { rtol: args.tol, atol: args.tol, ..Default::default() },
+    };
+    settings.integrator.validate().context("integrator settings")?;
+    if !quiet {
+        eprintln!(
+            "simulating {} phases of '{}' with model '{}' and foot '{}'…",
+            seq.phases.len(),
+            seq.name,
+            model.name,
+            model.foot_name
+        );
+    }
+    let theta = model.theta0();
+    let res = simulate(&model, &seq, &sets, &x0, &controls, &theta, &settings)?;
+    let folder = RunFolder::create(&args.out, args.overwrite)?;
+    folder.write("timeseries.csv", timeseries_csv(&model, &sets, &res).as_bytes())?;
+    let summary = summary_json(&model, &seq, &sets, &res, &args, started.elapsed().as_secs_f64());
+    folder.write("summary.json", serde_json::to_string_pretty(&summary)?.as_bytes())?;
+    let out = folder.commit()?;
+    if !quiet {
+        eprintln!(
+            "done: {} samples, {} CVODES steps, max drift {:.2e} m, max Baumgarte force {:.3} N → {}",
+            res.samples.len(),
+            res.stats.steps,
+            res.max_position_drift(&sets),
+            res.max_baumgarte_force(&sets),
+            out.display()
+        );
+    }
+    Ok(())
+}
+
+fn timeseries_csv(model: &GaitModel, sets: &[footfall::model::ConstraintSet], res: &SimulationResult) -> String {
+    let mut s = String::from("time,phase");
+    for n in model.state_names() {
+        write!(s, ",{n}").ok();
+    }
+    for side in ["r", "l"] {
+        write!(s, ",grf_x_{side},grf_y_{side},cop_x_{side}").ok();
+    }
+    for c in &model.contacts {
+        let n = &c.name;
+        write!(
+            s,
+            ",{n}.normal_force,{n}.tangential_force,{n}.gap,{n}.normal_velocity_error,{n}.tangential_velocity_error,{n}.baumgarte_normal_force,{n}.baumgarte_tangential_force"
+        )
+        .ok();
+    }
+    s.push('\n');
+    let cell = |v: Option<f64>| v.filter(|x| x.is_finite()).map(|x| format!("{x:.9e}")).unwrap_or_default();
+    for smp in &res.samples {
+        write!(s, "{:.6},{}", smp.t, sets[smp.phase].name).ok();
+        for v in &smp.x {
+            write!(s, ",{v:.9e}").ok();
+        }
+        for f in &smp.feet {
+            write!(s, ",{},{},{}", cell(Some(f.fx)), cell(Some(f.fy)), cell(Some(f.cop_x))).ok();
+        }
+        for (ci, _) in model.contacts.iter().enumerate() {
+            let row = |k: RowKind| sets[smp.phase].rows.iter().position(|r| r.contact == ci && r.kind == k);
+            let (rn, rt) = (row(RowKind::Normal), row(RowKind::Tangential));
+            let get = |r: Option<usize>, v: &Vec<f64>| r.map(|r| v[r]);
+            let c = &smp.contact;
+            write!(
+                s,
+                ",{},{},{},{},{},{},{}",
+                cell(get(rn, &c.lambda)),
+                cell(get(rt, &c.lambda)),
+                cell(get(rn, &c.position_error)),
+                cell(get(rn, &c.velocity_error)),
+                cell(get(rt, &c.velocity_error)),
+                cell(get(rn, &c.baumgarte_force)),
+                cell(get(rt, &c.baumgarte_force)),
+            )
+            .ok();
+        }
+        s.push('\n');
+    }
+    s
+}
+
+fn summary_json(
+    model: &GaitModel,
+    seq: &PhaseSequence,
+    sets: &[footfall::model::ConstraintSet],
+    res: &SimulationResult,
+    args: &Args,
+    seconds: f64,
+) -> serde_json::Value {
+    let peak = |side: usize| res.samples.iter().map(|s| s.feet[side].fy).fold(0.0f64, f64::max);
+    let last = res.samples.last().map(|s| s.x.clone()).unwrap_or_default();
+    serde_json::json!({
+        "command": "simulate",
+        "model": model.name,
+        "model_file": args.model,
+        "foot": model.foot_name,
+        "phase_set": seq.name,
+        "phase_file": args.phase_set,
+        "phases": res.phases,
+        "impacts": res.impacts,
+        "samples": res.samples.len(),
+        "output_step_s": args.dt,
+        "integrator_tolerance": args.tol,
+        "integrator_stats": res.stats,
+        "peak_normal_force_n": { "right": peak(0), "left": peak(1) },
+        "max_position_drift_m": res.max_position_drift(sets),
+        "max_velocity_drift_m_s": res.max_velocity_drift(sets),
+        "max_baumgarte_force_n": res.max_baumgarte_force(sets),
+        "final_state": last,
+        "state_names": model.state_names(),
+        "wall_time_s": seconds,
+    })
+}

@@ -1,0 +1,123 @@
+//! Control trajectories for forward simulation: a table of control values at knot times,
+//! interpolated piecewise linearly (held constant outside the table).
+
+use crate::model::ModelError;
+use std::path::Path;
+
+/// Piecewise-linear control table.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ControlTable {
+    /// Control names, in model order.
+    pub names: Vec<String>,
+    /// Knot times (s), strictly increasing.
+    pub times: Vec<f64>,
+    /// `values[k]` = controls at `times[k]`, in model order.
+    pub values: Vec<Vec<f64>>,
+}
+
+impl ControlTable {
+    /// The same controls at all times.
+    pub fn constant(names: Vec<String>, values: Vec<f64>) -> Self {
+        Self { names, times: vec![0.0], values: vec![values] }
+    }
+
+    /// Read a CSV file with a header `time,<control names…>`; columns may come in any order
+    /// but every name in `model_controls` must be present exactly once and no other.
+    pub fn load_csv(path: &Path, model_controls: &[String]) -> Result<Self, ModelError> {
+        let text = std::fs::read_to_string(path).map_err(|source| ModelError::Io { path: path.to_path_buf(), source })?;
+        Self::parse_csv(&text, path, model_controls)
+    }
+
+    /// Parse CSV text (see [`load_csv`](Self::load_csv)).
+    pub fn parse_csv(text: &str, path: &Path, model_controls: &[String]) -> Result<Self, ModelError> {
+        let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty() && !l.starts_with('#'));
+        let (_, header) = lines
+            .next()
+            .ok_or_else(|| ModelError::invalid(path, "header", "the file is empty; expected a header `time,<control names>`"))?;
+        let cols: Vec<&str> = header.split(',').map(str::trim).collect();
+        if cols.first() != Some(&"time") {
+            return Err(ModelError::invalid(path, "header", format!("first column must be `time`, found `{}`", cols[0])));
+        }
+        let mut index = Vec::new();
+        for name in model_controls {
+            let found: Vec<usize> = cols.iter().enumerate().filter(|(_, c)| *c == name).map(|(i, _)| i).collect();
+            match found.len() {
+                1 => index.push(found[0]),
+                0 => {
+                    return Err(ModelError::invalid(
+                        path,
+                        "header",
+                        format!("missing control column `{name}`; the model's controls are: {}", model_controls.join(", ")),
+                    ))
+                }
+                _ => return Err(ModelError::invalid(path, "header", format!("column `{name}` appears twice"))),
+            }
+        }
+        if let Some(extra) = cols[1..].iter().find(|c| !model_controls.iter().any(|m| m == *c)) {
+            return Err(ModelError::invalid(
+                path,
+                "header",
+                format!("unknown column `{extra}`; the model's controls are: {}", model_controls.join(", ")),
+            ));
+        }
+        let mut times = Vec::new();
+        let mut values = Vec::new();
+        for (ln, line) in lines {
+            let row: Vec<&str> = line.split(',').map(str::trim).collect();
+            let field = |c: usize| format!("row at line {}, column `{}`", ln + 1, cols[c]);
+            if row.len() != cols.len() {
+                return Err(ModelError::invalid(
+                    path,
+                    format!("line {}", ln + 1),
+                    format!("has {} values, the header has {}", row.len(), cols.len()),
+                ));
+            }
+            let parse = |c: usize| -> Result<f64, ModelError> {
+                let v: f64 = row[c]
+                    .parse()
+                    .map_err(|_| ModelError::invalid(path, field(c), format!("`{}` is not a number", row[c])))?;
+                if !v.is_finite() {
+                    return Err(ModelError::invalid(path, field(c), "must be finite"));
+                }
+                Ok(v)
+            };
+            let t = parse(0)?;
+            if let Some(&last) = times.last() {
+                if t <= last {
+                    return Err(ModelError::invalid(
+                        path,
+                        field(0),
+                        format!("time {t} does not increase (previous {last}); times must be strictly increasing"),
+                    ));
+                }
+            }
+            times.push(t);
+            values.push(index.iter().map(|&c| parse(c)).collect::<Result<Vec<_>, _>>()?);
+        }
+        if times.is_empty() {
+            return Err(ModelError::invalid(path, "rows", "no data rows after the header"));
+        }
+        Ok(Self { names: model_controls.to_vec(), times, values })
+    }
+
+    /// Controls at time `t` (piecewise linear, constant outside the table).
+    pub fn at(&self, t: f64, out: &mut [f64]) {
+        let k = self.times.partition_point(|&s| s <= t);
+        if k == 0 {
+            out.copy_from_slice(&self.values[0]);
+        } else if k == self.times.len() {
+            out.copy_from_slice(&self.values[k - 1]);
+        } else {
+            let (t0, t1) = (self.times[k - 1], self.times[k]);
+            let w = (t - t0) / (t1 - t0);
+            for (i, o) in out.iter_mut().enumerate() {
+                *o = (1.0 - w) * self.values[k - 1][i] + w * self.values[k][i];
+            }
+        }
+    }
+
+    /// Knot times strictly inside `(t0, t1)`, where the interpolant has kinks.
+    pub fn knots_within(&self, t0: f64, t1: f64) -> Vec<f64> {
+        self.times.iter().copied().filter(|&t| t > t0 && t < t1).collect()
+    }
+}

@@ -1,0 +1,13 @@
+//! footfall: fit and predict human gait with rigid foot-ground contact models.
+//!
+//! Layers (see DESIGN.md): [`model`] (planar multibody dynamics, contact, impacts,
+//! actuators, effects), [`integrate`] (CVODES with forward sensitivities), and on top the
+//! phase sequences, forward simulation and run folders.
+#![warn(missing_docs)]
+
+pub mod controls;
+pub mod integrate;
+pub mod model;
+pub mod phases;
+pub mod runfolder;
+pub mod simulate;

@@ -1,0 +1,9 @@
+//! `footfall` command-line program.
+
+mod cli;
+
+use std::process::ExitCode;
+
+fn main() -> ExitCode {
+    cli::main()
+}

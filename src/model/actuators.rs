@@ -1,0 +1,809 @@
+//! Muscle-torque generators (MTGs), activation dynamics and joint damping
+//! (seed paper "A Quick Turn of Foot", §2, eq. 9–12).
+//!
+//! # Model
+//!
+//! Each leg joint (hip, knee, ankle; both legs share the parameters) is driven by one
+//! flexor and one extensor MTG (seed eq. 9):
+//!
+//! ```text
+//! τ^M = s · τ_o · a · f^A(θ) · f^V(ω)          s = ±1, see MuscleSide::torque_sign
+//! ```
+//!
+//! with first-order activation dynamics in the C2 form of seed eq. 10
+//!
+//! ```text
+//! ȧ = (e − a) / (½ (τ_A + τ_D)),   τ_A = 15 ms, τ_D = 50 ms  (Thelen 2003, via the seed)
+//! ```
+//!
+//! and the net joint torque (seed eq. 11–12)
+//!
+//! ```text
+//! τ_i = τ^MF + τ^ME − β ω_i,   β = η (τ_o^MF + τ_o^ME) / (ω_max^MF + ω_max^ME),  η = 2.0
+//! ```
+//!
+//! The passive parallel element is ignored, as in the seed.
+//!
+//! # Sign conventions (this crate)
+//!
+//! Joint angles are counter-clockwise positive seen from the subject's right, zero in the
+//! neutral standing pose: hip `+` = flexion, knee `+` = extension (knee flexion is
+//! negative), ankle `+` = dorsiflexion.
+//!
+//! Anderson et al. (2007) — and RBDL's `Millard2016TorqueMuscle`, whose reference figures
+//! use Anderson's anatomical convention — measure hip flexion `+`, knee **flexion** `+`,
+//! ankle dorsiflexion `+`, all zero in the anatomical neutral pose (thigh in line with
+//! the trunk, knee straight, foot perpendicular to the shank). Hence
+//!
+//! ```text
+//! θ_Anderson = s_θ · θ_model,   s_θ = +1 (hip), −1 (knee), +1 (ankle),   offset = 0
+//! ```
+//!
+//! (evidence: RBDL `Millard2016TorqueMuscle.h` "Coordinate Mapping"; Millard, Sreenivasa &
+//! Mombaur 2017 code `wholebodylifter2d_Model.cc::setupTorqueMuscles`, which maps a model
+//! whose hip/ankle angles have the opposite sense and whose knee flexion is positive with
+//! angle signs −1/+1/−1 and zero offsets).
+//!
+//! A flexor produces torque in the direction of flexion (hip flexion `+`, knee flexion
+//! `−`, ankle dorsiflexion `+`); an extensor the opposite. "Ankle flexor" means
+//! dorsiflexor (Anderson's "ankle flexion" = dorsiflexion, "ankle extension" = plantar
+//! flexion). The **shortening (concentric) velocity** of an MTG is the joint angular
+//! velocity projected on its torque direction, `ω_s = s · ω`; `f^V` is evaluated at
+//! `ω_s / ω_max`, so the MTG's mechanical power `τ^M ω = τ_o a f^A f^V ω_s` is positive
+//! when it shortens.
+//!
+//! # Smoothness
+//!
+//! All functions of `S: Scalar` are C∞ (no `abs`, `max`, or value branches). The
+//! published curves have kinks; they are replaced by smooth approximations, each marked
+//! `SMOOTHING:` below:
+//! * Anderson's `cos(C2(θ−C3))` becomes negative away from the optimum → smooth positive
+//!   part with width [`ACTIVE_ANGLE_EPS`], and a saturating angle map so the cosine cannot
+//!   become positive again a period later.
+//! * The torque–velocity curve has a slope discontinuity at ω = 0 in Anderson et al. and
+//!   Hill/Katz → blended with [`TV_BLEND_DELTA`]; the concentric and eccentric branches
+//!   are constructed with equal slopes at ω = 0 so the blend only smooths curvature.
+//! * The Hill hyperbola becomes negative (the muscle would push) beyond ω_max → smooth
+//!   positive part with width [`TV_FLOOR_EPS`].
+
+use serde::{Deserialize, Serialize};
+
+use crate::model::scalar::Scalar;
+
+/// Gravitational acceleration used to de-normalise Anderson et al.'s torques
+/// (torque / (body mass · g · height)); 9.81 m/s² as in RBDL `Millard2016TorqueMuscle.cc`
+/// (`const double gravity = 9.81; // Needed for the strength scaling used by Anderson`).
+pub const ANDERSON_GRAVITY: f64 = 9.81;
+
+/// Seed subject (seed §3.1, data of Millard et al. 2017): 35-year-old male, 81.7 kg.
+pub const SEED_SUBJECT_MASS: f64 = 81.7;
+/// Seed subject height, 1.72 m (seed §3.1).
+pub const SEED_SUBJECT_HEIGHT: f64 = 1.72;
+
+/// Damping scale factor η of seed eq. 12 ("We use a value of 2.0 for η").
+pub const SEED_ETA: f64 = 2.0;
+
+/// Normalised joint damping used in the published code of Millard, Sreenivasa & Mombaur
+/// (2017) (`setupJointDamping`: `normDamping = 0.2`, same formula as seed eq. 12; that
+/// model also doubles the strength of the right-side MTGs because one planar limb stands
+/// for two). Kept for comparison only; see `docs/parameters.md`.
+pub const MILLARD2017_CODE_ETA: f64 = 0.2;
+
+/// Activation time constant τ_A = 15 ms (seed eq. 10, citing Thelen 2003).
+pub const TAU_ACTIVATION: f64 = 0.015;
+/// Deactivation time constant τ_D = 50 ms (seed eq. 10, citing Thelen 2003).
+pub const TAU_DEACTIVATION: f64 = 0.050;
+
+/// SMOOTHING: width of the smooth positive part applied to Anderson's cosine
+/// torque–angle curve: `f = ½(c + √(c² + ε²))`, normalised to peak 1. With ε = 0.05 the
+/// curve is 0.025 at Anderson's zero crossing and < 0.0013 once the cosine is below −0.5;
+/// RBDL's C2 Bézier version of the same curve likewise reaches 0 only at 1.05× Anderson's
+/// half-width (`createAnderson2007ActiveTorqueAngleCurve`).
+pub const ACTIVE_ANGLE_EPS: f64 = 0.05;
+
+/// SMOOTHING: half-width (in units of ω/ω_max) of the blend between the concentric and
+/// eccentric branches of f^V at ω = 0.
+pub const TV_BLEND_DELTA: f64 = 0.05;
+
+/// SMOOTHING: width of the smooth positive part that keeps f^V ≥ 0 (a muscle cannot push)
+/// beyond the maximum shortening velocity; f^V(ω_max) ≈ TV_FLOOR_EPS/2 instead of 0.
+pub const TV_FLOOR_EPS: f64 = 0.02;
+
+/// Cap on the torque–velocity value at half the maximum shortening velocity applied by
+/// RBDL (`createAnderson2007ActiveTorqueVelocityCurve`: `tvMid = min(tvMid, 0.45)`);
+/// Anderson's hip curves are almost linear (0.48–0.49) which a Hill hyperbola through
+/// (0,1) and (ω_max,0) can only reach with an extremely flat curvature.
+pub const TV_HALF_CAP: f64 = 0.45;
+
+/// A leg joint.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Joint {
+    /// Hip (pelvis–thigh).
+    Hip,
+    /// Knee (thigh–shank).
+    Knee,
+    /// Ankle (shank–foot).
+    Ankle,
+}
+
+impl Joint {
+    /// All leg joints, proximal to distal.
+    pub const ALL: [Joint; 3] = [Joint::Hip, Joint::Knee, Joint::Ankle];
+
+    /// `s_θ` in `θ_Anderson = s_θ · θ_model`: +1 hip (flexion +), −1 knee (Anderson's
+    /// knee flexion is +, ours is −), +1 ankle (dorsiflexion + in both). Equal to the sign
+    /// of the flexion (dorsiflexion) direction in model coordinates.
+    pub fn anatomical_angle_sign(self) -> f64 {
+        match self {
+            Joint::Hip => 1.0,
+            Joint::Knee => -1.0,
+            Joint::Ankle => 1.0,
+        }
+    }
+
+    /// snake_case name.
+    pub fn name(self) -> &'static str {
+        match self {
+            Joint::Hip => "hip",
+            Joint::Knee => "knee",
+            Joint::Ankle => "ankle",
+        }
+    }
+}
+
+/// Which muscle group of a joint an MTG lumps.
+///
+/// Torque direction in model coordinates ([`MuscleSide::torque_sign`]):
+///
+/// | joint | flexor                 | extensor                  |
+/// |-------|------------------------|---------------------------|
+/// | hip   | + (hip flexion)        | − (hip extension)         |
+/// | knee  | − (knee flexion)       | + (knee extension)        |
+/// | ankle | + (dorsiflexion)       | − (plantar flexion)       |
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum MuscleSide {
+    /// Hip flexors, knee flexors, ankle dorsiflexors.
+    Flexor,
+    /// Hip extensors, knee extensors, ankle plantar flexors.
+    Extensor,
+}
+
+impl MuscleSide {
+    /// Sign of the torque this MTG applies to `joint` in model coordinates (table above).
+    pub fn torque_sign(self, joint: Joint) -> f64 {
+        match self {
+            MuscleSide::Flexor => joint.anatomical_angle_sign(),
+            MuscleSide::Extensor => -joint.anatomical_angle_sign(),
+        }
+    }
+
+    /// snake_case name.
+    pub fn name(self) -> &'static str {
+        match self {
+            MuscleSide::Flexor => "flexor",
+            MuscleSide::Extensor => "extensor",
+        }
+    }
+}
+
+/// Shape of the normalised active torque–angle curve f^A (peak 1 at
+/// [`MtgParams::optimal_angle`]).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "shape", rename_all = "snake_case")]
+pub enum ActiveTorqueAngle {
+    /// Anderson et al. (2007): `cos(C2 (θ_A − C3))`; `angle_scale` = C2 [1/rad]. The
+    /// curve nominally reaches zero at `optimal_angle ± π/(2 C2)`.
+    /// SMOOTHING: smooth positive part (see [`ACTIVE_ANGLE_EPS`]).
+    Anderson2007Cosine {
+        /// C2 [1/rad].
+        angle_scale: f64,
+    },
+    /// Gaussian `exp(−(θ − θ_opt)² / (2 σ²))`, `std_dev` = σ [rad], as used for the
+    /// whole-body gymnast MTGs of Millard et al. (2019) / RBDL
+    /// (`createGaussianShapedActiveTorqueAngleCurve`). Already smooth and positive.
+    Gaussian {
+        /// σ [rad].
+        std_dev: f64,
+    },
+}
+
+/// Parameters of one muscle-torque generator.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct MtgParams {
+    /// Joint the MTG spans.
+    pub joint: Joint,
+    /// Flexor or extensor group.
+    pub side: MuscleSide,
+    /// Maximum active isometric torque τ_o^M [N·m] (positive magnitude).
+    pub max_isometric_torque: f64,
+    /// Maximum shortening angular velocity ω_max [rad/s] (positive magnitude): f^V ≈ 0
+    /// when the joint moves at ω_max in this MTG's torque direction.
+    pub omega_max: f64,
+    /// Joint angle of peak active torque, model convention [rad].
+    pub optimal_angle: f64,
+    /// Active torque–angle curve shape.
+    pub active_curve: ActiveTorqueAngle,
+    /// f^V at half the maximum shortening velocity (sets the Hill curvature); in (0, 0.5).
+    pub tv_at_half_omega_max: f64,
+    /// f^V at a lengthening velocity of ω_max (eccentric plateau level); in (1, 2).
+    pub tv_max_eccentric: f64,
+}
+
+impl MtgParams {
+    /// Torque direction in model coordinates (±1); see [`MuscleSide::torque_sign`].
+    pub fn torque_sign(&self) -> f64 {
+        self.side.torque_sign(self.joint)
+    }
+
+    /// Shortening (concentric, > 0) velocity of this MTG for joint velocity `omega`.
+    pub fn shortening_velocity<S: Scalar>(&self, omega: S) -> S {
+        omega * self.torque_sign()
+    }
+
+    /// Check the parameter ranges the curves need.
+    pub fn validate(&self) -> Result<(), String> {
+        let tag = format!("{} {}", self.joint.name(), self.side.name());
+        let finite_pos = |v: f64, what: &str| -> Result<(), String> {
+            if v.is_finite() && v > 0.0 {
+                Ok(())
+            } else {
+                Err(format!("{tag}: {what} must be finite and > 0, got {v}"))
+            }
+        };
+        finite_pos(self.max_isometric_torque, "max_isometric_torque")?;
+        finite_pos(self.omega_max, "omega_max")?;
+        if !self.optimal_angle.is_finite() {
+            return Err(format!("{tag}: optimal_angle must be finite"));
+        }
+        match self.active_curve {
+            ActiveTorqueAngle::Anderson2007Cosine { angle_scale } => {
+                finite_pos(angle_scale, "angle_scale (C2)")?
+            }
+            ActiveTorqueAngle::Gaussian { std_dev } => finite_pos(std_dev, "std_dev")?,
+        }
+        let tv = self.tv_at_half_omega_max;
+        if !(tv.is_finite() && tv > 0.0 && tv < 0.5) {
+            return Err(format!(
+                "{tag}: tv_at_half_omega_max must lie in (0, 0.5), got {tv}"
+            ));
+        }
+        let te = self.tv_max_eccentric;
+        if !(te.is_finite() && te > 1.0 && te < 2.0) {
+            return Err(format!(
+                "{tag}: tv_max_eccentric must lie in (1, 2), got {te}"
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Anderson et al. (2007) Table 3 coefficients of one exertion (joint, direction).
+///
+/// Model (Anderson et al. 2007; the form is also documented in RBDL
+/// `TorqueMuscleFunctionFactory.cc`):
+///
+/// ```text
+/// T/(m g h) = C1 · cos(C2 (θ − C3)) · [2C4C5 + ω(C5 − 3C4)] / [2C4C5 + ω(2C5 − 4C4)]      ω ≥ 0
+/// T/(m g h) = C1 · cos(C2 (θ − C3)) · (1 − C6 ω) [2C4C5 − ω(C5 − 3C4)] / [2C4C5 − ω(2C5 − 4C4)]   ω < 0
+/// ```
+///
+/// θ in rad (Anderson's anatomical convention), ω in rad/s (+ = concentric). C1 is the
+/// peak isometric torque normalised by body weight × height; the concentric factor is the
+/// rectangular hyperbola through (0, 1), (C4, 0.75) and (C5, 0.5).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct Anderson2007Coefficients {
+    /// Peak isometric torque / (body mass · g · height) [–].
+    pub c1: f64,
+    /// Angle scale of the cosine [1/rad].
+    pub c2: f64,
+    /// Angle of peak torque, Anderson convention [rad].
+    pub c3: f64,
+    /// Shortening velocity at 75 % of isometric torque [rad/s].
+    pub c4: f64,
+    /// Shortening velocity at 50 % of isometric torque [rad/s].
+    pub c5: f64,
+    /// Eccentric slope factor [s/rad].
+    pub c6: f64,
+}
+
+impl Anderson2007Coefficients {
+    /// Anderson's concentric torque–velocity factor at shortening velocity `w` [rad/s].
+    pub fn concentric_factor(&self, w: f64) -> f64 {
+        let (c4, c5) = (self.c4, self.c5);
+        (2.0 * c4 * c5 + w * (c5 - 3.0 * c4)) / (2.0 * c4 * c5 + w * (2.0 * c5 - 4.0 * c4))
+    }
+
+    /// ω_max = |2 C4 C5 / (C5 − 3 C4)| [rad/s]: the root of the numerator of Anderson's
+    /// concentric factor. For most exertions this is the shortening velocity at which the
+    /// torque vanishes. For the young-male (and young-female) ankle plantar flexors
+    /// C5 > 3 C4, the hyperbola never reaches zero for ω > 0 (it tends to
+    /// (C5−3C4)/(2C5−4C4) ≈ 0.19) and the root lies at negative ω; like RBDL
+    /// (`omegaMax = abs(2.0*c4*c5/(c5-3.0*c4))`) we use its magnitude.
+    pub fn omega_max(&self) -> f64 {
+        (2.0 * self.c4 * self.c5 / (self.c5 - 3.0 * self.c4)).abs()
+    }
+
+    /// f^V at ω_max/2 from Anderson's concentric factor, capped at [`TV_HALF_CAP`] as in
+    /// RBDL.
+    pub fn tv_at_half_omega_max(&self) -> f64 {
+        self.concentric_factor(0.5 * self.omega_max())
+            .min(TV_HALF_CAP)
+    }
+
+    /// Eccentric plateau level used by RBDL for Anderson's data:
+    /// `tvMaxEcc = 1.1 + 0.2 · C6` (`createAnderson2007ActiveTorqueVelocityCurve`); Anderson's
+    /// own eccentric branch is only valid near ω = 0 (it turns negative for fast
+    /// lengthening).
+    pub fn tv_max_eccentric(&self) -> f64 {
+        1.1 + 0.2 * self.c6
+    }
+
+    /// Build MTG parameters for a subject of `mass` [kg] and `height` [m]:
+    /// `τ_o = C1 · mass · g · height`, optimal angle `s_θ · C3` (model convention).
+    pub fn to_mtg(&self, joint: Joint, side: MuscleSide, mass: f64, height: f64) -> MtgParams {
+        MtgParams {
+            joint,
+            side,
+            max_isometric_torque: self.c1 * mass * ANDERSON_GRAVITY * height,
+            omega_max: self.omega_max(),
+            optimal_angle: joint.anatomical_angle_sign() * self.c3,
+            active_curve: ActiveTorqueAngle::Anderson2007Cosine {
+                angle_scale: self.c2,
+            },
+            tv_at_half_omega_max: self.tv_at_half_omega_max(),
+            tv_max_eccentric: self.tv_max_eccentric(),
+        }
+    }
+}
+
+const fn coeffs(c1: f64, c2: f64, c3: f64, c4: f64, c5: f64, c6: f64) -> Anderson2007Coefficients {
+    Anderson2007Coefficients {
+        c1,
+        c2,
+        c3,
+        c4,
+        c5,
+        c6,
+    }
+}
+
+/// Anderson, Madigan & Nussbaum (2007), J Biomech 40:3105–3113, Table 3, mean
+/// coefficients, **young (18–25) males**. Transcribed from RBDL
+/// `addons/muscle/Millard2016TorqueMuscle.cc` (`Anderson2007Table3Mean`, rows
+/// joint/direction/gender=0/age=0), which states it "is taken from Table 3 of Anderson et
+/// al." The paper itself could not be retrieved through the search tools.
+/// "Flexor" of the ankle = dorsiflexion ("AnkleFlexion"), extensor = plantar flexion.
+pub const ANDERSON2007_YOUNG_MALE: [(Joint, MuscleSide, Anderson2007Coefficients); 6] = [
+    (
+        Joint::Hip,
+        MuscleSide::Extensor,
+        coeffs(0.161, 0.958, 0.932, 1.578, 3.190, 0.242),
+    ),
+    (
+        Joint::Hip,
+        MuscleSide::Flexor,
+        coeffs(0.113, 0.738, -0.214, 2.095, 4.267, 0.218),
+    ),
+    (
+        Joint::Knee,
+        MuscleSide::Extensor,
+        coeffs(0.163, 1.258, 1.133, 1.517, 3.952, 0.095),
+    ),
+    (
+        Joint::Knee,
+        MuscleSide::Flexor,
+        coeffs(0.087, 0.869, 0.522, 2.008, 5.233, 0.304),
+    ),
+    (
+        Joint::Ankle,
+        MuscleSide::Extensor,
+        coeffs(0.095, 1.391, 0.408, 0.987, 3.558, 0.295),
+    ),
+    (
+        Joint::Ankle,
+        MuscleSide::Flexor,
+        coeffs(0.033, 1.510, -0.187, 0.699, 1.940, 0.828),
+    ),
+];
+
+/// As [`ANDERSON2007_YOUNG_MALE`], **young (18–25) females** (same source rows with
+/// gender = 1, age = 0).
+pub const ANDERSON2007_YOUNG_FEMALE: [(Joint, MuscleSide, Anderson2007Coefficients); 6] = [
+    (
+        Joint::Hip,
+        MuscleSide::Extensor,
+        coeffs(0.181, 0.697, 1.242, 1.567, 3.164, 0.164),
+    ),
+    (
+        Joint::Hip,
+        MuscleSide::Flexor,
+        coeffs(0.127, 0.650, -0.350, 2.136, 4.349, 0.156),
+    ),
+    (
+        Joint::Knee,
+        MuscleSide::Extensor,
+        coeffs(0.159, 1.187, 1.274, 1.393, 3.623, 0.173),
+    ),
+    (
+        Joint::Knee,
+        MuscleSide::Flexor,
+        coeffs(0.080, 0.873, 0.635, 1.698, 4.412, 0.175),
+    ),
+    (
+        Joint::Ankle,
+        MuscleSide::Extensor,
+        coeffs(0.104, 1.399, 0.424, 0.862, 3.109, 0.189),
+    ),
+    (
+        Joint::Ankle,
+        MuscleSide::Flexor,
+        coeffs(0.027, 1.079, -0.302, 0.864, 2.399, 0.771),
+    ),
+];
+
+/// Whole-body "gymnast" MTGs of Millard, Emonds, Harant & Mombaur (2019), J Biomech
+/// 89:11–20 (hip and knee from Jackson 2010, ankle from Anderson et al. 2007 scaled by
+/// Jackson-to-Anderson strength ratios), young elite male gymnast 69.6 kg, 1.732 m; not
+/// scaled to the subject. Values: RBDL `Millard2016TorqueMuscle.cc::GymnastWholeBody`
+/// columns (τ_iso [N·m], ω_max [rad/s], angle at peak [rad, Anderson convention], Gaussian
+/// σ [rad], f^V at −ω_max, f^V at ω_max/2); τ_iso and ω_max agree with
+/// `mjhmilla/MillardEmondsHarantMombaur2019FiguresTables/curveTables/mtgNamesParameters.csv`.
+/// Tuple: (joint, side, τ_iso, ω_max, θ_peak, σ, tv_ecc, tv_half).
+pub const MILLARD2019_GYMNAST: [(Joint, MuscleSide, f64, f64, f64, f64, f64, f64); 6] = [
+    (
+        Joint::Hip,
+        MuscleSide::Extensor,
+        175.746,
+        9.02335,
+        1.06465,
+        1.05941,
+        1.1,
+        0.163849,
+    ),
+    (
+        Joint::Hip,
+        MuscleSide::Flexor,
+        157.293,
+        9.18043,
+        0.733038,
+        1.21999,
+        1.11905,
+        0.25,
+    ),
+    (
+        Joint::Knee,
+        MuscleSide::Extensor,
+        285.619,
+        19.2161,
+        0.942478,
+        0.509636,
+        1.13292,
+        0.115304,
+    ),
+    (
+        Joint::Knee,
+        MuscleSide::Flexor,
+        98.7579,
+        16.633,
+        1.02974,
+        1.11003,
+        1.12,
+        0.19746,
+    ),
+    (
+        Joint::Ankle,
+        MuscleSide::Extensor,
+        127.561,
+        11.7646,
+        0.408,
+        0.660752,
+        1.159,
+        0.410591,
+    ),
+    (
+        Joint::Ankle,
+        MuscleSide::Flexor,
+        44.3106,
+        17.2746,
+        -0.187,
+        0.60868,
+        1.2656,
+        0.112303,
+    ),
+];
+
+/// Smooth positive part `½(x + √(x² + ε²))` (C∞; → max(x, 0) as ε → 0).
+#[inline]
+fn smooth_pos<S: Scalar>(x: S, eps: f64) -> S {
+    (x + (x * x + eps * eps).sqrt()) * 0.5
+}
+
+#[inline]
+fn smooth_pos_f64(x: f64, eps: f64) -> f64 {
+    0.5 * (x + (x * x + eps * eps).sqrt())
+}
+
+/// Active torque–angle multiplier f^A(θ) (dimensionless, peak exactly 1 at
+/// `p.optimal_angle`, ≥ 0). `theta` is the joint angle in model convention [rad].
+pub fn active_torque_angle<S: Scalar>(p: &MtgParams, theta: S) -> S {
+    let d = theta - p.optimal_angle;
+    match p.active_curve {
+        ActiveTorqueAngle::Anderson2007Cosine { angle_scale } => {
+            // f^A is even in (θ − θ_opt), so the sign map θ_A = s_θ θ only moves the peak
+            // to s_θ·C3 (done in `to_mtg`).
+            let u = d * angle_scale;
+            // SMOOTHING: saturating angle map σ(u) = u / (1 + (u/π)^6)^(1/6): identity to
+            // 3e-3 rad for |u| ≤ π/2, monotone, |σ| < π, so cos σ stays ≤ 0 beyond the
+            // zero crossing instead of rising again one period later.
+            let r = u * (1.0 / std::f64::consts::PI);
+            let sigma = u * (r.powi(6) + 1.0).powf(-1.0 / 6.0);
+            smooth_pos(sigma.cos(), ACTIVE_ANGLE_EPS)
+                * (1.0 / smooth_pos_f64(1.0, ACTIVE_ANGLE_EPS))
+        }
+        ActiveTorqueAngle::Gaussian { std_dev } => (d * d * (-0.5 / (std_dev * std_dev))).exp(),
+    }
+}
+
+/// Internal constants of the torque–velocity curve of one MTG.
+struct TvShape {
+    /// Hill curvature k: concentric branch (1 − x)·k/(k + x).
+    k: f64,
+    /// Eccentric increment f_ecc − 1.
+    de: f64,
+    /// Eccentric hyperbola constant b: 1 + de·(1 + b)·z/(b + z).
+    b: f64,
+    /// Value of the un-normalised blend at ω = 0.
+    f0: f64,
+}
+
+impl TvShape {
+    fn new(p: &MtgParams) -> Self {
+        let tv = p.tv_at_half_omega_max;
+        // Hill hyperbola through (0,1), (½, tv), (1,0): k = ½ tv / (½ − tv).
+        let k = 0.5 * tv / (0.5 - tv);
+        let slope = 1.0 + 1.0 / k; // |df/dx| at x = 0⁺
+        let de = p.tv_max_eccentric - 1.0;
+        // Eccentric hyperbola with the same slope at 0 (C1 junction like RBDL's curve)
+        // and value f_ecc at x = −1: slope = de (1+b)/b  ⇒  b = de / (slope − de).
+        let b = de / (slope - de);
+        let h = 0.5 * TV_BLEND_DELTA; // smooth_pos(0, δ)
+        let f0 = (1.0 - h) * k / (k + h) + de * (1.0 + b) * h / (b + h);
+        TvShape { k, de, b, f0 }
+    }
+}
+
+/// Torque–angular-velocity multiplier f^V (dimensionless). `omega` is the **joint**
+/// angular velocity in model convention [rad/s]; the curve is evaluated at the MTG's
+/// normalised shortening velocity x = s·ω/ω_max:
+/// * f^V(0) = 1 exactly;
+/// * concentric (x > 0): Hill hyperbola (1 − x)k/(k + x) through f(½) =
+///   `tv_at_half_omega_max`, ≈ 0 at x = 1 (≈ [`TV_FLOOR_EPS`]/2), never negative;
+/// * eccentric (x < 0): hyperbola 1 + (f_ecc − 1)(1 + b)z/(b + z), z = −x, reaching
+///   `tv_max_eccentric` at x = −1 and bounded by 1 + (f_ecc − 1)(1 + b) as x → −∞; its
+///   slope at 0 equals the concentric slope (as in RBDL's curve).
+///
+/// SMOOTHING: the branches are joined by evaluating them at y = ½(x + √(x²+δ²)) and
+/// z = ½(−x + √(x²+δ²)) (δ = [`TV_BLEND_DELTA`]); the sum is floored by a smooth positive
+/// part and normalised to 1 at x = 0.
+pub fn torque_velocity<S: Scalar>(p: &MtgParams, omega: S) -> S {
+    let sh = TvShape::new(p);
+    let x = p.shortening_velocity(omega) * (1.0 / p.omega_max);
+    let root = (x * x + TV_BLEND_DELTA * TV_BLEND_DELTA).sqrt();
+    let y = (root + x) * 0.5; // ≈ max(x, 0)
+    let z = (root - x) * 0.5; // ≈ max(−x, 0)
+    let conc = (-y + 1.0) * sh.k / (y + sh.k);
+    let ecc = z * (sh.de * (1.0 + sh.b)) / (z + sh.b);
+    let f = conc + ecc;
+    smooth_pos(f, TV_FLOOR_EPS) * (1.0 / smooth_pos_f64(sh.f0, TV_FLOOR_EPS))
+}
+
+/// Signed torque of one MTG (seed eq. 9): `s · τ_o · a · f^A(θ) · f^V(ω)` [N·m].
+pub fn mtg_torque<S: Scalar>(p: &MtgParams, a: S, theta: S, omega: S) -> S {
+    a * active_torque_angle(p, theta)
+        * torque_velocity(p, omega)
+        * (p.torque_sign() * p.max_isometric_torque)
+}
+
+/// Joint damping coefficient β of seed eq. 12 [N·m·s/rad]:
+/// `η (τ_o^F + τ_o^E) / (ω_max^F + ω_max^E)`.
+pub fn damping_coefficient(flexor: &MtgParams, extensor: &MtgParams, eta: f64) -> f64 {
+    eta * (flexor.max_isometric_torque + extensor.max_isometric_torque)
+        / (flexor.omega_max + extensor.omega_max)
+}
+
+/// First-order activation dynamics in the C2 form of seed eq. 10.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ActivationDynamics {
+    /// τ_A [s] (seed: 15 ms).
+    pub tau_activation: f64,
+    /// τ_D [s] (seed: 50 ms).
+    pub tau_deactivation: f64,
+}
+
+impl Default for ActivationDynamics {
+    fn default() -> Self {
+        ActivationDynamics {
+            tau_activation: TAU_ACTIVATION,
+            tau_deactivation: TAU_DEACTIVATION,
+        }
+    }
+}
+
+impl ActivationDynamics {
+    /// Effective time constant ½(τ_A + τ_D) [s] (32.5 ms with the seed values).
+    pub fn time_constant(&self) -> f64 {
+        0.5 * (self.tau_activation + self.tau_deactivation)
+    }
+
+    /// ȧ = (e − a) / (½(τ_A + τ_D)) (seed eq. 10).
+    pub fn rate<S: Scalar>(&self, e: S, a: S) -> S {
+        (e - a) * (1.0 / self.time_constant())
+    }
+
+    /// Positive, finite time constants.
+    pub fn validate(&self) -> Result<(), String> {
+        for (v, what) in [
+            (self.tau_activation, "tau_activation"),
+            (self.tau_deactivation, "tau_deactivation"),
+        ] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(format!("{what} must be finite and > 0, got {v}"));
+            }
+        }
+        Ok(())
+    }
+}
+
+/// The six MTGs of one leg (shared by both legs), the damping factor η and the
+/// activation dynamics.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct JointActuatorSet {
+    /// Six MTGs: (hip, knee, ankle) × (flexor, extensor), any order.
+    pub mtgs: Vec<MtgParams>,
+    /// Damping factor η of seed eq. 12.
+    pub eta: f64,
+    /// Activation dynamics shared by all MTGs.
+    pub activation: ActivationDynamics,
+}
+
+impl JointActuatorSet {
+    /// Anderson et al. (2007) young-male MTGs scaled (C1·m·g·h) to the seed subject
+    /// (81.7 kg, 1.72 m), η = 2.0, τ_A = 15 ms, τ_D = 50 ms.
+    pub fn anderson2007_young_male() -> Self {
+        Self::anderson2007_young_male_for(SEED_SUBJECT_MASS, SEED_SUBJECT_HEIGHT)
+    }
+
+    /// Anderson et al. (2007) young-male MTGs for a subject of `mass` [kg], `height` [m].
+    pub fn anderson2007_young_male_for(mass: f64, height: f64) -> Self {
+        Self::from_anderson(&ANDERSON2007_YOUNG_MALE, mass, height)
+    }
+
+    /// Anderson et al. (2007) young-female MTGs for a subject of `mass` [kg], `height` [m].
+    pub fn anderson2007_young_female_for(mass: f64, height: f64) -> Self {
+        Self::from_anderson(&ANDERSON2007_YOUNG_FEMALE, mass, height)
+    }
+
+    fn from_anderson(
+        table: &[(Joint, MuscleSide, Anderson2007Coefficients)],
+        mass: f64,
+        height: f64,
+    ) -> Self {
+        JointActuatorSet {
+            mtgs: table
+                .iter()
+                .map(|(j, s, c)| c.to_mtg(*j, *s, mass, height))
+                .collect(),
+            eta: SEED_ETA,
+            activation: ActivationDynamics::default(),
+        }
+    }
+
+    /// Millard et al. (2019) gymnast MTGs (Jackson 2010 hip/knee, scaled Anderson ankle;
+    /// 69.6 kg, 1.732 m subject, unscaled), η = 2.0, seed activation constants. Angles
+    /// converted with the same sign map as Anderson's.
+    pub fn millard2019_gymnast() -> Self {
+        JointActuatorSet {
+            mtgs: MILLARD2019_GYMNAST
+                .iter()
+                .map(
+                    |&(joint, side, tau, wmax, th, sd, tv_ecc, tv_half)| MtgParams {
+                        joint,
+                        side,
+                        max_isometric_torque: tau,
+                        omega_max: wmax,
+                        optimal_angle: joint.anatomical_angle_sign() * th,
+                        active_curve: ActiveTorqueAngle::Gaussian { std_dev: sd },
+                        tv_at_half_omega_max: tv_half,
+                        tv_max_eccentric: tv_ecc,
+                    },
+                )
+                .collect(),
+            eta: SEED_ETA,
+            activation: ActivationDynamics::default(),
+        }
+    }
+
+    /// Strength scaling: every τ_o multiplied by `factor` (ω_max and curve shapes
+    /// unchanged), so the damping β of eq. 12 scales by `factor` too. Typical factors:
+    /// body-mass ratio m/m_ref for mass-normalised data, or (m·h)/(m_ref·h_ref) to move
+    /// Anderson-based MTGs to another subject (their τ_o ∝ m·g·h).
+    pub fn scaled(&self, factor: f64) -> Self {
+        let mut out = self.clone();
+        for m in &mut out.mtgs {
+            m.max_isometric_torque *= factor;
+        }
+        out
+    }
+
+    /// Six valid MTGs, each (joint, side) exactly once; η ≥ 0 finite; positive time
+    /// constants.
+    pub fn validate(&self) -> Result<(), String> {
+        if self.mtgs.len() != 6 {
+            return Err(format!("expected 6 MTGs, got {}", self.mtgs.len()));
+        }
+        for j in Joint::ALL {
+            for s in [MuscleSide::Flexor, MuscleSide::Extensor] {
+                let n = self
+                    .mtgs
+                    .iter()
+                    .filter(|m| m.joint == j && m.side == s)
+                    .count();
+                if n != 1 {
+                    return Err(format!(
+                        "expected exactly one {} {} MTG, found {n}",
+                        j.name(),
+                        s.name()
+                    ));
+                }
+            }
+        }
+        for m in &self.mtgs {
+            m.validate()?;
+        }
+        if !(self.eta.is_finite() && self.eta >= 0.0) {
+            return Err(format!("eta must be finite and >= 0, got {}", self.eta));
+        }
+        self.activation.validate()
+    }
+
+    /// The MTG of `joint`/`side`, if present.
+    pub fn mtg(&self, joint: Joint, side: MuscleSide) -> Option<&MtgParams> {
+        self.mtgs
+            .iter()
+            .find(|m| m.joint == joint && m.side == side)
+    }
+
+    fn pair(&self, joint: Joint) -> (&MtgParams, &MtgParams) {
+        let f = self
+            .mtg(joint, MuscleSide::Flexor)
+            .unwrap_or_else(|| panic!("no {} flexor MTG (call validate())", joint.name()));
+        let e = self
+            .mtg(joint, MuscleSide::Extensor)
+            .unwrap_or_else(|| panic!("no {} extensor MTG (call validate())", joint.name()));
+        (f, e)
+    }
+
+    /// Damping coefficient β of `joint` (seed eq. 12) [N·m·s/rad].
+    pub fn damping(&self, joint: Joint) -> f64 {
+        let (f, e) = self.pair(joint);
+        damping_coefficient(f, e, self.eta)
+    }
+
+    /// Net torque at one joint (eq. 11): flexor + extensor − β ω, given the two
+    /// activations; `theta`, `omega` in model convention. Panics if the set lacks an MTG
+    /// of `joint` (see [`validate`](Self::validate)).
+    pub fn joint_torque<S: Scalar>(
+        &self,
+        joint: Joint,
+        a_flexor: S,
+        a_extensor: S,
+        theta: S,
+        omega: S,
+    ) -> S {
+        let (f, e) = self.pair(joint);
+        mtg_torque(f, a_flexor, theta, omega) + mtg_torque(e, a_extensor, theta, omega)
+            - omega * damping_coefficient(f, e, self.eta)
+    }
+}

@@ -1,0 +1,69 @@
+//! Errors of model construction and evaluation.
+
+use std::path::PathBuf;
+
+/// Failure to read, validate or assemble a model, foot or phase file.
+#[derive(Debug, thiserror::Error)]
+pub enum ModelError {
+    /// The file could not be read.
+    #[error("cannot read {path}: {source}")]
+    Io {
+        /// File.
+        path: PathBuf,
+        /// Cause.
+        source: std::io::Error,
+    },
+    /// The file is not valid JSON or does not match the schema.
+    #[error("{path}: {message} (line {line}, column {column})")]
+    Json {
+        /// File.
+        path: PathBuf,
+        /// serde's description, naming the field where it can.
+        message: String,
+        /// Line of the problem.
+        line: usize,
+        /// Column of the problem.
+        column: usize,
+    },
+    /// A value is physically or logically invalid.
+    #[error("{path}: field '{field}': {reason}")]
+    Invalid {
+        /// File (or `<memory>`).
+        path: PathBuf,
+        /// Dotted path of the field.
+        field: String,
+        /// What is wrong and what would be valid.
+        reason: String,
+    },
+}
+
+impl ModelError {
+    pub(crate) fn invalid(path: &std::path::Path, field: impl Into<String>, reason: impl Into<String>) -> Self {
+        ModelError::Invalid { path: path.to_path_buf(), field: field.into(), reason: reason.into() }
+    }
+}
+
+/// Failure of one dynamics evaluation.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum DynamicsError {
+    /// The mass matrix is not positive definite (non-physical inertias or state).
+    #[error("mass matrix not positive definite at pivot {pivot}")]
+    MassMatrix {
+        /// Pivot index.
+        pivot: usize,
+    },
+    /// The active constraint rows are linearly dependent: the body is over-constrained.
+    #[error("constraint set '{set}' over-constrains the body (row {row} is dependent on the others)")]
+    OverConstrained {
+        /// Constraint set name.
+        set: String,
+        /// Dependent row.
+        row: usize,
+    },
+    /// A state or input value is not finite.
+    #[error("non-finite {what}")]
+    NonFinite {
+        /// Which input.
+        what: &'static str,
+    },
+}

@@ -1,0 +1,175 @@
+//! Foot contact primitives and their lowest point against a ground plane.
+//!
+//! A primitive is fixed in a body frame (the foot). Against a plane with unit normal
+//! $n$ (world), its *contact point* is the point of the primitive furthest along $-n$.
+//! [`Primitive::contact_offset`] returns the world vector $d(\psi)$ from the primitive's
+//! reference point (its centre) to that point, where $\psi$ is the body's world angle.
+//!
+//! The ellipse has no closed form in the polar angle used by the seed (eq. 3–4): the
+//! polar angle $\phi$ of the lowest point, $p(\phi) = r(\phi)(\cos\phi, \sin\phi)$ with
+//! $r(\phi) = ab/\sqrt{b^2\cos^2\phi + a^2\sin^2\phi}$, is bracketed by sampling, narrowed by
+//! bisection on $h'(\phi)$ and polished by Newton's method to 1e-12 rad in `f64`. Derivative
+//! parts are then obtained by further Newton steps in the generic scalar, which by the
+//! implicit function theorem yield the exact derivatives of the converged root.
+
+use super::multibody::{rotate, V2};
+use super::Scalar;
+use serde::{Deserialize, Serialize};
+
+/// A contact primitive in a body frame. Lengths in metres, angles in radians.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Shape {
+    /// A circle.
+    Circle {
+        /// Centre in the body frame.
+        centre: [f64; 2],
+        /// Radius (> 0).
+        radius: f64,
+    },
+    /// An ellipse.
+    Ellipse {
+        /// Centre in the body frame.
+        centre: [f64; 2],
+        /// Orientation of the first semi-axis relative to the body x axis.
+        angle: f64,
+        /// Semi-axes (a along the rotated x, b along the rotated y), both > 0.
+        semi_axes: [f64; 2],
+    },
+    /// A single point.
+    Point {
+        /// Position in the body frame.
+        position: [f64; 2],
+    },
+}
+
+impl Shape {
+    /// Reference point (centre) in the body frame.
+    pub fn centre(&self) -> [f64; 2] {
+        match *self {
+            Shape::Circle { centre, .. } | Shape::Ellipse { centre, .. } => centre,
+            Shape::Point { position } => position,
+        }
+    }
+
+    /// Check physical validity: positive finite sizes, finite positions.
+    pub fn validate(&self) -> Result<(), String> {
+        let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+        match self {
+            Shape::Circle { centre, radius } => {
+                if !finite(centre) {
+                    return Err("centre must be finite".into());
+                }
+                if !(radius.is_finite() && *radius > 0.0) {
+                    return Err(format!("radius must be a positive number of metres, got {radius}"));
+                }
+            }
+            Shape::Ellipse { centre, angle, semi_axes } => {
+                if !finite(centre) || !angle.is_finite() {
+                    return Err("centre and angle must be finite".into());
+                }
+                if !semi_axes.iter().all(|a| a.is_finite() && *a > 0.0) {
+                    return Err(format!(
+                        "semi_axes must be two positive numbers of metres, got [{}, {}]",
+                        semi_axes[0], semi_axes[1]
+                    ));
+                }
+            }
+            Shape::Point { position } => {
+                if !finite(position) {
+                    return Err("position must be finite".into());
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// World offset from the reference point to the contact point, for body world angle
+    /// `psi` and ground normal `n` (unit, world).
+    pub fn contact_offset<S: Scalar>(&self, psi: S, n: V2<S>) -> V2<S> {
+        match *self {
+            Shape::Point { .. } => [S::c(0.0), S::c(0.0)],
+            Shape::Circle { radius, .. } => [-n[0] * radius, -n[1] * radius],
+            Shape::Ellipse { angle, semi_axes, .. } => {
+                let (a, b) = (semi_axes[0], semi_axes[1]);
+                let ang = psi + angle;
+                let (s, c) = (ang.sin(), ang.cos());
+                // normal in the ellipse frame: Rᵀ n
+                let ne = [c * n[0] + s * n[1], -s * n[0] + c * n[1]];
+                let phi0 = ellipse_lowest_polar_angle(a, b, [ne[0].value(), ne[1].value()]);
+                let mut phi = S::c(phi0);
+                for _ in 0..3 {
+                    let (_, h1, h2) = ellipse_height_derivatives(a, b, ne, phi);
+                    phi -= h1 / h2;
+                }
+                let (p, _, _) = ellipse_point(a, b, phi);
+                rotate(c, s, p)
+            }
+        }
+    }
+}
+
+/// Point on the ellipse at polar angle `phi` and its first two derivatives in `phi`.
+fn ellipse_point<S: Scalar>(a: f64, b: f64, phi: S) -> (V2<S>, V2<S>, V2<S>) {
+    let (s, c) = (phi.sin(), phi.cos());
+    let d = s * s * (a * a) + c * c * (b * b);
+    let two_phi = phi * 2.0;
+    let d1 = two_phi.sin() * (a * a - b * b);
+    let d2 = two_phi.cos() * (2.0 * (a * a - b * b));
+    let ab = a * b;
+    let inv_sqrt = d.sqrt().recip();
+    let r = inv_sqrt * ab;
+    let d32 = inv_sqrt / d; // D^{-3/2}
+    let r1 = -(d32 * d1) * (0.5 * ab);
+    let r2 = (d32 / d * d1 * d1 * 0.75 - d32 * d2 * 0.5) * ab;
+    let p = [r * c, r * s];
+    let p1 = [r1 * c - r * s, r1 * s + r * c];
+    let p2 = [r2 * c - r1 * s * 2.0 - r * c, r2 * s + r1 * c * 2.0 - r * s];
+    (p, p1, p2)
+}
+
+/// Height `h = ne·p(φ)` along the ellipse-frame normal and its derivatives in `φ`.
+fn ellipse_height_derivatives<S: Scalar>(a: f64, b: f64, ne: V2<S>, phi: S) -> (S, S, S) {
+    let (p, p1, p2) = ellipse_point(a, b, phi);
+    (
+        ne[0] * p[0] + ne[1] * p[1],
+        ne[0] * p1[0] + ne[1] * p1[1],
+        ne[0] * p2[0] + ne[1] * p2[1],
+    )
+}
+
+/// Polar angle (in the ellipse frame) of the ellipse point furthest along `-ne`:
+/// sampling bracket, bisection on h'(φ), Newton polish to 1e-12 rad.
+pub fn ellipse_lowest_polar_angle(a: f64, b: f64, ne: [f64; 2]) -> f64 {
+    const SAMPLES: usize = 64;
+    let step = std::f64::consts::TAU / SAMPLES as f64;
+    let height = |phi: f64| ellipse_height_derivatives(a, b, ne, phi).0;
+    let k_min = (0..SAMPLES)
+        .min_by(|&i, &j| height(i as f64 * step).total_cmp(&height(j as f64 * step)))
+        .unwrap_or(0);
+    let mut lo = (k_min as f64 - 1.0) * step;
+    let mut hi = (k_min as f64 + 1.0) * step;
+    let dh = |phi: f64| ellipse_height_derivatives(a, b, ne, phi).1;
+    // bisection on h' (negative left of the minimum, positive right of it)
+    for _ in 0..20 {
+        let mid = 0.5 * (lo + hi);
+        if dh(mid) > 0.0 {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    let mut phi = 0.5 * (lo + hi);
+    for _ in 0..20 {
+        let (_, h1, h2) = ellipse_height_derivatives(a, b, ne, phi);
+        if !(h2 > 0.0) {
+            break;
+        }
+        let dphi = h1 / h2;
+        phi -= dphi;
+        if dphi.abs() < 1e-12 {
+            break;
+        }
+    }
+    phi
+}

@@ -1,0 +1,16 @@
+//! Planar multibody gait model: dynamics, contact, impacts, actuators and effects.
+pub mod actuators;
+pub mod ad;
+pub mod anthropometry;
+pub mod effects;
+pub mod error;
+pub mod gait;
+pub mod geometry;
+pub mod linalg;
+pub mod multibody;
+pub mod scalar;
+pub mod spec;
+
+pub use error::{DynamicsError, ModelError};
+pub use gait::{ConstraintSet, GaitModel, GaitOde, RowKind, Side};
+pub use scalar::Scalar;

@@ -1,0 +1,64 @@
+//! Shared helpers for the integration tests.
+#![allow(dead_code)]
+
+use footfall::model::GaitModel;
+use std::path::{Path, PathBuf};
+
+/// Project root.
+pub fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Load a model file and a foot file from `models/`.
+pub fn model(model: &str, foot: &str) -> GaitModel {
+    let r = root();
+    GaitModel::load(&r.join("models").join(model), &r.join("models/feet").join(foot))
+        .unwrap_or_else(|e| panic!("loading {model} + {foot}: {e}"))
+}
+
+/// Deterministic pseudo-random numbers (xorshift), so tests need no seed handling.
+pub struct Rng(u64);
+impl Rng {
+    pub fn new(seed: u64) -> Self {
+        Self(seed.wrapping_mul(0x9E3779B97F4A7C15) | 1)
+    }
+    /// Uniform in [lo, hi).
+    pub fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
+        self.0 ^= self.0 << 13;
+        self.0 ^= self.0 >> 7;
+        self.0 ^= self.0 << 17;
+        lo + (hi - lo) * ((self.0 >> 11) as f64 / (1u64 << 53) as f64)
+    }
+}
+
+/// Peer problem file with check values.
+pub fn peer_gait_problem() -> serde_json::Value {
+    let p = root().join("../shared/peer_gait/problem/gait_track_ellipse.json");
+    let text = std::fs::read_to_string(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+    serde_json::from_str(&text).expect("peer problem JSON")
+}
+
+/// Whether the shared peer folder exists beside the project (it does in CI and for developers).
+pub fn have_shared() -> bool {
+    root().join("../shared/peer_gait/problem/gait_track_ellipse.json").exists()
+}
+
+/// Vector from a JSON array.
+pub fn vecf(v: &serde_json::Value) -> Vec<f64> {
+    v.as_array().expect("array").iter().map(|x| x.as_f64().expect("number")).collect()
+}
+
+/// Max-norm relative difference with a floor on the scale.
+pub fn rel_diff(a: &[f64], b: &[f64], floor: f64) -> f64 {
+    assert_eq!(a.len(), b.len());
+    let scale = b.iter().map(|x| x.abs()).fold(floor, f64::max);
+    a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max) / scale
+}
+
+pub fn path(p: &str) -> PathBuf {
+    root().join(p)
+}
+
+pub fn exists(p: &Path) -> bool {
+    p.exists()
+}
