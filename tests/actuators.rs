@@ -191,7 +191,11 @@ fn active_torque_angle_peaks_at_one() {
                 for k in [0.1, 0.3, 0.5, 0.8] {
                     let d = k * std::f64::consts::FRAC_PI_2 / angle_scale;
                     let err = (f(p.optimal_angle + d) - (angle_scale * d).cos()).abs();
-                    assert!(err < 2e-3, "{name}: f^A deviates from cos by {err} at {k}");
+                    // smooth-positive-part offset ≈ ε²/(4 cos) dominates: 1.9e-3 at k = 0.8
+                    assert!(
+                        err < 2.5e-3,
+                        "{name}: f^A deviates from cos by {err} at {k}"
+                    );
                 }
                 let z = f(p.optimal_angle + std::f64::consts::FRAC_PI_2 / angle_scale);
                 assert!(z > 0.0 && z < 0.03, "f^A at Anderson's zero crossing: {z}");
@@ -209,7 +213,7 @@ fn torque_velocity_shape() {
             assert!((fv(0.0) - 1.0).abs() < 1e-14, "{name}: f^V(0) != 1");
             let at_max = fv(1.0);
             assert!(
-                at_max >= 0.0 && at_max < 0.02,
+                (0.0..0.02).contains(&at_max),
                 "{name}: f^V(ω_max) = {at_max}"
             );
             assert!(
@@ -369,15 +373,19 @@ fn peak_torques_match_anderson_and_cross_sources() {
     {
         let g = MILLARD2019_GYMNAST
             .iter()
-            .find(|r| r.0 == *j && r.1 == *s)
+            .find(|r| r.joint == *j && r.side == *s)
             .unwrap();
         assert!(
-            (c.omega_max() - g.3).abs() < 1e-4,
+            (c.omega_max() - g.omega_max).abs() < 1e-4,
             "ω_max {} vs {}",
             c.omega_max(),
-            g.3
+            g.omega_max
         );
-        assert!((c.c3 - g.4).abs() < 1e-12);
+        assert!((c.c3 - g.peak_angle_anatomical).abs() < 1e-12);
+        // ... and their f^V parameters follow the same rules as ours:
+        // tv(ω_max/2) from Anderson's hyperbola (capped at 0.45), tv_ecc = 1.1 + 0.2 C6
+        assert!((c.tv_at_half_omega_max() - g.tv_at_half_omega_max).abs() < 1e-4);
+        assert!((c.tv_max_eccentric() - g.tv_max_eccentric).abs() < 1e-9);
     }
     // Independent cross-check 2 (strength normalisation C1·m·g·h): the gymnast ankle
     // torques are Anderson's C1·m·g·h for the 69.6 kg / 1.732 m gymnast times one common
@@ -388,9 +396,9 @@ fn peak_torques_match_anderson_and_cross_sources() {
         .map(|(j, s, c)| {
             let g = MILLARD2019_GYMNAST
                 .iter()
-                .find(|r| r.0 == *j && r.1 == *s)
+                .find(|r| r.joint == *j && r.side == *s)
                 .unwrap();
-            g.2 / (c.c1 * 69.6 * ANDERSON_GRAVITY * 1.732)
+            g.max_isometric_torque / (c.c1 * 69.6 * ANDERSON_GRAVITY * 1.732)
         })
         .collect();
     println!("gymnast/Anderson ankle strength ratios: {ratios:?}");
@@ -636,7 +644,7 @@ fn generic_over_scalar_types() {
         Dual64::c(-0.6),
         Dual64::from_re(1.5).derivative(),
     );
-    assert_eq!(td.re, t64);
+    assert!((td.re - t64).abs() < 1e-12 * t64.abs());
     assert!(td.eps.is_finite());
     let t2 = set.joint_torque(
         Joint::Knee,
@@ -648,4 +656,35 @@ fn generic_over_scalar_types() {
     assert!((t2.re - t64).abs() < 1e-12 && t2.v2.is_finite());
     let _ = Dual64::c(1.0).value();
     let _ = Dual64::c(1.0).sqrt();
+}
+
+#[test]
+fn curves_vs_anderson_original() {
+    // Compare the smooth f^V with Anderson et al.'s own concentric hyperbola (valid there)
+    // and report the eccentric side (Anderson's eccentric branch is replaced, see docs).
+    let set = JointActuatorSet::anderson2007_young_male();
+    println!("\nf^V: ours vs Anderson (x = shortening velocity / ω_max)");
+    println!("joint  side      x=-1.0(ours) x=0.25 ours/And  x=0.5 ours/And  x=0.75 ours/And");
+    for (j, s, c) in ANDERSON2007_YOUNG_MALE.iter() {
+        let p = set.mtg(*j, *s).unwrap();
+        let fv = |x: f64| torque_velocity(p, p.torque_sign() * x * p.omega_max);
+        let an = |x: f64| c.concentric_factor(x * p.omega_max);
+        println!(
+            "{:5}  {:8}  {:.3}        {:.3}/{:.3}    {:.3}/{:.3}    {:.3}/{:.3}",
+            j.name(),
+            s.name(),
+            fv(-1.0),
+            fv(0.25),
+            an(0.25),
+            fv(0.5),
+            an(0.5),
+            fv(0.75),
+            an(0.75)
+        );
+        // where RBDL's cap (0.45) is inactive the concentric branch reproduces Anderson's
+        // hyperbola at ω_max/2 (up to the smoothing)
+        if c.concentric_factor(0.5 * c.omega_max()) < actuators::TV_HALF_CAP {
+            assert!((fv(0.5) - an(0.5)).abs() < 0.005);
+        }
+    }
 }

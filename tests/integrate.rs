@@ -659,6 +659,79 @@ fn fatal_rhs_error_reports_its_time() {
     );
 }
 
+/// ẋ = −x whose Jacobians fail fatally for t > 0.4 (the right-hand side never fails).
+struct JacobianFailsAfter;
+
+impl Ode for JacobianFailsAfter {
+    fn nx(&self) -> usize {
+        1
+    }
+    fn np(&self) -> usize {
+        1
+    }
+    fn rhs(&self, _t: f64, x: &[f64], p: &[f64], xdot: &mut [f64]) -> Result<(), OdeError> {
+        xdot[0] = -p[0] * x[0];
+        Ok(())
+    }
+    fn jacobians(
+        &self,
+        t: f64,
+        x: &[f64],
+        p: &[f64],
+        xdot: &mut [f64],
+        fx: &mut [f64],
+        fp: &mut [f64],
+    ) -> Result<(), OdeError> {
+        if t > 0.4 {
+            return Err(OdeError::Fatal("no Jacobian".into()));
+        }
+        self.rhs(t, x, p, xdot)?;
+        fx[0] = -p[0];
+        fp[0] = -x[0];
+        Ok(())
+    }
+}
+
+#[test]
+fn fatal_jacobian_error_in_sensitivity_rhs_is_reported() {
+    let mut integrator = Integrator::new(1, 1, IntegratorSettings::default()).expect("new");
+    let (mut x1, mut s1) = ([0.0], [0.0; 2]);
+    let err = integrator
+        .integrate_with_sensitivities(
+            &JacobianFailsAfter,
+            0.0,
+            1.0,
+            &[1.0],
+            &[1.0],
+            &mut x1,
+            &mut s1,
+        )
+        .expect_err("must fail");
+    match err {
+        IntegratorError::Rhs { t, source } => {
+            assert!(t > 0.4 && t < 0.6, "t = {t}");
+            assert_eq!(source, OdeError::Fatal("no Jacobian".into()));
+        }
+        other => panic!("expected Rhs, got {other:?}"),
+    }
+}
+
+#[test]
+fn shooting_interval_rejects_wrong_lengths_without_panicking() {
+    let interval = ShootingInterval::new(&Pendulum, ControlShape::Linear);
+    let mut xdot = [0.0; 2];
+    let err = interval
+        .rhs(0.5, &[0.0, 0.0], &[1.0, 2.0], &mut xdot)
+        .expect_err("short p");
+    assert!(matches!(err, OdeError::Fatal(_)), "{err:?}");
+    let (mut fx, mut fp) = ([0.0; 4], [0.0; 6]);
+    let p = [1.0, 2.0, 1.0, 9.0];
+    let err = interval
+        .jacobians(0.5, &[0.0, 0.0], &p, &mut xdot, &mut fx, &mut fp)
+        .expect_err("short fp");
+    assert!(matches!(err, OdeError::Fatal(_)), "{err:?}");
+}
+
 #[test]
 fn panic_in_rhs_becomes_an_error() {
     let mut integrator = Integrator::new(1, 0, IntegratorSettings::default()).expect("new");

@@ -1,4 +1,4 @@
-//! Safe wrapper over SUNDIALS CVODES (version 6) for one ODE dimension.
+//! Safe wrapper over SUNDIALS CVODES (version 6) for ODEs of fixed dimension.
 //!
 //! This module is the only place in the crate that touches `sundials_sys` or uses `unsafe`.
 //! An [`Integrator`] owns every SUNDIALS object it creates (context, CVODES memory, state
@@ -607,6 +607,14 @@ fn check_dim(what: &'static str, expected: usize, found: usize) -> Result<(), In
     }
 }
 
+fn check_interval(t0: f64, t1: f64) -> Result<(), IntegratorError> {
+    if t0.is_finite() && t1.is_finite() && t1 > t0 {
+        Ok(())
+    } else {
+        Err(IntegratorError::BadInterval { t0, t1 })
+    }
+}
+
 // ---------------------------------------------------------------------------------------
 // Integrator
 // ---------------------------------------------------------------------------------------
@@ -883,10 +891,11 @@ impl Integrator {
         Ok(self.stats(true))
     }
 
-    /// States at the strictly increasing output times `times ⊂ [t0, t1]`, from CVODES's
-    /// interpolating polynomial; appends `nx` values per time to `out` (row k = x(times[k])).
+    /// States at the strictly increasing output times `times ⊂ [t0, t1]`.
     ///
-    /// On error `out` is left as it was.
+    /// Values come from CVODES's own interpolating polynomial (one integration, no extra
+    /// steps); `nx` values per time are appended to `out`, row `k` = `x(times[k])`.  On error
+    /// `out` is left as it was.
     #[allow(clippy::too_many_arguments)]
     pub fn integrate_dense(
         &mut self,
@@ -898,6 +907,7 @@ impl Integrator {
         times: &[f64],
         out: &mut Vec<f64>,
     ) -> Result<IntegrationStats, IntegratorError> {
+        check_interval(t0, t1)?;
         let mut previous = f64::NEG_INFINITY;
         for (index, &t) in times.iter().enumerate() {
             // NaN fails every comparison and is rejected here too.
@@ -962,9 +972,7 @@ impl Integrator {
         check_dim("ode.np()", self.np, ode.np())?;
         check_dim("x0", self.nx, x0.len())?;
         check_dim("p", self.np, p.len())?;
-        if !(t0.is_finite() && t1.is_finite() && t1 > t0) {
-            return Err(IntegratorError::BadInterval { t0, t1 });
-        }
+        check_interval(t0, t1)?;
         if !all_finite(x0) || !all_finite(p) {
             return Err(IntegratorError::NonFinite { t: t0 });
         }

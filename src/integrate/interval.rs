@@ -57,10 +57,29 @@ const STACK_NU: usize = 16;
 /// ([`p_u0`](Self::p_u0), [`p_u1`](Self::p_u1), [`p_duration`](Self::p_duration),
 /// [`p_theta`](Self::p_theta)) give the index ranges in `p` and in the sensitivity
 /// columns after the first `nx`.
-#[derive(Debug, Clone, Copy)]
 pub struct ShootingInterval<'a, O: ControlledOde + ?Sized> {
     model: &'a O,
     shape: ControlShape,
+}
+
+// Manual impls: derives would demand `O: Clone`/`O: Debug` although only `&O` is stored.
+impl<O: ControlledOde + ?Sized> Clone for ShootingInterval<'_, O> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+
+impl<O: ControlledOde + ?Sized> Copy for ShootingInterval<'_, O> {}
+
+impl<O: ControlledOde + ?Sized> std::fmt::Debug for ShootingInterval<'_, O> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ShootingInterval")
+            .field("nx", &self.model.nx())
+            .field("nu", &self.model.nu())
+            .field("ntheta", &self.model.ntheta())
+            .field("shape", &self.shape)
+            .finish()
+    }
 }
 
 impl<'a, O: ControlledOde + ?Sized> ShootingInterval<'a, O> {
@@ -153,6 +172,20 @@ impl<'a, O: ControlledOde + ?Sized> ShootingInterval<'a, O> {
         Ok(())
     }
 
+    /// Reject buffers of the wrong length (the [`Ode`] methods must not panic).
+    fn check_lengths(&self, x: &[f64], p: &[f64], xdot: &[f64]) -> Result<(), OdeError> {
+        let (nx, np) = (self.model.nx(), ShootingInterval::np(self));
+        if x.len() != nx || xdot.len() != nx || p.len() != np {
+            return Err(OdeError::Fatal(format!(
+                "shooting interval: expected x, xdot of length {nx} and p of length {np}, got {}, {}, {}",
+                x.len(),
+                xdot.len(),
+                p.len()
+            )));
+        }
+        Ok(())
+    }
+
     /// Call `body` with u(τ): a sub-slice of `p` for constant controls, otherwise the
     /// interpolated value in a stack (or, for large nu, heap) buffer.
     fn with_control<R>(&self, tau: f64, p: &[f64], body: impl FnOnce(&[f64]) -> R) -> R {
@@ -186,7 +219,7 @@ impl<O: ControlledOde + ?Sized> Ode for ShootingInterval<'_, O> {
     }
 
     fn rhs(&self, tau: f64, x: &[f64], p: &[f64], xdot: &mut [f64]) -> Result<(), OdeError> {
-        debug_assert_eq!(p.len(), ShootingInterval::np(self));
+        self.check_lengths(x, p, xdot)?;
         let duration = p[self.p_duration()];
         let theta = &p[self.p_theta()];
         self.with_control(tau, p, |u| self.model.f(x, u, theta, xdot))?;
@@ -204,8 +237,16 @@ impl<O: ControlledOde + ?Sized> Ode for ShootingInterval<'_, O> {
         fp: &mut [f64],
     ) -> Result<(), OdeError> {
         let nx = self.model.nx();
-        debug_assert_eq!(p.len(), ShootingInterval::np(self));
-        debug_assert_eq!(fp.len(), nx * ShootingInterval::np(self));
+        self.check_lengths(x, p, xdot)?;
+        if fx.len() != nx * nx || fp.len() != nx * p.len() {
+            return Err(OdeError::Fatal(format!(
+                "shooting interval: expected fx of length {} and fp of length {}, got {}, {}",
+                nx * nx,
+                nx * p.len(),
+                fx.len(),
+                fp.len()
+            )));
+        }
         let duration = p[self.p_duration()];
         let theta = &p[self.p_theta()];
         let cols = |r: Range<usize>| nx * r.start..nx * r.end;

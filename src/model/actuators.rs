@@ -61,8 +61,9 @@
 //!   part with width [`ACTIVE_ANGLE_EPS`], and a saturating angle map so the cosine cannot
 //!   become positive again a period later.
 //! * The torque–velocity curve has a slope discontinuity at ω = 0 in Anderson et al. and
-//!   Hill/Katz → blended with [`TV_BLEND_DELTA`]; the concentric and eccentric branches
-//!   are constructed with equal slopes at ω = 0 so the blend only smooths curvature.
+//!   Hill/Katz → blended over a width set by [`TV_BLEND_REL`]; the concentric and
+//!   eccentric branches are constructed with equal slopes at ω = 0 so the blend only
+//!   smooths curvature.
 //! * The Hill hyperbola becomes negative (the muscle would push) beyond ω_max → smooth
 //!   positive part with width [`TV_FLOOR_EPS`].
 
@@ -81,6 +82,12 @@ pub const SEED_SUBJECT_MASS: f64 = 81.7;
 pub const SEED_SUBJECT_HEIGHT: f64 = 1.72;
 
 /// Damping scale factor η of seed eq. 12 ("We use a value of 2.0 for η").
+///
+/// Note: with any published MTG set found (Anderson 2007 scaled to the seed subject:
+/// hip 49.1, knee 14.8, ankle 12.2 N·m·s/rad; Millard 2019 gymnast: 36.6, 21.4, 11.8)
+/// η = 2.0 does **not** give the seed's stated 2.7–7.3 N·m·s/rad; η = 0.4
+/// (= 2 × [`MILLARD2017_CODE_ETA`]) with the gymnast set gives 2.37–7.32. See
+/// `docs/parameters.md` §7.
 pub const SEED_ETA: f64 = 2.0;
 
 /// Normalised joint damping used in the published code of Millard, Sreenivasa & Mombaur
@@ -101,9 +108,13 @@ pub const TAU_DEACTIVATION: f64 = 0.050;
 /// half-width (`createAnderson2007ActiveTorqueAngleCurve`).
 pub const ACTIVE_ANGLE_EPS: f64 = 0.05;
 
-/// SMOOTHING: half-width (in units of ω/ω_max) of the blend between the concentric and
-/// eccentric branches of f^V at ω = 0.
-pub const TV_BLEND_DELTA: f64 = 0.05;
+/// SMOOTHING: blend width between the concentric and eccentric branches of f^V at ω = 0,
+/// relative to the branches' own curvature scales: δ = `TV_BLEND_REL` · min(k, b, 1) in
+/// units of ω/ω_max (k: Hill curvature, b: eccentric hyperbola constant; see
+/// [`torque_velocity`]). Because both branches have the same slope at ω = 0 the blend only
+/// interpolates the curvature; the value at ω = 0 moves by ≈ s δ²/4·|1/k − 1/b| ≤ 0.1 %
+/// before the exact renormalisation to 1.
+pub const TV_BLEND_REL: f64 = 0.2;
 
 /// SMOOTHING: width of the smooth positive part that keeps f^V ≥ 0 (a muscle cannot push)
 /// beyond the maximum shortening velocity; f^V(ω_max) ≈ TV_FLOOR_EPS/2 instead of 0.
@@ -443,16 +454,59 @@ pub const ANDERSON2007_YOUNG_FEMALE: [(Joint, MuscleSide, Anderson2007Coefficien
     ),
 ];
 
+/// One row of the Millard et al. (2019) gymnast MTG table (see [`MILLARD2019_GYMNAST`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GymnastMtgRow {
+    /// Joint.
+    pub joint: Joint,
+    /// Flexor / extensor.
+    pub side: MuscleSide,
+    /// Maximum active isometric torque [N·m].
+    pub max_isometric_torque: f64,
+    /// Maximum shortening velocity [rad/s].
+    pub omega_max: f64,
+    /// Angle of peak active torque, Anderson/RBDL-figure convention [rad].
+    pub peak_angle_anatomical: f64,
+    /// Standard deviation of the Gaussian torque–angle curve [rad].
+    pub std_dev: f64,
+    /// f^V at a lengthening velocity of ω_max.
+    pub tv_max_eccentric: f64,
+    /// f^V at ω_max/2 (shortening).
+    pub tv_at_half_omega_max: f64,
+}
+
+#[allow(clippy::too_many_arguments)]
+const fn gym(
+    joint: Joint,
+    side: MuscleSide,
+    max_isometric_torque: f64,
+    omega_max: f64,
+    peak_angle_anatomical: f64,
+    std_dev: f64,
+    tv_max_eccentric: f64,
+    tv_at_half_omega_max: f64,
+) -> GymnastMtgRow {
+    GymnastMtgRow {
+        joint,
+        side,
+        max_isometric_torque,
+        omega_max,
+        peak_angle_anatomical,
+        std_dev,
+        tv_max_eccentric,
+        tv_at_half_omega_max,
+    }
+}
+
 /// Whole-body "gymnast" MTGs of Millard, Emonds, Harant & Mombaur (2019), J Biomech
-/// 89:11–20 (hip and knee from Jackson 2010, ankle from Anderson et al. 2007 scaled by
-/// Jackson-to-Anderson strength ratios), young elite male gymnast 69.6 kg, 1.732 m; not
+/// 89:11–20 (hip and knee from Jackson 2010, ankle from Anderson et al. 2007 scaled by a
+/// Jackson-to-Anderson strength ratio), young elite male gymnast 69.6 kg, 1.732 m; not
 /// scaled to the subject. Values: RBDL `Millard2016TorqueMuscle.cc::GymnastWholeBody`
 /// columns (τ_iso [N·m], ω_max [rad/s], angle at peak [rad, Anderson convention], Gaussian
 /// σ [rad], f^V at −ω_max, f^V at ω_max/2); τ_iso and ω_max agree with
 /// `mjhmilla/MillardEmondsHarantMombaur2019FiguresTables/curveTables/mtgNamesParameters.csv`.
-/// Tuple: (joint, side, τ_iso, ω_max, θ_peak, σ, tv_ecc, tv_half).
-pub const MILLARD2019_GYMNAST: [(Joint, MuscleSide, f64, f64, f64, f64, f64, f64); 6] = [
-    (
+pub const MILLARD2019_GYMNAST: [GymnastMtgRow; 6] = [
+    gym(
         Joint::Hip,
         MuscleSide::Extensor,
         175.746,
@@ -462,7 +516,7 @@ pub const MILLARD2019_GYMNAST: [(Joint, MuscleSide, f64, f64, f64, f64, f64, f64
         1.1,
         0.163849,
     ),
-    (
+    gym(
         Joint::Hip,
         MuscleSide::Flexor,
         157.293,
@@ -472,7 +526,7 @@ pub const MILLARD2019_GYMNAST: [(Joint, MuscleSide, f64, f64, f64, f64, f64, f64
         1.11905,
         0.25,
     ),
-    (
+    gym(
         Joint::Knee,
         MuscleSide::Extensor,
         285.619,
@@ -482,7 +536,7 @@ pub const MILLARD2019_GYMNAST: [(Joint, MuscleSide, f64, f64, f64, f64, f64, f64
         1.13292,
         0.115304,
     ),
-    (
+    gym(
         Joint::Knee,
         MuscleSide::Flexor,
         98.7579,
@@ -492,7 +546,7 @@ pub const MILLARD2019_GYMNAST: [(Joint, MuscleSide, f64, f64, f64, f64, f64, f64
         1.12,
         0.19746,
     ),
-    (
+    gym(
         Joint::Ankle,
         MuscleSide::Extensor,
         127.561,
@@ -502,7 +556,7 @@ pub const MILLARD2019_GYMNAST: [(Joint, MuscleSide, f64, f64, f64, f64, f64, f64
         1.159,
         0.410591,
     ),
-    (
+    gym(
         Joint::Ankle,
         MuscleSide::Flexor,
         44.3106,
@@ -534,11 +588,11 @@ pub fn active_torque_angle<S: Scalar>(p: &MtgParams, theta: S) -> S {
             // f^A is even in (θ − θ_opt), so the sign map θ_A = s_θ θ only moves the peak
             // to s_θ·C3 (done in `to_mtg`).
             let u = d * angle_scale;
-            // SMOOTHING: saturating angle map σ(u) = u / (1 + (u/π)^6)^(1/6): identity to
-            // 3e-3 rad for |u| ≤ π/2, monotone, |σ| < π, so cos σ stays ≤ 0 beyond the
+            // SMOOTHING: saturating angle map σ(u) = u / (1 + (u/π)^8)^(1/8): identity to
+            // 8e-4 rad for |u| ≤ π/2, monotone, |σ| < π, so cos σ stays ≤ 0 beyond the
             // zero crossing instead of rising again one period later.
             let r = u * (1.0 / std::f64::consts::PI);
-            let sigma = u * (r.powi(6) + 1.0).powf(-1.0 / 6.0);
+            let sigma = u * (r.powi(8) + 1.0).powf(-1.0 / 8.0);
             smooth_pos(sigma.cos(), ACTIVE_ANGLE_EPS)
                 * (1.0 / smooth_pos_f64(1.0, ACTIVE_ANGLE_EPS))
         }
@@ -554,6 +608,8 @@ struct TvShape {
     de: f64,
     /// Eccentric hyperbola constant b: 1 + de·(1 + b)·z/(b + z).
     b: f64,
+    /// Blend width δ (units of ω/ω_max).
+    delta: f64,
     /// Value of the un-normalised blend at ω = 0.
     f0: f64,
 }
@@ -568,9 +624,16 @@ impl TvShape {
         // Eccentric hyperbola with the same slope at 0 (C1 junction like RBDL's curve)
         // and value f_ecc at x = −1: slope = de (1+b)/b  ⇒  b = de / (slope − de).
         let b = de / (slope - de);
-        let h = 0.5 * TV_BLEND_DELTA; // smooth_pos(0, δ)
+        let delta = TV_BLEND_REL * k.min(b).min(1.0);
+        let h = 0.5 * delta; // ½(x + √(x²+δ²)) at x = 0
         let f0 = (1.0 - h) * k / (k + h) + de * (1.0 + b) * h / (b + h);
-        TvShape { k, de, b, f0 }
+        TvShape {
+            k,
+            de,
+            b,
+            delta,
+            f0,
+        }
     }
 }
 
@@ -584,13 +647,14 @@ impl TvShape {
 ///   `tv_max_eccentric` at x = −1 and bounded by 1 + (f_ecc − 1)(1 + b) as x → −∞; its
 ///   slope at 0 equals the concentric slope (as in RBDL's curve).
 ///
-/// SMOOTHING: the branches are joined by evaluating them at y = ½(x + √(x²+δ²)) and
-/// z = ½(−x + √(x²+δ²)) (δ = [`TV_BLEND_DELTA`]); the sum is floored by a smooth positive
-/// part and normalised to 1 at x = 0.
+/// SMOOTHING: the branches are joined by evaluating them at y = ½(x + √(x²+δ²)) ≥ 0 and
+/// z = ½(−x + √(x²+δ²)) ≥ 0 (δ from [`TV_BLEND_REL`]; y, z ≥ 0 keeps both hyperbolas away
+/// from their poles); the sum is floored by a smooth positive part ([`TV_FLOOR_EPS`]) and
+/// normalised to exactly 1 at x = 0.
 pub fn torque_velocity<S: Scalar>(p: &MtgParams, omega: S) -> S {
     let sh = TvShape::new(p);
     let x = p.shortening_velocity(omega) * (1.0 / p.omega_max);
-    let root = (x * x + TV_BLEND_DELTA * TV_BLEND_DELTA).sqrt();
+    let root = (x * x + sh.delta * sh.delta).sqrt();
     let y = (root + x) * 0.5; // ≈ max(x, 0)
     let z = (root - x) * 0.5; // ≈ max(−x, 0)
     let conc = (-y + 1.0) * sh.k / (y + sh.k);
@@ -707,18 +771,16 @@ impl JointActuatorSet {
         JointActuatorSet {
             mtgs: MILLARD2019_GYMNAST
                 .iter()
-                .map(
-                    |&(joint, side, tau, wmax, th, sd, tv_ecc, tv_half)| MtgParams {
-                        joint,
-                        side,
-                        max_isometric_torque: tau,
-                        omega_max: wmax,
-                        optimal_angle: joint.anatomical_angle_sign() * th,
-                        active_curve: ActiveTorqueAngle::Gaussian { std_dev: sd },
-                        tv_at_half_omega_max: tv_half,
-                        tv_max_eccentric: tv_ecc,
-                    },
-                )
+                .map(|r| MtgParams {
+                    joint: r.joint,
+                    side: r.side,
+                    max_isometric_torque: r.max_isometric_torque,
+                    omega_max: r.omega_max,
+                    optimal_angle: r.joint.anatomical_angle_sign() * r.peak_angle_anatomical,
+                    active_curve: ActiveTorqueAngle::Gaussian { std_dev: r.std_dev },
+                    tv_at_half_omega_max: r.tv_at_half_omega_max,
+                    tv_max_eccentric: r.tv_max_eccentric,
+                })
                 .collect(),
             eta: SEED_ETA,
             activation: ActivationDynamics::default(),

@@ -208,8 +208,20 @@ impl GaitModel {
             }
         }
         let actuation = match &spec.actuators {
-            ActuatorSpec::MuscleTorqueGenerators { strength_scale, eta, tau_activation, tau_deactivation } => {
-                let mut set = JointActuatorSet::anderson2007_young_male().scaled(*strength_scale);
+            ActuatorSpec::MuscleTorqueGenerators {
+                strength_scale,
+                eta,
+                tau_activation,
+                tau_deactivation,
+                subject_mass,
+                subject_height,
+            } => {
+                let mass = subject_mass.unwrap_or_else(|| seg.total_mass());
+                let height = subject_height.unwrap_or_else(|| match &spec.body {
+                    BodySpec::DeLeva { height, .. } => *height,
+                    _ => estimated_stature(&seg),
+                });
+                let mut set = JointActuatorSet::anderson2007_young_male_for(mass, height).scaled(*strength_scale);
                 set.eta = *eta;
                 set.activation.tau_activation = *tau_activation;
                 set.activation.tau_deactivation = *tau_deactivation;
@@ -761,6 +773,14 @@ impl ControlledOde for GaitOde<'_> {
         }
         Ok(())
     }
+}
+
+/// Stature (m) estimated from the hip→knee→ankle length with de Leva's (1996) male
+/// reference proportions ((thigh + shank length) / stature = 862.5 / 1741 mm).
+pub fn estimated_stature(s: &Segments) -> f64 {
+    let len = |v: [f64; 2]| (v[0] * v[0] + v[1] * v[1]).sqrt();
+    let t = &anthropometry::DE_LEVA_MALE;
+    (len(s.knee_in_thigh) + len(s.ankle_in_shank)) * t.stature_mm / (t.thigh.length_mm + t.shank.length_mm)
 }
 
 /// The planar bodies of the 9-DoF model from segment parameters.

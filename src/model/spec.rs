@@ -165,6 +165,14 @@ pub enum ActuatorSpec {
         /// Deactivation time constant (s, default 0.050).
         #[serde(default = "default_tau_d")]
         tau_deactivation: f64,
+        /// Body mass the Anderson et al. (2007) torques are scaled with (kg); default: the
+        /// body's total segment mass.
+        #[serde(default)]
+        subject_mass: Option<f64>,
+        /// Stature the torques are scaled with (m); default: the de Leva preset's height,
+        /// else estimated from hip→ankle length with de Leva's (1996) male proportions.
+        #[serde(default)]
+        subject_height: Option<f64>,
     },
     /// Plain joint torques (N·m) as controls, no activation states.
     JointTorques {
@@ -288,7 +296,20 @@ impl ModelSpec {
             BodySpec::OpensimModel { .. } => {}
         }
         match &self.actuators {
-            ActuatorSpec::MuscleTorqueGenerators { strength_scale, eta, tau_activation, tau_deactivation } => {
+            ActuatorSpec::MuscleTorqueGenerators {
+                strength_scale,
+                eta,
+                tau_activation,
+                tau_deactivation,
+                subject_mass,
+                subject_height,
+            } => {
+                if let Some(m) = subject_mass {
+                    check_positive(path, "actuators.subject_mass", *m, "kg")?;
+                }
+                if let Some(h) = subject_height {
+                    check_positive(path, "actuators.subject_height", *h, "m")?;
+                }
                 check_positive(path, "actuators.strength_scale", *strength_scale, "dimensionless")?;
                 if !(eta.is_finite() && *eta >= 0.0) {
                     return Err(ModelError::invalid(path, "actuators.eta", format!("must be finite and ≥ 0, got {eta}")));

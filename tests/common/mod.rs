@@ -62,3 +62,42 @@ pub fn path(p: &str) -> PathBuf {
 pub fn exists(p: &Path) -> bool {
     p.exists()
 }
+
+/// A model from `models/MODEL` and `models/feet/FOOT` with extra effects (JSON values).
+pub fn model_with_effects(model_file: &str, foot: &str, effects: serde_json::Value) -> GaitModel {
+    use footfall::model::spec::{FootSpec, ModelSpec};
+    let mp = root().join("models").join(model_file);
+    let fp = root().join("models/feet").join(foot);
+    let mut spec = ModelSpec::load(&mp).unwrap();
+    spec.effects = serde_json::from_value(effects).expect("effects JSON");
+    let foot_spec = FootSpec::load(&fp).unwrap();
+    GaitModel::from_specs(&spec, &mp, &foot_spec, &fp).unwrap()
+}
+
+/// Generalised positions with the joint angles given and pelvis height chosen so that
+/// contact `c` touches the ground.
+pub fn pose_on_ground(m: &GaitModel, joints: [f64; 7], contact: &str) -> Vec<f64> {
+    let mut q = vec![0.0, 1.0, joints[0], joints[1], joints[2], joints[3], joints[4], joints[5], joints[6]];
+    let c = m.contact_index(contact).expect("contact");
+    let (_, gap) = m.contact_point(c, &q, &m.theta0());
+    q[1] -= gap;
+    q
+}
+
+/// The constraint sets exercised by derivative and drift tests, per foot file.
+pub fn constraint_sets(foot: &str) -> Vec<(&'static str, Vec<(&'static str, bool)>)> {
+    match foot {
+        "ellipse.json" => vec![
+            ("flight", vec![]),
+            ("single_stance", vec![("r.sole", true)]),
+            ("double_stance", vec![("r.sole", true), ("l.sole", true)]),
+        ],
+        _ => vec![
+            ("heel", vec![("r.heel", true)]),
+            ("forefoot", vec![("r.forefoot", true)]),
+            ("both_circles", vec![("r.heel", true), ("r.forefoot", false)]),
+            ("double_stance", vec![("r.forefoot", true), ("l.heel", true)]),
+            ("three_circles", vec![("r.forefoot", true), ("l.heel", true), ("l.forefoot", false)]),
+        ],
+    }
+}
