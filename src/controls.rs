@@ -73,11 +73,14 @@ impl ControlTable {
                 ));
             }
             let parse = |c: usize| -> Result<f64, ModelError> {
+                if row[c].is_empty() {
+                    return Err(ModelError::invalid(path, field(c), "the cell is empty; expected a number"));
+                }
                 let v: f64 = row[c]
                     .parse()
                     .map_err(|_| ModelError::invalid(path, field(c), format!("`{}` is not a number", row[c])))?;
                 if !v.is_finite() {
-                    return Err(ModelError::invalid(path, field(c), "must be finite"));
+                    return Err(ModelError::invalid(path, field(c), format!("must be finite, got `{}`", row[c])));
                 }
                 Ok(v)
             };
@@ -101,19 +104,47 @@ impl ControlTable {
     }
 
     /// Controls at time `t` (piecewise linear, constant outside the table).
+    ///
+    /// A table built by hand with fewer values than `out` leaves the remaining entries of
+    /// `out` unchanged (see [`validate`](Self::validate)); an empty table leaves all.
     pub fn at(&self, t: f64, out: &mut [f64]) {
-        let k = self.times.partition_point(|&s| s <= t);
+        let n = self.times.len().min(self.values.len());
+        if n == 0 {
+            return;
+        }
+        let k = self.times[..n].partition_point(|&s| s <= t);
+        let copy = |out: &mut [f64], v: &[f64]| out.iter_mut().zip(v).for_each(|(o, x)| *o = *x);
         if k == 0 {
-            out.copy_from_slice(&self.values[0]);
-        } else if k == self.times.len() {
-            out.copy_from_slice(&self.values[k - 1]);
+            copy(out, &self.values[0]);
+        } else if k == n {
+            copy(out, &self.values[n - 1]);
         } else {
             let (t0, t1) = (self.times[k - 1], self.times[k]);
             let w = (t - t0) / (t1 - t0);
-            for (i, o) in out.iter_mut().enumerate() {
-                *o = (1.0 - w) * self.values[k - 1][i] + w * self.values[k][i];
+            for ((o, a), b) in out.iter_mut().zip(&self.values[k - 1]).zip(&self.values[k]) {
+                *o = (1.0 - w) * a + w * b;
             }
         }
+    }
+
+    /// Check a table built in code: at least one knot, strictly increasing finite times, and
+    /// one finite value per name at every knot.
+    pub fn validate(&self) -> Result<(), String> {
+        if self.times.is_empty() || self.times.len() != self.values.len() {
+            return Err(format!("{} knot times but {} value rows (need at least one)", self.times.len(), self.values.len()));
+        }
+        for (k, (t, v)) in self.times.iter().zip(&self.values).enumerate() {
+            if !t.is_finite() || (k > 0 && *t <= self.times[k - 1]) {
+                return Err(format!("knot {k}: time {t} is not finite or not increasing"));
+            }
+            if v.len() != self.names.len() {
+                return Err(format!("knot {k}: {} values for {} controls", v.len(), self.names.len()));
+            }
+            if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+                return Err(format!("knot {k}: control `{}` is not finite", self.names[i]));
+            }
+        }
+        Ok(())
     }
 
     /// Knot times strictly inside `(t0, t1)`, where the interpolant has kinks.

@@ -25,7 +25,7 @@ fn yes() -> bool {
 
 /// Duration of a continuous phase: fixed, or free within bounds with an initial guess.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(untagged)]
+#[serde(untagged, expecting = "a duration: a positive number of seconds, or {\"initial\", \"min\", \"max\"} in seconds")]
 pub enum Duration {
     /// Fixed duration (s).
     Fixed(f64),
@@ -134,16 +134,23 @@ impl PhaseSequence {
     /// Structural checks that need no model.
     pub fn validate(&self, path: &Path) -> Result<(), ModelError> {
         if self.phases.is_empty() {
-            return Err(ModelError::invalid(path, "phases", "the sequence has no phase"));
+            return Err(ModelError::invalid(path, "phases", "the sequence has no phase; list at least one continuous phase"));
         }
         for (i, ph) in self.phases.iter().enumerate() {
             let f = |x: &str| format!("phases[{i}] ('{}').{x}", ph.name());
-            if self.phases[..i].iter().any(|o| o.name() == ph.name()) {
-                return Err(ModelError::invalid(path, f("name"), "phase names must be unique"));
+            if ph.name().trim().is_empty() {
+                return Err(ModelError::invalid(path, format!("phases[{i}].name"), "must be a non-empty name"));
+            }
+            if let Some(j) = self.phases[..i].iter().position(|o| o.name() == ph.name()) {
+                return Err(ModelError::invalid(
+                    path,
+                    f("name"),
+                    format!("phase name '{}' is already used by phases[{j}]; phase names must be unique", ph.name()),
+                ));
             }
             if let Phase::Continuous { duration, intervals, .. } = ph {
                 if *intervals == 0 {
-                    return Err(ModelError::invalid(path, f("intervals"), "must be at least 1"));
+                    return Err(ModelError::invalid(path, f("intervals"), "must be at least 1 shooting interval, got 0"));
                 }
                 let ok = match *duration {
                     Duration::Fixed(v) => v.is_finite() && v > 0.0,
@@ -155,7 +162,13 @@ impl PhaseSequence {
                     return Err(ModelError::invalid(
                         path,
                         f("duration"),
-                        "must be a positive number of seconds, or {initial, min, max} with 0 < min ≤ initial ≤ max",
+                        format!(
+                            "must be a positive number of seconds, or {{initial, min, max}} with 0 < min ≤ initial ≤ max; got {}",
+                            match *duration {
+                                Duration::Fixed(v) => format!("{v}"),
+                                Duration::Free { initial, min, max } => format!("{{initial: {initial}, min: {min}, max: {max}}}"),
+                            }
+                        ),
                     ));
                 }
             }
@@ -163,17 +176,80 @@ impl PhaseSequence {
         Ok(())
     }
 
-    /// Constraint sets of every phase for `model`; unknown contacts name the phase.
+    /// Constraint sets of every phase for `model`; unknown contacts name the phase. Also
+    /// checks the sizes and ranges of `initial_state` against the model.
     pub fn resolve(&self, model: &GaitModel, path: &Path) -> Result<Vec<ConstraintSet>, ModelError> {
+        if let Some(init) = &self.initial_state {
+            init.check(model, path, "initial_state")?;
+        }
+        let known: Vec<&str> = model.contacts.iter().map(|c| c.name.as_str()).collect();
         self.phases
             .iter()
             .enumerate()
             .map(|(i, ph)| {
+                let f = |x: String| format!("phases[{i}] ('{}').{x}", ph.name());
+                for (k, c) in ph.contacts().iter().enumerate() {
+                    if !known.contains(&c.contact.as_str()) {
+                        return Err(ModelError::invalid(
+                            path,
+                            f(format!("contacts[{k}].contact")),
+                            format!(
+                                "phase '{}' uses unknown contact '{}'; foot '{}' has: {}",
+                                ph.name(),
+                                c.contact,
+                                model.foot_name,
+                                known.join(", ")
+                            ),
+                        ));
+                    }
+                    if ph.contacts()[..k].iter().any(|o| o.contact == c.contact) {
+                        return Err(ModelError::invalid(
+                            path,
+                            f(format!("contacts[{k}].contact")),
+                            format!("phase '{}' lists contact '{}' twice", ph.name(), c.contact),
+                        ));
+                    }
+                }
                 let list: Vec<(&str, bool)> = ph.contacts().iter().map(|c| (c.contact.as_str(), c.rolling)).collect();
-                model
-                    .constraint_set(ph.name(), &list)
-                    .map_err(|r| ModelError::invalid(path, format!("phases[{i}] ('{}').contacts", ph.name()), r))
+                model.constraint_set(ph.name(), &list).map_err(|r| ModelError::invalid(path, f("contacts".into()), r))
             })
             .collect()
+    }
+}
+
+impl InitialState {
+    /// Check the lengths (nq positions and velocities, na activations) and ranges against
+    /// `model`; `field` is the state's dotted path in `path` (e.g. `initial_state`).
+    pub fn check(&self, model: &GaitModel, path: &Path, field: &str) -> Result<(), ModelError> {
+        let coords = crate::model::gait::COORDINATES.join(", ");
+        for (name, v, n) in [("q", &self.q, model.nq()), ("qd", &self.qd, model.nq())] {
+            if v.len() != n {
+                return Err(ModelError::invalid(
+                    path,
+                    format!("{field}.{name}"),
+                    format!("has {} values, the model has {n} ({coords})", v.len()),
+                ));
+            }
+            if let Some(k) = v.iter().position(|x| !x.is_finite()) {
+                return Err(ModelError::invalid(path, format!("{field}.{name}[{k}]"), "must be finite"));
+            }
+        }
+        if let Some(a) = &self.a {
+            if a.len() != model.na() {
+                return Err(ModelError::invalid(
+                    path,
+                    format!("{field}.a"),
+                    format!("has {} activations, the model has {}", a.len(), model.na()),
+                ));
+            }
+            if let Some(k) = a.iter().position(|x| !(x.is_finite() && (0.0..=1.0).contains(x))) {
+                return Err(ModelError::invalid(
+                    path,
+                    format!("{field}.a[{k}]"),
+                    format!("activation must be in [0, 1], got {}", a[k]),
+                ));
+            }
+        }
+        Ok(())
     }
 }

@@ -82,6 +82,10 @@ pub struct ImpactRecord {
     pub impulses: Vec<(String, RowKind, f64)>,
     /// Kinetic energy before and after (J).
     pub kinetic_energy: (f64, f64),
+    /// Normal gap φ (m) of each contact active after the impact, at the impact: a fixed
+    /// phase duration does not place the landing foot on the ground, so a non-zero gap is
+    /// closed afterwards by the Baumgarte terms.
+    pub gaps: Vec<(String, f64)>,
 }
 
 /// Start and end of one phase.
@@ -108,7 +112,54 @@ pub struct SimulationResult {
     pub stats: IntegrationStats,
 }
 
+/// Figures of one continuous phase.
+#[derive(Debug, Clone, Serialize)]
+pub struct PhaseFigures {
+    /// Phase name.
+    pub name: String,
+    /// Largest |φ| over normal rows (m).
+    pub max_position_drift_m: f64,
+    /// Largest |G q̇| over all rows (m/s).
+    pub max_velocity_drift_m_s: f64,
+    /// Largest |Baumgarte force| (N).
+    pub max_baumgarte_force_n: f64,
+    /// Peak normal force of the right and left foot (N).
+    pub peak_normal_force_n: [f64; 2],
+}
+
 impl SimulationResult {
+    /// Per-phase drift, Baumgarte and force figures (continuous phases only).
+    pub fn phase_figures(&self, sets: &[ConstraintSet]) -> Vec<PhaseFigures> {
+        let mut out: Vec<PhaseFigures> = Vec::new();
+        for (pi, set) in sets.iter().enumerate() {
+            let samples: Vec<&Sample> = self.samples.iter().filter(|s| s.phase == pi).collect();
+            if samples.is_empty() {
+                continue;
+            }
+            let mut f = PhaseFigures {
+                name: set.name.clone(),
+                max_position_drift_m: 0.0,
+                max_velocity_drift_m_s: 0.0,
+                max_baumgarte_force_n: 0.0,
+                peak_normal_force_n: [0.0; 2],
+            };
+            for s in samples {
+                for (r, row) in set.rows.iter().enumerate() {
+                    if row.kind == RowKind::Normal {
+                        f.max_position_drift_m = f.max_position_drift_m.max(s.contact.position_error[r].abs());
+                    }
+                    f.max_velocity_drift_m_s = f.max_velocity_drift_m_s.max(s.contact.velocity_error[r].abs());
+                    f.max_baumgarte_force_n = f.max_baumgarte_force_n.max(s.contact.baumgarte_force[r].abs());
+                }
+                for k in 0..2 {
+                    f.peak_normal_force_n[k] = f.peak_normal_force_n[k].max(s.feet[k].fy);
+                }
+            }
+            out.push(f);
+        }
+        out
+    }
+
     /// Largest |φ| over normal rows of all samples (m).
     pub fn max_position_drift(&self, sets: &[ConstraintSet]) -> f64 {
         self.max_over_rows(sets, |s, r| if s.rows[r].kind == RowKind::Normal { Some(0) } else { None }, |c, r| c.position_error[r])
@@ -228,6 +279,12 @@ pub fn simulate(
                         .map(|(r, v)| (model.contacts[r.contact].name.clone(), r.kind, *v))
                         .collect(),
                     kinetic_energy: (ke0, ke1),
+                    gaps: set
+                        .rows
+                        .iter()
+                        .filter(|r| r.kind == RowKind::Normal)
+                        .map(|r| (model.contacts[r.contact].name.clone(), model.contact_point(r.contact, q, theta).1))
+                        .collect(),
                 });
                 x[nq..2 * nq].copy_from_slice(&qd_plus);
                 res.phases.push(PhaseSpan { name: name.clone(), t0: t, t1: t });

@@ -623,6 +623,43 @@ impl GaitModel {
         g
     }
 
+    /// Project a state onto the constraint manifold of `set` (seed §3.6: the initial
+    /// guess is "polished to satisfy the foot-ground constraints"): positions by
+    /// minimum-norm Gauss–Newton steps on the normal gaps φ = 0, velocities by the
+    /// M-orthogonal projection onto `G q̇ = 0` (the plastic impact map). Returns the
+    /// projected `(q, q̇)` and the largest remaining |φ| (m).
+    pub fn project(&self, set: &ConstraintSet, q: &[f64], qd: &[f64], theta: &[f64]) -> Result<(Vec<f64>, Vec<f64>, f64), DynamicsError> {
+        let nq = self.nq();
+        let mut q = q.to_vec();
+        let normal: Vec<usize> = (0..set.rows.len()).filter(|&r| set.rows[r].kind == RowKind::Normal).collect();
+        let nn = normal.len();
+        let mut worst = 0.0;
+        for _ in 0..50 {
+            let g = self.constraint_jacobian_at(set, &q, theta);
+            let phi: Vec<f64> = normal.iter().map(|&r| self.contact_point(set.rows[r].contact, &q, theta).1).collect();
+            worst = phi.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            if worst < 1e-12 || nn == 0 {
+                break;
+            }
+            let mut a = vec![0.0; nn * nn];
+            for (i, &ri) in normal.iter().enumerate() {
+                for (j, &rj) in normal.iter().enumerate() {
+                    a[i * nn + j] = (0..nq).map(|l| g[ri * nq + l] * g[rj * nq + l]).sum();
+                }
+            }
+            cholesky(&mut a, nn, 1e-12).map_err(|e| DynamicsError::OverConstrained { set: set.name.clone(), row: e.pivot })?;
+            let mut y = phi.clone();
+            cholesky_solve(&a, nn, &mut y);
+            for (i, &ri) in normal.iter().enumerate() {
+                for l in 0..nq {
+                    q[l] -= g[ri * nq + l] * y[i];
+                }
+            }
+        }
+        let qd = if set.rows.is_empty() { qd.to_vec() } else { self.impact(set, &q, qd, theta)?.0 };
+        Ok((q, qd, worst))
+    }
+
     /// Constraint Jacobian `G` (rows × nq, row-major) of `set` at `q` (f64).
     pub fn constraint_jacobian_at(&self, set: &ConstraintSet, q: &[f64], theta: &[f64]) -> Vec<f64> {
         let p = self.full_params(theta);

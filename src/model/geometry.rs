@@ -54,34 +54,54 @@ impl Shape {
 
     /// Check physical validity: positive finite sizes, finite positions.
     pub fn validate(&self) -> Result<(), String> {
+        self.check().map_err(|(field, reason)| format!("{field}: {reason}"))
+    }
+
+    /// Like [`validate`](Self::validate), naming the offending field (`radius`,
+    /// `semi_axes`, `centre`, `angle`, `position`) separately from the reason.
+    pub fn check(&self) -> Result<(), (&'static str, String)> {
         let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
         match self {
             Shape::Circle { centre, radius } => {
                 if !finite(centre) {
-                    return Err("centre must be finite".into());
+                    return Err(("centre", format!("must be two finite numbers of metres, got {centre:?}")));
                 }
                 if !(radius.is_finite() && *radius > 0.0) {
-                    return Err(format!("radius must be a positive number of metres, got {radius}"));
+                    return Err(("radius", format!("must be a positive number of metres, got {radius}")));
                 }
             }
             Shape::Ellipse { centre, angle, semi_axes } => {
-                if !finite(centre) || !angle.is_finite() {
-                    return Err("centre and angle must be finite".into());
+                if !finite(centre) {
+                    return Err(("centre", format!("must be two finite numbers of metres, got {centre:?}")));
+                }
+                if !angle.is_finite() {
+                    return Err(("angle", format!("must be a finite number of radians, got {angle}")));
                 }
                 if !semi_axes.iter().all(|a| a.is_finite() && *a > 0.0) {
-                    return Err(format!(
-                        "semi_axes must be two positive numbers of metres, got [{}, {}]",
-                        semi_axes[0], semi_axes[1]
+                    return Err((
+                        "semi_axes",
+                        format!(
+                            "must be two positive numbers of metres, got [{}, {}]",
+                            semi_axes[0], semi_axes[1]
+                        ),
                     ));
                 }
             }
             Shape::Point { position } => {
                 if !finite(position) {
-                    return Err("position must be finite".into());
+                    return Err(("position", format!("must be two finite numbers of metres, got {position:?}")));
                 }
             }
         }
         Ok(())
+    }
+
+    /// Height of the primitive's lowest point in its body frame (m), with the body frame
+    /// upright (y up); `None` for an invalid shape.
+    pub fn lowest_y(&self) -> Option<f64> {
+        self.check().ok()?;
+        let y = self.centre()[1] + self.contact_offset::<f64>(0.0, [0.0, 1.0])[1];
+        y.is_finite().then_some(y)
     }
 
     /// World offset from the reference point to the contact point, for body world angle

@@ -225,13 +225,105 @@ pub fn read_json<T: DeserializeOwned>(path: &Path) -> Result<T, ModelError> {
 }
 
 /// Parse JSON text that came from `path`.
+///
+/// The error names the dotted path of the offending field (`body.segments.thigh.mass`,
+/// `primitives[0].shape`), found from serde's line and column.
 pub fn parse_json<T: DeserializeOwned>(text: &str, path: &Path) -> Result<T, ModelError> {
-    serde_json::from_str(text).map_err(|e| ModelError::Json {
-        path: path.to_path_buf(),
-        message: e.to_string().split(" at line ").next().unwrap_or_default().to_string(),
-        line: e.line(),
-        column: e.column(),
+    serde_json::from_str(text).map_err(|e| {
+        let what = e.to_string();
+        let what = match what.rfind(" at line ") {
+            Some(k) if e.line() > 0 => what[..k].to_string(),
+            _ => what,
+        };
+        let mut field = if e.line() > 0 { json_path_at(text, e.line(), e.column()) } else { String::new() };
+        // serde names the unknown or missing field itself; the position is its parent object.
+        for prefix in ["unknown field `", "missing field `"] {
+            if let Some(name) = what.strip_prefix(prefix).and_then(|r| r.split('`').next()) {
+                field = if field.is_empty() { name.to_string() } else { format!("{field}.{name}") };
+            }
+        }
+        let message = match e.classify() {
+            serde_json::error::Category::Syntax | serde_json::error::Category::Eof => {
+                if field.is_empty() {
+                    format!("invalid JSON: {what}")
+                } else {
+                    format!("invalid JSON: {what} (inside `{field}`)")
+                }
+            }
+            _ if field.is_empty() => what,
+            _ => format!("field `{field}`: {what}"),
+        };
+        ModelError::Json { path: path.to_path_buf(), message, line: e.line(), column: e.column() }
     })
+}
+
+/// Dotted path of the JSON value being read just before `line`:`column` (1-based, as
+/// serde_json reports them; the character at the position itself is excluded). Object keys
+/// become `.key`, array elements `[i]`; inside an unfinished key the path is its object's.
+fn json_path_at(text: &str, line: usize, column: usize) -> String {
+    enum Frame {
+        Object { key: Option<String> },
+        Array { index: usize },
+    }
+    let line_start: usize = text.split_inclusive('\n').take(line.saturating_sub(1)).map(str::len).sum();
+    let mut end = (line_start + column.saturating_sub(1)).min(text.len());
+    while !text.is_char_boundary(end) {
+        end -= 1;
+    }
+    let mut stack: Vec<Frame> = Vec::new();
+    let mut chars = text[..end].chars();
+    while let Some(c) = chars.next() {
+        match c {
+            '{' => stack.push(Frame::Object { key: None }),
+            '[' => stack.push(Frame::Array { index: 0 }),
+            '}' | ']' => {
+                stack.pop();
+            }
+            ',' => match stack.last_mut() {
+                Some(Frame::Array { index }) => *index += 1,
+                Some(Frame::Object { key }) => *key = None,
+                None => {}
+            },
+            '"' => {
+                let mut s = String::new();
+                let mut closed = false;
+                while let Some(d) = chars.next() {
+                    match d {
+                        '"' => {
+                            closed = true;
+                            break;
+                        }
+                        '\\' => {
+                            if let Some(x) = chars.next() {
+                                s.push(x);
+                            }
+                        }
+                        _ => s.push(d),
+                    }
+                }
+                if let Some(Frame::Object { key }) = stack.last_mut() {
+                    if key.is_none() && closed {
+                        *key = Some(s);
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    let mut out = String::new();
+    for f in &stack {
+        match f {
+            Frame::Object { key: Some(k) } => {
+                if !out.is_empty() {
+                    out.push('.');
+                }
+                out.push_str(k);
+            }
+            Frame::Object { key: None } => break,
+            Frame::Array { index } => out.push_str(&format!("[{index}]")),
+        }
+    }
+    out
 }
 
 fn check_positive(path: &Path, field: &str, v: f64, unit: &str) -> Result<(), ModelError> {
@@ -293,7 +385,18 @@ impl ModelSpec {
                 check_positive(path, "body.height", *height, "m")?;
             }
             BodySpec::Explicit { segments } => segments.validate(path)?,
-            BodySpec::OpensimModel { .. } => {}
+            BodySpec::OpensimModel { file, .. } => {
+                let target = relative_to(path, file);
+                if let Err(e) = std::fs::metadata(&target) {
+                    return Err(ModelError::Io {
+                        path: target,
+                        source: std::io::Error::new(
+                            e.kind(),
+                            format!("{e} (the OpenSim model named by field 'body.file' of {})", path.display()),
+                        ),
+                    });
+                }
+            }
         }
         match &self.actuators {
             ActuatorSpec::MuscleTorqueGenerators {
@@ -330,6 +433,29 @@ impl ModelSpec {
                 return Err(ModelError::invalid(path, f, format!("must be finite and ≥ 0 (1/s), got {v}")));
             }
         }
+        let mut springs: Vec<(usize, &str, &str)> = Vec::new();
+        for (i, e) in self.effects.iter().enumerate() {
+            e.check().map_err(|(f, r)| ModelError::invalid(path, format!("effects[{i}].{f}"), r))?;
+            match e {
+                EffectSpec::PassiveJointStiffness { joint, side, .. } => {
+                    let sides: &[&str] = match side.as_str() {
+                        "right" => &["right"],
+                        "left" => &["left"],
+                        _ => &["right", "left"],
+                    };
+                    for s in sides {
+                        if let Some((j, _, _)) = springs.iter().find(|(_, jj, ss)| jj == joint && ss == s) {
+                            return Err(ModelError::invalid(
+                                path,
+                                format!("effects[{i}].joint"),
+                                format!("the {s} {joint} already has a passive_joint_stiffness (effects[{j}]); give each joint one entry"),
+                            ));
+                        }
+                        springs.push((i, joint, s));
+                    }
+                }
+            }
+        }
         Ok(())
     }
 }
@@ -362,7 +488,20 @@ impl FootSpec {
             if self.primitives[..i].iter().any(|q| q.name == p.name) {
                 return Err(ModelError::invalid(path, format!("primitives[{i}].name"), format!("'{}' is used twice", p.name)));
             }
-            p.shape.validate().map_err(|r| ModelError::invalid(path, format!("primitives[{i}].shape"), r))?;
+            p.shape.check().map_err(|(f, r)| ModelError::invalid(path, format!("primitives[{i}].shape.{f}"), r))?;
+        }
+        // Planar model, foot frame at the ankle with y up in the neutral pose: a primitive
+        // whose lowest point is not below the ankle can never carry the body's weight.
+        let lowest = self.primitives.iter().filter_map(|p| p.shape.lowest_y()).fold(f64::INFINITY, f64::min);
+        if !(lowest < 0.0) {
+            return Err(ModelError::invalid(
+                path,
+                "primitives",
+                format!(
+                    "no primitive reaches below the ankle (lowest point {lowest:.4} m above it in the neutral pose), \
+                     so the foot cannot touch the ground; primitive positions are in the ankle frame, y up"
+                ),
+            ));
         }
         Ok(())
     }
