@@ -18,46 +18,88 @@ pub struct ControlTable {
 impl ControlTable {
     /// The same controls at all times.
     pub fn constant(names: Vec<String>, values: Vec<f64>) -> Self {
-        Self { names, times: vec![0.0], values: vec![values] }
+        Self {
+            names,
+            times: vec![0.0],
+            values: vec![values],
+        }
     }
 
     /// Read a CSV file with a header `time,<control names…>`; columns may come in any order
     /// but every name in `model_controls` must be present exactly once and no other.
     pub fn load_csv(path: &Path, model_controls: &[String]) -> Result<Self, ModelError> {
-        let text = std::fs::read_to_string(path).map_err(|source| ModelError::Io { path: path.to_path_buf(), source })?;
+        let text = std::fs::read_to_string(path).map_err(|source| ModelError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
         Self::parse_csv(&text, path, model_controls)
     }
 
     /// Parse CSV text (see [`load_csv`](Self::load_csv)).
-    pub fn parse_csv(text: &str, path: &Path, model_controls: &[String]) -> Result<Self, ModelError> {
-        let mut lines = text.lines().enumerate().filter(|(_, l)| !l.trim().is_empty() && !l.starts_with('#'));
-        let (_, header) = lines
-            .next()
-            .ok_or_else(|| ModelError::invalid(path, "header", "the file is empty; expected a header `time,<control names>`"))?;
+    pub fn parse_csv(
+        text: &str,
+        path: &Path,
+        model_controls: &[String],
+    ) -> Result<Self, ModelError> {
+        let mut lines = text
+            .lines()
+            .enumerate()
+            .filter(|(_, l)| !l.trim().is_empty() && !l.starts_with('#'));
+        let (_, header) = lines.next().ok_or_else(|| {
+            ModelError::invalid(
+                path,
+                "header",
+                "the file is empty; expected a header `time,<control names>`",
+            )
+        })?;
         let cols: Vec<&str> = header.split(',').map(str::trim).collect();
         if cols.first() != Some(&"time") {
-            return Err(ModelError::invalid(path, "header", format!("first column must be `time`, found `{}`", cols[0])));
+            return Err(ModelError::invalid(
+                path,
+                "header",
+                format!("first column must be `time`, found `{}`", cols[0]),
+            ));
         }
         let mut index = Vec::new();
         for name in model_controls {
-            let found: Vec<usize> = cols.iter().enumerate().filter(|(_, c)| *c == name).map(|(i, _)| i).collect();
+            let found: Vec<usize> = cols
+                .iter()
+                .enumerate()
+                .filter(|(_, c)| *c == name)
+                .map(|(i, _)| i)
+                .collect();
             match found.len() {
                 1 => index.push(found[0]),
                 0 => {
                     return Err(ModelError::invalid(
                         path,
                         "header",
-                        format!("missing control column `{name}`; the model's controls are: {}", model_controls.join(", ")),
+                        format!(
+                            "missing control column `{name}`; the model's controls are: {}",
+                            model_controls.join(", ")
+                        ),
                     ))
                 }
-                _ => return Err(ModelError::invalid(path, "header", format!("column `{name}` appears twice"))),
+                _ => {
+                    return Err(ModelError::invalid(
+                        path,
+                        "header",
+                        format!("column `{name}` appears twice"),
+                    ))
+                }
             }
         }
-        if let Some(extra) = cols[1..].iter().find(|c| !model_controls.iter().any(|m| m == *c)) {
+        if let Some(extra) = cols[1..]
+            .iter()
+            .find(|c| !model_controls.iter().any(|m| m == *c))
+        {
             return Err(ModelError::invalid(
                 path,
                 "header",
-                format!("unknown column `{extra}`; the model's controls are: {}", model_controls.join(", ")),
+                format!(
+                    "unknown column `{extra}`; the model's controls are: {}",
+                    model_controls.join(", ")
+                ),
             ));
         }
         let mut times = Vec::new();
@@ -74,13 +116,21 @@ impl ControlTable {
             }
             let parse = |c: usize| -> Result<f64, ModelError> {
                 if row[c].is_empty() {
-                    return Err(ModelError::invalid(path, field(c), "the cell is empty; expected a number"));
+                    return Err(ModelError::invalid(
+                        path,
+                        field(c),
+                        "the cell is empty; expected a number",
+                    ));
                 }
-                let v: f64 = row[c]
-                    .parse()
-                    .map_err(|_| ModelError::invalid(path, field(c), format!("`{}` is not a number", row[c])))?;
+                let v: f64 = row[c].parse().map_err(|_| {
+                    ModelError::invalid(path, field(c), format!("`{}` is not a number", row[c]))
+                })?;
                 if !v.is_finite() {
-                    return Err(ModelError::invalid(path, field(c), format!("must be finite, got `{}`", row[c])));
+                    return Err(ModelError::invalid(
+                        path,
+                        field(c),
+                        format!("must be finite, got `{}`", row[c]),
+                    ));
                 }
                 Ok(v)
             };
@@ -95,12 +145,25 @@ impl ControlTable {
                 }
             }
             times.push(t);
-            values.push(index.iter().map(|&c| parse(c)).collect::<Result<Vec<_>, _>>()?);
+            values.push(
+                index
+                    .iter()
+                    .map(|&c| parse(c))
+                    .collect::<Result<Vec<_>, _>>()?,
+            );
         }
         if times.is_empty() {
-            return Err(ModelError::invalid(path, "rows", "no data rows after the header"));
+            return Err(ModelError::invalid(
+                path,
+                "rows",
+                "no data rows after the header",
+            ));
         }
-        Ok(Self { names: model_controls.to_vec(), times, values })
+        Ok(Self {
+            names: model_controls.to_vec(),
+            times,
+            values,
+        })
     }
 
     /// Controls at time `t` (piecewise linear, constant outside the table).
@@ -131,17 +194,30 @@ impl ControlTable {
     /// one finite value per name at every knot.
     pub fn validate(&self) -> Result<(), String> {
         if self.times.is_empty() || self.times.len() != self.values.len() {
-            return Err(format!("{} knot times but {} value rows (need at least one)", self.times.len(), self.values.len()));
+            return Err(format!(
+                "{} knot times but {} value rows (need at least one)",
+                self.times.len(),
+                self.values.len()
+            ));
         }
         for (k, (t, v)) in self.times.iter().zip(&self.values).enumerate() {
             if !t.is_finite() || (k > 0 && *t <= self.times[k - 1]) {
-                return Err(format!("knot {k}: time {t} is not finite or not increasing"));
+                return Err(format!(
+                    "knot {k}: time {t} is not finite or not increasing"
+                ));
             }
             if v.len() != self.names.len() {
-                return Err(format!("knot {k}: {} values for {} controls", v.len(), self.names.len()));
+                return Err(format!(
+                    "knot {k}: {} values for {} controls",
+                    v.len(),
+                    self.names.len()
+                ));
             }
             if let Some(i) = v.iter().position(|x| !x.is_finite()) {
-                return Err(format!("knot {k}: control `{}` is not finite", self.names[i]));
+                return Err(format!(
+                    "knot {k}: control `{}` is not finite",
+                    self.names[i]
+                ));
             }
         }
         Ok(())
@@ -149,6 +225,10 @@ impl ControlTable {
 
     /// Knot times strictly inside `(t0, t1)`, where the interpolant has kinks.
     pub fn knots_within(&self, t0: f64, t1: f64) -> Vec<f64> {
-        self.times.iter().copied().filter(|&t| t > t0 && t < t1).collect()
+        self.times
+            .iter()
+            .copied()
+            .filter(|&t| t > t0 && t < t1)
+            .collect()
     }
 }

@@ -24,8 +24,8 @@ fn yes() -> bool {
 }
 
 /// Duration of a continuous phase: fixed, or free within bounds with an initial guess.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-#[serde(untagged, expecting = "a duration: a positive number of seconds, or {\"initial\", \"min\", \"max\"} in seconds")]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+#[serde(untagged)]
 pub enum Duration {
     /// Fixed duration (s).
     Fixed(f64),
@@ -38,6 +38,45 @@ pub enum Duration {
         /// Upper bound.
         max: f64,
     },
+}
+
+// By hand rather than `untagged`, so that a wrong value gets serde's "invalid type: …,
+// expected …" (quoting the value) and a bad bound names its field.
+impl<'de> Deserialize<'de> for Duration {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct Free {
+            initial: f64,
+            min: f64,
+            max: f64,
+        }
+        struct V;
+        impl<'de> serde::de::Visitor<'de> for V {
+            type Value = Duration;
+            fn expecting(&self, f: &mut std::fmt::Formatter) -> std::fmt::Result {
+                f.write_str("a duration: a number of seconds, or {\"initial\", \"min\", \"max\"} in seconds")
+            }
+            fn visit_f64<E>(self, v: f64) -> Result<Duration, E> {
+                Ok(Duration::Fixed(v))
+            }
+            fn visit_u64<E>(self, v: u64) -> Result<Duration, E> {
+                Ok(Duration::Fixed(v as f64))
+            }
+            fn visit_i64<E>(self, v: i64) -> Result<Duration, E> {
+                Ok(Duration::Fixed(v as f64))
+            }
+            fn visit_map<A: serde::de::MapAccess<'de>>(self, map: A) -> Result<Duration, A::Error> {
+                let f = Free::deserialize(serde::de::value::MapAccessDeserializer::new(map))?;
+                Ok(Duration::Free {
+                    initial: f.initial,
+                    min: f.min,
+                    max: f.max,
+                })
+            }
+        }
+        d.deserialize_any(V)
+    }
 }
 
 impl Duration {
@@ -134,12 +173,20 @@ impl PhaseSequence {
     /// Structural checks that need no model.
     pub fn validate(&self, path: &Path) -> Result<(), ModelError> {
         if self.phases.is_empty() {
-            return Err(ModelError::invalid(path, "phases", "the sequence has no phase; list at least one continuous phase"));
+            return Err(ModelError::invalid(
+                path,
+                "phases",
+                "the sequence has no phase; list at least one continuous phase",
+            ));
         }
         for (i, ph) in self.phases.iter().enumerate() {
             let f = |x: &str| format!("phases[{i}] ('{}').{x}", ph.name());
             if ph.name().trim().is_empty() {
-                return Err(ModelError::invalid(path, format!("phases[{i}].name"), "must be a non-empty name"));
+                return Err(ModelError::invalid(
+                    path,
+                    format!("phases[{i}].name"),
+                    "must be a non-empty name",
+                ));
             }
             if let Some(j) = self.phases[..i].iter().position(|o| o.name() == ph.name()) {
                 return Err(ModelError::invalid(
@@ -148,14 +195,27 @@ impl PhaseSequence {
                     format!("phase name '{}' is already used by phases[{j}]; phase names must be unique", ph.name()),
                 ));
             }
-            if let Phase::Continuous { duration, intervals, .. } = ph {
+            if let Phase::Continuous {
+                duration,
+                intervals,
+                ..
+            } = ph
+            {
                 if *intervals == 0 {
-                    return Err(ModelError::invalid(path, f("intervals"), "must be at least 1 shooting interval, got 0"));
+                    return Err(ModelError::invalid(
+                        path,
+                        f("intervals"),
+                        "must be at least 1 shooting interval, got 0",
+                    ));
                 }
                 let ok = match *duration {
                     Duration::Fixed(v) => v.is_finite() && v > 0.0,
                     Duration::Free { initial, min, max } => {
-                        min.is_finite() && max.is_finite() && min > 0.0 && min <= initial && initial <= max
+                        min.is_finite()
+                            && max.is_finite()
+                            && min > 0.0
+                            && min <= initial
+                            && initial <= max
                     }
                 };
                 if !ok {
@@ -178,7 +238,11 @@ impl PhaseSequence {
 
     /// Constraint sets of every phase for `model`; unknown contacts name the phase. Also
     /// checks the sizes and ranges of `initial_state` against the model.
-    pub fn resolve(&self, model: &GaitModel, path: &Path) -> Result<Vec<ConstraintSet>, ModelError> {
+    pub fn resolve(
+        &self,
+        model: &GaitModel,
+        path: &Path,
+    ) -> Result<Vec<ConstraintSet>, ModelError> {
         if let Some(init) = &self.initial_state {
             init.check(model, path, "initial_state")?;
         }
@@ -210,8 +274,14 @@ impl PhaseSequence {
                         ));
                     }
                 }
-                let list: Vec<(&str, bool)> = ph.contacts().iter().map(|c| (c.contact.as_str(), c.rolling)).collect();
-                model.constraint_set(ph.name(), &list).map_err(|r| ModelError::invalid(path, f("contacts".into()), r))
+                let list: Vec<(&str, bool)> = ph
+                    .contacts()
+                    .iter()
+                    .map(|c| (c.contact.as_str(), c.rolling))
+                    .collect();
+                model
+                    .constraint_set(ph.name(), &list)
+                    .map_err(|r| ModelError::invalid(path, f("contacts".into()), r))
             })
             .collect()
     }
@@ -231,7 +301,11 @@ impl InitialState {
                 ));
             }
             if let Some(k) = v.iter().position(|x| !x.is_finite()) {
-                return Err(ModelError::invalid(path, format!("{field}.{name}[{k}]"), "must be finite"));
+                return Err(ModelError::invalid(
+                    path,
+                    format!("{field}.{name}[{k}]"),
+                    "must be finite",
+                ));
             }
         }
         if let Some(a) = &self.a {
@@ -242,7 +316,10 @@ impl InitialState {
                     format!("has {} activations, the model has {}", a.len(), model.na()),
                 ));
             }
-            if let Some(k) = a.iter().position(|x| !(x.is_finite() && (0.0..=1.0).contains(x))) {
+            if let Some(k) = a
+                .iter()
+                .position(|x| !(x.is_finite() && (0.0..=1.0).contains(x)))
+            {
                 return Err(ModelError::invalid(
                     path,
                     format!("{field}.a[{k}]"),

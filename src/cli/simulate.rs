@@ -130,8 +130,9 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
             model.foot_name
         );
     }
-    let res = simulate(&model, &seq, &sets, &x0, &controls, &theta, &settings)?;
+    // refuse an existing output folder before the work, not after it
     let folder = RunFolder::create(&args.out, args.overwrite)?;
+    let res = simulate(&model, &seq, &sets, &x0, &controls, &theta, &settings)?;
     folder.write("timeseries.csv", timeseries_csv(&model, &sets, &res).as_bytes())?;
     let summary = summary_json(&model, &seq, &sets, &res, &args, started.elapsed().as_secs_f64());
     folder.write("summary.json", serde_json::to_string_pretty(&summary)?.as_bytes())?;

@@ -221,22 +221,42 @@ impl EffectSpec {
     /// `side`, `stiffness`, `rest_angle`, `free`) and what is wrong.
     pub fn check(&self) -> Result<(), (&'static str, String)> {
         match self {
-            EffectSpec::PassiveJointStiffness { joint, side, stiffness, rest_angle, free } => {
+            EffectSpec::PassiveJointStiffness {
+                joint,
+                side,
+                stiffness,
+                rest_angle,
+                free,
+            } => {
                 if !["hip", "knee", "ankle"].contains(&joint.as_str()) {
-                    return Err(("joint", format!("'{joint}' is not a joint of the model; use one of hip, knee, ankle")));
+                    return Err((
+                        "joint",
+                        format!(
+                            "'{joint}' is not a joint of the model; use one of hip, knee, ankle"
+                        ),
+                    ));
                 }
                 if !["both", "right", "left"].contains(&side.as_str()) {
                     return Err(("side", format!("'{side}' is not one of both, right, left")));
                 }
                 if !(stiffness.is_finite() && *stiffness >= 0.0) {
-                    return Err(("stiffness", format!("must be a finite number ≥ 0 N·m/rad, got {stiffness}")));
+                    return Err((
+                        "stiffness",
+                        format!("must be a finite number ≥ 0 N·m/rad, got {stiffness}"),
+                    ));
                 }
                 if !rest_angle.is_finite() {
-                    return Err(("rest_angle", format!("must be a finite number of radians, got {rest_angle}")));
+                    return Err((
+                        "rest_angle",
+                        format!("must be a finite number of radians, got {rest_angle}"),
+                    ));
                 }
                 for (k, f) in free.iter().enumerate() {
                     if f != "stiffness" && f != "rest_angle" {
-                        return Err(("free", format!("entry {k} '{f}' is not one of stiffness, rest_angle")));
+                        return Err((
+                            "free",
+                            format!("entry {k} '{f}' is not one of stiffness, rest_angle"),
+                        ));
                     }
                     if free[..k].contains(f) {
                         return Err(("free", format!("'{f}' is listed twice")));
@@ -249,9 +269,16 @@ impl EffectSpec {
 
     /// Build the effect instances for a model with generalised coordinates `coords`.
     pub fn build(&self, coords: &[String]) -> Result<Vec<Box<dyn DynEffect>>, String> {
-        self.check().map_err(|(field, reason)| format!("{field}: {reason}"))?;
+        self.check()
+            .map_err(|(field, reason)| format!("{field}: {reason}"))?;
         match self {
-            EffectSpec::PassiveJointStiffness { joint, side, stiffness, rest_angle, free } => {
+            EffectSpec::PassiveJointStiffness {
+                joint,
+                side,
+                stiffness,
+                rest_angle,
+                free,
+            } => {
                 let sides: &[&str] = match side.as_str() {
                     "right" => &["r"],
                     "left" => &["l"],

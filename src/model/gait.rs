@@ -493,13 +493,23 @@ impl GaitModel {
             let mut b_baum = vec![0.0; nc];
             let mut jp = vec![S::c(0.0); 2 * nq];
             let mut rep_rows = Vec::new();
+            // geometry once per contact (a rolling contact has two rows)
+            let mut geo: Vec<(usize, V2<S>, V2<S>)> = Vec::with_capacity(nc);
             for (r, row) in set.rows.iter().enumerate() {
                 let contact = &self.contacts[row.contact];
-                let (pt, d, d1) = self.contact_geometry(&k, contact, n);
+                let (pt, bias) = match geo.iter().find(|g| g.0 == row.contact) {
+                    Some(&(_, pt, bias)) => (pt, bias),
+                    None => {
+                        let (pt, d, d1) = self.contact_geometry(&k, contact, n);
+                        let (_, acc) = self.tree.point_motion(&k, contact.body, pt);
+                        let w = k.omega[contact.body];
+                        let bias = add(acc, scale(add(perp(d1), d), w * w));
+                        geo.push((row.contact, pt, bias));
+                        (pt, bias)
+                    }
+                };
+                let gdot_qd_vec = bias;
                 self.tree.point_jacobian(&k, contact.body, pt, &mut jp);
-                let (_, acc) = self.tree.point_motion(&k, contact.body, pt);
-                let w = k.omega[contact.body];
-                let gdot_qd_vec = add(acc, scale(add(perp(d1), d), w * w));
                 let e = if row.kind == RowKind::Normal { n } else { t };
                 for j in 0..nq {
                     g[r * nq + j] = e[0] * jp[j] + e[1] * jp[nq + j];
@@ -735,23 +745,57 @@ impl GaitModel {
         xdot: &mut [f64],
         jac: &mut [f64],
     ) -> Result<(), DynamicsError> {
-        let (nx, nu) = (self.nx(), self.nu());
-        let mut z = Vec::with_capacity(nx + nu + theta.len());
-        z.extend_from_slice(x);
-        z.extend_from_slice(u);
-        z.extend_from_slice(theta);
+        let (nx, nu, nt) = (self.nx(), self.nu(), theta.len());
         let mut lam = vec![AdChunk::from(0.0); set.rows.len()];
-        ad::jacobian(
-            &z,
-            nx,
-            |zs, out| {
-                let (xs, rest) = zs.split_at(nx);
-                let (us, ts) = rest.split_at(nu);
-                self.dynamics(set, xs, us, ts, out, &mut lam, None)
-            },
-            xdot,
-            jac,
-        )
+        match &self.actuation {
+            // Excitations enter only the activation dynamics ȧ = rate(u, a): their columns
+            // are diagonal and come from a scalar dual evaluation; AD runs over (x, θ) only.
+            Actuation::Mtg(mtg) => {
+                let mut z = Vec::with_capacity(nx + nt);
+                z.extend_from_slice(x);
+                z.extend_from_slice(theta);
+                let mut jz = vec![0.0; nx * (nx + nt)];
+                let uc: Vec<AdChunk> = u.iter().map(|&v| AdChunk::from(v)).collect();
+                ad::jacobian(
+                    &z,
+                    nx,
+                    |zs, out| {
+                        let (xs, ts) = zs.split_at(nx);
+                        self.dynamics(set, xs, &uc, ts, out, &mut lam, None)
+                    },
+                    xdot,
+                    &mut jz,
+                )?;
+                jac[..nx * nx].copy_from_slice(&jz[..nx * nx]);
+                jac[nx * (nx + nu)..].copy_from_slice(&jz[nx * nx..]);
+                let fu = &mut jac[nx * nx..nx * (nx + nu)];
+                fu.iter_mut().for_each(|v| *v = 0.0);
+                let a0 = 2 * self.nq();
+                for i in 0..nu {
+                    let e = num_dual::Dual64::new(u[i], 1.0);
+                    let a = num_dual::Dual64::from(x[a0 + i]);
+                    fu[i * nx + a0 + i] = mtg.activation.rate(e, a).eps;
+                }
+                Ok(())
+            }
+            Actuation::Torques { .. } => {
+                let mut z = Vec::with_capacity(nx + nu + nt);
+                z.extend_from_slice(x);
+                z.extend_from_slice(u);
+                z.extend_from_slice(theta);
+                ad::jacobian(
+                    &z,
+                    nx,
+                    |zs, out| {
+                        let (xs, rest) = zs.split_at(nx);
+                        let (us, ts) = rest.split_at(nu);
+                        self.dynamics(set, xs, us, ts, out, &mut lam, None)
+                    },
+                    xdot,
+                    jac,
+                )
+            }
+        }
     }
 }
 

@@ -142,7 +142,12 @@ pub struct ContactSettings {
 
 impl Default for ContactSettings {
     fn default() -> Self {
-        Self { ground_height: 0.0, baumgarte_alpha: 20.0, baumgarte_beta: 20.0, baumgarte_gamma: 20.0 }
+        Self {
+            ground_height: 0.0,
+            baumgarte_alpha: 20.0,
+            baumgarte_beta: 20.0,
+            baumgarte_gamma: 20.0,
+        }
     }
 }
 
@@ -220,14 +225,20 @@ pub struct PrimitiveSpec {
 
 /// Read and parse a JSON file, mapping errors to [`ModelError`] with line and column.
 pub fn read_json<T: DeserializeOwned>(path: &Path) -> Result<T, ModelError> {
-    let text = std::fs::read_to_string(path).map_err(|source| ModelError::Io { path: path.to_path_buf(), source })?;
+    let text = std::fs::read_to_string(path).map_err(|source| ModelError::Io {
+        path: path.to_path_buf(),
+        source,
+    })?;
     parse_json(&text, path)
 }
 
 /// Parse JSON text that came from `path`.
 ///
 /// The error names the dotted path of the offending field (`body.segments.thigh.mass`,
-/// `primitives[0].shape`), found from serde's line and column.
+/// `primitives[0].shape.type`). serde reports only a line and column, and inside internally
+/// tagged enums (`body`, `shape`, phases) only the end of the buffered object; the path is
+/// found from that position and then narrowed by looking for the value or key that serde's
+/// message names.
 pub fn parse_json<T: DeserializeOwned>(text: &str, path: &Path) -> Result<T, ModelError> {
     serde_json::from_str(text).map_err(|e| {
         let what = e.to_string();
@@ -235,102 +246,395 @@ pub fn parse_json<T: DeserializeOwned>(text: &str, path: &Path) -> Result<T, Mod
             Some(k) if e.line() > 0 => what[..k].to_string(),
             _ => what,
         };
-        let mut field = if e.line() > 0 { json_path_at(text, e.line(), e.column()) } else { String::new() };
-        // serde names the unknown or missing field itself; the position is its parent object.
-        for prefix in ["unknown field `", "missing field `"] {
-            if let Some(name) = what.strip_prefix(prefix).and_then(|r| r.split('`').next()) {
-                field = if field.is_empty() { name.to_string() } else { format!("{field}.{name}") };
+        let (mut line, mut column) = (e.line(), e.column());
+        let mut field = if line > 0 {
+            json_path_at(text, line, column, what.starts_with("missing field `"))
+        } else {
+            Vec::new()
+        };
+        let syntax = matches!(
+            e.classify(),
+            serde_json::error::Category::Syntax | serde_json::error::Category::Eof
+        );
+        if !syntax {
+            let root = serde_json::from_str::<serde_json::Value>(text).ok();
+            // the value normally lies below serde's position; else look further up
+            let found = root.as_ref().and_then(|root| {
+                (0..=field.len())
+                    .rev()
+                    .find_map(|depth| Some((depth, locate(root, &field[..depth], &what)?)))
+            });
+            if let Some((depth, sub)) = found {
+                field.truncate(depth);
+                field.extend(sub);
+                // serde's position is the end of a buffered object; point at the field
+                // (or, for a missing one, at the object lacking it).
+                let pos = json_position_of(text, &field).or_else(|| {
+                    field
+                        .split_last()
+                        .and_then(|(_, parent)| json_position_of(text, parent))
+                });
+                if let Some(pos) = pos {
+                    (line, column) = pos;
+                }
+            } else if let Some(name) = what
+                .strip_prefix("missing field `")
+                .and_then(|r| r.split('`').next())
+            {
+                field.push(PathSeg::Key(name.to_string()));
             }
         }
-        let message = match e.classify() {
-            serde_json::error::Category::Syntax | serde_json::error::Category::Eof => {
-                if field.is_empty() {
-                    format!("invalid JSON: {what}")
-                } else {
-                    format!("invalid JSON: {what} (inside `{field}`)")
-                }
+        let field = format_path(&field);
+        let message = if syntax {
+            if field.is_empty() {
+                format!("invalid JSON: {what}")
+            } else {
+                format!("invalid JSON: {what} (near field '{field}')")
             }
-            _ if field.is_empty() => what,
-            _ => format!("field `{field}`: {what}"),
+        } else if field.is_empty() {
+            what
+        } else {
+            format!("field '{field}': {what}")
         };
-        ModelError::Json { path: path.to_path_buf(), message, line: e.line(), column: e.column() }
+        ModelError::Json {
+            path: path.to_path_buf(),
+            message,
+            line,
+            column,
+        }
     })
 }
 
-/// Dotted path of the JSON value being read just before `line`:`column` (1-based, as
-/// serde_json reports them; the character at the position itself is excluded). Object keys
-/// become `.key`, array elements `[i]`; inside an unfinished key the path is its object's.
-fn json_path_at(text: &str, line: usize, column: usize) -> String {
-    enum Frame {
-        Object { key: Option<String> },
-        Array { index: usize },
-    }
-    let line_start: usize = text.split_inclusive('\n').take(line.saturating_sub(1)).map(str::len).sum();
-    let mut end = (line_start + column.saturating_sub(1)).min(text.len());
-    while !text.is_char_boundary(end) {
-        end -= 1;
-    }
-    let mut stack: Vec<Frame> = Vec::new();
-    let mut chars = text[..end].chars();
-    while let Some(c) = chars.next() {
-        match c {
-            '{' => stack.push(Frame::Object { key: None }),
-            '[' => stack.push(Frame::Array { index: 0 }),
-            '}' | ']' => {
-                stack.pop();
+/// One step of a path into a JSON document.
+#[derive(Debug, Clone, PartialEq)]
+enum PathSeg {
+    Key(String),
+    Index(usize),
+}
+
+fn format_path(p: &[PathSeg]) -> String {
+    let mut out = String::new();
+    for s in p {
+        match s {
+            PathSeg::Key(k) => {
+                if !out.is_empty() {
+                    out.push('.');
+                }
+                out.push_str(k);
             }
-            ',' => match stack.last_mut() {
-                Some(Frame::Array { index }) => *index += 1,
-                Some(Frame::Object { key }) => *key = None,
+            PathSeg::Index(i) => out.push_str(&format!("[{i}]")),
+        }
+    }
+    out
+}
+
+/// A minimal JSON scanner that follows the path of the value being read (the input is
+/// assumed to be JSON up to where scanning stops).
+#[derive(Default)]
+struct PathScanner {
+    stack: Vec<ScanFrame>,
+}
+
+enum ScanFrame {
+    Object {
+        /// Key of the current (or, after a comma, the previous) member.
+        key: Option<String>,
+        /// The member's value has been read completely (a string or a container).
+        done: bool,
+        /// A comma follows the member; the next key has not started.
+        after_comma: bool,
+        /// Scanning stopped inside the next key.
+        in_key: bool,
+    },
+    Array {
+        /// Elements started so far; the current (or previous) one is `count - 1`.
+        count: usize,
+        /// The element after the last comma has started.
+        started: bool,
+    },
+}
+
+/// What a [`PathScanner`] step began.
+enum ScanEvent {
+    None,
+    /// An object key ended; its value is next.
+    Key,
+    /// An array element starts at this character.
+    Element,
+}
+
+impl PathScanner {
+    /// Consume character `c` (a string is consumed whole from `chars`) and tell what began.
+    fn step(&mut self, c: char, chars: &mut impl Iterator<Item = (usize, char)>) -> ScanEvent {
+        let mut event = ScanEvent::None;
+        if !c.is_whitespace() && c != ',' && c != ']' {
+            if let Some(ScanFrame::Array { count, started }) = self.stack.last_mut() {
+                if !*started {
+                    *count += 1;
+                    *started = true;
+                    event = ScanEvent::Element;
+                }
+            }
+        }
+        match c {
+            '{' => self.stack.push(ScanFrame::Object {
+                key: None,
+                done: false,
+                after_comma: false,
+                in_key: false,
+            }),
+            '[' => self.stack.push(ScanFrame::Array {
+                count: 0,
+                started: false,
+            }),
+            '}' | ']' => {
+                self.stack.pop();
+                if let Some(ScanFrame::Object { done, .. }) = self.stack.last_mut() {
+                    *done = true;
+                }
+            }
+            ',' => match self.stack.last_mut() {
+                Some(ScanFrame::Array { started, .. }) => *started = false,
+                Some(ScanFrame::Object { after_comma, .. }) => *after_comma = true,
                 None => {}
             },
             '"' => {
                 let mut s = String::new();
                 let mut closed = false;
-                while let Some(d) = chars.next() {
+                while let Some((_, d)) = chars.next() {
                     match d {
                         '"' => {
                             closed = true;
                             break;
                         }
                         '\\' => {
-                            if let Some(x) = chars.next() {
+                            if let Some((_, x)) = chars.next() {
                                 s.push(x);
                             }
                         }
                         _ => s.push(d),
                     }
                 }
-                if let Some(Frame::Object { key }) = stack.last_mut() {
-                    if key.is_none() && closed {
+                if let Some(ScanFrame::Object {
+                    key,
+                    done,
+                    after_comma,
+                    in_key,
+                }) = self.stack.last_mut()
+                {
+                    let is_key = key.is_none() || *after_comma;
+                    if is_key && closed {
                         *key = Some(s);
+                        *done = false;
+                        *after_comma = false;
+                        return ScanEvent::Key;
                     }
+                    *in_key |= is_key;
+                    *done |= !is_key && closed;
+                }
+            }
+            _ => {}
+        }
+        event
+    }
+
+    /// The path; with `object`, a member still being read in the innermost object is left
+    /// out (serde reports a missing field at the end of the object lacking it).
+    fn path(&self, object: bool) -> Vec<PathSeg> {
+        let mut out = Vec::new();
+        for (depth, f) in self.stack.iter().enumerate() {
+            if object && depth + 1 == self.stack.len() {
+                if let ScanFrame::Object {
+                    after_comma: false, ..
+                } = f
+                {
+                    break;
+                }
+            }
+            match f {
+                ScanFrame::Object {
+                    key: Some(k),
+                    done,
+                    after_comma,
+                    in_key: false,
+                } if !*done || *after_comma => out.push(PathSeg::Key(k.clone())),
+                ScanFrame::Array { count, .. } if *count > 0 => out.push(PathSeg::Index(count - 1)),
+                _ => break,
+            }
+        }
+        out
+    }
+
+    /// Whether the member or element just begun is at `target`.
+    fn at(&self, target: &[PathSeg]) -> bool {
+        self.stack.len() == target.len()
+            && self.stack.iter().zip(target).all(|(f, t)| match (f, t) {
+                (ScanFrame::Object { key: Some(k), .. }, PathSeg::Key(t)) => k == t,
+                (ScanFrame::Array { count, .. }, PathSeg::Index(t)) => *count == t + 1,
+                _ => false,
+            })
+    }
+}
+
+/// Path of the JSON value serde was reading just before `line`:`column` (1-based, as
+/// serde_json reports them; the character at the position itself is excluded). Inside a
+/// key, or after a complete member, the path is the enclosing object's; right after a comma
+/// (serde has looked past a member it failed on) it is that member's. See
+/// [`PathScanner::path`] for `object`.
+fn json_path_at(text: &str, line: usize, column: usize, object: bool) -> Vec<PathSeg> {
+    let line_start: usize = text
+        .split_inclusive('\n')
+        .take(line.saturating_sub(1))
+        .map(str::len)
+        .sum();
+    let mut end = (line_start + column.saturating_sub(1)).min(text.len());
+    while !text.is_char_boundary(end) {
+        end -= 1;
+    }
+    let mut sc = PathScanner::default();
+    let mut chars = text[..end].char_indices();
+    while let Some((_, c)) = chars.next() {
+        sc.step(c, &mut chars);
+    }
+    sc.path(object)
+}
+
+/// Line and column (1-based) where the value at `target` starts in `text`: its key for an
+/// object member, its first character for an array element; `None` for the root or a path
+/// that does not occur.
+fn json_position_of(text: &str, target: &[PathSeg]) -> Option<(usize, usize)> {
+    if target.is_empty() {
+        return None;
+    }
+    let line_col = |offset: usize| {
+        let before = &text[..offset];
+        let line = before.matches('\n').count() + 1;
+        let col = before.rsplit('\n').next().map_or(0, |l| l.chars().count()) + 1;
+        (line, col)
+    };
+    let mut sc = PathScanner::default();
+    let mut chars = text.char_indices();
+    while let Some((i, c)) = chars.next() {
+        match sc.step(c, &mut chars) {
+            ScanEvent::Key | ScanEvent::Element if sc.at(target) => return Some(line_col(i)),
+            _ => {}
+        }
+    }
+    None
+}
+
+/// Narrow serde's message down to a path below `at` in `root`: the key an `unknown field`
+/// names, the object a `missing field` is missing from, or the value an `invalid type`,
+/// `invalid value`, `unknown variant` or `invalid length` quotes. `None` when nothing fits.
+fn locate(root: &serde_json::Value, at: &[PathSeg], what: &str) -> Option<Vec<PathSeg>> {
+    use serde_json::Value;
+    let mut base = root;
+    for s in at {
+        base = match (s, base) {
+            (PathSeg::Key(k), Value::Object(m)) => m.get(k)?,
+            (PathSeg::Index(i), Value::Array(a)) => a.get(*i)?,
+            _ => return None,
+        };
+    }
+    let quoted = |open: &str, close: char| -> Option<String> {
+        let k = what.find(open)? + open.len();
+        let rest = &what[k..];
+        Some(rest[..rest.find(close)?].to_string())
+    };
+    // Every value below `base` with its relative path, in document order.
+    fn walk<'a>(v: &'a Value, path: &mut Vec<PathSeg>, out: &mut Vec<(Vec<PathSeg>, &'a Value)>) {
+        out.push((path.clone(), v));
+        match v {
+            Value::Object(m) => {
+                for (k, x) in m {
+                    path.push(PathSeg::Key(k.clone()));
+                    walk(x, path, out);
+                    path.pop();
+                }
+            }
+            Value::Array(a) => {
+                for (i, x) in a.iter().enumerate() {
+                    path.push(PathSeg::Index(i));
+                    walk(x, path, out);
+                    path.pop();
                 }
             }
             _ => {}
         }
     }
-    let mut out = String::new();
-    for f in &stack {
-        match f {
-            Frame::Object { key: Some(k) } => {
-                if !out.is_empty() {
-                    out.push('.');
-                }
-                out.push_str(k);
-            }
-            Frame::Object { key: None } => break,
-            Frame::Array { index } => out.push_str(&format!("[{index}]")),
-        }
+    let mut all = Vec::new();
+    walk(base, &mut Vec::new(), &mut all);
+    let first =
+        |pred: &dyn Fn(&Value) -> bool| all.iter().find(|(_, v)| pred(v)).map(|(p, _)| p.clone());
+    if let Some(name) = quoted("unknown field `", '`') {
+        let mut p = first(&|v| v.as_object().is_some_and(|m| m.contains_key(&name)))?;
+        p.push(PathSeg::Key(name));
+        return Some(p);
     }
-    out
+    if let Some(name) = quoted("missing field `", '`') {
+        if !base.is_object() {
+            return None;
+        }
+        // The object below `base` lacking `name` that looks most like the objects of the
+        // document having it (shares the most keys with one); without such, `base` itself.
+        let mut everything = Vec::new();
+        walk(root, &mut Vec::new(), &mut everything);
+        let having: Vec<&serde_json::Map<String, Value>> = everything
+            .iter()
+            .filter_map(|(_, v)| v.as_object())
+            .filter(|m| m.contains_key(&name))
+            .collect();
+        let mut best: Option<(usize, Vec<PathSeg>)> = None;
+        for (p, v) in &all {
+            let Some(m) = v.as_object() else { continue };
+            if m.contains_key(&name) {
+                continue;
+            }
+            let score = having
+                .iter()
+                .map(|h| m.keys().filter(|k| h.contains_key(*k)).count())
+                .max()
+                .unwrap_or(0);
+            if best.as_ref().is_none_or(|(s, _)| score > *s) {
+                best = Some((score, p.clone()));
+            }
+        }
+        let mut p = match best {
+            Some((s, p)) if s > 0 => p,
+            _ => Vec::new(),
+        };
+        p.push(PathSeg::Key(name));
+        return Some(p);
+    }
+    if let Some(s) = quoted("unknown variant `", '`').or_else(|| quoted("string \"", '"')) {
+        return first(&|v| v.as_str() == Some(s.as_str()));
+    }
+    if let Some(n) = quoted("integer `", '`').or_else(|| quoted("floating point `", '`')) {
+        let n: f64 = n.parse().ok()?;
+        return first(&|v| v.as_f64() == Some(n));
+    }
+    if let Some(b) = quoted("boolean `", '`') {
+        return first(&|v| v.as_bool().map(|x| x.to_string()) == Some(b.clone()));
+    }
+    if what.contains("invalid type: null") {
+        return first(&|v| v.is_null());
+    }
+    if let Some(n) = quoted("invalid length ", ',') {
+        let n: usize = n.parse().ok()?;
+        return first(&|v| v.as_array().is_some_and(|a| a.len() == n));
+    }
+    None
 }
 
 fn check_positive(path: &Path, field: &str, v: f64, unit: &str) -> Result<(), ModelError> {
     if v.is_finite() && v > 0.0 {
         Ok(())
     } else {
-        Err(ModelError::invalid(path, field, format!("must be a positive finite number ({unit}), got {v}")))
+        Err(ModelError::invalid(
+            path,
+            field,
+            format!("must be a positive finite number ({unit}), got {v}"),
+        ))
     }
 }
 
@@ -338,7 +642,11 @@ fn check_finite(path: &Path, field: &str, v: &[f64]) -> Result<(), ModelError> {
     if v.iter().all(|x| x.is_finite()) {
         Ok(())
     } else {
-        Err(ModelError::invalid(path, field, format!("must be finite, got {v:?}")))
+        Err(ModelError::invalid(
+            path,
+            field,
+            format!("must be finite, got {v:?}"),
+        ))
     }
 }
 
@@ -392,7 +700,10 @@ impl ModelSpec {
                         path: target,
                         source: std::io::Error::new(
                             e.kind(),
-                            format!("{e} (the OpenSim model named by field 'body.file' of {})", path.display()),
+                            format!(
+                                "{e} (the OpenSim model named by field 'body.file' of {})",
+                                path.display()
+                            ),
                         ),
                     });
                 }
@@ -413,14 +724,25 @@ impl ModelSpec {
                 if let Some(h) = subject_height {
                     check_positive(path, "actuators.subject_height", *h, "m")?;
                 }
-                check_positive(path, "actuators.strength_scale", *strength_scale, "dimensionless")?;
+                check_positive(
+                    path,
+                    "actuators.strength_scale",
+                    *strength_scale,
+                    "dimensionless",
+                )?;
                 if !(eta.is_finite() && *eta >= 0.0) {
-                    return Err(ModelError::invalid(path, "actuators.eta", format!("must be finite and ≥ 0, got {eta}")));
+                    return Err(ModelError::invalid(
+                        path,
+                        "actuators.eta",
+                        format!("must be finite and ≥ 0, got {eta}"),
+                    ));
                 }
                 check_positive(path, "actuators.tau_activation", *tau_activation, "s")?;
                 check_positive(path, "actuators.tau_deactivation", *tau_deactivation, "s")?;
             }
-            ActuatorSpec::JointTorques { max_torque } => check_positive(path, "actuators.max_torque", *max_torque, "N·m")?,
+            ActuatorSpec::JointTorques { max_torque } => {
+                check_positive(path, "actuators.max_torque", *max_torque, "N·m")?
+            }
         }
         let c = &self.contact;
         check_finite(path, "contact.ground_height", &[c.ground_height])?;
@@ -430,12 +752,17 @@ impl ModelSpec {
             ("contact.baumgarte_gamma", c.baumgarte_gamma),
         ] {
             if !(v.is_finite() && v >= 0.0) {
-                return Err(ModelError::invalid(path, f, format!("must be finite and ≥ 0 (1/s), got {v}")));
+                return Err(ModelError::invalid(
+                    path,
+                    f,
+                    format!("must be finite and ≥ 0 (1/s), got {v}"),
+                ));
             }
         }
         let mut springs: Vec<(usize, &str, &str)> = Vec::new();
         for (i, e) in self.effects.iter().enumerate() {
-            e.check().map_err(|(f, r)| ModelError::invalid(path, format!("effects[{i}].{f}"), r))?;
+            e.check()
+                .map_err(|(f, r)| ModelError::invalid(path, format!("effects[{i}].{f}"), r))?;
             match e {
                 EffectSpec::PassiveJointStiffness { joint, side, .. } => {
                     let sides: &[&str] = match side.as_str() {
@@ -444,7 +771,9 @@ impl ModelSpec {
                         _ => &["right", "left"],
                     };
                     for s in sides {
-                        if let Some((j, _, _)) = springs.iter().find(|(_, jj, ss)| jj == joint && ss == s) {
+                        if let Some((j, _, _)) =
+                            springs.iter().find(|(_, jj, ss)| jj == joint && ss == s)
+                        {
                             return Err(ModelError::invalid(
                                 path,
                                 format!("effects[{i}].joint"),
@@ -486,14 +815,31 @@ impl FootSpec {
                 ));
             }
             if self.primitives[..i].iter().any(|q| q.name == p.name) {
-                return Err(ModelError::invalid(path, format!("primitives[{i}].name"), format!("'{}' is used twice", p.name)));
+                return Err(ModelError::invalid(
+                    path,
+                    format!("primitives[{i}].name"),
+                    format!("'{}' is used twice", p.name),
+                ));
             }
-            p.shape.check().map_err(|(f, r)| ModelError::invalid(path, format!("primitives[{i}].shape.{f}"), r))?;
+            p.shape.check().map_err(|(f, r)| {
+                ModelError::invalid(path, format!("primitives[{i}].shape.{f}"), r)
+            })?;
+            if p.shape.lowest_y().is_none() {
+                return Err(ModelError::invalid(
+                    path,
+                    format!("primitives[{i}].shape"),
+                    "its lowest point evaluates to a non-finite number; use sizes and positions in metres of a foot's scale",
+                ));
+            }
         }
         // Planar model, foot frame at the ankle with y up in the neutral pose: a primitive
         // whose lowest point is not below the ankle can never carry the body's weight.
-        let lowest = self.primitives.iter().filter_map(|p| p.shape.lowest_y()).fold(f64::INFINITY, f64::min);
-        if !(lowest < 0.0) {
+        let lowest = self
+            .primitives
+            .iter()
+            .filter_map(|p| p.shape.lowest_y())
+            .fold(f64::INFINITY, f64::min);
+        if lowest >= 0.0 {
             return Err(ModelError::invalid(
                 path,
                 "primitives",
@@ -521,10 +867,16 @@ pub fn opensim_segments(path: &Path, lumbar: LumbarChoice) -> Result<Segments, M
     let v: serde_json::Value = read_json(path)?;
     let get = |ptr: &str| -> Result<f64, ModelError> {
         v.pointer(ptr).and_then(|x| x.as_f64()).ok_or_else(|| {
-            ModelError::invalid(path, ptr.trim_start_matches('/').replace('/', "."), "missing or not a number")
+            ModelError::invalid(
+                path,
+                ptr.trim_start_matches('/').replace('/', "."),
+                "missing or not a number",
+            )
         })
     };
-    let pair = |ptr: &str| -> Result<[f64; 2], ModelError> { Ok([get(&format!("{ptr}/0"))?, get(&format!("{ptr}/1"))?]) };
+    let pair = |ptr: &str| -> Result<[f64; 2], ModelError> {
+        Ok([get(&format!("{ptr}/0"))?, get(&format!("{ptr}/1"))?])
+    };
     let hat = match lumbar {
         LumbarChoice::TrialMean => "/nine_dof_mapping/HAT_at_trial_mean_lumbar",
         LumbarChoice::Zero => "/nine_dof_mapping/HAT_at_default_lumbar_0",
@@ -551,7 +903,9 @@ pub fn opensim_segments(path: &Path, lumbar: LumbarChoice) -> Result<Segments, M
             izz: get("/nine_dof_mapping/foot_r/inertia_about_com_in_talus_frame_kg_m2/zz")?,
         },
         hip_in_pelvis: pair("/derived_planar/hip_centre_in_pelvis_frame_m")?,
-        knee_in_thigh: pair("/derived_planar/thigh_hip_to_knee_m/vector_in_femur_frame_at_knee_angle_0_m")?,
+        knee_in_thigh: pair(
+            "/derived_planar/thigh_hip_to_knee_m/vector_in_femur_frame_at_knee_angle_0_m",
+        )?,
         ankle_in_shank: pair("/derived_planar/shank_vector_in_tibia_frame_m")?,
     };
     seg.validate(path)?;

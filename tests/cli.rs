@@ -1,0 +1,282 @@
+//! The `footfall` binary end to end: a successful simulation writes a complete, finite run
+//! folder; bad input and failed runs exit with code 1, print `error: …` naming the file,
+//! field or phase, and leave no output folder (nor a hidden staging folder) behind.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Run `footfall ARGS` in the crate root.
+fn footfall(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_footfall"))
+        .args(args)
+        .current_dir(root())
+        .output()
+        .expect("run the footfall binary")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().expect("UTF-8 temp path")
+}
+
+/// Everything in `dir`, hidden entries included, sorted.
+fn entries(dir: &Path) -> Vec<String> {
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .expect("read dir")
+        .map(|e| {
+            e.expect("dir entry")
+                .file_name()
+                .to_string_lossy()
+                .into_owned()
+        })
+        .collect();
+    v.sort();
+    v
+}
+
+/// A failed run: exit code 1, one `error:` report that names every item of `names`, no panic.
+fn assert_user_error(o: &Output, names: &[&str]) -> String {
+    let err = stderr(o);
+    assert_eq!(
+        o.status.code(),
+        Some(1),
+        "expected exit code 1, stderr: {err}"
+    );
+    assert!(
+        err.starts_with("error: "),
+        "stderr does not start with `error:`: {err}"
+    );
+    assert!(!err.contains("panicked"), "the binary panicked: {err}");
+    for n in names {
+        assert!(err.contains(n), "stderr does not name {n:?}: {err}");
+    }
+    err
+}
+
+const STEP: [&str; 6] = [
+    "simulate",
+    "--phase-set",
+    "phases/sim_ellipse_step.json",
+    "--controls",
+    "phases/sim_controls_cocontraction.csv",
+    "--quiet",
+];
+
+fn step_args<'a>(out: &'a str, extra: &[&'a str]) -> Vec<&'a str> {
+    let mut a: Vec<&str> = STEP.to_vec();
+    a.extend(["--out", out]);
+    a.extend(extra);
+    a
+}
+
+/// Every number in a JSON document is finite (serde_json writes NaN and ±inf as `null`).
+fn assert_all_finite(v: &serde_json::Value, at: &str) {
+    match v {
+        serde_json::Value::Null => panic!("summary.json: null (a non-finite number?) at {at}"),
+        serde_json::Value::Number(n) => {
+            assert!(
+                n.as_f64().is_some_and(f64::is_finite),
+                "summary.json: {n} at {at}"
+            )
+        }
+        serde_json::Value::Array(a) => a
+            .iter()
+            .enumerate()
+            .for_each(|(i, x)| assert_all_finite(x, &format!("{at}[{i}]"))),
+        serde_json::Value::Object(m) => m
+            .iter()
+            .for_each(|(k, x)| assert_all_finite(x, &format!("{at}.{k}"))),
+        _ => {}
+    }
+}
+
+#[test]
+fn simulate_writes_a_complete_finite_run_folder() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("run");
+    let o = footfall(&step_args(s(&out), &[]));
+    assert!(o.status.success(), "simulate failed: {}", stderr(&o));
+    assert_eq!(entries(tmp.path()), ["run"], "staging folder left behind");
+    assert_eq!(entries(&out), ["summary.json", "timeseries.csv"]);
+
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
+            .expect("summary.json is JSON");
+    let samples = summary["samples"].as_u64().expect("summary.samples");
+    assert!(samples > 0);
+    assert_all_finite(&summary, "summary");
+
+    let csv = std::fs::read_to_string(out.join("timeseries.csv")).unwrap();
+    let lower = csv.to_ascii_lowercase();
+    assert!(
+        !lower.contains("nan") && !lower.contains("inf"),
+        "timeseries.csv holds non-finite text"
+    );
+    let mut lines = csv.lines();
+    let header: Vec<&str> = lines.next().expect("header").split(',').collect();
+    assert_eq!(header[..3], ["time", "phase", "pelvis_x"]);
+    let rows: Vec<&str> = lines.collect();
+    assert_eq!(rows.len() as u64, samples, "one row per sample");
+    for (i, row) in rows.iter().enumerate() {
+        let cells: Vec<&str> = row.split(',').collect();
+        assert_eq!(
+            cells.len(),
+            header.len(),
+            "row {} has {} cells",
+            i + 2,
+            cells.len()
+        );
+        for (c, cell) in cells.iter().enumerate().filter(|(c, _)| *c != 1) {
+            // empty = not applicable (e.g. the centre of pressure of an unloaded foot)
+            if !cell.is_empty() {
+                let v: f64 = cell
+                    .parse()
+                    .unwrap_or_else(|_| panic!("row {}, `{}`: `{cell}`", i + 2, header[c]));
+                assert!(v.is_finite());
+            }
+        }
+    }
+}
+
+#[test]
+fn bad_model_file_is_refused_without_output() {
+    let tmp = tempfile::tempdir().unwrap();
+    let model = tmp.path().join("bad_model.json");
+    let text = std::fs::read_to_string(root().join("models/opensim_subject01.json"))
+        .unwrap()
+        .replace("../data/", &format!("{}/data/", s(&root())))
+        .replace("\"gravity\": 9.80665", "\"gravity\": -9.80665");
+    std::fs::write(&model, text).unwrap();
+    let out = tmp.path().join("run");
+    let o = footfall(&step_args(s(&out), &["--model", s(&model)]));
+    let err = assert_user_error(&o, &[s(&model), "'gravity'", "positive"]);
+    eprintln!("{err}");
+    assert!(!out.exists(), "an output folder was created");
+    assert_eq!(
+        entries(tmp.path()),
+        ["bad_model.json"],
+        "something was left behind"
+    );
+
+    // malformed JSON names the file, line and column
+    std::fs::write(&model, "{ \"name\": \"x\",\n  \"body\": { ] }\n").unwrap();
+    let o = footfall(&step_args(s(&out), &["--model", s(&model)]));
+    let err = assert_user_error(&o, &[s(&model), "invalid JSON", "line 2"]);
+    eprintln!("{err}");
+    assert_eq!(entries(tmp.path()), ["bad_model.json"]);
+}
+
+#[test]
+fn bad_foot_phase_and_control_files_are_refused_without_output() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("run");
+
+    let foot = tmp.path().join("foot.json");
+    std::fs::write(
+        &foot,
+        r#"{ "name": "f", "primitives": [ { "name": "sole", "shape": { "type": "circle", "centre": [0.0, -0.05], "radius": -0.03 } } ] }"#,
+    )
+    .unwrap();
+    let o = footfall(&step_args(s(&out), &["--foot", s(&foot)]));
+    eprintln!(
+        "{}",
+        assert_user_error(&o, &[s(&foot), "primitives[0].shape.radius"])
+    );
+
+    let phases = tmp.path().join("phases.json");
+    let text = std::fs::read_to_string(root().join("phases/sim_ellipse_step.json")).unwrap();
+    std::fs::write(&phases, text.replacen("\"r.sole\"", "\"r.heel\"", 1)).unwrap();
+    let mut args = step_args(s(&out), &[]);
+    args[2] = s(&phases);
+    let o = footfall(&args);
+    eprintln!(
+        "{}",
+        assert_user_error(
+            &o,
+            &[
+                s(&phases),
+                "phase 'single_stance_r'",
+                "unknown contact 'r.heel'"
+            ]
+        )
+    );
+
+    let controls = tmp.path().join("controls.csv");
+    let text =
+        std::fs::read_to_string(root().join("phases/sim_controls_cocontraction.csv")).unwrap();
+    std::fs::write(&controls, text.replace("\n0.4,", "\n-0.4,")).unwrap();
+    let mut args = step_args(s(&out), &[]);
+    args[4] = s(&controls);
+    let o = footfall(&args);
+    eprintln!(
+        "{}",
+        assert_user_error(&o, &[s(&controls), "line 3", "does not increase"])
+    );
+
+    let missing = tmp.path().join("no_such_phases.json");
+    let mut args = step_args(s(&out), &[]);
+    args[2] = s(&missing);
+    let o = footfall(&args);
+    eprintln!("{}", assert_user_error(&o, &[s(&missing), "cannot read"]));
+
+    assert_eq!(
+        entries(tmp.path()),
+        ["controls.csv", "foot.json", "phases.json"],
+        "something was left behind"
+    );
+}
+
+#[test]
+fn existing_output_folder_is_kept_without_overwrite() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("run");
+    std::fs::create_dir(&out).unwrap();
+    std::fs::write(out.join("keep.txt"), "precious").unwrap();
+    let o = footfall(&step_args(s(&out), &[]));
+    let err = assert_user_error(&o, &[s(&out), "already exists", "--overwrite"]);
+    eprintln!("{err}");
+    assert_eq!(entries(tmp.path()), ["run"], "staging folder left behind");
+    assert_eq!(entries(&out), ["keep.txt"]);
+    assert_eq!(
+        std::fs::read_to_string(out.join("keep.txt")).unwrap(),
+        "precious"
+    );
+
+    // with --overwrite the folder is replaced by a complete run
+    let o = footfall(&step_args(s(&out), &["--overwrite"]));
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(entries(&out), ["summary.json", "timeseries.csv"]);
+    assert_eq!(entries(tmp.path()), ["run"]);
+}
+
+#[test]
+fn integrator_failure_names_the_phase_and_leaves_no_output() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("run");
+    // a tolerance below the unit roundoff: CVODES refuses at the first step (CV_TOO_MUCH_ACC)
+    let o = footfall(&step_args(s(&out), &["--tol", "1e-300"]));
+    let err = assert_user_error(&o, &["phase 'single_stance_r'", "t = ", "CV_TOO_MUCH_ACC"]);
+    eprintln!("{err}");
+    assert!(
+        entries(tmp.path()).is_empty(),
+        "output left behind: {:?}",
+        entries(tmp.path())
+    );
+}
+
+#[test]
+fn invalid_integrator_tolerance_is_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("run");
+    let o = footfall(&step_args(s(&out), &["--tol", "2"]));
+    let err = assert_user_error(&o, &["rtol", "(0, 1)"]);
+    eprintln!("{err}");
+    assert!(entries(tmp.path()).is_empty());
+}
