@@ -5,9 +5,12 @@
 //! phase sequences, forward simulation and run folders.
 #![warn(missing_docs)]
 
+pub mod benchmarks;
 pub mod controls;
 pub mod integrate;
 pub mod model;
+pub mod ocp;
 pub mod phases;
 pub mod runfolder;
 pub mod simulate;
+pub mod sqp;

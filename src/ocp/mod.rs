@@ -1,0 +1,12 @@
+//! Multi-phase optimal control problems and their direct multiple-shooting transcription.
+//!
+//! An [`Ocp`] lists continuous phases (dynamics as a
+//! [`ControlledOde`](crate::integrate::ControlledOde), a shooting grid, bounds, an initial
+//! guess), transitions between phases (e.g. impact maps), constraints and cost terms as
+//! functions of node variables. [`Transcription`] turns it into a sparse NLP whose
+//! continuity constraints come from CVODES forward sensitivities.
+pub mod problem;
+pub mod transcription;
+
+pub use problem::{Block, Constraint, NodeFunction, Ocp, Phase, PhaseDuration, Term};
+pub use transcription::{Evaluation, RowLabel, Transcription, TranscriptionError};

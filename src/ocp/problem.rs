@@ -1,0 +1,155 @@
+//! The multi-phase optimal control problem as the transcription sees it: phases with
+//! dynamics, shooting grids, bounds and initial guesses; functions of node variables for
+//! transitions, constraints and costs. Nothing here knows about gait.
+
+use crate::integrate::{ControlShape, ControlledOde, IntegratorSettings};
+use std::sync::Arc;
+
+/// A block of decision variables a function may depend on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Block {
+    /// State at a node of a phase (node 0 … intervals).
+    State {
+        /// Phase index.
+        phase: usize,
+        /// Node index.
+        node: usize,
+    },
+    /// Control at a node (constant controls: interval index 0 … intervals−1; linear
+    /// controls: node index 0 … intervals).
+    Control {
+        /// Phase index.
+        phase: usize,
+        /// Node or interval index.
+        node: usize,
+    },
+    /// Duration of a phase (s).
+    Duration {
+        /// Phase index.
+        phase: usize,
+    },
+    /// The free model parameters θ.
+    Params,
+}
+
+/// A vector function of the concatenation `z` of its argument blocks, with an exact
+/// Jacobian (`jac[i + j * dim] = ∂f_i/∂z_j`).
+pub trait NodeFunction: Send + Sync {
+    /// Output dimension.
+    fn dim(&self) -> usize;
+    /// Evaluate; fill `jac` when given.
+    fn eval(&self, z: &[f64], value: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), String>;
+}
+
+/// A function applied to specific variable blocks, with a name for reports.
+#[derive(Clone)]
+pub struct Term {
+    /// Name (e.g. `periodicity`, `friction_cone`).
+    pub name: String,
+    /// Argument blocks, concatenated in this order.
+    pub args: Vec<Block>,
+    /// The function.
+    pub f: Arc<dyn NodeFunction>,
+}
+
+impl std::fmt::Debug for Term {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Term").field("name", &self.name).field("args", &self.args).finish()
+    }
+}
+
+/// A constraint `lb ≤ f(z) ≤ ub` (equal bounds for an equality).
+#[derive(Debug, Clone)]
+pub struct Constraint {
+    /// The function and its arguments.
+    pub term: Term,
+    /// Lower bounds (−∞ allowed).
+    pub lb: Vec<f64>,
+    /// Upper bounds (+∞ allowed).
+    pub ub: Vec<f64>,
+}
+
+/// Duration of a phase: fixed when `lb == ub`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PhaseDuration {
+    /// Initial guess (s).
+    pub value: f64,
+    /// Lower bound (s).
+    pub lb: f64,
+    /// Upper bound (s).
+    pub ub: f64,
+}
+
+impl PhaseDuration {
+    /// A fixed duration.
+    pub fn fixed(v: f64) -> Self {
+        Self { value: v, lb: v, ub: v }
+    }
+    /// Whether the duration is a decision variable.
+    pub fn is_free(&self) -> bool {
+        self.lb < self.ub
+    }
+}
+
+/// One continuous phase, discretised into equal shooting intervals.
+pub struct Phase<'a> {
+    /// Name, used in reports.
+    pub name: String,
+    /// Dynamics.
+    pub ode: &'a dyn ControlledOde,
+    /// Number of shooting intervals (≥ 1).
+    pub intervals: usize,
+    /// Duration.
+    pub duration: PhaseDuration,
+    /// Control parameterisation.
+    pub controls: ControlShape,
+    /// State bounds per node (`intervals + 1` rows of nx).
+    pub x_lb: Vec<Vec<f64>>,
+    /// State upper bounds per node.
+    pub x_ub: Vec<Vec<f64>>,
+    /// Control bounds per control node.
+    pub u_lb: Vec<Vec<f64>>,
+    /// Control upper bounds per control node.
+    pub u_ub: Vec<Vec<f64>>,
+    /// Initial guess of the node states.
+    pub x_guess: Vec<Vec<f64>>,
+    /// Initial guess of the controls.
+    pub u_guess: Vec<Vec<f64>>,
+}
+
+impl Phase<'_> {
+    /// Number of control nodes.
+    pub fn control_nodes(&self) -> usize {
+        match self.controls {
+            ControlShape::Constant => self.intervals,
+            ControlShape::Linear => self.intervals + 1,
+        }
+    }
+}
+
+/// A multi-phase optimal control problem
+/// $$\min \sum \|r_i(z_i)\|^2 + \sum \phi_i(z_i)\quad\text{s.t. dynamics, transitions,}
+///   \;lb \le g(z) \le ub,\; \text{bounds}.$$
+pub struct Ocp<'a> {
+    /// Continuous phases in order.
+    pub phases: Vec<Phase<'a>>,
+    /// State transition into phase `j + 1`: `x_{j+1,0} = ψ_j(args)`; `None` means
+    /// continuity `x_{j+1,0} = x_{j,N}` (equal state dimensions required).
+    pub transitions: Vec<Option<Term>>,
+    /// Number of free parameters θ (shared by all phases' dynamics).
+    pub ntheta: usize,
+    /// θ initial guess and bounds.
+    pub theta_guess: Vec<f64>,
+    /// θ lower bounds.
+    pub theta_lb: Vec<f64>,
+    /// θ upper bounds.
+    pub theta_ub: Vec<f64>,
+    /// Path and boundary constraints.
+    pub constraints: Vec<Constraint>,
+    /// Least-squares cost terms: cost += ‖r(z)‖².
+    pub least_squares: Vec<Term>,
+    /// General scalar cost terms (dimension 1).
+    pub costs: Vec<Term>,
+    /// Integrator settings for the shooting intervals.
+    pub integrator: IntegratorSettings,
+}

@@ -1,0 +1,685 @@
+//! Direct multiple-shooting transcription of an [`Ocp`] into a sparse NLP
+//! $$\min_w f(w)\quad\text{s.t.}\quad c_{lb} \le c(w) \le c_{ub},\; w_{lb} \le w \le w_{ub}.$$
+//!
+//! Variables, per phase in node order: $s_{j,0}, u_{j,0}, s_{j,1}, u_{j,1}, \dots, s_{j,N_j}$
+//! (and $u_{j,N_j}$ for linear controls), then the phase duration $T_j$; θ last.
+//! Constraints: continuity $s_{j,k+1} - \Phi(h_j; s_{j,k}, u_{j,k}[, u_{j,k+1}], \theta) = 0$
+//! with $h_j = T_j/N_j$, from CVODES with forward sensitivities (every interval in
+//! parallel, deterministic whatever the thread count); phase transitions; user terms.
+//! The Jacobian is kept sparse: a fixed pattern built once, values refilled per
+//! evaluation.
+
+use super::problem::{Block, Ocp};
+use crate::integrate::{ControlShape, IntegrationStats, Integrator, IntegratorError, ShootingInterval};
+use rayon::prelude::*;
+use std::ops::Range;
+use std::sync::Mutex;
+
+/// Failure of an NLP evaluation.
+#[derive(Debug, thiserror::Error)]
+pub enum TranscriptionError {
+    /// The problem is malformed.
+    #[error("invalid problem: {0}")]
+    Invalid(String),
+    /// Integration of a shooting interval failed.
+    #[error("phase '{phase}', interval {interval}")]
+    Integrator {
+        /// Phase name.
+        phase: String,
+        /// Interval index.
+        interval: usize,
+        /// Cause.
+        #[source]
+        source: IntegratorError,
+    },
+    /// A user function failed.
+    #[error("term '{term}': {reason}")]
+    Term {
+        /// Term name.
+        term: String,
+        /// Cause.
+        reason: String,
+    },
+}
+
+/// Where a constraint row comes from, for reports of violated constraints.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct RowLabel {
+    /// Phase name (or `problem` for whole-problem terms).
+    pub phase: String,
+    /// Node or interval index within the phase.
+    pub node: usize,
+    /// Constraint name and component.
+    pub name: String,
+}
+
+#[derive(Debug, Clone)]
+struct IntervalRef {
+    phase: usize,
+    k: usize,
+    row: usize,
+}
+
+#[derive(Debug, Clone)]
+struct TermRef {
+    term: usize,
+    kind: TermKind,
+    row: usize,
+    cols: Vec<usize>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum TermKind {
+    Transition,
+    Constraint,
+    LeastSquares,
+    Cost,
+}
+
+/// Result of one evaluation.
+#[derive(Debug, Clone, Default)]
+pub struct Evaluation {
+    /// Objective.
+    pub f: f64,
+    /// Constraint values.
+    pub c: Vec<f64>,
+    /// Objective gradient (when derivatives were requested).
+    pub grad: Vec<f64>,
+    /// Jacobian values in [`Transcription::jacobian_pattern`] order.
+    pub jac: Vec<f64>,
+    /// Gauss–Newton Hessian values `2 Σ J_rᵀ J_r` in
+    /// [`Transcription::gauss_newton_pattern`] order (upper triangle).
+    pub gauss_newton: Vec<f64>,
+    /// Integrator counters of this evaluation.
+    pub stats: IntegrationStats,
+}
+
+/// The transcribed NLP.
+pub struct Transcription<'o, 'a> {
+    ocp: &'o Ocp<'a>,
+    n: usize,
+    state_off: Vec<Vec<usize>>,
+    control_off: Vec<Vec<usize>>,
+    duration_off: Vec<usize>,
+    theta_off: usize,
+    m: usize,
+    intervals: Vec<IntervalRef>,
+    terms: Vec<TermRef>,
+    jac_rows: Vec<usize>,
+    jac_cols: Vec<usize>,
+    gn_rows: Vec<usize>,
+    gn_cols: Vec<usize>,
+    pools: Vec<Mutex<Vec<Integrator>>>,
+    labels: Vec<RowLabel>,
+}
+
+impl<'o, 'a> Transcription<'o, 'a> {
+    /// Lay out variables and constraints and build the sparsity patterns.
+    pub fn new(ocp: &'o Ocp<'a>) -> Result<Self, TranscriptionError> {
+        let inv = |s: String| TranscriptionError::Invalid(s);
+        if ocp.phases.is_empty() {
+            return Err(inv("no phase".into()));
+        }
+        if ocp.transitions.len() + 1 != ocp.phases.len() {
+            return Err(inv(format!(
+                "{} transitions for {} phases (need one between each pair)",
+                ocp.transitions.len(),
+                ocp.phases.len()
+            )));
+        }
+        let mut n = 0;
+        let mut state_off = Vec::new();
+        let mut control_off = Vec::new();
+        let mut duration_off = Vec::new();
+        for (j, ph) in ocp.phases.iter().enumerate() {
+            let (nx, nu) = (ph.ode.nx(), ph.ode.nu());
+            if ph.intervals == 0 {
+                return Err(inv(format!("phase '{}' has zero intervals", ph.name)));
+            }
+            if ph.ode.ntheta() != ocp.ntheta {
+                return Err(inv(format!("phase '{}': dynamics have {} parameters, problem has {}", ph.name, ph.ode.ntheta(), ocp.ntheta)));
+            }
+            let nodes = ph.intervals + 1;
+            let cn = ph.control_nodes();
+            for (what, v, len, width) in [
+                ("x_lb", &ph.x_lb, nodes, nx),
+                ("x_ub", &ph.x_ub, nodes, nx),
+                ("x_guess", &ph.x_guess, nodes, nx),
+                ("u_lb", &ph.u_lb, cn, nu),
+                ("u_ub", &ph.u_ub, cn, nu),
+                ("u_guess", &ph.u_guess, cn, nu),
+            ] {
+                if v.len() != len || v.iter().any(|r| r.len() != width) {
+                    return Err(inv(format!("phase '{}' ({j}): {what} must be {len} rows of {width}", ph.name)));
+                }
+            }
+            let mut so = Vec::new();
+            let mut co = Vec::new();
+            for k in 0..nodes {
+                so.push(n);
+                n += nx;
+                if k < cn {
+                    co.push(n);
+                    n += nu;
+                }
+            }
+            state_off.push(so);
+            control_off.push(co);
+            duration_off.push(n);
+            n += 1;
+        }
+        let theta_off = n;
+        n += ocp.ntheta;
+
+        let mut t = Self {
+            ocp,
+            n,
+            state_off,
+            control_off,
+            duration_off,
+            theta_off,
+            m: 0,
+            intervals: Vec::new(),
+            terms: Vec::new(),
+            jac_rows: Vec::new(),
+            jac_cols: Vec::new(),
+            gn_rows: Vec::new(),
+            gn_cols: Vec::new(),
+            pools: ocp.phases.iter().map(|_| Mutex::new(Vec::new())).collect(),
+            labels: Vec::new(),
+        };
+        // continuity rows
+        for (j, ph) in ocp.phases.iter().enumerate() {
+            let nx = ph.ode.nx();
+            for k in 0..ph.intervals {
+                let row = t.m;
+                t.intervals.push(IntervalRef { phase: j, k, row });
+                let mut cols: Vec<usize> = Vec::new();
+                cols.extend(t.range(Block::State { phase: j, node: k }));
+                cols.extend(t.range(Block::Control { phase: j, node: k }));
+                if ph.controls == ControlShape::Linear {
+                    cols.extend(t.range(Block::Control { phase: j, node: k + 1 }));
+                }
+                cols.push(t.duration_off[j]);
+                cols.extend(t.range(Block::Params));
+                for i in 0..nx {
+                    for &c in &cols {
+                        t.jac_rows.push(row + i);
+                        t.jac_cols.push(c);
+                    }
+                    t.jac_rows.push(row + i);
+                    t.jac_cols.push(t.state_off[j][k + 1] + i);
+                    t.labels.push(RowLabel { phase: ph.name.clone(), node: k, name: format!("continuity[{i}]") });
+                }
+                t.m += nx;
+            }
+        }
+        // transitions
+        for (j, tr) in ocp.transitions.iter().enumerate() {
+            let next = &ocp.phases[j + 1];
+            let nx1 = next.ode.nx();
+            let row = t.m;
+            match tr {
+                Some(term) => {
+                    if term.f.dim() != nx1 {
+                        return Err(inv(format!("transition '{}' has dimension {}, phase '{}' has {nx1} states", term.name, term.f.dim(), next.name)));
+                    }
+                    let cols = t.term_cols(&term.args)?;
+                    t.terms.push(TermRef { term: j, kind: TermKind::Transition, row, cols: cols.clone() });
+                    for i in 0..nx1 {
+                        for &c in &cols {
+                            t.jac_rows.push(row + i);
+                            t.jac_cols.push(c);
+                        }
+                    }
+                }
+                None => {
+                    let prev = &ocp.phases[j];
+                    if prev.ode.nx() != nx1 {
+                        return Err(inv(format!("phases '{}' and '{}' differ in state dimension and need a transition", prev.name, next.name)));
+                    }
+                    for i in 0..nx1 {
+                        t.jac_rows.push(row + i);
+                        t.jac_cols.push(t.state_off[j][prev.intervals] + i);
+                    }
+                }
+            }
+            for i in 0..nx1 {
+                t.jac_rows.push(row + i);
+                t.jac_cols.push(t.state_off[j + 1][0] + i);
+                t.labels.push(RowLabel { phase: next.name.clone(), node: 0, name: format!("transition[{i}]") });
+            }
+            t.m += nx1;
+        }
+        // user constraints
+        for (ci, con) in ocp.constraints.iter().enumerate() {
+            let d = con.term.f.dim();
+            if con.lb.len() != d || con.ub.len() != d {
+                return Err(inv(format!("constraint '{}': bounds must have {d} entries", con.term.name)));
+            }
+            let cols = t.term_cols(&con.term.args)?;
+            let row = t.m;
+            t.terms.push(TermRef { term: ci, kind: TermKind::Constraint, row, cols: cols.clone() });
+            let (phase, node) = t.locate(&con.term.args);
+            for i in 0..d {
+                for &c in &cols {
+                    t.jac_rows.push(row + i);
+                    t.jac_cols.push(c);
+                }
+                t.labels.push(RowLabel { phase: phase.clone(), node, name: format!("{}[{i}]", con.term.name) });
+            }
+            t.m += d;
+        }
+        // costs
+        for (li, ls) in ocp.least_squares.iter().enumerate() {
+            let cols = t.term_cols(&ls.args)?;
+            for (a, &ca) in cols.iter().enumerate() {
+                for &cb in &cols[a..] {
+                    t.gn_rows.push(ca.min(cb));
+                    t.gn_cols.push(ca.max(cb));
+                }
+            }
+            t.terms.push(TermRef { term: li, kind: TermKind::LeastSquares, row: 0, cols });
+        }
+        for (gi, g) in ocp.costs.iter().enumerate() {
+            if g.f.dim() != 1 {
+                return Err(inv(format!("cost '{}' must be scalar", g.name)));
+            }
+            let cols = t.term_cols(&g.args)?;
+            t.terms.push(TermRef { term: gi, kind: TermKind::Cost, row: 0, cols });
+        }
+        Ok(t)
+    }
+
+    fn locate(&self, args: &[Block]) -> (String, usize) {
+        for b in args {
+            match *b {
+                Block::State { phase, node } | Block::Control { phase, node } => {
+                    return (self.ocp.phases[phase].name.clone(), node)
+                }
+                Block::Duration { phase } => return (self.ocp.phases[phase].name.clone(), 0),
+                Block::Params => {}
+            }
+        }
+        ("problem".into(), 0)
+    }
+
+    fn term_cols(&self, args: &[Block]) -> Result<Vec<usize>, TranscriptionError> {
+        let mut cols = Vec::new();
+        for &b in args {
+            self.check_block(b)?;
+            cols.extend(self.range(b));
+        }
+        Ok(cols)
+    }
+
+    fn check_block(&self, b: Block) -> Result<(), TranscriptionError> {
+        let ok = match b {
+            Block::State { phase, node } => phase < self.ocp.phases.len() && node <= self.ocp.phases[phase].intervals,
+            Block::Control { phase, node } => phase < self.ocp.phases.len() && node < self.ocp.phases[phase].control_nodes(),
+            Block::Duration { phase } => phase < self.ocp.phases.len(),
+            Block::Params => true,
+        };
+        if ok {
+            Ok(())
+        } else {
+            Err(TranscriptionError::Invalid(format!("block {b:?} does not exist")))
+        }
+    }
+
+    /// Variable index range of a block.
+    pub fn range(&self, b: Block) -> Range<usize> {
+        match b {
+            Block::State { phase, node } => {
+                let o = self.state_off[phase][node];
+                o..o + self.ocp.phases[phase].ode.nx()
+            }
+            Block::Control { phase, node } => {
+                let o = self.control_off[phase][node];
+                o..o + self.ocp.phases[phase].ode.nu()
+            }
+            Block::Duration { phase } => self.duration_off[phase]..self.duration_off[phase] + 1,
+            Block::Params => self.theta_off..self.theta_off + self.ocp.ntheta,
+        }
+    }
+
+    /// Number of variables.
+    pub fn n(&self) -> usize {
+        self.n
+    }
+    /// Number of constraints.
+    pub fn m(&self) -> usize {
+        self.m
+    }
+    /// The problem.
+    pub fn ocp(&self) -> &Ocp<'a> {
+        self.ocp
+    }
+    /// Row labels of the constraints.
+    pub fn labels(&self) -> &[RowLabel] {
+        &self.labels
+    }
+    /// Jacobian sparsity pattern as (rows, cols); duplicates are summed.
+    pub fn jacobian_pattern(&self) -> (&[usize], &[usize]) {
+        (&self.jac_rows, &self.jac_cols)
+    }
+    /// Gauss–Newton Hessian pattern (upper triangle, duplicates summed).
+    pub fn gauss_newton_pattern(&self) -> (&[usize], &[usize]) {
+        (&self.gn_rows, &self.gn_cols)
+    }
+
+    /// Variable blocks for block-wise quasi-Newton updates: one block per shooting node
+    /// (state with its control), plus durations and θ.
+    pub fn hessian_blocks(&self) -> Vec<Vec<usize>> {
+        let mut blocks = Vec::new();
+        for (j, ph) in self.ocp.phases.iter().enumerate() {
+            for k in 0..=ph.intervals {
+                let mut b: Vec<usize> = self.range(Block::State { phase: j, node: k }).collect();
+                if k < ph.control_nodes() {
+                    b.extend(self.range(Block::Control { phase: j, node: k }));
+                }
+                blocks.push(b);
+            }
+            blocks.push(vec![self.duration_off[j]]);
+        }
+        if self.ocp.ntheta > 0 {
+            blocks.push(self.range(Block::Params).collect());
+        }
+        blocks
+    }
+
+    /// Variable bounds and initial guess.
+    pub fn variable_bounds_and_guess(&self) -> (Vec<f64>, Vec<f64>, Vec<f64>) {
+        let mut lb = vec![f64::NEG_INFINITY; self.n];
+        let mut ub = vec![f64::INFINITY; self.n];
+        let mut w = vec![0.0; self.n];
+        for (j, ph) in self.ocp.phases.iter().enumerate() {
+            for k in 0..=ph.intervals {
+                let r = self.range(Block::State { phase: j, node: k });
+                lb[r.clone()].copy_from_slice(&ph.x_lb[k]);
+                ub[r.clone()].copy_from_slice(&ph.x_ub[k]);
+                w[r].copy_from_slice(&ph.x_guess[k]);
+            }
+            for k in 0..ph.control_nodes() {
+                let r = self.range(Block::Control { phase: j, node: k });
+                lb[r.clone()].copy_from_slice(&ph.u_lb[k]);
+                ub[r.clone()].copy_from_slice(&ph.u_ub[k]);
+                w[r].copy_from_slice(&ph.u_guess[k]);
+            }
+            let d = self.duration_off[j];
+            lb[d] = ph.duration.lb;
+            ub[d] = ph.duration.ub;
+            w[d] = ph.duration.value;
+        }
+        let r = self.range(Block::Params);
+        lb[r.clone()].copy_from_slice(&self.ocp.theta_lb);
+        ub[r.clone()].copy_from_slice(&self.ocp.theta_ub);
+        w[r].copy_from_slice(&self.ocp.theta_guess);
+        (lb, ub, w)
+    }
+
+    /// Constraint bounds.
+    pub fn constraint_bounds(&self) -> (Vec<f64>, Vec<f64>) {
+        let mut lb = vec![0.0; self.m];
+        let mut ub = vec![0.0; self.m];
+        for t in &self.terms {
+            if t.kind == TermKind::Constraint {
+                let con = &self.ocp.constraints[t.term];
+                lb[t.row..t.row + con.lb.len()].copy_from_slice(&con.lb);
+                ub[t.row..t.row + con.ub.len()].copy_from_slice(&con.ub);
+            }
+        }
+        (lb, ub)
+    }
+
+    fn gather(&self, w: &[f64], cols: &[usize]) -> Vec<f64> {
+        cols.iter().map(|&c| w[c]).collect()
+    }
+
+    fn integrate_interval(
+        &self,
+        iv: &IntervalRef,
+        w: &[f64],
+        sens: bool,
+    ) -> Result<(Vec<f64>, Vec<f64>, IntegrationStats), TranscriptionError> {
+        let ph = &self.ocp.phases[iv.phase];
+        let interval = ShootingInterval::new(ph.ode, ph.controls);
+        let (nx, np) = (ph.ode.nx(), interval.np());
+        let x0 = &w[self.range(Block::State { phase: iv.phase, node: iv.k })];
+        let u0 = &w[self.range(Block::Control { phase: iv.phase, node: iv.k })];
+        let u1 = match ph.controls {
+            ControlShape::Linear => Some(&w[self.range(Block::Control { phase: iv.phase, node: iv.k + 1 })]),
+            ControlShape::Constant => None,
+        };
+        let h = w[self.duration_off[iv.phase]] / ph.intervals as f64;
+        let theta = &w[self.range(Block::Params)];
+        let err = |source| TranscriptionError::Integrator { phase: ph.name.clone(), interval: iv.k, source };
+        let mut p = Vec::with_capacity(np);
+        interval.pack_params(u0, u1, h, theta, &mut p).map_err(err)?;
+        let pool = &self.pools[iv.phase];
+        let taken = pool.lock().map(|mut v| v.pop()).unwrap_or(None);
+        let mut integ = match taken {
+            Some(i) => i,
+            None => Integrator::new(nx, np, self.ocp.integrator.clone()).map_err(err)?,
+        };
+        let mut x1 = vec![0.0; nx];
+        let mut s = Vec::new();
+        let res = if sens {
+            s = vec![0.0; nx * (nx + np)];
+            integ.integrate_with_sensitivities(&interval, 0.0, 1.0, x0, &p, &mut x1, &mut s)
+        } else {
+            integ.integrate(&interval, 0.0, 1.0, x0, &p, &mut x1)
+        };
+        if let Ok(mut v) = pool.lock() {
+            v.push(integ);
+        }
+        let stats = res.map_err(err)?;
+        Ok((x1, s, stats))
+    }
+
+    /// Evaluate objective and constraints, and with `derivs` their first derivatives
+    /// and the Gauss–Newton Hessian.
+    pub fn evaluate(&self, w: &[f64], derivs: bool) -> Result<Evaluation, TranscriptionError> {
+        let results: Vec<_> = self.intervals.par_iter().map(|iv| self.integrate_interval(iv, w, derivs)).collect();
+        let mut ev = Evaluation {
+            f: 0.0,
+            c: vec![0.0; self.m],
+            grad: if derivs { vec![0.0; self.n] } else { Vec::new() },
+            jac: if derivs { Vec::with_capacity(self.jac_rows.len()) } else { Vec::new() },
+            gauss_newton: if derivs { Vec::with_capacity(self.gn_rows.len()) } else { Vec::new() },
+            stats: IntegrationStats::default(),
+        };
+        // continuity (Jacobian values in pattern order)
+        for (iv, r) in self.intervals.iter().zip(results) {
+            let (x1, s, st) = r?;
+            ev.stats += st;
+            let ph = &self.ocp.phases[iv.phase];
+            let nx = ph.ode.nx();
+            let next = &w[self.range(Block::State { phase: iv.phase, node: iv.k + 1 })];
+            for i in 0..nx {
+                ev.c[iv.row + i] = next[i] - x1[i];
+            }
+            if derivs {
+                let interval = ShootingInterval::new(ph.ode, ph.controls);
+                let np = interval.np();
+                let hscale = 1.0 / ph.intervals as f64;
+                let dur = interval.p_duration();
+                // sensitivity columns in pattern order: x0, u0, [u1], T, θ
+                let mut order: Vec<(usize, f64)> = (0..nx).map(|c| (c, 1.0)).collect();
+                order.extend(interval.p_u0().map(|c| (nx + c, 1.0)));
+                if let Some(r) = interval.p_u1() {
+                    order.extend(r.map(|c| (nx + c, 1.0)));
+                }
+                order.push((nx + dur, hscale));
+                order.extend(interval.p_theta().map(|c| (nx + c, 1.0)));
+                debug_assert_eq!(order.len(), nx + np);
+                for i in 0..nx {
+                    for &(c, sc) in &order {
+                        ev.jac.push(-s[c * nx + i] * sc);
+                    }
+                    ev.jac.push(1.0);
+                }
+            }
+        }
+        // transitions, in pattern order
+        for (j, tr) in self.ocp.transitions.iter().enumerate() {
+            let next = &self.ocp.phases[j + 1];
+            let nx1 = next.ode.nx();
+            let x0: Vec<f64> = w[self.range(Block::State { phase: j + 1, node: 0 })].to_vec();
+            match tr {
+                Some(term) => {
+                    let t = self
+                        .terms
+                        .iter()
+                        .find(|t| t.kind == TermKind::Transition && t.term == j)
+                        .expect("transition term registered in new()");
+                    let z = self.gather(w, &t.cols);
+                    let mut v = vec![0.0; nx1];
+                    let mut jac = vec![0.0; nx1 * z.len()];
+                    term.f
+                        .eval(&z, &mut v, derivs.then_some(&mut jac[..]))
+                        .map_err(|reason| TranscriptionError::Term { term: term.name.clone(), reason })?;
+                    for i in 0..nx1 {
+                        ev.c[t.row + i] = x0[i] - v[i];
+                    }
+                    if derivs {
+                        self.push_transition_jac(&mut ev.jac, t, nx1, &jac);
+                    }
+                }
+                None => {
+                    let prev = &self.ocp.phases[j];
+                    let xe = &w[self.range(Block::State { phase: j, node: prev.intervals })];
+                    let row = self.transition_row(j);
+                    for i in 0..nx1 {
+                        ev.c[row + i] = x0[i] - xe[i];
+                    }
+                    if derivs {
+                        ev.jac.extend(std::iter::repeat(-1.0).take(nx1));
+                        ev.jac.extend(std::iter::repeat(1.0).take(nx1));
+                    }
+                }
+            }
+        }
+        // user constraints and costs, in term order
+        for t in &self.terms {
+            match t.kind {
+                TermKind::Transition => {}
+                TermKind::Constraint => {
+                    let con = &self.ocp.constraints[t.term];
+                    let d = con.term.f.dim();
+                    let z = self.gather(w, &t.cols);
+                    let mut jac = vec![0.0; d * z.len()];
+                    con.term
+                        .f
+                        .eval(&z, &mut ev.c[t.row..t.row + d], derivs.then_some(&mut jac[..]))
+                        .map_err(|reason| TranscriptionError::Term { term: con.term.name.clone(), reason })?;
+                    if derivs {
+                        for i in 0..d {
+                            for c in 0..z.len() {
+                                ev.jac.push(jac[i + c * d]);
+                            }
+                        }
+                    }
+                }
+                TermKind::LeastSquares => {
+                    let term = &self.ocp.least_squares[t.term];
+                    let d = term.f.dim();
+                    let z = self.gather(w, &t.cols);
+                    let mut r = vec![0.0; d];
+                    let mut jac = vec![0.0; d * z.len()];
+                    term.f
+                        .eval(&z, &mut r, derivs.then_some(&mut jac[..]))
+                        .map_err(|reason| TranscriptionError::Term { term: term.name.clone(), reason })?;
+                    ev.f += r.iter().map(|v| v * v).sum::<f64>();
+                    if derivs {
+                        let nz = z.len();
+                        for (a, &ca) in t.cols.iter().enumerate() {
+                            ev.grad[ca] += 2.0 * (0..d).map(|i| jac[i + a * d] * r[i]).sum::<f64>();
+                        }
+                        for a in 0..nz {
+                            for b in a..nz {
+                                let mut v = 2.0 * (0..d).map(|i| jac[i + a * d] * jac[i + b * d]).sum::<f64>();
+                                if t.cols[a] == t.cols[b] && a != b {
+                                    v *= 2.0;
+                                }
+                                ev.gauss_newton.push(v);
+                            }
+                        }
+                    }
+                }
+                TermKind::Cost => {
+                    let term = &self.ocp.costs[t.term];
+                    let z = self.gather(w, &t.cols);
+                    let mut v = [0.0];
+                    let mut jac = vec![0.0; z.len()];
+                    term.f
+                        .eval(&z, &mut v, derivs.then_some(&mut jac[..]))
+                        .map_err(|reason| TranscriptionError::Term { term: term.name.clone(), reason })?;
+                    ev.f += v[0];
+                    if derivs {
+                        for (a, &ca) in t.cols.iter().enumerate() {
+                            ev.grad[ca] += jac[a];
+                        }
+                    }
+                }
+            }
+        }
+        Ok(ev)
+    }
+
+    fn transition_row(&self, j: usize) -> usize {
+        let cont: usize = self.ocp.phases.iter().map(|p| p.intervals * p.ode.nx()).sum();
+        cont + (0..j).map(|i| self.ocp.phases[i + 1].ode.nx()).sum::<usize>()
+    }
+
+    fn push_transition_jac(&self, jac_out: &mut Vec<f64>, t: &TermRef, nx1: usize, jac: &[f64]) {
+        for i in 0..nx1 {
+            for c in 0..t.cols.len() {
+                jac_out.push(-jac[i + c * nx1]);
+            }
+        }
+        for _ in 0..nx1 {
+            jac_out.push(1.0);
+        }
+    }
+}
+
+impl crate::sqp::Nlp for Transcription<'_, '_> {
+    fn n(&self) -> usize {
+        self.n
+    }
+    fn m(&self) -> usize {
+        self.m
+    }
+    fn bounds(&self) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
+        let (wl, wu, _) = self.variable_bounds_and_guess();
+        let (cl, cu) = self.constraint_bounds();
+        (wl, wu, cl, cu)
+    }
+    fn jacobian_pattern(&self) -> (Vec<usize>, Vec<usize>) {
+        (self.jac_rows.clone(), self.jac_cols.clone())
+    }
+    fn gauss_newton_pattern(&self) -> (Vec<usize>, Vec<usize>) {
+        (self.gn_rows.clone(), self.gn_cols.clone())
+    }
+    fn hessian_blocks(&self) -> Vec<Vec<usize>> {
+        Transcription::hessian_blocks(self)
+    }
+    fn evaluate(&self, w: &[f64], derivs: bool) -> Result<crate::sqp::NlpEval, String> {
+        let ev = Transcription::evaluate(self, w, derivs).map_err(|e| {
+            let mut s = e.to_string();
+            let mut src = std::error::Error::source(&e);
+            while let Some(c) = src {
+                s.push_str(": ");
+                s.push_str(&c.to_string());
+                src = c.source();
+            }
+            s
+        })?;
+        Ok(crate::sqp::NlpEval { f: ev.f, c: ev.c, grad: ev.grad, jac: ev.jac, gn: ev.gauss_newton })
+    }
+    fn row_name(&self, i: usize) -> String {
+        let l = &self.labels[i];
+        format!("phase '{}', node {}, {}", l.phase, l.node, l.name)
+    }
+}

@@ -1,0 +1,472 @@
+//! Sequential quadratic programming for sparse NLPs
+//! $$\min_w f(w)\ \text{s.t.}\ c_{lb} \le c(w) \le c_{ub},\ w_{lb} \le w \le w_{ub}.$$
+//!
+//! Each iteration solves a sparse QP (Clarabel) with a Gauss–Newton or block-wise damped
+//! BFGS Hessian and globalises with a backtracking line search on the exact l1 penalty
+//! merit function $\phi(w) = f(w) + \mu \|v(w)\|_1$ ($v$: constraint violations), with a
+//! second-order correction when the full step is rejected. When the linearised
+//! constraints are inconsistent the QP is solved in elastic mode; if the violation then
+//! cannot be reduced the solver stops with [`SqpStatus::Infeasible`] and names the most
+//! violated constraints.
+//!
+//! Convergence is declared when the KKT residual, the largest of the scaled
+//! stationarity $\|\nabla f + J^T\lambda + \nu\|_\infty / s_d$ (IPOPT's scaling,
+//! $s_d = \max(1, \|(\lambda,\nu)\|_1/((m+n)\,100))$), the constraint violation and the
+//! complementarity, falls below the tolerance.
+
+pub mod hessian;
+pub mod qp;
+
+use hessian::BlockBfgs;
+use qp::{QpData, QpError, Triplets};
+use serde::{Deserialize, Serialize};
+use std::time::Instant;
+
+/// A sparse NLP as the SQP sees it.
+pub trait Nlp {
+    /// Number of variables.
+    fn n(&self) -> usize;
+    /// Number of constraints.
+    fn m(&self) -> usize;
+    /// `(w_lb, w_ub, c_lb, c_ub)`.
+    fn bounds(&self) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>);
+    /// Jacobian pattern (rows, cols).
+    fn jacobian_pattern(&self) -> (Vec<usize>, Vec<usize>);
+    /// Gauss–Newton Hessian pattern (upper triangle).
+    fn gauss_newton_pattern(&self) -> (Vec<usize>, Vec<usize>);
+    /// Variable groups for block-wise quasi-Newton updates.
+    fn hessian_blocks(&self) -> Vec<Vec<usize>>;
+    /// Evaluate at `w`; with `derivs` also gradient, Jacobian values and Gauss–Newton
+    /// Hessian values (in pattern order).
+    fn evaluate(&self, w: &[f64], derivs: bool) -> Result<NlpEval, String>;
+    /// Human-readable name of constraint row `i`.
+    fn row_name(&self, i: usize) -> String;
+}
+
+/// An NLP evaluation.
+#[derive(Debug, Clone, Default)]
+pub struct NlpEval {
+    /// Objective.
+    pub f: f64,
+    /// Constraints.
+    pub c: Vec<f64>,
+    /// Gradient.
+    pub grad: Vec<f64>,
+    /// Jacobian values.
+    pub jac: Vec<f64>,
+    /// Gauss–Newton Hessian values.
+    pub gn: Vec<f64>,
+}
+
+/// Hessian approximation.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum HessianMode {
+    /// `2 Σ J_rᵀ J_r` of the least-squares terms (tracking problems).
+    GaussNewton,
+    /// Block-diagonal damped BFGS of the Lagrangian Hessian (general objectives).
+    Bfgs,
+}
+
+/// SQP settings.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(default, deny_unknown_fields)]
+pub struct SqpSettings {
+    /// KKT tolerance (default: 1e-5).
+    pub tol_kkt: f64,
+    /// Iteration limit (default: 200).
+    pub max_iter: usize,
+    /// Wall-time limit in seconds (default: none).
+    pub max_time: Option<f64>,
+    /// Hessian approximation (default: bfgs).
+    pub hessian: HessianMode,
+    /// Armijo constant of the line search (default: 1e-4).
+    pub line_search_armijo: f64,
+    /// Smallest step length before the line search fails (default: 1e-10).
+    pub line_search_min_step: f64,
+    /// Diagonal regularisation added to the QP Hessian (default: 1e-9).
+    pub regularization: f64,
+}
+
+impl Default for SqpSettings {
+    fn default() -> Self {
+        Self {
+            tol_kkt: 1e-5,
+            max_iter: 200,
+            max_time: None,
+            hessian: HessianMode::Bfgs,
+            line_search_armijo: 1e-4,
+            line_search_min_step: 1e-10,
+            regularization: 1e-9,
+        }
+    }
+}
+
+/// Why the SQP stopped.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SqpStatus {
+    /// KKT residual below tolerance.
+    Converged,
+    /// Iteration limit.
+    MaxIterations,
+    /// Time limit.
+    MaxTime,
+    /// No acceptable step along the search direction.
+    LineSearchFailure,
+    /// The QP solver failed.
+    QpFailure(String),
+    /// The constraints cannot be satisfied: a stationary point of the violation with
+    /// positive violation was reached.
+    Infeasible,
+    /// A function evaluation failed at the initial point or repeatedly.
+    EvaluationFailure(String),
+    /// Stopped by the caller's callback (e.g. Ctrl-C).
+    Interrupted,
+}
+
+impl std::fmt::Display for SqpStatus {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            SqpStatus::Converged => write!(f, "converged (KKT tolerance reached)"),
+            SqpStatus::MaxIterations => write!(f, "iteration limit reached"),
+            SqpStatus::MaxTime => write!(f, "time limit reached"),
+            SqpStatus::LineSearchFailure => write!(f, "line search failed"),
+            SqpStatus::QpFailure(s) => write!(f, "QP subproblem failed: {s}"),
+            SqpStatus::Infeasible => write!(f, "infeasible: the constraints cannot be satisfied"),
+            SqpStatus::EvaluationFailure(s) => write!(f, "evaluation failed: {s}"),
+            SqpStatus::Interrupted => write!(f, "interrupted"),
+        }
+    }
+}
+
+/// One iteration's figures.
+#[derive(Debug, Clone, Serialize)]
+pub struct IterationRecord {
+    /// Iteration number (0 = initial point).
+    pub iter: usize,
+    /// Objective.
+    pub objective: f64,
+    /// Largest constraint violation.
+    pub infeasibility: f64,
+    /// KKT residual at this point.
+    pub kkt: f64,
+    /// Accepted step length (0 at the last record).
+    pub step: f64,
+    /// Elapsed seconds.
+    pub seconds: f64,
+    /// QP solver iterations.
+    pub qp_iterations: u32,
+}
+
+/// A violated constraint at the final point.
+#[derive(Debug, Clone, Serialize)]
+pub struct Violation {
+    /// Row name.
+    pub name: String,
+    /// Amount of violation.
+    pub amount: f64,
+}
+
+/// Result of a solve.
+#[derive(Debug, Clone, Serialize)]
+pub struct SqpResult {
+    /// Final variables.
+    pub w: Vec<f64>,
+    /// Constraint multipliers.
+    pub lambda: Vec<f64>,
+    /// Bound multipliers.
+    pub nu: Vec<f64>,
+    /// Objective.
+    pub objective: f64,
+    /// Largest constraint violation.
+    pub infeasibility: f64,
+    /// KKT residual.
+    pub kkt: f64,
+    /// Stop reason.
+    pub status: SqpStatus,
+    /// Iteration history.
+    pub history: Vec<IterationRecord>,
+    /// The most violated constraints (up to 10), largest first.
+    pub most_violated: Vec<Violation>,
+    /// Wall time (s).
+    pub seconds: f64,
+}
+
+/// Receives iteration records; return `false` to stop.
+pub trait Observer {
+    /// Called after every iteration.
+    fn iteration(&mut self, rec: &IterationRecord) -> bool;
+}
+
+/// An observer that prints one line per iteration to stderr.
+pub struct StderrLog;
+
+impl Observer for StderrLog {
+    fn iteration(&mut self, r: &IterationRecord) -> bool {
+        if r.iter == 0 {
+            eprintln!("{:>5} {:>16} {:>10} {:>10} {:>8} {:>8}", "iter", "objective", "infeas", "kkt", "step", "seconds");
+        }
+        eprintln!(
+            "{:>5} {:>16.9e} {:>10.3e} {:>10.3e} {:>8.2e} {:>8.2}",
+            r.iter, r.objective, r.infeasibility, r.kkt, r.step, r.seconds
+        );
+        true
+    }
+}
+
+/// An observer that does nothing.
+pub struct Silent;
+impl Observer for Silent {
+    fn iteration(&mut self, _: &IterationRecord) -> bool {
+        true
+    }
+}
+
+fn violations(c: &[f64], lb: &[f64], ub: &[f64]) -> Vec<f64> {
+    c.iter().zip(lb.iter().zip(ub)).map(|(&v, (&l, &u))| (l - v).max(v - u).max(0.0)).collect()
+}
+
+struct State {
+    w: Vec<f64>,
+    ev: NlpEval,
+}
+
+/// Solve `nlp` from `w0` (clipped into the bounds).
+pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut dyn Observer) -> SqpResult {
+    let start = Instant::now();
+    let (n, m) = (nlp.n(), nlp.m());
+    let (w_lb, w_ub, c_lb, c_ub) = nlp.bounds();
+    let (jr, jc) = nlp.jacobian_pattern();
+    let (hr, hc) = nlp.gauss_newton_pattern();
+    let mut bfgs = BlockBfgs::new(nlp.hessian_blocks());
+    let w: Vec<f64> = w0.iter().zip(w_lb.iter().zip(&w_ub)).map(|(&v, (&l, &u))| v.max(l).min(u)).collect();
+    let fail = |status: SqpStatus, w: Vec<f64>| SqpResult {
+        lambda: vec![0.0; m],
+        nu: vec![0.0; n],
+        objective: f64::NAN,
+        infeasibility: f64::NAN,
+        kkt: f64::NAN,
+        status,
+        history: Vec::new(),
+        most_violated: Vec::new(),
+        seconds: start.elapsed().as_secs_f64(),
+        w,
+    };
+    let ev = match nlp.evaluate(&w, true) {
+        Ok(ev) => ev,
+        Err(e) => return fail(SqpStatus::EvaluationFailure(e), w),
+    };
+    let mut st = State { w, ev };
+    let mut lambda = vec![0.0; m];
+    let mut nu = vec![0.0; n];
+    let mut mu: f64 = 1.0;
+    let mut history = Vec::new();
+    let mut status = SqpStatus::MaxIterations;
+    let mut kkt = f64::INFINITY;
+    let mut last_step = 0.0;
+    let mut qp_iters;
+    let jt = |vals: &[f64]| Triplets { rows: jr.clone(), cols: jc.clone(), vals: vals.to_vec() };
+    for iter in 0..=settings.max_iter {
+        // --- QP subproblem at the current point
+        let mut h = Triplets::default();
+        match settings.hessian {
+            HessianMode::GaussNewton => {
+                h.rows.clone_from(&hr);
+                h.cols.clone_from(&hc);
+                h.vals.clone_from(&st.ev.gn);
+            }
+            HessianMode::Bfgs => bfgs.push_upper(&mut h),
+        }
+        for i in 0..n {
+            h.push(i, i, settings.regularization);
+        }
+        let jac = jt(&st.ev.jac);
+        let d_lb: Vec<f64> = (0..n).map(|i| w_lb[i] - st.w[i]).collect();
+        let d_ub: Vec<f64> = (0..n).map(|i| w_ub[i] - st.w[i]).collect();
+        let viol = violations(&st.ev.c, &c_lb, &c_ub);
+        let infeas = viol.iter().copied().fold(0.0, f64::max);
+        let l1 = viol.iter().sum::<f64>();
+        let data = |elastic| QpData {
+            h: &h,
+            g: &st.ev.grad,
+            jac: &jac,
+            c: &st.ev.c,
+            c_lb: &c_lb,
+            c_ub: &c_ub,
+            d_lb: &d_lb,
+            d_ub: &d_ub,
+            elastic,
+        };
+        let (sol, elastic) = match qp::solve(&data(None)) {
+            Ok(s) => (s, false),
+            Err(QpError::Infeasible) => {
+                let rho = (mu * 10.0).max(1e3);
+                match qp::solve(&data(Some(rho))) {
+                    Ok(s) => (s, true),
+                    Err(e) => {
+                        status = SqpStatus::QpFailure(e.to_string());
+                        break;
+                    }
+                }
+            }
+            Err(e) => {
+                status = SqpStatus::QpFailure(e.to_string());
+                break;
+            }
+        };
+        qp_iters = sol.iterations;
+        // --- KKT residual at the current point with the QP multipliers
+        let mut stat = st.ev.grad.clone();
+        for k in 0..jr.len() {
+            stat[jc[k]] += st.ev.jac[k] * sol.lambda[jr[k]];
+        }
+        for i in 0..n {
+            stat[i] += sol.nu[i];
+        }
+        let mult_l1: f64 = sol.lambda.iter().chain(&sol.nu).map(|v| v.abs()).sum();
+        let sd = (mult_l1 / ((m + n) as f64 * 100.0)).max(1.0);
+        let stat_inf = stat.iter().map(|v| v.abs()).fold(0.0, f64::max) / sd;
+        let compl = (0..m)
+            .map(|i| {
+                let (c, l, u) = (st.ev.c[i], c_lb[i], c_ub[i]);
+                if l == u {
+                    0.0
+                } else if sol.lambda[i] > 0.0 {
+                    (sol.lambda[i] * (u - c)).abs()
+                } else {
+                    (sol.lambda[i] * (c - l)).abs()
+                }
+            })
+            .fold(0.0, f64::max);
+        kkt = stat_inf.max(infeas).max(compl / sd);
+        let rec = IterationRecord {
+            iter,
+            objective: st.ev.f,
+            infeasibility: infeas,
+            kkt,
+            step: last_step,
+            seconds: start.elapsed().as_secs_f64(),
+            qp_iterations: qp_iters,
+        };
+        let go_on = observer.iteration(&rec);
+        history.push(rec);
+        lambda.clone_from(&sol.lambda);
+        nu.clone_from(&sol.nu);
+        if kkt <= settings.tol_kkt && !elastic {
+            status = SqpStatus::Converged;
+            break;
+        }
+        if !go_on {
+            status = SqpStatus::Interrupted;
+            break;
+        }
+        if iter == settings.max_iter {
+            status = SqpStatus::MaxIterations;
+            break;
+        }
+        if settings.max_time.is_some_and(|t| start.elapsed().as_secs_f64() > t) {
+            status = SqpStatus::MaxTime;
+            break;
+        }
+        let dnorm = sol.d.iter().map(|v| v.abs()).fold(0.0, f64::max);
+        let wnorm = st.w.iter().map(|v| v.abs()).fold(1.0, f64::max);
+        if elastic && dnorm <= 1e-10 * wnorm && infeas > settings.tol_kkt {
+            status = SqpStatus::Infeasible;
+            break;
+        }
+        // --- line search on the l1 merit function
+        let lam_inf = sol.lambda.iter().map(|v| v.abs()).fold(0.0, f64::max);
+        if mu < 1.1 * lam_inf {
+            mu = 2.0 * lam_inf;
+        }
+        let grad_d: f64 = st.ev.grad.iter().zip(&sol.d).map(|(a, b)| a * b).sum();
+        let lin_viol = if elastic { sol.elastic_violation } else { 0.0 };
+        let dmerit = grad_d - mu * (l1 - lin_viol);
+        let merit0 = st.ev.f + mu * l1;
+        let merit = |ev: &NlpEval| ev.f + mu * violations(&ev.c, &c_lb, &c_ub).iter().sum::<f64>();
+        let mut alpha = 1.0;
+        let mut accepted: Option<(Vec<f64>, NlpEval)> = None;
+        let trial = |a: f64, dir: &[f64]| -> Vec<f64> {
+            (0..n).map(|i| (st.w[i] + a * dir[i]).max(w_lb[i]).min(w_ub[i])).collect()
+        };
+        // full step, evaluated with derivatives (usually accepted near the solution)
+        let w1 = trial(1.0, &sol.d);
+        match nlp.evaluate(&w1, true) {
+            Ok(ev1) if merit(&ev1) <= merit0 + settings.line_search_armijo * dmerit => accepted = Some((w1, ev1)),
+            Ok(ev1) => {
+                // second-order correction: re-solve with the constraint values at w + d
+                let c_soc: Vec<f64> = {
+                    let mut jd = vec![0.0; m];
+                    for k in 0..jr.len() {
+                        jd[jr[k]] += st.ev.jac[k] * sol.d[jc[k]];
+                    }
+                    (0..m).map(|i| ev1.c[i] - jd[i]).collect()
+                };
+                let soc = QpData { c: &c_soc, ..data(None) };
+                if let Ok(s2) = qp::solve(&soc) {
+                    let w2 = trial(1.0, &s2.d);
+                    if let Ok(ev2) = nlp.evaluate(&w2, true) {
+                        if merit(&ev2) <= merit0 + settings.line_search_armijo * dmerit {
+                            accepted = Some((w2, ev2));
+                        }
+                    }
+                }
+                alpha = 0.5;
+            }
+            Err(_) => alpha = 0.5,
+        }
+        while accepted.is_none() && alpha >= settings.line_search_min_step {
+            let wa = trial(alpha, &sol.d);
+            if let Ok(eva) = nlp.evaluate(&wa, false) {
+                if merit(&eva) <= merit0 + settings.line_search_armijo * alpha * dmerit {
+                    match nlp.evaluate(&wa, true) {
+                        Ok(ev) => accepted = Some((wa, ev)),
+                        Err(e) => {
+                            status = SqpStatus::EvaluationFailure(e);
+                            break;
+                        }
+                    }
+                    break;
+                }
+            }
+            alpha *= 0.5;
+        }
+        let Some((w_new, ev_new)) = accepted else {
+            if !matches!(status, SqpStatus::EvaluationFailure(_)) {
+                status = if elastic { SqpStatus::Infeasible } else { SqpStatus::LineSearchFailure };
+            }
+            break;
+        };
+        last_step = alpha;
+        // --- quasi-Newton update with the new multipliers
+        if settings.hessian == HessianMode::Bfgs {
+            let mut gl_new = ev_new.grad.clone();
+            let mut gl_old = st.ev.grad.clone();
+            for k in 0..jr.len() {
+                gl_new[jc[k]] += ev_new.jac[k] * sol.lambda[jr[k]];
+                gl_old[jc[k]] += st.ev.jac[k] * sol.lambda[jr[k]];
+            }
+            let s: Vec<f64> = (0..n).map(|i| w_new[i] - st.w[i]).collect();
+            let y: Vec<f64> = (0..n).map(|i| gl_new[i] - gl_old[i]).collect();
+            bfgs.update(&s, &y);
+        }
+        st = State { w: w_new, ev: ev_new };
+    }
+    let viol = violations(&st.ev.c, &c_lb, &c_ub);
+    let mut order: Vec<usize> = (0..m).filter(|&i| viol[i] > 0.0).collect();
+    order.sort_by(|&a, &b| viol[b].total_cmp(&viol[a]));
+    let most_violated = order.iter().take(10).map(|&i| Violation { name: nlp.row_name(i), amount: viol[i] }).collect();
+    SqpResult {
+        objective: st.ev.f,
+        infeasibility: viol.iter().copied().fold(0.0, f64::max),
+        kkt,
+        status,
+        history,
+        most_violated,
+        seconds: start.elapsed().as_secs_f64(),
+        w: st.w,
+        lambda,
+        nu,
+    }
+}

@@ -1,0 +1,254 @@
+//! The SQP subproblem as a Clarabel QP.
+//!
+//! $$\min_d \tfrac12 d^T H d + g^T d \quad\text{s.t.}\quad
+//!   c_{lb} - c \le J d \le c_{ub} - c,\qquad w_{lb} - w \le d \le w_{ub} - w,$$
+//! mapped to Clarabel's form $A d + s = b$, $s \in \mathcal{K}$: equality rows (and fixed
+//! variables) in the zero cone, each finite inequality bound as one row of the
+//! nonnegative cone. In elastic mode every constraint row gets a pair of non-negative
+//! slacks $p, n$ penalised by $\rho \sum (p + n)$, so the QP is always feasible (used when
+//! the linearised constraints are inconsistent).
+
+use clarabel::algebra::CscMatrix;
+use clarabel::solver::{DefaultSettings, DefaultSolver, IPSolver, SolverStatus, SupportedConeT};
+
+/// Sparse matrix as triplets (duplicates are summed).
+#[derive(Debug, Clone, Default)]
+pub struct Triplets {
+    /// Row indices.
+    pub rows: Vec<usize>,
+    /// Column indices.
+    pub cols: Vec<usize>,
+    /// Values.
+    pub vals: Vec<f64>,
+}
+
+impl Triplets {
+    /// Add one entry.
+    pub fn push(&mut self, r: usize, c: usize, v: f64) {
+        self.rows.push(r);
+        self.cols.push(c);
+        self.vals.push(v);
+    }
+}
+
+/// Compressed sparse column matrix from triplets, summing duplicates.
+pub fn csc(m: usize, n: usize, t: &Triplets) -> CscMatrix<f64> {
+    let mut idx: Vec<usize> = (0..t.vals.len()).collect();
+    idx.sort_unstable_by_key(|&i| (t.cols[i], t.rows[i]));
+    let mut colptr = vec![0usize; n + 1];
+    let mut rowval: Vec<usize> = Vec::with_capacity(idx.len());
+    let mut nzval: Vec<f64> = Vec::with_capacity(idx.len());
+    let mut last: Option<(usize, usize)> = None;
+    for &i in &idx {
+        let key = (t.cols[i], t.rows[i]);
+        if last == Some(key) {
+            if let Some(v) = nzval.last_mut() {
+                *v += t.vals[i];
+            }
+        } else {
+            rowval.push(key.1);
+            nzval.push(t.vals[i]);
+            colptr[key.0 + 1] += 1;
+            last = Some(key);
+        }
+    }
+    for c in 0..n {
+        colptr[c + 1] += colptr[c];
+    }
+    CscMatrix::new(m, n, colptr, rowval, nzval)
+}
+
+/// Data of one QP subproblem.
+pub struct QpData<'a> {
+    /// Hessian (upper triangle entries; lower ones are ignored).
+    pub h: &'a Triplets,
+    /// Objective gradient.
+    pub g: &'a [f64],
+    /// Constraint Jacobian.
+    pub jac: &'a Triplets,
+    /// Constraint values at the current point.
+    pub c: &'a [f64],
+    /// Constraint bounds.
+    pub c_lb: &'a [f64],
+    /// Constraint upper bounds.
+    pub c_ub: &'a [f64],
+    /// Step bounds `w_lb − w`.
+    pub d_lb: &'a [f64],
+    /// Step upper bounds `w_ub − w`.
+    pub d_ub: &'a [f64],
+    /// Elastic penalty ρ (None = plain QP).
+    pub elastic: Option<f64>,
+}
+
+/// Solution of a QP subproblem.
+#[derive(Debug, Clone)]
+pub struct QpSolution {
+    /// Step.
+    pub d: Vec<f64>,
+    /// Constraint multipliers λ (Lagrangian `f + λᵀc + νᵀw`).
+    pub lambda: Vec<f64>,
+    /// Bound multipliers ν.
+    pub nu: Vec<f64>,
+    /// Linearised l1 violation after the step (elastic slacks), 0 for a plain QP.
+    pub elastic_violation: f64,
+    /// Clarabel iterations.
+    pub iterations: u32,
+}
+
+/// QP failure.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum QpError {
+    /// The linearised constraints are inconsistent.
+    #[error("QP subproblem infeasible")]
+    Infeasible,
+    /// Clarabel stopped without a solution.
+    #[error("QP solver stopped with status {0}")]
+    Failed(String),
+}
+
+enum RowMap {
+    /// constraint row i, sign
+    Con(usize, f64),
+    /// variable j, sign
+    Var(usize, f64),
+    /// slack variable column
+    Slack,
+}
+
+/// Solve a QP subproblem with Clarabel.
+pub fn solve(q: &QpData<'_>) -> Result<QpSolution, QpError> {
+    let n = q.g.len();
+    let m = q.c.len();
+    let ns = if q.elastic.is_some() { 2 * m } else { 0 };
+    let nt = n + ns;
+    // rows of J by constraint
+    let mut jrows: Vec<Vec<(usize, f64)>> = vec![Vec::new(); m];
+    for k in 0..q.jac.vals.len() {
+        jrows[q.jac.rows[k]].push((q.jac.cols[k], q.jac.vals[k]));
+    }
+    let mut eq = Triplets::default();
+    let mut eq_b = Vec::new();
+    let mut eq_map = Vec::new();
+    let mut ineq = Triplets::default();
+    let mut ineq_b = Vec::new();
+    let mut ineq_map = Vec::new();
+    for i in 0..m {
+        let (lo, hi) = (q.c_lb[i] - q.c[i], q.c_ub[i] - q.c[i]);
+        let slack = |t: &mut Triplets, r: usize| {
+            if q.elastic.is_some() {
+                // J d − p + n
+                t.push(r, n + 2 * i, -1.0);
+                t.push(r, n + 2 * i + 1, 1.0);
+            }
+        };
+        if q.c_lb[i] == q.c_ub[i] {
+            let r = eq_b.len();
+            for &(c, v) in &jrows[i] {
+                eq.push(r, c, v);
+            }
+            slack(&mut eq, r);
+            eq_b.push(lo);
+            eq_map.push(RowMap::Con(i, 1.0));
+        } else {
+            if hi.is_finite() {
+                let r = ineq_b.len();
+                for &(c, v) in &jrows[i] {
+                    ineq.push(r, c, v);
+                }
+                slack(&mut ineq, r);
+                ineq_b.push(hi);
+                ineq_map.push(RowMap::Con(i, 1.0));
+            }
+            if lo.is_finite() {
+                let r = ineq_b.len();
+                for &(c, v) in &jrows[i] {
+                    ineq.push(r, c, -v);
+                }
+                if q.elastic.is_some() {
+                    ineq.push(r, n + 2 * i, 1.0);
+                    ineq.push(r, n + 2 * i + 1, -1.0);
+                }
+                ineq_b.push(-lo);
+                ineq_map.push(RowMap::Con(i, -1.0));
+            }
+        }
+    }
+    for j in 0..n {
+        if q.d_lb[j] == q.d_ub[j] {
+            let r = eq_b.len();
+            eq.push(r, j, 1.0);
+            eq_b.push(q.d_lb[j]);
+            eq_map.push(RowMap::Var(j, 1.0));
+        } else {
+            if q.d_ub[j].is_finite() {
+                let r = ineq_b.len();
+                ineq.push(r, j, 1.0);
+                ineq_b.push(q.d_ub[j]);
+                ineq_map.push(RowMap::Var(j, 1.0));
+            }
+            if q.d_lb[j].is_finite() {
+                let r = ineq_b.len();
+                ineq.push(r, j, -1.0);
+                ineq_b.push(-q.d_lb[j]);
+                ineq_map.push(RowMap::Var(j, -1.0));
+            }
+        }
+    }
+    for s in 0..ns {
+        let r = ineq_b.len();
+        ineq.push(r, n + s, -1.0);
+        ineq_b.push(0.0);
+        ineq_map.push(RowMap::Slack);
+    }
+    let (neq, nin) = (eq_b.len(), ineq_b.len());
+    let mut a = eq;
+    for k in 0..ineq.vals.len() {
+        a.push(ineq.rows[k] + neq, ineq.cols[k], ineq.vals[k]);
+    }
+    let mut b = eq_b;
+    b.extend(ineq_b);
+    let mut p = Triplets::default();
+    for k in 0..q.h.vals.len() {
+        let (r, c) = (q.h.rows[k], q.h.cols[k]);
+        if r <= c {
+            p.push(r, c, q.h.vals[k]);
+        }
+    }
+    let mut qv = q.g.to_vec();
+    if let Some(rho) = q.elastic {
+        qv.extend(std::iter::repeat(rho).take(ns));
+    }
+    let pm = csc(nt, nt, &p);
+    let am = csc(neq + nin, nt, &a);
+    let cones = [SupportedConeT::ZeroConeT(neq), SupportedConeT::NonnegativeConeT(nin)];
+    let settings = DefaultSettings {
+        verbose: false,
+        max_threads: 1,
+        tol_gap_abs: 1e-10,
+        tol_gap_rel: 1e-10,
+        tol_feas: 1e-10,
+        max_iter: 200,
+        presolve_enable: false,
+        ..DefaultSettings::default()
+    };
+    let mut solver = DefaultSolver::new(&pm, &qv, &am, &b, &cones, settings).map_err(|e| QpError::Failed(e.to_string()))?;
+    solver.solve();
+    let sol = &solver.solution;
+    match sol.status {
+        SolverStatus::Solved | SolverStatus::AlmostSolved => {}
+        SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => return Err(QpError::Infeasible),
+        other => return Err(QpError::Failed(format!("{other:?}"))),
+    }
+    let mut lambda = vec![0.0; m];
+    let mut nu = vec![0.0; n];
+    for (r, map) in eq_map.iter().chain(ineq_map.iter()).enumerate() {
+        let z = sol.z[r];
+        match *map {
+            RowMap::Con(i, s) => lambda[i] += s * z,
+            RowMap::Var(j, s) => nu[j] += s * z,
+            RowMap::Slack => {}
+        }
+    }
+    let elastic_violation = sol.x[n..].iter().map(|v| v.max(0.0)).sum();
+    Ok(QpSolution { d: sol.x[..n].to_vec(), lambda, nu, elastic_violation, iterations: sol.iterations })
+}
