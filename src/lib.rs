@@ -11,6 +11,7 @@ pub mod integrate;
 pub mod model;
 pub mod ocp;
 pub mod phases;
+pub mod problems;
 pub mod runfolder;
 pub mod simulate;
 pub mod sqp;

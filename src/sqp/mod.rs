@@ -260,7 +260,10 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
     let mut st = State { w, ev };
     let mut lambda = vec![0.0; m];
     let mut nu = vec![0.0; n];
-    let mut mu: f64 = 1.0;
+    // size of the multipliers of the last consistent QP: the elastic penalty exceeds it
+    let mut lam_est: f64 = 1.0;
+    let mut filter: Vec<(f64, f64)> = Vec::new();
+    let mut theta_max = f64::INFINITY;
     let mut history = Vec::new();
     let mut status = SqpStatus::MaxIterations;
     let mut kkt = f64::INFINITY;
@@ -298,10 +301,14 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
             d_ub: &d_ub,
             elastic,
         };
+        let rho = (10.0 * lam_est).clamp(1e3, 1e8);
         let (sol, elastic) = match qp::solve(&data(None)) {
             Ok(s) => (s, false),
-            Err(QpError::Infeasible) => {
-                let rho = (mu * 10.0).max(1e3);
+            // inconsistent linearisation (or a stalled, nearly inconsistent one): elastic mode
+            Err(e @ (QpError::Infeasible | QpError::Failed(_))) => {
+                if std::env::var_os("FOOTFALL_SQP_DEBUG").is_some() {
+                    eprintln!("      QP: {e}; elastic mode with ρ = {rho:.1e}");
+                }
                 match qp::solve(&data(Some(rho))) {
                     Ok(s) => (s, true),
                     Err(e) => {
@@ -310,12 +317,11 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
                     }
                 }
             }
-            Err(e) => {
-                status = SqpStatus::QpFailure(e.to_string());
-                break;
-            }
         };
         qp_iters = sol.iterations;
+        if !elastic {
+            lam_est = sol.lambda.iter().map(|v| v.abs()).fold(1.0, f64::max);
+        }
         // --- KKT residual at the current point with the QP multipliers
         let mut stat = st.ev.grad.clone();
         for k in 0..jr.len() {
@@ -375,63 +381,89 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
             status = SqpStatus::Infeasible;
             break;
         }
-        // --- line search on the l1 merit function
-        let lam_inf = sol.lambda.iter().map(|v| v.abs()).fold(0.0, f64::max);
-        if mu < 1.1 * lam_inf {
-            mu = 2.0 * lam_inf;
-        }
+        // --- filter line search (Wächter & Biegler 2006): accept a trial point that
+        // sufficiently reduces the objective (when the step is a descent direction and
+        // the infeasibility is small) or the infeasibility, and is not dominated by the
+        // filter of earlier (infeasibility, objective) pairs
         let grad_d: f64 = st.ev.grad.iter().zip(&sol.d).map(|(a, b)| a * b).sum();
-        let lin_viol = if elastic { sol.elastic_violation } else { 0.0 };
-        let dmerit = grad_d - mu * (l1 - lin_viol);
-        let merit0 = st.ev.f + mu * l1;
-        let merit = |ev: &NlpEval| ev.f + mu * violations(&ev.c, &c_lb, &c_ub).iter().sum::<f64>();
-        let mut alpha = 1.0;
-        let mut accepted: Option<(Vec<f64>, NlpEval)> = None;
+        let theta0 = l1;
+        if filter.is_empty() {
+            theta_max = (1e4f64).max(1.2 * theta0);
+            filter.push((theta_max, f64::NEG_INFINITY));
+        }
+        if std::env::var_os("FOOTFALL_SQP_DEBUG").is_some() {
+            eprintln!("      |d| {dnorm:.3e} ∇f·d {grad_d:.3e} θ {theta0:.3e} elastic {elastic} filter {}", filter.len());
+        }
+        let (gamma_t, gamma_f, eta, delta, s_t, s_f) = (1e-5, 1e-5, settings.line_search_armijo, 1.0, 1.1, 2.3);
+        let f0 = st.ev.f;
+        let acceptable = |ev: &NlpEval, a: f64, filter: &[(f64, f64)]| -> Option<bool> {
+            let th = violations(&ev.c, &c_lb, &c_ub).iter().sum::<f64>();
+            if !ev.f.is_finite() || !th.is_finite() || th > theta_max {
+                return None;
+            }
+            if filter.iter().any(|&(ft, ff)| th >= ft && ev.f >= ff) {
+                return None;
+            }
+            let switching = grad_d < 0.0 && a * (-grad_d).powf(s_f) > delta * theta0.powf(s_t);
+            if switching && theta0 <= 1e-4 * theta_max.max(1.0) {
+                // f-type step: Armijo on the objective, the filter is not augmented
+                (ev.f <= f0 + eta * a * grad_d).then_some(false)
+            } else if th <= (1.0 - gamma_t) * theta0 || ev.f <= f0 - gamma_f * theta0 {
+                Some(true)
+            } else {
+                None
+            }
+        };
         let trial = |a: f64, dir: &[f64]| -> Vec<f64> {
             (0..n).map(|i| (st.w[i] + a * dir[i]).max(w_lb[i]).min(w_ub[i])).collect()
         };
+        let mut alpha = 1.0;
+        let mut accepted: Option<(Vec<f64>, NlpEval, bool)> = None;
         // full step, evaluated with derivatives (usually accepted near the solution)
         let w1 = trial(1.0, &sol.d);
         match nlp.evaluate(&w1, true) {
-            Ok(ev1) if merit(&ev1) <= merit0 + settings.line_search_armijo * dmerit => accepted = Some((w1, ev1)),
-            Ok(ev1) => {
-                // second-order correction: re-solve with the constraint values at w + d
-                let c_soc: Vec<f64> = {
+            Ok(ev1) => match acceptable(&ev1, 1.0, &filter) {
+                Some(aug) => accepted = Some((w1, ev1, aug)),
+                None => {
+                    // second-order correction: re-solve with the constraint values at w + d
                     let mut jd = vec![0.0; m];
                     for k in 0..jr.len() {
                         jd[jr[k]] += st.ev.jac[k] * sol.d[jc[k]];
                     }
-                    (0..m).map(|i| ev1.c[i] - jd[i]).collect()
-                };
-                let soc = QpData { c: &c_soc, ..data(None) };
-                if let Ok(s2) = qp::solve(&soc) {
-                    let w2 = trial(1.0, &s2.d);
-                    if let Ok(ev2) = nlp.evaluate(&w2, true) {
-                        if merit(&ev2) <= merit0 + settings.line_search_armijo * dmerit {
-                            accepted = Some((w2, ev2));
+                    let c_soc: Vec<f64> = (0..m).map(|i| ev1.c[i] - jd[i]).collect();
+                    let soc = QpData { c: &c_soc, ..data(None) };
+                    if let Ok(s2) = qp::solve(&soc) {
+                        let w2 = trial(1.0, &s2.d);
+                        if let Ok(ev2) = nlp.evaluate(&w2, true) {
+                            if let Some(aug) = acceptable(&ev2, 1.0, &filter) {
+                                accepted = Some((w2, ev2, aug));
+                            }
                         }
                     }
+                    alpha = 0.5;
                 }
-                alpha = 0.5;
-            }
+            },
             Err(_) => alpha = 0.5,
         }
         while accepted.is_none() && alpha >= settings.line_search_min_step {
             let wa = trial(alpha, &sol.d);
             if let Ok(eva) = nlp.evaluate(&wa, false) {
-                if merit(&eva) <= merit0 + settings.line_search_armijo * alpha * dmerit {
+                if let Some(aug) = acceptable(&eva, alpha, &filter) {
                     match nlp.evaluate(&wa, true) {
-                        Ok(ev) => accepted = Some((wa, ev)),
-                        Err(e) => {
-                            status = SqpStatus::EvaluationFailure(e);
-                            break;
-                        }
+                        Ok(ev) => accepted = Some((wa, ev, aug)),
+                        Err(e) => status = SqpStatus::EvaluationFailure(e),
                     }
                     break;
                 }
             }
             alpha *= 0.5;
         }
+        let accepted = accepted.map(|(w, ev, aug)| {
+            if aug {
+                filter.push(((1.0 - gamma_t) * theta0, f0 - gamma_f * theta0));
+            }
+            (w, ev)
+        });
         let Some((w_new, ev_new)) = accepted else {
             if !matches!(status, SqpStatus::EvaluationFailure(_)) {
                 status = if elastic { SqpStatus::Infeasible } else { SqpStatus::LineSearchFailure };

@@ -221,24 +221,41 @@ pub fn solve(q: &QpData<'_>) -> Result<QpSolution, QpError> {
     let pm = csc(nt, nt, &p);
     let am = csc(neq + nin, nt, &a);
     let cones = [SupportedConeT::ZeroConeT(neq), SupportedConeT::NonnegativeConeT(nin)];
-    let settings = DefaultSettings {
-        verbose: false,
-        max_threads: 1,
-        tol_gap_abs: 1e-10,
-        tol_gap_rel: 1e-10,
-        tol_feas: 1e-10,
-        max_iter: 200,
-        presolve_enable: false,
-        ..DefaultSettings::default()
-    };
-    let mut solver = DefaultSolver::new(&pm, &qv, &am, &b, &cones, settings).map_err(|e| QpError::Failed(e.to_string()))?;
-    solver.solve();
-    let sol = &solver.solution;
-    match sol.status {
-        SolverStatus::Solved | SolverStatus::AlmostSolved => {}
-        SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => return Err(QpError::Infeasible),
-        other => return Err(QpError::Failed(format!("{other:?}"))),
+    // tight tolerances first (the SQP's KKT test needs accurate multipliers); Clarabel's
+    // defaults as a fallback when it stalls
+    let mut last = String::new();
+    let mut solved = None;
+    for tol in [1e-10, 1e-8] {
+        let settings = DefaultSettings {
+            verbose: false,
+            max_threads: 1,
+            tol_gap_abs: tol,
+            tol_gap_rel: tol,
+            tol_feas: tol,
+            max_iter: 200,
+            presolve_enable: false,
+            ..DefaultSettings::default()
+        };
+        let mut solver =
+            DefaultSolver::new(&pm, &qv, &am, &b, &cones, settings).map_err(|e| QpError::Failed(e.to_string()))?;
+        solver.solve();
+        let sol = solver.solution;
+        match sol.status {
+            SolverStatus::Solved | SolverStatus::AlmostSolved => {
+                solved = Some(sol);
+                break;
+            }
+            SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => return Err(QpError::Infeasible),
+            SolverStatus::InsufficientProgress | SolverStatus::MaxIterations
+                if sol.r_prim < 1e-7 && sol.r_dual < 1e-7 =>
+            {
+                solved = Some(sol);
+                break;
+            }
+            other => last = format!("{other:?} (primal residual {:.1e}, dual residual {:.1e})", sol.r_prim, sol.r_dual),
+        }
     }
+    let Some(sol) = solved else { return Err(QpError::Failed(last)) };
     let mut lambda = vec![0.0; m];
     let mut nu = vec![0.0; n];
     for (r, map) in eq_map.iter().chain(ineq_map.iter()).enumerate() {

@@ -1,0 +1,261 @@
+//! The generic benchmark problems of `../shared/peer/problems/*.json`, transcribed
+//! exactly as defined there: N equal intervals, piecewise-constant controls, objective
+//! `h Σ_k |u_k|²`, bounds and path constraints at the N + 1 nodes, the same initial guess.
+
+use super::{FnTerm, Linear};
+use crate::benchmarks::{biped, CartPole, FiveLinkBiped};
+use crate::integrate::{ControlShape, IntegratorSettings};
+use crate::ocp::{Block, Constraint, Ocp, Phase, PhaseDuration, Term};
+use serde_json::Value;
+use std::sync::Arc;
+
+/// A benchmark model with its problem definition.
+pub enum Benchmark {
+    /// Cart-pole swing-up.
+    CartPole {
+        /// Model.
+        model: CartPole,
+        /// Problem JSON.
+        json: Value,
+    },
+    /// Five-link biped, one periodic step.
+    Biped {
+        /// Model.
+        model: FiveLinkBiped,
+        /// Problem JSON.
+        json: Value,
+    },
+}
+
+fn num(v: &Value, ptr: &str) -> Result<f64, String> {
+    v.pointer(ptr).and_then(Value::as_f64).ok_or_else(|| format!("field '{}' missing or not a number", ptr.trim_start_matches('/').replace('/', ".")))
+}
+
+fn vecn(v: &Value, ptr: &str, len: usize) -> Result<Vec<f64>, String> {
+    let a = v
+        .pointer(ptr)
+        .and_then(Value::as_array)
+        .ok_or_else(|| format!("field '{}' missing or not an array", ptr.trim_start_matches('/').replace('/', ".")))?;
+    if a.len() != len {
+        return Err(format!("field '{}' must have {len} entries", ptr.trim_start_matches('/').replace('/', ".")));
+    }
+    // null = unbounded
+    a.iter()
+        .enumerate()
+        .map(|(i, x)| {
+            if x.is_null() {
+                Ok(f64::NAN)
+            } else {
+                x.as_f64().ok_or_else(|| format!("field '{}[{i}]' is not a number", ptr.trim_start_matches('/').replace('/', ".")))
+            }
+        })
+        .collect()
+}
+
+fn bound(v: Vec<f64>, inf: f64) -> Vec<f64> {
+    v.into_iter().map(|x| if x.is_nan() { inf } else { x }).collect()
+}
+
+impl Benchmark {
+    /// Recognise the problem by its `name` and build its model.
+    pub fn from_json(json: Value) -> Result<Self, String> {
+        match json.get("name").and_then(Value::as_str) {
+            Some("cartpole_swingup") => Ok(Benchmark::CartPole { model: CartPole::from_problem_json(&json)?, json }),
+            Some("five_link_biped") => Ok(Benchmark::Biped { model: FiveLinkBiped::from_problem_json(&json)?, json }),
+            Some(other) => Err(format!("field 'name': unknown problem '{other}' (known: cartpole_swingup, five_link_biped)")),
+            None => Err("field 'name' missing".into()),
+        }
+    }
+
+    /// Problem name.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Benchmark::CartPole { .. } => "cartpole_swingup",
+            Benchmark::Biped { .. } => "five_link_biped",
+        }
+    }
+
+    /// The OCP with CVODES settings `integrator`.
+    pub fn ocp(&self, integrator: IntegratorSettings) -> Result<Ocp<'_>, String> {
+        match self {
+            Benchmark::CartPole { model, json } => cartpole(model, json, integrator),
+            Benchmark::Biped { model, json } => five_link_biped(model, json, integrator),
+        }
+    }
+}
+
+fn u_squared_terms(n: usize, nu: usize, h: f64) -> Vec<Term> {
+    let w = h.sqrt();
+    let f = Arc::new(Linear::new((0..nu * nu).map(|k| if k / nu == k % nu { w } else { 0.0 }).collect(), nu));
+    (0..n).map(|k| Term { name: "u_squared".into(), args: vec![Block::Control { phase: 0, node: k }], f: f.clone() }).collect()
+}
+
+fn cartpole<'a>(model: &'a CartPole, json: &Value, integrator: IntegratorSettings) -> Result<Ocp<'a>, String> {
+    let n = num(json, "/discretization/N")? as usize;
+    let t = num(json, "/horizon/T")?;
+    let xi = vecn(json, "/boundary/x_initial", 4)?;
+    let xf = vecn(json, "/boundary/x_final", 4)?;
+    let u_lb = bound(vecn(json, "/bounds/u_lb", 1)?, f64::NEG_INFINITY);
+    let u_ub = bound(vecn(json, "/bounds/u_ub", 1)?, f64::INFINITY);
+    let x_lb = bound(vecn(json, "/bounds/x_lb", 4)?, f64::NEG_INFINITY);
+    let x_ub = bound(vecn(json, "/bounds/x_ub", 4)?, f64::INFINITY);
+    let mut xl = vec![x_lb; n + 1];
+    let mut xu = vec![x_ub; n + 1];
+    xl[0] = xi.clone();
+    xu[0] = xi.clone();
+    xl[n] = xf.clone();
+    xu[n] = xf.clone();
+    let x_guess = (0..=n).map(|k| (0..4).map(|i| xi[i] + k as f64 / n as f64 * (xf[i] - xi[i])).collect()).collect();
+    Ok(Ocp {
+        phases: vec![Phase {
+            name: "swing_up".into(),
+            ode: model,
+            intervals: n,
+            duration: PhaseDuration::fixed(t),
+            controls: ControlShape::Constant,
+            x_lb: xl,
+            x_ub: xu,
+            u_lb: vec![u_lb; n],
+            u_ub: vec![u_ub; n],
+            x_guess,
+            u_guess: vec![vec![0.0]; n],
+        }],
+        transitions: vec![],
+        ntheta: 0,
+        theta_guess: vec![],
+        theta_lb: vec![],
+        theta_ub: vec![],
+        constraints: vec![],
+        least_squares: u_squared_terms(n, 1, t / n as f64),
+        costs: vec![],
+        integrator,
+    })
+}
+
+fn five_link_biped<'a>(model: &'a FiveLinkBiped, json: &Value, integrator: IntegratorSettings) -> Result<Ocp<'a>, String> {
+    use biped::{NQ, NU, NX};
+    let n = num(json, "/discretization/N")? as usize;
+    let t = num(json, "/horizon/T")?;
+    let step = num(json, "/parameters/step_length")?;
+    let x_lb = vecn(json, "/bounds/x_lb", NX)?;
+    let x_ub = vecn(json, "/bounds/x_ub", NX)?;
+    let u_lb = vecn(json, "/bounds/u_lb", NU)?;
+    let u_ub = vecn(json, "/bounds/u_ub", NU)?;
+    let q0 = vecn(json, "/initial_guess/q_start", NQ)?;
+    let qf: Vec<f64> = q0.iter().rev().copied().collect();
+    let dq: Vec<f64> = (0..NQ).map(|i| (qf[i] - q0[i]) / t).collect();
+    let x_guess = (0..=n)
+        .map(|k| {
+            let s = k as f64 / n as f64;
+            let mut x: Vec<f64> = (0..NQ).map(|i| q0[i] + s * (qf[i] - q0[i])).collect();
+            x.extend(&dq);
+            x
+        })
+        .collect();
+    let mut constraints = Vec::new();
+    // path: q1 − q2 ≤ 0 and q5 − q4 ≤ 0 at every node
+    let mut a = vec![0.0; 2 * NX];
+    a[0] = 1.0;
+    a[1] = -1.0;
+    a[NX + 4] = 1.0;
+    a[NX + 3] = -1.0;
+    let knee = Arc::new(Linear::new(a, 2));
+    for k in 0..=n {
+        constraints.push(Constraint {
+            term: Term { name: "knee_hyperextension".into(), args: vec![Block::State { phase: 0, node: k }], f: knee.clone() },
+            lb: vec![f64::NEG_INFINITY; 2],
+            ub: vec![0.0; 2],
+        });
+    }
+    let m1 = model.clone();
+    // periodicity through heel strike: x_0 − Δ(x_N) = 0
+    let periodic = FnTerm::new(NX, move |z: &[f64], v: &mut [f64], jac: Option<&mut [f64]>| {
+        let (x0, xn) = z.split_at(NX);
+        let (d, dj) = m1.heel_strike_jacobian(xn);
+        for i in 0..NX {
+            v[i] = x0[i] - d[i];
+        }
+        if let Some(j) = jac {
+            j.iter_mut().for_each(|x| *x = 0.0);
+            for i in 0..NX {
+                j[i + i * NX] = 1.0;
+                for c in 0..NX {
+                    j[i + (NX + c) * NX] = -dj[i + c * NX];
+                }
+            }
+        }
+        Ok(())
+    });
+    constraints.push(Constraint {
+        term: Term {
+            name: "periodicity".into(),
+            args: vec![Block::State { phase: 0, node: 0 }, Block::State { phase: 0, node: n }],
+            f: Arc::new(periodic),
+        },
+        lb: vec![0.0; NX],
+        ub: vec![0.0; NX],
+    });
+    // step length and height of the swing foot at the end
+    let m2 = model.clone();
+    let foot_end = FnTerm::new(2, move |z: &[f64], v: &mut [f64], jac: Option<&mut [f64]>| {
+        let (p, pj) = m2.swing_foot_jacobian(&z[..NQ]);
+        v[0] = p[0] - step;
+        v[1] = p[1];
+        if let Some(j) = jac {
+            j.iter_mut().for_each(|x| *x = 0.0);
+            for c in 0..NQ {
+                j[c * 2] = pj[c * 2];
+                j[1 + c * 2] = pj[1 + c * 2];
+            }
+        }
+        Ok(())
+    });
+    constraints.push(Constraint {
+        term: Term { name: "step_length_height".into(), args: vec![Block::State { phase: 0, node: n }], f: Arc::new(foot_end) },
+        lb: vec![0.0; 2],
+        ub: vec![0.0; 2],
+    });
+    // lift-off (ẏ₅ ≥ 0 at t = 0) and touch-down (ẏ₅ ≤ 0 at t = T)
+    for (node, name, lb, ub) in [(0, "liftoff", 0.0, f64::INFINITY), (n, "touchdown", f64::NEG_INFINITY, 0.0)] {
+        let m3 = model.clone();
+        let vy = FnTerm::new(1, move |z: &[f64], v: &mut [f64], jac: Option<&mut [f64]>| {
+            let (vel, vj) = m3.swing_foot_velocity_jacobian(z);
+            v[0] = vel[1];
+            if let Some(j) = jac {
+                for c in 0..NX {
+                    j[c] = vj[1 + c * 2];
+                }
+            }
+            Ok(())
+        });
+        constraints.push(Constraint {
+            term: Term { name: name.into(), args: vec![Block::State { phase: 0, node }], f: Arc::new(vy) },
+            lb: vec![lb],
+            ub: vec![ub],
+        });
+    }
+    Ok(Ocp {
+        phases: vec![Phase {
+            name: "single_stance".into(),
+            ode: model,
+            intervals: n,
+            duration: PhaseDuration::fixed(t),
+            controls: ControlShape::Constant,
+            x_lb: vec![x_lb; n + 1],
+            x_ub: vec![x_ub; n + 1],
+            u_lb: vec![u_lb; n],
+            u_ub: vec![u_ub; n],
+            x_guess,
+            u_guess: vec![vec![0.0; NU]; n],
+        }],
+        transitions: vec![],
+        ntheta: 0,
+        theta_guess: vec![],
+        theta_lb: vec![],
+        theta_ub: vec![],
+        constraints,
+        least_squares: u_squared_terms(n, NU, t / n as f64),
+        costs: vec![],
+        integrator,
+    })
+}
