@@ -1,11 +1,24 @@
-//! Block-diagonal damped BFGS approximation of the Lagrangian Hessian.
+//! Block-diagonal BFGS approximation of the Lagrangian Hessian.
 //!
 //! One dense block per group of variables (in multiple shooting: a node's state and
-//! control), each updated with Powell's damping so it stays positive definite:
-//! with $s$, $y$ the block's step and Lagrangian-gradient change, $\theta = 1$ if
-//! $s^Ty \ge 0.2\, s^TBs$, else $\theta = 0.8\, s^TBs/(s^TBs - s^Ty)$,
-//! $r = \theta y + (1-\theta) B s$ and $B \leftarrow B - Bss^TB/(s^TBs) + rr^T/(s^Tr)$.
+//! control). With $s$, $y$ the block's step and Lagrangian-gradient change, the block is
+//! updated $B \leftarrow B - Bss^TB/(s^TBs) + rr^T/(s^Tr)$, with $r = y$ when the curvature
+//! condition $s^Ty > 10^{-8}\|s\|\|y\|$ holds (the update is skipped otherwise), or with
+//! Powell's damped $r$ ([`BfgsUpdate`]); either way every block stays positive definite.
+//! Measured on the five-link biped: skipping reaches the reference optimum in about a
+//! third of the iterations Powell damping needs, which keeps over-estimated curvature.
 //! The first update rescales the initial identity by $y^Ty/s^Ty$ (Nocedal–Wright 6.20).
+
+/// How a block treats a step along which its Lagrangian is not convex.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BfgsUpdate {
+    /// Skip the update unless `sᵀy > 1e-8 ‖s‖‖y‖`.
+    SkipNonconvex,
+    /// Powell's damping: replace y by `r = θy + (1−θ)Bs` with θ chosen so that
+    /// `sᵀr ≥ 0.2 sᵀBs`.
+    PowellDamped,
+}
 
 /// Block BFGS matrices.
 #[derive(Debug, Clone)]
@@ -13,11 +26,12 @@ pub struct BlockBfgs {
     blocks: Vec<Vec<usize>>,
     mats: Vec<Vec<f64>>,
     scaled: Vec<bool>,
+    rule: BfgsUpdate,
 }
 
 impl BlockBfgs {
     /// Identity blocks.
-    pub fn new(blocks: Vec<Vec<usize>>) -> Self {
+    pub fn new(blocks: Vec<Vec<usize>>, rule: BfgsUpdate) -> Self {
         let mats = blocks
             .iter()
             .map(|b| {
@@ -30,7 +44,17 @@ impl BlockBfgs {
             })
             .collect();
         let scaled = vec![false; blocks.len()];
-        Self { blocks, mats, scaled }
+        Self { blocks, mats, scaled, rule }
+    }
+
+    /// Multiply every block by `s` (e.g. a small initial curvature for the structured
+    /// mode, where the Gauss–Newton part carries the objective).
+    pub fn scale(&mut self, s: f64) {
+        for m in &mut self.mats {
+            for v in m.iter_mut() {
+                *v *= s;
+            }
+        }
     }
 
     /// Update every block with the full-space step `s` and gradient change `y`.
@@ -60,8 +84,19 @@ impl BlockBfgs {
             if sbs <= 0.0 {
                 continue;
             }
-            let theta = if sy >= 0.2 * sbs { 1.0 } else { 0.8 * sbs / (sbs - sy) };
-            let r: Vec<f64> = (0..k).map(|i| theta * yb[i] + (1.0 - theta) * bs[i]).collect();
+            let r: Vec<f64> = match self.rule {
+                BfgsUpdate::SkipNonconvex => {
+                    let yy: f64 = yb.iter().map(|v| v * v).sum();
+                    if sy <= 1e-8 * ss.sqrt() * yy.sqrt() {
+                        continue;
+                    }
+                    yb
+                }
+                BfgsUpdate::PowellDamped => {
+                    let theta = if sy >= 0.2 * sbs { 1.0 } else { 0.8 * sbs / (sbs - sy) };
+                    (0..k).map(|i| theta * yb[i] + (1.0 - theta) * bs[i]).collect()
+                }
+            };
             let sr: f64 = sb.iter().zip(&r).map(|(a, b)| a * b).sum();
             if sr <= 1e-16 * sbs {
                 continue;

@@ -1,9 +1,9 @@
 //! Sequential quadratic programming for sparse NLPs
 //! $$\min_w f(w)\ \text{s.t.}\ c_{lb} \le c(w) \le c_{ub},\ w_{lb} \le w \le w_{ub}.$$
 //!
-//! Each iteration solves a sparse QP (Clarabel) with a Gauss–Newton or block-wise damped
-//! BFGS Hessian and globalises with a backtracking line search on the exact l1 penalty
-//! merit function $\phi(w) = f(w) + \mu \|v(w)\|_1$ ($v$: constraint violations), with a
+//! Each iteration solves a sparse QP (Clarabel) with a Gauss–Newton, block-wise BFGS or
+//! structured (Gauss–Newton + BFGS) Hessian and globalises with a filter line search
+//! (Wächter & Biegler 2006) on the objective and the l1 constraint violation, with a
 //! second-order correction when the full step is rejected. When the linearised
 //! constraints are inconsistent the QP is solved in elastic mode; if the violation then
 //! cannot be reduced the solver stops with [`SqpStatus::Infeasible`] and names the most
@@ -64,8 +64,12 @@ pub struct NlpEval {
 pub enum HessianMode {
     /// `2 Σ J_rᵀ J_r` of the least-squares terms (tracking problems).
     GaussNewton,
-    /// Block-diagonal damped BFGS of the Lagrangian Hessian (general objectives).
+    /// Block-diagonal BFGS of the Lagrangian Hessian (general objectives).
     Bfgs,
+    /// Gauss–Newton for the least-squares objective plus a block-diagonal BFGS
+    /// approximation of the constraint curvature `∇²(λᵀc)` (structured quasi-Newton):
+    /// exact where the objective is quadratic, superlinear where the dynamics bend.
+    GaussNewtonBfgs,
 }
 
 /// SQP settings.
@@ -78,7 +82,7 @@ pub struct SqpSettings {
     pub max_iter: usize,
     /// Wall-time limit in seconds (default: none).
     pub max_time: Option<f64>,
-    /// Hessian approximation (default: bfgs).
+    /// Hessian approximation (default: gauss_newton).
     pub hessian: HessianMode,
     /// Armijo constant of the line search (default: 1e-4).
     pub line_search_armijo: f64,
@@ -86,6 +90,8 @@ pub struct SqpSettings {
     pub line_search_min_step: f64,
     /// Diagonal regularisation added to the QP Hessian (default: 1e-9).
     pub regularization: f64,
+    /// BFGS rule for non-convex steps (default: skip_nonconvex).
+    pub bfgs_update: hessian::BfgsUpdate,
 }
 
 impl Default for SqpSettings {
@@ -94,10 +100,11 @@ impl Default for SqpSettings {
             tol_kkt: 1e-5,
             max_iter: 200,
             max_time: None,
-            hessian: HessianMode::Bfgs,
+            hessian: HessianMode::GaussNewton,
             line_search_armijo: 1e-4,
             line_search_min_step: 1e-10,
             regularization: 1e-9,
+            bfgs_update: hessian::BfgsUpdate::SkipNonconvex,
         }
     }
 }
@@ -239,7 +246,10 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
     let (w_lb, w_ub, c_lb, c_ub) = nlp.bounds();
     let (jr, jc) = nlp.jacobian_pattern();
     let (hr, hc) = nlp.gauss_newton_pattern();
-    let mut bfgs = BlockBfgs::new(nlp.hessian_blocks());
+    let mut bfgs = BlockBfgs::new(nlp.hessian_blocks(), settings.bfgs_update);
+    if settings.hessian == HessianMode::GaussNewtonBfgs {
+        bfgs.scale(1e-4);
+    }
     let w: Vec<f64> = w0.iter().zip(w_lb.iter().zip(&w_ub)).map(|(&v, (&l, &u))| v.max(l).min(u)).collect();
     let fail = |status: SqpStatus, w: Vec<f64>| SqpResult {
         lambda: vec![0.0; m],
@@ -280,6 +290,12 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
                 h.vals.clone_from(&st.ev.gn);
             }
             HessianMode::Bfgs => bfgs.push_upper(&mut h),
+            HessianMode::GaussNewtonBfgs => {
+                h.rows.clone_from(&hr);
+                h.cols.clone_from(&hc);
+                h.vals.clone_from(&st.ev.gn);
+                bfgs.push_upper(&mut h);
+            }
         }
         for i in 0..n {
             h.push(i, i, settings.regularization);
@@ -472,9 +488,11 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
         };
         last_step = alpha;
         // --- quasi-Newton update with the new multipliers
-        if settings.hessian == HessianMode::Bfgs {
-            let mut gl_new = ev_new.grad.clone();
-            let mut gl_old = st.ev.grad.clone();
+        if settings.hessian != HessianMode::GaussNewton {
+            // full Lagrangian gradient for BFGS, constraint part only for the structured mode
+            let structured = settings.hessian == HessianMode::GaussNewtonBfgs;
+            let mut gl_new = if structured { vec![0.0; n] } else { ev_new.grad.clone() };
+            let mut gl_old = if structured { vec![0.0; n] } else { st.ev.grad.clone() };
             for k in 0..jr.len() {
                 gl_new[jc[k]] += ev_new.jac[k] * sol.lambda[jr[k]];
                 gl_old[jc[k]] += st.ev.jac[k] * sol.lambda[jr[k]];
