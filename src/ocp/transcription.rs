@@ -678,6 +678,11 @@ impl crate::sqp::Nlp for Transcription<'_, '_> {
         })?;
         Ok(crate::sqp::NlpEval { f: ev.f, c: ev.c, grad: ev.grad, jac: ev.jac, gn: ev.gauss_newton })
     }
+    fn elastic_weights(&self) -> Vec<f64> {
+        let dynamics = self.ocp.phases.iter().map(|p| p.intervals * p.ode.nx()).sum::<usize>()
+            + self.ocp.phases.iter().skip(1).map(|p| p.ode.nx()).sum::<usize>();
+        (0..self.m).map(|i| if i < dynamics { 10.0 } else { 1.0 }).collect()
+    }
     fn row_name(&self, i: usize) -> String {
         let l = &self.labels[i];
         format!("phase '{}', node {}, {}", l.phase, l.node, l.name)

@@ -41,6 +41,13 @@ pub trait Nlp {
     fn evaluate(&self, w: &[f64], derivs: bool) -> Result<NlpEval, String>;
     /// Human-readable name of constraint row `i`.
     fn row_name(&self, i: usize) -> String;
+    /// Relative weights of the rows' violations in elastic mode (default all 1). A
+    /// larger weight makes the solver keep that row satisfied at the expense of others,
+    /// so an infeasible problem reports the constraints that really conflict (e.g. a
+    /// transcription weights its continuity rows above user constraints).
+    fn elastic_weights(&self) -> Vec<f64> {
+        vec![1.0; self.m()]
+    }
 }
 
 /// An NLP evaluation.
@@ -245,6 +252,7 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
     let (n, m) = (nlp.n(), nlp.m());
     let (w_lb, w_ub, c_lb, c_ub) = nlp.bounds();
     let (jr, jc) = nlp.jacobian_pattern();
+    let elastic_weights = nlp.elastic_weights();
     let (hr, hc) = nlp.gauss_newton_pattern();
     let mut bfgs = BlockBfgs::new(nlp.hessian_blocks(), settings.bfgs_update);
     if settings.hessian == HessianMode::GaussNewtonBfgs {
@@ -316,6 +324,7 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
             d_lb: &d_lb,
             d_ub: &d_ub,
             elastic,
+            elastic_weights: &elastic_weights,
         };
         let rho = (10.0 * lam_est).clamp(1e3, 1e8);
         let (sol, elastic) = match qp::solve(&data(None)) {
@@ -504,7 +513,7 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
         st = State { w: w_new, ev: ev_new };
     }
     let viol = violations(&st.ev.c, &c_lb, &c_ub);
-    let mut order: Vec<usize> = (0..m).filter(|&i| viol[i] > 0.0).collect();
+    let mut order: Vec<usize> = (0..m).filter(|&i| viol[i] > settings.tol_kkt).collect();
     order.sort_by(|&a, &b| viol[b].total_cmp(&viol[a]));
     let most_violated = order.iter().take(10).map(|&i| Violation { name: nlp.row_name(i), amount: viol[i] }).collect();
     SqpResult {

@@ -78,6 +78,8 @@ pub struct QpData<'a> {
     pub d_ub: &'a [f64],
     /// Elastic penalty ρ (None = plain QP).
     pub elastic: Option<f64>,
+    /// Per-row multipliers of ρ in elastic mode.
+    pub elastic_weights: &'a [f64],
 }
 
 /// Solution of a QP subproblem.
@@ -216,7 +218,11 @@ pub fn solve(q: &QpData<'_>) -> Result<QpSolution, QpError> {
     }
     let mut qv = q.g.to_vec();
     if let Some(rho) = q.elastic {
-        qv.extend(std::iter::repeat(rho).take(ns));
+        for i in 0..m {
+            let w = q.elastic_weights.get(i).copied().unwrap_or(1.0);
+            qv.push(rho * w);
+            qv.push(rho * w);
+        }
     }
     let pm = csc(nt, nt, &p);
     let am = csc(neq + nin, nt, &a);
@@ -266,6 +272,8 @@ pub fn solve(q: &QpData<'_>) -> Result<QpSolution, QpError> {
             RowMap::Slack => {}
         }
     }
-    let elastic_violation = sol.x[n..].iter().map(|v| v.max(0.0)).sum();
+    let elastic_violation = (0..ns)
+        .map(|s| sol.x[n + s].max(0.0) * q.elastic_weights.get(s / 2).copied().unwrap_or(1.0))
+        .sum();
     Ok(QpSolution { d: sol.x[..n].to_vec(), lambda, nu, elastic_violation, iterations: sol.iterations })
 }
