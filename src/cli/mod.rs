@@ -3,6 +3,7 @@
 //! Exit codes: 0 success, 1 bad input or a run that did not succeed, 2 internal error.
 
 mod simulate;
+mod solve;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -22,6 +23,8 @@ struct Cli {
 enum Command {
     /// Simulate the model forward through a phase sequence.
     Simulate(simulate::Args),
+    /// Solve a generic optimal control problem (cart-pole, five-link biped).
+    Solve(solve::Args),
 }
 
 /// Failure classes mapped to exit codes.
@@ -34,6 +37,7 @@ pub fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Simulate(args) => simulate::run(args, cli.quiet),
+        Command::Solve(args) => solve::run(args, cli.quiet),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
