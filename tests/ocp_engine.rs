@@ -110,3 +110,43 @@ fn infeasible_problem_stops_as_infeasible_and_names_the_constraint() {
     assert!(top.name.contains("phase 'reach'") && top.name.contains("node 10") && top.name.contains("final_reach"), "{}", top.name);
     assert!((top.amount - 2.0).abs() < 1e-6, "the best reachable final state is 1, violation 2, got {}", top.amount);
 }
+
+/// The exact weighted Hessians of the biped's boundary terms match central differences
+/// of their exact Jacobians.
+#[test]
+fn biped_term_hessians_match_finite_differences() {
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("problems/five_link_biped.json");
+    let bench = Benchmark::from_json(read_problem_json(&p).unwrap()).unwrap();
+    let ocp = bench.ocp(IntegratorSettings::default()).unwrap();
+    let tr = Transcription::new(&ocp).unwrap();
+    let (_, _, w0) = tr.variable_bounds_and_guess();
+    for name in ["periodicity", "step_length_height", "touchdown", "liftoff"] {
+        let con = ocp.constraints.iter().find(|c| c.term.name == name).unwrap();
+        let f = &con.term.f;
+        assert!(f.has_hessian());
+        let z: Vec<f64> = con.term.args.iter().flat_map(|b| w0[tr.range(*b)].to_vec()).collect();
+        let (d, nz) = (f.dim(), z.len());
+        let wts: Vec<f64> = (0..d).map(|i| 0.3 + 0.1 * i as f64).collect();
+        let mut h = vec![0.0; nz * nz];
+        f.weighted_hessian(&z, &wts, &mut h).unwrap();
+        let grad = |z: &[f64]| {
+            let mut v = vec![0.0; d];
+            let mut j = vec![0.0; d * nz];
+            f.eval(z, &mut v, Some(&mut j)).unwrap();
+            (0..nz).map(|c| (0..d).map(|i| wts[i] * j[i + c * d]).sum::<f64>()).collect::<Vec<f64>>()
+        };
+        let mut worst = 0.0f64;
+        for c in 0..nz {
+            let e = 1e-6;
+            let mut zp = z.clone();
+            zp[c] += e;
+            let mut zm = z.clone();
+            zm[c] -= e;
+            let (gp, gm) = (grad(&zp), grad(&zm));
+            for r in 0..nz {
+                worst = worst.max(((gp[r] - gm[r]) / (2.0 * e) - h[r + c * nz]).abs());
+            }
+        }
+        assert!(worst < 1e-6, "{name}: Hessian differs from FD by {worst:e}");
+    }
+}

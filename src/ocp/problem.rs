@@ -39,6 +39,15 @@ pub trait NodeFunction: Send + Sync {
     fn dim(&self) -> usize;
     /// Evaluate; fill `jac` when given.
     fn eval(&self, z: &[f64], value: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), String>;
+    /// Whether [`weighted_hessian`](Self::weighted_hessian) is provided.
+    fn has_hessian(&self) -> bool {
+        false
+    }
+    /// Exact curvature `Σ_i weights_i ∇²f_i(z)` (nz × nz, column-major), for the SQP's
+    /// Hessian of the Lagrangian. Only called when [`has_hessian`](Self::has_hessian).
+    fn weighted_hessian(&self, _z: &[f64], _weights: &[f64], _out: &mut [f64]) -> Result<(), String> {
+        Err("no Hessian provided".into())
+    }
 }
 
 /// A function applied to specific variable blocks, with a name for reports.

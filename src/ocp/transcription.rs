@@ -683,6 +683,62 @@ impl crate::sqp::Nlp for Transcription<'_, '_> {
             + self.ocp.phases.iter().skip(1).map(|p| p.ode.nx()).sum::<usize>();
         (0..self.m).map(|i| if i < dynamics { 10.0 } else { 1.0 }).collect()
     }
+    fn rows_with_exact_hessian(&self) -> Vec<bool> {
+        let mut rows = vec![false; self.m];
+        for t in &self.terms {
+            let (f, dim) = match t.kind {
+                TermKind::Transition => match &self.ocp.transitions[t.term] {
+                    Some(term) => (&term.f, term.f.dim()),
+                    None => continue,
+                },
+                TermKind::Constraint => (&self.ocp.constraints[t.term].term.f, self.ocp.constraints[t.term].term.f.dim()),
+                _ => continue,
+            };
+            if f.has_hessian() {
+                rows[t.row..t.row + dim].iter_mut().for_each(|r| *r = true);
+            }
+        }
+        rows
+    }
+    fn exact_hessian(&self, w: &[f64], lambda: &[f64]) -> Result<(Vec<usize>, Vec<usize>, Vec<f64>), String> {
+        let (mut rows, mut cols, mut vals) = (Vec::new(), Vec::new(), Vec::new());
+        for t in &self.terms {
+            // transitions are written x0 − ψ(z): their curvature enters with −λ
+            let (f, name, sign) = match t.kind {
+                TermKind::Transition => match &self.ocp.transitions[t.term] {
+                    Some(term) => (&term.f, &term.name, -1.0),
+                    None => continue,
+                },
+                TermKind::Constraint => (&self.ocp.constraints[t.term].term.f, &self.ocp.constraints[t.term].term.name, 1.0),
+                _ => continue,
+            };
+            if !f.has_hessian() {
+                continue;
+            }
+            let d = f.dim();
+            let weights: Vec<f64> = (0..d).map(|i| sign * lambda[t.row + i]).collect();
+            if weights.iter().all(|v| *v == 0.0) {
+                continue;
+            }
+            let z = self.gather(w, &t.cols);
+            let nz = z.len();
+            let mut hm = vec![0.0; nz * nz];
+            f.weighted_hessian(&z, &weights, &mut hm).map_err(|e| format!("term '{name}': {e}"))?;
+            for a in 0..nz {
+                for b in a..nz {
+                    let (r, c) = (t.cols[a].min(t.cols[b]), t.cols[a].max(t.cols[b]));
+                    let mut v = hm[a + b * nz];
+                    if t.cols[a] == t.cols[b] && a != b {
+                        v *= 2.0;
+                    }
+                    rows.push(r);
+                    cols.push(c);
+                    vals.push(v);
+                }
+            }
+        }
+        Ok((rows, cols, vals))
+    }
     fn row_name(&self, i: usize) -> String {
         let l = &self.labels[i];
         format!("phase '{}', node {}, {}", l.phase, l.node, l.name)

@@ -2,7 +2,7 @@
 //! exactly as defined there: N equal intervals, piecewise-constant controls, objective
 //! `h Σ_k |u_k|²`, bounds and path constraints at the N + 1 nodes, the same initial guess.
 
-use super::{FnTerm, Linear};
+use super::{hessian, FnTerm, Linear};
 use crate::benchmarks::{biped, CartPole, FiveLinkBiped};
 use crate::integrate::{ControlShape, IntegratorSettings};
 use crate::ocp::{Block, Constraint, Ocp, Phase, PhaseDuration, Term};
@@ -186,6 +186,22 @@ fn five_link_biped<'a>(model: &'a FiveLinkBiped, json: &Value, integrator: Integ
         }
         Ok(())
     });
+    let m1h = model.clone();
+    let periodic = periodic.with_hessian(Box::new(move |z: &[f64], w: &[f64], out: &mut [f64]| {
+        // Σ w_i (x0_i − Δ_i(x_N)): curvature only in x_N
+        let hx = hessian::<NX>(&z[NX..], |xs| {
+            let d = m1h.heel_strike(xs);
+            d.iter().zip(w).fold(num_dual::Dual2SVec64::<NX>::from(0.0), |acc, (di, wi)| acc - *di * *wi)
+        });
+        out.iter_mut().for_each(|v| *v = 0.0);
+        let nz = 2 * NX;
+        for a in 0..NX {
+            for c in 0..NX {
+                out[(NX + a) + (NX + c) * nz] = hx[a + c * NX];
+            }
+        }
+        Ok(())
+    }));
     constraints.push(Constraint {
         term: Term {
             name: "periodicity".into(),
@@ -210,6 +226,20 @@ fn five_link_biped<'a>(model: &'a FiveLinkBiped, json: &Value, integrator: Integ
         }
         Ok(())
     });
+    let m2h = model.clone();
+    let foot_end = foot_end.with_hessian(Box::new(move |z: &[f64], w: &[f64], out: &mut [f64]| {
+        let hq = hessian::<NQ>(&z[..NQ], |qs| {
+            let p = m2h.swing_foot(qs);
+            p[0] * w[0] + p[1] * w[1]
+        });
+        out.iter_mut().for_each(|v| *v = 0.0);
+        for a in 0..NQ {
+            for c in 0..NQ {
+                out[a + c * NX] = hq[a + c * NQ];
+            }
+        }
+        Ok(())
+    }));
     constraints.push(Constraint {
         term: Term { name: "step_length_height".into(), args: vec![Block::State { phase: 0, node: n }], f: Arc::new(foot_end) },
         lb: vec![0.0; 2],
@@ -228,6 +258,12 @@ fn five_link_biped<'a>(model: &'a FiveLinkBiped, json: &Value, integrator: Integ
             }
             Ok(())
         });
+        let m4 = model.clone();
+        let vy = vy.with_hessian(Box::new(move |z: &[f64], w: &[f64], out: &mut [f64]| {
+            let hx = hessian::<NX>(z, |xs| m4.swing_foot_velocity(&xs[..NQ], &xs[NQ..])[1] * w[0]);
+            out.copy_from_slice(&hx);
+            Ok(())
+        }));
         constraints.push(Constraint {
             term: Term { name: name.into(), args: vec![Block::State { phase: 0, node }], f: Arc::new(vy) },
             lb: vec![lb],

@@ -6,10 +6,15 @@ pub mod benchmark;
 
 use crate::ocp::NodeFunction;
 
-/// A [`NodeFunction`] from a closure `(z, value, jacobian)`.
+/// Callback computing `Σ w_i ∇²f_i(z)` (nz × nz column-major) for an [`FnTerm`].
+pub type HessianFn = Box<dyn Fn(&[f64], &[f64], &mut [f64]) -> Result<(), String> + Send + Sync>;
+
+/// A [`NodeFunction`] from a closure `(z, value, jacobian)`, optionally with an exact
+/// weighted Hessian.
 pub struct FnTerm<F> {
     dim: usize,
     f: F,
+    hessian: Option<HessianFn>,
 }
 
 impl<F> FnTerm<F>
@@ -18,8 +23,34 @@ where
 {
     /// Wrap `f` with output dimension `dim`.
     pub fn new(dim: usize, f: F) -> Self {
-        Self { dim, f }
+        Self { dim, f, hessian: None }
     }
+
+    /// Attach the exact weighted Hessian.
+    pub fn with_hessian(mut self, h: HessianFn) -> Self {
+        self.hessian = Some(h);
+        self
+    }
+}
+
+/// Hessian of a scalar function of `N` variables by second-order forward AD
+/// (column-major, `N × N`).
+pub fn hessian<const N: usize>(
+    z: &[f64],
+    f: impl Fn(&[num_dual::Dual2SVec64<N>]) -> num_dual::Dual2SVec64<N>,
+) -> Vec<f64> {
+    use num_dual::{Derivative, Dual2SVec64};
+    let xs: Vec<Dual2SVec64<N>> = (0..N).map(|i| Dual2SVec64::from_re(z[i]).derivative(i)).collect();
+    let y = f(&xs);
+    let mut out = vec![0.0; N * N];
+    if let Derivative(Some(m)) = &y.v2 {
+        for a in 0..N {
+            for b in 0..N {
+                out[a + b * N] = m[(a, b)];
+            }
+        }
+    }
+    out
 }
 
 impl<F> NodeFunction for FnTerm<F>
@@ -31,6 +62,15 @@ where
     }
     fn eval(&self, z: &[f64], value: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), String> {
         (self.f)(z, value, jac)
+    }
+    fn has_hessian(&self) -> bool {
+        self.hessian.is_some()
+    }
+    fn weighted_hessian(&self, z: &[f64], weights: &[f64], out: &mut [f64]) -> Result<(), String> {
+        match &self.hessian {
+            Some(h) => h(z, weights, out),
+            None => Err("no Hessian provided".into()),
+        }
     }
 }
 
@@ -52,6 +92,13 @@ impl Linear {
 impl NodeFunction for Linear {
     fn dim(&self) -> usize {
         self.dim
+    }
+    fn has_hessian(&self) -> bool {
+        true
+    }
+    fn weighted_hessian(&self, _z: &[f64], _weights: &[f64], out: &mut [f64]) -> Result<(), String> {
+        out.iter_mut().for_each(|v| *v = 0.0);
+        Ok(())
     }
     fn eval(&self, z: &[f64], value: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), String> {
         for i in 0..self.dim {

@@ -88,6 +88,9 @@ impl BlockBfgs {
                 BfgsUpdate::SkipNonconvex => {
                     let yy: f64 = yb.iter().map(|v| v * v).sum();
                     if sy <= 1e-8 * ss.sqrt() * yy.sqrt() {
+                        if std::env::var_os("FOOTFALL_SQP_DEBUG").is_some() {
+                            eprintln!("      skip block {bi}: sᵀy {sy:.2e} |s| {:.2e} |y| {:.2e}", ss.sqrt(), yy.sqrt());
+                        }
                         continue;
                     }
                     yb
@@ -104,6 +107,61 @@ impl BlockBfgs {
             for i in 0..k {
                 for j in 0..k {
                     m[i * k + j] += -bs[i] * bs[j] / sbs + r[i] * r[j] / sr;
+                }
+            }
+        }
+    }
+
+    /// Add exact curvature `ex` (upper-triangle triplets) to the BFGS blocks it falls in,
+    /// project each affected block onto the positive semidefinite cone (eigenvalues
+    /// clipped at 1e-8 of the largest) so the QP stays convex, and append the result of
+    /// those blocks to `h`; entries outside every block are appended unchanged. The
+    /// stored BFGS blocks are not modified. Call instead of [`push_upper`](Self::push_upper).
+    pub fn convexify_into(&self, ex: &mut super::qp::Triplets, h: &mut super::qp::Triplets) {
+        use std::collections::HashMap;
+        let mut where_: HashMap<usize, (usize, usize)> = HashMap::new();
+        for (bi, block) in self.blocks.iter().enumerate() {
+            for (a, &v) in block.iter().enumerate() {
+                where_.insert(v, (bi, a));
+            }
+        }
+        let mut extra: HashMap<usize, Vec<f64>> = HashMap::new();
+        for k in 0..ex.vals.len() {
+            let (r, c, v) = (ex.rows[k], ex.cols[k], ex.vals[k]);
+            match (where_.get(&r), where_.get(&c)) {
+                (Some(&(br, a)), Some(&(bc, b))) if br == bc => {
+                    let kk = self.blocks[br].len();
+                    let m = extra.entry(br).or_insert_with(|| vec![0.0; kk * kk]);
+                    m[a * kk + b] += v;
+                    if a != b {
+                        m[b * kk + a] += v;
+                    }
+                }
+                _ => h.push(r, c, v),
+            }
+        }
+        for (bi, block) in self.blocks.iter().enumerate() {
+            let k = block.len();
+            let mut m = self.mats[bi].clone();
+            if let Some(e) = extra.get(&bi) {
+                for i in 0..k * k {
+                    m[i] += e[i];
+                }
+                let sym = nalgebra::DMatrix::from_row_slice(k, k, &m);
+                let eig = sym.symmetric_eigen();
+                let top = eig.eigenvalues.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+                let clipped = eig.eigenvalues.map(|v| v.max(1e-8 * top));
+                let proj = &eig.eigenvectors * nalgebra::DMatrix::from_diagonal(&clipped) * eig.eigenvectors.transpose();
+                for i in 0..k {
+                    for j in 0..k {
+                        m[i * k + j] = proj[(i, j)];
+                    }
+                }
+            }
+            for a in 0..k {
+                for b in a..k {
+                    let (r, c) = (block[a].min(block[b]), block[a].max(block[b]));
+                    h.push(r, c, m[a * k + b]);
                 }
             }
         }

@@ -48,6 +48,15 @@ pub trait Nlp {
     fn elastic_weights(&self) -> Vec<f64> {
         vec![1.0; self.m()]
     }
+    /// Rows whose curvature [`exact_hessian`](Self::exact_hessian) provides (the
+    /// quasi-Newton update leaves them out). Default: none.
+    fn rows_with_exact_hessian(&self) -> Vec<bool> {
+        vec![false; self.m()]
+    }
+    /// Exact curvature `Σ λ_i ∇²c_i` of those rows at `w`, as upper-triangle triplets.
+    fn exact_hessian(&self, _w: &[f64], _lambda: &[f64]) -> Result<(Vec<usize>, Vec<usize>, Vec<f64>), String> {
+        Ok((Vec::new(), Vec::new(), Vec::new()))
+    }
 }
 
 /// An NLP evaluation.
@@ -99,6 +108,10 @@ pub struct SqpSettings {
     pub regularization: f64,
     /// BFGS rule for non-convex steps (default: skip_nonconvex).
     pub bfgs_update: hessian::BfgsUpdate,
+    /// Use the exact curvature of constraint terms that provide it (convexified per
+    /// block) in the quasi-Newton modes (default: false; on the five-link biped it
+    /// converged more slowly: J = 470.11354 vs 470.11126 after 150 iterations).
+    pub exact_term_hessians: bool,
 }
 
 impl Default for SqpSettings {
@@ -112,6 +125,7 @@ impl Default for SqpSettings {
             line_search_min_step: 1e-10,
             regularization: 1e-9,
             bfgs_update: hessian::BfgsUpdate::SkipNonconvex,
+            exact_term_hessians: false,
         }
     }
 }
@@ -253,6 +267,8 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
     let (w_lb, w_ub, c_lb, c_ub) = nlp.bounds();
     let (jr, jc) = nlp.jacobian_pattern();
     let elastic_weights = nlp.elastic_weights();
+    let exact_rows = if settings.exact_term_hessians { nlp.rows_with_exact_hessian() } else { vec![false; m] };
+    let any_exact = exact_rows.iter().any(|&r| r);
     let (hr, hc) = nlp.gauss_newton_pattern();
     let mut bfgs = BlockBfgs::new(nlp.hessian_blocks(), settings.bfgs_update);
     if settings.hessian == HessianMode::GaussNewtonBfgs {
@@ -297,12 +313,27 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
                 h.cols.clone_from(&hc);
                 h.vals.clone_from(&st.ev.gn);
             }
-            HessianMode::Bfgs => bfgs.push_upper(&mut h),
+            HessianMode::Bfgs if !any_exact => bfgs.push_upper(&mut h),
+            HessianMode::Bfgs => {}
             HessianMode::GaussNewtonBfgs => {
                 h.rows.clone_from(&hr);
                 h.cols.clone_from(&hc);
                 h.vals.clone_from(&st.ev.gn);
-                bfgs.push_upper(&mut h);
+                if !any_exact {
+                    bfgs.push_upper(&mut h);
+                }
+            }
+        }
+        if any_exact && settings.hessian != HessianMode::GaussNewton {
+            match nlp.exact_hessian(&st.w, &lambda) {
+                Ok((r, c, v)) => {
+                    let mut ex = Triplets { rows: r, cols: c, vals: v };
+                    bfgs.convexify_into(&mut ex, &mut h);
+                }
+                Err(e) => {
+                    status = SqpStatus::EvaluationFailure(e);
+                    break;
+                }
             }
         }
         for i in 0..n {
@@ -371,6 +402,10 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
             })
             .fold(0.0, f64::max);
         kkt = stat_inf.max(infeas).max(compl / sd);
+        if std::env::var_os("FOOTFALL_SQP_DEBUG").is_some() {
+            let (imax, vmax) = stat.iter().enumerate().fold((0, 0.0f64), |a, (i, v)| if v.abs() > a.1 { (i, v.abs()) } else { a });
+            eprintln!("      kkt parts: stationarity {stat_inf:.2e} (var {imax}, {vmax:.2e}, sd {sd:.2e}) infeas {infeas:.2e} compl {:.2e}", compl / sd);
+        }
         let rec = IterationRecord {
             iter,
             objective: st.ev.f,
@@ -503,6 +538,9 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
             let mut gl_new = if structured { vec![0.0; n] } else { ev_new.grad.clone() };
             let mut gl_old = if structured { vec![0.0; n] } else { st.ev.grad.clone() };
             for k in 0..jr.len() {
+                if exact_rows[jr[k]] {
+                    continue;
+                }
                 gl_new[jc[k]] += ev_new.jac[k] * sol.lambda[jr[k]];
                 gl_old[jc[k]] += st.ev.jac[k] * sol.lambda[jr[k]];
             }

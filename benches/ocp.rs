@@ -1,0 +1,70 @@
+//! Criterion benchmarks of the OCP engine on the generic problems (same definitions as the
+//! CasADi peer in `../shared/peer`): one forward-sensitivity sweep over all intervals,
+//! one QP subproblem, and full solves from the problem's initial guess.
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use footfall::benchmarks::read_problem_json;
+use footfall::integrate::IntegratorSettings;
+use footfall::ocp::Transcription;
+use footfall::problems::benchmark::Benchmark;
+use footfall::sqp::qp::{self, QpData, Triplets};
+use footfall::sqp::{self, HessianMode, Nlp, Silent, SqpSettings};
+use std::time::Duration;
+
+fn bench(c: &mut Criterion) {
+    for (file, hessian, max_iter) in [
+        ("problems/cartpole_swingup.json", HessianMode::GaussNewton, 100),
+        ("problems/five_link_biped.json", HessianMode::GaussNewtonBfgs, 150),
+    ] {
+        let bench = Benchmark::from_json(read_problem_json(file).expect("problem")).expect("benchmark");
+        let name = bench.name();
+        let ocp = bench.ocp(IntegratorSettings::default()).expect("ocp");
+        let tr = Transcription::new(&ocp).expect("transcription");
+        let (w_lb, w_ub, w0) = tr.variable_bounds_and_guess();
+        let mut g = c.benchmark_group(name);
+        g.sample_size(10).measurement_time(Duration::from_secs(3));
+        g.bench_function("sensitivity_sweep", |b| b.iter(|| tr.evaluate(&w0, true).expect("sweep")));
+        g.bench_function("plain_sweep", |b| b.iter(|| tr.evaluate(&w0, false).expect("sweep")));
+        let ev = tr.evaluate(&w0, true).expect("evaluation");
+        let (jr, jc) = Nlp::jacobian_pattern(&tr);
+        let (hr, hc) = Nlp::gauss_newton_pattern(&tr);
+        let (c_lb, c_ub) = tr.constraint_bounds();
+        let mut h = Triplets { rows: hr, cols: hc, vals: ev.gauss_newton.clone() };
+        for i in 0..tr.n() {
+            h.push(i, i, 1e-9);
+        }
+        let jac = Triplets { rows: jr, cols: jc, vals: ev.jac.clone() };
+        let d_lb: Vec<f64> = (0..tr.n()).map(|i| w_lb[i] - w0[i]).collect();
+        let d_ub: Vec<f64> = (0..tr.n()).map(|i| w_ub[i] - w0[i]).collect();
+        let weights = vec![1.0; tr.m()];
+        let data = QpData {
+            h: &h,
+            g: &ev.grad,
+            jac: &jac,
+            c: &ev.c,
+            c_lb: &c_lb,
+            c_ub: &c_ub,
+            d_lb: &d_lb,
+            d_ub: &d_ub,
+            elastic: Some(1e4),
+            elastic_weights: &weights,
+        };
+        g.bench_function("qp_solve_elastic", |b| b.iter(|| qp::solve(&data).expect("qp")));
+        let settings = SqpSettings { tol_kkt: 1e-6, hessian, max_iter, ..Default::default() };
+        let res = sqp::solve(&tr, &w0, &settings, &mut Silent);
+        eprintln!(
+            "{name}: {} after {} iterations, J = {:.9}, KKT {:.2e}, {:.3} s",
+            res.status,
+            res.history.len() - 1,
+            res.objective,
+            res.kkt,
+            res.seconds
+        );
+        g.measurement_time(Duration::from_secs(if name == "five_link_biped" { 60 } else { 5 }));
+        g.bench_function("full_solve", |b| b.iter(|| sqp::solve(&tr, &w0, &settings, &mut Silent)));
+        g.finish();
+    }
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);
