@@ -891,6 +891,72 @@ impl Integrator {
         Ok(self.stats(true))
     }
 
+    /// States and forward sensitivities at the strictly increasing output times
+    /// `times ⊂ (t0, t1]` (the integrator's own interpolant, like
+    /// [`integrate_dense`](Self::integrate_dense)). Appends nx values per time to `xs` and
+    /// nx·(nx + np) values per time (column-major `S(t)`, as in
+    /// [`integrate_with_sensitivities`](Self::integrate_with_sensitivities)) to `ss`.
+    /// Used for quadratures along the trajectory, e.g. exact second derivatives.
+    #[allow(clippy::too_many_arguments)]
+    pub fn integrate_with_sensitivities_dense(
+        &mut self,
+        ode: &dyn Ode,
+        t0: f64,
+        t1: f64,
+        x0: &[f64],
+        p: &[f64],
+        times: &[f64],
+        xs: &mut Vec<f64>,
+        ss: &mut Vec<f64>,
+    ) -> Result<IntegrationStats, IntegratorError> {
+        check_interval(t0, t1)?;
+        let mut previous = t0;
+        for (index, &t) in times.iter().enumerate() {
+            if !(t > previous && t <= t1) {
+                return Err(IntegratorError::BadOutputTime { index, t });
+            }
+            previous = t;
+        }
+        self.start(ode, t0, t1, x0, p, true)?;
+        let ctx = CallCtx { ode, p };
+        // SAFETY: `ctx` outlives the guard; `shared` is live.
+        let guard = unsafe { CallGuard::new(self.shared, &ctx) };
+        let (lx, ls) = (xs.len(), ss.len());
+        let mut result = Ok(());
+        let mut t_reached = t0;
+        for &t in times {
+            match self.advance(t_reached, t) {
+                Ok(tr) => t_reached = tr,
+                Err(e) => {
+                    result = Err(e);
+                    break;
+                }
+            }
+            let mut tret = t;
+            // SAFETY: sensitivities are enabled and `ys` holds `ns` vectors.
+            let flag = unsafe { sys::CVodeGetSens(self.mem, &mut tret, self.ys) };
+            if flag < 0 {
+                result = Err(self.failure(flag, t));
+                break;
+            }
+            let finite = all_finite(self.state()) && (0..self.ns as usize).all(|i| all_finite(self.sensitivity(i)));
+            if !finite {
+                result = Err(IntegratorError::NonFinite { t });
+                break;
+            }
+            xs.extend_from_slice(self.state());
+            for i in 0..self.ns as usize {
+                ss.extend_from_slice(self.sensitivity(i));
+            }
+        }
+        drop(guard);
+        if result.is_err() {
+            xs.truncate(lx);
+            ss.truncate(ls);
+        }
+        result.map(|()| self.stats(true))
+    }
+
     /// States at the strictly increasing output times `times ⊂ [t0, t1]`.
     ///
     /// Values come from CVODES's own interpolating polynomial (one integration, no extra

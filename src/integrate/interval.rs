@@ -36,6 +36,13 @@ pub trait ControlledOde: Sync {
         fu: &mut [f64],
         ftheta: &mut [f64],
     ) -> Result<(), OdeError>;
+
+    /// Exact curvature of the weighted dynamics: `∇²_{(x,u,θ)} (μᵀ f(x, u, θ))`
+    /// ((nx+nu+nθ)², column-major) into `out`. Returns `Ok(false)` when the model does not
+    /// provide second derivatives (the default).
+    fn weighted_hessian(&self, _x: &[f64], _u: &[f64], _theta: &[f64], _mu: &[f64], _out: &mut [f64]) -> Result<bool, OdeError> {
+        Ok(false)
+    }
 }
 
 /// How the control varies over one shooting interval.
@@ -284,5 +291,139 @@ impl<O: ControlledOde + ?Sized> Ode for ShootingInterval<'_, O> {
             scale(u_cols, duration);
         }
         Ok(())
+    }
+}
+
+/// Gauss–Legendre nodes and weights on [0, 1], 8 points.
+const GAUSS8: [(f64, f64); 8] = [
+    (0.019_855_071_751_231_856, 0.050_614_268_145_188_13),
+    (0.101_666_761_293_186_63, 0.111_190_517_226_687_24),
+    (0.237_233_795_041_835_5, 0.156_853_322_938_943_64),
+    (0.408_282_678_752_175_1, 0.181_341_891_689_180_99),
+    (0.591_717_321_247_824_9, 0.181_341_891_689_180_99),
+    (0.762_766_204_958_164_5, 0.156_853_322_938_943_64),
+    (0.898_333_238_706_813_4, 0.111_190_517_226_687_24),
+    (0.980_144_928_248_768_2, 0.050_614_268_145_188_13),
+];
+
+impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
+    /// End state, sensitivities and the exact curvature of `λᵀ x(1)` with respect to
+    /// `z = (x0, p)` ((nx+np)², column-major), by the second-order adjoint identity
+    /// $$\nabla^2_z\,\lambda^T x(1) = \int_0^1 \begin{bmatrix}S\\P\end{bmatrix}^T
+    ///   \nabla^2_{(x,p)}\big(\mu^T F\big)\begin{bmatrix}S\\P\end{bmatrix} d\tau,\qquad
+    ///   \mu(\tau)^T = \lambda^T\Psi(1)\Psi(\tau)^{-1},$$
+    /// with $S = \partial x/\partial z$ and $\Psi = \partial x/\partial x_0$ from the forward
+    /// sensitivities at 8 Gauss–Legendre nodes (CVODES dense output), $P = [0\;|\;I]$ and
+    /// $F = T f(x, u(\tau), \theta)$. Second derivatives of $f$ come from the model
+    /// ([`ControlledOde::weighted_hessian`]); no finite differences.
+    /// Returns `Ok(false)` when the model has no second derivatives.
+    #[allow(clippy::too_many_arguments)]
+    pub fn integrate_with_hessian(
+        &self,
+        integ: &mut super::Integrator,
+        x0: &[f64],
+        p: &[f64],
+        lambda: &[f64],
+        x1: &mut [f64],
+        s1: &mut [f64],
+        hess: &mut [f64],
+    ) -> Result<bool, IntegratorError> {
+        let m = self.model;
+        let (nx, nu, nt) = (m.nx(), m.nu(), m.ntheta());
+        let np = self.np();
+        let nz = nx + np;
+        let nw = nx + nu + nt;
+        let mut times: Vec<f64> = GAUSS8.iter().map(|g| g.0).collect();
+        times.push(1.0);
+        let (mut xs, mut ss) = (Vec::new(), Vec::new());
+        integ.integrate_with_sensitivities_dense(self, 0.0, 1.0, x0, p, &times, &mut xs, &mut ss)?;
+        let sz = nx * nz;
+        x1.copy_from_slice(&xs[8 * nx..9 * nx]);
+        s1.copy_from_slice(&ss[8 * sz..9 * sz]);
+        // λᵀΨ(1)
+        let lam_psi1: Vec<f64> = (0..nx).map(|j| (0..nx).map(|i| lambda[i] * s1[i + j * nx]).sum()).collect();
+        hess.iter_mut().for_each(|v| *v = 0.0);
+        let dur = p[self.p_duration()];
+        let theta = &p[self.p_theta()];
+        let mut u = vec![0.0; nu];
+        let mut h = vec![0.0; nw * nw];
+        let mut xdot = vec![0.0; nx];
+        let (mut fx, mut fu, mut ft) = (vec![0.0; nx * nx], vec![0.0; nx * nu], vec![0.0; nx * nt]);
+        for (q, &(tau, wq)) in GAUSS8.iter().enumerate() {
+            let x = &xs[q * nx..(q + 1) * nx];
+            let s = &ss[q * sz..(q + 1) * sz];
+            // μ(τ)ᵀ = λᵀΨ(1)Ψ(τ)⁻¹: solve Ψ(τ)ᵀ μ = (λᵀΨ(1))ᵀ
+            let psi = nalgebra::DMatrix::from_column_slice(nx, nx, &s[..nx * nx]);
+            let rhs = nalgebra::DVector::from_column_slice(&lam_psi1);
+            let mu = psi.transpose().lu().solve(&rhs).ok_or(IntegratorError::NonFinite { t: tau })?;
+            let mu: Vec<f64> = mu.iter().copied().collect();
+            let u0 = &p[self.p_u0()];
+            match self.p_u1() {
+                Some(r) => {
+                    let u1 = &p[r];
+                    for i in 0..nu {
+                        u[i] = (1.0 - tau) * u0[i] + tau * u1[i];
+                    }
+                }
+                None => u.copy_from_slice(u0),
+            }
+            let rhs_err = |e: OdeError| IntegratorError::Rhs { t: tau, source: e };
+            if !m.weighted_hessian(x, &u, theta, &mu, &mut h).map_err(rhs_err)? {
+                return Ok(false);
+            }
+            m.f_jac(x, &u, theta, &mut xdot, &mut fx, &mut fu, &mut ft).map_err(rhs_err)?;
+            // gradient of h = μᵀf with respect to (x, u, θ)
+            let grad_w: Vec<f64> = (0..nw)
+                .map(|c| {
+                    let col = if c < nx {
+                        &fx[c * nx..(c + 1) * nx]
+                    } else if c < nx + nu {
+                        &fu[(c - nx) * nx..(c - nx + 1) * nx]
+                    } else {
+                        &ft[(c - nx - nu) * nx..(c - nx - nu + 1) * nx]
+                    };
+                    col.iter().zip(&mu).map(|(a, b)| a * b).sum()
+                })
+                .collect();
+            // D = ∂(x, u, θ)/∂z (nw × nz) and the T-derivative column handled explicitly
+            let mut d = vec![0.0; nw * nz];
+            for c in 0..nz {
+                for r in 0..nx {
+                    d[r + c * nw] = s[r + c * nx];
+                }
+            }
+            for i in 0..nu {
+                d[nx + i + (nx + self.p_u0().start + i) * nw] = if self.p_u1().is_some() { 1.0 - tau } else { 1.0 };
+                if let Some(r) = self.p_u1() {
+                    d[nx + i + (nx + r.start + i) * nw] = tau;
+                }
+            }
+            for (k, c) in self.p_theta().enumerate() {
+                d[nx + nu + k + (nx + c) * nw] = 1.0;
+            }
+            // H += w · [ T · Dᵀ h_ww D + (e_T ⊗ (Dᵀ∇h)) + ((Dᵀ∇h) ⊗ e_T) ]
+            let hd: Vec<f64> = (0..nz)
+                .flat_map(|c| {
+                    let h = &h;
+                    let d = &d;
+                    (0..nw).map(move |r| (0..nw).map(|k| h[r + k * nw] * d[k + c * nw]).sum::<f64>())
+                })
+                .collect();
+            let t_col = nx + self.p_duration();
+            let dg: Vec<f64> = (0..nz).map(|c| (0..nw).map(|r| d[r + c * nw] * grad_w[r]).sum()).collect();
+            for a in 0..nz {
+                for b in 0..nz {
+                    let mut v = dur * (0..nw).map(|r| d[r + a * nw] * hd[r + b * nw]).sum::<f64>();
+                    if a == t_col {
+                        v += dg[b];
+                    }
+                    if b == t_col {
+                        v += dg[a];
+                    }
+                    hess[a + b * nz] += wq * v;
+                }
+            }
+        }
+        Ok(true)
     }
 }
