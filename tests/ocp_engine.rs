@@ -150,3 +150,54 @@ fn biped_term_hessians_match_finite_differences() {
         assert!(worst < 1e-6, "{name}: Hessian differs from FD by {worst:e}");
     }
 }
+
+/// The exact interval curvature ∇²_z λᵀx(1) (second-order adjoint identity from forward
+/// sensitivities) matches central differences of the exact gradient Sᵀλ, for the biped
+/// and the cart-pole, constant and linear controls.
+#[test]
+fn interval_hessian_matches_finite_differences_of_sensitivities() {
+    use footfall::benchmarks::{CartPole, FiveLinkBiped};
+    use footfall::integrate::{Integrator, ShootingInterval};
+    let tight = IntegratorSettings { rtol: 1e-12, atol: 1e-12, ..Default::default() };
+    let biped = FiveLinkBiped::default();
+    let cart = CartPole::default();
+    let cases: Vec<(&dyn ControlledOde, Vec<f64>, Vec<f64>, f64)> = vec![
+        (&biped, vec![-0.3, 0.7, 0.0, -0.5, -0.6, 0.5, -0.4, 0.1, 0.3, -0.2], vec![0.0, 20.0, -10.0, 5.0, 3.0], 0.0175),
+        (&cart, vec![0.1, 0.5, 0.3, -1.0], vec![4.0], 0.05),
+    ];
+    for (ode, x0, u, h) in cases {
+        for shape in [ControlShape::Constant, ControlShape::Linear] {
+            let iv = ShootingInterval::new(ode, shape);
+            let (nx, np) = (ode.nx(), iv.np());
+            let nz = nx + np;
+            let u1: Vec<f64> = u.iter().map(|v| 0.7 * v + 1.0).collect();
+            let mut p = Vec::new();
+            iv.pack_params(&u, (shape == ControlShape::Linear).then_some(&u1[..]), h, &[], &mut p).unwrap();
+            let lambda: Vec<f64> = (0..nx).map(|i| 0.5 - 0.13 * i as f64).collect();
+            let mut integ = Integrator::new(nx, np, tight.clone()).unwrap();
+            let (mut x1, mut s1, mut hs) = (vec![0.0; nx], vec![0.0; nx * nz], vec![0.0; nz * nz]);
+            assert!(iv.integrate_with_hessian(&mut integ, &x0, &p, &lambda, &mut x1, &mut s1, &mut hs).unwrap());
+            let mut grad = |z: &[f64]| {
+                let (mut x, mut s) = (vec![0.0; nx], vec![0.0; nx * nz]);
+                integ.integrate_with_sensitivities(&iv, 0.0, 1.0, &z[..nx], &z[nx..], &mut x, &mut s).unwrap();
+                (0..nz).map(|c| (0..nx).map(|i| lambda[i] * s[i + c * nx]).sum::<f64>()).collect::<Vec<f64>>()
+            };
+            let z0: Vec<f64> = x0.iter().chain(&p).copied().collect();
+            let scale = hs.iter().map(|v| v.abs()).fold(1e-3, f64::max);
+            let mut worst = 0.0f64;
+            for c in 0..nz {
+                let e = 1e-5 * z0[c].abs().max(if c == nx + iv.p_duration() { 0.01 } else { 1.0 });
+                let mut zp = z0.clone();
+                zp[c] += e;
+                let mut zm = z0.clone();
+                zm[c] -= e;
+                let (gp, gm) = (grad(&zp), grad(&zm));
+                for r in 0..nz {
+                    worst = worst.max(((gp[r] - gm[r]) / (2.0 * e) - hs[r + c * nz]).abs() / scale);
+                }
+            }
+            eprintln!("nx {nx} {shape:?}: interval Hessian vs FD relative error {worst:.2e} (scale {scale:.2e})");
+            assert!(worst < 1e-5, "interval Hessian differs from FD by {worst:e}");
+        }
+    }
+}

@@ -819,6 +819,11 @@ impl Integrator {
         &self.settings
     }
 
+    /// Counters of the last call (with sensitivities).
+    pub fn stats_snapshot(&self) -> IntegrationStats {
+        self.stats(true)
+    }
+
     /// Integrate from `x(t0) = x0` to `t1` and write the end state into `x1` (length nx).
     pub fn integrate(
         &mut self,

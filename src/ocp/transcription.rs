@@ -441,7 +441,8 @@ impl<'o, 'a> Transcription<'o, 'a> {
         iv: &IntervalRef,
         w: &[f64],
         sens: bool,
-    ) -> Result<(Vec<f64>, Vec<f64>, IntegrationStats), TranscriptionError> {
+        lambda: Option<&[f64]>,
+    ) -> Result<(Vec<f64>, Vec<f64>, IntegrationStats, Option<Vec<f64>>), TranscriptionError> {
         let ph = &self.ocp.phases[iv.phase];
         let interval = ShootingInterval::new(ph.ode, ph.controls);
         let (nx, np) = (ph.ode.nx(), interval.np());
@@ -464,7 +465,24 @@ impl<'o, 'a> Transcription<'o, 'a> {
         };
         let mut x1 = vec![0.0; nx];
         let mut s = Vec::new();
-        let res = if sens {
+        let mut hess = None;
+        let res = if let Some(lam) = lambda {
+            // continuity rows are s_{k+1} − x(1): their curvature is that of −λᵀx(1)
+            s = vec![0.0; nx * (nx + np)];
+            let weights: Vec<f64> = lam[iv.row..iv.row + nx].iter().map(|v| -v).collect();
+            let mut h = vec![0.0; (nx + np) * (nx + np)];
+            match interval.integrate_with_hessian(&mut integ, x0, &p, &weights, &mut x1, &mut s, &mut h) {
+                Ok(true) => {
+                    hess = Some(h);
+                    Ok(integ.stats_snapshot())
+                }
+                Ok(false) => Err(IntegratorError::BadSettings {
+                    field: "hessian",
+                    reason: format!("the dynamics of phase '{}' provide no second derivatives", ph.name),
+                }),
+                Err(e) => Err(e),
+            }
+        } else if sens {
             s = vec![0.0; nx * (nx + np)];
             integ.integrate_with_sensitivities(&interval, 0.0, 1.0, x0, &p, &mut x1, &mut s)
         } else {
@@ -474,13 +492,70 @@ impl<'o, 'a> Transcription<'o, 'a> {
             v.push(integ);
         }
         let stats = res.map_err(err)?;
-        Ok((x1, s, stats))
+        Ok((x1, s, stats, hess))
     }
 
     /// Evaluate objective and constraints, and with `derivs` their first derivatives
     /// and the Gauss–Newton Hessian.
     pub fn evaluate(&self, w: &[f64], derivs: bool) -> Result<Evaluation, TranscriptionError> {
-        let results: Vec<_> = self.intervals.par_iter().map(|iv| self.integrate_interval(iv, w, derivs)).collect();
+        self.evaluate_inner(w, derivs, None).map(|(ev, _)| ev)
+    }
+
+    /// Evaluate with derivatives and the exact curvature `Σ λ_i ∇²c_i` of the continuity
+    /// rows (from interval Hessians) and of the terms that provide it, as upper-triangle
+    /// triplets `(rows, cols, vals)`.
+    #[allow(clippy::type_complexity)]
+    pub fn evaluate_with_hessian(
+        &self,
+        w: &[f64],
+        lambda: &[f64],
+    ) -> Result<(Evaluation, (Vec<usize>, Vec<usize>, Vec<f64>)), TranscriptionError> {
+        let (ev, blocks) = self.evaluate_inner(w, true, Some(lambda))?;
+        let (mut rows, mut cols, mut vals) = crate::sqp::Nlp::exact_hessian(self, w, lambda)
+            .map_err(|reason| TranscriptionError::Term { term: "hessian".into(), reason })?;
+        for (iv, h) in self.intervals.iter().zip(blocks) {
+            let Some(h) = h else { continue };
+            let ph = &self.ocp.phases[iv.phase];
+            let interval = ShootingInterval::new(ph.ode, ph.controls);
+            let nx = ph.ode.nx();
+            let nz = nx + interval.np();
+            // z order: x0, u0, [u1], h, θ  → NLP columns (h = T/N)
+            let mut map: Vec<(usize, f64)> = self.range(Block::State { phase: iv.phase, node: iv.k }).map(|c| (c, 1.0)).collect();
+            map.extend(self.range(Block::Control { phase: iv.phase, node: iv.k }).map(|c| (c, 1.0)));
+            if ph.controls == ControlShape::Linear {
+                map.extend(self.range(Block::Control { phase: iv.phase, node: iv.k + 1 }).map(|c| (c, 1.0)));
+            }
+            map.push((self.duration_off[iv.phase], 1.0 / ph.intervals as f64));
+            map.extend(self.range(Block::Params).map(|c| (c, 1.0)));
+            debug_assert_eq!(map.len(), nz);
+            for a in 0..nz {
+                for b in a..nz {
+                    let (ca, sa) = map[a];
+                    let (cb, sb) = map[b];
+                    let mut v = h[a + b * nz] * sa * sb;
+                    if ca == cb && a != b {
+                        v *= 2.0;
+                    }
+                    if v != 0.0 {
+                        rows.push(ca.min(cb));
+                        cols.push(ca.max(cb));
+                        vals.push(v);
+                    }
+                }
+            }
+        }
+        Ok((ev, (rows, cols, vals)))
+    }
+
+    #[allow(clippy::type_complexity)]
+    fn evaluate_inner(
+        &self,
+        w: &[f64],
+        derivs: bool,
+        lambda: Option<&[f64]>,
+    ) -> Result<(Evaluation, Vec<Option<Vec<f64>>>), TranscriptionError> {
+        let results: Vec<_> = self.intervals.par_iter().map(|iv| self.integrate_interval(iv, w, derivs, lambda)).collect();
+        let mut blocks = Vec::with_capacity(results.len());
         let mut ev = Evaluation {
             f: 0.0,
             c: vec![0.0; self.m],
@@ -491,7 +566,8 @@ impl<'o, 'a> Transcription<'o, 'a> {
         };
         // continuity (Jacobian values in pattern order)
         for (iv, r) in self.intervals.iter().zip(results) {
-            let (x1, s, st) = r?;
+            let (x1, s, st, hess) = r?;
+            blocks.push(hess);
             ev.stats += st;
             let ph = &self.ocp.phases[iv.phase];
             let nx = ph.ode.nx();
@@ -624,7 +700,7 @@ impl<'o, 'a> Transcription<'o, 'a> {
                 }
             }
         }
-        Ok(ev)
+        Ok((ev, blocks))
     }
 
     fn transition_row(&self, j: usize) -> usize {
@@ -682,6 +758,23 @@ impl crate::sqp::Nlp for Transcription<'_, '_> {
         let dynamics = self.ocp.phases.iter().map(|p| p.intervals * p.ode.nx()).sum::<usize>()
             + self.ocp.phases.iter().skip(1).map(|p| p.ode.nx()).sum::<usize>();
         (0..self.m).map(|i| if i < dynamics { 10.0 } else { 1.0 }).collect()
+    }
+    fn evaluate_with_hessian(
+        &self,
+        w: &[f64],
+        lambda: &[f64],
+    ) -> Result<(crate::sqp::NlpEval, (Vec<usize>, Vec<usize>, Vec<f64>)), String> {
+        let (ev, h) = Transcription::evaluate_with_hessian(self, w, lambda).map_err(|e| {
+            let mut s = e.to_string();
+            let mut src = std::error::Error::source(&e);
+            while let Some(c) = src {
+                s.push_str(": ");
+                s.push_str(&c.to_string());
+                src = c.source();
+            }
+            s
+        })?;
+        Ok((crate::sqp::NlpEval { f: ev.f, c: ev.c, grad: ev.grad, jac: ev.jac, gn: ev.gauss_newton }, h))
     }
     fn rows_with_exact_hessian(&self) -> Vec<bool> {
         let mut rows = vec![false; self.m];

@@ -88,9 +88,6 @@ impl BlockBfgs {
                 BfgsUpdate::SkipNonconvex => {
                     let yy: f64 = yb.iter().map(|v| v * v).sum();
                     if sy <= 1e-8 * ss.sqrt() * yy.sqrt() {
-                        if std::env::var_os("FOOTFALL_SQP_DEBUG").is_some() {
-                            eprintln!("      skip block {bi}: sᵀy {sy:.2e} |s| {:.2e} |y| {:.2e}", ss.sqrt(), yy.sqrt());
-                        }
                         continue;
                     }
                     yb
