@@ -160,6 +160,47 @@ pub struct PhaseSequence {
     pub initial_state: Option<InitialState>,
     /// The phases in order.
     pub phases: Vec<Phase>,
+    /// Walking-cycle settings for optimal control (periodicity, symmetry, friction).
+    #[serde(default)]
+    pub gait: Option<GaitSpec>,
+}
+
+fn default_friction() -> f64 {
+    0.8
+}
+
+fn default_symmetry() -> Vec<[String; 2]> {
+    [["hip_r", "hip_l"], ["knee_r", "knee_l"], ["ankle_r", "ankle_l"]]
+        .iter()
+        .map(|p| [p[0].to_string(), p[1].to_string()])
+        .collect()
+}
+
+/// Settings of a walking cycle (seed 001 §3.3).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GaitSpec {
+    /// Coefficient of friction of the friction cone |λₜ| ≤ μ λₙ (default 0.8).
+    #[serde(default = "default_friction")]
+    pub friction: f64,
+    /// Coordinate pairs swapped by the left↔right symmetry map (default: hip, knee and
+    /// ankle of both legs); activations and excitations of the pairs swap with them.
+    #[serde(default = "default_symmetry")]
+    pub symmetry: Vec<[String; 2]>,
+    /// Periodic, symmetric cycle: the state after the last phase, mirrored, equals the
+    /// first state, except the forward pelvis position (default true).
+    #[serde(default = "yes")]
+    pub periodic: bool,
+    /// Swing-foot clearance φ ≥ 0 for every primitive not in contact (default true).
+    #[serde(default = "yes")]
+    pub clearance: bool,
+    /// Control parameterisation (default `linear`, as the seed).
+    #[serde(default = "linear")]
+    pub controls: crate::integrate::ControlShape,
+}
+
+fn linear() -> crate::integrate::ControlShape {
+    crate::integrate::ControlShape::Linear
 }
 
 impl PhaseSequence {
@@ -172,6 +213,7 @@ impl PhaseSequence {
 
     /// Structural checks that need no model.
     pub fn validate(&self, path: &Path) -> Result<(), ModelError> {
+        self.check_gait(path)?;
         if self.phases.is_empty() {
             return Err(ModelError::invalid(
                 path,
@@ -279,11 +321,61 @@ impl PhaseSequence {
                     .iter()
                     .map(|c| (c.contact.as_str(), c.rolling))
                     .collect();
-                model
+                let set = model
                     .constraint_set(ph.name(), &list)
-                    .map_err(|r| ModelError::invalid(path, f("contacts".into()), r))
+                    .map_err(|r| ModelError::invalid(path, f("contacts".into()), r))?;
+                if let Some(row) = model.dependent_row(&set) {
+                    let r = &set.rows[row];
+                    return Err(ModelError::invalid(
+                        path,
+                        f("contacts".into()),
+                        format!(
+                            "phase '{}' over-constrains the body: the {:?} row of '{}' depends on the others \
+                             (a rigid foot has 3 degrees of freedom in the plane; give a second contact on \
+                             the same foot \"rolling\": false)",
+                            ph.name(),
+                            r.kind,
+                            model.contacts[r.contact].name
+                        ),
+                    ));
+                }
+                Ok(set)
             })
             .collect()
+    }
+
+    /// Check the gait section against the model: symmetry pairs must name distinct
+    /// coordinates of the model, each at most once.
+    pub fn check_gait(&self, path: &Path) -> Result<(), ModelError> {
+        let Some(g) = &self.gait else { return Ok(()) };
+        if !(g.friction.is_finite() && g.friction > 0.0) {
+            return Err(ModelError::invalid(path, "gait.friction", format!("must be a positive number, got {}", g.friction)));
+        }
+        let coords = crate::model::gait::COORDINATES;
+        let mut used: Vec<&str> = Vec::new();
+        for (i, [a, b]) in g.symmetry.iter().enumerate() {
+            for c in [a, b] {
+                if !coords.contains(&c.as_str()) || c.starts_with("pelvis") {
+                    return Err(ModelError::invalid(
+                        path,
+                        format!("gait.symmetry[{i}]"),
+                        format!("'{c}' is not a leg coordinate of the model ({})", coords[3..].join(", ")),
+                    ));
+                }
+                if used.contains(&c.as_str()) {
+                    return Err(ModelError::invalid(
+                        path,
+                        format!("gait.symmetry[{i}]"),
+                        format!("'{c}' appears in two pairs: a symmetry map must be a permutation"),
+                    ));
+                }
+                used.push(c);
+            }
+            if a == b {
+                return Err(ModelError::invalid(path, format!("gait.symmetry[{i}]"), format!("pairs '{a}' with itself")));
+            }
+        }
+        Ok(())
     }
 }
 

@@ -396,6 +396,7 @@ impl GaitModel {
 
     /// Full parameter vector in scalar `S`: fixed values as constants, free ones from θ.
     fn full_params<S: Scalar>(&self, theta: &[S]) -> Vec<S> {
+        debug_assert_eq!(theta.len(), self.free.len(), "θ must hold the model's free parameters");
         let mut p: Vec<S> = self.params.iter().map(|p| S::c(p.value)).collect();
         for (k, &i) in self.free.iter().enumerate() {
             p[i] = theta[k];
@@ -633,6 +634,23 @@ impl GaitModel {
         g
     }
 
+    /// Index of a row of `set` that is linearly dependent on the rows before it, at a
+    /// neutral standing pose (dependence of contact rows on one rigid foot does not change
+    /// with the pose), or `None`.
+    pub fn dependent_row(&self, set: &ConstraintSet) -> Option<usize> {
+        let q = [0.0, 1.0, 0.0, 0.1, -0.2, 0.05, -0.1, -0.3, 0.1];
+        let nq = self.nq();
+        let g = self.constraint_jacobian_at(set, &q[..nq.min(9)], &self.theta0());
+        let nc = set.rows.len();
+        let mut a = vec![0.0; nc * nc];
+        for i in 0..nc {
+            for j in 0..nc {
+                a[i * nc + j] = (0..nq).map(|l| g[i * nq + l] * g[j * nq + l]).sum();
+            }
+        }
+        cholesky(&mut a, nc, 1e-10).err().map(|e| e.pivot)
+    }
+
     /// Project a state onto the constraint manifold of `set` (seed §3.6: the initial
     /// guess is "polished to satisfy the foot-ground constraints"): positions by
     /// minimum-norm Gauss–Newton steps on the normal gaps φ = 0, velocities by the
@@ -796,6 +814,63 @@ impl GaitModel {
                 )
             }
         }
+    }
+}
+
+impl GaitModel {
+    /// Constraint forces λ (one per row of `set`, N) and their Jacobian with respect to
+    /// `(x, u, θ)` (rows × (nx + nu + nθ), column-major), by forward AD.
+    pub fn contact_forces_jacobian(
+        &self,
+        set: &ConstraintSet,
+        x: &[f64],
+        u: &[f64],
+        theta: &[f64],
+        lambda: &mut [f64],
+        jac: &mut [f64],
+    ) -> Result<(), DynamicsError> {
+        let (nx, nu) = (self.nx(), self.nu());
+        let z: Vec<f64> = x.iter().chain(u).chain(theta).copied().collect();
+        let mut xdot = vec![AdChunk::from(0.0); nx];
+        ad::jacobian(
+            &z,
+            set.rows.len(),
+            |zs, out| {
+                let (xs, rest) = zs.split_at(nx);
+                let (us, ts) = rest.split_at(nu);
+                self.dynamics(set, xs, us, ts, &mut xdot, out, None)
+            },
+            lambda,
+            jac,
+        )
+    }
+
+    /// Post-impact state `(q, q̇⁺, a)` of the plastic impact with the contacts of
+    /// `set_after`, and its Jacobian with respect to `(x, θ)` (nx × (nx + nθ),
+    /// column-major), by forward AD.
+    pub fn impact_state_jacobian(
+        &self,
+        set_after: &ConstraintSet,
+        x: &[f64],
+        theta: &[f64],
+        x_plus: &mut [f64],
+        jac: &mut [f64],
+    ) -> Result<(), DynamicsError> {
+        let (nx, nq) = (self.nx(), self.nq());
+        let z: Vec<f64> = x.iter().chain(theta).copied().collect();
+        ad::jacobian(
+            &z,
+            nx,
+            |zs, out| {
+                let (xs, ts) = zs.split_at(nx);
+                let (qd_plus, _) = self.impact(set_after, &xs[..nq], &xs[nq..2 * nq], ts)?;
+                out.copy_from_slice(xs);
+                out[nq..2 * nq].copy_from_slice(&qd_plus);
+                Ok(())
+            },
+            x_plus,
+            jac,
+        )
     }
 }
 

@@ -52,16 +52,16 @@ pub trait NodeFunction: Send + Sync {
 
 /// A function applied to specific variable blocks, with a name for reports.
 #[derive(Clone)]
-pub struct Term {
+pub struct Term<'a> {
     /// Name (e.g. `periodicity`, `friction_cone`).
     pub name: String,
     /// Argument blocks, concatenated in this order.
     pub args: Vec<Block>,
-    /// The function.
-    pub f: Arc<dyn NodeFunction>,
+    /// The function (may borrow the model for `'a`).
+    pub f: Arc<dyn NodeFunction + 'a>,
 }
 
-impl std::fmt::Debug for Term {
+impl std::fmt::Debug for Term<'_> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         f.debug_struct("Term").field("name", &self.name).field("args", &self.args).finish()
     }
@@ -69,9 +69,9 @@ impl std::fmt::Debug for Term {
 
 /// A constraint `lb ≤ f(z) ≤ ub` (equal bounds for an equality).
 #[derive(Debug, Clone)]
-pub struct Constraint {
+pub struct Constraint<'a> {
     /// The function and its arguments.
-    pub term: Term,
+    pub term: Term<'a>,
     /// Lower bounds (−∞ allowed).
     pub lb: Vec<f64>,
     /// Upper bounds (+∞ allowed).
@@ -144,7 +144,7 @@ pub struct Ocp<'a> {
     pub phases: Vec<Phase<'a>>,
     /// State transition into phase `j + 1`: `x_{j+1,0} = ψ_j(args)`; `None` means
     /// continuity `x_{j+1,0} = x_{j,N}` (equal state dimensions required).
-    pub transitions: Vec<Option<Term>>,
+    pub transitions: Vec<Option<Term<'a>>>,
     /// Number of free parameters θ (shared by all phases' dynamics).
     pub ntheta: usize,
     /// θ initial guess and bounds.
@@ -154,11 +154,11 @@ pub struct Ocp<'a> {
     /// θ upper bounds.
     pub theta_ub: Vec<f64>,
     /// Path and boundary constraints.
-    pub constraints: Vec<Constraint>,
+    pub constraints: Vec<Constraint<'a>>,
     /// Least-squares cost terms: cost += ‖r(z)‖².
-    pub least_squares: Vec<Term>,
+    pub least_squares: Vec<Term<'a>>,
     /// General scalar cost terms (dimension 1).
-    pub costs: Vec<Term>,
+    pub costs: Vec<Term<'a>>,
     /// Integrator settings for the shooting intervals.
     pub integrator: IntegratorSettings,
 }

@@ -84,7 +84,7 @@ impl Benchmark {
     }
 }
 
-fn u_squared_terms(n: usize, nu: usize, h: f64) -> Vec<Term> {
+fn u_squared_terms(n: usize, nu: usize, h: f64) -> Vec<Term<'static>> {
     let w = h.sqrt();
     let f = Arc::new(Linear::new((0..nu * nu).map(|k| if k / nu == k % nu { w } else { 0.0 }).collect(), nu));
     (0..n).map(|k| Term { name: "u_squared".into(), args: vec![Block::Control { phase: 0, node: k }], f: f.clone() }).collect()

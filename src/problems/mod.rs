@@ -3,6 +3,7 @@
 //! nothing about gait.
 
 pub mod benchmark;
+pub mod gait;
 
 use crate::ocp::NodeFunction;
 

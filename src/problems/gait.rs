@@ -1,0 +1,433 @@
+//! The walking cycle as a multi-phase OCP (seed 001 §3.3): continuous phases with their
+//! contact sets, impacts as state transitions, contact-force path constraints
+//! (λₙ ≥ 0, friction cone |λₜ| ≤ μλₙ), swing-foot clearance, landing contacts on the
+//! ground, and periodicity through the left↔right symmetry map. Costs are added by the
+//! tracking and prediction problems.
+//!
+//! Leading impact phases of a phase file (e.g. `1e*`) are realised by the trailing impact
+//! of the mirrored cycle: the state after the last impact, mirrored, is the first state.
+
+use super::{FnTerm, Linear};
+use crate::integrate::{ControlShape, IntegratorSettings};
+use crate::model::gait::COORDINATES;
+use crate::model::{ConstraintSet, GaitModel, GaitOde, RowKind};
+use crate::ocp::{Block, Constraint, Ocp, Phase as OcpPhase, PhaseDuration, Term};
+use crate::phases::{Duration, GaitSpec, Phase, PhaseSequence};
+
+use std::sync::Arc;
+
+/// Bounds and initial guess for the gait OCP.
+#[derive(Debug, Clone)]
+pub struct GaitGuess {
+    /// Node states per continuous phase (`intervals + 1` rows each).
+    pub x: Vec<Vec<Vec<f64>>>,
+    /// Controls per continuous phase (control nodes).
+    pub u: Vec<Vec<Vec<f64>>>,
+    /// State bounds (applied at every node).
+    pub x_lb: Vec<f64>,
+    /// State upper bounds.
+    pub x_ub: Vec<f64>,
+    /// Control bounds.
+    pub u_lb: Vec<f64>,
+    /// Control upper bounds.
+    pub u_ub: Vec<f64>,
+}
+
+/// Index permutation and signs of the left↔right map on states and controls.
+fn mirror_maps(model: &GaitModel, spec: &GaitSpec) -> (Vec<usize>, Vec<usize>) {
+    let nq = model.nq();
+    let mut qmap: Vec<usize> = (0..nq).collect();
+    for [a, b] in &spec.symmetry {
+        let ia = COORDINATES.iter().position(|c| c == a).unwrap_or(0);
+        let ib = COORDINATES.iter().position(|c| c == b).unwrap_or(0);
+        qmap[ia] = ib;
+        qmap[ib] = ia;
+    }
+    let mut xmap: Vec<usize> = qmap.clone();
+    xmap.extend(qmap.iter().map(|&i| nq + i));
+    // activations/controls come in (flexor, extensor) pairs per leg joint in the order
+    // hip_r, knee_r, ankle_r, hip_l, knee_l, ankle_l: joint k ↔ the joint of its mirror
+    let leg = [3usize, 4, 5, 6, 7, 8];
+    let per = model.nu() / leg.len();
+    let mut umap: Vec<usize> = (0..model.nu()).collect();
+    for (k, &c) in leg.iter().enumerate() {
+        let m = leg.iter().position(|&d| d == qmap[c]).unwrap_or(k);
+        for s in 0..per {
+            umap[k * per + s] = m * per + s;
+        }
+    }
+    if model.na() > 0 {
+        xmap.extend(umap.iter().map(|&i| 2 * nq + i));
+    }
+    (xmap, umap)
+}
+
+/// A resolved walking cycle: the model, the phase file, the constraint set of every phase
+/// and the dynamics of every continuous phase, from which [`GaitCycle::ocp`] builds the
+/// optimal control problem.
+pub struct GaitCycle<'m> {
+    model: &'m GaitModel,
+    seq: PhaseSequence,
+    sets: &'m [ConstraintSet],
+    odes: Vec<GaitOde<'m>>,
+    /// Index (into the phase file) of each continuous phase.
+    pub continuous: Vec<usize>,
+}
+
+impl<'m> GaitCycle<'m> {
+    /// Resolve `seq` (with its constraint sets `sets`, one per phase) for `model`.
+    pub fn new(model: &'m GaitModel, seq: &PhaseSequence, sets: &'m [ConstraintSet]) -> Result<Self, String> {
+        if sets.len() != seq.phases.len() {
+            return Err(format!("{} constraint sets for {} phases", sets.len(), seq.phases.len()));
+        }
+        let continuous: Vec<usize> =
+            seq.phases.iter().enumerate().filter(|(_, p)| matches!(p, Phase::Continuous { .. })).map(|(i, _)| i).collect();
+        if continuous.is_empty() {
+            return Err("the phase file has no continuous phase".into());
+        }
+        let odes = continuous.iter().map(|&i| GaitOde { model, set: &sets[i] }).collect();
+        Ok(Self { model, seq: seq.clone(), sets, odes, continuous })
+    }
+
+    /// The optimal control problem with initial guess and bounds `guess`.
+    pub fn ocp(&self, guess: &GaitGuess, integrator: IntegratorSettings) -> Result<Ocp<'_>, String> {
+        gait_ocp(self.model, &self.seq, self.sets, &self.odes, guess, integrator)
+    }
+
+    /// Whole-cycle constraints: step length `L` = pelvis_x(end) − pelvis_x(start) (m) and
+    /// average forward speed `L / Σ T_j` (m/s), each when given (seed §3.5).
+    pub fn step_constraints<'s>(&'s self, ocp: &Ocp<'s>, step_length: Option<f64>, speed: Option<f64>) -> Vec<Constraint<'s>> {
+        let last = ocp.phases.len() - 1;
+        let n_last = ocp.phases[last].intervals;
+        let nx = self.model.nx();
+        let np = ocp.phases.len();
+        let mut args = vec![Block::State { phase: 0, node: 0 }, Block::State { phase: last, node: n_last }];
+        args.extend((0..np).map(|j| Block::Duration { phase: j }));
+        let mut out = Vec::new();
+        if let Some(l) = step_length {
+            let mut a = vec![0.0; 2 * nx + np];
+            a[0] = -1.0;
+            a[nx] = 1.0;
+            out.push(Constraint {
+                term: Term { name: "step_length".into(), args: args.clone(), f: Arc::new(Linear::new(a, 1)) },
+                lb: vec![l],
+                ub: vec![l],
+            });
+        }
+        if let Some(v) = speed {
+            // pelvis_x(end) − pelvis_x(start) − v Σ T_j = 0
+            let f = FnTerm::new(1, move |z: &[f64], val: &mut [f64], jac: Option<&mut [f64]>| {
+                let t: f64 = z[2 * nx..].iter().sum();
+                val[0] = z[nx] - z[0] - v * t;
+                if let Some(j) = jac {
+                    j.iter_mut().for_each(|x| *x = 0.0);
+                    j[0] = -1.0;
+                    j[nx] = 1.0;
+                    for k in 2 * nx..z.len() {
+                        j[k] = -v;
+                    }
+                }
+                Ok(())
+            });
+            out.push(Constraint { term: Term { name: "average_speed".into(), args, f: Arc::new(f) }, lb: vec![0.0], ub: vec![0.0] });
+        }
+        out
+    }
+}
+
+fn gait_ocp<'a>(
+    model: &'a GaitModel,
+    seq: &PhaseSequence,
+    sets: &'a [ConstraintSet],
+    odes: &'a [GaitOde<'a>],
+    guess: &GaitGuess,
+    integrator: IntegratorSettings,
+) -> Result<Ocp<'a>, String> {
+    let spec = seq.gait.clone().unwrap_or_else(|| serde_json::from_str("{}").expect("defaults"));
+    let (nx, nu) = (model.nx(), model.nu());
+    let theta = model.theta0();
+    let nt = theta.len();
+    // continuous phases and the impact that precedes each of them
+    let mut cont: Vec<(usize, &str, usize, Duration)> = Vec::new();
+    let mut pending_impact: Option<usize> = None;
+    let mut impact_before: Vec<Option<usize>> = Vec::new();
+    let mut trailing_impact: Option<usize> = None;
+    for (i, ph) in seq.phases.iter().enumerate() {
+        match ph {
+            Phase::Impact { .. } => pending_impact = Some(i),
+            Phase::Continuous { name, duration, intervals, .. } => {
+                impact_before.push(if cont.is_empty() { None } else { pending_impact.take() });
+                if cont.is_empty() {
+                    pending_impact = None;
+                }
+                cont.push((i, name, *intervals, *duration));
+            }
+        }
+    }
+    if let Some(i) = pending_impact {
+        trailing_impact = Some(i);
+    }
+    if cont.is_empty() {
+        return Err("the phase file has no continuous phase".into());
+    }
+    if guess.x.len() != cont.len() || guess.u.len() != cont.len() {
+        return Err(format!("the guess has {} phases, the file {} continuous phases", guess.x.len(), cont.len()));
+    }
+    let mut phases = Vec::new();
+    for (j, &(_, name, n, dur)) in cont.iter().enumerate() {
+        let duration = match dur {
+            Duration::Fixed(v) => PhaseDuration::fixed(v),
+            Duration::Free { initial, min, max } => PhaseDuration { value: initial, lb: min, ub: max },
+        };
+        let cn = if spec.controls == ControlShape::Linear { n + 1 } else { n };
+        phases.push(OcpPhase {
+            name: name.to_string(),
+            ode: &odes[j],
+            intervals: n,
+            duration,
+            controls: spec.controls,
+            x_lb: vec![guess.x_lb.clone(); n + 1],
+            x_ub: vec![guess.x_ub.clone(); n + 1],
+            u_lb: vec![guess.u_lb.clone(); cn],
+            u_ub: vec![guess.u_ub.clone(); cn],
+            x_guess: guess.x[j].clone(),
+            u_guess: guess.u[j].clone(),
+        });
+    }
+    // transitions: impact maps where an impact phase separates continuous phases
+    let mut transitions = Vec::new();
+    for j in 1..cont.len() {
+        transitions.push(impact_before[j].map(|i| impact_term(model, &sets[i], cont[j - 1].2, j - 1, nt)));
+    }
+    let mut constraints = Vec::new();
+    let mu = spec.friction;
+    for (j, &(i, name, n, _)) in cont.iter().enumerate() {
+        let set = &sets[i];
+        // contact forces at every node with the node's control
+        for k in 0..=n {
+            let ku = if spec.controls == ControlShape::Linear { k } else { k.min(n - 1) };
+            let mut rows_lb = Vec::new();
+            let mut rows_ub = Vec::new();
+            // rows: λn ≥ 0 per normal row; μλn − λt ≥ 0 and μλn + λt ≥ 0 per rolling contact
+            let mut a_rows: Vec<Vec<(usize, f64)>> = Vec::new();
+            for (r, row) in set.rows.iter().enumerate() {
+                if row.kind == RowKind::Normal {
+                    a_rows.push(vec![(r, 1.0)]);
+                    rows_lb.push(0.0);
+                    rows_ub.push(f64::INFINITY);
+                    if let Some(t) = set.rows.iter().position(|o| o.contact == row.contact && o.kind == RowKind::Tangential) {
+                        a_rows.push(vec![(r, mu), (t, -1.0)]);
+                        a_rows.push(vec![(r, mu), (t, 1.0)]);
+                        rows_lb.extend([0.0, 0.0]);
+                        rows_ub.extend([f64::INFINITY, f64::INFINITY]);
+                    }
+                }
+            }
+            if a_rows.is_empty() {
+                continue;
+            }
+            let setc = set.clone();
+            let dim = a_rows.len();
+            let f = FnTerm::new(dim, move |z: &[f64], v: &mut [f64], jac: Option<&mut [f64]>| {
+                let (x, rest) = z.split_at(nx);
+                let (u, th) = rest.split_at(nu);
+                let nc = setc.rows.len();
+                let nz = z.len();
+                let mut lam = vec![0.0; nc];
+                let mut lj = vec![0.0; nc * nz];
+                model.contact_forces_jacobian(&setc, x, u, th, &mut lam, &mut lj).map_err(|e| e.to_string())?;
+                for (o, row) in a_rows.iter().enumerate() {
+                    v[o] = row.iter().map(|&(r, c)| c * lam[r]).sum();
+                }
+                if let Some(j) = jac {
+                    for (o, row) in a_rows.iter().enumerate() {
+                        for c in 0..nz {
+                            j[o + c * dim] = row.iter().map(|&(r, w)| w * lj[r + c * nc]).sum();
+                        }
+                    }
+                }
+                Ok(())
+            });
+            constraints.push(Constraint {
+                term: Term {
+                    name: "contact_forces".into(),
+                    args: vec![Block::State { phase: j, node: k }, Block::Control { phase: j, node: ku }, Block::Params],
+                    f: Arc::new(f),
+                },
+                lb: rows_lb,
+                ub: rows_ub,
+            });
+        }
+        // clearance of every primitive not in contact, at every node
+        if spec.clearance {
+            let active: Vec<usize> = set.rows.iter().map(|r| r.contact).collect();
+            for (c, _) in model.contacts.iter().enumerate().filter(|(c, _)| !active.contains(c)) {
+                for k in 0..=n {
+                    constraints.push(gap_constraint(model, c, j, k, "clearance", 0.0, f64::INFINITY));
+                }
+            }
+        }
+        // contacts on the ground at the first node of the first phase
+        if j == 0 {
+            for c in set.rows.iter().filter(|r| r.kind == RowKind::Normal).map(|r| r.contact) {
+                constraints.push(gap_constraint(model, c, 0, 0, "on_ground", 0.0, 0.0));
+            }
+        }
+        // a landing contact touches the ground at the impact (last node of the phase before)
+        if j > 0 {
+            if let Some(ii) = impact_before[j] {
+                let prev_active: Vec<usize> = sets[cont[j - 1].0].rows.iter().map(|r| r.contact).collect();
+                for c in sets[ii].rows.iter().filter(|r| r.kind == RowKind::Normal).map(|r| r.contact) {
+                    if !prev_active.contains(&c) {
+                        constraints.push(gap_constraint(model, c, j - 1, cont[j - 1].2, "landing", 0.0, 0.0));
+                    }
+                }
+            }
+        }
+        let _ = name;
+    }
+    // trailing impact and periodicity through the symmetry map
+    let last = cont.len() - 1;
+    let n_last = cont[last].2;
+    if let Some(ti) = trailing_impact {
+        let prev_active: Vec<usize> = sets[cont[last].0].rows.iter().map(|r| r.contact).collect();
+        for c in sets[ti].rows.iter().filter(|r| r.kind == RowKind::Normal).map(|r| r.contact) {
+            if !prev_active.contains(&c) {
+                constraints.push(gap_constraint(model, c, last, n_last, "landing", 0.0, 0.0));
+            }
+        }
+    }
+    if spec.periodic {
+        let (xmap, umap) = mirror_maps(model, &spec);
+        let skip = 0usize; // pelvis_x is not periodic
+        let impact = trailing_impact.map(|ti| sets[ti].clone());
+        let f = FnTerm::new(nx - 1, move |z: &[f64], v: &mut [f64], jac: Option<&mut [f64]>| {
+            // z = (x_first(0), x_last(N), θ): x_first − mirror(ψ(x_last))
+            let (x0, rest) = z.split_at(nx);
+            let (xe, th) = rest.split_at(nx);
+            let mut xp = vec![0.0; nx];
+            let mut pj = vec![0.0; nx * (nx + th.len())];
+            match &impact {
+                Some(set) => model.impact_state_jacobian(set, xe, th, &mut xp, &mut pj).map_err(|e| e.to_string())?,
+                None => {
+                    xp.copy_from_slice(xe);
+                    for i in 0..nx {
+                        pj[i + i * nx] = 1.0;
+                    }
+                }
+            }
+            let nz = z.len();
+            let rows: Vec<usize> = (0..nx).filter(|&i| i != skip).collect();
+            for (o, &i) in rows.iter().enumerate() {
+                v[o] = x0[i] - xp[xmap[i]];
+            }
+            if let Some(j) = jac {
+                let d = rows.len();
+                j.iter_mut().for_each(|v| *v = 0.0);
+                for (o, &i) in rows.iter().enumerate() {
+                    j[o + i * d] = 1.0;
+                    for c in 0..nx + th.len() {
+                        j[o + (nx + c) * d] = -pj[xmap[i] + c * nx];
+                    }
+                }
+            }
+            let _ = nz;
+            Ok(())
+        });
+        constraints.push(Constraint {
+            term: Term {
+                name: "periodicity".into(),
+                args: vec![Block::State { phase: 0, node: 0 }, Block::State { phase: last, node: n_last }, Block::Params],
+                f: Arc::new(f),
+            },
+            lb: vec![0.0; nx - 1],
+            ub: vec![0.0; nx - 1],
+        });
+        if spec.controls == ControlShape::Linear {
+            let mut a = vec![0.0; nu * 2 * nu];
+            for i in 0..nu {
+                a[i * 2 * nu + i] = 1.0;
+                a[i * 2 * nu + nu + umap[i]] = -1.0;
+            }
+            constraints.push(Constraint {
+                term: Term {
+                    name: "control_periodicity".into(),
+                    args: vec![Block::Control { phase: 0, node: 0 }, Block::Control { phase: last, node: n_last }],
+                    f: Arc::new(Linear::new(a, nu)),
+                },
+                lb: vec![0.0; nu],
+                ub: vec![0.0; nu],
+            });
+        }
+    }
+    Ok(Ocp {
+        phases,
+        transitions,
+        ntheta: nt,
+        theta_guess: theta.clone(),
+        theta_lb: model.free_parameters().iter().map(|&i| model.parameters()[i].lower).collect(),
+        theta_ub: model.free_parameters().iter().map(|&i| model.parameters()[i].upper).collect(),
+        constraints,
+        least_squares: Vec::new(),
+        costs: Vec::new(),
+        integrator,
+    })
+}
+
+fn impact_term<'a>(model: &'a GaitModel, set: &ConstraintSet, n_prev: usize, prev: usize, nt: usize) -> Term<'a> {
+    let nx = model.nx();
+    let set = set.clone();
+    let f = FnTerm::new(nx, move |z: &[f64], v: &mut [f64], jac: Option<&mut [f64]>| {
+        let (x, th) = z.split_at(nx);
+        let mut j = vec![0.0; nx * (nx + th.len())];
+        model.impact_state_jacobian(&set, x, th, v, &mut j).map_err(|e| e.to_string())?;
+        if let Some(out) = jac {
+            out.copy_from_slice(&j);
+        }
+        Ok(())
+    });
+    let _ = nt;
+    Term {
+        name: "impact".into(),
+        args: vec![Block::State { phase: prev, node: n_prev }, Block::Params],
+        f: Arc::new(f),
+    }
+}
+
+fn gap_constraint<'a>(
+    model: &'a GaitModel,
+    c: usize,
+    phase: usize,
+    node: usize,
+    name: &str,
+    lb: f64,
+    ub: f64,
+) -> Constraint<'a> {
+    let nx = model.nx();
+    let nq = model.nq();
+    let cname = model.contacts[c].name.clone();
+    let f = FnTerm::new(1, move |z: &[f64], v: &mut [f64], jac: Option<&mut [f64]>| {
+        let (x, th) = z.split_at(nx);
+        let (_, gap) = model.contact_point(c, &x[..nq], th);
+        v[0] = gap;
+        if let Some(j) = jac {
+            j.iter_mut().for_each(|v| *v = 0.0);
+            let set = ConstraintSet {
+                name: "gap".into(),
+                rows: vec![crate::model::gait::ConstraintRow { contact: c, kind: RowKind::Normal }],
+            };
+            let g = model.constraint_jacobian_at(&set, &x[..nq], th);
+            j[..nq].copy_from_slice(&g);
+        }
+        Ok(())
+    });
+    Constraint {
+        term: Term {
+            name: format!("{name}({cname})"),
+            args: vec![Block::State { phase, node }, Block::Params],
+            f: Arc::new(f),
+        },
+        lb: vec![lb],
+        ub: vec![ub],
+    }
+}
