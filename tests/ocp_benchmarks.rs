@@ -60,23 +60,22 @@ fn solve_and_check(file: &str, j_star: f64, hessian: HessianMode, max_iter: usiz
     assert!(worst <= 1e-6);
 }
 
-/// Converges (KKT ≤ 1e-6) to the reference optimum with the Gauss–Newton Hessian.
+/// Converges (KKT ≤ 1e-6) to the reference optimum, exact and Gauss–Newton Hessians.
 #[test]
 fn cartpole_matches_peer_optimum() {
+    solve_and_check("cartpole_swingup.json", 76.665674185, HessianMode::Exact, 60, true);
     solve_and_check("cartpole_swingup.json", 76.665674185, HessianMode::GaussNewton, 100, true);
 }
 
-/// Reaches the reference optimum (objective to 1e-5 relative, node defects ≤ 1e-6) with
-/// the structured Gauss–Newton + BFGS Hessian within 150 iterations.
+/// Converges (KKT ≤ 1e-6) to the reference optimum with the exact Hessian.
 #[test]
-fn five_link_biped_reaches_peer_optimum() {
-    solve_and_check("five_link_biped.json", 470.111267088, HessianMode::GaussNewtonBfgs, 150, false);
+fn five_link_biped_matches_peer_optimum() {
+    solve_and_check("five_link_biped.json", 470.111267088, HessianMode::Exact, 60, true);
 }
 
-/// The full criterion, KKT ≤ 1e-6: not met yet (the KKT residual falls only
-/// linearly with block BFGS; 9.8e-5 after 300 iterations).
+/// The structured Gauss–Newton + BFGS Hessian reaches the optimum's objective but its KKT
+/// residual falls only linearly (5.5e-2 after 150 iterations): objective checked only.
 #[test]
-#[ignore = "SQP converges only linearly on the biped: KKT 9.8e-5 after 300 iterations"]
-fn five_link_biped_converges_to_kkt_tolerance() {
-    solve_and_check("five_link_biped.json", 470.111267088, HessianMode::GaussNewtonBfgs, 300, true);
+fn five_link_biped_structured_bfgs_reaches_the_objective() {
+    solve_and_check("five_link_biped.json", 470.111267088, HessianMode::GaussNewtonBfgs, 150, false);
 }

@@ -21,6 +21,8 @@ pub enum HessianArg {
     Bfgs,
     /// Gauss–Newton plus block BFGS of the constraint curvature.
     GaussNewtonBfgs,
+    /// Exact Hessian of the Lagrangian (second-order sensitivities).
+    Exact,
 }
 
 /// Arguments of `footfall solve`.
@@ -47,8 +49,7 @@ pub struct Args {
     /// Wall-time limit (s).
     #[arg(long)]
     max_time: Option<f64>,
-    /// Hessian approximation (default: gauss-newton for the cart-pole,
-    /// gauss-newton-bfgs for the biped).
+    /// Hessian approximation (default: exact).
     #[arg(long, value_enum)]
     hessian: Option<HessianArg>,
 }
@@ -81,10 +82,8 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         Some(HessianArg::GaussNewton) => HessianMode::GaussNewton,
         Some(HessianArg::Bfgs) => HessianMode::Bfgs,
         Some(HessianArg::GaussNewtonBfgs) => HessianMode::GaussNewtonBfgs,
-        None => match bench {
-            Benchmark::CartPole { .. } => HessianMode::GaussNewton,
-            Benchmark::Biped { .. } => HessianMode::GaussNewtonBfgs,
-        },
+        Some(HessianArg::Exact) => HessianMode::Exact,
+        None => HessianMode::Exact,
     };
     if !(args.tol.is_finite() && args.tol > 0.0) {
         return Err(anyhow!("--tol must be a positive number, got {}", args.tol));

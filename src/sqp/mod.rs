@@ -91,10 +91,12 @@ pub enum HessianMode {
     Bfgs,
     /// Exact Hessian of the Lagrangian: Gauss–Newton of the least-squares objective (exact
     /// for linear residuals) plus the exact constraint curvature (interval Hessians from
-    /// second-order sensitivities, term Hessians), each node block projected onto the
-    /// positive semidefinite cone so the QP stays convex. Measured: the projection of
-    /// indefinite blocks costs the quadratic rate (biped: J to 1e-9 in 30 iterations but
-    /// KKT only linear; cart-pole 84 iterations against 35 with Gauss–Newton).
+    /// second-order sensitivities, term Hessians). Multiple-shooting element Hessians are
+    /// indefinite; the QP is kept convex without changing its solution by adding
+    /// $\rho J_e^T J_e$ of the equality rows (constant on $J_e d = -c$; convex for ρ large
+    /// enough when the reduced Hessian is positive definite, Finsler), whose effect on
+    /// the equality multipliers ($-\rho c$) is removed afterwards. Elastic QPs use the
+    /// Hessian with each node block projected onto the PSD cone instead.
     Exact,
     /// Gauss–Newton for the least-squares objective plus a block-diagonal BFGS
     /// approximation of the constraint curvature `∇²(λᵀc)` (structured quasi-Newton):
@@ -319,6 +321,8 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
     };
     let mut st = State { w, ev, hess };
     let mut zero_blocks = BlockBfgs::new(nlp.hessian_blocks(), settings.bfgs_update);
+    // augmentation ρ = aug_scale · max|H| of the exact mode, raised when a QP fails
+    let mut aug_scale: f64 = 1.0;
     zero_blocks.scale(0.0);
     let mut lambda = vec![0.0; m];
     let mut nu = vec![0.0; n];
@@ -335,6 +339,8 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
     for iter in 0..=settings.max_iter {
         // --- QP subproblem at the current point
         let mut h = Triplets::default();
+        let mut h_elastic: Option<Triplets> = None;
+        let mut aug_rho = 0.0;
         match settings.hessian {
             HessianMode::GaussNewton => {
                 h.rows.clone_from(&hr);
@@ -350,7 +356,39 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
                     ex.cols.extend_from_slice(&hx.cols);
                     ex.vals.extend_from_slice(&hx.vals);
                 }
-                zero_blocks.convexify_into(&mut ex, &mut h);
+                // convexified copy for elastic QPs (where the augmentation below would bias
+                // the step); the exact curvature plus ρ Σ_eq J_iᵀJ_i for consistent QPs
+                let mut conv = Triplets::default();
+                zero_blocks.convexify_into(&mut ex.clone(), &mut conv);
+                for i in 0..n {
+                    conv.push(i, i, settings.regularization);
+                }
+                h_elastic = Some(conv);
+                let hmax = ex.vals.iter().map(|v| v.abs()).fold(1.0, f64::max);
+                let rho = aug_scale * hmax;
+                aug_rho = rho;
+                let mut rows_of: Vec<Vec<(usize, f64)>> = vec![Vec::new(); m];
+                for k in 0..jr.len() {
+                    if c_lb[jr[k]] == c_ub[jr[k]] {
+                        rows_of[jr[k]].push((jc[k], st.ev.jac[k]));
+                    }
+                }
+                for row in &rows_of {
+                    for a in 0..row.len() {
+                        for b in a..row.len() {
+                            let (ca, va) = row[a];
+                            let (cb, vb) = row[b];
+                            let mut v = rho * va * vb;
+                            if ca == cb && a != b {
+                                v *= 2.0;
+                            }
+                            h.push(ca.min(cb), ca.max(cb), v);
+                        }
+                    }
+                }
+                h.rows.extend_from_slice(&ex.rows);
+                h.cols.extend_from_slice(&ex.cols);
+                h.vals.extend_from_slice(&ex.vals);
             }
             HessianMode::GaussNewtonBfgs => {
                 h.rows.clone_from(&hr);
@@ -382,8 +420,8 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
         let viol = violations(&st.ev.c, &c_lb, &c_ub);
         let infeas = viol.iter().copied().fold(0.0, f64::max);
         let l1 = viol.iter().sum::<f64>();
-        let data = |elastic| QpData {
-            h: &h,
+        let data = |elastic: Option<f64>| QpData {
+            h: if elastic.is_some() { h_elastic.as_ref().unwrap_or(&h) } else { &h },
             g: &st.ev.grad,
             jac: &jac,
             c: &st.ev.c,
@@ -395,7 +433,12 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
             elastic_weights: &elastic_weights,
         };
         let rho = (10.0 * lam_est).clamp(1e3, 1e8);
-        let (sol, elastic) = match qp::solve(&data(None)) {
+        let first = qp::solve(&data(None));
+        if matches!(first, Err(QpError::Failed(_))) && h_elastic.is_some() {
+            // exact mode: the augmentation was too weak to convexify this QP
+            aug_scale *= 10.0;
+        }
+        let (sol, elastic) = match first {
             Ok(s) => (s, false),
             // inconsistent linearisation (or a stalled, nearly inconsistent one): elastic mode
             Err(QpError::Infeasible | QpError::Failed(_)) => {
@@ -408,6 +451,15 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
                 }
             }
         };
+        let mut sol = sol;
+        if aug_rho > 0.0 && !elastic {
+            // the augmentation ρ JₑᵀJₑ shifts the QP's equality multipliers by ρ·(J d) = −ρ c
+            for i in 0..m {
+                if c_lb[i] == c_ub[i] {
+                    sol.lambda[i] -= aug_rho * (st.ev.c[i] - c_lb[i]);
+                }
+            }
+        }
         qp_iters = sol.iterations;
         if !elastic {
             lam_est = sol.lambda.iter().map(|v| v.abs()).fold(1.0, f64::max);
