@@ -18,7 +18,7 @@ fn bench(c: &mut Criterion) {
     ] {
         let bench = Benchmark::from_json(read_problem_json(file).expect("problem")).expect("benchmark");
         let name = bench.name();
-        let ocp = bench.ocp(IntegratorSettings::default()).expect("ocp");
+        let ocp = bench.ocp(IntegratorSettings { method: footfall::integrate::Method::Adams, ..Default::default() }).expect("ocp");
         let tr = Transcription::new(&ocp).expect("transcription");
         let (w_lb, w_ub, w0) = tr.variable_bounds_and_guess();
         let mut g = c.benchmark_group(name);

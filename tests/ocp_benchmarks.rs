@@ -21,7 +21,7 @@ fn peer(name: &str) -> Option<serde_json::Value> {
 fn solve_and_check(file: &str, j_star: f64, hessian: HessianMode, max_iter: usize, require_kkt: bool) {
     let Some(json) = peer(file) else { return };
     let bench = Benchmark::from_json(json).unwrap();
-    let ocp = bench.ocp(IntegratorSettings::default()).unwrap();
+    let ocp = bench.ocp(IntegratorSettings { method: footfall::integrate::Method::Adams, ..Default::default() }).unwrap();
     let tr = Transcription::new(&ocp).unwrap();
     let (_, _, w0) = tr.variable_bounds_and_guess();
     let settings = SqpSettings { tol_kkt: 1e-6, hessian, max_iter, ..Default::default() };

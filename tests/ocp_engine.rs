@@ -17,7 +17,7 @@ fn solve_cartpole(threads: usize) -> Option<SqpResult> {
         return None;
     }
     let bench = Benchmark::from_json(read_problem_json(&p).unwrap()).unwrap();
-    let ocp = bench.ocp(IntegratorSettings::default()).unwrap();
+    let ocp = bench.ocp(IntegratorSettings { method: footfall::integrate::Method::Adams, ..Default::default() }).unwrap();
     let tr = Transcription::new(&ocp).unwrap();
     let (_, _, w0) = tr.variable_bounds_and_guess();
     let settings = SqpSettings { tol_kkt: 1e-6, hessian: HessianMode::GaussNewton, max_iter: 100, ..Default::default() };
@@ -117,7 +117,7 @@ fn infeasible_problem_stops_as_infeasible_and_names_the_constraint() {
 fn biped_term_hessians_match_finite_differences() {
     let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("problems/five_link_biped.json");
     let bench = Benchmark::from_json(read_problem_json(&p).unwrap()).unwrap();
-    let ocp = bench.ocp(IntegratorSettings::default()).unwrap();
+    let ocp = bench.ocp(IntegratorSettings { method: footfall::integrate::Method::Adams, ..Default::default() }).unwrap();
     let tr = Transcription::new(&ocp).unwrap();
     let (_, _, w0) = tr.variable_bounds_and_guess();
     for name in ["periodicity", "step_length_height", "touchdown", "liftoff"] {

@@ -4,7 +4,7 @@
 use super::Failure;
 use anyhow::{anyhow, Context};
 use footfall::benchmarks::read_problem_json;
-use footfall::integrate::IntegratorSettings;
+use footfall::integrate::{IntegratorSettings, Method};
 use footfall::ocp::{Block, Transcription};
 use footfall::problems::benchmark::Benchmark;
 use footfall::runfolder::RunFolder;
@@ -23,6 +23,15 @@ pub enum HessianArg {
     GaussNewtonBfgs,
     /// Exact Hessian of the Lagrangian (second-order sensitivities).
     Exact,
+}
+
+/// CVODES linear multistep method.
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+pub enum MethodArg {
+    /// Adams–Moulton (non-stiff problems; default for the generic problems).
+    Adams,
+    /// BDF (stiff problems).
+    Bdf,
 }
 
 /// Arguments of `footfall solve`.
@@ -49,6 +58,9 @@ pub struct Args {
     /// Wall-time limit (s).
     #[arg(long)]
     max_time: Option<f64>,
+    /// CVODES method for the shooting intervals.
+    #[arg(long, value_enum, default_value = "adams")]
+    integrator: MethodArg,
     /// Hessian approximation (default: exact).
     #[arg(long, value_enum)]
     hessian: Option<HessianArg>,
@@ -61,7 +73,13 @@ pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
 fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     let json = read_problem_json(&args.problem).map_err(|e| anyhow!(e))?;
     let bench = Benchmark::from_json(json).map_err(|e| anyhow!("{}: {e}", args.problem.display()))?;
-    let ocp = bench.ocp(IntegratorSettings::default()).map_err(|e| anyhow!("{}: {e}", args.problem.display()))?;
+    let method = match args.integrator {
+        MethodArg::Adams => Method::Adams,
+        MethodArg::Bdf => Method::Bdf,
+    };
+    let ocp = bench
+        .ocp(IntegratorSettings { method, ..Default::default() })
+        .map_err(|e| anyhow!("{}: {e}", args.problem.display()))?;
     let tr = Transcription::new(&ocp).context("transcribing the problem")?;
     let (_, _, mut w0) = tr.variable_bounds_and_guess();
     if let Some(ws) = &args.warm_start {

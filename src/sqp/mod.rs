@@ -212,6 +212,19 @@ pub struct Violation {
     pub amount: f64,
 }
 
+/// Where the time of a solve went.
+#[derive(Debug, Clone, Copy, Default, Serialize)]
+pub struct SqpTimings {
+    /// Seconds in NLP evaluations (integration, sensitivities, Hessians).
+    pub evaluation_s: f64,
+    /// Number of NLP evaluations.
+    pub evaluations: usize,
+    /// Seconds in QP solves (assembly and Clarabel).
+    pub qp_s: f64,
+    /// Number of QP solves (including elastic and second-order-correction QPs).
+    pub qp_solves: usize,
+}
+
 /// Result of a solve.
 #[derive(Debug, Clone, Serialize)]
 pub struct SqpResult {
@@ -235,6 +248,8 @@ pub struct SqpResult {
     pub most_violated: Vec<Violation>,
     /// Wall time (s).
     pub seconds: f64,
+    /// Time split.
+    pub timings: SqpTimings,
 }
 
 /// Receives iteration records; return `false` to stop.
@@ -303,17 +318,45 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
         history: Vec::new(),
         most_violated: Vec::new(),
         seconds: start.elapsed().as_secs_f64(),
+        timings: SqpTimings::default(),
         w,
+    };
+    let timings = std::cell::Cell::new(SqpTimings::default());
+    let timed = |eval: bool, f: &mut dyn FnMut()| {
+        let t = Instant::now();
+        f();
+        let mut tm = timings.get();
+        if eval {
+            tm.evaluation_s += t.elapsed().as_secs_f64();
+            tm.evaluations += 1;
+        } else {
+            tm.qp_s += t.elapsed().as_secs_f64();
+            tm.qp_solves += 1;
+        }
+        timings.set(tm);
+    };
+    let eval_plain = |w: &[f64]| {
+        let mut r = Err(String::new());
+        timed(true, &mut || r = nlp.evaluate(w, false));
+        r
+    };
+    let solve_qp = |d: &QpData<'_>| {
+        let mut r = Err(QpError::Failed(String::new()));
+        timed(false, &mut || r = qp::solve(d));
+        r
     };
     let exact = settings.hessian == HessianMode::Exact;
     // derivatives at a point; in Exact mode with the curvature for multipliers `lam`
     let eval_derivs = |w: &[f64], lam: &[f64]| -> Result<(NlpEval, Option<Triplets>), String> {
-        if exact {
-            let (ev, (r, c, v)) = nlp.evaluate_with_hessian(w, lam)?;
-            Ok((ev, Some(Triplets { rows: r, cols: c, vals: v })))
-        } else {
-            Ok((nlp.evaluate(w, true)?, None))
-        }
+        let mut out = Err(String::new());
+        timed(true, &mut || {
+            out = if exact {
+                nlp.evaluate_with_hessian(w, lam).map(|(ev, (r, c, v))| (ev, Some(Triplets { rows: r, cols: c, vals: v })))
+            } else {
+                nlp.evaluate(w, true).map(|ev| (ev, None))
+            }
+        });
+        out
     };
     let (ev, hess) = match eval_derivs(&w, &vec![0.0; m]) {
         Ok(r) => r,
@@ -433,7 +476,7 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
             elastic_weights: &elastic_weights,
         };
         let rho = (10.0 * lam_est).clamp(1e3, 1e8);
-        let first = qp::solve(&data(None));
+        let first = solve_qp(&data(None));
         if matches!(first, Err(QpError::Failed(_))) && h_elastic.is_some() {
             // exact mode: the augmentation was too weak to convexify this QP
             aug_scale *= 10.0;
@@ -442,7 +485,7 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
             Ok(s) => (s, false),
             // inconsistent linearisation (or a stalled, nearly inconsistent one): elastic mode
             Err(QpError::Infeasible | QpError::Failed(_)) => {
-                match qp::solve(&data(Some(rho))) {
+                match solve_qp(&data(Some(rho))) {
                     Ok(s) => (s, true),
                     Err(e) => {
                         status = SqpStatus::QpFailure(e.to_string());
@@ -571,7 +614,7 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
                     }
                     let c_soc: Vec<f64> = (0..m).map(|i| ev1.c[i] - jd[i]).collect();
                     let soc = QpData { c: &c_soc, ..data(None) };
-                    if let Ok(s2) = qp::solve(&soc) {
+                    if let Ok(s2) = solve_qp(&soc) {
                         let w2 = trial(1.0, &s2.d);
                         if let Ok((ev2, h2)) = eval_derivs(&w2, &sol.lambda) {
                             if let Some(aug) = acceptable(&ev2, 1.0, &filter) {
@@ -586,7 +629,7 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
         }
         while accepted.is_none() && alpha >= settings.line_search_min_step {
             let wa = trial(alpha, &sol.d);
-            if let Ok(eva) = nlp.evaluate(&wa, false) {
+            if let Ok(eva) = eval_plain(&wa) {
                 if let Some(aug) = acceptable(&eva, alpha, &filter) {
                     match eval_derivs(&wa, &sol.lambda) {
                         Ok((ev, hw)) => accepted = Some((wa, ev, hw, aug)),
@@ -641,6 +684,7 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
         history,
         most_violated,
         seconds: start.elapsed().as_secs_f64(),
+        timings: timings.get(),
         w: st.w,
         lambda,
         nu,
