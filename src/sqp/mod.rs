@@ -291,6 +291,10 @@ struct State {
     ev: NlpEval,
     /// Exact constraint curvature at `w` (Exact mode).
     hess: Option<Triplets>,
+    /// Objective and l1 violation from a plain evaluation at `w`: the line search compares
+    /// trial points (plain evaluations) with these, so that integrator noise, which differs
+    /// between runs with and without sensitivity error control, cannot mislead it.
+    plain: (f64, f64),
 }
 
 /// Solve `nlp` from `w0` (clipped into the bounds).
@@ -362,7 +366,11 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
         Ok(r) => r,
         Err(e) => return fail(SqpStatus::EvaluationFailure(e), w),
     };
-    let mut st = State { w, ev, hess };
+    let plain = match eval_plain(&w) {
+        Ok(p) => (p.f, violations(&p.c, &c_lb, &c_ub).iter().sum::<f64>()),
+        Err(e) => return fail(SqpStatus::EvaluationFailure(e), w),
+    };
+    let mut st = State { w, ev, hess, plain };
     let mut zero_blocks = BlockBfgs::new(nlp.hessian_blocks(), settings.bfgs_update);
     // augmentation ρ = aug_scale · max|H| of the exact mode, raised when a QP fails
     let mut aug_scale: f64 = 1.0;
@@ -462,7 +470,6 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
         let d_ub: Vec<f64> = (0..n).map(|i| w_ub[i] - st.w[i]).collect();
         let viol = violations(&st.ev.c, &c_lb, &c_ub);
         let infeas = viol.iter().copied().fold(0.0, f64::max);
-        let l1 = viol.iter().sum::<f64>();
         let data = |elastic: Option<f64>| QpData {
             h: if elastic.is_some() { h_elastic.as_ref().unwrap_or(&h) } else { &h },
             g: &st.ev.grad,
@@ -571,13 +578,13 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
         // the infeasibility is small) or the infeasibility, and is not dominated by the
         // filter of earlier (infeasibility, objective) pairs
         let grad_d: f64 = st.ev.grad.iter().zip(&sol.d).map(|(a, b)| a * b).sum();
-        let theta0 = l1;
+        let theta0 = st.plain.1;
         if filter.is_empty() {
             theta_max = (1e4f64).max(1.2 * theta0);
             filter.push((theta_max, f64::NEG_INFINITY));
         }
         let (gamma_t, gamma_f, eta, delta, s_t, s_f) = (1e-5, 1e-5, settings.line_search_armijo, 1.0, 1.1, 2.3);
-        let f0 = st.ev.f;
+        let f0 = st.plain.0;
         let acceptable = |ev: &NlpEval, a: f64, filter: &[(f64, f64)]| -> Option<bool> {
             let th = violations(&ev.c, &c_lb, &c_ub).iter().sum::<f64>();
             if !ev.f.is_finite() || !th.is_finite() || th > theta_max {
@@ -599,13 +606,15 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
         let trial = |a: f64, dir: &[f64]| -> Vec<f64> {
             (0..n).map(|i| (st.w[i] + a * dir[i]).max(w_lb[i]).min(w_ub[i])).collect()
         };
+        // trial points are evaluated without derivatives (a plain sweep); derivatives and
+        // curvature are computed once, at the accepted point
         let mut alpha = 1.0;
-        let mut accepted: Option<(Vec<f64>, NlpEval, Option<Triplets>, bool)> = None;
-        // full step, evaluated with derivatives (usually accepted near the solution)
+        let mut found: Option<(Vec<f64>, bool, (f64, f64))> = None;
+        let summary = |ev: &NlpEval| (ev.f, violations(&ev.c, &c_lb, &c_ub).iter().sum::<f64>());
         let w1 = trial(1.0, &sol.d);
-        match eval_derivs(&w1, &sol.lambda) {
-            Ok((ev1, h1)) => match acceptable(&ev1, 1.0, &filter) {
-                Some(aug) => accepted = Some((w1, ev1, h1, aug)),
+        match eval_plain(&w1) {
+            Ok(ev1) => match acceptable(&ev1, 1.0, &filter) {
+                Some(aug) => found = Some((w1, aug, summary(&ev1))),
                 None => {
                     // second-order correction: re-solve with the constraint values at w + d
                     let mut jd = vec![0.0; m];
@@ -616,9 +625,9 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
                     let soc = QpData { c: &c_soc, ..data(None) };
                     if let Ok(s2) = solve_qp(&soc) {
                         let w2 = trial(1.0, &s2.d);
-                        if let Ok((ev2, h2)) = eval_derivs(&w2, &sol.lambda) {
+                        if let Ok(ev2) = eval_plain(&w2) {
                             if let Some(aug) = acceptable(&ev2, 1.0, &filter) {
-                                accepted = Some((w2, ev2, h2, aug));
+                                found = Some((w2, aug, summary(&ev2)));
                             }
                         }
                     }
@@ -627,18 +636,24 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
             },
             Err(_) => alpha = 0.5,
         }
-        while accepted.is_none() && alpha >= settings.line_search_min_step {
+        while found.is_none() && alpha >= settings.line_search_min_step {
             let wa = trial(alpha, &sol.d);
             if let Ok(eva) = eval_plain(&wa) {
                 if let Some(aug) = acceptable(&eva, alpha, &filter) {
-                    match eval_derivs(&wa, &sol.lambda) {
-                        Ok((ev, hw)) => accepted = Some((wa, ev, hw, aug)),
-                        Err(e) => status = SqpStatus::EvaluationFailure(e),
-                    }
+                    found = Some((wa, aug, summary(&eva)));
                     break;
                 }
             }
             alpha *= 0.5;
+        }
+        let mut accepted: Option<(Vec<f64>, NlpEval, Option<Triplets>, bool)> = None;
+        let mut plain_new = (0.0, 0.0);
+        if let Some((wa, aug, pl)) = found {
+            plain_new = pl;
+            match eval_derivs(&wa, &sol.lambda) {
+                Ok((ev, hw)) => accepted = Some((wa, ev, hw, aug)),
+                Err(e) => status = SqpStatus::EvaluationFailure(e),
+            }
         }
         let accepted = accepted.map(|(w, ev, hw, aug)| {
             if aug {
@@ -670,7 +685,7 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
             let y: Vec<f64> = (0..n).map(|i| gl_new[i] - gl_old[i]).collect();
             bfgs.update(&s, &y);
         }
-        st = State { w: w_new, ev: ev_new, hess: hess_new };
+        st = State { w: w_new, ev: ev_new, hess: hess_new, plain: plain_new };
     }
     let viol = violations(&st.ev.c, &c_lb, &c_ub);
     let mut order: Vec<usize> = (0..m).filter(|&i| viol[i] > settings.tol_kkt).collect();
