@@ -10,29 +10,27 @@ use footfall::sqp::{self, HessianMode, Silent, SqpResult, SqpSettings, SqpStatus
 use std::path::PathBuf;
 use std::sync::Arc;
 
-fn solve_cartpole(threads: usize) -> Option<SqpResult> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../shared/peer/problems/cartpole_swingup.json");
-    if !p.exists() {
-        eprintln!("{} not found: skipped", p.display());
-        return None;
-    }
+fn solve_problem(file: &str, hessian: HessianMode, threads: usize) -> Option<SqpResult> {
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("problems").join(file);
     let bench = Benchmark::from_json(read_problem_json(&p).unwrap()).unwrap();
     let ocp = bench.ocp(IntegratorSettings { method: footfall::integrate::Method::Adams, ..Default::default() }).unwrap();
     let tr = Transcription::new(&ocp).unwrap();
     let (_, _, w0) = tr.variable_bounds_and_guess();
-    let settings = SqpSettings { tol_kkt: 1e-6, hessian: HessianMode::GaussNewton, max_iter: 100, ..Default::default() };
+    let settings = SqpSettings { tol_kkt: 1e-6, hessian, max_iter: 100, ..Default::default() };
     let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
     Some(pool.install(|| sqp::solve(&tr, &w0, &settings, &mut Silent)))
 }
 
 #[test]
 fn solution_is_bit_identical_with_one_and_two_threads() {
-    let (Some(a), Some(b)) = (solve_cartpole(1), solve_cartpole(2)) else { return };
-    assert_eq!(a.status, SqpStatus::Converged);
-    assert_eq!(a.history.len(), b.history.len());
-    assert!(a.w.iter().zip(&b.w).all(|(x, y)| x.to_bits() == y.to_bits()), "solutions differ in some bit");
-    assert!(a.lambda.iter().zip(&b.lambda).all(|(x, y)| x.to_bits() == y.to_bits()));
-    assert_eq!(a.objective.to_bits(), b.objective.to_bits());
+    for (file, hessian) in [("cartpole_swingup.json", HessianMode::GaussNewton), ("five_link_biped.json", HessianMode::Exact)] {
+        let (Some(a), Some(b)) = (solve_problem(file, hessian, 1), solve_problem(file, hessian, 2)) else { return };
+        assert_eq!(a.status, SqpStatus::Converged, "{file}");
+        assert_eq!(a.history.len(), b.history.len(), "{file}");
+        assert!(a.w.iter().zip(&b.w).all(|(x, y)| x.to_bits() == y.to_bits()), "{file}: solutions differ in some bit");
+        assert!(a.lambda.iter().zip(&b.lambda).all(|(x, y)| x.to_bits() == y.to_bits()), "{file}");
+        assert_eq!(a.objective.to_bits(), b.objective.to_bits(), "{file}");
+    }
 }
 
 /// ẋ = u on one state.
