@@ -525,19 +525,7 @@ impl GaitModel {
                 b_baum[r] = -stab.value();
                 rep_rows.push(([pt[0].value(), pt[1].value()], phi.value(), gqd.value()));
             }
-            // Y = M⁻¹ Gᵀ (column r = solve with row r of G)
-            let mut y = g.clone();
-            for r in 0..nc {
-                cholesky_solve(&m, nq, &mut y[r * nq..(r + 1) * nq]);
-            }
-            let mut amat = vec![S::c(0.0); nc * nc];
-            for i in 0..nc {
-                for j in 0..nc {
-                    amat[i * nc + j] = (0..nq).map(|l| g[i * nq + l] * y[j * nq + l]).sum();
-                }
-            }
-            let amat_f64: Vec<f64> = amat.iter().map(|v| v.value()).collect();
-            cholesky(&mut amat, nc, 1e-10).map_err(|e| DynamicsError::OverConstrained { set: set.name.clone(), row: e.pivot })?;
+            let (y, amat, amat_f64) = schur_complement(&m, nq, &g, nc, &set.name)?;
             for i in 0..nc {
                 let gq: S = (0..nq).map(|l| g[i * nq + l] * qdd[l]).sum();
                 lambda[i] = b[i] - gq;
@@ -594,18 +582,7 @@ impl GaitModel {
         cholesky(&mut m, nq, 1e-14).map_err(|e| DynamicsError::MassMatrix { pivot: e.pivot })?;
         let g = self.constraint_jacobian(&k, set_after, n);
         let nc = set_after.rows.len();
-        let mut y = g.clone();
-        for r in 0..nc {
-            cholesky_solve(&m, nq, &mut y[r * nq..(r + 1) * nq]);
-        }
-        let mut amat = vec![S::c(0.0); nc * nc];
-        for i in 0..nc {
-            for j in 0..nc {
-                amat[i * nc + j] = (0..nq).map(|l| g[i * nq + l] * y[j * nq + l]).sum();
-            }
-        }
-        cholesky(&mut amat, nc, 1e-10)
-            .map_err(|e| DynamicsError::OverConstrained { set: set_after.name.clone(), row: e.pivot })?;
+        let (y, amat, _) = schur_complement(&m, nq, &g, nc, &set_after.name)?;
         let mut imp: Vec<S> = (0..nc).map(|i| -(0..nq).map(|l| g[i * nq + l] * qd_minus[l]).sum::<S>()).collect();
         cholesky_solve(&amat, nc, &mut imp);
         let mut qd_plus = qd_minus.to_vec();
@@ -872,6 +849,33 @@ impl GaitModel {
             jac,
         )
     }
+}
+
+/// With the Cholesky factor of `M` and the constraint rows `G` (nc × nq, row-major):
+/// `Y = M⁻¹Gᵀ` (row r of `y` = column r), the Cholesky factor of the Schur complement
+/// `A = G M⁻¹ Gᵀ` and `A` itself in f64 (for reports). A dependent row of `G` is an
+/// over-constrained contact set and is reported, never regularised.
+#[allow(clippy::type_complexity)]
+fn schur_complement<S: Scalar>(
+    m_chol: &[S],
+    nq: usize,
+    g: &[S],
+    nc: usize,
+    set_name: &str,
+) -> Result<(Vec<S>, Vec<S>, Vec<f64>), DynamicsError> {
+    let mut y = g.to_vec();
+    for r in 0..nc {
+        cholesky_solve(m_chol, nq, &mut y[r * nq..(r + 1) * nq]);
+    }
+    let mut amat = vec![S::c(0.0); nc * nc];
+    for i in 0..nc {
+        for j in 0..nc {
+            amat[i * nc + j] = (0..nq).map(|l| g[i * nq + l] * y[j * nq + l]).sum();
+        }
+    }
+    let amat_f64: Vec<f64> = amat.iter().map(|v| v.value()).collect();
+    cholesky(&mut amat, nc, 1e-10).map_err(|e| DynamicsError::OverConstrained { set: set_name.to_string(), row: e.pivot })?;
+    Ok((y, amat, amat_f64))
 }
 
 /// `ControlledOde` view of the model under one constraint set.

@@ -720,6 +720,18 @@ impl<'o, 'a> Transcription<'o, 'a> {
     }
 }
 
+/// An error and its causes as one line.
+fn error_chain(e: &dyn std::error::Error) -> String {
+    let mut s = e.to_string();
+    let mut src = e.source();
+    while let Some(c) = src {
+        s.push_str(": ");
+        s.push_str(&c.to_string());
+        src = c.source();
+    }
+    s
+}
+
 impl crate::sqp::Nlp for Transcription<'_, '_> {
     fn n(&self) -> usize {
         self.n
@@ -742,16 +754,7 @@ impl crate::sqp::Nlp for Transcription<'_, '_> {
         Transcription::hessian_blocks(self)
     }
     fn evaluate(&self, w: &[f64], derivs: bool) -> Result<crate::sqp::NlpEval, String> {
-        let ev = Transcription::evaluate(self, w, derivs).map_err(|e| {
-            let mut s = e.to_string();
-            let mut src = std::error::Error::source(&e);
-            while let Some(c) = src {
-                s.push_str(": ");
-                s.push_str(&c.to_string());
-                src = c.source();
-            }
-            s
-        })?;
+        let ev = Transcription::evaluate(self, w, derivs).map_err(|e| error_chain(&e))?;
         Ok(crate::sqp::NlpEval { f: ev.f, c: ev.c, grad: ev.grad, jac: ev.jac, gn: ev.gauss_newton })
     }
     fn elastic_weights(&self) -> Vec<f64> {
@@ -764,16 +767,7 @@ impl crate::sqp::Nlp for Transcription<'_, '_> {
         w: &[f64],
         lambda: &[f64],
     ) -> Result<(crate::sqp::NlpEval, (Vec<usize>, Vec<usize>, Vec<f64>)), String> {
-        let (ev, h) = Transcription::evaluate_with_hessian(self, w, lambda).map_err(|e| {
-            let mut s = e.to_string();
-            let mut src = std::error::Error::source(&e);
-            while let Some(c) = src {
-                s.push_str(": ");
-                s.push_str(&c.to_string());
-                src = c.source();
-            }
-            s
-        })?;
+        let (ev, h) = Transcription::evaluate_with_hessian(self, w, lambda).map_err(|e| error_chain(&e))?;
         Ok((crate::sqp::NlpEval { f: ev.f, c: ev.c, grad: ev.grad, jac: ev.jac, gn: ev.gauss_newton }, h))
     }
     fn rows_with_exact_hessian(&self) -> Vec<bool> {
