@@ -14,6 +14,7 @@ fn one_phase(name: &str, contacts: &[&str], duration: f64) -> PhaseSequence {
         name: name.into(),
         description: String::new(),
         initial_state: None,
+        gait: None,
         phases: vec![Phase::Continuous {
             name: name.into(),
             contacts: contacts.iter().map(|c| ContactUse { contact: c.to_string(), rolling: true }).collect(),
