@@ -154,7 +154,7 @@ fn numerical_drift_grows_without_baumgarte() {
     let mut m = model_with_effects("opensim_subject01_torque.json", "ellipse.json", springs());
     let x0 = stance_start(&m, contact, 0.0, 0.0);
     let seq = one_phase("stance", &[contact], 1.0);
-    let (on, sets) = run(&m, &seq, &x0, 1e-6);
+    let (on, _) = run(&m, &seq, &x0, 1e-6);
     m.set_baumgarte(0.0, 0.0, 0.0);
     let (off, _) = run(&m, &seq, &x0, 1e-6);
     let window = |r: &SimulationResult, a: f64, b: f64| {

@@ -29,7 +29,7 @@ fn random_state(m: &GaitModel, rng: &mut Rng, contact: Option<&str>) -> Vec<f64>
         Some(c) => pose_on_ground(m, j, c),
         None => vec![0.0, 1.0, j[0], j[1], j[2], j[3], j[4], j[5], j[6]],
     };
-    for i in 0..9 {
+    for _ in 0..9 {
         x.push(rng.uniform(-0.5, 0.5));
     }
     for _ in 0..m.na() {

@@ -199,3 +199,72 @@ fn interval_hessian_matches_finite_differences_of_sensitivities() {
         }
     }
 }
+
+/// ∫ u² dt as a quadrature state gives the same cart-pole optimum as the node-wise
+/// least-squares form h Σ u_k² (exact for piecewise-constant u).
+#[test]
+fn integrated_cost_by_quadrature_state_matches_the_least_squares_form() {
+    use footfall::ocp::{quadrature_cost, Integrand, WithQuadrature};
+    struct USquared;
+    impl Integrand for USquared {
+        fn dim(&self) -> usize {
+            1
+        }
+        fn eval(&self, _x: &[f64], u: &[f64], _t: &[f64], v: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), String> {
+            v[0] = u[0] * u[0];
+            if let Some(j) = jac {
+                j.iter_mut().for_each(|x| *x = 0.0);
+                j[4] = 2.0 * u[0];
+            }
+            Ok(())
+        }
+        fn weighted_hessian(&self, _x: &[f64], _u: &[f64], _t: &[f64], w: &[f64], out: &mut [f64]) -> Result<bool, String> {
+            out.iter_mut().for_each(|x| *x = 0.0);
+            out[4 + 4 * 5] = 2.0 * w[0];
+            Ok(true)
+        }
+    }
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("problems/cartpole_swingup.json");
+    let bench = Benchmark::from_json(read_problem_json(&p).unwrap()).unwrap();
+    let settings = IntegratorSettings { method: footfall::integrate::Method::Adams, ..Default::default() };
+    let base = bench.ocp(settings.clone()).unwrap();
+    let integrand = USquared;
+    let ext = WithQuadrature { ode: base.phases[0].ode, integrand: &integrand };
+    let ph = &base.phases[0];
+    let n = ph.intervals;
+    let grow = |rows: &Vec<Vec<f64>>, v: f64| rows.iter().map(|r| r.iter().copied().chain([v]).collect()).collect::<Vec<Vec<f64>>>();
+    let mut x_lb = grow(&ph.x_lb, f64::NEG_INFINITY);
+    let mut x_ub = grow(&ph.x_ub, f64::INFINITY);
+    x_lb[0][4] = 0.0;
+    x_ub[0][4] = 0.0;
+    let ocp = Ocp {
+        phases: vec![Phase {
+            name: ph.name.clone(),
+            ode: &ext,
+            intervals: n,
+            duration: ph.duration,
+            controls: ph.controls,
+            x_lb,
+            x_ub,
+            u_lb: ph.u_lb.clone(),
+            u_ub: ph.u_ub.clone(),
+            x_guess: grow(&ph.x_guess, 0.0),
+            u_guess: ph.u_guess.clone(),
+        }],
+        transitions: vec![],
+        ntheta: 0,
+        theta_guess: vec![],
+        theta_lb: vec![],
+        theta_ub: vec![],
+        constraints: vec![],
+        least_squares: vec![],
+        costs: vec![quadrature_cost(0, n, 5, 4, 1)],
+        integrator: settings,
+    };
+    let tr = Transcription::new(&ocp).unwrap();
+    let (_, _, w0) = tr.variable_bounds_and_guess();
+    let res = sqp::solve(&tr, &w0, &SqpSettings { tol_kkt: 1e-6, hessian: HessianMode::Exact, ..Default::default() }, &mut Silent);
+    eprintln!("quadrature cost: {} after {} iterations, J = {:.9}", res.status, res.history.len() - 1, res.objective);
+    assert_eq!(res.status, SqpStatus::Converged);
+    assert!((res.objective - 76.665674185).abs() / 76.665674185 < 1e-5, "J = {}", res.objective);
+}

@@ -6,7 +6,9 @@
 //! functions of node variables. [`Transcription`] turns it into a sparse NLP whose
 //! continuity constraints come from CVODES forward sensitivities.
 pub mod problem;
+pub mod quadrature;
 pub mod transcription;
 
 pub use problem::{Block, Constraint, NodeFunction, Ocp, Phase, PhaseDuration, Term};
+pub use quadrature::{quadrature_cost, Integrand, WithQuadrature};
 pub use transcription::{Evaluation, RowLabel, Transcription, TranscriptionError};
