@@ -795,6 +795,43 @@ impl GaitModel {
 }
 
 impl GaitModel {
+    /// Ground reaction force and CoP moment of each foot, generic in the scalar type:
+    /// `[(fx, fy, m)]` for right and left, with `fx` the tangential and `fy` the normal
+    /// force on the foot (N) and `m = Σ λₙ·x_P` (N·m) the normal-force moment about the
+    /// origin, so that the centre of pressure is `m / fy` where `fy > 0`. Tracking costs use
+    /// `m − x_cop·fy`, which weights the CoP error by the load and stays smooth at lift-off.
+    pub fn foot_loads_generic<S: ModelScalar>(
+        &self,
+        set: &ConstraintSet,
+        x: &[S],
+        u: &[S],
+        theta: &[S],
+    ) -> Result<[(S, S, S); 2], DynamicsError> {
+        let nq = self.nq();
+        let mut xdot = vec![S::c(0.0); self.nx()];
+        let mut lam = vec![S::c(0.0); set.rows.len()];
+        self.dynamics(set, x, u, theta, &mut xdot, &mut lam, None)?;
+        let p = self.full_params(theta);
+        let (_, _, _, n) = self.adjusted(&p);
+        let zeros = vec![S::c(0.0); nq];
+        let k = self.tree.kinematics(&x[..nq], &zeros);
+        let z = S::c(0.0);
+        let mut out = [(z, z, z); 2];
+        for (r, row) in set.rows.iter().enumerate() {
+            let c = &self.contacts[row.contact];
+            let s = if c.side == Side::Right { 0 } else { 1 };
+            match row.kind {
+                RowKind::Tangential => out[s].0 += lam[r],
+                RowKind::Normal => {
+                    let (pt, _, _) = self.contact_geometry(&k, c, n);
+                    out[s].1 += lam[r];
+                    out[s].2 += lam[r] * pt[0];
+                }
+            }
+        }
+        Ok(out)
+    }
+
     /// Constraint forces λ (one per row of `set`, N) and their Jacobian with respect to
     /// `(x, u, θ)` (rows × (nx + nu + nθ), column-major), by forward AD.
     pub fn contact_forces_jacobian(

@@ -1,0 +1,166 @@
+//! Node-wise least-squares tracking residuals (seed 001 eq. 18, evaluated at the shooting
+//! nodes as the seed does): joint and pelvis-tilt angles and angular velocities, ground
+//! reaction forces and centre of pressure per foot, and the regularisation of excitations
+//! and activations.
+//!
+//! Each term is `√w · (model − measurement)`, so the cost is `Σ w (model − measurement)²`.
+//! The CoP term is written as the load-weighted moment error `(m − x_cop fᵧ) / (F_peak L)`
+//! with `m = Σ λₙ x_P`: equal to `(fᵧ/F_peak)(CoP − x_cop)/L`, smooth when the foot unloads.
+
+use crate::model::ad::{self, AdChunk};
+use crate::model::{ConstraintSet, GaitModel};
+use crate::ocp::NodeFunction;
+
+/// What a node is compared with (`None` = not tracked at this node).
+#[derive(Debug, Clone, Default)]
+pub struct NodeTarget {
+    /// Generalised positions (m, rad), one entry per coordinate.
+    pub q: Vec<Option<f64>>,
+    /// Generalised velocities (m/s, rad/s).
+    pub qd: Vec<Option<f64>>,
+    /// Per foot (right, left): tangential force, normal force (N) and CoP x (m; `None`
+    /// while the measured foot is unloaded).
+    pub feet: [Option<(f64, f64, Option<f64>)>; 2],
+}
+
+/// Weights of the tracking cost.
+#[derive(Debug, Clone)]
+pub struct TrackingWeights {
+    /// Per coordinate weight of the angle error (1/rad² or 1/m²).
+    pub angle: Vec<f64>,
+    /// Per coordinate weight of the velocity error.
+    pub velocity: Vec<f64>,
+    /// Force errors are divided by this (N; seed: the peak measured normal force).
+    pub force_scale: f64,
+    /// Weight of the normalised force errors.
+    pub force: f64,
+    /// CoP errors are divided by this length (m; the foot length).
+    pub cop_length: f64,
+    /// Weight of the normalised CoP (moment) errors.
+    pub cop: f64,
+    /// Weight of the squared excitations (seed: 1e-3).
+    pub excitation: f64,
+    /// Weight of the squared activations (seed: 1e-3).
+    pub activation: f64,
+}
+
+impl TrackingWeights {
+    /// Seed eq. 18: angles 1/(π/4), angular velocities 0.1/(π/4), ankles at 1/100 of
+    /// these; pelvis translations untracked; forces and CoP normalised by the peak force
+    /// (and the foot length); u², a² at 1e-3.
+    pub fn seed(nq: usize, peak_force: f64, foot_length: f64) -> Self {
+        let w = 1.0 / std::f64::consts::FRAC_PI_4;
+        let mut angle = vec![w; nq];
+        let mut velocity = vec![0.1 * w; nq];
+        for i in [0, 1] {
+            angle[i] = 0.0;
+            velocity[i] = 0.0;
+        }
+        for i in [5, 8] {
+            angle[i] *= 0.01;
+            velocity[i] *= 0.01;
+        }
+        Self { angle, velocity, force_scale: peak_force, force: 1.0, cop_length: foot_length, cop: 1.0, excitation: 1e-3, activation: 1e-3 }
+    }
+}
+
+/// The residual of one node.
+pub struct TrackingResidual<'a> {
+    model: &'a GaitModel,
+    set: ConstraintSet,
+    target: NodeTarget,
+    weights: TrackingWeights,
+    dim: usize,
+}
+
+impl<'a> TrackingResidual<'a> {
+    /// Residual of a node in a phase with constraint set `set`; its arguments are the
+    /// node's state, its control and θ.
+    pub fn new(model: &'a GaitModel, set: ConstraintSet, target: NodeTarget, weights: TrackingWeights) -> Self {
+        let nq = model.nq();
+        let mut dim = 0;
+        for i in 0..nq {
+            if target.q.get(i).copied().flatten().is_some() && weights.angle[i] > 0.0 {
+                dim += 1;
+            }
+            if target.qd.get(i).copied().flatten().is_some() && weights.velocity[i] > 0.0 {
+                dim += 1;
+            }
+        }
+        for f in target.feet.iter().flatten() {
+            dim += 2 + usize::from(f.2.is_some());
+        }
+        dim += model.nu() + model.na();
+        Self { model, set, target, weights, dim }
+    }
+
+    fn residual<S: crate::model::effects::ModelScalar>(&self, x: &[S], u: &[S], th: &[S], out: &mut [S]) -> Result<(), String> {
+        let (nq, w) = (self.model.nq(), &self.weights);
+        let mut o = 0;
+        for i in 0..nq {
+            if let Some(r) = self.target.q.get(i).copied().flatten() {
+                if w.angle[i] > 0.0 {
+                    out[o] = (x[i] - r) * w.angle[i].sqrt();
+                    o += 1;
+                }
+            }
+            if let Some(r) = self.target.qd.get(i).copied().flatten() {
+                if w.velocity[i] > 0.0 {
+                    out[o] = (x[nq + i] - r) * w.velocity[i].sqrt();
+                    o += 1;
+                }
+            }
+        }
+        if self.target.feet.iter().any(Option::is_some) {
+            let loads = self.model.foot_loads_generic(&self.set, x, u, th).map_err(|e| e.to_string())?;
+            for (s, tgt) in self.target.feet.iter().enumerate() {
+                let Some((fx, fy, cop)) = *tgt else { continue };
+                let sc = w.force.sqrt() / w.force_scale;
+                out[o] = (loads[s].0 - fx) * sc;
+                out[o + 1] = (loads[s].1 - fy) * sc;
+                o += 2;
+                if let Some(xc) = cop {
+                    out[o] = (loads[s].2 - loads[s].1 * xc) * (w.cop.sqrt() / (w.force_scale * w.cop_length));
+                    o += 1;
+                }
+            }
+        }
+        for v in u {
+            out[o] = *v * w.excitation.sqrt();
+            o += 1;
+        }
+        for i in 0..self.model.na() {
+            out[o] = x[2 * nq + i] * w.activation.sqrt();
+            o += 1;
+        }
+        debug_assert_eq!(o, self.dim);
+        Ok(())
+    }
+}
+
+impl NodeFunction for TrackingResidual<'_> {
+    fn dim(&self) -> usize {
+        self.dim
+    }
+    fn eval(&self, z: &[f64], value: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), String> {
+        let (nx, nu) = (self.model.nx(), self.model.nu());
+        match jac {
+            None => {
+                let (x, rest) = z.split_at(nx);
+                let (u, th) = rest.split_at(nu);
+                self.residual(x, u, th, value)
+            }
+            Some(j) => ad::jacobian(
+                z,
+                self.dim,
+                |zs: &[AdChunk], out: &mut [AdChunk]| {
+                    let (x, rest) = zs.split_at(nx);
+                    let (u, th) = rest.split_at(nu);
+                    self.residual(x, u, th, out)
+                },
+                value,
+                j,
+            ),
+        }
+    }
+}
