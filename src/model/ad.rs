@@ -13,6 +13,37 @@ pub const CHUNK: usize = 8;
 /// Dual number carrying [`CHUNK`] directional derivatives.
 pub type AdChunk = DualSVec64<CHUNK>;
 
+/// A dual number over [`AdChunk`]: one outer direction over [`CHUNK`] inner directions,
+/// for second derivatives (one Hessian column block per evaluation).
+pub type AdNested = num_dual::Dual<AdChunk>;
+
+/// Hessian of a scalar function `f: ℝⁿ → ℝ` (column-major n × n) by nested forward AD:
+/// `n · ⌈n / CHUNK⌉` evaluations of `f` in [`AdNested`].
+pub fn hessian<E>(x: &[f64], mut f: impl FnMut(&[AdNested]) -> Result<AdNested, E>, out: &mut [f64]) -> Result<(), E> {
+    let n = x.len();
+    let mut xs: Vec<AdNested> = Vec::with_capacity(n);
+    for j in 0..n {
+        let mut start = 0;
+        while start < n {
+            xs.clear();
+            for (i, &v) in x.iter().enumerate() {
+                let mut inner = AdChunk::from_re(v);
+                if i >= start && i < start + CHUNK {
+                    inner = inner.derivative(i - start);
+                }
+                let outer = if i == j { AdChunk::from_re(1.0) } else { AdChunk::from_re(0.0) };
+                xs.push(num_dual::Dual::new(inner, outer));
+            }
+            let y = f(&xs)?;
+            for k in 0..CHUNK.min(n - start) {
+                out[(start + k) + j * n] = eps(&y.eps, k);
+            }
+            start += CHUNK;
+        }
+    }
+    Ok(())
+}
+
 /// Seed `x` with unit directions for inputs `start..start+CHUNK`.
 pub fn seed_chunk(x: &[f64], start: usize, out: &mut Vec<AdChunk>) {
     out.clear();

@@ -8,7 +8,7 @@
 //! A user adds an effect with one entry in the model JSON (`"effects": [{"type": …}]`);
 //! [`EffectSpec`] lists the known kinds.
 
-use super::ad::AdChunk;
+use super::ad::{AdChunk, AdNested};
 use super::multibody::{Inertia, V2};
 use super::Scalar;
 use num_dual::Dual64;
@@ -74,9 +74,11 @@ pub trait DynEffect: std::fmt::Debug + Send + Sync {
     fn adjust_f64(&self, p: &[f64], m: &mut ModelAdjust<'_, f64>);
     fn adjust_dual(&self, p: &[Dual64], m: &mut ModelAdjust<'_, Dual64>);
     fn adjust_chunk(&self, p: &[AdChunk], m: &mut ModelAdjust<'_, AdChunk>);
+    fn adjust_nested(&self, p: &[AdNested], m: &mut ModelAdjust<'_, AdNested>);
     fn forces_f64(&self, p: &[f64], x: EffectState<'_, f64>, tau: &mut [f64]);
     fn forces_dual(&self, p: &[Dual64], x: EffectState<'_, Dual64>, tau: &mut [Dual64]);
     fn forces_chunk(&self, p: &[AdChunk], x: EffectState<'_, AdChunk>, tau: &mut [AdChunk]);
+    fn forces_nested(&self, p: &[AdNested], x: EffectState<'_, AdNested>, tau: &mut [AdNested]);
 }
 
 impl<E: Effect> DynEffect for E {
@@ -95,6 +97,9 @@ impl<E: Effect> DynEffect for E {
     fn adjust_chunk(&self, p: &[AdChunk], m: &mut ModelAdjust<'_, AdChunk>) {
         self.adjust_model(p, m)
     }
+    fn adjust_nested(&self, p: &[AdNested], m: &mut ModelAdjust<'_, AdNested>) {
+        self.adjust_model(p, m)
+    }
     fn forces_f64(&self, p: &[f64], x: EffectState<'_, f64>, tau: &mut [f64]) {
         self.generalized_forces(p, x, tau)
     }
@@ -102,6 +107,9 @@ impl<E: Effect> DynEffect for E {
         self.generalized_forces(p, x, tau)
     }
     fn forces_chunk(&self, p: &[AdChunk], x: EffectState<'_, AdChunk>, tau: &mut [AdChunk]) {
+        self.generalized_forces(p, x, tau)
+    }
+    fn forces_nested(&self, p: &[AdNested], x: EffectState<'_, AdNested>, tau: &mut [AdNested]) {
         self.generalized_forces(p, x, tau)
     }
 }
@@ -130,6 +138,7 @@ macro_rules! model_scalar {
 model_scalar!(f64, adjust_f64, forces_f64);
 model_scalar!(Dual64, adjust_dual, forces_dual);
 model_scalar!(AdChunk, adjust_chunk, forces_chunk);
+model_scalar!(AdNested, adjust_nested, forces_nested);
 
 /// A linear torsional spring at one joint coordinate: τ = −k (θ − θ₀).
 ///

@@ -949,6 +949,27 @@ impl ControlledOde for GaitOde<'_> {
         }
         Ok(())
     }
+    fn weighted_hessian(&self, x: &[f64], u: &[f64], theta: &[f64], mu: &[f64], out: &mut [f64]) -> Result<bool, OdeError> {
+        let (nx, nu) = (self.model.nx(), self.model.nu());
+        let z: Vec<f64> = x.iter().chain(u).chain(theta).copied().collect();
+        let mut xdot = vec![ad::AdNested::from(0.0); nx];
+        let mut lam = vec![ad::AdNested::from(0.0); self.set.rows.len()];
+        ad::hessian(
+            &z,
+            |zs| {
+                let (xs, rest) = zs.split_at(nx);
+                let (us, ts) = rest.split_at(nu);
+                self.model.dynamics(self.set, xs, us, ts, &mut xdot, &mut lam, None)?;
+                Ok(xdot.iter().zip(mu).fold(ad::AdNested::from(0.0), |acc, (f, m)| acc + *f * *m))
+            },
+            out,
+        )
+        .map_err(ode_err)?;
+        if out.iter().any(|v| !v.is_finite()) {
+            return Err(OdeError::Recoverable("non-finite Hessian".into()));
+        }
+        Ok(true)
+    }
     fn f_jac(
         &self,
         x: &[f64],
