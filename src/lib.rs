@@ -7,11 +7,13 @@
 
 pub mod benchmarks;
 pub mod controls;
+pub mod data;
 pub mod integrate;
 pub mod model;
 pub mod ocp;
 pub mod phases;
 pub mod problems;
+pub mod report;
 pub mod runfolder;
 pub mod simulate;
 pub mod sqp;

@@ -1,0 +1,508 @@
+//! The documented sagittal CSV schema (`data/README.md`) and its meta JSON file.
+//!
+//! One header row, then one row per sample, comma separated; blank lines and lines
+//! starting with `#` are skipped. Columns, in any order:
+//!
+//! | column | unit | meaning |
+//! |---|---|---|
+//! | `time` | s | strictly increasing |
+//! | `pelvis_x`, `pelvis_y` | m | pelvis origin in the global frame (x forward, y up) |
+//! | `pelvis_tilt` | rad | pelvis (HAT) angle, counter-clockwise positive seen from the right |
+//! | `hip_r`, `knee_r`, `ankle_r`, `hip_l`, `knee_l`, `ankle_l` | rad | + = hip flexion, knee extension (flexion is negative), ankle dorsiflexion |
+//! | `grf_x_r`, `grf_y_r`, `grf_x_l`, `grf_y_l` | N | force of the ground on the foot, + forward / + up |
+//! | `cop_x_r`, `cop_x_l` | m | centre of pressure x; `NaN` while that foot's `grf_y` < 20 N |
+//! | any other | | kept in [`GaitData::extra`] (e.g. `hip_center_x`, `hip_center_y`, `lumbar_extension`) |
+//!
+//! The six columns of one side (`hip`, `knee`, `ankle`, `grf_x`, `grf_y`, `cop_x`) may be
+//! left out together when only one side was measured ([`SideSource::Missing`]; fill it
+//! with [`GaitData::mirror_missing_side`]); leaving out some of them is an error. `NaN`
+//! is allowed only in `cop_x_*` while that foot is unloaded.
+//!
+//! The optional meta JSON ([`TrialMeta`]) supplies the body mass, the treadmill belt
+//! speed, the force-plate height, the CoP threshold and the units.
+
+use super::error::DataError;
+use super::storage::check_time;
+use super::{FootData, GaitData, SideSource, DEFAULT_COP_THRESHOLD, Q_NAMES};
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// Gait events stored in a meta file (s).
+#[derive(Debug, Clone, PartialEq, Default, Deserialize)]
+pub struct MetaEvents {
+    /// Heel strikes (s).
+    #[serde(default)]
+    pub heel_strike_s: Vec<f64>,
+    /// Toe offs (s).
+    #[serde(default)]
+    pub toe_off_s: Vec<f64>,
+}
+
+/// The meta file of a trial (`<name>_meta.json`); unknown fields are ignored.
+#[derive(Debug, Clone, PartialEq, Default, Deserialize)]
+pub struct TrialMeta {
+    /// Data-set name.
+    #[serde(default)]
+    pub dataset: Option<String>,
+    /// Body mass (kg) of the model (also read from `body_mass_kg`).
+    #[serde(default, alias = "body_mass_kg")]
+    pub body_mass_kg_model: Option<f64>,
+    /// Body mass estimated from the mean vertical force (kg).
+    #[serde(default)]
+    pub body_mass_kg_from_grf: Option<f64>,
+    /// Whether the trial was recorded on a treadmill.
+    #[serde(default)]
+    pub treadmill: Option<bool>,
+    /// Treadmill belt speed (m/s, the belt moves backward).
+    #[serde(default)]
+    pub belt_speed_m_s: Option<f64>,
+    /// Height of the force-plate surface (m).
+    #[serde(default)]
+    pub force_plate_surface_y_m: Option<f64>,
+    /// CoP is NaN below this normal force (N).
+    #[serde(default)]
+    pub cop_threshold_n: Option<f64>,
+    /// Hip-joint centre in the pelvis frame (m).
+    #[serde(default)]
+    pub hip_offset_in_pelvis_m: Option<[f64; 2]>,
+    /// Units of the CSV columns: keys `time` (s, ms), `positions` (m, cm, mm),
+    /// `angles` (rad, deg), `forces` (N).
+    #[serde(default)]
+    pub units: Option<BTreeMap<String, String>>,
+    /// Events detected on the raw forces with a 20 N threshold, keyed `r` and `l`.
+    #[serde(default, rename = "events_from_raw_grf_threshold_20N")]
+    pub events_20n: Option<BTreeMap<String, MetaEvents>>,
+}
+
+/// Read a meta JSON file (its units are checked too).
+pub fn read_meta(path: &Path) -> Result<TrialMeta, DataError> {
+    load_meta(path).map(|(m, _)| m)
+}
+
+fn load_meta(path: &Path) -> Result<(TrialMeta, Units), DataError> {
+    let text = std::fs::read_to_string(path).map_err(|e| DataError::io(path, e))?;
+    let meta: TrialMeta = serde_json::from_str(&text).map_err(|e| DataError::Json {
+        path: path.to_path_buf(),
+        message: e.to_string(),
+        line: e.line(),
+        column: e.column(),
+    })?;
+    for (field, v) in [
+        ("body_mass_kg_model", meta.body_mass_kg_model),
+        ("belt_speed_m_s", meta.belt_speed_m_s),
+        ("force_plate_surface_y_m", meta.force_plate_surface_y_m),
+        ("cop_threshold_n", meta.cop_threshold_n),
+    ] {
+        if let Some(x) = v {
+            if !x.is_finite() {
+                return Err(DataError::invalid(
+                    path,
+                    field,
+                    format!("must be finite, got {x}"),
+                ));
+            }
+        }
+    }
+    if let Some(m) = meta.body_mass_kg_model {
+        if m <= 0.0 {
+            return Err(DataError::invalid(
+                path,
+                "body_mass_kg_model",
+                format!("must be positive, got {m}"),
+            ));
+        }
+    }
+    let units = Units::from_meta(&meta, &text, path)?;
+    Ok((meta, units))
+}
+
+/// Scale factors to SI of the CSV columns.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Units {
+    time: f64,
+    position: f64,
+    angle: f64,
+}
+
+impl Units {
+    fn si() -> Self {
+        Self {
+            time: 1.0,
+            position: 1.0,
+            angle: 1.0,
+        }
+    }
+
+    fn from_meta(meta: &TrialMeta, text: &str, path: &Path) -> Result<Self, DataError> {
+        let mut u = Self::si();
+        let Some(map) = &meta.units else { return Ok(u) };
+        for (key, value) in map {
+            let v = value.trim();
+            let (factor, valid): (Option<f64>, &str) = match key.as_str() {
+                "time" => (
+                    match v {
+                        "s" => Some(1.0),
+                        "ms" => Some(1e-3),
+                        _ => None,
+                    },
+                    "s or ms",
+                ),
+                "positions" => (
+                    match v {
+                        "m" => Some(1.0),
+                        "cm" => Some(1e-2),
+                        "mm" => Some(1e-3),
+                        _ => None,
+                    },
+                    "m, cm or mm",
+                ),
+                "angles" => (
+                    match v {
+                        "rad" | "radians" => Some(1.0),
+                        "deg" | "degrees" => Some(std::f64::consts::PI / 180.0),
+                        _ => None,
+                    },
+                    "rad or deg",
+                ),
+                "forces" => (if v == "N" { Some(1.0) } else { None }, "N"),
+                _ => continue,
+            };
+            let Some(f) = factor else {
+                return Err(DataError::Units {
+                    path: path.to_path_buf(),
+                    row: json_key_line(text, key),
+                    column: format!("units.{key}"),
+                    text: value.clone(),
+                    reason: format!("not a unit of {key}; expected {valid}"),
+                });
+            };
+            match key.as_str() {
+                "time" => u.time = f,
+                "positions" => u.position = f,
+                "angles" => u.angle = f,
+                _ => {}
+            }
+        }
+        Ok(u)
+    }
+}
+
+/// Line (1-based) of `"key"` after the line holding `"units"`, for error messages.
+fn json_key_line(text: &str, key: &str) -> Option<usize> {
+    let lines: Vec<&str> = text.lines().collect();
+    let start = lines.iter().position(|l| l.contains("\"units\""))?;
+    let needle = format!("\"{key}\"");
+    (start..lines.len())
+        .find(|&i| lines[i].contains(&needle))
+        .map(|i| i + 1)
+}
+
+/// Where the meta file of a CSV comes from.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub enum MetaSource {
+    /// `<name>_meta.json` beside the CSV, where `<name>` is the CSV's stem without a
+    /// trailing `_sagittal` (also tried: `<stem>_meta.json`); none if absent.
+    #[default]
+    Sibling,
+    /// This file (must exist).
+    File(PathBuf),
+    /// No meta file.
+    None,
+}
+
+/// The sibling meta file of a CSV, if one exists.
+pub fn sibling_meta_path(csv: &Path) -> Option<PathBuf> {
+    let stem = csv.file_stem()?.to_string_lossy().into_owned();
+    let dir = csv.parent().unwrap_or(Path::new(""));
+    let mut names = Vec::new();
+    if let Some(base) = stem.strip_suffix("_sagittal") {
+        names.push(format!("{base}_meta.json"));
+    }
+    names.push(format!("{stem}_meta.json"));
+    names.into_iter().map(|n| dir.join(n)).find(|p| p.is_file())
+}
+
+/// Read a sagittal CSV (see the module docs) with its sibling meta file, if any.
+///
+/// # Example
+/// ```no_run
+/// let d = footfall::data::read_sagittal_csv("data/opensim_subject01_sagittal.csv".as_ref())?;
+/// assert_eq!(d.body_mass, Some(72.6));
+/// # Ok::<(), footfall::data::DataError>(())
+/// ```
+pub fn read_sagittal_csv(path: &Path) -> Result<GaitData, DataError> {
+    read_sagittal_csv_with(path, &MetaSource::Sibling)
+}
+
+/// Read a sagittal CSV with the meta file chosen by `meta`.
+///
+/// The meta file sets `body_mass` (`body_mass_kg_model`), `belt_speed`,
+/// `force_plate_height`, the CoP threshold (default 20 N) and the units of the columns
+/// (converted to SI). The data stay in the frame of the file: call
+/// [`GaitData::to_overground`] for treadmill trials.
+///
+/// Errors ([`DataError`]): unreadable file; empty file or fewer than two data rows;
+/// duplicate or missing columns (a side's six columns may only be missing together, and
+/// not both sides); a row with the wrong number of fields; an unparsable number (row,
+/// column); NaN or ∞ outside `cop_x_*`, or `cop_x_*` NaN while that foot's `grf_y` is at
+/// or above the CoP threshold (row, column); time not strictly increasing (row); a meta
+/// file that is not valid JSON, has invalid values or units that do not parse.
+pub fn read_sagittal_csv_with(path: &Path, meta: &MetaSource) -> Result<GaitData, DataError> {
+    let meta_path = match meta {
+        MetaSource::Sibling => sibling_meta_path(path),
+        MetaSource::File(p) => Some(p.clone()),
+        MetaSource::None => None,
+    };
+    let (meta, units) = match &meta_path {
+        Some(mp) => {
+            let (m, u) = load_meta(mp)?;
+            (Some(m), u)
+        }
+        None => (None, Units::si()),
+    };
+    let text = std::fs::read_to_string(path).map_err(|e| DataError::io(path, e))?;
+    let cop_threshold = meta
+        .as_ref()
+        .and_then(|m| m.cop_threshold_n)
+        .unwrap_or(DEFAULT_COP_THRESHOLD);
+    let mut data = parse_sagittal_csv(&text, path, cop_threshold, units)?;
+    if let Some(m) = meta {
+        data.body_mass = m.body_mass_kg_model;
+        data.belt_speed = m.belt_speed_m_s;
+        data.force_plate_height = m.force_plate_surface_y_m;
+        if let Some(name) = m.dataset {
+            data.name = name;
+        }
+    }
+    Ok(data)
+}
+
+fn foot_columns(side: &str) -> [String; 6] {
+    [
+        format!("hip_{side}"),
+        format!("knee_{side}"),
+        format!("ankle_{side}"),
+        format!("grf_x_{side}"),
+        format!("grf_y_{side}"),
+        format!("cop_x_{side}"),
+    ]
+}
+
+fn parse_sagittal_csv(
+    text: &str,
+    path: &Path,
+    cop_threshold: f64,
+    units: Units,
+) -> Result<GaitData, DataError> {
+    let p = path.to_path_buf();
+    let mut lines = text
+        .lines()
+        .enumerate()
+        .map(|(i, l)| (i + 1, l.trim_end_matches('\r')))
+        .filter(|(_, l)| !l.trim().is_empty() && !l.trim_start().starts_with('#'));
+    let (header_row, header) = lines.next().ok_or_else(|| DataError::Format {
+        path: p.clone(),
+        row: 1,
+        reason: "the file is empty; expected a header row 'time,pelvis_x,…'".into(),
+    })?;
+    let cols: Vec<String> = header
+        .split(',')
+        .map(|c| c.trim().trim_matches('"').to_string())
+        .collect();
+    for (j, c) in cols.iter().enumerate() {
+        if cols[..j].contains(c) {
+            return Err(DataError::DuplicateColumn {
+                path: p,
+                row: header_row,
+                column: c.clone(),
+            });
+        }
+    }
+    let find = |name: &str| cols.iter().position(|c| c == name);
+    let missing = |name: &str, reason: String| DataError::MissingColumn {
+        path: p.clone(),
+        row: header_row,
+        column: name.to_string(),
+        reason,
+    };
+    let t_col = find("time").ok_or_else(|| missing("time", "the sample times (s)".into()))?;
+    let mut q_cols = [usize::MAX; 9];
+    for i in [0, 1, 2] {
+        q_cols[i] = find(Q_NAMES[i]).ok_or_else(|| {
+            missing(
+                Q_NAMES[i],
+                "a pelvis coordinate of the sagittal schema".into(),
+            )
+        })?;
+    }
+    let mut side_cols: [Option<[usize; 6]>; 2] = [None, None];
+    for (s, side) in ["r", "l"].iter().enumerate() {
+        let names = foot_columns(side);
+        let found: Vec<Option<usize>> = names.iter().map(|n| find(n)).collect();
+        if found.iter().all(Option::is_some) {
+            side_cols[s] = Some(std::array::from_fn(|k| found[k].unwrap_or_default()));
+        } else if let Some(k) = found.iter().position(Option::is_some) {
+            let absent = found.iter().position(Option::is_none).unwrap_or_default();
+            return Err(missing(
+                &names[absent],
+                format!(
+                    "'{}' is present, so all six columns of that side are needed ({}); leave all six out if the side was not measured",
+                    names[k],
+                    names.join(", ")
+                ),
+            ));
+        }
+    }
+    if side_cols.iter().all(Option::is_none) {
+        return Err(missing(
+            "hip_r",
+            "neither leg is in the file; at least one side's six columns are needed".into(),
+        ));
+    }
+    for s in 0..2 {
+        if let Some(c) = side_cols[s] {
+            q_cols[3 + 3 * s..6 + 3 * s].copy_from_slice(&c[..3]);
+        }
+    }
+    let known: Vec<usize> = std::iter::once(t_col)
+        .chain(q_cols.iter().copied().filter(|&c| c != usize::MAX))
+        .chain(side_cols.iter().flatten().flat_map(|c| c.iter().copied()))
+        .collect();
+    let extra_cols: Vec<usize> = (0..cols.len()).filter(|j| !known.contains(j)).collect();
+
+    // Parse every row.
+    let ncol = cols.len();
+    let mut table = vec![Vec::new(); ncol];
+    let mut rows = Vec::new();
+    for (row, line) in lines {
+        let fields: Vec<&str> = line.split(',').collect();
+        if fields.len() != ncol {
+            return Err(DataError::RowLength {
+                path: p,
+                row,
+                expected: ncol,
+                found: fields.len(),
+            });
+        }
+        for (j, f) in fields.iter().enumerate() {
+            let t = f.trim();
+            let v = if t.is_empty() {
+                Err("empty field (write NaN for a missing value)".to_string())
+            } else {
+                t.parse::<f64>().map_err(|e| e.to_string())
+            }
+            .map_err(|reason| DataError::Parse {
+                path: p.clone(),
+                row,
+                column: cols[j].clone(),
+                text: t.to_string(),
+                reason,
+            })?;
+            table[j].push(v);
+        }
+        rows.push(row);
+    }
+    if rows.len() < 2 {
+        return Err(DataError::Format {
+            path: p,
+            row: header_row,
+            reason: format!("{} data row(s); at least two are needed", rows.len()),
+        });
+    }
+
+    // NaN only in cop_x_* while unloaded.
+    let cop_cols: Vec<(usize, usize)> = side_cols.iter().flatten().map(|c| (c[5], c[4])).collect();
+    for (j, col) in table.iter().enumerate() {
+        let cop_fy = cop_cols.iter().find(|(c, _)| *c == j).map(|(_, fy)| *fy);
+        for (k, &v) in col.iter().enumerate() {
+            if v.is_finite() {
+                continue;
+            }
+            let reason = match cop_fy {
+                Some(fyc) if v.is_nan() => {
+                    let fy = table[fyc][k];
+                    if fy < cop_threshold {
+                        continue;
+                    }
+                    format!(
+                        "CoP is NaN while {} = {fy} N ≥ {cop_threshold} N (CoP may be NaN only while the foot is unloaded)",
+                        cols[fyc]
+                    )
+                }
+                _ => format!(
+                    "value is {v}; NaN is allowed only in cop_x_* while that foot is unloaded"
+                ),
+            };
+            return Err(DataError::NotFinite {
+                path: p,
+                row: rows[k],
+                column: cols[j].clone(),
+                reason,
+            });
+        }
+    }
+    let time: Vec<f64> = table[t_col].iter().map(|t| t * units.time).collect();
+    check_time(&time, &rows, "time", path)?;
+
+    let n = time.len();
+    let conv = |j: usize, f: f64| -> Vec<f64> { table[j].iter().map(|v| v * f).collect() };
+    let mut q: [Vec<f64>; 9] = Default::default();
+    for i in 0..9 {
+        let f = if i < 2 { units.position } else { units.angle };
+        q[i] = if q_cols[i] == usize::MAX {
+            vec![f64::NAN; n]
+        } else {
+            conv(q_cols[i], f)
+        };
+    }
+    let mut feet: [FootData; 2] = Default::default();
+    let mut sides = [SideSource::Missing; 2];
+    for s in 0..2 {
+        feet[s] = match side_cols[s] {
+            Some(c) => {
+                sides[s] = SideSource::Measured;
+                FootData {
+                    fx: conv(c[3], 1.0),
+                    fy: conv(c[4], 1.0),
+                    cop_x: conv(c[5], units.position),
+                }
+            }
+            None => FootData {
+                fx: vec![f64::NAN; n],
+                fy: vec![f64::NAN; n],
+                cop_x: vec![f64::NAN; n],
+            },
+        };
+    }
+    let extra = extra_cols
+        .iter()
+        .map(|&j| {
+            let f = match cols[j].as_str() {
+                "hip_center_x" | "hip_center_y" => units.position,
+                "lumbar_extension" => units.angle,
+                _ => 1.0,
+            };
+            (cols[j].clone(), conv(j, f))
+        })
+        .collect();
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let name = stem.strip_suffix("_sagittal").unwrap_or(&stem).to_string();
+    Ok(GaitData {
+        name,
+        source: p,
+        time,
+        q,
+        feet,
+        extra,
+        body_mass: None,
+        force_plate_height: None,
+        belt_speed: None,
+        cop_threshold,
+        sides,
+        overground: false,
+    })
+}

@@ -1,0 +1,534 @@
+//! Measured gait data in: readers, validation, interpolation, events and the generated
+//! second leg.
+//!
+//! * [`read_sagittal_csv`]: the documented sagittal CSV schema of `data/README.md` (time;
+//!   pelvis x, y, tilt; hip, knee, ankle per side; GRF tangential/normal and CoP per foot;
+//!   SI units, radians, x forward, y up, angles counter-clockwise positive seen from the
+//!   right, knee flexion negative) with an optional meta JSON ([`TrialMeta`]).
+//! * [`read_storage`] and [`GaitData::from_storage`]: OpenSim `.mot`/`.sto` files, with
+//!   the angle unit from the header and forces resampled onto the kinematic instants.
+//! * [`CubicSpline`] / [`GaitData::spline`]: tracked quantities as smooth ($C^2$) functions
+//!   of time, interpolated before integration.
+//! * [`detect_events`]: heel strike and toe off from the normal-force threshold
+//!   $F_y > f\,\max F_y$ ($f$ = 5 %), crossings linearly interpolated; [`gait_cycle`],
+//!   [`Events::contact_phases`] give initial phase durations.
+//! * [`half_cycle_shift`] / [`GaitData::mirror_missing_side`]: the unmeasured leg as the
+//!   measured one's Fourier series shifted by half a cycle, $x_l(t) = x_r(t + T_c/2)$
+//!   (seed 000 §3.3).
+//! * [`GaitData::to_overground`]: treadmill data moved to an overground frame,
+//!   $x \mapsto x + v_{belt}\,t$.
+//!
+//! Bad data are refused with a [`DataError`] naming the file, the row (1-based line), the
+//! column and the reason; nothing here panics on input.
+//!
+//! # Example
+//! ```no_run
+//! use footfall::data::{detect_events, gait_cycle, GaitData};
+//! use footfall::model::Side;
+//! let d = GaitData::bundled(env!("CARGO_MANIFEST_DIR").as_ref())?; // overground frame
+//! let ev = detect_events(&d, 0.05)?;
+//! let (t0, t1) = gait_cycle(&ev, Side::Right)?;
+//! let hip = d.spline("hip_r")?;
+//! println!("right cycle {t0}–{t1} s, hip velocity at heel strike {} rad/s", hip.derivative(t0));
+//! # Ok::<(), footfall::data::DataError>(())
+//! ```
+
+pub mod csv;
+pub mod error;
+pub mod events;
+pub mod fourier;
+pub mod spline;
+pub mod storage;
+
+pub use csv::{
+    read_meta, read_sagittal_csv, read_sagittal_csv_with, sibling_meta_path, MetaEvents,
+    MetaSource, TrialMeta,
+};
+pub use error::DataError;
+pub use events::{
+    detect_events, gait_cycle, threshold_crossings, ContactPhase, Events, DEFAULT_EVENT_FRACTION,
+};
+pub use fourier::{half_cycle_shift, half_cycle_shift_order, FourierSeries, SEED_FOURIER_ORDER};
+pub use spline::CubicSpline;
+pub use storage::{parse_storage, read_storage, ColumnMap, ForceColumns, Storage, StorageMap};
+
+use crate::model::Side;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// Names of the nine generalised coordinates, in model order (m, m, rad × 7).
+pub const Q_NAMES: [&str; 9] = [
+    "pelvis_x",
+    "pelvis_y",
+    "pelvis_tilt",
+    "hip_r",
+    "knee_r",
+    "ankle_r",
+    "hip_l",
+    "knee_l",
+    "ankle_l",
+];
+
+/// Normal force below which the CoP is undefined (N), as in `data/README.md`.
+pub const DEFAULT_COP_THRESHOLD: f64 = 20.0;
+
+/// Extra channels that are global x positions and move with [`GaitData::to_overground`]
+/// (besides `pelvis_x` and `cop_x_*`).
+pub const OVERGROUND_SHIFTED_EXTRAS: [&str; 1] = ["hip_center_x"];
+
+/// Name of the bundled example trial (files `data/opensim_subject01_*`).
+pub const BUNDLED_TRIAL: &str = "opensim_subject01";
+
+/// Ground reaction force and centre of pressure of one foot, at the kinematic instants.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct FootData {
+    /// Tangential (horizontal) force of the ground on the foot, + forward (N).
+    pub fx: Vec<f64>,
+    /// Normal (vertical) force of the ground on the foot, + up (N).
+    pub fy: Vec<f64>,
+    /// Centre-of-pressure x in the global frame (m); NaN where undefined (foot unloaded).
+    pub cop_x: Vec<f64>,
+}
+
+/// Where one side's data come from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum SideSource {
+    /// Read from the file.
+    Measured,
+    /// Not in the file: its channels are NaN.
+    Missing,
+    /// Generated from the other side by [`GaitData::mirror_missing_side`].
+    Mirrored,
+}
+
+/// One measured trial in the model's sagittal coordinates.
+///
+/// All channels are sampled at `time`. Coordinates `q` follow [`Q_NAMES`]: `pelvis_x`,
+/// `pelvis_y` (m) are the pelvis (HAT) reference point, `pelvis_tilt` is the HAT angle,
+/// the joint angles are relative (rad, counter-clockwise positive seen from the right:
+/// hip flexion +, knee flexion −, ankle dorsiflexion +). For the bundled OpenSim trial the
+/// model's HAT is pelvis + torso frozen at the trial-mean lumbar angle, so the HAT angle is
+/// `pelvis_tilt` as measured (its neutral is the OpenSim pelvis neutral, tilted 6–10°
+/// posteriorly while walking), and `lumbar_extension` stays an extra channel.
+#[derive(Debug, Clone, PartialEq)]
+pub struct GaitData {
+    /// Trial name.
+    pub name: String,
+    /// File the data were read from (the kinematics file for OpenSim storages).
+    pub source: PathBuf,
+    /// Sample times (s), strictly increasing.
+    pub time: Vec<f64>,
+    /// `pelvis_x, pelvis_y, pelvis_tilt, hip_r, knee_r, ankle_r, hip_l, knee_l, ankle_l`
+    /// (m, rad); NaN for a [`SideSource::Missing`] side.
+    pub q: [Vec<f64>; 9],
+    /// `[right, left]` forces and CoP.
+    pub feet: [FootData; 2],
+    /// Other channels by name, e.g. `lumbar_extension` (rad), `hip_center_x`, `hip_center_y` (m).
+    pub extra: BTreeMap<String, Vec<f64>>,
+    /// Body mass (kg), from the meta file.
+    pub body_mass: Option<f64>,
+    /// Height of the force-plate surface (m), from the meta file or the CoP y column.
+    pub force_plate_height: Option<f64>,
+    /// Treadmill belt speed (m/s), from the meta file (or as applied by [`Self::to_overground`]).
+    pub belt_speed: Option<f64>,
+    /// CoP is NaN below this normal force (N, default 20).
+    pub cop_threshold: f64,
+    /// Where each side's data come from: `[right, left]`.
+    pub sides: [SideSource; 2],
+    /// Whether x positions are in the overground frame (belt displacement added).
+    pub overground: bool,
+}
+
+pub(crate) fn side_index(side: Side) -> usize {
+    match side {
+        Side::Right => 0,
+        Side::Left => 1,
+    }
+}
+
+fn side_of(s: usize) -> Side {
+    if s == 0 {
+        Side::Right
+    } else {
+        Side::Left
+    }
+}
+
+/// Piecewise-linear interpolation of `(x, y)` at `xn` (`x` increasing), held constant
+/// outside `[x_0, x_{n-1}]` (numpy's `interp`).
+pub(crate) fn interp_linear(xn: &[f64], x: &[f64], y: &[f64]) -> Vec<f64> {
+    let n = x.len();
+    xn.iter()
+        .map(|&t| {
+            if t <= x[0] {
+                return y[0];
+            }
+            if t >= x[n - 1] {
+                return y[n - 1];
+            }
+            let i = x.partition_point(|&v| v <= t) - 1;
+            let s = (t - x[i]) / (x[i + 1] - x[i]);
+            if s == 0.0 {
+                y[i]
+            } else {
+                y[i] + s * (y[i + 1] - y[i])
+            }
+        })
+        .collect()
+}
+
+impl GaitData {
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.time.len()
+    }
+
+    /// Whether there are no samples.
+    pub fn is_empty(&self) -> bool {
+        self.time.is_empty()
+    }
+
+    /// Forces and CoP of one foot.
+    pub fn foot(&self, side: Side) -> &FootData {
+        &self.feet[side_index(side)]
+    }
+
+    /// A channel by its CSV name: `time`, a [`Q_NAMES`] entry, `grf_x_r`, `grf_y_r`,
+    /// `cop_x_r`, the same `_l`, or an extra channel.
+    pub fn channel(&self, name: &str) -> Option<&[f64]> {
+        if name == "time" {
+            return Some(&self.time);
+        }
+        if let Some(i) = Q_NAMES.iter().position(|&q| q == name) {
+            return Some(&self.q[i]);
+        }
+        for (s, side) in ["r", "l"].iter().enumerate() {
+            let f = &self.feet[s];
+            if let Some(base) = name.strip_suffix(&format!("_{side}")) {
+                match base {
+                    "grf_x" => return Some(&f.fx),
+                    "grf_y" => return Some(&f.fy),
+                    "cop_x" => return Some(&f.cop_x),
+                    _ => {}
+                }
+            }
+        }
+        self.extra.get(name).map(Vec::as_slice)
+    }
+
+    /// Names of all channels except `time`, in CSV order, extras last.
+    pub fn channel_names(&self) -> Vec<String> {
+        let mut v: Vec<String> = Q_NAMES.iter().map(|s| s.to_string()).collect();
+        for side in ["r", "l"] {
+            for c in ["grf_x", "grf_y", "cop_x"] {
+                v.push(format!("{c}_{side}"));
+            }
+        }
+        v.extend(self.extra.keys().cloned());
+        v
+    }
+
+    /// The not-a-knot [`CubicSpline`] of a channel (see [`Self::channel`]) over `time`.
+    ///
+    /// Errors: unknown channel; a NaN sample (CoP while unloaded, a missing side): cut a
+    /// window where the channel is defined first.
+    pub fn spline(&self, channel: &str) -> Result<CubicSpline, DataError> {
+        let y = self.channel(channel).ok_or_else(|| {
+            DataError::invalid(
+                &self.source,
+                channel,
+                format!(
+                    "no such channel; channels are {}",
+                    self.channel_names().join(", ")
+                ),
+            )
+        })?;
+        if let Some(k) = y.iter().position(|v| !v.is_finite()) {
+            return Err(DataError::invalid(
+                &self.source,
+                channel,
+                format!(
+                    "sample {k} (t = {} s) is {}; a spline needs finite values (cut a window where the channel is defined)",
+                    self.time[k], y[k]
+                ),
+            ));
+        }
+        CubicSpline::new(&self.time, y).map_err(|e| match e {
+            DataError::Invalid { reason, .. } => DataError::invalid(&self.source, channel, reason),
+            other => other,
+        })
+    }
+
+    /// The samples with `t0 ≤ t ≤ t1` (to within 1e-9 s; no interpolation at the ends:
+    /// use [`Self::spline`] for values at exact event times).
+    ///
+    /// Errors: `t0 ≥ t1`, not finite, or fewer than two samples in the window.
+    pub fn window(&self, t0: f64, t1: f64) -> Result<GaitData, DataError> {
+        if !(t0.is_finite() && t1.is_finite() && t0 < t1) {
+            return Err(DataError::invalid(
+                &self.source,
+                "window",
+                format!("need finite t0 < t1, got {t0}, {t1}"),
+            ));
+        }
+        let eps = 1e-9;
+        let keep: Vec<usize> = (0..self.len())
+            .filter(|&k| self.time[k] >= t0 - eps && self.time[k] <= t1 + eps)
+            .collect();
+        if keep.len() < 2 {
+            return Err(DataError::invalid(
+                &self.source,
+                "window",
+                format!(
+                    "{t0}–{t1} s holds {} sample(s) of the data ({}–{} s); at least two are needed",
+                    keep.len(),
+                    self.time.first().copied().unwrap_or(f64::NAN),
+                    self.time.last().copied().unwrap_or(f64::NAN)
+                ),
+            ));
+        }
+        let pick = |v: &[f64]| keep.iter().map(|&k| v[k]).collect::<Vec<f64>>();
+        Ok(GaitData {
+            name: self.name.clone(),
+            source: self.source.clone(),
+            time: pick(&self.time),
+            q: std::array::from_fn(|i| pick(&self.q[i])),
+            feet: std::array::from_fn(|s| FootData {
+                fx: pick(&self.feet[s].fx),
+                fy: pick(&self.feet[s].fy),
+                cop_x: pick(&self.feet[s].cop_x),
+            }),
+            extra: self
+                .extra
+                .iter()
+                .map(|(k, v)| (k.clone(), pick(v)))
+                .collect(),
+            body_mass: self.body_mass,
+            force_plate_height: self.force_plate_height,
+            belt_speed: self.belt_speed,
+            cop_threshold: self.cop_threshold,
+            sides: self.sides,
+            overground: self.overground,
+        })
+    }
+
+    /// Treadmill data in an overground-equivalent frame: the belt moves backward at
+    /// `belt_speed` (m/s), so `belt_speed · t` (with the data's own time stamps) is added
+    /// to `pelvis_x`, both `cop_x` and the extras in [`OVERGROUND_SHIFTED_EXTRAS`]
+    /// (`hip_center_x`). Valid for a constant belt speed. Sets `belt_speed` and `overground`.
+    ///
+    /// Errors: a speed that is not finite, or data already in the overground frame.
+    pub fn to_overground(mut self, belt_speed: f64) -> Result<GaitData, DataError> {
+        if !belt_speed.is_finite() {
+            return Err(DataError::invalid(
+                &self.source,
+                "belt_speed",
+                format!("must be finite, got {belt_speed}"),
+            ));
+        }
+        if self.overground {
+            return Err(DataError::invalid(
+                &self.source,
+                "belt_speed",
+                "the data are already in the overground frame (the belt displacement was added once)",
+            ));
+        }
+        let t = self.time.clone();
+        let shift = |v: &mut Vec<f64>| {
+            for (x, &tk) in v.iter_mut().zip(&t) {
+                *x += belt_speed * tk;
+            }
+        };
+        shift(&mut self.q[0]);
+        for f in &mut self.feet {
+            shift(&mut f.cop_x);
+        }
+        for name in OVERGROUND_SHIFTED_EXTRAS {
+            if let Some(v) = self.extra.get_mut(name) {
+                shift(v);
+            }
+        }
+        self.belt_speed = Some(belt_speed);
+        self.overground = true;
+        Ok(self)
+    }
+
+    /// Path of the bundled example CSV under a project root: `ROOT/data/opensim_subject01_sagittal.csv`.
+    pub fn bundled_csv_path(root: &Path) -> PathBuf {
+        root.join("data")
+            .join(format!("{BUNDLED_TRIAL}_sagittal.csv"))
+    }
+
+    /// The bundled example (OpenSim subject01, instrumented treadmill, 0–2.5 s at 60 Hz,
+    /// 72.6 kg), read from `ROOT/data/opensim_subject01_sagittal.csv` with its meta file
+    /// and moved to the overground frame with the meta file's belt speed (1.1322 m/s).
+    ///
+    /// `root` is the project root (`env!("CARGO_MANIFEST_DIR")` in this crate); other
+    /// trials are read with [`read_sagittal_csv`]. Neutral offsets: the HAT angle is
+    /// `pelvis_tilt` unchanged (the model's HAT is pelvis + torso frozen at the trial-mean
+    /// `lumbar_extension`, −0.3634 rad, see `models/opensim_subject01.json`), and
+    /// `lumbar_extension` is kept as an extra channel; the force-plate surface is at
+    /// `force_plate_height` = −0.0075 m.
+    pub fn bundled(root: &Path) -> Result<GaitData, DataError> {
+        let path = Self::bundled_csv_path(root);
+        let data = read_sagittal_csv(&path)?;
+        let v = data.belt_speed.ok_or_else(|| {
+            DataError::invalid(
+                &path,
+                "belt_speed_m_s",
+                "the bundled treadmill trial needs its belt speed in the meta file",
+            )
+        })?;
+        data.to_overground(v)
+    }
+
+    /// Fill a [`SideSource::Missing`] side from the measured one by the half-cycle shift
+    /// of a Fourier series (seed 000 §3.3, [`half_cycle_shift`], five harmonics):
+    /// $x_{other}(t) = \hat x(t + T_c/2)$ for hip, knee, ankle, $F_x$ and $F_y$.
+    ///
+    /// The CoP moves with the body, so it is shifted relative to the pelvis:
+    /// $c_{other}(t) = p_x(t) + [c - p_x](t + T_c/2)$, with $t + T_c/2$ taken modulo the
+    /// period (from the first sample) and linear interpolation between the loaded samples;
+    /// it is NaN where the generated $F_y$ is below the CoP threshold. The data should
+    /// span whole cycles of duration `period` (e.g. one cycle cut with [`Self::window`]).
+    /// Returns the side that was filled, or `None` if both sides were measured.
+    ///
+    /// Errors: no side measured; a period that is not positive; too few samples (< 11).
+    pub fn mirror_missing_side(&mut self, period: f64) -> Result<Option<Side>, DataError> {
+        let missing: Vec<usize> = (0..2)
+            .filter(|&s| self.sides[s] == SideSource::Missing)
+            .collect();
+        let dst = match missing.as_slice() {
+            [] => return Ok(None),
+            [s] => *s,
+            _ => {
+                return Err(DataError::invalid(
+                    &self.source,
+                    "sides",
+                    "neither side was measured; nothing to mirror from",
+                ))
+            }
+        };
+        let src = 1 - dst;
+        let named = |e: DataError, what: String| match e {
+            DataError::Invalid { field, reason, .. } => {
+                DataError::invalid(&self.source, format!("{what} ({field})"), reason)
+            }
+            other => other,
+        };
+        let t = &self.time;
+        let mut q_new = Vec::new();
+        for j in 0..3 {
+            let v = half_cycle_shift(t, &self.q[3 + 3 * src + j], period)
+                .map_err(|e| named(e, Q_NAMES[3 + 3 * src + j].to_string()))?;
+            q_new.push(v);
+        }
+        let fs = &self.feet[src];
+        let forces_known = fs.fx.iter().chain(&fs.fy).all(|v| v.is_finite());
+        let foot = if forces_known {
+            let fx = half_cycle_shift(t, &fs.fx, period).map_err(|e| named(e, "grf_x".into()))?;
+            let fy = half_cycle_shift(t, &fs.fy, period).map_err(|e| named(e, "grf_y".into()))?;
+            // CoP relative to the pelvis at the loaded samples, repeated one period
+            // before and after so that the interpolation wraps around the cycle.
+            let mut rel: Vec<(f64, f64)> = Vec::new();
+            for shift in [-period, 0.0, period] {
+                rel.extend(
+                    (0..t.len())
+                        .filter(|&k| fs.cop_x[k].is_finite())
+                        .map(|k| (t[k] + shift, fs.cop_x[k] - self.q[0][k])),
+                );
+            }
+            rel.sort_by(|a, b| a.0.total_cmp(&b.0));
+            rel.dedup_by(|b, a| b.0 <= a.0 + 1e-12);
+            let (tc, rc): (Vec<f64>, Vec<f64>) = rel.into_iter().unzip();
+            let t0 = t[0];
+            let cop = (0..t.len())
+                .map(|k| {
+                    if fy[k] < self.cop_threshold || tc.is_empty() {
+                        return f64::NAN;
+                    }
+                    let ts = t0 + (t[k] + 0.5 * period - t0).rem_euclid(period);
+                    self.q[0][k] + interp_linear(&[ts], &tc, &rc)[0]
+                })
+                .collect();
+            FootData { fx, fy, cop_x: cop }
+        } else {
+            self.feet[dst].clone()
+        };
+        for (j, v) in q_new.into_iter().enumerate() {
+            self.q[3 + 3 * dst + j] = v;
+        }
+        self.feet[dst] = foot;
+        self.sides[dst] = SideSource::Mirrored;
+        Ok(Some(side_of(dst)))
+    }
+
+    /// Check the invariants of data built or edited in memory: every channel as long as
+    /// `time`; time finite and strictly increasing; pelvis, extras and every non-missing
+    /// side finite, except CoP, which may be NaN only where that foot's `fy` is below
+    /// `cop_threshold`. The readers return only data that pass.
+    pub fn validate(&self) -> Result<(), DataError> {
+        let n = self.time.len();
+        let bad =
+            |field: &str, reason: String| Err(DataError::invalid(&self.source, field, reason));
+        if n < 2 {
+            return bad("time", format!("{n} sample(s); at least two are needed"));
+        }
+        for k in 0..n {
+            if !self.time[k].is_finite() || (k > 0 && self.time[k] <= self.time[k - 1]) {
+                return bad(
+                    "time",
+                    format!(
+                        "sample {k} ({}) is not finite and larger than the previous",
+                        self.time[k]
+                    ),
+                );
+            }
+        }
+        let mut channels: Vec<(String, &[f64], bool)> = Vec::new();
+        for (i, name) in Q_NAMES.iter().enumerate() {
+            let required = i < 3 || self.sides[(i - 3) / 3] != SideSource::Missing;
+            channels.push((name.to_string(), &self.q[i], required));
+        }
+        for (s, side) in ["r", "l"].iter().enumerate() {
+            let required = self.sides[s] != SideSource::Missing;
+            channels.push((format!("grf_x_{side}"), &self.feet[s].fx, required));
+            channels.push((format!("grf_y_{side}"), &self.feet[s].fy, required));
+            channels.push((format!("cop_x_{side}"), &self.feet[s].cop_x, false));
+        }
+        for (k, v) in &self.extra {
+            channels.push((k.clone(), v, true));
+        }
+        for (name, v, required) in &channels {
+            if v.len() != n {
+                return bad(name, format!("{} samples but time has {n}", v.len()));
+            }
+            if *required {
+                if let Some(k) = v.iter().position(|x| !x.is_finite()) {
+                    return bad(
+                        name,
+                        format!("sample {k} (t = {} s) is {}", self.time[k], v[k]),
+                    );
+                }
+            }
+        }
+        for s in 0..2 {
+            if self.sides[s] == SideSource::Missing {
+                continue;
+            }
+            let f = &self.feet[s];
+            if let Some(k) = (0..n).find(|&k| {
+                f.cop_x[k].is_infinite() || (f.cop_x[k].is_nan() && f.fy[k] >= self.cop_threshold)
+            }) {
+                return bad(
+                    &format!("cop_x_{}", ["r", "l"][s]),
+                    format!(
+                        "sample {k} (t = {} s) is {} while grf_y = {} N ≥ {} N",
+                        self.time[k], f.cop_x[k], f.fy[k], self.cop_threshold
+                    ),
+                );
+            }
+        }
+        Ok(())
+    }
+}
