@@ -307,6 +307,7 @@ fn parse_sagittal_csv(
         reason: "the file is empty; expected a header row 'time,pelvis_x,…'".into(),
     })?;
     let cols: Vec<String> = header
+        .trim_start_matches('\u{feff}')
         .split(',')
         .map(|c| c.trim().trim_matches('"').to_string())
         .collect();

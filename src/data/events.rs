@@ -88,12 +88,13 @@ pub fn threshold_crossings(time: &[f64], force: &[f64], threshold: f64) -> (Vec<
 /// `fraction × peak normal force` (see the module docs; the seed uses
 /// [`DEFAULT_EVENT_FRACTION`] = 0.05).
 ///
-/// A foot whose normal force was not measured (all NaN) has no events. Errors:
-/// `fraction` outside (0, 1); [`DataError::NoStance`] when no normal force exceeds the
+/// A foot whose normal force was not measured (all NaN) has no events. Errors: data
+/// that fail [`GaitData::validate`]; `fraction` outside (0, 1); [`DataError::NoStance`] when no normal force exceeds the
 /// threshold (also when no force was measured at all or the peak is not positive);
 /// [`DataError::TooShort`] when neither foot has two heel strikes (less than one gait
 /// cycle). Detect events on the whole trial before cutting it with [`GaitData::window`].
 pub fn detect_events(data: &GaitData, fraction: f64) -> Result<Events, DataError> {
+    data.validate()?;
     if !(fraction > 0.0 && fraction < 1.0) {
         return Err(DataError::invalid(
             &data.source,

@@ -80,6 +80,9 @@ pub const OVERGROUND_SHIFTED_EXTRAS: [&str; 1] = ["hip_center_x"];
 pub const BUNDLED_TRIAL: &str = "opensim_subject01";
 
 /// Ground reaction force and centre of pressure of one foot, at the kinematic instants.
+///
+/// All three are NaN throughout when the forces were not measured
+/// ([`GaitData::from_storage`] without a GRF file, a [`SideSource::Missing`] side).
 #[derive(Debug, Clone, PartialEq, Default)]
 pub struct FootData {
     /// Tangential (horizontal) force of the ground on the foot, + forward (N).
@@ -262,8 +265,10 @@ impl GaitData {
     /// The samples with `t0 ≤ t ≤ t1` (to within 1e-9 s; no interpolation at the ends:
     /// use [`Self::spline`] for values at exact event times).
     ///
-    /// Errors: `t0 ≥ t1`, not finite, or fewer than two samples in the window.
+    /// Errors: data that fail [`Self::validate`]; `t0 ≥ t1`, not finite, or fewer than two
+    /// samples in the window.
     pub fn window(&self, t0: f64, t1: f64) -> Result<GaitData, DataError> {
+        self.validate()?;
         if !(t0.is_finite() && t1.is_finite() && t0 < t1) {
             return Err(DataError::invalid(
                 &self.source,
@@ -388,13 +393,16 @@ impl GaitData {
     ///
     /// The CoP moves with the body, so it is shifted relative to the pelvis:
     /// $c_{other}(t) = p_x(t) + [c - p_x](t + T_c/2)$, with $t + T_c/2$ taken modulo the
-    /// period (from the first sample) and linear interpolation between the loaded samples;
+    /// period (from the first sample) and linear interpolation between the loaded samples
+    /// of the first period;
     /// it is NaN where the generated $F_y$ is below the CoP threshold. The data should
     /// span whole cycles of duration `period` (e.g. one cycle cut with [`Self::window`]).
     /// Returns the side that was filled, or `None` if both sides were measured.
     ///
-    /// Errors: no side measured; a period that is not positive; too few samples (< 11).
+    /// Errors: data that fail [`Self::validate`]; no side measured; a period that is not
+    /// positive; too few samples (< 11).
     pub fn mirror_missing_side(&mut self, period: f64) -> Result<Option<Side>, DataError> {
+        self.validate()?;
         let missing: Vec<usize> = (0..2)
             .filter(|&s| self.sides[s] == SideSource::Missing)
             .collect();
@@ -428,13 +436,14 @@ impl GaitData {
         let foot = if forces_known {
             let fx = half_cycle_shift(t, &fs.fx, period).map_err(|e| named(e, "grf_x".into()))?;
             let fy = half_cycle_shift(t, &fs.fy, period).map_err(|e| named(e, "grf_y".into()))?;
-            // CoP relative to the pelvis at the loaded samples, repeated one period
-            // before and after so that the interpolation wraps around the cycle.
+            // CoP relative to the pelvis at the loaded samples of the first period,
+            // repeated one period before and after so that the interpolation wraps.
+            let first = t[0] + period;
             let mut rel: Vec<(f64, f64)> = Vec::new();
             for shift in [-period, 0.0, period] {
                 rel.extend(
                     (0..t.len())
-                        .filter(|&k| fs.cop_x[k].is_finite())
+                        .filter(|&k| t[k] < first && fs.cop_x[k].is_finite())
                         .map(|k| (t[k] + shift, fs.cop_x[k] - self.q[0][k])),
                 );
             }
@@ -466,7 +475,8 @@ impl GaitData {
     /// Check the invariants of data built or edited in memory: every channel as long as
     /// `time`; time finite and strictly increasing; pelvis, extras and every non-missing
     /// side finite, except CoP, which may be NaN only where that foot's `fy` is below
-    /// `cop_threshold`. The readers return only data that pass.
+    /// `cop_threshold`, and a foot's forces, which may be all NaN (not measured). The
+    /// readers return only data that pass.
     pub fn validate(&self) -> Result<(), DataError> {
         let n = self.time.len();
         let bad =
@@ -491,9 +501,12 @@ impl GaitData {
             channels.push((name.to_string(), &self.q[i], required));
         }
         for (s, side) in ["r", "l"].iter().enumerate() {
-            let required = self.sides[s] != SideSource::Missing;
-            channels.push((format!("grf_x_{side}"), &self.feet[s].fx, required));
-            channels.push((format!("grf_y_{side}"), &self.feet[s].fy, required));
+            // Forces not measured (no GRF file) are all NaN; otherwise all finite.
+            let f = &self.feet[s];
+            let unmeasured = f.fx.iter().chain(&f.fy).all(|v| v.is_nan());
+            let required = self.sides[s] != SideSource::Missing && !unmeasured;
+            channels.push((format!("grf_x_{side}"), &f.fx, required));
+            channels.push((format!("grf_y_{side}"), &f.fy, required));
             channels.push((format!("cop_x_{side}"), &self.feet[s].cop_x, false));
         }
         for (k, v) in &self.extra {

@@ -64,17 +64,59 @@ impl Storage {
 
     /// The time column (s).
     pub fn time(&self) -> &[f64] {
-        &self.data[0]
+        self.data.first().map_or(&[], Vec::as_slice)
     }
 
     /// Number of data rows.
     pub fn len(&self) -> usize {
-        self.data[0].len()
+        self.time().len()
     }
 
     /// Whether there are no data rows (never true for a storage returned by [`read_storage`]).
     pub fn is_empty(&self) -> bool {
-        self.data[0].is_empty()
+        self.time().is_empty()
+    }
+
+    /// Line (1-based) of data row `k`, for error messages.
+    pub fn line_of(&self, k: usize) -> usize {
+        self.lines
+            .get(k)
+            .copied()
+            .unwrap_or(self.label_line + 1 + k)
+    }
+
+    /// Check a storage built or edited in memory: a time column first, every column as
+    /// long as it, time finite and strictly increasing, at least one row.
+    pub fn validate(&self) -> Result<(), DataError> {
+        let n = self.len();
+        if n == 0 {
+            return Err(DataError::Format {
+                path: self.path.clone(),
+                row: self.label_line,
+                reason: "no data rows".into(),
+            });
+        }
+        if self.columns.len() != self.data.len() || self.labels.len() != self.data.len() {
+            return Err(DataError::invalid(
+                &self.path,
+                "columns",
+                format!(
+                    "{} names and {} labels for {} data columns",
+                    self.columns.len(),
+                    self.labels.len(),
+                    self.data.len()
+                ),
+            ));
+        }
+        if let Some(j) = self.data.iter().position(|c| c.len() != n) {
+            return Err(DataError::invalid(
+                &self.path,
+                self.columns[j].clone(),
+                format!("{} rows but the time column has {n}", self.data[j].len()),
+            ));
+        }
+        let lines: Vec<usize> = (0..n).map(|k| self.line_of(k)).collect();
+        check_time(self.time(), &lines, &self.columns[0], &self.path)
     }
 }
 
@@ -494,7 +536,7 @@ fn check_finite(s: &Storage, name: &str, v: &[f64]) -> Result<(), DataError> {
     if let Some(k) = v.iter().position(|x| !x.is_finite()) {
         return Err(DataError::NotFinite {
             path: s.path.clone(),
-            row: s.lines[k],
+            row: s.line_of(k),
             column: name.to_string(),
             reason: format!(
                 "value is {} (NaN is allowed only in a CoP column while that foot is unloaded)",
@@ -527,6 +569,10 @@ impl GaitData {
         map: &StorageMap,
     ) -> Result<GaitData, DataError> {
         let ks = kinematics;
+        ks.validate()?;
+        if let Some(g) = grf {
+            g.validate()?;
+        }
         let time = ks.time().to_vec();
         let needs_angles = map
             .q
@@ -611,7 +657,7 @@ impl GaitData {
                 {
                     return Err(DataError::NotFinite {
                         path: g.path.clone(),
-                        row: g.lines[k],
+                        row: g.line_of(k),
                         column: cols.cop_x.clone(),
                         reason: format!(
                             "CoP is NaN while {} = {} N ≥ {} N (CoP may be NaN only while the foot is unloaded)",
