@@ -4,6 +4,7 @@
 
 mod simulate;
 mod solve;
+mod track;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -25,6 +26,8 @@ enum Command {
     Simulate(simulate::Args),
     /// Solve a generic optimal control problem (cart-pole, five-link biped).
     Solve(solve::Args),
+    /// Track measured walking (default: the bundled trial with the ellipse foot).
+    Track(track::Args),
 }
 
 /// Failure classes mapped to exit codes.
@@ -38,6 +41,7 @@ pub fn main() -> ExitCode {
     let result = match cli.command {
         Command::Simulate(args) => simulate::run(args, cli.quiet),
         Command::Solve(args) => solve::run(args, cli.quiet),
+        Command::Track(args) => track::run(args, cli.quiet),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

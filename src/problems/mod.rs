@@ -4,6 +4,7 @@
 
 pub mod benchmark;
 pub mod gait;
+pub mod track;
 pub mod tracking;
 
 use crate::ocp::NodeFunction;

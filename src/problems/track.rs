@@ -1,0 +1,223 @@
+//! The tracking problem (seed 001 §3.4) assembled from measured data: the phase graph's
+//! durations fixed to the measured contact sequence, node targets from splines of the
+//! data, an initial guess from the data projected onto the contacts (activations 0.01,
+//! excitations 0.025, seed §3.6), and the node-wise least-squares residuals of eq. 18.
+
+use super::gait::{GaitCycle, GaitGuess};
+use super::tracking::{NodeTarget, TrackingResidual, TrackingWeights};
+use crate::data::{detect_events, CubicSpline, Events, GaitData, DEFAULT_EVENT_FRACTION};
+use crate::model::gait::COORDINATES;
+use crate::model::{ConstraintSet, GaitModel, Side};
+use crate::ocp::{Block, Ocp, Term};
+use crate::phases::{Duration, Phase, PhaseSequence};
+use std::sync::Arc;
+
+/// A measured half cycle from a left heel strike to the next right heel strike (the
+/// span the seed's phase graphs describe: 1e*/1c* … 4e*/7c*).
+pub fn half_cycle(events: &Events) -> Result<(f64, f64), String> {
+    // keep a margin from the start of the recording, where splines are least reliable
+    let earliest = events.span.0 + 0.05;
+    for &t0 in events.heel_strike[1].iter().filter(|&&t| t >= earliest) {
+        if let Some(&t1) = events.heel_strike[0].iter().find(|&&t| t > t0) {
+            return Ok((t0, t1));
+        }
+    }
+    Err("the data contain no left heel strike followed by a right heel strike".into())
+}
+
+/// Which feet touch the ground in a constraint set: `[right, left]`.
+fn loaded_feet(model: &GaitModel, set: &ConstraintSet) -> [bool; 2] {
+    let mut f = [false; 2];
+    for r in &set.rows {
+        f[if model.contacts[r.contact].side == Side::Right { 0 } else { 1 }] = true;
+    }
+    f
+}
+
+/// `seq` with the durations of its continuous phases fixed to the measured contact
+/// sequence over `[t0, t1]`: consecutive phases with the same loaded feet share the
+/// measured duration of that contact phase, in proportion to their initial durations.
+pub fn fix_durations(
+    seq: &PhaseSequence,
+    model: &GaitModel,
+    sets: &[ConstraintSet],
+    events: &Events,
+    t0: f64,
+    t1: f64,
+) -> Result<PhaseSequence, String> {
+    let measured = events.contact_phases(t0, t1);
+    let cont: Vec<usize> = seq.phases.iter().enumerate().filter(|(_, p)| matches!(p, Phase::Continuous { .. })).map(|(i, _)| i).collect();
+    let mut groups: Vec<([bool; 2], Vec<usize>)> = Vec::new();
+    for &i in &cont {
+        let feet = loaded_feet(model, &sets[i]);
+        match groups.last_mut() {
+            Some((f, v)) if *f == feet => v.push(i),
+            _ => groups.push((feet, vec![i])),
+        }
+    }
+    let pattern = |f: [bool; 2]| match f {
+        [true, true] => "double stance",
+        [true, false] => "right stance",
+        [false, true] => "left stance",
+        [false, false] => "flight",
+    };
+    let g: Vec<&str> = groups.iter().map(|(f, _)| pattern(*f)).collect();
+    let m: Vec<&str> = measured.iter().map(|p| pattern(p.contact)).collect();
+    if g != m {
+        return Err(format!(
+            "phase graph '{}' ({}) does not match the measured contacts between {t0:.3} s and {t1:.3} s ({})",
+            seq.name,
+            g.join(" → "),
+            m.join(" → ")
+        ));
+    }
+    let mut out = seq.clone();
+    for ((_, idx), mp) in groups.iter().zip(&measured) {
+        let init: Vec<f64> = idx
+            .iter()
+            .map(|&i| match &seq.phases[i] {
+                Phase::Continuous { duration, .. } => duration.value(),
+                Phase::Impact { .. } => 0.0,
+            })
+            .collect();
+        let total: f64 = init.iter().sum();
+        for (&i, d0) in idx.iter().zip(init) {
+            if let Phase::Continuous { duration, .. } = &mut out.phases[i] {
+                *duration = Duration::Fixed(mp.duration() * d0 / total);
+            }
+        }
+    }
+    Ok(out)
+}
+
+/// Everything the tracking OCP needs, built from data.
+pub struct TrackingSetup {
+    /// The phase file with durations fixed to the data.
+    pub seq: PhaseSequence,
+    /// Start and end of the tracked half cycle (s).
+    pub window: (f64, f64),
+    /// Node times per continuous phase (s).
+    pub node_times: Vec<Vec<f64>>,
+    /// Initial guess and bounds.
+    pub guess: GaitGuess,
+    /// Node targets per continuous phase.
+    pub targets: Vec<Vec<NodeTarget>>,
+    /// Cost weights.
+    pub weights: TrackingWeights,
+    /// Events detected in the data.
+    pub events: Events,
+}
+
+impl TrackingSetup {
+    /// Build from `data` for `model` and the phase file `seq` (with its resolved
+    /// constraint sets `sets`).
+    pub fn new(model: &GaitModel, seq: &PhaseSequence, sets: &[ConstraintSet], data: &GaitData) -> Result<Self, String> {
+        let events = detect_events(data, DEFAULT_EVENT_FRACTION).map_err(|e| e.to_string())?;
+        let (t0, t1) = half_cycle(&events)?;
+        let seq = fix_durations(seq, model, sets, &events, t0, t1)?;
+        let splines: Vec<CubicSpline> =
+            COORDINATES.iter().map(|c| data.spline(c).map_err(|e| e.to_string())).collect::<Result<_, _>>()?;
+        let force = |s: usize, k: usize| -> Result<CubicSpline, String> {
+            let f = &data.feet[s];
+            CubicSpline::new(&data.time, if k == 0 { &f.fx } else { &f.fy }).map_err(|e| e.to_string())
+        };
+        let fx = [force(0, 0)?, force(1, 0)?];
+        let fy = [force(0, 1)?, force(1, 1)?];
+        let peak = data.feet.iter().flat_map(|f| f.fy.iter()).copied().fold(0.0, f64::max);
+        let cop_at = |s: usize, t: f64| -> Option<f64> {
+            // linear interpolation of the measured CoP where the foot is loaded
+            let k = data.time.partition_point(|&x| x <= t).clamp(1, data.time.len() - 1);
+            let (ta, tb) = (data.time[k - 1], data.time[k]);
+            let (a, b) = (data.feet[s].cop_x[k - 1], data.feet[s].cop_x[k]);
+            let w = (t - ta) / (tb - ta);
+            let v = (1.0 - w) * a + w * b;
+            v.is_finite().then_some(v)
+        };
+        let (nq, na, nu) = (model.nq(), model.na(), model.nu());
+        let theta = model.theta0();
+        let mut node_times = Vec::new();
+        let mut targets = Vec::new();
+        let mut gx = Vec::new();
+        let mut gu = Vec::new();
+        let mut t = t0;
+        let linear = seq.gait.as_ref().is_none_or(|g| g.controls == crate::integrate::ControlShape::Linear);
+        for (i, ph) in seq.phases.iter().enumerate() {
+            let Phase::Continuous { duration, intervals, .. } = ph else { continue };
+            let h = duration.value() / *intervals as f64;
+            let feet = loaded_feet(model, &sets[i]);
+            let times: Vec<f64> = (0..=*intervals).map(|k| t + k as f64 * h).collect();
+            let mut tg = Vec::new();
+            let mut xs = Vec::new();
+            for &tk in &times {
+                let q: Vec<f64> = splines.iter().map(|s| s.eval(tk)).collect();
+                let qd: Vec<f64> = splines.iter().map(|s| s.derivative(tk)).collect();
+                let foot_target = |s: usize| {
+                    feet[s].then(|| {
+                        let fyv = fy[s].eval(tk);
+                        (fx[s].eval(tk), fyv, if fyv >= data.cop_threshold { cop_at(s, tk) } else { None })
+                    })
+                };
+                tg.push(NodeTarget { q: q.iter().map(|v| Some(*v)).collect(), qd: qd.iter().map(|v| Some(*v)).collect(), feet: [foot_target(0), foot_target(1)] });
+                let (qp, qdp, _) = model.project(&sets[i], &q, &qd, &theta).map_err(|e| format!("projecting the data at t = {tk:.3} s: {e}"))?;
+                let mut x = qp;
+                x.extend(qdp);
+                x.extend(vec![0.01; na]);
+                xs.push(x);
+            }
+            let cn = if linear { *intervals + 1 } else { *intervals };
+            gu.push(vec![vec![0.025; nu]; cn]);
+            gx.push(xs);
+            targets.push(tg);
+            node_times.push(times);
+            t += duration.value();
+        }
+        // bounds: the data's range ± 1 (m, rad) and ± 1 (m/s, rad/s) beyond the measured
+        // velocities (seed §3.3); knee hyper-extension up to 0.1 rad; a, u in [0, 1]
+        let (mut x_lb, mut x_ub) = (vec![0.0; model.nx()], vec![0.0; model.nx()]);
+        for i in 0..nq {
+            let (lo, hi) = data.q[i].iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+            let sp = &splines[i];
+            let (dlo, dhi) = data.time.iter().map(|&tt| sp.derivative(tt)).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
+            x_lb[i] = lo - 1.0;
+            x_ub[i] = hi + 1.0;
+            x_lb[nq + i] = dlo - 1.0;
+            x_ub[nq + i] = dhi + 1.0;
+        }
+        for i in [4, 7] {
+            x_ub[i] = 0.1;
+        }
+        for i in 2 * nq..model.nx() {
+            x_lb[i] = 0.0;
+            x_ub[i] = 1.0;
+        }
+        let guess = GaitGuess { x: gx, u: gu, x_lb, x_ub, u_lb: vec![0.0; nu], u_ub: vec![1.0; nu] };
+        let foot_length = 0.305;
+        let weights = TrackingWeights::seed(nq, peak, foot_length);
+        Ok(Self { seq, window: (t0, t1), node_times, guess, targets, weights, events })
+    }
+
+    /// The tracking OCP: the walking cycle of `cycle` plus the node-wise residuals.
+    pub fn ocp<'c>(&self, cycle: &'c GaitCycle<'c>, model: &'c GaitModel, sets: &'c [ConstraintSet], integrator: crate::integrate::IntegratorSettings) -> Result<Ocp<'c>, String> {
+        let mut ocp = cycle.ocp(&self.guess, integrator)?;
+        let linear = ocp.phases.iter().all(|p| p.controls == crate::integrate::ControlShape::Linear);
+        for (j, tg) in self.targets.iter().enumerate() {
+            let set = &sets[cycle.continuous[j]];
+            let n = ocp.phases[j].intervals;
+            let last = j + 1 == self.targets.len();
+            for (k, target) in tg.iter().enumerate() {
+                // a phase's last node coincides with the next phase's first: count it once
+                if k == n && !last {
+                    continue;
+                }
+                let ku = if linear { k } else { k.min(n - 1) };
+                let r = TrackingResidual::new(model, set.clone(), target.clone(), self.weights.clone());
+                ocp.least_squares.push(Term {
+                    name: "tracking".into(),
+                    args: vec![Block::State { phase: j, node: k }, Block::Control { phase: j, node: ku }, Block::Params],
+                    f: Arc::new(r),
+                });
+            }
+        }
+        Ok(ocp)
+    }
+}
