@@ -483,10 +483,13 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
             elastic_weights: &elastic_weights,
         };
         let rho = (10.0 * lam_est).clamp(1e3, 1e8);
-        let first = solve_qp(&data(None));
-        if matches!(first, Err(QpError::Failed(_))) && h_elastic.is_some() {
-            // exact mode: the augmentation was too weak to convexify this QP
+        let mut first = solve_qp(&data(None));
+        if let (Err(QpError::Failed(_)), Some(hc)) = (&first, h_elastic.as_ref()) {
+            // exact mode: the augmentation was too weak to convexify this QP; raise it for
+            // the next iterations and solve this one with the block-convexified Hessian
             aug_scale *= 10.0;
+            aug_rho = 0.0;
+            first = solve_qp(&QpData { h: hc, ..data(None) });
         }
         let (sol, elastic) = match first {
             Ok(s) => (s, false),
