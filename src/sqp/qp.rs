@@ -252,7 +252,7 @@ pub fn solve(q: &QpData<'_>) -> Result<QpSolution, QpError> {
                 break;
             }
             SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => return Err(QpError::Infeasible),
-            SolverStatus::InsufficientProgress | SolverStatus::MaxIterations
+            SolverStatus::InsufficientProgress | SolverStatus::MaxIterations | SolverStatus::NumericalError
                 if sol.r_prim < 1e-7 && sol.r_dual < 1e-7 =>
             {
                 solved = Some(sol);
