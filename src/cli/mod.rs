@@ -2,6 +2,7 @@
 //!
 //! Exit codes: 0 success, 1 bad input or a run that did not succeed, 2 internal error.
 
+mod fit_foot;
 mod simulate;
 mod solve;
 mod track;
@@ -26,6 +27,8 @@ enum Command {
     Simulate(simulate::Args),
     /// Solve a generic optimal control problem (cart-pole, five-link biped).
     Solve(solve::Args),
+    /// Fit a foot's geometry to the measured stance (seed §3.2).
+    FitFoot(fit_foot::Args),
     /// Track measured walking (default: the bundled trial with the ellipse foot).
     Track(track::Args),
 }
@@ -42,6 +45,7 @@ pub fn main() -> ExitCode {
         Command::Simulate(args) => simulate::run(args, cli.quiet),
         Command::Solve(args) => solve::run(args, cli.quiet),
         Command::Track(args) => track::run(args, cli.quiet),
+        Command::FitFoot(args) => fit_foot::run(args, cli.quiet),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

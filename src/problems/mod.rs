@@ -3,6 +3,7 @@
 //! nothing about gait.
 
 pub mod benchmark;
+pub mod foot_fit;
 pub mod gait;
 pub mod track;
 pub mod tracking;
