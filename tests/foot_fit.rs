@@ -19,7 +19,8 @@ fn a_rolling_circle_moves_its_centre_with_the_contact_and_turns_by_distance_over
     let st = StanceSamples { t: cop.clone(), ankle: vec![[0.0; 2]; n], angle: vec![0.2; n], cop: cop.clone(), weight: vec![1.0; n] };
     let (ankle, angle) = roll(&foot, &st, 0.0).unwrap();
     for i in 0..n {
-        assert!((ankle[i][0] - cop[i]).abs() < 2e-4, "centre above the contact: {} vs {}", ankle[i][0], cop[i]);
+        // the outline is a 720-gon: the centre may sit up to half an edge (2.2e-4 m) off
+        assert!((ankle[i][0] - cop[i]).abs() < 2.5e-4, "centre above the contact: {} vs {}", ankle[i][0], cop[i]);
         assert!((ankle[i][1] - r).abs() < 1e-5, "centre at radius height");
         if i + 1 < n {
             // rolling forward by d turns the disc clockwise by d / r
