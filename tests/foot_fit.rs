@@ -48,3 +48,37 @@ fn fitting_the_seed_feet_to_the_bundled_trial_lowers_the_cost_and_keeps_the_leng
         assert!((foot_length(&res.foot) - foot_length(&foot)).abs() < 1e-3, "length must stay fixed");
     }
 }
+
+/// A third foot defined only in JSON (heel circle + forefoot ellipse, with its own phase
+/// graph) is fitted and its tracking problem builds and evaluates end to end.
+#[test]
+fn a_third_foot_defined_only_in_json_is_fitted_and_tracked() {
+    use footfall::integrate::IntegratorSettings;
+    use footfall::ocp::Transcription;
+    use footfall::phases::PhaseSequence;
+    use footfall::problems::gait::GaitCycle;
+    use footfall::problems::track::TrackingSetup;
+    let data = GaitData::bundled(&root()).unwrap();
+    let m = model("opensim_subject01.json", "heel_circle_forefoot_ellipse.json");
+    let foot = FootSpec::load(&path("models/feet/heel_circle_forefoot_ellipse.json")).unwrap();
+    let stances = stances_from_data(&m, &data).unwrap();
+    let ground = m.contact_settings().ground_height;
+    let res = fit(&foot, &stances, ground, 1e-6, 4000).unwrap();
+    eprintln!("third foot: eq. 13 {:.3} → {:.3}", res.cost.0, res.cost.1);
+    assert!(res.cost.1 < res.cost.0);
+    // track with the fitted foot: the fitted JSON goes through the same loader
+    let dir = tempfile::tempdir().unwrap();
+    let fitted = dir.path().join("fitted.json");
+    std::fs::write(&fitted, serde_json::to_string(&res.foot).unwrap()).unwrap();
+    let m2 = footfall::model::GaitModel::load(&path("models/opensim_subject01.json"), &fitted).unwrap();
+    let pp = path("phases/heel_circle_forefoot_ellipse_walk.json");
+    let seq = PhaseSequence::load(&pp).unwrap();
+    let sets = seq.resolve(&m2, &pp).unwrap();
+    let setup = TrackingSetup::new(&m2, &seq, &sets, &data).unwrap();
+    let cycle = GaitCycle::new(&m2, &setup.seq, &sets).unwrap();
+    let ocp = setup.ocp(&cycle, &m2, &sets, IntegratorSettings::default()).unwrap();
+    let tr = Transcription::new(&ocp).unwrap();
+    let (_, _, w0) = tr.variable_bounds_and_guess();
+    let ev = tr.evaluate(&w0, false).unwrap();
+    assert!(ev.f.is_finite() && ev.c.iter().all(|v| v.is_finite()));
+}
