@@ -45,6 +45,9 @@ pub struct Args {
     /// KKT tolerance.
     #[arg(long, default_value_t = 1e-5)]
     tol: f64,
+    /// With `--hessian exact`: Gauss–Newton steps until the constraint violation is below this.
+    #[arg(long, default_value_t = 1e-3)]
+    exact_below: f64,
     /// Iteration limit.
     #[arg(long, default_value_t = 200)]
     max_iter: usize,
@@ -87,7 +90,14 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         super::solve::HessianArg::GaussNewtonBfgs => HessianMode::GaussNewtonBfgs,
         super::solve::HessianArg::Exact => HessianMode::Exact,
     };
-    let settings = SqpSettings { tol_kkt: args.tol, max_iter: args.max_iter, max_time: args.max_time, hessian, ..Default::default() };
+    let settings = SqpSettings {
+        tol_kkt: args.tol,
+        max_iter: args.max_iter,
+        max_time: args.max_time,
+        hessian,
+        exact_hessian_below: args.exact_below,
+        ..Default::default()
+    };
     let folder = RunFolder::create(&args.out, args.overwrite)?;
     if !quiet {
         eprintln!(
