@@ -2,7 +2,6 @@
 
 use super::Failure;
 use anyhow::anyhow;
-use footfall::data::{read_sagittal_csv, GaitData};
 use footfall::model::spec::FootSpec;
 use footfall::model::GaitModel;
 use footfall::problems::foot_fit::{fit, fit_cost, foot_length, parameters, stances_from_data};
@@ -44,16 +43,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     let foot_path = super::simulate::foot_path(&args.foot);
     let model = GaitModel::load(&args.model, &foot_path)?;
     let foot = FootSpec::load(&foot_path)?;
-    let data = match &args.data {
-        Some(p) => {
-            let d = read_sagittal_csv(p)?;
-            match d.belt_speed {
-                Some(v) if !d.overground => d.to_overground(v)?,
-                _ => d,
-            }
-        }
-        None => GaitData::bundled(std::path::Path::new("."))?,
-    };
+    let data = super::load_data(args.data.as_deref())?;
     let stances = stances_from_data(&model, &data).map_err(|e| anyhow!("{}: {e}", data.source.display()))?;
     let ground = model.contact_settings().ground_height;
     let folder = RunFolder::create(&args.out, args.overwrite)?;

@@ -71,3 +71,18 @@ fn render_chain(e: &anyhow::Error) -> String {
     }
     out
 }
+
+/// Measured data from a sagittal CSV (moved overground when its meta file gives a belt
+/// speed), or the bundled trial.
+pub fn load_data(path: Option<&std::path::Path>) -> anyhow::Result<footfall::data::GaitData> {
+    Ok(match path {
+        Some(p) => {
+            let d = footfall::data::read_sagittal_csv(p)?;
+            match d.belt_speed {
+                Some(v) if !d.overground => d.to_overground(v)?,
+                _ => d,
+            }
+        }
+        None => footfall::data::GaitData::bundled(std::path::Path::new("."))?,
+    })
+}

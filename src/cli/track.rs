@@ -2,7 +2,7 @@
 
 use super::Failure;
 use anyhow::{anyhow, Context};
-use footfall::data::{read_sagittal_csv, CubicSpline, GaitData};
+use footfall::data::CubicSpline;
 use footfall::integrate::IntegratorSettings;
 use footfall::model::gait::{ContactReport, COORDINATES};
 use footfall::model::GaitModel;
@@ -69,16 +69,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     });
     let seq = PhaseSequence::load(&phases)?;
     let sets = seq.resolve(&model, &phases)?;
-    let data = match &args.data {
-        Some(p) => {
-            let d = read_sagittal_csv(p)?;
-            match d.belt_speed {
-                Some(v) if !d.overground => d.to_overground(v)?,
-                _ => d,
-            }
-        }
-        None => GaitData::bundled(std::path::Path::new("."))?,
-    };
+    let data = super::load_data(args.data.as_deref())?;
     let setup = TrackingSetup::new(&model, &seq, &sets, &data).map_err(|e| anyhow!("{}: {e}", data.source.display()))?;
     let cycle = GaitCycle::new(&model, &setup.seq, &sets).map_err(|e| anyhow!(e))?;
     let ocp = setup.ocp(&cycle, &model, &sets, IntegratorSettings::default()).map_err(|e| anyhow!(e))?;
