@@ -45,6 +45,9 @@ pub struct Args {
     /// KKT tolerance.
     #[arg(long, default_value_t = 1e-5)]
     tol: f64,
+    /// Relative and absolute CVODES tolerance of the shooting intervals.
+    #[arg(long, default_value_t = 1e-8)]
+    integrator_tol: f64,
     /// With `--hessian exact`: Gauss–Newton steps until the constraint violation is below this.
     #[arg(long, default_value_t = 1e-3)]
     exact_below: f64,
@@ -72,7 +75,9 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     let data = super::load_data(args.data.as_deref())?;
     let setup = TrackingSetup::new(&model, &seq, &sets, &data).map_err(|e| anyhow!("{}: {e}", data.source.display()))?;
     let cycle = GaitCycle::new(&model, &setup.seq, &sets).map_err(|e| anyhow!(e))?;
-    let ocp = setup.ocp(&cycle, &model, &sets, IntegratorSettings::default()).map_err(|e| anyhow!(e))?;
+    let integrator = IntegratorSettings { rtol: args.integrator_tol, atol: args.integrator_tol, ..Default::default() };
+    integrator.validate().context("--integrator-tol")?;
+    let ocp = setup.ocp(&cycle, &model, &sets, integrator).map_err(|e| anyhow!(e))?;
     let tr = Transcription::new(&ocp).context("transcribing the tracking problem")?;
     let (_, _, w0) = tr.variable_bounds_and_guess();
     let hessian = match args.hessian {
