@@ -258,7 +258,7 @@ fn integrated_cost_by_quadrature_state_matches_the_least_squares_form() {
         theta_ub: vec![],
         constraints: vec![],
         least_squares: vec![],
-        costs: vec![quadrature_cost(0, n, 5, 4, 1)],
+        costs: vec![quadrature_cost(0, n, 4, 1)],
         integrator: settings,
     };
     let tr = Transcription::new(&ocp).unwrap();

@@ -163,26 +163,11 @@ impl CartPole {
 }
 
 fn check_dims(x: &[f64], u: &[f64], theta: &[f64], xdot: &[f64]) -> Result<(), OdeError> {
-    if x.len() != NX || u.len() != NU || !theta.is_empty() || xdot.len() != NX {
-        return Err(OdeError::Fatal(format!(
-            "cart-pole: expected x, xdot of length {NX}, u of length {NU} and no θ, got {}, {}, {}, {}",
-            x.len(),
-            xdot.len(),
-            u.len(),
-            theta.len()
-        )));
-    }
-    Ok(())
+    super::check_dims("cart-pole", NX, NU, x, u, theta, xdot)
 }
 
 fn finite(v: &[f64]) -> Result<(), OdeError> {
-    if v.iter().all(|a| a.is_finite()) {
-        Ok(())
-    } else {
-        Err(OdeError::Recoverable(
-            "cart-pole: non-finite state derivative".into(),
-        ))
-    }
+    super::finite("cart-pole", v)
 }
 
 impl ControlledOde for CartPole {

@@ -171,3 +171,26 @@ fn dense_jacobian<const N: usize, const M: usize>(
     }
     (value, jac)
 }
+
+/// Check the buffer lengths of a `ControlledOde` call on a model without parameters.
+pub(crate) fn check_dims(model: &str, nx: usize, nu: usize, x: &[f64], u: &[f64], theta: &[f64], xdot: &[f64]) -> Result<(), crate::integrate::OdeError> {
+    if x.len() != nx || u.len() != nu || !theta.is_empty() || xdot.len() != nx {
+        return Err(crate::integrate::OdeError::Fatal(format!(
+            "{model}: expected x, xdot of length {nx}, u of length {nu} and no θ, got {}, {}, {}, {}",
+            x.len(),
+            xdot.len(),
+            u.len(),
+            theta.len()
+        )));
+    }
+    Ok(())
+}
+
+/// A non-finite derivative is recoverable: CVODES retries with a smaller step.
+pub(crate) fn finite(model: &str, v: &[f64]) -> Result<(), crate::integrate::OdeError> {
+    if v.iter().all(|a| a.is_finite()) {
+        Ok(())
+    } else {
+        Err(crate::integrate::OdeError::Recoverable(format!("{model}: non-finite state derivative")))
+    }
+}

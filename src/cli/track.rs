@@ -145,11 +145,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
                 model_f[3 * s].push(loads[s].fx);
                 model_f[3 * s + 1].push(loads[s].fy);
                 model_f[3 * s + 2].push(if loads[s].fy > data.cop_threshold { loads[s].cop_x } else { f64::NAN });
-                let at = |v: &[f64]| -> f64 {
-                    let kk = data.time.partition_point(|&x| x <= t).clamp(1, data.time.len() - 1);
-                    let w = (t - data.time[kk - 1]) / (data.time[kk] - data.time[kk - 1]);
-                    (1.0 - w) * v[kk - 1] + w * v[kk]
-                };
+                let at = |v: &[f64]| footfall::data::interp_linear(&[t], &data.time, v)[0];
                 meas_f[3 * s].push(at(&data.feet[s].fx));
                 meas_f[3 * s + 1].push(at(&data.feet[s].fy));
                 meas_f[3 * s + 2].push(at(&data.feet[s].cop_x));

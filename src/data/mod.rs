@@ -159,7 +159,7 @@ fn side_of(s: usize) -> Side {
 
 /// Piecewise-linear interpolation of `(x, y)` at `xn` (`x` increasing), held constant
 /// outside `[x_0, x_{n-1}]` (numpy's `interp`).
-pub(crate) fn interp_linear(xn: &[f64], x: &[f64], y: &[f64]) -> Vec<f64> {
+pub fn interp_linear(xn: &[f64], x: &[f64], y: &[f64]) -> Vec<f64> {
     let n = x.len();
     xn.iter()
         .map(|&t| {

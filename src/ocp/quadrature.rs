@@ -109,10 +109,9 @@ impl ControlledOde for WithQuadrature<'_> {
 }
 
 /// The scalar cost `Σ_i ℓ_i` at the final node of `phase` (linear, so its curvature is
-/// zero), for quadrature states at offset `offset` of a state of dimension `nx`.
-pub fn quadrature_cost<'a>(phase: usize, node: usize, nx: usize, offset: usize, nl: usize) -> Term<'a> {
+/// zero), for `nl` quadrature states at offset `offset` of the node state.
+pub fn quadrature_cost<'a>(phase: usize, node: usize, offset: usize, nl: usize) -> Term<'a> {
     struct Sum {
-        nx: usize,
         range: std::ops::Range<usize>,
     }
     impl NodeFunction for Sum {
@@ -127,7 +126,6 @@ pub fn quadrature_cost<'a>(phase: usize, node: usize, nx: usize, offset: usize, 
                     j[i] = 1.0;
                 }
             }
-            let _ = self.nx;
             Ok(())
         }
         fn has_hessian(&self) -> bool {
@@ -141,6 +139,6 @@ pub fn quadrature_cost<'a>(phase: usize, node: usize, nx: usize, offset: usize, 
     Term {
         name: "integrated_cost".into(),
         args: vec![Block::State { phase, node }],
-        f: Arc::new(Sum { nx, range: offset..offset + nl }),
+        f: Arc::new(Sum { range: offset..offset + nl }),
     }
 }

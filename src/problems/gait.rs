@@ -197,11 +197,11 @@ fn gait_ocp<'a>(
     // transitions: impact maps where an impact phase separates continuous phases
     let mut transitions = Vec::new();
     for j in 1..cont.len() {
-        transitions.push(impact_before[j].map(|i| impact_term(model, &sets[i], cont[j - 1].2, j - 1, nt)));
+        transitions.push(impact_before[j].map(|i| impact_term(model, &sets[i], cont[j - 1].2, j - 1)));
     }
     let mut constraints = Vec::new();
     let mu = spec.friction;
-    for (j, &(i, name, n, _)) in cont.iter().enumerate() {
+    for (j, &(i, _, n, _)) in cont.iter().enumerate() {
         let set = &sets[i];
         // contact forces at every node with the node's control
         for k in 0..=n {
@@ -284,7 +284,6 @@ fn gait_ocp<'a>(
                 }
             }
         }
-        let _ = name;
     }
     // trailing impact and periodicity through the symmetry map
     let last = cont.len() - 1;
@@ -316,7 +315,6 @@ fn gait_ocp<'a>(
                     }
                 }
             }
-            let nz = z.len();
             let rows: Vec<usize> = (0..nx).filter(|&i| i != skip).collect();
             for (o, &i) in rows.iter().enumerate() {
                 v[o] = x0[i] - xp[xmap[i]];
@@ -331,7 +329,6 @@ fn gait_ocp<'a>(
                     }
                 }
             }
-            let _ = nz;
             Ok(())
         });
         constraints.push(Constraint {
@@ -374,7 +371,7 @@ fn gait_ocp<'a>(
     })
 }
 
-fn impact_term<'a>(model: &'a GaitModel, set: &ConstraintSet, n_prev: usize, prev: usize, nt: usize) -> Term<'a> {
+fn impact_term<'a>(model: &'a GaitModel, set: &ConstraintSet, n_prev: usize, prev: usize) -> Term<'a> {
     let nx = model.nx();
     let set = set.clone();
     let f = FnTerm::new(nx, move |z: &[f64], v: &mut [f64], jac: Option<&mut [f64]>| {
@@ -386,7 +383,6 @@ fn impact_term<'a>(model: &'a GaitModel, set: &ConstraintSet, n_prev: usize, pre
         }
         Ok(())
     });
-    let _ = nt;
     Term {
         name: "impact".into(),
         args: vec![Block::State { phase: prev, node: n_prev }, Block::Params],

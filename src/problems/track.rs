@@ -5,7 +5,7 @@
 
 use super::gait::{GaitCycle, GaitGuess};
 use super::tracking::{NodeTarget, TrackingResidual, TrackingWeights};
-use crate::data::{detect_events, CubicSpline, Events, GaitData, DEFAULT_EVENT_FRACTION};
+use crate::data::{detect_events, interp_linear, CubicSpline, Events, GaitData, DEFAULT_EVENT_FRACTION};
 use crate::model::gait::COORDINATES;
 use crate::model::{ConstraintSet, GaitModel, Side};
 use crate::ocp::{Block, Ocp, Term};
@@ -126,11 +126,7 @@ impl TrackingSetup {
         let peak = data.feet.iter().flat_map(|f| f.fy.iter()).copied().fold(0.0, f64::max);
         let cop_at = |s: usize, t: f64| -> Option<f64> {
             // linear interpolation of the measured CoP where the foot is loaded
-            let k = data.time.partition_point(|&x| x <= t).clamp(1, data.time.len() - 1);
-            let (ta, tb) = (data.time[k - 1], data.time[k]);
-            let (a, b) = (data.feet[s].cop_x[k - 1], data.feet[s].cop_x[k]);
-            let w = (t - ta) / (tb - ta);
-            let v = (1.0 - w) * a + w * b;
+            let v = interp_linear(&[t], &data.time, &data.feet[s].cop_x)[0];
             v.is_finite().then_some(v)
         };
         let (nq, na, nu) = (model.nq(), model.na(), model.nu());
