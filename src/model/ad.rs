@@ -17,14 +17,15 @@ pub type AdChunk = DualSVec64<CHUNK>;
 /// for second derivatives (one Hessian column block per evaluation).
 pub type AdNested = num_dual::Dual<AdChunk>;
 
-/// Hessian of a scalar function `f: ℝⁿ → ℝ` (column-major n × n) by nested forward AD:
-/// `n · ⌈n / CHUNK⌉` evaluations of `f` in [`AdNested`].
+/// Hessian of a scalar function `f: ℝⁿ → ℝ` (column-major n × n) by nested forward AD.
+/// Symmetry is used: outer direction `j` needs only the inner chunks up to `j`, so `f` is
+/// evaluated about `n²/(2·CHUNK) + n` times in [`AdNested`].
 pub fn hessian<E>(x: &[f64], mut f: impl FnMut(&[AdNested]) -> Result<AdNested, E>, out: &mut [f64]) -> Result<(), E> {
     let n = x.len();
     let mut xs: Vec<AdNested> = Vec::with_capacity(n);
     for j in 0..n {
         let mut start = 0;
-        while start < n {
+        while start <= j {
             xs.clear();
             for (i, &v) in x.iter().enumerate() {
                 let mut inner = AdChunk::from_re(v);
@@ -36,7 +37,13 @@ pub fn hessian<E>(x: &[f64], mut f: impl FnMut(&[AdNested]) -> Result<AdNested, 
             }
             let y = f(&xs)?;
             for k in 0..CHUNK.min(n - start) {
-                out[(start + k) + j * n] = eps(&y.eps, k);
+                let i = start + k;
+                if i > j {
+                    break;
+                }
+                let v = eps(&y.eps, k);
+                out[i + j * n] = v;
+                out[j + i * n] = v;
             }
             start += CHUNK;
         }

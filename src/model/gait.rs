@@ -682,6 +682,16 @@ impl GaitModel {
         (pt, dot(n, pt) - h)
     }
 
+    /// Normal gap φ (m) of contact `c` at `q`, over any model scalar (for exact
+    /// derivatives of clearance and landing constraints).
+    pub fn gap<S: ModelScalar>(&self, c: usize, q: &[S], theta: &[S]) -> S {
+        let p = self.full_params(theta);
+        let (_, _, h, n) = self.adjusted(&p);
+        let k = self.tree.kinematics(q, &vec![S::c(0.0); self.nq()]);
+        let (pt, _, _) = self.contact_geometry(&k, &self.contacts[c], n);
+        dot(n, pt) - h
+    }
+
     /// Mass matrix (row-major) and bias forces at `(q, q̇)`.
     pub fn mass_matrix_and_bias(&self, q: &[f64], qd: &[f64], theta: &[f64]) -> (Vec<f64>, Vec<f64>) {
         let nq = self.nq();

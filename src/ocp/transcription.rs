@@ -511,8 +511,8 @@ impl<'o, 'a> Transcription<'o, 'a> {
         lambda: &[f64],
     ) -> Result<(Evaluation, (Vec<usize>, Vec<usize>, Vec<f64>)), TranscriptionError> {
         let (ev, blocks) = self.evaluate_inner(w, true, Some(lambda))?;
-        let (mut rows, mut cols, mut vals) = crate::sqp::Nlp::exact_hessian(self, w, lambda)
-            .map_err(|reason| TranscriptionError::Term { term: "hessian".into(), reason })?;
+        let (mut rows, mut cols, mut vals) =
+            self.term_curvature(w, lambda, true).map_err(|reason| TranscriptionError::Term { term: "hessian".into(), reason })?;
         for (iv, h) in self.intervals.iter().zip(blocks) {
             let Some(h) = h else { continue };
             let ph = &self.ocp.phases[iv.phase];
@@ -703,6 +703,74 @@ impl<'o, 'a> Transcription<'o, 'a> {
         Ok((ev, blocks))
     }
 
+    /// Exact curvature of the terms that provide it, as upper-triangle triplets: of the
+    /// constraints and transitions `Σ λ_i ∇²c_i`, and with `objective` also of the
+    /// objective (`2 Σ r_i ∇²r_i` of least-squares terms, whose `2 JᵀJ` part is the
+    /// Gauss–Newton matrix, and `∇²f` of general costs). Terms are evaluated in parallel
+    /// and assembled in term order, so the result does not depend on the thread count.
+    #[allow(clippy::type_complexity)]
+    fn term_curvature(&self, w: &[f64], lambda: &[f64], objective: bool) -> Result<(Vec<usize>, Vec<usize>, Vec<f64>), String> {
+        let blocks: Vec<Result<Option<(&TermRef, Vec<f64>)>, String>> = self
+            .terms
+            .par_iter()
+            .map(|t| {
+                let z = self.gather(w, &t.cols);
+                // transitions are written x0 − ψ(z): their curvature enters with −λ
+                let (f, name, weights): (&dyn super::NodeFunction, &str, Vec<f64>) = match t.kind {
+                    TermKind::Transition => match &self.ocp.transitions[t.term] {
+                        Some(term) => (&*term.f, &term.name, (0..term.f.dim()).map(|i| -lambda[t.row + i]).collect()),
+                        None => return Ok(None),
+                    },
+                    TermKind::Constraint => {
+                        let term = &self.ocp.constraints[t.term].term;
+                        (&*term.f, &term.name, (0..term.f.dim()).map(|i| lambda[t.row + i]).collect())
+                    }
+                    TermKind::LeastSquares if objective => {
+                        let term = &self.ocp.least_squares[t.term];
+                        if !term.f.has_hessian() {
+                            return Ok(None);
+                        }
+                        let mut r = vec![0.0; term.f.dim()];
+                        term.f.eval(&z, &mut r, None).map_err(|e| format!("term '{}': {e}", term.name))?;
+                        (&*term.f, &term.name, r.iter().map(|v| 2.0 * v).collect())
+                    }
+                    TermKind::Cost if objective => {
+                        let term = &self.ocp.costs[t.term];
+                        (&*term.f, &term.name, vec![1.0])
+                    }
+                    _ => return Ok(None),
+                };
+                if !f.has_hessian() || weights.iter().all(|v| *v == 0.0) {
+                    return Ok(None);
+                }
+                let nz = z.len();
+                let mut hm = vec![0.0; nz * nz];
+                f.weighted_hessian(&z, &weights, &mut hm).map_err(|e| format!("term '{name}': {e}"))?;
+                Ok(Some((t, hm)))
+            })
+            .collect();
+        let (mut rows, mut cols, mut vals) = (Vec::new(), Vec::new(), Vec::new());
+        for b in blocks {
+            let Some((t, hm)) = b? else { continue };
+            let nz = t.cols.len();
+            for a in 0..nz {
+                for b in a..nz {
+                    let mut v = hm[a + b * nz];
+                    if v == 0.0 {
+                        continue;
+                    }
+                    if t.cols[a] == t.cols[b] && a != b {
+                        v *= 2.0;
+                    }
+                    rows.push(t.cols[a].min(t.cols[b]));
+                    cols.push(t.cols[a].max(t.cols[b]));
+                    vals.push(v);
+                }
+            }
+        }
+        Ok((rows, cols, vals))
+    }
+
     fn transition_row(&self, j: usize) -> usize {
         let cont: usize = self.ocp.phases.iter().map(|p| p.intervals * p.ode.nx()).sum();
         cont + (0..j).map(|i| self.ocp.phases[i + 1].ode.nx()).sum::<usize>()
@@ -788,43 +856,7 @@ impl crate::sqp::Nlp for Transcription<'_, '_> {
         rows
     }
     fn exact_hessian(&self, w: &[f64], lambda: &[f64]) -> Result<(Vec<usize>, Vec<usize>, Vec<f64>), String> {
-        let (mut rows, mut cols, mut vals) = (Vec::new(), Vec::new(), Vec::new());
-        for t in &self.terms {
-            // transitions are written x0 − ψ(z): their curvature enters with −λ
-            let (f, name, sign) = match t.kind {
-                TermKind::Transition => match &self.ocp.transitions[t.term] {
-                    Some(term) => (&term.f, &term.name, -1.0),
-                    None => continue,
-                },
-                TermKind::Constraint => (&self.ocp.constraints[t.term].term.f, &self.ocp.constraints[t.term].term.name, 1.0),
-                _ => continue,
-            };
-            if !f.has_hessian() {
-                continue;
-            }
-            let d = f.dim();
-            let weights: Vec<f64> = (0..d).map(|i| sign * lambda[t.row + i]).collect();
-            if weights.iter().all(|v| *v == 0.0) {
-                continue;
-            }
-            let z = self.gather(w, &t.cols);
-            let nz = z.len();
-            let mut hm = vec![0.0; nz * nz];
-            f.weighted_hessian(&z, &weights, &mut hm).map_err(|e| format!("term '{name}': {e}"))?;
-            for a in 0..nz {
-                for b in a..nz {
-                    let (r, c) = (t.cols[a].min(t.cols[b]), t.cols[a].max(t.cols[b]));
-                    let mut v = hm[a + b * nz];
-                    if t.cols[a] == t.cols[b] && a != b {
-                        v *= 2.0;
-                    }
-                    rows.push(r);
-                    cols.push(c);
-                    vals.push(v);
-                }
-            }
-        }
-        Ok((rows, cols, vals))
+        self.term_curvature(w, lambda, false)
     }
     fn row_name(&self, i: usize) -> String {
         let l = &self.labels[i];

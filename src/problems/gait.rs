@@ -7,7 +7,8 @@
 //! Leading impact phases of a phase file (e.g. `1e*`) are realised by the trailing impact
 //! of the mirrored cycle: the state after the last impact, mirrored, is the first state.
 
-use super::{FnTerm, Linear};
+use super::{AdTerm, GenericFunction, Linear};
+use crate::model::effects::ModelScalar;
 use crate::integrate::{ControlShape, IntegratorSettings};
 use crate::model::gait::COORDINATES;
 use crate::model::{ConstraintSet, GaitModel, GaitOde, RowKind};
@@ -114,21 +115,13 @@ impl<'m> GaitCycle<'m> {
                 ub: vec![l],
             });
         }
-        if let Some(v) = speed {
+        if let Some(v_avg) = speed {
             // pelvis_x(end) − pelvis_x(start) − v Σ T_j = 0
-            let f = FnTerm::new(1, move |z: &[f64], val: &mut [f64], jac: Option<&mut [f64]>| {
-                let t: f64 = z[2 * nx..].iter().sum();
-                val[0] = z[nx] - z[0] - v * t;
-                if let Some(j) = jac {
-                    j.iter_mut().for_each(|x| *x = 0.0);
-                    j[0] = -1.0;
-                    j[nx] = 1.0;
-                    for k in 2 * nx..z.len() {
-                        j[k] = -v;
-                    }
-                }
-                Ok(())
-            });
+            let mut a = vec![0.0; 2 * nx + np];
+            a[0] = -1.0;
+            a[nx] = 1.0;
+            a[2 * nx..].iter_mut().for_each(|v| *v = -v_avg);
+            let f = Linear::new(a, 1);
             out.push(Constraint { term: Term { name: "average_speed".into(), args, f: Arc::new(f) }, lb: vec![0.0], ub: vec![0.0] });
         }
         out
@@ -226,28 +219,7 @@ fn gait_ocp<'a>(
             if a_rows.is_empty() {
                 continue;
             }
-            let setc = set.clone();
-            let dim = a_rows.len();
-            let f = FnTerm::new(dim, move |z: &[f64], v: &mut [f64], jac: Option<&mut [f64]>| {
-                let (x, rest) = z.split_at(nx);
-                let (u, th) = rest.split_at(nu);
-                let nc = setc.rows.len();
-                let nz = z.len();
-                let mut lam = vec![0.0; nc];
-                let mut lj = vec![0.0; nc * nz];
-                model.contact_forces_jacobian(&setc, x, u, th, &mut lam, &mut lj).map_err(|e| e.to_string())?;
-                for (o, row) in a_rows.iter().enumerate() {
-                    v[o] = row.iter().map(|&(r, c)| c * lam[r]).sum();
-                }
-                if let Some(j) = jac {
-                    for (o, row) in a_rows.iter().enumerate() {
-                        for c in 0..nz {
-                            j[o + c * dim] = row.iter().map(|&(r, w)| w * lj[r + c * nc]).sum();
-                        }
-                    }
-                }
-                Ok(())
-            });
+            let f = AdTerm(ContactForceRows { model, set: set.clone(), rows: a_rows });
             constraints.push(Constraint {
                 term: Term {
                     name: "contact_forces".into(),
@@ -300,37 +272,7 @@ fn gait_ocp<'a>(
         let (xmap, umap) = mirror_maps(model, &spec);
         let skip = 0usize; // pelvis_x is not periodic
         let impact = trailing_impact.map(|ti| sets[ti].clone());
-        let f = FnTerm::new(nx - 1, move |z: &[f64], v: &mut [f64], jac: Option<&mut [f64]>| {
-            // z = (x_first(0), x_last(N), θ): x_first − mirror(ψ(x_last))
-            let (x0, rest) = z.split_at(nx);
-            let (xe, th) = rest.split_at(nx);
-            let mut xp = vec![0.0; nx];
-            let mut pj = vec![0.0; nx * (nx + th.len())];
-            match &impact {
-                Some(set) => model.impact_state_jacobian(set, xe, th, &mut xp, &mut pj).map_err(|e| e.to_string())?,
-                None => {
-                    xp.copy_from_slice(xe);
-                    for i in 0..nx {
-                        pj[i + i * nx] = 1.0;
-                    }
-                }
-            }
-            let rows: Vec<usize> = (0..nx).filter(|&i| i != skip).collect();
-            for (o, &i) in rows.iter().enumerate() {
-                v[o] = x0[i] - xp[xmap[i]];
-            }
-            if let Some(j) = jac {
-                let d = rows.len();
-                j.iter_mut().for_each(|v| *v = 0.0);
-                for (o, &i) in rows.iter().enumerate() {
-                    j[o + i * d] = 1.0;
-                    for c in 0..nx + th.len() {
-                        j[o + (nx + c) * d] = -pj[xmap[i] + c * nx];
-                    }
-                }
-            }
-            Ok(())
-        });
+        let f = AdTerm(Periodicity { model, impact, xmap, skip });
         constraints.push(Constraint {
             term: Term {
                 name: "periodicity".into(),
@@ -372,17 +314,7 @@ fn gait_ocp<'a>(
 }
 
 fn impact_term<'a>(model: &'a GaitModel, set: &ConstraintSet, n_prev: usize, prev: usize) -> Term<'a> {
-    let nx = model.nx();
-    let set = set.clone();
-    let f = FnTerm::new(nx, move |z: &[f64], v: &mut [f64], jac: Option<&mut [f64]>| {
-        let (x, th) = z.split_at(nx);
-        let mut j = vec![0.0; nx * (nx + th.len())];
-        model.impact_state_jacobian(&set, x, th, v, &mut j).map_err(|e| e.to_string())?;
-        if let Some(out) = jac {
-            out.copy_from_slice(&j);
-        }
-        Ok(())
-    });
+    let f = AdTerm(ImpactMap { model, set: set.clone() });
     Term {
         name: "impact".into(),
         args: vec![Block::State { phase: prev, node: n_prev }, Block::Params],
@@ -399,24 +331,8 @@ fn gap_constraint<'a>(
     lb: f64,
     ub: f64,
 ) -> Constraint<'a> {
-    let nx = model.nx();
-    let nq = model.nq();
     let cname = model.contacts[c].name.clone();
-    let f = FnTerm::new(1, move |z: &[f64], v: &mut [f64], jac: Option<&mut [f64]>| {
-        let (x, th) = z.split_at(nx);
-        let (_, gap) = model.contact_point(c, &x[..nq], th);
-        v[0] = gap;
-        if let Some(j) = jac {
-            j.iter_mut().for_each(|v| *v = 0.0);
-            let set = ConstraintSet {
-                name: "gap".into(),
-                rows: vec![crate::model::gait::ConstraintRow { contact: c, kind: RowKind::Normal }],
-            };
-            let g = model.constraint_jacobian_at(&set, &x[..nq], th);
-            j[..nq].copy_from_slice(&g);
-        }
-        Ok(())
-    });
+    let f = AdTerm(Gap { model, contact: c });
     Constraint {
         term: Term {
             name: format!("{name}({cname})"),
@@ -425,5 +341,99 @@ fn gap_constraint<'a>(
         },
         lb: vec![lb],
         ub: vec![ub],
+    }
+}
+
+/// Constraint forces of a contact set combined row-wise (`Σ_r c_r λ_r` per output):
+/// unilateral normal forces and the friction cone. Arguments: `(x, u, θ)`.
+struct ContactForceRows<'a> {
+    model: &'a GaitModel,
+    set: ConstraintSet,
+    rows: Vec<Vec<(usize, f64)>>,
+}
+
+impl GenericFunction for ContactForceRows<'_> {
+    fn dim(&self) -> usize {
+        self.rows.len()
+    }
+    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), String> {
+        let (nx, nu) = (self.model.nx(), self.model.nu());
+        let (x, rest) = z.split_at(nx);
+        let (u, th) = rest.split_at(nu);
+        let mut xdot = vec![S::c(0.0); nx];
+        let mut lam = vec![S::c(0.0); self.set.rows.len()];
+        self.model.dynamics(&self.set, x, u, th, &mut xdot, &mut lam, None).map_err(|e| e.to_string())?;
+        for (o, row) in self.rows.iter().enumerate() {
+            out[o] = row.iter().fold(S::c(0.0), |acc, &(r, c)| acc + lam[r] * c);
+        }
+        Ok(())
+    }
+}
+
+/// Post-impact state `(q, q̇⁺, a)` of the plastic impact with the contacts of `set`.
+/// Arguments: `(x, θ)`.
+struct ImpactMap<'a> {
+    model: &'a GaitModel,
+    set: ConstraintSet,
+}
+
+impl GenericFunction for ImpactMap<'_> {
+    fn dim(&self) -> usize {
+        self.model.nx()
+    }
+    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), String> {
+        let (nx, nq) = (self.model.nx(), self.model.nq());
+        let (x, th) = z.split_at(nx);
+        let (qd_plus, _) = self.model.impact(&self.set, &x[..nq], &x[nq..2 * nq], th).map_err(|e| e.to_string())?;
+        out.copy_from_slice(x);
+        out[nq..2 * nq].copy_from_slice(&qd_plus);
+        Ok(())
+    }
+}
+
+/// Periodicity through the left/right mirror: `x_first − mirror(ψ(x_last))` without the
+/// forward position, with ψ the trailing impact map (identity without one). Arguments:
+/// `(x_first, x_last, θ)`.
+struct Periodicity<'a> {
+    model: &'a GaitModel,
+    impact: Option<ConstraintSet>,
+    xmap: Vec<usize>,
+    skip: usize,
+}
+
+impl GenericFunction for Periodicity<'_> {
+    fn dim(&self) -> usize {
+        self.model.nx() - 1
+    }
+    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), String> {
+        let (nx, nq) = (self.model.nx(), self.model.nq());
+        let (x0, rest) = z.split_at(nx);
+        let (xe, th) = rest.split_at(nx);
+        let mut xp = xe.to_vec();
+        if let Some(set) = &self.impact {
+            let (qd_plus, _) = self.model.impact(set, &xe[..nq], &xe[nq..2 * nq], th).map_err(|e| e.to_string())?;
+            xp[nq..2 * nq].copy_from_slice(&qd_plus);
+        }
+        for (o, i) in (0..nx).filter(|&i| i != self.skip).enumerate() {
+            out[o] = x0[i] - xp[self.xmap[i]];
+        }
+        Ok(())
+    }
+}
+
+/// Normal gap of one contact primitive. Arguments: `(x, θ)`.
+struct Gap<'a> {
+    model: &'a GaitModel,
+    contact: usize,
+}
+
+impl GenericFunction for Gap<'_> {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), String> {
+        let (nx, nq) = (self.model.nx(), self.model.nq());
+        out[0] = self.model.gap(self.contact, &z[..nq], &z[nx..]);
+        Ok(())
     }
 }

@@ -8,7 +8,52 @@ pub mod gait;
 pub mod track;
 pub mod tracking;
 
+use crate::model::ad::{self, AdChunk, AdNested};
+use crate::model::effects::ModelScalar;
 use crate::ocp::NodeFunction;
+
+/// A vector function written once over any model scalar, so that its value, its exact
+/// Jacobian (chunked forward AD) and its exact weighted Hessian (nested forward AD) all
+/// come from the same code. Wrap it in [`AdTerm`] to use it as a [`NodeFunction`].
+pub trait GenericFunction: Send + Sync {
+    /// Output dimension.
+    fn dim(&self) -> usize;
+    /// Evaluate at `z` into `out`.
+    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), String>;
+}
+
+/// [`NodeFunction`] view of a [`GenericFunction`], with exact Jacobian and Hessian.
+pub struct AdTerm<T>(pub T);
+
+impl<T: GenericFunction> NodeFunction for AdTerm<T> {
+    fn dim(&self) -> usize {
+        self.0.dim()
+    }
+    fn eval(&self, z: &[f64], value: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), String> {
+        match jac {
+            None => self.0.eval(z, value),
+            Some(j) => ad::jacobian(z, self.0.dim(), |zs: &[AdChunk], out: &mut [AdChunk]| self.0.eval(zs, out), value, j),
+        }
+    }
+    fn has_hessian(&self) -> bool {
+        true
+    }
+    fn weighted_hessian(&self, z: &[f64], weights: &[f64], out: &mut [f64]) -> Result<(), String> {
+        if weights.iter().all(|w| *w == 0.0) {
+            out.iter_mut().for_each(|v| *v = 0.0);
+            return Ok(());
+        }
+        let mut y = vec![AdNested::from(0.0); self.0.dim()];
+        ad::hessian(
+            z,
+            |zs| {
+                self.0.eval(zs, &mut y)?;
+                Ok(y.iter().zip(weights).fold(AdNested::from(0.0), |acc, (v, w)| acc + *v * *w))
+            },
+            out,
+        )
+    }
+}
 
 /// Callback computing `Σ w_i ∇²f_i(z)` (nz × nz column-major) for an [`FnTerm`].
 pub type HessianFn = Box<dyn Fn(&[f64], &[f64], &mut [f64]) -> Result<(), String> + Send + Sync>;

@@ -7,7 +7,7 @@
 //! The CoP term is written as the load-weighted moment error `(m − x_cop fᵧ) / (F_peak L)`
 //! with `m = Σ λₙ x_P`: equal to `(fᵧ/F_peak)(CoP − x_cop)/L`, smooth when the foot unloads.
 
-use crate::model::ad::{self, AdChunk};
+use crate::model::ad::{self, AdChunk, AdNested};
 use crate::model::{ConstraintSet, GaitModel};
 use crate::ocp::NodeFunction;
 
@@ -162,5 +162,28 @@ impl NodeFunction for TrackingResidual<'_> {
                 j,
             ),
         }
+    }
+    fn has_hessian(&self) -> bool {
+        true
+    }
+    /// Only the ground-force and CoP rows are nonlinear: without a force target at this
+    /// node the curvature is zero.
+    fn weighted_hessian(&self, z: &[f64], weights: &[f64], out: &mut [f64]) -> Result<(), String> {
+        out.iter_mut().for_each(|v| *v = 0.0);
+        if self.target.feet.iter().all(Option::is_none) {
+            return Ok(());
+        }
+        let (nx, nu) = (self.model.nx(), self.model.nu());
+        let mut r = vec![AdNested::from(0.0); self.dim];
+        ad::hessian(
+            z,
+            |zs| {
+                let (x, rest) = zs.split_at(nx);
+                let (u, th) = rest.split_at(nu);
+                self.residual(x, u, th, &mut r)?;
+                Ok(r.iter().zip(weights).fold(AdNested::from(0.0), |acc, (v, w)| acc + *v * *w))
+            },
+            out,
+        )
     }
 }

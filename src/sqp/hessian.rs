@@ -1,4 +1,5 @@
-//! Block-diagonal BFGS approximation of the Lagrangian Hessian.
+//! Hessian approximations and convexity checks for the QP subproblems: block-diagonal
+//! BFGS of the Lagrangian Hessian and the inertia correction of the exact Hessian.
 //!
 //! One dense block per group of variables (in multiple shooting: a node's state and
 //! control). With $s$, $y$ the block's step and Lagrangian-gradient change, the block is
@@ -176,4 +177,44 @@ impl BlockBfgs {
             }
         }
     }
+}
+
+use super::qp::Triplets;
+
+/// Whether the symmetric matrix `h` (upper-triangle triplets, duplicates summed) plus
+/// `shift·I` is positive definite: a sparse LDLᵀ (QDLDL with AMD ordering, no
+/// regularisation) has `n` positive pivots.
+pub fn is_positive_definite(n: usize, h: &Triplets, shift: f64) -> bool {
+    let mut t = Triplets { rows: Vec::with_capacity(h.rows.len() + n), cols: Vec::with_capacity(h.rows.len() + n), vals: Vec::new() };
+    t.vals.reserve(h.rows.len() + n);
+    for k in 0..h.rows.len() {
+        let (r, c) = (h.rows[k].min(h.cols[k]), h.rows[k].max(h.cols[k]));
+        t.push(r, c, h.vals[k]);
+    }
+    for i in 0..n {
+        t.push(i, i, shift);
+    }
+    let a = super::qp::csc(n, n, &t);
+    let settings = clarabel::qdldl::QDLDLSettings { regularize_enable: false, ..Default::default() };
+    match clarabel::qdldl::QDLDLFactorisation::new(&a, Some(settings)) {
+        Ok(f) => f.positive_inertia() == n && f.D.iter().all(|d| d.is_finite() && *d > 0.0),
+        Err(_) => false,
+    }
+}
+
+/// Smallest shift δ of the sequence `0, δ₀, 8δ₀, 64δ₀, …` (δ₀ = a third of the previous
+/// shift, at least `min_shift`) that makes `h + δI` positive definite (the inertia
+/// correction of Wächter & Biegler 2006, §3.1); `None` above `max_shift`.
+pub fn convexity_shift(n: usize, h: &Triplets, previous: f64, min_shift: f64, max_shift: f64) -> Option<f64> {
+    if is_positive_definite(n, h, 0.0) {
+        return Some(0.0);
+    }
+    let mut delta = (previous / 3.0).max(min_shift);
+    while delta <= max_shift {
+        if is_positive_definite(n, h, delta) {
+            return Some(delta);
+        }
+        delta *= 8.0;
+    }
+    None
 }
