@@ -280,3 +280,46 @@ fn invalid_integrator_tolerance_is_refused() {
     eprintln!("{err}");
     assert!(entries(tmp.path()).is_empty());
 }
+
+/// Ctrl-C during `footfall track` stops after the current iteration and still writes a
+/// complete run folder from the last accepted iterate, with the stop reason saying so.
+#[test]
+fn track_interrupted_by_ctrl_c_writes_the_last_iterate() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("run");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_footfall"))
+        .current_dir(root())
+        .args(["track", "--out", s(&out), "--max-iter", "50"])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // wait for the first iteration line, then send SIGINT
+    use std::io::{BufRead, BufReader};
+    let mut lines = BufReader::new(child.stderr.take().unwrap()).lines();
+    let mut log = String::new();
+    for line in lines.by_ref() {
+        let line = line.unwrap();
+        log.push_str(&line);
+        log.push('\n');
+        if line.trim_start().starts_with("1 ") {
+            break;
+        }
+    }
+    let status = Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
+    assert!(status.success());
+    for line in lines {
+        log.push_str(&line.unwrap());
+        log.push('\n');
+    }
+    let code = child.wait().unwrap();
+    assert_eq!(code.code(), Some(1), "an interrupted solve is not a success:\n{log}");
+    assert!(log.contains("interrupted"), "{log}");
+    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["status"], "interrupted");
+    assert!(summary["iterations"].as_u64().unwrap() >= 1);
+    assert_all_finite(&summary, "summary");
+    for f in ["tracking.csv", "kinematics.sto", "table3.md", "report.html"] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+}

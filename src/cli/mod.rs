@@ -86,3 +86,30 @@ pub fn load_data(path: Option<&std::path::Path>) -> anyhow::Result<footfall::dat
         None => footfall::data::GaitData::bundled(std::path::Path::new("."))?,
     })
 }
+
+static INTERRUPTED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Wraps an SQP observer so that Ctrl-C stops the solve after the current iteration:
+/// the solver returns its current (last accepted) iterate with status `interrupted`,
+/// and the run folder is written from it as for any other stop.
+pub struct Interruptible<'a>(pub &'a mut dyn footfall::sqp::Observer);
+
+impl Interruptible<'_> {
+    /// Install the Ctrl-C handler (once per process; later calls are no-ops).
+    pub fn install() {
+        let _ = ctrlc::set_handler(|| {
+            if INTERRUPTED.swap(true, std::sync::atomic::Ordering::SeqCst) {
+                // a second Ctrl-C while the iteration finishes: give up at once
+                std::process::exit(130);
+            }
+            eprintln!("interrupted: stopping after this iteration (Ctrl-C again to abort)");
+        });
+    }
+}
+
+impl footfall::sqp::Observer for Interruptible<'_> {
+    fn iteration(&mut self, rec: &footfall::sqp::IterationRecord) -> bool {
+        let go_on = self.0.iteration(rec);
+        go_on && !INTERRUPTED.load(std::sync::atomic::Ordering::SeqCst)
+    }
+}

@@ -108,7 +108,12 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
             hessian
         );
     }
-    let res = if quiet { sqp::solve(&tr, &w0, &settings, &mut Silent) } else { sqp::solve(&tr, &w0, &settings, &mut StderrLog) };
+    super::Interruptible::install();
+    let res = if quiet {
+        sqp::solve(&tr, &w0, &settings, &mut super::Interruptible(&mut Silent))
+    } else {
+        sqp::solve(&tr, &w0, &settings, &mut super::Interruptible(&mut StderrLog))
+    };
 
     // model and measurement at the nodes
     let splines: Vec<CubicSpline> = COORDINATES.iter().map(|c| data.spline(c)).collect::<Result<_, _>>()?;
