@@ -6,6 +6,7 @@ use common::*;
 use footfall::model::gait::ContactReport;
 use footfall::ocp::NodeFunction;
 use footfall::problems::tracking::{NodeTarget, TrackingResidual, TrackingWeights};
+use footfall::problems::AdTerm;
 
 fn state(m: &footfall::model::GaitModel, set: &footfall::model::ConstraintSet) -> Vec<f64> {
     let q = [1.6, 0.95, 0.11, 0.3, -0.2, 0.1, -0.3, -0.5, 0.05];
@@ -46,7 +47,7 @@ fn residual_vanishes_at_the_models_own_motion_and_has_exact_jacobian() {
         let mut w = TrackingWeights::seed(nq, 800.0, 0.305);
         w.excitation = 0.0;
         w.activation = 0.0;
-        let r = TrackingResidual::new(&m, set.clone(), target, w);
+        let r = AdTerm(TrackingResidual::new(&m, set.clone(), target, w));
         let z: Vec<f64> = x.iter().chain(&u).copied().collect();
         let mut v = vec![0.0; r.dim()];
         let mut jac = vec![0.0; r.dim() * z.len()];

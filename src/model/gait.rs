@@ -675,21 +675,21 @@ impl GaitModel {
 
     /// World contact point and normal gap φ (m) of contact `c` at `q`.
     pub fn contact_point(&self, c: usize, q: &[f64], theta: &[f64]) -> ([f64; 2], f64) {
-        let p = self.full_params(theta);
-        let (_, _, h, n) = self.adjusted(&p);
-        let k = self.tree.kinematics(q, &vec![0.0; self.nq()]);
-        let (pt, _, _) = self.contact_geometry(&k, &self.contacts[c], n);
-        (pt, dot(n, pt) - h)
+        self.contact_point_generic(c, q, theta)
     }
 
     /// Normal gap φ (m) of contact `c` at `q`, over any model scalar (for exact
     /// derivatives of clearance and landing constraints).
     pub fn gap<S: ModelScalar>(&self, c: usize, q: &[S], theta: &[S]) -> S {
+        self.contact_point_generic(c, q, theta).1
+    }
+
+    fn contact_point_generic<S: ModelScalar>(&self, c: usize, q: &[S], theta: &[S]) -> (V2<S>, S) {
         let p = self.full_params(theta);
         let (_, _, h, n) = self.adjusted(&p);
         let k = self.tree.kinematics(q, &vec![S::c(0.0); self.nq()]);
         let (pt, _, _) = self.contact_geometry(&k, &self.contacts[c], n);
-        dot(n, pt) - h
+        (pt, dot(n, pt) - h)
     }
 
     /// Mass matrix (row-major) and bias forces at `(q, q̇)`.
@@ -840,61 +840,6 @@ impl GaitModel {
             }
         }
         Ok(out)
-    }
-
-    /// Constraint forces λ (one per row of `set`, N) and their Jacobian with respect to
-    /// `(x, u, θ)` (rows × (nx + nu + nθ), column-major), by forward AD.
-    pub fn contact_forces_jacobian(
-        &self,
-        set: &ConstraintSet,
-        x: &[f64],
-        u: &[f64],
-        theta: &[f64],
-        lambda: &mut [f64],
-        jac: &mut [f64],
-    ) -> Result<(), DynamicsError> {
-        let (nx, nu) = (self.nx(), self.nu());
-        let z: Vec<f64> = x.iter().chain(u).chain(theta).copied().collect();
-        let mut xdot = vec![AdChunk::from(0.0); nx];
-        ad::jacobian(
-            &z,
-            set.rows.len(),
-            |zs, out| {
-                let (xs, rest) = zs.split_at(nx);
-                let (us, ts) = rest.split_at(nu);
-                self.dynamics(set, xs, us, ts, &mut xdot, out, None)
-            },
-            lambda,
-            jac,
-        )
-    }
-
-    /// Post-impact state `(q, q̇⁺, a)` of the plastic impact with the contacts of
-    /// `set_after`, and its Jacobian with respect to `(x, θ)` (nx × (nx + nθ),
-    /// column-major), by forward AD.
-    pub fn impact_state_jacobian(
-        &self,
-        set_after: &ConstraintSet,
-        x: &[f64],
-        theta: &[f64],
-        x_plus: &mut [f64],
-        jac: &mut [f64],
-    ) -> Result<(), DynamicsError> {
-        let (nx, nq) = (self.nx(), self.nq());
-        let z: Vec<f64> = x.iter().chain(theta).copied().collect();
-        ad::jacobian(
-            &z,
-            nx,
-            |zs, out| {
-                let (xs, ts) = zs.split_at(nx);
-                let (qd_plus, _) = self.impact(set_after, &xs[..nq], &xs[nq..2 * nq], ts)?;
-                out.copy_from_slice(xs);
-                out[nq..2 * nq].copy_from_slice(&qd_plus);
-                Ok(())
-            },
-            x_plus,
-            jac,
-        )
     }
 }
 

@@ -20,6 +20,10 @@ pub trait GenericFunction: Send + Sync {
     fn dim(&self) -> usize;
     /// Evaluate at `z` into `out`.
     fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), String>;
+    /// Whether the function is affine in `z` (zero Hessian, no AD pass needed).
+    fn is_linear(&self) -> bool {
+        false
+    }
 }
 
 /// [`NodeFunction`] view of a [`GenericFunction`], with exact Jacobian and Hessian.
@@ -39,7 +43,7 @@ impl<T: GenericFunction> NodeFunction for AdTerm<T> {
         true
     }
     fn weighted_hessian(&self, z: &[f64], weights: &[f64], out: &mut [f64]) -> Result<(), String> {
-        if weights.iter().all(|w| *w == 0.0) {
+        if self.0.is_linear() || weights.iter().all(|w| *w == 0.0) {
             out.iter_mut().for_each(|v| *v = 0.0);
             return Ok(());
         }

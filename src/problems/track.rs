@@ -210,7 +210,7 @@ impl TrackingSetup {
                 ocp.least_squares.push(Term {
                     name: "tracking".into(),
                     args: vec![Block::State { phase: j, node: k }, Block::Control { phase: j, node: ku }, Block::Params],
-                    f: Arc::new(r),
+                    f: Arc::new(super::AdTerm(r)),
                 });
             }
         }

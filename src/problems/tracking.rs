@@ -7,9 +7,9 @@
 //! The CoP term is written as the load-weighted moment error `(m − x_cop fᵧ) / (F_peak L)`
 //! with `m = Σ λₙ x_P`: equal to `(fᵧ/F_peak)(CoP − x_cop)/L`, smooth when the foot unloads.
 
-use crate::model::ad::{self, AdChunk, AdNested};
+use super::GenericFunction;
+use crate::model::effects::ModelScalar;
 use crate::model::{ConstraintSet, GaitModel};
-use crate::ocp::NodeFunction;
 
 /// What a node is compared with (`None` = not tracked at this node).
 #[derive(Debug, Clone, Default)]
@@ -94,7 +94,7 @@ impl<'a> TrackingResidual<'a> {
         Self { model, set, target, weights, dim }
     }
 
-    fn residual<S: crate::model::effects::ModelScalar>(&self, x: &[S], u: &[S], th: &[S], out: &mut [S]) -> Result<(), String> {
+    fn residual<S: ModelScalar>(&self, x: &[S], u: &[S], th: &[S], out: &mut [S]) -> Result<(), String> {
         let (nq, w) = (self.model.nq(), &self.weights);
         let mut o = 0;
         for i in 0..nq {
@@ -138,52 +138,18 @@ impl<'a> TrackingResidual<'a> {
     }
 }
 
-impl NodeFunction for TrackingResidual<'_> {
+/// Wrapped in [`AdTerm`](super::AdTerm) for the OCP: exact Jacobian and Hessian by AD.
+impl GenericFunction for TrackingResidual<'_> {
     fn dim(&self) -> usize {
         self.dim
     }
-    fn eval(&self, z: &[f64], value: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), String> {
-        let (nx, nu) = (self.model.nx(), self.model.nu());
-        match jac {
-            None => {
-                let (x, rest) = z.split_at(nx);
-                let (u, th) = rest.split_at(nu);
-                self.residual(x, u, th, value)
-            }
-            Some(j) => ad::jacobian(
-                z,
-                self.dim,
-                |zs: &[AdChunk], out: &mut [AdChunk]| {
-                    let (x, rest) = zs.split_at(nx);
-                    let (u, th) = rest.split_at(nu);
-                    self.residual(x, u, th, out)
-                },
-                value,
-                j,
-            ),
-        }
+    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), String> {
+        let (x, rest) = z.split_at(self.model.nx());
+        let (u, th) = rest.split_at(self.model.nu());
+        self.residual(x, u, th, out)
     }
-    fn has_hessian(&self) -> bool {
-        true
-    }
-    /// Only the ground-force and CoP rows are nonlinear: without a force target at this
-    /// node the curvature is zero.
-    fn weighted_hessian(&self, z: &[f64], weights: &[f64], out: &mut [f64]) -> Result<(), String> {
-        out.iter_mut().for_each(|v| *v = 0.0);
-        if self.target.feet.iter().all(Option::is_none) {
-            return Ok(());
-        }
-        let (nx, nu) = (self.model.nx(), self.model.nu());
-        let mut r = vec![AdNested::from(0.0); self.dim];
-        ad::hessian(
-            z,
-            |zs| {
-                let (x, rest) = zs.split_at(nx);
-                let (u, th) = rest.split_at(nu);
-                self.residual(x, u, th, &mut r)?;
-                Ok(r.iter().zip(weights).fold(AdNested::from(0.0), |acc, (v, w)| acc + *v * *w))
-            },
-            out,
-        )
+    /// Only the ground-force and CoP rows are nonlinear.
+    fn is_linear(&self) -> bool {
+        self.target.feet.iter().all(Option::is_none)
     }
 }

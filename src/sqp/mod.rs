@@ -419,7 +419,7 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
         let mut h_elastic: Option<Triplets> = None;
         // augmentation ρ of the exact mode's QP (ExactConvexification::Augmented)
         let mut aug_rho = 0.0;
-        let mut eq_rows: Vec<Vec<(usize, f64)>> = vec![Vec::new(); m];
+        let mut eq_rows: Vec<Vec<(usize, f64)>> = Vec::new();
         match settings.hessian {
             HessianMode::GaussNewton => {
                 h.rows.clone_from(&hr);
@@ -448,20 +448,8 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
                 if settings.exact_convexification == ExactConvexification::Augmented {
                     let hmax = ex.vals.iter().map(|v| v.abs()).fold(1.0, f64::max);
                     aug_rho = test_rho_scale * hmax;
-                    for k in 0..jr.len() {
-                        if c_lb[jr[k]] == c_ub[jr[k]] {
-                            eq_rows[jr[k]].push((jc[k], st.ev.jac[k]));
-                        }
-                    }
-                    for row in &eq_rows {
-                        for a in 0..row.len() {
-                            for b in a..row.len() {
-                                let ((ca, va), (cb, vb)) = (row[a], row[b]);
-                                let v = if ca == cb && a != b { 2.0 * va * vb } else { va * vb };
-                                ex.push(ca.min(cb), ca.max(cb), aug_rho * v);
-                            }
-                        }
-                    }
+                    eq_rows = sparse_rows(m, &jr, &jc, &st.ev.jac, |i| c_lb[i] == c_ub[i]);
+                    ex.extend_scaled(&row_gram(&eq_rows), aug_rho);
                 } else if use_curvature {
                     shift = exact_qp_hessian(&mut ex, &ExactQpContext {
                         n,
@@ -798,29 +786,12 @@ fn exact_qp_hessian(h: &mut Triplets, cx: &ExactQpContext<'_>) -> f64 {
             cx.c_lb[i] == cx.c_ub[i] || (active && cx.lambda[i].abs() > 1e-8 * lam_max)
         })
         .collect();
-    let mut rows_of: Vec<Vec<(usize, f64)>> = vec![Vec::new(); cx.c.len()];
-    for k in 0..cx.jac_rows.len() {
-        if tested[cx.jac_rows[k]] {
-            rows_of[cx.jac_rows[k]].push((cx.jac_cols[k], cx.jac[k]));
-        }
-    }
-    let mut jtj = Triplets::default();
-    for row in &rows_of {
-        for a in 0..row.len() {
-            for b in a..row.len() {
-                let ((ca, va), (cb, vb)) = (row[a], row[b]);
-                let v = if ca == cb && a != b { 2.0 * va * vb } else { va * vb };
-                jtj.push(ca.min(cb), ca.max(cb), v);
-            }
-        }
-    }
+    let jtj = row_gram(&sparse_rows(cx.c.len(), cx.jac_rows, cx.jac_cols, cx.jac, |i| tested[i]));
     let mut best: Option<f64> = None;
     for f in [1.0, 1e2, 1e4] {
         let rho = cx.test_rho_scale * hmax * f;
         let mut t = h.clone();
-        t.rows.extend_from_slice(&jtj.rows);
-        t.cols.extend_from_slice(&jtj.cols);
-        t.vals.extend(jtj.vals.iter().map(|v| rho * v));
+        t.extend_scaled(&jtj, rho);
         if let Some(d) = hessian::convexity_shift(n, &t, cx.previous_shift, 1e-12 * hmax, 1e2 * hmax) {
             if best.is_none_or(|b| d < b) {
                 best = Some(d);
@@ -837,4 +808,31 @@ fn exact_qp_hessian(h: &mut Triplets, cx: &ExactQpContext<'_>) -> f64 {
         }
     }
     delta
+}
+
+/// The rows `i` of a sparse Jacobian (triplets in pattern order) with `keep(i)`, each as
+/// `(column, value)` pairs; the other rows empty.
+fn sparse_rows(m: usize, rows: &[usize], cols: &[usize], vals: &[f64], keep: impl Fn(usize) -> bool) -> Vec<Vec<(usize, f64)>> {
+    let mut out: Vec<Vec<(usize, f64)>> = vec![Vec::new(); m];
+    for k in 0..rows.len() {
+        if keep(rows[k]) {
+            out[rows[k]].push((cols[k], vals[k]));
+        }
+    }
+    out
+}
+
+/// `Σ_i J_iᵀJ_i` over the given sparse rows, as upper-triangle triplets.
+fn row_gram(rows: &[Vec<(usize, f64)>]) -> Triplets {
+    let mut t = Triplets::default();
+    for row in rows {
+        for a in 0..row.len() {
+            for b in a..row.len() {
+                let ((ca, va), (cb, vb)) = (row[a], row[b]);
+                let v = if ca == cb && a != b { 2.0 * va * vb } else { va * vb };
+                t.push(ca.min(cb), ca.max(cb), v);
+            }
+        }
+    }
+    t
 }

@@ -29,6 +29,13 @@ impl Triplets {
         self.cols.push(c);
         self.vals.push(v);
     }
+
+    /// Append `scale · other`.
+    pub fn extend_scaled(&mut self, other: &Triplets, scale: f64) {
+        self.rows.extend_from_slice(&other.rows);
+        self.cols.extend_from_slice(&other.cols);
+        self.vals.extend(other.vals.iter().map(|v| scale * v));
+    }
 }
 
 /// Compressed sparse column matrix from triplets, summing duplicates.
