@@ -60,6 +60,12 @@ impl RunFolder {
         f.write_all(bytes).map_err(io(&p))
     }
 
+    /// Where files are being written until [`commit`](Self::commit): nested run folders
+    /// go here, so that they appear with their parent.
+    pub fn staging_path(&self) -> &Path {
+        &self.staging
+    }
+
     /// Move the folder into place.
     pub fn commit(mut self) -> Result<PathBuf, RunFolderError> {
         if self.target.exists() {

@@ -2,7 +2,10 @@
 //!
 //! Exit codes: 0 success, 1 bad input or a run that did not succeed, 2 internal error.
 
+mod compare;
 mod fit_foot;
+mod gait_run;
+mod predict;
 mod simulate;
 mod solve;
 mod track;
@@ -31,6 +34,10 @@ enum Command {
     FitFoot(fit_foot::Args),
     /// Track measured walking (default: the bundled trial with the ellipse foot).
     Track(track::Args),
+    /// Predict the gait the model prefers (minimum activation and impulses; seed §3.5).
+    Predict(predict::Args),
+    /// Run the same prediction for two or more feet and compare their ground forces.
+    Compare(compare::Args),
 }
 
 /// Failure classes mapped to exit codes.
@@ -46,6 +53,8 @@ pub fn main() -> ExitCode {
         Command::Solve(args) => solve::run(args, cli.quiet),
         Command::Track(args) => track::run(args, cli.quiet),
         Command::FitFoot(args) => fit_foot::run(args, cli.quiet),
+        Command::Predict(args) => predict::run(args, cli.quiet),
+        Command::Compare(args) => compare::run(args, cli.quiet),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

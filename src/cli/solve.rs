@@ -25,6 +25,17 @@ pub enum HessianArg {
     Exact,
 }
 
+impl From<HessianArg> for HessianMode {
+    fn from(h: HessianArg) -> Self {
+        match h {
+            HessianArg::GaussNewton => HessianMode::GaussNewton,
+            HessianArg::Bfgs => HessianMode::Bfgs,
+            HessianArg::GaussNewtonBfgs => HessianMode::GaussNewtonBfgs,
+            HessianArg::Exact => HessianMode::Exact,
+        }
+    }
+}
+
 /// CVODES linear multistep method.
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
 pub enum MethodArg {
@@ -96,13 +107,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         }
         w0 = w;
     }
-    let hessian = match args.hessian {
-        Some(HessianArg::GaussNewton) => HessianMode::GaussNewton,
-        Some(HessianArg::Bfgs) => HessianMode::Bfgs,
-        Some(HessianArg::GaussNewtonBfgs) => HessianMode::GaussNewtonBfgs,
-        Some(HessianArg::Exact) => HessianMode::Exact,
-        None => HessianMode::Exact,
-    };
+    let hessian = args.hessian.map_or(HessianMode::Exact, HessianMode::from);
     if !(args.tol.is_finite() && args.tol > 0.0) {
         return Err(anyhow!("--tol must be a positive number, got {}", args.tol));
     }

@@ -3,9 +3,13 @@
 //! nothing about gait.
 
 pub mod benchmark;
+pub mod evaluation;
 pub mod foot_fit;
 pub mod gait;
+pub mod predict;
+pub mod synth;
 pub mod track;
+pub mod transient;
 pub mod tracking;
 
 use crate::model::ad::{self, AdChunk, AdNested};

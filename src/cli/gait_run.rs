@@ -1,0 +1,360 @@
+//! The run folder of a gait OCP (tracking or prediction): model against measurement at
+//! the nodes, overall and by phase, the 1 ms re-integration figures, plots, the solution
+//! for later runs, `summary.json` and `report.html`.
+
+use anyhow::Context;
+use footfall::data::GaitData;
+use footfall::integrate::IntegratorSettings;
+use footfall::model::gait::COORDINATES;
+use footfall::model::{ConstraintSet, GaitModel};
+use footfall::problems::evaluation::{channel_errors, Comparison, FineGridFigures, GaitSolution, Reintegration, LOAD_NAMES};
+use footfall::problems::transient::{force_transients, ForceTransient};
+use footfall::report::csv::TimeSeries;
+use footfall::report::html::{Report, Section, Summary, Tone};
+use footfall::report::plot::{LinePlot, LineStyle, Series, Span};
+use footfall::report::table::{error_table, Table};
+use footfall::runfolder::RunFolder;
+use footfall::sqp::{SqpResult, SqpStatus};
+use std::path::PathBuf;
+
+/// Step of the fine re-integration grid (s).
+pub const FINE_STEP: f64 = 1e-3;
+
+/// Default threshold of a reported ground-force transient: excess over the measurement (N).
+pub const DEFAULT_TRANSIENT_THRESHOLD_N: f64 = 250.0;
+
+/// What a gait run wrote and found.
+pub struct GaitRunOutput {
+    /// Committed run folder.
+    pub path: PathBuf,
+    /// The overall error table.
+    pub table: Table,
+    /// Fine-grid figures (None when the re-integration failed; the report says why).
+    pub fine: Option<FineGridFigures>,
+    /// Ground-force transients on the fine grid, strongest first.
+    pub transients: Vec<ForceTransient>,
+    /// Overall error statistics per channel (name, unit, stats).
+    pub errors: Vec<footfall::report::table::ChannelErrors>,
+    /// Ground forces on the fine grid (None when the re-integration failed).
+    pub fine_forces: Option<FineForces>,
+}
+
+/// Ground forces of both feet on the fine grid, model and measurement.
+pub struct FineForces {
+    /// Times (s).
+    pub times: Vec<f64>,
+    /// Model `[side][fx, fy]` (N).
+    pub model: [[Vec<f64>; 2]; 2],
+    /// Measured `[side][fx, fy]` (N).
+    pub measured: [[Vec<f64>; 2]; 2],
+}
+
+impl FineForces {
+    /// Largest excess of the model over the measurement, `(N, time s, side)`, of
+    /// component `c` (0 tangential, by magnitude along the model force; 1 normal).
+    pub fn max_excess(&self, c: usize) -> (f64, f64, usize) {
+        let mut best = (f64::NEG_INFINITY, f64::NAN, 0);
+        for s in 0..2 {
+            for (k, &t) in self.times.iter().enumerate() {
+                let (m, d) = (self.model[s][c][k], self.measured[s][c][k]);
+                let e = if c == 0 { (m - d) * m.signum() } else { m - d };
+                if e > best.0 {
+                    best = (e, t, s);
+                }
+            }
+        }
+        best
+    }
+    /// Peak |force| of component `c` over both feet (N).
+    pub fn peak(&self, c: usize) -> f64 {
+        self.model.iter().flat_map(|m| m[c].iter()).fold(0.0, |a, v| a.max(v.abs()))
+    }
+}
+
+/// Everything the writer needs.
+pub struct GaitRun<'a> {
+    /// `track` or `predict`.
+    pub command: &'a str,
+    /// Report title.
+    pub title: String,
+    /// The measurement the run compares with.
+    pub data: &'a GaitData,
+    /// Model and constraint sets.
+    pub model: &'a GaitModel,
+    /// Constraint sets, one per phase-file phase.
+    pub sets: &'a [ConstraintSet],
+    /// Phase file.
+    pub phases_path: &'a std::path::Path,
+    /// Solver result.
+    pub result: &'a SqpResult,
+    /// The solution read from `result.w`.
+    pub solution: &'a GaitSolution,
+    /// Integrator settings for the re-integration.
+    pub integrator: IntegratorSettings,
+    /// Extra summary lines and JSON fields.
+    pub extra_summary: Vec<(String, String)>,
+    /// Extra `summary.json` fields.
+    pub extra_json: serde_json::Map<String, serde_json::Value>,
+    /// Extra report sections, placed after the errors.
+    pub extra_sections: Vec<Section>,
+    /// Extra files (name, bytes).
+    pub extra_files: Vec<(String, Vec<u8>)>,
+    /// Report ground-force excursions above the measurement larger than this (N).
+    pub transient_threshold_n: f64,
+}
+
+/// Evaluate, write and commit the run folder.
+pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
+    let (model, sets, data, res, sol) = (run.model, run.sets, run.data, run.result, run.solution);
+    let nodes = sol.node_samples(model, sets).context("evaluating the solution at the nodes")?;
+    let cmp = Comparison::new(&nodes, data)?;
+    let channels = cmp.table_channels();
+    let foot = model.foot_name.clone();
+    let what = if run.command == "predict" { "Prediction" } else { "Tracking" };
+    let table = error_table(
+        &format!("{what} errors at the shooting nodes (seed Table {} layout; both legs pooled)", if run.command == "predict" { 4 } else { 3 }),
+        &[foot],
+        &channel_errors(&channels, &cmp, None),
+    );
+    let phase_ids: Vec<usize> = sol.phases.iter().map(|p| p.set).collect();
+    let phase_names: Vec<String> = sol.phases.iter().map(|p| p.name.clone()).collect();
+    let by_phase = error_table(&format!("{what} errors by phase"), &phase_names, &channel_errors(&channels, &cmp, Some(&phase_ids)));
+
+    // fine grid: a failure (e.g. of an interrupted early iterate) is reported, not fatal
+    let fine_run: Result<Reintegration, String> =
+        sol.reintegrate(model, sets, FINE_STEP, &run.integrator).map_err(|e| format!("the 1 ms re-integration failed: {e}"));
+    let fine = fine_run.as_ref().ok().map(|f| f.figures(sets, FINE_STEP));
+    let fine_cmp = match &fine_run {
+        Ok(f) => Some(Comparison::new(&f.result.samples, data)?),
+        Err(_) => None,
+    };
+    let transients = match (&fine_run, &fine_cmp) {
+        (Ok(f), Some(fc)) => force_transients(f, fc, sets, &cmp.times, model.nq(), run.transient_threshold_n),
+        _ => Vec::new(),
+    };
+    // plots show the fine grid where there is one, else the nodes
+    let line = fine_cmp.as_ref().unwrap_or(&cmp);
+    let line_label = if fine_cmp.is_some() { "model (1 ms re-integration)" } else { "model" };
+
+    let spans: Vec<Span> = sol.phase_spans().iter().map(|p| Span::new(p.t0, p.t1, p.name.clone())).collect();
+    let deg = 180.0 / std::f64::consts::PI;
+    let plot = |title: &str, unit: &str, line_model: &[f64], measured: &[f64], node_model: &[f64], scale: f64| {
+        let mut p = LinePlot::new(title, "time (s)", unit);
+        let scaled = |v: &[f64]| v.iter().map(|x| x * scale).collect::<Vec<f64>>();
+        p.series.push(Series::new(line_label, line.times.clone(), scaled(line_model), LineStyle::Solid));
+        p.series.push(Series::new("model at the nodes", cmp.times.clone(), scaled(node_model), LineStyle::Markers));
+        p.series.push(Series::new("measured", line.times.clone(), scaled(measured), LineStyle::Dashed));
+        p.shaded = spans.clone();
+        p.to_svg()
+    };
+    let mut kin = Vec::new();
+    for i in 2..9 {
+        kin.push(plot(&COORDINATES[i].replace('_', " "), "angle (°)", &line.model_q[i], &line.data_q[i], &cmp.model_q[i], deg));
+    }
+    let mut forces = Vec::new();
+    for (s, side) in ["right", "left"].iter().enumerate() {
+        for (c, label, unit) in [(1, "Normal GRF", "force (N)"), (0, "Tangential GRF", "force (N)"), (2, "CoP", "x (m)")] {
+            forces.push(plot(&format!("{label}, {side} foot"), unit, &line.model_feet[s][c], &line.data_feet[s][c], &cmp.model_feet[s][c], 1.0));
+        }
+    }
+
+    // time series at the nodes
+    let mut ts = TimeSeries::new(cmp.times.clone())?;
+    ts.push_text("phase", cmp.phase.iter().map(|&p| sets[p].name.clone()).collect())?;
+    for i in 0..9 {
+        ts.push(&format!("model_{}", COORDINATES[i]), cmp.model_q[i].clone())?;
+        ts.push(&format!("data_{}", COORDINATES[i]), cmp.data_q[i].clone())?;
+    }
+    for (s, side) in ["r", "l"].iter().enumerate() {
+        for (k, what) in LOAD_NAMES.iter().enumerate() {
+            ts.push(&format!("model_{what}_{side}"), cmp.model_feet[s][k].clone())?;
+            ts.push(&format!("data_{what}_{side}"), cmp.data_feet[s][k].clone())?;
+        }
+    }
+    let fine_ts = match (&fine_run, &fine_cmp) {
+        (Ok(f), Some(fc)) => {
+            let mut t = TimeSeries::new(fc.times.clone())?;
+            t.push_text("phase", fc.phase.iter().map(|&p| sets[p].name.clone()).collect())?;
+            for i in 0..9 {
+                t.push(&format!("model_{}", COORDINATES[i]), fc.model_q[i].clone())?;
+            }
+            for (s, side) in ["r", "l"].iter().enumerate() {
+                for (k, what) in LOAD_NAMES.iter().enumerate() {
+                    t.push(&format!("model_{what}_{side}"), fc.model_feet[s][k].clone())?;
+                    t.push(&format!("data_{what}_{side}"), fc.data_feet[s][k].clone())?;
+                }
+            }
+            t.push("baumgarte_max", f.result.samples.iter().map(|s| s.contact.baumgarte_force.iter().fold(0.0f64, |m, v| m.max(v.abs()))).collect())?;
+            Some(t)
+        }
+        _ => None,
+    };
+
+    let converged = res.status == SqpStatus::Converged;
+    let interrupted = res.status == footfall::sqp::SqpStatus::Interrupted;
+    let mut summary = Summary::new(
+        if converged {
+            "converged"
+        } else if interrupted {
+            "interrupted"
+        } else {
+            "not converged"
+        },
+        if converged { Tone::Good } else { Tone::Warning },
+        res.status.to_string(),
+    );
+    summary.iterations = Some(res.history.len().saturating_sub(1));
+    summary.time_s = Some(res.seconds);
+    let (t0, t1) = sol.span();
+    summary.extra = vec![
+        ("objective".into(), format!("{:.6}", res.objective)),
+        ("KKT residual".into(), format!("{:.2e}", res.kkt)),
+        ("window".into(), format!("{t0:.3}–{t1:.3} s")),
+    ];
+    let fine_text = match (&fine, &fine_run) {
+        (Some(f), _) => {
+            summary.extra.push(("peak normal GRF (1 ms grid)".into(), format!("right {:.1} N, left {:.1} N", f.peak_normal_force_n[0], f.peak_normal_force_n[1])));
+            summary.extra.push(("largest constraint drift (1 ms grid)".into(), format!("{:.2e} m, {:.2e} m/s", f.max_position_drift_m, f.max_velocity_drift_m_s)));
+            summary.extra.push(("largest Baumgarte force (1 ms grid)".into(), format!("{:.2} N", f.max_baumgarte_force_n)));
+            format!(
+                "Forces between the nodes come from the 1 ms re-integration (transients hide between nodes, seed §5): peak normal force {:.1} N (right) and {:.1} N (left); largest Baumgarte force {:.2} N; largest position drift {:.2e} m.",
+                f.peak_normal_force_n[0], f.peak_normal_force_n[1], f.max_baumgarte_force_n, f.max_position_drift_m
+            )
+        }
+        (None, Err(e)) => {
+            summary.extra.push(("1 ms re-integration".into(), e.clone()));
+            format!("{e}; the plots show the shooting nodes only.")
+        }
+        (None, Ok(_)) => String::new(),
+    };
+    summary.extra.extend(run.extra_summary);
+    let mut sections = vec![Section {
+        heading: "Errors".into(),
+        paragraphs: vec![
+            "Model against the measurement at the shooting nodes, overall and phase by phase (mean ± sd (max) of |error|; ground forces where the measured foot is loaded).".into(),
+        ],
+        tables: vec![table.clone(), by_phase.clone()],
+        svgs: vec![],
+    }];
+    sections.push(transient_section(&transients, run.transient_threshold_n, fine_run.is_ok()));
+    sections.extend(run.extra_sections);
+    sections.push(Section {
+        heading: "Kinematics".into(),
+        paragraphs: vec!["Lines: the solution re-integrated interval by interval on a 1 ms grid; markers: the shooting nodes; dashes: the measurement. Phases shaded.".into()],
+        tables: vec![],
+        svgs: kin,
+    });
+    sections.push(Section {
+        heading: "Ground reaction forces and centre of pressure".into(),
+        paragraphs: vec![fine_text],
+        tables: vec![],
+        svgs: forces,
+    });
+    let report = Report { title: run.title, summary, sections };
+    // channels without a defined sample in a phase are left out (no nulls)
+    let stat_json = |s: &Option<footfall::report::table::ErrorStats>| s.map(|v| serde_json::json!({"mean": v.mean, "sd": v.sd, "max": v.max}));
+    let overall = channel_errors(&channels, &cmp, None);
+    let phased = channel_errors(&channels, &cmp, Some(&phase_ids));
+    let mut summary_json = serde_json::json!({
+        "command": run.command,
+        "model": model.name,
+        "foot": model.foot_name,
+        "phases": run.phases_path,
+        "data": data.source,
+        "window_s": [t0, t1],
+        "status": res.status,
+        "stop_reason": res.status.to_string(),
+        "iterations": res.history.len().saturating_sub(1),
+        "seconds": res.seconds,
+        "objective": res.objective,
+        "kkt": res.kkt,
+        "infeasibility": res.infeasibility,
+        "timings": res.timings,
+        "errors": overall.iter().filter_map(|c| stat_json(&c.runs[0]).map(|s| serde_json::json!({"channel": c.name, "unit": c.unit, "stats": s}))).collect::<Vec<_>>(),
+        "errors_by_phase": phased.iter().map(|c| serde_json::json!({"channel": c.name, "unit": c.unit, "phases": phase_names.iter().zip(&c.runs).filter_map(|(p, s)| stat_json(s).map(|s| serde_json::json!({"phase": p, "stats": s}))).collect::<Vec<_>>()})).collect::<Vec<_>>(),
+        "fine_grid": fine,
+        "transient_threshold_n": run.transient_threshold_n,
+        "transients": transients,
+        "most_violated": res.most_violated,
+        "history": res.history,
+    });
+    if let Some(obj) = summary_json.as_object_mut() {
+        if let Err(e) = &fine_run {
+            obj.insert("fine_grid_error".into(), e.clone().into());
+        }
+        obj.extend(run.extra_json);
+    }
+    folder.write("summary.json", serde_json::to_string_pretty(&summary_json)?.as_bytes())?;
+    folder.write("solution.json", serde_json::to_string_pretty(sol)?.as_bytes())?;
+    let csv_name = if run.command == "predict" { "prediction" } else { "tracking" };
+    folder.write(&format!("{csv_name}.csv"), ts.to_csv().as_bytes())?;
+    if let Some(f) = &fine_ts {
+        folder.write("fine_grid.csv", f.to_csv().as_bytes())?;
+    }
+    folder.write("kinematics.sto", fine_ts.as_ref().unwrap_or(&ts).to_sto(&format!("footfall_{csv_name}")).as_bytes())?;
+    let table_file = if run.command == "predict" { "table4.md" } else { "table3.md" };
+    folder.write(table_file, format!("{}\n{}", table.to_markdown(), by_phase.to_markdown()).as_bytes())?;
+    for (name, bytes) in &run.extra_files {
+        folder.write(name, bytes)?;
+    }
+    folder.write("report.html", report.to_html().as_bytes())?;
+    let path = folder.commit()?;
+    let fine_forces = fine_cmp.map(|fc| FineForces {
+        model: [[fc.model_feet[0][0].clone(), fc.model_feet[0][1].clone()], [fc.model_feet[1][0].clone(), fc.model_feet[1][1].clone()]],
+        measured: [[fc.data_feet[0][0].clone(), fc.data_feet[0][1].clone()], [fc.data_feet[1][0].clone(), fc.data_feet[1][1].clone()]],
+        times: fc.times,
+    });
+    Ok(GaitRunOutput { path, table, fine, transients, errors: overall, fine_forces })
+}
+
+/// The report's account of the ground-force transients.
+fn transient_section(transients: &[ForceTransient], threshold: f64, have_fine: bool) -> Section {
+    let mut paragraphs = Vec::new();
+    let mut tables = Vec::new();
+    if !have_fine {
+        paragraphs.push("No transient analysis: the 1 ms re-integration failed.".to_string());
+    } else if transients.is_empty() {
+        paragraphs.push(format!("On the 1 ms grid no ground force exceeds the measurement by more than {threshold:.0} N."));
+    } else {
+        let t = &transients[0];
+        paragraphs.push(format!(
+            "Largest: the {} foot's {} force reaches {:.1} N at {:.3} s in phase {}, {:.1} N above the measurement, for {:.1} ms above the {threshold:.0} N threshold; ankle angular velocity {:.2} rad/s; largest Baumgarte force in the window {:.2} N{}.",
+            t.foot,
+            t.component,
+            t.peak_n,
+            t.t_peak,
+            t.phase,
+            t.excess_n,
+            1e3 * t.duration_s,
+            t.ankle_velocity_rad_s,
+            t.max_baumgarte_force_n,
+            if t.between_nodes { "; it falls between shooting nodes and shows only on the fine grid" } else { "" }
+        ));
+        tables.push(Table {
+            title: format!("Ground-force excursions above the measurement by more than {threshold:.0} N (1 ms grid)"),
+            headers: ["foot", "force", "phase", "peak time (s)", "peak (N)", "measured (N)", "excess (N)", "duration (ms)", "ankle ω (rad/s)", "max Baumgarte (N)", "between nodes"]
+                .iter()
+                .map(|h| h.to_string())
+                .collect(),
+            rows: transients
+                .iter()
+                .map(|t| {
+                    vec![
+                        t.foot.to_string(),
+                        t.component.to_string(),
+                        t.phase.clone(),
+                        format!("{:.3}", t.t_peak),
+                        format!("{:.1}", t.peak_n),
+                        format!("{:.1}", t.measured_n),
+                        format!("{:.1}", t.excess_n),
+                        format!("{:.1}", 1e3 * t.duration_s),
+                        format!("{:.2}", t.ankle_velocity_rad_s),
+                        format!("{:.2}", t.max_baumgarte_force_n),
+                        if t.between_nodes { "yes" } else { "no" }.to_string(),
+                    ]
+                })
+                .collect(),
+        });
+    }
+    Section { heading: "Ground-force transients".into(), paragraphs, tables, svgs: vec![] }
+}

@@ -1,0 +1,238 @@
+//! `footfall predict`: the gait the model prefers (seed 001 §3.5): minimum activation plus
+//! impulses, at the subject's step length and speed, started from a tracking solution.
+
+use super::gait_run::{GaitRun, GaitRunOutput, DEFAULT_TRANSIENT_THRESHOLD_N};
+use super::Failure;
+use anyhow::{anyhow, bail, Context};
+use footfall::integrate::IntegratorSettings;
+use footfall::model::GaitModel;
+use footfall::ocp::Transcription;
+use footfall::phases::PhaseSequence;
+use footfall::problems::evaluation::GaitSolution;
+use footfall::problems::gait::GaitCycle;
+use footfall::problems::predict::{PredictionSettings, PredictionSetup, SEED_IMPULSE_WEIGHT};
+use footfall::problems::track::TrackingSetup;
+use footfall::report::html::Section;
+use footfall::runfolder::RunFolder;
+use footfall::sqp::{self, ExactConvexification, Silent, SqpResult, SqpSettings, SqpStatus, StderrLog};
+use std::path::{Path, PathBuf};
+
+/// Options shared by `predict` and `compare`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct PredictOptions {
+    /// Model file.
+    #[arg(long, default_value = "models/opensim_subject01.json")]
+    pub model: PathBuf,
+    /// Sagittal CSV (default: the bundled OpenSim subject01 trial, moved overground).
+    #[arg(long)]
+    pub data: Option<PathBuf>,
+    /// Step length (m; default: the subject's over the tracked half cycle).
+    #[arg(long)]
+    pub step_length: Option<f64>,
+    /// Average forward speed (m/s; default: the subject's).
+    #[arg(long)]
+    pub speed: Option<f64>,
+    /// Impulse weight w_Δ of eq. 21.
+    #[arg(long, default_value_t = SEED_IMPULSE_WEIGHT)]
+    pub impulse_weight: f64,
+    /// Bound on |ankle angular velocity| (rad/s; the seed's control experiment: 3.96).
+    #[arg(long)]
+    pub ankle_velocity_limit: Option<f64>,
+    /// Hessian: exact (default) or an approximation.
+    #[arg(long, value_enum, default_value = "exact")]
+    pub hessian: super::solve::HessianArg,
+    /// KKT tolerance.
+    #[arg(long, default_value_t = 1e-5)]
+    pub tol: f64,
+    /// Relative and absolute CVODES tolerance of the shooting intervals.
+    #[arg(long, default_value_t = 1e-8)]
+    pub integrator_tol: f64,
+    /// With `--hessian exact`: Gauss–Newton steps until the constraint violation is below this.
+    #[arg(long, default_value_t = 1e-3)]
+    pub exact_below: f64,
+    /// Iteration limit.
+    #[arg(long, default_value_t = 300)]
+    pub max_iter: usize,
+    /// Wall-time limit per solve (s).
+    #[arg(long)]
+    pub max_time: Option<f64>,
+    /// Report ground-force excursions above the measurement larger than this (N).
+    #[arg(long, default_value_t = DEFAULT_TRANSIENT_THRESHOLD_N)]
+    pub transient_threshold: f64,
+}
+
+/// Arguments of `footfall predict`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Foot: `ellipse`, `double-circle` or a foot file.
+    #[arg(long, default_value = "ellipse")]
+    foot: String,
+    /// Phase graph (default: the seed's graph for the bundled feet).
+    #[arg(long)]
+    phases: Option<PathBuf>,
+    /// Start from this solution: a run folder (its `solution.json`) or a solution file,
+    /// e.g. of `footfall track` with the same foot and phases. Default: from the data.
+    #[arg(long)]
+    init: Option<PathBuf>,
+    /// Output folder.
+    #[arg(long, default_value = "runs/predict")]
+    out: PathBuf,
+    /// Replace the output folder if it exists.
+    #[arg(long)]
+    overwrite: bool,
+    #[command(flatten)]
+    options: PredictOptions,
+}
+
+pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
+    run_inner(args, quiet).map_err(Failure::User)
+}
+
+fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
+    let folder = RunFolder::create(&args.out, args.overwrite)?;
+    let init = args.init.as_deref().map(read_solution).transpose()?;
+    let (out, res) = predict(&args.options, &args.foot, args.phases.as_deref(), init.as_ref(), folder, quiet)?;
+    finish(&out, &res, quiet)
+}
+
+/// Print the outcome and map a solve that did not converge to an error.
+pub fn finish(out: &GaitRunOutput, res: &SqpResult, quiet: bool) -> anyhow::Result<()> {
+    if !quiet {
+        eprintln!("{}\n{}: J = {:.6}, KKT {:.2e}, {} iterations, {:.1} s", out.table.to_markdown(), res.status, res.objective, res.kkt, res.history.len().saturating_sub(1), res.seconds);
+        match out.transients.first() {
+            Some(t) => eprintln!(
+                "largest ground-force transient: {} {} force {:.1} N at {:.3} s ({}), {:.1} N above the measurement for {:.1} ms",
+                t.foot, t.component, t.peak_n, t.t_peak, t.phase, t.excess_n, 1e3 * t.duration_s
+            ),
+            None => eprintln!("no ground-force transient above the threshold on the 1 ms grid"),
+        }
+        eprintln!("report: {}", out.path.join("report.html").display());
+    }
+    if res.status == SqpStatus::Converged {
+        Ok(())
+    } else {
+        Err(anyhow!("the solver stopped without converging: {} (results written to {})", res.status, out.path.display()))
+    }
+}
+
+/// A solution from a run folder (`solution.json` inside) or a solution file.
+pub fn read_solution(path: &Path) -> anyhow::Result<GaitSolution> {
+    let file = if path.is_dir() { path.join("solution.json") } else { path.to_path_buf() };
+    let text = std::fs::read_to_string(&file).with_context(|| format!("reading the initial solution {}", file.display()))?;
+    serde_json::from_str(&text).with_context(|| format!("{}: not a footfall solution (expected the solution.json of a track or predict run)", file.display()))
+}
+
+/// The default phase file of a foot argument.
+pub fn default_phases(foot: &str) -> PathBuf {
+    match foot {
+        "double-circle" | "double_circle" => PathBuf::from("phases/double_circle_walk.json"),
+        _ => PathBuf::from("phases/ellipse_walk.json"),
+    }
+}
+
+/// Solve one prediction and write its run folder.
+pub fn predict(
+    o: &PredictOptions,
+    foot: &str,
+    phases: Option<&Path>,
+    init: Option<&GaitSolution>,
+    folder: RunFolder,
+    quiet: bool,
+) -> anyhow::Result<(GaitRunOutput, SqpResult)> {
+    let foot_path = super::simulate::foot_path(foot);
+    let model = GaitModel::load(&o.model, &foot_path)?;
+    let phases = phases.map(Path::to_path_buf).unwrap_or_else(|| default_phases(foot));
+    let seq = PhaseSequence::load(&phases)?;
+    let sets = seq.resolve(&model, &phases)?;
+    let data = super::load_data(o.data.as_deref())?;
+    let tracking = TrackingSetup::new(&model, &seq, &sets, &data).map_err(|e| anyhow!("{}: {e}", data.source.display()))?;
+    let mut settings = PredictionSettings::from_data(&tracking, &data);
+    settings.step_length = o.step_length.unwrap_or(settings.step_length);
+    settings.speed = o.speed.unwrap_or(settings.speed);
+    settings.impulse_weight = o.impulse_weight;
+    settings.ankle_velocity_limit = o.ankle_velocity_limit;
+    let setup = match init {
+        Some(sol) => PredictionSetup::from_solution(&seq, &tracking, sol, settings.clone()),
+        None => PredictionSetup::from_data(&seq, &tracking, settings.clone()),
+    }
+    .map_err(|e| anyhow!("{}: {e}", phases.display()))?;
+    let cycle = GaitCycle::new(&model, &setup.seq, &sets).map_err(|e| anyhow!(e))?;
+    let integrator = IntegratorSettings { rtol: o.integrator_tol, atol: o.integrator_tol, ..Default::default() };
+    integrator.validate().context("--integrator-tol")?;
+    if !(o.transient_threshold.is_finite() && o.transient_threshold > 0.0) {
+        bail!("--transient-threshold {}: need a positive force (N)", o.transient_threshold);
+    }
+    let ocp = setup.ocp(&cycle, &model, &sets, integrator.clone()).map_err(|e| anyhow!(e))?;
+    let tr = Transcription::new(&ocp).context("transcribing the prediction problem")?;
+    let (_, _, w0) = tr.variable_bounds_and_guess();
+    let hessian = o.hessian.into();
+    let sqp_settings = SqpSettings {
+        tol_kkt: o.tol,
+        max_iter: o.max_iter,
+        max_time: o.max_time,
+        hessian,
+        exact_hessian_below: o.exact_below,
+        exact_convexification: ExactConvexification::InertiaCorrection,
+        ..Default::default()
+    };
+    if !quiet {
+        eprintln!(
+            "predicting with the {} foot: step length {:.3} m, speed {:.3} m/s, w_Δ = {}{} ({} variables, {} constraints, {:?}, from {})",
+            model.foot_name,
+            settings.step_length,
+            settings.speed,
+            settings.impulse_weight,
+            settings.ankle_velocity_limit.map_or(String::new(), |w| format!(", |ankle ω| ≤ {w} rad/s")),
+            tr.n(),
+            tr.m(),
+            hessian,
+            if init.is_some() { "the given solution" } else { "the data" }
+        );
+    }
+    super::Interruptible::install();
+    let res = if quiet {
+        sqp::solve(&tr, &w0, &sqp_settings, &mut super::Interruptible(&mut Silent))
+    } else {
+        sqp::solve(&tr, &w0, &sqp_settings, &mut super::Interruptible(&mut StderrLog))
+    };
+    let solution = GaitSolution::from_nlp(&tr, &res.w, &cycle.continuous, tracking.window.0);
+    let durations: Vec<String> = solution.phases.iter().map(|p| format!("{} {:.3} s", p.name, p.duration)).collect();
+    let mut extra_json = serde_json::Map::new();
+    extra_json.insert("prediction".into(), serde_json::to_value(&settings)?);
+    extra_json.insert("durations_s".into(), solution.phases.iter().map(|p| serde_json::json!({"phase": p.name, "duration": p.duration})).collect());
+    let out = super::gait_run::write(
+        GaitRun {
+            command: "predict",
+            title: format!("footfall prediction — {} foot, {}", model.foot_name, data.name),
+            data: &data,
+            model: &model,
+            sets: &sets,
+            phases_path: &phases,
+            result: &res,
+            solution: &solution,
+            integrator,
+            extra_summary: vec![
+                ("targets".into(), format!("step length {:.3} m, speed {:.3} m/s", settings.step_length, settings.speed)),
+                ("phase durations".into(), durations.join(", ")),
+            ],
+            extra_json,
+            extra_sections: vec![Section {
+                heading: "Problem".into(),
+                paragraphs: vec![format!(
+                    "Minimum ∫Σa² dt (eq. 20) plus w_Δ ΣΔ² with w_Δ = {} (eq. 21), at step length {:.3} m and average speed {:.3} m/s{}; started from {}. The errors above compare the predicted gait with the measurement in the layout of seed Table 4.",
+                    settings.impulse_weight,
+                    settings.step_length,
+                    settings.speed,
+                    settings.ankle_velocity_limit.map_or(String::new(), |w| format!(", ankle angular velocity bounded by {w} rad/s")),
+                    if init.is_some() { "the given solution" } else { "the data" }
+                )],
+                tables: vec![],
+                svgs: vec![],
+            }],
+            extra_files: vec![],
+            transient_threshold_n: o.transient_threshold,
+        },
+        folder,
+    )?;
+    Ok((out, res))
+}

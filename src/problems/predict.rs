@@ -1,0 +1,226 @@
+//! The prediction problem (seed 001 §3.5): the walking cycle that minimises muscle
+//! activation, $\int \sum a_i^2\,dt$ (eq. 20), plus the foot-ground impulses,
+//! $w_\Delta \sum \Delta_i^2$ with $w_\Delta = 10^{-2}$ (eq. 21), at the subject's step
+//! length and average forward speed. Phase durations are free within the phase file's
+//! bounds; the rest of the cycle (periodicity, unilateral forces, friction cone, swing
+//! clearance, landing contacts) is the [`GaitCycle`]'s.
+//!
+//! The Lagrange term is integrated by the trapezoidal rule over the shooting nodes (the
+//! activations are smooth states, driven by piecewise-linear excitations), so that it is
+//! a least-squares term `r = √(c_k T_j/N_j) a` with exact derivatives in the node state
+//! and the phase duration.
+
+use super::evaluation::GaitSolution;
+use super::gait::{GaitCycle, GaitGuess};
+use super::track::TrackingSetup;
+use super::{AdTerm, GenericFunction};
+use crate::data::GaitData;
+use crate::integrate::IntegratorSettings;
+use crate::model::effects::ModelScalar;
+use crate::model::{ConstraintSet, GaitModel};
+use crate::ocp::{Block, Ocp, Term};
+use crate::phases::{Duration, Phase, PhaseSequence};
+use std::sync::Arc;
+
+/// The seed's impulse weight w_Δ (eq. 21, N⁻²s⁻²).
+pub const SEED_IMPULSE_WEIGHT: f64 = 1e-2;
+
+/// Targets and options of the prediction.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct PredictionSettings {
+    /// Step length: forward pelvis displacement over the half cycle (m).
+    pub step_length: f64,
+    /// Average forward speed (m/s).
+    pub speed: f64,
+    /// Impulse weight w_Δ.
+    pub impulse_weight: f64,
+    /// Bound on |ankle angular velocity| (rad/s; the seed's control experiment uses 3.96).
+    pub ankle_velocity_limit: Option<f64>,
+}
+
+impl PredictionSettings {
+    /// The subject's step length and speed over the tracked half cycle of `data`.
+    pub fn from_data(setup: &TrackingSetup, data: &GaitData) -> Self {
+        let (t0, t1) = setup.window;
+        let x = crate::data::interp_linear(&[t0, t1], &data.time, &data.q[0]);
+        let step_length = x[1] - x[0];
+        Self { step_length, speed: step_length / (t1 - t0), impulse_weight: SEED_IMPULSE_WEIGHT, ankle_velocity_limit: None }
+    }
+}
+
+/// Everything the prediction OCP needs.
+pub struct PredictionSetup {
+    /// The phase file with free durations initialised from the guess.
+    pub seq: PhaseSequence,
+    /// Initial guess and bounds.
+    pub guess: GaitGuess,
+    /// Targets and options.
+    pub settings: PredictionSettings,
+    /// Forward pelvis position at the first node (m): the cost and constraints are
+    /// invariant to a shift along the ground, so the start is pinned to the subject's
+    /// (a free direction of zero curvature would leave the problem singular).
+    pub pelvis_x0: f64,
+}
+
+impl PredictionSetup {
+    /// Start from `solution` (e.g. a tracking solution of the same model and phase file),
+    /// with the state bounds of the tracking problem of `tracking` (seed §3.3).
+    pub fn from_solution(original: &PhaseSequence, tracking: &TrackingSetup, solution: &GaitSolution, settings: PredictionSettings) -> Result<Self, String> {
+        let cont: Vec<usize> = original.phases.iter().enumerate().filter(|(_, p)| matches!(p, Phase::Continuous { .. })).map(|(i, _)| i).collect();
+        if cont.len() != solution.phases.len() {
+            return Err(format!("the initial solution has {} continuous phases, the phase file '{}' {}", solution.phases.len(), original.name, cont.len()));
+        }
+        let mut seq = original.clone();
+        for (&i, ph) in cont.iter().zip(&solution.phases) {
+            let Phase::Continuous { name, intervals, duration, .. } = &mut seq.phases[i] else { unreachable!() };
+            if *name != ph.name || *intervals != ph.intervals() {
+                return Err(format!(
+                    "the initial solution's phase '{}' ({} intervals) does not match the phase file's '{name}' ({intervals} intervals)",
+                    ph.name,
+                    ph.intervals()
+                ));
+            }
+            *duration = match *duration {
+                Duration::Fixed(_) => Duration::Fixed(ph.duration),
+                Duration::Free { min, max, .. } => Duration::Free { initial: ph.duration.clamp(min, max), min, max },
+            };
+        }
+        let mut guess = tracking.guess.clone();
+        guess.x = solution.phases.iter().map(|p| p.x.clone()).collect();
+        guess.u = solution.phases.iter().map(|p| p.u.clone()).collect();
+        Self::new(seq, guess, settings, tracking.guess.x[0][0][0])
+    }
+
+    /// Start from the data, as tracking does (positions projected onto the contacts,
+    /// activations 0.01, excitations 0.025), with the measured durations as initial values.
+    pub fn from_data(original: &PhaseSequence, tracking: &TrackingSetup, settings: PredictionSettings) -> Result<Self, String> {
+        let mut seq = original.clone();
+        for (p, measured) in seq.phases.iter_mut().zip(&tracking.seq.phases) {
+            if let (Phase::Continuous { duration: Duration::Free { initial, min, max }, .. }, Phase::Continuous { duration: m, .. }) = (p, measured) {
+                *initial = m.value().clamp(*min, *max);
+            }
+        }
+        Self::new(seq, tracking.guess.clone(), settings, tracking.guess.x[0][0][0])
+    }
+
+    fn new(seq: PhaseSequence, mut guess: GaitGuess, settings: PredictionSettings, pelvis_x0: f64) -> Result<Self, String> {
+        if !(settings.step_length.is_finite() && settings.speed.is_finite() && settings.speed > 0.0) {
+            return Err(format!("step length {} m and speed {} m/s: need finite values and a positive speed", settings.step_length, settings.speed));
+        }
+        if !(settings.impulse_weight.is_finite() && settings.impulse_weight >= 0.0) {
+            return Err(format!("impulse weight {}: need a finite value ≥ 0", settings.impulse_weight));
+        }
+        if let Some(w) = settings.ankle_velocity_limit {
+            if !(w.is_finite() && w > 0.0) {
+                return Err(format!("ankle angular velocity limit {w} rad/s: need a positive value"));
+            }
+            // ankle_r and ankle_l are coordinates 5 and 8; their velocities follow the nq positions
+            let nq = crate::model::gait::COORDINATES.len();
+            for i in [nq + 5, nq + 8] {
+                guess.x_lb[i] = guess.x_lb[i].max(-w);
+                guess.x_ub[i] = guess.x_ub[i].min(w);
+            }
+            for phase in guess.x.iter_mut() {
+                for x in phase.iter_mut() {
+                    for i in [nq + 5, nq + 8] {
+                        x[i] = x[i].clamp(-w, w);
+                    }
+                }
+            }
+        }
+        Ok(Self { seq, guess, settings, pelvis_x0 })
+    }
+
+    /// The prediction OCP on `cycle` (built from [`Self::seq`]).
+    pub fn ocp<'c>(&self, cycle: &'c GaitCycle<'c>, model: &'c GaitModel, sets: &'c [ConstraintSet], integrator: IntegratorSettings) -> Result<Ocp<'c>, String> {
+        let mut ocp = cycle.ocp(&self.guess, integrator)?;
+        ocp.phases[0].x_lb[0][0] = self.pelvis_x0;
+        ocp.phases[0].x_ub[0][0] = self.pelvis_x0;
+        ocp.phases[0].x_guess[0][0] = self.pelvis_x0;
+        let steps = cycle.step_constraints(&ocp, Some(self.settings.step_length), Some(self.settings.speed));
+        ocp.constraints.extend(steps);
+        let (nq, na) = (model.nq(), model.na());
+        // eq. 20: ∫ Σ a² dt by the trapezoidal rule over the nodes
+        if na > 0 {
+            for (j, ph) in ocp.phases.iter().enumerate() {
+                let n = ph.intervals;
+                for k in 0..=n {
+                    let c = if k == 0 || k == n { 0.5 } else { 1.0 };
+                    let f = ActivationEffort { offset: 2 * nq, na, nx: model.nx(), weight: c / n as f64 };
+                    ocp.least_squares.push(Term {
+                        name: "activation".into(),
+                        args: vec![Block::State { phase: j, node: k }, Block::Duration { phase: j }],
+                        f: Arc::new(AdTerm(f)),
+                    });
+                }
+            }
+        }
+        // eq. 21: w_Δ Σ Δ², every impact that follows a continuous phase (a leading impact
+        // is the mirrored trailing one)
+        if self.settings.impulse_weight > 0.0 {
+            let seq = &self.seq;
+            let mut prev: Option<usize> = None;
+            for (i, ph) in seq.phases.iter().enumerate() {
+                match ph {
+                    Phase::Continuous { .. } => prev = Some(cycle.continuous.iter().position(|&c| c == i).expect("a continuous phase")),
+                    Phase::Impact { name, .. } => {
+                        let Some(j) = prev else { continue };
+                        let f = ImpactImpulses { model, set: sets[i].clone(), scale: self.settings.impulse_weight.sqrt() };
+                        ocp.least_squares.push(Term {
+                            name: format!("impulse({name})"),
+                            args: vec![Block::State { phase: j, node: ocp.phases[j].intervals }, Block::Params],
+                            f: Arc::new(AdTerm(f)),
+                        });
+                    }
+                }
+            }
+        }
+        Ok(ocp)
+    }
+}
+
+/// `√(weight · T) · a` at one node: its square is the node's share of ∫ Σ a² dt.
+/// Arguments: `(x, T)`.
+struct ActivationEffort {
+    offset: usize,
+    na: usize,
+    nx: usize,
+    weight: f64,
+}
+
+impl GenericFunction for ActivationEffort {
+    fn dim(&self) -> usize {
+        self.na
+    }
+    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), String> {
+        let t = z[self.nx];
+        let s = (t * self.weight).sqrt();
+        for (o, a) in out.iter_mut().zip(&z[self.offset..self.offset + self.na]) {
+            *o = s * *a;
+        }
+        Ok(())
+    }
+}
+
+/// `√w_Δ · Δ`: the impulses of the plastic impact with the contacts of `set`.
+/// Arguments: `(x, θ)`.
+struct ImpactImpulses<'a> {
+    model: &'a GaitModel,
+    set: ConstraintSet,
+    scale: f64,
+}
+
+impl GenericFunction for ImpactImpulses<'_> {
+    fn dim(&self) -> usize {
+        self.set.rows.len()
+    }
+    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), String> {
+        let (nx, nq) = (self.model.nx(), self.model.nq());
+        let (x, th) = z.split_at(nx);
+        let (_, imp) = self.model.impact(&self.set, &x[..nq], &x[nq..2 * nq], th).map_err(|e| e.to_string())?;
+        for (o, v) in out.iter_mut().zip(imp) {
+            *o = v * self.scale;
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,191 @@
+//! Measurement sets generated from a model solution, for tests with a known truth.
+//!
+//! A gait OCP solution spans one half cycle (left heel strike to right heel strike). The
+//! walk is extended periodically through the left↔right mirror: half cycle `k` is the
+//! solution with the legs and feet swapped when `k` is odd, and everything moved forward
+//! by `k` step lengths. Each requested sample is the model itself — the shooting interval
+//! containing it integrated from its node — so the data carry no interpolation error.
+//! Noise: independent Gaussian per channel and sample, with standard deviations per
+//! channel kind ([`NoiseModel`]) from a seeded ChaCha8 generator, so a seed gives the same
+//! bits on every machine.
+
+use super::evaluation::GaitSolution;
+use crate::data::{FootData, GaitData, SideSource, DEFAULT_COP_THRESHOLD};
+use crate::integrate::IntegratorSettings;
+use crate::model::{ConstraintSet, GaitModel};
+use crate::simulate::SimulationError;
+use rand::SeedableRng;
+use rand_distr::{Distribution, Normal};
+use std::collections::BTreeMap;
+use std::path::PathBuf;
+
+/// Standard deviations of the Gaussian measurement noise, per channel kind.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct NoiseModel {
+    /// Pelvis x and y (m).
+    pub position_m: f64,
+    /// Pelvis tilt and joint angles (rad).
+    pub angle_rad: f64,
+    /// Ground reaction forces, both components (N).
+    pub force_n: f64,
+    /// Centre of pressure x (m).
+    pub cop_m: f64,
+    /// Seed of the generator.
+    pub seed: u64,
+}
+
+impl NoiseModel {
+    /// No noise.
+    pub fn none() -> Self {
+        Self { position_m: 0.0, angle_rad: 0.0, force_n: 0.0, cop_m: 0.0, seed: 0 }
+    }
+}
+
+/// How to sample the synthetic trial.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SynthSettings {
+    /// Sampling rate (Hz).
+    pub rate_hz: f64,
+    /// Start of the trial relative to the solution's first instant (s; negative to start
+    /// inside the previous half cycle).
+    pub start_s: f64,
+    /// Length of the trial (s).
+    pub duration_s: f64,
+    /// Noise.
+    pub noise: NoiseModel,
+    /// Integrator of the intervals.
+    pub integrator: IntegratorSettings,
+}
+
+/// The truth behind a synthetic trial: where each sample came from.
+#[derive(Debug, Clone)]
+pub struct SynthTruth {
+    /// The noise-free trial.
+    pub clean: GaitData,
+    /// Half-cycle period (s) and step length (m) of the periodic extension.
+    pub half_period_s: f64,
+    /// Step length (m).
+    pub step_length_m: f64,
+}
+
+/// Index map of the left↔right mirror on [`crate::data::Q_NAMES`].
+const MIRROR_Q: [usize; 9] = [0, 1, 2, 6, 7, 8, 3, 4, 5];
+
+/// Generate a trial from `solution` (one half cycle of `model` under `sets`) extended
+/// periodically, sampled and noised as `settings` says. Returns the noisy trial and the
+/// truth. Time 0 of the trial is the solution's first instant.
+pub fn synthesize(
+    model: &GaitModel,
+    sets: &[ConstraintSet],
+    solution: &GaitSolution,
+    settings: &SynthSettings,
+    name: &str,
+) -> Result<(GaitData, SynthTruth), SimulationError> {
+    if !(settings.rate_hz.is_finite() && settings.rate_hz > 0.0 && settings.duration_s.is_finite() && settings.duration_s > 0.0 && settings.start_s.is_finite()) {
+        return Err(SimulationError::Input(format!(
+            "synthetic trial: rate {} Hz, start {} s, duration {} s (need a positive rate and duration)",
+            settings.rate_hz, settings.start_s, settings.duration_s
+        )));
+    }
+    let (s0, s1) = solution.span();
+    let half = s1 - s0;
+    let nodes = solution.node_samples(model, sets).map_err(|e| SimulationError::Dynamics { phase: "node".into(), t: s0, source: e })?;
+    let step_length = nodes.last().map_or(0.0, |l| l.x[0]) - nodes[0].x[0];
+    let dt = 1.0 / settings.rate_hz;
+    let n = (settings.duration_s * settings.rate_hz).floor() as usize + 1;
+    let time: Vec<f64> = (0..n).map(|k| settings.start_s + k as f64 * dt).collect();
+    // each sample's half cycle k and time τ within the solution
+    let place: Vec<(i64, f64)> = time
+        .iter()
+        .map(|&t| {
+            let k = (t / half).floor() as i64;
+            (k, (s0 + t - k as f64 * half).clamp(s0, s1))
+        })
+        .collect();
+    let mut taus: Vec<f64> = place.iter().map(|p| p.1).collect();
+    taus.sort_by(f64::total_cmp);
+    taus.dedup_by(|a, b| (*a - *b).abs() < 1e-12);
+    let samples = solution.sample_at(model, sets, &taus, &settings.integrator)?;
+    let find = |tau: f64| {
+        let i = taus.partition_point(|&v| v < tau - 1e-12);
+        &samples[i.min(samples.len() - 1)]
+    };
+    let mut q: [Vec<f64>; 9] = Default::default();
+    let mut feet: [FootData; 2] = Default::default();
+    for &(k, tau) in &place {
+        let s = find(tau);
+        let odd = k.rem_euclid(2) == 1;
+        let shift = k as f64 * step_length;
+        for (i, qi) in q.iter_mut().enumerate() {
+            let src = if odd { MIRROR_Q[i] } else { i };
+            qi.push(s.x[src] + if i == 0 { shift } else { 0.0 });
+        }
+        for (side, foot) in feet.iter_mut().enumerate() {
+            let l = &s.feet[if odd { 1 - side } else { side }];
+            foot.fx.push(l.fx);
+            foot.fy.push(l.fy);
+            foot.cop_x.push(if l.fy > 0.0 { l.cop_x + shift } else { f64::NAN });
+        }
+    }
+    let clean = GaitData {
+        name: name.to_string(),
+        source: PathBuf::from(format!("<synthetic: {name}>")),
+        time,
+        q,
+        feet,
+        extra: BTreeMap::new(),
+        body_mass: None,
+        force_plate_height: None,
+        belt_speed: None,
+        cop_threshold: DEFAULT_COP_THRESHOLD,
+        sides: [SideSource::Measured, SideSource::Measured],
+        overground: true,
+    };
+    let mut clean = clean;
+    hide_unloaded_cop(&mut clean);
+    let noisy = add_noise(&clean, &settings.noise);
+    Ok((noisy, SynthTruth { clean, half_period_s: half, step_length_m: step_length }))
+}
+
+/// CoP undefined (NaN) where the normal force is below the data's CoP threshold, as a
+/// force plate reports it.
+fn hide_unloaded_cop(data: &mut GaitData) {
+    let th = data.cop_threshold;
+    for f in data.feet.iter_mut() {
+        for (c, fy) in f.cop_x.iter_mut().zip(&f.fy) {
+            if !(*fy >= th) {
+                *c = f64::NAN;
+            }
+        }
+    }
+}
+
+/// `data` with independent Gaussian noise added to every defined sample (see the module
+/// docs). A foot that carries no load (zero force, as after the usual force-plate
+/// threshold) reads exactly zero, and the CoP is undefined wherever the noisy normal
+/// force is below the CoP threshold.
+pub fn add_noise(data: &GaitData, noise: &NoiseModel) -> GaitData {
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(noise.seed);
+    let mut out = data.clone();
+    let mut perturb = |v: &mut Vec<f64>, sd: f64, keep: &dyn Fn(usize) -> bool| {
+        if sd > 0.0 {
+            let d = Normal::new(0.0, sd).expect("a positive standard deviation");
+            for (k, x) in v.iter_mut().enumerate() {
+                if x.is_finite() && keep(k) {
+                    *x += d.sample(&mut rng);
+                }
+            }
+        }
+    };
+    for (i, qi) in out.q.iter_mut().enumerate() {
+        perturb(qi, if i < 2 { noise.position_m } else { noise.angle_rad }, &|_| true);
+    }
+    for f in out.feet.iter_mut() {
+        let loaded: Vec<bool> = f.fy.iter().zip(&f.fx).map(|(y, x)| *y != 0.0 || *x != 0.0).collect();
+        perturb(&mut f.fx, noise.force_n, &|k| loaded[k]);
+        perturb(&mut f.fy, noise.force_n, &|k| loaded[k]);
+        perturb(&mut f.cop_x, noise.cop_m, &|_| true);
+    }
+    hide_unloaded_cop(&mut out);
+    out
+}
