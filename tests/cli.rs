@@ -323,3 +323,33 @@ fn track_interrupted_by_ctrl_c_writes_the_last_iterate() {
         assert!(out.join(f).is_file(), "{f} missing");
     }
 }
+
+#[test]
+fn predict_and_compare_refuse_bad_arguments_before_solving() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("p");
+    // an initial solution that does not exist, or is not a solution
+    let o = footfall(&["predict", "--init", "no/such/run", "--out", s(&out), "--quiet"]);
+    assert_user_error(&o, &["no/such/run", "no such run folder"]);
+    let junk = dir.path().join("junk.json");
+    std::fs::write(&junk, "{\"phases\": 3}").unwrap();
+    let o = footfall(&["predict", "--init", s(&junk), "--out", s(&out), "--quiet"]);
+    assert_user_error(&o, &["junk.json", "not a footfall solution"]);
+    // a solution of another phase graph
+    let sol = dir.path().join("other.json");
+    std::fs::write(&sol, r#"{"phases": [{"name": "x", "set": 1, "t0": 0.0, "duration": 0.1, "controls": "linear", "x": [[0.0], [0.0]], "u": [[0.0], [0.0]]}], "theta": []}"#).unwrap();
+    let o = footfall(&["predict", "--init", s(&sol), "--out", s(&out), "--quiet"]);
+    assert_user_error(&o, &["phases/ellipse_walk.json", "continuous phases"]);
+    let o = footfall(&["predict", "--speed=-1", "--out", s(&out), "--quiet"]);
+    assert_user_error(&o, &["speed"]);
+    assert!(!out.exists());
+    // compare: one foot, an unknown expected foot, a malformed --init
+    let o = footfall(&["compare", "--feet", "ellipse", "--out", s(&out), "--quiet"]);
+    assert_user_error(&o, &["--feet", "at least two"]);
+    let o = footfall(&["compare", "--expect-transient", "banana", "--out", s(&out), "--quiet"]);
+    assert_user_error(&o, &["--expect-transient banana"]);
+    let o = footfall(&["compare", "--init", "ellipse", "--out", s(&out), "--quiet"]);
+    assert_user_error(&o, &["--init ellipse", "FOOT=RUN"]);
+    assert!(!out.exists());
+    assert!(entries(dir.path()).iter().all(|e| !e.contains("partial")), "{:?}", entries(dir.path()));
+}

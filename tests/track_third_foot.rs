@@ -44,7 +44,7 @@ fn third_foot_is_fitted_then_tracked_from_json_files_only() {
     );
     assert_eq!(summary["status"], "converged");
     assert!(summary["kkt"].as_f64().unwrap() <= 1e-5);
-    assert_eq!(summary["foot"], "heel_circle_forefoot_ellipse");
+    assert_eq!(summary["foot"], "heel_circle_forefoot_ellipse_fitted");
 
     // the model follows the measurement: errors of the size the bundled feet reach
     let err = |name: &str| -> f64 {

@@ -35,7 +35,8 @@ pub struct PredictOptions {
     /// Impulse weight w_Δ of eq. 21.
     #[arg(long, default_value_t = SEED_IMPULSE_WEIGHT)]
     pub impulse_weight: f64,
-    /// Bound on |ankle angular velocity| (rad/s; the seed's control experiment: 3.96).
+    /// Bound on |ankle angular velocity| (rad/s), replacing the data's range ± 1 rad/s
+    /// (the seed's predictions: 14.6; its control experiment: 3.96).
     #[arg(long)]
     pub ankle_velocity_limit: Option<f64>,
     /// Hessian: exact (default) or an approximation.
@@ -47,8 +48,10 @@ pub struct PredictOptions {
     /// Relative and absolute CVODES tolerance of the shooting intervals.
     #[arg(long, default_value_t = 1e-8)]
     pub integrator_tol: f64,
-    /// With `--hessian exact`: Gauss–Newton steps until the constraint violation is below this.
-    #[arg(long, default_value_t = 1e-3)]
+    /// With `--hessian exact`: Gauss–Newton steps until the constraint violation is below
+    /// this (default: exact from the first iteration; the prediction's Gauss–Newton matrix
+    /// has no curvature in positions, velocities and excitations).
+    #[arg(long, default_value_t = f64::INFINITY)]
     pub exact_below: f64,
     /// Iteration limit.
     #[arg(long, default_value_t = 300)]
@@ -117,6 +120,9 @@ pub fn finish(out: &GaitRunOutput, res: &SqpResult, quiet: bool) -> anyhow::Resu
 
 /// A solution from a run folder (`solution.json` inside) or a solution file.
 pub fn read_solution(path: &Path) -> anyhow::Result<GaitSolution> {
+    if !path.exists() {
+        bail!("{}: no such run folder or solution file (give a track or predict run folder, or its solution.json)", path.display());
+    }
     let file = if path.is_dir() { path.join("solution.json") } else { path.to_path_buf() };
     let text = std::fs::read_to_string(&file).with_context(|| format!("reading the initial solution {}", file.display()))?;
     serde_json::from_str(&text).with_context(|| format!("{}: not a footfall solution (expected the solution.json of a track or predict run)", file.display()))

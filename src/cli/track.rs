@@ -29,6 +29,10 @@ pub struct Args {
     /// Sagittal CSV (default: the bundled OpenSim subject01 trial, moved overground).
     #[arg(long)]
     data: Option<PathBuf>,
+    /// Low-pass the measured coordinates at this cutoff (Hz; zero-phase 2nd-order
+    /// Butterworth) before tracking, for raw motion-capture data.
+    #[arg(long)]
+    kinematics_cutoff: Option<f64>,
     /// Output folder.
     #[arg(long, default_value = "runs/track")]
     out: PathBuf,
@@ -71,7 +75,10 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     });
     let seq = PhaseSequence::load(&phases)?;
     let sets = seq.resolve(&model, &phases)?;
-    let data = super::load_data(args.data.as_deref())?;
+    let mut data = super::load_data(args.data.as_deref())?;
+    if let Some(fc) = args.kinematics_cutoff {
+        data = data.low_pass_kinematics(fc).context("--kinematics-cutoff")?;
+    }
     let setup = TrackingSetup::new(&model, &seq, &sets, &data).map_err(|e| anyhow!("{}: {e}", data.source.display()))?;
     let cycle = GaitCycle::new(&model, &setup.seq, &sets).map_err(|e| anyhow!(e))?;
     let integrator = IntegratorSettings { rtol: args.integrator_tol, atol: args.integrator_tol, ..Default::default() };

@@ -36,6 +36,7 @@
 pub mod csv;
 pub mod error;
 pub mod events;
+pub mod filter;
 pub mod fourier;
 pub mod spline;
 pub mod storage;
@@ -260,6 +261,37 @@ impl GaitData {
             DataError::Invalid { reason, .. } => DataError::invalid(&self.source, channel, reason),
             other => other,
         })
+    }
+
+    /// The trial with its coordinates (pelvis and joint angles; not the forces or the
+    /// CoP, which force plates measure accurately) low-pass filtered at `cutoff_hz` by a
+    /// zero-phase second-order Butterworth filter ([`filter::low_pass`]), as gait labs
+    /// smooth kinematics before differentiating them.
+    ///
+    /// Errors: data that fail [`Self::validate`]; samples not uniformly spaced (to 1 %);
+    /// a cutoff not in (0, f_s/2).
+    pub fn low_pass_kinematics(&self, cutoff_hz: f64) -> Result<GaitData, DataError> {
+        self.validate()?;
+        let n = self.time.len();
+        let dt = (self.time[n - 1] - self.time[0]) / (n - 1) as f64;
+        if let Some(k) = (1..n).find(|&k| ((self.time[k] - self.time[k - 1]) - dt).abs() > 0.01 * dt) {
+            return Err(DataError::invalid(
+                &self.source,
+                "time",
+                format!("filtering needs uniform sampling; the step before sample {k} is {} s, the mean {dt} s", self.time[k] - self.time[k - 1]),
+            ));
+        }
+        let fs = 1.0 / dt;
+        if !(cutoff_hz > 0.0 && cutoff_hz < 0.5 * fs) {
+            return Err(DataError::invalid(&self.source, "cutoff", format!("the cutoff must lie in (0, {} Hz) for {fs} Hz sampling, got {cutoff_hz}", 0.5 * fs)));
+        }
+        let mut out = self.clone();
+        for q in out.q.iter_mut() {
+            if q.iter().all(|v| v.is_finite()) {
+                *q = filter::low_pass(q, fs, cutoff_hz);
+            }
+        }
+        Ok(out)
     }
 
     /// The samples with `t0 ≤ t ≤ t1` (to within 1e-9 s; no interpolation at the ends:

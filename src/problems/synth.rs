@@ -10,7 +10,8 @@
 //! bits on every machine.
 
 use super::evaluation::GaitSolution;
-use crate::data::{FootData, GaitData, SideSource, DEFAULT_COP_THRESHOLD};
+use super::track::loaded_feet;
+use crate::data::{Events, FootData, GaitData, SideSource, DEFAULT_COP_THRESHOLD};
 use crate::integrate::IntegratorSettings;
 use crate::model::{ConstraintSet, GaitModel};
 use crate::simulate::SimulationError;
@@ -66,6 +67,8 @@ pub struct SynthTruth {
     pub half_period_s: f64,
     /// Step length (m).
     pub step_length_m: f64,
+    /// The exact gait events: where the phase graph puts a foot on or off the ground.
+    pub events: Events,
 }
 
 /// Index map of the left↔right mirror on [`crate::data::Q_NAMES`].
@@ -141,10 +144,76 @@ pub fn synthesize(
         sides: [SideSource::Measured, SideSource::Measured],
         overground: true,
     };
+    // noise first (the noisy force decides where the noisy CoP is defined), then the
+    // clean CoP hidden below the threshold as well
+    let noisy = add_noise(&clean, &settings.noise);
     let mut clean = clean;
     hide_unloaded_cop(&mut clean);
-    let noisy = add_noise(&clean, &settings.noise);
-    Ok((noisy, SynthTruth { clean, half_period_s: half, step_length_m: step_length }))
+    let events = exact_events(model, sets, solution, &clean);
+    Ok((noisy, SynthTruth { clean, half_period_s: half, step_length_m: step_length, events }))
+}
+
+/// Heel strikes and toe offs of the periodic extension over the span of `data`: the
+/// instants where the contact sets of consecutive continuous phases put a foot on or off
+/// the ground.
+fn exact_events(model: &GaitModel, sets: &[ConstraintSet], solution: &GaitSolution, data: &GaitData) -> Events {
+    let (s0, s1) = solution.span();
+    let half = s1 - s0;
+    let (t_start, t_end) = (data.time[0], data.time[data.time.len() - 1]);
+    // (time, [right, left] loaded) at the start of every continuous phase of the extension
+    let mut spans: Vec<(f64, [bool; 2])> = Vec::new();
+    let k0 = (t_start / half).floor() as i64;
+    let k1 = (t_end / half).ceil() as i64;
+    for k in k0..=k1 {
+        for p in &solution.phases {
+            let mut feet = loaded_feet(model, &sets[p.set]);
+            if k.rem_euclid(2) == 1 {
+                feet.swap(0, 1);
+            }
+            spans.push((p.t0 - s0 + k as f64 * half, feet));
+        }
+    }
+    let mut ev = Events {
+        heel_strike: [Vec::new(), Vec::new()],
+        toe_off: [Vec::new(), Vec::new()],
+        threshold: 0.0,
+        loaded_at_start: [false; 2],
+        span: (t_start, t_end),
+        source: data.source.clone(),
+    };
+    let mut current: Option<[bool; 2]> = None;
+    for (t, feet) in spans {
+        if t <= t_start {
+            current = Some(feet);
+            continue;
+        }
+        if t >= t_end {
+            break;
+        }
+        let before = current.unwrap_or(feet);
+        for s in 0..2 {
+            if feet[s] && !before[s] {
+                ev.heel_strike[s].push(t);
+            } else if !feet[s] && before[s] {
+                ev.toe_off[s].push(t);
+            }
+        }
+        current = Some(feet);
+    }
+    // the first phase in the data decides what is loaded at the start
+    ev.loaded_at_start = current.map_or([false; 2], |_| {
+        let mut first = [false; 2];
+        let k = (t_start / half).floor() as i64;
+        let tau = s0 + t_start - k as f64 * half;
+        if let Some(p) = solution.phases.iter().rev().find(|p| p.t0 <= tau) {
+            first = loaded_feet(model, &sets[p.set]);
+            if k.rem_euclid(2) == 1 {
+                first.swap(0, 1);
+            }
+        }
+        first
+    });
+    ev
 }
 
 /// CoP undefined (NaN) where the normal force is below the data's CoP threshold, as a

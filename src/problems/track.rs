@@ -26,7 +26,7 @@ pub fn half_cycle(events: &Events) -> Result<(f64, f64), String> {
 }
 
 /// Which feet touch the ground in a constraint set: `[right, left]`.
-fn loaded_feet(model: &GaitModel, set: &ConstraintSet) -> [bool; 2] {
+pub fn loaded_feet(model: &GaitModel, set: &ConstraintSet) -> [bool; 2] {
     let mut f = [false; 2];
     for r in &set.rows {
         f[if model.contacts[r.contact].side == Side::Right { 0 } else { 1 }] = true;
@@ -113,6 +113,12 @@ impl TrackingSetup {
     /// constraint sets `sets`).
     pub fn new(model: &GaitModel, seq: &PhaseSequence, sets: &[ConstraintSet], data: &GaitData) -> Result<Self, String> {
         let events = detect_events(data, DEFAULT_EVENT_FRACTION).map_err(|e| e.to_string())?;
+        Self::with_events(model, seq, sets, data, events)
+    }
+
+    /// As [`new`](Self::new), with the gait events given instead of detected from the
+    /// force threshold (e.g. the exact events of a synthetic trial).
+    pub fn with_events(model: &GaitModel, seq: &PhaseSequence, sets: &[ConstraintSet], data: &GaitData, events: Events) -> Result<Self, String> {
         let (t0, t1) = half_cycle(&events)?;
         let seq = fix_durations(seq, model, sets, &events, t0, t1)?;
         let splines: Vec<CubicSpline> =

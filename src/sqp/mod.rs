@@ -523,15 +523,32 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
         let (sol, elastic) = match first {
             Ok(s) => (s, false),
             // inconsistent linearisation (or a stalled, nearly inconsistent one): elastic mode
-            Err(QpError::Infeasible | QpError::Failed(_)) => {
-                match solve_qp(&data(Some(rho))) {
-                    Ok(s) => (s, true),
-                    Err(e) => {
-                        status = SqpStatus::QpFailure(e.to_string());
-                        break;
+            Err(QpError::Infeasible | QpError::Failed(_)) => match solve_qp(&data(Some(rho))) {
+                Ok(s) => (s, true),
+                Err(e) => {
+                    // the interior-point solver lost accuracy on this QP: a proximal shift
+                    // δI (growing) gives a better-conditioned QP with a shorter step
+                    let hmax = h.vals.iter().fold(1.0f64, |m, v| m.max(v.abs()));
+                    let mut rescued = None;
+                    for delta in [1e-6, 1e-4, 1e-2] {
+                        let mut hs = h.clone();
+                        for i in 0..n {
+                            hs.push(i, i, delta * hmax);
+                        }
+                        if let Ok(s) = solve_qp(&QpData { h: &hs, ..data(None) }) {
+                            rescued = Some(s);
+                            break;
+                        }
+                    }
+                    match rescued {
+                        Some(s) => (s, false),
+                        None => {
+                            status = SqpStatus::QpFailure(e.to_string());
+                            break;
+                        }
                     }
                 }
-            }
+            },
         };
         let mut sol = sol;
         if aug_rho > 0.0 && !elastic {
