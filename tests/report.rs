@@ -7,6 +7,8 @@
 //! rather than passes silently, when it is missing. Set `FOOTFALL_REPORT_OUT=DIR` to keep
 //! the rendered `report.html` and `report.png` in DIR for a look.
 
+mod common;
+
 use footfall::report::csv::{parse_sto, TimeSeries};
 use footfall::report::html::{Report, Section, Summary, Tone};
 use footfall::report::plot::{
@@ -14,9 +16,7 @@ use footfall::report::plot::{
 };
 use footfall::report::table::{error_table, ChannelErrors, ErrorStats, Table};
 use footfall::report::ReportError;
-use std::io::Read;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 // ---------------------------------------------------------------------------------------
@@ -767,68 +767,7 @@ fn report_html_is_self_contained() {
     assert_eq!(std::fs::read_to_string(path).unwrap(), html);
 }
 
-const CHROMIUM: &str = "/usr/bin/chromium";
-
-/// Run headless Chromium on `args` (after the flags that keep it off the network) with a
-/// fresh profile; returns stdout. Panics on a time-out or a failure.
-fn chromium(args: &[String], timeout: Duration) -> Vec<u8> {
-    assert!(
-        Path::new(CHROMIUM).exists(),
-        "{CHROMIUM} not found: run tools/setup, which installs Debian's chromium for this test"
-    );
-    let profile = tempfile::tempdir().unwrap();
-    let mut child = Command::new(CHROMIUM)
-        .args([
-            "--headless",
-            "--no-sandbox",
-            "--disable-gpu",
-            "--disable-quic",
-            "--no-first-run",
-            "--disable-background-networking",
-            "--disable-component-update",
-            "--disable-sync",
-            "--hide-scrollbars",
-        ])
-        .arg(format!("--user-data-dir={}", profile.path().display()))
-        .args(args)
-        .stdin(Stdio::null())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("start chromium");
-    let mut out = child.stdout.take().unwrap();
-    let mut err = child.stderr.take().unwrap();
-    let out_t = std::thread::spawn(move || {
-        let mut v = Vec::new();
-        out.read_to_end(&mut v).ok();
-        v
-    });
-    let err_t = std::thread::spawn(move || {
-        let mut v = Vec::new();
-        err.read_to_end(&mut v).ok();
-        v
-    });
-    let start = Instant::now();
-    let status = loop {
-        if let Some(s) = child.try_wait().expect("wait for chromium") {
-            break s;
-        }
-        if start.elapsed() > timeout {
-            child.kill().ok();
-            child.wait().ok();
-            panic!("chromium {args:?} did not finish within {timeout:?}");
-        }
-        std::thread::sleep(Duration::from_millis(50));
-    };
-    let stdout = out_t.join().unwrap();
-    let stderr = err_t.join().unwrap();
-    assert!(
-        status.success(),
-        "chromium {args:?} failed ({status}): {}",
-        String::from_utf8_lossy(&stderr)
-    );
-    stdout
-}
+use common::chromium;
 
 #[test]
 fn chromium_renders_the_report() {

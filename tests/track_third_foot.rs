@@ -2,6 +2,8 @@
 //! graph, defined only in `models/feet/` and `phases/` — is fitted by `fit-foot` and then
 //! tracked end to end by `track --foot FILE --phases FILE` from the command line.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -74,5 +76,13 @@ fn third_foot_is_fitted_then_tracked_from_json_files_only() {
     assert!(fine["max_baumgarte_force_n"].as_f64().unwrap() < 0.05 * bw, "{fine}");
     for f in ["tracking.csv", "fine_grid.csv", "kinematics.sto", "table3.md", "solution.json", "report.html"] {
         assert!(track_dir.join(f).is_file(), "{f} missing");
+    }
+    // the run's own report renders in headless Chromium with every plot: 7 kinematic
+    // channels and normal force, tangential force and CoP of both feet
+    let url = format!("file://{}", track_dir.join("report.html").display());
+    let dom = String::from_utf8(common::chromium(&["--dump-dom".into(), url], std::time::Duration::from_secs(90))).unwrap();
+    assert_eq!(dom.matches("<svg").count(), 13, "plots in the rendered report");
+    for title in ["knee r", "ankle l", "Normal GRF, right foot", "CoP, left foot", "Tracking errors by phase", "Ground-force transients"] {
+        assert!(dom.contains(title), "{title} not in the rendered report");
     }
 }

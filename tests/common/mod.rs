@@ -2,7 +2,10 @@
 #![allow(dead_code)]
 
 use footfall::model::GaitModel;
+use std::io::Read;
 use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
 
 /// Project root.
 pub fn root() -> PathBuf {
@@ -101,3 +104,67 @@ pub fn constraint_sets(foot: &str) -> Vec<(&'static str, Vec<(&'static str, bool
         ],
     }
 }
+
+pub const CHROMIUM: &str = "/usr/bin/chromium";
+
+/// Run headless Chromium on `args` (after the flags that keep it off the network) with a
+/// fresh profile; returns stdout. Panics on a time-out or a failure.
+pub fn chromium(args: &[String], timeout: Duration) -> Vec<u8> {
+    assert!(
+        Path::new(CHROMIUM).exists(),
+        "{CHROMIUM} not found: run tools/setup, which installs Debian's chromium for this test"
+    );
+    let profile = tempfile::tempdir().unwrap();
+    let mut child = Command::new(CHROMIUM)
+        .args([
+            "--headless",
+            "--no-sandbox",
+            "--disable-gpu",
+            "--disable-quic",
+            "--no-first-run",
+            "--disable-background-networking",
+            "--disable-component-update",
+            "--disable-sync",
+            "--hide-scrollbars",
+        ])
+        .arg(format!("--user-data-dir={}", profile.path().display()))
+        .args(args)
+        .stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start chromium");
+    let mut out = child.stdout.take().unwrap();
+    let mut err = child.stderr.take().unwrap();
+    let out_t = std::thread::spawn(move || {
+        let mut v = Vec::new();
+        out.read_to_end(&mut v).ok();
+        v
+    });
+    let err_t = std::thread::spawn(move || {
+        let mut v = Vec::new();
+        err.read_to_end(&mut v).ok();
+        v
+    });
+    let start = Instant::now();
+    let status = loop {
+        if let Some(s) = child.try_wait().expect("wait for chromium") {
+            break s;
+        }
+        if start.elapsed() > timeout {
+            child.kill().ok();
+            child.wait().ok();
+            panic!("chromium {args:?} did not finish within {timeout:?}");
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    };
+    let stdout = out_t.join().unwrap();
+    let stderr = err_t.join().unwrap();
+    assert!(
+        status.success(),
+        "chromium {args:?} failed ({status}): {}",
+        String::from_utf8_lossy(&stderr)
+    );
+    stdout
+}
+
