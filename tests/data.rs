@@ -718,6 +718,7 @@ fn synthetic(period: f64) -> (GaitData, impl Fn(usize, f64) -> f64) {
         })
         .collect();
     let d = GaitData {
+        events: None,
         name: "synthetic".into(),
         source: "<memory>".into(),
         q: [

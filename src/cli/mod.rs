@@ -8,6 +8,7 @@ mod gait_run;
 mod predict;
 mod simulate;
 mod solve;
+mod synth;
 mod track;
 
 use clap::{Parser, Subcommand};
@@ -38,6 +39,8 @@ enum Command {
     Predict(predict::Args),
     /// Run the same prediction for two or more feet and compare their ground forces.
     Compare(compare::Args),
+    /// Generate a measurement set from a model solution, with noise and the truth kept apart.
+    Synth(synth::Args),
 }
 
 /// Failure classes mapped to exit codes.
@@ -55,6 +58,7 @@ pub fn main() -> ExitCode {
         Command::FitFoot(args) => fit_foot::run(args, cli.quiet),
         Command::Predict(args) => predict::run(args, cli.quiet),
         Command::Compare(args) => compare::run(args, cli.quiet),
+        Command::Synth(args) => synth::run(args, cli.quiet),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -23,13 +23,13 @@
 
 use super::error::DataError;
 use super::storage::check_time;
-use super::{FootData, GaitData, SideSource, DEFAULT_COP_THRESHOLD, Q_NAMES};
+use super::{Events, FootData, GaitData, SideSource, DEFAULT_COP_THRESHOLD, Q_NAMES};
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// Gait events stored in a meta file (s).
-#[derive(Debug, Clone, PartialEq, Default, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Default, Deserialize, serde::Serialize)]
 pub struct MetaEvents {
     /// Heel strikes (s).
     #[serde(default)]
@@ -70,6 +70,9 @@ pub struct TrialMeta {
     /// `angles` (rad, deg), `forces` (N).
     #[serde(default)]
     pub units: Option<BTreeMap<String, String>>,
+    /// Gait events to use instead of force-threshold detection, keyed `r` and `l`.
+    #[serde(default)]
+    pub events_s: Option<BTreeMap<String, MetaEvents>>,
     /// Events detected on the raw forces with a 20 N threshold, keyed `r` and `l`.
     #[serde(default, rename = "events_from_raw_grf_threshold_20N")]
     pub events_20n: Option<BTreeMap<String, MetaEvents>>,
@@ -274,8 +277,82 @@ pub fn read_sagittal_csv_with(path: &Path, meta: &MetaSource) -> Result<GaitData
         if let Some(name) = m.dataset {
             data.name = name;
         }
+        if let Some(ev) = m.events_s {
+            data.events = Some(given_events(&data, &ev, meta_path.as_deref().unwrap_or(path))?);
+        }
     }
     Ok(data)
+}
+
+/// Events given in a meta file: both sides, increasing, inside the recording; a foot is
+/// loaded at the start when its first event is a toe off.
+fn given_events(data: &GaitData, ev: &BTreeMap<String, MetaEvents>, meta: &Path) -> Result<Events, DataError> {
+    let mut out = Events {
+        heel_strike: [Vec::new(), Vec::new()],
+        toe_off: [Vec::new(), Vec::new()],
+        threshold: 0.0,
+        loaded_at_start: [false; 2],
+        span: (data.time[0], data.time[data.time.len() - 1]),
+        source: data.source.clone(),
+    };
+    for (s, side) in ["r", "l"].iter().enumerate() {
+        let e = ev.get(*side).ok_or_else(|| DataError::invalid(meta, format!("events_s.{side}"), "missing: give heel_strike_s and toe_off_s for both sides r and l"))?;
+        for (what, v) in [("heel_strike_s", &e.heel_strike_s), ("toe_off_s", &e.toe_off_s)] {
+            if let Some(k) = (0..v.len()).find(|&k| !(v[k] >= out.span.0 && v[k] <= out.span.1) || (k > 0 && v[k] <= v[k - 1])) {
+                return Err(DataError::invalid(
+                    meta,
+                    format!("events_s.{side}.{what}[{k}]"),
+                    format!("{} s: events must increase and lie within the recording {}–{} s", v[k], out.span.0, out.span.1),
+                ));
+            }
+        }
+        out.loaded_at_start[s] = match (e.heel_strike_s.first(), e.toe_off_s.first()) {
+            (Some(h), Some(t)) => t < h,
+            (None, Some(_)) => true,
+            _ => false,
+        };
+        out.heel_strike[s] = e.heel_strike_s.clone();
+        out.toe_off[s] = e.toe_off_s.clone();
+    }
+    Ok(out)
+}
+
+/// The trial as a sagittal CSV (the schema of the module docs, SI units; `NaN` for an
+/// undefined CoP) and its meta JSON (CoP threshold, body mass, given events), so that
+/// [`read_sagittal_csv`] reads it back.
+pub fn write_sagittal_csv(data: &GaitData) -> (String, String) {
+    use std::fmt::Write as _;
+    let mut csv = String::from("time");
+    for n in Q_NAMES {
+        write!(csv, ",{n}").ok();
+    }
+    for side in ["r", "l"] {
+        write!(csv, ",grf_x_{side},grf_y_{side},cop_x_{side}").ok();
+    }
+    csv.push('\n');
+    for k in 0..data.time.len() {
+        write!(csv, "{}", data.time[k]).ok();
+        for q in &data.q {
+            write!(csv, ",{}", q[k]).ok();
+        }
+        for f in &data.feet {
+            write!(csv, ",{},{},{}", f.fx[k], f.fy[k], if f.cop_x[k].is_finite() { f.cop_x[k].to_string() } else { "NaN".into() }).ok();
+        }
+        csv.push('\n');
+    }
+    let mut meta = serde_json::json!({
+        "dataset": data.name,
+        "cop_threshold_n": data.cop_threshold,
+        "treadmill": false,
+    });
+    if let Some(m) = data.body_mass {
+        meta["body_mass_kg_model"] = m.into();
+    }
+    if let Some(e) = &data.events {
+        let side = |s: usize| MetaEvents { heel_strike_s: e.heel_strike[s].clone(), toe_off_s: e.toe_off[s].clone() };
+        meta["events_s"] = serde_json::json!({"r": side(0), "l": side(1)});
+    }
+    (csv, serde_json::to_string_pretty(&meta).unwrap_or_default())
 }
 
 fn foot_columns(side: &str) -> [String; 6] {
@@ -493,6 +570,7 @@ fn parse_sagittal_csv(
         .unwrap_or_default();
     let name = stem.strip_suffix("_sagittal").unwrap_or(&stem).to_string();
     Ok(GaitData {
+        events: None,
         name,
         source: p,
         time,

@@ -42,7 +42,7 @@ pub mod spline;
 pub mod storage;
 
 pub use csv::{
-    read_meta, read_sagittal_csv, read_sagittal_csv_with, sibling_meta_path, MetaEvents,
+    read_meta, read_sagittal_csv, read_sagittal_csv_with, sibling_meta_path, write_sagittal_csv, MetaEvents,
     MetaSource, TrialMeta,
 };
 pub use error::DataError;
@@ -141,6 +141,9 @@ pub struct GaitData {
     pub sides: [SideSource; 2],
     /// Whether x positions are in the overground frame (belt displacement added).
     pub overground: bool,
+    /// Gait events given with the data (meta file `events_s`), used instead of the force
+    /// threshold when present: e.g. a lab's event markers or a synthetic trial's truth.
+    pub events: Option<Events>,
 }
 
 pub(crate) fn side_index(side: Side) -> usize {
@@ -326,6 +329,7 @@ impl GaitData {
         }
         let pick = |v: &[f64]| keep.iter().map(|&k| v[k]).collect::<Vec<f64>>();
         Ok(GaitData {
+            events: None,
             name: self.name.clone(),
             source: self.source.clone(),
             time: pick(&self.time),

@@ -704,6 +704,7 @@ impl GaitData {
         let force_plate_height =
             (!plate.is_empty()).then(|| plate.iter().sum::<f64>() / plate.len() as f64);
         Ok(GaitData {
+            events: None,
             name: ks.name.clone(),
             source: ks.path.clone(),
             time,

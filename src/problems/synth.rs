@@ -143,6 +143,7 @@ pub fn synthesize(
         cop_threshold: DEFAULT_COP_THRESHOLD,
         sides: [SideSource::Measured, SideSource::Measured],
         overground: true,
+        events: None,
     };
     // noise first (the noisy force decides where the noisy CoP is defined), then the
     // clean CoP hidden below the threshold as well
@@ -150,6 +151,9 @@ pub fn synthesize(
     let mut clean = clean;
     hide_unloaded_cop(&mut clean);
     let events = exact_events(model, sets, solution, &clean);
+    let mut noisy = noisy;
+    noisy.events = Some(events.clone());
+    clean.events = Some(events.clone());
     Ok((noisy, SynthTruth { clean, half_period_s: half, step_length_m: step_length, events }))
 }
 

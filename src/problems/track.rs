@@ -110,9 +110,13 @@ pub struct TrackingSetup {
 
 impl TrackingSetup {
     /// Build from `data` for `model` and the phase file `seq` (with its resolved
-    /// constraint sets `sets`).
+    /// constraint sets `sets`), with the events given with the data or else detected from
+    /// the force threshold (5 % of peak).
     pub fn new(model: &GaitModel, seq: &PhaseSequence, sets: &[ConstraintSet], data: &GaitData) -> Result<Self, String> {
-        let events = detect_events(data, DEFAULT_EVENT_FRACTION).map_err(|e| e.to_string())?;
+        let events = match &data.events {
+            Some(e) => e.clone(),
+            None => detect_events(data, DEFAULT_EVENT_FRACTION).map_err(|e| e.to_string())?,
+        };
         Self::with_events(model, seq, sets, data, events)
     }
 

@@ -238,16 +238,21 @@ pub fn solve(q: &QpData<'_>) -> Result<QpSolution, QpError> {
     // defaults as a fallback when it stalls
     let mut last = String::new();
     let mut solved = None;
-    for tol in [1e-10, 1e-8] {
+    // a third attempt for ill-conditioned QPs: stronger static regularisation of the KKT
+    // factorisation, more iterative refinement and more iterations
+    for (tol, robust) in [(1e-10, false), (1e-8, false), (1e-8, true)] {
+        let base = DefaultSettings::<f64>::default();
         let settings = DefaultSettings {
             verbose: false,
             max_threads: 1,
             tol_gap_abs: tol,
             tol_gap_rel: tol,
             tol_feas: tol,
-            max_iter: 200,
+            max_iter: if robust { 500 } else { 200 },
             presolve_enable: false,
-            ..DefaultSettings::default()
+            static_regularization_constant: if robust { 1e-6 } else { base.static_regularization_constant },
+            iterative_refinement_max_iter: if robust { 50 } else { base.iterative_refinement_max_iter },
+            ..base
         };
         let mut solver =
             DefaultSolver::new(&pm, &qv, &am, &b, &cones, settings).map_err(|e| QpError::Failed(e.to_string()))?;
