@@ -530,7 +530,7 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
                     // δI (growing) gives a better-conditioned QP with a shorter step
                     let hmax = h.vals.iter().fold(1.0f64, |m, v| m.max(v.abs()));
                     let mut rescued = None;
-                    for delta in [1e-6, 1e-4, 1e-2] {
+                    for delta in [1e-6, 1e-4, 1e-2, 1.0] {
                         let mut hs = h.clone();
                         for i in 0..n {
                             hs.push(i, i, delta * hmax);
