@@ -16,7 +16,7 @@ use footfall::report::plot::{
 };
 use footfall::report::table::{error_table, ChannelErrors, ErrorStats, Table};
 use footfall::report::ReportError;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 // ---------------------------------------------------------------------------------------

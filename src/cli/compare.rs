@@ -124,7 +124,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
             o.out.transients.first().map_or("none".into(), |t| format!("{} {}: {:.1} N for {:.1} ms in {} ({})", t.foot, t.component, t.excess_n, 1e3 * t.duration_s, t.phase, if t.between_nodes { "between nodes" } else { "at a node" }))
         }),
         row("ankle ω at the transient (rad/s)", &|o| o.out.transients.first().map_or("—".into(), |t| format!("{:.2}", t.ankle_velocity_rad_s))),
-        row("largest Baumgarte force (N)", &|o| o.out.fine.as_ref().map_or("—".into(), |f| format!("{:.2}", f.max_baumgarte_force_n))),
+        row("largest Baumgarte force (N)", &|o| o.out.fine.as_ref().map_or("—".into(), |f| format!("{:.1e}", f.max_baumgarte_force_n))),
     ];
     for (c, ch) in outcomes[0].out.errors.iter().enumerate() {
         rows.push(row(&format!("{} ({})", ch.name, ch.unit), &|o| o.out.errors[c].runs[0].map_or("—".into(), |s| s.cell(1))));

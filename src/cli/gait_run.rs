@@ -215,9 +215,9 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
         (Some(f), _) => {
             summary.extra.push(("peak normal GRF (1 ms grid)".into(), format!("right {:.1} N, left {:.1} N", f.peak_normal_force_n[0], f.peak_normal_force_n[1])));
             summary.extra.push(("largest constraint drift (1 ms grid)".into(), format!("{:.2e} m, {:.2e} m/s", f.max_position_drift_m, f.max_velocity_drift_m_s)));
-            summary.extra.push(("largest Baumgarte force (1 ms grid)".into(), format!("{:.2} N", f.max_baumgarte_force_n)));
+            summary.extra.push(("largest Baumgarte force (1 ms grid)".into(), format!("{:.1e} N", f.max_baumgarte_force_n)));
             format!(
-                "Forces between the nodes come from the 1 ms re-integration (transients hide between nodes, seed §5): peak normal force {:.1} N (right) and {:.1} N (left); largest Baumgarte force {:.2} N; largest position drift {:.2e} m.",
+                "Forces between the nodes come from the 1 ms re-integration (transients hide between nodes, seed §5): peak normal force {:.1} N (right) and {:.1} N (left); largest Baumgarte force {:.1e} N; largest position drift {:.2e} m.",
                 f.peak_normal_force_n[0], f.peak_normal_force_n[1], f.max_baumgarte_force_n, f.max_position_drift_m
             )
         }
@@ -318,7 +318,7 @@ fn transient_section(transients: &[ForceTransient], threshold: f64, have_fine: b
     } else {
         let t = &transients[0];
         paragraphs.push(format!(
-            "Largest: the {} foot's {} force reaches {:.1} N at {:.3} s in phase {}, {:.1} N above the measurement, for {:.1} ms above the {threshold:.0} N threshold; ankle angular velocity {:.2} rad/s; largest Baumgarte force in the window {:.2} N{}.",
+            "Largest: the {} foot's {} force reaches {:.1} N at {:.3} s in phase {}, {:.1} N above the measurement, for {:.1} ms above the {threshold:.0} N threshold; ankle angular velocity {:.2} rad/s; largest Baumgarte force in the window {:.1e} N{}.",
             t.foot,
             t.component,
             t.peak_n,
@@ -349,7 +349,7 @@ fn transient_section(transients: &[ForceTransient], threshold: f64, have_fine: b
                         format!("{:.1}", t.excess_n),
                         format!("{:.1}", 1e3 * t.duration_s),
                         format!("{:.2}", t.ankle_velocity_rad_s),
-                        format!("{:.2}", t.max_baumgarte_force_n),
+                        format!("{:.1e}", t.max_baumgarte_force_n),
                         if t.between_nodes { "yes" } else { "no" }.to_string(),
                     ]
                 })

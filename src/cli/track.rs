@@ -141,7 +141,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         eprintln!("{}\n{}: J = {:.6}, KKT {:.2e}, {} iterations, {:.1} s", out.table.to_markdown(), res.status, res.objective, res.kkt, res.history.len().saturating_sub(1), res.seconds);
         if let Some(f) = &out.fine {
             eprintln!(
-                "1 ms re-integration: peak normal force {:.1} N (right), {:.1} N (left); largest Baumgarte force {:.2} N; largest drift {:.2e} m",
+                "1 ms re-integration: peak normal force {:.1} N (right), {:.1} N (left); largest Baumgarte force {:.1e} N; largest drift {:.2e} m",
                 f.peak_normal_force_n[0], f.peak_normal_force_n[1], f.max_baumgarte_force_n, f.max_position_drift_m
             );
         }
