@@ -120,6 +120,17 @@ impl Interruptible<'_> {
     }
 }
 
+/// Solve `nlp` from `w0` with the Ctrl-C handler installed, logging each iteration to
+/// stderr unless `quiet`.
+pub fn solve_interruptibly(nlp: &dyn footfall::sqp::Nlp, w0: &[f64], settings: &footfall::sqp::SqpSettings, quiet: bool) -> footfall::sqp::SqpResult {
+    Interruptible::install();
+    if quiet {
+        footfall::sqp::solve(nlp, w0, settings, &mut Interruptible(&mut footfall::sqp::Silent))
+    } else {
+        footfall::sqp::solve(nlp, w0, settings, &mut Interruptible(&mut footfall::sqp::StderrLog))
+    }
+}
+
 impl footfall::sqp::Observer for Interruptible<'_> {
     fn iteration(&mut self, rec: &footfall::sqp::IterationRecord) -> bool {
         let go_on = self.0.iteration(rec);

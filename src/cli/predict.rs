@@ -14,7 +14,7 @@ use footfall::problems::predict::{PredictionSettings, PredictionSetup, SEED_IMPU
 use footfall::problems::track::TrackingSetup;
 use footfall::report::html::Section;
 use footfall::runfolder::RunFolder;
-use footfall::sqp::{self, ExactConvexification, Silent, SqpResult, SqpSettings, SqpStatus, StderrLog};
+use footfall::sqp::{ExactConvexification, SqpResult, SqpSettings, SqpStatus};
 use std::path::{Path, PathBuf};
 
 /// Options shared by `predict` and `compare`.
@@ -195,12 +195,7 @@ pub fn predict(
             if init.is_some() { "the given solution" } else { "the data" }
         );
     }
-    super::Interruptible::install();
-    let res = if quiet {
-        sqp::solve(&tr, &w0, &sqp_settings, &mut super::Interruptible(&mut Silent))
-    } else {
-        sqp::solve(&tr, &w0, &sqp_settings, &mut super::Interruptible(&mut StderrLog))
-    };
+    let res = super::solve_interruptibly(&tr, &w0, &sqp_settings, quiet);
     let solution = GaitSolution::from_nlp(&tr, &res.w, &cycle.continuous, tracking.window.0);
     let durations: Vec<String> = solution.phases.iter().map(|p| format!("{} {:.3} s", p.name, p.duration)).collect();
     let mut extra_json = serde_json::Map::new();

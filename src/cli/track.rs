@@ -11,7 +11,7 @@ use footfall::problems::gait::GaitCycle;
 use footfall::problems::track::TrackingSetup;
 use footfall::problems::evaluation::GaitSolution;
 use footfall::runfolder::RunFolder;
-use footfall::sqp::{self, ExactConvexification, HessianMode, Silent, SqpSettings, SqpStatus, StderrLog};
+use footfall::sqp::{ExactConvexification, HessianMode, SqpSettings, SqpStatus};
 use std::path::PathBuf;
 
 /// Arguments of `footfall track`.
@@ -109,12 +109,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
             hessian
         );
     }
-    super::Interruptible::install();
-    let res = if quiet {
-        sqp::solve(&tr, &w0, &settings, &mut super::Interruptible(&mut Silent))
-    } else {
-        sqp::solve(&tr, &w0, &settings, &mut super::Interruptible(&mut StderrLog))
-    };
+    let res = super::solve_interruptibly(&tr, &w0, &settings, quiet);
 
     let solution = GaitSolution::from_nlp(&tr, &res.w, &cycle.continuous, setup.window.0);
     let out = super::gait_run::write(
