@@ -449,7 +449,7 @@ fn effect_on_unknown_joint_is_refused() {
         ModelSpec::load(&m).unwrap_err(),
         &m,
         "effects[0].stiffness",
-        &["≥ 0", "-1"],
+        &["[0, 500]", "-1"],
     );
     let m = d.write(
         "model3.json",

@@ -40,6 +40,7 @@ fn residual_vanishes_at_the_models_own_motion_and_has_exact_jacobian() {
         }
         let nq = m.nq();
         let target = NodeTarget {
+            time: 0.0,
             q: x[..nq].iter().map(|v| Some(*v)).collect(),
             qd: x[nq..2 * nq].iter().map(|v| Some(*v)).collect(),
             feet: [0, 1].map(|s| Some((loads[s].fx, loads[s].fy, if loads[s].fy > 1.0 { Some(loads[s].cop_x) } else { None }))),
@@ -47,7 +48,7 @@ fn residual_vanishes_at_the_models_own_motion_and_has_exact_jacobian() {
         let mut w = TrackingWeights::seed(nq, 800.0, 0.305);
         w.excitation = 0.0;
         w.activation = 0.0;
-        let r = AdTerm(TrackingResidual::new(&m, set.clone(), target, w));
+        let r = AdTerm(TrackingResidual::new(&m, set.clone(), target, w, None));
         let z: Vec<f64> = x.iter().chain(&u).copied().collect();
         let mut v = vec![0.0; r.dim()];
         let mut jac = vec![0.0; r.dim() * z.len()];
@@ -77,4 +78,93 @@ fn residual_vanishes_at_the_models_own_motion_and_has_exact_jacobian() {
         }
         assert!(err < 1e-5, "{foot}: Jacobian vs FD {err:e}");
     }
+}
+
+/// Measurement effects: a force-plate clock offset compares the model with the measured
+/// loads at t + δ, a CoP offset moves the measured CoP. At zero offsets the residual
+/// equals the plain one; its derivatives in the offsets (free parameters θ) match central
+/// differences; a clock offset equal to the shift of a shifted measurement and a CoP
+/// offset equal to the added offset zero the load residuals.
+#[test]
+fn measurement_effects_shift_the_targets_with_exact_parameter_derivatives() {
+    use footfall::data::CubicSpline;
+    use footfall::problems::tracking::MeasuredLoads;
+    use std::sync::Arc;
+    let effects = serde_json::json!([
+        { "type": "force_plate_time_offset", "free": ["offset"] },
+        { "type": "cop_offset", "free": ["offset"] }
+    ]);
+    let m = model_with_effects("opensim_subject01.json", "ellipse.json", effects);
+    let plain = model("opensim_subject01.json", "ellipse.json");
+    assert_eq!(m.ntheta(), 2);
+    assert!(m.has_measurement_effects() && !plain.has_measurement_effects());
+    let set = m.constraint_set("s", &[("r.sole", true)]).unwrap();
+    let x = state(&m, &set);
+    let u = vec![0.3; m.nu()];
+    let loads = m.foot_loads_generic::<f64>(&set, &x, &u, &[0.0, 0.0]).unwrap();
+    let (fx, fy, mom) = loads[0];
+    let cop = mom / fy;
+    // a measurement that is the model's loads at t = 0.5 s, varying linearly in time, and
+    // recorded with a clock offset of 0.012 s and a CoP offset of 0.02 m
+    let (delay, dcop, t_node) = (0.012, 0.02, 0.5);
+    let time: Vec<f64> = (0..200).map(|k| k as f64 * 0.005).collect();
+    let shape = |t: f64| 1.0 + 0.8 * (t - t_node - delay);
+    let spl = |v: f64| CubicSpline::new(&time, &time.iter().map(|&t| v * shape(t)).collect::<Vec<_>>()).unwrap();
+    let zero = CubicSpline::new(&time, &vec![0.0; time.len()]).unwrap();
+    let cop_series: Vec<f64> = time.iter().map(|&t| cop + dcop + 0.1 * (t - t_node - delay)).collect();
+    let measured = Arc::new(MeasuredLoads {
+        fx: [spl(fx), zero.clone()],
+        fy: [spl(fy), zero],
+        time: time.clone(),
+        cop_x: [cop_series, vec![f64::NAN; time.len()]],
+    });
+    let nq = m.nq();
+    let target = NodeTarget {
+        time: t_node,
+        q: x[..nq].iter().map(|v| Some(*v)).collect(),
+        qd: x[nq..2 * nq].iter().map(|v| Some(*v)).collect(),
+        feet: [Some((fx * shape(t_node), fy * shape(t_node), Some(cop + dcop - 0.1 * delay))), None],
+    };
+    let mut w = TrackingWeights::seed(nq, 800.0, 0.305);
+    w.excitation = 0.0;
+    w.activation = 0.0;
+    let with = AdTerm(TrackingResidual::new(&m, set.clone(), target.clone(), w.clone(), Some(measured)));
+    let without = AdTerm(TrackingResidual::new(&plain, set.clone(), target, w, None));
+    let z0: Vec<f64> = x.iter().chain(&u).copied().collect();
+    let d = with.dim();
+    let eval = |r: &AdTerm<TrackingResidual>, z: &[f64]| {
+        let mut v = vec![0.0; d];
+        r.eval(z, &mut v, None).unwrap();
+        v
+    };
+    let at = |th: [f64; 2]| z0.iter().copied().chain(th).collect::<Vec<f64>>();
+    let a = eval(&with, &at([0.0, 0.0]));
+    let b = eval(&without, &z0);
+    assert!(rel_diff(&a, &b, 1e-12) < 1e-10, "zero offsets change nothing");
+    assert!(a.iter().map(|v| v.abs()).fold(0.0, f64::max) > 1e-3, "the shifted measurement is not matched at zero offsets");
+    let fit = eval(&with, &at([delay, dcop]));
+    let worst = fit.iter().map(|v| v.abs()).fold(0.0, f64::max);
+    assert!(worst < 1e-9, "the true offsets explain the measurement: worst residual {worst:e}");
+    // θ derivatives vs central differences at a point off the truth
+    let zp = at([0.004, -0.01]);
+    let mut jac = vec![0.0; d * zp.len()];
+    let mut v = vec![0.0; d];
+    with.eval(&zp, &mut v, Some(&mut jac)).unwrap();
+    let n = zp.len();
+    let mut err = 0.0f64;
+    let mut any = 0.0f64;
+    for c in [n - 2, n - 1] {
+        let h = 1e-6;
+        let (mut p, mut q) = (zp.clone(), zp.clone());
+        p[c] += h;
+        q[c] -= h;
+        let (vp, vq) = (eval(&with, &p), eval(&with, &q));
+        for i in 0..d {
+            let fd = (vp[i] - vq[i]) / (2.0 * h);
+            err = err.max((fd - jac[i + c * d]).abs());
+            any = any.max(fd.abs());
+        }
+    }
+    assert!(any > 1e-2, "the offsets move the residual");
+    assert!(err < 1e-6 * any.max(1.0), "θ Jacobian vs FD {err:e}");
 }

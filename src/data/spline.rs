@@ -137,6 +137,16 @@ impl CubicSpline {
         c[0] + x * (c[1] + x * (c[2] + x * c[3]))
     }
 
+    /// $s(t)$ at a dual number: the piece is chosen by the value of `t`, and the
+    /// polynomial is evaluated in `t`'s scalar type, so derivatives with respect to `t`
+    /// are exact (used to identify a measurement's time offset).
+    pub fn eval_generic<S: crate::model::Scalar>(&self, t: S) -> S {
+        let (i, _) = self.piece(t.value());
+        let c = &self.coef[i];
+        let x = t - self.t[i];
+        x * (x * (x * c[3] + c[2]) + c[1]) + c[0]
+    }
+
     /// $s'(t)$.
     pub fn derivative(&self, t: f64) -> f64 {
         let (i, x) = self.piece(t);

@@ -19,7 +19,7 @@
 use super::actuators::{Joint as MtgJoint, JointActuatorSet};
 use super::ad::{self, AdChunk};
 use super::anthropometry;
-use super::effects::{DynEffect, EffectState, ModelAdjust, ModelScalar, ParamSpec};
+use super::effects::{DynEffect, EffectState, MeasurementAdjust, ModelAdjust, ModelScalar, ParamSpec};
 use super::error::{DynamicsError, ModelError};
 use super::geometry::Shape;
 use super::linalg::{cholesky, cholesky_solve};
@@ -231,9 +231,11 @@ impl GaitModel {
             ActuatorSpec::JointTorques { max_torque } => Actuation::Torques { max_torque: *max_torque },
         };
         let coords: Vec<String> = COORDINATES.iter().map(|s| s.to_string()).collect();
+        let bodies: Vec<String> = tree.bodies().iter().map(|b| b.name.clone()).collect();
+        let ctx = super::effects::BuildContext { coordinates: &coords, bodies: &bodies };
         let mut effects = Vec::new();
         for (i, e) in spec.effects.iter().enumerate() {
-            effects.extend(e.build(&coords).map_err(|r| ModelError::invalid(model_path, format!("effects[{i}]"), r))?);
+            effects.extend(e.build(&ctx).map_err(|r| ModelError::invalid(model_path, format!("effects[{i}]"), r))?);
         }
         let mut params = Vec::new();
         let mut effect_offsets = Vec::new();
@@ -407,6 +409,27 @@ impl GaitModel {
     fn effect_params<'a, S>(&self, p: &'a [S], e: usize) -> &'a [S] {
         let start = self.effect_offsets[e];
         &p[start..start + self.effects[e].parameters().len()]
+    }
+
+    /// How the measurements relate to the model under the measurement effects (zero
+    /// offsets without any).
+    pub fn measurement_adjust<S: ModelScalar>(&self, theta: &[S]) -> MeasurementAdjust<S> {
+        let p = self.full_params(theta);
+        let mut m = MeasurementAdjust { force_time_offset: S::c(0.0), cop_offset: S::c(0.0) };
+        for e in 0..self.effects.len() {
+            S::measurement(self.effects[e].as_ref(), self.effect_params(&p, e), &mut m);
+        }
+        m
+    }
+
+    /// Whether any effect changes how the model is compared with the data.
+    pub fn has_measurement_effects(&self) -> bool {
+        self.effects.iter().any(|e| e.is_measurement())
+    }
+
+    /// Kinds of the effects in the model (one entry per effect instance).
+    pub fn effect_kinds(&self) -> Vec<&'static str> {
+        self.effects.iter().map(|e| e.kind()).collect()
     }
 
     /// Model quantities after the effects' adjustments.

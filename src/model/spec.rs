@@ -759,30 +759,21 @@ impl ModelSpec {
                 ));
             }
         }
-        let mut springs: Vec<(usize, &str, &str)> = Vec::new();
         for (i, e) in self.effects.iter().enumerate() {
             e.check()
                 .map_err(|(f, r)| ModelError::invalid(path, format!("effects[{i}].{f}"), r))?;
-            match e {
-                EffectSpec::PassiveJointStiffness { joint, side, .. } => {
-                    let sides: &[&str] = match side.as_str() {
-                        "right" => &["right"],
-                        "left" => &["left"],
-                        _ => &["right", "left"],
-                    };
-                    for s in sides {
-                        if let Some((j, _, _)) =
-                            springs.iter().find(|(_, jj, ss)| jj == joint && ss == s)
-                        {
-                            return Err(ModelError::invalid(
-                                path,
-                                format!("effects[{i}].joint"),
-                                format!("the {s} {joint} already has a passive_joint_stiffness (effects[{j}]); give each joint one entry"),
-                            ));
-                        }
-                        springs.push((i, joint, s));
+            if let Some(j) = self.effects[..i].iter().position(|o| o.overlaps(e)) {
+                let (field, what) = match e {
+                    EffectSpec::PassiveJointStiffness { joint, side, .. } => {
+                        let which = match (side.as_str(), &self.effects[j]) {
+                            ("both", EffectSpec::PassiveJointStiffness { side: s, .. }) if s != "both" => s.clone(),
+                            (s, _) => s.to_string(),
+                        };
+                        ("joint", format!("the {which} {joint} already has a passive_joint_stiffness (effects[{j}]); give each joint one entry"))
                     }
-                }
+                    _ => ("type", format!("'{}' is already an effect of the model (effects[{j}]); give each effect one entry", e.kind())),
+                };
+                return Err(ModelError::invalid(path, format!("effects[{i}].{field}"), what));
             }
         }
         Ok(())

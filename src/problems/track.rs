@@ -4,7 +4,7 @@
 //! excitations 0.025, seed §3.6), and the node-wise least-squares residuals of eq. 18.
 
 use super::gait::{GaitCycle, GaitGuess};
-use super::tracking::{NodeTarget, TrackingResidual, TrackingWeights};
+use super::tracking::{MeasuredLoads, NodeTarget, TrackingResidual, TrackingWeights};
 use crate::data::{detect_events, interp_linear, CubicSpline, Events, GaitData, DEFAULT_EVENT_FRACTION};
 use crate::model::gait::COORDINATES;
 use crate::model::{ConstraintSet, GaitModel, Side};
@@ -106,6 +106,8 @@ pub struct TrackingSetup {
     pub weights: TrackingWeights,
     /// Events detected in the data.
     pub events: Events,
+    /// The measured loads as functions of time (for measurement effects).
+    pub measured: Arc<MeasuredLoads>,
 }
 
 impl TrackingSetup {
@@ -163,7 +165,7 @@ impl TrackingSetup {
                         (fx[s].eval(tk), fyv, if fyv >= data.cop_threshold { cop_at(s, tk) } else { None })
                     })
                 };
-                tg.push(NodeTarget { q: q.iter().map(|v| Some(*v)).collect(), qd: qd.iter().map(|v| Some(*v)).collect(), feet: [foot_target(0), foot_target(1)] });
+                tg.push(NodeTarget { time: tk, q: q.iter().map(|v| Some(*v)).collect(), qd: qd.iter().map(|v| Some(*v)).collect(), feet: [foot_target(0), foot_target(1)] });
                 let (qp, qdp, _) = model.project(&sets[i], &q, &qd, &theta).map_err(|e| format!("projecting the data at t = {tk:.3} s: {e}"))?;
                 let mut x = qp;
                 x.extend(qdp);
@@ -199,7 +201,8 @@ impl TrackingSetup {
         let guess = GaitGuess { x: gx, u: gu, x_lb, x_ub, u_lb: vec![0.0; nu], u_ub: vec![1.0; nu] };
         let foot_length = 0.305;
         let weights = TrackingWeights::seed(nq, peak, foot_length);
-        Ok(Self { seq, window: (t0, t1), node_times, guess, targets, weights, events })
+        let measured = Arc::new(MeasuredLoads { fx, fy, time: data.time.clone(), cop_x: [data.feet[0].cop_x.clone(), data.feet[1].cop_x.clone()] });
+        Ok(Self { seq, window: (t0, t1), node_times, guess, targets, weights, events, measured })
     }
 
     /// The tracking OCP: the walking cycle of `cycle` plus the node-wise residuals.
@@ -216,7 +219,7 @@ impl TrackingSetup {
                     continue;
                 }
                 let ku = if linear { k } else { k.min(n - 1) };
-                let r = TrackingResidual::new(model, set.clone(), target.clone(), self.weights.clone());
+                let r = TrackingResidual::new(model, set.clone(), target.clone(), self.weights.clone(), Some(self.measured.clone()));
                 ocp.least_squares.push(Term {
                     name: "tracking".into(),
                     args: vec![Block::State { phase: j, node: k }, Block::Control { phase: j, node: ku }, Block::Params],

@@ -8,12 +8,53 @@
 //! with `m = Σ λₙ x_P`: equal to `(fᵧ/F_peak)(CoP − x_cop)/L`, smooth when the foot unloads.
 
 use super::GenericFunction;
+use crate::data::CubicSpline;
 use crate::model::effects::ModelScalar;
 use crate::model::{ConstraintSet, GaitModel};
+use std::sync::Arc;
+
+/// The measured ground loads as functions of time, for measurement effects that move the
+/// comparison in time (a force-plate clock offset) and need the targets' derivatives.
+#[derive(Debug, Clone)]
+pub struct MeasuredLoads {
+    /// Tangential force splines (N), right and left.
+    pub fx: [CubicSpline; 2],
+    /// Normal force splines (N), right and left.
+    pub fy: [CubicSpline; 2],
+    /// Sample times of the CoP (s).
+    pub time: Vec<f64>,
+    /// Measured CoP x (m; NaN where the foot is unloaded), right and left.
+    pub cop_x: [Vec<f64>; 2],
+}
+
+impl MeasuredLoads {
+    /// Tangential and normal force of foot `s` at time `t` (exact in `t`).
+    pub fn forces<S: ModelScalar>(&self, s: usize, t: S) -> (S, S) {
+        (self.fx[s].eval_generic(t), self.fy[s].eval_generic(t))
+    }
+
+    /// CoP of foot `s` at time `t`, linearly interpolated; `None` where a neighbouring
+    /// sample is undefined or `t` is outside the samples.
+    pub fn cop<S: ModelScalar>(&self, s: usize, t: S) -> Option<S> {
+        let tv = t.value();
+        let n = self.time.len();
+        if n < 2 || tv < self.time[0] || tv > self.time[n - 1] {
+            return None;
+        }
+        let i = (self.time.partition_point(|&v| v <= tv).max(1) - 1).min(n - 2);
+        let (y0, y1) = (self.cop_x[s][i], self.cop_x[s][i + 1]);
+        if !(y0.is_finite() && y1.is_finite()) {
+            return None;
+        }
+        Some((t - self.time[i]) * ((y1 - y0) / (self.time[i + 1] - self.time[i])) + y0)
+    }
+}
 
 /// What a node is compared with (`None` = not tracked at this node).
 #[derive(Debug, Clone, Default)]
 pub struct NodeTarget {
+    /// Node time (s, on the data's clock).
+    pub time: f64,
     /// Generalised positions (m, rad), one entry per coordinate.
     pub q: Vec<Option<f64>>,
     /// Generalised velocities (m/s, rad/s).
@@ -70,13 +111,22 @@ pub struct TrackingResidual<'a> {
     set: ConstraintSet,
     target: NodeTarget,
     weights: TrackingWeights,
+    measured: Option<Arc<MeasuredLoads>>,
     dim: usize,
 }
 
 impl<'a> TrackingResidual<'a> {
     /// Residual of a node in a phase with constraint set `set`; its arguments are the
-    /// node's state, its control and θ.
-    pub fn new(model: &'a GaitModel, set: ConstraintSet, target: NodeTarget, weights: TrackingWeights) -> Self {
+    /// node's state, its control and θ. With a model that has measurement effects, the
+    /// force and CoP targets are taken from `measured` through them (the target's values
+    /// otherwise).
+    pub fn new(
+        model: &'a GaitModel,
+        set: ConstraintSet,
+        target: NodeTarget,
+        weights: TrackingWeights,
+        measured: Option<Arc<MeasuredLoads>>,
+    ) -> Self {
         let nq = model.nq();
         let mut dim = 0;
         for i in 0..nq {
@@ -91,7 +141,8 @@ impl<'a> TrackingResidual<'a> {
             dim += 2 + usize::from(f.2.is_some());
         }
         dim += model.nu() + model.na();
-        Self { model, set, target, weights, dim }
+        let measured = measured.filter(|_| model.has_measurement_effects());
+        Self { model, set, target, weights, measured, dim }
     }
 
     fn residual<S: ModelScalar>(&self, x: &[S], u: &[S], th: &[S], out: &mut [S]) -> Result<(), String> {
@@ -113,14 +164,25 @@ impl<'a> TrackingResidual<'a> {
         }
         if self.target.feet.iter().any(Option::is_some) {
             let loads = self.model.foot_loads_generic(&self.set, x, u, th).map_err(|e| e.to_string())?;
+            let adjust = self.measured.as_ref().map(|m| (m, self.model.measurement_adjust(th)));
             for (s, tgt) in self.target.feet.iter().enumerate() {
                 let Some((fx, fy, cop)) = *tgt else { continue };
+                // targets at the node time, or through the measurement effects
+                let (tfx, tfy, tcop, cop_offset) = match &adjust {
+                    Some((m, adj)) => {
+                        let t = adj.force_time_offset + self.target.time;
+                        let (a, b) = m.forces(s, t);
+                        let c = cop.map(|c0| m.cop(s, t).unwrap_or(S::c(c0)));
+                        (a, b, c, adj.cop_offset)
+                    }
+                    None => (S::c(fx), S::c(fy), cop.map(S::c), S::c(0.0)),
+                };
                 let sc = w.force.sqrt() / w.force_scale;
-                out[o] = (loads[s].0 - fx) * sc;
-                out[o + 1] = (loads[s].1 - fy) * sc;
+                out[o] = (loads[s].0 - tfx) * sc;
+                out[o + 1] = (loads[s].1 - tfy) * sc;
                 o += 2;
-                if let Some(xc) = cop {
-                    out[o] = (loads[s].2 - loads[s].1 * xc) * (w.cop.sqrt() / (w.force_scale * w.cop_length));
+                if let Some(xc) = tcop {
+                    out[o] = (loads[s].2 + loads[s].1 * (cop_offset - xc)) * (w.cop.sqrt() / (w.force_scale * w.cop_length));
                     o += 1;
                 }
             }

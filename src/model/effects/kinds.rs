@@ -1,0 +1,200 @@
+//! The effect types of the catalog. Each is one small type implementing [`Effect`]; its
+//! parameters are named `<kind>.<parameter>` (per joint for passive stiffness) and carry
+//! the bounds an identification may use.
+
+use super::{Effect, EffectState, MeasurementAdjust, ModelAdjust, ParamSpec};
+use crate::model::Scalar;
+
+fn param(name: String, value: f64, (lower, upper): (f64, f64), unit: &str, free: bool) -> ParamSpec {
+    ParamSpec { name, value, lower, upper, unit: unit.into(), free }
+}
+
+/// A linear torsional spring at one joint coordinate: τ = −k (θ − θ₀).
+///
+/// Models the passive elastic torque of ligaments, joint capsule and stretched muscle
+/// that the muscle-torque generators leave out (seed §2 ignores it).
+#[derive(Debug, Clone)]
+pub struct PassiveJointStiffness {
+    coordinate: usize,
+    params: Vec<ParamSpec>,
+}
+
+impl PassiveJointStiffness {
+    /// Bounds of the stiffness (N·m/rad).
+    pub const STIFFNESS_BOUNDS: (f64, f64) = (0.0, 500.0);
+
+    /// Spring at coordinate index `coordinate` (named `coordinate_name`) with stiffness
+    /// `stiffness` (N·m/rad) and rest angle `rest_angle` (rad).
+    pub fn new(
+        coordinate: usize,
+        coordinate_name: &str,
+        stiffness: f64,
+        rest_angle: f64,
+        free_stiffness: bool,
+        free_rest_angle: bool,
+    ) -> Self {
+        let base = format!("passive_joint_stiffness.{coordinate_name}");
+        let pi = std::f64::consts::PI;
+        Self {
+            coordinate,
+            params: vec![
+                param(format!("{base}.stiffness"), stiffness, Self::STIFFNESS_BOUNDS, "N·m/rad", free_stiffness),
+                param(format!("{base}.rest_angle"), rest_angle, (-pi, pi), "rad", free_rest_angle),
+            ],
+        }
+    }
+}
+
+impl Effect for PassiveJointStiffness {
+    fn kind(&self) -> &'static str {
+        "passive_joint_stiffness"
+    }
+    fn parameters(&self) -> &[ParamSpec] {
+        &self.params
+    }
+    fn generalized_forces<S: Scalar>(&self, p: &[S], x: EffectState<'_, S>, tau: &mut [S]) {
+        let (k, rest) = (p[0], p[1]);
+        tau[self.coordinate] -= k * (x.q[self.coordinate] - rest);
+    }
+}
+
+/// The walkway is inclined by an angle α (rad, positive uphill in the walking direction)
+/// to the horizontal. The model's frame is the walkway's (as the motion-capture and
+/// force-plate frames are when aligned with it), so gravity is tilted by α:
+/// g = |g| (−sin α, −cos α).
+#[derive(Debug, Clone)]
+pub struct GroundSlope {
+    params: Vec<ParamSpec>,
+}
+
+impl GroundSlope {
+    /// Bounds of the slope (rad; ±11.5°).
+    pub const BOUNDS: (f64, f64) = (-0.2, 0.2);
+
+    /// Slope `angle` (rad).
+    pub fn new(angle: f64, free: bool) -> Self {
+        Self { params: vec![param("ground_slope.angle".into(), angle, Self::BOUNDS, "rad", free)] }
+    }
+}
+
+impl Effect for GroundSlope {
+    fn kind(&self) -> &'static str {
+        "ground_slope"
+    }
+    fn parameters(&self) -> &[ParamSpec] {
+        &self.params
+    }
+    fn adjust_model<S: Scalar>(&self, p: &[S], m: &mut ModelAdjust<'_, S>) {
+        let g = (m.gravity[0] * m.gravity[0] + m.gravity[1] * m.gravity[1]).sqrt();
+        let (s, c) = (p[0].sin(), p[0].cos());
+        *m.gravity = [-g * s, -g * c];
+    }
+}
+
+/// The trunk (head-arms-trunk body) is heavier or lighter than the anthropometric
+/// estimate by `added_mass` (kg) and its centre of mass lies `com_offset` (m) further
+/// along the body's x axis (anterior when upright). The moment of inertia about the
+/// centre of mass scales with the mass.
+#[derive(Debug, Clone)]
+pub struct TrunkMass {
+    body: usize,
+    params: Vec<ParamSpec>,
+}
+
+impl TrunkMass {
+    /// Bounds of the added mass (kg).
+    pub const MASS_BOUNDS: (f64, f64) = (-20.0, 20.0);
+    /// Bounds of the COM offset (m).
+    pub const OFFSET_BOUNDS: (f64, f64) = (-0.15, 0.15);
+
+    /// Trunk body index `body`; `added_mass` (kg), `com_offset` (m).
+    pub fn new(body: usize, added_mass: f64, com_offset: f64, free_mass: bool, free_offset: bool) -> Self {
+        Self {
+            body,
+            params: vec![
+                param("trunk_mass.added_mass".into(), added_mass, Self::MASS_BOUNDS, "kg", free_mass),
+                param("trunk_mass.com_offset".into(), com_offset, Self::OFFSET_BOUNDS, "m", free_offset),
+            ],
+        }
+    }
+}
+
+impl Effect for TrunkMass {
+    fn kind(&self) -> &'static str {
+        "trunk_mass"
+    }
+    fn parameters(&self) -> &[ParamSpec] {
+        &self.params
+    }
+    fn adjust_model<S: Scalar>(&self, p: &[S], m: &mut ModelAdjust<'_, S>) {
+        let b = &mut m.inertia[self.body];
+        let scale = (b.mass + p[0]) / b.mass;
+        b.mass += p[0];
+        b.izz *= scale;
+        b.com[0] += p[1];
+    }
+}
+
+/// The force plates' clock is offset from the motion capture's by `offset` (s): the
+/// model's ground forces at time t are compared with the measured forces at t + offset.
+#[derive(Debug, Clone)]
+pub struct ForcePlateTimeOffset {
+    params: Vec<ParamSpec>,
+}
+
+impl ForcePlateTimeOffset {
+    /// Bounds of the offset (s).
+    pub const BOUNDS: (f64, f64) = (-0.05, 0.05);
+
+    /// Clock offset `offset` (s).
+    pub fn new(offset: f64, free: bool) -> Self {
+        Self { params: vec![param("force_plate_time_offset.offset".into(), offset, Self::BOUNDS, "s", free)] }
+    }
+}
+
+impl Effect for ForcePlateTimeOffset {
+    fn kind(&self) -> &'static str {
+        "force_plate_time_offset"
+    }
+    fn parameters(&self) -> &[ParamSpec] {
+        &self.params
+    }
+    fn adjust_measurement<S: Scalar>(&self, p: &[S], m: &mut MeasurementAdjust<S>) {
+        m.force_time_offset += p[0];
+    }
+    fn is_measurement(&self) -> bool {
+        true
+    }
+}
+
+/// The force plates report the centre of pressure `offset` (m) further along the walkway
+/// than it is (a calibration error of the plate origin).
+#[derive(Debug, Clone)]
+pub struct CopOffset {
+    params: Vec<ParamSpec>,
+}
+
+impl CopOffset {
+    /// Bounds of the offset (m).
+    pub const BOUNDS: (f64, f64) = (-0.1, 0.1);
+
+    /// CoP offset `offset` (m).
+    pub fn new(offset: f64, free: bool) -> Self {
+        Self { params: vec![param("cop_offset.offset".into(), offset, Self::BOUNDS, "m", free)] }
+    }
+}
+
+impl Effect for CopOffset {
+    fn kind(&self) -> &'static str {
+        "cop_offset"
+    }
+    fn parameters(&self) -> &[ParamSpec] {
+        &self.params
+    }
+    fn adjust_measurement<S: Scalar>(&self, p: &[S], m: &mut MeasurementAdjust<S>) {
+        m.cop_offset += p[0];
+    }
+    fn is_measurement(&self) -> bool {
+        true
+    }
+}

@@ -1,0 +1,198 @@
+//! Optional physical effects: model components with named parameters an optimiser may free.
+//!
+//! An effect is one type implementing [`Effect`]. Its hooks are generic over the scalar
+//! type, so parameter sensitivities come from the same automatic differentiation as the
+//! rest of the model. The blanket implementation of [`DynEffect`] makes every [`Effect`]
+//! usable as a trait object; [`ModelScalar`] routes generic model code to it.
+//!
+//! Two kinds of hooks exist: *model* hooks change the dynamics (inertia, gravity, ground,
+//! generalised forces) and *measurement* hooks change how the model is compared with the
+//! data (a clock offset of the force plates, an offset of their centre of pressure).
+//!
+//! A user adds an effect with one entry in the model JSON (`"effects": [{"type": …}]`)
+//! or `--effect NAME` on the command line; [`EffectSpec`] lists the known kinds and
+//! [`catalog`] the candidates `footfall diagnose` tries.
+
+mod kinds;
+mod spec;
+
+pub use kinds::{CopOffset, ForcePlateTimeOffset, GroundSlope, PassiveJointStiffness, TrunkMass};
+pub use spec::{catalog, BuildContext, EffectSpec};
+
+use super::ad::{AdChunk, AdNested};
+use super::multibody::{Inertia, V2};
+use super::Scalar;
+use num_dual::Dual64;
+use serde::{Deserialize, Serialize};
+
+/// One named parameter of an effect.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ParamSpec {
+    /// Fully qualified name, e.g. `passive_joint_stiffness.knee_r.stiffness`.
+    pub name: String,
+    /// Current (or initial) value.
+    pub value: f64,
+    /// Lower bound for identification.
+    pub lower: f64,
+    /// Upper bound for identification.
+    pub upper: f64,
+    /// Unit, for reports.
+    pub unit: String,
+    /// Whether the parameter is free (a sensitivity parameter θ of the model).
+    pub free: bool,
+}
+
+/// Model quantities an effect may change before the dynamics are evaluated.
+#[derive(Debug)]
+pub struct ModelAdjust<'a, S> {
+    /// Inertial parameters of each body.
+    pub inertia: &'a mut [Inertia<S>],
+    /// Gravity vector in the world frame (m/s²).
+    pub gravity: &'a mut V2<S>,
+    /// Ground plane height along its normal (m).
+    pub ground_height: &'a mut S,
+    /// Ground plane unit normal (world).
+    pub ground_normal: &'a mut V2<S>,
+}
+
+/// How the measurements relate to the model, changed by measurement effects. With no
+/// such effect both are zero: the model is compared with the data at the same instant
+/// and position.
+#[derive(Debug, Clone, Copy)]
+pub struct MeasurementAdjust<S> {
+    /// The model's ground forces and CoP at time `t` are compared with the measured ones at
+    /// `t + force_time_offset` (s; positive when the force-plate clock runs behind the
+    /// motion capture's).
+    pub force_time_offset: S,
+    /// The measured CoP is the model's plus this (m, along the walkway).
+    pub cop_offset: S,
+}
+
+/// Read-only state seen by an effect's generalised forces.
+#[derive(Debug, Clone, Copy)]
+pub struct EffectState<'a, S> {
+    /// Generalised positions.
+    pub q: &'a [S],
+    /// Generalised velocities.
+    pub qd: &'a [S],
+}
+
+/// A physical effect, written once for any scalar type.
+pub trait Effect: std::fmt::Debug + Send + Sync {
+    /// Kind name as used in JSON (`"type"`).
+    fn kind(&self) -> &'static str;
+    /// The effect's parameters (values, bounds, whether free), in a fixed order.
+    fn parameters(&self) -> &[ParamSpec];
+    /// Change inertial parameters, gravity or ground (default: nothing).
+    fn adjust_model<S: Scalar>(&self, _p: &[S], _m: &mut ModelAdjust<'_, S>) {}
+    /// Add generalised forces (N or N·m) to `tau` (default: nothing).
+    fn generalized_forces<S: Scalar>(&self, _p: &[S], _x: EffectState<'_, S>, _tau: &mut [S]) {}
+    /// Change how the measurements are compared with the model (default: nothing).
+    fn adjust_measurement<S: Scalar>(&self, _p: &[S], _m: &mut MeasurementAdjust<S>) {}
+    /// Whether the effect has a measurement hook (the tracking residual then evaluates
+    /// its targets through it).
+    fn is_measurement(&self) -> bool {
+        false
+    }
+}
+
+/// Object-safe form of [`Effect`], implemented for every effect. The methods are
+/// monomorphic copies of the generic hooks, one per scalar type the model uses.
+#[allow(missing_docs)]
+pub trait DynEffect: std::fmt::Debug + Send + Sync {
+    fn kind(&self) -> &'static str;
+    fn parameters(&self) -> &[ParamSpec];
+    fn adjust_f64(&self, p: &[f64], m: &mut ModelAdjust<'_, f64>);
+    fn adjust_dual(&self, p: &[Dual64], m: &mut ModelAdjust<'_, Dual64>);
+    fn adjust_chunk(&self, p: &[AdChunk], m: &mut ModelAdjust<'_, AdChunk>);
+    fn adjust_nested(&self, p: &[AdNested], m: &mut ModelAdjust<'_, AdNested>);
+    fn forces_f64(&self, p: &[f64], x: EffectState<'_, f64>, tau: &mut [f64]);
+    fn forces_dual(&self, p: &[Dual64], x: EffectState<'_, Dual64>, tau: &mut [Dual64]);
+    fn forces_chunk(&self, p: &[AdChunk], x: EffectState<'_, AdChunk>, tau: &mut [AdChunk]);
+    fn forces_nested(&self, p: &[AdNested], x: EffectState<'_, AdNested>, tau: &mut [AdNested]);
+    fn measurement_f64(&self, p: &[f64], m: &mut MeasurementAdjust<f64>);
+    fn measurement_dual(&self, p: &[Dual64], m: &mut MeasurementAdjust<Dual64>);
+    fn measurement_chunk(&self, p: &[AdChunk], m: &mut MeasurementAdjust<AdChunk>);
+    fn measurement_nested(&self, p: &[AdNested], m: &mut MeasurementAdjust<AdNested>);
+    fn is_measurement(&self) -> bool;
+}
+
+impl<E: Effect> DynEffect for E {
+    fn kind(&self) -> &'static str {
+        Effect::kind(self)
+    }
+    fn parameters(&self) -> &[ParamSpec] {
+        Effect::parameters(self)
+    }
+    fn adjust_f64(&self, p: &[f64], m: &mut ModelAdjust<'_, f64>) {
+        self.adjust_model(p, m)
+    }
+    fn adjust_dual(&self, p: &[Dual64], m: &mut ModelAdjust<'_, Dual64>) {
+        self.adjust_model(p, m)
+    }
+    fn adjust_chunk(&self, p: &[AdChunk], m: &mut ModelAdjust<'_, AdChunk>) {
+        self.adjust_model(p, m)
+    }
+    fn adjust_nested(&self, p: &[AdNested], m: &mut ModelAdjust<'_, AdNested>) {
+        self.adjust_model(p, m)
+    }
+    fn forces_f64(&self, p: &[f64], x: EffectState<'_, f64>, tau: &mut [f64]) {
+        self.generalized_forces(p, x, tau)
+    }
+    fn forces_dual(&self, p: &[Dual64], x: EffectState<'_, Dual64>, tau: &mut [Dual64]) {
+        self.generalized_forces(p, x, tau)
+    }
+    fn forces_chunk(&self, p: &[AdChunk], x: EffectState<'_, AdChunk>, tau: &mut [AdChunk]) {
+        self.generalized_forces(p, x, tau)
+    }
+    fn forces_nested(&self, p: &[AdNested], x: EffectState<'_, AdNested>, tau: &mut [AdNested]) {
+        self.generalized_forces(p, x, tau)
+    }
+    fn measurement_f64(&self, p: &[f64], m: &mut MeasurementAdjust<f64>) {
+        self.adjust_measurement(p, m)
+    }
+    fn measurement_dual(&self, p: &[Dual64], m: &mut MeasurementAdjust<Dual64>) {
+        self.adjust_measurement(p, m)
+    }
+    fn measurement_chunk(&self, p: &[AdChunk], m: &mut MeasurementAdjust<AdChunk>) {
+        self.adjust_measurement(p, m)
+    }
+    fn measurement_nested(&self, p: &[AdNested], m: &mut MeasurementAdjust<AdNested>) {
+        self.adjust_measurement(p, m)
+    }
+    fn is_measurement(&self) -> bool {
+        Effect::is_measurement(self)
+    }
+}
+
+/// The scalar types the model's dynamics can be evaluated in (those [`DynEffect`] has a
+/// method for).
+pub trait ModelScalar: Scalar {
+    /// Route to the effect's model adjustment for this scalar type.
+    fn adjust(e: &dyn DynEffect, p: &[Self], m: &mut ModelAdjust<'_, Self>);
+    /// Route to the effect's generalised forces for this scalar type.
+    fn forces(e: &dyn DynEffect, p: &[Self], x: EffectState<'_, Self>, tau: &mut [Self]);
+    /// Route to the effect's measurement adjustment for this scalar type.
+    fn measurement(e: &dyn DynEffect, p: &[Self], m: &mut MeasurementAdjust<Self>);
+}
+
+macro_rules! model_scalar {
+    ($t:ty, $adj:ident, $frc:ident, $mea:ident) => {
+        impl ModelScalar for $t {
+            fn adjust(e: &dyn DynEffect, p: &[Self], m: &mut ModelAdjust<'_, Self>) {
+                e.$adj(p, m)
+            }
+            fn forces(e: &dyn DynEffect, p: &[Self], x: EffectState<'_, Self>, tau: &mut [Self]) {
+                e.$frc(p, x, tau)
+            }
+            fn measurement(e: &dyn DynEffect, p: &[Self], m: &mut MeasurementAdjust<Self>) {
+                e.$mea(p, m)
+            }
+        }
+    };
+}
+model_scalar!(f64, adjust_f64, forces_f64, measurement_f64);
+model_scalar!(Dual64, adjust_dual, forces_dual, measurement_dual);
+model_scalar!(AdChunk, adjust_chunk, forces_chunk, measurement_chunk);
+model_scalar!(AdNested, adjust_nested, forces_nested, measurement_nested);
+

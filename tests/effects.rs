@@ -1,0 +1,96 @@
+//! The effect catalog: each effect's physics against closed-form truth, the command-line
+//! form, and the catalog `diagnose` draws from.
+
+mod common;
+use common::*;
+use footfall::model::effects::{catalog, EffectSpec};
+
+const G: f64 = 9.80665;
+
+/// Generalised gravity force at rest: the bias `c` of `M q̈ + c = τ` at q̇ = 0 is the
+/// negative generalised gravity force. Its pelvis-x and pelvis-y entries are the total
+/// weight's components, whatever the posture.
+fn gravity_bias(m: &footfall::model::GaitModel, theta: &[f64]) -> Vec<f64> {
+    let q = [0.3, 0.95, 0.1, 0.3, -0.4, 0.1, -0.2, -0.3, 0.05];
+    m.mass_matrix_and_bias(&q, &[0.0; 9], theta).1
+}
+
+#[test]
+fn ground_slope_tilts_gravity_by_its_angle() {
+    let plain = model("opensim_subject01.json", "ellipse.json");
+    let m = model_with_effects("opensim_subject01.json", "ellipse.json", serde_json::json!([{ "type": "ground_slope", "free": ["angle"] }]));
+    let c0 = gravity_bias(&plain, &[]);
+    let total = c0[1] / G;
+    assert!((total - 72.6).abs() < 1.0, "the subject's mass from the weight: {total}");
+    assert!(c0[0].abs() < 1e-9);
+    for alpha in [-0.1, 0.03, 0.15] {
+        let c = gravity_bias(&m, &[alpha]);
+        assert!((c[0] - total * G * alpha.sin()).abs() < 1e-9, "along the walkway: {}", c[0]);
+        assert!((c[1] - total * G * alpha.cos()).abs() < 1e-9, "normal to it: {}", c[1]);
+    }
+    assert_eq!(gravity_bias(&m, &[0.0]), c0, "zero slope is no effect");
+}
+
+#[test]
+fn trunk_mass_adds_weight_and_moves_the_trunk_centre_of_mass() {
+    let plain = model("opensim_subject01.json", "ellipse.json");
+    let m = model_with_effects(
+        "opensim_subject01.json",
+        "ellipse.json",
+        serde_json::json!([{ "type": "trunk_mass", "free": ["added_mass", "com_offset"] }]),
+    );
+    let c0 = gravity_bias(&plain, &[]);
+    assert_eq!(gravity_bias(&m, &[0.0, 0.0]), c0);
+    let c = gravity_bias(&m, &[5.0, 0.0]);
+    assert!((c[1] - c0[1] - 5.0 * G).abs() < 1e-9, "5 kg more weight");
+    // the trunk's own coordinate (index 2, its angle 0.1 rad): moving its COM by δ along
+    // its x axis changes the gravity moment about the hip by (m_hat) g δ cos(0.1)
+    let delta = 0.02;
+    let c = gravity_bias(&m, &[0.0, delta]);
+    let dm = (c[2] - c0[2]).abs() / (G * delta * 0.1f64.cos());
+    assert!(dm > 20.0 && dm < 60.0, "the moment change is the trunk's weight times the offset: {dm} kg");
+    // and is linear in δ with no change of the total weight
+    let c2 = gravity_bias(&m, &[0.0, 2.0 * delta]);
+    assert!(((c2[2] - c0[2]) - 2.0 * (c[2] - c0[2])).abs() < 1e-9);
+    assert!((c2[1] - c0[1]).abs() < 1e-9);
+}
+
+#[test]
+fn command_line_effects_parse_free_their_parameters_and_refuse_mistakes() {
+    let e = EffectSpec::parse_cli("ground_slope").unwrap();
+    assert_eq!(e, EffectSpec::GroundSlope { angle: 0.0, free: vec!["angle".into()] });
+    let e = EffectSpec::parse_cli("passive_joint_stiffness:joint=knee,stiffness=40").unwrap();
+    assert_eq!(
+        e,
+        EffectSpec::PassiveJointStiffness { joint: "knee".into(), side: "both".into(), stiffness: 40.0, rest_angle: 0.0, free: vec!["stiffness".into()] }
+    );
+    let e = EffectSpec::parse_cli("trunk_mass:added_mass=3,free=").unwrap();
+    assert_eq!(e, EffectSpec::TrunkMass { added_mass: 3.0, com_offset: 0.0, free: vec![] });
+    for (bad, needle) in [
+        ("tendon_slack", "not a known effect"),
+        ("ground_slope:angle=1.0", "angle"),
+        ("ground_slope:angel=0.1", "angel"),
+        ("passive_joint_stiffness:joint=elbow", "elbow"),
+        ("cop_offset:free=offset+offset", "twice"),
+        ("cop_offset:offset", "key=value"),
+    ] {
+        let err = EffectSpec::parse_cli(bad).unwrap_err();
+        assert!(err.contains(needle), "{bad}: {err}");
+    }
+}
+
+#[test]
+fn the_catalog_builds_into_the_model_with_free_parameters_at_their_null_values() {
+    let cat = catalog();
+    let kinds: Vec<&str> = cat.iter().map(|e| e.kind()).collect();
+    for k in ["ground_slope", "trunk_mass", "passive_joint_stiffness", "force_plate_time_offset", "cop_offset"] {
+        assert!(kinds.contains(&k), "{k} missing from the catalog");
+    }
+    for e in &cat {
+        let m = model_with_effects("opensim_subject01.json", "ellipse.json", serde_json::to_value(vec![e]).unwrap());
+        assert!(m.ntheta() >= 1, "{}: nothing free", e.label());
+        assert!(m.theta0().iter().all(|v| *v == 0.0), "{}: not at its null value", e.label());
+        let plain = model("opensim_subject01.json", "ellipse.json");
+        assert_eq!(gravity_bias(&m, &m.theta0()), gravity_bias(&plain, &[]), "{}: the null value changes the model", e.label());
+    }
+}
