@@ -15,6 +15,7 @@
 //! complementarity, falls below the tolerance.
 
 pub mod hessian;
+pub mod linearised;
 pub mod qp;
 
 use hessian::BlockBfgs;
