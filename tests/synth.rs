@@ -31,7 +31,7 @@ fn noise_model_events_and_csv_round_trip() {
     let half = sol.span().1;
     let deg = std::f64::consts::PI / 180.0;
     let noise = NoiseModel { position_m: 0.002, angle_rad: 0.5 * deg, force_n: 5.0, cop_m: 0.005, seed: 3 };
-    let settings = SynthSettings { rate_hz: 100.0, start_s: -0.2, duration_s: 4.0 * half, noise, integrator: IntegratorSettings::default() };
+    let settings = SynthSettings { rate_hz: 100.0, start_s: -0.2, duration_s: 4.0 * half, noise, integrator: IntegratorSettings::default(), measurement: Default::default() };
     let (noisy, truth) = synthesize(&model, &sets, &sol, &settings, "t").unwrap();
     let (again, _) = synthesize(&model, &sets, &sol, &settings, "t").unwrap();
     assert_eq!(noisy.q, again.q, "same seed, same bits");

@@ -78,6 +78,7 @@ fn tracking_recovers_a_known_simulation_to_the_noise_level() {
         duration_s: 0.6 + 2.0 * half,
         noise,
         integrator: IntegratorSettings { rtol: 1e-10, atol: 1e-10, ..Default::default() },
+        measurement: Default::default(),
     };
     let (data, synth) = synthesize(&model, &sets, &truth, &settings, "synthetic_ellipse_walk").unwrap();
     assert!(data.time.last().unwrap() - data.time[0] > 2.0 * half, "more than a gait cycle");

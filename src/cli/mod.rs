@@ -3,6 +3,8 @@
 //! Exit codes: 0 success, 1 bad input or a run that did not succeed, 2 internal error.
 
 mod compare;
+mod diagnose;
+mod diff;
 mod fit_foot;
 mod gait_run;
 mod predict;
@@ -41,6 +43,10 @@ enum Command {
     Compare(compare::Args),
     /// Generate a measurement set from a model solution, with noise and the truth kept apart.
     Synth(synth::Args),
+    /// Which physical effect is the model of a track run missing? Score tests, then a re-fit.
+    Diagnose(diagnose::Args),
+    /// Compare the per-channel tracking errors of two runs: A (before) against B (after).
+    Diff(diff::Args),
 }
 
 /// Failure classes mapped to exit codes.
@@ -59,6 +65,8 @@ pub fn main() -> ExitCode {
         Command::Predict(args) => predict::run(args, cli.quiet),
         Command::Compare(args) => compare::run(args, cli.quiet),
         Command::Synth(args) => synth::run(args, cli.quiet),
+        Command::Diagnose(args) => diagnose::run(args, cli.quiet),
+        Command::Diff(args) => diff::run(args, cli.quiet),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

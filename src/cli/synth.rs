@@ -2,12 +2,13 @@
 //! noise model and the truth kept apart — data with a known answer.
 
 use super::Failure;
-use anyhow::{anyhow, bail};
+use anyhow::{anyhow, bail, Context};
+use footfall::model::effects::EffectSpec;
 use footfall::data::write_sagittal_csv;
 use footfall::integrate::IntegratorSettings;
 use footfall::model::GaitModel;
 use footfall::phases::PhaseSequence;
-use footfall::problems::synth::{synthesize, NoiseModel, SynthSettings};
+use footfall::problems::synth::{synthesize, MeasurementOffsets, NoiseModel, SynthSettings};
 use footfall::runfolder::RunFolder;
 use std::path::PathBuf;
 
@@ -53,6 +54,13 @@ pub struct Args {
     /// Replace the output folder if it exists.
     #[arg(long)]
     overwrite: bool,
+    /// Hide an effect in the data, `NAME:key=value,…` with the parameter values (e.g.
+    /// `ground_slope:angle=0.03`; repeatable). Measurement effects (force-plate time
+    /// offset, CoP offset) are applied to the samples; a model effect first re-fits the
+    /// `--from` track run's data with the effect in the model (held at the given values),
+    /// so the truth is a solution of the model with the effect.
+    #[arg(long = "hidden-effect", value_name = "NAME:key=value,…")]
+    hidden_effects: Vec<String>,
 }
 
 pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
@@ -68,9 +76,36 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     if !(args.half_cycles.is_finite() && args.half_cycles >= 2.5) {
         bail!("--half-cycles {}: need at least 2.5 (a gait cycle plus margins for the event search)", args.half_cycles);
     }
-    let solution = super::predict::read_solution(&args.from)?;
-    let model = GaitModel::load(&args.model, &super::simulate::foot_path(&args.foot))?;
-    let phases = args.phases.clone().unwrap_or_else(|| super::predict::default_phases(&args.foot));
+    let hidden: Vec<EffectSpec> = args.hidden_effects.iter().map(|e| EffectSpec::parse_cli(&format!("{e}{}free=", if e.contains(':') { "," } else { ":" })).map_err(|r| anyhow!("--hidden-effect: {r}"))).collect::<Result<_, _>>()?;
+    let mut offsets = MeasurementOffsets::default();
+    let mut model_effects = Vec::new();
+    for e in &hidden {
+        match e {
+            EffectSpec::ForcePlateTimeOffset { offset, .. } => offsets.force_time_offset_s = *offset,
+            EffectSpec::CopOffset { offset, .. } => offsets.cop_offset_m = *offset,
+            other => model_effects.push(other.clone()),
+        }
+    }
+    let mut solution = super::predict::read_solution(&args.from)?;
+    let mut model = GaitModel::load(&args.model, &super::simulate::foot_path(&args.foot))?;
+    let mut phases = args.phases.clone().unwrap_or_else(|| super::predict::default_phases(&args.foot));
+    if !model_effects.is_empty() {
+        // the truth: the --from run's problem re-solved with the effects in the model
+        let run = super::track::read_run_setup(&args.from).context("--hidden-effect with a model effect needs a track run folder as --from")?;
+        let mut prob = super::track::TrackingProblem::build(&run, &model_effects)?;
+        prob.setup.start_from(&solution).map_err(|e| anyhow!("{}: {e}", args.from.display()))?;
+        if !quiet {
+            eprintln!("re-fitting {} with {} hidden in the model", args.from.display(), model_effects.iter().map(|e| e.label()).collect::<Vec<_>>().join(" and "));
+        }
+        let settings = super::track::tracking_sqp_settings(1e-5, 200, None, footfall::sqp::HessianMode::Exact, 1e-3);
+        let (res, sol) = prob.solve(&settings, quiet)?;
+        if res.status != footfall::sqp::SqpStatus::Converged {
+            bail!("the model with the hidden effect did not converge on the --from run's data: {}", res.status);
+        }
+        solution = sol;
+        phases = run.phases.clone();
+        model = prob.model;
+    }
     let seq = PhaseSequence::load(&phases)?;
     let sets = seq.resolve(&model, &phases)?;
     if solution.phases.iter().any(|p| p.set >= sets.len() || p.x.iter().any(|x| x.len() != model.nx())) {
@@ -98,6 +133,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         duration_s: args.half_cycles * half,
         noise,
         integrator: IntegratorSettings { rtol: 1e-10, atol: 1e-10, ..Default::default() },
+        measurement: offsets,
     };
     let folder = RunFolder::create(&args.out, args.overwrite)?;
     let (data, truth) = synthesize(&model, &sets, &truth_sol, &settings, "synthetic").map_err(|e| anyhow!("generating the trial: {e}"))?;
@@ -108,6 +144,8 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         "model": args.model,
         "foot": model.foot_name,
         "phases": phases,
+        "hidden_effects": hidden,
+        "measurement_offsets": offsets,
         "effect_parameters": model.parameters().iter().map(|p| serde_json::json!({"name": p.name, "value": p.value, "unit": p.unit})).collect::<Vec<_>>(),
         "noise": noise,
         "noise_model": "independent Gaussian per channel and sample (ChaCha8, seeded); an unloaded foot reads exactly zero; CoP undefined below the CoP threshold",

@@ -11,6 +11,8 @@ use footfall::problems::gait::GaitCycle;
 use footfall::problems::track::TrackingSetup;
 use footfall::problems::evaluation::GaitSolution;
 use footfall::runfolder::RunFolder;
+use footfall::model::effects::EffectSpec;
+use footfall::problems::diagnose::{parameter_sd, IdentifiedParameter, TrackingRunSetup};
 use footfall::sqp::{ExactConvexification, HessianMode, SqpSettings, SqpStatus};
 use std::path::PathBuf;
 
@@ -60,6 +62,125 @@ pub struct Args {
     /// Report ground-force excursions above the measurement larger than this (N).
     #[arg(long, default_value_t = super::gait_run::DEFAULT_TRANSIENT_THRESHOLD_N)]
     transient_threshold: f64,
+    /// Add an effect and identify its parameters: `NAME[:key=value,…]`, e.g.
+    /// `ground_slope`, `passive_joint_stiffness:joint=knee`, `cop_offset:offset=0.01,free=`
+    /// (repeatable; names: ground_slope, trunk_mass, passive_joint_stiffness,
+    /// force_plate_time_offset, cop_offset).
+    #[arg(long = "effect", value_name = "NAME[:key=value,…]")]
+    effects: Vec<String>,
+    /// Start from the solution of a track run (its folder or solution.json) of the same
+    /// phase graph instead of the data; effect parameters it identified start at its values.
+    #[arg(long)]
+    init: Option<PathBuf>,
+}
+
+/// The parts of a tracking problem that do not borrow each other.
+pub struct TrackingProblem {
+    pub model: GaitModel,
+    pub sets: Vec<footfall::model::ConstraintSet>,
+    pub data: footfall::data::GaitData,
+    pub setup: TrackingSetup,
+    pub phases: PathBuf,
+    pub integrator: IntegratorSettings,
+}
+
+impl TrackingProblem {
+    /// Rebuild the problem a run describes, with `extra` effects added (parameters free
+    /// at their values) and the run's identified parameter values.
+    pub fn build(run: &TrackingRunSetup, extra: &[EffectSpec]) -> anyhow::Result<Self> {
+        let foot_path = super::simulate::foot_path(&run.foot);
+        let mut effects = run.effects.clone();
+        effects.extend(extra.iter().cloned());
+        let mut model = GaitModel::load_with_effects(&run.model, &foot_path, &effects)?;
+        for p in &run.parameters {
+            // a parameter the run knew is started at its value (one the model lacks is ignored)
+            if model.parameters().iter().any(|q| q.name == p.name) {
+                model.set_parameter_value(&p.name, p.value).map_err(|e| anyhow!(e))?;
+            }
+        }
+        let seq = PhaseSequence::load(&run.phases)?;
+        let sets = seq.resolve(&model, &run.phases)?;
+        let mut data = super::load_data(run.data.as_deref())?;
+        if let Some(fc) = run.kinematics_cutoff {
+            data = data.low_pass_kinematics(fc).context("--kinematics-cutoff")?;
+        }
+        let setup = TrackingSetup::new(&model, &seq, &sets, &data).map_err(|e| anyhow!("{}: {e}", data.source.display()))?;
+        let integrator = IntegratorSettings { rtol: run.integrator_tol, atol: run.integrator_tol, ..Default::default() };
+        integrator.validate().context("--integrator-tol")?;
+        Ok(Self { model, sets, data, setup, phases: run.phases.clone(), integrator })
+    }
+
+    /// The run description of a solution `theta` of this problem with standard
+    /// deviations `sd` (per θ).
+    pub fn record(&self, base: &TrackingRunSetup, extra: &[EffectSpec], theta: &[f64], sd: &[Option<f64>]) -> TrackingRunSetup {
+        let free = self.model.free_parameters();
+        let parameters = self
+            .model
+            .parameters()
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let k = free.iter().position(|&f| f == i);
+                IdentifiedParameter {
+                    name: p.name.clone(),
+                    value: k.map_or(p.value, |k| theta[k]),
+                    sd: k.and_then(|k| sd.get(k).copied().flatten()),
+                    unit: p.unit.clone(),
+                    free: p.free,
+                }
+            })
+            .collect();
+        let mut effects = base.effects.clone();
+        effects.extend(extra.iter().cloned());
+        TrackingRunSetup { effects, parameters, ..base.clone() }
+    }
+}
+
+/// The tracking solver's settings (exact Hessian once nearly feasible, as `track`'s
+/// defaults).
+pub fn tracking_sqp_settings(tol: f64, max_iter: usize, max_time: Option<f64>, hessian: HessianMode, exact_below: f64) -> SqpSettings {
+    SqpSettings { tol_kkt: tol, max_iter, max_time, hessian, exact_hessian_below: exact_below, exact_convexification: ExactConvexification::InertiaCorrection, ..Default::default() }
+}
+
+impl TrackingProblem {
+    /// Solve the problem (interruptibly, with progress unless `quiet`) and read its
+    /// solution.
+    pub fn solve(&self, settings: &SqpSettings, quiet: bool) -> anyhow::Result<(footfall::sqp::SqpResult, GaitSolution)> {
+        let cycle = GaitCycle::new(&self.model, &self.setup.seq, &self.sets).map_err(|e| anyhow!(e))?;
+        let ocp = self.setup.ocp(&cycle, &self.model, &self.sets, self.integrator.clone()).map_err(|e| anyhow!(e))?;
+        let tr = Transcription::new(&ocp).context("transcribing the tracking problem")?;
+        let (_, _, w0) = tr.variable_bounds_and_guess();
+        let res = super::solve_interruptibly(&tr, &w0, settings, quiet);
+        let sol = GaitSolution::from_nlp(&tr, &res.w, &cycle.continuous, self.setup.window.0);
+        Ok((res, sol))
+    }
+}
+
+/// Read a run's `setup.json`.
+pub fn read_run_setup(run: &std::path::Path) -> anyhow::Result<TrackingRunSetup> {
+    let file = if run.is_dir() { run.join("setup.json") } else { run.to_path_buf() };
+    let text = std::fs::read_to_string(&file).with_context(|| format!("reading {} (a track run folder has one)", file.display()))?;
+    serde_json::from_str(&text).with_context(|| format!("{}: not a footfall tracking setup", file.display()))
+}
+
+/// Table of effect parameters (identified ones with their standard deviation).
+pub fn parameter_table(params: &[IdentifiedParameter]) -> footfall::report::table::Table {
+    footfall::report::table::Table {
+        title: "Effect parameters".into(),
+        headers: vec!["parameter".into(), "value".into(), "± sd".into(), "unit".into(), "identified".into()],
+        rows: params
+            .iter()
+            .map(|p| {
+                vec![
+                    p.name.clone(),
+                    format!("{:.5}", p.value),
+                    p.sd.map_or("—".into(), |v| format!("{v:.2e}")),
+                    p.unit.clone(),
+                    if p.free { "yes".into() } else { "no".into() },
+                ]
+            })
+            .collect(),
+    }
 }
 
 pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
@@ -67,84 +188,146 @@ pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
 }
 
 fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
-    let foot_path = super::simulate::foot_path(&args.foot);
-    let model = GaitModel::load(&args.model, &foot_path)?;
-    let phases = args.phases.clone().unwrap_or_else(|| match args.foot.as_str() {
-        "double-circle" | "double_circle" => PathBuf::from("phases/double_circle_walk.json"),
-        _ => PathBuf::from("phases/ellipse_walk.json"),
-    });
-    let seq = PhaseSequence::load(&phases)?;
-    let sets = seq.resolve(&model, &phases)?;
-    let mut data = super::load_data(args.data.as_deref())?;
-    if let Some(fc) = args.kinematics_cutoff {
-        data = data.low_pass_kinematics(fc).context("--kinematics-cutoff")?;
-    }
-    let setup = TrackingSetup::new(&model, &seq, &sets, &data).map_err(|e| anyhow!("{}: {e}", data.source.display()))?;
-    let cycle = GaitCycle::new(&model, &setup.seq, &sets).map_err(|e| anyhow!(e))?;
-    let integrator = IntegratorSettings { rtol: args.integrator_tol, atol: args.integrator_tol, ..Default::default() };
-    integrator.validate().context("--integrator-tol")?;
-    let ocp = setup.ocp(&cycle, &model, &sets, integrator.clone()).map_err(|e| anyhow!(e))?;
-    let tr = Transcription::new(&ocp).context("transcribing the tracking problem")?;
-    let (_, _, w0) = tr.variable_bounds_and_guess();
-    let hessian: HessianMode = args.hessian.into();
-    let settings = SqpSettings {
-        tol_kkt: args.tol,
-        max_iter: args.max_iter,
-        max_time: args.max_time,
-        hessian,
-        exact_hessian_below: args.exact_below,
-        exact_convexification: ExactConvexification::InertiaCorrection,
-        ..Default::default()
+    let phases = args.phases.clone().unwrap_or_else(|| super::predict::default_phases(&args.foot));
+    let extra: Vec<EffectSpec> = args.effects.iter().map(|e| EffectSpec::parse_cli(e).map_err(|r| anyhow!("--effect: {r}"))).collect::<Result<_, _>>()?;
+    let mut base = TrackingRunSetup {
+        model: args.model.clone(),
+        foot: args.foot.clone(),
+        phases,
+        data: args.data.clone(),
+        kinematics_cutoff: args.kinematics_cutoff,
+        integrator_tol: args.integrator_tol,
+        effects: vec![],
+        parameters: vec![],
     };
-    let folder = RunFolder::create(&args.out, args.overwrite)?;
-    if !quiet {
-        eprintln!(
-            "tracking {:.3}–{:.3} s of {} with the {} foot ({} variables, {} constraints, {:?})",
-            setup.window.0,
-            setup.window.1,
-            data.name,
-            model.foot_name,
-            tr.n(),
-            tr.m(),
-            hessian
-        );
-    }
-    let res = super::solve_interruptibly(&tr, &w0, &settings, quiet);
-
-    let solution = GaitSolution::from_nlp(&tr, &res.w, &cycle.continuous, setup.window.0);
-    let out = super::gait_run::write(
-        GaitRun {
-            command: "track",
-            title: format!("footfall tracking — {} foot, {}", model.foot_name, data.name),
-            data: &data,
-            model: &model,
-            sets: &sets,
-            phases_path: &phases,
-            result: &res,
-            solution: &solution,
-            integrator,
-            extra_summary: vec![],
-            extra_json: Default::default(),
-            extra_sections: vec![],
-            extra_files: vec![],
-            transient_threshold_n: args.transient_threshold,
-        },
-        folder,
-    )?;
-    let converged = res.status == SqpStatus::Converged;
-    if !quiet {
-        eprintln!("{}\n{}: J = {:.6}, KKT {:.2e}, {} iterations, {:.1} s", out.table.to_markdown(), res.status, res.objective, res.kkt, res.history.len().saturating_sub(1), res.seconds);
-        if let Some(f) = &out.fine {
-            eprintln!(
-                "1 ms re-integration: peak normal force {:.1} N (right), {:.1} N (left); largest Baumgarte force {:.1e} N; largest drift {:.2e} m",
-                f.peak_normal_force_n[0], f.peak_normal_force_n[1], f.max_baumgarte_force_n, f.max_position_drift_m
-            );
+    let init = match &args.init {
+        Some(p) => {
+            let sol = super::predict::read_solution(p)?;
+            if p.is_dir() && p.join("setup.json").exists() {
+                base.parameters = read_run_setup(p)?.parameters;
+            }
+            Some(sol)
         }
-        eprintln!("report: {}", out.path.join("report.html").display());
+        None => None,
+    };
+    let mut prob = TrackingProblem::build(&base, &extra)?;
+    if let Some(sol) = &init {
+        prob.setup.start_from(sol).map_err(|e| anyhow!("--init {}: {e}", args.init.as_ref().map(|p| p.display().to_string()).unwrap_or_default()))?;
     }
-    if converged {
+    base.parameters.clear();
+    let hessian: HessianMode = args.hessian.into();
+    let settings = tracking_sqp_settings(args.tol, args.max_iter, args.max_time, hessian, args.exact_below);
+    let folder = RunFolder::create(&args.out, args.overwrite)?;
+    let run = prob.solve_and_write(&base, &extra, &settings, folder, args.transient_threshold, quiet)?;
+    if run.converged {
         Ok(())
     } else {
-        Err(anyhow!("the solver stopped without converging: {} (results written to {})", res.status, out.path.display()))
+        Err(anyhow!("the solver stopped without converging: {} (results written to {})", run.result.status, run.output.path.display()))
     }
 }
+
+impl TrackingProblem {
+    /// Solve the problem and write its run folder (`setup.json` records the effects and
+    /// the identified parameters with their uncertainty). `base` describes the run
+    /// without `extra` effects.
+    pub fn solve_and_write(
+        &self,
+        base: &TrackingRunSetup,
+        extra: &[EffectSpec],
+        settings: &SqpSettings,
+        folder: RunFolder,
+        transient_threshold: f64,
+        quiet: bool,
+    ) -> anyhow::Result<TrackedRun> {
+        let TrackingProblem { model, sets, data, setup, phases, integrator, .. } = self;
+        let integrator = integrator.clone();
+        let cycle = GaitCycle::new(model, &setup.seq, sets).map_err(|e| anyhow!(e))?;
+        let ocp = setup.ocp(&cycle, model, sets, integrator.clone()).map_err(|e| anyhow!(e))?;
+        let tr = Transcription::new(&ocp).context("transcribing the tracking problem")?;
+        let (_, _, w0) = tr.variable_bounds_and_guess();
+        if !quiet {
+            eprintln!(
+                "tracking {:.3}–{:.3} s of {} with the {} foot ({} variables, {} constraints, {:?})",
+                setup.window.0,
+                setup.window.1,
+                data.name,
+                model.foot_name,
+                tr.n(),
+                tr.m(),
+                settings.hessian
+            );
+        }
+        let res = super::solve_interruptibly(&tr, &w0, settings, quiet);
+
+        let solution = GaitSolution::from_nlp(&tr, &res.w, &cycle.continuous, setup.window.0);
+        let converged = res.status == SqpStatus::Converged;
+        let data_rows = setup.data_rows(model, sets, &cycle.continuous);
+        let sd = if model.ntheta() > 0 && converged {
+            parameter_sd(&tr, &res.w, data_rows).unwrap_or_else(|e| {
+                eprintln!("warning: no parameter uncertainty: {e}");
+                vec![None; model.ntheta()]
+            })
+        } else {
+            vec![None; model.ntheta()]
+        };
+        let record = self.record(base, extra, &solution.theta, &sd);
+        let mut extra_json = serde_json::Map::new();
+        extra_json.insert("setup".into(), serde_json::to_value(&record)?);
+        extra_json.insert("data_residuals".into(), data_rows.into());
+        let mut extra_sections = Vec::new();
+        if !record.parameters.is_empty() {
+            extra_sections.push(footfall::report::html::Section {
+                heading: "Effects".into(),
+                paragraphs: vec!["Effect parameters of the model; identified ones with an approximate standard deviation from the Gauss–Newton Hessian reduced to the constraints, s² = J/(N − p).".into()],
+                tables: vec![parameter_table(&record.parameters)],
+                svgs: vec![],
+            });
+        }
+        let out = super::gait_run::write(
+            GaitRun {
+                command: "track",
+                title: format!("footfall tracking — {} foot, {}", model.foot_name, data.name),
+                data,
+                model,
+                sets,
+                phases_path: phases,
+                result: &res,
+                solution: &solution,
+                integrator,
+                extra_summary: vec![],
+                extra_json,
+                extra_sections,
+                extra_files: vec![("setup.json".into(), serde_json::to_string_pretty(&record)?.into_bytes())],
+                transient_threshold_n: transient_threshold,
+            },
+            folder,
+        )?;
+        if !quiet {
+            if !record.parameters.is_empty() {
+                eprintln!("{}", parameter_table(&record.parameters).to_markdown());
+            }
+            eprintln!("{}\n{}: J = {:.6}, KKT {:.2e}, {} iterations, {:.1} s", out.table.to_markdown(), res.status, res.objective, res.kkt, res.history.len().saturating_sub(1), res.seconds);
+            if let Some(f) = &out.fine {
+                eprintln!(
+                    "1 ms re-integration: peak normal force {:.1} N (right), {:.1} N (left); largest Baumgarte force {:.1e} N; largest drift {:.2e} m",
+                    f.peak_normal_force_n[0], f.peak_normal_force_n[1], f.max_baumgarte_force_n, f.max_position_drift_m
+                );
+            }
+            eprintln!("report: {}", out.path.join("report.html").display());
+        }
+        Ok(TrackedRun { converged, result: res, output: out, record })
+    }
+}
+
+/// A solved and written tracking run.
+pub struct TrackedRun {
+    /// Whether the solver converged.
+    pub converged: bool,
+    /// The solver's result.
+    pub result: footfall::sqp::SqpResult,
+    /// What the run folder holds.
+    pub output: super::gait_run::GaitRunOutput,
+    /// The run's description.
+    pub record: TrackingRunSetup,
+}
+

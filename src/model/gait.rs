@@ -173,6 +173,35 @@ impl GaitModel {
         Self::from_specs(&spec, model_path, &foot, foot_path)
     }
 
+    /// Build the model with `extra` effects added to those of the model file (e.g. from
+    /// `--effect`); an extra effect that the file already has is refused.
+    pub fn load_with_effects(model_path: &Path, foot_path: &Path, extra: &[super::effects::EffectSpec]) -> Result<Self, ModelError> {
+        let mut spec = ModelSpec::load(model_path)?;
+        for e in extra {
+            if let Some(j) = spec.effects.iter().position(|o| o.overlaps(e)) {
+                return Err(ModelError::invalid(
+                    model_path,
+                    format!("effects[{j}]"),
+                    format!("the model already has the effect '{}' that was asked for in addition; remove one of them", e.label()),
+                ));
+            }
+            spec.effects.push(e.clone());
+        }
+        let foot = FootSpec::load(foot_path)?;
+        Self::from_specs(&spec, model_path, &foot, foot_path)
+    }
+
+    /// Set the value of the effect parameter `name` (e.g. an identified value read back
+    /// from a run), within its bounds.
+    pub fn set_parameter_value(&mut self, name: &str, value: f64) -> Result<(), String> {
+        let p = self.params.iter_mut().find(|p| p.name == name).ok_or_else(|| format!("the model has no parameter '{name}'"))?;
+        if !(value.is_finite() && value >= p.lower && value <= p.upper) {
+            return Err(format!("parameter '{name}': {value} is outside its bounds [{}, {}]", p.lower, p.upper));
+        }
+        p.value = value;
+        Ok(())
+    }
+
     /// Assemble from parsed specifications (`model_path` resolves relative paths and
     /// names the file in errors).
     pub fn from_specs(

@@ -3,6 +3,7 @@
 //! nothing about gait.
 
 pub mod benchmark;
+pub mod diagnose;
 pub mod evaluation;
 pub mod foot_fit;
 pub mod gait;

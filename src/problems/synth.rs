@@ -56,6 +56,20 @@ pub struct SynthSettings {
     pub noise: NoiseModel,
     /// Integrator of the intervals.
     pub integrator: IntegratorSettings,
+    /// Hidden measurement effects (zero: none).
+    pub measurement: MeasurementOffsets,
+}
+
+/// Measurement effects hidden in a synthetic trial, as the catalog defines them: the
+/// force plates' clock runs `force_time_offset_s` behind the motion capture's (the force
+/// recorded at t is the model's at t − offset) and their CoP reads `cop_offset_m` too far
+/// along the walkway.
+#[derive(Debug, Clone, Copy, PartialEq, Default, serde::Serialize, serde::Deserialize)]
+pub struct MeasurementOffsets {
+    /// Force-plate clock offset (s).
+    pub force_time_offset_s: f64,
+    /// CoP offset (m).
+    pub cop_offset_m: f64,
 }
 
 /// The truth behind a synthetic trial: where each sample came from.
@@ -97,15 +111,16 @@ pub fn synthesize(
     let dt = 1.0 / settings.rate_hz;
     let n = (settings.duration_s * settings.rate_hz).floor() as usize + 1;
     let time: Vec<f64> = (0..n).map(|k| settings.start_s + k as f64 * dt).collect();
-    // each sample's half cycle k and time τ within the solution
-    let place: Vec<(i64, f64)> = time
-        .iter()
-        .map(|&t| {
-            let k = (t / half).floor() as i64;
-            (k, (s0 + t - k as f64 * half).clamp(s0, s1))
-        })
-        .collect();
-    let mut taus: Vec<f64> = place.iter().map(|p| p.1).collect();
+    // each sample's half cycle k and time τ within the solution (the force plates'
+    // samples at the model's time t − offset)
+    let locate = |t: f64| {
+        let k = (t / half).floor() as i64;
+        (k, (s0 + t - k as f64 * half).clamp(s0, s1))
+    };
+    let place: Vec<(i64, f64)> = time.iter().map(|&t| locate(t)).collect();
+    let delay = settings.measurement.force_time_offset_s;
+    let place_force: Vec<(i64, f64)> = time.iter().map(|&t| locate(t - delay)).collect();
+    let mut taus: Vec<f64> = place.iter().chain(&place_force).map(|p| p.1).collect();
     taus.sort_by(f64::total_cmp);
     taus.dedup_by(|a, b| (*a - *b).abs() < 1e-12);
     let samples = solution.sample_at(model, sets, &taus, &settings.integrator)?;
@@ -115,7 +130,7 @@ pub fn synthesize(
     };
     let mut q: [Vec<f64>; 9] = Default::default();
     let mut feet: [FootData; 2] = Default::default();
-    for &(k, tau) in &place {
+    for (&(k, tau), &(kf, tau_f)) in place.iter().zip(&place_force) {
         let s = find(tau);
         let odd = k.rem_euclid(2) == 1;
         let shift = k as f64 * step_length;
@@ -123,6 +138,9 @@ pub fn synthesize(
             let src = if odd { MIRROR_Q[i] } else { i };
             qi.push(s.x[src] + if i == 0 { shift } else { 0.0 });
         }
+        let s = find(tau_f);
+        let odd = kf.rem_euclid(2) == 1;
+        let shift = kf as f64 * step_length + settings.measurement.cop_offset_m;
         for (side, foot) in feet.iter_mut().enumerate() {
             let l = &s.feet[if odd { 1 - side } else { side }];
             foot.fx.push(l.fx);

@@ -205,6 +205,48 @@ impl TrackingSetup {
         Ok(Self { seq, window: (t0, t1), node_times, guess, targets, weights, events, measured })
     }
 
+    /// Start from `solution` (a solution of the same phase graph, e.g. of a tracking run
+    /// before an effect was added) instead of the data.
+    pub fn start_from(&mut self, solution: &super::evaluation::GaitSolution) -> Result<(), String> {
+        let cont: Vec<(&str, usize)> = self
+            .seq
+            .phases
+            .iter()
+            .filter_map(|p| match p {
+                Phase::Continuous { name, intervals, .. } => Some((name.as_str(), *intervals)),
+                Phase::Impact { .. } => None,
+            })
+            .collect();
+        if cont.len() != solution.phases.len() {
+            return Err(format!("the initial solution has {} continuous phases, the phase graph '{}' {}", solution.phases.len(), self.seq.name, cont.len()));
+        }
+        for (((name, n), ph), gu) in cont.iter().zip(&solution.phases).zip(&self.guess.u) {
+            if *name != ph.name || *n != ph.intervals() || ph.u.len() != gu.len() {
+                return Err(format!("the initial solution's phase '{}' ({} intervals) does not match the phase graph's '{name}' ({n} intervals)", ph.name, ph.intervals()));
+            }
+        }
+        self.guess.x = solution.phases.iter().map(|p| p.x.clone()).collect();
+        self.guess.u = solution.phases.iter().map(|p| p.u.clone()).collect();
+        Ok(())
+    }
+
+    /// Number of data residuals (angles, velocities, forces and CoP at the nodes; not the
+    /// regularisation of excitations and activations).
+    pub fn data_rows(&self, model: &GaitModel, sets: &[ConstraintSet], continuous: &[usize]) -> usize {
+        let mut n = 0;
+        for (j, tg) in self.targets.iter().enumerate() {
+            let last = j + 1 == self.targets.len();
+            for (k, target) in tg.iter().enumerate() {
+                if k + 1 == tg.len() && !last {
+                    continue;
+                }
+                let r = TrackingResidual::new(model, sets[continuous[j]].clone(), target.clone(), self.weights.clone(), None);
+                n += super::GenericFunction::dim(&r) - model.nu() - model.na();
+            }
+        }
+        n
+    }
+
     /// The tracking OCP: the walking cycle of `cycle` plus the node-wise residuals.
     pub fn ocp<'c>(&self, cycle: &'c GaitCycle<'c>, model: &'c GaitModel, sets: &'c [ConstraintSet], integrator: crate::integrate::IntegratorSettings) -> Result<Ocp<'c>, String> {
         let mut ocp = cycle.ocp(&self.guess, integrator)?;

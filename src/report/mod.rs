@@ -1,13 +1,14 @@
 //! Run-folder artefacts that a gait researcher reads: SVG line plots ([`plot`]), error
 //! statistics and tables in Markdown, CSV and HTML ([`table`]), one self-contained
-//! `report.html` ([`html`]), and time series as CSV and OpenSim `.sto` ([`csv`]).
+//! `report.html` ([`html`]), time series as CSV and OpenSim `.sto` ([`csv`]), and the
+//! before/after comparison of two runs' tracking errors ([`diff`]).
 //!
 //! This layer knows nothing about how a solution was found: callers hand it numbers,
 //! names and strings. Every output is deterministic (the same input gives the same bytes)
 //! and self-contained (no external resources, no JavaScript).
 //!
 //! The SVG is written by hand rather than through a plotting crate: the plots need only
-//! lines, markers, shaded spans and text, and writing them directly keeps full control of
+//! lines, bars, markers, shaded spans and text, and writing them directly keeps full control of
 //! the layout (label collision avoidance, NaN gaps, byte-identical output), adds no
 //! dependency and no font-rendering stack (a crate such as `plotters` must measure text
 //! with a font library to place its labels), and costs about 600 lines.
@@ -33,6 +34,7 @@
 //! ```
 
 pub mod csv;
+pub mod diff;
 pub mod html;
 pub mod plot;
 pub mod table;

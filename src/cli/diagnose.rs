@@ -1,0 +1,292 @@
+//! `footfall diagnose RUN`: which effect of the catalog is the model of a tracking run
+//! missing? Score tests of every candidate at the run's solution, then a real re-fit of
+//! the top significant ones (each written as a track run folder, so `diff` and a second
+//! `diagnose` can start from it).
+
+use super::track::{read_run_setup, tracking_sqp_settings, TrackingProblem};
+use super::Failure;
+use anyhow::{anyhow, Context};
+use footfall::model::effects::{catalog, EffectSpec};
+use footfall::ocp::Transcription;
+use footfall::problems::diagnose::{gauss_newton_decrease, score_test, ScoreTest};
+use footfall::problems::gait::GaitCycle;
+use footfall::report::diff::{RunDiff, RunSummary};
+use footfall::report::html::{Report, Section, Summary, Tone};
+use footfall::report::table::Table;
+use footfall::runfolder::RunFolder;
+use footfall::sqp::HessianMode;
+use std::path::{Path, PathBuf};
+
+/// Arguments of `footfall diagnose`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// A track run folder.
+    run: PathBuf,
+    /// Re-fit this many of the top significant candidates to verify them.
+    #[arg(long, default_value_t = 1)]
+    verify: usize,
+    /// Only these candidates (effect names or `NAME:key=value,…`; default: the catalog).
+    #[arg(long = "candidate")]
+    candidates: Vec<String>,
+    /// Output folder (default: `<RUN>-diagnose`); re-fits go to `<RUN>+<effect>`.
+    #[arg(long)]
+    out: Option<PathBuf>,
+    /// Replace existing output folders.
+    #[arg(long)]
+    overwrite: bool,
+    /// KKT tolerance of the re-fits.
+    #[arg(long, default_value_t = 1e-5)]
+    tol: f64,
+    /// Iteration limit of the re-fits.
+    #[arg(long, default_value_t = 200)]
+    max_iter: usize,
+}
+
+pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
+    run_inner(args, quiet).map_err(Failure::User)
+}
+
+/// The Gauss–Newton decrease of a problem started at the run's solution, and its data
+/// residual count.
+fn decrease_at_solution(prob: &TrackingProblem) -> anyhow::Result<(f64, f64, usize, Vec<String>)> {
+    let cycle = GaitCycle::new(&prob.model, &prob.setup.seq, &prob.sets).map_err(|e| anyhow!(e))?;
+    let ocp = prob.setup.ocp(&cycle, &prob.model, &prob.sets, prob.integrator.clone()).map_err(|e| anyhow!(e))?;
+    let tr = Transcription::new(&ocp).context("transcribing the tracking problem")?;
+    let (_, _, w) = tr.variable_bounds_and_guess();
+    let (j, dec, _) = gauss_newton_decrease(&tr, &w).map_err(|e| anyhow!(e))?;
+    let rows = prob.setup.data_rows(&prob.model, &prob.sets, &cycle.continuous);
+    let names = prob.model.free_parameters().iter().map(|&i| prob.model.parameters()[i].name.clone()).collect();
+    Ok((j, dec, rows, names))
+}
+
+fn test_candidate(prob: &TrackingProblem, effect: &EffectSpec, k: usize, baseline: f64, rows: usize) -> anyhow::Result<ScoreTest> {
+    let cycle = GaitCycle::new(&prob.model, &prob.setup.seq, &prob.sets).map_err(|e| anyhow!(e))?;
+    let ocp = prob.setup.ocp(&cycle, &prob.model, &prob.sets, prob.integrator.clone()).map_err(|e| anyhow!(e))?;
+    let tr = Transcription::new(&ocp).context("transcribing the tracking problem")?;
+    let (_, _, w) = tr.variable_bounds_and_guess();
+    let free = prob.model.free_parameters();
+    let names: Vec<String> = free[free.len() - k..].iter().map(|&i| prob.model.parameters()[i].name.clone()).collect();
+    score_test(effect, names, &tr, &w, baseline, rows).map_err(|e| anyhow!(e))
+}
+
+/// A verified candidate: its re-fit run and what changed.
+struct Verified {
+    test: ScoreTest,
+    folder: PathBuf,
+    converged: bool,
+    objective_before: f64,
+    objective_after: f64,
+    parameters: Vec<(String, f64, Option<f64>, String)>,
+    diff: RunDiff,
+    sentence: String,
+}
+
+fn sibling(run: &Path, suffix: &str) -> PathBuf {
+    let name = run.file_name().map(|s| s.to_string_lossy().to_string()).unwrap_or_else(|| "run".into());
+    run.with_file_name(format!("{name}{suffix}"))
+}
+
+/// "ground slope explains 71 % of the tangential GRF error (…), most in phase 2e (…)".
+fn sentence(label: &str, diff: &RunDiff) -> String {
+    let best = diff
+        .channels
+        .iter()
+        .filter_map(|c| Some((c, c.a.as_ref()?.mean, c.b.as_ref()?.mean)))
+        .filter(|(_, a, b)| *a > 0.0 && b < a)
+        .max_by(|x, y| ((x.1 - x.2) / x.1).total_cmp(&((y.1 - y.2) / y.1)));
+    let Some((c, a, b)) = best else {
+        return format!("{label} does not reduce the mean error of any channel");
+    };
+    let mut s = format!("{label} explains {:.0} % of the {} error ({a:.3} → {b:.3} {})", 100.0 * (a - b) / a, c.channel, c.unit);
+    let phase = c
+        .phases
+        .iter()
+        .filter_map(|p| Some((p, p.mean_a?, p.mean_b?)))
+        .filter(|(_, a, b)| *a > 0.0 && b < a)
+        .max_by(|x, y| ((x.1 - x.2) / x.1).total_cmp(&((y.1 - y.2) / y.1)));
+    if let Some((p, pa, pb)) = phase {
+        s += &format!(", {:.0} % in phase {} ({pa:.3} → {pb:.3})", 100.0 * (pa - pb) / pa, p.phase);
+    }
+    s
+}
+
+fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
+    let setup = read_run_setup(&args.run)?;
+    let solution = super::predict::read_solution(&args.run)?;
+    let before = RunSummary::read(&args.run)?;
+    let out = args.out.clone().unwrap_or_else(|| sibling(&args.run, "-diagnose"));
+    let folder = RunFolder::create(&out, args.overwrite)?;
+    let candidates: Vec<EffectSpec> = if args.candidates.is_empty() {
+        catalog()
+    } else {
+        args.candidates.iter().map(|c| EffectSpec::parse_cli(c).map_err(|e| anyhow!("--candidate: {e}"))).collect::<Result<_, _>>()?
+    };
+    // the baseline: the run's own problem at its solution
+    let mut base = TrackingProblem::build(&setup, &[])?;
+    base.setup.start_from(&solution).map_err(|e| anyhow!("{}: {e}", args.run.display()))?;
+    let (objective, base_decrease, rows, _) = decrease_at_solution(&base)?;
+    if !quiet {
+        eprintln!(
+            "diagnosing {}: J = {objective:.6} over {rows} data residuals (mean square {:.3e}); Gauss–Newton decrease left at the solution {base_decrease:.2e}",
+            args.run.display(),
+            objective / rows as f64
+        );
+    }
+    let mut tests = Vec::new();
+    let mut skipped = Vec::new();
+    for c in &candidates {
+        if setup.effects.iter().any(|e| e.overlaps(c)) {
+            skipped.push(format!("{}: already in the model", c.label()));
+            continue;
+        }
+        let mut prob = match TrackingProblem::build(&setup, std::slice::from_ref(c)) {
+            Ok(p) => p,
+            Err(e) => {
+                skipped.push(format!("{}: {e:#}", c.label()));
+                continue;
+            }
+        };
+        let k = prob.model.ntheta() - base.model.ntheta();
+        prob.setup.start_from(&solution).map_err(|e| anyhow!(e))?;
+        let t0 = std::time::Instant::now();
+        let t = test_candidate(&prob, c, k, base_decrease, rows)?;
+        if !quiet {
+            eprintln!(
+                "  {:<32} predicted decrease {:>10.3e} ({:>5.1} % of J), statistic {:>9.1} vs {:.1}{}  [{:.1} s]",
+                t.label,
+                t.predicted_decrease,
+                100.0 * t.predicted_fraction,
+                t.statistic,
+                t.threshold,
+                if t.significant { "  significant" } else { "" },
+                t0.elapsed().as_secs_f64()
+            );
+        }
+        tests.push(t);
+    }
+    tests.sort_by(|a, b| b.statistic.total_cmp(&a.statistic));
+
+    let mut verified = Vec::new();
+    for t in tests.iter().filter(|t| t.significant).take(args.verify) {
+        let refit_dir = sibling(&args.run, &format!("+{}", t.effect.kind()));
+        if !quiet {
+            eprintln!("verifying {} by a re-fit → {}", t.label, refit_dir.display());
+        }
+        let mut prob = TrackingProblem::build(&setup, std::slice::from_ref(&t.effect))?;
+        prob.setup.start_from(&solution).map_err(|e| anyhow!(e))?;
+        let settings = tracking_sqp_settings(args.tol, args.max_iter, None, HessianMode::Exact, 1e-3);
+        let rf = RunFolder::create(&refit_dir, args.overwrite)?;
+        let run = prob.solve_and_write(&setup, std::slice::from_ref(&t.effect), &settings, rf, super::gait_run::DEFAULT_TRANSIENT_THRESHOLD_N, true)?;
+        let after = RunSummary::read(&run.output.path)?;
+        let diff = RunDiff::new(&before, &after, 5.0);
+        let names: Vec<&String> = t.parameters.iter().collect();
+        let parameters = run
+            .record
+            .parameters
+            .iter()
+            .filter(|p| names.contains(&&p.name))
+            .map(|p| (p.name.clone(), p.value, p.sd, p.unit.clone()))
+            .collect();
+        verified.push(Verified {
+            sentence: sentence(&t.label, &diff),
+            test: t.clone(),
+            folder: run.output.path.clone(),
+            converged: run.converged,
+            objective_before: objective,
+            objective_after: run.result.objective,
+            parameters,
+            diff,
+        });
+    }
+
+    // --- output
+    let significant = tests.iter().filter(|t| t.significant).count();
+    let verdict = if significant == 0 {
+        "No candidate explains more than the noise: every predicted decrease is below its χ² 0.1 % point. No effect is suggested.".to_string()
+    } else {
+        format!("{significant} of {} candidates explain more than the noise; the most likely missing effect is {}.", tests.len(), tests[0].label)
+    };
+    let ranking = Table {
+        title: "Candidate effects ranked by the score statistic (predicted cost decrease / residual mean square)".into(),
+        headers: ["rank", "effect", "parameters (one Gauss–Newton step)", "predicted decrease", "% of J", "statistic", "χ² 0.1 % point", "significant"].map(String::from).to_vec(),
+        rows: tests
+            .iter()
+            .enumerate()
+            .map(|(i, t)| {
+                vec![
+                    (i + 1).to_string(),
+                    t.label.clone(),
+                    t.parameters.iter().zip(&t.step_values).map(|(n, v)| format!("{} = {v:.4}", n.rsplit('.').next().unwrap_or(n))).collect::<Vec<_>>().join(", "),
+                    format!("{:.3e}", t.predicted_decrease),
+                    format!("{:.1}", 100.0 * t.predicted_fraction),
+                    format!("{:.1}", t.statistic),
+                    format!("{:.1}", t.threshold),
+                    if t.significant { "yes".into() } else { "no".into() },
+                ]
+            })
+            .collect(),
+    };
+    let mut md = format!("# Diagnosis of {}\n\n{verdict}\n\n{}\n", args.run.display(), ranking.to_markdown());
+    let mut sections = vec![Section { heading: "Ranking".into(), paragraphs: vec![verdict.clone()], tables: vec![ranking.clone()], svgs: vec![] }];
+    for v in &verified {
+        let params = v.parameters.iter().map(|(n, val, sd, u)| format!("{n} = {val:.5}{} {u}", sd.map_or(String::new(), |s| format!(" ± {s:.2e}")))).collect::<Vec<_>>().join("; ");
+        let text = format!(
+            "Re-fit with {} ({}): J {:.6} → {:.6} ({:.1} % lower; predicted {:.1} %), {}. Identified: {params}. {}.",
+            v.test.label,
+            v.folder.display(),
+            v.objective_before,
+            v.objective_after,
+            100.0 * (v.objective_before - v.objective_after) / v.objective_before,
+            100.0 * v.test.predicted_fraction,
+            if v.converged { "converged" } else { "did NOT converge" },
+            v.sentence
+        );
+        md += &format!("\n## {}\n\n{text}\n\n{}\n", v.test.label, v.diff.table().to_markdown());
+        sections.push(Section { heading: format!("Verified: {}", v.test.label), paragraphs: vec![text], tables: vec![v.diff.table()], svgs: vec![v.diff.chart().to_svg()] });
+    }
+    if !skipped.is_empty() {
+        md += &format!("\nNot tested: {}\n", skipped.join("; "));
+    }
+    let summary = serde_json::json!({
+        "command": "diagnose",
+        "run": args.run,
+        "objective": objective,
+        "data_residuals": rows,
+        "baseline_decrease": base_decrease,
+        "ranking": tests,
+        "significant": significant,
+        "verdict": verdict,
+        "verified": verified.iter().map(|v| serde_json::json!({
+            "effect": v.test.effect,
+            "label": v.test.label,
+            "folder": v.folder,
+            "converged": v.converged,
+            "objective_before": v.objective_before,
+            "objective_after": v.objective_after,
+            "predicted_fraction": v.test.predicted_fraction,
+            "verified_fraction": (v.objective_before - v.objective_after) / v.objective_before,
+            "parameters": v.parameters.iter().map(|(n, val, sd, u)| serde_json::json!({"name": n, "value": val, "sd": sd, "unit": u})).collect::<Vec<_>>(),
+            "sentence": v.sentence,
+        })).collect::<Vec<_>>(),
+        "skipped": skipped,
+    });
+    folder.write("diagnose.md", md.as_bytes())?;
+    folder.write("summary.json", serde_json::to_string_pretty(&summary)?.as_bytes())?;
+    let summary_box = Summary {
+        status: if significant == 0 { "nothing significant".into() } else { format!("{} significant", significant) },
+        tone: if significant == 0 { Tone::Good } else { Tone::Warning },
+        stop_reason: verdict.clone(),
+        iterations: None,
+        time_s: None,
+        extra: vec![("tracking cost J".into(), format!("{objective:.6}")), ("data residuals".into(), rows.to_string())],
+    };
+    let report = Report { title: format!("footfall diagnose — {}", args.run.display()), summary: summary_box, sections };
+    folder.write("report.html", report.to_html().as_bytes())?;
+    let path = folder.commit()?;
+    if !quiet {
+        eprintln!("\n{md}\nreport: {}", path.join("report.html").display());
+    } else {
+        let _ = &md;
+    }
+    Ok(())
+}

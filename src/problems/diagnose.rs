@@ -1,0 +1,172 @@
+//! Which physical effect is the model missing? Score tests of candidate effects at a
+//! tracking solution, and the uncertainty of identified effect parameters.
+//!
+//! A candidate effect enters the model at its null value (no effect) with its parameters
+//! free. One Gauss–Newton step of the enlarged tracking problem from the solution
+//! predicts how far the cost would fall if it were added and re-fitted; the step of the
+//! problem without the candidate is subtracted, so a solution that is not exactly
+//! stationary does not credit every candidate with the same leftover decrease.
+//!
+//! Significance: with `N` data residuals whose mean square at the solution is `s² =
+//! J/N`, the decrease in units of `s²` is approximately χ² with `k` degrees of freedom
+//! (`k` = the candidate's free parameters) when the candidate explains only noise (the
+//! extra-sum-of-squares test). The candidate is significant above the χ²ₖ 0.1 % point.
+//! Residuals of neighbouring nodes are not independent and the regularisation terms are
+//! counted in `J`, so the test is an approximation; it errs towards "nothing found"
+//! because `J` includes the misfit the candidate would remove.
+
+use crate::model::effects::EffectSpec;
+use crate::ocp::{Block, Transcription};
+use crate::sqp::linearised::GaussNewtonModel;
+use serde::{Deserialize, Serialize};
+use std::path::PathBuf;
+
+/// How a tracking run was set up: enough to rebuild its problem (`setup.json`).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct TrackingRunSetup {
+    /// Model file.
+    pub model: PathBuf,
+    /// Foot argument (`ellipse`, `double-circle` or a foot file).
+    pub foot: String,
+    /// Phase file.
+    pub phases: PathBuf,
+    /// Data file (`None`: the bundled trial).
+    pub data: Option<PathBuf>,
+    /// Kinematics low-pass cutoff (Hz).
+    pub kinematics_cutoff: Option<f64>,
+    /// CVODES tolerance.
+    pub integrator_tol: f64,
+    /// Effects added on top of the model file (`--effect`).
+    pub effects: Vec<EffectSpec>,
+    /// Every effect parameter of the model at the solution.
+    pub parameters: Vec<IdentifiedParameter>,
+}
+
+/// An effect parameter at a solution.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+pub struct IdentifiedParameter {
+    /// Qualified name, e.g. `ground_slope.angle`.
+    pub name: String,
+    /// Value at the solution.
+    pub value: f64,
+    /// Approximate standard deviation (`None` for a fixed parameter or one at a bound).
+    pub sd: Option<f64>,
+    /// Unit.
+    pub unit: String,
+    /// Whether it was identified.
+    pub free: bool,
+}
+
+/// The χ² 99.9 % point for `k` degrees of freedom (k ≥ 6 by the Wilson–Hilferty
+/// approximation).
+pub fn chi2_999(k: usize) -> f64 {
+    const TABLE: [f64; 5] = [10.828, 13.816, 16.266, 18.467, 20.515];
+    if (1..=5).contains(&k) {
+        return TABLE[k - 1];
+    }
+    let kf = k.max(1) as f64;
+    let z = 3.0902; // standard normal 99.9 % point
+    kf * (1.0 - 2.0 / (9.0 * kf) + z * (2.0 / (9.0 * kf)).sqrt()).powi(3)
+}
+
+/// Result of a score test of one candidate.
+#[derive(Debug, Clone, Serialize)]
+pub struct ScoreTest {
+    /// The candidate (null value, parameters free).
+    pub effect: EffectSpec,
+    /// Human label.
+    pub label: String,
+    /// Names of its free parameters.
+    pub parameters: Vec<String>,
+    /// Their values after the Gauss–Newton step.
+    pub step_values: Vec<f64>,
+    /// Predicted fall of the tracking cost (cost units).
+    pub predicted_decrease: f64,
+    /// As a fraction of the cost at the solution.
+    pub predicted_fraction: f64,
+    /// Predicted decrease in units of the residual mean square `J/N`.
+    pub statistic: f64,
+    /// The χ²ₖ 0.1 % point it is compared with.
+    pub threshold: f64,
+    /// Whether the statistic exceeds the threshold.
+    pub significant: bool,
+}
+
+/// The parameters θ of a transcription's variable vector.
+pub fn theta_of(tr: &Transcription, w: &[f64]) -> Vec<f64> {
+    w[tr.range(Block::Params)].to_vec()
+}
+
+/// Predicted cost decrease of one Gauss–Newton step from `w`, and the step.
+pub fn gauss_newton_decrease(tr: &Transcription, w: &[f64]) -> Result<(f64, f64, Vec<f64>), String> {
+    let m = GaussNewtonModel::new(tr, w, 1e-12)?;
+    let s = m.step(None)?;
+    let w1: Vec<f64> = m.point().iter().zip(&s.d).map(|(a, b)| a + b).collect();
+    Ok((m.objective(), s.predicted_decrease, w1))
+}
+
+/// Score test of a candidate: `tr` is the tracking problem of the model with the
+/// candidate added last (its parameters the last `k` of θ, at their null values in `w`),
+/// `baseline_decrease` the Gauss–Newton decrease of the problem without it, `data_rows`
+/// the number of data residuals.
+pub fn score_test(effect: &EffectSpec, parameters: Vec<String>, tr: &Transcription, w: &[f64], baseline_decrease: f64, data_rows: usize) -> Result<ScoreTest, String> {
+    let k = parameters.len();
+    let (objective, decrease, w1) = gauss_newton_decrease(tr, w)?;
+    let theta = theta_of(tr, &w1);
+    let predicted = (decrease - baseline_decrease).max(0.0);
+    let s2 = objective / data_rows.max(1) as f64;
+    let statistic = predicted / s2;
+    let threshold = chi2_999(k);
+    Ok(ScoreTest {
+        label: effect.label(),
+        effect: effect.clone(),
+        parameters,
+        step_values: theta[theta.len() - k..].to_vec(),
+        predicted_decrease: predicted,
+        predicted_fraction: predicted / objective,
+        statistic,
+        threshold,
+        significant: statistic > threshold,
+    })
+}
+
+/// Approximate standard deviations of the free parameters θ at a least-squares solution
+/// `w`: `sd_j = √(2 s² (H⁻¹)_jj)` with `H` the Gauss–Newton Hessian reduced to the
+/// linearised constraints and `s² = J/(N − p)` (`N` data residuals, `p` = number of θ).
+/// `(H⁻¹)_jj` comes from the step's response to a gradient shift in θ_j. A parameter at
+/// a bound gets `None`.
+pub fn parameter_sd(tr: &Transcription, w: &[f64], data_rows: usize) -> Result<Vec<Option<f64>>, String> {
+    let range = tr.range(Block::Params);
+    let (w_lb, w_ub, _, _) = crate::sqp::Nlp::bounds(tr);
+    let m = GaussNewtonModel::new(tr, w, 0.0)?;
+    let base = m.step(None)?;
+    let p = range.len();
+    let s2 = m.objective() / (data_rows.saturating_sub(p)).max(1) as f64;
+    let mut out = Vec::with_capacity(p);
+    for col in range {
+        let span = w_ub[col] - w_lb[col];
+        if w[col] - w_lb[col] < 1e-9 * span || w_ub[col] - w[col] < 1e-9 * span {
+            out.push(None);
+            continue;
+        }
+        // aim the probe's step at about 1e-3 of the parameter's range (QP accuracy
+        // limits small steps; large ones change the active set)
+        let target = 1e-3 * span;
+        let mut eps = 1.0;
+        let mut inv = None;
+        for _ in 0..4 {
+            let mut shift = vec![0.0; tr.n()];
+            shift[col] = eps;
+            let dtheta = base.d[col] - m.step(Some(&shift))?.d[col];
+            let h = dtheta / eps;
+            inv = Some(h);
+            let ratio = dtheta.abs() / target;
+            if h <= 0.0 || (0.1..=10.0).contains(&ratio) {
+                break;
+            }
+            eps = target / h;
+        }
+        out.push(inv.filter(|v| *v > 0.0).map(|v| (2.0 * s2 * v).sqrt()));
+    }
+    Ok(out)
+}
