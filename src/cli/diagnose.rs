@@ -8,9 +8,9 @@ use super::Failure;
 use anyhow::{anyhow, Context};
 use footfall::model::effects::{catalog, EffectSpec};
 use footfall::ocp::Transcription;
-use footfall::problems::diagnose::{gauss_newton_decrease, score_test, ScoreTest};
+use footfall::problems::diagnose::{channel_means, gauss_newton_decrease, score_test, ScoreTest};
 use footfall::problems::gait::GaitCycle;
-use footfall::report::diff::{RunDiff, RunSummary};
+use footfall::report::diff::{fmt_value, RunDiff, RunSummary};
 use footfall::report::html::{Report, Section, Summary, Tone};
 use footfall::report::table::Table;
 use footfall::runfolder::RunFolder;
@@ -53,7 +53,7 @@ fn decrease_at_solution(prob: &TrackingProblem) -> anyhow::Result<(f64, f64, usi
     let ocp = prob.setup.ocp(&cycle, &prob.model, &prob.sets, prob.integrator.clone()).map_err(|e| anyhow!(e))?;
     let tr = Transcription::new(&ocp).context("transcribing the tracking problem")?;
     let (_, _, w) = tr.variable_bounds_and_guess();
-    let (j, dec, _) = gauss_newton_decrease(&tr, &w).map_err(|e| anyhow!(e))?;
+    let (j, dec) = gauss_newton_decrease(&tr, &w).map_err(|e| anyhow!(e))?;
     let rows = prob.setup.data_rows(&prob.model, &prob.sets, &cycle.continuous);
     let names = prob.model.free_parameters().iter().map(|&i| prob.model.parameters()[i].name.clone()).collect();
     Ok((j, dec, rows, names))
@@ -66,7 +66,11 @@ fn test_candidate(prob: &TrackingProblem, effect: &EffectSpec, k: usize, baselin
     let (_, _, w) = tr.variable_bounds_and_guess();
     let free = prob.model.free_parameters();
     let names: Vec<String> = free[free.len() - k..].iter().map(|&i| prob.model.parameters()[i].name.clone()).collect();
-    score_test(effect, names, &tr, &w, baseline, rows).map_err(|e| anyhow!(e))
+    let (mut t, w1) = score_test(effect, names, &tr, &w, baseline, rows).map_err(|e| anyhow!(e))?;
+    let before = channel_means(&tr, &w, &cycle.continuous, prob.setup.window.0, &prob.model, &prob.sets, &prob.data).map_err(|e| anyhow!(e))?;
+    let after = channel_means(&tr, &w1, &cycle.continuous, prob.setup.window.0, &prob.model, &prob.sets, &prob.data).map_err(|e| anyhow!(e))?;
+    t.expected_channels = before.into_iter().zip(after).map(|((c, u, b), (_, _, a))| (c, u, b, a)).collect();
+    Ok(t)
 }
 
 /// A verified candidate: its re-fit run and what changed.
@@ -152,10 +156,11 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         let t = test_candidate(&prob, c, k, base_decrease, rows)?;
         if !quiet {
             eprintln!(
-                "  {:<32} predicted decrease {:>10.3e} ({:>5.1} % of J), statistic {:>9.1} vs {:.1}{}  [{:.1} s]",
+                "  {:<32} expected decrease {:>10.3e} ({:>5.1} % of J, {} steps), statistic {:>9.1} vs {:.1}{}  [{:.1} s]",
                 t.label,
                 t.predicted_decrease,
                 100.0 * t.predicted_fraction,
+                t.steps,
                 t.statistic,
                 t.threshold,
                 if t.significant { "  significant" } else { "" },
@@ -208,7 +213,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     };
     let ranking = Table {
         title: "Candidate effects ranked by the score statistic (predicted cost decrease / residual mean square)".into(),
-        headers: ["rank", "effect", "parameters (one Gauss–Newton step)", "predicted decrease", "% of J", "statistic", "χ² 0.1 % point", "significant"].map(String::from).to_vec(),
+        headers: ["rank", "effect", "parameters (truncated re-fit)", "expected decrease", "% of J", "statistic", "χ² 0.1 % point", "significant"].map(String::from).to_vec(),
         rows: tests
             .iter()
             .enumerate()
@@ -226,12 +231,20 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
             })
             .collect(),
     };
-    let mut md = format!("# Diagnosis of {}\n\n{verdict}\n\n{}\n", args.run.display(), ranking.to_markdown());
-    let mut sections = vec![Section { heading: "Ranking".into(), paragraphs: vec![verdict.clone()], tables: vec![ranking.clone()], svgs: vec![] }];
+    let expected = Table {
+        title: "Expected mean error per channel after the truncated re-fit with each candidate (before → after)".into(),
+        headers: std::iter::once("effect".to_string()).chain(tests.first().map_or(vec![], |t| t.expected_channels.iter().map(|c| format!("{} ({})", c.0, c.1)).collect())).collect(),
+        rows: tests
+            .iter()
+            .map(|t| std::iter::once(t.label.clone()).chain(t.expected_channels.iter().map(|c| format!("{} → {}", fmt_value(c.2), fmt_value(c.3)))).collect())
+            .collect(),
+    };
+    let mut md = format!("# Diagnosis of {}\n\n{verdict}\n\n{}\n\n{}\n", args.run.display(), ranking.to_markdown(), expected.to_markdown());
+    let mut sections = vec![Section { heading: "Ranking".into(), paragraphs: vec![verdict.clone()], tables: vec![ranking.clone(), expected], svgs: vec![] }];
     for v in &verified {
         let params = v.parameters.iter().map(|(n, val, sd, u)| format!("{n} = {val:.5}{} {u}", sd.map_or(String::new(), |s| format!(" ± {s:.2e}")))).collect::<Vec<_>>().join("; ");
         let text = format!(
-            "Re-fit with {} ({}): J {:.6} → {:.6} ({:.1} % lower; predicted {:.1} %), {}. Identified: {params}. {}.",
+            "Re-fit with {} ({}): J {:.6} → {:.6} ({:.1} % lower; expected {:.1} %), {}. Identified: {params}. {}.",
             v.test.label,
             v.folder.display(),
             v.objective_before,

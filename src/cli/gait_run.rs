@@ -107,7 +107,7 @@ pub struct GaitRun<'a> {
 pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
     let (model, sets, data, res, sol) = (run.model, run.sets, run.data, run.result, run.solution);
     let nodes = sol.node_samples(model, sets).context("evaluating the solution at the nodes")?;
-    let cmp = Comparison::new(&nodes, data)?;
+    let cmp = Comparison::through_model(&nodes, data, model, &sol.theta)?;
     let channels = cmp.table_channels();
     let foot = model.foot_name.clone();
     let what = if run.command == "predict" { "Prediction" } else { "Tracking" };
@@ -125,7 +125,7 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
         sol.reintegrate(model, sets, FINE_STEP, &run.integrator).map_err(|e| format!("the 1 ms re-integration failed: {e}"));
     let fine = fine_run.as_ref().ok().map(|f| f.figures(sets, FINE_STEP));
     let fine_cmp = match &fine_run {
-        Ok(f) => Some(Comparison::new(&f.result.samples, data)?),
+        Ok(f) => Some(Comparison::through_model(&f.result.samples, data, model, &sol.theta)?),
         Err(_) => None,
     };
     let transients = match (&fine_run, &fine_cmp) {

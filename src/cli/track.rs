@@ -68,6 +68,11 @@ pub struct Args {
     /// force_plate_time_offset, cop_offset).
     #[arg(long = "effect", value_name = "NAME[:key=value,…]")]
     effects: Vec<String>,
+    /// Track the pelvis position (x, y) too, weighted 1/(0.1 m) as angles are by
+    /// 1/(π/4); the seed leaves it untracked (then a CoP offset cannot be identified: the
+    /// model shifts along the walkway instead).
+    #[arg(long)]
+    track_pelvis_position: bool,
     /// Start from the solution of a track run (its folder or solution.json) of the same
     /// phase graph instead of the data; effect parameters it identified start at its values.
     #[arg(long)]
@@ -104,7 +109,10 @@ impl TrackingProblem {
         if let Some(fc) = run.kinematics_cutoff {
             data = data.low_pass_kinematics(fc).context("--kinematics-cutoff")?;
         }
-        let setup = TrackingSetup::new(&model, &seq, &sets, &data).map_err(|e| anyhow!("{}: {e}", data.source.display()))?;
+        let mut setup = TrackingSetup::new(&model, &seq, &sets, &data).map_err(|e| anyhow!("{}: {e}", data.source.display()))?;
+        if run.track_pelvis_position {
+            setup.weights = setup.weights.clone().with_pelvis_position();
+        }
         let integrator = IntegratorSettings { rtol: run.integrator_tol, atol: run.integrator_tol, ..Default::default() };
         integrator.validate().context("--integrator-tol")?;
         Ok(Self { model, sets, data, setup, phases: run.phases.clone(), integrator })
@@ -156,6 +164,35 @@ impl TrackingProblem {
     }
 }
 
+/// The cost-share table (channel × phase, % of J) and the worst windows.
+pub fn cost_tables(b: &footfall::problems::track::CostBreakdown) -> (footfall::report::table::Table, footfall::report::table::Table) {
+    let total = b.total().max(f64::MIN_POSITIVE);
+    let mut rows: Vec<(f64, Vec<String>)> = b
+        .channels
+        .iter()
+        .zip(&b.cost)
+        .map(|(c, per)| {
+            let sum: f64 = per.iter().sum();
+            let mut row = vec![c.clone(), format!("{:.1}", 100.0 * sum / total)];
+            row.extend(per.iter().map(|v| format!("{:.1}", 100.0 * v / total)));
+            (sum, row)
+        })
+        .collect();
+    rows.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let mut headers = vec!["channel".to_string(), "% of J".into()];
+    headers.extend(b.phases.iter().map(|p| format!("{p} %")));
+    let share = footfall::report::table::Table { title: "Share of the tracking cost per channel and phase".into(), headers, rows: rows.into_iter().map(|r| r.1).collect() };
+    let windows = footfall::report::table::Table {
+        title: "Worst stretches (five nodes)".into(),
+        headers: ["from (s)", "to (s)", "% of the data cost", "largest channel"].map(String::from).to_vec(),
+        rows: {
+            let data: f64 = b.nodes.iter().map(|n| n.data).sum::<f64>().max(f64::MIN_POSITIVE);
+            b.worst_windows(5, 3).into_iter().map(|(t0, t1, v, c)| vec![format!("{t0:.3}"), format!("{t1:.3}"), format!("{:.1}", 100.0 * v / data), c]).collect()
+        },
+    };
+    (share, windows)
+}
+
 /// Read a run's `setup.json`.
 pub fn read_run_setup(run: &std::path::Path) -> anyhow::Result<TrackingRunSetup> {
     let file = if run.is_dir() { run.join("setup.json") } else { run.to_path_buf() };
@@ -197,6 +234,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         data: args.data.clone(),
         kinematics_cutoff: args.kinematics_cutoff,
         integrator_tol: args.integrator_tol,
+        track_pelvis_position: args.track_pelvis_position,
         effects: vec![],
         parameters: vec![],
     };
@@ -275,6 +313,22 @@ impl TrackingProblem {
         extra_json.insert("setup".into(), serde_json::to_value(&record)?);
         extra_json.insert("data_residuals".into(), data_rows.into());
         let mut extra_sections = Vec::new();
+        match setup.cost_breakdown(model, sets, &cycle.continuous, &solution) {
+            Ok(b) => {
+                let (table, windows) = cost_tables(&b);
+                extra_json.insert("cost_breakdown".into(), serde_json::to_value(&b)?);
+                extra_sections.push(footfall::report::html::Section {
+                    heading: "Where the cost comes from".into(),
+                    paragraphs: vec![format!(
+                        "Share of the tracking cost J = {:.6} per channel and phase (weighted squared residuals at the nodes, seed eq. 18), and the stretches of five nodes with the largest data cost.",
+                        b.total()
+                    )],
+                    tables: vec![table, windows],
+                    svgs: vec![],
+                });
+            }
+            Err(e) => eprintln!("warning: no cost breakdown: {e}"),
+        }
         if !record.parameters.is_empty() {
             extra_sections.push(footfall::report::html::Section {
                 heading: "Effects".into(),

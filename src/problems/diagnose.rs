@@ -2,10 +2,12 @@
 //! tracking solution, and the uncertainty of identified effect parameters.
 //!
 //! A candidate effect enters the model at its null value (no effect) with its parameters
-//! free. One Gauss–Newton step of the enlarged tracking problem from the solution
-//! predicts how far the cost would fall if it were added and re-fitted; the step of the
-//! problem without the candidate is subtracted, so a solution that is not exactly
-//! stationary does not credit every candidate with the same leftover decrease.
+//! free. Gauss–Newton steps of the enlarged tracking problem from the solution — the
+//! first is the score test, a few more follow a cost that is strongly nonlinear in the
+//! parameter ([`truncated_refit`]) — estimate how far the cost would fall if it were
+//! added and re-fitted; the decrease of the problem without the candidate is
+//! subtracted, so a solution that is not exactly stationary does not credit every
+//! candidate with the same leftover decrease.
 //!
 //! Significance: with `N` data residuals whose mean square at the solution is `s² =
 //! J/N`, the decrease in units of `s²` is approximately χ² with `k` degrees of freedom
@@ -36,6 +38,9 @@ pub struct TrackingRunSetup {
     pub kinematics_cutoff: Option<f64>,
     /// CVODES tolerance.
     pub integrator_tol: f64,
+    /// Whether the pelvis position is tracked too (`--track-pelvis-position`).
+    #[serde(default)]
+    pub track_pelvis_position: bool,
     /// Effects added on top of the model file (`--effect`).
     pub effects: Vec<EffectSpec>,
     /// Every effect parameter of the model at the solution.
@@ -80,7 +85,8 @@ pub struct ScoreTest {
     pub parameters: Vec<String>,
     /// Their values after the Gauss–Newton step.
     pub step_values: Vec<f64>,
-    /// Predicted fall of the tracking cost (cost units).
+    /// Fall of the tracking cost over the truncated re-fit (cost units), less that of
+    /// the problem without the candidate.
     pub predicted_decrease: f64,
     /// As a fraction of the cost at the solution.
     pub predicted_fraction: f64,
@@ -90,6 +96,24 @@ pub struct ScoreTest {
     pub threshold: f64,
     /// Whether the statistic exceeds the threshold.
     pub significant: bool,
+    /// Gauss–Newton steps taken ([`truncated_refit`]).
+    pub steps: usize,
+    /// Mean error per Table 3 channel at the solution and after the steps:
+    /// `(channel, unit, before, after)` — the expected change channel by channel.
+    pub expected_channels: Vec<(String, String, f64, f64)>,
+}
+
+/// Mean error per Table 3 channel of the tracking solution in `w` against `data`.
+pub fn channel_means(tr: &Transcription, w: &[f64], continuous: &[usize], t0: f64, model: &crate::model::GaitModel, sets: &[crate::model::ConstraintSet], data: &crate::data::GaitData) -> Result<Vec<(String, String, f64)>, String> {
+    use super::evaluation::{channel_errors, Comparison, GaitSolution};
+    let sol = GaitSolution::from_nlp(tr, w, continuous, t0);
+    let nodes = sol.node_samples(model, sets).map_err(|e| e.to_string())?;
+    let cmp = Comparison::through_model(&nodes, data, model, &sol.theta).map_err(|e| e.to_string())?;
+    let channels = cmp.table_channels();
+    Ok(channel_errors(&channels, &cmp, None)
+        .into_iter()
+        .filter_map(|c| c.runs[0].map(|s| (c.name.clone(), c.unit.clone(), s.mean)))
+        .collect())
 }
 
 /// The parameters θ of a transcription's variable vector.
@@ -97,27 +121,78 @@ pub fn theta_of(tr: &Transcription, w: &[f64]) -> Vec<f64> {
     w[tr.range(Block::Params)].to_vec()
 }
 
-/// Predicted cost decrease of one Gauss–Newton step from `w`, and the step.
-pub fn gauss_newton_decrease(tr: &Transcription, w: &[f64]) -> Result<(f64, f64, Vec<f64>), String> {
-    let m = GaussNewtonModel::new(tr, w, 1e-12)?;
-    let s = m.step(None)?;
-    let w1: Vec<f64> = m.point().iter().zip(&s.d).map(|(a, b)| a + b).collect();
-    Ok((m.objective(), s.predicted_decrease, w1))
+/// At most this many Gauss–Newton steps per candidate.
+pub const MAX_STEPS: usize = 5;
+/// A candidate's steps stop when one adds less than this fraction of its decrease.
+pub const REL_STOP: f64 = 0.05;
+
+/// Cost decrease of the truncated re-fit from `w` ([`truncated_refit`]) and the cost.
+pub fn gauss_newton_decrease(tr: &Transcription, w: &[f64]) -> Result<(f64, f64), String> {
+    let (j, dec, _, _) = truncated_refit(tr, w, MAX_STEPS, REL_STOP)?;
+    Ok((j, dec))
+}
+
+/// A truncated re-fit from `w`: Gauss–Newton steps (each one QP on the linearised
+/// constraints, backtracked on the cost) until a step adds less than `rel_stop` of the
+/// decrease so far, or `max_steps`. The first step is the score test proper; the next
+/// ones follow the cost where it is strongly nonlinear in the new parameters (a clock
+/// offset moves sharp impact transients). Returns the cost at `w`, its total decrease,
+/// the point reached and the number of steps.
+pub fn truncated_refit(tr: &Transcription, w: &[f64], max_steps: usize, rel_stop: f64) -> Result<(f64, f64, Vec<f64>, usize), String> {
+    let cost = |w: &[f64]| crate::sqp::Nlp::evaluate(tr, w, false).map(|e| e.f);
+    let first = GaussNewtonModel::new(tr, w, 1e-12)?;
+    let j0 = first.objective();
+    let mut w = first.point().to_vec();
+    let mut model = Some(first);
+    let (mut f, mut total, mut steps) = (j0, 0.0, 0);
+    while steps < max_steps {
+        let m = match model.take() {
+            Some(m) => m,
+            None => GaussNewtonModel::new(tr, &w, 1e-12)?,
+        };
+        let s = m.step(None)?;
+        if !(s.predicted_decrease > 0.0) {
+            break;
+        }
+        let mut alpha = 1.0;
+        let mut accepted = None;
+        while alpha >= 1.0 / 16.0 {
+            let trial: Vec<f64> = w.iter().zip(&s.d).map(|(a, b)| a + alpha * b).collect();
+            if let Ok(ft) = cost(&trial) {
+                if ft < f {
+                    accepted = Some((trial, ft));
+                    break;
+                }
+            }
+            alpha *= 0.5;
+        }
+        let Some((trial, ft)) = accepted else { break };
+        let dec = f - ft;
+        total += dec;
+        w = trial;
+        f = ft;
+        steps += 1;
+        if dec < rel_stop * total {
+            break;
+        }
+    }
+    Ok((j0, total, w, steps))
 }
 
 /// Score test of a candidate: `tr` is the tracking problem of the model with the
 /// candidate added last (its parameters the last `k` of θ, at their null values in `w`),
 /// `baseline_decrease` the Gauss–Newton decrease of the problem without it, `data_rows`
 /// the number of data residuals.
-pub fn score_test(effect: &EffectSpec, parameters: Vec<String>, tr: &Transcription, w: &[f64], baseline_decrease: f64, data_rows: usize) -> Result<ScoreTest, String> {
+/// Returns the test and the point after the step.
+pub fn score_test(effect: &EffectSpec, parameters: Vec<String>, tr: &Transcription, w: &[f64], baseline_decrease: f64, data_rows: usize) -> Result<(ScoreTest, Vec<f64>), String> {
     let k = parameters.len();
-    let (objective, decrease, w1) = gauss_newton_decrease(tr, w)?;
+    let (objective, decrease, w1, steps) = truncated_refit(tr, w, MAX_STEPS, REL_STOP)?;
     let theta = theta_of(tr, &w1);
     let predicted = (decrease - baseline_decrease).max(0.0);
     let s2 = objective / data_rows.max(1) as f64;
     let statistic = predicted / s2;
     let threshold = chi2_999(k);
-    Ok(ScoreTest {
+    Ok((ScoreTest {
         label: effect.label(),
         effect: effect.clone(),
         parameters,
@@ -127,7 +202,9 @@ pub fn score_test(effect: &EffectSpec, parameters: Vec<String>, tr: &Transcripti
         statistic,
         threshold,
         significant: statistic > threshold,
-    })
+        expected_channels: Vec::new(),
+        steps,
+    }, w1))
 }
 
 /// Approximate standard deviations of the free parameters θ at a least-squares solution

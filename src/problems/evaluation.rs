@@ -281,6 +281,20 @@ pub const LOAD_NAMES: [&str; 3] = ["grf_x", "grf_y", "cop_x"];
 impl Comparison {
     /// Hold `samples` of the model against `data`.
     pub fn new(samples: &[Sample], data: &GaitData) -> Result<Self, DataError> {
+        Self::with_offsets(samples, data, 0.0, 0.0)
+    }
+
+    /// Hold `samples` of the model against `data` through the measurement effects of
+    /// `model` at parameters `theta` (the force plates read at t + clock offset, their
+    /// CoP less the CoP offset), as the tracking cost compares them.
+    pub fn through_model(samples: &[Sample], data: &GaitData, model: &crate::model::GaitModel, theta: &[f64]) -> Result<Self, DataError> {
+        let adj = model.measurement_adjust::<f64>(theta);
+        Self::with_offsets(samples, data, adj.force_time_offset, adj.cop_offset)
+    }
+
+    /// As [`new`](Self::new) with the force plates read at t + `force_time_offset` (s)
+    /// and `cop_offset` (m) taken off their CoP.
+    pub fn with_offsets(samples: &[Sample], data: &GaitData, force_time_offset: f64, cop_offset: f64) -> Result<Self, DataError> {
         let splines: Vec<CubicSpline> = COORDINATES.iter().map(|c| data.spline(c)).collect::<Result<_, _>>()?;
         let times: Vec<f64> = samples.iter().map(|s| s.t).collect();
         let model_q = (0..9).map(|i| samples.iter().map(|s| s.x[i]).collect()).collect();
@@ -293,9 +307,14 @@ impl Comparison {
                 samples.iter().map(|s| if s.feet[k].fy > th { s.feet[k].cop_x } else { f64::NAN }).collect(),
             ]
         };
+        let plate_times: Vec<f64> = times.iter().map(|t| t + force_time_offset).collect();
         let data_side = |k: usize| -> [Vec<f64>; 3] {
             let f = &data.feet[k];
-            [interp_linear(&times, &data.time, &f.fx), interp_linear(&times, &data.time, &f.fy), interp_linear(&times, &data.time, &f.cop_x)]
+            [
+                interp_linear(&plate_times, &data.time, &f.fx),
+                interp_linear(&plate_times, &data.time, &f.fy),
+                interp_linear(&plate_times, &data.time, &f.cop_x).into_iter().map(|c| c - cop_offset).collect(),
+            ]
         };
         Ok(Self {
             phase: samples.iter().map(|s| s.phase).collect(),

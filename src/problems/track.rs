@@ -247,6 +247,58 @@ impl TrackingSetup {
         n
     }
 
+    /// Where the tracking cost of `solution` comes from: per channel
+    /// ([`TrackingResidual::row_channels`]) and continuous phase, and per node.
+    pub fn cost_breakdown(&self, model: &GaitModel, sets: &[ConstraintSet], continuous: &[usize], solution: &super::evaluation::GaitSolution) -> Result<CostBreakdown, String> {
+        let linear = solution.phases.first().is_none_or(|p| p.controls == crate::integrate::ControlShape::Linear);
+        let mut channels: Vec<String> = Vec::new();
+        let mut phases = Vec::new();
+        let mut cost: Vec<Vec<f64>> = Vec::new();
+        let mut nodes = Vec::new();
+        for (j, (tg, ph)) in self.targets.iter().zip(&solution.phases).enumerate() {
+            phases.push(ph.name.clone());
+            let n = ph.intervals();
+            let last = j + 1 == self.targets.len();
+            let h = ph.duration / n as f64;
+            for (k, target) in tg.iter().enumerate() {
+                if k == n && !last {
+                    continue;
+                }
+                let r = TrackingResidual::new(model, sets[continuous[j]].clone(), target.clone(), self.weights.clone(), Some(self.measured.clone()));
+                let ku = if linear { k } else { k.min(n - 1) };
+                let z: Vec<f64> = ph.x[k].iter().chain(&ph.u[ku]).chain(&solution.theta).copied().collect();
+                let mut v = vec![0.0; super::GenericFunction::dim(&r)];
+                super::GenericFunction::eval(&r, &z, &mut v)?;
+                let mut node_data = Vec::new();
+                for (label, value) in r.row_channels().into_iter().zip(&v) {
+                    let c = match channels.iter().position(|x| *x == label) {
+                        Some(c) => c,
+                        None => {
+                            channels.push(label.clone());
+                            cost.push(Vec::new());
+                            channels.len() - 1
+                        }
+                    };
+                    if cost[c].len() <= j {
+                        cost[c].resize(j + 1, 0.0);
+                    }
+                    cost[c][j] += value * value;
+                    if label != "excitations" && label != "activations" {
+                        match node_data.iter_mut().find(|(l, _): &&mut (String, f64)| *l == label) {
+                            Some(e) => e.1 += value * value,
+                            None => node_data.push((label, value * value)),
+                        }
+                    }
+                }
+                nodes.push(NodeCost { time: ph.t0 + k as f64 * h, phase: ph.name.clone(), data: node_data.iter().map(|e| e.1).sum(), largest: node_data.into_iter().max_by(|a, b| a.1.total_cmp(&b.1)).map(|e| e.0).unwrap_or_default() });
+            }
+        }
+        for c in &mut cost {
+            c.resize(phases.len(), 0.0);
+        }
+        Ok(CostBreakdown { channels, phases, cost, nodes })
+    }
+
     /// The tracking OCP: the walking cycle of `cycle` plus the node-wise residuals.
     pub fn ocp<'c>(&self, cycle: &'c GaitCycle<'c>, model: &'c GaitModel, sets: &'c [ConstraintSet], integrator: crate::integrate::IntegratorSettings) -> Result<Ocp<'c>, String> {
         let mut ocp = cycle.ocp(&self.guess, integrator)?;
@@ -270,5 +322,74 @@ impl TrackingSetup {
             }
         }
         Ok(ocp)
+    }
+}
+
+/// Where a tracking cost comes from.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct CostBreakdown {
+    /// Channels, in order of first appearance.
+    pub channels: Vec<String>,
+    /// Continuous phases, in order.
+    pub phases: Vec<String>,
+    /// Cost `[channel][phase]` (Σ of squared weighted residuals).
+    pub cost: Vec<Vec<f64>>,
+    /// Per node: data cost and the channel contributing most.
+    pub nodes: Vec<NodeCost>,
+}
+
+/// The data cost of one node.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct NodeCost {
+    /// Time (s).
+    pub time: f64,
+    /// Phase name.
+    pub phase: String,
+    /// Σ of the squared weighted data residuals (without regularisation).
+    pub data: f64,
+    /// The channel contributing most.
+    pub largest: String,
+}
+
+impl CostBreakdown {
+    /// Total cost.
+    pub fn total(&self) -> f64 {
+        self.cost.iter().flatten().sum()
+    }
+
+    /// The `n` windows of `width` consecutive nodes with the largest data cost, not
+    /// overlapping: `(start time, end time, cost, channel contributing most)`.
+    pub fn worst_windows(&self, width: usize, n: usize) -> Vec<(f64, f64, f64, String)> {
+        let m = self.nodes.len();
+        if m == 0 {
+            return Vec::new();
+        }
+        let w = width.clamp(1, m);
+        let mut sums: Vec<(usize, f64)> = (0..=m - w).map(|i| (i, self.nodes[i..i + w].iter().map(|c| c.data).sum())).collect();
+        sums.sort_by(|a, b| b.1.total_cmp(&a.1));
+        let mut taken: Vec<(usize, f64)> = Vec::new();
+        for (i, v) in sums {
+            if taken.iter().all(|&(j, _)| i + w <= j || j + w <= i) {
+                taken.push((i, v));
+                if taken.len() == n {
+                    break;
+                }
+            }
+        }
+        taken
+            .into_iter()
+            .map(|(i, v)| {
+                let win = &self.nodes[i..i + w];
+                let mut by: Vec<(String, f64)> = Vec::new();
+                for c in win {
+                    match by.iter_mut().find(|e| e.0 == c.largest) {
+                        Some(e) => e.1 += c.data,
+                        None => by.push((c.largest.clone(), c.data)),
+                    }
+                }
+                let top = by.into_iter().max_by(|a, b| a.1.total_cmp(&b.1)).map(|e| e.0).unwrap_or_default();
+                (win[0].time, win[w - 1].time, v, top)
+            })
+            .collect()
     }
 }

@@ -103,6 +103,19 @@ impl TrackingWeights {
         }
         Self { angle, velocity, force_scale: peak_force, force: 1.0, cop_length: foot_length, cop: 1.0, excitation: 1e-3, activation: 1e-3 }
     }
+
+    /// Weight of the pelvis position (x, y) errors when they are tracked: 1/(0.1 m), as
+    /// the seed weights angles by 1/(π/4). The seed leaves the translations untracked,
+    /// which makes the model free to shift along the walkway — and a CoP offset of the
+    /// force plates indistinguishable from such a shift.
+    pub const PELVIS_POSITION: f64 = 10.0;
+
+    /// Also track the pelvis position (x, y) at [`PELVIS_POSITION`](Self::PELVIS_POSITION).
+    pub fn with_pelvis_position(mut self) -> Self {
+        self.angle[0] = Self::PELVIS_POSITION;
+        self.angle[1] = Self::PELVIS_POSITION;
+        self
+    }
 }
 
 /// The residual of one node.
@@ -143,6 +156,33 @@ impl<'a> TrackingResidual<'a> {
         dim += model.nu() + model.na();
         let measured = measured.filter(|_| model.has_measurement_effects());
         Self { model, set, target, weights, measured, dim }
+    }
+
+    /// The channel each residual row belongs to, in row order: the coordinate's name for
+    /// positions and angles, `velocities`, `tangential GRF`, `normal GRF`, `CoP`,
+    /// `excitations`, `activations` (for cost breakdowns).
+    pub fn row_channels(&self) -> Vec<String> {
+        let names = crate::model::gait::COORDINATES;
+        let (nq, w) = (self.model.nq(), &self.weights);
+        let mut out = Vec::with_capacity(self.dim);
+        for i in 0..nq {
+            if self.target.q.get(i).copied().flatten().is_some() && w.angle[i] > 0.0 {
+                out.push(names.get(i).map_or_else(|| format!("q{i}"), |n| n.to_string()));
+            }
+            if self.target.qd.get(i).copied().flatten().is_some() && w.velocity[i] > 0.0 {
+                out.push("velocities".into());
+            }
+        }
+        for f in self.target.feet.iter().flatten() {
+            out.push("tangential GRF".into());
+            out.push("normal GRF".into());
+            if f.2.is_some() {
+                out.push("CoP".into());
+            }
+        }
+        out.extend(std::iter::repeat_n("excitations".to_string(), self.model.nu()));
+        out.extend(std::iter::repeat_n("activations".to_string(), self.model.na()));
+        out
     }
 
     fn residual<S: ModelScalar>(&self, x: &[S], u: &[S], th: &[S], out: &mut [S]) -> Result<(), String> {

@@ -9,13 +9,15 @@ fn param(name: String, value: f64, (lower, upper): (f64, f64), unit: &str, free:
     ParamSpec { name, value, lower, upper, unit: unit.into(), free }
 }
 
-/// A linear torsional spring at one joint coordinate: τ = −k (θ − θ₀).
+/// A linear torsional spring at a joint: τ = −k (θ − θ₀), at one coordinate or with one
+/// shared stiffness and rest angle at the same joint of both legs (a symmetric subject,
+/// as the half-cycle problems with their left↔right periodicity assume).
 ///
 /// Models the passive elastic torque of ligaments, joint capsule and stretched muscle
 /// that the muscle-torque generators leave out (seed §2 ignores it).
 #[derive(Debug, Clone)]
 pub struct PassiveJointStiffness {
-    coordinate: usize,
+    coordinates: Vec<usize>,
     params: Vec<ParamSpec>,
 }
 
@@ -23,10 +25,10 @@ impl PassiveJointStiffness {
     /// Bounds of the stiffness (N·m/rad).
     pub const STIFFNESS_BOUNDS: (f64, f64) = (0.0, 500.0);
 
-    /// Spring at coordinate index `coordinate` (named `coordinate_name`) with stiffness
-    /// `stiffness` (N·m/rad) and rest angle `rest_angle` (rad).
+    /// Spring at coordinate indices `coordinates` (named `name`, e.g. `knee_r` or `knee`
+    /// for both legs) with stiffness `stiffness` (N·m/rad) and rest angle `rest_angle` (rad).
     pub fn new(
-        coordinate: usize,
+        coordinates: Vec<usize>,
         coordinate_name: &str,
         stiffness: f64,
         rest_angle: f64,
@@ -36,7 +38,7 @@ impl PassiveJointStiffness {
         let base = format!("passive_joint_stiffness.{coordinate_name}");
         let pi = std::f64::consts::PI;
         Self {
-            coordinate,
+            coordinates,
             params: vec![
                 param(format!("{base}.stiffness"), stiffness, Self::STIFFNESS_BOUNDS, "N·m/rad", free_stiffness),
                 param(format!("{base}.rest_angle"), rest_angle, (-pi, pi), "rad", free_rest_angle),
@@ -54,7 +56,9 @@ impl Effect for PassiveJointStiffness {
     }
     fn generalized_forces<S: Scalar>(&self, p: &[S], x: EffectState<'_, S>, tau: &mut [S]) {
         let (k, rest) = (p[0], p[1]);
-        tau[self.coordinate] -= k * (x.q[self.coordinate] - rest);
+        for &c in &self.coordinates {
+            tau[c] -= k * (x.q[c] - rest);
+        }
     }
 }
 

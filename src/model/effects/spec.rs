@@ -20,7 +20,8 @@ pub struct BuildContext<'a> {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum EffectSpec {
-    /// [`PassiveJointStiffness`] on one joint, on one or both legs.
+    /// [`PassiveJointStiffness`] on one joint, on one leg or on both with one shared
+    /// stiffness and rest angle.
     PassiveJointStiffness {
         /// `hip`, `knee` or `ankle`.
         joint: String,
@@ -237,29 +238,19 @@ impl EffectSpec {
         self.check().map_err(|(field, reason)| format!("{field}: {reason}"))?;
         Ok(match self {
             EffectSpec::PassiveJointStiffness { joint, side, stiffness, rest_angle, .. } => {
-                let sides: &[&str] = match side.as_str() {
-                    "right" => &["r"],
-                    "left" => &["l"],
-                    _ => &["r", "l"],
+                let (sides, name): (&[&str], String) = match side.as_str() {
+                    "right" => (&["r"], format!("{joint}_r")),
+                    "left" => (&["l"], format!("{joint}_l")),
+                    _ => (&["r", "l"], joint.clone()),
                 };
-                let mut out: Vec<Box<dyn DynEffect>> = Vec::new();
+                let mut coords = Vec::new();
                 for s in sides {
-                    let name = format!("{joint}_{s}");
-                    let idx = ctx
-                        .coordinates
-                        .iter()
-                        .position(|c| *c == name)
-                        .ok_or_else(|| format!("joint: the model has no coordinate '{name}'"))?;
-                    out.push(Box::new(PassiveJointStiffness::new(
-                        idx,
-                        &name,
-                        *stiffness,
-                        *rest_angle,
-                        self.is_free("stiffness"),
-                        self.is_free("rest_angle"),
-                    )));
+                    let c = format!("{joint}_{s}");
+                    coords.push(
+                        ctx.coordinates.iter().position(|x| *x == c).ok_or_else(|| format!("joint: the model has no coordinate '{c}'"))?,
+                    );
                 }
-                out
+                vec![Box::new(PassiveJointStiffness::new(coords, &name, *stiffness, *rest_angle, self.is_free("stiffness"), self.is_free("rest_angle")))]
             }
             EffectSpec::GroundSlope { angle, .. } => vec![Box::new(GroundSlope::new(*angle, self.is_free("angle")))],
             EffectSpec::TrunkMass { added_mass, com_offset, .. } => {

@@ -1,0 +1,227 @@
+//! Data with a hidden effect, end to end from the command line: `track` the synthetic
+//! trial with the plain model, `diagnose` it, and check that the hidden effect ranks
+//! first, that its re-fit brings every channel's error to the noise floor and that the
+//! identified parameter is the truth.
+//!
+//! The trials (tests/data/hidden/, made by tools/make-hidden-effect-data) are `synth`
+//! runs driven by the ellipse tracking solution of the bundled trial with the default
+//! noise (0.5°, 2 mm, 5 N, 5 mm at 100 Hz). The *noise floor* of a channel is the mean
+//! error the exact model reaches on the same kind of trial with no hidden effect (the
+//! trial `none`): the seed's cost, with its u² and a² regularisation and spline
+//! velocity targets, does not fit noisy data down to the raw noise level (its forces
+//! stay about 2.5× the mean absolute noise, tests/tracking_recovery.rs).
+
+mod common;
+
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::sync::OnceLock;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn footfall(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_footfall")).current_dir(root()).arg("--quiet").args(args).output().unwrap()
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+fn read_json(p: &Path) -> Value {
+    serde_json::from_str(&std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))).unwrap()
+}
+
+/// Mean error per channel of a run's summary.
+fn channel_means(run: &Path) -> Vec<(String, f64)> {
+    read_json(&run.join("summary.json"))["errors"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| (c["channel"].as_str().unwrap().to_string(), c["stats"]["mean"].as_f64().unwrap()))
+        .collect()
+}
+
+/// Track trial `name` with the plain model, starting from the bundled trial's solution;
+/// with `pelvis`, the pelvis position is tracked too.
+fn baseline(name: &str, dir: &Path, pelvis: bool) -> PathBuf {
+    let data = root().join("tests/data/hidden").join(name).join("synthetic.csv");
+    let out = dir.join(name);
+    let mut args = vec!["track", "--data", s(&data), "--kinematics-cutoff", "10", "--init", "tests/data/hidden/base", "--out", s(&out)];
+    if pelvis {
+        args.push("--track-pelvis-position");
+    }
+    let o = footfall(&args);
+    assert!(o.status.success(), "track {name}: {}", String::from_utf8_lossy(&o.stderr));
+    out
+}
+
+fn diagnose(run: &Path, verify: usize) -> Value {
+    let out = PathBuf::from(format!("{}-diagnose", run.display()));
+    let o = footfall(&["diagnose", s(run), "--verify", &verify.to_string()]);
+    assert!(o.status.success(), "diagnose {}: {}", run.display(), String::from_utf8_lossy(&o.stderr));
+    let summary = read_json(&out.join("summary.json"));
+    eprintln!("{}", std::fs::read_to_string(out.join("diagnose.md")).unwrap());
+    summary
+}
+
+type Floor = (Vec<(String, f64)>, Value);
+
+/// The noise floor (mean error per channel on the trial without a hidden effect) and
+/// the diagnosis of that trial, computed once for all tests (per cost: with or without
+/// the pelvis position tracked).
+fn floor(pelvis: bool) -> &'static Floor {
+    static FLOOR: [OnceLock<Floor>; 2] = [OnceLock::new(), OnceLock::new()];
+    FLOOR[usize::from(pelvis)].get_or_init(|| {
+        let dir = tempfile::tempdir().unwrap().keep();
+        let run = baseline("none", &dir, pelvis);
+        let d = diagnose(&run, 1);
+        (channel_means(&run), d)
+    })
+}
+
+/// The hidden values of trial `name`: `(field, value)` of every hidden effect.
+fn hidden_values(name: &str) -> Vec<(String, String, f64)> {
+    let truth = read_json(&root().join("tests/data/hidden").join(name).join("truth.json"));
+    let mut out = Vec::new();
+    for e in truth["hidden_effects"].as_array().unwrap() {
+        let kind = e["type"].as_str().unwrap().to_string();
+        for (k, v) in e.as_object().unwrap() {
+            if let Some(x) = v.as_f64() {
+                if x != 0.0 {
+                    out.push((kind.clone(), k.clone(), x));
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Every channel's mean error within `factor` × the floor.
+fn within_floor(run: &Path, factor: f64, pelvis: bool) -> Result<(), String> {
+    let (floor, _) = floor(pelvis);
+    let mut bad = Vec::new();
+    for ((c, e), (_, f)) in channel_means(run).iter().zip(floor) {
+        if *e > factor * f {
+            bad.push(format!("{c}: {e:.3} > {factor} × {f:.3}"));
+        }
+    }
+    if bad.is_empty() {
+        Ok(())
+    } else {
+        Err(bad.join("; "))
+    }
+}
+
+/// Identified values of the verified re-fit against the hidden ones (within 20 %).
+fn check_parameters(verified: &Value, hidden: &[(String, String, f64)]) {
+    for p in verified["parameters"].as_array().unwrap() {
+        let name = p["name"].as_str().unwrap();
+        let kind = name.split('.').next().unwrap();
+        let field = name.rsplit('.').next().unwrap();
+        let value = p["value"].as_f64().unwrap();
+        let (_, _, truth) = hidden.iter().find(|h| h.0 == kind && h.1 == field).unwrap_or_else(|| panic!("{name} was not hidden"));
+        let rel = (value - truth).abs() / truth.abs();
+        eprintln!("{name}: identified {value:.5} ± {}, truth {truth}, {:.1} % off", p["sd"], 100.0 * rel);
+        assert!(rel < 0.2, "{name}: identified {value}, truth {truth} ({:.1} % off)", 100.0 * rel);
+    }
+}
+
+/// One hidden effect: baseline above the floor, ranked first, re-fit at the floor with
+/// the truth identified.
+fn single_effect(name: &str, pelvis: bool) {
+    let dir = tempfile::tempdir().unwrap();
+    let run = baseline(name, dir.path(), pelvis);
+    assert!(within_floor(&run, 1.5, pelvis).is_err(), "{name}: the hidden effect does not show above the noise floor");
+    let d = diagnose(&run, 1);
+    assert_eq!(d["ranking"][0]["effect"]["type"], name, "{name}: ranked first is {}", d["ranking"][0]["label"]);
+    assert_eq!(d["ranking"][0]["significant"], true);
+    let v = &d["verified"][0];
+    assert_eq!(v["effect"]["type"], name);
+    assert_eq!(v["converged"], true);
+    check_parameters(v, &hidden_values(name));
+    let refit = PathBuf::from(v["folder"].as_str().unwrap());
+    within_floor(&root().join(&refit), 1.5, pelvis).unwrap_or_else(|e| panic!("{name}: after the re-fit {e}"));
+    if name == "ground_slope" {
+        // the diagnosis report renders with its ranking, the before/after table and plot
+        let url = format!("file://{}-diagnose/report.html", run.display());
+        let dom = String::from_utf8(common::chromium(&["--dump-dom".into(), url], std::time::Duration::from_secs(90))).unwrap();
+        for text in ["Candidate effects ranked", "Verified: ground slope", "Mean tracking error per channel", "foot orientation"] {
+            assert!(dom.contains(text), "'{text}' not in the rendered diagnosis report");
+        }
+        assert!(dom.matches("<svg").count() >= 1, "the before/after plot");
+    }
+}
+
+#[test]
+fn without_a_hidden_effect_nothing_is_significant() {
+    for pelvis in [false, true] {
+        let (floor, d) = floor(pelvis);
+        eprintln!("noise floor (pelvis position tracked: {pelvis}): {floor:?}");
+        assert_eq!(d["significant"], 0, "an effect was invented: {}", d["verdict"]);
+        assert!(d["verified"].as_array().unwrap().is_empty());
+    }
+}
+
+#[test]
+fn hidden_ground_slope_is_found_and_identified() {
+    single_effect("ground_slope", false);
+}
+
+#[test]
+fn hidden_trunk_mass_is_found_and_identified() {
+    single_effect("trunk_mass", false);
+}
+
+#[test]
+fn hidden_knee_stiffness_is_found_and_identified() {
+    single_effect("passive_joint_stiffness", false);
+}
+
+#[test]
+fn hidden_force_plate_time_offset_is_found_and_identified() {
+    single_effect("force_plate_time_offset", false);
+}
+
+/// A CoP offset of the force plates is a shift of the measured CoP along the walkway;
+/// with the seed's cost, which leaves the pelvis position untracked, the model shifts
+/// along with it at no cost (the offset is unobservable), so the pelvis position is
+/// tracked here.
+#[test]
+fn hidden_cop_offset_is_found_and_identified_when_the_pelvis_position_is_tracked() {
+    single_effect("cop_offset", true);
+}
+
+/// Two hidden effects: diagnose, add the top one, diagnose the re-fit, add the next.
+#[test]
+fn two_hidden_effects_are_found_one_after_the_other() {
+    let name = "ground_slope+force_plate_time_offset";
+    let dir = tempfile::tempdir().unwrap();
+    let run = baseline(name, dir.path(), false);
+    let first = diagnose(&run, 1);
+    let a = first["verified"][0]["effect"]["type"].as_str().expect("a first effect").to_string();
+    let refit = root().join(first["verified"][0]["folder"].as_str().unwrap());
+    let second = diagnose(&refit, 1);
+    let b = second["verified"][0]["effect"]["type"].as_str().expect("a second effect").to_string();
+    let mut found = [a, b];
+    found.sort();
+    assert_eq!(found, ["force_plate_time_offset", "ground_slope"]);
+    check_parameters(&second["verified"][0], &hidden_values(name));
+    let last = root().join(second["verified"][0]["folder"].as_str().unwrap());
+    // the second re-fit keeps the first effect free, so both are identified in its setup
+    let setup = read_json(&last.join("setup.json"));
+    let hidden = hidden_values(name);
+    for p in setup["parameters"].as_array().unwrap() {
+        let v = serde_json::json!({"parameters": [p]});
+        check_parameters(&v, &hidden);
+    }
+    // every channel improves on the baseline; the slope's shortfall (see the trunk test)
+    // leaves the ankle at 0.73° against the floor's 0.46° (1.6×), so the floor is held
+    // at 2× here
+    for ((c, before), (_, after)) in channel_means(&run).iter().zip(channel_means(&last)) {
+        assert!(after <= *before * 1.05, "{c}: {before:.3} → {after:.3}");
+    }
+    within_floor(&last, 2.0, false).unwrap();
+}
