@@ -94,3 +94,78 @@ fn the_catalog_builds_into_the_model_with_free_parameters_at_their_null_values()
         assert_eq!(gravity_bias(&m, &m.theta0()), gravity_bias(&plain, &[]), "{}: the null value changes the model", e.label());
     }
 }
+
+/// Residual actuators: controls after the actuators' that add `scale × u` to each
+/// generalised force; in flight M Δq̈ equals the added force exactly.
+#[test]
+fn residual_actuators_add_generalised_forces_per_unit_control() {
+    let m = model("opensim_subject01.json", "ellipse.json").with_residual_actuators(100.0, 50.0);
+    let base = m.nu_actuators();
+    assert_eq!(m.nu(), base + 9);
+    assert_eq!(m.control_names()[base], "pelvis_x_residual");
+    assert_eq!(m.control_names()[base + 4], "knee_r_residual");
+    let set = m.constraint_set("flight", &[]).unwrap();
+    let q = [0.3, 1.2, 0.1, 0.3, -0.4, 0.1, -0.2, -0.3, 0.05];
+    let qd = [1.0, 0.1, 0.2, -1.0, 1.0, 0.3, 1.5, -0.8, 1.0];
+    let mut x: Vec<f64> = q.iter().chain(&qd).copied().collect();
+    x.extend(vec![0.2; m.na()]);
+    let (mass, _) = m.mass_matrix_and_bias(&q, &qd, &[]);
+    let qdd = |u: &[f64]| {
+        let mut xdot = vec![0.0; m.nx()];
+        m.dynamics::<f64>(&set, &x, u, &[], &mut xdot, &mut [], None).unwrap();
+        xdot[9..18].to_vec()
+    };
+    let u0 = vec![0.3; m.nu()];
+    let a0 = qdd(&{
+        let mut u = u0.clone();
+        u[base..].iter_mut().for_each(|v| *v = 0.0);
+        u
+    });
+    for (i, scale) in [(0, 100.0), (2, 50.0), (7, 50.0)] {
+        let mut u = u0.clone();
+        u[base..].iter_mut().for_each(|v| *v = 0.0);
+        u[base + i] = 0.5;
+        let a = qdd(&u);
+        for r in 0..9 {
+            let f: f64 = (0..9).map(|c| mass[r * 9 + c] * (a[c] - a0[c])).sum();
+            let expect = if r == i { 0.5 * scale } else { 0.0 };
+            assert!((f - expect).abs() < 1e-8 * scale, "residual {i}, row {r}: {f} vs {expect}");
+        }
+    }
+}
+
+/// The dynamics Jacobian of a model with residual actuators has the residual controls'
+/// columns (central differences).
+#[test]
+fn residual_actuator_columns_of_the_dynamics_jacobian_match_finite_differences() {
+    let m = model("opensim_subject01.json", "ellipse.json").with_residual_actuators(100.0, 100.0);
+    let set = m.constraint_set("s", &[("r.sole", true)]).unwrap();
+    let q = [1.6, 0.95, 0.11, 0.3, -0.2, 0.1, -0.3, -0.5, 0.05];
+    let qd = [1.1, 0.1, 0.2, -1.0, 1.0, 0.3, 1.5, -0.8, 1.0];
+    let (q, qd, _) = m.project(&set, &q, &qd, &[]).unwrap();
+    let mut x: Vec<f64> = q.iter().chain(&qd).copied().collect();
+    x.extend(vec![0.2; m.na()]);
+    let (nx, nu) = (m.nx(), m.nu());
+    let u: Vec<f64> = (0..nu).map(|i| if i < m.nu_actuators() { 0.3 } else { 0.05 * i as f64 - 0.4 }).collect();
+    let mut xdot = vec![0.0; nx];
+    let mut jac = vec![0.0; nx * (nx + nu)];
+    m.dynamics_jacobian(&set, &x, &u, &[], &mut xdot, &mut jac).unwrap();
+    let f = |u: &[f64]| {
+        let mut xd = vec![0.0; nx];
+        let mut lam = vec![0.0; set.rows.len()];
+        m.dynamics::<f64>(&set, &x, u, &[], &mut xd, &mut lam, None).unwrap();
+        xd
+    };
+    let mut worst = 0.0f64;
+    for c in 0..nu {
+        let h = 1e-6;
+        let (mut a, mut b) = (u.clone(), u.clone());
+        a[c] += h;
+        b[c] -= h;
+        let (fa, fb) = (f(&a), f(&b));
+        for r in 0..nx {
+            worst = worst.max(((fa[r] - fb[r]) / (2.0 * h) - jac[nx * nx + c * nx + r]).abs());
+        }
+    }
+    assert!(worst < 1e-5, "control columns vs FD: {worst:e}");
+}

@@ -73,10 +73,73 @@ pub struct Args {
     /// model shifts along the walkway instead).
     #[arg(long)]
     track_pelvis_position: bool,
+    /// Add residual actuators: a force on each pelvis translation and a torque on the
+    /// pelvis tilt and every joint (100 N or N·m per unit control, penalised at 1e-2 per
+    /// unit²), so the model can follow the data and the residuals show what it lacks.
+    #[arg(long)]
+    residual_actuators: bool,
     /// Start from the solution of a track run (its folder or solution.json) of the same
     /// phase graph instead of the data; effect parameters it identified start at its values.
     #[arg(long)]
     init: Option<PathBuf>,
+}
+
+/// Force (N) or torque (N·m) of a residual actuator per unit control.
+pub const RESIDUAL_SCALE: f64 = 100.0;
+
+/// The residual actuators' profiles at the nodes (plots, phases shaded) and their RMS
+/// and peak values (N or N·m), for a model that has them.
+fn residual_report(model: &GaitModel, sol: &GaitSolution) -> Option<(footfall::report::html::Section, serde_json::Value)> {
+    use footfall::report::plot::{LinePlot, LineStyle, Series, Span};
+    let scales = model.residual_scales();
+    if scales.is_empty() {
+        return None;
+    }
+    let base = model.nu_actuators();
+    let names: Vec<String> = model.control_names().into_iter().skip(base).collect();
+    let (mut t, mut v): (Vec<f64>, Vec<Vec<f64>>) = (Vec::new(), vec![Vec::new(); scales.len()]);
+    for ph in &sol.phases {
+        let n = ph.intervals();
+        let h = ph.duration / n as f64;
+        for (k, u) in ph.u.iter().enumerate() {
+            t.push(ph.t0 + k as f64 * h);
+            for (i, s) in scales.iter().enumerate() {
+                v[i].push(u[base + i] * s);
+            }
+        }
+    }
+    let spans: Vec<Span> = sol.phase_spans().iter().map(|p| Span::new(p.t0, p.t1, p.name.clone())).collect();
+    let mut forces = LinePlot::new("Residual forces on the pelvis", "time (s)", "force (N)");
+    let mut torques = LinePlot::new("Residual torques", "time (s)", "torque (N·m)");
+    for (i, name) in names.iter().enumerate() {
+        let p = if i < 2 { &mut forces } else { &mut torques };
+        p.series.push(Series::new(name.trim_end_matches("_residual").replace('_', " "), t.clone(), v[i].clone(), LineStyle::Solid));
+    }
+    forces.shaded = spans.clone();
+    torques.shaded = spans;
+    let stats: Vec<serde_json::Value> = names
+        .iter()
+        .zip(&v)
+        .map(|(n, x)| {
+            let rms = (x.iter().map(|a| a * a).sum::<f64>() / x.len().max(1) as f64).sqrt();
+            let peak = x.iter().fold(0.0f64, |m, a| m.max(a.abs()));
+            serde_json::json!({"name": n, "rms": rms, "peak": peak, "unit": if n.starts_with("pelvis_x") || n.starts_with("pelvis_y") { "N" } else { "N·m" }})
+        })
+        .collect();
+    let rows = stats
+        .iter()
+        .map(|s| vec![s["name"].as_str().unwrap_or("").to_string(), format!("{:.2}", s["rms"].as_f64().unwrap_or(f64::NAN)), format!("{:.2}", s["peak"].as_f64().unwrap_or(f64::NAN)), s["unit"].as_str().unwrap_or("").to_string()])
+        .collect();
+    let table = footfall::report::table::Table { title: "Residual actuators at the nodes".into(), headers: ["residual", "RMS", "peak |·|", "unit"].map(String::from).to_vec(), rows };
+    Some((
+        footfall::report::html::Section {
+            heading: "Residual actuators".into(),
+            paragraphs: vec!["What the model needs beyond its own actuators to follow the data, and when: residual forces on the pelvis translations and torques on the pelvis tilt and the joints, at the shooting nodes.".into()],
+            tables: vec![table],
+            svgs: vec![forces.to_svg(), torques.to_svg()],
+        },
+        serde_json::Value::Array(stats),
+    ))
 }
 
 /// The parts of a tracking problem that do not borrow each other.
@@ -97,6 +160,9 @@ impl TrackingProblem {
         let mut effects = run.effects.clone();
         effects.extend(extra.iter().cloned());
         let mut model = GaitModel::load_with_effects(&run.model, &foot_path, &effects)?;
+        if run.residual_actuators {
+            model = model.with_residual_actuators(RESIDUAL_SCALE, RESIDUAL_SCALE);
+        }
         for p in &run.parameters {
             // a parameter the run knew is started at its value (one the model lacks is ignored)
             if model.parameters().iter().any(|q| q.name == p.name) {
@@ -235,6 +301,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         kinematics_cutoff: args.kinematics_cutoff,
         integrator_tol: args.integrator_tol,
         track_pelvis_position: args.track_pelvis_position,
+        residual_actuators: args.residual_actuators,
         effects: vec![],
         parameters: vec![],
     };
@@ -328,6 +395,10 @@ impl TrackingProblem {
                 });
             }
             Err(e) => eprintln!("warning: no cost breakdown: {e}"),
+        }
+        if let Some((section, stats)) = residual_report(model, &solution) {
+            extra_sections.push(section);
+            extra_json.insert("residual_actuators".into(), stats);
         }
         if !record.parameters.is_empty() {
             extra_sections.push(footfall::report::html::Section {

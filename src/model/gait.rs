@@ -132,6 +132,8 @@ pub struct GaitModel {
     actuation: Actuation,
     contact_settings: ContactSettings,
     effects: Vec<Box<dyn DynEffect>>,
+    /// Residual actuators: force or torque per unit control on every coordinate.
+    residuals: Option<Vec<f64>>,
     /// Offsets of each effect's parameters in [`GaitModel::parameters`].
     effect_offsets: Vec<usize>,
     params: Vec<ParamSpec>,
@@ -291,6 +293,7 @@ impl GaitModel {
             actuation,
             contact_settings: spec.contact,
             effects,
+            residuals: None,
             effect_offsets,
             params,
             free,
@@ -341,12 +344,31 @@ impl GaitModel {
     pub fn nx(&self) -> usize {
         2 * self.nq() + self.na()
     }
-    /// Control dimension.
+    /// Control dimension: the actuators' controls, then the residual actuators' (if any).
     pub fn nu(&self) -> usize {
+        self.nu_actuators() + self.residuals.as_ref().map_or(0, Vec::len)
+    }
+    /// Number of controls of the actuators proper (excitations or joint torques).
+    pub fn nu_actuators(&self) -> usize {
         match self.actuation {
             Actuation::Mtg(_) => 2 * LEG_JOINTS.len(),
             Actuation::Torques { .. } => LEG_JOINTS.len(),
         }
+    }
+
+    /// Add residual actuators (seed 003's residual reduction): a generalised force on
+    /// each pelvis translation of `force_n` newtons per unit control and a torque on the
+    /// pelvis tilt and every joint of `torque_nm` newton-metres per unit control. Their
+    /// controls follow the actuators' (names `<coordinate>_residual`), so a tracking
+    /// problem can penalise them and show which residual the model needs, and when.
+    pub fn with_residual_actuators(mut self, force_n: f64, torque_nm: f64) -> Self {
+        self.residuals = Some((0..self.nq()).map(|i| if i < 2 { force_n } else { torque_nm }).collect());
+        self
+    }
+
+    /// Force or torque per unit control of each residual actuator (empty without them).
+    pub fn residual_scales(&self) -> &[f64] {
+        self.residuals.as_deref().unwrap_or(&[])
     }
     /// Number of free parameters θ.
     pub fn ntheta(&self) -> usize {
@@ -396,6 +418,9 @@ impl GaitModel {
                 }
                 Actuation::Torques { .. } => v.push(format!("{}_torque", COORDINATES[c])),
             }
+        }
+        for i in 0..self.residual_scales().len() {
+            v.push(format!("{}_residual", COORDINATES[i]));
         }
         v
     }
@@ -492,6 +517,12 @@ impl GaitModel {
                 for (k, &(c, _)) in LEG_JOINTS.iter().enumerate() {
                     tau[c] += u[k];
                 }
+            }
+        }
+        if let Some(scales) = &self.residuals {
+            let base = self.nu_actuators();
+            for (i, &sc) in scales.iter().enumerate() {
+                tau[i] += u[base + i] * sc;
             }
         }
         for e in 0..self.effects.len() {
@@ -806,8 +837,9 @@ impl GaitModel {
         let mut lam = vec![AdChunk::from(0.0); set.rows.len()];
         match &self.actuation {
             // Excitations enter only the activation dynamics ȧ = rate(u, a): their columns
-            // are diagonal and come from a scalar dual evaluation; AD runs over (x, θ) only.
-            Actuation::Mtg(mtg) => {
+            // are diagonal and come from a scalar dual evaluation; AD runs over (x, θ) only
+            // (residual actuators' controls enter the dynamics: the general path below).
+            Actuation::Mtg(mtg) if self.residuals.is_none() => {
                 let mut z = Vec::with_capacity(nx + nt);
                 z.extend_from_slice(x);
                 z.extend_from_slice(theta);
@@ -835,7 +867,7 @@ impl GaitModel {
                 }
                 Ok(())
             }
-            Actuation::Torques { .. } => {
+            _ => {
                 let mut z = Vec::with_capacity(nx + nu + nt);
                 z.extend_from_slice(x);
                 z.extend_from_slice(u);

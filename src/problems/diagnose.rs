@@ -38,6 +38,9 @@ pub struct TrackingRunSetup {
     pub kinematics_cutoff: Option<f64>,
     /// CVODES tolerance.
     pub integrator_tol: f64,
+    /// Whether the model has residual actuators (`--residual-actuators`).
+    #[serde(default)]
+    pub residual_actuators: bool,
     /// Whether the pelvis position is tracked too (`--track-pelvis-position`).
     #[serde(default)]
     pub track_pelvis_position: bool,

@@ -173,7 +173,9 @@ impl TrackingSetup {
                 xs.push(x);
             }
             let cn = if linear { *intervals + 1 } else { *intervals };
-            gu.push(vec![vec![0.025; nu]; cn]);
+            let mut u0 = vec![0.025; nu];
+            u0[model.nu_actuators()..].iter_mut().for_each(|v| *v = 0.0);
+            gu.push(vec![u0; cn]);
             gx.push(xs);
             targets.push(tg);
             node_times.push(times);
@@ -198,7 +200,10 @@ impl TrackingSetup {
             x_lb[i] = 0.0;
             x_ub[i] = 1.0;
         }
-        let guess = GaitGuess { x: gx, u: gu, x_lb, x_ub, u_lb: vec![0.0; nu], u_ub: vec![1.0; nu] };
+        // excitations in [0, 1]; residual actuators (if any) in [−1, 1]
+        let na_u = model.nu_actuators();
+        let u_lb: Vec<f64> = (0..nu).map(|i| if i < na_u { 0.0 } else { -1.0 }).collect();
+        let guess = GaitGuess { x: gx, u: gu, x_lb, x_ub, u_lb, u_ub: vec![1.0; nu] };
         let foot_length = 0.305;
         let weights = TrackingWeights::seed(nq, peak, foot_length);
         let measured = Arc::new(MeasuredLoads { fx, fy, time: data.time.clone(), cop_x: [data.feet[0].cop_x.clone(), data.feet[1].cop_x.clone()] });
@@ -225,8 +230,18 @@ impl TrackingSetup {
                 return Err(format!("the initial solution's phase '{}' ({} intervals) does not match the phase graph's '{name}' ({n} intervals)", ph.name, ph.intervals()));
             }
         }
+        let nu = self.guess.u.first().and_then(|u| u.first()).map_or(0, Vec::len);
+        if solution.phases.iter().flat_map(|p| &p.u).any(|u| u.len() > nu) {
+            return Err(format!("the initial solution has more controls than the model's {nu}"));
+        }
         self.guess.x = solution.phases.iter().map(|p| p.x.clone()).collect();
-        self.guess.u = solution.phases.iter().map(|p| p.u.clone()).collect();
+        // a solution without the residual actuators starts them at zero
+        self.guess.u = solution
+            .phases
+            .iter()
+            .zip(&self.guess.u)
+            .map(|(p, g)| p.u.iter().zip(g).map(|(u, gu)| u.iter().copied().chain(gu[u.len()..].iter().copied()).collect()).collect())
+            .collect();
         Ok(())
     }
 
@@ -283,7 +298,7 @@ impl TrackingSetup {
                         cost[c].resize(j + 1, 0.0);
                     }
                     cost[c][j] += value * value;
-                    if label != "excitations" && label != "activations" {
+                    if label != "excitations" && label != "activations" && !label.ends_with("residual") {
                         match node_data.iter_mut().find(|(l, _): &&mut (String, f64)| *l == label) {
                             Some(e) => e.1 += value * value,
                             None => node_data.push((label, value * value)),
