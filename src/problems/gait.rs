@@ -49,7 +49,8 @@ fn mirror_maps(model: &GaitModel, spec: &GaitSpec) -> (Vec<usize>, Vec<usize>) {
     // activations/controls come in (flexor, extensor) pairs per leg joint in the order
     // hip_r, knee_r, ankle_r, hip_l, knee_l, ankle_l: joint k ↔ the joint of its mirror
     let leg = [3usize, 4, 5, 6, 7, 8];
-    let per = model.nu() / leg.len();
+    let base = model.nu_actuators();
+    let per = base / leg.len();
     let mut umap: Vec<usize> = (0..model.nu()).collect();
     for (k, &c) in leg.iter().enumerate() {
         let m = leg.iter().position(|&d| d == qmap[c]).unwrap_or(k);
@@ -57,8 +58,12 @@ fn mirror_maps(model: &GaitModel, spec: &GaitSpec) -> (Vec<usize>, Vec<usize>) {
             umap[k * per + s] = m * per + s;
         }
     }
+    // residual actuators (one per coordinate) mirror with their coordinates
+    for i in 0..model.nu() - base {
+        umap[base + i] = base + qmap[i];
+    }
     if model.na() > 0 {
-        xmap.extend(umap.iter().map(|&i| 2 * nq + i));
+        xmap.extend(umap[..model.na()].iter().map(|&i| 2 * nq + i));
     }
     (xmap, umap)
 }
