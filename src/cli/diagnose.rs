@@ -278,7 +278,13 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
             "objective_after": v.objective_after,
             "predicted_fraction": v.test.predicted_fraction,
             "verified_fraction": (v.objective_before - v.objective_after) / v.objective_before,
-            "parameters": v.parameters.iter().map(|(n, val, sd, u)| serde_json::json!({"name": n, "value": val, "sd": sd, "unit": u})).collect::<Vec<_>>(),
+            "parameters": v.parameters.iter().map(|(n, val, sd, u)| {
+                let mut p = serde_json::json!({"name": n, "value": val, "unit": u});
+                if let Some(sd) = sd {
+                    p["sd"] = (*sd).into();
+                }
+                p
+            }).collect::<Vec<_>>(),
             "sentence": v.sentence,
         })).collect::<Vec<_>>(),
         "skipped": skipped,

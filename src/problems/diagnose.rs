@@ -33,8 +33,10 @@ pub struct TrackingRunSetup {
     /// Phase file.
     pub phases: PathBuf,
     /// Data file (`None`: the bundled trial).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub data: Option<PathBuf>,
     /// Kinematics low-pass cutoff (Hz).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub kinematics_cutoff: Option<f64>,
     /// CVODES tolerance.
     pub integrator_tol: f64,
@@ -58,6 +60,7 @@ pub struct IdentifiedParameter {
     /// Value at the solution.
     pub value: f64,
     /// Approximate standard deviation (`None` for a fixed parameter or one at a bound).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sd: Option<f64>,
     /// Unit.
     pub unit: String,
