@@ -3,23 +3,15 @@
 
 mod common;
 use common::*;
-use footfall::data::GaitData;
 use footfall::integrate::IntegratorSettings;
 use footfall::ocp::Transcription;
-use footfall::phases::PhaseSequence;
 use footfall::problems::evaluation::GaitSolution;
 use footfall::problems::gait::GaitCycle;
-use footfall::problems::track::TrackingSetup;
 use footfall::sqp::Nlp;
 
 #[test]
 fn cost_breakdown_adds_up_to_the_objective() {
-    let data = GaitData::bundled(&root()).unwrap();
-    let m = model("opensim_subject01.json", "ellipse.json");
-    let p = path("phases/ellipse_walk.json");
-    let seq = PhaseSequence::load(&p).unwrap();
-    let sets = seq.resolve(&m, &p).unwrap();
-    let setup = TrackingSetup::new(&m, &seq, &sets, &data).unwrap();
+    let (m, sets, setup) = bundled_tracking("ellipse.json", "phases/ellipse_walk.json");
     let cycle = GaitCycle::new(&m, &setup.seq, &sets).unwrap();
     let ocp = setup.ocp(&cycle, &m, &sets, IntegratorSettings::default()).unwrap();
     let tr = Transcription::new(&ocp).unwrap();

@@ -4,12 +4,9 @@
 
 mod common;
 use common::*;
-use footfall::data::GaitData;
 use footfall::integrate::IntegratorSettings;
 use footfall::ocp::{NodeFunction, Transcription};
-use footfall::phases::PhaseSequence;
 use footfall::problems::gait::GaitCycle;
-use footfall::problems::track::TrackingSetup;
 use footfall::sqp::Nlp;
 
 /// Largest |H − FD(∇(wᵀf))| relative to max(1, |H|) over all entries.
@@ -41,13 +38,8 @@ fn term_hessian_error(f: &dyn NodeFunction, z: &[f64], wts: &[f64]) -> f64 {
 
 #[test]
 fn gait_term_hessians_match_finite_differences() {
-    let data = GaitData::bundled(&root()).unwrap();
     for (foot, phases) in [("ellipse.json", "phases/ellipse_walk.json"), ("double_circle.json", "phases/double_circle_walk.json")] {
-        let m = model("opensim_subject01.json", foot);
-        let p = path(phases);
-        let seq = PhaseSequence::load(&p).unwrap();
-        let sets = seq.resolve(&m, &p).unwrap();
-        let setup = TrackingSetup::new(&m, &seq, &sets, &data).unwrap();
+        let (m, sets, setup) = bundled_tracking(foot, phases);
         let cycle = GaitCycle::new(&m, &setup.seq, &sets).unwrap();
         let ocp = setup.ocp(&cycle, &m, &sets, IntegratorSettings::default()).unwrap();
         let tr = Transcription::new(&ocp).unwrap();
@@ -87,12 +79,7 @@ fn gait_term_hessians_match_finite_differences() {
 /// the Lagrangian `∇f + Jᵀλ`.
 #[test]
 fn tracking_lagrangian_hessian_matches_finite_differences() {
-    let data = GaitData::bundled(&root()).unwrap();
-    let m = model("opensim_subject01.json", "ellipse.json");
-    let p = path("phases/ellipse_walk.json");
-    let seq = PhaseSequence::load(&p).unwrap();
-    let sets = seq.resolve(&m, &p).unwrap();
-    let setup = TrackingSetup::new(&m, &seq, &sets, &data).unwrap();
+    let (m, sets, setup) = bundled_tracking("ellipse.json", "phases/ellipse_walk.json");
     let cycle = GaitCycle::new(&m, &setup.seq, &sets).unwrap();
     let tight = IntegratorSettings { rtol: 1e-12, atol: 1e-12, ..Default::default() };
     let ocp = setup.ocp(&cycle, &m, &sets, tight).unwrap();

@@ -5,11 +5,9 @@
 
 use super::track::{read_run_setup, tracking_sqp_settings, TrackingProblem};
 use super::Failure;
-use anyhow::{anyhow, Context};
+use anyhow::anyhow;
 use footfall::model::effects::{catalog, EffectSpec};
-use footfall::ocp::Transcription;
 use footfall::problems::diagnose::{channel_means, gauss_newton_decrease, score_test, ScoreTest};
-use footfall::problems::gait::GaitCycle;
 use footfall::report::diff::{fmt_value, RunDiff, RunSummary};
 use footfall::report::html::{Report, Section, Summary, Tone};
 use footfall::report::table::Table;
@@ -46,31 +44,25 @@ pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
     run_inner(args, quiet).map_err(Failure::User)
 }
 
-/// The Gauss–Newton decrease of a problem started at the run's solution, and its data
-/// residual count.
-fn decrease_at_solution(prob: &TrackingProblem) -> anyhow::Result<(f64, f64, usize, Vec<String>)> {
-    let cycle = GaitCycle::new(&prob.model, &prob.setup.seq, &prob.sets).map_err(|e| anyhow!(e))?;
-    let ocp = prob.setup.ocp(&cycle, &prob.model, &prob.sets, prob.integrator.clone()).map_err(|e| anyhow!(e))?;
-    let tr = Transcription::new(&ocp).context("transcribing the tracking problem")?;
-    let (_, _, w) = tr.variable_bounds_and_guess();
-    let (j, dec) = gauss_newton_decrease(&tr, &w).map_err(|e| anyhow!(e))?;
-    let rows = prob.setup.data_rows(&prob.model, &prob.sets, &cycle.continuous);
-    let names = prob.model.free_parameters().iter().map(|&i| prob.model.parameters()[i].name.clone()).collect();
-    Ok((j, dec, rows, names))
+/// The decrease of a truncated re-fit of a problem started at the run's solution (the
+/// baseline every candidate is measured against), its cost and its data residual count.
+fn decrease_at_solution(prob: &TrackingProblem) -> anyhow::Result<(f64, f64, usize)> {
+    prob.with_transcription(|tr, cycle, w| {
+        let (j, dec) = gauss_newton_decrease(tr, &w).map_err(|e| anyhow!(e))?;
+        Ok((j, dec, prob.setup.data_rows(&prob.model, &prob.sets, &cycle.continuous)))
+    })
 }
 
 fn test_candidate(prob: &TrackingProblem, effect: &EffectSpec, k: usize, baseline: f64, rows: usize) -> anyhow::Result<ScoreTest> {
-    let cycle = GaitCycle::new(&prob.model, &prob.setup.seq, &prob.sets).map_err(|e| anyhow!(e))?;
-    let ocp = prob.setup.ocp(&cycle, &prob.model, &prob.sets, prob.integrator.clone()).map_err(|e| anyhow!(e))?;
-    let tr = Transcription::new(&ocp).context("transcribing the tracking problem")?;
-    let (_, _, w) = tr.variable_bounds_and_guess();
-    let free = prob.model.free_parameters();
-    let names: Vec<String> = free[free.len() - k..].iter().map(|&i| prob.model.parameters()[i].name.clone()).collect();
-    let (mut t, w1) = score_test(effect, names, &tr, &w, baseline, rows).map_err(|e| anyhow!(e))?;
-    let before = channel_means(&tr, &w, &cycle.continuous, prob.setup.window.0, &prob.model, &prob.sets, &prob.data).map_err(|e| anyhow!(e))?;
-    let after = channel_means(&tr, &w1, &cycle.continuous, prob.setup.window.0, &prob.model, &prob.sets, &prob.data).map_err(|e| anyhow!(e))?;
-    t.expected_channels = before.into_iter().zip(after).map(|((c, u, b), (_, _, a))| (c, u, b, a)).collect();
-    Ok(t)
+    prob.with_transcription(|tr, cycle, w| {
+        let free = prob.model.free_parameters();
+        let names: Vec<String> = free[free.len() - k..].iter().map(|&i| prob.model.parameters()[i].name.clone()).collect();
+        let (mut t, w1) = score_test(effect, names, tr, &w, baseline, rows).map_err(|e| anyhow!(e))?;
+        let means = |w: &[f64]| channel_means(tr, w, &cycle.continuous, prob.setup.window.0, &prob.model, &prob.sets, &prob.data).map_err(|e| anyhow!(e));
+        let (before, after) = (means(&w)?, means(&w1)?);
+        t.expected_channels = before.into_iter().zip(after).map(|((c, u, b), (_, _, a))| (c, u, b, a)).collect();
+        Ok(t)
+    })
 }
 
 /// A verified candidate: its re-fit run and what changed.
@@ -128,7 +120,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     // the baseline: the run's own problem at its solution
     let mut base = TrackingProblem::build(&setup, &[])?;
     base.setup.start_from(&solution).map_err(|e| anyhow!("{}: {e}", args.run.display()))?;
-    let (objective, base_decrease, rows, _) = decrease_at_solution(&base)?;
+    let (objective, base_decrease, rows) = decrease_at_solution(&base)?;
     if !quiet {
         eprintln!(
             "diagnosing {}: J = {objective:.6} over {rows} data residuals (mean square {:.3e}); Gauss–Newton decrease left at the solution {base_decrease:.2e}",

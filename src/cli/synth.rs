@@ -76,7 +76,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     if !(args.half_cycles.is_finite() && args.half_cycles >= 2.5) {
         bail!("--half-cycles {}: need at least 2.5 (a gait cycle plus margins for the event search)", args.half_cycles);
     }
-    let hidden: Vec<EffectSpec> = args.hidden_effects.iter().map(|e| EffectSpec::parse_cli(&format!("{e}{}free=", if e.contains(':') { "," } else { ":" })).map_err(|r| anyhow!("--hidden-effect: {r}"))).collect::<Result<_, _>>()?;
+    let hidden: Vec<EffectSpec> = args.hidden_effects.iter().map(|e| EffectSpec::parse_cli(e).map(|s| s.fixed()).map_err(|r| anyhow!("--hidden-effect: {r}"))).collect::<Result<_, _>>()?;
     let mut offsets = MeasurementOffsets::default();
     let mut model_effects = Vec::new();
     for e in &hidden {

@@ -217,16 +217,24 @@ pub fn tracking_sqp_settings(tol: f64, max_iter: usize, max_time: Option<f64>, h
 }
 
 impl TrackingProblem {
-    /// Solve the problem (interruptibly, with progress unless `quiet`) and read its
-    /// solution.
-    pub fn solve(&self, settings: &SqpSettings, quiet: bool) -> anyhow::Result<(footfall::sqp::SqpResult, GaitSolution)> {
+    /// Run `f` on the problem's transcription, its walking cycle and its initial point
+    /// (the guess: the data, or the solution it was started from).
+    pub fn with_transcription<R>(&self, f: impl FnOnce(&Transcription, &GaitCycle, Vec<f64>) -> anyhow::Result<R>) -> anyhow::Result<R> {
         let cycle = GaitCycle::new(&self.model, &self.setup.seq, &self.sets).map_err(|e| anyhow!(e))?;
         let ocp = self.setup.ocp(&cycle, &self.model, &self.sets, self.integrator.clone()).map_err(|e| anyhow!(e))?;
         let tr = Transcription::new(&ocp).context("transcribing the tracking problem")?;
         let (_, _, w0) = tr.variable_bounds_and_guess();
-        let res = super::solve_interruptibly(&tr, &w0, settings, quiet);
-        let sol = GaitSolution::from_nlp(&tr, &res.w, &cycle.continuous, self.setup.window.0);
-        Ok((res, sol))
+        f(&tr, &cycle, w0)
+    }
+
+    /// Solve the problem (interruptibly, with progress unless `quiet`) and read its
+    /// solution.
+    pub fn solve(&self, settings: &SqpSettings, quiet: bool) -> anyhow::Result<(footfall::sqp::SqpResult, GaitSolution)> {
+        self.with_transcription(|tr, cycle, w0| {
+            let res = super::solve_interruptibly(tr, &w0, settings, quiet);
+            let sol = GaitSolution::from_nlp(tr, &res.w, &cycle.continuous, self.setup.window.0);
+            Ok((res, sol))
+        })
     }
 }
 
@@ -346,101 +354,99 @@ impl TrackingProblem {
     ) -> anyhow::Result<TrackedRun> {
         let TrackingProblem { model, sets, data, setup, phases, integrator, .. } = self;
         let integrator = integrator.clone();
-        let cycle = GaitCycle::new(model, &setup.seq, sets).map_err(|e| anyhow!(e))?;
-        let ocp = setup.ocp(&cycle, model, sets, integrator.clone()).map_err(|e| anyhow!(e))?;
-        let tr = Transcription::new(&ocp).context("transcribing the tracking problem")?;
-        let (_, _, w0) = tr.variable_bounds_and_guess();
-        if !quiet {
-            eprintln!(
-                "tracking {:.3}–{:.3} s of {} with the {} foot ({} variables, {} constraints, {:?})",
-                setup.window.0,
-                setup.window.1,
-                data.name,
-                model.foot_name,
-                tr.n(),
-                tr.m(),
-                settings.hessian
-            );
-        }
-        let res = super::solve_interruptibly(&tr, &w0, settings, quiet);
+        self.with_transcription(|tr, cycle, w0| {
+            if !quiet {
+                eprintln!(
+                    "tracking {:.3}–{:.3} s of {} with the {} foot ({} variables, {} constraints, {:?})",
+                    setup.window.0,
+                    setup.window.1,
+                    data.name,
+                    model.foot_name,
+                    tr.n(),
+                    tr.m(),
+                    settings.hessian
+                );
+            }
+            let res = super::solve_interruptibly(tr, &w0, settings, quiet);
 
-        let solution = GaitSolution::from_nlp(&tr, &res.w, &cycle.continuous, setup.window.0);
-        let converged = res.status == SqpStatus::Converged;
-        let data_rows = setup.data_rows(model, sets, &cycle.continuous);
-        let sd = if model.ntheta() > 0 && converged {
-            parameter_sd(&tr, &res.w, data_rows).unwrap_or_else(|e| {
-                eprintln!("warning: no parameter uncertainty: {e}");
+            let solution = GaitSolution::from_nlp(tr, &res.w, &cycle.continuous, setup.window.0);
+            let converged = res.status == SqpStatus::Converged;
+            let data_rows = setup.data_rows(model, sets, &cycle.continuous);
+            let sd = if model.ntheta() > 0 && converged {
+                parameter_sd(tr, &res.w, data_rows).unwrap_or_else(|e| {
+                    eprintln!("warning: no parameter uncertainty: {e}");
+                    vec![None; model.ntheta()]
+                })
+            } else {
                 vec![None; model.ntheta()]
-            })
-        } else {
-            vec![None; model.ntheta()]
-        };
-        let record = self.record(base, extra, &solution.theta, &sd);
-        let mut extra_json = serde_json::Map::new();
-        extra_json.insert("setup".into(), serde_json::to_value(&record)?);
-        extra_json.insert("data_residuals".into(), data_rows.into());
-        let mut extra_sections = Vec::new();
-        match setup.cost_breakdown(model, sets, &cycle.continuous, &solution) {
-            Ok(b) => {
-                let (table, windows) = cost_tables(&b);
-                extra_json.insert("cost_breakdown".into(), serde_json::to_value(&b)?);
+            };
+            let record = self.record(base, extra, &solution.theta, &sd);
+            let mut extra_json = serde_json::Map::new();
+            extra_json.insert("setup".into(), serde_json::to_value(&record)?);
+            extra_json.insert("data_residuals".into(), data_rows.into());
+            let mut extra_sections = Vec::new();
+            match setup.cost_breakdown(model, sets, &cycle.continuous, &solution) {
+                Ok(b) => {
+                    let (table, windows) = cost_tables(&b);
+                    extra_json.insert("cost_breakdown".into(), serde_json::to_value(&b)?);
+                    extra_sections.push(footfall::report::html::Section {
+                        heading: "Where the cost comes from".into(),
+                        paragraphs: vec![format!(
+                            "Share of the tracking cost J = {:.6} per channel and phase (weighted squared residuals at the nodes, seed eq. 18), and the stretches of five nodes with the largest data cost.",
+                            b.total()
+                        )],
+                        tables: vec![table, windows],
+                        svgs: vec![],
+                    });
+                }
+                Err(e) => eprintln!("warning: no cost breakdown: {e}"),
+            }
+            if let Some((section, stats)) = residual_report(model, &solution) {
+                extra_sections.push(section);
+                extra_json.insert("residual_actuators".into(), stats);
+            }
+            if !record.parameters.is_empty() {
                 extra_sections.push(footfall::report::html::Section {
-                    heading: "Where the cost comes from".into(),
-                    paragraphs: vec![format!(
-                        "Share of the tracking cost J = {:.6} per channel and phase (weighted squared residuals at the nodes, seed eq. 18), and the stretches of five nodes with the largest data cost.",
-                        b.total()
-                    )],
-                    tables: vec![table, windows],
+                    heading: "Effects".into(),
+                    paragraphs: vec!["Effect parameters of the model; identified ones with an approximate standard deviation from the Gauss–Newton Hessian reduced to the constraints, s² = J/(N − p).".into()],
+                    tables: vec![parameter_table(&record.parameters)],
                     svgs: vec![],
                 });
             }
-            Err(e) => eprintln!("warning: no cost breakdown: {e}"),
-        }
-        if let Some((section, stats)) = residual_report(model, &solution) {
-            extra_sections.push(section);
-            extra_json.insert("residual_actuators".into(), stats);
-        }
-        if !record.parameters.is_empty() {
-            extra_sections.push(footfall::report::html::Section {
-                heading: "Effects".into(),
-                paragraphs: vec!["Effect parameters of the model; identified ones with an approximate standard deviation from the Gauss–Newton Hessian reduced to the constraints, s² = J/(N − p).".into()],
-                tables: vec![parameter_table(&record.parameters)],
-                svgs: vec![],
-            });
-        }
-        let out = super::gait_run::write(
-            GaitRun {
-                command: "track",
-                title: format!("footfall tracking — {} foot, {}", model.foot_name, data.name),
-                data,
-                model,
-                sets,
-                phases_path: phases,
-                result: &res,
-                solution: &solution,
-                integrator,
-                extra_summary: vec![],
-                extra_json,
-                extra_sections,
-                extra_files: vec![("setup.json".into(), serde_json::to_string_pretty(&record)?.into_bytes())],
-                transient_threshold_n: transient_threshold,
-            },
-            folder,
-        )?;
-        if !quiet {
-            if !record.parameters.is_empty() {
-                eprintln!("{}", parameter_table(&record.parameters).to_markdown());
+            let out = super::gait_run::write(
+                GaitRun {
+                    command: "track",
+                    title: format!("footfall tracking — {} foot, {}", model.foot_name, data.name),
+                    data,
+                    model,
+                    sets,
+                    phases_path: phases,
+                    result: &res,
+                    solution: &solution,
+                    integrator,
+                    extra_summary: vec![],
+                    extra_json,
+                    extra_sections,
+                    extra_files: vec![("setup.json".into(), serde_json::to_string_pretty(&record)?.into_bytes())],
+                    transient_threshold_n: transient_threshold,
+                },
+                folder,
+            )?;
+            if !quiet {
+                if !record.parameters.is_empty() {
+                    eprintln!("{}", parameter_table(&record.parameters).to_markdown());
+                }
+                eprintln!("{}\n{}: J = {:.6}, KKT {:.2e}, {} iterations, {:.1} s", out.table.to_markdown(), res.status, res.objective, res.kkt, res.history.len().saturating_sub(1), res.seconds);
+                if let Some(f) = &out.fine {
+                    eprintln!(
+                        "1 ms re-integration: peak normal force {:.1} N (right), {:.1} N (left); largest Baumgarte force {:.1e} N; largest drift {:.2e} m",
+                        f.peak_normal_force_n[0], f.peak_normal_force_n[1], f.max_baumgarte_force_n, f.max_position_drift_m
+                    );
+                }
+                eprintln!("report: {}", out.path.join("report.html").display());
             }
-            eprintln!("{}\n{}: J = {:.6}, KKT {:.2e}, {} iterations, {:.1} s", out.table.to_markdown(), res.status, res.objective, res.kkt, res.history.len().saturating_sub(1), res.seconds);
-            if let Some(f) = &out.fine {
-                eprintln!(
-                    "1 ms re-integration: peak normal force {:.1} N (right), {:.1} N (left); largest Baumgarte force {:.1e} N; largest drift {:.2e} m",
-                    f.peak_normal_force_n[0], f.peak_normal_force_n[1], f.max_baumgarte_force_n, f.max_position_drift_m
-                );
-            }
-            eprintln!("report: {}", out.path.join("report.html").display());
-        }
-        Ok(TrackedRun { converged, result: res, output: out, record })
+            Ok(TrackedRun { converged, result: res, output: out, record })
+        })
     }
 }
 

@@ -481,11 +481,6 @@ impl GaitModel {
         self.effects.iter().any(|e| e.is_measurement())
     }
 
-    /// Kinds of the effects in the model (one entry per effect instance).
-    pub fn effect_kinds(&self) -> Vec<&'static str> {
-        self.effects.iter().map(|e| e.kind()).collect()
-    }
-
     /// Model quantities after the effects' adjustments.
     fn adjusted<S: ModelScalar>(&self, p: &[S]) -> (Vec<Inertia<S>>, V2<S>, S, V2<S>) {
         let mut inertia = self.tree.inertias::<S>();

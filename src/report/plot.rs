@@ -498,41 +498,7 @@ impl LinePlot {
         let sy = |y: f64| top + ph - (y - y_axis.lo) / (y_axis.hi - y_axis.lo) * ph;
 
         // Header.
-        let title = escape_xml(&self.title);
-        match at {
-            None => writeln!(
-                out,
-                r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}" role="img" aria-label="{title}" font-family="{FONT}">"#,
-                w = px(w),
-                h = px(h)
-            ),
-            Some((x, y)) => writeln!(
-                out,
-                r#"<svg x="{x}" y="{y}" width="{w}" height="{h}" viewBox="0 0 {w} {h}" role="img" aria-label="{title}">"#,
-                x = px(x),
-                y = px(y),
-                w = px(w),
-                h = px(h)
-            ),
-        }
-        .ok();
-        writeln!(out, "<title>{title}</title>").ok();
-        writeln!(
-            out,
-            r##"<rect width="{}" height="{}" fill="#ffffff"/>"##,
-            px(w),
-            px(h)
-        )
-        .ok();
-        if !self.title.is_empty() {
-            writeln!(
-                out,
-                r##"<text x="{}" y="{}" font-size="{TITLE_SIZE}" font-weight="bold" text-anchor="middle" fill="#222222">{title}</text>"##,
-                px(left + pw / 2.0),
-                px(8.0 + TITLE_SIZE)
-            )
-            .ok();
-        }
+        svg_header(out, &self.title, w, h, at, left + pw / 2.0);
 
         // Shaded spans, alternately tinted, with their edges.
         for (i, sp) in self.shaded.iter().enumerate() {
@@ -806,6 +772,40 @@ fn markers_path(
     d
 }
 
+/// Opening of a plot's SVG: the `<svg>` element (standalone, or nested at `at` inside a
+/// grid), its `<title>`, the white background and the bold title centred at `title_x`.
+fn svg_header(out: &mut String, title: &str, w: f64, h: f64, at: Option<(f64, f64)>, title_x: f64) {
+    let escaped = escape_xml(title);
+    match at {
+        None => writeln!(
+            out,
+            r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}" role="img" aria-label="{escaped}" font-family="{FONT}">"#,
+            w = px(w),
+            h = px(h)
+        ),
+        Some((x, y)) => writeln!(
+            out,
+            r#"<svg x="{x}" y="{y}" width="{w}" height="{h}" viewBox="0 0 {w} {h}" role="img" aria-label="{escaped}">"#,
+            x = px(x),
+            y = px(y),
+            w = px(w),
+            h = px(h)
+        ),
+    }
+    .ok();
+    writeln!(out, "<title>{escaped}</title>").ok();
+    writeln!(out, r##"<rect width="{}" height="{}" fill="#ffffff"/>"##, px(w), px(h)).ok();
+    if !title.is_empty() {
+        writeln!(
+            out,
+            r##"<text x="{}" y="{}" font-size="{TITLE_SIZE}" font-weight="bold" text-anchor="middle" fill="#222222">{escaped}</text>"##,
+            px(title_x),
+            px(8.0 + TITLE_SIZE)
+        )
+        .ok();
+    }
+}
+
 /// Small multiples: the plots in one SVG, `columns` to a row (at least 1), each in a cell
 /// as large as the largest plot, in order left to right, top to bottom.
 pub fn grid(plots: &[LinePlot], columns: usize) -> String {
@@ -1043,32 +1043,8 @@ impl BarChart {
             top + ph - (y.clamp(y_axis.lo, y_axis.hi) - y_axis.lo) / (y_axis.hi - y_axis.lo) * ph
         };
 
-        let title = escape_xml(&self.title);
         let mut out = String::new();
-        writeln!(
-            out,
-            r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{h}" viewBox="0 0 {w} {h}" role="img" aria-label="{title}" font-family="{FONT}">"#,
-            w = px(w),
-            h = px(h)
-        )
-        .ok();
-        writeln!(out, "<title>{title}</title>").ok();
-        writeln!(
-            out,
-            r##"<rect width="{}" height="{}" fill="#ffffff"/>"##,
-            px(w),
-            px(h)
-        )
-        .ok();
-        if !self.title.is_empty() {
-            writeln!(
-                out,
-                r##"<text x="{}" y="{}" font-size="{TITLE_SIZE}" font-weight="bold" text-anchor="middle" fill="#222222">{title}</text>"##,
-                px(left + pw / 2.0),
-                px(8.0 + TITLE_SIZE)
-            )
-            .ok();
-        }
+        svg_header(&mut out, &self.title, w, h, None, left + pw / 2.0);
 
         // grid, frame, y ticks and label
         for &t in &y_axis.ticks {

@@ -168,3 +168,17 @@ pub fn chromium(args: &[String], timeout: Duration) -> Vec<u8> {
     stdout
 }
 
+
+/// The tracking problem of the bundled trial for the model `opensim_subject01.json`, foot
+/// file `foot` and phase file `phases`: the model, the phase file's constraint sets and
+/// the tracking setup.
+#[allow(dead_code)]
+pub fn bundled_tracking(foot: &str, phases: &str) -> (GaitModel, Vec<footfall::model::ConstraintSet>, footfall::problems::track::TrackingSetup) {
+    let data = footfall::data::GaitData::bundled(&root()).unwrap();
+    let m = model("opensim_subject01.json", foot);
+    let p = path(phases);
+    let seq = footfall::phases::PhaseSequence::load(&p).unwrap();
+    let sets = seq.resolve(&m, &p).unwrap();
+    let setup = footfall::problems::track::TrackingSetup::new(&m, &seq, &sets, &data).unwrap();
+    (m, sets, setup)
+}
