@@ -322,6 +322,54 @@ fn track_interrupted_by_ctrl_c_writes_the_last_iterate() {
     for f in ["tracking.csv", "kinematics.sto", "table3.md", "report.html"] {
         assert!(out.join(f).is_file(), "{f} missing");
     }
+    report_rewrites_a_track_run(&out, &summary);
+}
+
+/// `footfall report` re-evaluates a track run's solution without solving: the same
+/// objective, errors and solver record, the where-it-fails section; bad input is named.
+fn report_rewrites_a_track_run(run: &Path, summary: &serde_json::Value) {
+    let dir = run.parent().unwrap();
+    let again = dir.join("again");
+    let o = footfall(&["report", s(run), "--out", s(&again), "--quiet"]);
+    assert!(o.status.success(), "report: {}", stderr(&o));
+    let rewritten: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(again.join("summary.json")).unwrap()).unwrap();
+    assert_all_finite(&rewritten, "summary");
+    for key in ["objective", "status", "iterations", "kkt", "errors", "errors_by_phase", "cost_breakdown", "history"] {
+        assert_eq!(rewritten[key], summary[key], "{key} differs after footfall report");
+    }
+    let rel = (rewritten["infeasibility"].as_f64().unwrap() - summary["infeasibility"].as_f64().unwrap()).abs() / summary["infeasibility"].as_f64().unwrap();
+    assert!(rel < 1e-3, "infeasibility {} against {}", rewritten["infeasibility"], summary["infeasibility"]);
+    let html = std::fs::read_to_string(again.join("report.html")).unwrap();
+    for text in ["Where the model fails", "Normalised error per channel and phase", "Data cost per shooting node", "re-evaluated from"] {
+        assert!(html.contains(text), "'{text}' not in the rewritten report");
+    }
+    // the output exists: refused without --overwrite
+    let o = footfall(&["report", s(run), "--out", s(&again), "--quiet"]);
+    assert_user_error(&o, &["again"]);
+    // a run whose solution no longer reproduces its recorded objective
+    let changed = dir.join("changed");
+    std::fs::create_dir(&changed).unwrap();
+    for f in ["setup.json", "solution.json"] {
+        std::fs::copy(run.join(f), changed.join(f)).unwrap();
+    }
+    let mut s2 = summary.clone();
+    s2["objective"] = (summary["objective"].as_f64().unwrap() * 1.01).into();
+    std::fs::write(changed.join("summary.json"), s2.to_string()).unwrap();
+    let out = dir.join("out");
+    let o = footfall(&["report", s(&changed), "--out", s(&out), "--quiet"]);
+    assert_user_error(&o, &["changed", "re-evaluates to J", "re-run `footfall track`"]);
+    // not a track run; no summary; not a folder
+    s2["command"] = "predict".into();
+    std::fs::write(changed.join("summary.json"), s2.to_string()).unwrap();
+    let o = footfall(&["report", s(&changed), "--out", s(&out), "--quiet"]);
+    assert_user_error(&o, &["summary.json", "`command`", "\"track\""]);
+    std::fs::remove_file(changed.join("summary.json")).unwrap();
+    let o = footfall(&["report", s(&changed), "--out", s(&out), "--quiet"]);
+    assert_user_error(&o, &["summary.json"]);
+    let o = footfall(&["report", "no/such/run", "--quiet"]);
+    assert_user_error(&o, &["no/such/run", "not a run folder"]);
+    assert!(!out.exists());
+    assert!(entries(dir).iter().all(|e| !e.contains("partial")), "{:?}", entries(dir));
 }
 
 #[test]

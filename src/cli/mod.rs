@@ -5,6 +5,7 @@
 mod compare;
 mod diagnose;
 mod diff;
+mod report;
 mod fit_foot;
 mod gait_run;
 mod predict;
@@ -47,6 +48,9 @@ enum Command {
     Diagnose(diagnose::Args),
     /// Compare the per-channel tracking errors of two runs: A (before) against B (after).
     Diff(diff::Args),
+    /// Rewrite a track run's report from its solution: where the model fails, by channel,
+    /// phase and time.
+    Report(report::Args),
 }
 
 /// Failure classes mapped to exit codes.
@@ -67,6 +71,7 @@ pub fn main() -> ExitCode {
         Command::Synth(args) => synth::run(args, cli.quiet),
         Command::Diagnose(args) => diagnose::run(args, cli.quiet),
         Command::Diff(args) => diff::run(args, cli.quiet),
+        Command::Report(args) => report::run(args, cli.quiet),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

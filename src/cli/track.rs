@@ -238,25 +238,45 @@ impl TrackingProblem {
     }
 }
 
-/// The cost-share table (channel × phase, % of J) and the worst windows.
-pub fn cost_tables(b: &footfall::problems::track::CostBreakdown) -> (footfall::report::table::Table, footfall::report::table::Table) {
+/// The cost-share table (channel × phase, % of J), the normalised-error table (channel ×
+/// phase) and the worst windows.
+pub fn cost_tables(b: &footfall::problems::track::CostBreakdown) -> (footfall::report::table::Table, footfall::report::table::Table, footfall::report::table::Table) {
+    use footfall::report::table::Table;
     let total = b.total().max(f64::MIN_POSITIVE);
-    let mut rows: Vec<(f64, Vec<String>)> = b
-        .channels
-        .iter()
-        .zip(&b.cost)
-        .map(|(c, per)| {
-            let sum: f64 = per.iter().sum();
-            let mut row = vec![c.clone(), format!("{:.1}", 100.0 * sum / total)];
-            row.extend(per.iter().map(|v| format!("{:.1}", 100.0 * v / total)));
-            (sum, row)
-        })
-        .collect();
-    rows.sort_by(|a, b| b.0.total_cmp(&a.0));
+    let mut order: Vec<usize> = (0..b.channels.len()).collect();
+    let sums: Vec<f64> = b.cost.iter().map(|per| per.iter().sum()).collect();
+    order.sort_by(|&x, &y| sums[y].total_cmp(&sums[x]));
     let mut headers = vec!["channel".to_string(), "% of J".into()];
     headers.extend(b.phases.iter().map(|p| format!("{p} %")));
-    let share = footfall::report::table::Table { title: "Share of the tracking cost per channel and phase".into(), headers, rows: rows.into_iter().map(|r| r.1).collect() };
-    let windows = footfall::report::table::Table {
+    let share = Table {
+        title: "Share of the tracking cost per channel and phase".into(),
+        headers,
+        rows: order
+            .iter()
+            .map(|&c| {
+                let mut row = vec![b.channels[c].clone(), format!("{:.1}", 100.0 * sums[c] / total)];
+                row.extend(b.cost[c].iter().map(|v| format!("{:.1}", 100.0 * v / total)));
+                row
+            })
+            .collect(),
+    };
+    let rms = b.normalised_rms();
+    let mut headers = vec!["channel".to_string(), "all".into()];
+    headers.extend(b.phases.iter().cloned());
+    let normalised = Table {
+        title: "Normalised error per channel and phase (RMS of the weighted residual)".into(),
+        headers,
+        rows: order
+            .iter()
+            .map(|&c| {
+                let n: usize = b.rows[c].iter().sum();
+                let mut row = vec![b.channels[c].clone(), if n > 0 { format!("{:.4}", (sums[c] / n as f64).sqrt()) } else { "—".into() }];
+                row.extend(rms[c].iter().map(|v| v.map_or("—".into(), |v| format!("{v:.4}"))));
+                row
+            })
+            .collect(),
+    };
+    let windows = Table {
         title: "Worst stretches (five nodes)".into(),
         headers: ["from (s)", "to (s)", "% of the data cost", "largest channel"].map(String::from).to_vec(),
         rows: {
@@ -264,7 +284,7 @@ pub fn cost_tables(b: &footfall::problems::track::CostBreakdown) -> (footfall::r
             b.worst_windows(5, 3).into_iter().map(|(t0, t1, v, c)| vec![format!("{t0:.3}"), format!("{t1:.3}"), format!("{:.1}", 100.0 * v / data), c]).collect()
         },
     };
-    (share, windows)
+    (share, normalised, windows)
 }
 
 /// Read a run's `setup.json`.
@@ -352,101 +372,143 @@ impl TrackingProblem {
         transient_threshold: f64,
         quiet: bool,
     ) -> anyhow::Result<TrackedRun> {
-        let TrackingProblem { model, sets, data, setup, phases, integrator, .. } = self;
-        let integrator = integrator.clone();
         self.with_transcription(|tr, cycle, w0| {
             if !quiet {
                 eprintln!(
                     "tracking {:.3}–{:.3} s of {} with the {} foot ({} variables, {} constraints, {:?})",
-                    setup.window.0,
-                    setup.window.1,
-                    data.name,
-                    model.foot_name,
+                    self.setup.window.0,
+                    self.setup.window.1,
+                    self.data.name,
+                    self.model.foot_name,
                     tr.n(),
                     tr.m(),
                     settings.hessian
                 );
             }
             let res = super::solve_interruptibly(tr, &w0, settings, quiet);
-
-            let solution = GaitSolution::from_nlp(tr, &res.w, &cycle.continuous, setup.window.0);
-            let converged = res.status == SqpStatus::Converged;
-            let data_rows = setup.data_rows(model, sets, &cycle.continuous);
-            let sd = if model.ntheta() > 0 && converged {
-                parameter_sd(tr, &res.w, data_rows).unwrap_or_else(|e| {
-                    eprintln!("warning: no parameter uncertainty: {e}");
-                    vec![None; model.ntheta()]
-                })
-            } else {
-                vec![None; model.ntheta()]
-            };
-            let record = self.record(base, extra, &solution.theta, &sd);
-            let mut extra_json = serde_json::Map::new();
-            extra_json.insert("setup".into(), serde_json::to_value(&record)?);
-            extra_json.insert("data_residuals".into(), data_rows.into());
-            let mut extra_sections = Vec::new();
-            match setup.cost_breakdown(model, sets, &cycle.continuous, &solution) {
-                Ok(b) => {
-                    let (table, windows) = cost_tables(&b);
-                    extra_json.insert("cost_breakdown".into(), serde_json::to_value(&b)?);
-                    extra_sections.push(footfall::report::html::Section {
-                        heading: "Where the cost comes from".into(),
-                        paragraphs: vec![format!(
-                            "Share of the tracking cost J = {:.6} per channel and phase (weighted squared residuals at the nodes, seed eq. 18), and the stretches of five nodes with the largest data cost.",
-                            b.total()
-                        )],
-                        tables: vec![table, windows],
-                        svgs: vec![],
-                    });
-                }
-                Err(e) => eprintln!("warning: no cost breakdown: {e}"),
-            }
-            if let Some((section, stats)) = residual_report(model, &solution) {
-                extra_sections.push(section);
-                extra_json.insert("residual_actuators".into(), stats);
-            }
-            if !record.parameters.is_empty() {
-                extra_sections.push(footfall::report::html::Section {
-                    heading: "Effects".into(),
-                    paragraphs: vec!["Effect parameters of the model; identified ones with an approximate standard deviation from the Gauss–Newton Hessian reduced to the constraints, s² = J/(N − p).".into()],
-                    tables: vec![parameter_table(&record.parameters)],
-                    svgs: vec![],
-                });
-            }
-            let out = super::gait_run::write(
-                GaitRun {
-                    command: "track",
-                    title: format!("footfall tracking — {} foot, {}", model.foot_name, data.name),
-                    data,
-                    model,
-                    sets,
-                    phases_path: phases,
-                    result: &res,
-                    solution: &solution,
-                    integrator,
-                    extra_summary: vec![],
-                    extra_json,
-                    extra_sections,
-                    extra_files: vec![("setup.json".into(), serde_json::to_string_pretty(&record)?.into_bytes())],
-                    transient_threshold_n: transient_threshold,
-                },
-                folder,
-            )?;
-            if !quiet {
-                if !record.parameters.is_empty() {
-                    eprintln!("{}", parameter_table(&record.parameters).to_markdown());
-                }
-                eprintln!("{}\n{}: J = {:.6}, KKT {:.2e}, {} iterations, {:.1} s", out.table.to_markdown(), res.status, res.objective, res.kkt, res.history.len().saturating_sub(1), res.seconds);
-                if let Some(f) = &out.fine {
-                    eprintln!(
-                        "1 ms re-integration: peak normal force {:.1} N (right), {:.1} N (left); largest Baumgarte force {:.1e} N; largest drift {:.2e} m",
-                        f.peak_normal_force_n[0], f.peak_normal_force_n[1], f.max_baumgarte_force_n, f.max_position_drift_m
-                    );
-                }
-                eprintln!("report: {}", out.path.join("report.html").display());
-            }
-            Ok(TrackedRun { converged, result: res, output: out, record })
+            self.write_run(tr, cycle, res, RunWriting { base, extra, folder, transient_threshold, quiet, provenance: None })
         })
+    }
+
+    /// Write the run folder of the solver result `res` of this problem's transcription
+    /// `tr` (solved by `track`, or re-evaluated by `report`).
+    pub fn write_run(&self, tr: &Transcription, cycle: &GaitCycle, res: footfall::sqp::SqpResult, how: RunWriting) -> anyhow::Result<TrackedRun> {
+        let TrackingProblem { model, sets, data, setup, phases, integrator, .. } = self;
+        let RunWriting { base, extra, folder, transient_threshold, quiet, provenance } = how;
+        let solution = GaitSolution::from_nlp(tr, &res.w, &cycle.continuous, setup.window.0);
+        let converged = res.status == SqpStatus::Converged;
+        let data_rows = setup.data_rows(model, sets, &cycle.continuous);
+        let sd = if model.ntheta() > 0 && converged {
+            parameter_sd(tr, &res.w, data_rows).unwrap_or_else(|e| {
+                eprintln!("warning: no parameter uncertainty: {e}");
+                vec![None; model.ntheta()]
+            })
+        } else {
+            vec![None; model.ntheta()]
+        };
+        let record = self.record(base, extra, &solution.theta, &sd);
+        let mut extra_json = serde_json::Map::new();
+        extra_json.insert("setup".into(), serde_json::to_value(&record)?);
+        extra_json.insert("data_residuals".into(), data_rows.into());
+        let mut extra_sections = Vec::new();
+        let mut extra_summary = Vec::new();
+        if let Some(p) = &provenance {
+            extra_summary.push(("report".into(), p.clone()));
+        }
+        let breakdown = match setup.cost_breakdown(model, sets, &cycle.continuous, &solution) {
+            Ok(b) => {
+                extra_json.insert("cost_breakdown".into(), serde_json::to_value(&b)?);
+                extra_sections.push(where_it_fails(&b, &solution));
+                Some(b)
+            }
+            Err(e) => {
+                eprintln!("warning: no cost breakdown: {e}");
+                None
+            }
+        };
+        let residuals = residual_report(model, &solution);
+        if let Some((section, stats)) = &residuals {
+            extra_sections.push(section.clone());
+            extra_json.insert("residual_actuators".into(), stats.clone());
+        }
+        if !record.parameters.is_empty() {
+            extra_sections.push(footfall::report::html::Section {
+                heading: "Effects".into(),
+                paragraphs: vec!["Effect parameters of the model; identified ones with an approximate standard deviation from the Gauss–Newton Hessian reduced to the constraints, s² = J/(N − p).".into()],
+                tables: vec![parameter_table(&record.parameters)],
+                svgs: vec![],
+            });
+        }
+        let out = super::gait_run::write(
+            GaitRun {
+                command: "track",
+                title: format!("footfall tracking — {} foot, {}", model.foot_name, data.name),
+                data,
+                model,
+                sets,
+                phases_path: phases,
+                result: &res,
+                solution: &solution,
+                integrator: integrator.clone(),
+                extra_summary,
+                extra_json,
+                extra_sections,
+                extra_files: vec![("setup.json".into(), serde_json::to_string_pretty(&record)?.into_bytes())],
+                transient_threshold_n: transient_threshold,
+            },
+            folder,
+        )?;
+        if !quiet {
+            if !record.parameters.is_empty() {
+                eprintln!("{}", parameter_table(&record.parameters).to_markdown());
+            }
+            eprintln!("{}\n{}: J = {:.6}, KKT {:.2e}, {} iterations, {:.1} s", out.table.to_markdown(), res.status, res.objective, res.kkt, res.history.len().saturating_sub(1), res.seconds);
+            if let Some(f) = &out.fine {
+                eprintln!(
+                    "1 ms re-integration: peak normal force {:.1} N (right), {:.1} N (left); largest Baumgarte force {:.1e} N; largest drift {:.2e} m",
+                    f.peak_normal_force_n[0], f.peak_normal_force_n[1], f.max_baumgarte_force_n, f.max_position_drift_m
+                );
+            }
+            eprintln!("report: {}", out.path.join("report.html").display());
+        }
+        Ok(TrackedRun { converged, result: res, output: out, record, breakdown, residuals: residuals.map(|r| r.0) })
+    }
+}
+
+/// How [`TrackingProblem::write_run`] writes a run.
+pub struct RunWriting<'a> {
+    /// The run without `extra` effects.
+    pub base: &'a TrackingRunSetup,
+    /// Effects added to `base`.
+    pub extra: &'a [EffectSpec],
+    /// Where to write.
+    pub folder: RunFolder,
+    /// Report ground-force excursions above the measurement larger than this (N).
+    pub transient_threshold: f64,
+    /// Print nothing.
+    pub quiet: bool,
+    /// Where the figures come from, when not from a solve just made.
+    pub provenance: Option<String>,
+}
+
+/// The report section on where the model fails: normalised error and cost share per
+/// channel and phase, the node cost over time with the phases shaded and the worst
+/// stretches.
+pub fn where_it_fails(b: &footfall::problems::track::CostBreakdown, solution: &GaitSolution) -> footfall::report::html::Section {
+    use footfall::report::plot::{LinePlot, LineStyle, Series, Span};
+    let (share, normalised, windows) = cost_tables(b);
+    let mut plot = LinePlot::new("Data cost per shooting node", "time (s)", "Σ weighted residual²");
+    let times: Vec<f64> = b.nodes.iter().map(|n| n.time).collect();
+    plot.series.push(Series::new("data cost", times.clone(), b.nodes.iter().map(|n| n.data).collect(), LineStyle::Solid));
+    plot.shaded = solution.phase_spans().iter().map(|p| Span::new(p.t0, p.t1, p.name.clone())).collect();
+    footfall::report::html::Section {
+        heading: "Where the model fails".into(),
+        paragraphs: vec![format!(
+            "The tracking cost J = {:.6} (weighted squared residuals at the nodes, seed eq. 18) by channel and phase: its share, and the normalised error (RMS of the weighted residual: the error in units of the channel's weighting scale). Below, the data cost of every node over time (phases shaded) and the stretches of five nodes where it is largest.",
+            b.total()
+        )],
+        tables: vec![share, normalised, windows],
+        svgs: vec![plot.to_svg()],
     }
 }
 
@@ -460,5 +522,9 @@ pub struct TrackedRun {
     pub output: super::gait_run::GaitRunOutput,
     /// The run's description.
     pub record: TrackingRunSetup,
+    /// Where the cost comes from (None when it could not be evaluated).
+    pub breakdown: Option<footfall::problems::track::CostBreakdown>,
+    /// The residual actuators' section, for a model that has them.
+    pub residuals: Option<footfall::report::html::Section>,
 }
 

@@ -269,6 +269,7 @@ impl TrackingSetup {
         let mut channels: Vec<String> = Vec::new();
         let mut phases = Vec::new();
         let mut cost: Vec<Vec<f64>> = Vec::new();
+        let mut rows: Vec<Vec<usize>> = Vec::new();
         let mut nodes = Vec::new();
         for (j, (tg, ph)) in self.targets.iter().zip(&solution.phases).enumerate() {
             phases.push(ph.name.clone());
@@ -291,13 +292,16 @@ impl TrackingSetup {
                         None => {
                             channels.push(label.clone());
                             cost.push(Vec::new());
+                            rows.push(Vec::new());
                             channels.len() - 1
                         }
                     };
                     if cost[c].len() <= j {
                         cost[c].resize(j + 1, 0.0);
+                        rows[c].resize(j + 1, 0);
                     }
                     cost[c][j] += value * value;
+                    rows[c][j] += 1;
                     if label != "excitations" && label != "activations" && !label.ends_with("residual") {
                         match node_data.iter_mut().find(|(l, _): &&mut (String, f64)| *l == label) {
                             Some(e) => e.1 += value * value,
@@ -311,7 +315,10 @@ impl TrackingSetup {
         for c in &mut cost {
             c.resize(phases.len(), 0.0);
         }
-        Ok(CostBreakdown { channels, phases, cost, nodes })
+        for r in &mut rows {
+            r.resize(phases.len(), 0);
+        }
+        Ok(CostBreakdown { channels, phases, cost, rows, nodes })
     }
 
     /// The tracking OCP: the walking cycle of `cycle` plus the node-wise residuals.
@@ -349,6 +356,8 @@ pub struct CostBreakdown {
     pub phases: Vec<String>,
     /// Cost `[channel][phase]` (Σ of squared weighted residuals).
     pub cost: Vec<Vec<f64>>,
+    /// Number of residual rows `[channel][phase]` behind each cost.
+    pub rows: Vec<Vec<usize>>,
     /// Per node: data cost and the channel contributing most.
     pub nodes: Vec<NodeCost>,
 }
@@ -370,6 +379,13 @@ impl CostBreakdown {
     /// Total cost.
     pub fn total(&self) -> f64 {
         self.cost.iter().flatten().sum()
+    }
+
+    /// Normalised error `[channel][phase]`: the RMS of the weighted residual, i.e. the
+    /// error in units of the channel's weighting scale (1 = an error as large as the
+    /// scale, e.g. π/4 for an angle); None where the channel has no rows in the phase.
+    pub fn normalised_rms(&self) -> Vec<Vec<Option<f64>>> {
+        self.cost.iter().zip(&self.rows).map(|(c, r)| c.iter().zip(r).map(|(&v, &n)| (n > 0).then(|| (v / n as f64).sqrt())).collect()).collect()
     }
 
     /// The `n` windows of `width` consecutive nodes with the largest data cost, not

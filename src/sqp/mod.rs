@@ -170,7 +170,7 @@ impl Default for SqpSettings {
 }
 
 /// Why the SQP stopped.
-#[derive(Debug, Clone, PartialEq, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum SqpStatus {
     /// KKT residual below tolerance.
@@ -208,7 +208,7 @@ impl std::fmt::Display for SqpStatus {
 }
 
 /// One iteration's figures.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct IterationRecord {
     /// Iteration number (0 = initial point).
     pub iter: usize,
@@ -227,7 +227,7 @@ pub struct IterationRecord {
 }
 
 /// A violated constraint at the final point.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Violation {
     /// Row name.
     pub name: String,
@@ -236,7 +236,7 @@ pub struct Violation {
 }
 
 /// Where the time of a solve went.
-#[derive(Debug, Clone, Copy, Default, Serialize)]
+#[derive(Debug, Clone, Copy, Default, Serialize, Deserialize)]
 pub struct SqpTimings {
     /// Seconds in NLP evaluations (integration, sensitivities, Hessians).
     pub evaluation_s: f64,
