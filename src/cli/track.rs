@@ -78,6 +78,11 @@ pub struct Args {
     /// unit²), so the model can follow the data and the residuals show what it lacks.
     #[arg(long)]
     residual_actuators: bool,
+    /// Weight of the excitation² and activation² regularisation terms (default: the
+    /// seed's 1e-3). Smaller weights let effort-costly parameters (slope, trunk mass)
+    /// move further from zero.
+    #[arg(long)]
+    regularisation: Option<f64>,
     /// Start from the solution of a track run (its folder or solution.json) of the same
     /// phase graph instead of the data; effect parameters it identified start at its values.
     #[arg(long)]
@@ -178,6 +183,13 @@ impl TrackingProblem {
         let mut setup = TrackingSetup::new(&model, &seq, &sets, &data).map_err(|e| anyhow!("{}: {e}", data.source.display()))?;
         if run.track_pelvis_position {
             setup.weights = setup.weights.clone().with_pelvis_position();
+        }
+        if let Some(w) = run.regularisation {
+            if !(w.is_finite() && w >= 0.0) {
+                return Err(anyhow!("--regularisation {w}: expected a finite weight ≥ 0 (the seed's is 1e-3)"));
+            }
+            setup.weights.excitation = w;
+            setup.weights.activation = w;
         }
         let integrator = IntegratorSettings { rtol: run.integrator_tol, atol: run.integrator_tol, ..Default::default() };
         integrator.validate().context("--integrator-tol")?;
@@ -330,6 +342,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         integrator_tol: args.integrator_tol,
         track_pelvis_position: args.track_pelvis_position,
         residual_actuators: args.residual_actuators,
+        regularisation: args.regularisation,
         effects: vec![],
         parameters: vec![],
     };

@@ -46,6 +46,10 @@ pub struct TrackingRunSetup {
     /// Whether the pelvis position is tracked too (`--track-pelvis-position`).
     #[serde(default)]
     pub track_pelvis_position: bool,
+    /// Weight of the excitation² and activation² regularisation (`None`: the seed's
+    /// 1e-3).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub regularisation: Option<f64>,
     /// Effects added on top of the model file (`--effect`).
     pub effects: Vec<EffectSpec>,
     /// Every effect parameter of the model at the solution.
