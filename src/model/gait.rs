@@ -136,6 +136,8 @@ pub struct GaitModel {
     residuals: Option<Vec<f64>>,
     /// Offsets of each effect's parameters in [`GaitModel::parameters`].
     effect_offsets: Vec<usize>,
+    /// Per contact: the effect that makes its normal contact compliant, if any.
+    compliant: Vec<Option<usize>>,
     params: Vec<ParamSpec>,
     free: Vec<usize>,
 }
@@ -263,7 +265,8 @@ impl GaitModel {
         };
         let coords: Vec<String> = COORDINATES.iter().map(|s| s.to_string()).collect();
         let bodies: Vec<String> = tree.bodies().iter().map(|b| b.name.clone()).collect();
-        let ctx = super::effects::BuildContext { coordinates: &coords, bodies: &bodies };
+        let primitives: Vec<String> = foot.primitives.iter().map(|p| p.name.clone()).collect();
+        let ctx = super::effects::BuildContext { coordinates: &coords, bodies: &bodies, primitives: &primitives };
         let mut effects = Vec::new();
         for (i, e) in spec.effects.iter().enumerate() {
             effects.extend(e.build(&ctx).map_err(|r| ModelError::invalid(model_path, format!("effects[{i}]"), r))?);
@@ -284,6 +287,10 @@ impl GaitModel {
             }
         }
         let free = params.iter().enumerate().filter(|(_, p)| p.free).map(|(i, _)| i).collect();
+        let compliant = contacts
+            .iter()
+            .map(|c| effects.iter().position(|e| e.compliant_primitive().is_some_and(|p| c.name.split_once('.').is_some_and(|(_, n)| n == p))))
+            .collect();
         let model = Self {
             name: spec.name.clone(),
             tree,
@@ -295,6 +302,7 @@ impl GaitModel {
             effects,
             residuals: None,
             effect_offsets,
+            compliant,
             params,
             free,
         };
@@ -574,6 +582,9 @@ impl GaitModel {
             let mut rep_rows = Vec::new();
             // geometry once per contact (a rolling contact has two rows)
             let mut geo: Vec<(usize, V2<S>, V2<S>)> = Vec::with_capacity(nc);
+            // compliant normal rows: an explicit force, not a constraint
+            let mut compliant_force = vec![S::c(0.0); nq];
+            let mut rigid = Vec::with_capacity(nc);
             for (r, row) in set.rows.iter().enumerate() {
                 let contact = &self.contacts[row.contact];
                 let (pt, bias) = match geo.iter().find(|g| g.0 == row.contact) {
@@ -595,36 +606,67 @@ impl GaitModel {
                 }
                 let gqd: S = (0..nq).map(|j| g[r * nq + j] * qd[j]).sum();
                 let phi = dot(n, pt) - ground_h;
+                rep_rows.push(([pt[0].value(), pt[1].value()], phi.value(), gqd.value()));
+                if let (RowKind::Normal, Some(eff)) = (row.kind, self.compliant[row.contact]) {
+                    // depth below the ground and its rate: the pad's compression
+                    lambda[r] = S::normal_force(self.effects[eff].as_ref(), self.effect_params(&p, eff), -phi, -gqd);
+                    for j in 0..nq {
+                        compliant_force[j] += g[r * nq + j] * lambda[r];
+                    }
+                    continue;
+                }
                 let stab = match row.kind {
                     RowKind::Normal => gqd * (2.0 * cs.baumgarte_alpha) + phi * (cs.baumgarte_beta * cs.baumgarte_beta),
                     RowKind::Tangential => gqd * cs.baumgarte_gamma,
                 };
                 b[r] = -dot(e, gdot_qd_vec) - stab;
                 b_baum[r] = -stab.value();
-                rep_rows.push(([pt[0].value(), pt[1].value()], phi.value(), gqd.value()));
+                rigid.push(r);
             }
-            let (y, amat, amat_f64) = schur_complement(&m, nq, &g, nc, &set.name)?;
-            for i in 0..nc {
-                let gq: S = (0..nq).map(|l| g[i * nq + l] * qdd[l]).sum();
-                lambda[i] = b[i] - gq;
+            if rigid.len() < nc {
+                cholesky_solve(&m, nq, &mut compliant_force);
+                for (a, f) in qdd.iter_mut().zip(&compliant_force) {
+                    *a += *f;
+                }
             }
-            cholesky_solve(&amat, nc, lambda);
-            for i in 0..nc {
-                for l in 0..nq {
-                    qdd[l] += y[i * nq + l] * lambda[i];
+            let nr = rigid.len();
+            let mut b_baum_rigid = vec![0.0; nr];
+            if nr > 0 {
+                let g_rigid: Vec<S> = rigid.iter().flat_map(|&r| g[r * nq..(r + 1) * nq].iter().copied()).collect();
+                let (y, amat, amat_f64) = schur_complement(&m, nq, &g_rigid, nr, &set.name)?;
+                let mut lam_rigid: Vec<S> = rigid
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &r)| {
+                        let gq: S = (0..nq).map(|l| g_rigid[i * nq + l] * qdd[l]).sum();
+                        b[r] - gq
+                    })
+                    .collect();
+                cholesky_solve(&amat, nr, &mut lam_rigid);
+                for i in 0..nr {
+                    for l in 0..nq {
+                        qdd[l] += y[i * nq + l] * lam_rigid[i];
+                    }
+                    lambda[rigid[i]] = lam_rigid[i];
+                }
+                if report.is_some() {
+                    let mut af = amat_f64;
+                    b_baum_rigid = rigid.iter().map(|&r| b_baum[r]).collect();
+                    if cholesky(&mut af, nr, 1e-10).is_ok() {
+                        cholesky_solve(&af, nr, &mut b_baum_rigid);
+                    }
                 }
             }
             if let Some(rep) = report {
-                let mut af = amat_f64;
-                let mut lb = b_baum;
-                if cholesky(&mut af, nc, 1e-10).is_ok() {
-                    cholesky_solve(&af, nc, &mut lb);
+                let mut baum = vec![0.0; nc];
+                for (i, &r) in rigid.iter().enumerate() {
+                    baum[r] = b_baum_rigid[i];
                 }
                 rep.points = rep_rows.iter().map(|r| r.0).collect();
                 rep.position_error = rep_rows.iter().map(|r| r.1).collect();
                 rep.velocity_error = rep_rows.iter().map(|r| r.2).collect();
                 rep.lambda = lambda.iter().map(|v| v.value()).collect();
-                rep.baumgarte_force = lb;
+                rep.baumgarte_force = baum;
             }
         } else if let Some(rep) = report {
             *rep = ContactReport::default();
@@ -658,18 +700,42 @@ impl GaitModel {
         let mut c = vec![S::c(0.0); nq];
         self.tree.mass_matrix_and_bias(&k, &inertia, gravity, &mut m, &mut c);
         cholesky(&mut m, nq, 1e-14).map_err(|e| DynamicsError::MassMatrix { pivot: e.pivot })?;
-        let g = self.constraint_jacobian(&k, set_after, n);
-        let nc = set_after.rows.len();
+        // a compliant normal contact takes no impulse: its pad is compressed from here on
+        let (rigid, idx) = self.rigid_rows(set_after);
+        let g = self.constraint_jacobian(&k, &rigid, n);
+        let nc = rigid.rows.len();
+        let mut qd_plus = qd_minus.to_vec();
+        let mut impulses = vec![S::c(0.0); set_after.rows.len()];
+        if nc == 0 {
+            return Ok((qd_plus, impulses));
+        }
         let (y, amat, _) = schur_complement(&m, nq, &g, nc, &set_after.name)?;
         let mut imp: Vec<S> = (0..nc).map(|i| -(0..nq).map(|l| g[i * nq + l] * qd_minus[l]).sum::<S>()).collect();
         cholesky_solve(&amat, nc, &mut imp);
-        let mut qd_plus = qd_minus.to_vec();
         for i in 0..nc {
             for l in 0..nq {
                 qd_plus[l] += y[i * nq + l] * imp[i];
             }
+            impulses[idx[i]] = imp[i];
         }
-        Ok((qd_plus, imp))
+        Ok((qd_plus, impulses))
+    }
+
+    /// The rows of `set` that are rigid constraints (all but the normal rows of compliant
+    /// contacts), and each one's index in `set`.
+    pub fn rigid_rows(&self, set: &ConstraintSet) -> (ConstraintSet, Vec<usize>) {
+        let idx: Vec<usize> = (0..set.rows.len()).filter(|&r| !self.is_compliant_row(&set.rows[r])).collect();
+        (ConstraintSet { name: set.name.clone(), rows: idx.iter().map(|&r| set.rows[r]).collect() }, idx)
+    }
+
+    /// Whether `row` is the normal row of a compliant contact (a force, not a constraint).
+    pub fn is_compliant_row(&self, row: &ConstraintRow) -> bool {
+        row.kind == RowKind::Normal && self.compliant[row.contact].is_some()
+    }
+
+    /// Whether contact `c` has a compliant normal contact.
+    pub fn is_compliant(&self, c: usize) -> bool {
+        self.compliant[c].is_some()
     }
 
     fn constraint_jacobian<S: Scalar>(&self, k: &Kinematics<S>, set: &ConstraintSet, n: V2<S>) -> Vec<S> {
@@ -695,6 +761,8 @@ impl GaitModel {
     pub fn dependent_row(&self, set: &ConstraintSet) -> Option<usize> {
         let q = [0.0, 1.0, 0.0, 0.1, -0.2, 0.05, -0.1, -0.3, 0.1];
         let nq = self.nq();
+        // only rigid rows constrain (a compliant contact's normal row is a force)
+        let (set, idx) = &self.rigid_rows(set);
         let g = self.constraint_jacobian_at(set, &q[..nq.min(9)], &self.theta0());
         let nc = set.rows.len();
         let mut a = vec![0.0; nc * nc];
@@ -703,7 +771,7 @@ impl GaitModel {
                 a[i * nc + j] = (0..nq).map(|l| g[i * nq + l] * g[j * nq + l]).sum();
             }
         }
-        cholesky(&mut a, nc, 1e-10).err().map(|e| e.pivot)
+        cholesky(&mut a, nc, 1e-10).err().map(|e| idx[e.pivot])
     }
 
     /// Project a state onto the constraint manifold of `set` (seed §3.6: the initial
@@ -714,7 +782,8 @@ impl GaitModel {
     pub fn project(&self, set: &ConstraintSet, q: &[f64], qd: &[f64], theta: &[f64]) -> Result<(Vec<f64>, Vec<f64>, f64), DynamicsError> {
         let nq = self.nq();
         let mut q = q.to_vec();
-        let normal: Vec<usize> = (0..set.rows.len()).filter(|&r| set.rows[r].kind == RowKind::Normal).collect();
+        // compliant contacts are left where they are (their pad holds them, not a constraint)
+        let normal: Vec<usize> = (0..set.rows.len()).filter(|&r| set.rows[r].kind == RowKind::Normal && !self.is_compliant_row(&set.rows[r])).collect();
         let nn = normal.len();
         let mut worst = 0.0;
         for _ in 0..50 {

@@ -238,8 +238,12 @@ fn gait_ocp<'a>(
         // clearance of every primitive not in contact, at every node
         if spec.clearance {
             let active: Vec<usize> = set.rows.iter().map(|r| r.contact).collect();
+            // a compliant contact leaves the ground when its pad force vanishes, with the pad
+            // still compressed: no clearance at the first node after it was in contact
+            let was_active: Vec<usize> = if j > 0 { sets[cont[j - 1].0].rows.iter().map(|r| r.contact).collect() } else { Vec::new() };
             for (c, _) in model.contacts.iter().enumerate().filter(|(c, _)| !active.contains(c)) {
-                for k in 0..=n {
+                let first = if model.is_compliant(c) && was_active.contains(&c) { 1 } else { 0 };
+                for k in first..=n {
                     constraints.push(gap_constraint(model, c, j, k, "clearance", 0.0, f64::INFINITY));
                 }
             }

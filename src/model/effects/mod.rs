@@ -6,7 +6,7 @@
 //! usable as a trait object; [`ModelScalar`] routes generic model code to it.
 //!
 //! Two kinds of hooks exist: *model* hooks change the dynamics (inertia, gravity, ground,
-//! generalised forces) and *measurement* hooks change how the model is compared with the
+//! generalised forces, a compliant contact) and *measurement* hooks change how the model is compared with the
 //! data (a clock offset of the force plates, an offset of their centre of pressure).
 //!
 //! A user adds an effect with one entry in the model JSON (`"effects": [{"type": …}]`)
@@ -16,7 +16,7 @@
 mod kinds;
 mod spec;
 
-pub use kinds::{CopOffset, ForcePlateTimeOffset, GroundSlope, PassiveJointStiffness, TrunkMass};
+pub use kinds::{CopOffset, ForcePlateTimeOffset, GroundSlope, HeelPadCompliance, PassiveJointStiffness, TrunkMass};
 pub use spec::{catalog, BuildContext, EffectSpec};
 
 use super::ad::{AdChunk, AdNested};
@@ -94,6 +94,17 @@ pub trait Effect: std::fmt::Debug + Send + Sync {
     fn is_measurement(&self) -> bool {
         false
     }
+    /// Name of the contact primitive (on both feet, e.g. `heel`) whose normal contact
+    /// this effect makes compliant: its normal row is then no rigid constraint but the
+    /// force [`normal_force`](Self::normal_force) (default: none).
+    fn compliant_primitive(&self) -> Option<&str> {
+        None
+    }
+    /// Normal force (N) of a compliant contact at penetration `depth` (m, > 0 into the
+    /// ground) and penetration rate `rate` (m/s).
+    fn normal_force<S: Scalar>(&self, _p: &[S], _depth: S, _rate: S) -> S {
+        S::c(0.0)
+    }
 }
 
 /// Object-safe form of [`Effect`], implemented for every effect. The methods are
@@ -115,6 +126,11 @@ pub trait DynEffect: std::fmt::Debug + Send + Sync {
     fn measurement_chunk(&self, p: &[AdChunk], m: &mut MeasurementAdjust<AdChunk>);
     fn measurement_nested(&self, p: &[AdNested], m: &mut MeasurementAdjust<AdNested>);
     fn is_measurement(&self) -> bool;
+    fn compliant_primitive(&self) -> Option<&str>;
+    fn normal_force_f64(&self, p: &[f64], depth: f64, rate: f64) -> f64;
+    fn normal_force_dual(&self, p: &[Dual64], depth: Dual64, rate: Dual64) -> Dual64;
+    fn normal_force_chunk(&self, p: &[AdChunk], depth: AdChunk, rate: AdChunk) -> AdChunk;
+    fn normal_force_nested(&self, p: &[AdNested], depth: AdNested, rate: AdNested) -> AdNested;
 }
 
 impl<E: Effect> DynEffect for E {
@@ -163,6 +179,21 @@ impl<E: Effect> DynEffect for E {
     fn is_measurement(&self) -> bool {
         Effect::is_measurement(self)
     }
+    fn compliant_primitive(&self) -> Option<&str> {
+        Effect::compliant_primitive(self)
+    }
+    fn normal_force_f64(&self, p: &[f64], depth: f64, rate: f64) -> f64 {
+        self.normal_force(p, depth, rate)
+    }
+    fn normal_force_dual(&self, p: &[Dual64], depth: Dual64, rate: Dual64) -> Dual64 {
+        self.normal_force(p, depth, rate)
+    }
+    fn normal_force_chunk(&self, p: &[AdChunk], depth: AdChunk, rate: AdChunk) -> AdChunk {
+        self.normal_force(p, depth, rate)
+    }
+    fn normal_force_nested(&self, p: &[AdNested], depth: AdNested, rate: AdNested) -> AdNested {
+        self.normal_force(p, depth, rate)
+    }
 }
 
 /// The scalar types the model's dynamics can be evaluated in (those [`DynEffect`] has a
@@ -174,10 +205,12 @@ pub trait ModelScalar: Scalar {
     fn forces(e: &dyn DynEffect, p: &[Self], x: EffectState<'_, Self>, tau: &mut [Self]);
     /// Route to the effect's measurement adjustment for this scalar type.
     fn measurement(e: &dyn DynEffect, p: &[Self], m: &mut MeasurementAdjust<Self>);
+    /// Route to the effect's compliant normal force for this scalar type.
+    fn normal_force(e: &dyn DynEffect, p: &[Self], depth: Self, rate: Self) -> Self;
 }
 
 macro_rules! model_scalar {
-    ($t:ty, $adj:ident, $frc:ident, $mea:ident) => {
+    ($t:ty, $adj:ident, $frc:ident, $mea:ident, $nf:ident) => {
         impl ModelScalar for $t {
             fn adjust(e: &dyn DynEffect, p: &[Self], m: &mut ModelAdjust<'_, Self>) {
                 e.$adj(p, m)
@@ -188,11 +221,14 @@ macro_rules! model_scalar {
             fn measurement(e: &dyn DynEffect, p: &[Self], m: &mut MeasurementAdjust<Self>) {
                 e.$mea(p, m)
             }
+            fn normal_force(e: &dyn DynEffect, p: &[Self], depth: Self, rate: Self) -> Self {
+                e.$nf(p, depth, rate)
+            }
         }
     };
 }
-model_scalar!(f64, adjust_f64, forces_f64, measurement_f64);
-model_scalar!(Dual64, adjust_dual, forces_dual, measurement_dual);
-model_scalar!(AdChunk, adjust_chunk, forces_chunk, measurement_chunk);
-model_scalar!(AdNested, adjust_nested, forces_nested, measurement_nested);
+model_scalar!(f64, adjust_f64, forces_f64, measurement_f64, normal_force_f64);
+model_scalar!(Dual64, adjust_dual, forces_dual, measurement_dual, normal_force_dual);
+model_scalar!(AdChunk, adjust_chunk, forces_chunk, measurement_chunk, normal_force_chunk);
+model_scalar!(AdNested, adjust_nested, forces_nested, measurement_nested, normal_force_nested);
 

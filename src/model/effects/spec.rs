@@ -1,7 +1,7 @@
 //! Effects as written in a model JSON file or on the command line, and the catalog of
 //! candidate effects `footfall diagnose` tries.
 
-use super::kinds::{CopOffset, ForcePlateTimeOffset, GroundSlope, PassiveJointStiffness, TrunkMass};
+use super::kinds::{CopOffset, ForcePlateTimeOffset, GroundSlope, HeelPadCompliance, PassiveJointStiffness, TrunkMass};
 use super::DynEffect;
 use serde::{Deserialize, Serialize};
 
@@ -12,6 +12,8 @@ pub struct BuildContext<'a> {
     pub coordinates: &'a [String],
     /// Body names, in order.
     pub bodies: &'a [String],
+    /// Names of the foot's contact primitives (without the side prefix).
+    pub primitives: &'a [String],
 }
 
 /// An effect as written in a model JSON file (`{"type": "ground_slope", "angle": 0.02}`).
@@ -77,6 +79,33 @@ pub enum EffectSpec {
         #[serde(default)]
         free: Vec<String>,
     },
+    /// [`HeelPadCompliance`].
+    HeelPadCompliance {
+        /// The foot's primitive the pad is under (default `heel`).
+        #[serde(default = "heel")]
+        primitive: String,
+        /// Pad stiffness (N/mm; default 1000, nearly rigid: 0.7 mm under body weight).
+        #[serde(default = "default_pad_stiffness")]
+        stiffness: f64,
+        /// Pad damping (N·s/mm; default 1).
+        #[serde(default = "default_pad_damping")]
+        damping: f64,
+        /// Any of `stiffness`, `damping`.
+        #[serde(default)]
+        free: Vec<String>,
+    },
+}
+
+fn heel() -> String {
+    "heel".into()
+}
+
+fn default_pad_stiffness() -> f64 {
+    1000.0
+}
+
+fn default_pad_damping() -> f64 {
+    1.0
 }
 
 fn both() -> String {
@@ -84,7 +113,7 @@ fn both() -> String {
 }
 
 /// The names that may appear on the command line: `--effect NAME[:key=value,…]`.
-pub const EFFECT_KINDS: [&str; 5] = ["ground_slope", "trunk_mass", "passive_joint_stiffness", "force_plate_time_offset", "cop_offset"];
+pub const EFFECT_KINDS: [&str; 6] = ["ground_slope", "trunk_mass", "passive_joint_stiffness", "force_plate_time_offset", "cop_offset", "heel_pad_compliance"];
 
 impl EffectSpec {
     /// Kind name as in JSON.
@@ -95,6 +124,7 @@ impl EffectSpec {
             EffectSpec::TrunkMass { .. } => "trunk_mass",
             EffectSpec::ForcePlateTimeOffset { .. } => "force_plate_time_offset",
             EffectSpec::CopOffset { .. } => "cop_offset",
+            EffectSpec::HeelPadCompliance { .. } => "heel_pad_compliance",
         }
     }
 
@@ -107,6 +137,7 @@ impl EffectSpec {
             EffectSpec::TrunkMass { .. } => "trunk mass and COM offset".into(),
             EffectSpec::ForcePlateTimeOffset { .. } => "force-plate time offset".into(),
             EffectSpec::CopOffset { .. } => "CoP offset".into(),
+            EffectSpec::HeelPadCompliance { .. } => "heel-pad compliance".into(),
         }
     }
 
@@ -123,6 +154,9 @@ impl EffectSpec {
             }
             EffectSpec::ForcePlateTimeOffset { offset, .. } => vec![("offset", *offset, ForcePlateTimeOffset::BOUNDS)],
             EffectSpec::CopOffset { offset, .. } => vec![("offset", *offset, CopOffset::BOUNDS)],
+            EffectSpec::HeelPadCompliance { stiffness, damping, .. } => {
+                vec![("stiffness", *stiffness, HeelPadCompliance::STIFFNESS_BOUNDS), ("damping", *damping, HeelPadCompliance::DAMPING_BOUNDS)]
+            }
         }
     }
 
@@ -132,7 +166,8 @@ impl EffectSpec {
             | EffectSpec::GroundSlope { free, .. }
             | EffectSpec::TrunkMass { free, .. }
             | EffectSpec::ForcePlateTimeOffset { free, .. }
-            | EffectSpec::CopOffset { free, .. } => free,
+            | EffectSpec::CopOffset { free, .. }
+            | EffectSpec::HeelPadCompliance { free, .. } => free,
         }
     }
 
@@ -142,7 +177,8 @@ impl EffectSpec {
             | EffectSpec::GroundSlope { free, .. }
             | EffectSpec::TrunkMass { free, .. }
             | EffectSpec::ForcePlateTimeOffset { free, .. }
-            | EffectSpec::CopOffset { free, .. } => free,
+            | EffectSpec::CopOffset { free, .. }
+            | EffectSpec::HeelPadCompliance { free, .. } => free,
         }
     }
 
@@ -261,6 +297,12 @@ impl EffectSpec {
                 vec![Box::new(ForcePlateTimeOffset::new(*offset, self.is_free("offset")))]
             }
             EffectSpec::CopOffset { offset, .. } => vec![Box::new(CopOffset::new(*offset, self.is_free("offset")))],
+            EffectSpec::HeelPadCompliance { primitive, stiffness, damping, .. } => {
+                if !ctx.primitives.contains(primitive) {
+                    return Err(format!("primitive: this foot has no primitive '{primitive}' (it has: {}); the pad goes under a heel circle", ctx.primitives.join(", ")));
+                }
+                vec![Box::new(HeelPadCompliance::new(primitive, *stiffness, *damping, self.is_free("stiffness"), self.is_free("damping")))]
+            }
         })
     }
 
