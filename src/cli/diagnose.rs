@@ -106,6 +106,9 @@ fn sentence(label: &str, diff: &RunDiff) -> String {
     s
 }
 
+/// Why heel-pad compliance is not scored, and what to do instead (followed by the run).
+const UNSCORABLE_PAD: &str = "not scored — the rigid heel is its limit of infinite stiffness, so it has no null value a score test could start from; re-fit it with `footfall track --foot … --effect heel_pad_compliance` and compare with `footfall diff`, from";
+
 fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     let setup = read_run_setup(&args.run)?;
     let solution = super::predict::read_solution(&args.run)?;
@@ -130,9 +133,19 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     }
     let mut tests = Vec::new();
     let mut skipped = Vec::new();
+    let pad = EffectSpec::parse_cli("heel_pad_compliance").map_err(|e| anyhow!(e))?;
+    let unscorable = |c: &EffectSpec| c.kind() == pad.kind();
+    let has_heel = base.model.contacts.iter().any(|c| c.name.ends_with(".heel"));
+    if args.candidates.is_empty() && has_heel && !setup.effects.iter().any(|e| e.overlaps(&pad)) {
+        skipped.push(format!("{}: {UNSCORABLE_PAD} --init {}", pad.label(), args.run.display()));
+    }
     for c in &candidates {
         if setup.effects.iter().any(|e| e.overlaps(c)) {
             skipped.push(format!("{}: already in the model", c.label()));
+            continue;
+        }
+        if unscorable(c) {
+            skipped.push(format!("{}: {UNSCORABLE_PAD} --init {}", c.label(), args.run.display()));
             continue;
         }
         let mut prob = match TrackingProblem::build(&setup, std::slice::from_ref(c)) {
