@@ -149,9 +149,10 @@ pub struct ContactReport {
     pub points: Vec<[f64; 2]>,
     /// Constraint force along each row (N).
     pub lambda: Vec<f64>,
-    /// Normal position error φ of each row's primitive (m; meaningful on normal rows).
+    /// Normal position error φ of each row's primitive (m; meaningful on normal rows;
+    /// 0 on a compliant contact's normal row, whose depth is its pad's compression).
     pub position_error: Vec<f64>,
-    /// Velocity error `G q̇` of each row (m/s).
+    /// Velocity error `G q̇` of each row (m/s; 0 on a compliant contact's normal row).
     pub velocity_error: Vec<f64>,
     /// Part of λ caused by the Baumgarte terms (N).
     pub baumgarte_force: Vec<f64>,
@@ -662,9 +663,11 @@ impl GaitModel {
                 for (i, &r) in rigid.iter().enumerate() {
                     baum[r] = b_baum_rigid[i];
                 }
+                // a compliant row's depth is its pad's compression, not a constraint error
+                let rigid_or_zero = |r: usize, v: f64| if self.is_compliant_row(&set.rows[r]) { 0.0 } else { v };
                 rep.points = rep_rows.iter().map(|r| r.0).collect();
-                rep.position_error = rep_rows.iter().map(|r| r.1).collect();
-                rep.velocity_error = rep_rows.iter().map(|r| r.2).collect();
+                rep.position_error = rep_rows.iter().enumerate().map(|(r, x)| rigid_or_zero(r, x.1)).collect();
+                rep.velocity_error = rep_rows.iter().enumerate().map(|(r, x)| rigid_or_zero(r, x.2)).collect();
                 rep.lambda = lambda.iter().map(|v| v.value()).collect();
                 rep.baumgarte_force = baum;
             }
