@@ -18,13 +18,15 @@ pub struct Args {
     /// The solution that drives the model: a track or predict run folder (or its solution.json).
     #[arg(long)]
     from: PathBuf,
-    /// Model file (must be the one the solution was found with).
-    #[arg(long, default_value = "models/opensim_subject01.json")]
-    model: PathBuf,
-    /// Foot: `ellipse`, `double-circle` or a foot file (the solution's).
-    #[arg(long, default_value = "ellipse")]
-    foot: String,
-    /// Phase graph (default: the seed's graph for the bundled feet).
+    /// Model file (must be the one the solution was found with; default: the one the
+    /// `--from` track run's setup.json names, else models/opensim_subject01.json).
+    #[arg(long)]
+    model: Option<PathBuf>,
+    /// Foot: `ellipse`, `double-circle` or a foot file (the solution's; default: the
+    /// `--from` track run's, else ellipse).
+    #[arg(long)]
+    foot: Option<String>,
+    /// Phase graph (default: the `--from` track run's, else the seed's graph for the foot).
     #[arg(long)]
     phases: Option<PathBuf>,
     /// Sampling rate (Hz).
@@ -87,8 +89,12 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         }
     }
     let mut solution = super::predict::read_solution(&args.from)?;
-    let mut model = GaitModel::load(&args.model, &super::simulate::foot_path(&args.foot))?;
-    let mut phases = args.phases.clone().unwrap_or_else(|| super::predict::default_phases(&args.foot));
+    // what the --from run was made with, unless given
+    let from_setup = if args.from.is_dir() && args.from.join("setup.json").is_file() { Some(super::track::read_run_setup(&args.from)?) } else { None };
+    let model_path = args.model.clone().or_else(|| from_setup.as_ref().map(|s| s.model.clone())).unwrap_or_else(|| PathBuf::from("models/opensim_subject01.json"));
+    let foot = args.foot.clone().or_else(|| from_setup.as_ref().map(|s| s.foot.clone())).unwrap_or_else(|| "ellipse".into());
+    let mut model = GaitModel::load(&model_path, &super::simulate::foot_path(&foot))?;
+    let mut phases = args.phases.clone().or_else(|| from_setup.as_ref().map(|s| s.phases.clone())).unwrap_or_else(|| super::predict::default_phases(&foot));
     if !model_effects.is_empty() {
         // the truth: the --from run's problem re-solved with the effects in the model
         let run = super::track::read_run_setup(&args.from).context("--hidden-effect with a model effect needs a track run folder as --from")?;
@@ -141,7 +147,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     let (clean_csv, _) = write_sagittal_csv(&truth.clean);
     let truth_json = serde_json::json!({
         "from": args.from,
-        "model": args.model,
+        "model": model_path,
         "foot": model.foot_name,
         "phases": phases,
         "hidden_effects": hidden,
