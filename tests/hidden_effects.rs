@@ -4,7 +4,8 @@
 //! identified parameter is the truth.
 //!
 //! The trials (tests/data/hidden/, made by tools/make-hidden-effect-data) are `synth`
-//! runs driven by the ellipse tracking solution of the bundled trial with the default
+//! runs driven by the ellipse tracking solution of the bundled trial (the heel pad's and
+//! its floor's by the double-circle one) with the default
 //! noise (0.5°, 2 mm, 5 N, 5 mm at 100 Hz). The *noise floor* of a channel is the mean
 //! error the exact model reaches on the same kind of trial with no hidden effect (the
 //! trial `none`): the seed's cost, with its u² and a² regularisation and spline
@@ -44,14 +45,36 @@ fn channel_means(run: &Path) -> Vec<(String, f64)> {
         .collect()
 }
 
-/// Track trial `name` with the plain model, starting from the bundled trial's solution;
-/// with `pelvis`, the pelvis position is tracked too.
-fn baseline(name: &str, dir: &Path, pelvis: bool) -> PathBuf {
+/// How a trial is tracked: the seed's cost with the ellipse foot, the same with the
+/// pelvis position tracked, or the seed's cost with the double-circle foot (whose heel
+/// circle the heel pad needs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Setup {
+    Seed,
+    Pelvis,
+    DoubleCircle,
+}
+
+impl Setup {
+    fn index(self) -> usize {
+        self as usize
+    }
+    /// The trial without a hidden effect (the noise floor's).
+    fn none(self) -> &'static str {
+        if self == Setup::DoubleCircle { "double_circle_none" } else { "none" }
+    }
+}
+
+/// Track trial `name` with the plain model, starting from the bundled trial's solution
+/// of the same foot.
+fn baseline(name: &str, dir: &Path, how: Setup) -> PathBuf {
     let data = root().join("tests/data/hidden").join(name).join("synthetic.csv");
     let out = dir.join(name);
-    let mut args = vec!["track", "--data", s(&data), "--kinematics-cutoff", "10", "--init", "tests/data/hidden/base", "--out", s(&out)];
-    if pelvis {
-        args.push("--track-pelvis-position");
+    let mut args = vec!["track", "--data", s(&data), "--kinematics-cutoff", "10", "--out", s(&out)];
+    match how {
+        Setup::Seed => args.extend(["--init", "tests/data/hidden/base"]),
+        Setup::Pelvis => args.extend(["--init", "tests/data/hidden/base", "--track-pelvis-position"]),
+        Setup::DoubleCircle => args.extend(["--foot", "double-circle", "--init", "tests/data/hidden/double_circle_base"]),
     }
     let o = footfall(&args);
     assert!(o.status.success(), "track {name}: {}", String::from_utf8_lossy(&o.stderr));
@@ -70,13 +93,12 @@ fn diagnose(run: &Path, verify: usize) -> Value {
 type Floor = (Vec<(String, f64)>, Value);
 
 /// The noise floor (mean error per channel on the trial without a hidden effect) and
-/// the diagnosis of that trial, computed once for all tests (per cost: with or without
-/// the pelvis position tracked).
-fn floor(pelvis: bool) -> &'static Floor {
-    static FLOOR: [OnceLock<Floor>; 2] = [OnceLock::new(), OnceLock::new()];
-    FLOOR[usize::from(pelvis)].get_or_init(|| {
+/// the diagnosis of that trial, computed once for all tests (per setup).
+fn floor(how: Setup) -> &'static Floor {
+    static FLOOR: [OnceLock<Floor>; 3] = [OnceLock::new(), OnceLock::new(), OnceLock::new()];
+    FLOOR[how.index()].get_or_init(|| {
         let dir = tempfile::tempdir().unwrap().keep();
-        let run = baseline("none", &dir, pelvis);
+        let run = baseline(how.none(), &dir, how);
         let d = diagnose(&run, 1);
         (channel_means(&run), d)
     })
@@ -100,8 +122,8 @@ fn hidden_values(name: &str) -> Vec<(String, String, f64)> {
 }
 
 /// Every channel's mean error within `factor` × the floor.
-fn within_floor(run: &Path, factor: f64, pelvis: bool) -> Result<(), String> {
-    let (floor, _) = floor(pelvis);
+fn within_floor(run: &Path, factor: f64, how: Setup) -> Result<(), String> {
+    let (floor, _) = floor(how);
     let mut bad = Vec::new();
     for ((c, e), (_, f)) in channel_means(run).iter().zip(floor) {
         if *e > factor * f {
@@ -135,10 +157,10 @@ fn check_parameters(verified: &Value, hidden: &[(String, String, f64)], unchecke
 
 /// One hidden effect: baseline above the floor, ranked first, re-fit at the floor with
 /// the truth identified.
-fn single_effect(name: &str, pelvis: bool, unchecked: &[&str], floor_factor: f64) {
+fn single_effect(name: &str, how: Setup, unchecked: &[&str], floor_factor: f64) {
     let dir = tempfile::tempdir().unwrap();
-    let run = baseline(name, dir.path(), pelvis);
-    assert!(within_floor(&run, 1.5, pelvis).is_err(), "{name}: the hidden effect does not show above the noise floor");
+    let run = baseline(name, dir.path(), how);
+    assert!(within_floor(&run, 1.5, how).is_err(), "{name}: the hidden effect does not show above the noise floor");
     let d = diagnose(&run, 1);
     assert_eq!(d["ranking"][0]["effect"]["type"], name, "{name}: ranked first is {}", d["ranking"][0]["label"]);
     assert_eq!(d["ranking"][0]["significant"], true);
@@ -148,9 +170,9 @@ fn single_effect(name: &str, pelvis: bool, unchecked: &[&str], floor_factor: f64
     check_parameters(v, &hidden_values(name), unchecked);
     let refit = PathBuf::from(v["folder"].as_str().unwrap());
     for ((c, before), (_, after)) in channel_means(&run).iter().zip(channel_means(&root().join(&refit))) {
-        eprintln!("{c}: {before:.3} → {after:.3} (floor ×{:.2})", after / floor(pelvis).0.iter().find(|f| f.0 == *c).map_or(f64::NAN, |f| f.1));
+        eprintln!("{c}: {before:.3} → {after:.3} (floor ×{:.2})", after / floor(how).0.iter().find(|f| f.0 == *c).map_or(f64::NAN, |f| f.1));
     }
-    within_floor(&root().join(&refit), floor_factor, pelvis).unwrap_or_else(|e| panic!("{name}: after the re-fit {e}"));
+    within_floor(&root().join(&refit), floor_factor, how).unwrap_or_else(|e| panic!("{name}: after the re-fit {e}"));
     if name == "ground_slope" {
         // the diagnosis report renders with its ranking, the before/after table and plot
         let url = format!("file://{}-diagnose/report.html", run.display());
@@ -164,9 +186,9 @@ fn single_effect(name: &str, pelvis: bool, unchecked: &[&str], floor_factor: f64
 
 #[test]
 fn without_a_hidden_effect_nothing_is_significant() {
-    for pelvis in [false, true] {
-        let (floor, d) = floor(pelvis);
-        eprintln!("noise floor (pelvis position tracked: {pelvis}): {floor:?}");
+    for how in [Setup::Seed, Setup::Pelvis, Setup::DoubleCircle] {
+        let (floor, d) = floor(how);
+        eprintln!("noise floor ({how:?}): {floor:?}");
         assert_eq!(d["significant"], 0, "an effect was invented: {}", d["verdict"]);
         assert!(d["verified"].as_array().unwrap().is_empty());
     }
@@ -174,7 +196,7 @@ fn without_a_hidden_effect_nothing_is_significant() {
 
 #[test]
 fn hidden_ground_slope_is_found_and_identified() {
-    single_effect("ground_slope", false, &[], 1.5);
+    single_effect("ground_slope", Setup::Seed, &[], 1.5);
 }
 
 /// The trunk mass and COM offset are found (ranked first) but the COM offset is not
@@ -187,17 +209,17 @@ fn hidden_ground_slope_is_found_and_identified() {
 /// NOT met here: the offset is printed, not asserted, and the floor is held at 2×.
 #[test]
 fn hidden_trunk_mass_is_found_and_identified() {
-    single_effect("trunk_mass", false, &["trunk_mass.com_offset"], 2.0);
+    single_effect("trunk_mass", Setup::Seed, &["trunk_mass.com_offset"], 2.0);
 }
 
 #[test]
 fn hidden_knee_stiffness_is_found_and_identified() {
-    single_effect("passive_joint_stiffness", false, &[], 1.5);
+    single_effect("passive_joint_stiffness", Setup::Seed, &[], 1.5);
 }
 
 #[test]
 fn hidden_force_plate_time_offset_is_found_and_identified() {
-    single_effect("force_plate_time_offset", false, &[], 1.5);
+    single_effect("force_plate_time_offset", Setup::Seed, &[], 1.5);
 }
 
 /// A CoP offset of the force plates is a shift of the measured CoP along the walkway;
@@ -206,7 +228,7 @@ fn hidden_force_plate_time_offset_is_found_and_identified() {
 /// tracked here.
 #[test]
 fn hidden_cop_offset_is_found_and_identified_when_the_pelvis_position_is_tracked() {
-    single_effect("cop_offset", true, &[], 1.5);
+    single_effect("cop_offset", Setup::Pelvis, &[], 1.5);
 }
 
 /// Two hidden effects: diagnose, add the top one, diagnose the re-fit, add the next.
@@ -214,7 +236,7 @@ fn hidden_cop_offset_is_found_and_identified_when_the_pelvis_position_is_tracked
 fn two_hidden_effects_are_found_one_after_the_other() {
     let name = "ground_slope+force_plate_time_offset";
     let dir = tempfile::tempdir().unwrap();
-    let run = baseline(name, dir.path(), false);
+    let run = baseline(name, dir.path(), Setup::Seed);
     let first = diagnose(&run, 1);
     let a = first["verified"][0]["effect"]["type"].as_str().expect("a first effect").to_string();
     let refit = root().join(first["verified"][0]["folder"].as_str().unwrap());
@@ -238,5 +260,38 @@ fn two_hidden_effects_are_found_one_after_the_other() {
     for ((c, before), (_, after)) in channel_means(&run).iter().zip(channel_means(&last)) {
         assert!(after <= *before * 1.05, "{c}: {before:.3} → {after:.3}");
     }
-    within_floor(&last, 2.0, false).unwrap();
+    within_floor(&last, 2.0, Setup::Seed).unwrap();
+}
+
+/// A compliant heel pad (150 N/mm, 3 N·s/mm) hidden in data of the double-circle foot:
+/// the baseline is above the floor, `track --effect heel_pad_compliance` identifies the
+/// stiffness and brings every channel to the floor.
+///
+/// NOT met: `diagnose` does not rank it. The pad has no null value (the rigid heel is its
+/// infinite-stiffness limit), and a re-fit's decrease is no evidence: on the trial
+/// without a hidden effect a free pad lowers J too (the seed's spline velocity targets
+/// penalise the rigid heel strike's velocity jump), so `diagnose` lists it as not scored
+/// — checked here. The damping is not identified either (0.76 ± 0.30 against 3 N·s/mm,
+/// probably because it acts mostly in the first milliseconds after heel strike, which
+/// 100 Hz samples and the 10 Hz kinematics filter barely resolve; not yet shown): printed,
+/// not asserted.
+#[test]
+fn hidden_heel_pad_is_identified_by_a_refit() {
+    let name = "heel_pad_compliance";
+    let how = Setup::DoubleCircle;
+    let dir = tempfile::tempdir().unwrap();
+    let run = baseline(name, dir.path(), how);
+    assert!(within_floor(&run, 1.5, how).is_err(), "the hidden pad does not show above the noise floor");
+    let d = diagnose(&run, 0);
+    let skipped: Vec<&str> = d["skipped"].as_array().unwrap().iter().filter_map(|v| v.as_str()).collect();
+    assert!(skipped.iter().any(|s| s.starts_with("heel-pad compliance: not scored")), "{skipped:?}");
+    let refit = dir.path().join("refit");
+    let o = footfall(&["track", "--foot", "double-circle", "--data", s(&root().join("tests/data/hidden").join(name).join("synthetic.csv")), "--kinematics-cutoff", "10", "--init", s(&run), "--effect", "heel_pad_compliance", "--out", s(&refit)]);
+    assert!(o.status.success(), "re-fit with the pad: {}", String::from_utf8_lossy(&o.stderr));
+    let setup = read_json(&refit.join("setup.json"));
+    check_parameters(&serde_json::json!({"parameters": setup["parameters"]}), &hidden_values(name), &["heel_pad_compliance.damping"]);
+    for ((c, before), (_, after)) in channel_means(&run).iter().zip(channel_means(&refit)) {
+        eprintln!("{c}: {before:.3} → {after:.3} (floor ×{:.2})", after / floor(how).0.iter().find(|f| f.0 == *c).map_or(f64::NAN, |f| f.1));
+    }
+    within_floor(&refit, 1.5, how).unwrap_or_else(|e| panic!("after the re-fit {e}"));
 }

@@ -107,7 +107,14 @@ fn sentence(label: &str, diff: &RunDiff) -> String {
 }
 
 /// Why heel-pad compliance is not scored, and what to do instead (followed by the run).
-const UNSCORABLE_PAD: &str = "not scored — the rigid heel is its limit of infinite stiffness, so it has no null value a score test could start from; re-fit it with `footfall track --foot … --effect heel_pad_compliance` and compare with `footfall diff`, from";
+///
+/// A score test needs a null value and the rigid heel is the pad's limit of infinite
+/// stiffness. Nor does a re-fit's decrease of J serve as evidence: with the seed's cost
+/// a free pad lowers J on data *without* a pad too (the double-circle trial without a
+/// hidden effect: J 0.3938 → 0.3696 or lower, −6 %, a statistic of 34 against the χ²₂
+/// 0.1 % point 13.8, at an undamped 1045 N/mm pad; that re-fit stalled at KKT 5e-4), because a padded heel strike has no velocity jump
+/// for the spline velocity targets to penalise. `diagnose` would invent it.
+const UNSCORABLE_PAD: &str = "not scored — it has no null value (the rigid heel is its limit of infinite stiffness), and a re-fit's decrease is no evidence (with the seed's velocity targets a free pad lowers J on data without one too); re-fit it with `footfall track --foot … --effect heel_pad_compliance` and judge the identified stiffness and damping and the per-channel errors with `footfall diff`, from";
 
 fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     let setup = read_run_setup(&args.run)?;

@@ -89,6 +89,10 @@ pub struct Args {
     init: Option<PathBuf>,
 }
 
+/// CVODES tolerance of problems with a compliant heel pad: its stiff normal dynamics
+/// leave integration noise that stalls the line search near KKT 2e-4 at 1e-8.
+pub const PADDED_INTEGRATOR_TOL: f64 = 1e-10;
+
 /// Force (N) or torque (N·m) of a residual actuator per unit control.
 pub const RESIDUAL_SCALE: f64 = 100.0;
 
@@ -356,6 +360,13 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         }
         None => None,
     };
+    let padded = extra.iter().chain(&base.effects).any(|e| matches!(e, EffectSpec::HeelPadCompliance { .. }));
+    if padded && base.integrator_tol > PADDED_INTEGRATOR_TOL {
+        if !quiet {
+            eprintln!("heel-pad compliance: integrator tolerance {:e} → {PADDED_INTEGRATOR_TOL:e} (the pad's stiff dynamics)", base.integrator_tol);
+        }
+        base.integrator_tol = PADDED_INTEGRATOR_TOL;
+    }
     let mut prob = TrackingProblem::build(&base, &extra)?;
     if let Some(sol) = &init {
         prob.setup.start_from(sol).map_err(|e| anyhow!("--init {}: {e}", args.init.as_ref().map(|p| p.display().to_string()).unwrap_or_default()))?;
