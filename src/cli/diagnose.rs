@@ -114,7 +114,7 @@ fn sentence(label: &str, diff: &RunDiff) -> String {
 /// hidden effect: J 0.3938 → 0.3696 or lower, −6 %, a statistic of 34 against the χ²₂
 /// 0.1 % point 13.8, at an undamped 1045 N/mm pad; that re-fit stalled at KKT 5e-4), because a padded heel strike has no velocity jump
 /// for the spline velocity targets to penalise. `diagnose` would invent it.
-const UNSCORABLE_PAD: &str = "not scored — it has no null value (the rigid heel is its limit of infinite stiffness), and a re-fit's decrease is no evidence (with the seed's velocity targets a free pad lowers J on data without one too); re-fit it with `footfall track --foot … --effect heel_pad_compliance` and judge the identified stiffness and damping and the per-channel errors with `footfall diff`, from";
+const UNSCORABLE_PAD: &str = "not scored — it has no null value (the rigid heel is its limit of infinite stiffness), and a re-fit's decrease is no evidence (with the seed's velocity targets a free pad lowers J on data without one too); re-fit it with `footfall track --foot … --effect heel_pad_compliance --init RUN` and judge the identified stiffness and damping and the per-channel errors with `footfall diff`";
 
 fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     let setup = read_run_setup(&args.run)?;
@@ -144,7 +144,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     let unscorable = |c: &EffectSpec| c.kind() == pad.kind();
     let has_heel = base.model.contacts.iter().any(|c| c.name.ends_with(".heel"));
     if args.candidates.is_empty() && has_heel && !setup.effects.iter().any(|e| e.overlaps(&pad)) {
-        skipped.push(format!("{}: {UNSCORABLE_PAD} --init {}", pad.label(), args.run.display()));
+        skipped.push(format!("{}: {}", pad.label(), UNSCORABLE_PAD.replace("RUN", &args.run.display().to_string())));
     }
     for c in &candidates {
         if setup.effects.iter().any(|e| e.overlaps(c)) {
@@ -152,7 +152,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
             continue;
         }
         if unscorable(c) {
-            skipped.push(format!("{}: {UNSCORABLE_PAD} --init {}", c.label(), args.run.display()));
+            skipped.push(format!("{}: {}", c.label(), UNSCORABLE_PAD.replace("RUN", &args.run.display().to_string())));
             continue;
         }
         let mut prob = match TrackingProblem::build(&setup, std::slice::from_ref(c)) {
