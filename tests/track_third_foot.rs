@@ -78,11 +78,12 @@ fn third_foot_is_fitted_then_tracked_from_json_files_only() {
         assert!(track_dir.join(f).is_file(), "{f} missing");
     }
     // the run's own report renders in headless Chromium with every plot: 7 kinematic
-    // channels and normal force, tangential force and CoP of both feet
+    // channels, normal force, tangential force and CoP of both feet, and the data cost
+    // per node of "Where the model fails"
     let url = format!("file://{}", track_dir.join("report.html").display());
     let dom = String::from_utf8(common::chromium(&["--dump-dom".into(), url], std::time::Duration::from_secs(90))).unwrap();
-    assert_eq!(dom.matches("<svg").count(), 13, "plots in the rendered report");
-    for title in ["knee r", "ankle l", "Normal GRF, right foot", "CoP, left foot", "Tracking errors by phase", "Ground-force transients"] {
+    assert_eq!(dom.matches("<svg").count(), 14, "plots in the rendered report");
+    for title in ["knee r", "ankle l", "Normal GRF, right foot", "CoP, left foot", "Tracking errors by phase", "Ground-force transients", "Where the model fails", "Data cost per shooting node"] {
         assert!(dom.contains(title), "{title} not in the rendered report");
     }
 }
