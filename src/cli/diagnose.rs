@@ -140,18 +140,18 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     }
     let mut tests = Vec::new();
     let mut skipped = Vec::new();
+    // the heel pad, not in the catalog, is named as not scored on feet with a heel circle
+    let mut candidates = candidates;
     let pad = EffectSpec::parse_cli("heel_pad_compliance").map_err(|e| anyhow!(e))?;
-    let unscorable = |c: &EffectSpec| c.kind() == pad.kind();
-    let has_heel = base.model.contacts.iter().any(|c| c.name.ends_with(".heel"));
-    if args.candidates.is_empty() && has_heel && !setup.effects.iter().any(|e| e.overlaps(&pad)) {
-        skipped.push(format!("{}: {}", pad.label(), UNSCORABLE_PAD.replace("RUN", &args.run.display().to_string())));
+    if args.candidates.is_empty() && base.model.contacts.iter().any(|c| c.name.ends_with(".heel")) {
+        candidates.push(pad.clone());
     }
     for c in &candidates {
         if setup.effects.iter().any(|e| e.overlaps(c)) {
             skipped.push(format!("{}: already in the model", c.label()));
             continue;
         }
-        if unscorable(c) {
+        if c.kind() == pad.kind() {
             skipped.push(format!("{}: {}", c.label(), UNSCORABLE_PAD.replace("RUN", &args.run.display().to_string())));
             continue;
         }

@@ -75,11 +75,11 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         None => (args.run.clone(), true),
     };
     let folder = RunFolder::create(&out, overwrite)?;
-    let base = footfall::problems::diagnose::TrackingRunSetup { effects: setup.effects.clone(), parameters: vec![], ..setup.clone() };
+    let base = footfall::problems::diagnose::TrackingRunSetup { parameters: vec![], ..setup.clone() };
     let run = prob.with_transcription(|tr, cycle, w| {
         let ev = tr.evaluate(&w, true).context("evaluating the run's solution")?;
         let (lo, hi) = tr.constraint_bounds();
-        let infeasibility = ev.c.iter().zip(lo.iter().zip(&hi)).fold(0.0f64, |m, (c, (l, h))| m.max(l - c).max(c - h));
+        let infeasibility = footfall::sqp::violations(&ev.c, &lo, &hi).into_iter().fold(0.0, f64::max);
         let mismatch = (ev.f - record.objective).abs() / record.objective.abs().max(1e-12);
         if mismatch > OBJECTIVE_MISMATCH {
             bail!(

@@ -362,7 +362,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         }
         None => None,
     };
-    let padded = extra.iter().chain(&base.effects).any(|e| matches!(e, EffectSpec::HeelPadCompliance { .. }));
+    let padded = extra.iter().any(|e| matches!(e, EffectSpec::HeelPadCompliance { .. }));
     if (padded || args.residual_actuators) && base.integrator_tol > PADDED_INTEGRATOR_TOL {
         if !quiet {
             let why = if padded { "the heel pad's stiff dynamics" } else { "residual actuators" };
@@ -525,8 +525,7 @@ pub fn where_it_fails(b: &footfall::problems::track::CostBreakdown, solution: &G
     use footfall::report::plot::{LinePlot, LineStyle, Series, Span};
     let (share, normalised, windows) = cost_tables(b);
     let mut plot = LinePlot::new("Data cost per shooting node", "time (s)", "Σ weighted residual²");
-    let times: Vec<f64> = b.nodes.iter().map(|n| n.time).collect();
-    plot.series.push(Series::new("data cost", times.clone(), b.nodes.iter().map(|n| n.data).collect(), LineStyle::Solid));
+    plot.series.push(Series::new("data cost", b.nodes.iter().map(|n| n.time).collect(), b.nodes.iter().map(|n| n.data).collect(), LineStyle::Solid));
     plot.shaded = solution.phase_spans().iter().map(|p| Span::new(p.t0, p.t1, p.name.clone())).collect();
     footfall::report::html::Section {
         heading: "Where the model fails".into(),

@@ -305,7 +305,8 @@ impl Observer for Silent {
     }
 }
 
-fn violations(c: &[f64], lb: &[f64], ub: &[f64]) -> Vec<f64> {
+/// Violation of each constraint value `c` of its bounds `[lb, ub]` (0 when satisfied).
+pub fn violations(c: &[f64], lb: &[f64], ub: &[f64]) -> Vec<f64> {
     c.iter().zip(lb.iter().zip(ub)).map(|(&v, (&l, &u))| (l - v).max(v - u).max(0.0)).collect()
 }
 
