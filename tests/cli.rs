@@ -401,3 +401,25 @@ fn predict_and_compare_refuse_bad_arguments_before_solving() {
     assert!(!out.exists());
     assert!(entries(dir.path()).iter().all(|e| !e.contains("partial")), "{:?}", entries(dir.path()));
 }
+
+/// A heel pad written in the model file (not only `--effect`) gets the integrator
+/// tolerance its stiff dynamics need, and setup.json records the tolerance used.
+#[test]
+fn track_tightens_the_integrator_for_a_pad_in_the_model_file() {
+    let tmp = tempfile::tempdir().unwrap();
+    let mut model: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(root().join("models/opensim_subject01.json")).unwrap()).unwrap();
+    model["body"]["file"] = root().join("data/opensim_subject01_model.json").to_str().unwrap().into();
+    model["effects"] = serde_json::json!([{ "type": "heel_pad_compliance", "stiffness": 150.0, "damping": 3.0 }]);
+    let model_path = tmp.path().join("padded.json");
+    std::fs::write(&model_path, model.to_string()).unwrap();
+    let out = tmp.path().join("run");
+    let o = Command::new(env!("CARGO_BIN_EXE_footfall"))
+        .current_dir(root())
+        .args(["track", "--model", s(&model_path), "--foot", "double-circle", "--init", "tests/data/hidden/double_circle_base", "--max-iter", "0", "--out", s(&out)])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(err.contains("integrator tolerance 1e-8 → 1e-10"), "{err}");
+    let setup: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("setup.json")).unwrap()).unwrap();
+    assert_eq!(setup["integrator_tol"], 1e-10, "{setup}");
+}

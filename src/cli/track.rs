@@ -197,7 +197,10 @@ impl TrackingProblem {
             setup.weights.excitation = w;
             setup.weights.activation = w;
         }
-        let integrator = IntegratorSettings { rtol: run.integrator_tol, atol: run.integrator_tol, ..Default::default() };
+        // a pad (from the model file or `extra`) or residual actuators need a tighter tolerance
+        let stiff = run.residual_actuators || (0..model.contacts.len()).any(|c| model.is_compliant(c));
+        let tol = if stiff { run.integrator_tol.min(PADDED_INTEGRATOR_TOL) } else { run.integrator_tol };
+        let integrator = IntegratorSettings { rtol: tol, atol: tol, ..Default::default() };
         integrator.validate().context("--integrator-tol")?;
         Ok(Self { model, sets, data, setup, phases: run.phases.clone(), integrator })
     }
@@ -224,7 +227,7 @@ impl TrackingProblem {
             .collect();
         let mut effects = base.effects.clone();
         effects.extend(extra.iter().cloned());
-        TrackingRunSetup { effects, parameters, ..base.clone() }
+        TrackingRunSetup { effects, parameters, integrator_tol: self.integrator.rtol, ..base.clone() }
     }
 }
 
@@ -362,15 +365,11 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         }
         None => None,
     };
-    let padded = extra.iter().any(|e| matches!(e, EffectSpec::HeelPadCompliance { .. }));
-    if (padded || args.residual_actuators) && base.integrator_tol > PADDED_INTEGRATOR_TOL {
-        if !quiet {
-            let why = if padded { "the heel pad's stiff dynamics" } else { "residual actuators" };
-            eprintln!("{why}: integrator tolerance {:e} → {PADDED_INTEGRATOR_TOL:e} (integration noise stalls the line search at 1e-8)", base.integrator_tol);
-        }
-        base.integrator_tol = PADDED_INTEGRATOR_TOL;
-    }
     let mut prob = TrackingProblem::build(&base, &extra)?;
+    if prob.integrator.rtol < base.integrator_tol && !quiet {
+        let why = if args.residual_actuators { "residual actuators" } else { "the heel pad's stiff dynamics" };
+        eprintln!("{why}: integrator tolerance {:e} → {:e} (integration noise stalls the line search at 1e-8)", base.integrator_tol, prob.integrator.rtol);
+    }
     if let Some(sol) = &init {
         prob.setup.start_from(sol).map_err(|e| anyhow!("--init {}: {e}", args.init.as_ref().map(|p| p.display().to_string()).unwrap_or_default()))?;
     }
