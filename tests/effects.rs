@@ -269,28 +269,28 @@ fn heel_pad_dynamics_jacobian_matches_finite_differences() {
         m.dynamics::<f64>(&set, x, &u, th, &mut xd, &mut lam, None).unwrap();
         xd
     };
+    // worst relative error of Jacobian column `col` against a central difference of
+    // `perturbed(±h)`
+    let column_error = |col: usize, h: f64, perturbed: &dyn Fn(f64) -> Vec<f64>| {
+        let (fa, fb) = (perturbed(h), perturbed(-h));
+        (0..nx).map(|r| (fa[r] - fb[r]) / (2.0 * h)).enumerate().map(|(r, fd)| (fd - jac[col * nx + r]).abs() / (1.0 + fd.abs())).fold(0.0f64, f64::max)
+    };
     let mut worst = 0.0f64;
     for c in 0..18 {
-        let h = 1e-6;
-        let (mut a, mut b) = (x.clone(), x.clone());
-        a[c] += h;
-        b[c] -= h;
-        let (fa, fb) = (f(&a, &theta), f(&b, &theta));
-        for r in 0..nx {
-            let fd = (fa[r] - fb[r]) / (2.0 * h);
-            worst = worst.max((fd - jac[c * nx + r]).abs() / (1.0 + fd.abs()));
-        }
+        let along = |h: f64| {
+            let mut a = x.clone();
+            a[c] += h;
+            f(&a, &theta)
+        };
+        worst = worst.max(column_error(c, 1e-6, &along));
     }
     for k in 0..2 {
-        let h = 1e-4 * theta[k].abs().max(1.0);
-        let (mut a, mut b) = (theta.clone(), theta.clone());
-        a[k] += h;
-        b[k] -= h;
-        let (fa, fb) = (f(&x, &a), f(&x, &b));
-        for r in 0..nx {
-            let fd = (fa[r] - fb[r]) / (2.0 * h);
-            worst = worst.max((fd - jac[(nx + nu + k) * nx + r]).abs() / (1.0 + fd.abs()));
-        }
+        let along = |h: f64| {
+            let mut a = theta.clone();
+            a[k] += h;
+            f(&x, &a)
+        };
+        worst = worst.max(column_error(nx + nu + k, 1e-4 * theta[k].abs().max(1.0), &along));
     }
     assert!(worst < 1e-5, "AD vs central differences: {worst:e}");
 }

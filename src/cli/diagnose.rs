@@ -8,6 +8,7 @@ use super::Failure;
 use anyhow::anyhow;
 use footfall::model::effects::{catalog, EffectSpec};
 use footfall::problems::diagnose::{channel_means, gauss_newton_decrease, score_test, ScoreTest};
+use footfall::problems::evaluation::GaitSolution;
 use footfall::report::diff::{fmt_value, RunDiff, RunSummary};
 use footfall::report::html::{Report, Section, Summary, Tone};
 use footfall::report::table::Table;
@@ -53,7 +54,9 @@ fn decrease_at_solution(prob: &TrackingProblem) -> anyhow::Result<(f64, f64, usi
     })
 }
 
-fn test_candidate(prob: &TrackingProblem, effect: &EffectSpec, k: usize, baseline: f64, rows: usize) -> anyhow::Result<ScoreTest> {
+/// Score test of candidate `effect` (its `k` parameters the last of θ); returns the test
+/// and the point its truncated re-fit reached, where a verifying re-fit starts.
+fn test_candidate(prob: &TrackingProblem, effect: &EffectSpec, k: usize, baseline: f64, rows: usize) -> anyhow::Result<(ScoreTest, GaitSolution)> {
     prob.with_transcription(|tr, cycle, w| {
         let free = prob.model.free_parameters();
         let names: Vec<String> = free[free.len() - k..].iter().map(|&i| prob.model.parameters()[i].name.clone()).collect();
@@ -61,8 +64,18 @@ fn test_candidate(prob: &TrackingProblem, effect: &EffectSpec, k: usize, baselin
         let means = |w: &[f64]| channel_means(tr, w, &cycle.continuous, prob.setup.window.0, &prob.model, &prob.sets, &prob.data).map_err(|e| anyhow!(e));
         let (before, after) = (means(&w)?, means(&w1)?);
         t.expected_channels = before.into_iter().zip(after).map(|((c, u, b), (_, _, a))| (c, u, b, a)).collect();
-        Ok(t)
+        Ok((t, GaitSolution::from_nlp(tr, &w1, &cycle.continuous, prob.setup.window.0)))
     })
+}
+
+/// Start `prob` at `start`: its states, controls and free parameters.
+fn start_at(prob: &mut TrackingProblem, start: &GaitSolution) -> anyhow::Result<()> {
+    prob.setup.start_from(start).map_err(|e| anyhow!(e))?;
+    let names: Vec<String> = prob.model.free_parameters().iter().map(|&i| prob.model.parameters()[i].name.clone()).collect();
+    for (name, &v) in names.iter().zip(&start.theta) {
+        prob.model.set_parameter_value(name, v).map_err(|e| anyhow!(e))?;
+    }
+    Ok(())
 }
 
 /// A verified candidate: its re-fit run and what changed.
@@ -173,7 +186,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         let k = prob.model.ntheta() - base.model.ntheta();
         prob.setup.start_from(&solution).map_err(|e| anyhow!(e))?;
         let t0 = std::time::Instant::now();
-        let t = test_candidate(&prob, c, k, base_decrease, rows)?;
+        let (t, start) = test_candidate(&prob, c, k, base_decrease, rows)?;
         if !quiet {
             eprintln!(
                 "  {:<32} expected decrease {:>10.3e} ({:>5.1} % of J, {} steps), statistic {:>9.1} vs {:.1}{}  [{:.1} s]",
@@ -187,18 +200,21 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
                 t0.elapsed().as_secs_f64()
             );
         }
-        tests.push(t);
+        tests.push((t, start));
     }
-    tests.sort_by(|a, b| b.statistic.total_cmp(&a.statistic));
+    tests.sort_by(|a, b| b.0.statistic.total_cmp(&a.0.statistic));
+    let (tests, starts): (Vec<ScoreTest>, Vec<GaitSolution>) = tests.into_iter().unzip();
 
     let mut verified = Vec::new();
-    for t in tests.iter().filter(|t| t.significant).take(args.verify) {
+    for (t, start) in tests.iter().zip(&starts).filter(|(t, _)| t.significant).take(args.verify) {
         let refit_dir = sibling(&args.run, &format!("+{}", t.effect.kind()));
         if !quiet {
             eprintln!("verifying {} by a re-fit → {}", t.label, refit_dir.display());
         }
+        // from where the candidate's truncated re-fit got to (fewer SQP iterations than
+        // from the run's solution)
         let mut prob = TrackingProblem::build(&setup, std::slice::from_ref(&t.effect))?;
-        prob.setup.start_from(&solution).map_err(|e| anyhow!(e))?;
+        start_at(&mut prob, start)?;
         let settings = tracking_sqp_settings(args.tol, args.max_iter, None, HessianMode::Exact, 1e-3);
         let rf = RunFolder::create(&refit_dir, args.overwrite)?;
         let run = prob.solve_and_write(&setup, std::slice::from_ref(&t.effect), &settings, rf, super::gait_run::DEFAULT_TRANSIENT_THRESHOLD_N, true)?;
