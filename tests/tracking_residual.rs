@@ -168,3 +168,44 @@ fn measurement_effects_shift_the_targets_with_exact_parameter_derivatives() {
     assert!(any > 1e-2, "the offsets move the residual");
     assert!(err < 1e-6 * any.max(1.0), "θ Jacobian vs FD {err:e}");
 }
+
+/// The residual actuators' figures of a solution: RMS, peak and the share of nodes on the
+/// bound, against values worked out by hand; the model's own actuators do not count.
+#[test]
+fn residual_use_reports_rms_peak_and_saturation() {
+    use footfall::integrate::ControlShape;
+    use footfall::problems::evaluation::{residual_use, GaitSolution, PhaseSolution};
+    let m = model("opensim_subject01.json", "ellipse.json").with_residual_actuators(100.0, 50.0);
+    assert!(residual_use(&model("opensim_subject01.json", "ellipse.json"), &GaitSolution { phases: vec![], theta: vec![] }).is_empty());
+    let (base, nr) = (m.nu_actuators(), m.residual_scales().len());
+    assert_eq!(nr, 9);
+    // four nodes: pelvis_x residual at controls 1, −1, 0.5, 0 (two of four on the bound);
+    // the hip_r torque at 0.2 throughout; actuators at 1 (must not count as saturation)
+    let u = |c: f64| {
+        let mut u = vec![1.0; base + nr];
+        u[base..].iter_mut().for_each(|v| *v = 0.0);
+        u[base] = c;
+        u[base + 3] = 0.2;
+        u
+    };
+    let phase = PhaseSolution {
+        name: "p".into(),
+        set: 0,
+        t0: 0.5,
+        duration: 0.4,
+        controls: ControlShape::Constant,
+        x: vec![vec![0.0; m.nx()]; 5],
+        u: vec![u(1.0), u(-1.0), u(0.5), u(0.0)],
+    };
+    let uses = residual_use(&m, &GaitSolution { phases: vec![phase], theta: vec![] });
+    assert_eq!(uses.len(), 9);
+    let px = &uses[0];
+    assert_eq!((px.name.as_str(), px.unit, px.bound), ("pelvis_x_residual", "N", 100.0));
+    let rms = ((100.0f64.powi(2) * 2.0 + 50.0f64.powi(2)) / 4.0).sqrt();
+    assert!((px.rms - rms).abs() < 1e-12 && px.peak == 100.0 && px.at_bound_fraction == 0.5, "{px:?}");
+    assert_eq!(px.times, vec![0.5, 0.6, 0.7, 0.8]);
+    let hip = &uses[3];
+    assert_eq!((hip.name.as_str(), hip.unit, hip.bound), ("hip_r_residual", "N·m", 50.0));
+    assert!((hip.rms - 10.0).abs() < 1e-12 && (hip.peak - 10.0).abs() < 1e-12 && hip.at_bound_fraction == 0.0, "{hip:?}");
+    assert!(uses[1].rms == 0.0 && uses[1].at_bound_fraction == 0.0);
+}

@@ -98,58 +98,48 @@ pub const PADDED_INTEGRATOR_TOL: f64 = 1e-10;
 /// Force (N) or torque (N·m) of a residual actuator per unit control.
 pub const RESIDUAL_SCALE: f64 = 100.0;
 
-/// The residual actuators' profiles at the nodes (plots, phases shaded) and their RMS
-/// and peak values (N or N·m), for a model that has them.
+/// The residual actuators' profiles at the nodes (plots, phases shaded), their RMS and
+/// peak values (N or N·m) and how often they sit on their bounds, for a model that has
+/// them.
 fn residual_report(model: &GaitModel, sol: &GaitSolution) -> Option<(footfall::report::html::Section, serde_json::Value)> {
     use footfall::report::plot::{LinePlot, LineStyle, Series, Span};
-    let scales = model.residual_scales();
-    if scales.is_empty() {
+    let uses = footfall::problems::evaluation::residual_use(model, sol);
+    if uses.is_empty() {
         return None;
-    }
-    let base = model.nu_actuators();
-    let names: Vec<String> = model.control_names().into_iter().skip(base).collect();
-    let (mut t, mut v): (Vec<f64>, Vec<Vec<f64>>) = (Vec::new(), vec![Vec::new(); scales.len()]);
-    for ph in &sol.phases {
-        let n = ph.intervals();
-        let h = ph.duration / n as f64;
-        for (k, u) in ph.u.iter().enumerate() {
-            t.push(ph.t0 + k as f64 * h);
-            for (i, s) in scales.iter().enumerate() {
-                v[i].push(u[base + i] * s);
-            }
-        }
     }
     let spans: Vec<Span> = sol.phase_spans().iter().map(|p| Span::new(p.t0, p.t1, p.name.clone())).collect();
     let mut forces = LinePlot::new("Residual forces on the pelvis", "time (s)", "force (N)");
     let mut torques = LinePlot::new("Residual torques", "time (s)", "torque (N·m)");
-    for (i, name) in names.iter().enumerate() {
-        let p = if i < 2 { &mut forces } else { &mut torques };
-        p.series.push(Series::new(name.trim_end_matches("_residual").replace('_', " "), t.clone(), v[i].clone(), LineStyle::Solid));
+    for r in &uses {
+        let p = if r.unit == "N" { &mut forces } else { &mut torques };
+        p.series.push(Series::new(r.name.trim_end_matches("_residual").replace('_', " "), r.times.clone(), r.values.clone(), LineStyle::Solid));
     }
     forces.shaded = spans.clone();
     torques.shaded = spans;
-    let stats: Vec<serde_json::Value> = names
+    let rows = uses
         .iter()
-        .zip(&v)
-        .map(|(n, x)| {
-            let rms = (x.iter().map(|a| a * a).sum::<f64>() / x.len().max(1) as f64).sqrt();
-            let peak = x.iter().fold(0.0f64, |m, a| m.max(a.abs()));
-            serde_json::json!({"name": n, "rms": rms, "peak": peak, "unit": if n.starts_with("pelvis_x") || n.starts_with("pelvis_y") { "N" } else { "N·m" }})
-        })
+        .map(|r| vec![r.name.clone(), format!("{:.2}", r.rms), format!("{:.2}", r.peak), format!("±{}", r.bound), format!("{:.0}", 100.0 * r.at_bound_fraction), r.unit.to_string()])
         .collect();
-    let rows = stats
-        .iter()
-        .map(|s| vec![s["name"].as_str().unwrap_or("").to_string(), format!("{:.2}", s["rms"].as_f64().unwrap_or(f64::NAN)), format!("{:.2}", s["peak"].as_f64().unwrap_or(f64::NAN)), s["unit"].as_str().unwrap_or("").to_string()])
-        .collect();
-    let table = footfall::report::table::Table { title: "Residual actuators at the nodes".into(), headers: ["residual", "RMS", "peak |·|", "unit"].map(String::from).to_vec(), rows };
+    let table = footfall::report::table::Table { title: "Residual actuators at the nodes".into(), headers: ["residual", "RMS", "peak |·|", "bound", "% of nodes at the bound", "unit"].map(String::from).to_vec(), rows };
+    let mut paragraphs = vec!["What the model needs beyond its own actuators to follow the data, and when: residual forces on the pelvis translations and torques on the pelvis tilt and the joints, at the shooting nodes.".to_string()];
+    let saturated: Vec<&str> = uses.iter().filter(|r| r.at_bound_fraction > 0.0).map(|r| r.name.as_str()).collect();
+    if !saturated.is_empty() {
+        paragraphs.push(format!(
+            "{} of {} residuals reach their bound ({}): where they do, the model needs more than the residual may give, so the profile is a lower bound of what is missing and the tracking error there carries the rest.",
+            saturated.len(),
+            uses.len(),
+            saturated.join(", ")
+        ));
+    }
+    let stats = serde_json::to_value(&uses).unwrap_or_default();
     Some((
         footfall::report::html::Section {
             heading: "Residual actuators".into(),
-            paragraphs: vec!["What the model needs beyond its own actuators to follow the data, and when: residual forces on the pelvis translations and torques on the pelvis tilt and the joints, at the shooting nodes.".into()],
+            paragraphs,
             tables: vec![table],
             svgs: vec![forces.to_svg(), torques.to_svg()],
         },
-        serde_json::Value::Array(stats),
+        stats,
     ))
 }
 

@@ -406,3 +406,64 @@ pub fn channel_errors(channels: &[ErrorChannel], comparison: &Comparison, by_pha
         })
         .collect()
 }
+
+/// What one residual actuator of a solution did, at the control nodes.
+#[derive(Debug, Clone, Serialize)]
+pub struct ResidualUse {
+    /// Control name (`<coordinate>_residual`).
+    pub name: String,
+    /// `N` (pelvis translations) or `N·m`.
+    pub unit: &'static str,
+    /// Its bound: force or torque at control ±1.
+    pub bound: f64,
+    /// Root mean square over the nodes.
+    pub rms: f64,
+    /// Largest magnitude.
+    pub peak: f64,
+    /// Fraction of the nodes where it sits on its bound (|control| ≥ 0.999): there the
+    /// model needed more than the residual could give, so the profile is a lower bound.
+    pub at_bound_fraction: f64,
+    /// Node times (s), for plots.
+    #[serde(skip)]
+    pub times: Vec<f64>,
+    /// Values at those times (N or N·m).
+    #[serde(skip)]
+    pub values: Vec<f64>,
+}
+
+/// The residual actuators' profiles of `sol` and their figures (empty for a model
+/// without residual actuators).
+pub fn residual_use(model: &GaitModel, sol: &GaitSolution) -> Vec<ResidualUse> {
+    let scales = model.residual_scales();
+    let base = model.nu_actuators();
+    let names: Vec<String> = model.control_names().into_iter().skip(base).collect();
+    let mut times = Vec::new();
+    let mut values = vec![Vec::new(); scales.len()];
+    for ph in &sol.phases {
+        for (k, u) in ph.u.iter().enumerate() {
+            times.push(ph.node_time(k));
+            for (i, s) in scales.iter().enumerate() {
+                values[i].push(u[base + i] * s);
+            }
+        }
+    }
+    names
+        .into_iter()
+        .zip(values)
+        .zip(scales)
+        .enumerate()
+        .map(|(i, ((name, v), &bound))| {
+            let n = v.len().max(1) as f64;
+            ResidualUse {
+                name,
+                unit: if i < 2 { "N" } else { "N·m" },
+                bound,
+                rms: (v.iter().map(|a| a * a).sum::<f64>() / n).sqrt(),
+                peak: v.iter().fold(0.0f64, |m, a| m.max(a.abs())),
+                at_bound_fraction: v.iter().filter(|a| a.abs() >= (1.0 - 1e-3) * bound).count() as f64 / n,
+                times: times.clone(),
+                values: v,
+            }
+        })
+        .collect()
+}
