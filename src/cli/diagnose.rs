@@ -143,7 +143,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     let before = RunSummary::read(&args.run)?;
     let out = args.out.clone().unwrap_or_else(|| sibling(&args.run, "-diagnose"));
     let folder = RunFolder::create(&out, args.overwrite)?;
-    let candidates: Vec<EffectSpec> = if args.candidates.is_empty() {
+    let mut candidates: Vec<EffectSpec> = if args.candidates.is_empty() {
         catalog()
     } else {
         args.candidates.iter().map(|c| EffectSpec::parse_cli(c).map_err(|e| anyhow!("--candidate: {e}"))).collect::<Result<_, _>>()?
@@ -162,7 +162,6 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     let mut tests = Vec::new();
     let mut skipped = Vec::new();
     // the heel pad, not in the catalog, is named as not scored on feet with a heel circle
-    let mut candidates = candidates;
     let pad = EffectSpec::parse_cli("heel_pad_compliance").map_err(|e| anyhow!(e))?;
     if args.candidates.is_empty() && base.model.contacts.iter().any(|c| c.name.ends_with(".heel")) {
         candidates.push(pad.clone());
