@@ -423,3 +423,29 @@ fn track_tightens_the_integrator_for_a_pad_in_the_model_file() {
     let setup: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("setup.json")).unwrap()).unwrap();
     assert_eq!(setup["integrator_tol"], 1e-10, "{setup}");
 }
+
+/// `--init` of a run that identified an effect's parameters starts free ones at its
+/// values, but an `--effect` that holds a parameter fixed keeps the value it gives.
+#[test]
+fn track_holds_a_fixed_effect_parameter_at_its_given_value_despite_init() {
+    let tmp = tempfile::tempdir().unwrap();
+    let kept = root().join("tests/data/hidden/none/tracked_seed");
+    let init = tmp.path().join("init");
+    std::fs::create_dir(&init).unwrap();
+    std::fs::copy(kept.join("solution.json"), init.join("solution.json")).unwrap();
+    let mut setup: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(kept.join("setup.json")).unwrap()).unwrap();
+    setup["parameters"] = serde_json::json!([{ "name": "ground_slope.angle", "value": 0.02, "unit": "rad", "free": true }]);
+    std::fs::write(init.join("setup.json"), setup.to_string()).unwrap();
+    let slope_after = |effect: &str, out: &str| {
+        let out = tmp.path().join(out);
+        Command::new(env!("CARGO_BIN_EXE_footfall"))
+            .current_dir(root())
+            .args(["track", "--data", "tests/data/hidden/none/synthetic.csv", "--kinematics-cutoff", "10", "--init", s(&init), "--effect", effect, "--max-iter", "0", "--quiet", "--out", s(&out)])
+            .output()
+            .unwrap();
+        let setup: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("setup.json")).unwrap()).unwrap();
+        setup["parameters"][0]["value"].as_f64().unwrap()
+    };
+    assert_eq!(slope_after("ground_slope:angle=0.01,free=", "fixed"), 0.01);
+    assert_eq!(slope_after("ground_slope", "free"), 0.02);
+}

@@ -226,8 +226,11 @@ fn hidden_ground_slope_is_found_and_identified() {
 /// re-fit started at the truth returns to it), and the cost's design accounts for it: on
 /// a noise-free, unfiltered version of the trial, with the u², a² regularisation at 1e-5
 /// instead of the seed's 1e-3 and the pelvis position tracked, the re-fit gives 3.82 kg
-/// and 0.0268 m. The criterion (20 %, 1.5× floor) is NOT met with the seed's
-/// cost: the offset is printed, not asserted, and the floor is held at 2×.
+/// and 0.0268 m. Held at the truth the model follows this trial with every channel
+/// within 1.31× the floor (ankle 0.477°) at J 0.312313, 2.6 % above the free optimum:
+/// the velocity targets and the regularisation prefer the lighter trunk. The issue's
+/// criterion (20 %, 1.5× floor) is NOT met with the seed's cost: the offset is printed,
+/// not asserted, and the floor is held at 2×.
 #[test]
 fn hidden_trunk_mass_is_found_and_identified() {
     single_effect("trunk_mass", Setup::Seed, &["trunk_mass.com_offset"], 2.0);

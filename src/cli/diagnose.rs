@@ -134,7 +134,14 @@ fn sentence(label: &str, diff: &RunDiff) -> String {
 /// 14.2 against 13.8 (the padded trial at 47.8). Its noisy trial gains 14 s² more than
 /// the noise-free replicate, far above the χ²₂ mean of 2: with the impact constraint
 /// gone the pad frees more than its two parameters, so the χ²₂ calibration fails, and a
-/// calibrated null would need noisy replicates — three more pad re-fits per diagnosis.
+/// calibrated null would need noisy replicates — three more pad re-fits per diagnosis
+/// (one on a noisy replicate of the padded trial's rigid fit stalled at a gain of 0.0066).
+///
+/// A nested null, the stiffest pad allowed (5000 N/mm) with free damping, removes the
+/// velocity jump from both models but leaves a local test blind: from it the padded
+/// trial's free re-fit stays at 5000 N/mm (J 0.391142) while from the rigid fit it
+/// reaches 150 N/mm (J 0.360766), and on the no-effect trial a free pad still lies 0.0110
+/// below it (statistic 16.2 against χ²₁'s 10.8).
 const UNSCORABLE_PAD: &str = "not scored — it has no null value (the rigid heel is its limit of infinite stiffness), and a re-fit's decrease is no evidence (with the seed's velocity targets a free pad lowers J on data without one too); re-fit it with `footfall track --foot … --effect heel_pad_compliance --init RUN` and judge the identified stiffness and damping and the per-channel errors with `footfall diff`";
 
 fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {

@@ -84,7 +84,8 @@ pub struct Args {
     #[arg(long)]
     regularisation: Option<f64>,
     /// Start from the solution of a track run (its folder or solution.json) of the same
-    /// phase graph instead of the data; effect parameters it identified start at its values.
+    /// phase graph instead of the data; effect parameters it identified start at its
+    /// values, unless an `--effect` holds them fixed at its own.
     #[arg(long)]
     init: Option<PathBuf>,
 }
@@ -155,7 +156,11 @@ pub struct TrackingProblem {
 
 impl TrackingProblem {
     /// Rebuild the problem a run describes, with `extra` effects added (parameters free
-    /// at their values) and the run's identified parameter values.
+    /// at their values) and the run's identified parameter values. A parameter an
+    /// `extra` effect holds fixed keeps the value that effect gives: `--effect
+    /// trunk_mass:added_mass=4,com_offset=0.03,free=` with `--init` of a run that
+    /// identified other values holds 4 kg and 0.03 m; the run's values only start free
+    /// parameters.
     pub fn build(run: &TrackingRunSetup, extra: &[EffectSpec]) -> anyhow::Result<Self> {
         let foot_path = super::simulate::foot_path(&run.foot);
         let mut effects = run.effects.clone();
@@ -164,7 +169,14 @@ impl TrackingProblem {
         if run.residual_actuators {
             model = model.with_residual_actuators(RESIDUAL_SCALE, RESIDUAL_SCALE);
         }
-        for p in &run.parameters {
+        // the parameters come in effect order, so `extra`'s are the last ones
+        let held: Vec<String> = if extra.is_empty() || run.parameters.is_empty() {
+            Vec::new()
+        } else {
+            let before = GaitModel::load_with_effects(&run.model, &foot_path, &run.effects)?.parameters().len();
+            model.parameters()[before..].iter().filter(|p| !p.free).map(|p| p.name.clone()).collect()
+        };
+        for p in run.parameters.iter().filter(|p| !held.contains(&p.name)) {
             // a parameter the run knew is started at its value (one the model lacks is ignored)
             if model.parameters().iter().any(|q| q.name == p.name) {
                 model.set_parameter_value(&p.name, p.value).map_err(|e| anyhow!(e))?;
