@@ -156,11 +156,11 @@ pub struct TrackingProblem {
 
 impl TrackingProblem {
     /// Rebuild the problem a run describes, with `extra` effects added (parameters free
-    /// at their values) and the run's identified parameter values. A parameter an
-    /// `extra` effect holds fixed keeps the value that effect gives: `--effect
-    /// trunk_mass:added_mass=4,com_offset=0.03,free=` with `--init` of a run that
-    /// identified other values holds 4 kg and 0.03 m; the run's values only start free
-    /// parameters.
+    /// at their values) and the run's identified parameter values. The run's values
+    /// only start free parameters; a fixed one keeps the value its effect gives (a fixed
+    /// parameter does not move, so a run's value of it is its effect's — except for
+    /// `extra`: `--effect trunk_mass:added_mass=4,com_offset=0.03,free=` with `--init` of
+    /// a run that identified other values holds 4 kg and 0.03 m).
     pub fn build(run: &TrackingRunSetup, extra: &[EffectSpec]) -> anyhow::Result<Self> {
         let foot_path = super::simulate::foot_path(&run.foot);
         let mut effects = run.effects.clone();
@@ -169,16 +169,10 @@ impl TrackingProblem {
         if run.residual_actuators {
             model = model.with_residual_actuators(RESIDUAL_SCALE, RESIDUAL_SCALE);
         }
-        // the parameters come in effect order, so `extra`'s are the last ones
-        let held: Vec<String> = if extra.is_empty() || run.parameters.is_empty() {
-            Vec::new()
-        } else {
-            let before = GaitModel::load_with_effects(&run.model, &foot_path, &run.effects)?.parameters().len();
-            model.parameters()[before..].iter().filter(|p| !p.free).map(|p| p.name.clone()).collect()
-        };
-        for p in run.parameters.iter().filter(|p| !held.contains(&p.name)) {
-            // a parameter the run knew is started at its value (one the model lacks is ignored)
-            if model.parameters().iter().any(|q| q.name == p.name) {
+        for p in &run.parameters {
+            // a free parameter the run knew is started at its value (one the model lacks
+            // or holds fixed is left as it is)
+            if model.parameters().iter().any(|q| q.name == p.name && q.free) {
                 model.set_parameter_value(&p.name, p.value).map_err(|e| anyhow!(e))?;
             }
         }
