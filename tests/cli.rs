@@ -449,3 +449,42 @@ fn track_holds_a_fixed_effect_parameter_at_its_given_value_despite_init() {
     assert_eq!(slope_after("ground_slope:angle=0.01,free=", "fixed"), 0.01);
     assert_eq!(slope_after("ground_slope", "free"), 0.02);
 }
+
+/// `--velocity-weight` scales the velocity targets' cost (0 drops them) at a given point
+/// and is recorded in setup.json; a negative weight is refused before any output.
+#[test]
+fn track_velocity_weight_scales_the_velocity_targets_and_is_recorded() {
+    let tmp = tempfile::tempdir().unwrap();
+    let init = root().join("tests/data/hidden/none/tracked_seed");
+    let run = |weight: Option<&str>, out: &str| {
+        let out = tmp.path().join(out);
+        let mut args = vec!["track", "--data", "tests/data/hidden/none/synthetic.csv", "--kinematics-cutoff", "10", "--init", s(&init), "--max-iter", "0", "--quiet", "--out", s(&out)];
+        if let Some(w) = weight {
+            args.extend(["--velocity-weight", w]);
+        }
+        let o = Command::new(env!("CARGO_BIN_EXE_footfall")).current_dir(root()).args(&args).output().unwrap();
+        (o, out)
+    };
+    let (bad, bad_out) = run(Some("-1"), "bad");
+    assert_user_error(&bad, &["--velocity-weight", "≥ 0", "0.1"]);
+    assert!(!bad_out.exists());
+    // (J, the velocity targets' share of it) at the kept solution
+    let costs = |out: &Path| {
+        let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+        let b = &summary["cost_breakdown"];
+        let channels: Vec<&str> = b["channels"].as_array().unwrap().iter().map(|c| c.as_str().unwrap()).collect();
+        let velocities = channels.iter().position(|&c| c == "velocities").map(|i| b["cost"][i].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).sum::<f64>());
+        (summary["objective"].as_f64().unwrap(), velocities)
+    };
+    let (j_seed, v_seed) = costs(&run(None, "seed").1);
+    let (j_double, v_double) = costs(&run(Some("0.2"), "double").1);
+    let (j_none, v_none) = costs(&run(Some("0"), "none").1);
+    let v_seed = v_seed.expect("the seed's cost has velocity targets");
+    assert!(v_seed > 0.01 * j_seed, "velocity targets {v_seed} of J {j_seed}");
+    assert!((v_double.unwrap() - 2.0 * v_seed).abs() < 1e-9 * v_seed, "{v_double:?} vs 2 × {v_seed}");
+    assert!((j_double - j_seed - v_seed).abs() < 1e-9 * j_seed);
+    assert_eq!(v_none, None, "weight 0 leaves no velocity channel");
+    assert!((j_none - (j_seed - v_seed)).abs() < 1e-9 * j_seed, "J {j_none} vs {j_seed} − {v_seed}");
+    let setup: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(tmp.path().join("double/setup.json")).unwrap()).unwrap();
+    assert_eq!(setup["velocity_weight"].as_f64(), Some(0.2));
+}

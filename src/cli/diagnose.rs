@@ -68,16 +68,6 @@ fn test_candidate(prob: &TrackingProblem, effect: &EffectSpec, k: usize, baselin
     })
 }
 
-/// Start `prob` at `start`: its states, controls and free parameters.
-fn start_at(prob: &mut TrackingProblem, start: &GaitSolution) -> anyhow::Result<()> {
-    prob.setup.start_from(start).map_err(|e| anyhow!(e))?;
-    let names: Vec<String> = prob.model.free_parameters().iter().map(|&i| prob.model.parameters()[i].name.clone()).collect();
-    for (name, &v) in names.iter().zip(&start.theta) {
-        prob.model.set_parameter_value(name, v).map_err(|e| anyhow!(e))?;
-    }
-    Ok(())
-}
-
 /// A verified candidate: its re-fit run and what changed.
 struct Verified {
     test: ScoreTest,
@@ -220,7 +210,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         // from where the candidate's truncated re-fit got to (fewer SQP iterations than
         // from the run's solution)
         let mut prob = TrackingProblem::build(&setup, std::slice::from_ref(&t.effect))?;
-        start_at(&mut prob, start)?;
+        prob.start_at(start)?;
         let settings = tracking_sqp_settings(args.tol, args.max_iter, None, HessianMode::Exact, 1e-3);
         let rf = RunFolder::create(&refit_dir, args.overwrite)?;
         let run = prob.solve_and_write(&setup, std::slice::from_ref(&t.effect), &settings, rf, super::gait_run::DEFAULT_TRANSIENT_THRESHOLD_N, true)?;

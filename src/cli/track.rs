@@ -83,6 +83,11 @@ pub struct Args {
     /// move further from zero.
     #[arg(long)]
     regularisation: Option<f64>,
+    /// Weight of the angular-velocity targets relative to the angles (default: the seed's
+    /// 0.1; 0 drops them). The targets differentiate the smoothed angles, so they carry
+    /// the filter's bias and its low-passed noise, which a fit can follow.
+    #[arg(long, allow_negative_numbers = true)]
+    velocity_weight: Option<f64>,
     /// Start from the solution of a track run (its folder or solution.json) of the same
     /// phase graph instead of the data; effect parameters it identified start at its
     /// values, unless an `--effect` holds them fixed at its own.
@@ -193,6 +198,12 @@ impl TrackingProblem {
             setup.weights.excitation = w;
             setup.weights.activation = w;
         }
+        if let Some(v) = run.velocity_weight {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(anyhow!("--velocity-weight {v}: expected a finite weight ≥ 0 relative to the angles' (the seed's is 0.1)"));
+            }
+            setup.weights = setup.weights.clone().with_velocity_weight(v);
+        }
         // a pad (from the model file or `extra`) or residual actuators need a tighter tolerance
         let stiff = run.residual_actuators || (0..model.contacts.len()).any(|c| model.is_compliant(c));
         let tol = if stiff { run.integrator_tol.min(PADDED_INTEGRATOR_TOL) } else { run.integrator_tol };
@@ -234,6 +245,18 @@ pub fn tracking_sqp_settings(tol: f64, max_iter: usize, max_time: Option<f64>, h
 }
 
 impl TrackingProblem {
+    /// Start the problem at `start`: its states, controls and free parameters (its
+    /// θ lists the free parameters in the model's order). `diagnose` starts a verifying
+    /// re-fit where the candidate's truncated re-fit got to.
+    pub fn start_at(&mut self, start: &GaitSolution) -> anyhow::Result<()> {
+        self.setup.start_from(start).map_err(|e| anyhow!(e))?;
+        let names: Vec<String> = self.model.free_parameters().iter().map(|&i| self.model.parameters()[i].name.clone()).collect();
+        for (name, &v) in names.iter().zip(&start.theta) {
+            self.model.set_parameter_value(name, v).map_err(|e| anyhow!(e))?;
+        }
+        Ok(())
+    }
+
     /// Run `f` on the problem's transcription, its walking cycle and its initial point
     /// (the guess: the data, or the solution it was started from).
     pub fn with_transcription<R>(&self, f: impl FnOnce(&Transcription, &GaitCycle, Vec<f64>) -> anyhow::Result<R>) -> anyhow::Result<R> {
@@ -348,6 +371,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         track_pelvis_position: args.track_pelvis_position,
         residual_actuators: args.residual_actuators,
         regularisation: args.regularisation,
+        velocity_weight: args.velocity_weight,
         effects: vec![],
         parameters: vec![],
     };

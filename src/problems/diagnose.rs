@@ -50,6 +50,9 @@ pub struct TrackingRunSetup {
     /// 1e-3).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub regularisation: Option<f64>,
+    /// Weight of the velocity targets relative to the angles (`None`: the seed's 0.1).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub velocity_weight: Option<f64>,
     /// Effects added on top of the model file (`--effect`).
     pub effects: Vec<EffectSpec>,
     /// Every effect parameter of the model at the solution.

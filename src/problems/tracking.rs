@@ -96,7 +96,7 @@ impl TrackingWeights {
     pub fn seed(nq: usize, peak_force: f64, foot_length: f64) -> Self {
         let w = 1.0 / std::f64::consts::FRAC_PI_4;
         let mut angle = vec![w; nq];
-        let mut velocity = vec![0.1 * w; nq];
+        let mut velocity = vec![Self::SEED_VELOCITY * w; nq];
         for i in [0, 1] {
             angle[i] = 0.0;
             velocity[i] = 0.0;
@@ -106,6 +106,18 @@ impl TrackingWeights {
             velocity[i] *= 0.01;
         }
         Self { angle, velocity, force_scale: peak_force, force: 1.0, cop_length: foot_length, cop: 1.0, excitation: 1e-3, activation: 1e-3, residual: 1e-2 }
+    }
+
+    /// The seed's weight of the angular-velocity targets relative to the angles' (eq. 18).
+    pub const SEED_VELOCITY: f64 = 0.1;
+
+    /// These weights with the velocity targets weighted `relative` to the angles instead
+    /// of the seed's [`SEED_VELOCITY`](Self::SEED_VELOCITY) (the ankles keeping their
+    /// 1/100, untracked coordinates staying untracked); 0 drops the velocity targets,
+    /// which come from differentiating the smoothed angles rather than from a measurement.
+    pub fn with_velocity_weight(mut self, relative: f64) -> Self {
+        self.velocity.iter_mut().for_each(|v| *v *= relative / Self::SEED_VELOCITY);
+        self
     }
 
     /// Weight of the pelvis position (x, y) errors when they are tracked: 1/(0.1 m), as
