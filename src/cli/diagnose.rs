@@ -118,8 +118,9 @@ fn sentence(label: &str, diff: &RunDiff) -> String {
 /// because the velocity targets, derivatives of the filtered angles, carry filter bias
 /// and low-passed noise that a fit follows (at the truth they cost 0.5545, at the rigid
 /// fit 0.1875) and a pad, with no velocity jump at heel strike, follows further. A
-/// noise-free bootstrap null, noisy replicates and a nested stiff-pad null were tried
-/// and fail; `docs/heel-pad.md` has the figures.
+/// noise-free bootstrap null, noisy replicates, a nested stiff-pad null and
+/// cross-validation on alternate samples were tried and fail; `docs/heel-pad.md` has the
+/// figures.
 const UNSCORABLE_PAD: &str = "not scored — it has no null value (the rigid heel is its limit of infinite stiffness), and a re-fit's decrease is no evidence (with the seed's velocity targets a free pad lowers J on data without one too); re-fit it with `footfall track --foot … --effect heel_pad_compliance --init RUN` and judge the identified stiffness and damping and the per-channel errors with `footfall diff`";
 
 fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
