@@ -8,7 +8,7 @@ use footfall::model::GaitModel;
 use footfall::ocp::Transcription;
 use footfall::phases::PhaseSequence;
 use footfall::problems::gait::GaitCycle;
-use footfall::problems::track::TrackingSetup;
+use footfall::problems::track::{TargetSides, TrackingSetup};
 use footfall::problems::evaluation::GaitSolution;
 use footfall::runfolder::RunFolder;
 use footfall::model::effects::EffectSpec;
@@ -83,6 +83,14 @@ pub struct Args {
     /// move further from zero.
     #[arg(long)]
     regularisation: Option<f64>,
+    /// Read each phase's node targets from its own samples, so a node on a contact change
+    /// gets the limit from its phase's side instead of an average across the jump a rigid
+    /// contact makes there (angles split at impacts, forces at every contact change; the
+    /// kinematics cutoff filters each segment). For high-rate data: every phase needs 4
+    /// samples, and the targets at a contact change are extrapolated over up to one
+    /// sample interval.
+    #[arg(long)]
+    one_sided_targets: bool,
     /// Weight of the angular-velocity targets relative to the angles (default: the seed's
     /// 0.1; 0 drops them). The targets differentiate the smoothed angles, so they carry
     /// the filter's bias and its low-passed noise, which a fit can follow.
@@ -184,10 +192,16 @@ impl TrackingProblem {
         let seq = PhaseSequence::load(&run.phases)?;
         let sets = seq.resolve(&model, &run.phases)?;
         let mut data = super::load_data(run.data.as_deref())?;
+        let sides = if run.one_sided_targets { TargetSides::OneSided { cutoff_hz: run.kinematics_cutoff } } else { TargetSides::Interpolated };
         if let Some(fc) = run.kinematics_cutoff {
-            data = data.low_pass_kinematics(fc).context("--kinematics-cutoff")?;
+            // one-sided targets filter segment by segment; the whole-trial filter still
+            // checks the sampling and the cutoff
+            let filtered = data.low_pass_kinematics(fc).context("--kinematics-cutoff")?;
+            if !run.one_sided_targets {
+                data = filtered;
+            }
         }
-        let mut setup = TrackingSetup::new(&model, &seq, &sets, &data).map_err(|e| anyhow!("{}: {e}", data.source.display()))?;
+        let mut setup = TrackingSetup::new_with_sides(&model, &seq, &sets, &data, sides).map_err(|e| anyhow!("{}: {e}", data.source.display()))?;
         if run.track_pelvis_position {
             setup.weights = setup.weights.clone().with_pelvis_position();
         }
@@ -372,6 +386,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         residual_actuators: args.residual_actuators,
         regularisation: args.regularisation,
         velocity_weight: args.velocity_weight,
+        one_sided_targets: args.one_sided_targets,
         effects: vec![],
         parameters: vec![],
     };

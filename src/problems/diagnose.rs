@@ -50,6 +50,9 @@ pub struct TrackingRunSetup {
     /// 1e-3).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub regularisation: Option<f64>,
+    /// Whether the node targets are one-sided at contact changes (`--one-sided-targets`).
+    #[serde(default)]
+    pub one_sided_targets: bool,
     /// Weight of the velocity targets relative to the angles (`None`: the seed's 0.1).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub velocity_weight: Option<f64>,

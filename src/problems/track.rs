@@ -34,6 +34,57 @@ pub fn loaded_feet(model: &GaitModel, set: &ConstraintSet) -> [bool; 2] {
     f
 }
 
+/// How the node targets are read from the samples.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum TargetSides {
+    /// Splines through all the samples (the seed's). At a node on a contact change they
+    /// average across the jump a rigid contact makes there (the force at heel strike,
+    /// the velocities at an impact), whatever the sampling rate.
+    #[default]
+    Interpolated,
+    /// Each phase's targets from its own samples only: the angles from those between
+    /// the neighbouring impacts (where velocities jump), the forces from those strictly
+    /// inside the phase (contact forces jump at every contact change), so a node on a
+    /// contact change gets the limit from its phase's side. `cutoff_hz` low-passes the
+    /// angles segment by segment (odd reflection at the segment's ends). Needs samples
+    /// fast enough for every phase to hold [`MIN_SEGMENT_SAMPLES`]; the extrapolation to
+    /// the event spans up to one sample interval, so it pays off with high-rate data
+    /// (1 kHz, as force plates sample).
+    OneSided {
+        /// Kinematics low-pass cutoff (Hz), if any.
+        cutoff_hz: Option<f64>,
+    },
+}
+
+/// The fewest samples a phase (forces) or an impact-to-impact segment (angles) must hold
+/// for one-sided targets.
+pub const MIN_SEGMENT_SAMPLES: usize = 4;
+
+/// Splines of `columns` through the samples strictly inside `(a, b)` (low-passed at
+/// `cutoff_hz` first, if given); `what` names the span in errors.
+fn segment_splines(data: &GaitData, columns: &[&[f64]], (a, b): (f64, f64), cutoff_hz: Option<f64>, what: &str) -> Result<Vec<CubicSpline>, String> {
+    let idx: Vec<usize> = (0..data.time.len()).filter(|&k| data.time[k] > a + 1e-9 && data.time[k] < b - 1e-9).collect();
+    if idx.len() < MIN_SEGMENT_SAMPLES {
+        return Err(format!(
+            "one-sided targets: {what} ({a:.4}–{b:.4} s) holds {} samples, fewer than {MIN_SEGMENT_SAMPLES}; sample faster or use interpolated targets",
+            idx.len()
+        ));
+    }
+    let t: Vec<f64> = idx.iter().map(|&k| data.time[k]).collect();
+    let fs = (t.len() - 1) as f64 / (t[t.len() - 1] - t[0]);
+    columns
+        .iter()
+        .map(|col| {
+            let y: Vec<f64> = idx.iter().map(|&k| col[k]).collect();
+            let y = match cutoff_hz {
+                Some(fc) => crate::data::filter::low_pass(&y, fs, fc),
+                None => y,
+            };
+            CubicSpline::new(&t, &y).map_err(|e| format!("{what}: {e}"))
+        })
+        .collect()
+}
+
 /// `seq` with the durations of its continuous phases fixed to the measured contact
 /// sequence over `[t0, t1]`: consecutive phases with the same loaded feet share the
 /// measured duration of that contact phase, in proportion to their initial durations.
@@ -122,9 +173,25 @@ impl TrackingSetup {
         Self::with_events(model, seq, sets, data, events)
     }
 
+    /// As [`new`](Self::new), with the node targets read as `sides` says. For
+    /// [`TargetSides::OneSided`] `data` is the unfiltered trial (its cutoff filters each
+    /// segment instead of the whole trial).
+    pub fn new_with_sides(model: &GaitModel, seq: &PhaseSequence, sets: &[ConstraintSet], data: &GaitData, sides: TargetSides) -> Result<Self, String> {
+        let events = match &data.events {
+            Some(e) => e.clone(),
+            None => detect_events(data, DEFAULT_EVENT_FRACTION).map_err(|e| e.to_string())?,
+        };
+        Self::with_events_and_sides(model, seq, sets, data, events, sides)
+    }
+
     /// As [`new`](Self::new), with the gait events given instead of detected from the
     /// force threshold (e.g. the exact events of a synthetic trial).
     pub fn with_events(model: &GaitModel, seq: &PhaseSequence, sets: &[ConstraintSet], data: &GaitData, events: Events) -> Result<Self, String> {
+        Self::with_events_and_sides(model, seq, sets, data, events, TargetSides::Interpolated)
+    }
+
+    /// As [`with_events`](Self::with_events), with the node targets read as `sides` says.
+    pub fn with_events_and_sides(model: &GaitModel, seq: &PhaseSequence, sets: &[ConstraintSet], data: &GaitData, events: Events, sides: TargetSides) -> Result<Self, String> {
         let (t0, t1) = half_cycle(&events)?;
         let seq = fix_durations(seq, model, sets, &events, t0, t1)?;
         let splines: Vec<CubicSpline> =
@@ -149,9 +216,38 @@ impl TrackingSetup {
         let mut gu = Vec::new();
         let mut t = t0;
         let linear = seq.gait.as_ref().is_none_or(|g| g.controls == crate::integrate::ControlShape::Linear);
+        // the impacts' times (with the window's ends), where one-sided angle segments break
+        let mut impacts = vec![t0];
+        let mut at = t0;
+        for ph in &seq.phases {
+            match ph {
+                Phase::Impact { .. } => impacts.push(at),
+                Phase::Continuous { duration, .. } => at += duration.value(),
+            }
+        }
+        impacts.push(t1);
         for (i, ph) in seq.phases.iter().enumerate() {
-            let Phase::Continuous { duration, intervals, .. } = ph else { continue };
+            let Phase::Continuous { name, duration, intervals, .. } = ph else { continue };
             let h = duration.value() / *intervals as f64;
+            let one_sided = match sides {
+                TargetSides::Interpolated => None,
+                TargetSides::OneSided { cutoff_hz } => {
+                    let end = t + duration.value();
+                    let a = impacts.iter().copied().filter(|&x| x <= t + 1e-9).fold(t0, f64::max);
+                    let b = impacts.iter().copied().filter(|&x| x >= end - 1e-9).fold(t1, f64::min);
+                    let angles: Vec<&[f64]> = COORDINATES.iter().map(|c| data.channel(c).ok_or_else(|| format!("no channel {c}"))).collect::<Result<_, _>>()?;
+                    let angles = segment_splines(data, &angles, (a, b), cutoff_hz, &format!("the segment between the impacts around phase {name}"))?;
+                    let f = &data.feet;
+                    let forces = segment_splines(data, &[&f[0].fx, &f[1].fx, &f[0].fy, &f[1].fy], (t, end), None, &format!("phase {name}"))?;
+                    let mut forces = forces.into_iter();
+                    let mut next = || forces.next().ok_or_else(|| "one-sided targets: missing force spline".to_string());
+                    Some((angles, [next()?, next()?], [next()?, next()?]))
+                }
+            };
+            let (splines, fx, fy) = match &one_sided {
+                Some((a, x, y)) => (a, x, y),
+                None => (&splines, &fx, &fy),
+            };
             let feet = loaded_feet(model, &sets[i]);
             let times: Vec<f64> = (0..=*intervals).map(|k| t + k as f64 * h).collect();
             let mut tg = Vec::new();
