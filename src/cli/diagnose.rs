@@ -112,16 +112,15 @@ fn sentence(label: &str, diff: &RunDiff) -> String {
 /// Why heel-pad compliance is not scored, and what to do instead (followed by the run).
 ///
 /// A score test needs a null value and the rigid heel is the pad's limit of infinite
-/// stiffness. Nor does a re-fit's decrease of J serve as evidence: with the seed's cost
-/// a free pad lowers J on data *without* a pad too (the double-circle trial without a
-/// hidden effect: J 0.3938 → 0.3696, a statistic of 34 against the χ²₂ 0.1 % point 13.8),
-/// because the velocity targets, derivatives of the filtered angles, carry filter bias
-/// and low-passed noise that a fit follows (at the truth they cost 0.5545, at the rigid
-/// fit 0.1875) and a pad, with no velocity jump at heel strike, follows further. A
-/// noise-free bootstrap null, noisy replicates, a nested stiff-pad null and
-/// cross-validation on alternate samples were tried and fail; `docs/heel-pad.md` has the
-/// figures.
-const UNSCORABLE_PAD: &str = "not scored — it has no null value (the rigid heel is its limit of infinite stiffness), and a re-fit's decrease is no evidence (with the seed's velocity targets a free pad lowers J on data without one too); re-fit it with `footfall track --foot … --effect heel_pad_compliance --init RUN` and judge the identified stiffness and damping and the per-channel errors with `footfall diff`";
+/// stiffness. Nor does a re-fit's decrease of J serve as evidence: with the seed's
+/// interpolated node targets a free pad lowers J on data *without* a pad too (the
+/// double-circle trial without a hidden effect: J 0.3938 → 0.3696, a statistic of 34
+/// against the χ²₂ 0.1 % point 13.8), even on noise-free data, because at the nodes on
+/// the contact changes the targets average across the jumps a rigid contact makes and a
+/// pad bends to meet them. `track --one-sided-targets` removes that on noise-free 1 kHz
+/// data, not yet on 100 Hz noisy trials; `docs/heel-pad.md` has the figures, and the
+/// nulls and cross-validation that were tried and fail.
+const UNSCORABLE_PAD: &str = "not scored — it has no null value (the rigid heel is its limit of infinite stiffness), and a re-fit's decrease is no evidence (a free pad lowers J on data without one too, from the node targets on the contact changes; see docs/heel-pad.md); re-fit it with `footfall track --foot … --effect heel_pad_compliance --init RUN` and judge the identified stiffness and damping and the per-channel errors with `footfall diff`";
 
 fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     let setup = read_run_setup(&args.run)?;
