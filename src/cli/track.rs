@@ -194,11 +194,11 @@ impl TrackingProblem {
         let mut data = super::load_data(run.data.as_deref())?;
         let sides = if run.one_sided_targets { TargetSides::OneSided { cutoff_hz: run.kinematics_cutoff } } else { TargetSides::Interpolated };
         if let Some(fc) = run.kinematics_cutoff {
-            // one-sided targets filter segment by segment; the whole-trial filter still
-            // checks the sampling and the cutoff
-            let filtered = data.low_pass_kinematics(fc).context("--kinematics-cutoff")?;
-            if !run.one_sided_targets {
-                data = filtered;
+            // one-sided targets filter segment by segment (the same sampling and cutoff checks)
+            if run.one_sided_targets {
+                data.kinematics_filter_rate(fc).context("--kinematics-cutoff")?;
+            } else {
+                data = data.low_pass_kinematics(fc).context("--kinematics-cutoff")?;
             }
         }
         let mut setup = TrackingSetup::new_with_sides(&model, &seq, &sets, &data, sides).map_err(|e| anyhow!("{}: {e}", data.source.display()))?;

@@ -274,6 +274,22 @@ impl GaitData {
     /// Errors: data that fail [`Self::validate`]; samples not uniformly spaced (to 1 %);
     /// a cutoff not in (0, f_s/2).
     pub fn low_pass_kinematics(&self, cutoff_hz: f64) -> Result<GaitData, DataError> {
+        let fs = self.kinematics_filter_rate(cutoff_hz)?;
+        let mut out = self.clone();
+        for q in out.q.iter_mut() {
+            if q.iter().all(|v| v.is_finite()) {
+                *q = filter::low_pass(q, fs, cutoff_hz);
+            }
+        }
+        Ok(out)
+    }
+
+    /// The sampling rate (Hz) at which the trial's kinematics can be low-pass filtered at
+    /// `cutoff_hz`: what [`Self::low_pass_kinematics`] checks, for callers that filter
+    /// parts of the trial themselves.
+    ///
+    /// Errors: as [`Self::low_pass_kinematics`].
+    pub fn kinematics_filter_rate(&self, cutoff_hz: f64) -> Result<f64, DataError> {
         self.validate()?;
         let n = self.time.len();
         let dt = (self.time[n - 1] - self.time[0]) / (n - 1) as f64;
@@ -288,13 +304,7 @@ impl GaitData {
         if !(cutoff_hz > 0.0 && cutoff_hz < 0.5 * fs) {
             return Err(DataError::invalid(&self.source, "cutoff", format!("the cutoff must lie in (0, {} Hz) for {fs} Hz sampling, got {cutoff_hz}", 0.5 * fs)));
         }
-        let mut out = self.clone();
-        for q in out.q.iter_mut() {
-            if q.iter().all(|v| v.is_finite()) {
-                *q = filter::low_pass(q, fs, cutoff_hz);
-            }
-        }
-        Ok(out)
+        Ok(fs)
     }
 
     /// The samples with `t0 ≤ t ≤ t1` (to within 1e-9 s; no interpolation at the ends:

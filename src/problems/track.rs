@@ -166,11 +166,7 @@ impl TrackingSetup {
     /// constraint sets `sets`), with the events given with the data or else detected from
     /// the force threshold (5 % of peak).
     pub fn new(model: &GaitModel, seq: &PhaseSequence, sets: &[ConstraintSet], data: &GaitData) -> Result<Self, String> {
-        let events = match &data.events {
-            Some(e) => e.clone(),
-            None => detect_events(data, DEFAULT_EVENT_FRACTION).map_err(|e| e.to_string())?,
-        };
-        Self::with_events(model, seq, sets, data, events)
+        Self::new_with_sides(model, seq, sets, data, TargetSides::Interpolated)
     }
 
     /// As [`new`](Self::new), with the node targets read as `sides` says. For
@@ -237,14 +233,13 @@ impl TrackingSetup {
                     let b = impacts.iter().copied().filter(|&x| x >= end - 1e-9).fold(t1, f64::min);
                     let angles: Vec<&[f64]> = COORDINATES.iter().map(|c| data.channel(c).ok_or_else(|| format!("no channel {c}"))).collect::<Result<_, _>>()?;
                     let angles = segment_splines(data, &angles, (a, b), cutoff_hz, &format!("the segment between the impacts around phase {name}"))?;
-                    let f = &data.feet;
-                    let forces = segment_splines(data, &[&f[0].fx, &f[1].fx, &f[0].fy, &f[1].fy], (t, end), None, &format!("phase {name}"))?;
-                    let mut forces = forces.into_iter();
-                    let mut next = || forces.next().ok_or_else(|| "one-sided targets: missing force spline".to_string());
-                    Some((angles, [next()?, next()?], [next()?, next()?]))
+                    let (f, phase) = (&data.feet, format!("phase {name}"));
+                    let fx = segment_splines(data, &[&f[0].fx, &f[1].fx], (t, end), None, &phase)?;
+                    let fy = segment_splines(data, &[&f[0].fy, &f[1].fy], (t, end), None, &phase)?;
+                    Some((angles, fx, fy))
                 }
             };
-            let (splines, fx, fy) = match &one_sided {
+            let (splines, fx, fy): (&[CubicSpline], &[CubicSpline], &[CubicSpline]) = match &one_sided {
                 Some((a, x, y)) => (a, x, y),
                 None => (&splines, &fx, &fy),
             };
