@@ -1,13 +1,14 @@
 //! `footfall diagnose RUN`: which effect of the catalog is the model of a tracking run
-//! missing? Score tests of every candidate at the run's solution, then a real re-fit of
-//! the top significant ones (each written as a track run folder, so `diff` and a second
-//! `diagnose` can start from it).
+//! missing? Score tests of every candidate at the run's solution (a full re-fit for the
+//! heel pad, which has no null value), then a real re-fit of the top significant ones
+//! (each written as a track run folder, so `diff` and a second `diagnose` can start from
+//! it).
 
-use super::track::{read_run_setup, tracking_sqp_settings, TrackingProblem};
+use super::track::{read_run_setup, tracking_sqp_settings, TrackedRun, TrackingProblem};
 use super::Failure;
 use anyhow::anyhow;
 use footfall::model::effects::{catalog, EffectSpec};
-use footfall::problems::diagnose::{channel_means, gauss_newton_decrease, score_test, ScoreTest};
+use footfall::problems::diagnose::{channel_means, gauss_newton_decrease, refit_test, score_test, IdentifiedParameter, ScoreTest, TrackingRunSetup};
 use footfall::problems::evaluation::GaitSolution;
 use footfall::report::diff::{fmt_value, RunDiff, RunSummary};
 use footfall::report::html::{Report, Section, Summary, Tone};
@@ -80,6 +81,84 @@ struct Verified {
     sentence: String,
 }
 
+impl Verified {
+    /// What the re-fit `run` of candidate `test` changed against the run `before` (cost
+    /// `objective`).
+    fn new(test: &ScoreTest, run: &TrackedRun, before: &RunSummary, objective: f64) -> anyhow::Result<Self> {
+        let after = RunSummary::read(&run.output.path)?;
+        let diff = RunDiff::new(before, &after, 5.0);
+        let parameters = run
+            .record
+            .parameters
+            .iter()
+            .filter(|p| test.parameters.contains(&p.name))
+            .map(|p| (p.name.clone(), p.value, p.sd, p.unit.clone()))
+            .collect();
+        Ok(Verified {
+            sentence: sentence(&test.label, &diff),
+            test: test.clone(),
+            folder: run.output.path.clone(),
+            converged: run.converged,
+            objective_before: objective,
+            objective_after: run.result.objective,
+            parameters,
+            diff,
+        })
+    }
+}
+
+/// What a candidate's test left: the point of its truncated re-fit (where a verifying
+/// re-fit starts), or the full re-fit of a candidate without a null value.
+enum Evidence {
+    Start(GaitSolution),
+    Refit(Box<TrackedRun>),
+}
+
+/// The run's re-fit with `effect` added, from its solution, written to `<RUN>+<effect>`.
+fn refit(args: &Args, setup: &TrackingRunSetup, effect: &EffectSpec, start: Start<'_>, quiet: bool) -> anyhow::Result<TrackedRun> {
+    let dir = sibling(&args.run, &format!("+{}", effect.kind()));
+    if !quiet {
+        eprintln!("re-fitting with {} → {}", effect.label(), dir.display());
+    }
+    let mut prob = TrackingProblem::build(setup, std::slice::from_ref(effect))?;
+    match start {
+        Start::Solution(s) => prob.setup.start_from(s).map_err(|e| anyhow!("{}: {e}", args.run.display()))?,
+        Start::Point(s) => prob.start_at(s)?,
+    }
+    let settings = tracking_sqp_settings(args.tol, args.max_iter, None, HessianMode::Exact, 1e-3);
+    let rf = RunFolder::create(&dir, args.overwrite)?;
+    prob.solve_and_write(setup, std::slice::from_ref(effect), &settings, rf, super::gait_run::DEFAULT_TRANSIENT_THRESHOLD_N, quiet)
+}
+
+/// Where a re-fit starts: the run's solution (the effect's parameters at their initial
+/// values) or a point that has them (a truncated re-fit's).
+enum Start<'a> {
+    Solution(&'a GaitSolution),
+    Point(&'a GaitSolution),
+}
+
+/// The run being diagnosed: its solution, summary, cost and data residual count.
+struct Baseline<'a> {
+    solution: &'a GaitSolution,
+    summary: &'a RunSummary,
+    objective: f64,
+    rows: usize,
+}
+
+/// Test of the heel pad by a full re-fit ([`refit_test`]); its channel errors before and
+/// after are the re-fit's.
+fn test_by_refit(args: &Args, setup: &TrackingRunSetup, effect: &EffectSpec, base: &Baseline<'_>, quiet: bool) -> anyhow::Result<(ScoreTest, TrackedRun)> {
+    let Baseline { solution, summary: before, objective, rows } = *base;
+    let run = refit(args, setup, effect, Start::Solution(solution), quiet)?;
+    let added: Vec<&IdentifiedParameter> = run.record.parameters.iter().filter(|p| p.free && p.name.starts_with(&format!("{}.", effect.kind()))).collect();
+    let names = added.iter().map(|p| p.name.clone()).collect();
+    let values = added.iter().map(|p| p.value).collect();
+    let mut t = refit_test(effect, names, values, objective, run.result.objective, rows, run.result.history.len().saturating_sub(1));
+    let diff = RunDiff::new(before, &RunSummary::read(&run.output.path)?, 5.0);
+    t.expected_channels = diff.channels.iter().filter_map(|c| Some((c.channel.clone(), c.unit.clone(), c.a.as_ref()?.mean, c.b.as_ref()?.mean))).collect();
+    Ok((t, run))
+}
+
 fn sibling(run: &Path, suffix: &str) -> PathBuf {
     let name = run.file_name().map(|s| s.to_string_lossy().to_string()).unwrap_or_else(|| "run".into());
     run.with_file_name(format!("{name}{suffix}"))
@@ -109,18 +188,19 @@ fn sentence(label: &str, diff: &RunDiff) -> String {
     s
 }
 
-/// Why heel-pad compliance is not scored, and what to do instead (followed by the run).
+/// Why heel-pad compliance is not scored on a run with interpolated node targets, and
+/// what to do instead (followed by the run).
 ///
-/// A score test needs a null value and the rigid heel is the pad's limit of infinite
-/// stiffness. Nor does a re-fit's decrease of J serve as evidence: with the seed's
-/// interpolated node targets a free pad lowers J on data *without* a pad too (the
-/// double-circle trial without a hidden effect: J 0.3938 → 0.3696, a statistic of 34
-/// against the χ²₂ 0.1 % point 13.8), even on noise-free data, because at the nodes on
-/// the contact changes the targets average across the jumps a rigid contact makes and a
-/// pad bends to meet them. `track --one-sided-targets` removes that on noise-free 1 kHz
-/// data, not yet on 100 Hz noisy trials; `docs/heel-pad.md` has the figures, and the
-/// nulls and cross-validation that were tried and fail.
-const UNSCORABLE_PAD: &str = "not scored — it has no null value (the rigid heel is its limit of infinite stiffness), and a re-fit's decrease is no evidence (a free pad lowers J on data without one too, from the node targets on the contact changes; see docs/heel-pad.md); re-fit it with `footfall track --foot … --effect heel_pad_compliance --init RUN` and judge the identified stiffness and damping and the per-channel errors with `footfall diff`";
+/// The pad has no null value for a score test (the rigid heel is its limit of infinite
+/// stiffness), so `diagnose` tests it by a full re-fit ([`refit_test`]). With the seed's
+/// interpolated node targets that re-fit's decrease is no evidence: a free pad lowers J
+/// on data *without* a pad too (the double-circle trial without a hidden effect: J
+/// 0.3938 → 0.3696, a statistic of 34 against the χ²₂ 0.1 % point 13.8), even on
+/// noise-free data, because at the nodes on the contact changes the targets average
+/// across the jumps a rigid contact makes and a pad bends to meet them. With
+/// `track --one-sided-targets` it does not (noise-free 1 kHz data); `docs/heel-pad.md`
+/// has the figures.
+const UNSCORABLE_PAD: &str = "not scored — it has no null value (the rigid heel is its limit of infinite stiffness), so it is tested by a re-fit, and on a run with interpolated node targets a re-fit's decrease is no evidence (a free pad lowers J on data without one too, from the node targets on the contact changes; see docs/heel-pad.md); track with `--one-sided-targets` (data sampled fast enough for 4 samples per phase; 1 kHz tested) and diagnose that run, or re-fit it with `footfall track --foot … --effect heel_pad_compliance --init RUN` and judge the identified stiffness and damping and the per-channel errors with `footfall diff`";
 
 fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     let setup = read_run_setup(&args.run)?;
@@ -146,7 +226,8 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     }
     let mut tests = Vec::new();
     let mut skipped = Vec::new();
-    // the heel pad, not in the catalog, is named as not scored on feet with a heel circle
+    // the heel pad, not in the catalog, is a candidate on feet with a heel circle: tested
+    // by a re-fit on runs with one-sided targets, named as not scored on others
     let pad = EffectSpec::parse_cli("heel_pad_compliance").map_err(|e| anyhow!(e))?;
     if args.candidates.is_empty() && base.model.contacts.iter().any(|c| c.name.ends_with(".heel")) {
         candidates.push(pad.clone());
@@ -157,7 +238,28 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
             continue;
         }
         if c.kind() == pad.kind() {
-            skipped.push(format!("{}: {}", c.label(), UNSCORABLE_PAD.replace("RUN", &args.run.display().to_string())));
+            if !setup.one_sided_targets {
+                skipped.push(format!("{}: {}", c.label(), UNSCORABLE_PAD.replace("RUN", &args.run.display().to_string())));
+                continue;
+            }
+            let t0 = std::time::Instant::now();
+            let baseline = Baseline { solution: &solution, summary: &before, objective, rows };
+            let (t, run) = test_by_refit(&args, &setup, c, &baseline, quiet)?;
+            if !quiet {
+                eprintln!(
+                    "  {:<32} re-fit decrease   {:>10.3e} ({:>5.1} % of J, {} iterations{}), statistic {:>9.1} vs {:.1}{}  [{:.1} s]",
+                    t.label,
+                    t.predicted_decrease,
+                    100.0 * t.predicted_fraction,
+                    t.steps,
+                    if run.converged { "" } else { ", not converged" },
+                    t.statistic,
+                    t.threshold,
+                    if t.significant { "  significant" } else { "" },
+                    t0.elapsed().as_secs_f64()
+                );
+            }
+            tests.push((t, Evidence::Refit(Box::new(run))));
             continue;
         }
         let mut prob = match TrackingProblem::build(&setup, std::slice::from_ref(c)) {
@@ -184,44 +286,21 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
                 t0.elapsed().as_secs_f64()
             );
         }
-        tests.push((t, start));
+        tests.push((t, Evidence::Start(start)));
     }
     tests.sort_by(|a, b| b.0.statistic.total_cmp(&a.0.statistic));
-    let (tests, starts): (Vec<ScoreTest>, Vec<GaitSolution>) = tests.into_iter().unzip();
+    let (tests, evidence): (Vec<ScoreTest>, Vec<Evidence>) = tests.into_iter().unzip();
 
     let mut verified = Vec::new();
-    for (t, start) in tests.iter().zip(&starts).filter(|(t, _)| t.significant).take(args.verify) {
-        let refit_dir = sibling(&args.run, &format!("+{}", t.effect.kind()));
-        if !quiet {
-            eprintln!("verifying {} by a re-fit → {}", t.label, refit_dir.display());
-        }
-        // from where the candidate's truncated re-fit got to (fewer SQP iterations than
-        // from the run's solution)
-        let mut prob = TrackingProblem::build(&setup, std::slice::from_ref(&t.effect))?;
-        prob.start_at(start)?;
-        let settings = tracking_sqp_settings(args.tol, args.max_iter, None, HessianMode::Exact, 1e-3);
-        let rf = RunFolder::create(&refit_dir, args.overwrite)?;
-        let run = prob.solve_and_write(&setup, std::slice::from_ref(&t.effect), &settings, rf, super::gait_run::DEFAULT_TRANSIENT_THRESHOLD_N, true)?;
-        let after = RunSummary::read(&run.output.path)?;
-        let diff = RunDiff::new(&before, &after, 5.0);
-        let names: Vec<&String> = t.parameters.iter().collect();
-        let parameters = run
-            .record
-            .parameters
-            .iter()
-            .filter(|p| names.contains(&&p.name))
-            .map(|p| (p.name.clone(), p.value, p.sd, p.unit.clone()))
-            .collect();
-        verified.push(Verified {
-            sentence: sentence(&t.label, &diff),
-            test: t.clone(),
-            folder: run.output.path.clone(),
-            converged: run.converged,
-            objective_before: objective,
-            objective_after: run.result.objective,
-            parameters,
-            diff,
-        });
+    for (t, e) in tests.iter().zip(&evidence).filter(|(t, _)| t.significant).take(args.verify) {
+        let v = match e {
+            // the test was the re-fit
+            Evidence::Refit(run) => Verified::new(t, run, &before, objective)?,
+            // from where the candidate's truncated re-fit got to (fewer SQP iterations
+            // than from the run's solution)
+            Evidence::Start(start) => Verified::new(t, &refit(&args, &setup, &t.effect, Start::Point(start), quiet)?, &before, objective)?,
+        };
+        verified.push(v);
     }
 
     // --- output
@@ -251,16 +330,35 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
             })
             .collect(),
     };
+    // channels by name: a re-fit's come from its run summary, a score test's from the
+    // problem
+    let channels: Vec<(String, String)> = tests.first().map_or(vec![], |t| t.expected_channels.iter().map(|c| (c.0.clone(), c.1.clone())).collect());
     let expected = Table {
-        title: "Expected mean error per channel after the truncated re-fit with each candidate (before → after)".into(),
-        headers: std::iter::once("effect".to_string()).chain(tests.first().map_or(vec![], |t| t.expected_channels.iter().map(|c| format!("{} ({})", c.0, c.1)).collect())).collect(),
+        title: "Expected mean error per channel after the truncated re-fit with each candidate (a full re-fit for the heel pad; before → after)".into(),
+        headers: std::iter::once("effect".to_string()).chain(channels.iter().map(|(c, u)| format!("{c} ({u})"))).collect(),
         rows: tests
             .iter()
-            .map(|t| std::iter::once(t.label.clone()).chain(t.expected_channels.iter().map(|c| format!("{} → {}", fmt_value(c.2), fmt_value(c.3)))).collect())
+            .map(|t| {
+                std::iter::once(t.label.clone())
+                    .chain(channels.iter().map(|(name, _)| t.expected_channels.iter().find(|c| &c.0 == name).map_or("—".into(), |c| format!("{} → {}", fmt_value(c.2), fmt_value(c.3)))))
+                    .collect()
+            })
             .collect(),
     };
+    let refits: Vec<String> = tests
+        .iter()
+        .zip(&evidence)
+        .filter_map(|(t, e)| match e {
+            Evidence::Refit(run) => Some(format!("{} was tested by a full re-fit ({}, {}), as it has no null value for a score test", t.label, run.output.path.display(), if run.converged { "converged" } else { "did NOT converge" })),
+            Evidence::Start(_) => None,
+        })
+        .collect();
     let mut md = format!("# Diagnosis of {}\n\n{verdict}\n\n{}\n\n{}\n", args.run.display(), ranking.to_markdown(), expected.to_markdown());
-    let mut sections = vec![Section { heading: "Ranking".into(), paragraphs: vec![verdict.clone()], tables: vec![ranking.clone(), expected], svgs: vec![] }];
+    for r in &refits {
+        md += &format!("\n{r}.\n");
+    }
+    let paragraphs = std::iter::once(verdict.clone()).chain(refits.iter().map(|r| format!("{r}."))).collect();
+    let mut sections = vec![Section { heading: "Ranking".into(), paragraphs, tables: vec![ranking.clone(), expected], svgs: vec![] }];
     for v in &verified {
         let params = v.parameters.iter().map(|(n, val, sd, u)| format!("{n} = {val:.5}{} {u}", sd.map_or(String::new(), |s| format!(" ± {s:.2e}")))).collect::<Vec<_>>().join("; ");
         let text = format!(

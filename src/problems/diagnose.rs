@@ -112,8 +112,12 @@ pub struct ScoreTest {
     pub threshold: f64,
     /// Whether the statistic exceeds the threshold.
     pub significant: bool,
-    /// Gauss–Newton steps taken ([`truncated_refit`]).
+    /// Gauss–Newton steps taken ([`truncated_refit`]), or the SQP iterations of a full
+    /// re-fit.
     pub steps: usize,
+    /// Whether the decrease is a full re-fit's ([`refit_test`]: an effect without a null
+    /// value) rather than the truncated re-fit's prediction.
+    pub refit: bool,
     /// Mean error per Table 3 channel at the solution and after the steps:
     /// `(channel, unit, before, after)` — the expected change channel by channel.
     pub expected_channels: Vec<(String, String, f64, f64)>,
@@ -220,7 +224,36 @@ pub fn score_test(effect: &EffectSpec, parameters: Vec<String>, tr: &Transcripti
         significant: statistic > threshold,
         expected_channels: Vec::new(),
         steps,
+        refit: false,
     }, w1))
+}
+
+/// The test of a candidate without a null value (the heel pad, whose limit of infinite
+/// stiffness is the rigid heel): the decrease of a full re-fit with the candidate from
+/// the solution, `objective` → `refit_objective`, in units of the residual mean square
+/// `objective / data_rows`, against the χ²ₖ 0.1 % point as a score test's. The null
+/// lies on the boundary and one parameter (the damping) has no meaning there, so the
+/// χ²ₖ reference is an approximation; `diagnose` offers it only where the pad was shown
+/// not to gain on data without one (one-sided node targets).
+pub fn refit_test(effect: &EffectSpec, parameters: Vec<String>, values: Vec<f64>, objective: f64, refit_objective: f64, data_rows: usize, iterations: usize) -> ScoreTest {
+    let k = parameters.len();
+    let decrease = (objective - refit_objective).max(0.0);
+    let statistic = decrease / (objective / data_rows.max(1) as f64);
+    let threshold = chi2_999(k);
+    ScoreTest {
+        label: effect.label(),
+        effect: effect.clone(),
+        parameters,
+        step_values: values,
+        predicted_decrease: decrease,
+        predicted_fraction: decrease / objective,
+        statistic,
+        threshold,
+        significant: statistic > threshold,
+        expected_channels: Vec::new(),
+        steps: iterations,
+        refit: true,
+    }
 }
 
 /// Approximate standard deviations of the free parameters θ at a least-squares solution
