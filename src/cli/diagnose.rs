@@ -114,27 +114,19 @@ enum Evidence {
     Refit(Box<TrackedRun>),
 }
 
-/// The run's re-fit with `effect` added, from its solution, written to `<RUN>+<effect>`.
-fn refit(args: &Args, setup: &TrackingRunSetup, effect: &EffectSpec, start: Start<'_>, quiet: bool) -> anyhow::Result<TrackedRun> {
+/// The run's re-fit with `effect` added, from `start` (the run's solution, the effect's
+/// parameters at their initial values, or a truncated re-fit's point), written to
+/// `<RUN>+<effect>`.
+fn refit(args: &Args, setup: &TrackingRunSetup, effect: &EffectSpec, start: &GaitSolution, quiet: bool) -> anyhow::Result<TrackedRun> {
     let dir = sibling(&args.run, &format!("+{}", effect.kind()));
     if !quiet {
         eprintln!("re-fitting with {} → {}", effect.label(), dir.display());
     }
     let mut prob = TrackingProblem::build(setup, std::slice::from_ref(effect))?;
-    match start {
-        Start::Solution(s) => prob.setup.start_from(s).map_err(|e| anyhow!("{}: {e}", args.run.display()))?,
-        Start::Point(s) => prob.start_at(s)?,
-    }
+    prob.start_at(start).map_err(|e| anyhow!("{}: {e:#}", args.run.display()))?;
     let settings = tracking_sqp_settings(args.tol, args.max_iter, None, HessianMode::Exact, 1e-3);
     let rf = RunFolder::create(&dir, args.overwrite)?;
     prob.solve_and_write(setup, std::slice::from_ref(effect), &settings, rf, super::gait_run::DEFAULT_TRANSIENT_THRESHOLD_N, quiet)
-}
-
-/// Where a re-fit starts: the run's solution (the effect's parameters at their initial
-/// values) or a point that has them (a truncated re-fit's).
-enum Start<'a> {
-    Solution(&'a GaitSolution),
-    Point(&'a GaitSolution),
 }
 
 /// The run being diagnosed: its solution, summary, cost and data residual count.
@@ -149,7 +141,7 @@ struct Baseline<'a> {
 /// after are the re-fit's.
 fn test_by_refit(args: &Args, setup: &TrackingRunSetup, effect: &EffectSpec, base: &Baseline<'_>, quiet: bool) -> anyhow::Result<(ScoreTest, TrackedRun)> {
     let Baseline { solution, summary: before, objective, rows } = *base;
-    let run = refit(args, setup, effect, Start::Solution(solution), quiet)?;
+    let run = refit(args, setup, effect, solution, quiet)?;
     let added: Vec<&IdentifiedParameter> = run.record.parameters.iter().filter(|p| p.free && p.name.starts_with(&format!("{}.", effect.kind()))).collect();
     let names = added.iter().map(|p| p.name.clone()).collect();
     let values = added.iter().map(|p| p.value).collect();
@@ -298,7 +290,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
             Evidence::Refit(run) => Verified::new(t, run, &before, objective)?,
             // from where the candidate's truncated re-fit got to (fewer SQP iterations
             // than from the run's solution)
-            Evidence::Start(start) => Verified::new(t, &refit(&args, &setup, &t.effect, Start::Point(start), quiet)?, &before, objective)?,
+            Evidence::Start(start) => Verified::new(t, &refit(&args, &setup, &t.effect, start, quiet)?, &before, objective)?,
         };
         verified.push(v);
     }

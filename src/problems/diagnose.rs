@@ -208,24 +208,9 @@ pub fn score_test(effect: &EffectSpec, parameters: Vec<String>, tr: &Transcripti
     let k = parameters.len();
     let (objective, decrease, w1, steps) = truncated_refit(tr, w, MAX_STEPS, REL_STOP)?;
     let theta = theta_of(tr, &w1);
-    let predicted = (decrease - baseline_decrease).max(0.0);
-    let s2 = objective / data_rows.max(1) as f64;
-    let statistic = predicted / s2;
-    let threshold = chi2_999(k);
-    Ok((ScoreTest {
-        label: effect.label(),
-        effect: effect.clone(),
-        parameters,
-        step_values: theta[theta.len() - k..].to_vec(),
-        predicted_decrease: predicted,
-        predicted_fraction: predicted / objective,
-        statistic,
-        threshold,
-        significant: statistic > threshold,
-        expected_channels: Vec::new(),
-        steps,
-        refit: false,
-    }, w1))
+    let values = theta[theta.len() - k..].to_vec();
+    let test = ScoreTest { steps, ..ScoreTest::from_decrease(effect, parameters, values, decrease - baseline_decrease, objective, data_rows) };
+    Ok((test, w1))
 }
 
 /// The test of a candidate without a null value (the heel pad, whose limit of infinite
@@ -236,23 +221,32 @@ pub fn score_test(effect: &EffectSpec, parameters: Vec<String>, tr: &Transcripti
 /// χ²ₖ reference is an approximation; `diagnose` offers it only where the pad was shown
 /// not to gain on data without one (one-sided node targets).
 pub fn refit_test(effect: &EffectSpec, parameters: Vec<String>, values: Vec<f64>, objective: f64, refit_objective: f64, data_rows: usize, iterations: usize) -> ScoreTest {
-    let k = parameters.len();
-    let decrease = (objective - refit_objective).max(0.0);
-    let statistic = decrease / (objective / data_rows.max(1) as f64);
-    let threshold = chi2_999(k);
-    ScoreTest {
-        label: effect.label(),
-        effect: effect.clone(),
-        parameters,
-        step_values: values,
-        predicted_decrease: decrease,
-        predicted_fraction: decrease / objective,
-        statistic,
-        threshold,
-        significant: statistic > threshold,
-        expected_channels: Vec::new(),
-        steps: iterations,
-        refit: true,
+    ScoreTest { steps: iterations, refit: true, ..ScoreTest::from_decrease(effect, parameters, values, objective - refit_objective, objective, data_rows) }
+}
+
+impl ScoreTest {
+    /// The test of a candidate whose parameters (at `values` after its re-fit) lower the
+    /// cost `objective` by `decrease` (a negative one counts as none): the decrease in
+    /// units of the residual mean square `objective / data_rows` against the χ²ₖ 0.1 %
+    /// point, `k` the number of parameters. No steps, not a full re-fit.
+    fn from_decrease(effect: &EffectSpec, parameters: Vec<String>, values: Vec<f64>, decrease: f64, objective: f64, data_rows: usize) -> Self {
+        let decrease = decrease.max(0.0);
+        let statistic = decrease / (objective / data_rows.max(1) as f64);
+        let threshold = chi2_999(parameters.len());
+        ScoreTest {
+            label: effect.label(),
+            effect: effect.clone(),
+            parameters,
+            step_values: values,
+            predicted_decrease: decrease,
+            predicted_fraction: decrease / objective,
+            statistic,
+            threshold,
+            significant: statistic > threshold,
+            expected_channels: Vec::new(),
+            steps: 0,
+            refit: false,
+        }
     }
 }
 
