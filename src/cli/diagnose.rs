@@ -297,11 +297,19 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
 
     // --- output
     let significant = tests.iter().filter(|t| t.significant).count();
-    let verdict = if significant == 0 {
+    let mut verdict = if significant == 0 {
         "No candidate explains more than the noise: every predicted decrease is below its χ² 0.1 % point. No effect is suggested.".to_string()
     } else {
         format!("{significant} of {} candidates explain more than the noise; the most likely missing effect is {}.", tests.len(), tests[0].label)
     };
+    // the score tests compare against the plain model's optimum; say so when the run
+    // stopped short of it
+    if before.status.as_deref().is_some_and(|s| s != "converged") {
+        let reason = before.stop_reason.as_deref().or(before.status.as_deref()).unwrap_or_default();
+        verdict += &format!(
+            " Caution: the run did not converge ({reason}), and the score tests assume the plain model's optimum; re-track it to convergence before trusting this ranking."
+        );
+    }
     let ranking = Table {
         title: "Candidate effects ranked by the score statistic (predicted cost decrease / residual mean square)".into(),
         headers: ["rank", "effect", "parameters (truncated re-fit)", "expected decrease", "% of J", "statistic", "χ² 0.1 % point", "significant"].map(String::from).to_vec(),

@@ -119,6 +119,10 @@ pub struct RunSummary {
     pub command: Option<String>,
     /// The foot of the run, when recorded.
     pub foot: Option<String>,
+    /// The solver's status (`converged`, `line_search_failure`, …), when recorded.
+    pub status: Option<String>,
+    /// Why the solver stopped, in words, when recorded.
+    pub stop_reason: Option<String>,
     /// Channels in the order of the summary's `"errors"`.
     pub channels: Vec<ChannelSummary>,
     /// Whether the summary has `"errors_by_phase"` (older or foreign runs may not).
@@ -379,6 +383,8 @@ impl RunSummary {
             name: name.into(),
             command: text_field("command"),
             foot: text_field("foot"),
+            status: text_field("status"),
+            stop_reason: text_field("stop_reason"),
             channels,
             has_phases,
         })
