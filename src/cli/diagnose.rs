@@ -81,12 +81,15 @@ struct Verified {
     sentence: String,
 }
 
+/// Per-channel errors of the run `before` against its re-fit `run`.
+fn diff_with(before: &RunSummary, run: &TrackedRun) -> anyhow::Result<RunDiff> {
+    Ok(RunDiff::new(before, &RunSummary::read(&run.output.path)?, 5.0))
+}
+
 impl Verified {
-    /// What the re-fit `run` of candidate `test` changed against the run `before` (cost
-    /// `objective`).
-    fn new(test: &ScoreTest, run: &TrackedRun, before: &RunSummary, objective: f64) -> anyhow::Result<Self> {
-        let after = RunSummary::read(&run.output.path)?;
-        let diff = RunDiff::new(before, &after, 5.0);
+    /// What the re-fit `run` of candidate `test` changed (`diff`) against the run before
+    /// it (cost `objective`).
+    fn new(test: &ScoreTest, run: &TrackedRun, diff: RunDiff, objective: f64) -> Self {
         let parameters = run
             .record
             .parameters
@@ -94,7 +97,7 @@ impl Verified {
             .filter(|p| test.parameters.contains(&p.name))
             .map(|p| (p.name.clone(), p.value, p.sd, p.unit.clone()))
             .collect();
-        Ok(Verified {
+        Verified {
             sentence: sentence(&test.label, &diff),
             test: test.clone(),
             folder: run.output.path.clone(),
@@ -103,15 +106,16 @@ impl Verified {
             objective_after: run.result.objective,
             parameters,
             diff,
-        })
+        }
     }
 }
 
 /// What a candidate's test left: the point of its truncated re-fit (where a verifying
-/// re-fit starts), or the full re-fit of a candidate without a null value.
+/// re-fit starts), or the full re-fit of a candidate without a null value with its
+/// per-channel errors against the run.
 enum Evidence {
     Start(GaitSolution),
-    Refit(Box<TrackedRun>),
+    Refit(Box<TrackedRun>, RunDiff),
 }
 
 /// The run's re-fit with `effect` added, from `start` (the run's solution, the effect's
@@ -138,17 +142,34 @@ struct Baseline<'a> {
 }
 
 /// Test of the heel pad by a full re-fit ([`refit_test`]); its channel errors before and
-/// after are the re-fit's.
-fn test_by_refit(args: &Args, setup: &TrackingRunSetup, effect: &EffectSpec, base: &Baseline<'_>, quiet: bool) -> anyhow::Result<(ScoreTest, TrackedRun)> {
+/// after are the re-fit's (returned too, for its verification).
+fn test_by_refit(args: &Args, setup: &TrackingRunSetup, effect: &EffectSpec, base: &Baseline<'_>, quiet: bool) -> anyhow::Result<(ScoreTest, TrackedRun, RunDiff)> {
     let Baseline { solution, summary: before, objective, rows } = *base;
     let run = refit(args, setup, effect, solution, quiet)?;
     let added: Vec<&IdentifiedParameter> = run.record.parameters.iter().filter(|p| p.free && p.name.starts_with(&format!("{}.", effect.kind()))).collect();
     let names = added.iter().map(|p| p.name.clone()).collect();
     let values = added.iter().map(|p| p.value).collect();
     let mut t = refit_test(effect, names, values, objective, run.result.objective, rows, run.result.history.len().saturating_sub(1));
-    let diff = RunDiff::new(before, &RunSummary::read(&run.output.path)?, 5.0);
+    let diff = diff_with(before, &run)?;
     t.expected_channels = diff.channels.iter().filter_map(|c| Some((c.channel.clone(), c.unit.clone(), c.a.as_ref()?.mean, c.b.as_ref()?.mean))).collect();
-    Ok((t, run))
+    Ok((t, run, diff))
+}
+
+/// One progress line per tested candidate: its (predicted or re-fit) decrease, the steps
+/// or iterations it took, its statistic against the threshold.
+fn print_progress(t: &ScoreTest, converged: bool, seconds: f64) {
+    let (what, steps) = if t.refit { ("re-fit decrease  ", "iterations") } else { ("expected decrease", "steps") };
+    eprintln!(
+        "  {:<32} {what} {:>10.3e} ({:>5.1} % of J, {} {steps}{}), statistic {:>9.1} vs {:.1}{}  [{seconds:.1} s]",
+        t.label,
+        t.predicted_decrease,
+        100.0 * t.predicted_fraction,
+        t.steps,
+        if converged { "" } else { ", not converged" },
+        t.statistic,
+        t.threshold,
+        if t.significant { "  significant" } else { "" },
+    );
 }
 
 fn sibling(run: &Path, suffix: &str) -> PathBuf {
@@ -236,22 +257,11 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
             }
             let t0 = std::time::Instant::now();
             let baseline = Baseline { solution: &solution, summary: &before, objective, rows };
-            let (t, run) = test_by_refit(&args, &setup, c, &baseline, quiet)?;
+            let (t, run, diff) = test_by_refit(&args, &setup, c, &baseline, quiet)?;
             if !quiet {
-                eprintln!(
-                    "  {:<32} re-fit decrease   {:>10.3e} ({:>5.1} % of J, {} iterations{}), statistic {:>9.1} vs {:.1}{}  [{:.1} s]",
-                    t.label,
-                    t.predicted_decrease,
-                    100.0 * t.predicted_fraction,
-                    t.steps,
-                    if run.converged { "" } else { ", not converged" },
-                    t.statistic,
-                    t.threshold,
-                    if t.significant { "  significant" } else { "" },
-                    t0.elapsed().as_secs_f64()
-                );
+                print_progress(&t, run.converged, t0.elapsed().as_secs_f64());
             }
-            tests.push((t, Evidence::Refit(Box::new(run))));
+            tests.push((t, Evidence::Refit(Box::new(run), diff)));
             continue;
         }
         let mut prob = match TrackingProblem::build(&setup, std::slice::from_ref(c)) {
@@ -266,17 +276,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         let t0 = std::time::Instant::now();
         let (t, start) = test_candidate(&prob, c, k, base_decrease, rows)?;
         if !quiet {
-            eprintln!(
-                "  {:<32} expected decrease {:>10.3e} ({:>5.1} % of J, {} steps), statistic {:>9.1} vs {:.1}{}  [{:.1} s]",
-                t.label,
-                t.predicted_decrease,
-                100.0 * t.predicted_fraction,
-                t.steps,
-                t.statistic,
-                t.threshold,
-                if t.significant { "  significant" } else { "" },
-                t0.elapsed().as_secs_f64()
-            );
+            print_progress(&t, true, t0.elapsed().as_secs_f64());
         }
         tests.push((t, Evidence::Start(start)));
     }
@@ -287,10 +287,13 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     for (t, e) in tests.iter().zip(&evidence).filter(|(t, _)| t.significant).take(args.verify) {
         let v = match e {
             // the test was the re-fit
-            Evidence::Refit(run) => Verified::new(t, run, &before, objective)?,
+            Evidence::Refit(run, diff) => Verified::new(t, run, diff.clone(), objective),
             // from where the candidate's truncated re-fit got to (fewer SQP iterations
             // than from the run's solution)
-            Evidence::Start(start) => Verified::new(t, &refit(&args, &setup, &t.effect, start, quiet)?, &before, objective)?,
+            Evidence::Start(start) => {
+                let run = refit(&args, &setup, &t.effect, start, quiet)?;
+                Verified::new(t, &run, diff_with(&before, &run)?, objective)
+            }
         };
         verified.push(v);
     }
@@ -349,7 +352,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         .iter()
         .zip(&evidence)
         .filter_map(|(t, e)| match e {
-            Evidence::Refit(run) => Some(format!("{} was tested by a full re-fit ({}, {}), as it has no null value for a score test", t.label, run.output.path.display(), if run.converged { "converged" } else { "did NOT converge" })),
+            Evidence::Refit(run, _) => Some(format!("{} was tested by a full re-fit ({}, {}), as it has no null value for a score test", t.label, run.output.path.display(), if run.converged { "converged" } else { "did NOT converge" })),
             Evidence::Start(_) => None,
         })
         .collect();
