@@ -96,6 +96,7 @@ fn infeasible_problem_stops_as_infeasible_and_names_the_constraint() {
             args: vec![Block::Control { phase: 0, node: 0 }],
             f: Arc::new(Linear::new(vec![1.0], 1)),
         }],
+        samples: Vec::new(),
         costs: vec![],
         integrator: IntegratorSettings::default(),
     };
@@ -258,6 +259,7 @@ fn integrated_cost_by_quadrature_state_matches_the_least_squares_form() {
         theta_ub: vec![],
         constraints: vec![],
         least_squares: vec![],
+        samples: Vec::new(),
         costs: vec![quadrature_cost(0, n, 4, 1)],
         integrator: settings,
     };

@@ -107,6 +107,7 @@ fn lq_problem_matches_discrete_riccati() {
         theta_ub: vec![],
         constraints: vec![],
         least_squares: ls,
+        samples: Vec::new(),
         costs: vec![],
         integrator: IntegratorSettings { rtol: 1e-12, atol: 1e-12, ..Default::default() },
     };

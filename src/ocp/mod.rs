@@ -9,6 +9,6 @@ pub mod problem;
 pub mod quadrature;
 pub mod transcription;
 
-pub use problem::{Block, Constraint, NodeFunction, Ocp, Phase, PhaseDuration, Term};
+pub use problem::{Block, Constraint, NodeFunction, Ocp, Phase, PhaseDuration, SampleTerm, Term};
 pub use quadrature::{quadrature_cost, Integrand, WithQuadrature};
 pub use transcription::{Evaluation, RowLabel, Transcription, TranscriptionError};

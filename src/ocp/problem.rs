@@ -67,6 +67,32 @@ impl std::fmt::Debug for Term<'_> {
     }
 }
 
+/// A least-squares residual at an instant inside a shooting interval,
+/// `r(x(t), u(t), θ)`, where `x(t)` is the interval integrated from its start node to
+/// `t = t_k + τ h` (CVODES dense output, with its forward sensitivities) and `u(t)` the
+/// interval's control there. It lets a cost compare the model with measurements at the
+/// instants they were taken instead of at the shooting nodes. Its curvature enters the
+/// SQP as the Gauss–Newton term `2 JᵀJ` only, in every Hessian mode.
+#[derive(Clone)]
+pub struct SampleTerm<'a> {
+    /// Name (e.g. `tracking sample`).
+    pub name: String,
+    /// Phase index.
+    pub phase: usize,
+    /// Interval index within the phase.
+    pub interval: usize,
+    /// Where in the interval, as a fraction of its length (0 < τ ≤ 1).
+    pub tau: f64,
+    /// The residual, a function of the concatenation `(x, u, θ)` (nx + nu + nθ).
+    pub f: Arc<dyn NodeFunction + 'a>,
+}
+
+impl std::fmt::Debug for SampleTerm<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("SampleTerm").field("name", &self.name).field("phase", &self.phase).field("interval", &self.interval).field("tau", &self.tau).finish()
+    }
+}
+
 /// A constraint `lb ≤ f(z) ≤ ub` (equal bounds for an equality).
 #[derive(Debug, Clone)]
 pub struct Constraint<'a> {
@@ -157,6 +183,8 @@ pub struct Ocp<'a> {
     pub constraints: Vec<Constraint<'a>>,
     /// Least-squares cost terms: cost += ‖r(z)‖².
     pub least_squares: Vec<Term<'a>>,
+    /// Least-squares residuals inside shooting intervals: cost += ‖r(x(t), u(t), θ)‖².
+    pub samples: Vec<SampleTerm<'a>>,
     /// General scalar cost terms (dimension 1).
     pub costs: Vec<Term<'a>>,
     /// Integrator settings for the shooting intervals.

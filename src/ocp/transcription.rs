@@ -58,7 +58,22 @@ struct IntervalRef {
     phase: usize,
     k: usize,
     row: usize,
+    /// Sample terms inside the interval: distinct τ ascending, each with its terms.
+    samples: Vec<(f64, Vec<usize>)>,
 }
+
+/// What an interval's sample terms add to the objective: their value, the gradient and the
+/// Gauss–Newton block (upper triangle, row by row) over the interval's columns.
+#[derive(Debug, Default)]
+struct SampleSums {
+    f: f64,
+    grad: Vec<f64>,
+    gauss_newton: Vec<f64>,
+}
+
+/// One interval's integration: end state, sensitivities, statistics, curvature block
+/// (with multipliers) and what its sample terms add.
+type IntervalResult = (Vec<f64>, Vec<f64>, IntegrationStats, Option<Vec<f64>>, Option<SampleSums>);
 
 #[derive(Debug, Clone)]
 struct TermRef {
@@ -188,20 +203,30 @@ impl<'o, 'a> Transcription<'o, 'a> {
             pools: ocp.phases.iter().map(|_| Mutex::new(Vec::new())).collect(),
             labels: Vec::new(),
         };
+        // sample terms, grouped by interval and τ
+        let mut samples: Vec<Vec<Vec<(f64, Vec<usize>)>>> = ocp.phases.iter().map(|p| vec![Vec::new(); p.intervals]).collect();
+        for (si, st) in ocp.samples.iter().enumerate() {
+            let Some(list) = samples.get_mut(st.phase).and_then(|p| p.get_mut(st.interval)) else {
+                return Err(inv(format!("sample term '{}': phase {} has no interval {}", st.name, st.phase, st.interval)));
+            };
+            if !(st.tau > 0.0 && st.tau <= 1.0) {
+                return Err(inv(format!("sample term '{}': τ = {} is not in (0, 1]", st.name, st.tau)));
+            }
+            match list.iter_mut().find(|(tau, _)| *tau == st.tau) {
+                Some((_, v)) => v.push(si),
+                None => list.push((st.tau, vec![si])),
+            }
+        }
+        for list in samples.iter_mut().flatten() {
+            list.sort_by(|a, b| a.0.total_cmp(&b.0));
+        }
         // continuity rows
         for (j, ph) in ocp.phases.iter().enumerate() {
             let nx = ph.ode.nx();
             for k in 0..ph.intervals {
                 let row = t.m;
-                t.intervals.push(IntervalRef { phase: j, k, row });
-                let mut cols: Vec<usize> = Vec::new();
-                cols.extend(t.range(Block::State { phase: j, node: k }));
-                cols.extend(t.range(Block::Control { phase: j, node: k }));
-                if ph.controls == ControlShape::Linear {
-                    cols.extend(t.range(Block::Control { phase: j, node: k + 1 }));
-                }
-                cols.push(t.duration_off[j]);
-                cols.extend(t.range(Block::Params));
+                t.intervals.push(IntervalRef { phase: j, k, row, samples: std::mem::take(&mut samples[j][k]) });
+                let cols = t.interval_cols(j, k);
                 for i in 0..nx {
                     for &c in &cols {
                         t.jac_rows.push(row + i);
@@ -281,6 +306,17 @@ impl<'o, 'a> Transcription<'o, 'a> {
             }
             t.terms.push(TermRef { term: li, kind: TermKind::LeastSquares, row: 0, cols });
         }
+        // the sample terms' Gauss–Newton blocks, after the least-squares terms', in
+        // interval order
+        for iv in t.intervals.iter().filter(|iv| !iv.samples.is_empty()) {
+            let cols = t.interval_cols(iv.phase, iv.k);
+            for (a, &ca) in cols.iter().enumerate() {
+                for &cb in &cols[a..] {
+                    t.gn_rows.push(ca.min(cb));
+                    t.gn_cols.push(ca.max(cb));
+                }
+            }
+        }
         for (gi, g) in ocp.costs.iter().enumerate() {
             if g.f.dim() != 1 {
                 return Err(inv(format!("cost '{}' must be scalar", g.name)));
@@ -289,6 +325,21 @@ impl<'o, 'a> Transcription<'o, 'a> {
             t.terms.push(TermRef { term: gi, kind: TermKind::Cost, row: 0, cols });
         }
         Ok(t)
+    }
+
+    /// The columns an interval depends on: its start state, its control(s), its phase's
+    /// duration and θ (the order of its sensitivity columns).
+    fn interval_cols(&self, j: usize, k: usize) -> Vec<usize> {
+        let ph = &self.ocp.phases[j];
+        let mut cols: Vec<usize> = Vec::new();
+        cols.extend(self.range(Block::State { phase: j, node: k }));
+        cols.extend(self.range(Block::Control { phase: j, node: k }));
+        if ph.controls == ControlShape::Linear {
+            cols.extend(self.range(Block::Control { phase: j, node: k + 1 }));
+        }
+        cols.push(self.duration_off[j]);
+        cols.extend(self.range(Block::Params));
+        cols
     }
 
     fn locate(&self, args: &[Block]) -> (String, usize) {
@@ -436,13 +487,7 @@ impl<'o, 'a> Transcription<'o, 'a> {
         cols.iter().map(|&c| w[c]).collect()
     }
 
-    fn integrate_interval(
-        &self,
-        iv: &IntervalRef,
-        w: &[f64],
-        sens: bool,
-        lambda: Option<&[f64]>,
-    ) -> Result<(Vec<f64>, Vec<f64>, IntegrationStats, Option<Vec<f64>>), TranscriptionError> {
+    fn integrate_interval(&self, iv: &IntervalRef, w: &[f64], sens: bool, lambda: Option<&[f64]>) -> Result<IntervalResult, TranscriptionError> {
         let ph = &self.ocp.phases[iv.phase];
         let interval = ShootingInterval::new(ph.ode, ph.controls);
         let (nx, np) = (ph.ode.nx(), interval.np());
@@ -466,6 +511,13 @@ impl<'o, 'a> Transcription<'o, 'a> {
         let mut x1 = vec![0.0; nx];
         let mut s = Vec::new();
         let mut hess = None;
+        // the sample terms' instants, with the interval's end for one pass to both
+        let taus: Vec<f64> = iv.samples.iter().map(|e| e.0).collect();
+        let mut times = taus.clone();
+        if times.last().is_some_and(|&t| t < 1.0) {
+            times.push(1.0);
+        }
+        let (mut xs, mut ss) = (Vec::new(), Vec::new());
         let res = if let Some(lam) = lambda {
             // continuity rows are s_{k+1} − x(1): their curvature is that of −λᵀx(1)
             s = vec![0.0; nx * (nx + np)];
@@ -474,7 +526,16 @@ impl<'o, 'a> Transcription<'o, 'a> {
             match interval.integrate_with_hessian(&mut integ, x0, &p, &weights, &mut x1, &mut s, &mut h) {
                 Ok(true) => {
                     hess = Some(h);
-                    Ok(integ.stats_snapshot())
+                    if taus.is_empty() {
+                        Ok(integ.stats_snapshot())
+                    } else {
+                        // a second pass for the samples' states and sensitivities
+                        let first = integ.stats_snapshot();
+                        integ.integrate_with_sensitivities_dense(&interval, 0.0, 1.0, x0, &p, &taus, &mut xs, &mut ss).map(|mut st| {
+                            st += first;
+                            st
+                        })
+                    }
                 }
                 Ok(false) => Err(IntegratorError::BadSettings {
                     field: "hessian",
@@ -484,15 +545,102 @@ impl<'o, 'a> Transcription<'o, 'a> {
             }
         } else if sens {
             s = vec![0.0; nx * (nx + np)];
-            integ.integrate_with_sensitivities(&interval, 0.0, 1.0, x0, &p, &mut x1, &mut s)
-        } else {
+            if taus.is_empty() {
+                integ.integrate_with_sensitivities(&interval, 0.0, 1.0, x0, &p, &mut x1, &mut s)
+            } else {
+                integ.integrate_with_sensitivities_dense(&interval, 0.0, 1.0, x0, &p, &times, &mut xs, &mut ss).inspect(|_| {
+                    let sz = nx * (nx + np);
+                    x1.copy_from_slice(&xs[xs.len() - nx..]);
+                    s.copy_from_slice(&ss[ss.len() - sz..]);
+                })
+            }
+        } else if taus.is_empty() {
             integ.integrate(&interval, 0.0, 1.0, x0, &p, &mut x1)
+        } else {
+            integ.integrate_dense(&interval, 0.0, 1.0, x0, &p, &times, &mut xs).inspect(|_| x1.copy_from_slice(&xs[xs.len() - nx..]))
         };
         if let Ok(mut v) = pool.lock() {
             v.push(integ);
         }
         let stats = res.map_err(err)?;
-        Ok((x1, s, stats, hess))
+        let sums = if taus.is_empty() { None } else { Some(self.sample_sums(iv, &p, &xs, (sens || lambda.is_some()).then_some(&ss[..]))?) };
+        Ok((x1, s, stats, hess, sums))
+    }
+
+    /// The sample terms of interval `iv` at its integrated states `xs` (nx per τ, in τ
+    /// order) with, when `ss` is given, their sensitivities (nx·(nx+np) per τ): value,
+    /// gradient and Gauss–Newton block over the interval's columns (x0, u0, [u1], T, θ),
+    /// by the chain rule through `x(τ) = Φ(τ; x0, p)` and `u(τ)`.
+    fn sample_sums(&self, iv: &IntervalRef, p: &[f64], xs: &[f64], ss: Option<&[f64]>) -> Result<SampleSums, TranscriptionError> {
+        let ph = &self.ocp.phases[iv.phase];
+        let interval = ShootingInterval::new(ph.ode, ph.controls);
+        let (nx, nu, nt) = (ph.ode.nx(), ph.ode.nu(), self.ocp.ntheta);
+        let ncols = nx + interval.np();
+        let nz = nx + nu + nt;
+        let theta = &p[interval.p_theta()];
+        let u0 = &p[interval.p_u0()];
+        let u1 = interval.p_u1().map(|r| &p[r]);
+        let duration_col = nx + interval.p_duration();
+        let hscale = 1.0 / ph.intervals as f64;
+        let mut out = SampleSums { f: 0.0, grad: Vec::new(), gauss_newton: Vec::new() };
+        if ss.is_some() {
+            out.grad = vec![0.0; ncols];
+            out.gauss_newton = vec![0.0; ncols * (ncols + 1) / 2];
+        }
+        for (q, (tau, terms)) in iv.samples.iter().enumerate() {
+            let x = &xs[q * nx..(q + 1) * nx];
+            let u: Vec<f64> = match u1 {
+                Some(u1) => u0.iter().zip(u1).map(|(a, b)| (1.0 - tau) * a + tau * b).collect(),
+                None => u0.to_vec(),
+            };
+            let z: Vec<f64> = x.iter().chain(&u).chain(theta).copied().collect();
+            for &si in terms {
+                let term = &self.ocp.samples[si];
+                let d = term.f.dim();
+                let mut r = vec![0.0; d];
+                let mut jz = vec![0.0; d * nz];
+                term.f
+                    .eval(&z, &mut r, ss.is_some().then_some(&mut jz[..]))
+                    .map_err(|reason| TranscriptionError::Term { term: term.name.clone(), reason })?;
+                out.f += r.iter().map(|v| v * v).sum::<f64>();
+                let Some(ss) = ss else { continue };
+                let s = &ss[q * nx * ncols..(q + 1) * nx * ncols];
+                // J = ∂r/∂x · S (the duration column through h = T/N) + the direct terms
+                let mut jac = vec![0.0; d * ncols];
+                for c in 0..ncols {
+                    let sc = if c == duration_col { hscale } else { 1.0 };
+                    let sc_col = &s[c * nx..(c + 1) * nx];
+                    for i in 0..d {
+                        jac[i + c * d] = sc * (0..nx).map(|k| jz[i + k * d] * sc_col[k]).sum::<f64>();
+                    }
+                }
+                for k in 0..nu {
+                    let direct = |c: usize, f: f64, jac: &mut [f64]| (0..d).for_each(|i| jac[i + c * d] += f * jz[i + (nx + k) * d]);
+                    match interval.p_u1() {
+                        Some(r1) => {
+                            direct(nx + interval.p_u0().start + k, 1.0 - tau, &mut jac);
+                            direct(nx + r1.start + k, *tau, &mut jac);
+                        }
+                        None => direct(nx + interval.p_u0().start + k, 1.0, &mut jac),
+                    }
+                }
+                for (k, c) in interval.p_theta().enumerate() {
+                    for i in 0..d {
+                        jac[i + (nx + c) * d] += jz[i + (nx + nu + k) * d];
+                    }
+                }
+                let mut at = 0;
+                for a in 0..ncols {
+                    let ja = &jac[a * d..(a + 1) * d];
+                    out.grad[a] += 2.0 * ja.iter().zip(&r).map(|(j, v)| j * v).sum::<f64>();
+                    for b in a..ncols {
+                        out.gauss_newton[at] += 2.0 * ja.iter().zip(&jac[b * d..(b + 1) * d]).map(|(x, y)| x * y).sum::<f64>();
+                        at += 1;
+                    }
+                }
+            }
+        }
+        Ok(out)
     }
 
     /// Evaluate objective and constraints, and with `derivs` their first derivatives
@@ -556,6 +704,7 @@ impl<'o, 'a> Transcription<'o, 'a> {
     ) -> Result<(Evaluation, Vec<Option<Vec<f64>>>), TranscriptionError> {
         let results: Vec<_> = self.intervals.par_iter().map(|iv| self.integrate_interval(iv, w, derivs, lambda)).collect();
         let mut blocks = Vec::with_capacity(results.len());
+        let mut sample_sums = Vec::new();
         let mut ev = Evaluation {
             f: 0.0,
             c: vec![0.0; self.m],
@@ -566,8 +715,11 @@ impl<'o, 'a> Transcription<'o, 'a> {
         };
         // continuity (Jacobian values in pattern order)
         for (iv, r) in self.intervals.iter().zip(results) {
-            let (x1, s, st, hess) = r?;
+            let (x1, s, st, hess, sums) = r?;
             blocks.push(hess);
+            if let Some(sums) = sums {
+                sample_sums.push((iv, sums));
+            }
             ev.stats += st;
             let ph = &self.ocp.phases[iv.phase];
             let nx = ph.ode.nx();
@@ -698,6 +850,18 @@ impl<'o, 'a> Transcription<'o, 'a> {
                         }
                     }
                 }
+            }
+        }
+        // sample terms, in interval order (their Gauss–Newton blocks follow the
+        // least-squares terms' in the pattern)
+        for (iv, sums) in sample_sums {
+            ev.f += sums.f;
+            if derivs {
+                let cols = self.interval_cols(iv.phase, iv.k);
+                for (&c, g) in cols.iter().zip(&sums.grad) {
+                    ev.grad[c] += g;
+                }
+                ev.gauss_newton.extend_from_slice(&sums.gauss_newton);
             }
         }
         Ok((ev, blocks))

@@ -127,6 +127,7 @@ fn cartpole<'a>(model: &'a CartPole, json: &Value, integrator: IntegratorSetting
         theta_ub: vec![],
         constraints: vec![],
         least_squares: u_squared_terms(n, 1, t / n as f64),
+        samples: Vec::new(),
         costs: vec![],
         integrator,
     })
@@ -291,6 +292,7 @@ fn five_link_biped<'a>(model: &'a FiveLinkBiped, json: &Value, integrator: Integ
         theta_ub: vec![],
         constraints,
         least_squares: u_squared_terms(n, NU, t / n as f64),
+        samples: Vec::new(),
         costs: vec![],
         integrator,
     })

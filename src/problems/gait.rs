@@ -317,6 +317,7 @@ fn gait_ocp<'a>(
         theta_ub: model.free_parameters().iter().map(|&i| model.parameters()[i].upper).collect(),
         constraints,
         least_squares: Vec::new(),
+        samples: Vec::new(),
         costs: Vec::new(),
         integrator,
     })

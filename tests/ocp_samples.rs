@@ -1,0 +1,213 @@
+//! Least-squares residuals inside shooting intervals (`Ocp::samples`): their value
+//! against an independent RK4 integration of the interval, their gradient against central
+//! differences, and their Gauss–Newton block against the directional derivative of the
+//! residual.
+
+use footfall::integrate::{ControlShape, ControlledOde, IntegratorSettings, OdeError};
+use footfall::ocp::{Block, NodeFunction, Ocp, Phase, PhaseDuration, SampleTerm, Transcription};
+use std::sync::Arc;
+
+/// A driven, damped pendulum with the stiffness as the free parameter θ:
+/// ẋ₀ = x₁, ẋ₁ = −θ sin x₀ − 0.3 x₁ + u.
+struct Pendulum;
+
+impl Pendulum {
+    fn rhs(x: &[f64], u: f64, theta: f64) -> [f64; 2] {
+        [x[1], -theta * x[0].sin() - 0.3 * x[1] + u]
+    }
+}
+
+impl ControlledOde for Pendulum {
+    fn nx(&self) -> usize {
+        2
+    }
+    fn nu(&self) -> usize {
+        1
+    }
+    fn ntheta(&self) -> usize {
+        1
+    }
+    fn f(&self, x: &[f64], u: &[f64], theta: &[f64], xdot: &mut [f64]) -> Result<(), OdeError> {
+        xdot.copy_from_slice(&Self::rhs(x, u[0], theta[0]));
+        Ok(())
+    }
+    fn f_jac(&self, x: &[f64], u: &[f64], theta: &[f64], xdot: &mut [f64], fx: &mut [f64], fu: &mut [f64], ft: &mut [f64]) -> Result<(), OdeError> {
+        self.f(x, u, theta, xdot)?;
+        fx.copy_from_slice(&[0.0, -theta[0] * x[0].cos(), 1.0, -0.3]);
+        fu.copy_from_slice(&[0.0, 1.0]);
+        ft.copy_from_slice(&[0.0, -x[0].sin()]);
+        Ok(())
+    }
+}
+
+/// A positive scalar residual of `(x, u, θ)`: r = 2 + x₀² + sin(x₁)·u + θ·x₁ / 4 − 0.1 u.
+struct Residual;
+
+impl Residual {
+    fn value(z: &[f64]) -> f64 {
+        2.0 + z[0] * z[0] + z[1].sin() * z[2] + z[3] * z[1] / 4.0 - 0.1 * z[2]
+    }
+}
+
+impl NodeFunction for Residual {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn eval(&self, z: &[f64], v: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), String> {
+        v[0] = Self::value(z);
+        if let Some(j) = jac {
+            j.copy_from_slice(&[2.0 * z[0], z[1].cos() * z[2] + z[3] / 4.0, z[1].sin() - 0.1, z[1] / 4.0]);
+        }
+        Ok(())
+    }
+}
+
+const INTERVALS: usize = 3;
+/// (interval, τ) of the sample terms; two share an instant.
+const SAMPLES: [(usize, f64); 5] = [(0, 0.3), (0, 0.3), (1, 0.55), (1, 1.0), (2, 0.8)];
+
+fn problem(ode: &Pendulum) -> Ocp<'_> {
+    let inf = f64::INFINITY;
+    let n = INTERVALS;
+    let phase = Phase {
+        name: "swing".into(),
+        ode,
+        intervals: n,
+        duration: PhaseDuration { value: 0.9, lb: 0.5, ub: 2.0 },
+        controls: ControlShape::Linear,
+        x_lb: vec![vec![-inf; 2]; n + 1],
+        x_ub: vec![vec![inf; 2]; n + 1],
+        u_lb: vec![vec![-inf]; n + 1],
+        u_ub: vec![vec![inf]; n + 1],
+        x_guess: vec![vec![0.0; 2]; n + 1],
+        u_guess: vec![vec![0.0]; n + 1],
+    };
+    let f: Arc<dyn NodeFunction> = Arc::new(Residual);
+    Ocp {
+        phases: vec![phase],
+        transitions: vec![],
+        ntheta: 1,
+        theta_guess: vec![2.0],
+        theta_lb: vec![0.0],
+        theta_ub: vec![10.0],
+        constraints: vec![],
+        least_squares: vec![],
+        samples: SAMPLES.iter().map(|&(interval, tau)| SampleTerm { name: "sample".into(), phase: 0, interval, tau, f: f.clone() }).collect(),
+        costs: vec![],
+        integrator: IntegratorSettings { rtol: 1e-12, atol: 1e-12, ..Default::default() },
+    }
+}
+
+/// A point with distinct node states, controls, duration and θ.
+fn point(tr: &Transcription) -> Vec<f64> {
+    let mut w = vec![0.0; tr.n()];
+    for k in 0..=INTERVALS {
+        let r = tr.range(Block::State { phase: 0, node: k });
+        w[r.start] = 0.4 - 0.2 * k as f64;
+        w[r.start + 1] = 0.8 + 0.3 * k as f64;
+        w[tr.range(Block::Control { phase: 0, node: k }).start] = 0.5 * (k as f64 - 1.2);
+    }
+    w[tr.range(Block::Duration { phase: 0 }).start] = 0.9;
+    w[tr.range(Block::Params).start] = 2.3;
+    w
+}
+
+/// RK4 of the interval from its node to τ (fine fixed steps), with the linear control.
+fn rk4(x0: [f64; 2], u0: f64, u1: f64, h: f64, theta: f64, tau: f64) -> [f64; 2] {
+    let steps = 4000;
+    let dt = tau / steps as f64;
+    let mut x = x0;
+    let f = |s: f64, x: [f64; 2]| {
+        let d = Pendulum::rhs(&x, (1.0 - s) * u0 + s * u1, theta);
+        [h * d[0], h * d[1]]
+    };
+    for i in 0..steps {
+        let s = i as f64 * dt;
+        let k1 = f(s, x);
+        let k2 = f(s + dt / 2.0, [x[0] + dt / 2.0 * k1[0], x[1] + dt / 2.0 * k1[1]]);
+        let k3 = f(s + dt / 2.0, [x[0] + dt / 2.0 * k2[0], x[1] + dt / 2.0 * k2[1]]);
+        let k4 = f(s + dt, [x[0] + dt * k3[0], x[1] + dt * k3[1]]);
+        for j in 0..2 {
+            x[j] += dt / 6.0 * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j]);
+        }
+    }
+    x
+}
+
+#[test]
+fn sample_terms_match_an_independent_integration() {
+    let ode = Pendulum;
+    let ocp = problem(&ode);
+    let tr = Transcription::new(&ocp).unwrap();
+    let w = point(&tr);
+    let theta = w[tr.range(Block::Params).start];
+    let h = w[tr.range(Block::Duration { phase: 0 }).start] / INTERVALS as f64;
+    let mut expected = 0.0;
+    for &(k, tau) in &SAMPLES {
+        let s = tr.range(Block::State { phase: 0, node: k });
+        let u0 = w[tr.range(Block::Control { phase: 0, node: k }).start];
+        let u1 = w[tr.range(Block::Control { phase: 0, node: k + 1 }).start];
+        let x = rk4([w[s.start], w[s.start + 1]], u0, u1, h, theta, tau);
+        let u = (1.0 - tau) * u0 + tau * u1;
+        expected += Residual::value(&[x[0], x[1], u, theta]).powi(2);
+    }
+    for derivs in [false, true] {
+        let ev = tr.evaluate(&w, derivs).unwrap();
+        assert!((ev.f - expected).abs() < 1e-9 * expected, "derivs {derivs}: objective {} against RK4's {expected}", ev.f);
+    }
+    // the end states are the same as without samples: the continuity rows agree
+    let plain = Ocp { samples: vec![], ..problem(&ode) };
+    let trp = Transcription::new(&plain).unwrap();
+    let (a, b) = (tr.evaluate(&w, true).unwrap(), trp.evaluate(&w, true).unwrap());
+    for (x, y) in a.c.iter().zip(&b.c) {
+        assert!((x - y).abs() < 1e-9, "continuity {x} with samples, {y} without");
+    }
+    assert_eq!(b.f, 0.0);
+}
+
+#[test]
+fn sample_gradient_and_gauss_newton_match_central_differences() {
+    let ode = Pendulum;
+    let ocp = problem(&ode);
+    let tr = Transcription::new(&ocp).unwrap();
+    let w = point(&tr);
+    let ev = tr.evaluate(&w, true).unwrap();
+    let f = |w: &[f64]| tr.evaluate(w, false).unwrap().f;
+    let eps = 1e-6;
+    for i in 0..tr.n() {
+        let (mut wp, mut wm) = (w.clone(), w.clone());
+        wp[i] += eps;
+        wm[i] -= eps;
+        let fd = (f(&wp) - f(&wm)) / (2.0 * eps);
+        assert!((ev.grad[i] - fd).abs() < 1e-6 * (1.0 + fd.abs()), "∂f/∂w[{i}]: {} against {fd}", ev.grad[i]);
+    }
+    // one sample term alone: r = √f (r > 0), so dᵀ GN d = 2 (∂r/∂d)²
+    let one = Ocp { samples: problem(&ode).samples.into_iter().skip(2).take(1).collect(), ..problem(&ode) };
+    let tr1 = Transcription::new(&one).unwrap();
+    let ev1 = tr1.evaluate(&w, true).unwrap();
+    let (rows, cols) = tr1.gauss_newton_pattern();
+    let r = |w: &[f64]| tr1.evaluate(w, false).unwrap().f.sqrt();
+    for seed in 0..4 {
+        let d: Vec<f64> = (0..tr1.n()).map(|i| ((i * 7 + seed * 13) % 11) as f64 / 11.0 - 0.45).collect();
+        let mut quad = 0.0;
+        for ((&a, &b), &v) in rows.iter().zip(cols).zip(&ev1.gauss_newton) {
+            quad += if a == b { v * d[a] * d[a] } else { 2.0 * v * d[a] * d[b] };
+        }
+        let wp: Vec<f64> = w.iter().zip(&d).map(|(x, y)| x + eps * y).collect();
+        let wm: Vec<f64> = w.iter().zip(&d).map(|(x, y)| x - eps * y).collect();
+        let dr = (r(&wp) - r(&wm)) / (2.0 * eps);
+        assert!((quad - 2.0 * dr * dr).abs() < 1e-6 * (1.0 + quad.abs()), "direction {seed}: dᵀ GN d = {quad}, 2 (∂r/∂d)² = {}", 2.0 * dr * dr);
+    }
+}
+
+#[test]
+fn a_sample_outside_its_interval_is_refused() {
+    let ode = Pendulum;
+    for (interval, tau) in [(0, 0.0), (0, 1.5), (3, 0.5), (0, f64::NAN)] {
+        let mut ocp = problem(&ode);
+        ocp.samples[0].interval = interval;
+        ocp.samples[0].tau = tau;
+        let e = Transcription::new(&ocp).err().map(|e| e.to_string()).unwrap_or_default();
+        assert!(e.contains("sample term 'sample'"), "interval {interval}, τ {tau}: {e}");
+    }
+}
