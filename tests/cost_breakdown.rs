@@ -18,7 +18,7 @@ fn cost_breakdown_adds_up_to_the_objective() {
     let (_, _, w) = tr.variable_bounds_and_guess();
     let f = Nlp::evaluate(&tr, &w, false).unwrap().f;
     let sol = GaitSolution::from_nlp(&tr, &w, &cycle.continuous, setup.window.0);
-    let b = setup.cost_breakdown(&m, &sets, &cycle.continuous, &sol).unwrap();
+    let b = setup.cost_breakdown(&m, &sets, &cycle.continuous, &sol, &IntegratorSettings::default()).unwrap();
     assert!((b.total() - f).abs() < 1e-9 * f, "breakdown {} vs objective {f}", b.total());
     for c in ["hip_r", "knee_l", "velocities", "normal GRF", "CoP", "excitations", "activations"] {
         assert!(b.channels.iter().any(|x| x == c), "{c} missing: {:?}", b.channels);
@@ -35,4 +35,37 @@ fn cost_breakdown_adds_up_to_the_objective() {
         }
     }
     assert!(win[0].2 >= win[1].2 && win[1].2 >= win[2].2);
+}
+
+/// With sample targets the breakdown integrates the intervals to the samples itself (in
+/// physical time, as the report does) and still adds up to the objective the NLP
+/// evaluates through its interval sensitivities; there is one entry per sample, and
+/// neither velocities nor node data.
+#[test]
+fn sample_target_breakdown_adds_up_to_the_objective() {
+    let (m, sets, setup) = bundled_tracking_with("double_circle.json", "phases/double_circle_walk.json", footfall::problems::track::TargetSides::Samples);
+    let cycle = GaitCycle::new(&m, &setup.seq, &sets).unwrap();
+    let tight = IntegratorSettings { rtol: 1e-10, atol: 1e-10, ..Default::default() };
+    let ocp = setup.ocp(&cycle, &m, &sets, tight.clone()).unwrap();
+    assert_eq!(ocp.samples.len(), setup.samples.len());
+    let tr = Transcription::new(&ocp).unwrap();
+    let (_, _, w) = tr.variable_bounds_and_guess();
+    let f = Nlp::evaluate(&tr, &w, false).unwrap().f;
+    let sol = GaitSolution::from_nlp(&tr, &w, &cycle.continuous, setup.window.0);
+    let b = setup.cost_breakdown(&m, &sets, &cycle.continuous, &sol, &tight).unwrap();
+    assert!((b.total() - f).abs() < 1e-6 * f, "breakdown {} vs objective {f}", b.total());
+    assert!(!b.channels.iter().any(|c| c == "velocities"), "{:?}", b.channels);
+    for c in ["hip_r", "knee_l", "normal GRF", "CoP", "excitations", "activations"] {
+        assert!(b.channels.iter().any(|x| x == c), "{c} missing: {:?}", b.channels);
+    }
+    // every sample strictly inside the window, none on a phase boundary, in time order
+    let data = footfall::data::GaitData::bundled(&root()).unwrap();
+    let (t0, t1) = setup.window;
+    let inside = data.time.iter().filter(|&&t| t > t0 + 1e-9 && t < t1 - 1e-9).count();
+    assert!(setup.samples.len() <= inside && setup.samples.len() + sol.phases.len() >= inside, "{} samples of {inside}", setup.samples.len());
+    assert_eq!(b.nodes.len(), setup.samples.len());
+    assert!(b.nodes.windows(2).all(|w| w[0].time < w[1].time));
+    // the data rows are the samples' angles (7 tracked coordinates) and loads
+    let rows = setup.data_rows(&m, &sets, &cycle.continuous);
+    assert!(rows > 7 * setup.samples.len() && rows < 13 * setup.samples.len(), "{rows} data residuals for {} samples", setup.samples.len());
 }

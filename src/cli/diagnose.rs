@@ -251,7 +251,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
             continue;
         }
         if c.kind() == pad.kind() {
-            if !setup.one_sided_targets {
+            if !(setup.one_sided_targets || setup.sample_targets) {
                 skipped.push(format!("{}: {}", c.label(), UNSCORABLE_PAD.replace("RUN", &args.run.display().to_string())));
                 continue;
             }

@@ -89,8 +89,15 @@ pub struct Args {
     /// kinematics cutoff filters each segment). For high-rate data: every phase needs 4
     /// samples, and the targets at a contact change are extrapolated over up to one
     /// sample interval.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "sample_targets")]
     one_sided_targets: bool,
+    /// Compare every sample in the tracked window with the model at its own instant (the
+    /// shooting interval that holds it integrated to it, with its sensitivities) instead of
+    /// node targets from splines: no sample is averaged across a contact change, and there
+    /// are no velocity targets. The excitation and activation regularisation stays at the
+    /// nodes.
+    #[arg(long)]
+    sample_targets: bool,
     /// Weight of the angular-velocity targets relative to the angles (default: the seed's
     /// 0.1; 0 drops them). The targets differentiate the smoothed angles, so they carry
     /// the filter's bias and its low-passed noise, which a fit can follow.
@@ -192,7 +199,13 @@ impl TrackingProblem {
         let seq = PhaseSequence::load(&run.phases)?;
         let sets = seq.resolve(&model, &run.phases)?;
         let mut data = super::load_data(run.data.as_deref())?;
-        let sides = if run.one_sided_targets { TargetSides::OneSided { cutoff_hz: run.kinematics_cutoff } } else { TargetSides::Interpolated };
+        let sides = if run.one_sided_targets {
+            TargetSides::OneSided { cutoff_hz: run.kinematics_cutoff }
+        } else if run.sample_targets {
+            TargetSides::Samples
+        } else {
+            TargetSides::Interpolated
+        };
         if let Some(fc) = run.kinematics_cutoff {
             // one-sided targets filter segment by segment (the same sampling and cutoff checks)
             if run.one_sided_targets {
@@ -387,6 +400,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         regularisation: args.regularisation,
         velocity_weight: args.velocity_weight,
         one_sided_targets: args.one_sided_targets,
+        sample_targets: args.sample_targets,
         effects: vec![],
         parameters: vec![],
     };
@@ -476,7 +490,7 @@ impl TrackingProblem {
         if let Some(p) = &provenance {
             extra_summary.push(("report".into(), p.clone()));
         }
-        let breakdown = match setup.cost_breakdown(model, sets, &cycle.continuous, &solution) {
+        let breakdown = match setup.cost_breakdown(model, sets, &cycle.continuous, &solution, integrator) {
             Ok(b) => {
                 extra_json.insert("cost_breakdown".into(), serde_json::to_value(&b)?);
                 extra_sections.push(where_it_fails(&b, &solution));

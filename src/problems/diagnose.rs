@@ -53,6 +53,10 @@ pub struct TrackingRunSetup {
     /// Whether the node targets are one-sided at contact changes (`--one-sided-targets`).
     #[serde(default)]
     pub one_sided_targets: bool,
+    /// Whether every sample is compared with the model at its own instant instead of node
+    /// targets (`--sample-targets`).
+    #[serde(default)]
+    pub sample_targets: bool,
     /// Weight of the velocity targets relative to the angles (`None`: the seed's 0.1).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub velocity_weight: Option<f64>,

@@ -8,7 +8,7 @@ use super::tracking::{MeasuredLoads, NodeTarget, TrackingResidual, TrackingWeigh
 use crate::data::{detect_events, interp_linear, CubicSpline, Events, GaitData, DEFAULT_EVENT_FRACTION};
 use crate::model::gait::COORDINATES;
 use crate::model::{ConstraintSet, GaitModel, Side};
-use crate::ocp::{Block, Ocp, Term};
+use crate::ocp::{Block, Ocp, SampleTerm, Term};
 use crate::phases::{Duration, Phase, PhaseSequence};
 use std::sync::Arc;
 
@@ -54,7 +54,32 @@ pub enum TargetSides {
         /// Kinematics low-pass cutoff (Hz), if any.
         cutoff_hz: Option<f64>,
     },
+    /// No node targets: every sample inside the tracked window is compared with the model
+    /// at its own instant (the shooting interval that holds it integrated to it, see
+    /// [`SampleTerm`](crate::ocp::SampleTerm)): angles, and the forces and CoP of the feet
+    /// the phase loads. A sample is always on one side of a contact change, so nothing is
+    /// averaged across a jump, and there are no velocity targets (velocities are not
+    /// measured). The excitation and activation regularisation stays at the nodes.
+    Samples,
 }
+
+/// A measurement compared with the model inside a shooting interval
+/// ([`TargetSides::Samples`]).
+#[derive(Debug, Clone)]
+pub struct SampleTarget {
+    /// Continuous phase (OCP phase index).
+    pub phase: usize,
+    /// Shooting interval within the phase.
+    pub interval: usize,
+    /// Position in the interval (0 < τ ≤ 1).
+    pub tau: f64,
+    /// The sample (its time, angles and loads; no velocities).
+    pub target: NodeTarget,
+}
+
+/// Samples closer than this to a phase boundary (s) are left out of sample targets: on a
+/// contact change the measurement belongs to neither side.
+const SAMPLE_EDGE: f64 = 1e-9;
 
 /// The fewest samples a phase (forces) or an impact-to-impact segment (angles) must hold
 /// for one-sided targets.
@@ -83,6 +108,45 @@ fn segment_splines(data: &GaitData, columns: &[&[f64]], (a, b): (f64, f64), cuto
             CubicSpline::new(&t, &y).map_err(|e| format!("{what}: {e}"))
         })
         .collect()
+}
+
+/// Every sample of `data` inside the continuous phases of `seq` (durations fixed, the
+/// first starting at `t0`), located in its shooting interval, with the angles and the
+/// loads of the feet its phase loads (the CoP where the normal force reaches the data's
+/// CoP threshold); samples on a phase boundary are left out.
+fn sample_targets(model: &GaitModel, seq: &PhaseSequence, sets: &[ConstraintSet], data: &GaitData, t0: f64) -> Result<Vec<SampleTarget>, String> {
+    let angles: Vec<&[f64]> = COORDINATES.iter().map(|c| data.channel(c).ok_or_else(|| format!("no channel {c}"))).collect::<Result<_, _>>()?;
+    let nq = angles.len();
+    let mut out = Vec::new();
+    let (mut a, mut j) = (t0, 0);
+    for (i, ph) in seq.phases.iter().enumerate() {
+        let Phase::Continuous { duration, intervals, .. } = ph else { continue };
+        let b = a + duration.value();
+        let h = duration.value() / *intervals as f64;
+        let feet = loaded_feet(model, &sets[i]);
+        for (n, &t) in data.time.iter().enumerate() {
+            if !(t > a + SAMPLE_EDGE && t < b - SAMPLE_EDGE) {
+                continue;
+            }
+            let s = (t - a) / h;
+            let mut k = (s.floor() as usize).min(*intervals - 1);
+            let mut tau = (s - k as f64).min(1.0);
+            if tau < 1e-12 {
+                // on an inner node: the end of the interval before it
+                k -= 1;
+                tau = 1.0;
+            }
+            let load = |f: usize| {
+                let fd = &data.feet[f];
+                feet[f].then(|| (fd.fx[n], fd.fy[n], (fd.fy[n] >= data.cop_threshold && fd.cop_x[n].is_finite()).then_some(fd.cop_x[n])))
+            };
+            let q = angles.iter().map(|c| c[n].is_finite().then_some(c[n])).collect();
+            out.push(SampleTarget { phase: j, interval: k, tau, target: NodeTarget { time: t, q, qd: vec![None; nq], feet: [load(0), load(1)] } });
+        }
+        a = b;
+        j += 1;
+    }
+    Ok(out)
 }
 
 /// `seq` with the durations of its continuous phases fixed to the measured contact
@@ -159,6 +223,8 @@ pub struct TrackingSetup {
     pub events: Events,
     /// The measured loads as functions of time (for measurement effects).
     pub measured: Arc<MeasuredLoads>,
+    /// Measurements compared inside the shooting intervals ([`TargetSides::Samples`]).
+    pub samples: Vec<SampleTarget>,
 }
 
 impl TrackingSetup {
@@ -226,7 +292,7 @@ impl TrackingSetup {
             let Phase::Continuous { name, duration, intervals, .. } = ph else { continue };
             let h = duration.value() / *intervals as f64;
             let one_sided = match sides {
-                TargetSides::Interpolated => None,
+                TargetSides::Interpolated | TargetSides::Samples => None,
                 TargetSides::OneSided { cutoff_hz } => {
                     let end = t + duration.value();
                     let a = impacts.iter().copied().filter(|&x| x <= t + 1e-9).fold(t0, f64::max);
@@ -239,6 +305,7 @@ impl TrackingSetup {
                     Some((angles, fx, fy))
                 }
             };
+            let untracked = NodeTarget { time: 0.0, q: vec![None; nq], qd: vec![None; nq], feet: [None, None] };
             let (splines, fx, fy): (&[CubicSpline], &[CubicSpline], &[CubicSpline]) = match &one_sided {
                 Some((a, x, y)) => (a, x, y),
                 None => (&splines, &fx, &fy),
@@ -256,7 +323,11 @@ impl TrackingSetup {
                         (fx[s].eval(tk), fyv, if fyv >= data.cop_threshold { cop_at(s, tk) } else { None })
                     })
                 };
-                tg.push(NodeTarget { time: tk, q: q.iter().map(|v| Some(*v)).collect(), qd: qd.iter().map(|v| Some(*v)).collect(), feet: [foot_target(0), foot_target(1)] });
+                tg.push(if sides == TargetSides::Samples {
+                    NodeTarget { time: tk, ..untracked.clone() }
+                } else {
+                    NodeTarget { time: tk, q: q.iter().map(|v| Some(*v)).collect(), qd: qd.iter().map(|v| Some(*v)).collect(), feet: [foot_target(0), foot_target(1)] }
+                });
                 let (qp, qdp, _) = model.project(&sets[i], &q, &qd, &theta).map_err(|e| format!("projecting the data at t = {tk:.3} s: {e}"))?;
                 let mut x = qp;
                 x.extend(qdp);
@@ -298,7 +369,8 @@ impl TrackingSetup {
         let foot_length = 0.305;
         let weights = TrackingWeights::seed(nq, peak, foot_length);
         let measured = Arc::new(MeasuredLoads { fx, fy, time: data.time.clone(), cop_x: [data.feet[0].cop_x.clone(), data.feet[1].cop_x.clone()] });
-        Ok(Self { seq, window: (t0, t1), node_times, guess, targets, weights, events, measured })
+        let samples = if sides == TargetSides::Samples { sample_targets(model, &seq, sets, data, t0)? } else { Vec::new() };
+        Ok(Self { seq, window: (t0, t1), node_times, guess, targets, weights, events, measured, samples })
     }
 
     /// Start from `solution` (a solution of the same phase graph, e.g. of a tracking run
@@ -350,12 +422,28 @@ impl TrackingSetup {
                 n += super::GenericFunction::dim(&r) - model.nu() - model.na();
             }
         }
+        for s in &self.samples {
+            n += super::GenericFunction::dim(&self.sample_residual(model, sets, continuous, s));
+        }
         n
     }
 
+    /// The data-only residual of a sample target.
+    fn sample_residual<'m>(&self, model: &'m GaitModel, sets: &[ConstraintSet], continuous: &[usize], s: &SampleTarget) -> TrackingResidual<'m> {
+        TrackingResidual::new(model, sets[continuous[s.phase]].clone(), s.target.clone(), self.weights.clone(), Some(self.measured.clone())).data_only()
+    }
+
     /// Where the tracking cost of `solution` comes from: per channel
-    /// ([`TrackingResidual::row_channels`]) and continuous phase, and per node.
-    pub fn cost_breakdown(&self, model: &GaitModel, sets: &[ConstraintSet], continuous: &[usize], solution: &super::evaluation::GaitSolution) -> Result<CostBreakdown, String> {
+    /// ([`TrackingResidual::row_channels`]) and continuous phase, and per node (per sample
+    /// for sample targets, the intervals integrated to them with `integrator`).
+    pub fn cost_breakdown(
+        &self,
+        model: &GaitModel,
+        sets: &[ConstraintSet],
+        continuous: &[usize],
+        solution: &super::evaluation::GaitSolution,
+        integrator: &crate::integrate::IntegratorSettings,
+    ) -> Result<CostBreakdown, String> {
         let linear = solution.phases.first().is_none_or(|p| p.controls == crate::integrate::ControlShape::Linear);
         let mut channels: Vec<String> = Vec::new();
         let mut phases = Vec::new();
@@ -374,34 +462,27 @@ impl TrackingSetup {
                 let r = TrackingResidual::new(model, sets[continuous[j]].clone(), target.clone(), self.weights.clone(), Some(self.measured.clone()));
                 let ku = if linear { k } else { k.min(n - 1) };
                 let z: Vec<f64> = ph.x[k].iter().chain(&ph.u[ku]).chain(&solution.theta).copied().collect();
-                let mut v = vec![0.0; super::GenericFunction::dim(&r)];
-                super::GenericFunction::eval(&r, &z, &mut v)?;
-                let mut node_data = Vec::new();
-                for (label, value) in r.row_channels().into_iter().zip(&v) {
-                    let c = match channels.iter().position(|x| *x == label) {
-                        Some(c) => c,
-                        None => {
-                            channels.push(label.clone());
-                            cost.push(Vec::new());
-                            rows.push(Vec::new());
-                            channels.len() - 1
-                        }
-                    };
-                    if cost[c].len() <= j {
-                        cost[c].resize(j + 1, 0.0);
-                        rows[c].resize(j + 1, 0);
-                    }
-                    cost[c][j] += value * value;
-                    rows[c][j] += 1;
-                    if label != "excitations" && label != "activations" && !label.ends_with("residual") {
-                        match node_data.iter_mut().find(|(l, _): &&mut (String, f64)| *l == label) {
-                            Some(e) => e.1 += value * value,
-                            None => node_data.push((label, value * value)),
-                        }
-                    }
+                let (data, largest) = add_costs(&r, &z, j, &mut channels, &mut cost, &mut rows)?;
+                if !largest.is_empty() {
+                    nodes.push(NodeCost { time: ph.t0 + k as f64 * h, phase: ph.name.clone(), data, largest });
                 }
-                nodes.push(NodeCost { time: ph.t0 + k as f64 * h, phase: ph.name.clone(), data: node_data.iter().map(|e| e.1).sum(), largest: node_data.into_iter().max_by(|a, b| a.1.total_cmp(&b.1)).map(|e| e.0).unwrap_or_default() });
             }
+        }
+        if !self.samples.is_empty() {
+            let times: Vec<f64> = self.samples.iter().map(|s| s.target.time).collect();
+            let states = solution.sample_at(model, sets, &times, integrator).map_err(|e| format!("integrating to the samples: {e}"))?;
+            for (st, at) in self.samples.iter().zip(&states) {
+                let ph = &solution.phases[st.phase];
+                let u: Vec<f64> = match ph.controls {
+                    crate::integrate::ControlShape::Linear => ph.u[st.interval].iter().zip(&ph.u[st.interval + 1]).map(|(a, b)| (1.0 - st.tau) * a + st.tau * b).collect(),
+                    crate::integrate::ControlShape::Constant => ph.u[st.interval].clone(),
+                };
+                let z: Vec<f64> = at.x.iter().chain(&u).chain(&solution.theta).copied().collect();
+                let r = self.sample_residual(model, sets, continuous, st);
+                let (data, largest) = add_costs(&r, &z, st.phase, &mut channels, &mut cost, &mut rows)?;
+                nodes.push(NodeCost { time: st.target.time, phase: ph.name.clone(), data, largest });
+            }
+            nodes.sort_by(|a, b| a.time.total_cmp(&b.time));
         }
         for c in &mut cost {
             c.resize(phases.len(), 0.0);
@@ -434,8 +515,46 @@ impl TrackingSetup {
                 });
             }
         }
+        for s in &self.samples {
+            let r = self.sample_residual(model, sets, &cycle.continuous, s);
+            ocp.samples.push(SampleTerm { name: "tracking sample".into(), phase: s.phase, interval: s.interval, tau: s.tau, f: Arc::new(super::AdTerm(r)) });
+        }
         Ok(ocp)
     }
+}
+
+/// Add the squared rows of residual `r` at `z` to the cost of phase `j` per channel
+/// (new channels appended); returns the data cost (without regularisation) and the
+/// channel contributing most to it (empty without data rows).
+fn add_costs(r: &TrackingResidual, z: &[f64], j: usize, channels: &mut Vec<String>, cost: &mut Vec<Vec<f64>>, rows: &mut Vec<Vec<usize>>) -> Result<(f64, String), String> {
+    let mut v = vec![0.0; super::GenericFunction::dim(r)];
+    super::GenericFunction::eval(r, z, &mut v)?;
+    let mut node_data: Vec<(String, f64)> = Vec::new();
+    for (label, value) in r.row_channels().into_iter().zip(&v) {
+        let c = match channels.iter().position(|x| *x == label) {
+            Some(c) => c,
+            None => {
+                channels.push(label.clone());
+                cost.push(Vec::new());
+                rows.push(Vec::new());
+                channels.len() - 1
+            }
+        };
+        if cost[c].len() <= j {
+            cost[c].resize(j + 1, 0.0);
+            rows[c].resize(j + 1, 0);
+        }
+        cost[c][j] += value * value;
+        rows[c][j] += 1;
+        if label != "excitations" && label != "activations" && !label.ends_with("residual") {
+            match node_data.iter_mut().find(|(l, _)| *l == label) {
+                Some(e) => e.1 += value * value,
+                None => node_data.push((label, value * value)),
+            }
+        }
+    }
+    let data = node_data.iter().map(|e| e.1).sum();
+    Ok((data, node_data.into_iter().max_by(|a, b| a.1.total_cmp(&b.1)).map(|e| e.0).unwrap_or_default()))
 }
 
 /// Where a tracking cost comes from.

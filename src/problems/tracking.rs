@@ -141,6 +141,7 @@ pub struct TrackingResidual<'a> {
     target: NodeTarget,
     weights: TrackingWeights,
     measured: Option<Arc<MeasuredLoads>>,
+    regularised: bool,
     dim: usize,
 }
 
@@ -171,7 +172,19 @@ impl<'a> TrackingResidual<'a> {
         }
         dim += model.nu() + model.na();
         let measured = measured.filter(|_| model.has_measurement_effects());
-        Self { model, set, target, weights, measured, dim }
+        Self { model, set, target, weights, measured, regularised: true, dim }
+    }
+
+    /// The same residual without the regularisation rows (excitations, activations,
+    /// residual actuators): the data rows only, for a measurement compared with the model
+    /// at its own instant inside a shooting interval (the regularisation stays at the
+    /// nodes).
+    pub fn data_only(mut self) -> Self {
+        if self.regularised {
+            self.regularised = false;
+            self.dim -= self.model.nu() + self.model.na();
+        }
+        self
     }
 
     /// The channel each residual row belongs to, in row order: the coordinate's name for
@@ -196,9 +209,11 @@ impl<'a> TrackingResidual<'a> {
                 out.push("CoP".into());
             }
         }
-        out.extend(std::iter::repeat_n("excitations".to_string(), self.model.nu_actuators()));
-        out.extend(self.model.control_names().into_iter().skip(self.model.nu_actuators()));
-        out.extend(std::iter::repeat_n("activations".to_string(), self.model.na()));
+        if self.regularised {
+            out.extend(std::iter::repeat_n("excitations".to_string(), self.model.nu_actuators()));
+            out.extend(self.model.control_names().into_iter().skip(self.model.nu_actuators()));
+            out.extend(std::iter::repeat_n("activations".to_string(), self.model.na()));
+        }
         out
     }
 
@@ -243,6 +258,10 @@ impl<'a> TrackingResidual<'a> {
                     o += 1;
                 }
             }
+        }
+        if !self.regularised {
+            debug_assert_eq!(o, self.dim);
+            return Ok(());
         }
         let n_act = self.model.nu_actuators();
         for (k, v) in u.iter().enumerate() {

@@ -174,11 +174,21 @@ pub fn chromium(args: &[String], timeout: Duration) -> Vec<u8> {
 /// the tracking setup.
 #[allow(dead_code)]
 pub fn bundled_tracking(foot: &str, phases: &str) -> (GaitModel, Vec<footfall::model::ConstraintSet>, footfall::problems::track::TrackingSetup) {
+    bundled_tracking_with(foot, phases, footfall::problems::track::TargetSides::Interpolated)
+}
+
+/// As [`bundled_tracking`], with the targets read as `sides` says.
+#[allow(dead_code)]
+pub fn bundled_tracking_with(
+    foot: &str,
+    phases: &str,
+    sides: footfall::problems::track::TargetSides,
+) -> (GaitModel, Vec<footfall::model::ConstraintSet>, footfall::problems::track::TrackingSetup) {
     let data = footfall::data::GaitData::bundled(&root()).unwrap();
     let m = model("opensim_subject01.json", foot);
     let p = path(phases);
     let seq = footfall::phases::PhaseSequence::load(&p).unwrap();
     let sets = seq.resolve(&m, &p).unwrap();
-    let setup = footfall::problems::track::TrackingSetup::new(&m, &seq, &sets, &data).unwrap();
+    let setup = footfall::problems::track::TrackingSetup::new_with_sides(&m, &seq, &sets, &data, sides).unwrap();
     (m, sets, setup)
 }
