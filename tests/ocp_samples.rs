@@ -38,6 +38,14 @@ impl ControlledOde for Pendulum {
         ft.copy_from_slice(&[0.0, -x[0].sin()]);
         Ok(())
     }
+    fn weighted_hessian(&self, x: &[f64], _: &[f64], theta: &[f64], mu: &[f64], out: &mut [f64]) -> Result<bool, OdeError> {
+        // (x₀, x₁, u, θ): only f₁ = −θ sin x₀ … is curved
+        out.iter_mut().for_each(|v| *v = 0.0);
+        out[0] = mu[1] * theta[0] * x[0].sin();
+        out[3] = -mu[1] * x[0].cos();
+        out[12] = out[3];
+        Ok(true)
+    }
 }
 
 /// A positive scalar residual of `(x, u, θ)`: r = 2 + x₀² + sin(x₁)·u + θ·x₁ / 4 − 0.1 u.
@@ -197,6 +205,23 @@ fn sample_gradient_and_gauss_newton_match_central_differences() {
         let wm: Vec<f64> = w.iter().zip(&d).map(|(x, y)| x - eps * y).collect();
         let dr = (r(&wp) - r(&wm)) / (2.0 * eps);
         assert!((quad - 2.0 * dr * dr).abs() < 1e-6 * (1.0 + quad.abs()), "direction {seed}: dᵀ GN d = {quad}, 2 (∂r/∂d)² = {}", 2.0 * dr * dr);
+    }
+}
+
+/// With multipliers (the exact-Hessian path) the samples come from the interval's
+/// curvature pass: the same objective, gradient and Gauss–Newton block as without.
+#[test]
+fn sample_terms_are_the_same_on_the_exact_hessian_path() {
+    let ode = Pendulum;
+    let ocp = problem(&ode);
+    let tr = Transcription::new(&ocp).unwrap();
+    let w = point(&tr);
+    let lambda: Vec<f64> = (0..tr.m()).map(|i| 0.3 - 0.1 * i as f64).collect();
+    let (a, _) = tr.evaluate_with_hessian(&w, &lambda).unwrap();
+    let b = tr.evaluate(&w, true).unwrap();
+    assert!((a.f - b.f).abs() < 1e-10 * b.f, "{} against {}", a.f, b.f);
+    for (x, y) in a.grad.iter().zip(&b.grad).chain(a.gauss_newton.iter().zip(&b.gauss_newton)) {
+        assert!((x - y).abs() < 1e-8 * (1.0 + y.abs()), "{x} against {y}");
     }
 }
 

@@ -326,20 +326,49 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
         s1: &mut [f64],
         hess: &mut [f64],
     ) -> Result<bool, IntegratorError> {
+        self.integrate_with_hessian_and_outputs(integ, x0, p, lambda, x1, s1, hess, &[], &mut Vec::new(), &mut Vec::new())
+    }
+
+    /// As [`integrate_with_hessian`](Self::integrate_with_hessian), and in the same pass
+    /// the states and sensitivities at the strictly increasing `outputs ⊂ (0, 1]`,
+    /// appended to `xs` and `ss` as by
+    /// [`Integrator::integrate_with_sensitivities_dense`](super::Integrator::integrate_with_sensitivities_dense).
+    #[allow(clippy::too_many_arguments)]
+    pub fn integrate_with_hessian_and_outputs(
+        &self,
+        integ: &mut super::Integrator,
+        x0: &[f64],
+        p: &[f64],
+        lambda: &[f64],
+        x1: &mut [f64],
+        s1: &mut [f64],
+        hess: &mut [f64],
+        outputs: &[f64],
+        xs_out: &mut Vec<f64>,
+        ss_out: &mut Vec<f64>,
+    ) -> Result<bool, IntegratorError> {
         let m = self.model;
         let (nx, nu, nt) = (m.nx(), m.nu(), m.ntheta());
         let np = self.np();
         let nz = nx + np;
         let nw = nx + nu + nt;
         let nodes = &GAUSS4;
-        let nq = nodes.len();
-        let mut times: Vec<f64> = nodes.iter().map(|g| g.0).collect();
-        times.push(1.0);
+        // one pass to the quadrature nodes, the outputs and the end, in time order
+        let mut times: Vec<f64> = nodes.iter().map(|g| g.0).chain(outputs.iter().copied()).chain([1.0]).collect();
+        times.sort_by(f64::total_cmp);
+        times.dedup();
+        let at = |t: f64| times.partition_point(|&v| v < t);
         let (mut xs, mut ss) = (Vec::new(), Vec::new());
         integ.integrate_with_sensitivities_dense(self, 0.0, 1.0, x0, p, &times, &mut xs, &mut ss)?;
         let sz = nx * nz;
-        x1.copy_from_slice(&xs[nq * nx..(nq + 1) * nx]);
-        s1.copy_from_slice(&ss[nq * sz..(nq + 1) * sz]);
+        let end = times.len() - 1;
+        x1.copy_from_slice(&xs[end * nx..(end + 1) * nx]);
+        s1.copy_from_slice(&ss[end * sz..(end + 1) * sz]);
+        for &t in outputs {
+            let i = at(t);
+            xs_out.extend_from_slice(&xs[i * nx..(i + 1) * nx]);
+            ss_out.extend_from_slice(&ss[i * sz..(i + 1) * sz]);
+        }
         // λᵀΨ(1)
         let lam_psi1: Vec<f64> = (0..nx).map(|j| (0..nx).map(|i| lambda[i] * s1[i + j * nx]).sum()).collect();
         hess.iter_mut().for_each(|v| *v = 0.0);
@@ -349,7 +378,8 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
         let mut h = vec![0.0; nw * nw];
         let mut xdot = vec![0.0; nx];
         let (mut fx, mut fu, mut ft) = (vec![0.0; nx * nx], vec![0.0; nx * nu], vec![0.0; nx * nt]);
-        for (q, &(tau, wq)) in nodes.iter().enumerate() {
+        for &(tau, wq) in nodes.iter() {
+            let q = at(tau);
             let x = &xs[q * nx..(q + 1) * nx];
             let s = &ss[q * sz..(q + 1) * sz];
             // μ(τ)ᵀ = λᵀΨ(1)Ψ(τ)⁻¹: solve Ψ(τ)ᵀ μ = (λᵀΨ(1))ᵀ

@@ -523,19 +523,11 @@ impl<'o, 'a> Transcription<'o, 'a> {
             s = vec![0.0; nx * (nx + np)];
             let weights: Vec<f64> = lam[iv.row..iv.row + nx].iter().map(|v| -v).collect();
             let mut h = vec![0.0; (nx + np) * (nx + np)];
-            match interval.integrate_with_hessian(&mut integ, x0, &p, &weights, &mut x1, &mut s, &mut h) {
+            // the samples' states and sensitivities come from the same pass
+            match interval.integrate_with_hessian_and_outputs(&mut integ, x0, &p, &weights, &mut x1, &mut s, &mut h, &taus, &mut xs, &mut ss) {
                 Ok(true) => {
                     hess = Some(h);
-                    if taus.is_empty() {
-                        Ok(integ.stats_snapshot())
-                    } else {
-                        // a second pass for the samples' states and sensitivities
-                        let first = integ.stats_snapshot();
-                        integ.integrate_with_sensitivities_dense(&interval, 0.0, 1.0, x0, &p, &taus, &mut xs, &mut ss).map(|mut st| {
-                            st += first;
-                            st
-                        })
-                    }
+                    Ok(integ.stats_snapshot())
                 }
                 Ok(false) => Err(IntegratorError::BadSettings {
                     field: "hessian",
