@@ -98,6 +98,12 @@ pub struct Args {
     /// nodes.
     #[arg(long)]
     sample_targets: bool,
+    /// Weight every channel by the inverse variance of its measurement noise instead of
+    /// the seed's weights (the maximum-likelihood weighting; the angles keep the seed's
+    /// weight, so the regularisation keeps its meaning): `angle=DEG,position=MM,force=N,cop=MM`,
+    /// e.g. `angle=0.5,position=2,force=5,cop=5` (synth's default noise).
+    #[arg(long, value_name = "angle=DEG,position=MM,force=N,cop=MM")]
+    noise_weights: Option<String>,
     /// Weight of the angular-velocity targets relative to the angles (default: the seed's
     /// 0.1; 0 drops them). The targets differentiate the smoothed angles, so they carry
     /// the filter's bias and its low-passed noise, which a fit can follow.
@@ -218,6 +224,10 @@ impl TrackingProblem {
         if run.track_pelvis_position {
             setup.weights = setup.weights.clone().with_pelvis_position();
         }
+        if let Some(noise) = &run.noise_weights {
+            let peak = setup.weights.force_scale;
+            setup.weights = setup.weights.clone().with_noise_weights(noise, peak);
+        }
         if let Some(w) = run.regularisation {
             if !(w.is_finite() && w >= 0.0) {
                 return Err(anyhow!("--regularisation {w}: expected a finite weight ≥ 0 (the seed's is 1e-3)"));
@@ -263,6 +273,30 @@ impl TrackingProblem {
         effects.extend(extra.iter().cloned());
         TrackingRunSetup { effects, parameters, integrator_tol: self.integrator.rtol, ..base.clone() }
     }
+}
+
+/// `--noise-weights angle=DEG,position=MM,force=N,cop=MM`: every key once, each a
+/// positive, finite standard deviation.
+fn parse_noise_weights(text: &str) -> anyhow::Result<footfall::problems::tracking::ChannelNoise> {
+    let keys = ["angle", "position", "force", "cop"];
+    let mut v = [None; 4];
+    for part in text.split(',') {
+        let (k, x) = part.split_once('=').ok_or_else(|| anyhow!("--noise-weights '{text}': '{part}' is not key=value (keys: angle in °, position in mm, force in N, cop in mm)"))?;
+        let i = keys.iter().position(|n| *n == k.trim()).ok_or_else(|| anyhow!("--noise-weights: unknown key '{}' (keys: angle in °, position in mm, force in N, cop in mm)", k.trim()))?;
+        let x: f64 = x.trim().parse().map_err(|_| anyhow!("--noise-weights: {k}='{x}' is not a number"))?;
+        if !(x.is_finite() && x > 0.0) {
+            return Err(anyhow!("--noise-weights: {k}={x}: a standard deviation must be positive and finite"));
+        }
+        if v[i].replace(x).is_some() {
+            return Err(anyhow!("--noise-weights: '{k}' given twice"));
+        }
+    }
+    let missing: Vec<&str> = keys.iter().zip(&v).filter(|(_, x)| x.is_none()).map(|(k, _)| *k).collect();
+    if !missing.is_empty() {
+        return Err(anyhow!("--noise-weights '{text}': missing {} (give angle=DEG,position=MM,force=N,cop=MM)", missing.join(", ")));
+    }
+    let [a, p, f, c] = v.map(|x| x.unwrap_or_default());
+    Ok(footfall::problems::tracking::ChannelNoise { angle_rad: a.to_radians(), position_m: p * 1e-3, force_n: f, cop_m: c * 1e-3 })
 }
 
 /// The tracking solver's settings (exact Hessian once nearly feasible, as `track`'s
@@ -401,6 +435,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         velocity_weight: args.velocity_weight,
         one_sided_targets: args.one_sided_targets,
         sample_targets: args.sample_targets,
+        noise_weights: args.noise_weights.as_deref().map(parse_noise_weights).transpose()?,
         effects: vec![],
         parameters: vec![],
     };

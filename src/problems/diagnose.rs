@@ -57,6 +57,9 @@ pub struct TrackingRunSetup {
     /// targets (`--sample-targets`).
     #[serde(default)]
     pub sample_targets: bool,
+    /// Channels weighted by their noise (`--noise-weights`; `None`: the seed's weights).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub noise_weights: Option<crate::problems::tracking::ChannelNoise>,
     /// Weight of the velocity targets relative to the angles (`None`: the seed's 0.1).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub velocity_weight: Option<f64>,

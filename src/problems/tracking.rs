@@ -126,12 +126,51 @@ impl TrackingWeights {
     /// force plates indistinguishable from such a shift.
     pub const PELVIS_POSITION: f64 = 10.0;
 
+    /// These weights with every data channel weighted by the inverse variance of its
+    /// measurement noise (`noise`: σ of the angles in rad, the pelvis position in m, the
+    /// forces in N and the CoP in m), scaled so that the angles keep the seed's weight:
+    /// the maximum-likelihood weighting for independent Gaussian noise, where the seed's
+    /// weights count an angle's noise 2.3 times a force's and the ankles at 1/100. The CoP
+    /// row, a load-weighted moment error, is weighted so that its noise counts fully at
+    /// the peak force (`peak_force`, N). Untracked coordinates stay untracked; the
+    /// velocity targets keep their weight relative to the angles.
+    pub fn with_noise_weights(mut self, noise: &ChannelNoise, peak_force: f64) -> Self {
+        let c = self.angle.iter().copied().fold(0.0, f64::max) * noise.angle_rad.powi(2);
+        let relative: Vec<f64> = self.velocity.iter().zip(&self.angle).map(|(v, a)| if *a > 0.0 { v / a } else { 0.0 }).collect();
+        for (i, w) in self.angle.iter_mut().enumerate() {
+            if *w > 0.0 {
+                *w = c / if i < 2 { noise.position_m } else { noise.angle_rad }.powi(2);
+            }
+        }
+        for ((v, a), r) in self.velocity.iter_mut().zip(&self.angle).zip(relative) {
+            *v = r * a;
+        }
+        self.force = c;
+        self.force_scale = noise.force_n;
+        self.cop = c * (noise.force_n * self.cop_length / (peak_force * noise.cop_m)).powi(2);
+        self
+    }
+
     /// Also track the pelvis position (x, y) at [`PELVIS_POSITION`](Self::PELVIS_POSITION).
     pub fn with_pelvis_position(mut self) -> Self {
         self.angle[0] = Self::PELVIS_POSITION;
         self.angle[1] = Self::PELVIS_POSITION;
         self
     }
+}
+
+/// Standard deviations of the measurement noise per channel kind, for
+/// [`TrackingWeights::with_noise_weights`].
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct ChannelNoise {
+    /// Pelvis tilt and joint angles (rad).
+    pub angle_rad: f64,
+    /// Pelvis position (m).
+    pub position_m: f64,
+    /// Ground reaction forces (N).
+    pub force_n: f64,
+    /// Centre of pressure (m).
+    pub cop_m: f64,
 }
 
 /// The residual of one node.
