@@ -1,8 +1,10 @@
 //! Criterion benchmarks of the model layer: one dynamics evaluation, one dynamics +
 //! exact Jacobian evaluation (what the sensitivity right-hand side needs), and one 40 ms
 //! shooting interval with full forward sensitivities (x0, piecewise-linear controls,
-//! duration), for the ellipse foot in single stance and the double-circle foot with both
-//! circles on the ground.
+//! duration), alone and with the states and sensitivities at the samples inside it that
+//! `track --sample-targets` compares (4 at 100 Hz, 40 at 1 kHz; CVODES dense output), for
+//! the ellipse foot in single stance and the double-circle foot with both circles on the
+//! ground.
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use footfall::integrate::{ControlShape, Integrator, IntegratorSettings, ShootingInterval};
@@ -56,6 +58,19 @@ fn bench(c: &mut Criterion) {
                     .expect("interval")
             })
         });
+        for (rate, n) in [("100Hz", 4), ("1kHz", 40)] {
+            let times: Vec<f64> = (1..=n).map(|k| k as f64 / n as f64).collect();
+            let (mut xs, mut ss) = (Vec::new(), Vec::new());
+            c.bench_function(&format!("interval_40ms_sensitivities_samples_{rate}/{label}"), |b| {
+                b.iter(|| {
+                    xs.clear();
+                    ss.clear();
+                    integ
+                        .integrate_with_sensitivities_dense(&interval, 0.0, 1.0, black_box(&x), &p, &times, &mut xs, &mut ss)
+                        .expect("interval")
+                })
+            });
+        }
     }
 }
 

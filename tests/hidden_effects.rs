@@ -50,11 +50,24 @@ fn channel_means(run: &Path) -> Vec<(String, f64)> {
         .collect()
 }
 
+/// Mean error per channel and phase of a run's summary: `((channel, phase), mean)`.
+fn phase_means(run: &Path) -> Vec<((String, String), f64)> {
+    let mut out = Vec::new();
+    for c in read_json(&run.join("summary.json"))["errors_by_phase"].as_array().unwrap() {
+        for p in c["phases"].as_array().unwrap() {
+            out.push(((c["channel"].as_str().unwrap().to_string(), p["phase"].as_str().unwrap().to_string()), p["stats"]["mean"].as_f64().unwrap()));
+        }
+    }
+    out
+}
+
 /// How a trial is tracked: the seed's cost with the ellipse foot, the same with the
 /// pelvis position tracked, the cost for identifying effort-costly parameters (the pelvis
 /// position tracked, no velocity targets, the u², a² regularisation at 1e-4 instead of
 /// the seed's 1e-3), or the double-circle foot (whose heel circle the heel pad needs)
-/// with every sample compared at its own instant (`--sample-targets`, unfiltered).
+/// with every sample compared at its own instant (`--sample-targets`, unfiltered) and
+/// every channel weighted by the inverse variance of the trials' documented noise
+/// (`--noise-weights`, synth's default noise).
 #[derive(Debug, Clone, Copy, PartialEq)]
 enum Setup {
     Seed,
@@ -100,7 +113,7 @@ fn baseline(name: &str, dir: &Path, how: Setup) -> PathBuf {
         Setup::Seed => {}
         Setup::Pelvis => args.push("--track-pelvis-position"),
         Setup::Identify => args.extend(["--track-pelvis-position", "--regularisation", "1e-4", "--velocity-weight", "0"]),
-        Setup::Samples => args.extend(["--foot", "double-circle", "--sample-targets"]),
+        Setup::Samples => args.extend(["--foot", "double-circle", "--sample-targets", "--noise-weights", "angle=0.5,position=2,force=5,cop=5"]),
     }
     let o = footfall(&args);
     assert!(o.status.success(), "track {name}: {}", String::from_utf8_lossy(&o.stderr));
@@ -116,17 +129,18 @@ fn diagnose(run: &Path, verify: usize) -> Value {
     summary
 }
 
-type Floor = (Vec<(String, f64)>, Value);
+type Floor = (Vec<(String, f64)>, Value, Vec<((String, String), f64)>);
 
-/// The noise floor (mean error per channel on the trial without a hidden effect) and
-/// the diagnosis of that trial, computed once for all tests (per setup).
+/// The noise floor (mean error per channel on the trial without a hidden effect), the
+/// diagnosis of that trial and the floor phase by phase, computed once for all tests
+/// (per setup).
 fn floor(how: Setup) -> &'static Floor {
     static FLOOR: [OnceLock<Floor>; 4] = [OnceLock::new(), OnceLock::new(), OnceLock::new(), OnceLock::new()];
     FLOOR[how.index()].get_or_init(|| {
         let dir = tempfile::tempdir().unwrap().keep();
         let run = baseline(how.none(), &dir, how);
         let d = diagnose(&run, 1);
-        (channel_means(&run), d)
+        (channel_means(&run), d, phase_means(&run))
     })
 }
 
@@ -149,7 +163,7 @@ fn hidden_values(name: &str) -> Vec<(String, String, f64)> {
 
 /// Every channel's mean error within `factor` × the floor.
 fn within_floor(run: &Path, factor: f64, how: Setup) -> Result<(), String> {
-    let (floor, _) = floor(how);
+    let (floor, _, _) = floor(how);
     let mut bad = Vec::new();
     for ((c, e), (_, f)) in channel_means(run).iter().zip(floor) {
         if *e > factor * f {
@@ -183,19 +197,35 @@ fn check_parameters(verified: &Value, hidden: &[(String, String, f64)], within_t
     }
 }
 
+/// Whether a run's error shows above the noise floor: some channel's mean error above
+/// 1.5× the floor, over the whole window or in one phase (an effect confined to part of
+/// the cycle, as the heel pad's to heel contact, is diluted in the window's mean).
+fn above_floor(run: &Path, how: Setup) -> Option<String> {
+    let (floor, _, by_phase) = floor(how);
+    let whole = channel_means(run).into_iter().zip(floor).find(|((_, e), (_, f))| *e > 1.5 * f).map(|((c, e), (_, f))| format!("{c}: {e:.3} against {f:.3}"));
+    let phase = || {
+        phase_means(run).into_iter().zip(by_phase).inspect(|(a, b)| assert_eq!(a.0, b.0)).find(|((_, e), (_, f))| *e > 1.5 * f).map(|(((c, p), e), (_, f))| format!("{c} in phase {p}: {e:.3} against {f:.3}"))
+    };
+    whole.or_else(phase)
+}
+
 /// One hidden effect: baseline above the floor, ranked first, re-fit at the floor with
 /// the truth identified.
 fn single_effect(name: &str, how: Setup, within_two_sd: &[&str], floor_factor: f64) {
+    let hidden = hidden_values(name);
+    let kind = hidden[0].0.as_str();
+    assert!(hidden.iter().all(|h| h.0 == kind), "{name}: more than one hidden effect");
     let dir = tempfile::tempdir().unwrap();
     let run = baseline(name, dir.path(), how);
-    assert!(within_floor(&run, 1.5, how).is_err(), "{name}: the hidden effect does not show above the noise floor");
+    let shows = above_floor(&run, how).unwrap_or_else(|| panic!("{name}: the hidden effect does not show above the noise floor"));
+    eprintln!("{name} above the floor: {shows}");
     let d = diagnose(&run, 1);
-    assert_eq!(d["ranking"][0]["effect"]["type"], name, "{name}: ranked first is {}", d["ranking"][0]["label"]);
+    assert_eq!(d["ranking"][0]["effect"]["type"], kind, "{name}: ranked first is {}", d["ranking"][0]["label"]);
     assert_eq!(d["ranking"][0]["significant"], true);
     let v = &d["verified"][0];
-    assert_eq!(v["effect"]["type"], name);
+    assert_eq!(v["effect"]["type"], kind);
     assert_eq!(v["converged"], true);
-    check_parameters(v, &hidden_values(name), within_two_sd);
+    check_parameters(v, &hidden, within_two_sd);
     let refit = PathBuf::from(v["folder"].as_str().unwrap());
     for ((c, before), (_, after)) in channel_means(&run).iter().zip(channel_means(&root().join(&refit))) {
         eprintln!("{c}: {before:.3} → {after:.3} (floor ×{:.2})", after / floor(how).0.iter().find(|f| f.0 == *c).map_or(f64::NAN, |f| f.1));
@@ -215,7 +245,7 @@ fn single_effect(name: &str, how: Setup, within_two_sd: &[&str], floor_factor: f
 #[test]
 fn without_a_hidden_effect_nothing_is_significant() {
     for how in [Setup::Seed, Setup::Pelvis, Setup::Identify, Setup::Samples] {
-        let (floor, d) = floor(how);
+        let (floor, d, _) = floor(how);
         eprintln!("noise floor ({how:?}): {floor:?}");
         assert_eq!(d["significant"], 0, "an effect was invented: {}", d["verdict"]);
         assert!(d["verified"].as_array().unwrap().is_empty());
@@ -295,19 +325,22 @@ fn two_hidden_effects_are_found_one_after_the_other() {
 }
 
 /// A compliant heel pad (150 N/mm, 3 N·s/mm) hidden in data of the double-circle foot,
-/// tracked with every sample compared at its own instant (`--sample-targets`): the pad
-/// has no null value, so `diagnose` tests it by a re-fit, which ranks it first (on the
-/// trial without a hidden effect the same re-fit ends above the rigid fit,
-/// `without_a_hidden_effect_nothing_is_significant`), and the re-fit brings every channel
-/// to 1.5× the floor.
+/// tracked with every sample compared at its own instant and the channels weighted by
+/// their noise (`Setup::Samples`). The pad has no null value, so `diagnose` tests it by a
+/// re-fit: it ranks first (statistic 64.4 against 13.8; on the trial without a hidden
+/// effect the same re-fit ends above the rigid fit,
+/// `without_a_hidden_effect_nothing_is_significant`), the re-fit brings every channel to
+/// 1.5× the floor and identifies the stiffness at 164.1 ± 37.5 N/mm (+9 %).
 ///
-/// NOT met: the 20 % on the parameters. The 100 Hz trial holds two or three samples of
-/// the heel-strike transient, and the re-fit's own standard deviations (the Gauss–Newton
-/// covariance scaled by J/N) are about 36 % of the stiffness and 30 % of the damping, so
-/// an estimate within 20 % is a matter of the noise's draw; on this draw they come out at
-/// 190 ± 69 N/mm (+27 %) and 1.95 ± 0.61 N·s/mm (−35 %). Asserted: each within two of
-/// its standard deviations of the truth (`docs/heel-pad.md`, section 6).
+/// NOT met: the damping within 20 %: 2.18 ± 0.42 N·s/mm (−27 %), asserted within two of
+/// its standard deviations instead. The 100 Hz trial holds five samples of the heel's
+/// 55 ms of contact before the forefoot lands; with the noise of another seed the same
+/// cost gives 197 ± 52 N/mm (+31 %) and 2.49 ± 0.54 N·s/mm (−17 %), and on the noise-free
+/// trial 181 N/mm and 2.50 N·s/mm, the seed's u², a² regularisation's pull (at 1e-4,
+/// 157 and 2.82). On a 1 kHz trial both come within 7 %, but there `diagnose` invents a
+/// force-plate clock offset on the trial without a hidden effect (`docs/heel-pad.md`,
+/// section 6).
 #[test]
 fn hidden_heel_pad_is_found_and_identified() {
-    single_effect("heel_pad_compliance", Setup::Samples, &["heel_pad_compliance.stiffness", "heel_pad_compliance.damping"], 1.5);
+    single_effect("heel_pad_compliance", Setup::Samples, &["heel_pad_compliance.damping"], 1.5);
 }

@@ -129,8 +129,9 @@ fn refit(args: &Args, setup: &TrackingRunSetup, effect: &EffectSpec, start: &Gai
     let mut prob = TrackingProblem::build(setup, std::slice::from_ref(effect))?;
     prob.start_at(start).map_err(|e| anyhow!("{}: {e:#}", args.run.display()))?;
     // sample terms enter the objective's curvature as Gauss–Newton only; with the exact
-    // curvature of the constraints beside it the 100 Hz pad trial's re-fit stalled at KKT
-    // 1e-3 for 60 iterations, where Gauss–Newton converged in 36 (docs/heel-pad.md)
+    // curvature of the constraints beside it the 100 Hz pad trial's re-fit stalled (KKT
+    // 1e-3 to 0.2 from iteration 23 to 90), where Gauss–Newton converged in 36
+    // (docs/heel-pad.md, section 6)
     let hessian = if setup.sample_targets { HessianMode::GaussNewton } else { HessianMode::Exact };
     let settings = tracking_sqp_settings(args.tol, args.max_iter, None, hessian, 1e-3);
     let rf = RunFolder::create(&dir, args.overwrite)?;

@@ -226,7 +226,7 @@ pub fn score_test(effect: &EffectSpec, parameters: Vec<String>, tr: &Transcripti
 /// `objective / data_rows`, against the χ²ₖ 0.1 % point as a score test's. The null
 /// lies on the boundary and one parameter (the damping) has no meaning there, so the
 /// χ²ₖ reference is an approximation; `diagnose` offers it only where the pad was shown
-/// not to gain on data without one (one-sided node targets).
+/// not to gain on data without one (sample targets, one-sided node targets).
 pub fn refit_test(effect: &EffectSpec, parameters: Vec<String>, values: Vec<f64>, objective: f64, refit_objective: f64, data_rows: usize, iterations: usize) -> ScoreTest {
     ScoreTest { steps: iterations, refit: true, ..ScoreTest::from_decrease(effect, parameters, values, objective - refit_objective, objective, data_rows) }
 }
