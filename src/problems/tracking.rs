@@ -130,10 +130,10 @@ impl TrackingWeights {
     /// measurement noise (`noise`: σ of the angles in rad, the pelvis position in m, the
     /// forces in N and the CoP in m), scaled so that the angles keep the seed's weight:
     /// the maximum-likelihood weighting for independent Gaussian noise, where the seed's
-    /// weights count an angle's noise 2.3 times a force's and the ankles at 1/100. The CoP
-    /// row, a load-weighted moment error, is weighted so that its noise counts fully at
-    /// the peak force (`peak_force`, N). Untracked coordinates stay untracked; the
-    /// velocity targets keep their weight relative to the angles.
+    /// weights count an angle's noise (0.5°) 3.8 times a force's (5 N, peak 995 N) and the
+    /// ankles at 1/100. The CoP row, a load-weighted moment error, is weighted so that its
+    /// noise counts fully at the peak force (`peak_force`, N). Untracked coordinates stay
+    /// untracked; the velocity targets keep their weight relative to the angles.
     pub fn with_noise_weights(mut self, noise: &ChannelNoise, peak_force: f64) -> Self {
         let c = self.angle.iter().copied().fold(0.0, f64::max) * noise.angle_rad.powi(2);
         let relative: Vec<f64> = self.velocity.iter().zip(&self.angle).map(|(v, a)| if *a > 0.0 { v / a } else { 0.0 }).collect();
