@@ -225,8 +225,7 @@ impl TrackingProblem {
             setup.weights = setup.weights.clone().with_pelvis_position();
         }
         if let Some(noise) = &run.noise_weights {
-            let peak = setup.weights.force_scale;
-            setup.weights = setup.weights.clone().with_noise_weights(noise, peak);
+            setup.weights = setup.weights.clone().with_noise_weights(noise);
         }
         if let Some(w) = run.regularisation {
             if !(w.is_finite() && w >= 0.0) {
@@ -278,11 +277,12 @@ impl TrackingProblem {
 /// `--noise-weights angle=DEG,position=MM,force=N,cop=MM`: every key once, each a
 /// positive, finite standard deviation.
 fn parse_noise_weights(text: &str) -> anyhow::Result<footfall::problems::tracking::ChannelNoise> {
+    const KEYS: &str = "keys: angle in °, position in mm, force in N, cop in mm";
     let keys = ["angle", "position", "force", "cop"];
     let mut v = [None; 4];
     for part in text.split(',') {
-        let (k, x) = part.split_once('=').ok_or_else(|| anyhow!("--noise-weights '{text}': '{part}' is not key=value (keys: angle in °, position in mm, force in N, cop in mm)"))?;
-        let i = keys.iter().position(|n| *n == k.trim()).ok_or_else(|| anyhow!("--noise-weights: unknown key '{}' (keys: angle in °, position in mm, force in N, cop in mm)", k.trim()))?;
+        let (k, x) = part.split_once('=').ok_or_else(|| anyhow!("--noise-weights '{text}': '{part}' is not key=value ({KEYS})"))?;
+        let i = keys.iter().position(|n| *n == k.trim()).ok_or_else(|| anyhow!("--noise-weights: unknown key '{}' ({KEYS})", k.trim()))?;
         let x: f64 = x.trim().parse().map_err(|_| anyhow!("--noise-weights: {k}='{x}' is not a number"))?;
         if !(x.is_finite() && x > 0.0) {
             return Err(anyhow!("--noise-weights: {k}={x}: a standard deviation must be positive and finite"));

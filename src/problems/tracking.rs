@@ -132,22 +132,23 @@ impl TrackingWeights {
     /// the maximum-likelihood weighting for independent Gaussian noise, where the seed's
     /// weights count an angle's noise (0.5°) 3.8 times a force's (5 N, peak 995 N) and the
     /// ankles at 1/100. The CoP row, a load-weighted moment error, is weighted so that its
-    /// noise counts fully at the peak force (`peak_force`, N). Untracked coordinates stay
-    /// untracked; the velocity targets keep their weight relative to the angles.
-    pub fn with_noise_weights(mut self, noise: &ChannelNoise, peak_force: f64) -> Self {
+    /// noise counts fully at the peak force (these weights' `force_scale`, N). Untracked
+    /// coordinates stay untracked (their velocities too); the velocity targets keep their
+    /// weight relative to the angles.
+    pub fn with_noise_weights(mut self, noise: &ChannelNoise) -> Self {
         let c = self.angle.iter().copied().fold(0.0, f64::max) * noise.angle_rad.powi(2);
-        let relative: Vec<f64> = self.velocity.iter().zip(&self.angle).map(|(v, a)| if *a > 0.0 { v / a } else { 0.0 }).collect();
-        for (i, w) in self.angle.iter_mut().enumerate() {
-            if *w > 0.0 {
-                *w = c / if i < 2 { noise.position_m } else { noise.angle_rad }.powi(2);
+        for (i, (a, v)) in self.angle.iter_mut().zip(&mut self.velocity).enumerate() {
+            if *a > 0.0 {
+                let relative = *v / *a;
+                *a = c / if i < 2 { noise.position_m } else { noise.angle_rad }.powi(2);
+                *v = relative * *a;
+            } else {
+                *v = 0.0;
             }
         }
-        for ((v, a), r) in self.velocity.iter_mut().zip(&self.angle).zip(relative) {
-            *v = r * a;
-        }
+        self.cop = c * (noise.force_n * self.cop_length / (self.force_scale * noise.cop_m)).powi(2);
         self.force = c;
         self.force_scale = noise.force_n;
-        self.cop = c * (noise.force_n * self.cop_length / (peak_force * noise.cop_m)).powi(2);
         self
     }
 
