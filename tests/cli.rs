@@ -279,6 +279,9 @@ fn invalid_integrator_tolerance_is_refused() {
     let err = assert_user_error(&o, &["rtol", "(0, 1)"]);
     eprintln!("{err}");
     assert!(entries(tmp.path()).is_empty());
+    let o = footfall(&["track", "--sensitivity-tol", "1.5", "--out", s(&out), "--quiet"]);
+    assert_user_error(&o, &["--sensitivity-tol", "sens_tol", "(0, 1)", "1.5"]);
+    assert!(entries(tmp.path()).is_empty());
 }
 
 /// Ctrl-C during `footfall track` stops after the current iteration and still writes a
@@ -403,7 +406,9 @@ fn predict_and_compare_refuse_bad_arguments_before_solving() {
 }
 
 /// A heel pad written in the model file (not only `--effect`) gets the integrator
-/// tolerance its stiff dynamics need, and setup.json records the tolerance used.
+/// tolerance its stiff dynamics need for the states while the sensitivities keep the
+/// run's (with residual actuators both are tightened), and setup.json records both (so `diagnose` re-fits and `report` rebuild the same
+/// problem; `report` reproduces the run's objective bit for bit).
 #[test]
 fn track_tightens_the_integrator_for_a_pad_in_the_model_file() {
     let tmp = tempfile::tempdir().unwrap();
@@ -419,9 +424,26 @@ fn track_tightens_the_integrator_for_a_pad_in_the_model_file() {
         .output()
         .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(err.contains("integrator tolerance 1e-8 → 1e-10"), "{err}");
+    assert!(err.contains("integrator tolerance of the states 1e-8 → 1e-10"), "{err}");
+    assert!(err.contains("of the sensitivities 1e-8"), "{err}");
     let setup: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("setup.json")).unwrap()).unwrap();
     assert_eq!(setup["integrator_tol"], 1e-10, "{setup}");
+    assert_eq!(setup["sensitivity_tol"], 1e-8, "{setup}");
+    let o = Command::new(env!("CARGO_BIN_EXE_footfall")).current_dir(root()).args(["report", s(&out), "--out", s(&tmp.path().join("report"))]).output().unwrap();
+    assert!(o.status.success(), "report of the padded run: {}", String::from_utf8_lossy(&o.stderr));
+    let html = std::fs::read_to_string(tmp.path().join("report/report.html")).unwrap();
+    assert!(html.contains("J reproduced to 0e0"), "the padded run does not re-evaluate bit for bit from its setup.json");
+    // residual actuators keep the sensitivities at 1e-10 too (the KKT residual is
+    // computed from them)
+    let out = tmp.path().join("residuals");
+    Command::new(env!("CARGO_BIN_EXE_footfall"))
+        .current_dir(root())
+        .args(["track", "--model", s(&model_path), "--foot", "double-circle", "--init", "tests/data/hidden/double_circle_base", "--residual-actuators", "--max-iter", "0", "--quiet", "--out", s(&out)])
+        .output()
+        .unwrap();
+    let setup: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("setup.json")).unwrap()).unwrap();
+    assert_eq!(setup["integrator_tol"], 1e-10, "{setup}");
+    assert!(setup.get("sensitivity_tol").is_none(), "{setup}");
 }
 
 /// `--init` of a run that identified an effect's parameters starts free ones at its

@@ -242,6 +242,30 @@ fn van_der_pol_sensitivities_match_finite_differences() {
     assert!(s1.iter().map(|v| v.abs()).fold(0.0, f64::max) > 0.1);
 }
 
+/// A looser sensitivity tolerance (`sens_tol`) keeps the states at their own tolerance,
+/// gives sensitivities accurate to the looser one, and takes fewer steps than
+/// sensitivities held to the states' tolerance.
+#[test]
+fn looser_sensitivity_tolerance_keeps_the_states_and_costs_fewer_steps() {
+    let (x0, p) = ([1.5, -0.5], [1.2, 0.3]);
+    let (t0, t1) = (0.0, 3.0);
+    let run = |s: IntegratorSettings| {
+        let mut integrator = Integrator::new(2, 2, s).expect("integrator");
+        let (mut x1, mut s1) = ([0.0; 2], [0.0; 8]);
+        let stats = integrator.integrate_with_sensitivities(&VanDerPol, t0, t1, &x0, &p, &mut x1, &mut s1).expect("sensitivities");
+        (x1, s1, stats)
+    };
+    let (x_tight, _, tight) = run(settings(1e-10, Method::Bdf));
+    let (x_loose, s_loose, loose) = run(IntegratorSettings { sens_tol: Some(1e-6), ..settings(1e-10, Method::Bdf) });
+    let mut reference = Integrator::new(2, 2, settings(1e-12, Method::Bdf)).expect("integrator");
+    let fd = finite_difference_sensitivities(&mut reference, &VanDerPol, t0, t1, &x0, &p, 1e-6);
+    let e = rel_err(&x_loose, &x_tight, 1e-8);
+    assert!(e < 1e-8, "states: rel err {e:e} between {x_loose:?} and {x_tight:?}");
+    let e = rel_err(&s_loose, &fd, 1e-8);
+    assert!(e < 1e-4, "sensitivities at 1e-6: rel err {e:e}\nCVODES {s_loose:?}\nFD     {fd:?}");
+    assert!(loose.steps < tight.steps, "steps: sensitivities at 1e-6 {loose:?}, at 1e-10 {tight:?}");
+}
+
 // ---------------------------------------------------------------------------------------
 // 3. ShootingInterval
 // ---------------------------------------------------------------------------------------
@@ -943,6 +967,20 @@ fn bad_settings_are_rejected() {
             "initial_step",
             IntegratorSettings {
                 initial_step: Some(-0.1),
+                ..Default::default()
+            },
+        ),
+        (
+            "sens_tol",
+            IntegratorSettings {
+                sens_tol: Some(0.0),
+                ..Default::default()
+            },
+        ),
+        (
+            "sens_tol",
+            IntegratorSettings {
+                sens_tol: Some(f64::INFINITY),
                 ..Default::default()
             },
         ),

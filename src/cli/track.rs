@@ -50,6 +50,11 @@ pub struct Args {
     /// Relative and absolute CVODES tolerance of the shooting intervals.
     #[arg(long, default_value_t = 1e-8)]
     integrator_tol: f64,
+    /// CVODES tolerance of the forward sensitivities (default: the states'; with a heel
+    /// pad, whose states are integrated at 1e-10, `--integrator-tol`). The KKT residual is
+    /// computed from them: tighten it if a fit stalls just above `--tol`.
+    #[arg(long)]
+    sensitivity_tol: Option<f64>,
     /// With `--hessian exact`: Gauss–Newton steps until the constraint violation is below this.
     #[arg(long, default_value_t = 1e-3)]
     exact_below: f64,
@@ -116,10 +121,15 @@ pub struct Args {
     init: Option<PathBuf>,
 }
 
-/// CVODES tolerance of problems with a compliant heel pad or residual actuators: at
-/// 1e-8 integration noise stalls the line search (a pad near KKT 2e-4; the bundled
-/// trial with residual actuators at KKT 3.2e-5 after 103 iterations, where 1e-10
-/// converges in 38).
+/// CVODES tolerance of the states of problems with a compliant heel pad or residual
+/// actuators: at 1e-8 integration noise stalls the line search (a pad near KKT 2e-4; the
+/// bundled trial with residual actuators at KKT 3.2e-5 after 103 iterations, where 1e-10
+/// converges in 38). With a pad the sensitivities keep the run's tolerance: at 1e-10 they
+/// cost 37–46 % of a pad re-fit's time (`diagnose` on the 100 Hz sample-target trials:
+/// the padded one's re-fit reaches the same optimum in the same 22 iterations, 90 → 57 s;
+/// the no-effect one's in 43 instead of 49, 177 → 96 s). With residual actuators they
+/// stay at 1e-10: the KKT residual is computed from them, and at 1e-8 the bundled trial's
+/// residual fit reaches the same J but stalls at KKT 2.4e-5.
 pub const PADDED_INTEGRATOR_TOL: f64 = 1e-10;
 
 /// Force (N) or torque (N·m) of a residual actuator per unit control.
@@ -243,8 +253,10 @@ impl TrackingProblem {
         // a pad (from the model file or `extra`) or residual actuators need a tighter tolerance
         let stiff = run.residual_actuators || (0..model.contacts.len()).any(|c| model.is_compliant(c));
         let tol = if stiff { run.integrator_tol.min(PADDED_INTEGRATOR_TOL) } else { run.integrator_tol };
-        let integrator = IntegratorSettings { rtol: tol, atol: tol, ..Default::default() };
-        integrator.validate().context("--integrator-tol")?;
+        let sens_tol = run.sensitivity_tol.unwrap_or(if run.residual_actuators { tol } else { run.integrator_tol });
+        let sens_tol = (sens_tol != tol).then_some(sens_tol);
+        let integrator = IntegratorSettings { rtol: tol, atol: tol, sens_tol, ..Default::default() };
+        integrator.validate().context("--integrator-tol or --sensitivity-tol")?;
         Ok(Self { model, sets, data, setup, phases: run.phases.clone(), integrator })
     }
 
@@ -270,7 +282,7 @@ impl TrackingProblem {
             .collect();
         let mut effects = base.effects.clone();
         effects.extend(extra.iter().cloned());
-        TrackingRunSetup { effects, parameters, integrator_tol: self.integrator.rtol, ..base.clone() }
+        TrackingRunSetup { effects, parameters, integrator_tol: self.integrator.rtol, sensitivity_tol: self.integrator.sens_tol, ..base.clone() }
     }
 }
 
@@ -429,6 +441,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         data: args.data.clone(),
         kinematics_cutoff: args.kinematics_cutoff,
         integrator_tol: args.integrator_tol,
+        sensitivity_tol: args.sensitivity_tol,
         track_pelvis_position: args.track_pelvis_position,
         residual_actuators: args.residual_actuators,
         regularisation: args.regularisation,
@@ -452,7 +465,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     let mut prob = TrackingProblem::build(&base, &extra)?;
     if prob.integrator.rtol < base.integrator_tol && !quiet {
         let why = if args.residual_actuators { "residual actuators" } else { "the heel pad's stiff dynamics" };
-        eprintln!("{why}: integrator tolerance {:e} → {:e} (integration noise stalls the line search at 1e-8)", base.integrator_tol, prob.integrator.rtol);
+        eprintln!("{why}: integrator tolerance of the states {:e} → {:e} (integration noise stalls the line search at 1e-8), of the sensitivities {:e}", base.integrator_tol, prob.integrator.rtol, prob.integrator.sens_tol.unwrap_or(prob.integrator.rtol));
     }
     if let Some(sol) = &init {
         prob.setup.start_from(sol).map_err(|e| anyhow!("--init {}: {e}", args.init.as_ref().map(|p| p.display().to_string()).unwrap_or_default()))?;

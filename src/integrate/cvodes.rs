@@ -60,8 +60,9 @@ impl Method {
 
 /// Options of the CVODES integrator; fixed when the [`Integrator`] is created.
 ///
-/// The sensitivities use the same tolerances as the states, scaled by CVODES's estimated
-/// error tolerances (`CVodeSensEEtolerances`).
+/// The sensitivities use the same tolerances as the states (CVODES's estimated error
+/// tolerances, `CVodeSensEEtolerances`) unless [`sens_tol`](Self::sens_tol) sets their
+/// own.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(default, deny_unknown_fields)]
 pub struct IntegratorSettings {
@@ -75,6 +76,11 @@ pub struct IntegratorSettings {
     pub max_steps: i64,
     /// Include the sensitivities in the local error test (default: true).
     pub sens_error_control: bool,
+    /// Relative and absolute local error tolerance of the forward sensitivities, in (0, 1)
+    /// (`CVodeSensSStolerances`); `None` = the states' tolerances (default). A looser one
+    /// than the states' keeps the function values precise (what a line search compares)
+    /// while the derivatives, which only steer a step, cost fewer steps.
+    pub sens_tol: Option<f64>,
     /// Maximum method order, 1–5 for BDF and 1–12 for Adams; `None` = method maximum (default: None).
     pub max_order: Option<i32>,
     /// First internal step size in time units, > 0; `None` = CVODES estimate (default: None).
@@ -89,6 +95,7 @@ impl Default for IntegratorSettings {
             atol: 1e-8,
             max_steps: 100_000,
             sens_error_control: true,
+            sens_tol: None,
             max_order: None,
             initial_step: None,
         }
@@ -112,6 +119,11 @@ impl IntegratorSettings {
                 "atol",
                 format!("must be finite and positive, got {}", self.atol),
             );
+        }
+        if let Some(t) = self.sens_tol {
+            if !(t.is_finite() && t > 0.0 && t < 1.0) {
+                return bad("sens_tol", format!("must be finite and in (0, 1), got {t}"));
+            }
         }
         if self.max_steps <= 0 || c_long::try_from(self.max_steps).is_err() {
             return bad(
@@ -791,10 +803,20 @@ impl Integrator {
                     this.ys,
                 ),
             )?;
-            check_setup(
-                "CVodeSensEEtolerances",
-                sys::CVodeSensEEtolerances(this.mem),
-            )?;
+            match this.settings.sens_tol {
+                Some(t) => {
+                    // CVODES copies the absolute tolerances (one per sensitivity)
+                    let mut abs = vec![t; ntot];
+                    check_setup(
+                        "CVodeSensSStolerances",
+                        sys::CVodeSensSStolerances(this.mem, t, abs.as_mut_ptr()),
+                    )?;
+                }
+                None => check_setup(
+                    "CVodeSensEEtolerances",
+                    sys::CVodeSensEEtolerances(this.mem),
+                )?,
+            }
             check_setup(
                 "CVodeSetSensErrCon",
                 sys::CVodeSetSensErrCon(this.mem, c_int::from(this.settings.sens_error_control)),

@@ -38,8 +38,12 @@ pub struct TrackingRunSetup {
     /// Kinematics low-pass cutoff (Hz).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub kinematics_cutoff: Option<f64>,
-    /// CVODES tolerance.
+    /// CVODES tolerance of the states.
     pub integrator_tol: f64,
+    /// CVODES tolerance of the forward sensitivities when it differs from the states'
+    /// (`None`: the same; a heel pad or residual actuators tighten only the states).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sensitivity_tol: Option<f64>,
     /// Whether the model has residual actuators (`--residual-actuators`).
     #[serde(default)]
     pub residual_actuators: bool,
