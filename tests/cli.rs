@@ -446,6 +446,36 @@ fn track_tightens_the_integrator_for_a_pad_in_the_model_file() {
     assert!(setup.get("sensitivity_tol").is_none(), "{setup}");
 }
 
+/// A pad re-fit whose line search fails with the sensitivities looser than the states
+/// goes on from that iterate with them at the states' tolerance and converges: started
+/// where `diagnose`'s re-fit of a padded 100 Hz trial (noise seed 3) stalled at KKT 2.4e-5
+/// with them at 1e-8, the first stage fails at once and the second converges to the
+/// same parameters.
+#[test]
+fn a_pad_fit_stalled_by_loose_sensitivities_goes_on_with_tight_ones() {
+    let tmp = tempfile::tempdir().unwrap();
+    let trial = root().join("tests/data/hidden/heel_pad_compliance_seed3");
+    let out = tmp.path().join("run");
+    let o = Command::new(env!("CARGO_BIN_EXE_footfall"))
+        .current_dir(root())
+        .args(["track", "--data", s(&trial.join("synthetic.csv")), "--init", s(&trial.join("stalled_refit")), "--foot", "double-circle", "--sample-targets"])
+        .args(["--noise-weights", "angle=0.5,position=2,force=5,cop=5", "--effect", "heel_pad_compliance", "--hessian", "gauss-newton", "--out", s(&out)])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    assert!(err.contains("line search failed at KKT") && err.contains("with the sensitivities at 1e-8: going on from there with them at 1e-10"), "{err}");
+    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["status"], "converged", "{summary}");
+    assert!(summary["kkt"].as_f64().unwrap() < 1e-5);
+    let setup: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("setup.json")).unwrap()).unwrap();
+    let start: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(trial.join("stalled_refit/setup.json")).unwrap()).unwrap();
+    for (a, b) in setup["parameters"].as_array().unwrap().iter().zip(start["parameters"].as_array().unwrap()) {
+        let (x, y) = (a["value"].as_f64().unwrap(), b["value"].as_f64().unwrap());
+        assert!((x - y).abs() < 1e-4 * y, "{}: {x} after, {y} at the stalled iterate", a["name"]);
+    }
+}
+
 /// `--init` of a run that identified an effect's parameters starts free ones at its
 /// values, but an `--effect` that holds a parameter fixed keeps the value it gives.
 #[test]

@@ -344,11 +344,67 @@ impl TrackingProblem {
     /// solution.
     pub fn solve(&self, settings: &SqpSettings, quiet: bool) -> anyhow::Result<(footfall::sqp::SqpResult, GaitSolution)> {
         self.with_transcription(|tr, cycle, w0| {
-            let res = super::solve_interruptibly(tr, &w0, settings, quiet);
-            let sol = GaitSolution::from_nlp(tr, &res.w, &cycle.continuous, self.setup.window.0);
-            Ok((res, sol))
+            self.solve_staged(tr, cycle, &w0, settings, quiet, |tr, res| {
+                let sol = GaitSolution::from_nlp(tr, &res.w, &cycle.continuous, self.setup.window.0);
+                Ok((res, sol))
+            })
         })
     }
+
+    /// Solve on `tr` from `w0` and hand the result, with the transcription it was last
+    /// iterated on, to `finish`. When the sensitivities are looser than the states (a
+    /// heel pad) and the line search fails, the solve goes on from that iterate with the
+    /// sensitivities at the states' tolerance: the KKT residual is computed from them, so
+    /// the looser ones can leave an optimum uncertified (a padded 100 Hz trial's re-fit
+    /// stopped at KKT 2.4e-5 with them at 1e-8 and converged at 1e-10 to the same
+    /// parameters).
+    fn solve_staged<R>(
+        &self,
+        tr: &Transcription,
+        cycle: &GaitCycle,
+        w0: &[f64],
+        settings: &SqpSettings,
+        quiet: bool,
+        finish: impl FnOnce(&Transcription, footfall::sqp::SqpResult) -> anyhow::Result<R>,
+    ) -> anyhow::Result<R> {
+        let first = super::solve_interruptibly(tr, w0, settings, quiet);
+        let Some(sens_tol) = self.integrator.sens_tol else { return finish(tr, first) };
+        if first.status != footfall::sqp::SqpStatus::LineSearchFailure {
+            return finish(tr, first);
+        }
+        let used = first.history.len().saturating_sub(1);
+        let tight = IntegratorSettings { sens_tol: None, ..self.integrator.clone() };
+        if !quiet {
+            eprintln!(
+                "line search failed at KKT {:.2e} with the sensitivities at {sens_tol:e}: going on from there with them at {:e} (the KKT residual is computed from them)",
+                first.kkt, tight.rtol
+            );
+        }
+        let ocp = self.setup.ocp(cycle, &self.model, &self.sets, tight).map_err(|e| anyhow!(e))?;
+        let tr2 = Transcription::new(&ocp).context("transcribing the tracking problem")?;
+        let rest = SqpSettings {
+            max_iter: settings.max_iter.saturating_sub(used),
+            max_time: settings.max_time.map(|t| (t - first.seconds).max(0.0)),
+            ..settings.clone()
+        };
+        let second = super::solve_interruptibly(&tr2, &first.w, &rest, quiet);
+        finish(&tr2, merge_stages(first, second))
+    }
+}
+
+/// One result of two solves, the second started where the first stopped: the second's
+/// point and status, the iteration history of both (the second's numbered on, without
+/// its repeated initial point), their times added up.
+fn merge_stages(first: footfall::sqp::SqpResult, second: footfall::sqp::SqpResult) -> footfall::sqp::SqpResult {
+    let (used, elapsed) = (first.history.len().saturating_sub(1), first.seconds);
+    let mut history = first.history;
+    history.extend(second.history.iter().skip(1).map(|r| footfall::sqp::IterationRecord { iter: r.iter + used, seconds: r.seconds + elapsed, ..r.clone() }));
+    let mut timings = second.timings.clone();
+    timings.evaluation_s += first.timings.evaluation_s;
+    timings.evaluations += first.timings.evaluations;
+    timings.qp_s += first.timings.qp_s;
+    timings.qp_solves += first.timings.qp_solves;
+    footfall::sqp::SqpResult { history, timings, seconds: first.seconds + second.seconds, ..second }
 }
 
 /// The cost-share table (channel × phase, % of J), the normalised-error table (channel ×
@@ -508,8 +564,9 @@ impl TrackingProblem {
                     settings.hessian
                 );
             }
-            let res = super::solve_interruptibly(tr, &w0, settings, quiet);
-            self.write_run(tr, cycle, res, RunWriting { base, extra, folder, transient_threshold, quiet, provenance: None })
+            self.solve_staged(tr, cycle, &w0, settings, quiet, |tr, res| {
+                self.write_run(tr, cycle, res, RunWriting { base, extra, folder, transient_threshold, quiet, provenance: None })
+            })
         })
     }
 
