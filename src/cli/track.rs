@@ -368,7 +368,8 @@ impl TrackingProblem {
         finish: impl FnOnce(&Transcription, footfall::sqp::SqpResult) -> anyhow::Result<R>,
     ) -> anyhow::Result<R> {
         let first = super::solve_interruptibly(tr, w0, settings, quiet);
-        let Some(sens_tol) = self.integrator.sens_tol else { return finish(tr, first) };
+        let loose = self.integrator.sens_tol.filter(|&t| t > self.integrator.rtol);
+        let Some(sens_tol) = loose else { return finish(tr, first) };
         if first.status != footfall::sqp::SqpStatus::LineSearchFailure {
             return finish(tr, first);
         }

@@ -79,7 +79,8 @@ pub struct IntegratorSettings {
     /// Relative and absolute local error tolerance of the forward sensitivities, in (0, 1)
     /// (`CVodeSensSStolerances`); `None` = the states' tolerances (default). A looser one
     /// than the states' keeps the function values precise (what a line search compares)
-    /// while the derivatives, which only steer a step, cost fewer steps.
+    /// at fewer steps; but an optimality test computed from the derivatives inherits
+    /// their error.
     pub sens_tol: Option<f64>,
     /// Maximum method order, 1–5 for BDF and 1–12 for Adams; `None` = method maximum (default: None).
     pub max_order: Option<i32>,

@@ -41,7 +41,7 @@ pub struct TrackingRunSetup {
     /// CVODES tolerance of the states.
     pub integrator_tol: f64,
     /// CVODES tolerance of the forward sensitivities when it differs from the states'
-    /// (`None`: the same; a heel pad or residual actuators tighten only the states).
+    /// (`None`: the same; a heel pad tightens only the states).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sensitivity_tol: Option<f64>,
     /// Whether the model has residual actuators (`--residual-actuators`).
