@@ -407,8 +407,9 @@ fn predict_and_compare_refuse_bad_arguments_before_solving() {
 
 /// A heel pad written in the model file (not only `--effect`) gets the integrator
 /// tolerance its stiff dynamics need for the states while the sensitivities keep the
-/// run's (with residual actuators both are tightened), and setup.json records both (so `diagnose` re-fits and `report` rebuild the same
-/// problem; `report` reproduces the run's objective bit for bit).
+/// run's (with residual actuators both are tightened), and setup.json records both (so
+/// `diagnose` re-fits and `report` rebuild the same problem; `report` reproduces the
+/// run's objective bit for bit).
 #[test]
 fn track_tightens_the_integrator_for_a_pad_in_the_model_file() {
     let tmp = tempfile::tempdir().unwrap();

@@ -400,11 +400,8 @@ fn merge_stages(first: footfall::sqp::SqpResult, second: footfall::sqp::SqpResul
     let (used, elapsed) = (first.history.len().saturating_sub(1), first.seconds);
     let mut history = first.history;
     history.extend(second.history.iter().skip(1).map(|r| footfall::sqp::IterationRecord { iter: r.iter + used, seconds: r.seconds + elapsed, ..r.clone() }));
-    let mut timings = second.timings.clone();
-    timings.evaluation_s += first.timings.evaluation_s;
-    timings.evaluations += first.timings.evaluations;
-    timings.qp_s += first.timings.qp_s;
-    timings.qp_solves += first.timings.qp_solves;
+    let mut timings = first.timings;
+    timings += second.timings;
     footfall::sqp::SqpResult { history, timings, seconds: first.seconds + second.seconds, ..second }
 }
 

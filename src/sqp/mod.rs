@@ -248,6 +248,16 @@ pub struct SqpTimings {
     pub qp_solves: usize,
 }
 
+/// Two solves' time splits added up (a solve continued from where another stopped).
+impl std::ops::AddAssign for SqpTimings {
+    fn add_assign(&mut self, other: Self) {
+        self.evaluation_s += other.evaluation_s;
+        self.evaluations += other.evaluations;
+        self.qp_s += other.qp_s;
+        self.qp_solves += other.qp_solves;
+    }
+}
+
 /// Result of a solve.
 #[derive(Debug, Clone, Serialize)]
 pub struct SqpResult {
