@@ -100,7 +100,7 @@ fn problem(ode: &Pendulum) -> Ocp<'_> {
         theta_ub: vec![10.0],
         constraints: vec![],
         least_squares: vec![],
-        samples: SAMPLES.iter().map(|&(interval, tau)| SampleTerm { name: "sample".into(), phase: 0, interval, tau, f: f.clone() }).collect(),
+        samples: SAMPLES.iter().map(|&(interval, tau)| SampleTerm { name: "sample".into(), phase: 0, interval, tau, f: f.clone(), shift: None }).collect(),
         costs: vec![],
         integrator: IntegratorSettings { rtol: 1e-12, atol: 1e-12, ..Default::default() },
     }
@@ -235,4 +235,144 @@ fn a_sample_outside_its_interval_is_refused() {
         let e = Transcription::new(&ocp).err().map(|e| e.to_string()).unwrap_or_default();
         assert!(e.contains("sample term 'sample'"), "interval {interval}, τ {tau}: {e}");
     }
+}
+
+/// A shift of a sample's instant linear in θ: `s(θ) = c + 0.05 (θ − 2)` seconds.
+struct Shift(f64);
+
+impl NodeFunction for Shift {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn eval(&self, z: &[f64], v: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), String> {
+        v[0] = self.0 + 0.05 * (z[0] - 2.0);
+        if let Some(j) = jac {
+            j[0] = 0.05;
+        }
+        Ok(())
+    }
+}
+
+/// (interval, τ, c) of shifted sample terms on a fixed 0.9 s phase (h = 0.3 s), and the
+/// (interval, τ) each lands in at θ = 2.3 (shift c + 0.015 s): within its interval, two
+/// intervals on, one back, held at the phase's end and at its start.
+const SHIFTED: [(usize, f64, f64, usize, f64); 5] = [
+    (0, 0.3, 0.1, 0, 0.205 / 0.3),
+    (1, 0.55, 0.2, 2, 0.68 / 0.3 - 2.0),
+    (2, 0.8, -0.35, 1, 0.505 / 0.3 - 1.0),
+    (1, 0.5, 0.8, 2, 1.0),
+    (0, 0.5, -0.5, 0, 1e-6),
+];
+
+fn shifted_problem<'a>(ode: &'a Pendulum, which: &[usize]) -> Ocp<'a> {
+    let mut ocp = problem(ode);
+    ocp.phases[0].duration = PhaseDuration::fixed(0.9);
+    let f: Arc<dyn NodeFunction> = Arc::new(Residual);
+    ocp.samples = which
+        .iter()
+        .map(|&i| {
+            let (interval, tau, c, ..) = SHIFTED[i];
+            SampleTerm { name: "shifted".into(), phase: 0, interval, tau, f: f.clone(), shift: Some(Arc::new(Shift(c))) }
+        })
+        .collect();
+    ocp
+}
+
+/// Shifted sample terms are the model at the moved instant, wherever in the phase it
+/// falls (an independent RK4 from the node of the interval it lands in), with their
+/// gradient matching central differences (every variable but the fixed duration) and
+/// their Gauss–Newton block the directional derivative of the residual.
+#[test]
+fn shifted_sample_terms_are_the_model_at_the_moved_instant_with_exact_derivatives() {
+    let ode = Pendulum;
+    let all: Vec<usize> = (0..SHIFTED.len()).collect();
+    let ocp = shifted_problem(&ode, &all);
+    let tr = Transcription::new(&ocp).unwrap();
+    let w = point(&tr);
+    let theta = w[tr.range(Block::Params).start];
+    let h = 0.3;
+    let mut expected = 0.0;
+    for &(_, _, _, k, tau) in &SHIFTED {
+        let s = tr.range(Block::State { phase: 0, node: k });
+        let u0 = w[tr.range(Block::Control { phase: 0, node: k }).start];
+        let u1 = w[tr.range(Block::Control { phase: 0, node: k + 1 }).start];
+        let x = rk4([w[s.start], w[s.start + 1]], u0, u1, h, theta, tau);
+        let u = (1.0 - tau) * u0 + tau * u1;
+        expected += Residual::value(&[x[0], x[1], u, theta]).powi(2);
+    }
+    let ev = tr.evaluate(&w, true).unwrap();
+    assert!((ev.f - expected).abs() < 1e-9 * expected, "objective {} against RK4's {expected}", ev.f);
+    let f = |w: &[f64]| tr.evaluate(w, false).unwrap().f;
+    let eps = 1e-6;
+    let duration = tr.range(Block::Duration { phase: 0 }).start;
+    for i in (0..tr.n()).filter(|&i| i != duration) {
+        let (mut wp, mut wm) = (w.clone(), w.clone());
+        wp[i] += eps;
+        wm[i] -= eps;
+        let fd = (f(&wp) - f(&wm)) / (2.0 * eps);
+        assert!((ev.grad[i] - fd).abs() < 1e-6 * (1.0 + fd.abs()), "∂f/∂w[{i}]: {} against {fd}", ev.grad[i]);
+    }
+    // one term that moved two intervals on: r = √f (r > 0), so dᵀ GN d = 2 (∂r/∂d)²
+    let one = shifted_problem(&ode, &[1]);
+    let tr1 = Transcription::new(&one).unwrap();
+    let ev1 = tr1.evaluate(&w, true).unwrap();
+    let (rows, cols) = tr1.gauss_newton_pattern();
+    let r = |w: &[f64]| tr1.evaluate(w, false).unwrap().f.sqrt();
+    for seed in 0..4 {
+        let d: Vec<f64> = (0..tr1.n()).map(|i| if i == duration { 0.0 } else { ((i * 7 + seed * 13) % 11) as f64 / 11.0 - 0.45 }).collect();
+        let mut quad = 0.0;
+        for ((&a, &b), &v) in rows.iter().zip(cols).zip(&ev1.gauss_newton) {
+            quad += if a == b { v * d[a] * d[a] } else { 2.0 * v * d[a] * d[b] };
+        }
+        let wp: Vec<f64> = w.iter().zip(&d).map(|(x, y)| x + eps * y).collect();
+        let wm: Vec<f64> = w.iter().zip(&d).map(|(x, y)| x - eps * y).collect();
+        let dr = (r(&wp) - r(&wm)) / (2.0 * eps);
+        assert!((quad - 2.0 * dr * dr).abs() < 1e-6 * (1.0 + quad.abs()), "direction {seed}: dᵀ GN d = {quad}, 2 (∂r/∂d)² = {}", 2.0 * dr * dr);
+    }
+    // the exact-Hessian path places them the same
+    let lambda: Vec<f64> = (0..tr.m()).map(|i| 0.3 - 0.1 * i as f64).collect();
+    let (a, _) = tr.evaluate_with_hessian(&w, &lambda).unwrap();
+    assert!((a.f - ev.f).abs() < 1e-10 * ev.f, "{} against {}", a.f, ev.f);
+    for (x, y) in a.grad.iter().zip(&ev.grad).chain(a.gauss_newton.iter().zip(&ev.gauss_newton)) {
+        assert!((x - y).abs() < 1e-8 * (1.0 + y.abs()), "{x} against {y}");
+    }
+}
+
+/// A shift that is zero (and constant) leaves a sample term where it was: the same
+/// objective and gradient as the unshifted term, bit for bit.
+#[test]
+fn a_zero_shift_leaves_the_sample_where_it_was() {
+    let ode = Pendulum;
+    let mut fixed = problem(&ode);
+    fixed.phases[0].duration = PhaseDuration::fixed(0.9);
+    let mut zero = problem(&ode);
+    zero.phases[0].duration = PhaseDuration::fixed(0.9);
+    struct Zero;
+    impl NodeFunction for Zero {
+        fn dim(&self) -> usize {
+            1
+        }
+        fn eval(&self, _: &[f64], v: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), String> {
+            v[0] = 0.0;
+            if let Some(j) = jac {
+                j[0] = 0.0;
+            }
+            Ok(())
+        }
+    }
+    zero.samples.iter_mut().for_each(|s| s.shift = Some(Arc::new(Zero)));
+    let (ta, tb) = (Transcription::new(&fixed).unwrap(), Transcription::new(&zero).unwrap());
+    let w = point(&ta);
+    let (a, b) = (ta.evaluate(&w, true).unwrap(), tb.evaluate(&w, true).unwrap());
+    assert_eq!(a.f, b.f);
+    assert_eq!(a.grad, b.grad);
+}
+
+#[test]
+fn a_shifted_sample_in_a_phase_of_free_duration_is_refused() {
+    let ode = Pendulum;
+    let mut ocp = shifted_problem(&ode, &[0]);
+    ocp.phases[0].duration = PhaseDuration { value: 0.9, lb: 0.5, ub: 2.0 };
+    let e = Transcription::new(&ocp).err().map(|e| e.to_string()).unwrap_or_default();
+    assert!(e.contains("sample term 'shifted'") && e.contains("fixed duration"), "{e}");
 }

@@ -85,11 +85,24 @@ pub struct SampleTerm<'a> {
     pub tau: f64,
     /// The residual, a function of the concatenation `(x, u, θ)` (nx + nu + nθ).
     pub f: Arc<dyn NodeFunction + 'a>,
+    /// A shift of the instant by `s(θ)` seconds (a scalar function of θ with its
+    /// gradient), for a measurement taken on a clock offset from the model's: the model
+    /// is compared at `(interval + τ) h + s(θ)`, in whichever interval of the phase that
+    /// falls, so the data are never interpolated. The instant is held inside its phase
+    /// (clamped to its ends, where the shift's derivative is zero), and the phase's
+    /// duration must be fixed. `None`: the instant is fixed.
+    pub shift: Option<Arc<dyn NodeFunction + 'a>>,
 }
 
 impl std::fmt::Debug for SampleTerm<'_> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("SampleTerm").field("name", &self.name).field("phase", &self.phase).field("interval", &self.interval).field("tau", &self.tau).finish()
+        f.debug_struct("SampleTerm")
+            .field("name", &self.name)
+            .field("phase", &self.phase)
+            .field("interval", &self.interval)
+            .field("tau", &self.tau)
+            .field("shifted", &self.shift.is_some())
+            .finish()
     }
 }
 

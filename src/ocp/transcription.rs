@@ -58,9 +58,27 @@ struct IntervalRef {
     phase: usize,
     k: usize,
     row: usize,
-    /// Sample terms inside the interval: distinct τ ascending, each with its terms.
+    /// Sample terms inside the interval at fixed instants: distinct τ ascending, each
+    /// with its terms.
     samples: Vec<(f64, Vec<usize>)>,
+    /// Whether sample terms can fall in the interval (fixed ones, or its phase has
+    /// shifted ones): it then has a Gauss–Newton block.
+    sample_block: bool,
 }
+
+/// Instants of the sample terms at one evaluation, per interval in transcription order
+/// (`None`: the fixed ones only), and per sample term the gradient of its instant in θ
+/// (s per unit; `None` where it does not move: not shifted, or held at its phase's ends).
+type Placement = (Vec<Option<Vec<(f64, Vec<usize>)>>>, Vec<Option<Vec<f64>>>);
+
+/// A shifted sample's instant is held at least this far (as a fraction of an interval)
+/// after its phase's start, where CVODES can take a first step towards it.
+const SHIFTED_PHASE_START: f64 = 1e-6;
+
+/// A shifted instant closer than this (fraction of an interval) to an interval's start
+/// is taken at the end of the interval before it (an instant moved by at most 1e-9 of an
+/// interval, instead of a first CVODES step of that size).
+const SHIFTED_SNAP: f64 = 1e-9;
 
 /// What an interval's sample terms add to the objective: their value, the gradient and the
 /// Gauss–Newton block (upper triangle, row by row) over the interval's columns.
@@ -126,6 +144,10 @@ pub struct Transcription<'o, 'a> {
     gn_cols: Vec<usize>,
     pools: Vec<Mutex<Vec<Integrator>>>,
     labels: Vec<RowLabel>,
+    /// Sample terms whose instant moves with θ ([`SampleTerm::shift`](super::SampleTerm)).
+    shifted: Vec<usize>,
+    /// Index in `intervals` of each phase's first interval.
+    first_interval: Vec<usize>,
 }
 
 impl<'o, 'a> Transcription<'o, 'a> {
@@ -202,6 +224,8 @@ impl<'o, 'a> Transcription<'o, 'a> {
             gn_cols: Vec::new(),
             pools: ocp.phases.iter().map(|_| Mutex::new(Vec::new())).collect(),
             labels: Vec::new(),
+            shifted: Vec::new(),
+            first_interval: Vec::new(),
         };
         // sample terms, grouped by interval and τ
         let mut samples: Vec<Vec<Vec<(f64, Vec<usize>)>>> = ocp.phases.iter().map(|p| vec![Vec::new(); p.intervals]).collect();
@@ -212,6 +236,17 @@ impl<'o, 'a> Transcription<'o, 'a> {
             if !(st.tau > 0.0 && st.tau <= 1.0) {
                 return Err(inv(format!("sample term '{}': τ = {} is not in (0, 1]", st.name, st.tau)));
             }
+            if let Some(shift) = &st.shift {
+                let ph = &ocp.phases[st.phase];
+                if ph.duration.is_free() {
+                    return Err(inv(format!("sample term '{}': a shifted instant needs phase '{}' to have a fixed duration", st.name, ph.name)));
+                }
+                if shift.dim() != 1 {
+                    return Err(inv(format!("sample term '{}': its shift has dimension {}, not 1", st.name, shift.dim())));
+                }
+                t.shifted.push(si);
+                continue;
+            }
             match list.iter_mut().find(|(tau, _)| *tau == st.tau) {
                 Some((_, v)) => v.push(si),
                 None => list.push((st.tau, vec![si])),
@@ -220,12 +255,19 @@ impl<'o, 'a> Transcription<'o, 'a> {
         for list in samples.iter_mut().flatten() {
             list.sort_by(|a, b| a.0.total_cmp(&b.0));
         }
+        let mut shifted_phase = vec![false; ocp.phases.len()];
+        for &si in &t.shifted {
+            shifted_phase[ocp.samples[si].phase] = true;
+        }
         // continuity rows
         for (j, ph) in ocp.phases.iter().enumerate() {
             let nx = ph.ode.nx();
+            t.first_interval.push(t.intervals.len());
             for k in 0..ph.intervals {
                 let row = t.m;
-                t.intervals.push(IntervalRef { phase: j, k, row, samples: std::mem::take(&mut samples[j][k]) });
+                let fixed = std::mem::take(&mut samples[j][k]);
+                let sample_block = shifted_phase[j] || !fixed.is_empty();
+                t.intervals.push(IntervalRef { phase: j, k, row, samples: fixed, sample_block });
                 let cols = t.interval_cols(j, k);
                 for i in 0..nx {
                     for &c in &cols {
@@ -308,7 +350,7 @@ impl<'o, 'a> Transcription<'o, 'a> {
         }
         // the sample terms' Gauss–Newton blocks, after the least-squares terms', in
         // interval order
-        for iv in t.intervals.iter().filter(|iv| !iv.samples.is_empty()) {
+        for iv in t.intervals.iter().filter(|iv| iv.sample_block) {
             let cols = t.interval_cols(iv.phase, iv.k);
             for (a, &ca) in cols.iter().enumerate() {
                 for &cb in &cols[a..] {
@@ -487,7 +529,67 @@ impl<'o, 'a> Transcription<'o, 'a> {
         cols.iter().map(|&c| w[c]).collect()
     }
 
-    fn integrate_interval(&self, iv: &IntervalRef, w: &[f64], sens: bool, lambda: Option<&[f64]>) -> Result<IntervalResult, TranscriptionError> {
+    /// Where the shifted sample terms fall at `w` ([`SampleTerm::shift`](super::SampleTerm)):
+    /// the instant `(interval + τ) h + s(θ)` located in its phase's intervals (the node
+    /// times are fixed: the phase's duration is), held inside the phase.
+    fn place_shifted(&self, w: &[f64]) -> Result<Placement, TranscriptionError> {
+        let mut lists: Vec<Option<Vec<(f64, Vec<usize>)>>> = vec![None; self.intervals.len()];
+        let mut gradients = vec![None; self.ocp.samples.len()];
+        let theta = &w[self.range(Block::Params)];
+        for &si in &self.shifted {
+            let st = &self.ocp.samples[si];
+            let Some(shift) = &st.shift else { continue };
+            let n = self.ocp.phases[st.phase].intervals;
+            let h = w[self.duration_off[st.phase]] / n as f64;
+            let mut s = [0.0];
+            let mut g = vec![0.0; self.ocp.ntheta];
+            shift.eval(theta, &mut s, Some(&mut g)).map_err(|reason| TranscriptionError::Term { term: format!("{} (shift)", st.name), reason })?;
+            if !s[0].is_finite() || g.iter().any(|v| !v.is_finite()) {
+                return Err(TranscriptionError::Term { term: format!("{} (shift)", st.name), reason: format!("shift {} s is not finite", s[0]) });
+            }
+            // the instant in units of intervals from the phase's start
+            let at = st.interval as f64 + st.tau + s[0] / h;
+            let (k, tau, moves) = if s[0] == 0.0 {
+                (st.interval, st.tau, true)
+            } else if at <= SHIFTED_PHASE_START {
+                (0, SHIFTED_PHASE_START, false)
+            } else if at >= n as f64 {
+                (n - 1, 1.0, false)
+            } else {
+                let k = (at.ceil() as usize).saturating_sub(1).min(n - 1);
+                let tau = (at - k as f64).min(1.0);
+                if tau < SHIFTED_SNAP && k > 0 {
+                    (k - 1, 1.0, true)
+                } else {
+                    (k, tau, true)
+                }
+            };
+            if moves {
+                gradients[si] = Some(g);
+            }
+            let i = self.first_interval[st.phase] + k;
+            let list = lists[i].get_or_insert_with(|| self.intervals[i].samples.clone());
+            match list.iter_mut().find(|(t, _)| *t == tau) {
+                Some((_, v)) => v.push(si),
+                None => list.push((tau, vec![si])),
+            }
+        }
+        for list in lists.iter_mut().flatten() {
+            list.sort_by(|a, b| a.0.total_cmp(&b.0));
+        }
+        Ok((lists, gradients))
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn integrate_interval(
+        &self,
+        iv: &IntervalRef,
+        list: &[(f64, Vec<usize>)],
+        moves: &[Option<Vec<f64>>],
+        w: &[f64],
+        sens: bool,
+        lambda: Option<&[f64]>,
+    ) -> Result<IntervalResult, TranscriptionError> {
         let ph = &self.ocp.phases[iv.phase];
         let interval = ShootingInterval::new(ph.ode, ph.controls);
         let (nx, np) = (ph.ode.nx(), interval.np());
@@ -512,7 +614,7 @@ impl<'o, 'a> Transcription<'o, 'a> {
         let mut s = Vec::new();
         let mut hess = None;
         // the sample terms' instants, with the interval's end for one pass to both
-        let taus: Vec<f64> = iv.samples.iter().map(|e| e.0).collect();
+        let taus: Vec<f64> = list.iter().map(|e| e.0).collect();
         let mut times = taus.clone();
         if times.last().is_some_and(|&t| t < 1.0) {
             times.push(1.0);
@@ -555,15 +657,25 @@ impl<'o, 'a> Transcription<'o, 'a> {
             v.push(integ);
         }
         let stats = res.map_err(err)?;
-        let sums = if taus.is_empty() { None } else { Some(self.sample_sums(iv, &p, &xs, (sens || lambda.is_some()).then_some(&ss[..]))?) };
+        let sums = if iv.sample_block { Some(self.sample_sums(iv, list, moves, &p, &xs, (sens || lambda.is_some()).then_some(&ss[..]))?) } else { None };
         Ok((x1, s, stats, hess, sums))
     }
 
-    /// The sample terms of interval `iv` at its integrated states `xs` (nx per τ, in τ
-    /// order) with, when `ss` is given, their sensitivities (nx·(nx+np) per τ): value,
-    /// gradient and Gauss–Newton block over the interval's columns (x0, u0, [u1], T, θ),
-    /// by the chain rule through `x(τ) = Φ(τ; x0, p)` and `u(τ)`.
-    fn sample_sums(&self, iv: &IntervalRef, p: &[f64], xs: &[f64], ss: Option<&[f64]>) -> Result<SampleSums, TranscriptionError> {
+    /// The sample terms `list` of interval `iv` at its integrated states `xs` (nx per τ,
+    /// in τ order) with, when `ss` is given, their sensitivities (nx·(nx+np) per τ):
+    /// value, gradient and Gauss–Newton block over the interval's columns (x0, u0, [u1],
+    /// T, θ), by the chain rule through `x(τ) = Φ(τ; x0, p)` and `u(τ)`; a term whose
+    /// instant moves with θ (gradient in `moves`) adds `(∂r/∂x ẋ + ∂r/∂u u̇) ∂t/∂θ`.
+    #[allow(clippy::too_many_arguments)]
+    fn sample_sums(
+        &self,
+        iv: &IntervalRef,
+        list: &[(f64, Vec<usize>)],
+        moves: &[Option<Vec<f64>>],
+        p: &[f64],
+        xs: &[f64],
+        ss: Option<&[f64]>,
+    ) -> Result<SampleSums, TranscriptionError> {
         let ph = &self.ocp.phases[iv.phase];
         let interval = ShootingInterval::new(ph.ode, ph.controls);
         let (nx, nu, nt) = (ph.ode.nx(), ph.ode.nu(), self.ocp.ntheta);
@@ -579,7 +691,7 @@ impl<'o, 'a> Transcription<'o, 'a> {
             out.grad = vec![0.0; ncols];
             out.gauss_newton = vec![0.0; ncols * (ncols + 1) / 2];
         }
-        for (q, (tau, terms)) in iv.samples.iter().enumerate() {
+        for (q, (tau, terms)) in list.iter().enumerate() {
             let x = &xs[q * nx..(q + 1) * nx];
             let u: Vec<f64> = match u1 {
                 Some(u1) => u0.iter().zip(u1).map(|(a, b)| (1.0 - tau) * a + tau * b).collect(),
@@ -619,6 +731,22 @@ impl<'o, 'a> Transcription<'o, 'a> {
                 for (k, c) in interval.p_theta().enumerate() {
                     for i in 0..d {
                         jac[i + (nx + c) * d] += jz[i + (nx + nu + k) * d];
+                    }
+                }
+                if let Some(g) = moves.get(si).and_then(Option::as_ref) {
+                    // dr/dt along the trajectory (per second): ẋ = f(x, u, θ), u̇ = (u1 − u0)/h
+                    let h = p[interval.p_duration()];
+                    let mut xdot = vec![0.0; nx];
+                    ph.ode.f(x, &u, theta, &mut xdot).map_err(|e| TranscriptionError::Term { term: term.name.clone(), reason: e.to_string() })?;
+                    let udot: Vec<f64> = match u1 {
+                        Some(u1) => u0.iter().zip(u1).map(|(a, b)| (b - a) / h).collect(),
+                        None => vec![0.0; nu],
+                    };
+                    for i in 0..d {
+                        let rate = (0..nx).map(|k| jz[i + k * d] * xdot[k]).sum::<f64>() + (0..nu).map(|k| jz[i + (nx + k) * d] * udot[k]).sum::<f64>();
+                        for (k, c) in interval.p_theta().enumerate() {
+                            jac[i + (nx + c) * d] += rate * g[k];
+                        }
                     }
                 }
                 let mut at = 0;
@@ -694,7 +822,13 @@ impl<'o, 'a> Transcription<'o, 'a> {
         derivs: bool,
         lambda: Option<&[f64]>,
     ) -> Result<(Evaluation, Vec<Option<Vec<f64>>>), TranscriptionError> {
-        let results: Vec<_> = self.intervals.par_iter().map(|iv| self.integrate_interval(iv, w, derivs, lambda)).collect();
+        let (lists, moves) = self.place_shifted(w)?;
+        let results: Vec<_> = self
+            .intervals
+            .par_iter()
+            .zip(&lists)
+            .map(|(iv, list)| self.integrate_interval(iv, list.as_deref().unwrap_or(&iv.samples), &moves, w, derivs, lambda))
+            .collect();
         let mut blocks = Vec::with_capacity(results.len());
         let mut sample_sums = Vec::new();
         let mut ev = Evaluation {

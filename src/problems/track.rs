@@ -517,7 +517,7 @@ impl TrackingSetup {
         }
         for s in &self.samples {
             let r = self.sample_residual(model, sets, &cycle.continuous, s);
-            ocp.samples.push(SampleTerm { name: "tracking sample".into(), phase: s.phase, interval: s.interval, tau: s.tau, f: Arc::new(super::AdTerm(r)) });
+            ocp.samples.push(SampleTerm { name: "tracking sample".into(), phase: s.phase, interval: s.interval, tau: s.tau, f: Arc::new(super::AdTerm(r)), shift: None });
         }
         Ok(ocp)
     }
