@@ -490,6 +490,11 @@ impl GaitModel {
         self.effects.iter().any(|e| e.is_measurement())
     }
 
+    /// Whether an effect moves the force plates' clock against the motion capture's.
+    pub fn shifts_force_clock(&self) -> bool {
+        self.effects.iter().any(|e| e.shifts_force_clock())
+    }
+
     /// Model quantities after the effects' adjustments.
     fn adjusted<S: ModelScalar>(&self, p: &[S]) -> (Vec<Inertia<S>>, V2<S>, S, V2<S>) {
         let mut inertia = self.tree.inertias::<S>();

@@ -11,4 +11,4 @@ pub mod transcription;
 
 pub use problem::{Block, Constraint, NodeFunction, Ocp, Phase, PhaseDuration, SampleTerm, Term};
 pub use quadrature::{quadrature_cost, Integrand, WithQuadrature};
-pub use transcription::{Evaluation, RowLabel, Transcription, TranscriptionError};
+pub use transcription::{shifted_instant, Evaluation, RowLabel, Transcription, TranscriptionError};

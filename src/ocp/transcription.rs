@@ -80,6 +80,31 @@ const SHIFTED_PHASE_START: f64 = 1e-6;
 /// interval, instead of a first CVODES step of that size).
 const SHIFTED_SNAP: f64 = 1e-9;
 
+/// Where a sample term at `(interval, τ)` of a phase of `intervals` intervals of length
+/// `h` (s) falls when its instant is shifted by `shift` (s), as
+/// [`SampleTerm::shift`](super::SampleTerm) places it: `(interval, τ, moves)`, held
+/// inside the phase (`moves` false where it is held at either end, so the instant does
+/// not move with the shift there). A zero shift leaves it exactly where it was.
+pub fn shifted_instant(interval: usize, tau: f64, shift: f64, h: f64, intervals: usize) -> (usize, f64, bool) {
+    // the instant in units of intervals from the phase's start
+    let at = interval as f64 + tau + shift / h;
+    if shift == 0.0 {
+        (interval, tau, true)
+    } else if at <= SHIFTED_PHASE_START {
+        (0, SHIFTED_PHASE_START, false)
+    } else if at >= intervals as f64 {
+        (intervals - 1, 1.0, false)
+    } else {
+        let k = (at.ceil() as usize).saturating_sub(1).min(intervals - 1);
+        let tau = (at - k as f64).min(1.0);
+        if tau < SHIFTED_SNAP && k > 0 {
+            (k - 1, 1.0, true)
+        } else {
+            (k, tau, true)
+        }
+    }
+}
+
 /// What an interval's sample terms add to the objective: their value, the gradient and the
 /// Gauss–Newton block (upper triangle, row by row) over the interval's columns.
 #[derive(Debug, Default)]
@@ -547,23 +572,7 @@ impl<'o, 'a> Transcription<'o, 'a> {
             if !s[0].is_finite() || g.iter().any(|v| !v.is_finite()) {
                 return Err(TranscriptionError::Term { term: format!("{} (shift)", st.name), reason: format!("shift {} s is not finite", s[0]) });
             }
-            // the instant in units of intervals from the phase's start
-            let at = st.interval as f64 + st.tau + s[0] / h;
-            let (k, tau, moves) = if s[0] == 0.0 {
-                (st.interval, st.tau, true)
-            } else if at <= SHIFTED_PHASE_START {
-                (0, SHIFTED_PHASE_START, false)
-            } else if at >= n as f64 {
-                (n - 1, 1.0, false)
-            } else {
-                let k = (at.ceil() as usize).saturating_sub(1).min(n - 1);
-                let tau = (at - k as f64).min(1.0);
-                if tau < SHIFTED_SNAP && k > 0 {
-                    (k - 1, 1.0, true)
-                } else {
-                    (k, tau, true)
-                }
-            };
+            let (k, tau, moves) = shifted_instant(st.interval, st.tau, s[0], h, n);
             if moves {
                 gradients[si] = Some(g);
             }

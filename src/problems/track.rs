@@ -4,11 +4,11 @@
 //! excitations 0.025, seed §3.6), and the node-wise least-squares residuals of eq. 18.
 
 use super::gait::{GaitCycle, GaitGuess};
-use super::tracking::{MeasuredLoads, NodeTarget, TrackingResidual, TrackingWeights};
+use super::tracking::{ForceClockShift, MeasuredLoads, NodeTarget, TrackingResidual, TrackingWeights};
 use crate::data::{detect_events, interp_linear, CubicSpline, Events, GaitData, DEFAULT_EVENT_FRACTION};
 use crate::model::gait::COORDINATES;
 use crate::model::{ConstraintSet, GaitModel, Side};
-use crate::ocp::{Block, Ocp, SampleTerm, Term};
+use crate::ocp::{shifted_instant, Block, NodeFunction, Ocp, SampleTerm, Term};
 use crate::phases::{Duration, Phase, PhaseSequence};
 use std::sync::Arc;
 
@@ -76,6 +76,11 @@ pub struct SampleTarget {
     /// The sample (its time, angles and loads; no velocities).
     pub target: NodeTarget,
 }
+
+/// A sample's loads moved by the force plates' clock offset to the end of their phase are
+/// evaluated this long (s) before it in cost breakdowns, where the solution is sampled
+/// before the impact rather than after it.
+const CLOCK_SHIFT_END: f64 = 1e-8;
 
 /// Samples closer than this to a phase boundary (s) are left out of sample targets: on a
 /// contact change the measurement belongs to neither side.
@@ -423,14 +428,26 @@ impl TrackingSetup {
             }
         }
         for s in &self.samples {
-            n += super::GenericFunction::dim(&self.sample_residual(model, sets, continuous, s));
+            n += self.sample_residuals(model, sets, continuous, s).iter().map(|(r, _)| super::GenericFunction::dim(r)).sum::<usize>();
         }
         n
     }
 
-    /// The data-only residual of a sample target.
-    fn sample_residual<'m>(&self, model: &'m GaitModel, sets: &[ConstraintSet], continuous: &[usize], s: &SampleTarget) -> TrackingResidual<'m> {
-        TrackingResidual::new(model, sets[continuous[s.phase]].clone(), s.target.clone(), self.weights.clone(), Some(self.measured.clone())).data_only()
+    /// The data-only residuals of a sample target, each with whether its instant is
+    /// moved by the force plates' clock offset: one residual; or, when an effect of the
+    /// model shifts that clock and the sample has loads, the angles at the sample's
+    /// instant and the loads, at their measured values, at the instant the offset moves
+    /// them to ([`ForceClockShift`]).
+    fn sample_residuals<'m>(&self, model: &'m GaitModel, sets: &[ConstraintSet], continuous: &[usize], s: &SampleTarget) -> Vec<(TrackingResidual<'m>, bool)> {
+        let residual = |target: NodeTarget| {
+            TrackingResidual::new(model, sets[continuous[s.phase]].clone(), target, self.weights.clone(), Some(self.measured.clone())).data_only()
+        };
+        if !model.shifts_force_clock() || s.target.feet.iter().all(Option::is_none) {
+            return vec![(residual(s.target.clone()), false)];
+        }
+        let angles = residual(NodeTarget { feet: [None, None], ..s.target.clone() });
+        let loads = residual(NodeTarget { q: vec![None; s.target.q.len()], ..s.target.clone() }).at_measured_values();
+        [(angles, false), (loads, true)].into_iter().filter(|(r, _)| super::GenericFunction::dim(r) > 0).collect()
     }
 
     /// Where the tracking cost of `solution` comes from: per channel
@@ -462,25 +479,54 @@ impl TrackingSetup {
                 let r = TrackingResidual::new(model, sets[continuous[j]].clone(), target.clone(), self.weights.clone(), Some(self.measured.clone()));
                 let ku = if linear { k } else { k.min(n - 1) };
                 let z: Vec<f64> = ph.x[k].iter().chain(&ph.u[ku]).chain(&solution.theta).copied().collect();
-                let (data, largest) = add_costs(&r, &z, j, &mut channels, &mut cost, &mut rows)?;
+                let (data, largest, _) = add_costs(&r, &z, j, &mut channels, &mut cost, &mut rows)?;
                 if !largest.is_empty() {
                     nodes.push(NodeCost { time: ph.t0 + k as f64 * h, phase: ph.name.clone(), data, largest });
                 }
             }
         }
         if !self.samples.is_empty() {
-            let times: Vec<f64> = self.samples.iter().map(|s| s.target.time).collect();
-            let states = solution.sample_at(model, sets, &times, integrator).map_err(|e| format!("integrating to the samples: {e}"))?;
-            for (st, at) in self.samples.iter().zip(&states) {
+            // each residual's instant: (interval, τ, time), the loads' moved by the force
+            // plates' clock offset as the OCP's shifted sample terms are
+            let shift = -model.measurement_adjust::<f64>(&solution.theta).force_time_offset;
+            let mut parts = Vec::new();
+            for (i, st) in self.samples.iter().enumerate() {
                 let ph = &solution.phases[st.phase];
+                let (n, h) = (ph.intervals(), ph.duration / ph.intervals() as f64);
+                for (r, shifted) in self.sample_residuals(model, sets, continuous, st) {
+                    let (k, tau, time) = if shifted {
+                        let (k, tau, _) = shifted_instant(st.interval, st.tau, shift, h, n);
+                        // a phase's end is sampled before its impact
+                        (k, tau, (ph.t0 + (k as f64 + tau) * h).min(ph.t0 + ph.duration - CLOCK_SHIFT_END))
+                    } else {
+                        (st.interval, st.tau, st.target.time)
+                    };
+                    parts.push((i, st, r, k, tau, time));
+                }
+            }
+            let mut times: Vec<f64> = parts.iter().map(|p| p.5).collect();
+            times.sort_by(f64::total_cmp);
+            times.dedup();
+            let states = solution.sample_at(model, sets, &times, integrator).map_err(|e| format!("integrating to the samples: {e}"))?;
+            let mut data_by_sample = vec![(0.0, String::new(), 0.0); self.samples.len()];
+            for (i, st, r, k, tau, time) in &parts {
+                let ph = &solution.phases[st.phase];
+                let at = &states[times.partition_point(|t| t < time)];
                 let u: Vec<f64> = match ph.controls {
-                    crate::integrate::ControlShape::Linear => ph.u[st.interval].iter().zip(&ph.u[st.interval + 1]).map(|(a, b)| (1.0 - st.tau) * a + st.tau * b).collect(),
-                    crate::integrate::ControlShape::Constant => ph.u[st.interval].clone(),
+                    crate::integrate::ControlShape::Linear => ph.u[*k].iter().zip(&ph.u[k + 1]).map(|(a, b)| (1.0 - tau) * a + tau * b).collect(),
+                    crate::integrate::ControlShape::Constant => ph.u[*k].clone(),
                 };
                 let z: Vec<f64> = at.x.iter().chain(&u).chain(&solution.theta).copied().collect();
-                let r = self.sample_residual(model, sets, continuous, st);
-                let (data, largest) = add_costs(&r, &z, st.phase, &mut channels, &mut cost, &mut rows)?;
-                nodes.push(NodeCost { time: st.target.time, phase: ph.name.clone(), data, largest });
+                let (data, largest, largest_cost) = add_costs(r, &z, st.phase, &mut channels, &mut cost, &mut rows)?;
+                // the parts' channels are disjoint: the sample's largest is the parts' largest
+                let entry = &mut data_by_sample[*i];
+                entry.0 += data;
+                if entry.1.is_empty() || largest_cost > entry.2 {
+                    (entry.1, entry.2) = (largest, largest_cost);
+                }
+            }
+            for (st, (data, largest, _)) in self.samples.iter().zip(data_by_sample) {
+                nodes.push(NodeCost { time: st.target.time, phase: solution.phases[st.phase].name.clone(), data, largest });
             }
             nodes.sort_by(|a, b| a.time.total_cmp(&b.time));
         }
@@ -516,8 +562,10 @@ impl TrackingSetup {
             }
         }
         for s in &self.samples {
-            let r = self.sample_residual(model, sets, &cycle.continuous, s);
-            ocp.samples.push(SampleTerm { name: "tracking sample".into(), phase: s.phase, interval: s.interval, tau: s.tau, f: Arc::new(super::AdTerm(r)), shift: None });
+            for (r, shifted) in self.sample_residuals(model, sets, &cycle.continuous, s) {
+                let shift = shifted.then(|| Arc::new(super::AdTerm(ForceClockShift { model })) as Arc<dyn NodeFunction + 'c>);
+                ocp.samples.push(SampleTerm { name: "tracking sample".into(), phase: s.phase, interval: s.interval, tau: s.tau, f: Arc::new(super::AdTerm(r)), shift });
+            }
         }
         Ok(ocp)
     }
@@ -525,8 +573,8 @@ impl TrackingSetup {
 
 /// Add the squared rows of residual `r` at `z` to the cost of phase `j` per channel
 /// (new channels appended); returns the data cost (without regularisation) and the
-/// channel contributing most to it (empty without data rows).
-fn add_costs(r: &TrackingResidual, z: &[f64], j: usize, channels: &mut Vec<String>, cost: &mut Vec<Vec<f64>>, rows: &mut Vec<Vec<usize>>) -> Result<(f64, String), String> {
+/// channel contributing most to it with its cost (empty and 0 without data rows).
+fn add_costs(r: &TrackingResidual, z: &[f64], j: usize, channels: &mut Vec<String>, cost: &mut Vec<Vec<f64>>, rows: &mut Vec<Vec<usize>>) -> Result<(f64, String, f64), String> {
     let mut v = vec![0.0; super::GenericFunction::dim(r)];
     super::GenericFunction::eval(r, z, &mut v)?;
     let mut node_data: Vec<(String, f64)> = Vec::new();
@@ -554,7 +602,8 @@ fn add_costs(r: &TrackingResidual, z: &[f64], j: usize, channels: &mut Vec<Strin
         }
     }
     let data = node_data.iter().map(|e| e.1).sum();
-    Ok((data, node_data.into_iter().max_by(|a, b| a.1.total_cmp(&b.1)).map(|e| e.0).unwrap_or_default()))
+    let (largest, largest_cost) = node_data.into_iter().max_by(|a, b| a.1.total_cmp(&b.1)).unwrap_or_default();
+    Ok((data, largest, largest_cost))
 }
 
 /// Where a tracking cost comes from.

@@ -182,7 +182,31 @@ pub struct TrackingResidual<'a> {
     weights: TrackingWeights,
     measured: Option<Arc<MeasuredLoads>>,
     regularised: bool,
+    /// The loads are compared with the target's own values (the CoP offset still
+    /// applied), never with the measured loads at a moved time.
+    as_measured: bool,
     dim: usize,
+}
+
+/// The shift (s) of a sample term's instant whose loads are read on the force plates'
+/// clock: the sample taken at t is compared with the model at `t − force_time_offset(θ)`,
+/// a function of θ ([`SampleTerm::shift`](crate::ocp::SampleTerm)).
+pub struct ForceClockShift<'a> {
+    /// The model whose measurement effects give the offset.
+    pub model: &'a GaitModel,
+}
+
+impl GenericFunction for ForceClockShift<'_> {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), String> {
+        out[0] = -self.model.measurement_adjust(z).force_time_offset;
+        Ok(())
+    }
+    fn is_linear(&self) -> bool {
+        true
+    }
 }
 
 impl<'a> TrackingResidual<'a> {
@@ -212,7 +236,17 @@ impl<'a> TrackingResidual<'a> {
         }
         dim += model.nu() + model.na();
         let measured = measured.filter(|_| model.has_measurement_effects());
-        Self { model, set, target, weights, measured, regularised: true, dim }
+        Self { model, set, target, weights, measured, regularised: true, as_measured: false, dim }
+    }
+
+    /// The same residual with the loads compared with the target's own values (the CoP
+    /// offset still applied) rather than with the measured loads at the time the force
+    /// plates' clock offset moves them to: for a sample term whose instant that offset
+    /// moves instead ([`ForceClockShift`]), so that the measured forces, and their noise,
+    /// are never interpolated.
+    pub fn at_measured_values(mut self) -> Self {
+        self.as_measured = true;
+        self
     }
 
     /// The same residual without the regularisation rows (excitations, activations,
@@ -281,6 +315,7 @@ impl<'a> TrackingResidual<'a> {
                 let Some((fx, fy, cop)) = *tgt else { continue };
                 // targets at the node time, or through the measurement effects
                 let (tfx, tfy, tcop, cop_offset) = match &adjust {
+                    Some((_, adj)) if self.as_measured => (S::c(fx), S::c(fy), cop.map(S::c), adj.cop_offset),
                     Some((m, adj)) => {
                         let t = adj.force_time_offset + self.target.time;
                         let (a, b) = m.forces(s, t);

@@ -169,6 +169,9 @@ impl Effect for ForcePlateTimeOffset {
     fn is_measurement(&self) -> bool {
         true
     }
+    fn shifts_force_clock(&self) -> bool {
+        true
+    }
 }
 
 /// The force plates report the centre of pressure `offset` (m) further along the walkway

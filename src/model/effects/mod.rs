@@ -94,6 +94,13 @@ pub trait Effect: std::fmt::Debug + Send + Sync {
     fn is_measurement(&self) -> bool {
         false
     }
+    /// Whether the effect moves the force plates' clock against the motion capture's
+    /// (`MeasurementAdjust::force_time_offset`): a tracking cost that compares every
+    /// sample at its own instant then moves the model's instant rather than
+    /// interpolating the measured forces, whose noise an interpolation would smooth.
+    fn shifts_force_clock(&self) -> bool {
+        false
+    }
     /// Name of the contact primitive (on both feet, e.g. `heel`) whose normal contact
     /// this effect makes compliant: its normal row is then no rigid constraint but the
     /// force [`normal_force`](Self::normal_force) (default: none).
@@ -126,6 +133,7 @@ pub trait DynEffect: std::fmt::Debug + Send + Sync {
     fn measurement_chunk(&self, p: &[AdChunk], m: &mut MeasurementAdjust<AdChunk>);
     fn measurement_nested(&self, p: &[AdNested], m: &mut MeasurementAdjust<AdNested>);
     fn is_measurement(&self) -> bool;
+    fn shifts_force_clock(&self) -> bool;
     fn compliant_primitive(&self) -> Option<&str>;
     fn normal_force_f64(&self, p: &[f64], depth: f64, rate: f64) -> f64;
     fn normal_force_dual(&self, p: &[Dual64], depth: Dual64, rate: Dual64) -> Dual64;
@@ -178,6 +186,9 @@ impl<E: Effect> DynEffect for E {
     }
     fn is_measurement(&self) -> bool {
         Effect::is_measurement(self)
+    }
+    fn shifts_force_clock(&self) -> bool {
+        Effect::shifts_force_clock(self)
     }
     fn compliant_primitive(&self) -> Option<&str> {
         Effect::compliant_primitive(self)
