@@ -69,3 +69,46 @@ fn sample_target_breakdown_adds_up_to_the_objective() {
     let rows = setup.data_rows(&m, &sets, &cycle.continuous);
     assert!(rows > 7 * setup.samples.len() && rows < 13 * setup.samples.len(), "{rows} data residuals for {} samples", setup.samples.len());
 }
+
+/// With a force-plate clock offset in the model the sample targets' loads are compared
+/// at the instant the offset moves them to (their own sample terms), not at the measured
+/// loads interpolated to a moved time: the breakdown, which samples the solution there
+/// itself, adds up to the NLP's objective at a nonzero offset, and the objective moves
+/// with the offset.
+#[test]
+fn sample_target_breakdown_adds_up_with_a_force_plate_clock_offset() {
+    use footfall::model::effects::EffectSpec;
+    use footfall::model::spec::{FootSpec, ModelSpec};
+    let (plain, sets, setup) = bundled_tracking_with("double_circle.json", "phases/double_circle_walk.json", footfall::problems::track::TargetSides::Samples);
+    let (mp, fp) = (root().join("models/opensim_subject01.json"), root().join("models/feet/double_circle.json"));
+    let mut spec = ModelSpec::load(&mp).unwrap();
+    spec.effects = vec![EffectSpec::parse_cli("force_plate_time_offset:offset=0.012").unwrap()];
+    let m = footfall::model::GaitModel::from_specs(&spec, &mp, &FootSpec::load(&fp).unwrap(), &fp).unwrap();
+    assert!(m.shifts_force_clock() && !plain.shifts_force_clock());
+    let tight = IntegratorSettings { rtol: 1e-10, atol: 1e-10, ..Default::default() };
+    let objective = |m: &footfall::model::GaitModel, offset: Option<f64>| {
+        let cycle = GaitCycle::new(m, &setup.seq, &sets).unwrap();
+        let ocp = setup.ocp(&cycle, m, &sets, tight.clone()).unwrap();
+        let tr = Transcription::new(&ocp).unwrap();
+        let (_, _, mut w) = tr.variable_bounds_and_guess();
+        if let Some(v) = offset {
+            let at = tr.range(footfall::ocp::Block::Params).start;
+            w[at] = v;
+        }
+        let f = Nlp::evaluate(&tr, &w, false).unwrap().f;
+        let sol = GaitSolution::from_nlp(&tr, &w, &cycle.continuous, setup.window.0);
+        let b = setup.cost_breakdown(m, &sets, &cycle.continuous, &sol, &tight).unwrap();
+        (f, b, ocp.samples.len(), ocp.samples.iter().filter(|s| s.shift.is_some()).count())
+    };
+    let (f0, _, n0, shifted0) = objective(&plain, None);
+    assert_eq!((n0, shifted0), (setup.samples.len(), 0));
+    let (f, b, n, shifted) = objective(&m, Some(0.012));
+    let with_loads = setup.samples.iter().filter(|s| s.target.feet.iter().any(Option::is_some)).count();
+    assert_eq!((n, shifted), (setup.samples.len() + with_loads, with_loads), "a term for the angles and one for the loads of every loaded sample");
+    assert!((b.total() - f).abs() < 1e-6 * f, "breakdown {} vs objective {f}", b.total());
+    assert_eq!(b.nodes.len(), setup.samples.len());
+    // the same model with the offset at zero compares the same instants as the plain one
+    let (z, _, _, _) = objective(&m, Some(0.0));
+    assert!((z - f0).abs() < 1e-9 * f0, "zero offset {z} against the plain model's {f0}");
+    assert!((f - f0).abs() > 1e-3 * f0, "a 12 ms offset leaves the objective at {f} (plain {f0})");
+}
