@@ -53,6 +53,9 @@ pub struct RowLabel {
     pub name: String,
 }
 
+/// Sample terms of one interval: distinct τ ascending, each with its terms' indices.
+type Instants = Vec<(f64, Vec<usize>)>;
+
 #[derive(Debug, Clone)]
 struct IntervalRef {
     phase: usize,
@@ -60,7 +63,7 @@ struct IntervalRef {
     row: usize,
     /// Sample terms inside the interval at fixed instants: distinct τ ascending, each
     /// with its terms.
-    samples: Vec<(f64, Vec<usize>)>,
+    samples: Instants,
     /// Whether sample terms can fall in the interval (fixed ones, or its phase has
     /// shifted ones): it then has a Gauss–Newton block.
     sample_block: bool,
@@ -69,7 +72,7 @@ struct IntervalRef {
 /// Instants of the sample terms at one evaluation, per interval in transcription order
 /// (`None`: the fixed ones only), and per sample term the gradient of its instant in θ
 /// (s per unit; `None` where it does not move: not shifted, or held at its phase's ends).
-type Placement = (Vec<Option<Vec<(f64, Vec<usize>)>>>, Vec<Option<Vec<f64>>>);
+type Placement = (Vec<Option<Instants>>, Vec<Option<Vec<f64>>>);
 
 /// A shifted sample's instant is held at least this far (as a fraction of an interval)
 /// after its phase's start, where CVODES can take a first step towards it.
@@ -253,7 +256,7 @@ impl<'o, 'a> Transcription<'o, 'a> {
             first_interval: Vec::new(),
         };
         // sample terms, grouped by interval and τ
-        let mut samples: Vec<Vec<Vec<(f64, Vec<usize>)>>> = ocp.phases.iter().map(|p| vec![Vec::new(); p.intervals]).collect();
+        let mut samples: Vec<Vec<Instants>> = ocp.phases.iter().map(|p| vec![Vec::new(); p.intervals]).collect();
         for (si, st) in ocp.samples.iter().enumerate() {
             let Some(list) = samples.get_mut(st.phase).and_then(|p| p.get_mut(st.interval)) else {
                 return Err(inv(format!("sample term '{}': phase {} has no interval {}", st.name, st.phase, st.interval)));
@@ -558,7 +561,7 @@ impl<'o, 'a> Transcription<'o, 'a> {
     /// the instant `(interval + τ) h + s(θ)` located in its phase's intervals (the node
     /// times are fixed: the phase's duration is), held inside the phase.
     fn place_shifted(&self, w: &[f64]) -> Result<Placement, TranscriptionError> {
-        let mut lists: Vec<Option<Vec<(f64, Vec<usize>)>>> = vec![None; self.intervals.len()];
+        let mut lists: Vec<Option<Instants>> = vec![None; self.intervals.len()];
         let mut gradients = vec![None; self.ocp.samples.len()];
         let theta = &w[self.range(Block::Params)];
         for &si in &self.shifted {
