@@ -191,20 +191,38 @@ fn sample_gradient_and_gauss_newton_match_central_differences() {
     }
     // one sample term alone: r = √f (r > 0), so dᵀ GN d = 2 (∂r/∂d)²
     let one = Ocp { samples: problem(&ode).samples.into_iter().skip(2).take(1).collect(), ..problem(&ode) };
-    let tr1 = Transcription::new(&one).unwrap();
-    let ev1 = tr1.evaluate(&w, true).unwrap();
-    let (rows, cols) = tr1.gauss_newton_pattern();
-    let r = |w: &[f64]| tr1.evaluate(w, false).unwrap().f.sqrt();
+    assert_gauss_newton_is_the_residuals_derivative(&Transcription::new(&one).unwrap(), &w, None);
+}
+
+/// For a problem with one positive sample residual (r = √f), `dᵀ GN d = 2 (∂r/∂d)²` along
+/// a few directions (central differences), the variable `fixed` (if any) held.
+fn assert_gauss_newton_is_the_residuals_derivative(tr: &Transcription, w: &[f64], fixed: Option<usize>) {
+    let eps = 1e-6;
+    let ev = tr.evaluate(w, true).unwrap();
+    let (rows, cols) = tr.gauss_newton_pattern();
+    let r = |w: &[f64]| tr.evaluate(w, false).unwrap().f.sqrt();
     for seed in 0..4 {
-        let d: Vec<f64> = (0..tr1.n()).map(|i| ((i * 7 + seed * 13) % 11) as f64 / 11.0 - 0.45).collect();
+        let d: Vec<f64> = (0..tr.n()).map(|i| if Some(i) == fixed { 0.0 } else { ((i * 7 + seed * 13) % 11) as f64 / 11.0 - 0.45 }).collect();
         let mut quad = 0.0;
-        for ((&a, &b), &v) in rows.iter().zip(cols).zip(&ev1.gauss_newton) {
+        for ((&a, &b), &v) in rows.iter().zip(cols).zip(&ev.gauss_newton) {
             quad += if a == b { v * d[a] * d[a] } else { 2.0 * v * d[a] * d[b] };
         }
         let wp: Vec<f64> = w.iter().zip(&d).map(|(x, y)| x + eps * y).collect();
         let wm: Vec<f64> = w.iter().zip(&d).map(|(x, y)| x - eps * y).collect();
         let dr = (r(&wp) - r(&wm)) / (2.0 * eps);
         assert!((quad - 2.0 * dr * dr).abs() < 1e-6 * (1.0 + quad.abs()), "direction {seed}: dᵀ GN d = {quad}, 2 (∂r/∂d)² = {}", 2.0 * dr * dr);
+    }
+}
+
+/// The exact-Hessian path (with multipliers) gives the same objective, gradient and
+/// Gauss–Newton block as the plain evaluation.
+fn assert_exact_hessian_path_agrees(tr: &Transcription, w: &[f64]) {
+    let lambda: Vec<f64> = (0..tr.m()).map(|i| 0.3 - 0.1 * i as f64).collect();
+    let (a, _) = tr.evaluate_with_hessian(w, &lambda).unwrap();
+    let b = tr.evaluate(w, true).unwrap();
+    assert!((a.f - b.f).abs() < 1e-10 * b.f, "{} against {}", a.f, b.f);
+    for (x, y) in a.grad.iter().zip(&b.grad).chain(a.gauss_newton.iter().zip(&b.gauss_newton)) {
+        assert!((x - y).abs() < 1e-8 * (1.0 + y.abs()), "{x} against {y}");
     }
 }
 
@@ -215,14 +233,7 @@ fn sample_terms_are_the_same_on_the_exact_hessian_path() {
     let ode = Pendulum;
     let ocp = problem(&ode);
     let tr = Transcription::new(&ocp).unwrap();
-    let w = point(&tr);
-    let lambda: Vec<f64> = (0..tr.m()).map(|i| 0.3 - 0.1 * i as f64).collect();
-    let (a, _) = tr.evaluate_with_hessian(&w, &lambda).unwrap();
-    let b = tr.evaluate(&w, true).unwrap();
-    assert!((a.f - b.f).abs() < 1e-10 * b.f, "{} against {}", a.f, b.f);
-    for (x, y) in a.grad.iter().zip(&b.grad).chain(a.gauss_newton.iter().zip(&b.gauss_newton)) {
-        assert!((x - y).abs() < 1e-8 * (1.0 + y.abs()), "{x} against {y}");
-    }
+    assert_exact_hessian_path_agrees(&tr, &point(&tr));
 }
 
 #[test]
@@ -312,30 +323,10 @@ fn shifted_sample_terms_are_the_model_at_the_moved_instant_with_exact_derivative
         let fd = (f(&wp) - f(&wm)) / (2.0 * eps);
         assert!((ev.grad[i] - fd).abs() < 1e-6 * (1.0 + fd.abs()), "∂f/∂w[{i}]: {} against {fd}", ev.grad[i]);
     }
-    // one term that moved two intervals on: r = √f (r > 0), so dᵀ GN d = 2 (∂r/∂d)²
-    let one = shifted_problem(&ode, &[1]);
-    let tr1 = Transcription::new(&one).unwrap();
-    let ev1 = tr1.evaluate(&w, true).unwrap();
-    let (rows, cols) = tr1.gauss_newton_pattern();
-    let r = |w: &[f64]| tr1.evaluate(w, false).unwrap().f.sqrt();
-    for seed in 0..4 {
-        let d: Vec<f64> = (0..tr1.n()).map(|i| if i == duration { 0.0 } else { ((i * 7 + seed * 13) % 11) as f64 / 11.0 - 0.45 }).collect();
-        let mut quad = 0.0;
-        for ((&a, &b), &v) in rows.iter().zip(cols).zip(&ev1.gauss_newton) {
-            quad += if a == b { v * d[a] * d[a] } else { 2.0 * v * d[a] * d[b] };
-        }
-        let wp: Vec<f64> = w.iter().zip(&d).map(|(x, y)| x + eps * y).collect();
-        let wm: Vec<f64> = w.iter().zip(&d).map(|(x, y)| x - eps * y).collect();
-        let dr = (r(&wp) - r(&wm)) / (2.0 * eps);
-        assert!((quad - 2.0 * dr * dr).abs() < 1e-6 * (1.0 + quad.abs()), "direction {seed}: dᵀ GN d = {quad}, 2 (∂r/∂d)² = {}", 2.0 * dr * dr);
-    }
+    // one term that moved two intervals on: its Gauss–Newton block
+    assert_gauss_newton_is_the_residuals_derivative(&Transcription::new(&shifted_problem(&ode, &[1])).unwrap(), &w, Some(duration));
     // the exact-Hessian path places them the same
-    let lambda: Vec<f64> = (0..tr.m()).map(|i| 0.3 - 0.1 * i as f64).collect();
-    let (a, _) = tr.evaluate_with_hessian(&w, &lambda).unwrap();
-    assert!((a.f - ev.f).abs() < 1e-10 * ev.f, "{} against {}", a.f, ev.f);
-    for (x, y) in a.grad.iter().zip(&ev.grad).chain(a.gauss_newton.iter().zip(&ev.gauss_newton)) {
-        assert!((x - y).abs() < 1e-8 * (1.0 + y.abs()), "{x} against {y}");
-    }
+    assert_exact_hessian_path_agrees(&tr, &w);
 }
 
 /// A shift that is zero (and constant) leaves a sample term where it was: the same
