@@ -142,16 +142,13 @@ fn rk4(x0: [f64; 2], u0: f64, u1: f64, h: f64, theta: f64, tau: f64) -> [f64; 2]
     x
 }
 
-#[test]
-fn sample_terms_match_an_independent_integration() {
-    let ode = Pendulum;
-    let ocp = problem(&ode);
-    let tr = Transcription::new(&ocp).unwrap();
-    let w = point(&tr);
+/// The objective of residuals at `(interval, τ)` instants, each interval integrated by
+/// RK4 from its node at `w`.
+fn rk4_objective<const N: usize>(tr: &Transcription, w: &[f64], instants: [(usize, f64); N]) -> f64 {
     let theta = w[tr.range(Block::Params).start];
     let h = w[tr.range(Block::Duration { phase: 0 }).start] / INTERVALS as f64;
     let mut expected = 0.0;
-    for &(k, tau) in &SAMPLES {
+    for (k, tau) in instants {
         let s = tr.range(Block::State { phase: 0, node: k });
         let u0 = w[tr.range(Block::Control { phase: 0, node: k }).start];
         let u1 = w[tr.range(Block::Control { phase: 0, node: k + 1 }).start];
@@ -159,6 +156,16 @@ fn sample_terms_match_an_independent_integration() {
         let u = (1.0 - tau) * u0 + tau * u1;
         expected += Residual::value(&[x[0], x[1], u, theta]).powi(2);
     }
+    expected
+}
+
+#[test]
+fn sample_terms_match_an_independent_integration() {
+    let ode = Pendulum;
+    let ocp = problem(&ode);
+    let tr = Transcription::new(&ocp).unwrap();
+    let w = point(&tr);
+    let expected = rk4_objective(&tr, &w, SAMPLES);
     for derivs in [false, true] {
         let ev = tr.evaluate(&w, derivs).unwrap();
         assert!((ev.f - expected).abs() < 1e-9 * expected, "derivs {derivs}: objective {} against RK4's {expected}", ev.f);
@@ -300,17 +307,7 @@ fn shifted_sample_terms_are_the_model_at_the_moved_instant_with_exact_derivative
     let ocp = shifted_problem(&ode, &all);
     let tr = Transcription::new(&ocp).unwrap();
     let w = point(&tr);
-    let theta = w[tr.range(Block::Params).start];
-    let h = 0.3;
-    let mut expected = 0.0;
-    for &(_, _, _, k, tau) in &SHIFTED {
-        let s = tr.range(Block::State { phase: 0, node: k });
-        let u0 = w[tr.range(Block::Control { phase: 0, node: k }).start];
-        let u1 = w[tr.range(Block::Control { phase: 0, node: k + 1 }).start];
-        let x = rk4([w[s.start], w[s.start + 1]], u0, u1, h, theta, tau);
-        let u = (1.0 - tau) * u0 + tau * u1;
-        expected += Residual::value(&[x[0], x[1], u, theta]).powi(2);
-    }
+    let expected = rk4_objective(&tr, &w, SHIFTED.map(|(.., k, tau)| (k, tau)));
     let ev = tr.evaluate(&w, true).unwrap();
     assert!((ev.f - expected).abs() < 1e-9 * expected, "objective {} against RK4's {expected}", ev.f);
     let f = |w: &[f64]| tr.evaluate(w, false).unwrap().f;

@@ -56,6 +56,15 @@ pub struct RowLabel {
 /// Sample terms of one interval: distinct τ ascending, each with its terms' indices.
 type Instants = Vec<(f64, Vec<usize>)>;
 
+/// Add sample term `si` at `tau` to `list` (beside the terms already at that instant; the
+/// caller sorts the list by τ once it is complete).
+fn add_instant(list: &mut Instants, tau: f64, si: usize) {
+    match list.iter_mut().find(|(t, _)| *t == tau) {
+        Some((_, v)) => v.push(si),
+        None => list.push((tau, vec![si])),
+    }
+}
+
 #[derive(Debug, Clone)]
 struct IntervalRef {
     phase: usize,
@@ -275,10 +284,7 @@ impl<'o, 'a> Transcription<'o, 'a> {
                 t.shifted.push(si);
                 continue;
             }
-            match list.iter_mut().find(|(tau, _)| *tau == st.tau) {
-                Some((_, v)) => v.push(si),
-                None => list.push((st.tau, vec![si])),
-            }
+            add_instant(list, st.tau, si);
         }
         for list in samples.iter_mut().flatten() {
             list.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -580,11 +586,7 @@ impl<'o, 'a> Transcription<'o, 'a> {
                 gradients[si] = Some(g);
             }
             let i = self.first_interval[st.phase] + k;
-            let list = lists[i].get_or_insert_with(|| self.intervals[i].samples.clone());
-            match list.iter_mut().find(|(t, _)| *t == tau) {
-                Some((_, v)) => v.push(si),
-                None => list.push((tau, vec![si])),
-            }
+            add_instant(lists[i].get_or_insert_with(|| self.intervals[i].samples.clone()), tau, si);
         }
         for list in lists.iter_mut().flatten() {
             list.sort_by(|a, b| a.0.total_cmp(&b.0));

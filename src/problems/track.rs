@@ -501,15 +501,16 @@ impl TrackingSetup {
                     } else {
                         (st.interval, st.tau, st.target.time)
                     };
-                    parts.push((i, st, r, k, tau, time));
+                    parts.push((i, r, k, tau, time));
                 }
             }
-            let mut times: Vec<f64> = parts.iter().map(|p| p.5).collect();
+            let mut times: Vec<f64> = parts.iter().map(|p| p.4).collect();
             times.sort_by(f64::total_cmp);
             times.dedup();
             let states = solution.sample_at(model, sets, &times, integrator).map_err(|e| format!("integrating to the samples: {e}"))?;
             let mut data_by_sample = vec![(0.0, String::new(), 0.0); self.samples.len()];
-            for (i, st, r, k, tau, time) in &parts {
+            for (i, r, k, tau, time) in &parts {
+                let st = &self.samples[*i];
                 let ph = &solution.phases[st.phase];
                 let at = &states[times.partition_point(|t| t < time)];
                 let u: Vec<f64> = match ph.controls {
