@@ -1,11 +1,25 @@
-//! Run folders that are either complete or absent.
+//! Run folders that are either complete or absent, and that never replace a user's files.
 //!
-//! Files are written into a hidden sibling staging folder; [`RunFolder::commit`] renames it
-//! into place as the last step, so a failed or interrupted run never leaves a folder that
-//! looks complete.
+//! Files are written into a hidden sibling staging folder `.NAME.partial-PID`;
+//! [`RunFolder::commit`] renames it into place as the last step, so a failed or interrupted
+//! run never leaves a folder that looks complete. Every folder footfall writes holds a
+//! marker file ([`MARKER`]); `--overwrite` replaces only a folder that holds it (or an
+//! empty one), never the current folder or one of its parents, and the old folder is
+//! removed only after the new one is in place. Staging folders of processes that died
+//! (`kill -9`, a power cut) are removed by the next run with the same output folder.
+//! Staging folders of this process are registered, so that a Ctrl-C handler can remove
+//! them before exiting ([`remove_unfinished`]).
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+/// Name of the marker file footfall writes into every run folder it makes: `--overwrite`
+/// replaces only folders that hold it.
+pub const MARKER: &str = ".footfall-run";
+
+/// Contents of the marker (constant, so that identical runs write identical folders).
+const MARKER_TEXT: &str = "This folder was written by footfall; `--overwrite` may replace it.\n";
 
 /// Failure to write a run folder.
 #[derive(Debug, thiserror::Error)]
@@ -13,6 +27,23 @@ pub enum RunFolderError {
     /// The target exists and overwriting was not requested.
     #[error("output folder {0} already exists (pass --overwrite to replace it)")]
     Exists(PathBuf),
+    /// `--overwrite` was asked for a folder footfall did not make.
+    #[error(
+        "output folder {path} was not written by footfall (it holds {entry} and no {MARKER} marker): \
+         --overwrite replaces only footfall's own run folders; choose another --out or remove it yourself"
+    )]
+    Foreign {
+        /// The target.
+        path: PathBuf,
+        /// One of the entries it holds.
+        entry: String,
+    },
+    /// The target is the current folder or one of its parents.
+    #[error("output folder {0} is the current folder or one of its parents: it cannot be replaced; choose another --out")]
+    HoldsCurrentFolder(PathBuf),
+    /// The target exists and is not a folder.
+    #[error("output {0} exists and is not a folder: it cannot be replaced; choose another --out")]
+    NotAFolder(PathBuf),
     /// An I/O error on a path.
     #[error("{path}: {source}")]
     Io {
@@ -36,28 +67,153 @@ fn io(path: &Path) -> impl FnOnce(std::io::Error) -> RunFolderError + '_ {
     move |source| RunFolderError::Io { path: path.to_path_buf(), source }
 }
 
-impl RunFolder {
-    /// Start writing the folder `target`.
-    pub fn create(target: &Path, overwrite: bool) -> Result<Self, RunFolderError> {
-        if target.exists() && !overwrite {
-            return Err(RunFolderError::Exists(target.to_path_buf()));
+/// Staging folders this process created and has not committed yet.
+static UNFINISHED: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+fn unfinished() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
+    UNFINISHED.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+}
+
+/// Remove every staging folder this process has created and not committed, and keep any
+/// other thread from committing one until the process exits: for a Ctrl-C handler that
+/// exits at once (the folders' `Drop` would not run).
+pub fn remove_unfinished_and_exit(code: i32) -> ! {
+    let mut list = unfinished();
+    for p in list.drain(..) {
+        let _ = std::fs::remove_dir_all(&p);
+    }
+    std::process::exit(code)
+}
+
+/// Remove every staging folder this process has created and not committed (they are
+/// forgotten, and their [`RunFolder`]s will fail to commit).
+pub fn remove_unfinished() {
+    for p in unfinished().drain(..) {
+        let _ = std::fs::remove_dir_all(&p);
+    }
+}
+
+/// Prefix of the files that let a killed run be resumed (its command and the solver's
+/// checkpoints): they live in the staging folder and are removed when the run commits.
+pub const RESUME_PREFIX: &str = ".resume-";
+
+/// Write `dir/name` whole or not at all: written under a temporary name, then renamed.
+pub fn write_atomic(dir: &Path, name: &str, bytes: &[u8]) -> Result<(), RunFolderError> {
+    let p = dir.join(name);
+    let tmp = dir.join(format!(".{name}.tmp"));
+    let mut f = std::fs::File::create(&tmp).map_err(io(&tmp))?;
+    f.write_all(bytes).map_err(io(&tmp))?;
+    drop(f);
+    std::fs::rename(&tmp, &p).map_err(io(&p))
+}
+
+/// The folder name and parent of a target path (`run` for a path without a name).
+fn name_and_parent(target: &Path) -> (String, PathBuf) {
+    let name = target.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "run".into());
+    let parent = target.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new(".")).to_path_buf();
+    (name, parent)
+}
+
+/// Whether the process `pid` is alive; `None` where this cannot be told (no `/proc`).
+fn process_alive(pid: u32) -> Option<bool> {
+    if !Path::new("/proc/self").exists() {
+        return None;
+    }
+    Some(Path::new(&format!("/proc/{pid}")).exists())
+}
+
+/// Staging (`.NAME.partial-PID`) and replaced (`.NAME.old-PID`) folders of `target` left
+/// by processes that are no longer alive, with their PIDs: only folders holding the marker
+/// (footfall's own).
+pub fn stale_staging(target: &Path) -> Vec<(PathBuf, u32)> {
+    let (name, parent) = name_and_parent(target);
+    let Ok(dir) = std::fs::read_dir(&parent) else { return Vec::new() };
+    let own = std::process::id();
+    let mut out = Vec::new();
+    for entry in dir.flatten() {
+        let file = entry.file_name().to_string_lossy().into_owned();
+        let pid = [".partial-", ".old-"].iter().find_map(|kind| {
+            file.strip_prefix(&format!(".{name}{kind}")).and_then(|p| p.parse::<u32>().ok())
+        });
+        let Some(pid) = pid else { continue };
+        let path = entry.path();
+        if pid != own && process_alive(pid) == Some(false) && path.join(MARKER).is_file() {
+            out.push((path, pid));
         }
-        let name = target.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "run".into());
-        let parent = target.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
-        std::fs::create_dir_all(parent).map_err(io(parent))?;
+    }
+    out.sort();
+    out
+}
+
+/// Whether `target` is the current folder or one of its parents.
+fn holds_current_folder(target: &Path) -> bool {
+    let (Ok(t), Ok(cwd)) = (target.canonicalize(), std::env::current_dir().and_then(|c| c.canonicalize())) else {
+        return false;
+    };
+    cwd.starts_with(&t)
+}
+
+/// Check that an existing `target` may be replaced: a folder footfall made (it holds the
+/// marker) or an empty one, and not the current folder or one of its parents.
+pub fn check_replaceable(target: &Path) -> Result<(), RunFolderError> {
+    let meta = std::fs::symlink_metadata(target).map_err(io(target))?;
+    if !meta.is_dir() {
+        return Err(RunFolderError::NotAFolder(target.to_path_buf()));
+    }
+    if holds_current_folder(target) {
+        return Err(RunFolderError::HoldsCurrentFolder(target.to_path_buf()));
+    }
+    if target.join(MARKER).is_file() {
+        return Ok(());
+    }
+    let mut entries: Vec<String> = std::fs::read_dir(target)
+        .map_err(io(target))?
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
+    entries.sort();
+    match entries.first() {
+        None => Ok(()),
+        Some(e) => Err(RunFolderError::Foreign { path: target.to_path_buf(), entry: format!("'{e}'") }),
+    }
+}
+
+impl RunFolder {
+    /// Start writing the folder `target`. An existing `target` is refused unless
+    /// `overwrite` is set and it may be replaced ([`check_replaceable`]); the refusal comes
+    /// before any work. Stale staging folders of dead processes for the same target are
+    /// removed.
+    pub fn create(target: &Path, overwrite: bool) -> Result<Self, RunFolderError> {
+        if std::fs::symlink_metadata(target).is_ok() {
+            if !overwrite {
+                return Err(RunFolderError::Exists(target.to_path_buf()));
+            }
+            check_replaceable(target)?;
+        }
+        let (name, parent) = name_and_parent(target);
+        std::fs::create_dir_all(&parent).map_err(io(&parent))?;
+        for (stale, _) in stale_staging(target) {
+            std::fs::remove_dir_all(&stale).map_err(io(&stale))?;
+        }
         let staging = parent.join(format!(".{name}.partial-{}", std::process::id()));
         if staging.exists() {
             std::fs::remove_dir_all(&staging).map_err(io(&staging))?;
         }
-        std::fs::create_dir_all(&staging).map_err(io(&staging))?;
-        Ok(Self { target: target.to_path_buf(), staging, overwrite, committed: false })
+        {
+            let mut list = unfinished();
+            std::fs::create_dir_all(&staging).map_err(io(&staging))?;
+            list.push(staging.clone());
+        }
+        let folder = Self { target: target.to_path_buf(), staging, overwrite, committed: false };
+        folder.write(MARKER, MARKER_TEXT.as_bytes())?;
+        Ok(folder)
     }
 
-    /// Write a file into the folder.
+    /// Write a file into the folder: written under a temporary name, then renamed, so a
+    /// file is either whole or absent (a checkpoint written every iteration stays readable
+    /// whenever the process is killed).
     pub fn write(&self, name: &str, bytes: &[u8]) -> Result<(), RunFolderError> {
-        let p = self.staging.join(name);
-        let mut f = std::fs::File::create(&p).map_err(io(&p))?;
-        f.write_all(bytes).map_err(io(&p))
+        write_atomic(&self.staging, name, bytes)
     }
 
     /// Where files are being written until [`commit`](Self::commit): nested run folders
@@ -66,16 +222,55 @@ impl RunFolder {
         &self.staging
     }
 
-    /// Move the folder into place.
+    /// The folder the run will have once committed.
+    pub fn target(&self) -> &Path {
+        &self.target
+    }
+
+    /// Move the folder into place. A folder it replaces is moved aside first and removed
+    /// only once the new one is in place (it is moved back if that fails).
     pub fn commit(mut self) -> Result<PathBuf, RunFolderError> {
-        if self.target.exists() {
+        let mut list = unfinished();
+        let Some(pos) = list.iter().position(|p| p == &self.staging) else {
+            // removed by remove_unfinished (an interrupt): nothing to commit
+            return Err(io(&self.staging)(std::io::Error::new(std::io::ErrorKind::Interrupted, "the run was interrupted")));
+        };
+        for entry in std::fs::read_dir(&self.staging).map_err(io(&self.staging))?.flatten() {
+            if entry.file_name().to_string_lossy().starts_with(RESUME_PREFIX) {
+                std::fs::remove_file(entry.path()).map_err(io(&entry.path()))?;
+            }
+        }
+        let mut aside = None;
+        if std::fs::symlink_metadata(&self.target).is_ok() {
             if !self.overwrite {
                 return Err(RunFolderError::Exists(self.target.clone()));
             }
-            std::fs::remove_dir_all(&self.target).map_err(io(&self.target))?;
+            check_replaceable(&self.target)?;
+            let (name, parent) = name_and_parent(&self.target);
+            let old = parent.join(format!(".{name}.old-{}", std::process::id()));
+            if old.exists() {
+                std::fs::remove_dir_all(&old).map_err(io(&old))?;
+            }
+            // an empty folder gets the marker, so a crash before the removal below leaves
+            // a folder the next run recognises as its own
+            if !self.target.join(MARKER).exists() {
+                std::fs::write(self.target.join(MARKER), MARKER_TEXT).map_err(io(&self.target))?;
+            }
+            std::fs::rename(&self.target, &old).map_err(io(&self.target))?;
+            aside = Some(old);
         }
-        std::fs::rename(&self.staging, &self.target).map_err(io(&self.target))?;
+        if let Err(e) = std::fs::rename(&self.staging, &self.target) {
+            if let Some(old) = &aside {
+                let _ = std::fs::rename(old, &self.target);
+            }
+            return Err(io(&self.target)(e));
+        }
+        list.remove(pos);
         self.committed = true;
+        drop(list);
+        if let Some(old) = aside {
+            std::fs::remove_dir_all(&old).map_err(io(&old))?;
+        }
         Ok(self.target.clone())
     }
 }
@@ -83,7 +278,39 @@ impl RunFolder {
 impl Drop for RunFolder {
     fn drop(&mut self) {
         if !self.committed {
-            let _ = std::fs::remove_dir_all(&self.staging);
+            let mut list = unfinished();
+            if let Some(pos) = list.iter().position(|p| p == &self.staging) {
+                list.remove(pos);
+                let _ = std::fs::remove_dir_all(&self.staging);
+            }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_dead_process_staging_folder_is_stale_and_a_live_one_is_not() {
+        let tmp = tempfile::tempdir().unwrap();
+        let target = tmp.path().join("run");
+        // PID 0 is never a user process; our own parent is alive
+        let dead = tmp.path().join(format!(".run.partial-{}", u32::MAX - 1));
+        let alive = tmp.path().join(format!(".run.partial-{}", std::os::unix::process::parent_id()));
+        let foreign = tmp.path().join(format!(".run.partial-{}", u32::MAX - 2));
+        for d in [&dead, &alive, &foreign] {
+            std::fs::create_dir(d).unwrap();
+        }
+        std::fs::write(dead.join(MARKER), MARKER_TEXT).unwrap();
+        std::fs::write(alive.join(MARKER), MARKER_TEXT).unwrap();
+        // no marker: not footfall's, never removed
+        std::fs::write(foreign.join("notes.txt"), "mine").unwrap();
+        let stale: Vec<PathBuf> = stale_staging(&target).into_iter().map(|(p, _)| p).collect();
+        assert_eq!(stale, vec![dead.clone()]);
+        let f = RunFolder::create(&target, false).unwrap();
+        assert!(!dead.exists() && alive.exists() && foreign.join("notes.txt").exists());
+        f.commit().unwrap();
+        assert!(target.join(MARKER).is_file());
     }
 }

@@ -104,7 +104,7 @@ fn simulate_writes_a_complete_finite_run_folder() {
     let o = footfall(&step_args(s(&out), &[]));
     assert!(o.status.success(), "simulate failed: {}", stderr(&o));
     assert_eq!(entries(tmp.path()), ["run"], "staging folder left behind");
-    assert_eq!(entries(&out), ["summary.json", "timeseries.csv"]);
+    assert_eq!(entries(&out), [".footfall-run", "summary.json", "timeseries.csv"]);
 
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
@@ -249,11 +249,20 @@ fn existing_output_folder_is_kept_without_overwrite() {
         "precious"
     );
 
-    // with --overwrite the folder is replaced by a complete run
+    // --overwrite does not replace a folder footfall did not write
     let o = footfall(&step_args(s(&out), &["--overwrite"]));
-    assert!(o.status.success(), "{}", stderr(&o));
-    assert_eq!(entries(&out), ["summary.json", "timeseries.csv"]);
-    assert_eq!(entries(tmp.path()), ["run"]);
+    assert_user_error(&o, &[s(&out), "was not written by footfall", "'keep.txt'"]);
+    assert_eq!(entries(&out), ["keep.txt"]);
+    assert_eq!(entries(tmp.path()), ["run"], "staging folder left behind");
+
+    // an empty folder, or one footfall wrote, is replaced by a complete run
+    std::fs::remove_file(out.join("keep.txt")).unwrap();
+    for _ in 0..2 {
+        let o = footfall(&step_args(s(&out), &["--overwrite"]));
+        assert!(o.status.success(), "{}", stderr(&o));
+        assert_eq!(entries(&out), [".footfall-run", "summary.json", "timeseries.csv"]);
+        assert_eq!(entries(tmp.path()), ["run"]);
+    }
 }
 
 #[test]

@@ -9,6 +9,7 @@ mod report;
 mod fit_foot;
 mod gait_run;
 mod predict;
+mod session;
 mod simulate;
 mod solve;
 mod synth;
@@ -60,7 +61,29 @@ pub enum Failure {
 }
 
 pub fn main() -> ExitCode {
-    let cli = Cli::parse();
+    // before any work: a Ctrl-C during setup removes what this process staged and exits 130
+    session::install_interrupt_handler();
+    let mut cli = Cli::parse();
+    let args: Vec<String> = std::env::args().skip(1).collect();
+    let resuming = match &cli.command {
+        Command::Track(a) => a.resume.is_some().then_some("track"),
+        Command::Predict(a) => a.resume.is_some().then_some("predict"),
+        Command::Solve(a) => a.resume.is_some().then_some("solve"),
+        _ => None,
+    };
+    let recorded = match resuming {
+        Some(sub) => session::prepare_resume(sub, &args).map(|original| {
+            let quiet = cli.quiet;
+            cli = Cli::parse_from(std::iter::once("footfall".to_string()).chain(original.iter().cloned()));
+            cli.quiet |= quiet;
+            original
+        }),
+        None => Ok(args),
+    };
+    if let Err(e) = recorded.and_then(session::record_command) {
+        eprintln!("error: {}", render_chain(&e));
+        return ExitCode::from(1);
+    }
     let result = match cli.command {
         Command::Simulate(args) => simulate::run(args, cli.quiet),
         Command::Solve(args) => solve::run(args, cli.quiet),
@@ -113,40 +136,4 @@ pub fn load_data(path: Option<&std::path::Path>) -> anyhow::Result<footfall::dat
     })
 }
 
-static INTERRUPTED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
-
-/// Wraps an SQP observer so that Ctrl-C stops the solve after the current iteration:
-/// the solver returns its current (last accepted) iterate with status `interrupted`,
-/// and the run folder is written from it as for any other stop.
-pub struct Interruptible<'a>(pub &'a mut dyn footfall::sqp::Observer);
-
-impl Interruptible<'_> {
-    /// Install the Ctrl-C handler (once per process; later calls are no-ops).
-    pub fn install() {
-        let _ = ctrlc::set_handler(|| {
-            if INTERRUPTED.swap(true, std::sync::atomic::Ordering::SeqCst) {
-                // a second Ctrl-C while the iteration finishes: give up at once
-                std::process::exit(130);
-            }
-            eprintln!("interrupted: stopping after this iteration (Ctrl-C again to abort)");
-        });
-    }
-}
-
-/// Solve `nlp` from `w0` with the Ctrl-C handler installed, logging each iteration to
-/// stderr unless `quiet`.
-pub fn solve_interruptibly(nlp: &dyn footfall::sqp::Nlp, w0: &[f64], settings: &footfall::sqp::SqpSettings, quiet: bool) -> footfall::sqp::SqpResult {
-    Interruptible::install();
-    if quiet {
-        footfall::sqp::solve(nlp, w0, settings, &mut Interruptible(&mut footfall::sqp::Silent))
-    } else {
-        footfall::sqp::solve(nlp, w0, settings, &mut Interruptible(&mut footfall::sqp::StderrLog))
-    }
-}
-
-impl footfall::sqp::Observer for Interruptible<'_> {
-    fn iteration(&mut self, rec: &footfall::sqp::IterationRecord) -> bool {
-        let go_on = self.0.iteration(rec);
-        go_on && !INTERRUPTED.load(std::sync::atomic::Ordering::SeqCst)
-    }
-}
+pub use session::solve_interruptibly;

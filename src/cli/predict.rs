@@ -83,6 +83,10 @@ pub struct Args {
     /// Replace the output folder if it exists.
     #[arg(long)]
     overwrite: bool,
+    /// Continue the run a killed process left unfinished in this output folder, from its
+    /// last SQP iteration, with the options it was started with (give no others).
+    #[arg(long, value_name = "DIR")]
+    pub resume: Option<PathBuf>,
     #[command(flatten)]
     options: PredictOptions,
 }
@@ -92,7 +96,7 @@ pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
 }
 
 fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
-    let folder = RunFolder::create(&args.out, args.overwrite)?;
+    let folder = super::session::create_checkpointed_run_folder(&args.out, args.overwrite)?;
     let init = args.init.as_deref().map(read_solution).transpose()?;
     let (out, res) = predict(&args.options, &args.foot, args.phases.as_deref(), init.as_ref(), folder, quiet)?;
     finish(&out, &res, quiet)
@@ -195,7 +199,7 @@ pub fn predict(
             if init.is_some() { "the given solution" } else { "the data" }
         );
     }
-    let res = super::solve_interruptibly(&tr, &w0, &sqp_settings, quiet);
+    let res = super::solve_interruptibly(&tr, &w0, &sqp_settings, quiet)?;
     let solution = GaitSolution::from_nlp(&tr, &res.w, &cycle.continuous, tracking.window.0);
     let durations: Vec<String> = solution.phases.iter().map(|p| format!("{} {:.3} s", p.name, p.duration)).collect();
     let mut extra_json = serde_json::Map::new();

@@ -7,8 +7,7 @@ use footfall::benchmarks::read_problem_json;
 use footfall::integrate::{IntegratorSettings, Method};
 use footfall::ocp::{Block, Transcription};
 use footfall::problems::benchmark::Benchmark;
-use footfall::runfolder::RunFolder;
-use footfall::sqp::{self, HessianMode, Silent, SqpSettings, SqpStatus, StderrLog};
+use footfall::sqp::{HessianMode, SqpSettings, SqpStatus};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -49,14 +48,18 @@ pub enum MethodArg {
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// Problem file (JSON), e.g. problems/cartpole_swingup.json or problems/five_link_biped.json.
-    #[arg(long)]
-    problem: PathBuf,
+    #[arg(long, required_unless_present = "resume")]
+    problem: Option<PathBuf>,
     /// Output folder.
     #[arg(long, default_value = "runs/solve")]
     out: PathBuf,
     /// Replace the output folder if it exists.
     #[arg(long)]
     overwrite: bool,
+    /// Continue the run a killed process left unfinished in this output folder, from its
+    /// last SQP iteration, with the options it was started with (give no others).
+    #[arg(long, value_name = "DIR")]
+    pub resume: Option<PathBuf>,
     /// Start from the variables of a previous solution.json.
     #[arg(long)]
     warm_start: Option<PathBuf>,
@@ -82,15 +85,17 @@ pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
 }
 
 fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
-    let json = read_problem_json(&args.problem).map_err(|e| anyhow!(e))?;
-    let bench = Benchmark::from_json(json).map_err(|e| anyhow!("{}: {e}", args.problem.display()))?;
+    // clap requires --problem unless --resume, which main replaces by the killed run's options
+    let problem = args.problem.clone().ok_or_else(|| anyhow!("--problem is required"))?;
+    let json = read_problem_json(&problem).map_err(|e| anyhow!(e))?;
+    let bench = Benchmark::from_json(json).map_err(|e| anyhow!("{}: {e}", problem.display()))?;
     let method = match args.integrator {
         MethodArg::Adams => Method::Adams,
         MethodArg::Bdf => Method::Bdf,
     };
     let ocp = bench
         .ocp(IntegratorSettings { method, ..Default::default() })
-        .map_err(|e| anyhow!("{}: {e}", args.problem.display()))?;
+        .map_err(|e| anyhow!("{}: {e}", problem.display()))?;
     let tr = Transcription::new(&ocp).context("transcribing the problem")?;
     let (_, _, mut w0) = tr.variable_bounds_and_guess();
     if let Some(ws) = &args.warm_start {
@@ -112,11 +117,11 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         return Err(anyhow!("--tol must be a positive number, got {}", args.tol));
     }
     let settings = SqpSettings { tol_kkt: args.tol, max_iter: args.max_iter, max_time: args.max_time, hessian, ..Default::default() };
-    let folder = RunFolder::create(&args.out, args.overwrite)?;
+    let folder = super::session::create_checkpointed_run_folder(&args.out, args.overwrite)?;
     if !quiet {
         eprintln!("solving {} ({} variables, {} constraints) with {hessian:?}", bench.name(), tr.n(), tr.m());
     }
-    let res = if quiet { sqp::solve(&tr, &w0, &settings, &mut Silent) } else { sqp::solve(&tr, &w0, &settings, &mut StderrLog) };
+    let res = super::solve_interruptibly(&tr, &w0, &settings, quiet)?;
 
     // solution: variables, and node states/controls per phase on their time grid
     let mut phases = Vec::new();
@@ -165,7 +170,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     let summary = serde_json::json!({
         "command": "solve",
         "problem": bench.name(),
-        "problem_file": args.problem,
+        "problem_file": problem,
         "status": res.status,
         "stop_reason": res.status.to_string(),
         "objective": res.objective,

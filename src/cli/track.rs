@@ -41,6 +41,10 @@ pub struct Args {
     /// Replace the output folder if it exists.
     #[arg(long)]
     overwrite: bool,
+    /// Continue the run a killed process left unfinished in this output folder, from its
+    /// last SQP iteration, with the options it was started with (give no others).
+    #[arg(long, value_name = "DIR")]
+    pub resume: Option<PathBuf>,
     /// Hessian: exact (converges), or gauss-newton (the seed's; stalls near KKT 3e-5).
     #[arg(long, value_enum, default_value = "exact")]
     hessian: super::solve::HessianArg,
@@ -367,7 +371,7 @@ impl TrackingProblem {
         quiet: bool,
         finish: impl FnOnce(&Transcription, footfall::sqp::SqpResult) -> anyhow::Result<R>,
     ) -> anyhow::Result<R> {
-        let first = super::solve_interruptibly(tr, w0, settings, quiet);
+        let first = super::solve_interruptibly(tr, w0, settings, quiet)?;
         let loose = self.integrator.sens_tol.filter(|&t| t > self.integrator.rtol);
         let Some(sens_tol) = loose else { return finish(tr, first) };
         if first.status != footfall::sqp::SqpStatus::LineSearchFailure {
@@ -388,7 +392,7 @@ impl TrackingProblem {
             max_time: settings.max_time.map(|t| (t - first.seconds).max(0.0)),
             ..settings.clone()
         };
-        let second = super::solve_interruptibly(&tr2, &first.w, &rest, quiet);
+        let second = super::solve_interruptibly(&tr2, &first.w, &rest, quiet)?;
         finish(&tr2, merge_stages(first, second))
     }
 }
@@ -527,7 +531,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     base.parameters.clear();
     let hessian: HessianMode = args.hessian.into();
     let settings = tracking_sqp_settings(args.tol, args.max_iter, args.max_time, hessian, args.exact_below);
-    let folder = RunFolder::create(&args.out, args.overwrite)?;
+    let folder = super::session::create_checkpointed_run_folder(&args.out, args.overwrite)?;
     let run = prob.solve_and_write(&base, &extra, &settings, folder, args.transient_threshold, quiet)?;
     if run.converged {
         Ok(())

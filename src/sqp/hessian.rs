@@ -48,6 +48,23 @@ impl BlockBfgs {
         Self { blocks, mats, scaled, rule }
     }
 
+    /// The blocks (row-major) and whether each has been scaled: the state a checkpoint keeps.
+    pub fn state(&self) -> Vec<(Vec<f64>, bool)> {
+        self.mats.iter().cloned().zip(self.scaled.iter().copied()).collect()
+    }
+
+    /// Restore the blocks from [`state`](Self::state); `false` if the block sizes differ.
+    pub fn restore(&mut self, state: Vec<(Vec<f64>, bool)>) -> bool {
+        if state.len() != self.mats.len() || state.iter().zip(&self.mats).any(|((m, _), own)| m.len() != own.len()) {
+            return false;
+        }
+        for (i, (m, s)) in state.into_iter().enumerate() {
+            self.mats[i] = m;
+            self.scaled[i] = s;
+        }
+        true
+    }
+
     /// Multiply every block by `s` (e.g. a small initial curvature for the structured
     /// mode, where the Gauss–Newton part carries the objective).
     pub fn scale(&mut self, s: f64) {

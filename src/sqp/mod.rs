@@ -14,10 +14,12 @@
 //! $s_d = \max(1, \|(\lambda,\nu)\|_1/((m+n)\,100))$), the constraint violation and the
 //! complementarity, falls below the tolerance.
 
+pub mod checkpoint;
 pub mod hessian;
 pub mod linearised;
 pub mod qp;
 
+use checkpoint::{ExactRecord, ExactVec, SqpCheckpoint, CHECKPOINT_VERSION};
 use hessian::BlockBfgs;
 use qp::{QpData, QpError, Triplets};
 use serde::{Deserialize, Serialize};
@@ -289,6 +291,14 @@ pub struct SqpResult {
 pub trait Observer {
     /// Called after every iteration.
     fn iteration(&mut self, rec: &IterationRecord) -> bool;
+    /// Whether [`checkpoint`](Self::checkpoint) should be called (building a checkpoint
+    /// copies the iterate and the history).
+    fn wants_checkpoints(&self) -> bool {
+        false
+    }
+    /// Called after every accepted step with the state a solve can continue from
+    /// ([`solve_resumed`]), e.g. to write it to disk.
+    fn checkpoint(&mut self, _state: &SqpCheckpoint) {}
 }
 
 /// An observer that prints one line per iteration to stderr.
@@ -333,7 +343,20 @@ struct State {
 
 /// Solve `nlp` from `w0` (clipped into the bounds).
 pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut dyn Observer) -> SqpResult {
-    let start = Instant::now();
+    solve_impl(nlp, w0, settings, observer, None)
+}
+
+/// Continue a solve of `nlp` from a checkpoint its observer received: with the same
+/// settings it follows the same iterates, bit for bit, as the solve that wrote it, and
+/// its result holds the whole history. The checkpoint must pass
+/// [`SqpCheckpoint::check`] for this NLP (a mismatch is an evaluation failure).
+pub fn solve_resumed(nlp: &dyn Nlp, from: &SqpCheckpoint, settings: &SqpSettings, observer: &mut dyn Observer) -> SqpResult {
+    solve_impl(nlp, &from.w.values(), settings, observer, Some(from))
+}
+
+fn solve_impl(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut dyn Observer, resume: Option<&SqpCheckpoint>) -> SqpResult {
+    let elapsed_before = resume.map_or(0.0, |cp| cp.scalars.values().get(5).copied().unwrap_or(0.0));
+    let start = Instant::now().checked_sub(std::time::Duration::from_secs_f64(elapsed_before.max(0.0))).unwrap_or_else(Instant::now);
     let (n, m) = (nlp.n(), nlp.m());
     let (w_lb, w_ub, c_lb, c_ub) = nlp.bounds();
     let (jr, jc) = nlp.jacobian_pattern();
@@ -359,7 +382,15 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
         timings: SqpTimings::default(),
         w,
     };
-    let timings = std::cell::Cell::new(SqpTimings::default());
+    if let Some(cp) = resume {
+        if let Err(e) = cp.check(n, m) {
+            return fail(SqpStatus::EvaluationFailure(e.to_string()), w);
+        }
+        if !bfgs.restore(cp.bfgs.iter().map(|(b, s)| (b.values(), *s)).collect()) {
+            return fail(SqpStatus::EvaluationFailure("the checkpoint's BFGS blocks do not fit this problem".into()), w);
+        }
+    }
+    let timings = std::cell::Cell::new(resume.map_or_else(SqpTimings::default, |cp| cp.timings));
     let timed = |eval: bool, f: &mut dyn FnMut()| {
         let t = Instant::now();
         f();
@@ -396,7 +427,8 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
         });
         out
     };
-    let (ev, hess) = match eval_derivs(&w, &vec![0.0; m]) {
+    let lambda0 = resume.map_or_else(|| vec![0.0; m], |cp| cp.lambda.values());
+    let (ev, hess) = match eval_derivs(&w, &lambda0) {
         Ok(r) => r,
         Err(e) => return fail(SqpStatus::EvaluationFailure(e), w),
     };
@@ -412,7 +444,7 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
     // inertia-correction shift of the exact mode's QP Hessian (last value)
     let mut shift: f64 = 0.0;
     zero_blocks.scale(0.0);
-    let mut lambda = vec![0.0; m];
+    let mut lambda = lambda0;
     let mut nu = vec![0.0; n];
     // size of the multipliers of the last consistent QP: the elastic penalty exceeds it
     let mut lam_est: f64 = 1.0;
@@ -423,8 +455,17 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
     let mut kkt = f64::INFINITY;
     let mut last_step = 0.0;
     let mut qp_iters;
+    let mut first_iter = 0;
+    if let Some(cp) = resume {
+        nu = cp.nu.values();
+        let sc = cp.scalars.values();
+        (lam_est, test_rho_scale, shift, theta_max, last_step) = (sc[0], sc[1], sc[2], sc[3], sc[4]);
+        filter = cp.filter.values().chunks_exact(2).map(|p| (p[0], p[1])).collect();
+        history = cp.records();
+        first_iter = cp.next_iter;
+    }
     let jt = |vals: &[f64]| Triplets { rows: jr.clone(), cols: jc.clone(), vals: vals.to_vec() };
-    for iter in 0..=settings.max_iter {
+    for iter in first_iter..=settings.max_iter {
         // --- QP subproblem at the current point
         let infeas0 = violations(&st.ev.c, &c_lb, &c_ub).iter().copied().fold(0.0, f64::max);
         let mut h = Triplets::default();
@@ -745,6 +786,22 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
             bfgs.update(&s, &y);
         }
         st = State { w: w_new, ev: ev_new, hess: hess_new, plain: plain_new };
+        if observer.wants_checkpoints() {
+            observer.checkpoint(&SqpCheckpoint {
+                version: CHECKPOINT_VERSION,
+                n,
+                m,
+                next_iter: iter + 1,
+                w: ExactVec::new(&st.w),
+                lambda: ExactVec::new(&lambda),
+                nu: ExactVec::new(&nu),
+                scalars: ExactVec::new(&[lam_est, test_rho_scale, shift, theta_max, last_step, start.elapsed().as_secs_f64()]),
+                filter: ExactVec::new(&filter.iter().flat_map(|&(a, b)| [a, b]).collect::<Vec<f64>>()),
+                bfgs: bfgs.state().into_iter().map(|(b, s)| (ExactVec::new(&b), s)).collect(),
+                history: history.iter().map(ExactRecord::from).collect(),
+                timings: timings.get(),
+            });
+        }
     }
     let viol = violations(&st.ev.c, &c_lb, &c_ub);
     let mut order: Vec<usize> = (0..m).filter(|&i| viol[i] > settings.tol_kkt).collect();
