@@ -319,3 +319,46 @@ fn a_killed_solve_resumes_to_the_same_optimum() {
     assert!((j1 - j2).abs() <= 1e-9 * j1.abs(), "J {j1} against {j2}");
     assert_eq!(w1, w2, "deterministic whatever the thread count: the same bits");
 }
+
+#[test]
+fn a_killed_track_resumes_along_the_same_iterates() {
+    // the bundled trial, killed after its first accepted iteration: the resumed run
+    // re-parses the recorded command in its working folder (the repository; relative
+    // model and data paths) and writes the same solution as a run that was never killed
+    let tmp = tempfile::tempdir().unwrap();
+    let whole = tmp.path().join("whole");
+    let killed = tmp.path().join("killed");
+    let track = |out: &Path| {
+        let mut c = bin();
+        c.args(["--quiet", "track", "--max-iter", "2", "--out", out.to_str().unwrap()]).current_dir(root());
+        c
+    };
+    let o = track(&whole).output().unwrap();
+    assert_eq!(o.status.code(), Some(1), "the iteration limit: {}", stderr(&o));
+    let mut child = track(&killed).stderr(Stdio::null()).spawn().unwrap();
+    let cp = tmp.path().join(format!(".killed.partial-{}/.resume-checkpoint-0.json", child.id()));
+    let start = Instant::now();
+    while !cp.exists() {
+        assert!(child.try_wait().unwrap().is_none(), "the track ended before it was killed");
+        assert!(start.elapsed() < Duration::from_secs(600), "no checkpoint");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    signal(&child, "-KILL");
+    child.wait().unwrap();
+    assert!(!killed.exists());
+    // resumed from another folder
+    let o = bin().args(["--quiet", "track", "--resume", killed.to_str().unwrap()]).current_dir(tmp.path()).output().unwrap();
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let history = |run: &Path| -> Vec<[u64; 3]> {
+        let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(run.join("summary.json")).unwrap()).unwrap();
+        let f = |x: &serde_json::Value| x.as_f64().unwrap().to_bits();
+        v["history"].as_array().unwrap().iter().map(|h| [f(&h["objective"]), f(&h["kkt"]), f(&h["step"])]).collect()
+    };
+    assert_eq!(history(&whole).len(), 3);
+    assert_eq!(history(&whole), history(&killed), "the resumed track took other iterates");
+    assert_eq!(
+        std::fs::read(whole.join("solution.json")).unwrap(),
+        std::fs::read(killed.join("solution.json")).unwrap(),
+        "the resumed track wrote another solution"
+    );
+}
