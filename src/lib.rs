@@ -9,6 +9,7 @@ pub mod benchmarks;
 pub mod controls;
 pub mod data;
 pub mod integrate;
+pub mod limits;
 pub mod model;
 pub mod ocp;
 pub mod phases;

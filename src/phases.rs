@@ -2,6 +2,7 @@
 //! held for a duration) and instantaneous impact phases (the plastic impact map of the
 //! contacts that are active after it), seed 001 §3.3.
 
+use crate::limits::MAX_INTERVALS;
 use crate::model::spec::read_json;
 use crate::model::{ConstraintSet, GaitModel, ModelError};
 use serde::{Deserialize, Serialize};
@@ -17,6 +18,18 @@ pub struct ContactUse {
     /// rolling carries a normal force only (seed: the second circle when both touch).
     #[serde(default = "yes")]
     pub rolling: bool,
+}
+
+impl ContactUse {
+    /// The same contact on the other foot (`r.` ↔ `l.`).
+    pub fn mirrored(&self) -> Self {
+        let contact = match self.contact.split_once('.') {
+            Some(("r", p)) => format!("l.{p}"),
+            Some(("l", p)) => format!("r.{p}"),
+            _ => self.contact.clone(),
+        };
+        ContactUse { contact, rolling: self.rolling }
+    }
 }
 
 fn yes() -> bool {
@@ -101,7 +114,8 @@ pub enum Phase {
         contacts: Vec<ContactUse>,
         /// Duration.
         duration: Duration,
-        /// Number of shooting intervals (used by optimal control; ≥ 1).
+        /// Number of shooting intervals (used by optimal control; 1 to
+        /// [`MAX_INTERVALS`]).
         #[serde(default = "one_interval")]
         intervals: usize,
     },
@@ -243,11 +257,11 @@ impl PhaseSequence {
                 ..
             } = ph
             {
-                if *intervals == 0 {
+                if *intervals == 0 || *intervals > MAX_INTERVALS {
                     return Err(ModelError::invalid(
                         path,
                         f("intervals"),
-                        "must be at least 1 shooting interval, got 0",
+                        format!("must be 1 to {MAX_INTERVALS} shooting intervals, got {intervals}"),
                     ));
                 }
                 let ok = match *duration {
@@ -271,6 +285,50 @@ impl PhaseSequence {
                                 Duration::Free { initial, min, max } => format!("{{initial: {initial}, min: {min}, max: {max}}}"),
                             }
                         ),
+                    ));
+                }
+            }
+        }
+        self.check_impacts(path)
+    }
+
+    /// An impact lists the contacts active right after it, so it must list those of the
+    /// phase after it (in a periodic gait, a last impact those of the first continuous
+    /// phase mirrored), and it must add a contact to those of the phase before it.
+    fn check_impacts(&self, path: &Path) -> Result<(), ModelError> {
+        let names = |cs: &[ContactUse]| cs.iter().map(|c| if c.rolling { c.contact.clone() } else { format!("{} (not rolling)", c.contact) }).collect::<Vec<_>>();
+        let same = |a: &[ContactUse], b: &[ContactUse]| a.len() == b.len() && a.iter().all(|c| b.contains(c));
+        let list = |cs: &[ContactUse]| if cs.is_empty() { "none".to_string() } else { names(cs).join(", ") };
+        for (i, ph) in self.phases.iter().enumerate() {
+            let Phase::Impact { contacts, .. } = ph else { continue };
+            let field = format!("phases[{i}] ('{}').contacts", ph.name());
+            let after: Option<(Vec<ContactUse>, String)> = match self.phases.get(i + 1) {
+                Some(Phase::Impact { name, .. }) => {
+                    return Err(ModelError::invalid(path, field, format!("an impact must be followed by a continuous phase, not by the impact '{name}'")));
+                }
+                Some(next) => Some((next.contacts().to_vec(), format!("the next phase '{}'", next.name()))),
+                None if self.gait.as_ref().is_some_and(|g| g.periodic) => self
+                    .phases
+                    .iter()
+                    .find(|p| matches!(p, Phase::Continuous { .. }))
+                    .map(|first| (first.contacts().iter().map(ContactUse::mirrored).collect(), format!("the first continuous phase '{}' mirrored (the cycle is periodic)", first.name()))),
+                None => None,
+            };
+            if let Some((want, which)) = after {
+                if !same(contacts, &want) {
+                    return Err(ModelError::invalid(
+                        path,
+                        field,
+                        format!("an impact lists the contacts active right after it, so must list those of {which}: {}; got {}", list(&want), list(contacts)),
+                    ));
+                }
+            }
+            if let Some(before) = i.checked_sub(1).map(|j| &self.phases[j]) {
+                if contacts.iter().all(|c| before.contacts().iter().any(|b| b.contact == c.contact)) {
+                    return Err(ModelError::invalid(
+                        path,
+                        field,
+                        format!("an impact must add a contact to those of the phase before it ('{}': {}); got {}", before.name(), list(before.contacts()), list(contacts)),
                     ));
                 }
             }

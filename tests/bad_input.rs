@@ -155,8 +155,9 @@ fn bundled_files_pass_the_checks() {
         "gait9dof.json",
         "opensim_subject01.json",
         "opensim_subject01_torque.json",
+        "opensim_subject01_seed_damping.json",
     ] {
-        for foot in ["ellipse.json", "double_circle.json", "peer_ellipse.json"] {
+        for foot in ["ellipse.json", "double_circle.json", "peer_ellipse.json", "heel_circle_forefoot_ellipse.json"] {
             let m = root().join("models").join(model);
             let f = root().join("models/feet").join(foot);
             GaitModel::load(&m, &f).unwrap_or_else(|e| panic!("{e}"));
@@ -165,6 +166,9 @@ fn bundled_files_pass_the_checks() {
     for (phases, foot) in [
         ("sim_ellipse_step.json", "ellipse.json"),
         ("sim_double_circle_step.json", "double_circle.json"),
+        ("ellipse_walk.json", "ellipse.json"),
+        ("double_circle_walk.json", "double_circle.json"),
+        ("heel_circle_forefoot_ellipse_walk.json", "heel_circle_forefoot_ellipse.json"),
     ] {
         let p = root().join("phases").join(phases);
         let model = GaitModel::load(
@@ -370,6 +374,52 @@ fn non_positive_gravity_and_stature_are_refused() {
         &["positive", "m"],
     );
     eprintln!("{msg}");
+}
+
+#[test]
+fn absurd_gravity_mass_and_sizes_are_refused_with_short_numbers() {
+    let d = Scratch::new();
+    let m = d.write("model.json", &explicit_model(GOOD_THIGH, "").replace("9.81", "1e308"));
+    let msg = assert_invalid(ModelSpec::load(&m).unwrap_err(), &m, "gravity", &["1e308 m/s²", "beyond the sensible limit", "(0, 100] m/s²"]);
+    assert!(msg.len() < 200, "{msg}");
+    let m = d.write("model.json", &explicit_model(r#"{ "mass": 5000.0, "com": [0.0, -0.18], "izz": 0.12 }"#, ""));
+    assert_invalid(ModelSpec::load(&m).unwrap_err(), &m, "body.segments.thigh.mass", &["5000 kg", "(0, 1000] kg"]);
+    let m = d.write("model.json", &explicit_model(r#"{ "mass": 8.0, "com": [0.0, -0.18], "izz": 1e6 }"#, ""));
+    assert_invalid(ModelSpec::load(&m).unwrap_err(), &m, "body.segments.thigh.izz", &["1e6 kg·m²", "(0, 100] kg·m²"]);
+    let m = d.write("model.json", &explicit_model(r#"{ "mass": 8.0, "com": [0.0, -1e9], "izz": 0.12 }"#, ""));
+    assert_invalid(ModelSpec::load(&m).unwrap_err(), &m, "body.segments.thigh.com", &["[0, -1e9] m", "±10 m"]);
+    let m = d.write(
+        "deleva.json",
+        r#"{ "name": "x", "body": { "preset": "de_leva", "mass": 80.0, "height": 18.0, "sex": "male" },
+             "actuators": { "type": "joint_torques" } }"#,
+    );
+    assert_invalid(ModelSpec::load(&m).unwrap_err(), &m, "body.height", &["18 m", "(0, 3] m"]);
+    let m = d.write(
+        "deleva.json",
+        r#"{ "name": "x", "body": { "preset": "de_leva", "mass": 8e5, "height": 1.8, "sex": "male" },
+             "actuators": { "type": "joint_torques" } }"#,
+    );
+    let msg = assert_invalid(ModelSpec::load(&m).unwrap_err(), &m, "body.mass", &["800000 kg", "(0, 1000] kg"]);
+    eprintln!("{msg}");
+}
+
+#[test]
+fn absurd_ground_force_is_refused_naming_line_and_column() {
+    use footfall::data::DataError;
+    let d = Scratch::new();
+    let header = "time,pelvis_x,pelvis_y,pelvis_tilt,hip_r,knee_r,ankle_r,grf_x_r,grf_y_r,cop_x_r";
+    let good = format!("{header}\n0.00,0,0.9,0,0,0,0,10,700,0.1\n0.01,0.01,0.9,0,0,0,0,10,700,0.1\n");
+    let p = d.write("trial.csv", &good);
+    footfall::data::read_sagittal_csv(&p).expect("the template is valid");
+    let p = d.write("trial.csv", &good.replace("0.01,0.01,0.9,0,0,0,0,10,700,0.1", "0.01,0.01,0.9,0,0,0,0,10,1e308,NaN"));
+    let err = footfall::data::read_sagittal_csv(&p).unwrap_err();
+    let msg = err.to_string();
+    assert!(matches!(err, DataError::OutOfRange { row: 3, .. }), "{msg}");
+    assert_eq!(err.column(), Some("grf_y_r"));
+    for w in ["trial.csv", "line 3", "'grf_y_r'", "1e308 N", "at most 100000 N"] {
+        assert!(msg.contains(w), "{w:?} missing: {msg}");
+    }
+    assert!(msg.len() < 200, "{msg}");
 }
 
 #[test]
@@ -647,8 +697,78 @@ fn phase_with_zero_intervals_is_refused() {
         PhaseSequence::load(&p).unwrap_err(),
         &p,
         "phases[0] ('stance').intervals",
-        &["at least 1"],
+        &["1 to 10000", "got 0"],
     );
+    eprintln!("{msg}");
+}
+
+#[test]
+fn phase_with_too_many_intervals_is_refused() {
+    let d = Scratch::new();
+    let p = d.write("phases.json", &PHASES.replace("\"duration\": 0.3", "\"duration\": 0.3, \"intervals\": 1000000"));
+    let msg = assert_invalid(PhaseSequence::load(&p).unwrap_err(), &p, "phases[0] ('stance').intervals", &["1 to 10000", "got 1000000"]);
+    eprintln!("{msg}");
+    let p = d.write("phases.json", &PHASES.replace("\"duration\": 0.3", "\"duration\": 0.3, \"intervals\": 10000"));
+    PhaseSequence::load(&p).expect("10000 intervals are allowed");
+}
+
+/// The shipped walking cycle with its impacts' contacts replaced.
+fn walk_with_impacts(file: &str, first: &str, last: &str) -> String {
+    let text = std::fs::read_to_string(root().join("phases").join(file)).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let phases = v["phases"].as_array_mut().unwrap();
+    let contacts = |list: &str| serde_json::Value::from(list.split(',').map(|c| serde_json::json!({ "contact": c })).collect::<Vec<_>>());
+    phases[0]["contacts"] = contacts(first);
+    let n = phases.len();
+    phases[n - 1]["contacts"] = contacts(last);
+    v.to_string()
+}
+
+#[test]
+fn impact_that_does_not_match_the_next_phase_is_refused() {
+    // the issue's case: a first impact on l.sole only, a last one on r.sole only
+    let d = Scratch::new();
+    let p = d.write("walk.json", &walk_with_impacts("ellipse_walk.json", "l.sole", "r.sole"));
+    let msg = assert_invalid(
+        PhaseSequence::load(&p).unwrap_err(),
+        &p,
+        "phases[0] ('1e*').contacts",
+        &["contacts active right after it", "the next phase '2e'", "r.sole, l.sole", "got l.sole"],
+    );
+    eprintln!("{msg}");
+    // rolling flags count: a non-rolling contact is another constraint
+    let p = d.write("p.json", &PHASES.replace(r#"{ "contact": "l.sole" } ] },"#, r#"{ "contact": "l.sole", "rolling": false } ] },"#));
+    assert_invalid(PhaseSequence::load(&p).unwrap_err(), &p, "phases[1] ('strike').contacts", &["l.sole (not rolling)", "got r.sole, l.sole (not rolling)"]);
+}
+
+#[test]
+fn last_impact_of_a_periodic_cycle_must_mirror_the_first_phase() {
+    let d = Scratch::new();
+    let p = d.write("walk.json", &walk_with_impacts("double_circle_walk.json", "r.forefoot,l.heel", "r.forefoot,l.heel"));
+    let msg = assert_invalid(
+        PhaseSequence::load(&p).unwrap_err(),
+        &p,
+        "phases[6] ('7c*').contacts",
+        &["the first continuous phase '2c' mirrored", "l.forefoot, r.heel", "got r.forefoot, l.heel"],
+    );
+    eprintln!("{msg}");
+}
+
+#[test]
+fn impact_that_adds_no_contact_or_is_followed_by_an_impact_is_refused() {
+    let d = Scratch::new();
+    let p = d.write("p.json", &PHASES.replace(r#""contact": "r.sole" } ], "duration": 0.3"#, r#""contact": "r.sole" }, { "contact": "l.sole" } ], "duration": 0.3"#));
+    let msg = assert_invalid(PhaseSequence::load(&p).unwrap_err(), &p, "phases[1] ('strike').contacts", &["must add a contact", "'stance': r.sole, l.sole"]);
+    eprintln!("{msg}");
+    let p = d.write(
+        "p.json",
+        &PHASES.replace(
+            r#"{ "type": "continuous", "name": "double""#,
+            r#"{ "type": "impact", "name": "again", "contacts": [ { "contact": "r.sole" }, { "contact": "l.sole" } ] },
+    { "type": "continuous", "name": "double""#,
+        ),
+    );
+    let msg = assert_invalid(PhaseSequence::load(&p).unwrap_err(), &p, "phases[1] ('strike').contacts", &["followed by a continuous phase", "'again'"]);
     eprintln!("{msg}");
 }
 
@@ -736,19 +856,17 @@ fn unknown_contact_names_the_phase() {
     let d = Scratch::new();
     let p = d.write(
         "phases.json",
-        &PHASES.replace(
-            "{ \"contact\": \"l.sole\" } ], \"duration\"",
-            "{ \"contact\": \"l.heel\" } ], \"duration\"",
-        ),
+        // in the impact and the phase after it, which must list the same contacts
+        &PHASES.replace("\"l.sole\"", "\"l.heel\""),
     );
     let seq = PhaseSequence::load(&p).unwrap();
     let err = seq.resolve(&reference_model(), &p).unwrap_err();
     let msg = assert_invalid(
         err,
         &p,
-        "phases[2] ('double').contacts[1].contact",
+        "phases[1] ('strike').contacts[1].contact",
         &[
-            "phase 'double'",
+            "phase 'strike'",
             "unknown contact 'l.heel'",
             "r.sole, l.sole",
         ],
@@ -762,8 +880,8 @@ fn contact_listed_twice_is_refused() {
     let p = d.write(
         "phases.json",
         &PHASES.replace(
-            "\"contact\": \"l.sole\" } ] }",
-            "\"contact\": \"r.sole\" } ] }",
+            "\"contact\": \"r.sole\" } ], \"duration\": 0.3",
+            "\"contact\": \"r.sole\" }, { \"contact\": \"r.sole\" } ], \"duration\": 0.3",
         ),
     );
     let seq = PhaseSequence::load(&p).unwrap();
@@ -771,8 +889,8 @@ fn contact_listed_twice_is_refused() {
     let msg = assert_invalid(
         err,
         &p,
-        "phases[1] ('strike').contacts[1].contact",
-        &["phase 'strike'", "twice"],
+        "phases[0] ('stance').contacts[1].contact",
+        &["phase 'stance'", "twice"],
     );
     eprintln!("{msg}");
 }

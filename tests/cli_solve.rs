@@ -16,7 +16,7 @@ fn solve_writes_a_converged_run_and_warm_starts_from_it() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("cartpole");
     let o = footfall(&["solve", "--problem", "problems/cartpole_swingup.json", "--out", out.to_str().unwrap(), "--quiet"]);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
     let summary: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["status"], "converged");
     let j = summary["objective"].as_f64().unwrap();
@@ -36,11 +36,11 @@ fn solve_writes_a_converged_run_and_warm_starts_from_it() {
 }
 
 #[test]
-fn solve_reports_an_iteration_limit_with_exit_code_1_and_keeps_the_run() {
+fn solve_reports_an_iteration_limit_with_exit_code_3_and_keeps_the_run() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("limited");
     let o = footfall(&["solve", "--problem", "problems/cartpole_swingup.json", "--out", out.to_str().unwrap(), "--max-iter", "3", "--quiet"]);
-    assert_eq!(o.status.code(), Some(1));
+    assert_eq!(o.status.code(), Some(3));
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(err.contains("iteration limit"), "{err}");
     let summary: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();

@@ -275,12 +275,12 @@ fn a_killed_solve_resumes_along_the_same_iterates() {
     std::fs::create_dir_all(&whole).unwrap();
     std::fs::create_dir_all(&killed).unwrap();
     let o = bin().args(["--quiet", "solve"]).args(args).args(["--out", "run"]).env("RAYON_NUM_THREADS", "1").current_dir(&whole).output().unwrap();
-    assert_eq!(o.status.code(), Some(1), "the iteration limit: {}", stderr(&o));
+    assert_eq!(o.status.code(), Some(3), "the iteration limit: {}", stderr(&o));
 
     let at = kill_after_checkpoint(&killed, &args, "1", 6);
     assert!(at < 25, "killed at iteration {at}");
     let o = resume(&killed, "1");
-    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
     let (h1, w1, s1) = iterates(&whole.join("run"));
     let (h2, w2, s2) = iterates(&killed.join("run"));
     assert_eq!(h1.len(), 26);
@@ -334,7 +334,7 @@ fn a_killed_track_resumes_along_the_same_iterates() {
         c
     };
     let o = track(&whole).output().unwrap();
-    assert_eq!(o.status.code(), Some(1), "the iteration limit: {}", stderr(&o));
+    assert_eq!(o.status.code(), Some(3), "the iteration limit: {}", stderr(&o));
     let mut child = track(&killed).stderr(Stdio::null()).spawn().unwrap();
     let cp = tmp.path().join(format!(".killed.partial-{}/.resume-checkpoint-0.json", child.id()));
     let start = Instant::now();
@@ -348,7 +348,7 @@ fn a_killed_track_resumes_along_the_same_iterates() {
     assert!(!killed.exists());
     // resumed from another folder
     let o = bin().args(["--quiet", "track", "--resume", killed.to_str().unwrap()]).current_dir(tmp.path()).output().unwrap();
-    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
     let history = |run: &Path| -> Vec<[u64; 3]> {
         let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(run.join("summary.json")).unwrap()).unwrap();
         let f = |x: &serde_json::Value| x.as_f64().unwrap().to_bits();

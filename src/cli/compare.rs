@@ -24,11 +24,12 @@ pub struct Args {
     #[arg(long = "init")]
     inits: Vec<String>,
     /// Exit with status 1 unless this foot's peak normal-force excess over the
-    /// measurement is at least `--expect-ratio` times every other foot's.
+    /// measurement is at least `--expect-ratio` times every other foot's (a prediction
+    /// that did not converge exits with its own code first).
     #[arg(long)]
     expect_transient: Option<String>,
     /// Ratio for `--expect-transient`.
-    #[arg(long, default_value_t = 3.0)]
+    #[arg(long, default_value_t = 3.0, value_parser = super::validate::positive)]
     expect_ratio: f64,
     /// Output folder (one prediction run folder per foot inside).
     #[arg(long, default_value = "runs/compare")]
@@ -41,7 +42,7 @@ pub struct Args {
 }
 
 pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
-    run_inner(args, quiet).map_err(Failure::User)
+    run_inner(args, quiet).map_err(Failure::classify)
 }
 
 struct Outcome {
@@ -49,6 +50,9 @@ struct Outcome {
     out: GaitRunOutput,
     converged: bool,
     status: String,
+    /// The solver's status, and whether it stopped before any iteration.
+    result: SqpStatus,
+    at_start: bool,
     seconds: f64,
     iterations: usize,
     objective: f64,
@@ -58,9 +62,6 @@ struct Outcome {
 fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     if args.feet.len() < 2 {
         bail!("--feet: give at least two feet to compare, got {:?}", args.feet);
-    }
-    if !(args.expect_ratio.is_finite() && args.expect_ratio > 0.0) {
-        bail!("--expect-ratio {}: need a positive number", args.expect_ratio);
     }
     let mut inits: Vec<(String, GaitSolution)> = Vec::new();
     for i in &args.inits {
@@ -93,6 +94,8 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
             name,
             converged: res.status == SqpStatus::Converged,
             status: res.status.to_string(),
+            result: res.status.clone(),
+            at_start: res.history.is_empty(),
             seconds: res.seconds,
             iterations: res.history.len().saturating_sub(1),
             objective: res.objective,
@@ -247,9 +250,23 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         }
         eprintln!("report: {}", path.join("report.html").display());
     }
+    // a prediction that did not converge decides the exit code before the expectation
+    // (interrupted first, then infeasible, then any other stop)
+    let rank = |o: &Outcome| match o.result {
+        SqpStatus::Interrupted => 0,
+        SqpStatus::Infeasible => 1,
+        _ => 2,
+    };
+    if let Some(o) = outcomes.iter().filter(|o| !o.converged).min_by_key(|o| rank(o)) {
+        return Err(super::Unsolved {
+            status: o.result.clone(),
+            at_start: o.at_start,
+            message: format!("not every prediction converged ({}: {}; results in {})", o.name, o.status, path.display()),
+        }
+        .into());
+    }
     match verdict {
         Some((false, v)) => Err(anyhow!("expected transient ordering does not hold: {v}")),
-        _ if !all_converged => Err(anyhow!("not every prediction converged (results in {})", path.display())),
         _ => Ok(()),
     }
 }

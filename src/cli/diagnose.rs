@@ -35,15 +35,15 @@ pub struct Args {
     #[arg(long)]
     overwrite: bool,
     /// KKT tolerance of the re-fits.
-    #[arg(long, default_value_t = 1e-5)]
+    #[arg(long, default_value_t = 1e-5, value_parser = super::validate::positive)]
     tol: f64,
     /// Iteration limit of the re-fits.
-    #[arg(long, default_value_t = 200)]
+    #[arg(long, default_value_t = 200, value_parser = super::validate::iterations)]
     max_iter: usize,
 }
 
 pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
-    run_inner(args, quiet).map_err(Failure::User)
+    run_inner(args, quiet).map_err(Failure::classify)
 }
 
 /// The decrease of a truncated re-fit of a problem started at the run's solution (the

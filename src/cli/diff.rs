@@ -23,12 +23,12 @@ pub struct Args {
     #[arg(long)]
     overwrite: bool,
     /// Changes of the mean error within this many per cent of A count as unchanged.
-    #[arg(long, default_value_t = 1.0)]
+    #[arg(long, default_value_t = 1.0, value_parser = super::validate::non_negative)]
     threshold_pct: f64,
 }
 
 pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
-    run_inner(args, quiet).map_err(Failure::User)
+    run_inner(args, quiet).map_err(Failure::classify)
 }
 
 /// Refuse an output folder that would replace (with `--overwrite`) one of the inputs.
@@ -45,9 +45,6 @@ fn check_not_input(out: &Path, inputs: &[&Path]) -> anyhow::Result<()> {
 }
 
 fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
-    if !(args.threshold_pct.is_finite() && args.threshold_pct >= 0.0) {
-        bail!("--threshold-pct {}: need a finite number ≥ 0", args.threshold_pct);
-    }
     let a = RunSummary::read(&args.run_a).context("run A")?;
     let b = RunSummary::read(&args.run_b).context("run B")?;
     let diff = RunDiff::new(&a, &b, args.threshold_pct);

@@ -28,15 +28,15 @@ pub struct Args {
     #[arg(long)]
     overwrite: bool,
     /// Nelder–Mead tolerance on the simplex's cost spread.
-    #[arg(long, default_value_t = 1e-6)]
+    #[arg(long, default_value_t = 1e-6, value_parser = super::validate::positive)]
     tol: f64,
     /// Iteration limit.
-    #[arg(long, default_value_t = 4000)]
-    max_iter: u64,
+    #[arg(long, default_value_t = 4000, value_parser = super::validate::iterations)]
+    max_iter: usize,
 }
 
 pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
-    run_inner(args, quiet).map_err(Failure::User)
+    run_inner(args, quiet).map_err(Failure::classify)
 }
 
 fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
@@ -52,7 +52,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         eprintln!("fitting '{}' ({} parameters, length {:.1} cm) to {} stances, {n} samples…", foot.name, parameters(&foot).len(), 100.0 * foot_length(&foot), stances.len());
     }
     let started = std::time::Instant::now();
-    let res = fit(&foot, &stances, ground, args.tol, args.max_iter).map_err(|e| anyhow!(e))?;
+    let res = fit(&foot, &stances, ground, args.tol, args.max_iter as u64).map_err(|e| anyhow!(e))?;
     let seconds = started.elapsed().as_secs_f64();
     let (_, pos0, ang0) = fit_cost(&foot, &stances, ground).ok_or_else(|| anyhow!("the initial foot cannot roll"))?;
     let deg = 180.0 / std::f64::consts::PI;

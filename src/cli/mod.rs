@@ -1,6 +1,10 @@
 //! Command-line interface: argument parsing, progress output and exit codes.
 //!
-//! Exit codes: 0 success, 1 bad input or a run that did not succeed, 2 internal error.
+//! Exit codes ([`EXIT_CODES`]): 0 success; 1 bad input or I/O error; 2 usage error
+//! (clap, including a numeric option out of range); 3 solved but not converged; 4
+//! infeasible; 5 converged but physically invalid; 130 interrupted. A command returns a
+//! [`Failure`]; a solve that did not converge is an [`Unsolved`] error, whose status
+//! picks the code.
 
 mod compare;
 mod diagnose;
@@ -14,13 +18,26 @@ mod simulate;
 mod solve;
 mod synth;
 mod track;
+mod validate;
 
 use clap::{Parser, Subcommand};
+use footfall::sqp::SqpStatus;
 use std::process::ExitCode;
+
+/// The exit codes, as `--help` prints them.
+pub const EXIT_CODES: &str = "\
+Exit codes:
+  0    success
+  1    bad input (a file, field or option value the command refuses) or an I/O error
+  2    usage error (unknown option, missing or malformed value, a number out of range)
+  3    solved but not converged (iteration or time limit, line search, QP or evaluation failure); the run folder is written
+  4    infeasible: the constraints cannot be satisfied; the run folder is written
+  5    converged but physically invalid
+  130  interrupted (Ctrl-C); the run folder is written from the last accepted iterate";
 
 /// Fit and predict human gait with rigid foot-ground contact models.
 #[derive(Debug, Parser)]
-#[command(name = "footfall", version, about)]
+#[command(name = "footfall", version, about, after_help = EXIT_CODES)]
 struct Cli {
     /// Print nothing but errors.
     #[arg(long, global = true)]
@@ -56,8 +73,78 @@ enum Command {
 
 /// Failure classes mapped to exit codes.
 pub enum Failure {
-    /// Bad user input or a run that did not succeed (exit 1).
-    User(anyhow::Error),
+    /// Bad input or an I/O error (exit 1).
+    Input(anyhow::Error),
+    /// Solved but not converged (exit 3).
+    NotConverged(anyhow::Error),
+    /// The constraints cannot be satisfied (exit 4).
+    Infeasible(anyhow::Error),
+    /// Converged, but the solution fails a physical check (exit 5; no command makes such a
+    /// check yet).
+    #[allow(dead_code)]
+    PhysicallyInvalid(anyhow::Error),
+    /// Stopped by Ctrl-C (exit 130).
+    Interrupted(anyhow::Error),
+}
+
+impl Failure {
+    /// The class of an error: an [`Unsolved`] in its chain by its status, anything else
+    /// bad input.
+    pub fn classify(e: anyhow::Error) -> Self {
+        let Some(u) = e.chain().find_map(|c| c.downcast_ref::<Unsolved>()) else { return Failure::Input(e) };
+        match &u.status {
+            SqpStatus::Infeasible => Failure::Infeasible(e),
+            SqpStatus::Interrupted => Failure::Interrupted(e),
+            // the start could not be evaluated: the problem as given is broken
+            SqpStatus::EvaluationFailure(_) if u.at_start => Failure::Input(e),
+            _ => Failure::NotConverged(e),
+        }
+    }
+
+    /// The process exit code.
+    pub fn code(&self) -> u8 {
+        match self {
+            Failure::Input(_) => 1,
+            Failure::NotConverged(_) => 3,
+            Failure::Infeasible(_) => 4,
+            Failure::PhysicallyInvalid(_) => 5,
+            Failure::Interrupted(_) => 130,
+        }
+    }
+
+    fn error(&self) -> &anyhow::Error {
+        match self {
+            Failure::Input(e) | Failure::NotConverged(e) | Failure::Infeasible(e) | Failure::PhysicallyInvalid(e) | Failure::Interrupted(e) => e,
+        }
+    }
+}
+
+/// A solve that stopped without converging; its status picks the exit code.
+#[derive(Debug, thiserror::Error)]
+#[error("{message}")]
+pub struct Unsolved {
+    /// Why the solver stopped.
+    pub status: SqpStatus,
+    /// Whether it stopped at the initial point, before any iteration.
+    pub at_start: bool,
+    /// What to print.
+    pub message: String,
+}
+
+impl Unsolved {
+    /// The error of a solve that ended with `res` (None when it converged); `written`
+    /// names the run folder.
+    pub fn check(res: &footfall::sqp::SqpResult, written: &std::path::Path) -> anyhow::Result<()> {
+        if res.status == SqpStatus::Converged {
+            return Ok(());
+        }
+        Err(Unsolved {
+            status: res.status.clone(),
+            at_start: res.history.is_empty(),
+            message: format!("the solver stopped without converging: {} (results written to {})", res.status, written.display()),
+        }
+        .into())
+    }
 }
 
 pub fn main() -> ExitCode {
@@ -98,9 +185,9 @@ pub fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
-        Err(Failure::User(e)) => {
-            eprintln!("error: {}", render_chain(&e));
-            ExitCode::from(1)
+        Err(f) => {
+            eprintln!("error: {}", render_chain(f.error()));
+            ExitCode::from(f.code())
         }
     }
 }
@@ -137,3 +224,26 @@ pub fn load_data(path: Option<&std::path::Path>) -> anyhow::Result<footfall::dat
 }
 
 pub use session::solve_interruptibly;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn code(status: SqpStatus, at_start: bool) -> u8 {
+        let e = anyhow::Error::new(Unsolved { status, at_start, message: String::new() }).context("wrapped");
+        Failure::classify(e).code()
+    }
+
+    #[test]
+    fn the_solver_status_picks_the_exit_code() {
+        assert_eq!(code(SqpStatus::MaxIterations, false), 3);
+        assert_eq!(code(SqpStatus::MaxTime, false), 3);
+        assert_eq!(code(SqpStatus::LineSearchFailure, false), 3);
+        assert_eq!(code(SqpStatus::QpFailure("x".into()), false), 3);
+        assert_eq!(code(SqpStatus::EvaluationFailure("x".into()), false), 3);
+        assert_eq!(code(SqpStatus::EvaluationFailure("x".into()), true), 1);
+        assert_eq!(code(SqpStatus::Infeasible, false), 4);
+        assert_eq!(code(SqpStatus::Interrupted, false), 130);
+        assert_eq!(Failure::classify(anyhow::anyhow!("bad file")).code(), 1);
+    }
+}

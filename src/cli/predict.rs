@@ -14,7 +14,7 @@ use footfall::problems::predict::{PredictionSettings, PredictionSetup, SEED_IMPU
 use footfall::problems::track::TrackingSetup;
 use footfall::report::html::Section;
 use footfall::runfolder::RunFolder;
-use footfall::sqp::{ExactConvexification, SqpResult, SqpSettings, SqpStatus};
+use footfall::sqp::{ExactConvexification, SqpResult, SqpSettings};
 use std::path::{Path, PathBuf};
 
 /// Options shared by `predict` and `compare`.
@@ -33,34 +33,34 @@ pub struct PredictOptions {
     #[arg(long)]
     pub speed: Option<f64>,
     /// Impulse weight w_Δ of eq. 21.
-    #[arg(long, default_value_t = SEED_IMPULSE_WEIGHT)]
+    #[arg(long, default_value_t = SEED_IMPULSE_WEIGHT, value_parser = super::validate::non_negative)]
     pub impulse_weight: f64,
     /// Bound on |ankle angular velocity| (rad/s), replacing the data's range ± 1 rad/s
     /// (the seed's predictions: 14.6; its control experiment: 3.96).
-    #[arg(long)]
+    #[arg(long, value_parser = super::validate::positive)]
     pub ankle_velocity_limit: Option<f64>,
     /// Hessian: exact (default) or an approximation.
     #[arg(long, value_enum, default_value = "exact")]
     pub hessian: super::solve::HessianArg,
     /// KKT tolerance.
-    #[arg(long, default_value_t = 1e-5)]
+    #[arg(long, default_value_t = 1e-5, value_parser = super::validate::positive)]
     pub tol: f64,
     /// Relative and absolute CVODES tolerance of the shooting intervals.
-    #[arg(long, default_value_t = 1e-8)]
+    #[arg(long, default_value_t = 1e-8, value_parser = super::validate::positive)]
     pub integrator_tol: f64,
     /// With `--hessian exact`: Gauss–Newton steps until the constraint violation is below
     /// this (default: exact from the first iteration; the prediction's Gauss–Newton matrix
     /// has no curvature in positions, velocities and excitations).
-    #[arg(long, default_value_t = f64::INFINITY)]
+    #[arg(long, default_value_t = f64::INFINITY, value_parser = super::validate::threshold)]
     pub exact_below: f64,
     /// Iteration limit.
-    #[arg(long, default_value_t = 300)]
+    #[arg(long, default_value_t = 300, value_parser = super::validate::iterations)]
     pub max_iter: usize,
     /// Wall-time limit per solve (s).
-    #[arg(long)]
+    #[arg(long, value_parser = super::validate::positive)]
     pub max_time: Option<f64>,
     /// Report ground-force excursions above the measurement larger than this (N).
-    #[arg(long, default_value_t = DEFAULT_TRANSIENT_THRESHOLD_N)]
+    #[arg(long, default_value_t = DEFAULT_TRANSIENT_THRESHOLD_N, value_parser = super::validate::positive)]
     pub transient_threshold: f64,
 }
 
@@ -92,7 +92,7 @@ pub struct Args {
 }
 
 pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
-    run_inner(args, quiet).map_err(Failure::User)
+    run_inner(args, quiet).map_err(Failure::classify)
 }
 
 fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
@@ -102,7 +102,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     finish(&out, &res, quiet)
 }
 
-/// Print the outcome and map a solve that did not converge to an error.
+/// Print the outcome; a solve that did not converge is an [`Unsolved`](super::Unsolved) error.
 pub fn finish(out: &GaitRunOutput, res: &SqpResult, quiet: bool) -> anyhow::Result<()> {
     if !quiet {
         eprintln!("{}\n{}: J = {:.6}, KKT {:.2e}, {} iterations, {:.1} s", out.table.to_markdown(), res.status, res.objective, res.kkt, res.history.len().saturating_sub(1), res.seconds);
@@ -115,11 +115,7 @@ pub fn finish(out: &GaitRunOutput, res: &SqpResult, quiet: bool) -> anyhow::Resu
         }
         eprintln!("report: {}", out.path.join("report.html").display());
     }
-    if res.status == SqpStatus::Converged {
-        Ok(())
-    } else {
-        Err(anyhow!("the solver stopped without converging: {} (results written to {})", res.status, out.path.display()))
-    }
+    super::Unsolved::check(res, &out.path)
 }
 
 /// A solution from a run folder (`solution.json` inside) or a solution file.
@@ -169,9 +165,6 @@ pub fn predict(
     let cycle = GaitCycle::new(&model, &setup.seq, &sets).map_err(|e| anyhow!(e))?;
     let integrator = IntegratorSettings { rtol: o.integrator_tol, atol: o.integrator_tol, ..Default::default() };
     integrator.validate().context("--integrator-tol")?;
-    if !(o.transient_threshold.is_finite() && o.transient_threshold > 0.0) {
-        bail!("--transient-threshold {}: need a positive force (N)", o.transient_threshold);
-    }
     let ocp = setup.ocp(&cycle, &model, &sets, integrator.clone()).map_err(|e| anyhow!(e))?;
     let tr = Transcription::new(&ocp).context("transcribing the prediction problem")?;
     let (_, _, w0) = tr.variable_bounds_and_guess();

@@ -24,7 +24,7 @@ pub struct Args {
     #[arg(long)]
     overwrite: bool,
     /// Report ground-force excursions above the measurement larger than this (N).
-    #[arg(long, default_value_t = super::gait_run::DEFAULT_TRANSIENT_THRESHOLD_N)]
+    #[arg(long, default_value_t = super::gait_run::DEFAULT_TRANSIENT_THRESHOLD_N, value_parser = super::validate::positive)]
     transient_threshold: f64,
 }
 
@@ -58,7 +58,7 @@ fn read_record(run: &Path) -> anyhow::Result<SolverRecord> {
 }
 
 pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
-    run_inner(args, quiet).map_err(Failure::User)
+    run_inner(args, quiet).map_err(Failure::classify)
 }
 
 fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {

@@ -39,13 +39,13 @@ pub struct Args {
     #[arg(long)]
     overwrite: bool,
     /// Output grid step (s).
-    #[arg(long, default_value_t = 0.001)]
+    #[arg(long, default_value_t = 0.001, value_parser = super::validate::positive)]
     dt: f64,
     /// Do not project the initial state onto the first phase's contact constraints.
     #[arg(long)]
     no_project: bool,
     /// Relative and absolute integrator tolerance.
-    #[arg(long, default_value_t = 1e-8)]
+    #[arg(long, default_value_t = 1e-8, value_parser = super::validate::positive)]
     tol: f64,
 }
 
@@ -59,7 +59,7 @@ pub fn foot_path(arg: &str) -> PathBuf {
 }
 
 pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
-    run_inner(args, quiet).map_err(Failure::User)
+    run_inner(args, quiet).map_err(Failure::classify)
 }
 
 fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {

@@ -7,7 +7,7 @@ use footfall::benchmarks::read_problem_json;
 use footfall::integrate::{IntegratorSettings, Method};
 use footfall::ocp::{Block, Transcription};
 use footfall::problems::benchmark::Benchmark;
-use footfall::sqp::{HessianMode, SqpSettings, SqpStatus};
+use footfall::sqp::{HessianMode, SqpSettings};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -64,13 +64,13 @@ pub struct Args {
     #[arg(long)]
     warm_start: Option<PathBuf>,
     /// KKT tolerance.
-    #[arg(long, default_value_t = 1e-6)]
+    #[arg(long, default_value_t = 1e-6, value_parser = super::validate::positive)]
     tol: f64,
     /// Iteration limit.
-    #[arg(long, default_value_t = 200)]
+    #[arg(long, default_value_t = 200, value_parser = super::validate::iterations)]
     max_iter: usize,
     /// Wall-time limit (s).
-    #[arg(long)]
+    #[arg(long, value_parser = super::validate::positive)]
     max_time: Option<f64>,
     /// CVODES method for the shooting intervals.
     #[arg(long, value_enum, default_value = "adams")]
@@ -81,7 +81,7 @@ pub struct Args {
 }
 
 pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
-    run_inner(args, quiet).map_err(Failure::User)
+    run_inner(args, quiet).map_err(Failure::classify)
 }
 
 fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
@@ -113,9 +113,6 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         w0 = w;
     }
     let hessian = args.hessian.map_or(HessianMode::Exact, HessianMode::from);
-    if !(args.tol.is_finite() && args.tol > 0.0) {
-        return Err(anyhow!("--tol must be a positive number, got {}", args.tol));
-    }
     let settings = SqpSettings { tol_kkt: args.tol, max_iter: args.max_iter, max_time: args.max_time, hessian, ..Default::default() };
     let folder = super::session::create_checkpointed_run_folder(&args.out, args.overwrite)?;
     if !quiet {
@@ -202,9 +199,5 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
             eprintln!("  violated: {} by {:.3e}", v.name, v.amount);
         }
     }
-    if res.status == SqpStatus::Converged {
-        Ok(())
-    } else {
-        Err(anyhow!("the solver stopped without converging: {} (results written to {})", res.status, out.display()))
-    }
+    super::Unsolved::check(&res, &out)
 }

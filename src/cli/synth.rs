@@ -30,22 +30,22 @@ pub struct Args {
     #[arg(long)]
     phases: Option<PathBuf>,
     /// Sampling rate (Hz).
-    #[arg(long, default_value_t = 100.0)]
+    #[arg(long, default_value_t = 100.0, value_parser = super::validate::positive)]
     rate: f64,
     /// Length of the trial in half cycles of the solution.
     #[arg(long, default_value_t = 5.0)]
     half_cycles: f64,
     /// Noise standard deviation of the joint and pelvis angles (degrees).
-    #[arg(long, default_value_t = 0.5)]
+    #[arg(long, default_value_t = 0.5, value_parser = super::validate::non_negative)]
     noise_angle_deg: f64,
     /// Noise standard deviation of the pelvis position (mm).
-    #[arg(long, default_value_t = 2.0)]
+    #[arg(long, default_value_t = 2.0, value_parser = super::validate::non_negative)]
     noise_position_mm: f64,
     /// Noise standard deviation of the ground forces (N).
-    #[arg(long, default_value_t = 5.0)]
+    #[arg(long, default_value_t = 5.0, value_parser = super::validate::non_negative)]
     noise_force_n: f64,
     /// Noise standard deviation of the centre of pressure (mm).
-    #[arg(long, default_value_t = 5.0)]
+    #[arg(long, default_value_t = 5.0, value_parser = super::validate::non_negative)]
     noise_cop_mm: f64,
     /// Seed of the noise generator.
     #[arg(long, default_value_t = 1)]
@@ -66,15 +66,10 @@ pub struct Args {
 }
 
 pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
-    run_inner(args, quiet).map_err(Failure::User)
+    run_inner(args, quiet).map_err(Failure::classify)
 }
 
 fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
-    for (name, v) in [("--noise-angle-deg", args.noise_angle_deg), ("--noise-position-mm", args.noise_position_mm), ("--noise-force-n", args.noise_force_n), ("--noise-cop-mm", args.noise_cop_mm)] {
-        if !(v.is_finite() && v >= 0.0) {
-            bail!("{name} {v}: a standard deviation must be finite and ≥ 0");
-        }
-    }
     if !(args.half_cycles.is_finite() && args.half_cycles >= 2.5) {
         bail!("--half-cycles {}: need at least 2.5 (a gait cycle plus margins for the event search)", args.half_cycles);
     }
@@ -106,7 +101,12 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         let settings = super::track::tracking_sqp_settings(1e-5, 200, None, footfall::sqp::HessianMode::Exact, 1e-3);
         let (res, sol) = prob.solve(&settings, quiet)?;
         if res.status != footfall::sqp::SqpStatus::Converged {
-            bail!("the model with the hidden effect did not converge on the --from run's data: {}", res.status);
+            return Err(super::Unsolved {
+                status: res.status.clone(),
+                at_start: res.history.is_empty(),
+                message: format!("the model with the hidden effect did not converge on the --from run's data: {}", res.status),
+            }
+            .into());
         }
         solution = sol;
         phases = run.phases.clone();

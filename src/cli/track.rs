@@ -33,7 +33,7 @@ pub struct Args {
     data: Option<PathBuf>,
     /// Low-pass the measured coordinates at this cutoff (Hz; zero-phase 2nd-order
     /// Butterworth) before tracking, for raw motion-capture data.
-    #[arg(long)]
+    #[arg(long, value_parser = super::validate::positive)]
     kinematics_cutoff: Option<f64>,
     /// Output folder.
     #[arg(long, default_value = "runs/track")]
@@ -49,27 +49,27 @@ pub struct Args {
     #[arg(long, value_enum, default_value = "exact")]
     hessian: super::solve::HessianArg,
     /// KKT tolerance.
-    #[arg(long, default_value_t = 1e-5)]
+    #[arg(long, default_value_t = 1e-5, value_parser = super::validate::positive)]
     tol: f64,
     /// Relative and absolute CVODES tolerance of the shooting intervals.
-    #[arg(long, default_value_t = 1e-8)]
+    #[arg(long, default_value_t = 1e-8, value_parser = super::validate::positive)]
     integrator_tol: f64,
     /// CVODES tolerance of the forward sensitivities (default: the states'; with a heel
     /// pad, whose states are integrated at 1e-10, `--integrator-tol`). The KKT residual is
     /// computed from them: tighten it if a fit stalls just above `--tol`.
-    #[arg(long)]
+    #[arg(long, value_parser = super::validate::positive)]
     sensitivity_tol: Option<f64>,
     /// With `--hessian exact`: Gauss–Newton steps until the constraint violation is below this.
-    #[arg(long, default_value_t = 1e-3)]
+    #[arg(long, default_value_t = 1e-3, value_parser = super::validate::threshold)]
     exact_below: f64,
     /// Iteration limit.
-    #[arg(long, default_value_t = 200)]
+    #[arg(long, default_value_t = 200, value_parser = super::validate::iterations)]
     max_iter: usize,
     /// Wall-time limit (s).
-    #[arg(long)]
+    #[arg(long, value_parser = super::validate::positive)]
     max_time: Option<f64>,
     /// Report ground-force excursions above the measurement larger than this (N).
-    #[arg(long, default_value_t = super::gait_run::DEFAULT_TRANSIENT_THRESHOLD_N)]
+    #[arg(long, default_value_t = super::gait_run::DEFAULT_TRANSIENT_THRESHOLD_N, value_parser = super::validate::positive)]
     transient_threshold: f64,
     /// Add an effect and identify its parameters: `NAME[:key=value,…]`, e.g.
     /// `ground_slope`, `passive_joint_stiffness:joint=knee`, `cop_offset:offset=0.01,free=`
@@ -90,7 +90,7 @@ pub struct Args {
     /// Weight of the excitation² and activation² regularisation terms (default: the
     /// seed's 1e-3). Smaller weights let effort-costly parameters (slope, trunk mass)
     /// move further from zero.
-    #[arg(long)]
+    #[arg(long, value_parser = super::validate::non_negative)]
     regularisation: Option<f64>,
     /// Read each phase's node targets from its own samples, so a node on a contact change
     /// gets the limit from its phase's side instead of an average across the jump a rigid
@@ -116,7 +116,7 @@ pub struct Args {
     /// Weight of the angular-velocity targets relative to the angles (default: the seed's
     /// 0.1; 0 drops them). The targets differentiate the smoothed angles, so they carry
     /// the filter's bias and its low-passed noise, which a fit can follow.
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, allow_negative_numbers = true, value_parser = super::validate::non_negative)]
     velocity_weight: Option<f64>,
     /// Start from the solution of a track run (its folder or solution.json) of the same
     /// phase graph instead of the data; effect parameters it identified start at its
@@ -486,7 +486,7 @@ pub fn parameter_table(params: &[IdentifiedParameter]) -> footfall::report::tabl
 }
 
 pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
-    run_inner(args, quiet).map_err(Failure::User)
+    run_inner(args, quiet).map_err(Failure::classify)
 }
 
 fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
@@ -533,11 +533,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     let settings = tracking_sqp_settings(args.tol, args.max_iter, args.max_time, hessian, args.exact_below);
     let folder = super::session::create_checkpointed_run_folder(&args.out, args.overwrite)?;
     let run = prob.solve_and_write(&base, &extra, &settings, folder, args.transient_threshold, quiet)?;
-    if run.converged {
-        Ok(())
-    } else {
-        Err(anyhow!("the solver stopped without converging: {} (results written to {})", run.result.status, run.output.path.display()))
-    }
+    super::Unsolved::check(&run.result, &run.output.path)
 }
 
 impl TrackingProblem {

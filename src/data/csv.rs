@@ -489,6 +489,12 @@ fn parse_sagittal_csv(
         });
     }
 
+    // ground forces beyond any walker's (forces are always in N)
+    for &j in side_cols.iter().flatten().flat_map(|c| &c[3..5]) {
+        if let Some(k) = table[j].iter().position(|v| v.abs() > crate::limits::MAX_FORCE) {
+            return Err(DataError::OutOfRange { path: p, row: rows[k], column: cols[j].clone(), value: table[j][k], limit: crate::limits::MAX_FORCE, unit: "N" });
+        }
+    }
     // NaN only in cop_x_* while unloaded.
     let cop_cols: Vec<(usize, usize)> = side_cols.iter().flatten().map(|c| (c[5], c[4])).collect();
     for (j, col) in table.iter().enumerate() {
@@ -504,8 +510,10 @@ fn parse_sagittal_csv(
                         continue;
                     }
                     format!(
-                        "CoP is NaN while {} = {fy} N ≥ {cop_threshold} N (CoP may be NaN only while the foot is unloaded)",
-                        cols[fyc]
+                        "CoP is NaN while {} = {} N ≥ {} N (CoP may be NaN only while the foot is unloaded)",
+                        cols[fyc],
+                        crate::limits::show(fy),
+                        crate::limits::show(cop_threshold)
                     )
                 }
                 _ => format!(

@@ -101,6 +101,23 @@ pub enum DataError {
         /// What the value is and why it is not allowed.
         reason: String,
     },
+    /// A value is beyond what the column can physically hold (e.g. a ground force above
+    /// [`crate::limits::MAX_FORCE`]).
+    #[error("{path}: line {row}, column '{column}': {} {unit} is beyond the sensible limit; expected a magnitude of at most {} {unit}", crate::limits::show(*value), crate::limits::show(*limit))]
+    OutOfRange {
+        /// File.
+        path: PathBuf,
+        /// Line (1-based).
+        row: usize,
+        /// Column name.
+        column: String,
+        /// The value.
+        value: f64,
+        /// The largest magnitude allowed.
+        limit: f64,
+        /// Unit of both.
+        unit: &'static str,
+    },
     /// Time does not increase strictly from one row to the next.
     #[error("{path}: line {row}: time {time} s does not increase (previous row: {previous} s)")]
     NonMonotonicTime {
@@ -128,7 +145,7 @@ pub enum DataError {
         reason: String,
     },
     /// No foot's normal force ever exceeds the contact threshold: the trial has no stance.
-    #[error("{path}: no stance phase: no normal force exceeds the threshold {threshold} N (peak normal force {peak} N)")]
+    #[error("{path}: no stance phase: no normal force exceeds the threshold {} N (peak normal force {} N)", crate::limits::show(*threshold), crate::limits::show(*peak))]
     NoStance {
         /// File.
         path: PathBuf,
@@ -169,6 +186,7 @@ impl DataError {
             | DataError::RowLength { path, .. }
             | DataError::Parse { path, .. }
             | DataError::NotFinite { path, .. }
+            | DataError::OutOfRange { path, .. }
             | DataError::NonMonotonicTime { path, .. }
             | DataError::Units { path, .. }
             | DataError::NoStance { path, .. }
@@ -187,6 +205,7 @@ impl DataError {
             | DataError::RowLength { row, .. }
             | DataError::Parse { row, .. }
             | DataError::NotFinite { row, .. }
+            | DataError::OutOfRange { row, .. }
             | DataError::NonMonotonicTime { row, .. } => Some(*row),
             DataError::Units { row, .. } => *row,
             _ => None,
@@ -200,6 +219,7 @@ impl DataError {
             | DataError::DuplicateColumn { column, .. }
             | DataError::Parse { column, .. }
             | DataError::NotFinite { column, .. }
+            | DataError::OutOfRange { column, .. }
             | DataError::Units { column, .. } => Some(column),
             DataError::Invalid { field, .. } => Some(field),
             _ => None,

@@ -8,6 +8,7 @@
 use super::effects::EffectSpec;
 use super::error::ModelError;
 use super::geometry::Shape;
+use crate::limits::{show, MAX_GRAVITY, MAX_HEIGHT, MAX_INERTIA, MAX_MASS, MAX_SEGMENT_EXTENT};
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -633,7 +634,21 @@ fn check_positive(path: &Path, field: &str, v: f64, unit: &str) -> Result<(), Mo
         Err(ModelError::invalid(
             path,
             field,
-            format!("must be a positive finite number ({unit}), got {v}"),
+            format!("must be a positive finite number ({unit}), got {}", show(v)),
+        ))
+    }
+}
+
+/// `v` must be in (0, `max`]: beyond it a value is physically absurd.
+fn check_at_most(path: &Path, field: &str, v: f64, max: f64, unit: &str) -> Result<(), ModelError> {
+    check_positive(path, field, v, unit)?;
+    if v <= max {
+        Ok(())
+    } else {
+        Err(ModelError::invalid(
+            path,
+            field,
+            format!("{} {unit} is beyond the sensible limit; expected a value in (0, {}] {unit}", show(v), show(max)),
         ))
     }
 }
@@ -650,11 +665,25 @@ fn check_finite(path: &Path, field: &str, v: &[f64]) -> Result<(), ModelError> {
     }
 }
 
+/// A position in a segment frame: finite and within [`MAX_SEGMENT_EXTENT`] of the origin.
+fn check_position(path: &Path, field: &str, v: &[f64; 2]) -> Result<(), ModelError> {
+    check_finite(path, field, v)?;
+    if v.iter().all(|x| x.abs() <= MAX_SEGMENT_EXTENT) {
+        Ok(())
+    } else {
+        Err(ModelError::invalid(
+            path,
+            field,
+            format!("[{}, {}] m is beyond the sensible limit; expected coordinates within ±{MAX_SEGMENT_EXTENT} m of the frame's origin", show(v[0]), show(v[1])),
+        ))
+    }
+}
+
 impl SegmentSpec {
     fn validate(&self, path: &Path, field: &str) -> Result<(), ModelError> {
-        check_positive(path, &format!("{field}.mass"), self.mass, "kg")?;
-        check_positive(path, &format!("{field}.izz"), self.izz, "kg·m²")?;
-        check_finite(path, &format!("{field}.com"), &self.com)
+        check_at_most(path, &format!("{field}.mass"), self.mass, MAX_MASS, "kg")?;
+        check_at_most(path, &format!("{field}.izz"), self.izz, MAX_INERTIA, "kg·m²")?;
+        check_position(path, &format!("{field}.com"), &self.com)
     }
 }
 
@@ -665,9 +694,9 @@ impl Segments {
         self.thigh.validate(path, "body.segments.thigh")?;
         self.shank.validate(path, "body.segments.shank")?;
         self.foot.validate(path, "body.segments.foot")?;
-        check_finite(path, "body.segments.hip_in_pelvis", &self.hip_in_pelvis)?;
-        check_finite(path, "body.segments.knee_in_thigh", &self.knee_in_thigh)?;
-        check_finite(path, "body.segments.ankle_in_shank", &self.ankle_in_shank)
+        check_position(path, "body.segments.hip_in_pelvis", &self.hip_in_pelvis)?;
+        check_position(path, "body.segments.knee_in_thigh", &self.knee_in_thigh)?;
+        check_position(path, "body.segments.ankle_in_shank", &self.ankle_in_shank)
     }
 
     /// Total body mass (kg): HAT plus two legs.
@@ -686,11 +715,11 @@ impl ModelSpec {
 
     /// Check values that serde cannot.
     pub fn validate(&self, path: &Path) -> Result<(), ModelError> {
-        check_positive(path, "gravity", self.gravity, "m/s²")?;
+        check_at_most(path, "gravity", self.gravity, MAX_GRAVITY, "m/s²")?;
         match &self.body {
             BodySpec::DeLeva { mass, height, .. } => {
-                check_positive(path, "body.mass", *mass, "kg")?;
-                check_positive(path, "body.height", *height, "m")?;
+                check_at_most(path, "body.mass", *mass, MAX_MASS, "kg")?;
+                check_at_most(path, "body.height", *height, MAX_HEIGHT, "m")?;
             }
             BodySpec::Explicit { segments } => segments.validate(path)?,
             BodySpec::OpensimModel { file, .. } => {
@@ -719,10 +748,10 @@ impl ModelSpec {
                 subject_height,
             } => {
                 if let Some(m) = subject_mass {
-                    check_positive(path, "actuators.subject_mass", *m, "kg")?;
+                    check_at_most(path, "actuators.subject_mass", *m, MAX_MASS, "kg")?;
                 }
                 if let Some(h) = subject_height {
-                    check_positive(path, "actuators.subject_height", *h, "m")?;
+                    check_at_most(path, "actuators.subject_height", *h, MAX_HEIGHT, "m")?;
                 }
                 check_positive(
                     path,

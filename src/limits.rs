@@ -1,0 +1,31 @@
+//! Limits beyond which an input value is refused as physically absurd, and a compact
+//! number format for messages that quote such values.
+
+/// Largest gravity (m/s²): ten times the Earth's.
+pub const MAX_GRAVITY: f64 = 100.0;
+/// Largest body or segment mass (kg).
+pub const MAX_MASS: f64 = 1000.0;
+/// Largest stature (m).
+pub const MAX_HEIGHT: f64 = 3.0;
+/// Largest segment moment of inertia (kg·m²).
+pub const MAX_INERTIA: f64 = 100.0;
+/// Largest distance of a segment's centre of mass or joint from its frame's origin (m).
+pub const MAX_SEGMENT_EXTENT: f64 = 10.0;
+/// Largest measured ground-force component (N): about 100 body weights.
+pub const MAX_FORCE: f64 = 1e5;
+/// Most shooting intervals in one phase.
+pub const MAX_INTERVALS: usize = 10_000;
+/// Most SQP (or Nelder–Mead) iterations a command accepts.
+pub const MAX_ITERATIONS: usize = 100_000;
+
+/// `v` as plain decimal when that is short (1e-4 ≤ |v| < 1e6, or 0), else in
+/// scientific notation: `1e308` never becomes 309 digits.
+pub fn show(v: f64) -> String {
+    let a = v.abs();
+    if v == 0.0 || !v.is_finite() || (1e-4..1e6).contains(&a) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
+}
+
