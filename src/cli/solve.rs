@@ -3,7 +3,6 @@
 
 use super::Failure;
 use anyhow::{anyhow, Context};
-use footfall::benchmarks::read_problem_json;
 use footfall::integrate::{IntegratorSettings, Method};
 use footfall::ocp::{Block, Transcription};
 use footfall::problems::benchmark::Benchmark;
@@ -82,8 +81,7 @@ pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
 }
 
 fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
-    let json = read_problem_json(&args.problem).map_err(|e| anyhow!(e))?;
-    let bench = Benchmark::from_json(json).map_err(|e| anyhow!("{}: {e}", args.problem.display()))?;
+    let bench = Benchmark::load(&args.problem)?;
     let method = match args.integrator {
         MethodArg::Adams => Method::Adams,
         MethodArg::Bdf => Method::Bdf,
