@@ -6,7 +6,7 @@
 //! panic, done within 10 s, and either a successful load (whose object then works once)
 //! or an error whose message names the file. The RNG seed is fixed, so a run is
 //! reproducible; `FOOTFALL_FUZZ_CASES` sets the cases per library target (the CLI target
-//! runs a tenth of them). Inputs that once failed live in `tests/data/fuzz/regressions/`
+//! runs a tenth of them) and `FOOTFALL_FUZZ_SEED` (any text) picks other cases. Inputs that once failed live in `tests/data/fuzz/regressions/`
 //! and are replayed by every run. A failing case is written to
 //! `target/fuzz-failures/<target>/` after shrinking.
 
@@ -72,7 +72,8 @@ fn keep_failure(target: &str, name: &str, bytes: &[u8]) -> PathBuf {
     p
 }
 
-/// A fixed RNG per target, so that CI runs the same cases every time.
+/// A fixed RNG per target, so that CI runs the same cases every time;
+/// `FOOTFALL_FUZZ_SEED` (any text) picks other cases for a long run.
 fn runner(name: &str, cases: u32) -> TestRunner {
     let config = Config {
         cases,
@@ -83,7 +84,8 @@ fn runner(name: &str, cases: u32) -> TestRunner {
         ..Config::default()
     };
     let mut key = [0u8; 32];
-    for (k, b) in name.bytes().enumerate() {
+    let extra = std::env::var("FOOTFALL_FUZZ_SEED").unwrap_or_default();
+    for (k, b) in name.bytes().chain([0]).chain(extra.bytes()).enumerate() {
         key[k % 32] ^= b;
     }
     TestRunner::new_with_rng(config, TestRng::from_seed(RngAlgorithm::ChaCha, &key))
