@@ -3,7 +3,6 @@
 
 use super::Failure;
 use anyhow::{anyhow, Context};
-use footfall::benchmarks::read_problem_json;
 use footfall::integrate::{IntegratorSettings, Method};
 use footfall::ocp::{Block, Transcription};
 use footfall::problems::benchmark::Benchmark;
@@ -87,8 +86,7 @@ pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
 fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     // clap requires --problem unless --resume, which main replaces by the killed run's options
     let problem = args.problem.clone().ok_or_else(|| anyhow!("--problem is required"))?;
-    let json = read_problem_json(&problem).map_err(|e| anyhow!(e))?;
-    let bench = Benchmark::from_json(json).map_err(|e| anyhow!("{}: {e}", problem.display()))?;
+    let bench = Benchmark::load(&problem)?;
     let method = match args.integrator {
         MethodArg::Adams => Method::Adams,
         MethodArg::Bdf => Method::Bdf,

@@ -7,7 +7,37 @@ use crate::benchmarks::{biped, CartPole, FiveLinkBiped};
 use crate::integrate::{ControlShape, IntegratorSettings};
 use crate::ocp::{Block, Constraint, Ocp, Phase, PhaseDuration, Term};
 use serde_json::Value;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
+
+/// Why a problem file was refused; every variant names the file.
+#[derive(Debug, thiserror::Error)]
+pub enum ProblemError {
+    /// The file could not be read.
+    #[error("cannot read problem file {path}: {source}")]
+    Io {
+        /// File.
+        path: PathBuf,
+        /// Cause.
+        source: std::io::Error,
+    },
+    /// The file is not valid JSON.
+    #[error("problem file {path} is not valid JSON: {source}")]
+    Json {
+        /// File.
+        path: PathBuf,
+        /// Cause (with line and column).
+        source: serde_json::Error,
+    },
+    /// The problem is unknown or a field is missing or invalid.
+    #[error("{path}: {reason}")]
+    Invalid {
+        /// File.
+        path: PathBuf,
+        /// What is wrong (names the field).
+        reason: String,
+    },
+}
 
 /// A benchmark model with its problem definition.
 pub enum Benchmark {
@@ -29,6 +59,20 @@ pub enum Benchmark {
 
 fn num(v: &Value, ptr: &str) -> Result<f64, String> {
     v.pointer(ptr).and_then(Value::as_f64).ok_or_else(|| format!("field '{}' missing or not a number", ptr.trim_start_matches('/').replace('/', ".")))
+}
+
+/// Most shooting intervals a problem file may ask for: far more than any of these problems
+/// needs, and few enough that the transcription's vectors can be allocated.
+pub const MAX_INTERVALS: usize = 100_000;
+
+/// The number of shooting intervals `discretization.N`: a whole number from 1 to
+/// [`MAX_INTERVALS`].
+fn intervals(v: &Value) -> Result<usize, String> {
+    let n = num(v, "/discretization/N")?;
+    if !(n >= 1.0 && n <= MAX_INTERVALS as f64 && n.fract() == 0.0) {
+        return Err(format!("field 'discretization.N' must be a whole number of intervals from 1 to {MAX_INTERVALS}, got {n}"));
+    }
+    Ok(n as usize)
 }
 
 fn vecn(v: &Value, ptr: &str, len: usize) -> Result<Vec<f64>, String> {
@@ -57,6 +101,18 @@ fn bound(v: Vec<f64>, inf: f64) -> Vec<f64> {
 }
 
 impl Benchmark {
+    /// Read a problem file (e.g. `problems/cartpole_swingup.json`) and build its model;
+    /// the fields of the optimal control problem are checked too (by building it once), so
+    /// that [`ocp`](Self::ocp) succeeds on what this returns.
+    pub fn load(path: &Path) -> Result<Self, ProblemError> {
+        let text = std::fs::read_to_string(path).map_err(|source| ProblemError::Io { path: path.into(), source })?;
+        let json = serde_json::from_str(&text).map_err(|source| ProblemError::Json { path: path.into(), source })?;
+        let invalid = |reason| ProblemError::Invalid { path: path.into(), reason };
+        let bench = Self::from_json(json).map_err(invalid)?;
+        bench.ocp(IntegratorSettings::default()).map_err(invalid)?;
+        Ok(bench)
+    }
+
     /// Recognise the problem by its `name` and build its model.
     pub fn from_json(json: Value) -> Result<Self, String> {
         match json.get("name").and_then(Value::as_str) {
@@ -91,7 +147,7 @@ fn u_squared_terms(n: usize, nu: usize, h: f64) -> Vec<Term<'static>> {
 }
 
 fn cartpole<'a>(model: &'a CartPole, json: &Value, integrator: IntegratorSettings) -> Result<Ocp<'a>, String> {
-    let n = num(json, "/discretization/N")? as usize;
+    let n = intervals(json)?;
     let t = num(json, "/horizon/T")?;
     let xi = vecn(json, "/boundary/x_initial", 4)?;
     let xf = vecn(json, "/boundary/x_final", 4)?;
@@ -135,7 +191,7 @@ fn cartpole<'a>(model: &'a CartPole, json: &Value, integrator: IntegratorSetting
 
 fn five_link_biped<'a>(model: &'a FiveLinkBiped, json: &Value, integrator: IntegratorSettings) -> Result<Ocp<'a>, String> {
     use biped::{NQ, NU, NX};
-    let n = num(json, "/discretization/N")? as usize;
+    let n = intervals(json)?;
     let t = num(json, "/horizon/T")?;
     let step = num(json, "/parameters/step_length")?;
     let x_lb = vecn(json, "/bounds/x_lb", NX)?;
