@@ -13,6 +13,16 @@ pub const MAX_INERTIA: f64 = 100.0;
 pub const MAX_SEGMENT_EXTENT: f64 = 10.0;
 /// Largest measured ground-force component (N): about 100 body weights.
 pub const MAX_FORCE: f64 = 1e5;
+/// Largest ground height (m) from the model's origin.
+pub const MAX_GROUND_HEIGHT: f64 = 10.0;
+/// Largest Baumgarte stabilisation gain (1/s): stiffer than any sampling of a gait.
+pub const MAX_BAUMGARTE: f64 = 1e4;
+/// Largest MTG damping coefficient η (dimensionless; the seed uses 0.4 to 2).
+pub const MAX_ETA: f64 = 1e3;
+/// Largest magnitude of an initial generalised coordinate (m or rad).
+pub const MAX_COORDINATE: f64 = 100.0;
+/// Largest magnitude of an initial generalised velocity (m/s or rad/s).
+pub const MAX_VELOCITY: f64 = 1e3;
 /// Most shooting intervals in one phase.
 pub const MAX_INTERVALS: usize = 10_000;
 /// Most SQP (or Nelder–Mead) iterations a command accepts.

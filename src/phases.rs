@@ -2,7 +2,7 @@
 //! held for a duration) and instantaneous impact phases (the plastic impact map of the
 //! contacts that are active after it), seed 001 §3.3.
 
-use crate::limits::MAX_INTERVALS;
+use crate::limits::{show, MAX_COORDINATE, MAX_INTERVALS, MAX_VELOCITY};
 use crate::model::spec::read_json;
 use crate::model::{ConstraintSet, GaitModel, ModelError};
 use serde::{Deserialize, Serialize};
@@ -455,6 +455,14 @@ impl InitialState {
                     path,
                     format!("{field}.{name}[{k}]"),
                     "must be finite",
+                ));
+            }
+            let (limit, unit) = if name == "q" { (MAX_COORDINATE, "m or rad") } else { (MAX_VELOCITY, "m/s or rad/s") };
+            if let Some(k) = v.iter().position(|x| x.abs() > limit) {
+                return Err(ModelError::invalid(
+                    path,
+                    format!("{field}.{name}[{k}]"),
+                    format!("{} is beyond the sensible limit; expected a magnitude of at most {} {unit}", show(v[k]), show(limit)),
                 ));
             }
         }

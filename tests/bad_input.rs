@@ -912,6 +912,42 @@ fn initial_state_of_wrong_size_is_refused() {
     eprintln!("{msg}");
 }
 
+#[test]
+fn absurd_initial_state_is_refused_with_short_numbers() {
+    // found by tests/fuzz.rs: these loaded, and the dynamics then returned NaN
+    let d = Scratch::new();
+    for (q, qd, field, words) in [
+        ("[0,1e308,0,0,0,0,0,0,0]", "[0,0,0,0,0,0,0,0,0]", "initial_state.q[1]", ["1e308", "at most 100 m or rad"]),
+        ("[0,1,0,0,0,0,0,0,0]", "[0,0,0,-1e308,0,0,0,0,0]", "initial_state.qd[3]", ["-1e308", "at most 1000 m/s or rad/s"]),
+    ] {
+        let p = d.write(
+            "phases.json",
+            &PHASES.replace("\"name\": \"p\",", &format!("\"name\": \"p\", \"initial_state\": {{ \"q\": {q}, \"qd\": {qd} }},")),
+        );
+        let seq = PhaseSequence::load(&p).unwrap();
+        let msg = assert_invalid(seq.resolve(&reference_model(), &p).unwrap_err(), &p, field, &words);
+        assert!(msg.len() < 300, "{msg}");
+    }
+}
+
+#[test]
+fn absurd_contact_and_damping_values_are_refused() {
+    let d = Scratch::new();
+    for (extra, field, words) in [
+        (r#", "contact": { "ground_height": 1e308 }"#, "contact.ground_height", ["1e308 m", "±10 m"]),
+        (r#", "contact": { "baumgarte_beta": 1e308 }"#, "contact.baumgarte_beta", ["1e308", "[0, 10000] 1/s"]),
+    ] {
+        let m = d.write("model.json", &explicit_model(GOOD_THIGH, extra));
+        assert_invalid(ModelSpec::load(&m).unwrap_err(), &m, field, &words);
+    }
+    let m = d.write(
+        "mtg.json",
+        r#"{ "name": "x", "body": { "preset": "de_leva", "mass": 80.0, "height": 1.8, "sex": "male" },
+             "actuators": { "type": "muscle_torque_generators", "eta": 1e308 } }"#,
+    );
+    assert_invalid(ModelSpec::load(&m).unwrap_err(), &m, "actuators.eta", &["1e308", "[0, 1000]"]);
+}
+
 // ---------------------------------------------------------------------------------------
 // Control tables
 

@@ -8,7 +8,7 @@
 use super::effects::EffectSpec;
 use super::error::ModelError;
 use super::geometry::Shape;
-use crate::limits::{show, MAX_GRAVITY, MAX_HEIGHT, MAX_INERTIA, MAX_MASS, MAX_SEGMENT_EXTENT};
+use crate::limits::{show, MAX_BAUMGARTE, MAX_ETA, MAX_GRAVITY, MAX_GROUND_HEIGHT, MAX_HEIGHT, MAX_INERTIA, MAX_MASS, MAX_SEGMENT_EXTENT};
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -759,11 +759,11 @@ impl ModelSpec {
                     *strength_scale,
                     "dimensionless",
                 )?;
-                if !(eta.is_finite() && *eta >= 0.0) {
+                if !(eta.is_finite() && (0.0..=MAX_ETA).contains(eta)) {
                     return Err(ModelError::invalid(
                         path,
                         "actuators.eta",
-                        format!("must be finite and ≥ 0, got {eta}"),
+                        format!("must be in [0, {}] (the seed uses 0.4 to 2), got {}", show(MAX_ETA), show(*eta)),
                     ));
                 }
                 check_positive(path, "actuators.tau_activation", *tau_activation, "s")?;
@@ -775,16 +775,23 @@ impl ModelSpec {
         }
         let c = &self.contact;
         check_finite(path, "contact.ground_height", &[c.ground_height])?;
+        if c.ground_height.abs() > MAX_GROUND_HEIGHT {
+            return Err(ModelError::invalid(
+                path,
+                "contact.ground_height",
+                format!("{} m is beyond the sensible limit; expected a height within ±{} m of the model's origin", show(c.ground_height), show(MAX_GROUND_HEIGHT)),
+            ));
+        }
         for (f, v) in [
             ("contact.baumgarte_alpha", c.baumgarte_alpha),
             ("contact.baumgarte_beta", c.baumgarte_beta),
             ("contact.baumgarte_gamma", c.baumgarte_gamma),
         ] {
-            if !(v.is_finite() && v >= 0.0) {
+            if !(v.is_finite() && (0.0..=MAX_BAUMGARTE).contains(&v)) {
                 return Err(ModelError::invalid(
                     path,
                     f,
-                    format!("must be finite and ≥ 0 (1/s), got {v}"),
+                    format!("must be in [0, {}] 1/s, got {}", show(MAX_BAUMGARTE), show(v)),
                 ));
             }
         }
