@@ -97,6 +97,7 @@ fn infeasible_problem_stops_as_infeasible_and_names_the_constraint() {
             f: Arc::new(Linear::new(vec![1.0], 1)),
         }],
         samples: Vec::new(),
+        checks: Vec::new(),
         costs: vec![],
         integrator: IntegratorSettings::default(),
     };
@@ -260,6 +261,7 @@ fn integrated_cost_by_quadrature_state_matches_the_least_squares_form() {
         constraints: vec![],
         least_squares: vec![],
         samples: Vec::new(),
+        checks: Vec::new(),
         costs: vec![quadrature_cost(0, n, 4, 1)],
         integrator: settings,
     };

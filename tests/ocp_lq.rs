@@ -108,6 +108,7 @@ fn lq_problem_matches_discrete_riccati() {
         constraints: vec![],
         least_squares: ls,
         samples: Vec::new(),
+        checks: Vec::new(),
         costs: vec![],
         integrator: IntegratorSettings { rtol: 1e-12, atol: 1e-12, ..Default::default() },
     };

@@ -4,7 +4,7 @@
 //! residual.
 
 use footfall::integrate::{ControlShape, ControlledOde, IntegratorSettings, OdeError};
-use footfall::ocp::{Block, NodeFunction, Ocp, Phase, PhaseDuration, SampleTerm, Transcription};
+use footfall::ocp::{Block, CheckPoint, NodeFunction, Ocp, Phase, PhaseDuration, SampleTerm, Transcription};
 use std::sync::Arc;
 
 /// A driven, damped pendulum with the stiffness as the free parameter θ:
@@ -101,6 +101,7 @@ fn problem(ode: &Pendulum) -> Ocp<'_> {
         constraints: vec![],
         least_squares: vec![],
         samples: SAMPLES.iter().map(|&(interval, tau)| SampleTerm { name: "sample".into(), phase: 0, interval, tau, f: f.clone(), shift: None }).collect(),
+        checks: vec![],
         costs: vec![],
         integrator: IntegratorSettings { rtol: 1e-12, atol: 1e-12, ..Default::default() },
     }
@@ -363,4 +364,224 @@ fn a_shifted_sample_in_a_phase_of_free_duration_is_refused() {
     ocp.phases[0].duration = PhaseDuration { value: 0.9, lb: 0.5, ub: 2.0 };
     let e = Transcription::new(&ocp).err().map(|e| e.to_string()).unwrap_or_default();
     assert!(e.contains("sample term 'shifted'") && e.contains("fixed duration"), "{e}");
+}
+
+// ---------------------------------------------------------------------------------------
+// Check points: path constraints inside intervals (`Ocp::checks`)
+
+/// (interval, τ) of the check points; one shares its instant with a sample term, two
+/// share an instant with each other.
+const CHECKS: [(usize, f64); 4] = [(0, 0.3), (0, 0.65), (0, 0.65), (2, 0.4)];
+
+fn checked_problem(ode: &Pendulum) -> Ocp<'_> {
+    let f: Arc<dyn NodeFunction> = Arc::new(Residual);
+    Ocp {
+        checks: CHECKS
+            .iter()
+            .map(|&(interval, tau)| CheckPoint { name: "check".into(), phase: 0, interval, tau, f: f.clone(), lb: vec![2.5], ub: vec![f64::INFINITY] })
+            .collect(),
+        ..problem(ode)
+    }
+}
+
+#[test]
+fn check_points_match_an_independent_integration_with_exact_jacobians() {
+    let ode = Pendulum;
+    let ocp = checked_problem(&ode);
+    let tr = Transcription::new(&ocp).unwrap();
+    let plain_ocp = problem(&ode);
+    let plain = Transcription::new(&plain_ocp).unwrap();
+    assert_eq!(tr.m(), plain.m() + CHECKS.len());
+    let w = point(&tr);
+    let (lb, _) = tr.constraint_bounds();
+    let ev = tr.evaluate(&w, true).unwrap();
+    let evp = plain.evaluate(&w, true).unwrap();
+    // the check rows follow the others, in interval and τ order, with their bounds
+    let rows = plain.m()..tr.m();
+    assert!(lb[rows.clone()].iter().all(|&v| v == 2.5));
+    assert!(tr.labels()[rows.start].name.starts_with("check@τ=0.300"), "{:?}", tr.labels()[rows.start]);
+    // each value is the function at the RK4 state of its instant
+    for (row, (k, tau)) in rows.clone().zip(CHECKS) {
+        let expected = rk4_objective(&tr, &w, [(k, tau)]).sqrt();
+        assert!((ev.c[row] - expected).abs() < 1e-8, "check at ({k}, {tau}): {} against RK4's {expected}", ev.c[row]);
+    }
+    // the rest of the NLP is the same as without them (the samples share the pass)
+    assert!((ev.f - evp.f).abs() < 1e-10 * evp.f.abs(), "{} against {}", ev.f, evp.f);
+    for i in 0..plain.m() {
+        assert!((ev.c[i] - evp.c[i]).abs() < 1e-10, "row {i}: {} against {}", ev.c[i], evp.c[i]);
+    }
+    // the Jacobian rows against central differences of the values
+    let (jr, jc) = tr.jacobian_pattern();
+    let eps = 1e-6;
+    for i in 0..tr.n() {
+        let (mut wp, mut wm) = (w.clone(), w.clone());
+        wp[i] += eps;
+        wm[i] -= eps;
+        let (cp, cm) = (tr.evaluate(&wp, false).unwrap().c, tr.evaluate(&wm, false).unwrap().c);
+        for row in rows.clone() {
+            let fd = (cp[row] - cm[row]) / (2.0 * eps);
+            let exact: f64 = (0..jr.len()).filter(|&e| jr[e] == row && jc[e] == i).map(|e| ev.jac[e]).sum();
+            assert!((exact - fd).abs() < 1e-6 * (1.0 + fd.abs()), "∂c[{row}]/∂w[{i}]: {exact} against {fd}");
+        }
+    }
+    // and on the exact-Hessian path
+    let lambda = vec![0.1; tr.m()];
+    let (evh, _) = tr.evaluate_with_hessian(&w, &lambda).unwrap();
+    for row in rows {
+        assert!((evh.c[row] - ev.c[row]).abs() < 1e-10);
+    }
+    assert_eq!(evh.jac.len(), ev.jac.len());
+}
+
+#[test]
+fn a_check_point_at_a_node_or_outside_its_phase_is_refused() {
+    let ode = Pendulum;
+    for (interval, tau, words) in [(0, 1.0, "not in (0, 1)"), (0, 0.0, "not in (0, 1)"), (7, 0.5, "has no interval 7")] {
+        let f: Arc<dyn NodeFunction> = Arc::new(Residual);
+        let ocp = Ocp { checks: vec![CheckPoint { name: "c".into(), phase: 0, interval, tau, f, lb: vec![0.0], ub: vec![1.0] }], ..problem(&ode) };
+        let err = Transcription::new(&ocp).err().expect("refused").to_string();
+        assert!(err.contains(words), "{err}");
+    }
+}
+
+/// ẍ = u on a fixed horizon: a double integrator.
+struct DoubleIntegrator;
+
+impl ControlledOde for DoubleIntegrator {
+    fn nx(&self) -> usize {
+        2
+    }
+    fn nu(&self) -> usize {
+        1
+    }
+    fn ntheta(&self) -> usize {
+        0
+    }
+    fn f(&self, x: &[f64], u: &[f64], _: &[f64], xdot: &mut [f64]) -> Result<(), OdeError> {
+        xdot.copy_from_slice(&[x[1], u[0]]);
+        Ok(())
+    }
+    fn f_jac(&self, x: &[f64], u: &[f64], t: &[f64], xdot: &mut [f64], fx: &mut [f64], fu: &mut [f64], _: &mut [f64]) -> Result<(), OdeError> {
+        self.f(x, u, t, xdot)?;
+        fx.copy_from_slice(&[0.0, 0.0, 1.0, 0.0]);
+        fu.copy_from_slice(&[0.0, 1.0]);
+        Ok(())
+    }
+}
+
+/// `scale · (x₀ − target)`, or with `target` NaN the position itself: of `(x, u)` or
+/// `(x)` (the control, when given, has no effect).
+struct Position {
+    target: f64,
+    scale: f64,
+}
+
+impl NodeFunction for Position {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn eval(&self, z: &[f64], v: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), String> {
+        let t = if self.target.is_nan() { 0.0 } else { self.target };
+        v[0] = self.scale * (z[0] - t);
+        if let Some(j) = jac {
+            j.iter_mut().for_each(|e| *e = 0.0);
+            j[0] = self.scale;
+        }
+        Ok(())
+    }
+}
+
+#[test]
+fn check_points_remove_a_violation_between_the_nodes() {
+    // a cost that pulls the position to −1 in the middle of the second interval, against
+    // x ≥ 0 at the nodes: the optimum keeps the nodes on x = 0 and dips below it between
+    use footfall::sqp::{solve, Silent, SqpSettings, SqpStatus};
+    let ode = DoubleIntegrator;
+    let n = 4;
+    let inf = f64::INFINITY;
+    let mut x_lb = vec![vec![0.0, -inf]; n + 1];
+    let mut x_ub = vec![vec![inf, inf]; n + 1];
+    // start and end at rest at x = 1
+    x_lb[0] = vec![1.0, 0.0];
+    x_ub[0] = vec![1.0, 0.0];
+    x_lb[n] = vec![1.0, 0.0];
+    x_ub[n] = vec![1.0, 0.0];
+    let phase = |checks: bool| Phase {
+        name: if checks { "checked".into() } else { "plain".into() },
+        ode: &ode,
+        intervals: n,
+        duration: PhaseDuration::fixed(4.0),
+        controls: ControlShape::Constant,
+        x_lb: x_lb.clone(),
+        x_ub: x_ub.clone(),
+        u_lb: vec![vec![-10.0]; n],
+        u_ub: vec![vec![10.0]; n],
+        x_guess: vec![vec![1.0, 0.0]; n + 1],
+        u_guess: vec![vec![0.0]; n],
+    };
+    let pull: Arc<dyn NodeFunction> = Arc::new(Position { target: -1.0, scale: 1.0 });
+    let position: Arc<dyn NodeFunction> = Arc::new(Position { target: f64::NAN, scale: 1.0 });
+    let build = |checks: Vec<(usize, f64)>| Ocp {
+        phases: vec![phase(!checks.is_empty())],
+        transitions: vec![],
+        ntheta: 0,
+        theta_guess: vec![],
+        theta_lb: vec![],
+        theta_ub: vec![],
+        constraints: vec![],
+        least_squares: vec![],
+        samples: vec![SampleTerm { name: "pull".into(), phase: 0, interval: 1, tau: 0.5, f: pull.clone(), shift: None }],
+        checks: checks.into_iter().map(|(interval, tau)| CheckPoint { name: "x ≥ 0".into(), phase: 0, interval, tau, f: position.clone(), lb: vec![0.0], ub: vec![inf] }).collect(),
+        costs: vec![],
+        integrator: IntegratorSettings { rtol: 1e-10, atol: 1e-10, ..Default::default() },
+    };
+    // the smallest position on a fine grid of each interval, from an RK-free closed form:
+    // x(t) = x_k + v_k t + u_k t²/2 within interval k
+    let lowest = |tr: &Transcription, w: &[f64]| -> (f64, usize, f64) {
+        let mut worst = (f64::INFINITY, 0, 0.0);
+        for k in 0..n {
+            let s = tr.range(Block::State { phase: 0, node: k });
+            let u = w[tr.range(Block::Control { phase: 0, node: k }).start];
+            for i in 1..200 {
+                let t = i as f64 / 200.0;
+                let x = w[s.start] + w[s.start + 1] * t + u * t * t / 2.0;
+                if x < worst.0 {
+                    worst = (x, k, t);
+                }
+            }
+        }
+        worst
+    };
+    let settings = SqpSettings { tol_kkt: 1e-8, ..Default::default() };
+    let plain = build(vec![]);
+    let tr = Transcription::new(&plain).unwrap();
+    let (_, _, w0) = tr.variable_bounds_and_guess();
+    let res = solve(&tr, &w0, &settings, &mut Silent);
+    assert_eq!(res.status, SqpStatus::Converged);
+    let (low, k, tau) = lowest(&tr, &res.w);
+    // every node satisfies x ≥ 0, yet the trajectory dips below it between them
+    for node in 0..=n {
+        assert!(res.w[tr.range(Block::State { phase: 0, node }).start] >= -1e-8);
+    }
+    assert!(low < -0.05, "no violation between the nodes to remove: lowest x {low}");
+    eprintln!("without check points: lowest x {low:.4} at τ = {tau:.3} of interval {k}");
+    // refine: a check point where the fine grid is lowest in each violating interval,
+    // warm-started, until nothing on the fine grid is below −1e-6
+    let mut checks: Vec<(usize, f64)> = vec![(k, tau)];
+    let mut w = res.w.clone();
+    for round in 0..5 {
+        let ocp = build(checks.clone());
+        let tr = Transcription::new(&ocp).unwrap();
+        let res = solve(&tr, &w, &settings, &mut Silent);
+        assert_eq!(res.status, SqpStatus::Converged, "round {round}");
+        w = res.w;
+        let (low, k, tau) = lowest(&tr, &w);
+        if low >= -1e-6 {
+            eprintln!("{} check point(s), {} round(s); lowest x between the nodes {low:.2e}", checks.len(), round + 1);
+            assert!(round <= 3, "took {} rounds", round + 1);
+            return;
+        }
+        checks.push((k, tau));
+    }
+    panic!("the check points did not remove the violation: {checks:?}");
 }

@@ -5,10 +5,11 @@
 //! guess), transitions between phases (e.g. impact maps), constraints and cost terms as
 //! functions of node variables. [`Transcription`] turns it into a sparse NLP whose
 //! continuity constraints come from CVODES forward sensitivities.
+mod checks;
 pub mod problem;
 pub mod quadrature;
 pub mod transcription;
 
-pub use problem::{Block, Constraint, NodeFunction, Ocp, Phase, PhaseDuration, SampleTerm, Term};
+pub use problem::{Block, CheckPoint, Constraint, NodeFunction, Ocp, Phase, PhaseDuration, SampleTerm, Term};
 pub use quadrature::{quadrature_cost, Integrand, WithQuadrature};
 pub use transcription::{shifted_instant, Evaluation, RowLabel, Transcription, TranscriptionError};

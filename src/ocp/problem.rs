@@ -106,6 +106,37 @@ impl std::fmt::Debug for SampleTerm<'_> {
     }
 }
 
+/// A path constraint at an instant inside a shooting interval,
+/// `lb ≤ g(x(t), u(t), θ) ≤ ub` with `t = t_k + τ h`: `x(t)` from the interval's
+/// integration (CVODES dense output, with its forward sensitivities, as for
+/// [`SampleTerm`]). Node constraints hold only at the shooting nodes; check points hold a
+/// constraint between them too (a ground that must not pull, a foot that must stay above
+/// the floor). The constraint's curvature is left out of the SQP's Hessian (its first
+/// derivatives are exact): it is active at few points, if any.
+#[derive(Clone)]
+pub struct CheckPoint<'a> {
+    /// Name (e.g. `contact_forces`).
+    pub name: String,
+    /// Phase index.
+    pub phase: usize,
+    /// Interval index within the phase.
+    pub interval: usize,
+    /// Where in the interval, as a fraction of its length (0 < τ < 1).
+    pub tau: f64,
+    /// The constraint function of the concatenation `(x, u, θ)` (nx + nu + nθ).
+    pub f: Arc<dyn NodeFunction + 'a>,
+    /// Lower bounds (−∞ allowed).
+    pub lb: Vec<f64>,
+    /// Upper bounds (+∞ allowed).
+    pub ub: Vec<f64>,
+}
+
+impl std::fmt::Debug for CheckPoint<'_> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("CheckPoint").field("name", &self.name).field("phase", &self.phase).field("interval", &self.interval).field("tau", &self.tau).finish()
+    }
+}
+
 /// A constraint `lb ≤ f(z) ≤ ub` (equal bounds for an equality).
 #[derive(Debug, Clone)]
 pub struct Constraint<'a> {
@@ -198,6 +229,8 @@ pub struct Ocp<'a> {
     pub least_squares: Vec<Term<'a>>,
     /// Least-squares residuals inside shooting intervals: cost += ‖r(x(t), u(t), θ)‖².
     pub samples: Vec<SampleTerm<'a>>,
+    /// Path constraints at instants inside shooting intervals.
+    pub checks: Vec<CheckPoint<'a>>,
     /// General scalar cost terms (dimension 1).
     pub costs: Vec<Term<'a>>,
     /// Integrator settings for the shooting intervals.

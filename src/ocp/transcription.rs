@@ -9,6 +9,7 @@
 //! The Jacobian is kept sparse: a fixed pattern built once, values refilled per
 //! evaluation.
 
+use super::checks::CheckValues;
 use super::problem::{Block, Ocp};
 use crate::integrate::{ControlShape, IntegrationStats, Integrator, IntegratorError, ShootingInterval};
 use rayon::prelude::*;
@@ -76,7 +77,10 @@ struct IntervalRef {
     /// Whether sample terms can fall in the interval (fixed ones, or its phase has
     /// shifted ones): it then has a Gauss–Newton block.
     sample_block: bool,
+    /// Check points inside the interval, by τ: (τ, index in `Ocp::checks`, first row).
+    checks: Vec<(f64, usize, usize)>,
 }
+
 
 /// Instants of the sample terms at one evaluation, per interval in transcription order
 /// (`None`: the fixed ones only), and per sample term the gradient of its instant in θ
@@ -128,7 +132,7 @@ struct SampleSums {
 
 /// One interval's integration: end state, sensitivities, statistics, curvature block
 /// (with multipliers) and what its sample terms add.
-type IntervalResult = (Vec<f64>, Vec<f64>, IntegrationStats, Option<Vec<f64>>, Option<SampleSums>);
+type IntervalResult = (Vec<f64>, Vec<f64>, IntegrationStats, Option<Vec<f64>>, Option<SampleSums>, Vec<CheckValues>);
 
 #[derive(Debug, Clone)]
 struct TermRef {
@@ -301,7 +305,7 @@ impl<'o, 'a> Transcription<'o, 'a> {
                 let row = t.m;
                 let fixed = std::mem::take(&mut samples[j][k]);
                 let sample_block = shifted_phase[j] || !fixed.is_empty();
-                t.intervals.push(IntervalRef { phase: j, k, row, samples: fixed, sample_block });
+                t.intervals.push(IntervalRef { phase: j, k, row, samples: fixed, sample_block, checks: Vec::new() });
                 let cols = t.interval_cols(j, k);
                 for i in 0..nx {
                     for &c in &cols {
@@ -370,6 +374,39 @@ impl<'o, 'a> Transcription<'o, 'a> {
                 t.labels.push(RowLabel { phase: phase.clone(), node, name: format!("{}[{i}]", con.term.name) });
             }
             t.m += d;
+        }
+        // check points: rows in interval order, by τ within an interval
+        let mut per_interval: Vec<Vec<(f64, usize)>> = vec![Vec::new(); t.intervals.len()];
+        for (ci, cp) in ocp.checks.iter().enumerate() {
+            let Some(ph) = ocp.phases.get(cp.phase).filter(|ph| cp.interval < ph.intervals) else {
+                return Err(inv(format!("check point '{}': phase {} has no interval {}", cp.name, cp.phase, cp.interval)));
+            };
+            if !(cp.tau > 0.0 && cp.tau < 1.0) {
+                return Err(inv(format!("check point '{}' in phase '{}': τ = {} is not in (0, 1)", cp.name, ph.name, cp.tau)));
+            }
+            let d = cp.f.dim();
+            if cp.lb.len() != d || cp.ub.len() != d {
+                return Err(inv(format!("check point '{}': bounds must have {d} entries", cp.name)));
+            }
+            per_interval[t.first_interval[cp.phase] + cp.interval].push((cp.tau, ci));
+        }
+        for (i, mut list) in per_interval.into_iter().enumerate() {
+            list.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
+            let (j, k) = (t.intervals[i].phase, t.intervals[i].k);
+            let cols = t.interval_cols(j, k);
+            for (tau, ci) in list {
+                let cp = &ocp.checks[ci];
+                let row = t.m;
+                t.intervals[i].checks.push((tau, ci, row));
+                for r in 0..cp.f.dim() {
+                    for &c in &cols {
+                        t.jac_rows.push(row + r);
+                        t.jac_cols.push(c);
+                    }
+                    t.labels.push(RowLabel { phase: ocp.phases[j].name.clone(), node: k, name: format!("{}@τ={tau:.3}[{r}]", cp.name) });
+                }
+                t.m += cp.f.dim();
+            }
         }
         // costs
         for (li, ls) in ocp.least_squares.iter().enumerate() {
@@ -556,6 +593,11 @@ impl<'o, 'a> Transcription<'o, 'a> {
                 ub[t.row..t.row + con.ub.len()].copy_from_slice(&con.ub);
             }
         }
+        for &(_, ci, row) in self.intervals.iter().flat_map(|iv| &iv.checks) {
+            let cp = &self.ocp.checks[ci];
+            lb[row..row + cp.lb.len()].copy_from_slice(&cp.lb);
+            ub[row..row + cp.ub.len()].copy_from_slice(&cp.ub);
+        }
         (lb, ub)
     }
 
@@ -627,8 +669,14 @@ impl<'o, 'a> Transcription<'o, 'a> {
         let mut x1 = vec![0.0; nx];
         let mut s = Vec::new();
         let mut hess = None;
-        // the sample terms' instants, with the interval's end for one pass to both
-        let taus: Vec<f64> = list.iter().map(|e| e.0).collect();
+        // the sample terms' and check points' instants, with the interval's end for one
+        // pass to all
+        let mut taus: Vec<f64> = list.iter().map(|e| e.0).collect();
+        if !iv.checks.is_empty() {
+            taus.extend(iv.checks.iter().map(|c| c.0));
+            taus.sort_by(f64::total_cmp);
+            taus.dedup();
+        }
         let mut times = taus.clone();
         if times.last().is_some_and(|&t| t < 1.0) {
             times.push(1.0);
@@ -671,8 +719,18 @@ impl<'o, 'a> Transcription<'o, 'a> {
             v.push(integ);
         }
         let stats = res.map_err(err)?;
-        let sums = if iv.sample_block { Some(self.sample_sums(iv, list, moves, &p, &xs, (sens || lambda.is_some()).then_some(&ss[..]))?) } else { None };
-        Ok((x1, s, stats, hess, sums))
+        let derivs = sens || lambda.is_some();
+        let checks = super::checks::check_values(self.ocp, iv.phase, &iv.checks, &taus, &p, &xs, derivs.then_some(&ss[..]))?;
+        let sums = if !iv.sample_block {
+            None
+        } else if iv.checks.is_empty() {
+            Some(self.sample_sums(iv, list, moves, &p, &xs, derivs.then_some(&ss[..]))?)
+        } else {
+            // the samples' own rows of the merged instants
+            let (xs, ss) = super::checks::rows_at(list.iter().map(|e| e.0), &taus, nx, nx * (nx + np), &xs, &ss, derivs);
+            Some(self.sample_sums(iv, list, moves, &p, &xs, derivs.then_some(&ss[..]))?)
+        };
+        Ok((x1, s, stats, hess, sums, checks))
     }
 
     /// The sample terms `list` of interval `iv` at its integrated states `xs` (nx per τ,
@@ -698,7 +756,6 @@ impl<'o, 'a> Transcription<'o, 'a> {
         let theta = &p[interval.p_theta()];
         let u0 = &p[interval.p_u0()];
         let u1 = interval.p_u1().map(|r| &p[r]);
-        let duration_col = nx + interval.p_duration();
         let hscale = 1.0 / ph.intervals as f64;
         let mut out = SampleSums { f: 0.0, grad: Vec::new(), gauss_newton: Vec::new() };
         if ss.is_some() {
@@ -723,30 +780,7 @@ impl<'o, 'a> Transcription<'o, 'a> {
                 out.f += r.iter().map(|v| v * v).sum::<f64>();
                 let Some(ss) = ss else { continue };
                 let s = &ss[q * nx * ncols..(q + 1) * nx * ncols];
-                // J = ∂r/∂x · S (the duration column through h = T/N) + the direct terms
-                let mut jac = vec![0.0; d * ncols];
-                for c in 0..ncols {
-                    let sc = if c == duration_col { hscale } else { 1.0 };
-                    let sc_col = &s[c * nx..(c + 1) * nx];
-                    for i in 0..d {
-                        jac[i + c * d] = sc * (0..nx).map(|k| jz[i + k * d] * sc_col[k]).sum::<f64>();
-                    }
-                }
-                for k in 0..nu {
-                    let direct = |c: usize, f: f64, jac: &mut [f64]| (0..d).for_each(|i| jac[i + c * d] += f * jz[i + (nx + k) * d]);
-                    match interval.p_u1() {
-                        Some(r1) => {
-                            direct(nx + interval.p_u0().start + k, 1.0 - tau, &mut jac);
-                            direct(nx + r1.start + k, *tau, &mut jac);
-                        }
-                        None => direct(nx + interval.p_u0().start + k, 1.0, &mut jac),
-                    }
-                }
-                for (k, c) in interval.p_theta().enumerate() {
-                    for i in 0..d {
-                        jac[i + (nx + c) * d] += jz[i + (nx + nu + k) * d];
-                    }
-                }
+                let mut jac = super::checks::instant_jacobian(&interval, nx, nu, d, &jz, s, *tau, hscale);
                 if let Some(g) = moves.get(si).and_then(Option::as_ref) {
                     // dr/dt along the trajectory (per second): ẋ = f(x, u, θ), u̇ = (u1 − u0)/h
                     let h = p[interval.p_duration()];
@@ -845,6 +879,7 @@ impl<'o, 'a> Transcription<'o, 'a> {
             .collect();
         let mut blocks = Vec::with_capacity(results.len());
         let mut sample_sums = Vec::new();
+        let mut check_values = Vec::new();
         let mut ev = Evaluation {
             f: 0.0,
             c: vec![0.0; self.m],
@@ -855,8 +890,9 @@ impl<'o, 'a> Transcription<'o, 'a> {
         };
         // continuity (Jacobian values in pattern order)
         for (iv, r) in self.intervals.iter().zip(results) {
-            let (x1, s, st, hess, sums) = r?;
+            let (x1, s, st, hess, sums, checks) = r?;
             blocks.push(hess);
+            check_values.extend(checks);
             if let Some(sums) = sums {
                 sample_sums.push((iv, sums));
             }
@@ -989,6 +1025,17 @@ impl<'o, 'a> Transcription<'o, 'a> {
                             ev.grad[ca] += jac[a];
                         }
                     }
+                }
+            }
+        }
+        // check points, in row order (after the user constraints in the pattern)
+        for cv in check_values {
+            let d = cv.values.len();
+            ev.c[cv.row..cv.row + d].copy_from_slice(&cv.values);
+            if derivs {
+                let ncols = cv.jac.len() / d.max(1);
+                for i in 0..d {
+                    ev.jac.extend((0..ncols).map(|c| cv.jac[i + c * d]));
                 }
             }
         }

@@ -184,6 +184,7 @@ fn cartpole<'a>(model: &'a CartPole, json: &Value, integrator: IntegratorSetting
         constraints: vec![],
         least_squares: u_squared_terms(n, 1, t / n as f64),
         samples: Vec::new(),
+        checks: Vec::new(),
         costs: vec![],
         integrator,
     })
@@ -349,6 +350,7 @@ fn five_link_biped<'a>(model: &'a FiveLinkBiped, json: &Value, integrator: Integ
         constraints,
         least_squares: u_squared_terms(n, NU, t / n as f64),
         samples: Vec::new(),
+        checks: Vec::new(),
         costs: vec![],
         integrator,
     })

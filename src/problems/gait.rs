@@ -318,6 +318,7 @@ fn gait_ocp<'a>(
         constraints,
         least_squares: Vec::new(),
         samples: Vec::new(),
+        checks: Vec::new(),
         costs: Vec::new(),
         integrator,
     })

@@ -1,0 +1,112 @@
+//! Check points ([`CheckPoint`](super::CheckPoint)): path constraints at instants inside
+//! shooting intervals, and the chain rule they share with sample terms.
+
+use super::problem::Ocp;
+use super::transcription::TranscriptionError;
+use crate::integrate::ShootingInterval;
+
+/// A check point's values and, with derivatives, its Jacobian over the interval's columns
+/// (d × ncols, column-major), with its first constraint row.
+pub(super) struct CheckValues {
+    pub row: usize,
+    pub values: Vec<f64>,
+    pub jac: Vec<f64>,
+}
+
+/// Jacobian (d × ncols, column-major) over an interval's columns `(x0, u0, [u1], T, θ)`
+/// of a function `g(x(τ), u(τ), θ)` with Jacobian `jz` (d × (nx + nu + nθ)) at the
+/// interval's state `x(τ)`, whose sensitivities `s` (nx × ncols) are those of the
+/// time-scaled interval (the duration column enters through h = T/N, `hscale` = 1/N):
+/// `J = ∂g/∂x · S` plus the direct control and θ terms.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn instant_jacobian<O: crate::integrate::ControlledOde + ?Sized>(interval: &ShootingInterval<'_, O>, nx: usize, nu: usize, d: usize, jz: &[f64], s: &[f64], tau: f64, hscale: f64) -> Vec<f64> {
+    let ncols = nx + interval.np();
+    let duration_col = nx + interval.p_duration();
+    let mut jac = vec![0.0; d * ncols];
+    for c in 0..ncols {
+        let sc = if c == duration_col { hscale } else { 1.0 };
+        let sc_col = &s[c * nx..(c + 1) * nx];
+        for i in 0..d {
+            jac[i + c * d] = sc * (0..nx).map(|k| jz[i + k * d] * sc_col[k]).sum::<f64>();
+        }
+    }
+    for k in 0..nu {
+        let direct = |c: usize, f: f64, jac: &mut [f64]| (0..d).for_each(|i| jac[i + c * d] += f * jz[i + (nx + k) * d]);
+        match interval.p_u1() {
+            Some(r1) => {
+                direct(nx + interval.p_u0().start + k, 1.0 - tau, &mut jac);
+                direct(nx + r1.start + k, tau, &mut jac);
+            }
+            None => direct(nx + interval.p_u0().start + k, 1.0, &mut jac),
+        }
+    }
+    for (k, c) in interval.p_theta().enumerate() {
+        for i in 0..d {
+            jac[i + (nx + c) * d] += jz[i + (nx + nu + k) * d];
+        }
+    }
+    jac
+}
+
+/// The rows of `xs` (`nx` per instant) and `ss` (`ns` per instant, when `derivs`) at the
+/// instants `wanted`, each one of `taus` (the instants the interval was integrated to).
+pub(super) fn rows_at(wanted: impl Iterator<Item = f64>, taus: &[f64], nx: usize, ns: usize, xs: &[f64], ss: &[f64], derivs: bool) -> (Vec<f64>, Vec<f64>) {
+    let (mut xo, mut so) = (Vec::new(), Vec::new());
+    for tau in wanted {
+        let q = taus.iter().position(|&t| t == tau).expect("every instant was integrated to");
+        xo.extend_from_slice(&xs[q * nx..(q + 1) * nx]);
+        if derivs {
+            so.extend_from_slice(&ss[q * ns..(q + 1) * ns]);
+        }
+    }
+    (xo, so)
+}
+
+/// Values (and with `ss`, Jacobians) of the check points `checks` of an interval of phase
+/// `phase`, from its states `xs` at `taus` (nx per instant) and their sensitivities `ss`
+/// (nx · ncols per instant), with the interval's packed parameters `p`.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn check_values(
+    ocp: &Ocp<'_>,
+    phase: usize,
+    checks: &[(f64, usize, usize)],
+    taus: &[f64],
+    p: &[f64],
+    xs: &[f64],
+    ss: Option<&[f64]>,
+) -> Result<Vec<CheckValues>, TranscriptionError> {
+    if checks.is_empty() {
+        return Ok(Vec::new());
+    }
+    let ph = &ocp.phases[phase];
+    let interval = ShootingInterval::new(ph.ode, ph.controls);
+    let (nx, nu, nt) = (ph.ode.nx(), ph.ode.nu(), ocp.ntheta);
+    let ncols = nx + interval.np();
+    let nz = nx + nu + nt;
+    let theta = &p[interval.p_theta()];
+    let u0 = &p[interval.p_u0()];
+    let u1 = interval.p_u1().map(|r| &p[r]);
+    let hscale = 1.0 / ph.intervals as f64;
+    let mut out = Vec::with_capacity(checks.len());
+    for &(tau, ci, row) in checks {
+        let cp = &ocp.checks[ci];
+        let q = taus.iter().position(|&t| t == tau).expect("every check point was integrated to");
+        let x = &xs[q * nx..(q + 1) * nx];
+        let u: Vec<f64> = match u1 {
+            Some(u1) => u0.iter().zip(u1).map(|(a, b)| (1.0 - tau) * a + tau * b).collect(),
+            None => u0.to_vec(),
+        };
+        let z: Vec<f64> = x.iter().chain(&u).chain(theta).copied().collect();
+        let d = cp.f.dim();
+        let mut values = vec![0.0; d];
+        let mut jz = vec![0.0; d * nz];
+        cp.f.eval(&z, &mut values, ss.is_some().then_some(&mut jz[..]))
+            .map_err(|reason| TranscriptionError::Term { term: cp.name.clone(), reason })?;
+        let jac = match ss {
+            Some(ss) => instant_jacobian(&interval, nx, nu, d, &jz, &ss[q * nx * ncols..(q + 1) * nx * ncols], tau, hscale),
+            None => Vec::new(),
+        };
+        out.push(CheckValues { row, values, jac });
+    }
+    Ok(out)
+}
