@@ -115,6 +115,11 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     let fine = |o: &Outcome, f: &dyn Fn(&super::gait_run::FineForces) -> String| o.out.fine_forces.as_ref().map_or("—".to_string(), f);
     let mut rows = vec![
         row("status", &|o| o.status.clone()),
+        row("physically valid (1 ms grid)", &|o| match &o.out.validity {
+            Some(v) if v.is_valid() => "yes".into(),
+            Some(v) => format!("NO: {}", v.violations.iter().max_by(|a, b| a.amount.total_cmp(&b.amount)).map(|x| x.to_string()).unwrap_or_default()),
+            None => "unknown (no re-integration)".into(),
+        }),
         row("solve time (s)", &|o| format!("{:.1}", o.seconds)),
         row("iterations", &|o| o.iterations.to_string()),
         row("objective", &|o| format!("{:.6}", o.objective)),
@@ -150,7 +155,8 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     }
 
     // the expectation
-    let excess = |o: &Outcome| o.out.fine_forces.as_ref().map(|f| f.max_excess(1).0);
+    let valid = |o: &Outcome| o.out.validity.as_ref().is_some_and(|v| v.is_valid());
+    let excess = |o: &Outcome| o.out.fine_forces.as_ref().filter(|_| valid(o)).map(|f| f.max_excess(1).0);
     let mut verdict: Option<(bool, String)> = None;
     if let Some(e) = &args.expect_transient {
         let key = std::path::Path::new(e).file_stem().map_or(e.clone(), |s| s.to_string_lossy().replace('_', "-"));
@@ -159,6 +165,11 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         let mut lines = Vec::new();
         if !ok {
             lines.push("not every prediction converged".to_string());
+        }
+        // a transient of a solution that breaks physics between its nodes is not counted
+        for o in outcomes.iter().filter(|o| !valid(o)) {
+            ok = false;
+            lines.push(format!("{}: physically invalid on the 1 ms grid, its forces are not counted", o.name));
         }
         match excess(expected) {
             None => {
@@ -222,6 +233,8 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
             "name": o.name,
             "status": o.status,
             "converged": o.converged,
+            "physically_valid": o.out.validity.as_ref().map(|v| v.is_valid()),
+            "violations": o.out.validity.as_ref().map(|v| v.violations.clone()),
             "seconds": o.seconds,
             "iterations": o.iterations,
             "objective": o.objective,
@@ -264,6 +277,9 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
             message: format!("not every prediction converged ({}: {}; results in {})", o.name, o.status, path.display()),
         }
         .into());
+    }
+    if let Some(o) = outcomes.iter().find(|o| !valid(o)) {
+        return Err(super::Invalid { message: format!("{}: converged, physically invalid on the 1 ms grid (results in {})", o.name, path.display()) }.into());
     }
     match verdict {
         Some((false, v)) => Err(anyhow!("expected transient ordering does not hold: {v}")),

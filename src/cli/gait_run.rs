@@ -37,6 +37,8 @@ pub struct GaitRunOutput {
     pub errors: Vec<footfall::report::table::ChannelErrors>,
     /// Ground forces on the fine grid (None when the re-integration failed).
     pub fine_forces: Option<FineForces>,
+    /// Physical validity on the fine grid (None when the re-integration failed).
+    pub validity: Option<footfall::problems::validity::Validity>,
 }
 
 /// Ground forces of both feet on the fine grid, model and measurement.
@@ -101,6 +103,10 @@ pub struct GaitRun<'a> {
     pub extra_files: Vec<(String, Vec<u8>)>,
     /// Report ground-force excursions above the measurement larger than this (N).
     pub transient_threshold_n: f64,
+    /// Friction coefficient of the contacts' cone.
+    pub friction: f64,
+    /// Number of check points holding the contact constraints between the nodes.
+    pub check_points: usize,
 }
 
 /// Evaluate, write and commit the run folder.
@@ -128,6 +134,10 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
         Ok(f) => Some(Comparison::through_model(&f.result.samples, data, model, &sol.theta)?),
         Err(_) => None,
     };
+    let phase_file_names: Vec<String> = sets.iter().map(|s| s.name.clone()).collect();
+    let validity = fine_run.as_ref().ok().map(|f| {
+        footfall::problems::validity::check(model, &f.result.samples, sets, &phase_file_names, &sol.theta, run.friction, Default::default())
+    });
     let transients = match (&fine_run, &fine_cmp) {
         (Ok(f), Some(fc)) => force_transients(f, fc, sets, &cmp.times, model.nq(), run.transient_threshold_n),
         _ => Vec::new(),
@@ -192,15 +202,24 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
 
     let converged = res.status == SqpStatus::Converged;
     let interrupted = res.status == footfall::sqp::SqpStatus::Interrupted;
+    let invalid = validity.as_ref().is_some_and(|v| !v.is_valid());
+    let verdict = match (converged, invalid) {
+        (true, false) => "converged",
+        (true, true) => "converged, physically invalid",
+        (false, true) if interrupted => "interrupted, physically invalid",
+        (false, false) if interrupted => "interrupted",
+        (false, true) => "not converged, physically invalid",
+        (false, false) => "not converged",
+    };
     let mut summary = Summary::new(
-        if converged {
-            "converged"
-        } else if interrupted {
-            "interrupted"
+        verdict,
+        if invalid {
+            Tone::Bad
+        } else if converged {
+            Tone::Good
         } else {
-            "not converged"
+            Tone::Warning
         },
-        if converged { Tone::Good } else { Tone::Warning },
         res.status.to_string(),
     );
     summary.iterations = Some(res.history.len().saturating_sub(1));
@@ -227,6 +246,19 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
         }
         (None, Ok(_)) => String::new(),
     };
+    if let Some(v) = &validity {
+        let text = if v.is_valid() {
+            format!("valid on the 1 ms grid ({} check point(s) between the nodes)", run.check_points)
+        } else {
+            format!(
+                "INVALID: {} ({} stretch(es); {} check point(s) between the nodes)",
+                v.violations.iter().max_by(|a, b| a.amount.total_cmp(&b.amount)).map(|x| x.to_string()).unwrap_or_default(),
+                v.violations.len(),
+                run.check_points
+            )
+        };
+        summary.extra.push(("physical validity".into(), text));
+    }
     summary.extra.extend(run.extra_summary);
     let mut sections = vec![Section {
         heading: "Errors".into(),
@@ -236,6 +268,9 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
         tables: vec![table.clone(), by_phase.clone()],
         svgs: vec![],
     }];
+    if let Some(v) = &validity {
+        sections.push(validity_section(v, run.check_points));
+    }
     sections.push(transient_section(&transients, run.transient_threshold_n, fine_run.is_ok()));
     sections.extend(run.extra_sections);
     sections.push(Section {
@@ -263,6 +298,10 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
         "data": data.source,
         "window_s": [t0, t1],
         "status": res.status,
+        "verdict": verdict,
+        "physically_valid": validity.as_ref().map(|v| v.is_valid()),
+        "validity": validity,
+        "check_points": run.check_points,
         "stop_reason": res.status.to_string(),
         "iterations": res.history.len().saturating_sub(1),
         "seconds": res.seconds,
@@ -304,7 +343,39 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
         measured: [[fc.data_feet[0][0].clone(), fc.data_feet[0][1].clone()], [fc.data_feet[1][0].clone(), fc.data_feet[1][1].clone()]],
         times: fc.times,
     });
-    Ok(GaitRunOutput { path, table, fine, transients, errors: overall, fine_forces })
+    Ok(GaitRunOutput { path, table, fine, transients, errors: overall, fine_forces, validity })
+}
+
+/// The report's account of physical validity on the 1 ms grid.
+fn validity_section(v: &footfall::problems::validity::Validity, check_points: usize) -> Section {
+    let l = &v.limits;
+    let mut paragraphs = vec![format!(
+        "The solution re-integrated on the 1 ms grid, checked for a normal force below −{} N, a tangential force beyond the friction cone by more than {} N, a primitive not in contact more than {} mm below the ground, and a Baumgarte force above {} N. The contact constraints hold at the shooting nodes and at {check_points} check point(s) between them.",
+        l.normal_force_n,
+        l.friction_n,
+        l.penetration_m * 1e3,
+        l.baumgarte_n
+    )];
+    let mut tables = Vec::new();
+    if v.is_valid() {
+        paragraphs.push("Nothing is broken: the solution is physically valid between the nodes.".into());
+    } else {
+        paragraphs.push(format!("**The solution is physically invalid** in {} stretch(es): it is not a gait the model can walk.", v.violations.len()));
+        let mut t = Table {
+            title: "Where physics is broken on the 1 ms grid".into(),
+            headers: ["what", "contact", "phase", "from (s)", "to (s)", "worst at (s)", "worst"].map(String::from).to_vec(),
+            rows: Vec::new(),
+        };
+        for x in v.violations.iter().take(20) {
+            let worst = match x.kind {
+                footfall::problems::validity::ViolationKind::Penetration => format!("{:.1} mm", x.amount * 1e3),
+                _ => format!("{:.1} N", x.amount),
+            };
+            t.rows.push(vec![x.kind.describe().into(), x.contact.clone(), x.phase.clone(), format!("{:.3}", x.from_s), format!("{:.3}", x.to_s), format!("{:.3}", x.worst_s), worst]);
+        }
+        tables.push(t);
+    }
+    Section { heading: "Physical validity".into(), paragraphs, tables, svgs: vec![] }
 }
 
 /// The report's account of the ground-force transients.

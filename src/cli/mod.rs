@@ -13,6 +13,7 @@ mod report;
 mod fit_foot;
 mod gait_run;
 mod predict;
+mod refine;
 mod session;
 mod simulate;
 mod solve;
@@ -32,7 +33,7 @@ Exit codes:
   2    usage error (unknown option, missing or malformed value, a number out of range)
   3    solved but not converged (iteration or time limit, line search, QP or evaluation failure); the run folder is written
   4    infeasible: the constraints cannot be satisfied; the run folder is written
-  5    converged but physically invalid
+  5    converged but physically invalid: on the 1 ms grid a ground pulls, a contact leaves its friction cone, a foot is inside the floor or a stabilisation force is large; the run folder is written
   130  interrupted (Ctrl-C); the run folder is written from the last accepted iterate";
 
 /// Fit and predict human gait with rigid foot-ground contact models.
@@ -79,9 +80,7 @@ pub enum Failure {
     NotConverged(anyhow::Error),
     /// The constraints cannot be satisfied (exit 4).
     Infeasible(anyhow::Error),
-    /// Converged, but the solution fails a physical check (exit 5; no command makes such a
-    /// check yet).
-    #[allow(dead_code)]
+    /// Converged, but the solution breaks physics between the nodes (exit 5).
     PhysicallyInvalid(anyhow::Error),
     /// Stopped by Ctrl-C (exit 130).
     Interrupted(anyhow::Error),
@@ -91,6 +90,9 @@ impl Failure {
     /// The class of an error: an [`Unsolved`] in its chain by its status, anything else
     /// bad input.
     pub fn classify(e: anyhow::Error) -> Self {
+        if e.chain().any(|c| c.downcast_ref::<Invalid>().is_some()) {
+            return Failure::PhysicallyInvalid(e);
+        }
         let Some(u) = e.chain().find_map(|c| c.downcast_ref::<Unsolved>()) else { return Failure::Input(e) };
         match &u.status {
             SqpStatus::Infeasible => Failure::Infeasible(e),
@@ -115,6 +117,31 @@ impl Failure {
     fn error(&self) -> &anyhow::Error {
         match self {
             Failure::Input(e) | Failure::NotConverged(e) | Failure::Infeasible(e) | Failure::PhysicallyInvalid(e) | Failure::Interrupted(e) => e,
+        }
+    }
+}
+
+/// A converged solution that breaks physics on the 1 ms grid (exit 5).
+#[derive(Debug, thiserror::Error)]
+#[error("{message}")]
+pub struct Invalid {
+    /// What to print.
+    pub message: String,
+}
+
+impl Invalid {
+    /// The error of a written gait run that converged but is physically invalid.
+    pub fn check(out: &gait_run::GaitRunOutput) -> anyhow::Result<()> {
+        match &out.validity {
+            Some(v) if !v.is_valid() => Err(Invalid {
+                message: format!(
+                    "converged, physically invalid: {} (results written to {})",
+                    v.violations.iter().map(|x| x.to_string()).collect::<Vec<_>>().join("; "),
+                    out.path.display()
+                ),
+            }
+            .into()),
+            _ => Ok(()),
         }
     }
 }

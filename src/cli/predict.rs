@@ -20,6 +20,10 @@ use std::path::{Path, PathBuf};
 /// Options shared by `predict` and `compare`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct PredictOptions {
+    /// Do not add check points between the nodes where the solution breaks a contact
+    /// constraint (the run is then flagged physically invalid if it does).
+    #[arg(long)]
+    pub no_check_points: bool,
     /// Model file.
     #[arg(long, default_value = "models/opensim_subject01.json")]
     pub model: PathBuf,
@@ -115,7 +119,8 @@ pub fn finish(out: &GaitRunOutput, res: &SqpResult, quiet: bool) -> anyhow::Resu
         }
         eprintln!("report: {}", out.path.join("report.html").display());
     }
-    super::Unsolved::check(res, &out.path)
+    super::Unsolved::check(res, &out.path)?;
+    super::Invalid::check(out)
 }
 
 /// A solution from a run folder (`solution.json` inside) or a solution file.
@@ -165,7 +170,8 @@ pub fn predict(
     let cycle = GaitCycle::new(&model, &setup.seq, &sets).map_err(|e| anyhow!(e))?;
     let integrator = IntegratorSettings { rtol: o.integrator_tol, atol: o.integrator_tol, ..Default::default() };
     integrator.validate().context("--integrator-tol")?;
-    let ocp = setup.ocp(&cycle, &model, &sets, integrator.clone()).map_err(|e| anyhow!(e))?;
+    let build = || setup.ocp(&cycle, &model, &sets, integrator.clone()).map_err(|e| anyhow!(e));
+    let ocp = build()?;
     let tr = Transcription::new(&ocp).context("transcribing the prediction problem")?;
     let (_, _, w0) = tr.variable_bounds_and_guess();
     let hessian = o.hessian.into();
@@ -192,7 +198,18 @@ pub fn predict(
             if init.is_some() { "the given solution" } else { "the data" }
         );
     }
-    let res = super::solve_interruptibly(&tr, &w0, &sqp_settings, quiet)?;
+    let refinement = super::refine::Refinement {
+        cycle: &cycle,
+        model: &model,
+        sets: &sets,
+        integrator: integrator.clone(),
+        t0: tracking.window.0,
+        enabled: !o.no_check_points,
+    };
+    let (sites, res) = refinement.solve(&build, &[], &w0, &mut |tr, w| super::solve_interruptibly(tr, w, &sqp_settings, quiet), quiet)?;
+    let mut ocp = build()?;
+    ocp.checks = refinement.checks(&sites);
+    let tr = Transcription::new(&ocp).context("transcribing the prediction problem")?;
     let solution = GaitSolution::from_nlp(&tr, &res.w, &cycle.continuous, tracking.window.0);
     let durations: Vec<String> = solution.phases.iter().map(|p| format!("{} {:.3} s", p.name, p.duration)).collect();
     let mut extra_json = serde_json::Map::new();
@@ -228,6 +245,8 @@ pub fn predict(
                 svgs: vec![],
             }],
             extra_files: vec![],
+            friction: cycle.friction(),
+            check_points: sites.len(),
             transient_threshold_n: o.transient_threshold,
         },
         folder,

@@ -103,7 +103,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
             timings: record.timings,
         };
         let provenance = format!("re-evaluated from {} by footfall report (J reproduced to {mismatch:.0e}); solver figures as the run recorded them", args.run.join("solution.json").display());
-        prob.write_run(tr, cycle, res, RunWriting { base: &base, extra: &[], folder, transient_threshold: args.transient_threshold, quiet: true, provenance: Some(provenance) })
+        prob.write_run(tr, cycle, res, RunWriting { base: &base, extra: &[], folder, transient_threshold: args.transient_threshold, quiet: true, provenance: Some(provenance), check_sites: &prob.check_sites })
     })?;
     if !quiet {
         println!("{}", run.output.table.to_markdown());

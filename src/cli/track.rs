@@ -41,6 +41,10 @@ pub struct Args {
     /// Replace the output folder if it exists.
     #[arg(long)]
     overwrite: bool,
+    /// Do not add check points between the nodes where the solution breaks a contact
+    /// constraint (the run is then flagged physically invalid if it does).
+    #[arg(long)]
+    no_check_points: bool,
     /// Continue the run a killed process left unfinished in this output folder, from its
     /// last SQP iteration, with the options it was started with (give no others).
     #[arg(long, value_name = "DIR")]
@@ -192,6 +196,11 @@ pub struct TrackingProblem {
     pub setup: TrackingSetup,
     pub phases: PathBuf,
     pub integrator: IntegratorSettings,
+    /// Check points the problem has from the start (those of the run it was rebuilt from).
+    pub check_sites: super::refine::CheckSites,
+    /// Whether a solve adds check points where the solution breaks a contact constraint
+    /// between the nodes.
+    pub refine: bool,
 }
 
 impl TrackingProblem {
@@ -261,12 +270,12 @@ impl TrackingProblem {
         let sens_tol = (sens_tol != tol).then_some(sens_tol);
         let integrator = IntegratorSettings { rtol: tol, atol: tol, sens_tol, ..Default::default() };
         integrator.validate().context("--integrator-tol or --sensitivity-tol")?;
-        Ok(Self { model, sets, data, setup, phases: run.phases.clone(), integrator })
+        Ok(Self { model, sets, data, setup, phases: run.phases.clone(), integrator, check_sites: run.check_points.clone(), refine: false })
     }
 
     /// The run description of a solution `theta` of this problem with standard
     /// deviations `sd` (per θ).
-    pub fn record(&self, base: &TrackingRunSetup, extra: &[EffectSpec], theta: &[f64], sd: &[Option<f64>]) -> TrackingRunSetup {
+    pub fn record(&self, base: &TrackingRunSetup, extra: &[EffectSpec], theta: &[f64], sd: &[Option<f64>], check_points: &[(usize, usize, f64)]) -> TrackingRunSetup {
         let free = self.model.free_parameters();
         let parameters = self
             .model
@@ -286,7 +295,7 @@ impl TrackingProblem {
             .collect();
         let mut effects = base.effects.clone();
         effects.extend(extra.iter().cloned());
-        TrackingRunSetup { effects, parameters, integrator_tol: self.integrator.rtol, sensitivity_tol: self.integrator.sens_tol, ..base.clone() }
+        TrackingRunSetup { effects, parameters, integrator_tol: self.integrator.rtol, sensitivity_tol: self.integrator.sens_tol, check_points: check_points.to_vec(), ..base.clone() }
     }
 }
 
@@ -338,7 +347,8 @@ impl TrackingProblem {
     /// (the guess: the data, or the solution it was started from).
     pub fn with_transcription<R>(&self, f: impl FnOnce(&Transcription, &GaitCycle, Vec<f64>) -> anyhow::Result<R>) -> anyhow::Result<R> {
         let cycle = GaitCycle::new(&self.model, &self.setup.seq, &self.sets).map_err(|e| anyhow!(e))?;
-        let ocp = self.setup.ocp(&cycle, &self.model, &self.sets, self.integrator.clone()).map_err(|e| anyhow!(e))?;
+        let mut ocp = self.setup.ocp(&cycle, &self.model, &self.sets, self.integrator.clone()).map_err(|e| anyhow!(e))?;
+        ocp.checks = self.check_sites.iter().flat_map(|&(j, k, tau)| cycle.contact_checks(j, k, tau)).collect();
         let tr = Transcription::new(&ocp).context("transcribing the tracking problem")?;
         let (_, _, w0) = tr.variable_bounds_and_guess();
         f(&tr, &cycle, w0)
@@ -400,7 +410,7 @@ impl TrackingProblem {
 /// One result of two solves, the second started where the first stopped: the second's
 /// point and status, the iteration history of both (the second's numbered on, without
 /// its repeated initial point), their times added up.
-fn merge_stages(first: footfall::sqp::SqpResult, second: footfall::sqp::SqpResult) -> footfall::sqp::SqpResult {
+pub(super) fn merge_stages(first: footfall::sqp::SqpResult, second: footfall::sqp::SqpResult) -> footfall::sqp::SqpResult {
     let (used, elapsed) = (first.history.len().saturating_sub(1), first.seconds);
     let mut history = first.history;
     history.extend(second.history.iter().skip(1).map(|r| footfall::sqp::IterationRecord { iter: r.iter + used, seconds: r.seconds + elapsed, ..r.clone() }));
@@ -507,6 +517,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         one_sided_targets: args.one_sided_targets,
         sample_targets: args.sample_targets,
         noise_weights: args.noise_weights.as_deref().map(parse_noise_weights).transpose()?,
+        check_points: vec![],
         effects: vec![],
         parameters: vec![],
     };
@@ -514,13 +525,17 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         Some(p) => {
             let sol = super::predict::read_solution(p)?;
             if p.is_dir() && p.join("setup.json").exists() {
-                base.parameters = read_run_setup(p)?.parameters;
+                let from = read_run_setup(p)?;
+                base.parameters = from.parameters;
+                base.check_points = from.check_points;
             }
             Some(sol)
         }
         None => None,
     };
     let mut prob = TrackingProblem::build(&base, &extra)?;
+    prob.refine = !args.no_check_points;
+    base.check_points.clear();
     if prob.integrator.rtol < base.integrator_tol && !quiet {
         let why = if args.residual_actuators { "residual actuators" } else { "the heel pad's stiff dynamics" };
         eprintln!("{why}: integrator tolerance of the states {:e} → {:e} (integration noise stalls the line search at 1e-8), of the sensitivities {:e}", base.integrator_tol, prob.integrator.rtol, prob.integrator.sens_tol.unwrap_or(prob.integrator.rtol));
@@ -533,7 +548,8 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     let settings = tracking_sqp_settings(args.tol, args.max_iter, args.max_time, hessian, args.exact_below);
     let folder = super::session::create_checkpointed_run_folder(&args.out, args.overwrite)?;
     let run = prob.solve_and_write(&base, &extra, &settings, folder, args.transient_threshold, quiet)?;
-    super::Unsolved::check(&run.result, &run.output.path)
+    super::Unsolved::check(&run.result, &run.output.path)?;
+    super::Invalid::check(&run.output)
 }
 
 impl TrackingProblem {
@@ -549,7 +565,7 @@ impl TrackingProblem {
         transient_threshold: f64,
         quiet: bool,
     ) -> anyhow::Result<TrackedRun> {
-        self.with_transcription(|tr, cycle, w0| {
+        let w0 = self.with_transcription(|tr, _, w0| {
             if !quiet {
                 eprintln!(
                     "tracking {:.3}–{:.3} s of {} with the {} foot ({} variables, {} constraints, {:?})",
@@ -562,17 +578,31 @@ impl TrackingProblem {
                     settings.hessian
                 );
             }
-            self.solve_staged(tr, cycle, &w0, settings, quiet, |tr, res| {
-                self.write_run(tr, cycle, res, RunWriting { base, extra, folder, transient_threshold, quiet, provenance: None })
-            })
-        })
+            Ok(w0)
+        })?;
+        let cycle = GaitCycle::new(&self.model, &self.setup.seq, &self.sets).map_err(|e| anyhow!(e))?;
+        let refinement = super::refine::Refinement {
+            cycle: &cycle,
+            model: &self.model,
+            sets: &self.sets,
+            integrator: self.integrator.clone(),
+            t0: self.setup.window.0,
+            enabled: self.refine,
+        };
+        let build = || self.setup.ocp(&cycle, &self.model, &self.sets, self.integrator.clone()).map_err(|e| anyhow!(e));
+        let mut solve = |tr: &Transcription, w: &[f64]| self.solve_staged(tr, &cycle, w, settings, quiet, |_, res| Ok(res));
+        let (sites, res) = refinement.solve(&build, &self.check_sites, &w0, &mut solve, quiet)?;
+        let mut ocp = build()?;
+        ocp.checks = refinement.checks(&sites);
+        let tr = Transcription::new(&ocp).context("transcribing the tracking problem")?;
+        self.write_run(&tr, &cycle, res, RunWriting { base, extra, folder, transient_threshold, quiet, provenance: None, check_sites: &sites })
     }
 
     /// Write the run folder of the solver result `res` of this problem's transcription
     /// `tr` (solved by `track`, or re-evaluated by `report`).
     pub fn write_run(&self, tr: &Transcription, cycle: &GaitCycle, res: footfall::sqp::SqpResult, how: RunWriting) -> anyhow::Result<TrackedRun> {
         let TrackingProblem { model, sets, data, setup, phases, integrator, .. } = self;
-        let RunWriting { base, extra, folder, transient_threshold, quiet, provenance } = how;
+        let RunWriting { base, extra, folder, transient_threshold, quiet, provenance, check_sites } = how;
         let solution = GaitSolution::from_nlp(tr, &res.w, &cycle.continuous, setup.window.0);
         let converged = res.status == SqpStatus::Converged;
         let data_rows = setup.data_rows(model, sets, &cycle.continuous);
@@ -584,7 +614,7 @@ impl TrackingProblem {
         } else {
             vec![None; model.ntheta()]
         };
-        let record = self.record(base, extra, &solution.theta, &sd);
+        let record = self.record(base, extra, &solution.theta, &sd, check_sites);
         let mut extra_json = serde_json::Map::new();
         extra_json.insert("setup".into(), serde_json::to_value(&record)?);
         extra_json.insert("data_residuals".into(), data_rows.into());
@@ -633,6 +663,8 @@ impl TrackingProblem {
                 extra_sections,
                 extra_files: vec![("setup.json".into(), serde_json::to_string_pretty(&record)?.into_bytes())],
                 transient_threshold_n: transient_threshold,
+                friction: cycle.friction(),
+                check_points: check_sites.len(),
             },
             folder,
         )?;
@@ -667,6 +699,8 @@ pub struct RunWriting<'a> {
     pub quiet: bool,
     /// Where the figures come from, when not from a solve just made.
     pub provenance: Option<String>,
+    /// The problem's check points (recorded in `setup.json`).
+    pub check_sites: &'a [(usize, usize, f64)],
 }
 
 /// The report section on where the model fails: normalised error and cost share per

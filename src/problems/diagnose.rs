@@ -67,6 +67,10 @@ pub struct TrackingRunSetup {
     /// Weight of the velocity targets relative to the angles (`None`: the seed's 0.1).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub velocity_weight: Option<f64>,
+    /// Check points holding the contact constraints between the nodes, as (continuous
+    /// phase, interval, τ): the run's problem has them, so a rebuild must too.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub check_points: Vec<(usize, usize, f64)>,
     /// Effects added on top of the model file (`--effect`).
     pub effects: Vec<EffectSpec>,
     /// Every effect parameter of the model at the solution.

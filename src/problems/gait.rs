@@ -12,7 +12,7 @@ use crate::model::effects::ModelScalar;
 use crate::integrate::{ControlShape, IntegratorSettings};
 use crate::model::gait::COORDINATES;
 use crate::model::{ConstraintSet, GaitModel, GaitOde, RowKind};
-use crate::ocp::{Block, Constraint, Ocp, Phase as OcpPhase, PhaseDuration, Term};
+use crate::ocp::{Block, CheckPoint, Constraint, Ocp, Phase as OcpPhase, PhaseDuration, Term};
 use crate::phases::{Duration, GaitSpec, Phase, PhaseSequence};
 
 use std::sync::Arc;
@@ -204,27 +204,7 @@ fn gait_ocp<'a>(
         // contact forces at every node with the node's control
         for k in 0..=n {
             let ku = if spec.controls == ControlShape::Linear { k } else { k.min(n - 1) };
-            let mut rows_lb = Vec::new();
-            let mut rows_ub = Vec::new();
-            // rows: λn ≥ 0 per normal row; μλn − λt ≥ 0 and μλn + λt ≥ 0 per rolling contact
-            let mut a_rows: Vec<Vec<(usize, f64)>> = Vec::new();
-            for (r, row) in set.rows.iter().enumerate() {
-                if row.kind == RowKind::Normal {
-                    a_rows.push(vec![(r, 1.0)]);
-                    rows_lb.push(0.0);
-                    rows_ub.push(f64::INFINITY);
-                    if let Some(t) = set.rows.iter().position(|o| o.contact == row.contact && o.kind == RowKind::Tangential) {
-                        a_rows.push(vec![(r, mu), (t, -1.0)]);
-                        a_rows.push(vec![(r, mu), (t, 1.0)]);
-                        rows_lb.extend([0.0, 0.0]);
-                        rows_ub.extend([f64::INFINITY, f64::INFINITY]);
-                    }
-                }
-            }
-            if a_rows.is_empty() {
-                continue;
-            }
-            let f = AdTerm(ContactForceRows { model, set: set.clone(), rows: a_rows });
+            let Some((f, rows_lb, rows_ub)) = contact_force_rows(model, set, mu) else { continue };
             constraints.push(Constraint {
                 term: Term {
                     name: "contact_forces".into(),
@@ -324,6 +304,74 @@ fn gait_ocp<'a>(
     })
 }
 
+/// The unilateral-contact and friction-cone rows of a contact set (λn ≥ 0 per normal
+/// row; μλn − λt ≥ 0 and μλn + λt ≥ 0 per rolling contact) as one function of
+/// `(x, u, θ)` with its bounds; `None` for a set without contacts.
+fn contact_force_rows<'a>(model: &'a GaitModel, set: &ConstraintSet, mu: f64) -> Option<(AdTerm<ContactForceRows<'a>>, Vec<f64>, Vec<f64>)> {
+    let mut rows_lb = Vec::new();
+    let mut rows_ub = Vec::new();
+    let mut a_rows: Vec<Vec<(usize, f64)>> = Vec::new();
+    for (r, row) in set.rows.iter().enumerate() {
+        if row.kind == RowKind::Normal {
+            a_rows.push(vec![(r, 1.0)]);
+            rows_lb.push(0.0);
+            rows_ub.push(f64::INFINITY);
+            if let Some(t) = set.rows.iter().position(|o| o.contact == row.contact && o.kind == RowKind::Tangential) {
+                a_rows.push(vec![(r, mu), (t, -1.0)]);
+                a_rows.push(vec![(r, mu), (t, 1.0)]);
+                rows_lb.extend([0.0, 0.0]);
+                rows_ub.extend([f64::INFINITY, f64::INFINITY]);
+            }
+        }
+    }
+    (!a_rows.is_empty()).then(|| (AdTerm(ContactForceRows { model, set: set.clone(), rows: a_rows }), rows_lb, rows_ub))
+}
+
+impl<'m> GaitCycle<'m> {
+    /// The name of every phase of the phase file, in its order.
+    pub fn phase_names(&self) -> Vec<String> {
+        self.seq.phases.iter().map(|p| p.name().to_string()).collect()
+    }
+
+    /// Friction coefficient of the cone (the phase file's, default 0.8).
+    pub fn friction(&self) -> f64 {
+        self.seq.gait.as_ref().map_or(0.8, |g| g.friction)
+    }
+
+    /// Check points that hold the contact constraints of continuous phase `j` at
+    /// `(interval, τ)`: λn ≥ 0 and the friction cone of its contacts, and (when the phase
+    /// file asks for clearance) every primitive not in contact above the ground, as the
+    /// node constraints hold them at the nodes.
+    pub fn contact_checks(&self, j: usize, interval: usize, tau: f64) -> Vec<CheckPoint<'m>> {
+        let model = self.model;
+        let set = &self.sets[self.continuous[j]];
+        let mut out = Vec::new();
+        if let Some((f, lb, ub)) = contact_force_rows(model, set, self.friction()) {
+            out.push(CheckPoint { name: "contact_forces".into(), phase: j, interval, tau, f: Arc::new(f), lb, ub });
+        }
+        if self.seq.gait.as_ref().is_none_or(|g| g.clearance) {
+            let active: Vec<usize> = set.rows.iter().map(|r| r.contact).collect();
+            for c in (0..model.contacts.len()).filter(|c| !active.contains(c)) {
+                let f = AdTerm(GapOfState { model, contact: c });
+                out.push(CheckPoint { name: format!("clearance({})", model.contacts[c].name), phase: j, interval, tau, f: Arc::new(f), lb: vec![0.0], ub: vec![f64::INFINITY] });
+            }
+        }
+        out
+    }
+}
+
+/// Where the instant `t` (s) of phase-file phase `set` falls in a solution's continuous
+/// phases: (continuous phase, interval, τ) with τ in (0, 1), or `None` at a node (where
+/// the node constraints already hold) or outside every phase.
+pub fn locate_instant(solution: &super::evaluation::GaitSolution, set: usize, t: f64) -> Option<(usize, usize, f64)> {
+    let (j, ph) = solution.phases.iter().enumerate().find(|(_, p)| p.set == set && t >= p.t0 - 1e-12 && t <= p.t0 + p.duration + 1e-12)?;
+    let n = ph.intervals();
+    let s = ((t - ph.t0) / ph.duration * n as f64).clamp(0.0, n as f64);
+    let k = (s.floor() as usize).min(n - 1);
+    let tau = s - k as f64;
+    (tau > 1e-6 && tau < 1.0 - 1e-6).then_some((j, k, tau))
+}
+
 fn impact_term<'a>(model: &'a GaitModel, set: &ConstraintSet, n_prev: usize, prev: usize) -> Term<'a> {
     let f = AdTerm(ImpactMap { model, set: set.clone() });
     Term {
@@ -377,6 +425,24 @@ impl GenericFunction for ContactForceRows<'_> {
         for (o, row) in self.rows.iter().enumerate() {
             out[o] = row.iter().fold(S::c(0.0), |acc, &(r, c)| acc + lam[r] * c);
         }
+        Ok(())
+    }
+}
+
+/// Normal gap of one contact primitive as a function of `(x, u, θ)` (the control has no
+/// effect), for check points.
+struct GapOfState<'a> {
+    model: &'a GaitModel,
+    contact: usize,
+}
+
+impl GenericFunction for GapOfState<'_> {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), String> {
+        let (nx, nu, nq) = (self.model.nx(), self.model.nu(), self.model.nq());
+        out[0] = self.model.gap(self.contact, &z[..nq], &z[nx + nu..]);
         Ok(())
     }
 }

@@ -12,6 +12,7 @@ pub mod synth;
 pub mod track;
 pub mod transient;
 pub mod tracking;
+pub mod validity;
 
 use crate::model::ad::{self, AdChunk, AdNested};
 use crate::model::effects::ModelScalar;
