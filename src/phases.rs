@@ -102,6 +102,18 @@ impl Duration {
     }
 }
 
+/// An event that ends a continuous phase in a forward simulation (`"end": {"touchdown":
+/// "l.heel"}`): the phase ends at the first instant the named contact, not active in the
+/// phase, reaches the ground (its gap φ falls from above zero to zero), so the impact that
+/// follows starts with the landing contact on the ground. Optimal control ignores it: its
+/// landing constraints put the contact on the ground at the phase end.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PhaseEnd {
+    /// Contact whose touchdown ends the phase, `r.PRIMITIVE` or `l.PRIMITIVE`.
+    pub touchdown: String,
+}
+
 /// A phase of the sequence.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
@@ -118,6 +130,10 @@ pub enum Phase {
         /// [`MAX_INTERVALS`]).
         #[serde(default = "one_interval")]
         intervals: usize,
+        /// Event that ends the phase before its duration (forward simulation only; the
+        /// duration is then the longest the phase may last).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        end: Option<PhaseEnd>,
     },
     /// An instantaneous plastic impact; `contacts` are those active right after it.
     Impact {
@@ -137,6 +153,13 @@ impl Phase {
     pub fn name(&self) -> &str {
         match self {
             Phase::Continuous { name, .. } | Phase::Impact { name, .. } => name,
+        }
+    }
+    /// The event that ends a continuous phase early in a simulation, if any.
+    pub fn end(&self) -> Option<&PhaseEnd> {
+        match self {
+            Phase::Continuous { end, .. } => end.as_ref(),
+            Phase::Impact { .. } => None,
         }
     }
     /// The contacts.
@@ -371,6 +394,33 @@ impl PhaseSequence {
                             path,
                             f(format!("contacts[{k}].contact")),
                             format!("phase '{}' lists contact '{}' twice", ph.name(), c.contact),
+                        ));
+                    }
+                }
+                if let Some(end) = ph.end() {
+                    if !known.contains(&end.touchdown.as_str()) {
+                        return Err(ModelError::invalid(
+                            path,
+                            f("end.touchdown".into()),
+                            format!(
+                                "phase '{}' ends at the touchdown of unknown contact '{}'; foot '{}' has: {}",
+                                ph.name(),
+                                end.touchdown,
+                                model.foot_name,
+                                known.join(", ")
+                            ),
+                        ));
+                    }
+                    if ph.contacts().iter().any(|c| c.contact == end.touchdown) {
+                        return Err(ModelError::invalid(
+                            path,
+                            f("end.touchdown".into()),
+                            format!(
+                                "phase '{}' ends at the touchdown of '{}', which is already on the ground in it; \
+                                 name a contact that lands at the end of the phase",
+                                ph.name(),
+                                end.touchdown
+                            ),
                         ));
                     }
                 }

@@ -4,7 +4,10 @@
 //! piecewise-linear controls have kinks there), the state is read on an output grid from
 //! the integrator's dense output, and every sample is re-evaluated to report ground
 //! reaction forces, centres of pressure, constraint drift and Baumgarte forces. An impact
-//! phase applies the plastic impact map.
+//! phase applies the plastic impact map. A continuous phase with `end.touchdown` stops at
+//! the first instant the named contact reaches the ground (CVODES root finding on its gap).
+//! [`SimulationResult::check`] lists landings away from the ground, touchdowns not reached
+//! and large stabilisation forces as [`SimulationWarning`]s.
 
 use crate::controls::ControlTable;
 use crate::integrate::{IntegrationStats, Integrator, IntegratorError, IntegratorSettings, Ode, OdeError};
@@ -82,9 +85,10 @@ pub struct ImpactRecord {
     pub impulses: Vec<(String, RowKind, f64)>,
     /// Kinetic energy before and after (J).
     pub kinetic_energy: (f64, f64),
-    /// Normal gap φ (m) of each contact active after the impact, at the impact: a fixed
-    /// phase duration does not place the landing foot on the ground, so a non-zero gap is
-    /// closed afterwards by the Baumgarte terms.
+    /// Normal gap φ (m) of each contact active after the impact, at the impact. A phase
+    /// ending at its landing contact's touchdown (`end.touchdown`) puts it on the ground; a
+    /// fixed duration does not, and the non-zero gap is then closed afterwards by the
+    /// Baumgarte terms ([`SimulationResult::check`] reports it).
     pub gaps: Vec<(String, f64)>,
 }
 
@@ -97,6 +101,22 @@ pub struct PhaseSpan {
     pub t0: f64,
     /// End (s).
     pub t1: f64,
+    /// Outcome of the phase's `end.touchdown` event, if it has one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub touchdown: Option<TouchdownOutcome>,
+}
+
+/// What became of a phase's `end.touchdown` event.
+#[derive(Debug, Clone, Serialize)]
+pub struct TouchdownOutcome {
+    /// The landing contact.
+    pub contact: String,
+    /// Whether it reached the ground before the phase's duration ran out (the phase then
+    /// ends at the touchdown instant).
+    pub landed: bool,
+    /// Its gap φ at the end of the phase (m): zero to the root-finding precision when it
+    /// landed.
+    pub gap_m: f64,
 }
 
 /// The result of a simulation.
@@ -110,6 +130,103 @@ pub struct SimulationResult {
     pub phases: Vec<PhaseSpan>,
     /// Integrator counters summed over all phases.
     pub stats: IntegrationStats,
+}
+
+/// Tolerances of [`SimulationResult::check`].
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct SanityTolerances {
+    /// Largest |φ| (m) of a contact at the impact that puts it on the ground (default
+    /// 1e-3 m). A larger gap is closed, or a penetration pushed out, by the Baumgarte terms
+    /// after the impact, not by the impact map.
+    pub landing_gap_m: f64,
+    /// Largest |Baumgarte force| (N) of a contact row (default 1 N). The stabilisation is
+    /// meant to hold integration drift (its forces are below 1e-5 N on contacts that land
+    /// on the ground); a 1 mm landing gap already asks about 1 N of it.
+    pub baumgarte_force_n: f64,
+}
+
+impl Default for SanityTolerances {
+    fn default() -> Self {
+        Self { landing_gap_m: 1e-3, baumgarte_force_n: 1.0 }
+    }
+}
+
+/// A physically doubtful feature of a simulation, found by [`SimulationResult::check`].
+#[derive(Debug, Clone, PartialEq, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case")]
+pub enum SimulationWarning {
+    /// A contact made active by an impact is away from the ground at the impact
+    /// (φ > 0: above it; φ < 0: below it).
+    LandingGap {
+        /// Impact phase.
+        phase: String,
+        /// Contact.
+        contact: String,
+        /// Time of the impact (s).
+        t: f64,
+        /// Gap φ (m).
+        gap_m: f64,
+        /// Tolerance on |φ| (m).
+        tolerance_m: f64,
+    },
+    /// A phase's `end.touchdown` contact did not reach the ground within the duration.
+    NoTouchdown {
+        /// Continuous phase.
+        phase: String,
+        /// Contact.
+        contact: String,
+        /// End of the phase (s).
+        t: f64,
+        /// Gap φ at the end (m).
+        gap_m: f64,
+    },
+    /// A stabilisation force above the tolerance (largest over the phase for the contact).
+    BaumgarteForce {
+        /// Continuous phase.
+        phase: String,
+        /// Contact.
+        contact: String,
+        /// Row (normal or tangential).
+        row: RowKind,
+        /// Time of the largest force (s).
+        t: f64,
+        /// The force (N).
+        force_n: f64,
+        /// Tolerance (N).
+        tolerance_n: f64,
+    },
+}
+
+impl std::fmt::Display for SimulationWarning {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let side = |g: f64| if g < 0.0 { "below" } else { "above" };
+        match self {
+            SimulationWarning::LandingGap { phase, contact, t, gap_m, tolerance_m } => write!(
+                f,
+                "phase '{phase}': contact '{contact}' is {:.1} mm {} the ground at the impact, t = {t:.4} s (gap {:.1} mm, tolerance {:.1} mm)",
+                gap_m.abs() * 1e3,
+                side(*gap_m),
+                gap_m * 1e3,
+                tolerance_m * 1e3
+            ),
+            SimulationWarning::NoTouchdown { phase, contact, t, gap_m } => write!(
+                f,
+                "phase '{phase}': contact '{contact}' does not touch down within the phase's duration; \
+                 at its end, t = {t:.4} s, it is {:.1} mm {} the ground (gap {:.1} mm)",
+                gap_m.abs() * 1e3,
+                side(*gap_m),
+                gap_m * 1e3
+            ),
+            SimulationWarning::BaumgarteForce { phase, contact, row, t, force_n, tolerance_n } => write!(
+                f,
+                "phase '{phase}': contact '{contact}' has a {} stabilisation (Baumgarte) force of {force_n:.2} N at t = {t:.4} s (tolerance {tolerance_n} N)",
+                match row {
+                    RowKind::Normal => "normal",
+                    RowKind::Tangential => "tangential",
+                }
+            ),
+        }
+    }
 }
 
 /// Figures of one continuous phase.
@@ -156,6 +273,63 @@ impl SimulationResult {
                 }
             }
             out.push(f);
+        }
+        out
+    }
+
+    /// Physical sanity of the simulation: landings away from the ground, touchdown events
+    /// not reached, and stabilisation forces above the tolerances. `sets` are the phases'
+    /// constraint sets of `model`, as passed to [`simulate`]. Warnings come in time order
+    /// of the phases; within a continuous phase, one Baumgarte warning per contact (its
+    /// largest force).
+    pub fn check(&self, model: &GaitModel, sets: &[ConstraintSet], tol: &SanityTolerances) -> Vec<SimulationWarning> {
+        let mut out = Vec::new();
+        for (pi, span) in self.phases.iter().enumerate() {
+            if let Some(imp) = self.impacts.iter().find(|i| i.phase == span.name) {
+                for (contact, gap) in &imp.gaps {
+                    if gap.abs() > tol.landing_gap_m {
+                        out.push(SimulationWarning::LandingGap {
+                            phase: imp.phase.clone(),
+                            contact: contact.clone(),
+                            t: imp.t,
+                            gap_m: *gap,
+                            tolerance_m: tol.landing_gap_m,
+                        });
+                    }
+                }
+                continue;
+            }
+            if let Some(td) = span.touchdown.as_ref().filter(|td| !td.landed) {
+                out.push(SimulationWarning::NoTouchdown {
+                    phase: span.name.clone(),
+                    contact: td.contact.clone(),
+                    t: span.t1,
+                    gap_m: td.gap_m,
+                });
+            }
+            let Some(set) = sets.get(pi) else { continue };
+            // (row, |force|, t) of the largest force of each contact
+            let mut worst: Vec<Option<(usize, f64, f64)>> = vec![None; model.contacts.len()];
+            for smp in self.samples.iter().filter(|s| s.phase == pi) {
+                for (r, row) in set.rows.iter().enumerate() {
+                    let v = smp.contact.baumgarte_force.get(r).copied().unwrap_or(0.0).abs();
+                    let w = &mut worst[row.contact];
+                    if v > tol.baumgarte_force_n && w.is_none_or(|(_, m, _)| v > m) {
+                        *w = Some((r, v, smp.t));
+                    }
+                }
+            }
+            for (r, force_n, t) in worst.into_iter().flatten() {
+                let row = &set.rows[r];
+                out.push(SimulationWarning::BaumgarteForce {
+                    phase: span.name.clone(),
+                    contact: model.contacts[row.contact].name.clone(),
+                    row: row.kind,
+                    t,
+                    force_n,
+                    tolerance_n: tol.baumgarte_force_n,
+                });
+            }
         }
         out
     }
@@ -287,14 +461,13 @@ pub fn simulate(
                         .collect(),
                 });
                 x[nq..2 * nq].copy_from_slice(&qd_plus);
-                res.phases.push(PhaseSpan { name: name.clone(), t0: t, t1: t });
+                res.phases.push(PhaseSpan { name: name.clone(), t0: t, t1: t, touchdown: None });
             }
-            Phase::Continuous { name, duration, .. } => {
-                let t_end = t + duration.value();
+            Phase::Continuous { name, duration, end, .. } => {
+                let t_max = t + duration.value();
                 let ode = SimulationOde { model, set, controls };
-                let mut bounds = controls.knots_within(t, t_end);
-                bounds.push(t_end);
-                let mut a = t;
+                let mut bounds = controls.knots_within(t, t_max);
+                bounds.push(t_max);
                 let sample = |tt: f64, xx: &[f64], u: &mut Vec<f64>| -> Result<Sample, SimulationError> {
                     controls.at(tt, u);
                     let mut xdot = vec![0.0; model.nx()];
@@ -305,7 +478,17 @@ pub fn simulate(
                         .map_err(|e| SimulationError::Dynamics { phase: name.clone(), t: tt, source: e })?;
                     Ok(Sample { t: tt, phase: pi, x: xx.to_vec(), feet: model.foot_loads(set, &rep), contact: rep })
                 };
+                // The touchdown watch: the landing contact's index; CVODES stops at the first
+                // fall of its gap φ from above zero to zero.
+                let watch = match end {
+                    Some(e) => Some(model.contact_index(&e.touchdown).ok_or_else(|| {
+                        SimulationError::Input(format!("phase '{name}' ends at the touchdown of unknown contact '{}'", e.touchdown))
+                    })?),
+                    None => None,
+                };
+                let mut landed = false;
                 res.samples.push(sample(t, &x, &mut u)?);
+                let mut a = t;
                 for &b in &bounds {
                     let step = settings.output_step;
                     let mut times: Vec<f64> = Vec::new();
@@ -318,19 +501,39 @@ pub fn simulate(
                     }
                     times.push(b);
                     let mut out = Vec::new();
-                    let st = integrator
-                        .integrate_dense(&ode, a, b, &x, theta, &times, &mut out)
-                        .map_err(|e| SimulationError::Integrator { phase: name.clone(), source: e })?;
+                    let (st, root) = match watch {
+                        Some(c) => {
+                            let gap = |_: f64, xx: &[f64]| model.contact_point(c, &xx[..nq], theta).1;
+                            integrator.integrate_dense_until(&ode, a, b, &x, theta, &times, &gap, &mut out)
+                        }
+                        None => integrator.integrate_dense(&ode, a, b, &x, theta, &times, &mut out).map(|st| (st, None)),
+                    }
+                    .map_err(|e| SimulationError::Integrator { phase: name.clone(), source: e })?;
                     res.stats += st;
-                    for (i, &tt) in times.iter().enumerate() {
-                        let xi = &out[i * model.nx()..(i + 1) * model.nx()];
-                        res.samples.push(sample(tt, xi, &mut u)?);
+                    // with a root, the last row of `out` is the state at the touchdown
+                    let n_out = out.len() / model.nx();
+                    for i in 0..n_out {
+                        let tt = match root {
+                            Some(tr) if i + 1 == n_out => tr,
+                            _ => times[i],
+                        };
+                        res.samples.push(sample(tt, &out[i * model.nx()..(i + 1) * model.nx()], &mut u)?);
                     }
                     x.copy_from_slice(&out[out.len() - model.nx()..]);
+                    if let Some(tr) = root {
+                        a = tr;
+                        landed = true;
+                        break;
+                    }
                     a = b;
                 }
-                res.phases.push(PhaseSpan { name: name.clone(), t0: t, t1: t_end });
-                t = t_end;
+                let touchdown = watch.map(|c| TouchdownOutcome {
+                    contact: model.contacts[c].name.clone(),
+                    landed,
+                    gap_m: model.contact_point(c, &x[..nq], theta).1,
+                });
+                res.phases.push(PhaseSpan { name: name.clone(), t0: t, t1: a, touchdown });
+                t = a;
             }
         }
     }

@@ -20,6 +20,7 @@ fn one_phase(name: &str, contacts: &[&str], duration: f64) -> PhaseSequence {
             contacts: contacts.iter().map(|c| ContactUse { contact: c.to_string(), rolling: true }).collect(),
             duration: Duration::Fixed(duration),
             intervals: 1,
+            end: None,
         }],
     }
 }

@@ -1008,3 +1008,64 @@ fn settings_deserialize_with_defaults_and_reject_unknown_fields() {
     assert_eq!(s.atol, IntegratorSettings::default().atol);
     assert!(serde_json::from_str::<IntegratorSettings>(r#"{"rtoll": 1e-6}"#).is_err());
 }
+
+/// The first time after `t0` at which `g(exact x(t))` falls through zero, by bisection on
+/// the closed form (scanning in 1e-3 steps for the bracket).
+fn closed_form_fall(t0: f64, g: impl Fn(&[f64]) -> f64) -> f64 {
+    let x = |t: f64| Oscillator::exact(t0, t, &OSC_X0, &OSC_P).0;
+    let mut lo = t0;
+    while !(g(&x(lo)) > 0.0 && g(&x(lo + 1e-3)) <= 0.0) {
+        lo += 1e-3;
+        assert!(lo < t0 + 20.0, "no fall");
+    }
+    let mut hi = lo + 1e-3;
+    for _ in 0..200 {
+        let m = 0.5 * (lo + hi);
+        if g(&x(m)) > 0.0 {
+            lo = m;
+        } else {
+            hi = m;
+        }
+    }
+    hi
+}
+
+/// Root finding stops at the first fall of the event through zero (rises are ignored),
+/// returns the state there, and is switched off again for the next call.
+#[test]
+fn dense_output_until_an_event_stops_at_its_first_fall() {
+    let mut integrator = Integrator::new(2, 2, settings(1e-10, Method::Bdf)).expect("integrator");
+    let (t0, t1) = (0.3, 8.0);
+    let times: Vec<f64> = (1..=77).map(|k| t0 + 0.1 * k as f64).filter(|&t| t <= t1).collect();
+    // x₀ falls through zero first; −x₀ starts negative, rises with that fall, and falls
+    // when x₀ rises through zero
+    let events: [(&str, fn(&[f64]) -> f64); 2] = [("x0", |x| x[0]), ("-x0", |x| -x[0])];
+    for (name, g) in events {
+        let truth = closed_form_fall(t0, g);
+        let mut out = vec![-1.0];
+        let event = move |_t: f64, x: &[f64]| g(x);
+        let (_, root) = integrator
+            .integrate_dense_until(&Oscillator, t0, t1, &OSC_X0, &OSC_P, &times, &event, &mut out)
+            .expect("until");
+        let tr = root.expect("a root");
+        assert!((tr - truth).abs() < 1e-8, "{name}: root {tr} vs {truth}");
+        let before = times.iter().filter(|&&t| t < tr).count();
+        assert_eq!(out.len(), 1 + 2 * (before + 1), "{name}");
+        let last = &out[out.len() - 2..];
+        let (exact, _) = Oscillator::exact(t0, tr, &OSC_X0, &OSC_P);
+        assert!(rel_err(last, &exact, 1e-3) < 1e-7, "{name}: {last:?} vs {exact:?}");
+        assert!(g(last) <= 1e-12, "{name}: event {} at the root", g(last));
+        eprintln!("{name}: root {tr:.12} (closed form {truth:.12}), {before} outputs before it");
+    }
+    // the next plain call has no root function: all outputs
+    let mut out = Vec::new();
+    integrator.integrate_dense(&Oscillator, t0, t1, &OSC_X0, &OSC_P, &times, &mut out).expect("dense");
+    assert_eq!(out.len(), 2 * times.len());
+    // no fall within the interval: every output and no root
+    let mut out = Vec::new();
+    let never = |_t: f64, _x: &[f64]| 1.0;
+    let (_, root) = integrator
+        .integrate_dense_until(&Oscillator, t0, t1, &OSC_X0, &OSC_P, &times, &never, &mut out)
+        .expect("until");
+    assert_eq!((root, out.len()), (None, 2 * times.len()));
+}

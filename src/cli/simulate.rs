@@ -8,7 +8,7 @@ use footfall::model::gait::COORDINATES;
 use footfall::model::{GaitModel, RowKind};
 use footfall::phases::{InitialState, PhaseSequence};
 use footfall::runfolder::RunFolder;
-use footfall::simulate::{simulate, SimulationResult, SimulationSettings};
+use footfall::simulate::{simulate, SanityTolerances, SimulationResult, SimulationSettings, SimulationWarning};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -47,6 +47,16 @@ pub struct Args {
     /// Relative and absolute integrator tolerance.
     #[arg(long, default_value_t = 1e-8, value_parser = super::validate::positive)]
     tol: f64,
+    /// Refuse (exit 1, no output folder) instead of warning when a landing is away from
+    /// the ground, a touchdown is not reached, or a stabilisation force is too large.
+    #[arg(long)]
+    strict: bool,
+    /// Largest landing gap |φ| at an impact before a warning (m).
+    #[arg(long, default_value_t = 1e-3)]
+    gap_tolerance: f64,
+    /// Largest stabilisation (Baumgarte) force before a warning (N).
+    #[arg(long, default_value_t = 1.0)]
+    baumgarte_tolerance: f64,
 }
 
 /// Resolve a foot argument: a bundled name or a file path.
@@ -121,6 +131,12 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         integrator: IntegratorSettings { rtol: args.tol, atol: args.tol, ..Default::default() },
     };
     settings.integrator.validate().context("integrator settings")?;
+    for (flag, v) in [("--gap-tolerance", args.gap_tolerance), ("--baumgarte-tolerance", args.baumgarte_tolerance)] {
+        if !(v.is_finite() && v > 0.0) {
+            return Err(anyhow!("{flag} must be a positive number, got {v}"));
+        }
+    }
+    let tolerances = SanityTolerances { landing_gap_m: args.gap_tolerance, baumgarte_force_n: args.baumgarte_tolerance };
     if !quiet {
         eprintln!(
             "simulating {} phases of '{}' with model '{}' and foot '{}'…",
@@ -133,13 +149,27 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     // refuse an existing output folder before the work, not after it
     let folder = RunFolder::create(&args.out, args.overwrite)?;
     let res = simulate(&model, &seq, &sets, &x0, &controls, &theta, &settings)?;
+    let warnings = res.check(&model, &sets, &tolerances);
+    if args.strict && !warnings.is_empty() {
+        // the staged folder is dropped uncommitted: nothing is left behind
+        let list: Vec<String> = warnings.iter().map(|w| format!("  {w}")).collect();
+        return Err(anyhow!(
+            "the simulation is not physically sound (--strict; {} problem{}):\n{}",
+            warnings.len(),
+            if warnings.len() == 1 { "" } else { "s" },
+            list.join("\n")
+        ));
+    }
+    for w in &warnings {
+        eprintln!("warning: {w}");
+    }
     folder.write("timeseries.csv", timeseries_csv(&model, &sets, &res).as_bytes())?;
-    let summary = summary_json(&model, &seq, &sets, &res, &args, started.elapsed().as_secs_f64());
+    let summary = summary_json(&model, &seq, &sets, &res, &args, &tolerances, &warnings, started.elapsed().as_secs_f64());
     folder.write("summary.json", serde_json::to_string_pretty(&summary)?.as_bytes())?;
     let out = folder.commit()?;
     if !quiet {
         eprintln!(
-            "done: {} samples, {} CVODES steps, max drift {:.2e} m, max Baumgarte force {:.3} N → {}",
+            "done: {} samples, {} CVODES steps, max drift {:.2e} m, max Baumgarte force {:.2e} N → {}",
             res.samples.len(),
             res.stats.steps,
             res.max_position_drift(&sets),
@@ -199,14 +229,27 @@ fn timeseries_csv(model: &GaitModel, sets: &[footfall::model::ConstraintSet], re
     s
 }
 
+#[allow(clippy::too_many_arguments)]
 fn summary_json(
     model: &GaitModel,
     seq: &PhaseSequence,
     sets: &[footfall::model::ConstraintSet],
     res: &SimulationResult,
     args: &Args,
+    tolerances: &SanityTolerances,
+    warnings: &[SimulationWarning],
     seconds: f64,
 ) -> serde_json::Value {
+    let warnings: Vec<serde_json::Value> = warnings
+        .iter()
+        .map(|w| {
+            let mut v = serde_json::to_value(w).unwrap_or_default();
+            if let Some(o) = v.as_object_mut() {
+                o.insert("message".into(), w.to_string().into());
+            }
+            v
+        })
+        .collect();
     let peak = |side: usize| res.samples.iter().map(|s| s.feet[side].fy).fold(0.0f64, f64::max);
     let last = res.samples.last().map(|s| s.x.clone()).unwrap_or_default();
     serde_json::json!({
@@ -227,6 +270,8 @@ fn summary_json(
         "max_position_drift_m": res.max_position_drift(sets),
         "max_velocity_drift_m_s": res.max_velocity_drift(sets),
         "max_baumgarte_force_n": res.max_baumgarte_force(sets),
+        "sanity_tolerances": tolerances,
+        "warnings": warnings,
         "final_state": last,
         "state_names": model.state_names(),
         "wall_time_s": seconds,

@@ -267,6 +267,8 @@ pub enum IntegratorError {
 struct CallCtx<'a> {
     ode: &'a dyn Ode,
     p: &'a [f64],
+    /// Event function `g(t, x)` of a call with root finding.
+    event: Option<&'a dyn Fn(f64, &[f64]) -> f64>,
 }
 
 /// Heap block shared with the C callbacks through CVODES's user-data and error-handler
@@ -510,6 +512,24 @@ unsafe extern "C" fn sens_rhs_callback(
     })
 }
 
+/// `CVRootFn` (one function): gout[0] = g(t, y) of the call's event.
+unsafe extern "C" fn root_callback(t: f64, y: sys::N_Vector, gout: *mut f64, user_data: *mut c_void) -> c_int {
+    run_callback(user_data, t, |shared, ctx| {
+        let nx = shared.nx;
+        let event = ctx
+            .event
+            .ok_or_else(|| OdeError::Fatal("internal error: root function called without an event".to_string()))?;
+        // SAFETY: `y` is a serial vector of length nx; `gout` holds the one root function.
+        let (y, g) = unsafe { (nv_slice(y, nx), &mut *gout) };
+        *g = event(t, y);
+        if g.is_finite() {
+            Ok(())
+        } else {
+            Err(OdeError::Fatal(format!("non-finite event function value at t = {t}")))
+        }
+    })
+}
+
 /// `CVErrHandlerFn`: keeps CVODES messages off stderr and stores them for the error value.
 unsafe extern "C" fn error_handler(
     error_code: c_int,
@@ -650,6 +670,8 @@ pub struct Integrator {
     mat: sys::SUNMatrix,
     ls: sys::SUNLinearSolver,
     shared: *mut Shared,
+    /// Whether CVODES root finding is switched on (by the last call).
+    roots_on: bool,
 }
 
 // SAFETY: every pointer is exclusively owned by this value (nothing is shared with other
@@ -721,6 +743,7 @@ impl Integrator {
             mat: ptr::null_mut(),
             ls: ptr::null_mut(),
             shared,
+            roots_on: false,
         };
         // SAFETY: every call below receives pointers created in this function and checked
         // for null; `shared` is a live heap block that outlives the CVODES memory.
@@ -859,7 +882,7 @@ impl Integrator {
     ) -> Result<IntegrationStats, IntegratorError> {
         check_dim("x1", self.nx, x1.len())?;
         self.start(ode, t0, t1, x0, p, false)?;
-        let ctx = CallCtx { ode, p };
+        let ctx = CallCtx { ode, p, event: None };
         // SAFETY: `ctx` outlives the guard; `shared` is live.
         let guard = unsafe { CallGuard::new(self.shared, &ctx) };
         self.advance(t0, t1)?;
@@ -895,7 +918,7 @@ impl Integrator {
             s1.len(),
         )?;
         self.start(ode, t0, t1, x0, p, true)?;
-        let ctx = CallCtx { ode, p };
+        let ctx = CallCtx { ode, p, event: None };
         // SAFETY: `ctx` outlives the guard; `shared` is live.
         let guard = unsafe { CallGuard::new(self.shared, &ctx) };
         self.advance(t0, t1)?;
@@ -946,7 +969,7 @@ impl Integrator {
             previous = t;
         }
         self.start(ode, t0, t1, x0, p, true)?;
-        let ctx = CallCtx { ode, p };
+        let ctx = CallCtx { ode, p, event: None };
         // SAFETY: `ctx` outlives the guard; `shared` is live.
         let guard = unsafe { CallGuard::new(self.shared, &ctx) };
         let (lx, ls) = (xs.len(), ss.len());
@@ -1011,7 +1034,7 @@ impl Integrator {
             previous = t;
         }
         self.start(ode, t0, t1, x0, p, false)?;
-        let ctx = CallCtx { ode, p };
+        let ctx = CallCtx { ode, p, event: None };
         // SAFETY: `ctx` outlives the guard; `shared` is live.
         let guard = unsafe { CallGuard::new(self.shared, &ctx) };
         let len = out.len();
@@ -1021,6 +1044,85 @@ impl Integrator {
             out.truncate(len);
         }
         result.map(|()| self.stats(false))
+    }
+
+    /// States at the strictly increasing output times `times ⊂ [t0, t1]`, as
+    /// [`integrate_dense`](Self::integrate_dense), stopping early at the first time
+    /// `t* ∈ (t0, t1]` where `event(t, x)` falls through zero (from positive to zero or
+    /// negative; CVODES root finding on each step's interpolating polynomial, located to a
+    /// few ulp of t). Appends the states at the output times before `t*`, then the state
+    /// at `t*`, and returns `Some(t*)`; without a root, all output states and `None`. A
+    /// root exactly at t0 does not count (the event must first be positive). On error
+    /// `out` is left as it was.
+    #[allow(clippy::too_many_arguments)]
+    pub fn integrate_dense_until(
+        &mut self,
+        ode: &dyn Ode,
+        t0: f64,
+        t1: f64,
+        x0: &[f64],
+        p: &[f64],
+        times: &[f64],
+        event: &dyn Fn(f64, &[f64]) -> f64,
+        out: &mut Vec<f64>,
+    ) -> Result<(IntegrationStats, Option<f64>), IntegratorError> {
+        check_interval(t0, t1)?;
+        let mut previous = f64::NEG_INFINITY;
+        for (index, &t) in times.iter().enumerate() {
+            if !(t >= t0 && t <= t1 && t > previous) {
+                return Err(IntegratorError::BadOutputTime { index, t });
+            }
+            previous = t;
+        }
+        self.start(ode, t0, t1, x0, p, false)?;
+        let mut direction: [c_int; 1] = [-1];
+        // SAFETY: `mem` is initialised; one root function; `direction` has one entry and
+        // CVODES copies it.
+        unsafe {
+            check_setup("CVodeRootInit", sys::CVodeRootInit(self.mem, 1, Some(root_callback)))?;
+            self.roots_on = true;
+            check_setup("CVodeSetRootDirection", sys::CVodeSetRootDirection(self.mem, direction.as_mut_ptr()))?;
+            check_setup("CVodeSetNoInactiveRootWarn", sys::CVodeSetNoInactiveRootWarn(self.mem))?;
+        }
+        let ctx = CallCtx { ode, p, event: Some(event) };
+        // SAFETY: `ctx` outlives the guard; `shared` is live.
+        let guard = unsafe { CallGuard::new(self.shared, &ctx) };
+        let len = out.len();
+        let result = self.dense_outputs_until(t0, x0, times, out);
+        drop(guard);
+        if result.is_err() {
+            out.truncate(len);
+        }
+        result.map(|root| (self.stats(false), root))
+    }
+
+    fn dense_outputs_until(
+        &mut self,
+        t0: f64,
+        x0: &[f64],
+        times: &[f64],
+        out: &mut Vec<f64>,
+    ) -> Result<Option<f64>, IntegratorError> {
+        let mut started = false;
+        let mut t_reached = t0;
+        for &t in times {
+            if !started && t - t0 <= 4.0 * f64::EPSILON * t0.abs().max(t.abs()) {
+                out.extend_from_slice(x0);
+                continue;
+            }
+            started = true;
+            let (tr, flag) = self.advance_flag(t_reached, t)?;
+            t_reached = tr;
+            let y = self.state();
+            if !all_finite(y) {
+                return Err(IntegratorError::NonFinite { t: tr });
+            }
+            out.extend_from_slice(y);
+            if flag == sys::CV_ROOT_RETURN {
+                return Ok(Some(tr));
+            }
+        }
+        Ok(None)
     }
 
     fn dense_outputs(
@@ -1076,6 +1178,10 @@ impl Integrator {
             nv_slice_mut(self.y, self.nx).copy_from_slice(x0);
             check_setup("CVodeReInit", sys::CVodeReInit(self.mem, t0, self.y))?;
             check_setup("CVodeSetStopTime", sys::CVodeSetStopTime(self.mem, t1))?;
+            if self.roots_on {
+                check_setup("CVodeRootInit", sys::CVodeRootInit(self.mem, 0, None))?;
+                self.roots_on = false;
+            }
             if sensitivities {
                 self.reset_sensitivities();
                 check_setup(
@@ -1092,13 +1198,19 @@ impl Integrator {
     /// Advance to `tout` (CV_NORMAL, interpolating inside the last step); returns the
     /// reached time.  `t_from` is reported if CVODES fails before taking a step.
     fn advance(&mut self, t_from: f64, tout: f64) -> Result<f64, IntegratorError> {
+        self.advance_flag(t_from, tout).map(|(t, _)| t)
+    }
+
+    /// [`advance`](Self::advance), also returning CVODES's non-negative flag
+    /// (`CV_ROOT_RETURN` when an event stopped it before `tout`).
+    fn advance_flag(&mut self, t_from: f64, tout: f64) -> Result<(f64, c_int), IntegratorError> {
         let mut tret = t_from;
         // SAFETY: `mem` is initialised by `start`; `y` has length nx; the call context is set.
         let flag = unsafe { sys::CVode(self.mem, tout, self.y, &mut tret, sys::CV_NORMAL) };
         if flag < 0 {
             return Err(self.failure(flag, tret));
         }
-        Ok(tret)
+        Ok((tret, flag))
     }
 
     /// Turn a negative CVODES flag into an error, preferring the ODE's own fatal error.

@@ -91,7 +91,7 @@ impl GaitSolution {
 
     /// Phase spans for plots and tables.
     pub fn phase_spans(&self) -> Vec<PhaseSpan> {
-        self.phases.iter().map(|p| PhaseSpan { name: p.name.clone(), t0: p.t0, t1: p.t0 + p.duration }).collect()
+        self.phases.iter().map(|p| PhaseSpan { name: p.name.clone(), t0: p.t0, t1: p.t0 + p.duration, touchdown: None }).collect()
     }
 
     /// The model evaluated at every shooting node (a node shared by two phases once, from
