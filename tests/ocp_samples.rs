@@ -68,6 +68,21 @@ impl NodeFunction for Residual {
         }
         Ok(())
     }
+    fn has_hessian(&self) -> bool {
+        true
+    }
+    fn weighted_hessian(&self, z: &[f64], weights: &[f64], out: &mut [f64]) -> Result<(), String> {
+        // z = (x₀, x₁, u, θ): ∂²/∂x₀² = 2, ∂²/∂x₁² = −sin(x₁) u, ∂²/∂x₁∂u = cos x₁, ∂²/∂x₁∂θ = 1/4
+        let w = weights[0];
+        out.iter_mut().for_each(|v| *v = 0.0);
+        out[0] = 2.0 * w;
+        out[1 + 4] = -z[1].sin() * z[2] * w;
+        out[1 + 2 * 4] = z[1].cos() * w;
+        out[2 + 4] = out[1 + 2 * 4];
+        out[1 + 3 * 4] = 0.25 * w;
+        out[3 + 4] = 0.25 * w;
+        Ok(())
+    }
 }
 
 const INTERVALS: usize = 3;
@@ -584,4 +599,56 @@ fn check_points_remove_a_violation_between_the_nodes() {
         checks.push((k, tau));
     }
     panic!("the check points did not remove the violation: {checks:?}");
+}
+
+#[test]
+fn check_point_curvature_matches_central_differences_of_the_gradient() {
+    // Σ ν ∇²c over the check rows alone: the exact Hessian with multipliers on the check
+    // rows less the one without, against central differences of Jᵀν
+    let ode = Pendulum;
+    let ocp = checked_problem(&ode);
+    let tr = Transcription::new(&ocp).unwrap();
+    let plain_ocp = problem(&ode);
+    let first_check = Transcription::new(&plain_ocp).unwrap().m();
+    let w = point(&tr);
+    let mut nu = vec![0.0; tr.m()];
+    for (i, v) in nu[first_check..].iter_mut().enumerate() {
+        *v = 0.7 - 0.45 * i as f64;
+    }
+    let dense = |lam: &[f64]| {
+        let (_, (r, c, v)) = tr.evaluate_with_hessian(&w, lam).unwrap();
+        let mut h = vec![0.0; tr.n() * tr.n()];
+        for k in 0..r.len() {
+            h[r[k] + c[k] * tr.n()] += v[k];
+            if r[k] != c[k] {
+                h[c[k] + r[k] * tr.n()] += v[k];
+            }
+        }
+        h
+    };
+    let (with, without) = (dense(&nu), dense(&vec![0.0; tr.m()]));
+    let (jr, jc) = tr.jacobian_pattern();
+    let jt_nu = |w: &[f64]| {
+        let ev = tr.evaluate(w, true).unwrap();
+        let mut g = vec![0.0; tr.n()];
+        for k in 0..jr.len() {
+            g[jc[k]] += ev.jac[k] * nu[jr[k]];
+        }
+        g
+    };
+    let eps = 1e-5;
+    let mut largest = 0.0f64;
+    for j in 0..tr.n() {
+        let (mut wp, mut wm) = (w.clone(), w.clone());
+        wp[j] += eps;
+        wm[j] -= eps;
+        let (gp, gm) = (jt_nu(&wp), jt_nu(&wm));
+        for i in 0..tr.n() {
+            let fd = (gp[i] - gm[i]) / (2.0 * eps);
+            let exact = with[i + j * tr.n()] - without[i + j * tr.n()];
+            largest = largest.max(fd.abs());
+            assert!((exact - fd).abs() < 1e-5 * (1.0 + fd.abs()), "∂²(νᵀc)/∂w[{i}]∂w[{j}]: {exact} against {fd}");
+        }
+    }
+    assert!(largest > 0.1, "the check points' curvature is not exercised: {largest}");
 }

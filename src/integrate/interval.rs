@@ -347,14 +347,45 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
         xs_out: &mut Vec<f64>,
         ss_out: &mut Vec<f64>,
     ) -> Result<bool, IntegratorError> {
+        self.integrate_with_hessian_interior(integ, x0, p, lambda, x1, s1, hess, outputs, xs_out, ss_out, &[], &mut |_, _| Ok(Vec::new()))
+    }
+
+    /// As [`integrate_with_hessian_and_outputs`](Self::integrate_with_hessian_and_outputs),
+    /// with the curvature of `w_iᵀ x(τ_i)` added for every interior instant `τ_i` of
+    /// `interior` (each one of `outputs`): the same identity over `[0, τ_i]` with
+    /// `μ_i(τ)ᵀ = w_iᵀΨ(τ_i)Ψ(τ)⁻¹`, 4 Gauss–Legendre nodes on that span in the same pass.
+    /// `weights(i, x(τ_i))` gives `w_i` (nx) once the state there is known (e.g. the
+    /// multipliers of a constraint on `x(τ_i)` times its gradient).
+    #[allow(clippy::too_many_arguments)]
+    pub fn integrate_with_hessian_interior(
+        &self,
+        integ: &mut super::Integrator,
+        x0: &[f64],
+        p: &[f64],
+        lambda: &[f64],
+        x1: &mut [f64],
+        s1: &mut [f64],
+        hess: &mut [f64],
+        outputs: &[f64],
+        xs_out: &mut Vec<f64>,
+        ss_out: &mut Vec<f64>,
+        interior: &[f64],
+        weights: &mut dyn FnMut(usize, &[f64]) -> Result<Vec<f64>, IntegratorError>,
+    ) -> Result<bool, IntegratorError> {
         let m = self.model;
-        let (nx, nu, nt) = (m.nx(), m.nu(), m.ntheta());
+        let nx = m.nx();
         let np = self.np();
         let nz = nx + np;
-        let nw = nx + nu + nt;
         let nodes = &GAUSS4;
-        // one pass to the quadrature nodes, the outputs and the end, in time order
-        let mut times: Vec<f64> = nodes.iter().map(|g| g.0).chain(outputs.iter().copied()).chain([1.0]).collect();
+        // one pass to the quadrature nodes (of [0, 1] and of every [0, τ_i]), the outputs
+        // and the end, in time order
+        let mut times: Vec<f64> = nodes
+            .iter()
+            .map(|g| g.0)
+            .chain(interior.iter().flat_map(|&ti| nodes.iter().map(move |g| ti * g.0)))
+            .chain(outputs.iter().copied())
+            .chain([1.0])
+            .collect();
         times.sort_by(f64::total_cmp);
         times.dedup();
         let at = |t: f64| times.partition_point(|&v| v < t);
@@ -369,16 +400,45 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
             xs_out.extend_from_slice(&xs[i * nx..(i + 1) * nx]);
             ss_out.extend_from_slice(&ss[i * sz..(i + 1) * sz]);
         }
-        // λᵀΨ(1)
-        let lam_psi1: Vec<f64> = (0..nx).map(|j| (0..nx).map(|i| lambda[i] * s1[i + j * nx]).sum()).collect();
         hess.iter_mut().for_each(|v| *v = 0.0);
+        // (end instant, weights on the state there): λ at 1, then each w_i at τ_i
+        let mut spans: Vec<(f64, Vec<f64>)> = vec![(1.0, lambda.to_vec())];
+        for (i, &ti) in interior.iter().enumerate() {
+            let q = at(ti);
+            spans.push((ti, weights(i, &xs[q * nx..(q + 1) * nx])?));
+        }
+        for (t_end, w_end) in spans {
+            let q_end = at(t_end);
+            let s_end = &ss[q_end * sz..(q_end + 1) * sz];
+            if !self.add_span_curvature(p, &xs, &ss, &times, t_end, &w_end, s_end, hess)? {
+                return Ok(false);
+            }
+        }
+        Ok(true)
+    }
+
+    /// Add `∇²_z w_endᵀ x(t_end)` to `hess` by Gauss–Legendre quadrature over `[0, t_end]`
+    /// from the states and sensitivities `xs`, `ss` at `times`; `s_end` = S(t_end).
+    #[allow(clippy::too_many_arguments)]
+    /// Returns `Ok(false)` when the model has no second derivatives.
+    fn add_span_curvature(&self, p: &[f64], xs: &[f64], ss: &[f64], times: &[f64], t_end: f64, w_end: &[f64], s_end: &[f64], hess: &mut [f64]) -> Result<bool, IntegratorError> {
+        let m = self.model;
+        let (nx, nu, nt) = (m.nx(), m.nu(), m.ntheta());
+        let np = self.np();
+        let nz = nx + np;
+        let nw = nx + nu + nt;
+        let sz = nx * nz;
+        let at = |t: f64| times.partition_point(|&v| v < t);
+        // wᵀΨ(t_end)
+        let lam_psi1: Vec<f64> = (0..nx).map(|j| (0..nx).map(|i| w_end[i] * s_end[i + j * nx]).sum()).collect();
         let dur = p[self.p_duration()];
         let theta = &p[self.p_theta()];
         let mut u = vec![0.0; nu];
         let mut h = vec![0.0; nw * nw];
         let mut xdot = vec![0.0; nx];
         let (mut fx, mut fu, mut ft) = (vec![0.0; nx * nx], vec![0.0; nx * nu], vec![0.0; nx * nt]);
-        for &(tau, wq) in nodes.iter() {
+        for &(g, wg) in GAUSS4.iter() {
+            let (tau, wq) = (t_end * g, t_end * wg);
             let q = at(tau);
             let x = &xs[q * nx..(q + 1) * nx];
             let s = &ss[q * sz..(q + 1) * sz];

@@ -110,3 +110,96 @@ pub(super) fn check_values(
     }
     Ok(out)
 }
+
+/// `(x(τ), u(τ), θ)` of an interval at `x` and τ, from its packed parameters `p`.
+fn instant_args<O: crate::integrate::ControlledOde + ?Sized>(interval: &ShootingInterval<'_, O>, x: &[f64], p: &[f64], tau: f64) -> Vec<f64> {
+    let u0 = &p[interval.p_u0()];
+    let u: Vec<f64> = match interval.p_u1().map(|r| &p[r]) {
+        Some(u1) => u0.iter().zip(u1).map(|(a, b)| (1.0 - tau) * a + tau * b).collect(),
+        None => u0.to_vec(),
+    };
+    x.iter().chain(&u).chain(&p[interval.p_theta()]).copied().collect()
+}
+
+/// The weights `Σ_c Σ_r ν_r ∂g_r/∂x` (nx) on the state at `tau` of the check points of an
+/// interval there, with their multipliers `lambda` (the NLP's, by row): the state part of
+/// the checks' curvature comes from the interval's second-order pass with these weights.
+pub(super) fn state_weights(ocp: &Ocp<'_>, phase: usize, checks: &[(f64, usize, usize)], tau: f64, p: &[f64], x: &[f64], lambda: &[f64]) -> Result<Vec<f64>, String> {
+    let ph = &ocp.phases[phase];
+    let interval = ShootingInterval::new(ph.ode, ph.controls);
+    let nx = ph.ode.nx();
+    let z = instant_args(&interval, x, p, tau);
+    let nz = z.len();
+    let mut w = vec![0.0; nx];
+    for &(_, ci, row) in checks.iter().filter(|c| c.0 == tau) {
+        let cp = &ocp.checks[ci];
+        let d = cp.f.dim();
+        let mut v = vec![0.0; d];
+        let mut jz = vec![0.0; d * nz];
+        cp.f.eval(&z, &mut v, Some(&mut jz)).map_err(|e| format!("check point '{}': {e}", cp.name))?;
+        for (k, wk) in w.iter_mut().enumerate() {
+            *wk += (0..d).map(|i| lambda[row + i] * jz[i + k * d]).sum::<f64>();
+        }
+    }
+    Ok(w)
+}
+
+/// Add the direct part of the check points' curvature, `Dᵀ (Σ ν ∇²g) D` with
+/// `D = ∂(x(τ), u(τ), θ)/∂(x0, p)`, to an interval's Hessian `hess` ((nx+np)²,
+/// column-major), from the states `xs` and sensitivities `ss` at `taus`. Functions without
+/// second derivatives add nothing.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn add_direct_curvature(
+    ocp: &Ocp<'_>,
+    phase: usize,
+    checks: &[(f64, usize, usize)],
+    taus: &[f64],
+    p: &[f64],
+    xs: &[f64],
+    ss: &[f64],
+    lambda: &[f64],
+    hess: &mut [f64],
+) -> Result<(), String> {
+    let ph = &ocp.phases[phase];
+    let interval = ShootingInterval::new(ph.ode, ph.controls);
+    let (nx, nu, nt) = (ph.ode.nx(), ph.ode.nu(), ocp.ntheta);
+    let ncols = nx + interval.np();
+    let nw = nx + nu + nt;
+    for &(tau, ci, row) in checks {
+        let cp = &ocp.checks[ci];
+        let d = cp.f.dim();
+        let weights = &lambda[row..row + d];
+        if !cp.f.has_hessian() || weights.iter().all(|v| *v == 0.0) {
+            continue;
+        }
+        let q = taus.iter().position(|&t| t == tau).expect("every check point was integrated to");
+        let z = instant_args(&interval, &xs[q * nx..(q + 1) * nx], p, tau);
+        let mut g = vec![0.0; nw * nw];
+        cp.f.weighted_hessian(&z, weights, &mut g).map_err(|e| format!("check point '{}': {e}", cp.name))?;
+        // D (nw × ncols): the state rows are S(τ), the control and θ rows direct
+        let s = &ss[q * nx * ncols..(q + 1) * nx * ncols];
+        let mut dm = vec![0.0; nw * ncols];
+        for c in 0..ncols {
+            dm[c * nw..c * nw + nx].copy_from_slice(&s[c * nx..(c + 1) * nx]);
+        }
+        for k in 0..nu {
+            match interval.p_u1() {
+                Some(r1) => {
+                    dm[nx + k + (nx + interval.p_u0().start + k) * nw] = 1.0 - tau;
+                    dm[nx + k + (nx + r1.start + k) * nw] = tau;
+                }
+                None => dm[nx + k + (nx + interval.p_u0().start + k) * nw] = 1.0,
+            }
+        }
+        for (k, c) in interval.p_theta().enumerate() {
+            dm[nx + nu + k + (nx + c) * nw] = 1.0;
+        }
+        let gd: Vec<f64> = (0..ncols).flat_map(|c| { let (g, dm) = (&g, &dm); (0..nw).map(move |r| (0..nw).map(|k| g[r + k * nw] * dm[k + c * nw]).sum::<f64>()) }).collect();
+        for a in 0..ncols {
+            for b in 0..ncols {
+                hess[a + b * ncols] += (0..nw).map(|r| dm[r + a * nw] * gd[r + b * nw]).sum::<f64>();
+            }
+        }
+    }
+    Ok(())
+}

@@ -687,12 +687,25 @@ impl<'o, 'a> Transcription<'o, 'a> {
             s = vec![0.0; nx * (nx + np)];
             let weights: Vec<f64> = lam[iv.row..iv.row + nx].iter().map(|v| -v).collect();
             let mut h = vec![0.0; (nx + np) * (nx + np)];
-            // the samples' states and sensitivities come from the same pass
-            match interval.integrate_with_hessian_and_outputs(&mut integ, x0, &p, &weights, &mut x1, &mut s, &mut h, &taus, &mut xs, &mut ss) {
-                Ok(true) => {
-                    hess = Some(h);
-                    Ok(integ.stats_snapshot())
-                }
+            // the samples' and check points' states and sensitivities come from the same
+            // pass, with the curvature of the check points' state dependence
+            let interior: Vec<f64> = {
+                let mut v: Vec<f64> = iv.checks.iter().map(|c| c.0).collect();
+                v.dedup();
+                v
+            };
+            let mut check_weights = |i: usize, x: &[f64]| {
+                super::checks::state_weights(self.ocp, iv.phase, &iv.checks, interior[i], &p, x, lam)
+                    .map_err(|reason| IntegratorError::BadSettings { field: "check point", reason })
+            };
+            match interval.integrate_with_hessian_interior(&mut integ, x0, &p, &weights, &mut x1, &mut s, &mut h, &taus, &mut xs, &mut ss, &interior, &mut check_weights) {
+                Ok(true) => match super::checks::add_direct_curvature(self.ocp, iv.phase, &iv.checks, &taus, &p, &xs, &ss, lam, &mut h) {
+                    Ok(()) => {
+                        hess = Some(h);
+                        Ok(integ.stats_snapshot())
+                    }
+                    Err(reason) => Err(IntegratorError::BadSettings { field: "check point", reason }),
+                },
                 Ok(false) => Err(IntegratorError::BadSettings {
                     field: "hessian",
                     reason: format!("the dynamics of phase '{}' provide no second derivatives", ph.name),
