@@ -92,7 +92,8 @@ impl<'m> Refinement<'_, 'm> {
                 for v in &found.violations {
                     eprintln!("between the nodes: {v}");
                 }
-                eprintln!("adding {} check point(s) ({} in all) and solving again from this solution", new.len(), sites.len() + new.len());
+                let at: Vec<String> = new.iter().map(|&(j, k, tau)| format!("{} interval {k} τ = {tau:.3}", solution.phases[j].name)).collect();
+                eprintln!("adding {} check point(s) ({}; {} in all) and solving again from this solution", new.len(), at.join(", "), sites.len() + new.len());
             }
             sites.extend(new);
             w = next;
