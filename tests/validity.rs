@@ -1,8 +1,9 @@
 //! Physically valid between the nodes: the validity check on hand-made samples (a pulling
 //! ground, a force outside the friction cone, a foot inside the floor, a large Baumgarte
 //! force), and end to end on the bundled ellipse track, whose kept solution lets the ground
-//! pull the left foot with 115.7 N between two nodes after heel strike: without check points
-//! the run is flagged (verdict, report, exit code 5); with them the solve removes it.
+//! pull the left foot with 115.7 N between two nodes after heel strike: its report lists it;
+//! with `--check-points` and no iteration left the run is flagged (verdict, report, exit
+//! code 5), and with iterations the solve removes it.
 
 mod common;
 
@@ -107,8 +108,17 @@ fn a_track_that_breaks_physics_between_nodes_is_flagged_and_check_points_repair_
     let flagged = tmp.path().join("flagged");
     let repaired = tmp.path().join("repaired");
     let base = common::root().join("tests/data/hidden/base");
-    // the kept tracking solution of the bundled trial (a KKT point: 0 iterations), as it is
-    let o = footfall(&["--quiet", "track", "--init", base.to_str().unwrap(), "--no-check-points", "--out", flagged.to_str().unwrap()]);
+    // the kept tracking solution of the bundled trial (a KKT point: 0 iterations), as it
+    // is: without --check-points its validity is reported only
+    let reported = tmp.path().join("reported");
+    let o = footfall(&["--quiet", "track", "--init", base.to_str().unwrap(), "--max-iter", "0", "--out", reported.to_str().unwrap()]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let s = summary(&reported);
+    assert_eq!((s["verdict"].as_str(), s["physically_valid"].as_bool()), (Some("converged"), Some(false)));
+    let html = std::fs::read_to_string(reported.join("report.html")).unwrap();
+    assert!(html.contains("Where physics is broken") && html.contains("--check-points"));
+    // with --check-points and no iteration left to repair it: flagged
+    let o = footfall(&["--quiet", "track", "--init", base.to_str().unwrap(), "--check-points", "--max-iter", "0", "--out", flagged.to_str().unwrap()]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(5), "{err}");
     assert!(err.contains("converged, physically invalid") && err.contains("negative normal force") && err.contains("l.sole"), "{err}");
@@ -124,8 +134,8 @@ fn a_track_that_breaks_physics_between_nodes_is_flagged_and_check_points_repair_
     let (low, _) = fine_grid_extremes(&flagged);
     assert!(low < -100.0, "{low}");
 
-    // with check points (the default) the solve removes it
-    let o = footfall(&["--quiet", "track", "--init", base.to_str().unwrap(), "--out", repaired.to_str().unwrap()]);
+    // with check points and iterations the solve removes it
+    let o = footfall(&["--quiet", "track", "--init", base.to_str().unwrap(), "--check-points", "--out", repaired.to_str().unwrap()]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let s = summary(&repaired);
     assert_eq!(s["verdict"], "converged");

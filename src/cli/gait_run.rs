@@ -39,6 +39,8 @@ pub struct GaitRunOutput {
     pub fine_forces: Option<FineForces>,
     /// Physical validity on the fine grid (None when the re-integration failed).
     pub validity: Option<footfall::problems::validity::Validity>,
+    /// Whether the validity decides the verdict and the exit code.
+    pub enforce_validity: bool,
 }
 
 /// Ground forces of both feet on the fine grid, model and measurement.
@@ -107,6 +109,9 @@ pub struct GaitRun<'a> {
     pub friction: f64,
     /// Number of check points holding the contact constraints between the nodes.
     pub check_points: usize,
+    /// Whether an invalid solution changes the verdict (`--check-points`); otherwise its
+    /// validity is reported beside it.
+    pub enforce_validity: bool,
 }
 
 /// Evaluate, write and commit the run folder.
@@ -202,7 +207,7 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
 
     let converged = res.status == SqpStatus::Converged;
     let interrupted = res.status == footfall::sqp::SqpStatus::Interrupted;
-    let invalid = validity.as_ref().is_some_and(|v| !v.is_valid());
+    let invalid = run.enforce_validity && validity.as_ref().is_some_and(|v| !v.is_valid());
     let verdict = match (converged, invalid) {
         (true, false) => "converged",
         (true, true) => "converged, physically invalid",
@@ -343,7 +348,7 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
         measured: [[fc.data_feet[0][0].clone(), fc.data_feet[0][1].clone()], [fc.data_feet[1][0].clone(), fc.data_feet[1][1].clone()]],
         times: fc.times,
     });
-    Ok(GaitRunOutput { path, table, fine, transients, errors: overall, fine_forces, validity })
+    Ok(GaitRunOutput { path, table, fine, transients, errors: overall, fine_forces, validity, enforce_validity: run.enforce_validity })
 }
 
 /// The report's account of physical validity on the 1 ms grid.
@@ -360,7 +365,7 @@ fn validity_section(v: &footfall::problems::validity::Validity, check_points: us
     if v.is_valid() {
         paragraphs.push("Nothing is broken: the solution is physically valid between the nodes.".into());
     } else {
-        paragraphs.push(format!("**The solution is physically invalid** in {} stretch(es): it is not a gait the model can walk.", v.violations.len()));
+        paragraphs.push(format!("**The solution is physically invalid** in {} stretch(es): it is not a gait the model can walk. `--check-points` holds the contact constraints between the nodes where they break, and makes the verdict and exit code say so.", v.violations.len()));
         let mut t = Table {
             title: "Where physics is broken on the 1 ms grid".into(),
             headers: ["what", "contact", "phase", "from (s)", "to (s)", "worst at (s)", "worst"].map(String::from).to_vec(),

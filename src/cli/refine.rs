@@ -37,6 +37,8 @@ pub struct Refinement<'c, 'm> {
     pub t0: f64,
     /// Whether to add check points at all (`false`: solve once).
     pub enabled: bool,
+    /// Iteration limit of the whole solve: no round starts once it is used up.
+    pub max_iter: usize,
 }
 
 impl<'m> Refinement<'_, 'm> {
@@ -70,11 +72,13 @@ impl<'m> Refinement<'_, 'm> {
             let res = solve(&tr, &w)?;
             let converged = res.status == SqpStatus::Converged;
             let next = res.w.clone();
-            merged = Some(match merged {
+            let all = match merged {
                 None => res,
                 Some(first) => super::track::merge_stages(first, res),
-            });
-            if !converged || !self.enabled || round == MAX_ROUNDS {
+            };
+            let used = all.history.len().saturating_sub(1);
+            merged = Some(all);
+            if !converged || !self.enabled || round == MAX_ROUNDS || used >= self.max_iter {
                 break;
             }
             let solution = GaitSolution::from_nlp(&tr, &next, &self.cycle.continuous, self.t0);
