@@ -83,20 +83,12 @@ pub(super) fn check_values(
     let (nx, nu, nt) = (ph.ode.nx(), ph.ode.nu(), ocp.ntheta);
     let ncols = nx + interval.np();
     let nz = nx + nu + nt;
-    let theta = &p[interval.p_theta()];
-    let u0 = &p[interval.p_u0()];
-    let u1 = interval.p_u1().map(|r| &p[r]);
     let hscale = 1.0 / ph.intervals as f64;
     let mut out = Vec::with_capacity(checks.len());
     for &(tau, ci, row) in checks {
         let cp = &ocp.checks[ci];
         let q = taus.iter().position(|&t| t == tau).expect("every check point was integrated to");
-        let x = &xs[q * nx..(q + 1) * nx];
-        let u: Vec<f64> = match u1 {
-            Some(u1) => u0.iter().zip(u1).map(|(a, b)| (1.0 - tau) * a + tau * b).collect(),
-            None => u0.to_vec(),
-        };
-        let z: Vec<f64> = x.iter().chain(&u).chain(theta).copied().collect();
+        let z = instant_args(&interval, &xs[q * nx..(q + 1) * nx], p, tau);
         let d = cp.f.dim();
         let mut values = vec![0.0; d];
         let mut jz = vec![0.0; d * nz];
@@ -111,8 +103,9 @@ pub(super) fn check_values(
     Ok(out)
 }
 
-/// `(x(τ), u(τ), θ)` of an interval at `x` and τ, from its packed parameters `p`.
-fn instant_args<O: crate::integrate::ControlledOde + ?Sized>(interval: &ShootingInterval<'_, O>, x: &[f64], p: &[f64], tau: f64) -> Vec<f64> {
+/// `(x(τ), u(τ), θ)` of an interval at `x` and τ, from its packed parameters `p` (the
+/// argument of sample terms and check points).
+pub(super) fn instant_args<O: crate::integrate::ControlledOde + ?Sized>(interval: &ShootingInterval<'_, O>, x: &[f64], p: &[f64], tau: f64) -> Vec<f64> {
     let u0 = &p[interval.p_u0()];
     let u: Vec<f64> = match interval.p_u1().map(|r| &p[r]) {
         Some(u1) => u0.iter().zip(u1).map(|(a, b)| (1.0 - tau) * a + tau * b).collect(),

@@ -777,11 +777,8 @@ impl<'o, 'a> Transcription<'o, 'a> {
         }
         for (q, (tau, terms)) in list.iter().enumerate() {
             let x = &xs[q * nx..(q + 1) * nx];
-            let u: Vec<f64> = match u1 {
-                Some(u1) => u0.iter().zip(u1).map(|(a, b)| (1.0 - tau) * a + tau * b).collect(),
-                None => u0.to_vec(),
-            };
-            let z: Vec<f64> = x.iter().chain(&u).chain(theta).copied().collect();
+            let z = super::checks::instant_args(&interval, x, p, *tau);
+            let u = &z[nx..nx + nu];
             for &si in terms {
                 let term = &self.ocp.samples[si];
                 let d = term.f.dim();
