@@ -12,7 +12,8 @@ use footfall::model::{GaitModel, GaitOde};
 use std::path::Path;
 
 fn setup(foot: &str, contacts: &[(&str, bool)]) -> (GaitModel, Vec<f64>, Vec<f64>) {
-    let m = GaitModel::load(Path::new("models/opensim_subject01.json"), Path::new(foot)).expect("model");
+    let m = GaitModel::load(Path::new("models/opensim_subject01.json"), Path::new(foot))
+        .expect("model");
     let set = m.constraint_set("stance", contacts).expect("set");
     let q = [1.6, 1.0, 0.11, 0.09, -0.30, 0.11, 0.11, -1.17, -0.03];
     let qd = [1.08, 0.16, 0.20, -2.17, 1.51, 0.33, 2.22, -0.84, 1.40];
@@ -26,8 +27,16 @@ fn setup(foot: &str, contacts: &[(&str, bool)]) -> (GaitModel, Vec<f64>, Vec<f64
 
 fn bench(c: &mut Criterion) {
     for (label, foot, contacts) in [
-        ("ellipse_single_stance", "models/feet/ellipse.json", vec![("r.sole", true)]),
-        ("double_circle_both_circles", "models/feet/double_circle.json", vec![("r.heel", true), ("r.forefoot", false)]),
+        (
+            "ellipse_single_stance",
+            "models/feet/ellipse.json",
+            vec![("r.sole", true)],
+        ),
+        (
+            "double_circle_both_circles",
+            "models/feet/double_circle.json",
+            vec![("r.heel", true), ("r.forefoot", false)],
+        ),
     ] {
         let (m, x, u) = setup(foot, &contacts);
         let set = m.constraint_set("stance", &contacts).expect("set");
@@ -35,41 +44,85 @@ fn bench(c: &mut Criterion) {
         let mut xdot = vec![0.0; nx];
         let mut lam = vec![0.0; set.rows.len()];
         c.bench_function(&format!("dynamics/{label}"), |b| {
-            b.iter(|| m.dynamics(&set, black_box(&x), black_box(&u), &[], &mut xdot, &mut lam, None).expect("dynamics"))
+            b.iter(|| {
+                m.dynamics(
+                    &set,
+                    black_box(&x),
+                    black_box(&u),
+                    &[],
+                    &mut xdot,
+                    &mut lam,
+                    None,
+                )
+                .expect("dynamics")
+            })
         });
         let mut jac = vec![0.0; nx * (nx + nu)];
         c.bench_function(&format!("dynamics_jacobian/{label}"), |b| {
-            b.iter(|| m.dynamics_jacobian(&set, black_box(&x), black_box(&u), &[], &mut xdot, &mut jac).expect("jacobian"))
+            b.iter(|| {
+                m.dynamics_jacobian(&set, black_box(&x), black_box(&u), &[], &mut xdot, &mut jac)
+                    .expect("jacobian")
+            })
         });
-        let ode = GaitOde { model: &m, set: &set };
+        let ode = GaitOde {
+            model: &m,
+            set: &set,
+        };
         let interval = ShootingInterval::new(&ode, ControlShape::Linear);
         let np = interval.np();
         let mut p = Vec::new();
-        interval.pack_params(&u, Some(&vec![0.4; nu]), 0.040, &[], &mut p).expect("params");
+        interval
+            .pack_params(&u, Some(&vec![0.4; nu]), 0.040, &[], &mut p)
+            .expect("params");
         let mut integ = Integrator::new(nx, np, IntegratorSettings::default()).expect("integrator");
         let mut x1 = vec![0.0; nx];
         let mut s1 = vec![0.0; nx * (nx + np)];
-        let stats = integ.integrate_with_sensitivities(&interval, 0.0, 1.0, &x, &p, &mut x1, &mut s1).expect("interval");
-        eprintln!("{label}: 40 ms interval, {} sensitivity columns: {stats:?}", nx + np);
+        let stats = integ
+            .integrate_with_sensitivities(&interval, 0.0, 1.0, &x, &p, &mut x1, &mut s1)
+            .expect("interval");
+        eprintln!(
+            "{label}: 40 ms interval, {} sensitivity columns: {stats:?}",
+            nx + np
+        );
         c.bench_function(&format!("interval_40ms_sensitivities/{label}"), |b| {
             b.iter(|| {
                 integ
-                    .integrate_with_sensitivities(&interval, 0.0, 1.0, black_box(&x), &p, &mut x1, &mut s1)
+                    .integrate_with_sensitivities(
+                        &interval,
+                        0.0,
+                        1.0,
+                        black_box(&x),
+                        &p,
+                        &mut x1,
+                        &mut s1,
+                    )
                     .expect("interval")
             })
         });
         for (rate, n) in [("100Hz", 4), ("1kHz", 40)] {
             let times: Vec<f64> = (1..=n).map(|k| k as f64 / n as f64).collect();
             let (mut xs, mut ss) = (Vec::new(), Vec::new());
-            c.bench_function(&format!("interval_40ms_sensitivities_samples_{rate}/{label}"), |b| {
-                b.iter(|| {
-                    xs.clear();
-                    ss.clear();
-                    integ
-                        .integrate_with_sensitivities_dense(&interval, 0.0, 1.0, black_box(&x), &p, &times, &mut xs, &mut ss)
-                        .expect("interval")
-                })
-            });
+            c.bench_function(
+                &format!("interval_40ms_sensitivities_samples_{rate}/{label}"),
+                |b| {
+                    b.iter(|| {
+                        xs.clear();
+                        ss.clear();
+                        integ
+                            .integrate_with_sensitivities_dense(
+                                &interval,
+                                0.0,
+                                1.0,
+                                black_box(&x),
+                                &p,
+                                &times,
+                                &mut xs,
+                                &mut ss,
+                            )
+                            .expect("interval")
+                    })
+                },
+            );
         }
     }
 }

@@ -16,24 +16,42 @@ fn bench(c: &mut Criterion) {
         ("problems/cartpole_swingup.json", HessianMode::Exact, 100),
         ("problems/five_link_biped.json", HessianMode::Exact, 100),
     ] {
-        let bench = Benchmark::from_json(read_problem_json(file).expect("problem")).expect("benchmark");
+        let bench =
+            Benchmark::from_json(read_problem_json(file).expect("problem")).expect("benchmark");
         let name = bench.name();
-        let ocp = bench.ocp(IntegratorSettings { method: footfall::integrate::Method::Adams, ..Default::default() }).expect("ocp");
+        let ocp = bench
+            .ocp(IntegratorSettings {
+                method: footfall::integrate::Method::Adams,
+                ..Default::default()
+            })
+            .expect("ocp");
         let tr = Transcription::new(&ocp).expect("transcription");
         let (w_lb, w_ub, w0) = tr.variable_bounds_and_guess();
         let mut g = c.benchmark_group(name);
         g.sample_size(10).measurement_time(Duration::from_secs(3));
-        g.bench_function("sensitivity_sweep", |b| b.iter(|| tr.evaluate(&w0, true).expect("sweep")));
-        g.bench_function("plain_sweep", |b| b.iter(|| tr.evaluate(&w0, false).expect("sweep")));
+        g.bench_function("sensitivity_sweep", |b| {
+            b.iter(|| tr.evaluate(&w0, true).expect("sweep"))
+        });
+        g.bench_function("plain_sweep", |b| {
+            b.iter(|| tr.evaluate(&w0, false).expect("sweep"))
+        });
         let ev = tr.evaluate(&w0, true).expect("evaluation");
         let (jr, jc) = Nlp::jacobian_pattern(&tr);
         let (hr, hc) = Nlp::gauss_newton_pattern(&tr);
         let (c_lb, c_ub) = tr.constraint_bounds();
-        let mut h = Triplets { rows: hr, cols: hc, vals: ev.gauss_newton.clone() };
+        let mut h = Triplets {
+            rows: hr,
+            cols: hc,
+            vals: ev.gauss_newton.clone(),
+        };
         for i in 0..tr.n() {
             h.push(i, i, 1e-9);
         }
-        let jac = Triplets { rows: jr, cols: jc, vals: ev.jac.clone() };
+        let jac = Triplets {
+            rows: jr,
+            cols: jc,
+            vals: ev.jac.clone(),
+        };
         let d_lb: Vec<f64> = (0..tr.n()).map(|i| w_lb[i] - w0[i]).collect();
         let d_ub: Vec<f64> = (0..tr.n()).map(|i| w_ub[i] - w0[i]).collect();
         let weights = vec![1.0; tr.m()];
@@ -49,8 +67,15 @@ fn bench(c: &mut Criterion) {
             elastic: Some(1e4),
             elastic_weights: &weights,
         };
-        g.bench_function("qp_solve_elastic", |b| b.iter(|| qp::solve(&data).expect("qp")));
-        let settings = SqpSettings { tol_kkt: 1e-6, hessian, max_iter, ..Default::default() };
+        g.bench_function("qp_solve_elastic", |b| {
+            b.iter(|| qp::solve(&data).expect("qp"))
+        });
+        let settings = SqpSettings {
+            tol_kkt: 1e-6,
+            hessian,
+            max_iter,
+            ..Default::default()
+        };
         let res = sqp::solve(&tr, &w0, &settings, &mut Silent);
         eprintln!(
             "{name}: {} after {} iterations, J = {:.9}, KKT {:.2e}, {:.3} s",
@@ -60,8 +85,14 @@ fn bench(c: &mut Criterion) {
             res.kkt,
             res.seconds
         );
-        g.measurement_time(Duration::from_secs(if name == "five_link_biped" { 15 } else { 5 }));
-        g.bench_function("full_solve", |b| b.iter(|| sqp::solve(&tr, &w0, &settings, &mut Silent)));
+        g.measurement_time(Duration::from_secs(if name == "five_link_biped" {
+            15
+        } else {
+            5
+        }));
+        g.bench_function("full_solve", |b| {
+            b.iter(|| sqp::solve(&tr, &w0, &settings, &mut Silent))
+        });
         g.finish();
     }
 }

@@ -38,4 +38,3 @@ pub fn show(v: f64) -> String {
         format!("{v:e}")
     }
 }
-

@@ -28,7 +28,10 @@ impl ContactUse {
             Some(("l", p)) => format!("r.{p}"),
             _ => self.contact.clone(),
         };
-        ContactUse { contact, rolling: self.rolling }
+        ContactUse {
+            contact,
+            rolling: self.rolling,
+        }
     }
 }
 
@@ -207,10 +210,14 @@ fn default_friction() -> f64 {
 }
 
 fn default_symmetry() -> Vec<[String; 2]> {
-    [["hip_r", "hip_l"], ["knee_r", "knee_l"], ["ankle_r", "ankle_l"]]
-        .iter()
-        .map(|p| [p[0].to_string(), p[1].to_string()])
-        .collect()
+    [
+        ["hip_r", "hip_l"],
+        ["knee_r", "knee_l"],
+        ["ankle_r", "ankle_l"],
+    ]
+    .iter()
+    .map(|p| [p[0].to_string(), p[1].to_string()])
+    .collect()
 }
 
 /// Settings of a walking cycle (seed 001 §3.3).
@@ -319,22 +326,53 @@ impl PhaseSequence {
     /// phase after it (in a periodic gait, a last impact those of the first continuous
     /// phase mirrored), and it must add a contact to those of the phase before it.
     fn check_impacts(&self, path: &Path) -> Result<(), ModelError> {
-        let names = |cs: &[ContactUse]| cs.iter().map(|c| if c.rolling { c.contact.clone() } else { format!("{} (not rolling)", c.contact) }).collect::<Vec<_>>();
-        let same = |a: &[ContactUse], b: &[ContactUse]| a.len() == b.len() && a.iter().all(|c| b.contains(c));
-        let list = |cs: &[ContactUse]| if cs.is_empty() { "none".to_string() } else { names(cs).join(", ") };
+        let names = |cs: &[ContactUse]| {
+            cs.iter()
+                .map(|c| {
+                    if c.rolling {
+                        c.contact.clone()
+                    } else {
+                        format!("{} (not rolling)", c.contact)
+                    }
+                })
+                .collect::<Vec<_>>()
+        };
+        let same = |a: &[ContactUse], b: &[ContactUse]| {
+            a.len() == b.len() && a.iter().all(|c| b.contains(c))
+        };
+        let list = |cs: &[ContactUse]| {
+            if cs.is_empty() {
+                "none".to_string()
+            } else {
+                names(cs).join(", ")
+            }
+        };
         for (i, ph) in self.phases.iter().enumerate() {
-            let Phase::Impact { contacts, .. } = ph else { continue };
+            let Phase::Impact { contacts, .. } = ph else {
+                continue;
+            };
             let field = format!("phases[{i}] ('{}').contacts", ph.name());
             let after: Option<(Vec<ContactUse>, String)> = match self.phases.get(i + 1) {
                 Some(Phase::Impact { name, .. }) => {
                     return Err(ModelError::invalid(path, field, format!("an impact must be followed by a continuous phase, not by the impact '{name}'")));
                 }
-                Some(next) => Some((next.contacts().to_vec(), format!("the next phase '{}'", next.name()))),
+                Some(next) => Some((
+                    next.contacts().to_vec(),
+                    format!("the next phase '{}'", next.name()),
+                )),
                 None if self.gait.as_ref().is_some_and(|g| g.periodic) => self
                     .phases
                     .iter()
                     .find(|p| matches!(p, Phase::Continuous { .. }))
-                    .map(|first| (first.contacts().iter().map(ContactUse::mirrored).collect(), format!("the first continuous phase '{}' mirrored (the cycle is periodic)", first.name()))),
+                    .map(|first| {
+                        (
+                            first.contacts().iter().map(ContactUse::mirrored).collect(),
+                            format!(
+                                "the first continuous phase '{}' mirrored (the cycle is periodic)",
+                                first.name()
+                            ),
+                        )
+                    }),
                 None => None,
             };
             if let Some((want, which)) = after {
@@ -347,7 +385,10 @@ impl PhaseSequence {
                 }
             }
             if let Some(before) = i.checked_sub(1).map(|j| &self.phases[j]) {
-                if contacts.iter().all(|c| before.contacts().iter().any(|b| b.contact == c.contact)) {
+                if contacts
+                    .iter()
+                    .all(|c| before.contacts().iter().any(|b| b.contact == c.contact))
+                {
                     return Err(ModelError::invalid(
                         path,
                         field,
@@ -457,7 +498,11 @@ impl PhaseSequence {
     pub fn check_gait(&self, path: &Path) -> Result<(), ModelError> {
         let Some(g) = &self.gait else { return Ok(()) };
         if !(g.friction.is_finite() && g.friction > 0.0) {
-            return Err(ModelError::invalid(path, "gait.friction", format!("must be a positive number, got {}", g.friction)));
+            return Err(ModelError::invalid(
+                path,
+                "gait.friction",
+                format!("must be a positive number, got {}", g.friction),
+            ));
         }
         let coords = crate::model::gait::COORDINATES;
         let mut used: Vec<&str> = Vec::new();
@@ -467,7 +512,10 @@ impl PhaseSequence {
                     return Err(ModelError::invalid(
                         path,
                         format!("gait.symmetry[{i}]"),
-                        format!("'{c}' is not a leg coordinate of the model ({})", coords[3..].join(", ")),
+                        format!(
+                            "'{c}' is not a leg coordinate of the model ({})",
+                            coords[3..].join(", ")
+                        ),
                     ));
                 }
                 if used.contains(&c.as_str()) {
@@ -480,7 +528,11 @@ impl PhaseSequence {
                 used.push(c);
             }
             if a == b {
-                return Err(ModelError::invalid(path, format!("gait.symmetry[{i}]"), format!("pairs '{a}' with itself")));
+                return Err(ModelError::invalid(
+                    path,
+                    format!("gait.symmetry[{i}]"),
+                    format!("pairs '{a}' with itself"),
+                ));
             }
         }
         Ok(())
@@ -507,7 +559,11 @@ impl InitialState {
                     "must be finite",
                 ));
             }
-            let (limit, unit) = if name == "q" { (MAX_COORDINATE, "m or rad") } else { (MAX_VELOCITY, "m/s or rad/s") };
+            let (limit, unit) = if name == "q" {
+                (MAX_COORDINATE, "m or rad")
+            } else {
+                (MAX_VELOCITY, "m/s or rad/s")
+            };
             if let Some(k) = v.iter().position(|x| x.abs() > limit) {
                 return Err(ModelError::invalid(
                     path,

@@ -64,14 +64,19 @@ pub struct RunFolder {
 }
 
 fn io(path: &Path) -> impl FnOnce(std::io::Error) -> RunFolderError + '_ {
-    move |source| RunFolderError::Io { path: path.to_path_buf(), source }
+    move |source| RunFolderError::Io {
+        path: path.to_path_buf(),
+        source,
+    }
 }
 
 /// Staging folders this process created and has not committed yet.
 static UNFINISHED: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 
 fn unfinished() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
-    UNFINISHED.lock().unwrap_or_else(|poisoned| poisoned.into_inner())
+    UNFINISHED
+        .lock()
+        .unwrap_or_else(|poisoned| poisoned.into_inner())
 }
 
 /// Remove every staging folder this process has created and not committed, and keep any
@@ -109,8 +114,15 @@ pub fn write_atomic(dir: &Path, name: &str, bytes: &[u8]) -> Result<(), RunFolde
 
 /// The folder name and parent of a target path (`run` for a path without a name).
 fn name_and_parent(target: &Path) -> (String, PathBuf) {
-    let name = target.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_else(|| "run".into());
-    let parent = target.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new(".")).to_path_buf();
+    let name = target
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "run".into());
+    let parent = target
+        .parent()
+        .filter(|p| !p.as_os_str().is_empty())
+        .unwrap_or(Path::new("."))
+        .to_path_buf();
     (name, parent)
 }
 
@@ -127,13 +139,16 @@ fn process_alive(pid: u32) -> Option<bool> {
 /// (footfall's own).
 pub fn stale_staging(target: &Path) -> Vec<(PathBuf, u32)> {
     let (name, parent) = name_and_parent(target);
-    let Ok(dir) = std::fs::read_dir(&parent) else { return Vec::new() };
+    let Ok(dir) = std::fs::read_dir(&parent) else {
+        return Vec::new();
+    };
     let own = std::process::id();
     let mut out = Vec::new();
     for entry in dir.flatten() {
         let file = entry.file_name().to_string_lossy().into_owned();
         let pid = [".partial-", ".old-"].iter().find_map(|kind| {
-            file.strip_prefix(&format!(".{name}{kind}")).and_then(|p| p.parse::<u32>().ok())
+            file.strip_prefix(&format!(".{name}{kind}"))
+                .and_then(|p| p.parse::<u32>().ok())
         });
         let Some(pid) = pid else { continue };
         let path = entry.path();
@@ -147,7 +162,10 @@ pub fn stale_staging(target: &Path) -> Vec<(PathBuf, u32)> {
 
 /// Whether `target` is the current folder or one of its parents.
 fn holds_current_folder(target: &Path) -> bool {
-    let (Ok(t), Ok(cwd)) = (target.canonicalize(), std::env::current_dir().and_then(|c| c.canonicalize())) else {
+    let (Ok(t), Ok(cwd)) = (
+        target.canonicalize(),
+        std::env::current_dir().and_then(|c| c.canonicalize()),
+    ) else {
         return false;
     };
     cwd.starts_with(&t)
@@ -174,7 +192,10 @@ pub fn check_replaceable(target: &Path) -> Result<(), RunFolderError> {
     entries.sort();
     match entries.first() {
         None => Ok(()),
-        Some(e) => Err(RunFolderError::Foreign { path: target.to_path_buf(), entry: format!("'{e}'") }),
+        Some(e) => Err(RunFolderError::Foreign {
+            path: target.to_path_buf(),
+            entry: format!("'{e}'"),
+        }),
     }
 }
 
@@ -204,7 +225,12 @@ impl RunFolder {
             std::fs::create_dir_all(&staging).map_err(io(&staging))?;
             list.push(staging.clone());
         }
-        let folder = Self { target: target.to_path_buf(), staging, overwrite, committed: false };
+        let folder = Self {
+            target: target.to_path_buf(),
+            staging,
+            overwrite,
+            committed: false,
+        };
         folder.write(MARKER, MARKER_TEXT.as_bytes())?;
         Ok(folder)
     }
@@ -233,10 +259,20 @@ impl RunFolder {
         let mut list = unfinished();
         let Some(pos) = list.iter().position(|p| p == &self.staging) else {
             // removed by remove_unfinished (an interrupt): nothing to commit
-            return Err(io(&self.staging)(std::io::Error::new(std::io::ErrorKind::Interrupted, "the run was interrupted")));
+            return Err(io(&self.staging)(std::io::Error::new(
+                std::io::ErrorKind::Interrupted,
+                "the run was interrupted",
+            )));
         };
-        for entry in std::fs::read_dir(&self.staging).map_err(io(&self.staging))?.flatten() {
-            if entry.file_name().to_string_lossy().starts_with(RESUME_PREFIX) {
+        for entry in std::fs::read_dir(&self.staging)
+            .map_err(io(&self.staging))?
+            .flatten()
+        {
+            if entry
+                .file_name()
+                .to_string_lossy()
+                .starts_with(RESUME_PREFIX)
+            {
                 std::fs::remove_file(entry.path()).map_err(io(&entry.path()))?;
             }
         }
@@ -297,7 +333,10 @@ mod tests {
         let target = tmp.path().join("run");
         // PID 0 is never a user process; our own parent is alive
         let dead = tmp.path().join(format!(".run.partial-{}", u32::MAX - 1));
-        let alive = tmp.path().join(format!(".run.partial-{}", std::os::unix::process::parent_id()));
+        let alive = tmp.path().join(format!(
+            ".run.partial-{}",
+            std::os::unix::process::parent_id()
+        ));
         let foreign = tmp.path().join(format!(".run.partial-{}", u32::MAX - 2));
         for d in [&dead, &alive, &foreign] {
             std::fs::create_dir(d).unwrap();

@@ -10,7 +10,9 @@
 //! and large stabilisation forces as [`SimulationWarning`]s.
 
 use crate::controls::ControlTable;
-use crate::integrate::{IntegrationStats, Integrator, IntegratorError, IntegratorSettings, Ode, OdeError};
+use crate::integrate::{
+    IntegrationStats, Integrator, IntegratorError, IntegratorSettings, Ode, OdeError,
+};
 use crate::model::gait::{ContactReport, FootLoad};
 use crate::model::{ConstraintSet, DynamicsError, GaitModel, RowKind};
 use crate::phases::{Phase, PhaseSequence};
@@ -27,7 +29,10 @@ pub struct SimulationSettings {
 
 impl Default for SimulationSettings {
     fn default() -> Self {
-        Self { output_step: 1e-3, integrator: IntegratorSettings::default() }
+        Self {
+            output_step: 1e-3,
+            integrator: IntegratorSettings::default(),
+        }
     }
 }
 
@@ -147,7 +152,10 @@ pub struct SanityTolerances {
 
 impl Default for SanityTolerances {
     fn default() -> Self {
-        Self { landing_gap_m: 1e-3, baumgarte_force_n: 1.0 }
+        Self {
+            landing_gap_m: 1e-3,
+            baumgarte_force_n: 1.0,
+        }
     }
 }
 
@@ -263,10 +271,16 @@ impl SimulationResult {
             for s in samples {
                 for (r, row) in set.rows.iter().enumerate() {
                     if row.kind == RowKind::Normal {
-                        f.max_position_drift_m = f.max_position_drift_m.max(s.contact.position_error[r].abs());
+                        f.max_position_drift_m = f
+                            .max_position_drift_m
+                            .max(s.contact.position_error[r].abs());
                     }
-                    f.max_velocity_drift_m_s = f.max_velocity_drift_m_s.max(s.contact.velocity_error[r].abs());
-                    f.max_baumgarte_force_n = f.max_baumgarte_force_n.max(s.contact.baumgarte_force[r].abs());
+                    f.max_velocity_drift_m_s = f
+                        .max_velocity_drift_m_s
+                        .max(s.contact.velocity_error[r].abs());
+                    f.max_baumgarte_force_n = f
+                        .max_baumgarte_force_n
+                        .max(s.contact.baumgarte_force[r].abs());
                 }
                 for k in 0..2 {
                     f.peak_normal_force_n[k] = f.peak_normal_force_n[k].max(s.feet[k].fy);
@@ -282,7 +296,12 @@ impl SimulationResult {
     /// constraint sets of `model`, as passed to [`simulate`]. Warnings come in time order
     /// of the phases; within a continuous phase, one Baumgarte warning per contact (its
     /// largest force).
-    pub fn check(&self, model: &GaitModel, sets: &[ConstraintSet], tol: &SanityTolerances) -> Vec<SimulationWarning> {
+    pub fn check(
+        &self,
+        model: &GaitModel,
+        sets: &[ConstraintSet],
+        tol: &SanityTolerances,
+    ) -> Vec<SimulationWarning> {
         let mut out = Vec::new();
         for (pi, span) in self.phases.iter().enumerate() {
             if let Some(imp) = self.impacts.iter().find(|i| i.phase == span.name) {
@@ -312,7 +331,13 @@ impl SimulationResult {
             let mut worst: Vec<Option<(usize, f64, f64)>> = vec![None; model.contacts.len()];
             for smp in self.samples.iter().filter(|s| s.phase == pi) {
                 for (r, row) in set.rows.iter().enumerate() {
-                    let v = smp.contact.baumgarte_force.get(r).copied().unwrap_or(0.0).abs();
+                    let v = smp
+                        .contact
+                        .baumgarte_force
+                        .get(r)
+                        .copied()
+                        .unwrap_or(0.0)
+                        .abs();
                     let w = &mut worst[row.contact];
                     if v > tol.baumgarte_force_n && w.is_none_or(|(_, m, _)| v > m) {
                         *w = Some((r, v, smp.t));
@@ -336,7 +361,17 @@ impl SimulationResult {
 
     /// Largest |φ| over normal rows of all samples (m).
     pub fn max_position_drift(&self, sets: &[ConstraintSet]) -> f64 {
-        self.max_over_rows(sets, |s, r| if s.rows[r].kind == RowKind::Normal { Some(0) } else { None }, |c, r| c.position_error[r])
+        self.max_over_rows(
+            sets,
+            |s, r| {
+                if s.rows[r].kind == RowKind::Normal {
+                    Some(0)
+                } else {
+                    None
+                }
+            },
+            |c, r| c.position_error[r],
+        )
     }
     /// Largest |G q̇| over all rows (m/s).
     pub fn max_velocity_drift(&self, sets: &[ConstraintSet]) -> f64 {
@@ -386,13 +421,23 @@ impl Ode for SimulationOde<'_> {
         let mut u = vec![0.0; self.model.nu()];
         self.controls.at(t, &mut u);
         let mut lam = vec![0.0; self.set.rows.len()];
-        self.model.dynamics(self.set, x, &u, p, xdot, &mut lam, None).map_err(|e| OdeError::Fatal(e.to_string()))?;
+        self.model
+            .dynamics(self.set, x, &u, p, xdot, &mut lam, None)
+            .map_err(|e| OdeError::Fatal(e.to_string()))?;
         if xdot.iter().any(|v| !v.is_finite()) {
             return Err(OdeError::Recoverable("non-finite state derivative".into()));
         }
         Ok(())
     }
-    fn jacobians(&self, t: f64, x: &[f64], p: &[f64], xdot: &mut [f64], fx: &mut [f64], fp: &mut [f64]) -> Result<(), OdeError> {
+    fn jacobians(
+        &self,
+        t: f64,
+        x: &[f64],
+        p: &[f64],
+        xdot: &mut [f64],
+        fx: &mut [f64],
+        fp: &mut [f64],
+    ) -> Result<(), OdeError> {
         let (nx, nu) = (self.model.nx(), self.model.nu());
         let mut u = vec![0.0; nu];
         self.controls.at(t, &mut u);
@@ -424,23 +469,39 @@ pub fn simulate(
         )));
     }
     if !(settings.output_step.is_finite() && settings.output_step > 0.0) {
-        return Err(SimulationError::Input(format!("output step must be positive, got {}", settings.output_step)));
+        return Err(SimulationError::Input(format!(
+            "output step must be positive, got {}",
+            settings.output_step
+        )));
     }
     let nq = model.nq();
     let mut integrator = Integrator::new(model.nx(), model.ntheta(), settings.integrator.clone())
-        .map_err(|e| SimulationError::Integrator { phase: seq.phases[0].name().into(), source: e })?;
+        .map_err(|e| SimulationError::Integrator {
+        phase: seq.phases[0].name().into(),
+        source: e,
+    })?;
     let mut x = x0.to_vec();
     let mut t = 0.0;
-    let mut res = SimulationResult { samples: Vec::new(), impacts: Vec::new(), phases: Vec::new(), stats: Default::default() };
+    let mut res = SimulationResult {
+        samples: Vec::new(),
+        impacts: Vec::new(),
+        phases: Vec::new(),
+        stats: Default::default(),
+    };
     let mut u = vec![0.0; model.nu()];
     for (pi, phase) in seq.phases.iter().enumerate() {
         let set = &sets[pi];
         match phase {
             Phase::Impact { name, .. } => {
                 let (q, qd) = (&x[..nq], &x[nq..2 * nq]);
-                let (qd_plus, imp) = model
-                    .impact(set, q, qd, theta)
-                    .map_err(|e| SimulationError::Dynamics { phase: name.clone(), t, source: e })?;
+                let (qd_plus, imp) =
+                    model
+                        .impact(set, q, qd, theta)
+                        .map_err(|e| SimulationError::Dynamics {
+                            phase: name.clone(),
+                            t,
+                            source: e,
+                        })?;
                 let ke0 = model.energy(q, qd, theta).0;
                 let ke1 = model.energy(q, &qd_plus, theta).0;
                 res.impacts.push(ImpactRecord {
@@ -457,32 +518,65 @@ pub fn simulate(
                         .rows
                         .iter()
                         .filter(|r| r.kind == RowKind::Normal)
-                        .map(|r| (model.contacts[r.contact].name.clone(), model.contact_point(r.contact, q, theta).1))
+                        .map(|r| {
+                            (
+                                model.contacts[r.contact].name.clone(),
+                                model.contact_point(r.contact, q, theta).1,
+                            )
+                        })
                         .collect(),
                 });
                 x[nq..2 * nq].copy_from_slice(&qd_plus);
-                res.phases.push(PhaseSpan { name: name.clone(), t0: t, t1: t, touchdown: None });
+                res.phases.push(PhaseSpan {
+                    name: name.clone(),
+                    t0: t,
+                    t1: t,
+                    touchdown: None,
+                });
             }
-            Phase::Continuous { name, duration, end, .. } => {
+            Phase::Continuous {
+                name,
+                duration,
+                end,
+                ..
+            } => {
                 let t_max = t + duration.value();
-                let ode = SimulationOde { model, set, controls };
+                let ode = SimulationOde {
+                    model,
+                    set,
+                    controls,
+                };
                 let mut bounds = controls.knots_within(t, t_max);
                 bounds.push(t_max);
-                let sample = |tt: f64, xx: &[f64], u: &mut Vec<f64>| -> Result<Sample, SimulationError> {
-                    controls.at(tt, u);
-                    let mut xdot = vec![0.0; model.nx()];
-                    let mut lam = vec![0.0; set.rows.len()];
-                    let mut rep = ContactReport::default();
-                    model
-                        .dynamics(set, xx, u, theta, &mut xdot, &mut lam, Some(&mut rep))
-                        .map_err(|e| SimulationError::Dynamics { phase: name.clone(), t: tt, source: e })?;
-                    Ok(Sample { t: tt, phase: pi, x: xx.to_vec(), feet: model.foot_loads(set, &rep), contact: rep })
-                };
+                let sample =
+                    |tt: f64, xx: &[f64], u: &mut Vec<f64>| -> Result<Sample, SimulationError> {
+                        controls.at(tt, u);
+                        let mut xdot = vec![0.0; model.nx()];
+                        let mut lam = vec![0.0; set.rows.len()];
+                        let mut rep = ContactReport::default();
+                        model
+                            .dynamics(set, xx, u, theta, &mut xdot, &mut lam, Some(&mut rep))
+                            .map_err(|e| SimulationError::Dynamics {
+                                phase: name.clone(),
+                                t: tt,
+                                source: e,
+                            })?;
+                        Ok(Sample {
+                            t: tt,
+                            phase: pi,
+                            x: xx.to_vec(),
+                            feet: model.foot_loads(set, &rep),
+                            contact: rep,
+                        })
+                    };
                 // The touchdown watch: the landing contact's index; CVODES stops at the first
                 // fall of its gap φ from above zero to zero.
                 let watch = match end {
                     Some(e) => Some(model.contact_index(&e.touchdown).ok_or_else(|| {
-                        SimulationError::Input(format!("phase '{name}' ends at the touchdown of unknown contact '{}'", e.touchdown))
+                        SimulationError::Input(format!(
+                            "phase '{name}' ends at the touchdown of unknown contact '{}'",
+                            e.touchdown
+                        ))
                     })?),
                     None => None,
                 };
@@ -503,12 +597,20 @@ pub fn simulate(
                     let mut out = Vec::new();
                     let (st, root) = match watch {
                         Some(c) => {
-                            let gap = |_: f64, xx: &[f64]| model.contact_point(c, &xx[..nq], theta).1;
-                            integrator.integrate_dense_until(&ode, a, b, &x, theta, &times, &gap, &mut out)
+                            let gap =
+                                |_: f64, xx: &[f64]| model.contact_point(c, &xx[..nq], theta).1;
+                            integrator.integrate_dense_until(
+                                &ode, a, b, &x, theta, &times, &gap, &mut out,
+                            )
                         }
-                        None => integrator.integrate_dense(&ode, a, b, &x, theta, &times, &mut out).map(|st| (st, None)),
+                        None => integrator
+                            .integrate_dense(&ode, a, b, &x, theta, &times, &mut out)
+                            .map(|st| (st, None)),
                     }
-                    .map_err(|e| SimulationError::Integrator { phase: name.clone(), source: e })?;
+                    .map_err(|e| SimulationError::Integrator {
+                        phase: name.clone(),
+                        source: e,
+                    })?;
                     res.stats += st;
                     // with a root, the last row of `out` is the state at the touchdown
                     let n_out = out.len() / model.nx();
@@ -517,7 +619,11 @@ pub fn simulate(
                             Some(tr) if i + 1 == n_out => tr,
                             _ => times[i],
                         };
-                        res.samples.push(sample(tt, &out[i * model.nx()..(i + 1) * model.nx()], &mut u)?);
+                        res.samples.push(sample(
+                            tt,
+                            &out[i * model.nx()..(i + 1) * model.nx()],
+                            &mut u,
+                        )?);
                     }
                     x.copy_from_slice(&out[out.len() - model.nx()..]);
                     if let Some(tr) = root {
@@ -532,7 +638,12 @@ pub fn simulate(
                     landed,
                     gap_m: model.contact_point(c, &x[..nq], theta).1,
                 });
-                res.phases.push(PhaseSpan { name: name.clone(), t0: t, t1: a, touchdown });
+                res.phases.push(PhaseSpan {
+                    name: name.clone(),
+                    t0: t,
+                    t1: a,
+                    touchdown,
+                });
                 t = a;
             }
         }

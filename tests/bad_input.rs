@@ -157,7 +157,12 @@ fn bundled_files_pass_the_checks() {
         "opensim_subject01_torque.json",
         "opensim_subject01_seed_damping.json",
     ] {
-        for foot in ["ellipse.json", "double_circle.json", "peer_ellipse.json", "heel_circle_forefoot_ellipse.json"] {
+        for foot in [
+            "ellipse.json",
+            "double_circle.json",
+            "peer_ellipse.json",
+            "heel_circle_forefoot_ellipse.json",
+        ] {
             let m = root().join("models").join(model);
             let f = root().join("models/feet").join(foot);
             GaitModel::load(&m, &f).unwrap_or_else(|e| panic!("{e}"));
@@ -168,7 +173,10 @@ fn bundled_files_pass_the_checks() {
         ("sim_double_circle_step.json", "double_circle.json"),
         ("ellipse_walk.json", "ellipse.json"),
         ("double_circle_walk.json", "double_circle.json"),
-        ("heel_circle_forefoot_ellipse_walk.json", "heel_circle_forefoot_ellipse.json"),
+        (
+            "heel_circle_forefoot_ellipse_walk.json",
+            "heel_circle_forefoot_ellipse.json",
+        ),
     ] {
         let p = root().join("phases").join(phases);
         let model = GaitModel::load(
@@ -379,27 +387,72 @@ fn non_positive_gravity_and_stature_are_refused() {
 #[test]
 fn absurd_gravity_mass_and_sizes_are_refused_with_short_numbers() {
     let d = Scratch::new();
-    let m = d.write("model.json", &explicit_model(GOOD_THIGH, "").replace("9.81", "1e308"));
-    let msg = assert_invalid(ModelSpec::load(&m).unwrap_err(), &m, "gravity", &["1e308 m/s²", "beyond the sensible limit", "(0, 100] m/s²"]);
+    let m = d.write(
+        "model.json",
+        &explicit_model(GOOD_THIGH, "").replace("9.81", "1e308"),
+    );
+    let msg = assert_invalid(
+        ModelSpec::load(&m).unwrap_err(),
+        &m,
+        "gravity",
+        &["1e308 m/s²", "beyond the sensible limit", "(0, 100] m/s²"],
+    );
     assert!(msg.len() < 200, "{msg}");
-    let m = d.write("model.json", &explicit_model(r#"{ "mass": 5000.0, "com": [0.0, -0.18], "izz": 0.12 }"#, ""));
-    assert_invalid(ModelSpec::load(&m).unwrap_err(), &m, "body.segments.thigh.mass", &["5000 kg", "(0, 1000] kg"]);
-    let m = d.write("model.json", &explicit_model(r#"{ "mass": 8.0, "com": [0.0, -0.18], "izz": 1e6 }"#, ""));
-    assert_invalid(ModelSpec::load(&m).unwrap_err(), &m, "body.segments.thigh.izz", &["1e6 kg·m²", "(0, 100] kg·m²"]);
-    let m = d.write("model.json", &explicit_model(r#"{ "mass": 8.0, "com": [0.0, -1e9], "izz": 0.12 }"#, ""));
-    assert_invalid(ModelSpec::load(&m).unwrap_err(), &m, "body.segments.thigh.com", &["[0, -1e9] m", "±10 m"]);
+    let m = d.write(
+        "model.json",
+        &explicit_model(
+            r#"{ "mass": 5000.0, "com": [0.0, -0.18], "izz": 0.12 }"#,
+            "",
+        ),
+    );
+    assert_invalid(
+        ModelSpec::load(&m).unwrap_err(),
+        &m,
+        "body.segments.thigh.mass",
+        &["5000 kg", "(0, 1000] kg"],
+    );
+    let m = d.write(
+        "model.json",
+        &explicit_model(r#"{ "mass": 8.0, "com": [0.0, -0.18], "izz": 1e6 }"#, ""),
+    );
+    assert_invalid(
+        ModelSpec::load(&m).unwrap_err(),
+        &m,
+        "body.segments.thigh.izz",
+        &["1e6 kg·m²", "(0, 100] kg·m²"],
+    );
+    let m = d.write(
+        "model.json",
+        &explicit_model(r#"{ "mass": 8.0, "com": [0.0, -1e9], "izz": 0.12 }"#, ""),
+    );
+    assert_invalid(
+        ModelSpec::load(&m).unwrap_err(),
+        &m,
+        "body.segments.thigh.com",
+        &["[0, -1e9] m", "±10 m"],
+    );
     let m = d.write(
         "deleva.json",
         r#"{ "name": "x", "body": { "preset": "de_leva", "mass": 80.0, "height": 18.0, "sex": "male" },
              "actuators": { "type": "joint_torques" } }"#,
     );
-    assert_invalid(ModelSpec::load(&m).unwrap_err(), &m, "body.height", &["18 m", "(0, 3] m"]);
+    assert_invalid(
+        ModelSpec::load(&m).unwrap_err(),
+        &m,
+        "body.height",
+        &["18 m", "(0, 3] m"],
+    );
     let m = d.write(
         "deleva.json",
         r#"{ "name": "x", "body": { "preset": "de_leva", "mass": 8e5, "height": 1.8, "sex": "male" },
              "actuators": { "type": "joint_torques" } }"#,
     );
-    let msg = assert_invalid(ModelSpec::load(&m).unwrap_err(), &m, "body.mass", &["800000 kg", "(0, 1000] kg"]);
+    let msg = assert_invalid(
+        ModelSpec::load(&m).unwrap_err(),
+        &m,
+        "body.mass",
+        &["800000 kg", "(0, 1000] kg"],
+    );
     eprintln!("{msg}");
 }
 
@@ -408,15 +461,28 @@ fn absurd_ground_force_is_refused_naming_line_and_column() {
     use footfall::data::DataError;
     let d = Scratch::new();
     let header = "time,pelvis_x,pelvis_y,pelvis_tilt,hip_r,knee_r,ankle_r,grf_x_r,grf_y_r,cop_x_r";
-    let good = format!("{header}\n0.00,0,0.9,0,0,0,0,10,700,0.1\n0.01,0.01,0.9,0,0,0,0,10,700,0.1\n");
+    let good =
+        format!("{header}\n0.00,0,0.9,0,0,0,0,10,700,0.1\n0.01,0.01,0.9,0,0,0,0,10,700,0.1\n");
     let p = d.write("trial.csv", &good);
     footfall::data::read_sagittal_csv(&p).expect("the template is valid");
-    let p = d.write("trial.csv", &good.replace("0.01,0.01,0.9,0,0,0,0,10,700,0.1", "0.01,0.01,0.9,0,0,0,0,10,1e308,NaN"));
+    let p = d.write(
+        "trial.csv",
+        &good.replace(
+            "0.01,0.01,0.9,0,0,0,0,10,700,0.1",
+            "0.01,0.01,0.9,0,0,0,0,10,1e308,NaN",
+        ),
+    );
     let err = footfall::data::read_sagittal_csv(&p).unwrap_err();
     let msg = err.to_string();
     assert!(matches!(err, DataError::OutOfRange { row: 3, .. }), "{msg}");
     assert_eq!(err.column(), Some("grf_y_r"));
-    for w in ["trial.csv", "line 3", "'grf_y_r'", "1e308 N", "at most 100000 N"] {
+    for w in [
+        "trial.csv",
+        "line 3",
+        "'grf_y_r'",
+        "1e308 N",
+        "at most 100000 N",
+    ] {
         assert!(msg.contains(w), "{w:?} missing: {msg}");
     }
     assert!(msg.len() < 200, "{msg}");
@@ -705,10 +771,27 @@ fn phase_with_zero_intervals_is_refused() {
 #[test]
 fn phase_with_too_many_intervals_is_refused() {
     let d = Scratch::new();
-    let p = d.write("phases.json", &PHASES.replace("\"duration\": 0.3", "\"duration\": 0.3, \"intervals\": 1000000"));
-    let msg = assert_invalid(PhaseSequence::load(&p).unwrap_err(), &p, "phases[0] ('stance').intervals", &["1 to 10000", "got 1000000"]);
+    let p = d.write(
+        "phases.json",
+        &PHASES.replace(
+            "\"duration\": 0.3",
+            "\"duration\": 0.3, \"intervals\": 1000000",
+        ),
+    );
+    let msg = assert_invalid(
+        PhaseSequence::load(&p).unwrap_err(),
+        &p,
+        "phases[0] ('stance').intervals",
+        &["1 to 10000", "got 1000000"],
+    );
     eprintln!("{msg}");
-    let p = d.write("phases.json", &PHASES.replace("\"duration\": 0.3", "\"duration\": 0.3, \"intervals\": 10000"));
+    let p = d.write(
+        "phases.json",
+        &PHASES.replace(
+            "\"duration\": 0.3",
+            "\"duration\": 0.3, \"intervals\": 10000",
+        ),
+    );
     PhaseSequence::load(&p).expect("10000 intervals are allowed");
 }
 
@@ -717,7 +800,13 @@ fn walk_with_impacts(file: &str, first: &str, last: &str) -> String {
     let text = std::fs::read_to_string(root().join("phases").join(file)).unwrap();
     let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
     let phases = v["phases"].as_array_mut().unwrap();
-    let contacts = |list: &str| serde_json::Value::from(list.split(',').map(|c| serde_json::json!({ "contact": c })).collect::<Vec<_>>());
+    let contacts = |list: &str| {
+        serde_json::Value::from(
+            list.split(',')
+                .map(|c| serde_json::json!({ "contact": c }))
+                .collect::<Vec<_>>(),
+        )
+    };
     phases[0]["contacts"] = contacts(first);
     let n = phases.len();
     phases[n - 1]["contacts"] = contacts(last);
@@ -728,28 +817,58 @@ fn walk_with_impacts(file: &str, first: &str, last: &str) -> String {
 fn impact_that_does_not_match_the_next_phase_is_refused() {
     // the issue's case: a first impact on l.sole only, a last one on r.sole only
     let d = Scratch::new();
-    let p = d.write("walk.json", &walk_with_impacts("ellipse_walk.json", "l.sole", "r.sole"));
+    let p = d.write(
+        "walk.json",
+        &walk_with_impacts("ellipse_walk.json", "l.sole", "r.sole"),
+    );
     let msg = assert_invalid(
         PhaseSequence::load(&p).unwrap_err(),
         &p,
         "phases[0] ('1e*').contacts",
-        &["contacts active right after it", "the next phase '2e'", "r.sole, l.sole", "got l.sole"],
+        &[
+            "contacts active right after it",
+            "the next phase '2e'",
+            "r.sole, l.sole",
+            "got l.sole",
+        ],
     );
     eprintln!("{msg}");
     // rolling flags count: a non-rolling contact is another constraint
-    let p = d.write("p.json", &PHASES.replace(r#"{ "contact": "l.sole" } ] },"#, r#"{ "contact": "l.sole", "rolling": false } ] },"#));
-    assert_invalid(PhaseSequence::load(&p).unwrap_err(), &p, "phases[1] ('strike').contacts", &["l.sole (not rolling)", "got r.sole, l.sole (not rolling)"]);
+    let p = d.write(
+        "p.json",
+        &PHASES.replace(
+            r#"{ "contact": "l.sole" } ] },"#,
+            r#"{ "contact": "l.sole", "rolling": false } ] },"#,
+        ),
+    );
+    assert_invalid(
+        PhaseSequence::load(&p).unwrap_err(),
+        &p,
+        "phases[1] ('strike').contacts",
+        &["l.sole (not rolling)", "got r.sole, l.sole (not rolling)"],
+    );
 }
 
 #[test]
 fn last_impact_of_a_periodic_cycle_must_mirror_the_first_phase() {
     let d = Scratch::new();
-    let p = d.write("walk.json", &walk_with_impacts("double_circle_walk.json", "r.forefoot,l.heel", "r.forefoot,l.heel"));
+    let p = d.write(
+        "walk.json",
+        &walk_with_impacts(
+            "double_circle_walk.json",
+            "r.forefoot,l.heel",
+            "r.forefoot,l.heel",
+        ),
+    );
     let msg = assert_invalid(
         PhaseSequence::load(&p).unwrap_err(),
         &p,
         "phases[6] ('7c*').contacts",
-        &["the first continuous phase '2c' mirrored", "l.forefoot, r.heel", "got r.forefoot, l.heel"],
+        &[
+            "the first continuous phase '2c' mirrored",
+            "l.forefoot, r.heel",
+            "got r.forefoot, l.heel",
+        ],
     );
     eprintln!("{msg}");
 }
@@ -757,8 +876,19 @@ fn last_impact_of_a_periodic_cycle_must_mirror_the_first_phase() {
 #[test]
 fn impact_that_adds_no_contact_or_is_followed_by_an_impact_is_refused() {
     let d = Scratch::new();
-    let p = d.write("p.json", &PHASES.replace(r#""contact": "r.sole" } ], "duration": 0.3"#, r#""contact": "r.sole" }, { "contact": "l.sole" } ], "duration": 0.3"#));
-    let msg = assert_invalid(PhaseSequence::load(&p).unwrap_err(), &p, "phases[1] ('strike').contacts", &["must add a contact", "'stance': r.sole, l.sole"]);
+    let p = d.write(
+        "p.json",
+        &PHASES.replace(
+            r#""contact": "r.sole" } ], "duration": 0.3"#,
+            r#""contact": "r.sole" }, { "contact": "l.sole" } ], "duration": 0.3"#,
+        ),
+    );
+    let msg = assert_invalid(
+        PhaseSequence::load(&p).unwrap_err(),
+        &p,
+        "phases[1] ('strike').contacts",
+        &["must add a contact", "'stance': r.sole, l.sole"],
+    );
     eprintln!("{msg}");
     let p = d.write(
         "p.json",
@@ -768,7 +898,12 @@ fn impact_that_adds_no_contact_or_is_followed_by_an_impact_is_refused() {
     { "type": "continuous", "name": "double""#,
         ),
     );
-    let msg = assert_invalid(PhaseSequence::load(&p).unwrap_err(), &p, "phases[1] ('strike').contacts", &["followed by a continuous phase", "'again'"]);
+    let msg = assert_invalid(
+        PhaseSequence::load(&p).unwrap_err(),
+        &p,
+        "phases[1] ('strike').contacts",
+        &["followed by a continuous phase", "'again'"],
+    );
     eprintln!("{msg}");
 }
 
@@ -917,15 +1052,33 @@ fn absurd_initial_state_is_refused_with_short_numbers() {
     // found by tests/fuzz.rs: these loaded, and the dynamics then returned NaN
     let d = Scratch::new();
     for (q, qd, field, words) in [
-        ("[0,1e308,0,0,0,0,0,0,0]", "[0,0,0,0,0,0,0,0,0]", "initial_state.q[1]", ["1e308", "at most 100 m or rad"]),
-        ("[0,1,0,0,0,0,0,0,0]", "[0,0,0,-1e308,0,0,0,0,0]", "initial_state.qd[3]", ["-1e308", "at most 1000 m/s or rad/s"]),
+        (
+            "[0,1e308,0,0,0,0,0,0,0]",
+            "[0,0,0,0,0,0,0,0,0]",
+            "initial_state.q[1]",
+            ["1e308", "at most 100 m or rad"],
+        ),
+        (
+            "[0,1,0,0,0,0,0,0,0]",
+            "[0,0,0,-1e308,0,0,0,0,0]",
+            "initial_state.qd[3]",
+            ["-1e308", "at most 1000 m/s or rad/s"],
+        ),
     ] {
         let p = d.write(
             "phases.json",
-            &PHASES.replace("\"name\": \"p\",", &format!("\"name\": \"p\", \"initial_state\": {{ \"q\": {q}, \"qd\": {qd} }},")),
+            &PHASES.replace(
+                "\"name\": \"p\",",
+                &format!("\"name\": \"p\", \"initial_state\": {{ \"q\": {q}, \"qd\": {qd} }},"),
+            ),
         );
         let seq = PhaseSequence::load(&p).unwrap();
-        let msg = assert_invalid(seq.resolve(&reference_model(), &p).unwrap_err(), &p, field, &words);
+        let msg = assert_invalid(
+            seq.resolve(&reference_model(), &p).unwrap_err(),
+            &p,
+            field,
+            &words,
+        );
         assert!(msg.len() < 300, "{msg}");
     }
 }
@@ -934,8 +1087,16 @@ fn absurd_initial_state_is_refused_with_short_numbers() {
 fn absurd_contact_and_damping_values_are_refused() {
     let d = Scratch::new();
     for (extra, field, words) in [
-        (r#", "contact": { "ground_height": 1e308 }"#, "contact.ground_height", ["1e308 m", "±10 m"]),
-        (r#", "contact": { "baumgarte_beta": 1e308 }"#, "contact.baumgarte_beta", ["1e308", "[0, 10000] 1/s"]),
+        (
+            r#", "contact": { "ground_height": 1e308 }"#,
+            "contact.ground_height",
+            ["1e308 m", "±10 m"],
+        ),
+        (
+            r#", "contact": { "baumgarte_beta": 1e308 }"#,
+            "contact.baumgarte_beta",
+            ["1e308", "[0, 10000] 1/s"],
+        ),
     ] {
         let m = d.write("model.json", &explicit_model(GOOD_THIGH, extra));
         assert_invalid(ModelSpec::load(&m).unwrap_err(), &m, field, &words);
@@ -945,7 +1106,12 @@ fn absurd_contact_and_damping_values_are_refused() {
         r#"{ "name": "x", "body": { "preset": "de_leva", "mass": 80.0, "height": 1.8, "sex": "male" },
              "actuators": { "type": "muscle_torque_generators", "eta": 1e308 } }"#,
     );
-    assert_invalid(ModelSpec::load(&m).unwrap_err(), &m, "actuators.eta", &["1e308", "[0, 1000]"]);
+    assert_invalid(
+        ModelSpec::load(&m).unwrap_err(),
+        &m,
+        "actuators.eta",
+        &["1e308", "[0, 1000]"],
+    );
 }
 
 // ---------------------------------------------------------------------------------------

@@ -106,7 +106,10 @@ fn simulate_writes_a_complete_finite_run_folder() {
     let o = footfall(&step_args(s(&out), &[]));
     assert!(o.status.success(), "simulate failed: {}", stderr(&o));
     assert_eq!(entries(tmp.path()), ["run"], "staging folder left behind");
-    assert_eq!(entries(&out), [".footfall-run", "summary.json", "timeseries.csv"]);
+    assert_eq!(
+        entries(&out),
+        [".footfall-run", "summary.json", "timeseries.csv"]
+    );
 
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
@@ -262,7 +265,10 @@ fn existing_output_folder_is_kept_without_overwrite() {
     for _ in 0..2 {
         let o = footfall(&step_args(s(&out), &["--overwrite"]));
         assert!(o.status.success(), "{}", stderr(&o));
-        assert_eq!(entries(&out), [".footfall-run", "summary.json", "timeseries.csv"]);
+        assert_eq!(
+            entries(&out),
+            [".footfall-run", "summary.json", "timeseries.csv"]
+        );
         assert_eq!(entries(tmp.path()), ["run"]);
     }
 }
@@ -290,7 +296,14 @@ fn invalid_integrator_tolerance_is_refused() {
     let err = assert_user_error(&o, &["rtol", "(0, 1)"]);
     eprintln!("{err}");
     assert!(entries(tmp.path()).is_empty());
-    let o = footfall(&["track", "--sensitivity-tol", "1.5", "--out", s(&out), "--quiet"]);
+    let o = footfall(&[
+        "track",
+        "--sensitivity-tol",
+        "1.5",
+        "--out",
+        s(&out),
+        "--quiet",
+    ]);
     assert_user_error(&o, &["--sensitivity-tol", "sens_tol", "(0, 1)", "1.5"]);
     assert!(entries(tmp.path()).is_empty());
 }
@@ -320,16 +333,24 @@ fn track_interrupted_by_ctrl_c_writes_the_last_iterate() {
             break;
         }
     }
-    let status = Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
+    let status = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
     assert!(status.success());
     for line in lines {
         log.push_str(&line.unwrap());
         log.push('\n');
     }
     let code = child.wait().unwrap();
-    assert_eq!(code.code(), Some(130), "an interrupted solve exits with 130:\n{log}");
+    assert_eq!(
+        code.code(),
+        Some(130),
+        "an interrupted solve exits with 130:\n{log}"
+    );
     assert!(log.contains("interrupted"), "{log}");
-    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["status"], "interrupted");
     assert!(summary["iterations"].as_u64().unwrap() >= 1);
     assert_all_finite(&summary, "summary");
@@ -346,15 +367,42 @@ fn report_rewrites_a_track_run(run: &Path, summary: &serde_json::Value) {
     let again = dir.join("again");
     let o = footfall(&["report", s(run), "--out", s(&again), "--quiet"]);
     assert!(o.status.success(), "report: {}", stderr(&o));
-    let rewritten: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(again.join("summary.json")).unwrap()).unwrap();
+    let rewritten: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(again.join("summary.json")).unwrap())
+            .unwrap();
     assert_all_finite(&rewritten, "summary");
-    for key in ["objective", "status", "iterations", "kkt", "errors", "errors_by_phase", "cost_breakdown", "history"] {
-        assert_eq!(rewritten[key], summary[key], "{key} differs after footfall report");
+    for key in [
+        "objective",
+        "status",
+        "iterations",
+        "kkt",
+        "errors",
+        "errors_by_phase",
+        "cost_breakdown",
+        "history",
+    ] {
+        assert_eq!(
+            rewritten[key], summary[key],
+            "{key} differs after footfall report"
+        );
     }
-    let rel = (rewritten["infeasibility"].as_f64().unwrap() - summary["infeasibility"].as_f64().unwrap()).abs() / summary["infeasibility"].as_f64().unwrap();
-    assert!(rel < 1e-3, "infeasibility {} against {}", rewritten["infeasibility"], summary["infeasibility"]);
+    let rel = (rewritten["infeasibility"].as_f64().unwrap()
+        - summary["infeasibility"].as_f64().unwrap())
+    .abs()
+        / summary["infeasibility"].as_f64().unwrap();
+    assert!(
+        rel < 1e-3,
+        "infeasibility {} against {}",
+        rewritten["infeasibility"],
+        summary["infeasibility"]
+    );
     let html = std::fs::read_to_string(again.join("report.html")).unwrap();
-    for text in ["Where the model fails", "Normalised error per channel and phase", "Data cost per shooting node", "re-evaluated from"] {
+    for text in [
+        "Where the model fails",
+        "Normalised error per channel and phase",
+        "Data cost per shooting node",
+        "re-evaluated from",
+    ] {
         assert!(html.contains(text), "'{text}' not in the rewritten report");
     }
     // the output exists: refused without --overwrite
@@ -371,7 +419,10 @@ fn report_rewrites_a_track_run(run: &Path, summary: &serde_json::Value) {
     std::fs::write(changed.join("summary.json"), s2.to_string()).unwrap();
     let out = dir.join("out");
     let o = footfall(&["report", s(&changed), "--out", s(&out), "--quiet"]);
-    assert_user_error(&o, &["changed", "re-evaluates to J", "re-run `footfall track`"]);
+    assert_user_error(
+        &o,
+        &["changed", "re-evaluates to J", "re-run `footfall track`"],
+    );
     // not a track run; no summary; not a folder
     s2["command"] = "predict".into();
     std::fs::write(changed.join("summary.json"), s2.to_string()).unwrap();
@@ -383,7 +434,11 @@ fn report_rewrites_a_track_run(run: &Path, summary: &serde_json::Value) {
     let o = footfall(&["report", "no/such/run", "--quiet"]);
     assert_user_error(&o, &["no/such/run", "not a run folder"]);
     assert!(!out.exists());
-    assert!(entries(dir).iter().all(|e| !e.contains("partial")), "{:?}", entries(dir));
+    assert!(
+        entries(dir).iter().all(|e| !e.contains("partial")),
+        "{:?}",
+        entries(dir)
+    );
 }
 
 #[test]
@@ -391,7 +446,14 @@ fn predict_and_compare_refuse_bad_arguments_before_solving() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("p");
     // an initial solution that does not exist, or is not a solution
-    let o = footfall(&["predict", "--init", "no/such/run", "--out", s(&out), "--quiet"]);
+    let o = footfall(&[
+        "predict",
+        "--init",
+        "no/such/run",
+        "--out",
+        s(&out),
+        "--quiet",
+    ]);
     assert_user_error(&o, &["no/such/run", "no such run folder"]);
     let junk = dir.path().join("junk.json");
     std::fs::write(&junk, "{\"phases\": 3}").unwrap();
@@ -408,12 +470,23 @@ fn predict_and_compare_refuse_bad_arguments_before_solving() {
     // compare: one foot, an unknown expected foot, a malformed --init
     let o = footfall(&["compare", "--feet", "ellipse", "--out", s(&out), "--quiet"]);
     assert_user_error(&o, &["--feet", "at least two"]);
-    let o = footfall(&["compare", "--expect-transient", "banana", "--out", s(&out), "--quiet"]);
+    let o = footfall(&[
+        "compare",
+        "--expect-transient",
+        "banana",
+        "--out",
+        s(&out),
+        "--quiet",
+    ]);
     assert_user_error(&o, &["--expect-transient banana"]);
     let o = footfall(&["compare", "--init", "ellipse", "--out", s(&out), "--quiet"]);
     assert_user_error(&o, &["--init ellipse", "FOOT=RUN"]);
     assert!(!out.exists());
-    assert!(entries(dir.path()).iter().all(|e| !e.contains("partial")), "{:?}", entries(dir.path()));
+    assert!(
+        entries(dir.path()).iter().all(|e| !e.contains("partial")),
+        "{:?}",
+        entries(dir.path())
+    );
 }
 
 /// A heel pad written in the model file (not only `--effect`) gets the integrator
@@ -424,36 +497,86 @@ fn predict_and_compare_refuse_bad_arguments_before_solving() {
 #[test]
 fn track_tightens_the_integrator_for_a_pad_in_the_model_file() {
     let tmp = tempfile::tempdir().unwrap();
-    let mut model: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(root().join("models/opensim_subject01.json")).unwrap()).unwrap();
-    model["body"]["file"] = root().join("data/opensim_subject01_model.json").to_str().unwrap().into();
-    model["effects"] = serde_json::json!([{ "type": "heel_pad_compliance", "stiffness": 150.0, "damping": 3.0 }]);
+    let mut model: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(root().join("models/opensim_subject01.json")).unwrap(),
+    )
+    .unwrap();
+    model["body"]["file"] = root()
+        .join("data/opensim_subject01_model.json")
+        .to_str()
+        .unwrap()
+        .into();
+    model["effects"] =
+        serde_json::json!([{ "type": "heel_pad_compliance", "stiffness": 150.0, "damping": 3.0 }]);
     let model_path = tmp.path().join("padded.json");
     std::fs::write(&model_path, model.to_string()).unwrap();
     let out = tmp.path().join("run");
     let o = Command::new(env!("CARGO_BIN_EXE_footfall"))
         .current_dir(root())
-        .args(["track", "--model", s(&model_path), "--foot", "double-circle", "--init", "tests/data/hidden/double_circle_base", "--max-iter", "0", "--out", s(&out)])
+        .args([
+            "track",
+            "--model",
+            s(&model_path),
+            "--foot",
+            "double-circle",
+            "--init",
+            "tests/data/hidden/double_circle_base",
+            "--max-iter",
+            "0",
+            "--out",
+            s(&out),
+        ])
         .output()
         .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(err.contains("integrator tolerance of the states 1e-8 → 1e-10"), "{err}");
+    assert!(
+        err.contains("integrator tolerance of the states 1e-8 → 1e-10"),
+        "{err}"
+    );
     assert!(err.contains("of the sensitivities 1e-8"), "{err}");
-    let setup: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("setup.json")).unwrap()).unwrap();
+    let setup: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("setup.json")).unwrap()).unwrap();
     assert_eq!(setup["integrator_tol"], 1e-10, "{setup}");
     assert_eq!(setup["sensitivity_tol"], 1e-8, "{setup}");
-    let o = Command::new(env!("CARGO_BIN_EXE_footfall")).current_dir(root()).args(["report", s(&out), "--out", s(&tmp.path().join("report"))]).output().unwrap();
-    assert!(o.status.success(), "report of the padded run: {}", String::from_utf8_lossy(&o.stderr));
+    let o = Command::new(env!("CARGO_BIN_EXE_footfall"))
+        .current_dir(root())
+        .args(["report", s(&out), "--out", s(&tmp.path().join("report"))])
+        .output()
+        .unwrap();
+    assert!(
+        o.status.success(),
+        "report of the padded run: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
     let html = std::fs::read_to_string(tmp.path().join("report/report.html")).unwrap();
-    assert!(html.contains("J reproduced to 0e0"), "the padded run does not re-evaluate bit for bit from its setup.json");
+    assert!(
+        html.contains("J reproduced to 0e0"),
+        "the padded run does not re-evaluate bit for bit from its setup.json"
+    );
     // residual actuators keep the sensitivities at 1e-10 too (the KKT residual is
     // computed from them)
     let out = tmp.path().join("residuals");
     Command::new(env!("CARGO_BIN_EXE_footfall"))
         .current_dir(root())
-        .args(["track", "--model", s(&model_path), "--foot", "double-circle", "--init", "tests/data/hidden/double_circle_base", "--residual-actuators", "--max-iter", "0", "--quiet", "--out", s(&out)])
+        .args([
+            "track",
+            "--model",
+            s(&model_path),
+            "--foot",
+            "double-circle",
+            "--init",
+            "tests/data/hidden/double_circle_base",
+            "--residual-actuators",
+            "--max-iter",
+            "0",
+            "--quiet",
+            "--out",
+            s(&out),
+        ])
         .output()
         .unwrap();
-    let setup: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("setup.json")).unwrap()).unwrap();
+    let setup: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("setup.json")).unwrap()).unwrap();
     assert_eq!(setup["integrator_tol"], 1e-10, "{setup}");
     assert!(setup.get("sensitivity_tol").is_none(), "{setup}");
 }
@@ -470,21 +593,58 @@ fn a_pad_fit_stalled_by_loose_sensitivities_goes_on_with_tight_ones() {
     let out = tmp.path().join("run");
     let o = Command::new(env!("CARGO_BIN_EXE_footfall"))
         .current_dir(root())
-        .args(["track", "--data", s(&trial.join("synthetic.csv")), "--init", s(&trial.join("stalled_refit")), "--foot", "double-circle", "--sample-targets"])
-        .args(["--noise-weights", "angle=0.5,position=2,force=5,cop=5", "--effect", "heel_pad_compliance", "--hessian", "gauss-newton", "--out", s(&out)])
+        .args([
+            "track",
+            "--data",
+            s(&trial.join("synthetic.csv")),
+            "--init",
+            s(&trial.join("stalled_refit")),
+            "--foot",
+            "double-circle",
+            "--sample-targets",
+        ])
+        .args([
+            "--noise-weights",
+            "angle=0.5,position=2,force=5,cop=5",
+            "--effect",
+            "heel_pad_compliance",
+            "--hessian",
+            "gauss-newton",
+            "--out",
+            s(&out),
+        ])
         .output()
         .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{err}");
-    assert!(err.contains("line search failed at KKT") && err.contains("with the sensitivities at 1e-8: going on from there with them at 1e-10"), "{err}");
-    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert!(
+        err.contains("line search failed at KKT")
+            && err
+                .contains("with the sensitivities at 1e-8: going on from there with them at 1e-10"),
+        "{err}"
+    );
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["status"], "converged", "{summary}");
     assert!(summary["kkt"].as_f64().unwrap() < 1e-5);
-    let setup: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("setup.json")).unwrap()).unwrap();
-    let start: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(trial.join("stalled_refit/setup.json")).unwrap()).unwrap();
-    for (a, b) in setup["parameters"].as_array().unwrap().iter().zip(start["parameters"].as_array().unwrap()) {
+    let setup: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("setup.json")).unwrap()).unwrap();
+    let start: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(trial.join("stalled_refit/setup.json")).unwrap(),
+    )
+    .unwrap();
+    for (a, b) in setup["parameters"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .zip(start["parameters"].as_array().unwrap())
+    {
         let (x, y) = (a["value"].as_f64().unwrap(), b["value"].as_f64().unwrap());
-        assert!((x - y).abs() < 1e-4 * y, "{}: {x} after, {y} at the stalled iterate", a["name"]);
+        assert!(
+            (x - y).abs() < 1e-4 * y,
+            "{}: {x} after, {y} at the stalled iterate",
+            a["name"]
+        );
     }
 }
 
@@ -497,17 +657,35 @@ fn track_holds_a_fixed_effect_parameter_at_its_given_value_despite_init() {
     let init = tmp.path().join("init");
     std::fs::create_dir(&init).unwrap();
     std::fs::copy(kept.join("solution.json"), init.join("solution.json")).unwrap();
-    let mut setup: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(kept.join("setup.json")).unwrap()).unwrap();
+    let mut setup: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(kept.join("setup.json")).unwrap()).unwrap();
     setup["parameters"] = serde_json::json!([{ "name": "ground_slope.angle", "value": 0.02, "unit": "rad", "free": true }]);
     std::fs::write(init.join("setup.json"), setup.to_string()).unwrap();
     let slope_after = |effect: &str, out: &str| {
         let out = tmp.path().join(out);
         Command::new(env!("CARGO_BIN_EXE_footfall"))
             .current_dir(root())
-            .args(["track", "--data", "tests/data/hidden/none/synthetic.csv", "--kinematics-cutoff", "10", "--init", s(&init), "--effect", effect, "--max-iter", "0", "--quiet", "--out", s(&out)])
+            .args([
+                "track",
+                "--data",
+                "tests/data/hidden/none/synthetic.csv",
+                "--kinematics-cutoff",
+                "10",
+                "--init",
+                s(&init),
+                "--effect",
+                effect,
+                "--max-iter",
+                "0",
+                "--quiet",
+                "--out",
+                s(&out),
+            ])
             .output()
             .unwrap();
-        let setup: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("setup.json")).unwrap()).unwrap();
+        let setup: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("setup.json")).unwrap())
+                .unwrap();
         setup["parameters"][0]["value"].as_f64().unwrap()
     };
     assert_eq!(slope_after("ground_slope:angle=0.01,free=", "fixed"), 0.01);
@@ -522,37 +700,83 @@ fn track_velocity_weight_scales_the_velocity_targets_and_is_recorded() {
     let init = root().join("tests/data/hidden/none/tracked_seed");
     let run = |weight: Option<&str>, out: &str| {
         let out = tmp.path().join(out);
-        let mut args = vec!["track", "--data", "tests/data/hidden/none/synthetic.csv", "--kinematics-cutoff", "10", "--init", s(&init), "--max-iter", "0", "--quiet", "--out", s(&out)];
+        let mut args = vec![
+            "track",
+            "--data",
+            "tests/data/hidden/none/synthetic.csv",
+            "--kinematics-cutoff",
+            "10",
+            "--init",
+            s(&init),
+            "--max-iter",
+            "0",
+            "--quiet",
+            "--out",
+            s(&out),
+        ];
         if let Some(w) = weight {
             args.extend(["--velocity-weight", w]);
         }
-        let o = Command::new(env!("CARGO_BIN_EXE_footfall")).current_dir(root()).args(&args).output().unwrap();
+        let o = Command::new(env!("CARGO_BIN_EXE_footfall"))
+            .current_dir(root())
+            .args(&args)
+            .output()
+            .unwrap();
         (o, out)
     };
     let (bad, bad_out) = run(Some("-1"), "bad");
     // refused by the option's parser: a usage error
     let err = stderr(&bad);
     assert_eq!(bad.status.code(), Some(2), "{err}");
-    assert!(err.contains("'--velocity-weight <VELOCITY_WEIGHT>'") && err.contains("≥ 0"), "{err}");
+    assert!(
+        err.contains("'--velocity-weight <VELOCITY_WEIGHT>'") && err.contains("≥ 0"),
+        "{err}"
+    );
     assert!(!bad_out.exists());
     // (J, the velocity targets' share of it) at the kept solution
     let costs = |out: &Path| {
-        let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+        let summary: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
+                .unwrap();
         let b = &summary["cost_breakdown"];
-        let channels: Vec<&str> = b["channels"].as_array().unwrap().iter().map(|c| c.as_str().unwrap()).collect();
-        let velocities = channels.iter().position(|&c| c == "velocities").map(|i| b["cost"][i].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).sum::<f64>());
+        let channels: Vec<&str> = b["channels"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|c| c.as_str().unwrap())
+            .collect();
+        let velocities = channels.iter().position(|&c| c == "velocities").map(|i| {
+            b["cost"][i]
+                .as_array()
+                .unwrap()
+                .iter()
+                .map(|v| v.as_f64().unwrap())
+                .sum::<f64>()
+        });
         (summary["objective"].as_f64().unwrap(), velocities)
     };
     let (j_seed, v_seed) = costs(&run(None, "seed").1);
     let (j_double, v_double) = costs(&run(Some("0.2"), "double").1);
     let (j_none, v_none) = costs(&run(Some("0"), "none").1);
     let v_seed = v_seed.expect("the seed's cost has velocity targets");
-    assert!(v_seed > 0.01 * j_seed, "velocity targets {v_seed} of J {j_seed}");
-    assert!((v_double.unwrap() - 2.0 * v_seed).abs() < 1e-9 * v_seed, "{v_double:?} vs 2 × {v_seed}");
+    assert!(
+        v_seed > 0.01 * j_seed,
+        "velocity targets {v_seed} of J {j_seed}"
+    );
+    assert!(
+        (v_double.unwrap() - 2.0 * v_seed).abs() < 1e-9 * v_seed,
+        "{v_double:?} vs 2 × {v_seed}"
+    );
     assert!((j_double - j_seed - v_seed).abs() < 1e-9 * j_seed);
     assert_eq!(v_none, None, "weight 0 leaves no velocity channel");
-    assert!((j_none - (j_seed - v_seed)).abs() < 1e-9 * j_seed, "J {j_none} vs {j_seed} − {v_seed}");
-    let setup: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(tmp.path().join("double/setup.json")).unwrap()).unwrap();
+    assert!(
+        (j_none - (j_seed - v_seed)).abs() < 1e-9 * j_seed,
+        "J {j_none} vs {j_seed} − {v_seed}"
+    );
+    let setup: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(tmp.path().join("double/setup.json")).unwrap(),
+    )
+    .unwrap();
     assert_eq!(setup["velocity_weight"].as_f64(), Some(0.2));
 }
 
@@ -566,12 +790,53 @@ fn diagnose_cautions_on_a_run_that_did_not_converge() {
     let init = root().join("tests/data/hidden/none/tracked_seed");
     let verdict = |weight: &str| {
         let out = tmp.path().join(format!("w{weight}"));
-        let args = ["track", "--data", "tests/data/hidden/none/synthetic.csv", "--kinematics-cutoff", "10", "--init", s(&init), "--max-iter", "0", "--velocity-weight", weight, "--quiet", "--out", s(&out)];
-        Command::new(env!("CARGO_BIN_EXE_footfall")).current_dir(root()).args(args).output().unwrap();
-        let status = serde_json::from_str::<serde_json::Value>(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap()["status"].as_str().unwrap().to_string();
-        let o = Command::new(env!("CARGO_BIN_EXE_footfall")).current_dir(root()).args(["diagnose", s(&out), "--candidate", "ground_slope", "--verify", "0", "--quiet"]).output().unwrap();
+        let args = [
+            "track",
+            "--data",
+            "tests/data/hidden/none/synthetic.csv",
+            "--kinematics-cutoff",
+            "10",
+            "--init",
+            s(&init),
+            "--max-iter",
+            "0",
+            "--velocity-weight",
+            weight,
+            "--quiet",
+            "--out",
+            s(&out),
+        ];
+        Command::new(env!("CARGO_BIN_EXE_footfall"))
+            .current_dir(root())
+            .args(args)
+            .output()
+            .unwrap();
+        let status = serde_json::from_str::<serde_json::Value>(
+            &std::fs::read_to_string(out.join("summary.json")).unwrap(),
+        )
+        .unwrap()["status"]
+            .as_str()
+            .unwrap()
+            .to_string();
+        let o = Command::new(env!("CARGO_BIN_EXE_footfall"))
+            .current_dir(root())
+            .args([
+                "diagnose",
+                s(&out),
+                "--candidate",
+                "ground_slope",
+                "--verify",
+                "0",
+                "--quiet",
+            ])
+            .output()
+            .unwrap();
         assert!(o.status.success(), "diagnose: {}", stderr(&o));
-        let d: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(tmp.path().join(format!("w{weight}-diagnose/summary.json"))).unwrap()).unwrap();
+        let d: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(tmp.path().join(format!("w{weight}-diagnose/summary.json")))
+                .unwrap(),
+        )
+        .unwrap();
         (status, d["verdict"].as_str().unwrap().to_string())
     };
     let (status, text) = verdict("0.1");
@@ -579,7 +844,10 @@ fn diagnose_cautions_on_a_run_that_did_not_converge() {
     assert!(!text.contains("did not converge"), "{text}");
     let (status, text) = verdict("0.2");
     assert_eq!(status, "max_iterations");
-    assert!(text.contains("Caution: the run did not converge (iteration limit reached)"), "{text}");
+    assert!(
+        text.contains("Caution: the run did not converge (iteration limit reached)"),
+        "{text}"
+    );
 }
 
 /// `--one-sided-targets`: on a noise-free 1 kHz trial generated by the rigid
@@ -595,25 +863,84 @@ fn one_sided_targets_match_the_generating_model_at_its_solution() {
     let base = root().join("tests/data/hidden/double_circle_base");
     let synth = |rate: &str, out: &str| {
         let out = tmp.path().join(out);
-        let noise_free = ["--noise-angle-deg", "0", "--noise-position-mm", "0", "--noise-force-n", "0", "--noise-cop-mm", "0"];
-        let mut args = vec!["synth", "--from", s(&base), "--rate", rate, "--quiet", "--out", s(&out)];
+        let noise_free = [
+            "--noise-angle-deg",
+            "0",
+            "--noise-position-mm",
+            "0",
+            "--noise-force-n",
+            "0",
+            "--noise-cop-mm",
+            "0",
+        ];
+        let mut args = vec![
+            "synth",
+            "--from",
+            s(&base),
+            "--rate",
+            rate,
+            "--quiet",
+            "--out",
+            s(&out),
+        ];
         args.extend(noise_free);
-        let o = Command::new(env!("CARGO_BIN_EXE_footfall")).current_dir(root()).args(&args).output().unwrap();
+        let o = Command::new(env!("CARGO_BIN_EXE_footfall"))
+            .current_dir(root())
+            .args(&args)
+            .output()
+            .unwrap();
         assert!(o.status.success(), "synth: {}", stderr(&o));
         out.join("synthetic.csv")
     };
     let at_truth = |data: &Path, one_sided: bool, out: &str| {
         let out = tmp.path().join(out);
-        let mut args = vec!["track", "--foot", "double-circle", "--data", s(data), "--init", s(&base), "--max-iter", "0", "--quiet", "--out", s(&out)];
+        let mut args = vec![
+            "track",
+            "--foot",
+            "double-circle",
+            "--data",
+            s(data),
+            "--init",
+            s(&base),
+            "--max-iter",
+            "0",
+            "--quiet",
+            "--out",
+            s(&out),
+        ];
         if one_sided {
             args.push("--one-sided-targets");
         }
-        (Command::new(env!("CARGO_BIN_EXE_footfall")).current_dir(root()).args(&args).output().unwrap(), out)
+        (
+            Command::new(env!("CARGO_BIN_EXE_footfall"))
+                .current_dir(root())
+                .args(&args)
+                .output()
+                .unwrap(),
+            out,
+        )
     };
     let channel_costs = |out: &Path| -> std::collections::HashMap<String, f64> {
-        let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+        let summary: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
+                .unwrap();
         let b = &summary["cost_breakdown"];
-        b["channels"].as_array().unwrap().iter().zip(b["cost"].as_array().unwrap()).map(|(c, v)| (c.as_str().unwrap().to_string(), v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).sum())).collect()
+        b["channels"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .zip(b["cost"].as_array().unwrap())
+            .map(|(c, v)| {
+                (
+                    c.as_str().unwrap().to_string(),
+                    v.as_array()
+                        .unwrap()
+                        .iter()
+                        .map(|x| x.as_f64().unwrap())
+                        .sum(),
+                )
+            })
+            .collect()
     };
     let fast = synth("1000", "k");
     let interpolated = channel_costs(&at_truth(&fast, false, "interpolated").1);
@@ -625,26 +952,78 @@ fn one_sided_targets_match_the_generating_model_at_its_solution() {
     for c in ["normal GRF", "tangential GRF"] {
         assert!(one_sided[c] < 1e-6, "{c}: {one_sided:?}");
     }
-    assert!(one_sided["velocities"] < 1e-4 && one_sided["velocities"] < 0.01 * interpolated["velocities"], "{one_sided:?}");
-    let setup: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(one_sided_out.join("setup.json")).unwrap()).unwrap();
+    assert!(
+        one_sided["velocities"] < 1e-4
+            && one_sided["velocities"] < 0.01 * interpolated["velocities"],
+        "{one_sided:?}"
+    );
+    let setup: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(one_sided_out.join("setup.json")).unwrap())
+            .unwrap();
     assert_eq!(setup["one_sided_targets"].as_bool(), Some(true));
     // diagnose tests the heel pad (no null value) by a full re-fit on a one-sided run …
-    let read = |p: &Path| -> serde_json::Value { serde_json::from_str(&std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))).unwrap() };
+    let read = |p: &Path| -> serde_json::Value {
+        serde_json::from_str(
+            &std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display())),
+        )
+        .unwrap()
+    };
     let diagnose = |run: &Path| {
-        let o = Command::new(env!("CARGO_BIN_EXE_footfall")).current_dir(root()).args(["diagnose", s(run), "--candidate", "heel_pad_compliance", "--max-iter", "2", "--quiet"]).output().unwrap();
+        let o = Command::new(env!("CARGO_BIN_EXE_footfall"))
+            .current_dir(root())
+            .args([
+                "diagnose",
+                s(run),
+                "--candidate",
+                "heel_pad_compliance",
+                "--max-iter",
+                "2",
+                "--quiet",
+            ])
+            .output()
+            .unwrap();
         assert!(o.status.success(), "diagnose: {}", stderr(&o));
-        read(&tmp.path().join(format!("{}-diagnose/summary.json", run.file_name().unwrap().to_str().unwrap())))
+        read(&tmp.path().join(format!(
+            "{}-diagnose/summary.json",
+            run.file_name().unwrap().to_str().unwrap()
+        )))
     };
     let d = diagnose(&one_sided_out);
     let t = &d["ranking"][0];
-    assert_eq!((t["effect"]["type"].as_str(), t["refit"].as_bool(), t["steps"].as_u64()), (Some("heel_pad_compliance"), Some(true), Some(2)), "{t}");
+    assert_eq!(
+        (
+            t["effect"]["type"].as_str(),
+            t["refit"].as_bool(),
+            t["steps"].as_u64()
+        ),
+        (Some("heel_pad_compliance"), Some(true), Some(2)),
+        "{t}"
+    );
     let refit = tmp.path().join("one_sided+heel_pad_compliance");
-    let (j, j_refit) = (read(&one_sided_out.join("summary.json"))["objective"].as_f64().unwrap(), read(&refit.join("summary.json"))["objective"].as_f64().unwrap());
+    let (j, j_refit) = (
+        read(&one_sided_out.join("summary.json"))["objective"]
+            .as_f64()
+            .unwrap(),
+        read(&refit.join("summary.json"))["objective"]
+            .as_f64()
+            .unwrap(),
+    );
     let rows = d["data_residuals"].as_f64().unwrap();
     let statistic = (j - j_refit).max(0.0) / (j / rows);
-    assert!((t["statistic"].as_f64().unwrap() - statistic).abs() <= 1e-9 * statistic.max(1.0), "{t} against (J {j} − re-fit {j_refit}) / (J / {rows})");
-    assert_eq!(t["significant"].as_bool(), Some(statistic > t["threshold"].as_f64().unwrap()));
-    let refit_parameters: Vec<String> = read(&refit.join("setup.json"))["parameters"].as_array().unwrap().iter().map(|p| p["name"].as_str().unwrap().to_string()).collect();
+    assert!(
+        (t["statistic"].as_f64().unwrap() - statistic).abs() <= 1e-9 * statistic.max(1.0),
+        "{t} against (J {j} − re-fit {j_refit}) / (J / {rows})"
+    );
+    assert_eq!(
+        t["significant"].as_bool(),
+        Some(statistic > t["threshold"].as_f64().unwrap())
+    );
+    let refit_parameters: Vec<String> = read(&refit.join("setup.json"))["parameters"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["name"].as_str().unwrap().to_string())
+        .collect();
     assert_eq!(t["parameters"], serde_json::json!(refit_parameters));
     if let Some(v) = d["verified"].as_array().unwrap().first() {
         // a significant pad's verification is the same re-fit, not another
@@ -653,11 +1032,26 @@ fn one_sided_targets_match_the_generating_model_at_its_solution() {
     // … and names it as not scored on a run with the seed's interpolated targets
     let d = diagnose(&tmp.path().join("interpolated"));
     assert!(d["ranking"].as_array().unwrap().is_empty());
-    assert!(d["skipped"][0].as_str().unwrap().starts_with("heel-pad compliance: not scored"), "{}", d["skipped"]);
+    assert!(
+        d["skipped"][0]
+            .as_str()
+            .unwrap()
+            .starts_with("heel-pad compliance: not scored"),
+        "{}",
+        d["skipped"]
+    );
     // at 50 Hz the 55 ms from heel strike to the forefoot's landing hold too few samples
     let coarse = synth("50", "coarse");
     let (o, out) = at_truth(&coarse, true, "coarse_run");
-    assert_user_error(&o, &["one-sided targets", "phase 2c", "fewer than 4", "sample faster"]);
+    assert_user_error(
+        &o,
+        &[
+            "one-sided targets",
+            "phase 2c",
+            "fewer than 4",
+            "sample faster",
+        ],
+    );
     assert!(!out.exists());
 }
 
@@ -674,20 +1068,70 @@ fn sample_targets_match_the_generating_model_and_noise_weights_rescale_channels(
     let base = root().join("tests/data/hidden/double_circle_base");
     let data = tmp.path().join("clean");
     let mut args = vec!["synth", "--from", s(&base), "--quiet", "--out", s(&data)];
-    args.extend(["--noise-angle-deg", "0", "--noise-position-mm", "0", "--noise-force-n", "0", "--noise-cop-mm", "0"]);
-    let o = Command::new(env!("CARGO_BIN_EXE_footfall")).current_dir(root()).args(&args).output().unwrap();
+    args.extend([
+        "--noise-angle-deg",
+        "0",
+        "--noise-position-mm",
+        "0",
+        "--noise-force-n",
+        "0",
+        "--noise-cop-mm",
+        "0",
+    ]);
+    let o = Command::new(env!("CARGO_BIN_EXE_footfall"))
+        .current_dir(root())
+        .args(&args)
+        .output()
+        .unwrap();
     assert!(o.status.success(), "synth: {}", stderr(&o));
     let data = data.join("synthetic.csv");
     let at_truth = |extra: &[&str], out: &str| {
         let out = tmp.path().join(out);
-        let mut args = vec!["track", "--foot", "double-circle", "--data", s(&data), "--init", s(&base), "--max-iter", "0", "--quiet", "--out", s(&out)];
+        let mut args = vec![
+            "track",
+            "--foot",
+            "double-circle",
+            "--data",
+            s(&data),
+            "--init",
+            s(&base),
+            "--max-iter",
+            "0",
+            "--quiet",
+            "--out",
+            s(&out),
+        ];
         args.extend(extra);
-        (Command::new(env!("CARGO_BIN_EXE_footfall")).current_dir(root()).args(&args).output().unwrap(), out)
+        (
+            Command::new(env!("CARGO_BIN_EXE_footfall"))
+                .current_dir(root())
+                .args(&args)
+                .output()
+                .unwrap(),
+            out,
+        )
     };
     let channel_costs = |out: &Path| -> std::collections::HashMap<String, f64> {
-        let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+        let summary: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap())
+                .unwrap();
         let b = &summary["cost_breakdown"];
-        b["channels"].as_array().unwrap().iter().zip(b["cost"].as_array().unwrap()).map(|(c, v)| (c.as_str().unwrap().to_string(), v.as_array().unwrap().iter().map(|x| x.as_f64().unwrap()).sum())).collect()
+        b["channels"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .zip(b["cost"].as_array().unwrap())
+            .map(|(c, v)| {
+                (
+                    c.as_str().unwrap().to_string(),
+                    v.as_array()
+                        .unwrap()
+                        .iter()
+                        .map(|x| x.as_f64().unwrap())
+                        .sum(),
+                )
+            })
+            .collect()
     };
     let interpolated = channel_costs(&at_truth(&[], "interpolated").1);
     let (_, samples_out) = at_truth(&["--sample-targets"], "samples");
@@ -700,38 +1144,102 @@ fn sample_targets_match_the_generating_model_and_noise_weights_rescale_channels(
             assert!(*v < 1e-9, "{c}: {v} at the generating solution");
         }
     }
-    let setup: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(samples_out.join("setup.json")).unwrap()).unwrap();
+    let setup: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(samples_out.join("setup.json")).unwrap())
+            .unwrap();
     assert_eq!(setup["sample_targets"].as_bool(), Some(true));
     // noise weights on the noisy trial without a hidden effect, at its kept solution
     let noisy = root().join("tests/data/hidden/double_circle_none/synthetic.csv");
     let init = root().join("tests/data/hidden/double_circle_none/tracked_samples");
     let on_noisy = |extra: &[&str], out: &str| {
         let out = tmp.path().join(out);
-        let mut args = vec!["track", "--foot", "double-circle", "--sample-targets", "--data", s(&noisy), "--init", s(&init), "--max-iter", "0", "--quiet", "--out", s(&out)];
+        let mut args = vec![
+            "track",
+            "--foot",
+            "double-circle",
+            "--sample-targets",
+            "--data",
+            s(&noisy),
+            "--init",
+            s(&init),
+            "--max-iter",
+            "0",
+            "--quiet",
+            "--out",
+            s(&out),
+        ];
         args.extend(extra);
-        (Command::new(env!("CARGO_BIN_EXE_footfall")).current_dir(root()).args(&args).output().unwrap(), out)
+        (
+            Command::new(env!("CARGO_BIN_EXE_footfall"))
+                .current_dir(root())
+                .args(&args)
+                .output()
+                .unwrap(),
+            out,
+        )
     };
     let seed = channel_costs(&on_noisy(&[], "seed_weights").1);
-    let (_, weighted_out) = on_noisy(&["--noise-weights", "angle=0.5,position=2,force=5,cop=5"], "noise_weights");
+    let (_, weighted_out) = on_noisy(
+        &["--noise-weights", "angle=0.5,position=2,force=5,cop=5"],
+        "noise_weights",
+    );
     let weighted = channel_costs(&weighted_out);
     let peak = {
         let text = std::fs::read_to_string(&noisy).unwrap();
         let head: Vec<&str> = text.lines().next().unwrap().split(',').collect();
-        let cols: Vec<usize> = head.iter().enumerate().filter(|(_, h)| h.starts_with("grf_y")).map(|(i, _)| i).collect();
-        text.lines().skip(1).flat_map(|l| {
-            let v: Vec<&str> = l.split(',').collect();
-            cols.iter().map(move |&i| v[i].parse::<f64>().unwrap()).collect::<Vec<_>>()
-        }).fold(0.0, f64::max)
+        let cols: Vec<usize> = head
+            .iter()
+            .enumerate()
+            .filter(|(_, h)| h.starts_with("grf_y"))
+            .map(|(i, _)| i)
+            .collect();
+        text.lines()
+            .skip(1)
+            .flat_map(|l| {
+                let v: Vec<&str> = l.split(',').collect();
+                cols.iter()
+                    .map(move |&i| v[i].parse::<f64>().unwrap())
+                    .collect::<Vec<_>>()
+            })
+            .fold(0.0, f64::max)
     };
     let ratio = |c: &str| weighted[c] / seed[c];
     // the seed weights an angle by 1/(π/4) per rad² and a force by 1/peak² per N²
     let force = (0.5f64.to_radians() / 5.0).powi(2) * peak * peak / std::f64::consts::FRAC_PI_4;
-    for (c, expected) in [("hip_r", 1.0), ("knee_l", 1.0), ("ankle_r", 100.0), ("normal GRF", force), ("tangential GRF", force)] {
-        assert!((ratio(c) - expected).abs() < 1e-9 * expected, "{c}: cost ×{} with noise weights, expected ×{expected}", ratio(c));
+    for (c, expected) in [
+        ("hip_r", 1.0),
+        ("knee_l", 1.0),
+        ("ankle_r", 100.0),
+        ("normal GRF", force),
+        ("tangential GRF", force),
+    ] {
+        assert!(
+            (ratio(c) - expected).abs() < 1e-9 * expected,
+            "{c}: cost ×{} with noise weights, expected ×{expected}",
+            ratio(c)
+        );
     }
-    let setup: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(weighted_out.join("setup.json")).unwrap()).unwrap();
-    assert!((setup["noise_weights"]["force_n"].as_f64().unwrap() - 5.0).abs() < 1e-12, "{setup}");
-    for (bad, names) in [("angle=0.5,force=5,cop=5", vec!["--noise-weights", "missing position"]), ("angle=0.5,position=2,force=-5,cop=5", vec!["force", "positive"]), ("angle=0.5,position=2,force=5,cop=5,speed=1", vec!["unknown key 'speed'"])] {
+    let setup: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(weighted_out.join("setup.json")).unwrap())
+            .unwrap();
+    assert!(
+        (setup["noise_weights"]["force_n"].as_f64().unwrap() - 5.0).abs() < 1e-12,
+        "{setup}"
+    );
+    for (bad, names) in [
+        (
+            "angle=0.5,force=5,cop=5",
+            vec!["--noise-weights", "missing position"],
+        ),
+        (
+            "angle=0.5,position=2,force=-5,cop=5",
+            vec!["force", "positive"],
+        ),
+        (
+            "angle=0.5,position=2,force=5,cop=5,speed=1",
+            vec!["unknown key 'speed'"],
+        ),
+    ] {
         let (o, out) = on_noisy(&["--noise-weights", bad], "bad");
         assert_user_error(&o, &names);
         assert!(!out.exists());

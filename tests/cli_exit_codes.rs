@@ -11,7 +11,11 @@ fn root() -> PathBuf {
 }
 
 fn footfall(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_footfall")).args(args).current_dir(root()).output().expect("run footfall")
+    Command::new(env!("CARGO_BIN_EXE_footfall"))
+        .args(args)
+        .current_dir(root())
+        .output()
+        .expect("run footfall")
 }
 
 fn s(p: &Path) -> &str {
@@ -38,26 +42,124 @@ fn out_of_range_option_values_are_usage_errors_naming_the_option() {
     let cases: &[(&[&str], &str, &str)] = &[
         (&["track", "--tol", "NaN"], "'--tol <TOL>'", finite_positive),
         (&["track", "--tol=-1"], "'--tol <TOL>'", finite_positive),
-        (&["track", "--max-time=-5"], "'--max-time <MAX_TIME>'", finite_positive),
-        (&["track", "--integrator-tol", "0"], "'--integrator-tol <INTEGRATOR_TOL>'", finite_positive),
-        (&["track", "--sensitivity-tol", "inf"], "'--sensitivity-tol <SENSITIVITY_TOL>'", finite_positive),
-        (&["track", "--exact-below", "NaN"], "'--exact-below <EXACT_BELOW>'", "≥ 0 (or inf)"),
-        (&["track", "--max-iter", "1000000"], "'--max-iter <MAX_ITER>'", "from 0 to 100000"),
-        (&["track", "--regularisation=-1e-3"], "'--regularisation <REGULARISATION>'", "finite number ≥ 0"),
-        (&["track", "--transient-threshold", "0"], "'--transient-threshold <TRANSIENT_THRESHOLD>'", finite_positive),
-        (&["track", "--kinematics-cutoff", "NaN"], "'--kinematics-cutoff <KINEMATICS_CUTOFF>'", finite_positive),
-        (&["solve", "--problem", "problems/cartpole_swingup.json", "--tol", "NaN"], "'--tol <TOL>'", finite_positive),
-        (&["solve", "--problem", "problems/cartpole_swingup.json", "--max-time", "0"], "'--max-time <MAX_TIME>'", finite_positive),
-        (&["predict", "--impulse-weight=-1"], "'--impulse-weight <IMPULSE_WEIGHT>'", "finite number ≥ 0"),
-        (&["predict", "--ankle-velocity-limit", "0"], "'--ankle-velocity-limit <ANKLE_VELOCITY_LIMIT>'", finite_positive),
-        (&["compare", "--expect-ratio", "inf"], "'--expect-ratio <EXPECT_RATIO>'", finite_positive),
-        (&["simulate", "--phase-set", "phases/sim_ellipse_step.json", "--dt", "0"], "'--dt <DT>'", finite_positive),
-        (&["fit-foot", "--tol", "NaN"], "'--tol <TOL>'", finite_positive),
-        (&["diagnose", "runs/x", "--max-iter=-1"], "'--max-iter <MAX_ITER>'", "from 0 to 100000"),
-        (&["synth", "--from", "runs/x", "--noise-force-n=-5"], "'--noise-force-n <NOISE_FORCE_N>'", "finite number ≥ 0"),
-        (&["synth", "--from", "runs/x", "--rate", "0"], "'--rate <RATE>'", finite_positive),
-        (&["diff", "a", "b", "--threshold-pct", "NaN"], "'--threshold-pct <THRESHOLD_PCT>'", "finite number ≥ 0"),
-        (&["report", "runs/x", "--transient-threshold=-1"], "'--transient-threshold <TRANSIENT_THRESHOLD>'", finite_positive),
+        (
+            &["track", "--max-time=-5"],
+            "'--max-time <MAX_TIME>'",
+            finite_positive,
+        ),
+        (
+            &["track", "--integrator-tol", "0"],
+            "'--integrator-tol <INTEGRATOR_TOL>'",
+            finite_positive,
+        ),
+        (
+            &["track", "--sensitivity-tol", "inf"],
+            "'--sensitivity-tol <SENSITIVITY_TOL>'",
+            finite_positive,
+        ),
+        (
+            &["track", "--exact-below", "NaN"],
+            "'--exact-below <EXACT_BELOW>'",
+            "≥ 0 (or inf)",
+        ),
+        (
+            &["track", "--max-iter", "1000000"],
+            "'--max-iter <MAX_ITER>'",
+            "from 0 to 100000",
+        ),
+        (
+            &["track", "--regularisation=-1e-3"],
+            "'--regularisation <REGULARISATION>'",
+            "finite number ≥ 0",
+        ),
+        (
+            &["track", "--transient-threshold", "0"],
+            "'--transient-threshold <TRANSIENT_THRESHOLD>'",
+            finite_positive,
+        ),
+        (
+            &["track", "--kinematics-cutoff", "NaN"],
+            "'--kinematics-cutoff <KINEMATICS_CUTOFF>'",
+            finite_positive,
+        ),
+        (
+            &[
+                "solve",
+                "--problem",
+                "problems/cartpole_swingup.json",
+                "--tol",
+                "NaN",
+            ],
+            "'--tol <TOL>'",
+            finite_positive,
+        ),
+        (
+            &[
+                "solve",
+                "--problem",
+                "problems/cartpole_swingup.json",
+                "--max-time",
+                "0",
+            ],
+            "'--max-time <MAX_TIME>'",
+            finite_positive,
+        ),
+        (
+            &["predict", "--impulse-weight=-1"],
+            "'--impulse-weight <IMPULSE_WEIGHT>'",
+            "finite number ≥ 0",
+        ),
+        (
+            &["predict", "--ankle-velocity-limit", "0"],
+            "'--ankle-velocity-limit <ANKLE_VELOCITY_LIMIT>'",
+            finite_positive,
+        ),
+        (
+            &["compare", "--expect-ratio", "inf"],
+            "'--expect-ratio <EXPECT_RATIO>'",
+            finite_positive,
+        ),
+        (
+            &[
+                "simulate",
+                "--phase-set",
+                "phases/sim_ellipse_step.json",
+                "--dt",
+                "0",
+            ],
+            "'--dt <DT>'",
+            finite_positive,
+        ),
+        (
+            &["fit-foot", "--tol", "NaN"],
+            "'--tol <TOL>'",
+            finite_positive,
+        ),
+        (
+            &["diagnose", "runs/x", "--max-iter=-1"],
+            "'--max-iter <MAX_ITER>'",
+            "from 0 to 100000",
+        ),
+        (
+            &["synth", "--from", "runs/x", "--noise-force-n=-5"],
+            "'--noise-force-n <NOISE_FORCE_N>'",
+            "finite number ≥ 0",
+        ),
+        (
+            &["synth", "--from", "runs/x", "--rate", "0"],
+            "'--rate <RATE>'",
+            finite_positive,
+        ),
+        (
+            &["diff", "a", "b", "--threshold-pct", "NaN"],
+            "'--threshold-pct <THRESHOLD_PCT>'",
+            "finite number ≥ 0",
+        ),
+        (
+            &["report", "runs/x", "--transient-threshold=-1"],
+            "'--transient-threshold <TRANSIENT_THRESHOLD>'",
+            finite_positive,
+        ),
     ];
     for (args, option, valid) in cases {
         let mut a = args.to_vec();
@@ -72,10 +174,34 @@ fn an_absurd_phase_file_is_bad_input() {
     let tmp = tempfile::tempdir().unwrap();
     let p = tmp.path().join("p.json");
     let text = std::fs::read_to_string(root().join("phases/sim_ellipse_step.json")).unwrap();
-    std::fs::write(&p, text.replacen("\"type\": \"continuous\",", "\"type\": \"continuous\", \"intervals\": 1000000,", 1)).unwrap();
+    std::fs::write(
+        &p,
+        text.replacen(
+            "\"type\": \"continuous\",",
+            "\"type\": \"continuous\", \"intervals\": 1000000,",
+            1,
+        ),
+    )
+    .unwrap();
     let out = tmp.path().join("run");
-    let o = footfall(&["simulate", "--phase-set", s(&p), "--out", s(&out), "--quiet"]);
-    assert_exit(&o, 1, &["p.json", "phases[0] ('single_stance_r').intervals", "1 to 10000", "got 1000000"]);
+    let o = footfall(&[
+        "simulate",
+        "--phase-set",
+        s(&p),
+        "--out",
+        s(&out),
+        "--quiet",
+    ]);
+    assert_exit(
+        &o,
+        1,
+        &[
+            "p.json",
+            "phases[0] ('single_stance_r').intervals",
+            "1 to 10000",
+            "got 1000000",
+        ],
+    );
     assert!(!out.exists());
 }
 
@@ -88,8 +214,26 @@ fn an_absurd_gravity_is_bad_input_naming_the_field() {
     v["gravity"] = 1e308.into();
     std::fs::write(&m, v.to_string()).unwrap();
     let out = tmp.path().join("run");
-    let o = footfall(&["simulate", "--model", s(&m), "--phase-set", "phases/sim_ellipse_step.json", "--out", s(&out), "--quiet"]);
-    let err = assert_exit(&o, 1, &["model.json", "field 'gravity'", "1e308 m/s²", "(0, 100] m/s²"]);
+    let o = footfall(&[
+        "simulate",
+        "--model",
+        s(&m),
+        "--phase-set",
+        "phases/sim_ellipse_step.json",
+        "--out",
+        s(&out),
+        "--quiet",
+    ]);
+    let err = assert_exit(
+        &o,
+        1,
+        &[
+            "model.json",
+            "field 'gravity'",
+            "1e308 m/s²",
+            "(0, 100] m/s²",
+        ],
+    );
     assert!(err.len() < 300, "{err}");
     assert!(!out.exists());
 }
@@ -98,9 +242,19 @@ fn an_absurd_gravity_is_bad_input_naming_the_field() {
 fn an_iteration_limit_exits_3_with_the_run_written() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("limited");
-    let o = footfall(&["solve", "--problem", "problems/cartpole_swingup.json", "--max-iter", "1", "--out", s(&out), "--quiet"]);
+    let o = footfall(&[
+        "solve",
+        "--problem",
+        "problems/cartpole_swingup.json",
+        "--max-iter",
+        "1",
+        "--out",
+        s(&out),
+        "--quiet",
+    ]);
     assert_exit(&o, 3, &["iteration limit reached", "results written to"]);
-    let summary: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["status"], "max_iterations");
 }
 
@@ -119,7 +273,8 @@ fn an_infeasible_problem_exits_4_with_the_run_written() {
     let out = tmp.path().join("weak");
     let o = footfall(&["solve", "--problem", s(&p), "--out", s(&out), "--quiet"]);
     assert_exit(&o, 4, &["infeasible"]);
-    let summary: serde_json::Value = serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["status"], "infeasible");
 }
 
@@ -128,7 +283,15 @@ fn help_lists_the_exit_codes() {
     let o = footfall(&["--help"]);
     assert!(o.status.success());
     let help = String::from_utf8_lossy(&o.stdout);
-    for line in ["Exit codes:", "  1    bad input", "  2    usage error", "  3    solved but not converged", "  4    infeasible", "  5    converged but physically invalid", "  130  interrupted"] {
+    for line in [
+        "Exit codes:",
+        "  1    bad input",
+        "  2    usage error",
+        "  3    solved but not converged",
+        "  4    infeasible",
+        "  5    converged but physically invalid",
+        "  130  interrupted",
+    ] {
         assert!(help.contains(line), "{line:?} missing: {help}");
     }
 }

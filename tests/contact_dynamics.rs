@@ -17,7 +17,13 @@ fn one_phase(name: &str, contacts: &[&str], duration: f64) -> PhaseSequence {
         gait: None,
         phases: vec![Phase::Continuous {
             name: name.into(),
-            contacts: contacts.iter().map(|c| ContactUse { contact: c.to_string(), rolling: true }).collect(),
+            contacts: contacts
+                .iter()
+                .map(|c| ContactUse {
+                    contact: c.to_string(),
+                    rolling: true,
+                })
+                .collect(),
             duration: Duration::Fixed(duration),
             intervals: 1,
             end: None,
@@ -25,12 +31,21 @@ fn one_phase(name: &str, contacts: &[&str], duration: f64) -> PhaseSequence {
     }
 }
 
-fn run(m: &GaitModel, seq: &PhaseSequence, x0: &[f64], tol: f64) -> (SimulationResult, Vec<ConstraintSet>) {
+fn run(
+    m: &GaitModel,
+    seq: &PhaseSequence,
+    x0: &[f64],
+    tol: f64,
+) -> (SimulationResult, Vec<ConstraintSet>) {
     let sets = seq.resolve(m, std::path::Path::new("<test>")).unwrap();
     let controls = ControlTable::constant(m.control_names(), vec![0.0; m.nu()]);
     let settings = SimulationSettings {
         output_step: 1e-3,
-        integrator: IntegratorSettings { rtol: tol, atol: tol, ..Default::default() },
+        integrator: IntegratorSettings {
+            rtol: tol,
+            atol: tol,
+            ..Default::default()
+        },
     };
     let res = simulate(m, seq, &sets, x0, &controls, &[], &settings).unwrap();
     (res, sets)
@@ -58,9 +73,15 @@ fn energy_is_conserved_in_flight_without_actuation() {
                 (k + p - e0).abs() / scale
             })
             .fold(0.0, f64::max);
-        eprintln!("tol {tol:e}: relative energy drift over 1 s {worst:.2e} ({} samples)", res.samples.len());
+        eprintln!(
+            "tol {tol:e}: relative energy drift over 1 s {worst:.2e} ({} samples)",
+            res.samples.len()
+        );
         assert!(res.samples.last().unwrap().t > 0.999);
-        assert!(worst < 50.0 * tol, "energy drift {worst:e} at tolerance {tol:e}");
+        assert!(
+            worst < 50.0 * tol,
+            "energy drift {worst:e} at tolerance {tol:e}"
+        );
     }
 }
 
@@ -85,18 +106,29 @@ fn stance_start(m: &GaitModel, contact: &str, lift: f64, slip: f64) -> Vec<f64> 
     q
 }
 
-fn max_abs(res: &SimulationResult, sets: &[ConstraintSet], kind: RowKind, pos: bool, from: f64) -> f64 {
+fn max_abs(
+    res: &SimulationResult,
+    sets: &[ConstraintSet],
+    kind: RowKind,
+    pos: bool,
+    from: f64,
+) -> f64 {
     res.samples
         .iter()
         .filter(|s| s.t >= from)
         .flat_map(|s| {
-            sets[s.phase].rows.iter().enumerate().filter(move |(_, r)| r.kind == kind).map(move |(i, _)| {
-                if pos {
-                    s.contact.position_error[i].abs()
-                } else {
-                    s.contact.velocity_error[i].abs()
-                }
-            })
+            sets[s.phase]
+                .rows
+                .iter()
+                .enumerate()
+                .filter(move |(_, r)| r.kind == kind)
+                .map(move |(i, _)| {
+                    if pos {
+                        s.contact.position_error[i].abs()
+                    } else {
+                        s.contact.velocity_error[i].abs()
+                    }
+                })
         })
         .fold(0.0, f64::max)
 }
@@ -105,7 +137,11 @@ fn max_abs(res: &SimulationResult, sets: &[ConstraintSet], kind: RowKind, pos: b
 /// position drift stays bounded with Baumgarte on, for both feet.
 #[test]
 fn rolling_contact_point_stays_still_with_baumgarte() {
-    for (foot, contact) in [("ellipse.json", "r.sole"), ("double_circle.json", "r.forefoot"), ("double_circle.json", "r.heel")] {
+    for (foot, contact) in [
+        ("ellipse.json", "r.sole"),
+        ("double_circle.json", "r.forefoot"),
+        ("double_circle.json", "r.heel"),
+    ] {
         // passive joint springs keep the unactuated body in shape, so it rolls over the foot
         let m = model_with_effects("opensim_subject01_torque.json", foot, springs());
         let x0 = stance_start(&m, contact, 0.0, 0.0);
@@ -114,11 +150,21 @@ fn rolling_contact_point_stays_still_with_baumgarte() {
         let vn = max_abs(&res, &sets, RowKind::Normal, false, 0.0);
         let drift = max_abs(&res, &sets, RowKind::Normal, true, 0.0);
         let foot_body = m.contacts[m.contact_index(contact).unwrap()].body;
-        let rot = |x: &[f64]| -> f64 { m.tree().ancestors(foot_body).iter().filter(|&&j| j >= 2).map(|&j| x[j]).sum() };
+        let rot = |x: &[f64]| -> f64 {
+            m.tree()
+                .ancestors(foot_body)
+                .iter()
+                .filter(|&&j| j >= 2)
+                .map(|&j| x[j])
+                .sum()
+        };
         let rolled = (rot(&res.samples.last().unwrap().x) - rot(&x0)).abs();
         eprintln!("{foot} {contact}: |v_t| ≤ {vt:.2e} m/s, |v_n| ≤ {vn:.2e} m/s, |φ| ≤ {drift:.2e} m, foot rotated {rolled:.3} rad");
         assert!(rolled > 0.05, "the foot must actually roll in this test");
-        assert!(vt < 1e-6 && vn < 1e-6, "contact point velocity {vt:e} / {vn:e} m/s");
+        assert!(
+            vt < 1e-6 && vn < 1e-6,
+            "contact point velocity {vt:e} / {vn:e} m/s"
+        );
         assert!(drift < 1e-6, "position drift {drift:e} m");
     }
 }
@@ -139,11 +185,23 @@ fn drift_decays_with_baumgarte_and_grows_without() {
     let slip_on = max_abs(&res_on, &sets, RowKind::Tangential, false, 0.35);
     let slip_off = max_abs(&res_off, &sets, RowKind::Tangential, false, 0.35);
     eprintln!("after 0.35 s: gap {end_on:.2e} m (Baumgarte) vs {end_off:.2e} m (none); slip {slip_on:.2e} vs {slip_off:.2e} m/s");
-    assert!(end_on < 1e-5, "Baumgarte must remove the 1 mm gap, left {end_on:e}");
+    assert!(
+        end_on < 1e-5,
+        "Baumgarte must remove the 1 mm gap, left {end_on:e}"
+    );
     // tangential errors decay as e^{-γt}: 0.01 m/s · e^{-20·0.35} = 9.1e-6 m/s
-    assert!(slip_on < 1.2 * 0.01 * (-20.0f64 * 0.35).exp(), "slip {slip_on:e}");
-    assert!(end_off > 0.9e-3, "without stabilisation the gap must persist: {end_off:e}");
-    assert!((slip_off - 0.01).abs() < 1e-3, "without stabilisation the slip persists: {slip_off:e}");
+    assert!(
+        slip_on < 1.2 * 0.01 * (-20.0f64 * 0.35).exp(),
+        "slip {slip_on:e}"
+    );
+    assert!(
+        end_off > 0.9e-3,
+        "without stabilisation the gap must persist: {end_off:e}"
+    );
+    assert!(
+        (slip_off - 0.01).abs() < 1e-3,
+        "without stabilisation the slip persists: {slip_off:e}"
+    );
     assert!(end_off > 100.0 * end_on);
 }
 
@@ -159,12 +217,22 @@ fn numerical_drift_grows_without_baumgarte() {
     m.set_baumgarte(0.0, 0.0, 0.0);
     let (off, _) = run(&m, &seq, &x0, 1e-6);
     let window = |r: &SimulationResult, a: f64, b: f64| {
-        r.samples.iter().filter(|s| s.t >= a && s.t <= b).map(|s| s.contact.position_error[1].abs()).fold(0.0, f64::max)
+        r.samples
+            .iter()
+            .filter(|s| s.t >= a && s.t <= b)
+            .map(|s| s.contact.position_error[1].abs())
+            .fold(0.0, f64::max)
     };
     let (on_early, on_late) = (window(&on, 0.0, 0.1), window(&on, 0.9, 1.0));
     let (off_early, off_late) = (window(&off, 0.0, 0.1), window(&off, 0.9, 1.0));
     eprintln!("drift |φ| at tol 1e-6: Baumgarte {on_early:.2e} → {on_late:.2e} m; none {off_early:.2e} → {off_late:.2e} m");
-    assert!(off_late > 3.0 * off_early, "drift without Baumgarte should grow");
-    assert!(off_late > 10.0 * on_late, "Baumgarte should keep drift smaller");
+    assert!(
+        off_late > 3.0 * off_early,
+        "drift without Baumgarte should grow"
+    );
+    assert!(
+        off_late > 10.0 * on_late,
+        "Baumgarte should keep drift smaller"
+    );
     assert!(on_late < 1e-6);
 }

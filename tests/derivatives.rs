@@ -53,12 +53,22 @@ fn dynamics_jacobian_matches_central_differences() {
                 let th = vec![rng.uniform(5.0, 50.0)];
                 let mut f0 = vec![0.0; nx];
                 let mut jac = vec![0.0; nx * (nx + nu + nt)];
-                m.dynamics_jacobian(&set, &x, &u, &th, &mut f0, &mut jac).unwrap();
+                m.dynamics_jacobian(&set, &x, &u, &th, &mut f0, &mut jac)
+                    .unwrap();
                 let mut z: Vec<f64> = x.iter().chain(&u).chain(&th).copied().collect();
                 let eval = |z: &[f64]| {
                     let mut f = vec![0.0; nx];
                     let mut lam = vec![0.0; set.rows.len()];
-                    m.dynamics(&set, &z[..nx], &z[nx..nx + nu], &z[nx + nu..], &mut f, &mut lam, None).unwrap();
+                    m.dynamics(
+                        &set,
+                        &z[..nx],
+                        &z[nx..nx + nu],
+                        &z[nx + nu..],
+                        &mut f,
+                        &mut lam,
+                        None,
+                    )
+                    .unwrap();
                     f
                 };
                 for j in 0..z.len() {
@@ -72,12 +82,17 @@ fn dynamics_jacobian_matches_central_differences() {
                         f
                     };
                     let (f2, f1, m1, m2) = (at(2.0), at(1.0), at(-1.0), at(-2.0));
-                    let fd: Vec<f64> = (0..nx).map(|i| (-f2[i] + 8.0 * f1[i] - 8.0 * m1[i] + m2[i]) / (12.0 * h)).collect();
+                    let fd: Vec<f64> = (0..nx)
+                        .map(|i| (-f2[i] + 8.0 * f1[i] - 8.0 * m1[i] + m2[i]) / (12.0 * h))
+                        .collect();
                     let col = &jac[j * nx..(j + 1) * nx];
                     // FD round-off grows with |f|/h: scale the floor with the function's size
                     let fscale = f0.iter().map(|v| v.abs()).fold(1.0, f64::max);
                     let err = rel_diff(col, &fd, (1e-3 * fscale).max(1.0));
-                    assert!(err < 1e-6, "{foot}/{name}: column {j} differs from FD by {err:e}");
+                    assert!(
+                        err < 1e-6,
+                        "{foot}/{name}: column {j} differs from FD by {err:e}"
+                    );
                 }
             }
         }
@@ -89,12 +104,19 @@ fn dynamics_jacobian_matches_central_differences() {
 #[test]
 fn cvodes_sensitivities_match_finite_differences_for_every_constraint_set() {
     let mut rng = Rng::new(17);
-    let tight = IntegratorSettings { rtol: 1e-12, atol: 1e-12, ..Default::default() };
+    let tight = IntegratorSettings {
+        rtol: 1e-12,
+        atol: 1e-12,
+        ..Default::default()
+    };
     for foot in ["ellipse.json", "double_circle.json"] {
         let m = stiff_model(foot);
         for (name, contacts) in constraint_sets(foot) {
             let set = m.constraint_set(name, &contacts).unwrap();
-            let ode = GaitOde { model: &m, set: &set };
+            let ode = GaitOde {
+                model: &m,
+                set: &set,
+            };
             let interval = ShootingInterval::new(&ode, ControlShape::Linear);
             let nx = m.nx();
             let np = interval.np();
@@ -105,13 +127,19 @@ fn cvodes_sensitivities_match_finite_differences_for_every_constraint_set() {
             let dur = rng.uniform(0.02, 0.04);
             let th = vec![rng.uniform(5.0, 50.0)];
             let mut p = Vec::new();
-            interval.pack_params(&u0, Some(&u1), dur, &th, &mut p).unwrap();
+            interval
+                .pack_params(&u0, Some(&u1), dur, &th, &mut p)
+                .unwrap();
             let mut x1 = vec![0.0; nx];
             let mut s1 = vec![0.0; nx * (nx + np)];
-            integ.integrate_with_sensitivities(&interval, 0.0, 1.0, &x0, &p, &mut x1, &mut s1).unwrap();
+            integ
+                .integrate_with_sensitivities(&interval, 0.0, 1.0, &x0, &p, &mut x1, &mut s1)
+                .unwrap();
             let mut end = |x0: &[f64], p: &[f64]| {
                 let mut x1 = vec![0.0; nx];
-                integ.integrate(&interval, 0.0, 1.0, x0, p, &mut x1).unwrap();
+                integ
+                    .integrate(&interval, 0.0, 1.0, x0, p, &mut x1)
+                    .unwrap();
                 x1
             };
             let mut worst = (0.0f64, 0usize);
@@ -120,7 +148,11 @@ fn cvodes_sensitivities_match_finite_differences_for_every_constraint_set() {
                 // dominates the larger step, integration noise (~tol/h) the smaller one; the
                 // sensitivity must agree with the better of the two estimates.
                 let v = if j < nx { x0[j] } else { p[j - nx] };
-                let floor = if j == nx + interval.p_duration() { 0.0 } else { 0.1 };
+                let floor = if j == nx + interval.p_duration() {
+                    0.0
+                } else {
+                    0.1
+                };
                 let col = &s1[j * nx..(j + 1) * nx];
                 let mut best: Option<(f64, Vec<f64>)> = None;
                 for eps in [1e-2, 1e-3] {
@@ -135,14 +167,20 @@ fn cvodes_sensitivities_match_finite_differences_for_every_constraint_set() {
                         end(&xa, &pa)
                     };
                     let (f2, f1, m1, m2) = (at(2.0), at(1.0), at(-1.0), at(-2.0));
-                    let fd: Vec<f64> = (0..nx).map(|i| (-f2[i] + 8.0 * f1[i] - 8.0 * m1[i] + m2[i]) / (12.0 * h)).collect();
+                    let fd: Vec<f64> = (0..nx)
+                        .map(|i| (-f2[i] + 8.0 * f1[i] - 8.0 * m1[i] + m2[i]) / (12.0 * h))
+                        .collect();
                     let e = rel_diff(col, &fd, 1e-3);
                     if best.as_ref().is_none_or(|(be, _)| e < *be) {
                         best = Some((e, fd));
                     }
                 }
                 let (err, fd) = best.expect("two estimates");
-                let abs = s1[j * nx..(j + 1) * nx].iter().zip(&fd).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+                let abs = s1[j * nx..(j + 1) * nx]
+                    .iter()
+                    .zip(&fd)
+                    .map(|(a, b)| (a - b).abs())
+                    .fold(0.0, f64::max);
                 let norm = fd.iter().map(|v| v.abs()).fold(0.0, f64::max);
                 if err > 1e-6 {
                     eprintln!("  col {j}: rel {err:.2e} abs {abs:.2e} |fd| {norm:.2e}");
@@ -151,8 +189,18 @@ fn cvodes_sensitivities_match_finite_differences_for_every_constraint_set() {
                     worst = (err, j);
                 }
             }
-            eprintln!("{foot}/{name}: worst column {} relative error {:.2e} ({} sensitivity columns)", worst.1, worst.0, nx + np);
-            assert!(worst.0 < 1e-5, "{foot}/{name}: sensitivity column {} differs from FD by {:e}", worst.1, worst.0);
+            eprintln!(
+                "{foot}/{name}: worst column {} relative error {:.2e} ({} sensitivity columns)",
+                worst.1,
+                worst.0,
+                nx + np
+            );
+            assert!(
+                worst.0 < 1e-5,
+                "{foot}/{name}: sensitivity column {} differs from FD by {:e}",
+                worst.1,
+                worst.0
+            );
             let _ = interval.nx();
         }
     }
@@ -164,10 +212,19 @@ fn cvodes_sensitivities_match_finite_differences_for_every_constraint_set() {
 fn dynamics_second_derivatives_match_finite_differences() {
     use footfall::integrate::ControlledOde;
     let mut rng = Rng::new(21);
-    for (foot, contacts) in [("ellipse.json", vec![("r.sole", true)]), ("double_circle.json", vec![("r.heel", true), ("r.forefoot", false)])] {
+    for (foot, contacts) in [
+        ("ellipse.json", vec![("r.sole", true)]),
+        (
+            "double_circle.json",
+            vec![("r.heel", true), ("r.forefoot", false)],
+        ),
+    ] {
         let m = stiff_model(foot);
         let set = m.constraint_set("s", &contacts).unwrap();
-        let ode = GaitOde { model: &m, set: &set };
+        let ode = GaitOde {
+            model: &m,
+            set: &set,
+        };
         let (nx, nu, nt) = (m.nx(), m.nu(), m.ntheta());
         let nw = nx + nu + nt;
         let x = random_state(&m, &mut rng, Some(contacts[0].0));
@@ -179,8 +236,18 @@ fn dynamics_second_derivatives_match_finite_differences() {
         let grad = |z: &[f64]| {
             let mut xdot = vec![0.0; nx];
             let mut jac = vec![0.0; nx * nw];
-            m.dynamics_jacobian(&set, &z[..nx], &z[nx..nx + nu], &z[nx + nu..], &mut xdot, &mut jac).unwrap();
-            (0..nw).map(|c| (0..nx).map(|i| mu[i] * jac[i + c * nx]).sum::<f64>()).collect::<Vec<f64>>()
+            m.dynamics_jacobian(
+                &set,
+                &z[..nx],
+                &z[nx..nx + nu],
+                &z[nx + nu..],
+                &mut xdot,
+                &mut jac,
+            )
+            .unwrap();
+            (0..nw)
+                .map(|c| (0..nx).map(|i| mu[i] * jac[i + c * nx]).sum::<f64>())
+                .collect::<Vec<f64>>()
         };
         let z: Vec<f64> = x.iter().chain(&u).chain(&th).copied().collect();
         let scale = h.iter().map(|v| v.abs()).fold(1.0, f64::max);

@@ -30,13 +30,17 @@ const LIMIT: Duration = Duration::from_secs(10);
 /// Cases per library target: `FOOTFALL_FUZZ_CASES`, else `default`.
 fn cases(default: u32) -> u32 {
     match std::env::var("FOOTFALL_FUZZ_CASES") {
-        Ok(v) => v.parse().unwrap_or_else(|_| panic!("FOOTFALL_FUZZ_CASES={v:?} is not a count")),
+        Ok(v) => v
+            .parse()
+            .unwrap_or_else(|_| panic!("FOOTFALL_FUZZ_CASES={v:?} is not a count")),
         Err(_) => default,
     }
 }
 
 /// Run `f` on its own thread: a panic, or no answer within [`LIMIT`], is an error.
-fn guarded<T: Send + 'static>(f: impl FnOnce() -> Result<T, String> + Send + 'static) -> Result<T, String> {
+fn guarded<T: Send + 'static>(
+    f: impl FnOnce() -> Result<T, String> + Send + 'static,
+) -> Result<T, String> {
     let (tx, rx) = mpsc::channel();
     std::thread::spawn(move || {
         let r = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f));
@@ -65,7 +69,9 @@ fn run_case(t: &'static Target, dir: &Path, s: usize, bytes: Vec<u8>) -> Result<
 
 /// Keep a failing input for inspection.
 fn keep_failure(target: &str, name: &str, bytes: &[u8]) -> PathBuf {
-    let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("fuzz-failures").join(target);
+    let d = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+        .join("fuzz-failures")
+        .join(target);
     std::fs::create_dir_all(&d).ok();
     let p = d.join(name);
     std::fs::write(&p, bytes).ok();
@@ -118,7 +124,11 @@ fn fuzz_target(t: &'static Target, n: u32) -> BTreeMap<String, usize> {
             Err(e) => {
                 let name = t.seeds[s].rsplit('/').next().unwrap();
                 let kept = keep_failure(t.name, name, &bytes);
-                Err(TestCaseError::fail(format!("{e}\n(input from {} kept in {})", t.seeds[s], kept.display())))
+                Err(TestCaseError::fail(format!(
+                    "{e}\n(input from {} kept in {})",
+                    t.seeds[s],
+                    kept.display()
+                )))
             }
         }
     });
@@ -145,8 +155,16 @@ macro_rules! library_target {
             let tally = fuzz_target(t, cases(SHORT));
             // the seeds load, so some mutated inputs must too: otherwise the harness only
             // exercises the first refusal and the target is broken
-            assert!(tally.get("accepted").copied().unwrap_or(0) > 0, "'{}': no input was accepted: {tally:?}", t.name);
-            assert!(tally.get("refused").copied().unwrap_or(0) > 0, "'{}': no input was refused: {tally:?}", t.name);
+            assert!(
+                tally.get("accepted").copied().unwrap_or(0) > 0,
+                "'{}': no input was accepted: {tally:?}",
+                t.name
+            );
+            assert!(
+                tally.get("refused").copied().unwrap_or(0) > 0,
+                "'{}': no input was refused: {tally:?}",
+                t.name
+            );
         }
     };
 }
@@ -179,7 +197,9 @@ fn regressions_stay_fixed() {
     let mut n = 0;
     for t in TARGETS {
         let dir = corpus().join("regressions").join(t.name);
-        let Ok(entries) = std::fs::read_dir(&dir) else { continue };
+        let Ok(entries) = std::fs::read_dir(&dir) else {
+            continue;
+        };
         for e in entries {
             let p = e.unwrap().path();
             let name = p.file_name().unwrap().to_string_lossy().into_owned();
@@ -188,7 +208,9 @@ fn regressions_stay_fixed() {
                 .seeds
                 .iter()
                 .position(|r| Path::new(r).file_stem().unwrap().to_string_lossy() == stem)
-                .unwrap_or_else(|| panic!("{}: no seed '{stem}' in target '{}'", p.display(), t.name));
+                .unwrap_or_else(|| {
+                    panic!("{}: no seed '{stem}' in target '{}'", p.display(), t.name)
+                });
             let r = run_case(t, scratch.path(), s, std::fs::read(&p).unwrap());
             assert!(r.is_ok(), "{}: {}", p.display(), r.unwrap_err());
             n += 1;
@@ -224,5 +246,8 @@ fn mutations_change_the_seeds() {
             mutate::apply_all(&text, &ms) != text
         })
         .count();
-    assert!(changed > 150, "only {changed} of 200 mutation lists changed the seed");
+    assert!(
+        changed > 150,
+        "only {changed} of 200 mutation lists changed the seed"
+    );
 }

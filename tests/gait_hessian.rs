@@ -18,7 +18,9 @@ fn term_hessian_error(f: &dyn NodeFunction, z: &[f64], wts: &[f64]) -> f64 {
         let mut v = vec![0.0; d];
         let mut j = vec![0.0; d * nz];
         f.eval(z, &mut v, Some(&mut j)).unwrap();
-        (0..nz).map(|c| (0..d).map(|i| wts[i] * j[i + c * d]).sum::<f64>()).collect::<Vec<f64>>()
+        (0..nz)
+            .map(|c| (0..d).map(|i| wts[i] * j[i + c * d]).sum::<f64>())
+            .collect::<Vec<f64>>()
     };
     let scale = h.iter().fold(1.0f64, |m, v| m.max(v.abs()));
     let mut worst = 0.0f64;
@@ -38,10 +40,15 @@ fn term_hessian_error(f: &dyn NodeFunction, z: &[f64], wts: &[f64]) -> f64 {
 
 #[test]
 fn gait_term_hessians_match_finite_differences() {
-    for (foot, phases) in [("ellipse.json", "phases/ellipse_walk.json"), ("double_circle.json", "phases/double_circle_walk.json")] {
+    for (foot, phases) in [
+        ("ellipse.json", "phases/ellipse_walk.json"),
+        ("double_circle.json", "phases/double_circle_walk.json"),
+    ] {
         let (m, sets, setup) = bundled_tracking(foot, phases);
         let cycle = GaitCycle::new(&m, &setup.seq, &sets).unwrap();
-        let ocp = setup.ocp(&cycle, &m, &sets, IntegratorSettings::default()).unwrap();
+        let ocp = setup
+            .ocp(&cycle, &m, &sets, IntegratorSettings::default())
+            .unwrap();
         let tr = Transcription::new(&ocp).unwrap();
         let (_, _, w0) = tr.variable_bounds_and_guess();
         let mut rng = Rng::new(7);
@@ -61,13 +68,22 @@ fn gait_term_hessians_match_finite_differences() {
             let count = seen.entry(name.to_string()).or_insert(0usize);
             *count += 1;
             if *count > 3 || !f.has_hessian() {
-                assert!(f.has_hessian(), "{foot}: term '{name}' has no exact Hessian");
+                assert!(
+                    f.has_hessian(),
+                    "{foot}: term '{name}' has no exact Hessian"
+                );
                 continue;
             }
-            let z: Vec<f64> = args.iter().flat_map(|b| w0[tr.range(*b)].to_vec()).collect();
+            let z: Vec<f64> = args
+                .iter()
+                .flat_map(|b| w0[tr.range(*b)].to_vec())
+                .collect();
             let wts: Vec<f64> = (0..f.dim()).map(|_| rng.uniform(-1.0, 1.0)).collect();
             let err = term_hessian_error(f, &z, &wts);
-            assert!(err < 1e-5, "{foot}: term '{name}': Hessian differs from FD by {err:e} (relative)");
+            assert!(
+                err < 1e-5,
+                "{foot}: term '{name}': Hessian differs from FD by {err:e} (relative)"
+            );
         }
         eprintln!("{foot}: terms checked: {seen:?}");
     }
@@ -81,7 +97,11 @@ fn gait_term_hessians_match_finite_differences() {
 fn tracking_lagrangian_hessian_matches_finite_differences() {
     let (m, sets, setup) = bundled_tracking("ellipse.json", "phases/ellipse_walk.json");
     let cycle = GaitCycle::new(&m, &setup.seq, &sets).unwrap();
-    let tight = IntegratorSettings { rtol: 1e-12, atol: 1e-12, ..Default::default() };
+    let tight = IntegratorSettings {
+        rtol: 1e-12,
+        atol: 1e-12,
+        ..Default::default()
+    };
     let ocp = setup.ocp(&cycle, &m, &sets, tight).unwrap();
     let tr = Transcription::new(&ocp).unwrap();
     let (_, _, w0) = tr.variable_bounds_and_guess();
@@ -118,10 +138,22 @@ fn tracking_lagrangian_hessian_matches_finite_differences() {
         let wp: Vec<f64> = w0.iter().zip(&d).map(|(w, d)| w + e * d).collect();
         let wm: Vec<f64> = w0.iter().zip(&d).map(|(w, d)| w - e * d).collect();
         let (gp, gm) = (grad_l(&wp), grad_l(&wm));
-        let fd: Vec<f64> = gp.iter().zip(&gm).map(|(a, b)| (a - b) / (2.0 * e)).collect();
+        let fd: Vec<f64> = gp
+            .iter()
+            .zip(&gm)
+            .map(|(a, b)| (a - b) / (2.0 * e))
+            .collect();
         let scale = fd.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let worst = hd.iter().zip(&fd).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max) / scale;
+        let worst = hd
+            .iter()
+            .zip(&fd)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max)
+            / scale;
         eprintln!("direction {trial}: |Hd − FD| / |FD|∞ = {worst:.2e} (|FD|∞ = {scale:.3e})");
-        assert!(worst < 1e-4, "assembled Hessian differs from FD of the gradient by {worst:e} (relative)");
+        assert!(
+            worst < 1e-4,
+            "assembled Hessian differs from FD of the gradient by {worst:e} (relative)"
+        );
     }
 }

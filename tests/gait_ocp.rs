@@ -32,14 +32,27 @@ fn guess(m: &GaitModel, seq: &PhaseSequence, sets: &[footfall::model::Constraint
         x_lb[i] = 0.0;
         x_ub[i] = 1.0;
     }
-    GaitGuess { x, u, x_lb, x_ub, u_lb: vec![0.0; m.nu()], u_ub: vec![1.0; m.nu()] }
+    GaitGuess {
+        x,
+        u,
+        x_lb,
+        x_ub,
+        u_lb: vec![0.0; m.nu()],
+        u_ub: vec![1.0; m.nu()],
+    }
 }
 
 #[test]
 fn seed_phase_graphs_transcribe_with_the_seed_interval_counts() {
-    for (foot, phases, intervals, n_cont) in
-        [("ellipse.json", "phases/ellipse_walk.json", 25, 2), ("double_circle.json", "phases/double_circle_walk.json", 31, 4)]
-    {
+    for (foot, phases, intervals, n_cont) in [
+        ("ellipse.json", "phases/ellipse_walk.json", 25, 2),
+        (
+            "double_circle.json",
+            "phases/double_circle_walk.json",
+            31,
+            4,
+        ),
+    ] {
         let m = model("opensim_subject01.json", foot);
         let p = path(phases);
         let seq = PhaseSequence::load(&p).unwrap();
@@ -54,14 +67,35 @@ fn seed_phase_graphs_transcribe_with_the_seed_interval_counts() {
         let (_, _, w0) = tr.variable_bounds_and_guess();
         let ev = tr.evaluate(&w0, false).unwrap();
         assert!(ev.c.iter().all(|v| v.is_finite()));
-        let names: Vec<String> = ocp.constraints.iter().map(|c| c.term.name.clone()).collect();
+        let names: Vec<String> = ocp
+            .constraints
+            .iter()
+            .map(|c| c.term.name.clone())
+            .collect();
         for must in ["contact_forces", "periodicity", "control_periodicity"] {
-            assert!(names.iter().any(|n| n == must), "{phases}: no '{must}' constraint");
+            assert!(
+                names.iter().any(|n| n == must),
+                "{phases}: no '{must}' constraint"
+            );
         }
-        assert!(names.iter().any(|n| n.starts_with("clearance(")), "{phases}: no clearance");
-        assert!(names.iter().any(|n| n.starts_with("on_ground(")), "{phases}: no on-ground constraint");
-        assert!(names.iter().any(|n| n.starts_with("landing(")), "{phases}: no landing constraint");
-        eprintln!("{phases}: {} variables, {} constraints, {} intervals", tr.n(), tr.m(), total);
+        assert!(
+            names.iter().any(|n| n.starts_with("clearance(")),
+            "{phases}: no clearance"
+        );
+        assert!(
+            names.iter().any(|n| n.starts_with("on_ground(")),
+            "{phases}: no on-ground constraint"
+        );
+        assert!(
+            names.iter().any(|n| n.starts_with("landing(")),
+            "{phases}: no landing constraint"
+        );
+        eprintln!(
+            "{phases}: {} variables, {} constraints, {} intervals",
+            tr.n(),
+            tr.m(),
+            total
+        );
     }
 }
 
@@ -89,7 +123,11 @@ fn gait_constraint_jacobians_match_finite_differences() {
     let mut cons: Vec<footfall::ocp::Constraint> = ocp.constraints.clone();
     // the mid-cycle impact 3c* as a transition, and the whole-cycle targets
     for tr_term in ocp.transitions.iter().flatten() {
-        cons.push(footfall::ocp::Constraint { term: tr_term.clone(), lb: vec![], ub: vec![] });
+        cons.push(footfall::ocp::Constraint {
+            term: tr_term.clone(),
+            lb: vec![],
+            ub: vec![],
+        });
     }
     cons.extend(cycle.step_constraints(&ocp, Some(0.6), Some(1.13)));
     for con in &cons {
@@ -98,7 +136,12 @@ fn gait_constraint_jacobians_match_finite_differences() {
             continue;
         }
         let f = &con.term.f;
-        let z: Vec<f64> = con.term.args.iter().flat_map(|b| w0[tr.range(*b)].to_vec()).collect();
+        let z: Vec<f64> = con
+            .term
+            .args
+            .iter()
+            .flat_map(|b| w0[tr.range(*b)].to_vec())
+            .collect();
         let (d, nz) = (f.dim(), z.len());
         let mut v = vec![0.0; d];
         let mut jac = vec![0.0; d * nz];
@@ -118,7 +161,10 @@ fn gait_constraint_jacobians_match_finite_differences() {
             }
         }
         eprintln!("{kind}: Jacobian vs FD {worst:.2e}");
-        assert!(worst < 1e-5, "{kind}: Jacobian differs from FD by {worst:e}");
+        assert!(
+            worst < 1e-5,
+            "{kind}: Jacobian differs from FD by {worst:e}"
+        );
     }
     assert!(seen.len() >= 9, "checked {seen:?}");
 }
@@ -142,7 +188,10 @@ fn invalid_gait_graphs_are_refused_naming_the_phase() {
     );
     let seq = PhaseSequence::load(&p).unwrap();
     let e = seq.resolve(&m, &p).unwrap_err().to_string();
-    assert!(e.contains("'flat'") && e.contains("over-constrains") && e.contains("rolling"), "{e}");
+    assert!(
+        e.contains("'flat'") && e.contains("over-constrains") && e.contains("rolling"),
+        "{e}"
+    );
     // a symmetry map naming a coordinate twice
     let p = write(
         d.path(),
@@ -151,7 +200,10 @@ fn invalid_gait_graphs_are_refused_naming_the_phase() {
              "gait": { "symmetry": [ ["hip_r", "hip_l"], ["hip_r", "knee_l"] ] } }"#,
     );
     let e = PhaseSequence::load(&p).unwrap_err().to_string();
-    assert!(e.contains("gait.symmetry[1]") && e.contains("permutation"), "{e}");
+    assert!(
+        e.contains("gait.symmetry[1]") && e.contains("permutation"),
+        "{e}"
+    );
     // a symmetry map naming something that is not a leg coordinate
     let p = write(
         d.path(),
@@ -160,6 +212,9 @@ fn invalid_gait_graphs_are_refused_naming_the_phase() {
              "gait": { "symmetry": [ ["hip_r", "elbow_l"] ] } }"#,
     );
     let e = PhaseSequence::load(&p).unwrap_err().to_string();
-    assert!(e.contains("elbow_l") && e.contains("not a leg coordinate"), "{e}");
+    assert!(
+        e.contains("elbow_l") && e.contains("not a leg coordinate"),
+        "{e}"
+    );
     // zero intervals and unknown contacts are refused by the phase reader (tests/bad_input.rs)
 }

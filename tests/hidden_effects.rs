@@ -27,9 +27,21 @@ fn root() -> PathBuf {
 /// Runs the CLI and prints how long it took (the hidden-effect tests are most of CI's time).
 fn footfall(args: &[&str]) -> std::process::Output {
     let start = std::time::Instant::now();
-    let o = Command::new(env!("CARGO_BIN_EXE_footfall")).current_dir(root()).arg("--quiet").args(args).output().unwrap();
-    let name = args.iter().position(|a| *a == "--out").map_or(args[1], |i| args[i + 1]);
-    eprintln!("footfall {} {name}: {:.1} s", args[0], start.elapsed().as_secs_f64());
+    let o = Command::new(env!("CARGO_BIN_EXE_footfall"))
+        .current_dir(root())
+        .arg("--quiet")
+        .args(args)
+        .output()
+        .unwrap();
+    let name = args
+        .iter()
+        .position(|a| *a == "--out")
+        .map_or(args[1], |i| args[i + 1]);
+    eprintln!(
+        "footfall {} {name}: {:.1} s",
+        args[0],
+        start.elapsed().as_secs_f64()
+    );
     o
 }
 
@@ -38,7 +50,10 @@ fn s(p: &Path) -> &str {
 }
 
 fn read_json(p: &Path) -> Value {
-    serde_json::from_str(&std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display()))).unwrap()
+    serde_json::from_str(
+        &std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display())),
+    )
+    .unwrap()
 }
 
 /// Mean error per channel of a run's summary.
@@ -47,16 +62,30 @@ fn channel_means(run: &Path) -> Vec<(String, f64)> {
         .as_array()
         .unwrap()
         .iter()
-        .map(|c| (c["channel"].as_str().unwrap().to_string(), c["stats"]["mean"].as_f64().unwrap()))
+        .map(|c| {
+            (
+                c["channel"].as_str().unwrap().to_string(),
+                c["stats"]["mean"].as_f64().unwrap(),
+            )
+        })
         .collect()
 }
 
 /// Mean error per channel and phase of a run's summary: `((channel, phase), mean)`.
 fn phase_means(run: &Path) -> Vec<((String, String), f64)> {
     let mut out = Vec::new();
-    for c in read_json(&run.join("summary.json"))["errors_by_phase"].as_array().unwrap() {
+    for c in read_json(&run.join("summary.json"))["errors_by_phase"]
+        .as_array()
+        .unwrap()
+    {
         for p in c["phases"].as_array().unwrap() {
-            out.push(((c["channel"].as_str().unwrap().to_string(), p["phase"].as_str().unwrap().to_string()), p["stats"]["mean"].as_f64().unwrap()));
+            out.push((
+                (
+                    c["channel"].as_str().unwrap().to_string(),
+                    p["phase"].as_str().unwrap().to_string(),
+                ),
+                p["stats"]["mean"].as_f64().unwrap(),
+            ));
         }
     }
     out
@@ -115,21 +144,51 @@ fn baseline(name: &str, dir: &Path, how: Setup) -> PathBuf {
     let data = trial.join("synthetic.csv");
     let init = trial.join(format!("tracked_{}", how.slug()));
     let out = dir.join(name);
-    let mut args = vec!["track", "--data", s(&data), "--init", s(&init), "--out", s(&out)];
+    let mut args = vec![
+        "track",
+        "--data",
+        s(&data),
+        "--init",
+        s(&init),
+        "--out",
+        s(&out),
+    ];
     if !matches!(how, Setup::Samples | Setup::ForcePlateRate) {
         args.extend(["--kinematics-cutoff", "10"]);
     }
     match how {
         Setup::Seed => {}
         Setup::Pelvis => args.push("--track-pelvis-position"),
-        Setup::Identify => args.extend(["--track-pelvis-position", "--regularisation", "1e-4", "--velocity-weight", "0"]),
-        Setup::Samples => args.extend(["--foot", "double-circle", "--sample-targets", "--noise-weights", "angle=0.5,position=2,force=5,cop=5"]),
-        Setup::ForcePlateRate => {
-            args.extend(["--foot", "double-circle", "--sample-targets", "--noise-weights", "angle=0.5,position=2,force=5,cop=5", "--tol", "1e-4"])
-        }
+        Setup::Identify => args.extend([
+            "--track-pelvis-position",
+            "--regularisation",
+            "1e-4",
+            "--velocity-weight",
+            "0",
+        ]),
+        Setup::Samples => args.extend([
+            "--foot",
+            "double-circle",
+            "--sample-targets",
+            "--noise-weights",
+            "angle=0.5,position=2,force=5,cop=5",
+        ]),
+        Setup::ForcePlateRate => args.extend([
+            "--foot",
+            "double-circle",
+            "--sample-targets",
+            "--noise-weights",
+            "angle=0.5,position=2,force=5,cop=5",
+            "--tol",
+            "1e-4",
+        ]),
     }
     let o = footfall(&args);
-    assert!(o.status.success(), "track {name}: {}", String::from_utf8_lossy(&o.stderr));
+    assert!(
+        o.status.success(),
+        "track {name}: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
     out
 }
 
@@ -143,9 +202,17 @@ fn diagnose(run: &Path, verify: usize, candidates: &[&str]) -> Value {
         args.extend(["--candidate", c]);
     }
     let o = footfall(&args);
-    assert!(o.status.success(), "diagnose {}: {}", run.display(), String::from_utf8_lossy(&o.stderr));
+    assert!(
+        o.status.success(),
+        "diagnose {}: {}",
+        run.display(),
+        String::from_utf8_lossy(&o.stderr)
+    );
     let summary = read_json(&out.join("summary.json"));
-    eprintln!("{}", std::fs::read_to_string(out.join("diagnose.md")).unwrap());
+    eprintln!(
+        "{}",
+        std::fs::read_to_string(out.join("diagnose.md")).unwrap()
+    );
     summary
 }
 
@@ -168,18 +235,37 @@ const SCORED_CANDIDATES: [&str; 7] = [
 /// diagnosis of that trial and the floor phase by phase, computed once for all tests
 /// (per setup).
 fn floor(how: Setup) -> &'static Floor {
-    static FLOOR: [OnceLock<Floor>; 5] = [OnceLock::new(), OnceLock::new(), OnceLock::new(), OnceLock::new(), OnceLock::new()];
+    static FLOOR: [OnceLock<Floor>; 5] = [
+        OnceLock::new(),
+        OnceLock::new(),
+        OnceLock::new(),
+        OnceLock::new(),
+        OnceLock::new(),
+    ];
     FLOOR[how.index()].get_or_init(|| {
         let dir = tempfile::tempdir().unwrap().keep();
         let run = baseline(how.none(), &dir, how);
-        let d = diagnose(&run, 1, if how == Setup::ForcePlateRate { &SCORED_CANDIDATES } else { &[] });
+        let d = diagnose(
+            &run,
+            1,
+            if how == Setup::ForcePlateRate {
+                &SCORED_CANDIDATES
+            } else {
+                &[]
+            },
+        );
         (channel_means(&run), d, phase_means(&run))
     })
 }
 
 /// The hidden values of trial `name`: `(field, value)` of every hidden effect.
 fn hidden_values(name: &str) -> Vec<(String, String, f64)> {
-    let truth = read_json(&root().join("tests/data/hidden").join(name).join("truth.json"));
+    let truth = read_json(
+        &root()
+            .join("tests/data/hidden")
+            .join(name)
+            .join("truth.json"),
+    );
     let mut out = Vec::new();
     for e in truth["hidden_effects"].as_array().unwrap() {
         let kind = e["type"].as_str().unwrap().to_string();
@@ -217,10 +303,21 @@ fn check_parameters(verified: &Value, hidden: &[(String, String, f64)]) {
         let kind = name.split('.').next().unwrap();
         let field = name.rsplit('.').next().unwrap();
         let value = p["value"].as_f64().unwrap();
-        let (_, _, truth) = hidden.iter().find(|h| h.0 == kind && h.1 == field).unwrap_or_else(|| panic!("{name} was not hidden"));
+        let (_, _, truth) = hidden
+            .iter()
+            .find(|h| h.0 == kind && h.1 == field)
+            .unwrap_or_else(|| panic!("{name} was not hidden"));
         let rel = (value - truth).abs() / truth.abs();
-        eprintln!("{name}: identified {value:.5} ± {}, truth {truth}, {:.1} % off", p["sd"], 100.0 * rel);
-        assert!(rel < 0.2, "{name}: identified {value}, truth {truth} ({:.1} % off)", 100.0 * rel);
+        eprintln!(
+            "{name}: identified {value:.5} ± {}, truth {truth}, {:.1} % off",
+            p["sd"],
+            100.0 * rel
+        );
+        assert!(
+            rel < 0.2,
+            "{name}: identified {value}, truth {truth} ({:.1} % off)",
+            100.0 * rel
+        );
     }
 }
 
@@ -229,9 +326,18 @@ fn check_parameters(verified: &Value, hidden: &[(String, String, f64)]) {
 /// the cycle, as the heel pad's to heel contact, is diluted in the window's mean).
 fn above_floor(run: &Path, how: Setup) -> Option<String> {
     let (floor, _, by_phase) = floor(how);
-    let whole = channel_means(run).into_iter().zip(floor).find(|((_, e), (_, f))| *e > 1.5 * f).map(|((c, e), (_, f))| format!("{c}: {e:.3} against {f:.3}"));
+    let whole = channel_means(run)
+        .into_iter()
+        .zip(floor)
+        .find(|((_, e), (_, f))| *e > 1.5 * f)
+        .map(|((c, e), (_, f))| format!("{c}: {e:.3} against {f:.3}"));
     let phase = || {
-        phase_means(run).into_iter().zip(by_phase).inspect(|(a, b)| assert_eq!(a.0, b.0)).find(|((_, e), (_, f))| *e > 1.5 * f).map(|(((c, p), e), (_, f))| format!("{c} in phase {p}: {e:.3} against {f:.3}"))
+        phase_means(run)
+            .into_iter()
+            .zip(by_phase)
+            .inspect(|(a, b)| assert_eq!(a.0, b.0))
+            .find(|((_, e), (_, f))| *e > 1.5 * f)
+            .map(|(((c, p), e), (_, f))| format!("{c} in phase {p}: {e:.3} against {f:.3}"))
     };
     whole.or_else(phase)
 }
@@ -241,36 +347,72 @@ fn above_floor(run: &Path, how: Setup) -> Option<String> {
 fn single_effect(name: &str, how: Setup, floor_factor: f64) {
     let hidden = hidden_values(name);
     let kind = hidden[0].0.as_str();
-    assert!(hidden.iter().all(|h| h.0 == kind), "{name}: more than one hidden effect");
+    assert!(
+        hidden.iter().all(|h| h.0 == kind),
+        "{name}: more than one hidden effect"
+    );
     let dir = tempfile::tempdir().unwrap();
     let run = baseline(name, dir.path(), how);
-    let shows = above_floor(&run, how).unwrap_or_else(|| panic!("{name}: the hidden effect does not show above the noise floor"));
+    let shows = above_floor(&run, how)
+        .unwrap_or_else(|| panic!("{name}: the hidden effect does not show above the noise floor"));
     eprintln!("{name} above the floor: {shows}");
     let d = diagnose(&run, 1, &[]);
-    assert_eq!(d["ranking"][0]["effect"]["type"], kind, "{name}: ranked first is {}", d["ranking"][0]["label"]);
+    assert_eq!(
+        d["ranking"][0]["effect"]["type"], kind,
+        "{name}: ranked first is {}",
+        d["ranking"][0]["label"]
+    );
     assert_eq!(d["ranking"][0]["significant"], true);
     let v = &d["verified"][0];
     assert_eq!(v["effect"]["type"], kind);
     assert_eq!(v["converged"], true);
     check_parameters(v, &hidden);
     let refit = PathBuf::from(v["folder"].as_str().unwrap());
-    for ((c, before), (_, after)) in channel_means(&run).iter().zip(channel_means(&root().join(&refit))) {
-        eprintln!("{c}: {before:.3} → {after:.3} (floor ×{:.2})", after / floor(how).0.iter().find(|f| f.0 == *c).map_or(f64::NAN, |f| f.1));
+    for ((c, before), (_, after)) in channel_means(&run)
+        .iter()
+        .zip(channel_means(&root().join(&refit)))
+    {
+        eprintln!(
+            "{c}: {before:.3} → {after:.3} (floor ×{:.2})",
+            after
+                / floor(how)
+                    .0
+                    .iter()
+                    .find(|f| f.0 == *c)
+                    .map_or(f64::NAN, |f| f.1)
+        );
     }
-    within_floor(&root().join(&refit), floor_factor, how).unwrap_or_else(|e| panic!("{name}: after the re-fit {e}"));
+    within_floor(&root().join(&refit), floor_factor, how)
+        .unwrap_or_else(|e| panic!("{name}: after the re-fit {e}"));
     if name == "heel_pad_compliance_1k" {
         // beside the pad the rigid run also finds a clock offset and the trunk significant
         // (a rigid heel's force rises earlier than a padded one's); with the pad added,
         // a second diagnosis finds nothing
         let second = diagnose(&root().join(&refit), 1, &[]);
-        assert_eq!(second["significant"], 0, "after the pad's re-fit: {}", second["verdict"]);
+        assert_eq!(
+            second["significant"], 0,
+            "after the pad's re-fit: {}",
+            second["verdict"]
+        );
     }
     if name == "ground_slope" {
         // the diagnosis report renders with its ranking, the before/after table and plot
         let url = format!("file://{}-diagnose/report.html", run.display());
-        let dom = String::from_utf8(common::chromium(&["--dump-dom".into(), url], std::time::Duration::from_secs(90))).unwrap();
-        for text in ["Candidate effects ranked", "Verified: ground slope", "Mean tracking error per channel", "foot orientation"] {
-            assert!(dom.contains(text), "'{text}' not in the rendered diagnosis report");
+        let dom = String::from_utf8(common::chromium(
+            &["--dump-dom".into(), url],
+            std::time::Duration::from_secs(90),
+        ))
+        .unwrap();
+        for text in [
+            "Candidate effects ranked",
+            "Verified: ground slope",
+            "Mean tracking error per channel",
+            "foot orientation",
+        ] {
+            assert!(
+                dom.contains(text),
+                "'{text}' not in the rendered diagnosis report"
+            );
         }
         assert!(dom.matches("<svg").count() >= 1, "the before/after plot");
     }
@@ -278,10 +420,20 @@ fn single_effect(name: &str, how: Setup, floor_factor: f64) {
 
 #[test]
 fn without_a_hidden_effect_nothing_is_significant() {
-    for how in [Setup::Seed, Setup::Pelvis, Setup::Identify, Setup::Samples, Setup::ForcePlateRate] {
+    for how in [
+        Setup::Seed,
+        Setup::Pelvis,
+        Setup::Identify,
+        Setup::Samples,
+        Setup::ForcePlateRate,
+    ] {
         let (floor, d, _) = floor(how);
         eprintln!("noise floor ({how:?}): {floor:?}");
-        assert_eq!(d["significant"], 0, "an effect was invented: {}", d["verdict"]);
+        assert_eq!(
+            d["significant"], 0,
+            "an effect was invented: {}",
+            d["verdict"]
+        );
         assert!(d["verified"].as_array().unwrap().is_empty());
     }
 }
@@ -333,10 +485,16 @@ fn two_hidden_effects_are_found_one_after_the_other() {
     let dir = tempfile::tempdir().unwrap();
     let run = baseline(name, dir.path(), Setup::Seed);
     let first = diagnose(&run, 1, &[]);
-    let a = first["verified"][0]["effect"]["type"].as_str().expect("a first effect").to_string();
+    let a = first["verified"][0]["effect"]["type"]
+        .as_str()
+        .expect("a first effect")
+        .to_string();
     let refit = root().join(first["verified"][0]["folder"].as_str().unwrap());
     let second = diagnose(&refit, 1, &[]);
-    let b = second["verified"][0]["effect"]["type"].as_str().expect("a second effect").to_string();
+    let b = second["verified"][0]["effect"]["type"]
+        .as_str()
+        .expect("a second effect")
+        .to_string();
     let mut found = [a, b];
     found.sort();
     assert_eq!(found, ["force_plate_time_offset", "ground_slope"]);

@@ -252,18 +252,32 @@ fn looser_sensitivity_tolerance_keeps_the_states_and_costs_fewer_steps() {
     let run = |s: IntegratorSettings| {
         let mut integrator = Integrator::new(2, 2, s).expect("integrator");
         let (mut x1, mut s1) = ([0.0; 2], [0.0; 8]);
-        let stats = integrator.integrate_with_sensitivities(&VanDerPol, t0, t1, &x0, &p, &mut x1, &mut s1).expect("sensitivities");
+        let stats = integrator
+            .integrate_with_sensitivities(&VanDerPol, t0, t1, &x0, &p, &mut x1, &mut s1)
+            .expect("sensitivities");
         (x1, s1, stats)
     };
     let (x_tight, _, tight) = run(settings(1e-10, Method::Bdf));
-    let (x_loose, s_loose, loose) = run(IntegratorSettings { sens_tol: Some(1e-6), ..settings(1e-10, Method::Bdf) });
+    let (x_loose, s_loose, loose) = run(IntegratorSettings {
+        sens_tol: Some(1e-6),
+        ..settings(1e-10, Method::Bdf)
+    });
     let mut reference = Integrator::new(2, 2, settings(1e-12, Method::Bdf)).expect("integrator");
     let fd = finite_difference_sensitivities(&mut reference, &VanDerPol, t0, t1, &x0, &p, 1e-6);
     let e = rel_err(&x_loose, &x_tight, 1e-8);
-    assert!(e < 1e-8, "states: rel err {e:e} between {x_loose:?} and {x_tight:?}");
+    assert!(
+        e < 1e-8,
+        "states: rel err {e:e} between {x_loose:?} and {x_tight:?}"
+    );
     let e = rel_err(&s_loose, &fd, 1e-8);
-    assert!(e < 1e-4, "sensitivities at 1e-6: rel err {e:e}\nCVODES {s_loose:?}\nFD     {fd:?}");
-    assert!(loose.steps < tight.steps, "steps: sensitivities at 1e-6 {loose:?}, at 1e-10 {tight:?}");
+    assert!(
+        e < 1e-4,
+        "sensitivities at 1e-6: rel err {e:e}\nCVODES {s_loose:?}\nFD     {fd:?}"
+    );
+    assert!(
+        loose.steps < tight.steps,
+        "steps: sensitivities at 1e-6 {loose:?}, at 1e-10 {tight:?}"
+    );
 }
 
 // ---------------------------------------------------------------------------------------
@@ -1036,7 +1050,10 @@ fn closed_form_fall(t0: f64, g: impl Fn(&[f64]) -> f64) -> f64 {
 fn dense_output_until_an_event_stops_at_its_first_fall() {
     let mut integrator = Integrator::new(2, 2, settings(1e-10, Method::Bdf)).expect("integrator");
     let (t0, t1) = (0.3, 8.0);
-    let times: Vec<f64> = (1..=77).map(|k| t0 + 0.1 * k as f64).filter(|&t| t <= t1).collect();
+    let times: Vec<f64> = (1..=77)
+        .map(|k| t0 + 0.1 * k as f64)
+        .filter(|&t| t <= t1)
+        .collect();
     // x₀ falls through zero first; −x₀ starts negative, rises with that fall, and falls
     // when x₀ rises through zero
     let events: [(&str, fn(&[f64]) -> f64); 2] = [("x0", |x| x[0]), ("-x0", |x| -x[0])];
@@ -1045,7 +1062,16 @@ fn dense_output_until_an_event_stops_at_its_first_fall() {
         let mut out = vec![-1.0];
         let event = move |_t: f64, x: &[f64]| g(x);
         let (_, root) = integrator
-            .integrate_dense_until(&Oscillator, t0, t1, &OSC_X0, &OSC_P, &times, &event, &mut out)
+            .integrate_dense_until(
+                &Oscillator,
+                t0,
+                t1,
+                &OSC_X0,
+                &OSC_P,
+                &times,
+                &event,
+                &mut out,
+            )
             .expect("until");
         let tr = root.expect("a root");
         assert!((tr - truth).abs() < 1e-8, "{name}: root {tr} vs {truth}");
@@ -1053,19 +1079,33 @@ fn dense_output_until_an_event_stops_at_its_first_fall() {
         assert_eq!(out.len(), 1 + 2 * (before + 1), "{name}");
         let last = &out[out.len() - 2..];
         let (exact, _) = Oscillator::exact(t0, tr, &OSC_X0, &OSC_P);
-        assert!(rel_err(last, &exact, 1e-3) < 1e-7, "{name}: {last:?} vs {exact:?}");
+        assert!(
+            rel_err(last, &exact, 1e-3) < 1e-7,
+            "{name}: {last:?} vs {exact:?}"
+        );
         assert!(g(last) <= 1e-12, "{name}: event {} at the root", g(last));
         eprintln!("{name}: root {tr:.12} (closed form {truth:.12}), {before} outputs before it");
     }
     // the next plain call has no root function: all outputs
     let mut out = Vec::new();
-    integrator.integrate_dense(&Oscillator, t0, t1, &OSC_X0, &OSC_P, &times, &mut out).expect("dense");
+    integrator
+        .integrate_dense(&Oscillator, t0, t1, &OSC_X0, &OSC_P, &times, &mut out)
+        .expect("dense");
     assert_eq!(out.len(), 2 * times.len());
     // no fall within the interval: every output and no root
     let mut out = Vec::new();
     let never = |_t: f64, _x: &[f64]| 1.0;
     let (_, root) = integrator
-        .integrate_dense_until(&Oscillator, t0, t1, &OSC_X0, &OSC_P, &times, &never, &mut out)
+        .integrate_dense_until(
+            &Oscillator,
+            t0,
+            t1,
+            &OSC_X0,
+            &OSC_P,
+            &times,
+            &never,
+            &mut out,
+        )
         .expect("until");
     assert_eq!((root, out.len()), (None, 2 * times.len()));
 }

@@ -41,7 +41,11 @@ impl Nlp for LinearLs {
     fn evaluate(&self, w: &[f64], derivs: bool) -> Result<NlpEval, String> {
         let x = DVector::from_column_slice(w);
         let r = &self.a * &x - &self.b;
-        let mut ev = NlpEval { f: r.norm_squared(), c: vec![w.iter().sum()], ..Default::default() };
+        let mut ev = NlpEval {
+            f: r.norm_squared(),
+            c: vec![w.iter().sum()],
+            ..Default::default()
+        };
         if derivs {
             ev.grad = (2.0 * self.a.transpose() * &r).iter().copied().collect();
             ev.jac = vec![1.0; 3];
@@ -58,9 +62,16 @@ impl Nlp for LinearLs {
 
 #[test]
 fn one_gauss_newton_step_solves_a_linear_least_squares_problem_and_predicts_its_decrease() {
-    let a = DMatrix::from_row_slice(4, 3, &[1.0, 0.5, 0.0, 0.2, 2.0, 0.3, 0.0, 0.4, 1.5, 1.0, 1.0, 1.0]);
+    let a = DMatrix::from_row_slice(
+        4,
+        3,
+        &[1.0, 0.5, 0.0, 0.2, 2.0, 0.3, 0.0, 0.4, 1.5, 1.0, 1.0, 1.0],
+    );
     let b = DVector::from_column_slice(&[1.0, -0.5, 2.0, 0.7]);
-    let nlp = LinearLs { a: a.clone(), b: b.clone() };
+    let nlp = LinearLs {
+        a: a.clone(),
+        b: b.clone(),
+    };
     // brute force: the KKT system [H 1; 1ᵀ 0][x; λ] = [2Aᵀb; 1]
     let h = 2.0 * a.transpose() * &a;
     let mut k = DMatrix::zeros(4, 4);
@@ -79,11 +90,19 @@ fn one_gauss_newton_step_solves_a_linear_least_squares_problem_and_predicts_its_
     let model = GaussNewtonModel::new(&nlp, &w0, 0.0).unwrap();
     let step = model.step(None).unwrap();
     for i in 0..3 {
-        assert!((w0[i] + step.d[i] - x_star[i]).abs() < 1e-6, "step reaches the optimum: {:?} vs {x_star:?}", step.d);
+        assert!(
+            (w0[i] + step.d[i] - x_star[i]).abs() < 1e-6,
+            "step reaches the optimum: {:?} vs {x_star:?}",
+            step.d
+        );
     }
     let truth = f(&w0) - f(&x_star);
     assert!(truth > 0.1);
-    assert!((step.predicted_decrease - truth).abs() < 1e-6 * truth, "{} vs {truth}", step.predicted_decrease);
+    assert!(
+        (step.predicted_decrease - truth).abs() < 1e-6 * truth,
+        "{} vs {truth}",
+        step.predicted_decrease
+    );
     // reduced inverse Hessian from a gradient shift vs Z (ZᵀHZ)⁻¹ Zᵀ, Z spanning {d: Σd = 0}
     let z = DMatrix::from_row_slice(3, 2, &[1.0, 0.0, -1.0, 1.0, 0.0, -1.0]);
     let reduced = &z * (z.transpose() * &h * &z).try_inverse().unwrap() * z.transpose();
@@ -94,7 +113,11 @@ fn one_gauss_newton_step_solves_a_linear_least_squares_problem_and_predicts_its_
         let s = model.step(Some(&shift)).unwrap();
         for i in 0..3 {
             let col = -(s.d[i] - step.d[i]) / eps;
-            assert!((col - reduced[(i, j)]).abs() < 1e-5 * reduced.abs().max(), "({i},{j}): {col} vs {}", reduced[(i, j)]);
+            assert!(
+                (col - reduced[(i, j)]).abs() < 1e-5 * reduced.abs().max(),
+                "({i},{j}): {col} vs {}",
+                reduced[(i, j)]
+            );
         }
     }
 }

@@ -11,24 +11,58 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 fn solve_problem(file: &str, hessian: HessianMode, threads: usize) -> Option<SqpResult> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("problems").join(file);
+    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("problems")
+        .join(file);
     let bench = Benchmark::from_json(read_problem_json(&p).unwrap()).unwrap();
-    let ocp = bench.ocp(IntegratorSettings { method: footfall::integrate::Method::Adams, ..Default::default() }).unwrap();
+    let ocp = bench
+        .ocp(IntegratorSettings {
+            method: footfall::integrate::Method::Adams,
+            ..Default::default()
+        })
+        .unwrap();
     let tr = Transcription::new(&ocp).unwrap();
     let (_, _, w0) = tr.variable_bounds_and_guess();
-    let settings = SqpSettings { tol_kkt: 1e-6, hessian, max_iter: 100, ..Default::default() };
-    let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+    let settings = SqpSettings {
+        tol_kkt: 1e-6,
+        hessian,
+        max_iter: 100,
+        ..Default::default()
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
     Some(pool.install(|| sqp::solve(&tr, &w0, &settings, &mut Silent)))
 }
 
 #[test]
 fn solution_is_bit_identical_with_one_and_two_threads() {
-    for (file, hessian) in [("cartpole_swingup.json", HessianMode::GaussNewton), ("five_link_biped.json", HessianMode::Exact)] {
-        let (Some(a), Some(b)) = (solve_problem(file, hessian, 1), solve_problem(file, hessian, 2)) else { return };
+    for (file, hessian) in [
+        ("cartpole_swingup.json", HessianMode::GaussNewton),
+        ("five_link_biped.json", HessianMode::Exact),
+    ] {
+        let (Some(a), Some(b)) = (
+            solve_problem(file, hessian, 1),
+            solve_problem(file, hessian, 2),
+        ) else {
+            return;
+        };
         assert_eq!(a.status, SqpStatus::Converged, "{file}");
         assert_eq!(a.history.len(), b.history.len(), "{file}");
-        assert!(a.w.iter().zip(&b.w).all(|(x, y)| x.to_bits() == y.to_bits()), "{file}: solutions differ in some bit");
-        assert!(a.lambda.iter().zip(&b.lambda).all(|(x, y)| x.to_bits() == y.to_bits()), "{file}");
+        assert!(
+            a.w.iter()
+                .zip(&b.w)
+                .all(|(x, y)| x.to_bits() == y.to_bits()),
+            "{file}: solutions differ in some bit"
+        );
+        assert!(
+            a.lambda
+                .iter()
+                .zip(&b.lambda)
+                .all(|(x, y)| x.to_bits() == y.to_bits()),
+            "{file}"
+        );
         assert_eq!(a.objective.to_bits(), b.objective.to_bits(), "{file}");
     }
 }
@@ -49,7 +83,16 @@ impl ControlledOde for Integrator1 {
         xdot[0] = u[0];
         Ok(())
     }
-    fn f_jac(&self, x: &[f64], u: &[f64], t: &[f64], xdot: &mut [f64], fx: &mut [f64], fu: &mut [f64], _: &mut [f64]) -> Result<(), OdeError> {
+    fn f_jac(
+        &self,
+        x: &[f64],
+        u: &[f64],
+        t: &[f64],
+        xdot: &mut [f64],
+        fx: &mut [f64],
+        fu: &mut [f64],
+        _: &mut [f64],
+    ) -> Result<(), OdeError> {
         self.f(x, u, t, xdot)?;
         fx[0] = 0.0;
         fu[0] = 1.0;
@@ -87,7 +130,11 @@ fn infeasible_problem_stops_as_infeasible_and_names_the_constraint() {
         theta_lb: vec![],
         theta_ub: vec![],
         constraints: vec![Constraint {
-            term: Term { name: "final_reach".into(), args: vec![Block::State { phase: 0, node: n }], f: Arc::new(Linear::new(vec![1.0], 1)) },
+            term: Term {
+                name: "final_reach".into(),
+                args: vec![Block::State { phase: 0, node: n }],
+                f: Arc::new(Linear::new(vec![1.0], 1)),
+            },
             lb: vec![3.0],
             ub: vec![inf],
         }],
@@ -104,11 +151,24 @@ fn infeasible_problem_stops_as_infeasible_and_names_the_constraint() {
     let tr = Transcription::new(&ocp).unwrap();
     let (_, _, w0) = tr.variable_bounds_and_guess();
     let res = sqp::solve(&tr, &w0, &SqpSettings::default(), &mut Silent);
-    eprintln!("status: {}; most violated: {:?}", res.status, res.most_violated);
+    eprintln!(
+        "status: {}; most violated: {:?}",
+        res.status, res.most_violated
+    );
     assert_eq!(res.status, SqpStatus::Infeasible);
     let top = &res.most_violated[0];
-    assert!(top.name.contains("phase 'reach'") && top.name.contains("node 10") && top.name.contains("final_reach"), "{}", top.name);
-    assert!((top.amount - 2.0).abs() < 1e-6, "the best reachable final state is 1, violation 2, got {}", top.amount);
+    assert!(
+        top.name.contains("phase 'reach'")
+            && top.name.contains("node 10")
+            && top.name.contains("final_reach"),
+        "{}",
+        top.name
+    );
+    assert!(
+        (top.amount - 2.0).abs() < 1e-6,
+        "the best reachable final state is 1, violation 2, got {}",
+        top.amount
+    );
 }
 
 /// The exact weighted Hessians of the biped's boundary terms match central differences
@@ -117,14 +177,28 @@ fn infeasible_problem_stops_as_infeasible_and_names_the_constraint() {
 fn biped_term_hessians_match_finite_differences() {
     let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("problems/five_link_biped.json");
     let bench = Benchmark::from_json(read_problem_json(&p).unwrap()).unwrap();
-    let ocp = bench.ocp(IntegratorSettings { method: footfall::integrate::Method::Adams, ..Default::default() }).unwrap();
+    let ocp = bench
+        .ocp(IntegratorSettings {
+            method: footfall::integrate::Method::Adams,
+            ..Default::default()
+        })
+        .unwrap();
     let tr = Transcription::new(&ocp).unwrap();
     let (_, _, w0) = tr.variable_bounds_and_guess();
     for name in ["periodicity", "step_length_height", "touchdown", "liftoff"] {
-        let con = ocp.constraints.iter().find(|c| c.term.name == name).unwrap();
+        let con = ocp
+            .constraints
+            .iter()
+            .find(|c| c.term.name == name)
+            .unwrap();
         let f = &con.term.f;
         assert!(f.has_hessian());
-        let z: Vec<f64> = con.term.args.iter().flat_map(|b| w0[tr.range(*b)].to_vec()).collect();
+        let z: Vec<f64> = con
+            .term
+            .args
+            .iter()
+            .flat_map(|b| w0[tr.range(*b)].to_vec())
+            .collect();
         let (d, nz) = (f.dim(), z.len());
         let wts: Vec<f64> = (0..d).map(|i| 0.3 + 0.1 * i as f64).collect();
         let mut h = vec![0.0; nz * nz];
@@ -133,7 +207,9 @@ fn biped_term_hessians_match_finite_differences() {
             let mut v = vec![0.0; d];
             let mut j = vec![0.0; d * nz];
             f.eval(z, &mut v, Some(&mut j)).unwrap();
-            (0..nz).map(|c| (0..d).map(|i| wts[i] * j[i + c * d]).sum::<f64>()).collect::<Vec<f64>>()
+            (0..nz)
+                .map(|c| (0..d).map(|i| wts[i] * j[i + c * d]).sum::<f64>())
+                .collect::<Vec<f64>>()
         };
         let mut worst = 0.0f64;
         for c in 0..nz {
@@ -158,11 +234,20 @@ fn biped_term_hessians_match_finite_differences() {
 fn interval_hessian_matches_finite_differences_of_sensitivities() {
     use footfall::benchmarks::{CartPole, FiveLinkBiped};
     use footfall::integrate::{Integrator, ShootingInterval};
-    let tight = IntegratorSettings { rtol: 1e-12, atol: 1e-12, ..Default::default() };
+    let tight = IntegratorSettings {
+        rtol: 1e-12,
+        atol: 1e-12,
+        ..Default::default()
+    };
     let biped = FiveLinkBiped::default();
     let cart = CartPole::default();
     let cases: Vec<(&dyn ControlledOde, Vec<f64>, Vec<f64>, f64)> = vec![
-        (&biped, vec![-0.3, 0.7, 0.0, -0.5, -0.6, 0.5, -0.4, 0.1, 0.3, -0.2], vec![0.0, 20.0, -10.0, 5.0, 3.0], 0.0175),
+        (
+            &biped,
+            vec![-0.3, 0.7, 0.0, -0.5, -0.6, 0.5, -0.4, 0.1, 0.3, -0.2],
+            vec![0.0, 20.0, -10.0, 5.0, 3.0],
+            0.0175,
+        ),
         (&cart, vec![0.1, 0.5, 0.3, -1.0], vec![4.0], 0.05),
     ];
     for (ode, x0, u, h) in cases {
@@ -172,21 +257,37 @@ fn interval_hessian_matches_finite_differences_of_sensitivities() {
             let nz = nx + np;
             let u1: Vec<f64> = u.iter().map(|v| 0.7 * v + 1.0).collect();
             let mut p = Vec::new();
-            iv.pack_params(&u, (shape == ControlShape::Linear).then_some(&u1[..]), h, &[], &mut p).unwrap();
+            iv.pack_params(
+                &u,
+                (shape == ControlShape::Linear).then_some(&u1[..]),
+                h,
+                &[],
+                &mut p,
+            )
+            .unwrap();
             let lambda: Vec<f64> = (0..nx).map(|i| 0.5 - 0.13 * i as f64).collect();
             let mut integ = Integrator::new(nx, np, tight.clone()).unwrap();
             let (mut x1, mut s1, mut hs) = (vec![0.0; nx], vec![0.0; nx * nz], vec![0.0; nz * nz]);
-            assert!(iv.integrate_with_hessian(&mut integ, &x0, &p, &lambda, &mut x1, &mut s1, &mut hs).unwrap());
+            assert!(iv
+                .integrate_with_hessian(&mut integ, &x0, &p, &lambda, &mut x1, &mut s1, &mut hs)
+                .unwrap());
             let mut grad = |z: &[f64]| {
                 let (mut x, mut s) = (vec![0.0; nx], vec![0.0; nx * nz]);
-                integ.integrate_with_sensitivities(&iv, 0.0, 1.0, &z[..nx], &z[nx..], &mut x, &mut s).unwrap();
-                (0..nz).map(|c| (0..nx).map(|i| lambda[i] * s[i + c * nx]).sum::<f64>()).collect::<Vec<f64>>()
+                integ
+                    .integrate_with_sensitivities(&iv, 0.0, 1.0, &z[..nx], &z[nx..], &mut x, &mut s)
+                    .unwrap();
+                (0..nz)
+                    .map(|c| (0..nx).map(|i| lambda[i] * s[i + c * nx]).sum::<f64>())
+                    .collect::<Vec<f64>>()
             };
             let z0: Vec<f64> = x0.iter().chain(&p).copied().collect();
             let scale = hs.iter().map(|v| v.abs()).fold(1e-3, f64::max);
             let mut worst = 0.0f64;
             for c in 0..nz {
-                let e = 1e-5 * z0[c].abs().max(if c == nx + iv.p_duration() { 0.01 } else { 1.0 });
+                let e = 1e-5
+                    * z0[c]
+                        .abs()
+                        .max(if c == nx + iv.p_duration() { 0.01 } else { 1.0 });
                 let mut zp = z0.clone();
                 zp[c] += e;
                 let mut zm = z0.clone();
@@ -197,7 +298,10 @@ fn interval_hessian_matches_finite_differences_of_sensitivities() {
                 }
             }
             eprintln!("nx {nx} {shape:?}: interval Hessian vs FD relative error {worst:.2e} (scale {scale:.2e})");
-            assert!(worst < 1e-5, "interval Hessian differs from FD by {worst:e}");
+            assert!(
+                worst < 1e-5,
+                "interval Hessian differs from FD by {worst:e}"
+            );
         }
     }
 }
@@ -212,7 +316,14 @@ fn integrated_cost_by_quadrature_state_matches_the_least_squares_form() {
         fn dim(&self) -> usize {
             1
         }
-        fn eval(&self, _x: &[f64], u: &[f64], _t: &[f64], v: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), String> {
+        fn eval(
+            &self,
+            _x: &[f64],
+            u: &[f64],
+            _t: &[f64],
+            v: &mut [f64],
+            jac: Option<&mut [f64]>,
+        ) -> Result<(), String> {
             v[0] = u[0] * u[0];
             if let Some(j) = jac {
                 j.iter_mut().for_each(|x| *x = 0.0);
@@ -220,7 +331,14 @@ fn integrated_cost_by_quadrature_state_matches_the_least_squares_form() {
             }
             Ok(())
         }
-        fn weighted_hessian(&self, _x: &[f64], _u: &[f64], _t: &[f64], w: &[f64], out: &mut [f64]) -> Result<bool, String> {
+        fn weighted_hessian(
+            &self,
+            _x: &[f64],
+            _u: &[f64],
+            _t: &[f64],
+            w: &[f64],
+            out: &mut [f64],
+        ) -> Result<bool, String> {
             out.iter_mut().for_each(|x| *x = 0.0);
             out[4 + 4 * 5] = 2.0 * w[0];
             Ok(true)
@@ -228,13 +346,23 @@ fn integrated_cost_by_quadrature_state_matches_the_least_squares_form() {
     }
     let p = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("problems/cartpole_swingup.json");
     let bench = Benchmark::from_json(read_problem_json(&p).unwrap()).unwrap();
-    let settings = IntegratorSettings { method: footfall::integrate::Method::Adams, ..Default::default() };
+    let settings = IntegratorSettings {
+        method: footfall::integrate::Method::Adams,
+        ..Default::default()
+    };
     let base = bench.ocp(settings.clone()).unwrap();
     let integrand = USquared;
-    let ext = WithQuadrature { ode: base.phases[0].ode, integrand: &integrand };
+    let ext = WithQuadrature {
+        ode: base.phases[0].ode,
+        integrand: &integrand,
+    };
     let ph = &base.phases[0];
     let n = ph.intervals;
-    let grow = |rows: &Vec<Vec<f64>>, v: f64| rows.iter().map(|r| r.iter().copied().chain([v]).collect()).collect::<Vec<Vec<f64>>>();
+    let grow = |rows: &Vec<Vec<f64>>, v: f64| {
+        rows.iter()
+            .map(|r| r.iter().copied().chain([v]).collect())
+            .collect::<Vec<Vec<f64>>>()
+    };
     let mut x_lb = grow(&ph.x_lb, f64::NEG_INFINITY);
     let mut x_ub = grow(&ph.x_ub, f64::INFINITY);
     x_lb[0][4] = 0.0;
@@ -267,8 +395,26 @@ fn integrated_cost_by_quadrature_state_matches_the_least_squares_form() {
     };
     let tr = Transcription::new(&ocp).unwrap();
     let (_, _, w0) = tr.variable_bounds_and_guess();
-    let res = sqp::solve(&tr, &w0, &SqpSettings { tol_kkt: 1e-6, hessian: HessianMode::Exact, ..Default::default() }, &mut Silent);
-    eprintln!("quadrature cost: {} after {} iterations, J = {:.9}", res.status, res.history.len() - 1, res.objective);
+    let res = sqp::solve(
+        &tr,
+        &w0,
+        &SqpSettings {
+            tol_kkt: 1e-6,
+            hessian: HessianMode::Exact,
+            ..Default::default()
+        },
+        &mut Silent,
+    );
+    eprintln!(
+        "quadrature cost: {} after {} iterations, J = {:.9}",
+        res.status,
+        res.history.len() - 1,
+        res.objective
+    );
     assert_eq!(res.status, SqpStatus::Converged);
-    assert!((res.objective - 76.665674185).abs() / 76.665674185 < 1e-5, "J = {}", res.objective);
+    assert!(
+        (res.objective - 76.665674185).abs() / 76.665674185 < 1e-5,
+        "J = {}",
+        res.objective
+    );
 }

@@ -27,7 +27,16 @@ impl ControlledOde for Linear {
         }
         Ok(())
     }
-    fn f_jac(&self, x: &[f64], u: &[f64], t: &[f64], xdot: &mut [f64], fx: &mut [f64], fu: &mut [f64], _: &mut [f64]) -> Result<(), OdeError> {
+    fn f_jac(
+        &self,
+        x: &[f64],
+        u: &[f64],
+        t: &[f64],
+        xdot: &mut [f64],
+        fx: &mut [f64],
+        fu: &mut [f64],
+        _: &mut [f64],
+    ) -> Result<(), OdeError> {
         self.f(x, u, t, xdot)?;
         for i in 0..2 {
             for j in 0..2 {
@@ -89,13 +98,19 @@ fn lq_problem_matches_discrete_riccati() {
     let mut ls: Vec<Term> = (0..n_int)
         .map(|k| Term {
             name: "stage".into(),
-            args: vec![Block::State { phase: 0, node: k }, Block::Control { phase: 0, node: k }],
+            args: vec![
+                Block::State { phase: 0, node: k },
+                Block::Control { phase: 0, node: k },
+            ],
             f: stage.clone(),
         })
         .collect();
     ls.push(Term {
         name: "terminal".into(),
-        args: vec![Block::State { phase: 0, node: n_int }],
+        args: vec![Block::State {
+            phase: 0,
+            node: n_int,
+        }],
         f: Arc::new(Weighted(vec![qf[0].sqrt(), qf[1].sqrt()])),
     });
     let ocp = Ocp {
@@ -110,11 +125,19 @@ fn lq_problem_matches_discrete_riccati() {
         samples: Vec::new(),
         checks: Vec::new(),
         costs: vec![],
-        integrator: IntegratorSettings { rtol: 1e-12, atol: 1e-12, ..Default::default() },
+        integrator: IntegratorSettings {
+            rtol: 1e-12,
+            atol: 1e-12,
+            ..Default::default()
+        },
     };
     let tr = Transcription::new(&ocp).unwrap();
     let (_, _, w0) = tr.variable_bounds_and_guess();
-    let settings = SqpSettings { tol_kkt: 1e-9, hessian: HessianMode::GaussNewton, ..Default::default() };
+    let settings = SqpSettings {
+        tol_kkt: 1e-9,
+        hessian: HessianMode::GaussNewton,
+        ..Default::default()
+    };
     let res = sqp::solve(&tr, &w0, &settings, &mut Silent);
     assert_eq!(res.status, SqpStatus::Converged, "{res:?}");
 
@@ -142,13 +165,23 @@ fn lq_problem_matches_discrete_riccati() {
     let x0v = DVector::from_vec(x0.to_vec());
     let j_star = (x0v.transpose() * &p * &x0v)[(0, 0)];
     let rel = (res.objective - j_star).abs() / j_star;
-    eprintln!("LQ: J = {:.12} vs Riccati {:.12} (rel {rel:.2e}), {} SQP iterations", res.objective, j_star, res.history.len() - 1);
+    eprintln!(
+        "LQ: J = {:.12} vs Riccati {:.12} (rel {rel:.2e}), {} SQP iterations",
+        res.objective,
+        j_star,
+        res.history.len() - 1
+    );
     assert!(rel < 1e-8, "objective differs by {rel:e}");
     let mut x = x0v;
     for (k, gain) in gains.iter().enumerate() {
         let sx = &res.w[tr.range(Block::State { phase: 0, node: k })];
         for i in 0..2 {
-            assert!((sx[i] - x[i]).abs() < 1e-6, "state {i} at node {k}: {} vs {}", sx[i], x[i]);
+            assert!(
+                (sx[i] - x[i]).abs() < 1e-6,
+                "state {i} at node {k}: {} vs {}",
+                sx[i],
+                x[i]
+            );
         }
         let u = -(gain * &x)[(0, 0)];
         let su = res.w[tr.range(Block::Control { phase: 0, node: k })][0];

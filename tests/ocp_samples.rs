@@ -4,7 +4,9 @@
 //! residual.
 
 use footfall::integrate::{ControlShape, ControlledOde, IntegratorSettings, OdeError};
-use footfall::ocp::{Block, CheckPoint, NodeFunction, Ocp, Phase, PhaseDuration, SampleTerm, Transcription};
+use footfall::ocp::{
+    Block, CheckPoint, NodeFunction, Ocp, Phase, PhaseDuration, SampleTerm, Transcription,
+};
 use std::sync::Arc;
 
 /// A driven, damped pendulum with the stiffness as the free parameter θ:
@@ -31,14 +33,30 @@ impl ControlledOde for Pendulum {
         xdot.copy_from_slice(&Self::rhs(x, u[0], theta[0]));
         Ok(())
     }
-    fn f_jac(&self, x: &[f64], u: &[f64], theta: &[f64], xdot: &mut [f64], fx: &mut [f64], fu: &mut [f64], ft: &mut [f64]) -> Result<(), OdeError> {
+    fn f_jac(
+        &self,
+        x: &[f64],
+        u: &[f64],
+        theta: &[f64],
+        xdot: &mut [f64],
+        fx: &mut [f64],
+        fu: &mut [f64],
+        ft: &mut [f64],
+    ) -> Result<(), OdeError> {
         self.f(x, u, theta, xdot)?;
         fx.copy_from_slice(&[0.0, -theta[0] * x[0].cos(), 1.0, -0.3]);
         fu.copy_from_slice(&[0.0, 1.0]);
         ft.copy_from_slice(&[0.0, -x[0].sin()]);
         Ok(())
     }
-    fn weighted_hessian(&self, x: &[f64], _: &[f64], theta: &[f64], mu: &[f64], out: &mut [f64]) -> Result<bool, OdeError> {
+    fn weighted_hessian(
+        &self,
+        x: &[f64],
+        _: &[f64],
+        theta: &[f64],
+        mu: &[f64],
+        out: &mut [f64],
+    ) -> Result<bool, OdeError> {
         // (x₀, x₁, u, θ): only f₁ = −θ sin x₀ … is curved
         out.iter_mut().for_each(|v| *v = 0.0);
         out[0] = mu[1] * theta[0] * x[0].sin();
@@ -64,7 +82,12 @@ impl NodeFunction for Residual {
     fn eval(&self, z: &[f64], v: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), String> {
         v[0] = Self::value(z);
         if let Some(j) = jac {
-            j.copy_from_slice(&[2.0 * z[0], z[1].cos() * z[2] + z[3] / 4.0, z[1].sin() - 0.1, z[1] / 4.0]);
+            j.copy_from_slice(&[
+                2.0 * z[0],
+                z[1].cos() * z[2] + z[3] / 4.0,
+                z[1].sin() - 0.1,
+                z[1] / 4.0,
+            ]);
         }
         Ok(())
     }
@@ -96,7 +119,11 @@ fn problem(ode: &Pendulum) -> Ocp<'_> {
         name: "swing".into(),
         ode,
         intervals: n,
-        duration: PhaseDuration { value: 0.9, lb: 0.5, ub: 2.0 },
+        duration: PhaseDuration {
+            value: 0.9,
+            lb: 0.5,
+            ub: 2.0,
+        },
         controls: ControlShape::Linear,
         x_lb: vec![vec![-inf; 2]; n + 1],
         x_ub: vec![vec![inf; 2]; n + 1],
@@ -115,10 +142,24 @@ fn problem(ode: &Pendulum) -> Ocp<'_> {
         theta_ub: vec![10.0],
         constraints: vec![],
         least_squares: vec![],
-        samples: SAMPLES.iter().map(|&(interval, tau)| SampleTerm { name: "sample".into(), phase: 0, interval, tau, f: f.clone(), shift: None }).collect(),
+        samples: SAMPLES
+            .iter()
+            .map(|&(interval, tau)| SampleTerm {
+                name: "sample".into(),
+                phase: 0,
+                interval,
+                tau,
+                f: f.clone(),
+                shift: None,
+            })
+            .collect(),
         checks: vec![],
         costs: vec![],
-        integrator: IntegratorSettings { rtol: 1e-12, atol: 1e-12, ..Default::default() },
+        integrator: IntegratorSettings {
+            rtol: 1e-12,
+            atol: 1e-12,
+            ..Default::default()
+        },
     }
 }
 
@@ -148,8 +189,14 @@ fn rk4(x0: [f64; 2], u0: f64, u1: f64, h: f64, theta: f64, tau: f64) -> [f64; 2]
     for i in 0..steps {
         let s = i as f64 * dt;
         let k1 = f(s, x);
-        let k2 = f(s + dt / 2.0, [x[0] + dt / 2.0 * k1[0], x[1] + dt / 2.0 * k1[1]]);
-        let k3 = f(s + dt / 2.0, [x[0] + dt / 2.0 * k2[0], x[1] + dt / 2.0 * k2[1]]);
+        let k2 = f(
+            s + dt / 2.0,
+            [x[0] + dt / 2.0 * k1[0], x[1] + dt / 2.0 * k1[1]],
+        );
+        let k3 = f(
+            s + dt / 2.0,
+            [x[0] + dt / 2.0 * k2[0], x[1] + dt / 2.0 * k2[1]],
+        );
         let k4 = f(s + dt, [x[0] + dt * k3[0], x[1] + dt * k3[1]]);
         for j in 0..2 {
             x[j] += dt / 6.0 * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j]);
@@ -160,14 +207,23 @@ fn rk4(x0: [f64; 2], u0: f64, u1: f64, h: f64, theta: f64, tau: f64) -> [f64; 2]
 
 /// The objective of residuals at `(interval, τ)` instants, each interval integrated by
 /// RK4 from its node at `w`.
-fn rk4_objective<const N: usize>(tr: &Transcription, w: &[f64], instants: [(usize, f64); N]) -> f64 {
+fn rk4_objective<const N: usize>(
+    tr: &Transcription,
+    w: &[f64],
+    instants: [(usize, f64); N],
+) -> f64 {
     let theta = w[tr.range(Block::Params).start];
     let h = w[tr.range(Block::Duration { phase: 0 }).start] / INTERVALS as f64;
     let mut expected = 0.0;
     for (k, tau) in instants {
         let s = tr.range(Block::State { phase: 0, node: k });
         let u0 = w[tr.range(Block::Control { phase: 0, node: k }).start];
-        let u1 = w[tr.range(Block::Control { phase: 0, node: k + 1 }).start];
+        let u1 = w[tr
+            .range(Block::Control {
+                phase: 0,
+                node: k + 1,
+            })
+            .start];
         let x = rk4([w[s.start], w[s.start + 1]], u0, u1, h, theta, tau);
         let u = (1.0 - tau) * u0 + tau * u1;
         expected += Residual::value(&[x[0], x[1], u, theta]).powi(2);
@@ -184,14 +240,27 @@ fn sample_terms_match_an_independent_integration() {
     let expected = rk4_objective(&tr, &w, SAMPLES);
     for derivs in [false, true] {
         let ev = tr.evaluate(&w, derivs).unwrap();
-        assert!((ev.f - expected).abs() < 1e-9 * expected, "derivs {derivs}: objective {} against RK4's {expected}", ev.f);
+        assert!(
+            (ev.f - expected).abs() < 1e-9 * expected,
+            "derivs {derivs}: objective {} against RK4's {expected}",
+            ev.f
+        );
     }
     // the end states are the same as without samples: the continuity rows agree
-    let plain = Ocp { samples: vec![], ..problem(&ode) };
+    let plain = Ocp {
+        samples: vec![],
+        ..problem(&ode)
+    };
     let trp = Transcription::new(&plain).unwrap();
-    let (a, b) = (tr.evaluate(&w, true).unwrap(), trp.evaluate(&w, true).unwrap());
+    let (a, b) = (
+        tr.evaluate(&w, true).unwrap(),
+        trp.evaluate(&w, true).unwrap(),
+    );
     for (x, y) in a.c.iter().zip(&b.c) {
-        assert!((x - y).abs() < 1e-9, "continuity {x} with samples, {y} without");
+        assert!(
+            (x - y).abs() < 1e-9,
+            "continuity {x} with samples, {y} without"
+        );
     }
     assert_eq!(b.f, 0.0);
 }
@@ -210,30 +279,57 @@ fn sample_gradient_and_gauss_newton_match_central_differences() {
         wp[i] += eps;
         wm[i] -= eps;
         let fd = (f(&wp) - f(&wm)) / (2.0 * eps);
-        assert!((ev.grad[i] - fd).abs() < 1e-6 * (1.0 + fd.abs()), "∂f/∂w[{i}]: {} against {fd}", ev.grad[i]);
+        assert!(
+            (ev.grad[i] - fd).abs() < 1e-6 * (1.0 + fd.abs()),
+            "∂f/∂w[{i}]: {} against {fd}",
+            ev.grad[i]
+        );
     }
     // one sample term alone: r = √f (r > 0), so dᵀ GN d = 2 (∂r/∂d)²
-    let one = Ocp { samples: problem(&ode).samples.into_iter().skip(2).take(1).collect(), ..problem(&ode) };
+    let one = Ocp {
+        samples: problem(&ode).samples.into_iter().skip(2).take(1).collect(),
+        ..problem(&ode)
+    };
     assert_gauss_newton_is_the_residuals_derivative(&Transcription::new(&one).unwrap(), &w, None);
 }
 
 /// For a problem with one positive sample residual (r = √f), `dᵀ GN d = 2 (∂r/∂d)²` along
 /// a few directions (central differences), the variable `fixed` (if any) held.
-fn assert_gauss_newton_is_the_residuals_derivative(tr: &Transcription, w: &[f64], fixed: Option<usize>) {
+fn assert_gauss_newton_is_the_residuals_derivative(
+    tr: &Transcription,
+    w: &[f64],
+    fixed: Option<usize>,
+) {
     let eps = 1e-6;
     let ev = tr.evaluate(w, true).unwrap();
     let (rows, cols) = tr.gauss_newton_pattern();
     let r = |w: &[f64]| tr.evaluate(w, false).unwrap().f.sqrt();
     for seed in 0..4 {
-        let d: Vec<f64> = (0..tr.n()).map(|i| if Some(i) == fixed { 0.0 } else { ((i * 7 + seed * 13) % 11) as f64 / 11.0 - 0.45 }).collect();
+        let d: Vec<f64> = (0..tr.n())
+            .map(|i| {
+                if Some(i) == fixed {
+                    0.0
+                } else {
+                    ((i * 7 + seed * 13) % 11) as f64 / 11.0 - 0.45
+                }
+            })
+            .collect();
         let mut quad = 0.0;
         for ((&a, &b), &v) in rows.iter().zip(cols).zip(&ev.gauss_newton) {
-            quad += if a == b { v * d[a] * d[a] } else { 2.0 * v * d[a] * d[b] };
+            quad += if a == b {
+                v * d[a] * d[a]
+            } else {
+                2.0 * v * d[a] * d[b]
+            };
         }
         let wp: Vec<f64> = w.iter().zip(&d).map(|(x, y)| x + eps * y).collect();
         let wm: Vec<f64> = w.iter().zip(&d).map(|(x, y)| x - eps * y).collect();
         let dr = (r(&wp) - r(&wm)) / (2.0 * eps);
-        assert!((quad - 2.0 * dr * dr).abs() < 1e-6 * (1.0 + quad.abs()), "direction {seed}: dᵀ GN d = {quad}, 2 (∂r/∂d)² = {}", 2.0 * dr * dr);
+        assert!(
+            (quad - 2.0 * dr * dr).abs() < 1e-6 * (1.0 + quad.abs()),
+            "direction {seed}: dᵀ GN d = {quad}, 2 (∂r/∂d)² = {}",
+            2.0 * dr * dr
+        );
     }
 }
 
@@ -244,7 +340,12 @@ fn assert_exact_hessian_path_agrees(tr: &Transcription, w: &[f64]) {
     let (a, _) = tr.evaluate_with_hessian(w, &lambda).unwrap();
     let b = tr.evaluate(w, true).unwrap();
     assert!((a.f - b.f).abs() < 1e-10 * b.f, "{} against {}", a.f, b.f);
-    for (x, y) in a.grad.iter().zip(&b.grad).chain(a.gauss_newton.iter().zip(&b.gauss_newton)) {
+    for (x, y) in a
+        .grad
+        .iter()
+        .zip(&b.grad)
+        .chain(a.gauss_newton.iter().zip(&b.gauss_newton))
+    {
         assert!((x - y).abs() < 1e-8 * (1.0 + y.abs()), "{x} against {y}");
     }
 }
@@ -266,8 +367,14 @@ fn a_sample_outside_its_interval_is_refused() {
         let mut ocp = problem(&ode);
         ocp.samples[0].interval = interval;
         ocp.samples[0].tau = tau;
-        let e = Transcription::new(&ocp).err().map(|e| e.to_string()).unwrap_or_default();
-        assert!(e.contains("sample term 'sample'"), "interval {interval}, τ {tau}: {e}");
+        let e = Transcription::new(&ocp)
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
+        assert!(
+            e.contains("sample term 'sample'"),
+            "interval {interval}, τ {tau}: {e}"
+        );
     }
 }
 
@@ -306,7 +413,14 @@ fn shifted_problem<'a>(ode: &'a Pendulum, which: &[usize]) -> Ocp<'a> {
         .iter()
         .map(|&i| {
             let (interval, tau, c, ..) = SHIFTED[i];
-            SampleTerm { name: "shifted".into(), phase: 0, interval, tau, f: f.clone(), shift: Some(Arc::new(Shift(c))) }
+            SampleTerm {
+                name: "shifted".into(),
+                phase: 0,
+                interval,
+                tau,
+                f: f.clone(),
+                shift: Some(Arc::new(Shift(c))),
+            }
         })
         .collect();
     ocp
@@ -325,7 +439,11 @@ fn shifted_sample_terms_are_the_model_at_the_moved_instant_with_exact_derivative
     let w = point(&tr);
     let expected = rk4_objective(&tr, &w, SHIFTED.map(|(.., k, tau)| (k, tau)));
     let ev = tr.evaluate(&w, true).unwrap();
-    assert!((ev.f - expected).abs() < 1e-9 * expected, "objective {} against RK4's {expected}", ev.f);
+    assert!(
+        (ev.f - expected).abs() < 1e-9 * expected,
+        "objective {} against RK4's {expected}",
+        ev.f
+    );
     let f = |w: &[f64]| tr.evaluate(w, false).unwrap().f;
     let eps = 1e-6;
     let duration = tr.range(Block::Duration { phase: 0 }).start;
@@ -334,10 +452,18 @@ fn shifted_sample_terms_are_the_model_at_the_moved_instant_with_exact_derivative
         wp[i] += eps;
         wm[i] -= eps;
         let fd = (f(&wp) - f(&wm)) / (2.0 * eps);
-        assert!((ev.grad[i] - fd).abs() < 1e-6 * (1.0 + fd.abs()), "∂f/∂w[{i}]: {} against {fd}", ev.grad[i]);
+        assert!(
+            (ev.grad[i] - fd).abs() < 1e-6 * (1.0 + fd.abs()),
+            "∂f/∂w[{i}]: {} against {fd}",
+            ev.grad[i]
+        );
     }
     // one term that moved two intervals on: its Gauss–Newton block
-    assert_gauss_newton_is_the_residuals_derivative(&Transcription::new(&shifted_problem(&ode, &[1])).unwrap(), &w, Some(duration));
+    assert_gauss_newton_is_the_residuals_derivative(
+        &Transcription::new(&shifted_problem(&ode, &[1])).unwrap(),
+        &w,
+        Some(duration),
+    );
     // the exact-Hessian path places them the same
     assert_exact_hessian_path_agrees(&tr, &w);
 }
@@ -364,10 +490,18 @@ fn a_zero_shift_leaves_the_sample_where_it_was() {
             Ok(())
         }
     }
-    zero.samples.iter_mut().for_each(|s| s.shift = Some(Arc::new(Zero)));
-    let (ta, tb) = (Transcription::new(&fixed).unwrap(), Transcription::new(&zero).unwrap());
+    zero.samples
+        .iter_mut()
+        .for_each(|s| s.shift = Some(Arc::new(Zero)));
+    let (ta, tb) = (
+        Transcription::new(&fixed).unwrap(),
+        Transcription::new(&zero).unwrap(),
+    );
     let w = point(&ta);
-    let (a, b) = (ta.evaluate(&w, true).unwrap(), tb.evaluate(&w, true).unwrap());
+    let (a, b) = (
+        ta.evaluate(&w, true).unwrap(),
+        tb.evaluate(&w, true).unwrap(),
+    );
     assert_eq!(a.f, b.f);
     assert_eq!(a.grad, b.grad);
 }
@@ -376,9 +510,19 @@ fn a_zero_shift_leaves_the_sample_where_it_was() {
 fn a_shifted_sample_in_a_phase_of_free_duration_is_refused() {
     let ode = Pendulum;
     let mut ocp = shifted_problem(&ode, &[0]);
-    ocp.phases[0].duration = PhaseDuration { value: 0.9, lb: 0.5, ub: 2.0 };
-    let e = Transcription::new(&ocp).err().map(|e| e.to_string()).unwrap_or_default();
-    assert!(e.contains("sample term 'shifted'") && e.contains("fixed duration"), "{e}");
+    ocp.phases[0].duration = PhaseDuration {
+        value: 0.9,
+        lb: 0.5,
+        ub: 2.0,
+    };
+    let e = Transcription::new(&ocp)
+        .err()
+        .map(|e| e.to_string())
+        .unwrap_or_default();
+    assert!(
+        e.contains("sample term 'shifted'") && e.contains("fixed duration"),
+        "{e}"
+    );
 }
 
 // ---------------------------------------------------------------------------------------
@@ -393,7 +537,15 @@ fn checked_problem(ode: &Pendulum) -> Ocp<'_> {
     Ocp {
         checks: CHECKS
             .iter()
-            .map(|&(interval, tau)| CheckPoint { name: "check".into(), phase: 0, interval, tau, f: f.clone(), lb: vec![2.5], ub: vec![f64::INFINITY] })
+            .map(|&(interval, tau)| CheckPoint {
+                name: "check".into(),
+                phase: 0,
+                interval,
+                tau,
+                f: f.clone(),
+                lb: vec![2.5],
+                ub: vec![f64::INFINITY],
+            })
             .collect(),
         ..problem(ode)
     }
@@ -414,16 +566,34 @@ fn check_points_match_an_independent_integration_with_exact_jacobians() {
     // the check rows follow the others, in interval and τ order, with their bounds
     let rows = plain.m()..tr.m();
     assert!(lb[rows.clone()].iter().all(|&v| v == 2.5));
-    assert!(tr.labels()[rows.start].name.starts_with("check@τ=0.300"), "{:?}", tr.labels()[rows.start]);
+    assert!(
+        tr.labels()[rows.start].name.starts_with("check@τ=0.300"),
+        "{:?}",
+        tr.labels()[rows.start]
+    );
     // each value is the function at the RK4 state of its instant
     for (row, (k, tau)) in rows.clone().zip(CHECKS) {
         let expected = rk4_objective(&tr, &w, [(k, tau)]).sqrt();
-        assert!((ev.c[row] - expected).abs() < 1e-8, "check at ({k}, {tau}): {} against RK4's {expected}", ev.c[row]);
+        assert!(
+            (ev.c[row] - expected).abs() < 1e-8,
+            "check at ({k}, {tau}): {} against RK4's {expected}",
+            ev.c[row]
+        );
     }
     // the rest of the NLP is the same as without them (the samples share the pass)
-    assert!((ev.f - evp.f).abs() < 1e-10 * evp.f.abs(), "{} against {}", ev.f, evp.f);
+    assert!(
+        (ev.f - evp.f).abs() < 1e-10 * evp.f.abs(),
+        "{} against {}",
+        ev.f,
+        evp.f
+    );
     for i in 0..plain.m() {
-        assert!((ev.c[i] - evp.c[i]).abs() < 1e-10, "row {i}: {} against {}", ev.c[i], evp.c[i]);
+        assert!(
+            (ev.c[i] - evp.c[i]).abs() < 1e-10,
+            "row {i}: {} against {}",
+            ev.c[i],
+            evp.c[i]
+        );
     }
     // the Jacobian rows against central differences of the values
     let (jr, jc) = tr.jacobian_pattern();
@@ -432,11 +602,20 @@ fn check_points_match_an_independent_integration_with_exact_jacobians() {
         let (mut wp, mut wm) = (w.clone(), w.clone());
         wp[i] += eps;
         wm[i] -= eps;
-        let (cp, cm) = (tr.evaluate(&wp, false).unwrap().c, tr.evaluate(&wm, false).unwrap().c);
+        let (cp, cm) = (
+            tr.evaluate(&wp, false).unwrap().c,
+            tr.evaluate(&wm, false).unwrap().c,
+        );
         for row in rows.clone() {
             let fd = (cp[row] - cm[row]) / (2.0 * eps);
-            let exact: f64 = (0..jr.len()).filter(|&e| jr[e] == row && jc[e] == i).map(|e| ev.jac[e]).sum();
-            assert!((exact - fd).abs() < 1e-6 * (1.0 + fd.abs()), "∂c[{row}]/∂w[{i}]: {exact} against {fd}");
+            let exact: f64 = (0..jr.len())
+                .filter(|&e| jr[e] == row && jc[e] == i)
+                .map(|e| ev.jac[e])
+                .sum();
+            assert!(
+                (exact - fd).abs() < 1e-6 * (1.0 + fd.abs()),
+                "∂c[{row}]/∂w[{i}]: {exact} against {fd}"
+            );
         }
     }
     // and on the exact-Hessian path
@@ -451,9 +630,24 @@ fn check_points_match_an_independent_integration_with_exact_jacobians() {
 #[test]
 fn a_check_point_at_a_node_or_outside_its_phase_is_refused() {
     let ode = Pendulum;
-    for (interval, tau, words) in [(0, 1.0, "not in (0, 1)"), (0, 0.0, "not in (0, 1)"), (7, 0.5, "has no interval 7")] {
+    for (interval, tau, words) in [
+        (0, 1.0, "not in (0, 1)"),
+        (0, 0.0, "not in (0, 1)"),
+        (7, 0.5, "has no interval 7"),
+    ] {
         let f: Arc<dyn NodeFunction> = Arc::new(Residual);
-        let ocp = Ocp { checks: vec![CheckPoint { name: "c".into(), phase: 0, interval, tau, f, lb: vec![0.0], ub: vec![1.0] }], ..problem(&ode) };
+        let ocp = Ocp {
+            checks: vec![CheckPoint {
+                name: "c".into(),
+                phase: 0,
+                interval,
+                tau,
+                f,
+                lb: vec![0.0],
+                ub: vec![1.0],
+            }],
+            ..problem(&ode)
+        };
         let err = Transcription::new(&ocp).err().expect("refused").to_string();
         assert!(err.contains(words), "{err}");
     }
@@ -476,7 +670,16 @@ impl ControlledOde for DoubleIntegrator {
         xdot.copy_from_slice(&[x[1], u[0]]);
         Ok(())
     }
-    fn f_jac(&self, x: &[f64], u: &[f64], t: &[f64], xdot: &mut [f64], fx: &mut [f64], fu: &mut [f64], _: &mut [f64]) -> Result<(), OdeError> {
+    fn f_jac(
+        &self,
+        x: &[f64],
+        u: &[f64],
+        t: &[f64],
+        xdot: &mut [f64],
+        fx: &mut [f64],
+        fu: &mut [f64],
+        _: &mut [f64],
+    ) -> Result<(), OdeError> {
         self.f(x, u, t, xdot)?;
         fx.copy_from_slice(&[0.0, 0.0, 1.0, 0.0]);
         fu.copy_from_slice(&[0.0, 1.0]);
@@ -496,7 +699,11 @@ impl NodeFunction for Position {
         1
     }
     fn eval(&self, z: &[f64], v: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), String> {
-        let t = if self.target.is_nan() { 0.0 } else { self.target };
+        let t = if self.target.is_nan() {
+            0.0
+        } else {
+            self.target
+        };
         v[0] = self.scale * (z[0] - t);
         if let Some(j) = jac {
             j.iter_mut().for_each(|e| *e = 0.0);
@@ -522,7 +729,11 @@ fn check_points_remove_a_violation_between_the_nodes() {
     x_lb[n] = vec![1.0, 0.0];
     x_ub[n] = vec![1.0, 0.0];
     let phase = |checks: bool| Phase {
-        name: if checks { "checked".into() } else { "plain".into() },
+        name: if checks {
+            "checked".into()
+        } else {
+            "plain".into()
+        },
         ode: &ode,
         intervals: n,
         duration: PhaseDuration::fixed(4.0),
@@ -534,8 +745,14 @@ fn check_points_remove_a_violation_between_the_nodes() {
         x_guess: vec![vec![1.0, 0.0]; n + 1],
         u_guess: vec![vec![0.0]; n],
     };
-    let pull: Arc<dyn NodeFunction> = Arc::new(Position { target: -1.0, scale: 1.0 });
-    let position: Arc<dyn NodeFunction> = Arc::new(Position { target: f64::NAN, scale: 1.0 });
+    let pull: Arc<dyn NodeFunction> = Arc::new(Position {
+        target: -1.0,
+        scale: 1.0,
+    });
+    let position: Arc<dyn NodeFunction> = Arc::new(Position {
+        target: f64::NAN,
+        scale: 1.0,
+    });
     let build = |checks: Vec<(usize, f64)>| Ocp {
         phases: vec![phase(!checks.is_empty())],
         transitions: vec![],
@@ -545,10 +762,32 @@ fn check_points_remove_a_violation_between_the_nodes() {
         theta_ub: vec![],
         constraints: vec![],
         least_squares: vec![],
-        samples: vec![SampleTerm { name: "pull".into(), phase: 0, interval: 1, tau: 0.5, f: pull.clone(), shift: None }],
-        checks: checks.into_iter().map(|(interval, tau)| CheckPoint { name: "x ≥ 0".into(), phase: 0, interval, tau, f: position.clone(), lb: vec![0.0], ub: vec![inf] }).collect(),
+        samples: vec![SampleTerm {
+            name: "pull".into(),
+            phase: 0,
+            interval: 1,
+            tau: 0.5,
+            f: pull.clone(),
+            shift: None,
+        }],
+        checks: checks
+            .into_iter()
+            .map(|(interval, tau)| CheckPoint {
+                name: "x ≥ 0".into(),
+                phase: 0,
+                interval,
+                tau,
+                f: position.clone(),
+                lb: vec![0.0],
+                ub: vec![inf],
+            })
+            .collect(),
         costs: vec![],
-        integrator: IntegratorSettings { rtol: 1e-10, atol: 1e-10, ..Default::default() },
+        integrator: IntegratorSettings {
+            rtol: 1e-10,
+            atol: 1e-10,
+            ..Default::default()
+        },
     };
     // the smallest position on a fine grid of each interval, from an RK-free closed form:
     // x(t) = x_k + v_k t + u_k t²/2 within interval k
@@ -567,7 +806,10 @@ fn check_points_remove_a_violation_between_the_nodes() {
         }
         worst
     };
-    let settings = SqpSettings { tol_kkt: 1e-8, ..Default::default() };
+    let settings = SqpSettings {
+        tol_kkt: 1e-8,
+        ..Default::default()
+    };
     let plain = build(vec![]);
     let tr = Transcription::new(&plain).unwrap();
     let (_, _, w0) = tr.variable_bounds_and_guess();
@@ -578,7 +820,10 @@ fn check_points_remove_a_violation_between_the_nodes() {
     for node in 0..=n {
         assert!(res.w[tr.range(Block::State { phase: 0, node }).start] >= -1e-8);
     }
-    assert!(low < -0.05, "no violation between the nodes to remove: lowest x {low}");
+    assert!(
+        low < -0.05,
+        "no violation between the nodes to remove: lowest x {low}"
+    );
     eprintln!("without check points: lowest x {low:.4} at τ = {tau:.3} of interval {k}");
     // refine: a check point where the fine grid is lowest in each violating interval,
     // warm-started, until nothing on the fine grid is below −1e-6
@@ -592,7 +837,11 @@ fn check_points_remove_a_violation_between_the_nodes() {
         w = res.w;
         let (low, k, tau) = lowest(&tr, &w);
         if low >= -1e-6 {
-            eprintln!("{} check point(s), {} round(s); lowest x between the nodes {low:.2e}", checks.len(), round + 1);
+            eprintln!(
+                "{} check point(s), {} round(s); lowest x between the nodes {low:.2e}",
+                checks.len(),
+                round + 1
+            );
             assert!(round <= 3, "took {} rounds", round + 1);
             return;
         }
@@ -647,8 +896,14 @@ fn check_point_curvature_matches_central_differences_of_the_gradient() {
             let fd = (gp[i] - gm[i]) / (2.0 * eps);
             let exact = with[i + j * tr.n()] - without[i + j * tr.n()];
             largest = largest.max(fd.abs());
-            assert!((exact - fd).abs() < 1e-5 * (1.0 + fd.abs()), "∂²(νᵀc)/∂w[{i}]∂w[{j}]: {exact} against {fd}");
+            assert!(
+                (exact - fd).abs() < 1e-5 * (1.0 + fd.abs()),
+                "∂²(νᵀc)/∂w[{i}]∂w[{j}]: {exact} against {fd}"
+            );
         }
     }
-    assert!(largest > 0.1, "the check points' curvature is not exercised: {largest}");
+    assert!(
+        largest > 0.1,
+        "the check points' curvature is not exercised: {largest}"
+    );
 }

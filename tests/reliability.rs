@@ -25,7 +25,14 @@ fn r(p: &str) -> String {
 /// runs from any folder.
 fn simulate(cwd: &Path, out: &str, extra: &[&str]) -> Output {
     bin()
-        .args(["--quiet", "simulate", "--phase-set", &r("phases/sim_ellipse_step.json"), "--model", &r("models/opensim_subject01.json")])
+        .args([
+            "--quiet",
+            "simulate",
+            "--phase-set",
+            &r("phases/sim_ellipse_step.json"),
+            "--model",
+            &r("models/opensim_subject01.json"),
+        ])
         .args(["--foot", &r("models/feet/ellipse.json"), "--out", out])
         .args(extra)
         .current_dir(cwd)
@@ -39,7 +46,10 @@ fn stderr(o: &Output) -> String {
 
 /// Everything in `dir`, hidden entries included, sorted.
 fn entries(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> = std::fs::read_dir(dir).expect("read dir").map(|e| e.expect("entry").file_name().to_string_lossy().into_owned()).collect();
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .expect("read dir")
+        .map(|e| e.expect("entry").file_name().to_string_lossy().into_owned())
+        .collect();
     v.sort();
     v
 }
@@ -47,7 +57,10 @@ fn entries(dir: &Path) -> Vec<String> {
 fn refused(o: &Output, names: &[&str]) {
     let err = stderr(o);
     assert_eq!(o.status.code(), Some(1), "expected exit code 1: {err}");
-    assert!(err.starts_with("error: ") && !err.contains("panicked"), "{err}");
+    assert!(
+        err.starts_with("error: ") && !err.contains("panicked"),
+        "{err}"
+    );
     for n in names {
         assert!(err.contains(n), "stderr does not name {n:?}: {err}");
     }
@@ -60,8 +73,14 @@ fn overwrite_refuses_a_foreign_folder_the_current_folder_and_a_file() {
     // a folder of the user's own
     std::fs::create_dir(t.join("mine")).unwrap();
     std::fs::write(t.join("mine/precious.txt"), "precious").unwrap();
-    refused(&simulate(t, "mine", &["--overwrite"]), &["mine", "was not written by footfall", "'precious.txt'"]);
-    assert_eq!(std::fs::read_to_string(t.join("mine/precious.txt")).unwrap(), "precious");
+    refused(
+        &simulate(t, "mine", &["--overwrite"]),
+        &["mine", "was not written by footfall", "'precious.txt'"],
+    );
+    assert_eq!(
+        std::fs::read_to_string(t.join("mine/precious.txt")).unwrap(),
+        "precious"
+    );
     assert_eq!(entries(t), ["mine"], "something was left behind");
 
     // the current folder, even one footfall wrote, and its parent
@@ -71,20 +90,36 @@ fn overwrite_refuses_a_foreign_folder_the_current_folder_and_a_file() {
     for out in [".", "..", "./"] {
         refused(&simulate(&run, out, &["--overwrite"]), &["current folder"]);
     }
-    refused(&simulate(&t.join("mine"), ".", &["--overwrite"]), &["current folder"]);
-    assert_eq!(entries(&run), [".footfall-run", "summary.json", "timeseries.csv"]);
+    refused(
+        &simulate(&t.join("mine"), ".", &["--overwrite"]),
+        &["current folder"],
+    );
+    assert_eq!(
+        entries(&run),
+        [".footfall-run", "summary.json", "timeseries.csv"]
+    );
     assert_eq!(entries(&t.join("mine")), ["precious.txt"]);
 
     // a file
     std::fs::write(t.join("notes.txt"), "notes").unwrap();
-    refused(&simulate(t, "notes.txt", &["--overwrite"]), &["notes.txt", "is not a folder"]);
-    assert_eq!(std::fs::read_to_string(t.join("notes.txt")).unwrap(), "notes");
+    refused(
+        &simulate(t, "notes.txt", &["--overwrite"]),
+        &["notes.txt", "is not a folder"],
+    );
+    assert_eq!(
+        std::fs::read_to_string(t.join("notes.txt")).unwrap(),
+        "notes"
+    );
 
     // footfall's own folder is replaced, and a file added to it since is refused
     let before = std::fs::read(run.join("summary.json")).unwrap();
     let o = simulate(t, "run", &["--overwrite", "--dt", "0.002"]);
     assert!(o.status.success(), "{}", stderr(&o));
-    assert_ne!(std::fs::read(run.join("summary.json")).unwrap(), before, "not replaced");
+    assert_ne!(
+        std::fs::read(run.join("summary.json")).unwrap(),
+        before,
+        "not replaced"
+    );
     assert_eq!(entries(t), ["mine", "notes.txt", "run"]);
 }
 
@@ -139,7 +174,11 @@ fn wait_for_line(child: &mut Child, needle: impl Fn(&str) -> bool, limit: Durati
 }
 
 fn signal(child: &Child, sig: &str) {
-    let ok = Command::new("kill").args([sig, &child.id().to_string()]).status().expect("run kill").success();
+    let ok = Command::new("kill")
+        .args([sig, &child.id().to_string()])
+        .status()
+        .expect("run kill")
+        .success();
     assert!(ok, "kill {sig} failed");
 }
 
@@ -164,10 +203,20 @@ fn ctrl_c_during_setup_exits_130_and_leaves_nothing() {
     // `predict` makes its staging folder first, then reads --init: from a FIFO nobody
     // writes, so the process is held in its setup when the Ctrl-C comes
     let fifo = t.join("init.json");
-    assert!(Command::new("mkfifo").arg(&fifo).status().expect("mkfifo").success());
+    assert!(Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .expect("mkfifo")
+        .success());
     let out = t.join("pred");
     let mut child = bin()
-        .args(["predict", "--init", fifo.to_str().unwrap(), "--out", out.to_str().unwrap()])
+        .args([
+            "predict",
+            "--init",
+            fifo.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
         .current_dir(root())
         .stderr(Stdio::piped())
         .spawn()
@@ -175,7 +224,10 @@ fn ctrl_c_during_setup_exits_130_and_leaves_nothing() {
     let staging = t.join(format!(".pred.partial-{}", child.id()));
     let start = Instant::now();
     while !staging.exists() {
-        assert!(start.elapsed() < Duration::from_secs(30), "the staging folder never appeared");
+        assert!(
+            start.elapsed() < Duration::from_secs(30),
+            "the staging folder never appeared"
+        );
         std::thread::sleep(Duration::from_millis(10));
     }
     signal(&child, "-INT");
@@ -189,13 +241,27 @@ fn ctrl_c_twice_during_a_solve_exits_130_and_leaves_nothing() {
     let tmp = tempfile::tempdir().unwrap();
     let t = tmp.path();
     let mut child = bin()
-        .args(["solve", "--problem", &r("problems/five_link_biped.json"), "--hessian", "bfgs", "--max-iter", "500", "--out", "run"])
+        .args([
+            "solve",
+            "--problem",
+            &r("problems/five_link_biped.json"),
+            "--hessian",
+            "bfgs",
+            "--max-iter",
+            "500",
+            "--out",
+            "run",
+        ])
         .current_dir(t)
         .stderr(Stdio::piped())
         .spawn()
         .expect("spawn");
     // the log line of iteration 2
-    let lines = wait_for_line(&mut child, |l| l.trim_start().starts_with("2 "), Duration::from_secs(120));
+    let lines = wait_for_line(
+        &mut child,
+        |l| l.trim_start().starts_with("2 "),
+        Duration::from_secs(120),
+    );
     signal(&child, "-INT");
     std::thread::sleep(Duration::from_millis(5));
     signal(&child, "-INT");
@@ -206,7 +272,8 @@ fn ctrl_c_twice_during_a_solve_exits_130_and_leaves_nothing() {
     let left = entries(t);
     assert!(left.is_empty() || left == ["run"], "{left:?}");
     if left == ["run"] {
-        let summary = std::fs::read_to_string(t.join("run/summary.json")).expect("a complete run folder");
+        let summary =
+            std::fs::read_to_string(t.join("run/summary.json")).expect("a complete run folder");
         assert!(summary.contains("\"interrupted\""), "{summary}");
     }
 }
@@ -214,14 +281,23 @@ fn ctrl_c_twice_during_a_solve_exits_130_and_leaves_nothing() {
 /// The iterate history (exact bits of every figure but the time) and the final variables
 /// of a `solve` run folder.
 fn iterates(run: &Path) -> (Vec<[u64; 4]>, Vec<u64>, String) {
-    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(run.join("summary.json")).unwrap()).unwrap();
-    let solution: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(run.join("solution.json")).unwrap()).unwrap();
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(run.join("summary.json")).unwrap()).unwrap();
+    let solution: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(run.join("solution.json")).unwrap()).unwrap();
     let f = |v: &serde_json::Value| v.as_f64().expect("number").to_bits();
     let history = summary["history"]
         .as_array()
         .unwrap()
         .iter()
-        .map(|h| [f(&h["objective"]), f(&h["infeasibility"]), f(&h["kkt"]), f(&h["step"])])
+        .map(|h| {
+            [
+                f(&h["objective"]),
+                f(&h["infeasibility"]),
+                f(&h["kkt"]),
+                f(&h["step"]),
+            ]
+        })
         .collect();
     let w = solution["w"].as_array().unwrap().iter().map(f).collect();
     (history, w, summary["status"].to_string())
@@ -239,43 +315,79 @@ fn kill_after_checkpoint(dir: &Path, args: &[&str], threads: &str, kill_at: usiz
         .stderr(Stdio::null())
         .spawn()
         .expect("spawn");
-    let cp = dir.join(format!(".run.partial-{}/.resume-checkpoint-0.json", child.id()));
+    let cp = dir.join(format!(
+        ".run.partial-{}/.resume-checkpoint-0.json",
+        child.id()
+    ));
     let start = Instant::now();
     let next_iter = |p: &Path| -> Option<usize> {
         let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(p).ok()?).ok()?;
         v["next_iter"].as_u64().map(|n| n as usize)
     };
     loop {
-        assert!(child.try_wait().unwrap().is_none(), "the solve ended before it was killed");
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "the solve ended before it was killed"
+        );
         if next_iter(&cp).is_some_and(|k| k >= kill_at) {
             break;
         }
-        assert!(start.elapsed() < Duration::from_secs(300), "no checkpoint of iteration {kill_at}");
+        assert!(
+            start.elapsed() < Duration::from_secs(300),
+            "no checkpoint of iteration {kill_at}"
+        );
         std::thread::sleep(Duration::from_millis(2));
     }
     signal(&child, "-KILL");
     let status = child.wait().unwrap();
     assert_eq!(status.code(), None, "not killed by a signal");
-    assert!(!dir.join("run").exists(), "a killed run left a folder that looks complete");
+    assert!(
+        !dir.join("run").exists(),
+        "a killed run left a folder that looks complete"
+    );
     next_iter(&cp).expect("the killed run's checkpoint is readable")
 }
 
 fn resume(dir: &Path, threads: &str) -> Output {
-    bin().args(["--quiet", "solve", "--resume", "run"]).env("RAYON_NUM_THREADS", threads).current_dir(dir).output().expect("run footfall")
+    bin()
+        .args(["--quiet", "solve", "--resume", "run"])
+        .env("RAYON_NUM_THREADS", threads)
+        .current_dir(dir)
+        .output()
+        .expect("run footfall")
 }
 
 #[test]
 fn a_killed_solve_resumes_along_the_same_iterates() {
     // BFGS on the five-link biped: many iterations, and a solver state (the BFGS blocks,
     // the filter) that a resume must restore exactly; one thread, as the issue asks
-    let args = ["--problem", &r("problems/five_link_biped.json"), "--hessian", "bfgs", "--max-iter", "25"];
+    let args = [
+        "--problem",
+        &r("problems/five_link_biped.json"),
+        "--hessian",
+        "bfgs",
+        "--max-iter",
+        "25",
+    ];
     let tmp = tempfile::tempdir().unwrap();
     let whole = tmp.path().join("whole");
     let killed = tmp.path().join("killed");
     std::fs::create_dir_all(&whole).unwrap();
     std::fs::create_dir_all(&killed).unwrap();
-    let o = bin().args(["--quiet", "solve"]).args(args).args(["--out", "run"]).env("RAYON_NUM_THREADS", "1").current_dir(&whole).output().unwrap();
-    assert_eq!(o.status.code(), Some(3), "the iteration limit: {}", stderr(&o));
+    let o = bin()
+        .args(["--quiet", "solve"])
+        .args(args)
+        .args(["--out", "run"])
+        .env("RAYON_NUM_THREADS", "1")
+        .current_dir(&whole)
+        .output()
+        .unwrap();
+    assert_eq!(
+        o.status.code(),
+        Some(3),
+        "the iteration limit: {}",
+        stderr(&o)
+    );
 
     let at = kill_after_checkpoint(&killed, &args, "1", 6);
     assert!(at < 25, "killed at iteration {at}");
@@ -289,7 +401,9 @@ fn a_killed_solve_resumes_along_the_same_iterates() {
     assert_eq!(s1, s2);
     // nothing left but the run folder, and no checkpoint inside it
     assert_eq!(entries(&killed), ["run"]);
-    assert!(entries(&killed.join("run")).iter().all(|e| !e.starts_with(".resume-")));
+    assert!(entries(&killed.join("run"))
+        .iter()
+        .all(|e| !e.starts_with(".resume-")));
     // nothing left to resume
     let o = resume(&killed, "1");
     refused(&o, &["no killed run to resume"]);
@@ -303,11 +417,24 @@ fn a_killed_solve_resumes_to_the_same_optimum() {
     let killed = tmp.path().join("killed");
     std::fs::create_dir_all(&whole).unwrap();
     std::fs::create_dir_all(&killed).unwrap();
-    let o = bin().args(["--quiet", "solve"]).args(args).args(["--out", "run"]).current_dir(&whole).output().unwrap();
+    let o = bin()
+        .args(["--quiet", "solve"])
+        .args(args)
+        .args(["--out", "run"])
+        .current_dir(&whole)
+        .output()
+        .unwrap();
     assert!(o.status.success(), "{}", stderr(&o));
     kill_after_checkpoint(&killed, &args, "2", 3);
     // other options beside --resume are refused: the run continues as it was started
-    refused(&bin().args(["solve", "--resume", "run", "--tol", "1e-3"]).current_dir(&killed).output().unwrap(), &["--resume", "--tol"]);
+    refused(
+        &bin()
+            .args(["solve", "--resume", "run", "--tol", "1e-3"])
+            .current_dir(&killed)
+            .output()
+            .unwrap(),
+        &["--resume", "--tol"],
+    );
     let o = resume(&killed, "2");
     assert!(o.status.success(), "{}", stderr(&o));
     let (h1, w1, s1) = iterates(&whole.join("run"));
@@ -315,9 +442,15 @@ fn a_killed_solve_resumes_to_the_same_optimum() {
     assert_eq!(s1, s2);
     assert_eq!(s2, "\"converged\"");
     assert_eq!(h1.len(), h2.len());
-    let (j1, j2) = (f64::from_bits(h1.last().unwrap()[0]), f64::from_bits(h2.last().unwrap()[0]));
+    let (j1, j2) = (
+        f64::from_bits(h1.last().unwrap()[0]),
+        f64::from_bits(h2.last().unwrap()[0]),
+    );
     assert!((j1 - j2).abs() <= 1e-9 * j1.abs(), "J {j1} against {j2}");
-    assert_eq!(w1, w2, "deterministic whatever the thread count: the same bits");
+    assert_eq!(
+        w1, w2,
+        "deterministic whatever the thread count: the same bits"
+    );
 }
 
 #[test]
@@ -330,16 +463,35 @@ fn a_killed_track_resumes_along_the_same_iterates() {
     let killed = tmp.path().join("killed");
     let track = |out: &Path| {
         let mut c = bin();
-        c.args(["--quiet", "track", "--max-iter", "2", "--out", out.to_str().unwrap()]).current_dir(root());
+        c.args([
+            "--quiet",
+            "track",
+            "--max-iter",
+            "2",
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .current_dir(root());
         c
     };
     let o = track(&whole).output().unwrap();
-    assert_eq!(o.status.code(), Some(3), "the iteration limit: {}", stderr(&o));
+    assert_eq!(
+        o.status.code(),
+        Some(3),
+        "the iteration limit: {}",
+        stderr(&o)
+    );
     let mut child = track(&killed).stderr(Stdio::null()).spawn().unwrap();
-    let cp = tmp.path().join(format!(".killed.partial-{}/.resume-checkpoint-0.json", child.id()));
+    let cp = tmp.path().join(format!(
+        ".killed.partial-{}/.resume-checkpoint-0.json",
+        child.id()
+    ));
     let start = Instant::now();
     while !cp.exists() {
-        assert!(child.try_wait().unwrap().is_none(), "the track ended before it was killed");
+        assert!(
+            child.try_wait().unwrap().is_none(),
+            "the track ended before it was killed"
+        );
         assert!(start.elapsed() < Duration::from_secs(600), "no checkpoint");
         std::thread::sleep(Duration::from_millis(5));
     }
@@ -347,15 +499,30 @@ fn a_killed_track_resumes_along_the_same_iterates() {
     child.wait().unwrap();
     assert!(!killed.exists());
     // resumed from another folder
-    let o = bin().args(["--quiet", "track", "--resume", killed.to_str().unwrap()]).current_dir(tmp.path()).output().unwrap();
+    let o = bin()
+        .args(["--quiet", "track", "--resume", killed.to_str().unwrap()])
+        .current_dir(tmp.path())
+        .output()
+        .unwrap();
     assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
     let history = |run: &Path| -> Vec<[u64; 3]> {
-        let v: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(run.join("summary.json")).unwrap()).unwrap();
+        let v: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(run.join("summary.json")).unwrap())
+                .unwrap();
         let f = |x: &serde_json::Value| x.as_f64().unwrap().to_bits();
-        v["history"].as_array().unwrap().iter().map(|h| [f(&h["objective"]), f(&h["kkt"]), f(&h["step"])]).collect()
+        v["history"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|h| [f(&h["objective"]), f(&h["kkt"]), f(&h["step"])])
+            .collect()
     };
     assert_eq!(history(&whole).len(), 3);
-    assert_eq!(history(&whole), history(&killed), "the resumed track took other iterates");
+    assert_eq!(
+        history(&whole),
+        history(&killed),
+        "the resumed track took other iterates"
+    );
     assert_eq!(
         std::fs::read(whole.join("solution.json")).unwrap(),
         std::fs::read(killed.join("solution.json")).unwrap(),

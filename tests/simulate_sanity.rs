@@ -9,13 +9,19 @@ use common::root;
 use footfall::controls::ControlTable;
 use footfall::model::{ConstraintSet, GaitModel, RowKind};
 use footfall::phases::{Duration, Phase, PhaseSequence};
-use footfall::simulate::{simulate, SanityTolerances, SimulationResult, SimulationSettings, SimulationWarning};
+use footfall::simulate::{
+    simulate, SanityTolerances, SimulationResult, SimulationSettings, SimulationWarning,
+};
 use std::path::Path;
 use std::process::{Command, Output};
 
 const EXAMPLES: [(&str, &str, &str); 2] = [
     ("phases/sim_ellipse_step.json", "ellipse", "l.sole"),
-    ("phases/sim_double_circle_step.json", "double_circle", "l.heel"),
+    (
+        "phases/sim_double_circle_step.json",
+        "double_circle",
+        "l.heel",
+    ),
 ];
 
 fn load(phases: &str, foot: &str) -> (GaitModel, PhaseSequence) {
@@ -40,7 +46,16 @@ fn run(model: &GaitModel, seq: &PhaseSequence) -> (SimulationResult, Vec<Constra
     x0.extend(qd);
     x0.extend(vec![0.01; model.na()]);
     let controls = ControlTable::constant(model.control_names(), vec![0.025; model.nu()]);
-    let res = simulate(model, seq, &sets, &x0, &controls, &theta, &SimulationSettings::default()).unwrap();
+    let res = simulate(
+        model,
+        seq,
+        &sets,
+        &x0,
+        &controls,
+        &theta,
+        &SimulationSettings::default(),
+    )
+    .unwrap();
     (res, sets)
 }
 
@@ -61,20 +76,35 @@ fn shipped_examples_land_on_the_ground() {
         let (model, seq) = load(phases, foot);
         let (res, sets) = run(&model, &seq);
         let span = &res.phases[0];
-        let td = span.touchdown.as_ref().expect("the swing ends at a touchdown");
+        let td = span
+            .touchdown
+            .as_ref()
+            .expect("the swing ends at a touchdown");
         assert_eq!(td.contact, landing);
         assert!(td.landed, "{phases}: no touchdown");
-        assert!(span.t1 > 0.1 && span.t1 < 0.5, "{phases}: touchdown at {} s", span.t1);
+        assert!(
+            span.t1 > 0.1 && span.t1 < 0.5,
+            "{phases}: touchdown at {} s",
+            span.t1
+        );
         let imp = &res.impacts[0];
         assert_eq!(imp.t, span.t1);
-        let gap = imp.gaps.iter().find(|(c, _)| c == landing).expect("landing contact active after the impact").1;
+        let gap = imp
+            .gaps
+            .iter()
+            .find(|(c, _)| c == landing)
+            .expect("landing contact active after the impact")
+            .1;
         let worst = imp.gaps.iter().fold(0.0f64, |m, (_, g)| m.max(g.abs()));
         eprintln!(
             "{phases}: touchdown at {:.6} s, landing gap {gap:.3e} m, worst gap {worst:.3e} m, max Baumgarte force {:.3e} N",
             span.t1,
             res.max_baumgarte_force(&sets)
         );
-        assert!(worst < 1e-3, "{phases}: a contact is {worst} m from the ground at the impact");
+        assert!(
+            worst < 1e-3,
+            "{phases}: a contact is {worst} m from the ground at the impact"
+        );
         // the root is located to a few ulp of t: the landing contact is on the ground
         assert!(gap.abs() < 1e-9, "{phases}: landing gap {gap} m");
         assert!(res.max_baumgarte_force(&sets) < 1e-3, "{phases}");
@@ -96,8 +126,17 @@ fn a_fixed_swing_duration_lands_below_the_ground_and_is_reported() {
     }
     assert_eq!(w.len(), 2, "{w:?}");
     match &w[0] {
-        SimulationWarning::LandingGap { phase, contact, t, gap_m, tolerance_m } => {
-            assert_eq!((phase.as_str(), contact.as_str()), ("heel_strike_l", "l.sole"));
+        SimulationWarning::LandingGap {
+            phase,
+            contact,
+            t,
+            gap_m,
+            tolerance_m,
+        } => {
+            assert_eq!(
+                (phase.as_str(), contact.as_str()),
+                ("heel_strike_l", "l.sole")
+            );
             assert!((t - 0.3).abs() < 1e-12);
             assert!((-0.14..-0.13).contains(gap_m), "{gap_m}");
             assert_eq!(*tolerance_m, 1e-3);
@@ -105,16 +144,33 @@ fn a_fixed_swing_duration_lands_below_the_ground_and_is_reported() {
         other => panic!("expected a landing gap, got {other:?}"),
     }
     match &w[1] {
-        SimulationWarning::BaumgarteForce { phase, contact, row, force_n, .. } => {
-            assert_eq!((phase.as_str(), contact.as_str(), *row), ("double_stance", "l.sole", RowKind::Normal));
+        SimulationWarning::BaumgarteForce {
+            phase,
+            contact,
+            row,
+            force_n,
+            ..
+        } => {
+            assert_eq!(
+                (phase.as_str(), contact.as_str(), *row),
+                ("double_stance", "l.sole", RowKind::Normal)
+            );
             assert!(*force_n > 100.0, "{force_n}");
         }
         other => panic!("expected a Baumgarte force, got {other:?}"),
     }
     let msg = w[0].to_string();
-    assert!(msg.contains("phase 'heel_strike_l'") && msg.contains("'l.sole'") && msg.contains("136.0 mm below"), "{msg}");
+    assert!(
+        msg.contains("phase 'heel_strike_l'")
+            && msg.contains("'l.sole'")
+            && msg.contains("136.0 mm below"),
+        "{msg}"
+    );
     // looser tolerances silence them
-    let loose = SanityTolerances { landing_gap_m: 0.2, baumgarte_force_n: 1e3 };
+    let loose = SanityTolerances {
+        landing_gap_m: 0.2,
+        baumgarte_force_n: 1e3,
+    };
     assert!(res.check(&model, &sets, &loose).is_empty());
 }
 
@@ -140,8 +196,10 @@ fn a_touchdown_not_reached_is_reported() {
         "{w:?}"
     );
     assert!(
-        w.iter().any(|x| matches!(x, SimulationWarning::LandingGap { phase, contact, gap_m, .. }
-            if phase == "heel_strike_l" && contact == "l.heel" && *gap_m > 1e-3)),
+        w.iter().any(
+            |x| matches!(x, SimulationWarning::LandingGap { phase, contact, gap_m, .. }
+            if phase == "heel_strike_l" && contact == "l.heel" && *gap_m > 1e-3)
+        ),
         "{w:?}"
     );
 }
@@ -150,7 +208,10 @@ fn a_touchdown_not_reached_is_reported() {
 fn touchdown_end_names_a_known_contact_not_on_the_ground() {
     let (model, seq) = load(EXAMPLES[0].0, EXAMPLES[0].1);
     let p = Path::new("x.json");
-    for (contact, expect) in [("l.toe", "unknown contact 'l.toe'"), ("r.sole", "already on the ground")] {
+    for (contact, expect) in [
+        ("l.toe", "unknown contact 'l.toe'"),
+        ("r.sole", "already on the ground"),
+    ] {
         let mut bad = seq.clone();
         if let Phase::Continuous { end, .. } = &mut bad.phases[0] {
             end.as_mut().unwrap().touchdown = contact.into();
@@ -168,7 +229,11 @@ fn touchdown_end_names_a_known_contact_not_on_the_ground() {
 // The CLI
 
 fn footfall(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_footfall")).args(args).current_dir(root()).output().expect("run footfall")
+    Command::new(env!("CARGO_BIN_EXE_footfall"))
+        .args(args)
+        .current_dir(root())
+        .output()
+        .expect("run footfall")
 }
 
 fn stderr(o: &Output) -> String {
@@ -180,7 +245,10 @@ fn summary(out: &Path) -> serde_json::Value {
 }
 
 fn entries(dir: &Path) -> Vec<String> {
-    let mut v: Vec<String> = std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().file_name().to_string_lossy().into_owned()).collect();
+    let mut v: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
     v.sort();
     v
 }
@@ -190,7 +258,16 @@ fn cli_shipped_examples_land_without_warnings() {
     let tmp = tempfile::tempdir().unwrap();
     for (phases, foot, landing) in EXAMPLES {
         let out = tmp.path().join(foot);
-        let o = footfall(&["simulate", "--phase-set", phases, "--foot", foot, "--out", out.to_str().unwrap(), "--strict"]);
+        let o = footfall(&[
+            "simulate",
+            "--phase-set",
+            phases,
+            "--foot",
+            foot,
+            "--out",
+            out.to_str().unwrap(),
+            "--strict",
+        ]);
         let err = stderr(&o);
         assert!(o.status.success(), "{phases}: {err}");
         assert!(!err.contains("warning"), "{phases}: {err}");
@@ -212,19 +289,33 @@ fn cli_warns_of_a_landing_below_the_ground_and_strict_refuses() {
     let tmp = tempfile::tempdir().unwrap();
     let phases = tmp.path().join("fixed.json");
     let mut v: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(root().join(EXAMPLES[0].0)).unwrap()).unwrap();
+        serde_json::from_str(&std::fs::read_to_string(root().join(EXAMPLES[0].0)).unwrap())
+            .unwrap();
     v["phases"][0].as_object_mut().unwrap().remove("end");
     v["phases"][0]["duration"] = 0.3.into();
     std::fs::write(&phases, v.to_string()).unwrap();
     let out = tmp.path().join("run");
-    let args = ["simulate", "--phase-set", phases.to_str().unwrap(), "--out", out.to_str().unwrap()];
+    let args = [
+        "simulate",
+        "--phase-set",
+        phases.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ];
 
     let o = footfall(&args);
     let err = stderr(&o);
     eprintln!("{err}");
     assert!(o.status.success(), "{err}");
-    let line = err.lines().find(|l| l.starts_with("warning: ") && l.contains("'l.sole'")).unwrap_or_else(|| panic!("{err}"));
-    for part in ["phase 'heel_strike_l'", "136.0 mm below the ground", "gap -136.0 mm"] {
+    let line = err
+        .lines()
+        .find(|l| l.starts_with("warning: ") && l.contains("'l.sole'"))
+        .unwrap_or_else(|| panic!("{err}"));
+    for part in [
+        "phase 'heel_strike_l'",
+        "136.0 mm below the ground",
+        "gap -136.0 mm",
+    ] {
         assert!(line.contains(part), "{line}");
     }
     assert!(err.contains("warning: phase 'double_stance': contact 'l.sole' has a normal stabilisation (Baumgarte) force of 128."), "{err}");
@@ -246,11 +337,20 @@ fn cli_warns_of_a_landing_below_the_ground_and_strict_refuses() {
     eprintln!("{err}");
     assert_eq!(o.status.code(), Some(1), "{err}");
     assert!(err.starts_with("error: "), "{err}");
-    for part in ["--strict", "phase 'heel_strike_l'", "'l.sole'", "136.0 mm below"] {
+    for part in [
+        "--strict",
+        "phase 'heel_strike_l'",
+        "'l.sole'",
+        "136.0 mm below",
+    ] {
         assert!(err.contains(part), "{err}");
     }
     assert!(!out.exists(), "an output folder was written");
-    assert_eq!(entries(tmp.path()), ["fixed.json"], "something was left behind");
+    assert_eq!(
+        entries(tmp.path()),
+        ["fixed.json"],
+        "something was left behind"
+    );
 }
 
 /// A deliberately bad initial state: the pelvis 5 cm above its stance, not projected onto
@@ -282,17 +382,24 @@ fn cli_warns_of_a_bad_initial_state_and_strict_refuses() {
         err.lines().any(|l| l.starts_with("warning: phase 'single_stance_r': contact 'r.sole' has a normal stabilisation (Baumgarte) force of")),
         "{err}"
     );
-    assert!(summary(&out)["warnings"].as_array().unwrap().iter().any(|w| w["kind"] == "baumgarte_force"
-        && w["phase"] == "single_stance_r"
-        && w["contact"] == "r.sole"
-        && w["force_n"].as_f64().unwrap() > 50.0));
+    assert!(summary(&out)["warnings"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .any(|w| w["kind"] == "baumgarte_force"
+            && w["phase"] == "single_stance_r"
+            && w["contact"] == "r.sole"
+            && w["force_n"].as_f64().unwrap() > 50.0));
 
     std::fs::remove_dir_all(&out).unwrap();
     args.extend(["--strict", "--quiet"]);
     let o = footfall(&args);
     let err = stderr(&o);
     assert_eq!(o.status.code(), Some(1), "{err}");
-    assert!(err.starts_with("error: ") && err.contains("phase 'single_stance_r': contact 'r.sole'"), "{err}");
+    assert!(
+        err.starts_with("error: ") && err.contains("phase 'single_stance_r': contact 'r.sole'"),
+        "{err}"
+    );
     assert!(!out.exists());
     assert_eq!(entries(tmp.path()), ["raised.json"]);
 }

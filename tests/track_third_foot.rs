@@ -12,7 +12,12 @@ fn root() -> PathBuf {
 }
 
 fn run(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_footfall")).current_dir(root()).arg("--quiet").args(args).output().unwrap()
+    Command::new(env!("CARGO_BIN_EXE_footfall"))
+        .current_dir(root())
+        .arg("--quiet")
+        .args(args)
+        .output()
+        .unwrap()
 }
 
 fn s(p: &Path) -> &str {
@@ -23,8 +28,18 @@ fn s(p: &Path) -> &str {
 fn third_foot_is_fitted_then_tracked_from_json_files_only() {
     let dir = tempfile::tempdir().unwrap();
     let fit_dir = dir.path().join("fit");
-    let o = run(&["fit-foot", "--foot", "models/feet/heel_circle_forefoot_ellipse.json", "--out", s(&fit_dir)]);
-    assert!(o.status.success(), "fit-foot: {}", String::from_utf8_lossy(&o.stderr));
+    let o = run(&[
+        "fit-foot",
+        "--foot",
+        "models/feet/heel_circle_forefoot_ellipse.json",
+        "--out",
+        s(&fit_dir),
+    ]);
+    assert!(
+        o.status.success(),
+        "fit-foot: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
     let fitted = fit_dir.join("heel_circle_forefoot_ellipse_fitted.json");
     assert!(fitted.is_file());
 
@@ -38,11 +53,20 @@ fn third_foot_is_fitted_then_tracked_from_json_files_only() {
         "--out",
         s(&track_dir),
     ]);
-    assert!(o.status.success(), "track: {}", String::from_utf8_lossy(&o.stderr));
-    let summary: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(track_dir.join("summary.json")).unwrap()).unwrap();
+    assert!(
+        o.status.success(),
+        "track: {}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(track_dir.join("summary.json")).unwrap())
+            .unwrap();
     eprintln!(
         "third foot tracked: {} iterations, {:.1} s, J = {}, KKT {}",
-        summary["iterations"], summary["seconds"].as_f64().unwrap(), summary["objective"], summary["kkt"]
+        summary["iterations"],
+        summary["seconds"].as_f64().unwrap(),
+        summary["objective"],
+        summary["kkt"]
     );
     assert_eq!(summary["status"], "converged");
     assert!(summary["kkt"].as_f64().unwrap() <= 1e-5);
@@ -50,40 +74,98 @@ fn third_foot_is_fitted_then_tracked_from_json_files_only() {
 
     // the model follows the measurement: errors of the size the bundled feet reach
     let err = |name: &str| -> f64 {
-        summary["errors"].as_array().unwrap().iter().find(|c| c["channel"] == name).unwrap_or_else(|| panic!("no channel {name}"))["stats"]["mean"]
+        summary["errors"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|c| c["channel"] == name)
+            .unwrap_or_else(|| panic!("no channel {name}"))["stats"]["mean"]
             .as_f64()
             .unwrap()
     };
-    for (name, limit) in [("hip angle", 5.0), ("knee angle", 8.0), ("normal GRF", 80.0), ("CoP", 8.0)] {
+    for (name, limit) in [
+        ("hip angle", 5.0),
+        ("knee angle", 8.0),
+        ("normal GRF", 80.0),
+        ("CoP", 8.0),
+    ] {
         let e = err(name);
         eprintln!("  {name}: mean |error| {e:.2}");
         assert!(e < limit, "{name}: mean error {e} ≥ {limit}");
     }
     // errors by phase name every phase of the foot's own phase graph
-    let phases: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(root().join("phases/heel_circle_forefoot_ellipse_walk.json")).unwrap()).unwrap();
-    let hip = summary["errors_by_phase"].as_array().unwrap().iter().find(|c| c["channel"] == "hip angle").unwrap();
-    let listed: Vec<&str> = hip["phases"].as_array().unwrap().iter().map(|p| p["phase"].as_str().unwrap()).collect();
+    let phases: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(root().join("phases/heel_circle_forefoot_ellipse_walk.json"))
+            .unwrap(),
+    )
+    .unwrap();
+    let hip = summary["errors_by_phase"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["channel"] == "hip angle")
+        .unwrap();
+    let listed: Vec<&str> = hip["phases"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["phase"].as_str().unwrap())
+        .collect();
     for p in phases["phases"].as_array().unwrap() {
         let name = p["name"].as_str().unwrap();
         let continuous = p["type"] == "continuous";
-        assert_eq!(listed.contains(&name), continuous, "phase {name} in errors_by_phase: {listed:?}");
+        assert_eq!(
+            listed.contains(&name),
+            continuous,
+            "phase {name} in errors_by_phase: {listed:?}"
+        );
     }
     // the 1 ms re-integration: finite figures, Baumgarte forces small next to body weight
     let fine = &summary["fine_grid"];
     let bw = 72.6 * 9.81;
     let peak = fine["peak_normal_force_n"][0].as_f64().unwrap();
-    assert!(peak > 0.8 * bw && peak < 3.0 * bw, "peak normal force {peak}");
-    assert!(fine["max_baumgarte_force_n"].as_f64().unwrap() < 0.05 * bw, "{fine}");
-    for f in ["tracking.csv", "fine_grid.csv", "kinematics.sto", "table3.md", "solution.json", "report.html"] {
+    assert!(
+        peak > 0.8 * bw && peak < 3.0 * bw,
+        "peak normal force {peak}"
+    );
+    assert!(
+        fine["max_baumgarte_force_n"].as_f64().unwrap() < 0.05 * bw,
+        "{fine}"
+    );
+    for f in [
+        "tracking.csv",
+        "fine_grid.csv",
+        "kinematics.sto",
+        "table3.md",
+        "solution.json",
+        "report.html",
+    ] {
         assert!(track_dir.join(f).is_file(), "{f} missing");
     }
     // the run's own report renders in headless Chromium with every plot: 7 kinematic
     // channels, normal force, tangential force and CoP of both feet, and the data cost
     // per node of "Where the model fails"
     let url = format!("file://{}", track_dir.join("report.html").display());
-    let dom = String::from_utf8(common::chromium(&["--dump-dom".into(), url], std::time::Duration::from_secs(90))).unwrap();
-    assert_eq!(dom.matches("<svg").count(), 14, "plots in the rendered report");
-    for title in ["knee r", "ankle l", "Normal GRF, right foot", "CoP, left foot", "Tracking errors by phase", "Ground-force transients", "Where the model fails", "Data cost per shooting node"] {
+    let dom = String::from_utf8(common::chromium(
+        &["--dump-dom".into(), url],
+        std::time::Duration::from_secs(90),
+    ))
+    .unwrap();
+    assert_eq!(
+        dom.matches("<svg").count(),
+        14,
+        "plots in the rendered report"
+    );
+    for title in [
+        "knee r",
+        "ankle l",
+        "Normal GRF, right foot",
+        "CoP, left foot",
+        "Tracking errors by phase",
+        "Ground-force transients",
+        "Where the model fails",
+        "Data cost per shooting node",
+    ] {
         assert!(dom.contains(title), "{title} not in the rendered report");
     }
 }

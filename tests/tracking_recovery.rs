@@ -51,7 +51,18 @@ fn track(
     setup.weights.excitation = regularisation;
     setup.weights.activation = regularisation;
     let cycle = GaitCycle::new(model, &setup.seq, sets).unwrap();
-    let ocp = setup.ocp(&cycle, model, sets, IntegratorSettings { rtol: 1e-8, atol: 1e-8, ..Default::default() }).unwrap();
+    let ocp = setup
+        .ocp(
+            &cycle,
+            model,
+            sets,
+            IntegratorSettings {
+                rtol: 1e-8,
+                atol: 1e-8,
+                ..Default::default()
+            },
+        )
+        .unwrap();
     let tr = Transcription::new(&ocp).unwrap();
     let (_, _, w0) = tr.variable_bounds_and_guess();
     let settings = SqpSettings {
@@ -63,14 +74,28 @@ fn track(
         ..Default::default()
     };
     let res = sqp::solve(&tr, &w0, &settings, &mut Silent);
-    eprintln!("{}: {} iterations, {:.1} s, J = {:.6}, KKT {:.1e}", data.name, res.history.len() - 1, res.seconds, res.objective, res.kkt);
+    eprintln!(
+        "{}: {} iterations, {:.1} s, J = {:.6}, KKT {:.1e}",
+        data.name,
+        res.history.len() - 1,
+        res.seconds,
+        res.objective,
+        res.kkt
+    );
     assert_eq!(res.status, SqpStatus::Converged, "{}", data.name);
-    (GaitSolution::from_nlp(&tr, &res.w, &cycle.continuous, setup.window.0), setup)
+    (
+        GaitSolution::from_nlp(&tr, &res.w, &cycle.continuous, setup.window.0),
+        setup,
+    )
 }
 
 #[test]
 fn tracking_recovers_a_known_simulation_to_the_noise_level() {
-    let model = GaitModel::load(&root().join("models/opensim_subject01.json"), &root().join("models/feet/ellipse.json")).unwrap();
+    let model = GaitModel::load(
+        &root().join("models/opensim_subject01.json"),
+        &root().join("models/feet/ellipse.json"),
+    )
+    .unwrap();
     let pp = root().join("phases/ellipse_walk.json");
     let seq = PhaseSequence::load(&pp).unwrap();
     let sets = seq.resolve(&model, &pp).unwrap();
@@ -78,33 +103,72 @@ fn tracking_recovers_a_known_simulation_to_the_noise_level() {
     // the truth: the model's own walk, fitted to the bundled trial (`footfall track`'s
     // solution, kept in tests/data/hidden/base; started from it, the solver only checks
     // it is still a KKT point of the current code's problem, or iterates on)
-    let kept: GaitSolution = serde_json::from_str(&std::fs::read_to_string(root().join("tests/data/hidden/base/solution.json")).unwrap()).unwrap();
-    let (mut truth, _) = track(&model, &seq, &sets, &GaitData::bundled(&root()).unwrap(), None, 1e-3, Some(&kept));
+    let kept: GaitSolution = serde_json::from_str(
+        &std::fs::read_to_string(root().join("tests/data/hidden/base/solution.json")).unwrap(),
+    )
+    .unwrap();
+    let (mut truth, _) = track(
+        &model,
+        &seq,
+        &sets,
+        &GaitData::bundled(&root()).unwrap(),
+        None,
+        1e-3,
+        Some(&kept),
+    );
     // put the truth's first instant at t = 0
     let shift = truth.phases[0].t0;
     truth.phases.iter_mut().for_each(|p| p.t0 -= shift);
     let half = truth.span().1;
 
     let deg = std::f64::consts::PI / 180.0;
-    let noise = NoiseModel { position_m: 0.0008, angle_rad: 0.2 * deg, force_n: 2.0, cop_m: 0.002, seed: 7 };
+    let noise = NoiseModel {
+        position_m: 0.0008,
+        angle_rad: 0.2 * deg,
+        force_n: 2.0,
+        cop_m: 0.002,
+        seed: 7,
+    };
     let settings = SynthSettings {
         rate_hz: 1000.0,
         start_s: -0.3,
         duration_s: 0.6 + 2.0 * half,
         noise,
-        integrator: IntegratorSettings { rtol: 1e-10, atol: 1e-10, ..Default::default() },
+        integrator: IntegratorSettings {
+            rtol: 1e-10,
+            atol: 1e-10,
+            ..Default::default()
+        },
         measurement: Default::default(),
     };
-    let (data, synth) = synthesize(&model, &sets, &truth, &settings, "synthetic_ellipse_walk").unwrap();
-    assert!(data.time.last().unwrap() - data.time[0] > 2.0 * half, "more than a gait cycle");
+    let (data, synth) =
+        synthesize(&model, &sets, &truth, &settings, "synthetic_ellipse_walk").unwrap();
+    assert!(
+        data.time.last().unwrap() - data.time[0] > 2.0 * half,
+        "more than a gait cycle"
+    );
 
     // track the synthetic trial from scratch, with the phase timing of the truth: the
     // model's own forces near touch-down and lift-off need not cross the 5 % threshold
     // where the phase graph switches contacts, and event detection is not under test here
     let filtered = data.low_pass_kinematics(20.0).unwrap();
-    let (rec, setup) = track(&model, &seq, &sets, &filtered, Some(synth.events.clone()), 1e-3, None);
-    eprintln!("window {:.4}–{:.4} s (truth 0–{half:.4} s)", setup.window.0, setup.window.1);
-    assert!(setup.window.0.abs() < 1e-9 && (setup.window.1 - half).abs() < 1e-9, "the window is the truth's half cycle");
+    let (rec, setup) = track(
+        &model,
+        &seq,
+        &sets,
+        &filtered,
+        Some(synth.events.clone()),
+        1e-3,
+        None,
+    );
+    eprintln!(
+        "window {:.4}–{:.4} s (truth 0–{half:.4} s)",
+        setup.window.0, setup.window.1
+    );
+    assert!(
+        setup.window.0.abs() < 1e-9 && (setup.window.1 - half).abs() < 1e-9,
+        "the window is the truth's half cycle"
+    );
 
     // errors against the noisy data: at the noise level (|N(0, σ)| has mean σ√(2/π))
     let nodes = rec.node_samples(&model, &sets).unwrap();
@@ -121,7 +185,12 @@ fn tracking_recovers_a_known_simulation_to_the_noise_level() {
         ("hip angle", noise.angle_rad / deg * mean_abs),
     ];
     let mut failures = Vec::new();
-    for ((c_noisy, c_clean), (name, level)) in noisy.table_channels().iter().zip(clean.table_channels()).zip(expected) {
+    for ((c_noisy, c_clean), (name, level)) in noisy
+        .table_channels()
+        .iter()
+        .zip(clean.table_channels())
+        .zip(expected)
+    {
         assert_eq!(c_noisy.name, name);
         let e_noisy = c_noisy.stats(|_| true).unwrap();
         let e_clean = c_clean.stats(|_| true).unwrap();
@@ -136,26 +205,42 @@ fn tracking_recovers_a_known_simulation_to_the_noise_level() {
         };
         if let Some(f) = factor {
             if e_noisy.mean > f * level {
-                failures.push(format!("{name}: error {:.3} above {f} × the noise level {level:.3}", e_noisy.mean));
+                failures.push(format!(
+                    "{name}: error {:.3} above {f} × the noise level {level:.3}",
+                    e_noisy.mean
+                ));
             }
         }
         let tol = match name {
-            "CoP" => 0.5,                                 // cm
-            "tangential GRF" | "normal GRF" => 6.0,       // N: 2 × the noise-free floor
-            "foot orientation" | "ankle angle" => 0.75,   // °
-            _ => 0.3,                                     // °
+            "CoP" => 0.5,                               // cm
+            "tangential GRF" | "normal GRF" => 6.0,     // N: 2 × the noise-free floor
+            "foot orientation" | "ankle angle" => 0.75, // °
+            _ => 0.3,                                   // °
         };
         if e_clean.mean >= tol {
-            failures.push(format!("{name}: mean distance to the truth {:.3} ≥ {tol}", e_clean.mean));
+            failures.push(format!(
+                "{name}: mean distance to the truth {:.3} ≥ {tol}",
+                e_clean.mean
+            ));
         }
     }
 
     // node states near the truth at the same instants
     let times: Vec<f64> = nodes.iter().map(|s| s.t).collect();
-    let inside: Vec<f64> = times.iter().copied().filter(|&t| t > 0.0 && t < half).collect();
-    let truth_at = truth.sample_at(&model, &sets, &inside, &settings.integrator).unwrap();
+    let inside: Vec<f64> = times
+        .iter()
+        .copied()
+        .filter(|&t| t > 0.0 && t < half)
+        .collect();
+    let truth_at = truth
+        .sample_at(&model, &sets, &inside, &settings.integrator)
+        .unwrap();
     let mut worst = [0.0f64; 3]; // positions (m), angles (rad), velocities
-    for (s, t) in nodes.iter().filter(|s| s.t > 0.0 && s.t < half).zip(&truth_at) {
+    for (s, t) in nodes
+        .iter()
+        .filter(|s| s.t > 0.0 && s.t < half)
+        .zip(&truth_at)
+    {
         for i in 0..9 {
             let e = (s.x[i] - t.x[i]).abs();
             if i < 2 {

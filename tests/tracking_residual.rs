@@ -20,7 +20,13 @@ fn state(m: &footfall::model::GaitModel, set: &footfall::model::ConstraintSet) -
 
 #[test]
 fn residual_vanishes_at_the_models_own_motion_and_has_exact_jacobian() {
-    for (foot, contacts) in [("ellipse.json", vec![("r.sole", true), ("l.sole", true)]), ("double_circle.json", vec![("r.heel", true), ("r.forefoot", false)])] {
+    for (foot, contacts) in [
+        ("ellipse.json", vec![("r.sole", true), ("l.sole", true)]),
+        (
+            "double_circle.json",
+            vec![("r.heel", true), ("r.forefoot", false)],
+        ),
+    ] {
         let m = model("opensim_subject01.json", foot);
         let set = m.constraint_set("s", &contacts).unwrap();
         let x = state(&m, &set);
@@ -29,13 +35,20 @@ fn residual_vanishes_at_the_models_own_motion_and_has_exact_jacobian() {
         let mut xdot = vec![0.0; m.nx()];
         let mut lam = vec![0.0; set.rows.len()];
         let mut rep = ContactReport::default();
-        m.dynamics(&set, &x, &u, &[], &mut xdot, &mut lam, Some(&mut rep)).unwrap();
+        m.dynamics(&set, &x, &u, &[], &mut xdot, &mut lam, Some(&mut rep))
+            .unwrap();
         let loads = m.foot_loads(&set, &rep);
         let generic = m.foot_loads_generic::<f64>(&set, &x, &u, &[]).unwrap();
         for s in 0..2 {
-            assert!((generic[s].0 - loads[s].fx).abs() < 1e-9 && (generic[s].1 - loads[s].fy).abs() < 1e-9);
+            assert!(
+                (generic[s].0 - loads[s].fx).abs() < 1e-9
+                    && (generic[s].1 - loads[s].fy).abs() < 1e-9
+            );
             if loads[s].fy.abs() > 1e-6 {
-                assert!((generic[s].2 / generic[s].1 - loads[s].cop_x).abs() < 1e-9, "CoP");
+                assert!(
+                    (generic[s].2 / generic[s].1 - loads[s].cop_x).abs() < 1e-9,
+                    "CoP"
+                );
             }
         }
         let nq = m.nq();
@@ -43,7 +56,17 @@ fn residual_vanishes_at_the_models_own_motion_and_has_exact_jacobian() {
             time: 0.0,
             q: x[..nq].iter().map(|v| Some(*v)).collect(),
             qd: x[nq..2 * nq].iter().map(|v| Some(*v)).collect(),
-            feet: [0, 1].map(|s| Some((loads[s].fx, loads[s].fy, if loads[s].fy > 1.0 { Some(loads[s].cop_x) } else { None }))),
+            feet: [0, 1].map(|s| {
+                Some((
+                    loads[s].fx,
+                    loads[s].fy,
+                    if loads[s].fy > 1.0 {
+                        Some(loads[s].cop_x)
+                    } else {
+                        None
+                    },
+                ))
+            }),
         };
         let mut w = TrackingWeights::seed(nq, 800.0, 0.305);
         w.excitation = 0.0;
@@ -54,7 +77,10 @@ fn residual_vanishes_at_the_models_own_motion_and_has_exact_jacobian() {
         let mut jac = vec![0.0; r.dim() * z.len()];
         r.eval(&z, &mut v, Some(&mut jac)).unwrap();
         let worst = v.iter().map(|a| a.abs()).fold(0.0, f64::max);
-        assert!(worst < 1e-9, "{foot}: residual at the model's own motion {worst:e}");
+        assert!(
+            worst < 1e-9,
+            "{foot}: residual at the model's own motion {worst:e}"
+        );
         // Jacobian vs central differences (perturbed point so all terms are active)
         let mut zp = z.clone();
         let mut rng = Rng::new(4);
@@ -101,7 +127,9 @@ fn measurement_effects_shift_the_targets_with_exact_parameter_derivatives() {
     let set = m.constraint_set("s", &[("r.sole", true)]).unwrap();
     let x = state(&m, &set);
     let u = vec![0.3; m.nu()];
-    let loads = m.foot_loads_generic::<f64>(&set, &x, &u, &[0.0, 0.0]).unwrap();
+    let loads = m
+        .foot_loads_generic::<f64>(&set, &x, &u, &[0.0, 0.0])
+        .unwrap();
     let (fx, fy, mom) = loads[0];
     let cop = mom / fy;
     // a measurement that is the model's loads at t = 0.5 s, varying linearly in time, and
@@ -109,9 +137,18 @@ fn measurement_effects_shift_the_targets_with_exact_parameter_derivatives() {
     let (delay, dcop, t_node) = (0.012, 0.02, 0.5);
     let time: Vec<f64> = (0..200).map(|k| k as f64 * 0.005).collect();
     let shape = |t: f64| 1.0 + 0.8 * (t - t_node - delay);
-    let spl = |v: f64| CubicSpline::new(&time, &time.iter().map(|&t| v * shape(t)).collect::<Vec<_>>()).unwrap();
+    let spl = |v: f64| {
+        CubicSpline::new(
+            &time,
+            &time.iter().map(|&t| v * shape(t)).collect::<Vec<_>>(),
+        )
+        .unwrap()
+    };
     let zero = CubicSpline::new(&time, &vec![0.0; time.len()]).unwrap();
-    let cop_series: Vec<f64> = time.iter().map(|&t| cop + dcop + 0.1 * (t - t_node - delay)).collect();
+    let cop_series: Vec<f64> = time
+        .iter()
+        .map(|&t| cop + dcop + 0.1 * (t - t_node - delay))
+        .collect();
     let measured = Arc::new(MeasuredLoads {
         fx: [spl(fx), zero.clone()],
         fy: [spl(fy), zero],
@@ -123,12 +160,25 @@ fn measurement_effects_shift_the_targets_with_exact_parameter_derivatives() {
         time: t_node,
         q: x[..nq].iter().map(|v| Some(*v)).collect(),
         qd: x[nq..2 * nq].iter().map(|v| Some(*v)).collect(),
-        feet: [Some((fx * shape(t_node), fy * shape(t_node), Some(cop + dcop - 0.1 * delay))), None],
+        feet: [
+            Some((
+                fx * shape(t_node),
+                fy * shape(t_node),
+                Some(cop + dcop - 0.1 * delay),
+            )),
+            None,
+        ],
     };
     let mut w = TrackingWeights::seed(nq, 800.0, 0.305);
     w.excitation = 0.0;
     w.activation = 0.0;
-    let with = AdTerm(TrackingResidual::new(&m, set.clone(), target.clone(), w.clone(), Some(measured)));
+    let with = AdTerm(TrackingResidual::new(
+        &m,
+        set.clone(),
+        target.clone(),
+        w.clone(),
+        Some(measured),
+    ));
     let without = AdTerm(TrackingResidual::new(&plain, set.clone(), target, w, None));
     let z0: Vec<f64> = x.iter().chain(&u).copied().collect();
     let d = with.dim();
@@ -140,11 +190,20 @@ fn measurement_effects_shift_the_targets_with_exact_parameter_derivatives() {
     let at = |th: [f64; 2]| z0.iter().copied().chain(th).collect::<Vec<f64>>();
     let a = eval(&with, &at([0.0, 0.0]));
     let b = eval(&without, &z0);
-    assert!(rel_diff(&a, &b, 1e-12) < 1e-10, "zero offsets change nothing");
-    assert!(a.iter().map(|v| v.abs()).fold(0.0, f64::max) > 1e-3, "the shifted measurement is not matched at zero offsets");
+    assert!(
+        rel_diff(&a, &b, 1e-12) < 1e-10,
+        "zero offsets change nothing"
+    );
+    assert!(
+        a.iter().map(|v| v.abs()).fold(0.0, f64::max) > 1e-3,
+        "the shifted measurement is not matched at zero offsets"
+    );
     let fit = eval(&with, &at([delay, dcop]));
     let worst = fit.iter().map(|v| v.abs()).fold(0.0, f64::max);
-    assert!(worst < 1e-9, "the true offsets explain the measurement: worst residual {worst:e}");
+    assert!(
+        worst < 1e-9,
+        "the true offsets explain the measurement: worst residual {worst:e}"
+    );
     // θ derivatives vs central differences at a point off the truth
     let zp = at([0.004, -0.01]);
     let mut jac = vec![0.0; d * zp.len()];
@@ -176,7 +235,14 @@ fn residual_use_reports_rms_peak_and_saturation() {
     use footfall::integrate::ControlShape;
     use footfall::problems::evaluation::{residual_use, GaitSolution, PhaseSolution};
     let m = model("opensim_subject01.json", "ellipse.json").with_residual_actuators(100.0, 50.0);
-    assert!(residual_use(&model("opensim_subject01.json", "ellipse.json"), &GaitSolution { phases: vec![], theta: vec![] }).is_empty());
+    assert!(residual_use(
+        &model("opensim_subject01.json", "ellipse.json"),
+        &GaitSolution {
+            phases: vec![],
+            theta: vec![]
+        }
+    )
+    .is_empty());
     let (base, nr) = (m.nu_actuators(), m.residual_scales().len());
     assert_eq!(nr, 9);
     // four nodes: pelvis_x residual at controls 1, −1, 0.5, 0 (two of four on the bound);
@@ -197,15 +263,35 @@ fn residual_use_reports_rms_peak_and_saturation() {
         x: vec![vec![0.0; m.nx()]; 5],
         u: vec![u(1.0), u(-1.0), u(0.5), u(0.0)],
     };
-    let uses = residual_use(&m, &GaitSolution { phases: vec![phase], theta: vec![] });
+    let uses = residual_use(
+        &m,
+        &GaitSolution {
+            phases: vec![phase],
+            theta: vec![],
+        },
+    );
     assert_eq!(uses.len(), 9);
     let px = &uses[0];
-    assert_eq!((px.name.as_str(), px.unit, px.bound), ("pelvis_x_residual", "N", 100.0));
+    assert_eq!(
+        (px.name.as_str(), px.unit, px.bound),
+        ("pelvis_x_residual", "N", 100.0)
+    );
     let rms = ((100.0f64.powi(2) * 2.0 + 50.0f64.powi(2)) / 4.0).sqrt();
-    assert!((px.rms - rms).abs() < 1e-12 && px.peak == 100.0 && px.at_bound_fraction == 0.5, "{px:?}");
+    assert!(
+        (px.rms - rms).abs() < 1e-12 && px.peak == 100.0 && px.at_bound_fraction == 0.5,
+        "{px:?}"
+    );
     assert_eq!(px.times, vec![0.5, 0.6, 0.7, 0.8]);
     let hip = &uses[3];
-    assert_eq!((hip.name.as_str(), hip.unit, hip.bound), ("hip_r_residual", "N·m", 50.0));
-    assert!((hip.rms - 10.0).abs() < 1e-12 && (hip.peak - 10.0).abs() < 1e-12 && hip.at_bound_fraction == 0.0, "{hip:?}");
+    assert_eq!(
+        (hip.name.as_str(), hip.unit, hip.bound),
+        ("hip_r_residual", "N·m", 50.0)
+    );
+    assert!(
+        (hip.rms - 10.0).abs() < 1e-12
+            && (hip.peak - 10.0).abs() < 1e-12
+            && hip.at_bound_fraction == 0.0,
+        "{hip:?}"
+    );
     assert!(uses[1].rms == 0.0 && uses[1].at_bound_fraction == 0.0);
 }

@@ -15,11 +15,16 @@ use std::path::Path;
 use std::process::{Command, Output};
 
 fn footfall(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_footfall")).args(args).current_dir(common::root()).output().expect("run footfall")
+    Command::new(env!("CARGO_BIN_EXE_footfall"))
+        .args(args)
+        .current_dir(common::root())
+        .output()
+        .expect("run footfall")
 }
 
 fn summary(run: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(run.join("summary.json")).expect("summary.json")).expect("JSON")
+    serde_json::from_str(&std::fs::read_to_string(run.join("summary.json")).expect("summary.json"))
+        .expect("JSON")
 }
 
 /// The smallest normal force and the largest excess over the friction cone (μ = 0.8) of
@@ -28,7 +33,11 @@ fn fine_grid_extremes(run: &Path) -> (f64, f64) {
     let text = std::fs::read_to_string(run.join("fine_grid.csv")).expect("fine_grid.csv");
     let mut lines = text.lines();
     let head: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let col = |n: &str| head.iter().position(|h| *h == n).unwrap_or_else(|| panic!("no column {n}"));
+    let col = |n: &str| {
+        head.iter()
+            .position(|h| *h == n)
+            .unwrap_or_else(|| panic!("no column {n}"))
+    };
     let (mut low, mut cone) = (f64::INFINITY, f64::NEG_INFINITY);
     for line in lines {
         let v: Vec<&str> = line.split(',').collect();
@@ -50,8 +59,16 @@ fn the_check_finds_each_kind_of_violation_in_stretches() {
     let sets = seq.resolve(&model, &path).unwrap();
     let names: Vec<String> = seq.phases.iter().map(|p| p.name().to_string()).collect();
     // a phase with one foot on the ground (its rows: normal, then tangential)
-    let (phase, set) = sets.iter().enumerate().find(|(_, s)| s.rows.len() == 2).expect("a single-stance phase");
-    let normal = set.rows.iter().position(|r| r.kind == RowKind::Normal).unwrap();
+    let (phase, set) = sets
+        .iter()
+        .enumerate()
+        .find(|(_, s)| s.rows.len() == 2)
+        .expect("a single-stance phase");
+    let normal = set
+        .rows
+        .iter()
+        .position(|r| r.kind == RowKind::Normal)
+        .unwrap();
     let tangential = 1 - normal;
     let stance = set.rows[normal].contact;
     let theta = model.theta0();
@@ -64,8 +81,20 @@ fn the_check_finds_each_kind_of_violation_in_stretches() {
         let mut lambda = vec![0.0; 2];
         lambda[normal] = ln;
         lambda[tangential] = lt;
-        let contact = ContactReport { points: vec![[0.0, 0.0]; 2], lambda, position_error: vec![0.0; 2], velocity_error: vec![0.0; 2], baumgarte_force: vec![baumgarte, 0.0] };
-        Sample { t, phase, x, feet: [FootLoad::default(); 2], contact }
+        let contact = ContactReport {
+            points: vec![[0.0, 0.0]; 2],
+            lambda,
+            position_error: vec![0.0; 2],
+            velocity_error: vec![0.0; 2],
+            baumgarte_force: vec![baumgarte, 0.0],
+        };
+        Sample {
+            t,
+            phase,
+            x,
+            feet: [FootLoad::default(); 2],
+            contact,
+        }
     };
     let samples = vec![
         sample(0.000, 500.0, 100.0, 0.0, 2.0),
@@ -81,24 +110,73 @@ fn the_check_finds_each_kind_of_violation_in_stretches() {
         sample(0.006, 500.0, 0.0, 0.0, 0.3),
         sample(0.007, 500.0, 100.0, 0.0, 2.0),
     ];
-    let v = check(&model, &samples, &sets, &names, &theta, 0.8, ValidityLimits::default());
+    let v = check(
+        &model,
+        &samples,
+        &sets,
+        &names,
+        &theta,
+        0.8,
+        ValidityLimits::default(),
+    );
     assert!(!v.is_valid());
     let kinds: Vec<ViolationKind> = v.violations.iter().map(|x| x.kind).collect();
-    assert!(kinds.contains(&ViolationKind::NegativeNormalForce) && kinds.contains(&ViolationKind::FrictionCone));
-    assert!(kinds.contains(&ViolationKind::BaumgarteForce) && kinds.contains(&ViolationKind::Penetration), "{kinds:?}");
-    let pull = v.violations.iter().find(|x| x.kind == ViolationKind::NegativeNormalForce).unwrap();
-    assert_eq!((pull.from_s, pull.to_s, pull.worst_s), (0.002, 0.003, 0.003));
+    assert!(
+        kinds.contains(&ViolationKind::NegativeNormalForce)
+            && kinds.contains(&ViolationKind::FrictionCone)
+    );
+    assert!(
+        kinds.contains(&ViolationKind::BaumgarteForce)
+            && kinds.contains(&ViolationKind::Penetration),
+        "{kinds:?}"
+    );
+    let pull = v
+        .violations
+        .iter()
+        .find(|x| x.kind == ViolationKind::NegativeNormalForce)
+        .unwrap();
+    assert_eq!(
+        (pull.from_s, pull.to_s, pull.worst_s),
+        (0.002, 0.003, 0.003)
+    );
     assert_eq!(pull.amount, 40.0);
     assert_eq!(pull.contact, model.contacts[stance].name);
     assert_eq!(pull.phase, names[phase]);
-    let cone = v.violations.iter().find(|x| x.kind == ViolationKind::FrictionCone).unwrap();
+    let cone = v
+        .violations
+        .iter()
+        .find(|x| x.kind == ViolationKind::FrictionCone)
+        .unwrap();
     assert!((cone.amount - 140.0).abs() < 1e-9 && cone.worst_s == 0.004);
-    let inside = v.violations.iter().find(|x| x.kind == ViolationKind::Penetration).unwrap();
-    assert!(inside.contact != model.contacts[stance].name && inside.worst_s == 0.006 && inside.amount > 0.5, "{inside}");
+    let inside = v
+        .violations
+        .iter()
+        .find(|x| x.kind == ViolationKind::Penetration)
+        .unwrap();
+    assert!(
+        inside.contact != model.contacts[stance].name
+            && inside.worst_s == 0.006
+            && inside.amount > 0.5,
+        "{inside}"
+    );
     // the optimiser can hold all but the Baumgarte force with check points
-    assert_eq!(v.refinement().len(), v.violations.iter().filter(|x| x.kind != ViolationKind::BaumgarteForce).count());
+    assert_eq!(
+        v.refinement().len(),
+        v.violations
+            .iter()
+            .filter(|x| x.kind != ViolationKind::BaumgarteForce)
+            .count()
+    );
     // valid samples are valid
-    let good = check(&model, &[samples[0].clone(), samples[7].clone()], &sets, &names, &theta, 0.8, ValidityLimits::default());
+    let good = check(
+        &model,
+        &[samples[0].clone(), samples[7].clone()],
+        &sets,
+        &names,
+        &theta,
+        0.8,
+        ValidityLimits::default(),
+    );
     assert!(good.is_valid(), "{:?}", good.violations);
 }
 
@@ -111,31 +189,75 @@ fn a_track_that_breaks_physics_between_nodes_is_flagged_and_check_points_repair_
     // the kept tracking solution of the bundled trial (a KKT point: 0 iterations), as it
     // is: without --check-points its validity is reported only
     let reported = tmp.path().join("reported");
-    let o = footfall(&["--quiet", "track", "--init", base.to_str().unwrap(), "--max-iter", "0", "--out", reported.to_str().unwrap()]);
+    let o = footfall(&[
+        "--quiet",
+        "track",
+        "--init",
+        base.to_str().unwrap(),
+        "--max-iter",
+        "0",
+        "--out",
+        reported.to_str().unwrap(),
+    ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let s = summary(&reported);
-    assert_eq!((s["verdict"].as_str(), s["physically_valid"].as_bool()), (Some("converged"), Some(false)));
+    assert_eq!(
+        (s["verdict"].as_str(), s["physically_valid"].as_bool()),
+        (Some("converged"), Some(false))
+    );
     let html = std::fs::read_to_string(reported.join("report.html")).unwrap();
     assert!(html.contains("Where physics is broken") && html.contains("--check-points"));
     // with --check-points and no iteration left to repair it: flagged
-    let o = footfall(&["--quiet", "track", "--init", base.to_str().unwrap(), "--check-points", "--max-iter", "0", "--out", flagged.to_str().unwrap()]);
+    let o = footfall(&[
+        "--quiet",
+        "track",
+        "--init",
+        base.to_str().unwrap(),
+        "--check-points",
+        "--max-iter",
+        "0",
+        "--out",
+        flagged.to_str().unwrap(),
+    ]);
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(5), "{err}");
-    assert!(err.contains("converged, physically invalid") && err.contains("negative normal force") && err.contains("l.sole"), "{err}");
+    assert!(
+        err.contains("converged, physically invalid")
+            && err.contains("negative normal force")
+            && err.contains("l.sole"),
+        "{err}"
+    );
     let s = summary(&flagged);
     assert_eq!(s["status"], "converged");
     assert_eq!(s["verdict"], "converged, physically invalid");
     assert_eq!(s["physically_valid"], false);
-    let pull = s["validity"]["violations"].as_array().unwrap().iter().find(|v| v["kind"] == "negative_normal_force").expect("the pulling ground listed");
+    let pull = s["validity"]["violations"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|v| v["kind"] == "negative_normal_force")
+        .expect("the pulling ground listed");
     assert_eq!(pull["contact"], "l.sole");
     assert!(pull["amount"].as_f64().unwrap() > 100.0, "{pull}");
     let html = std::fs::read_to_string(flagged.join("report.html")).unwrap();
-    assert!(html.contains("<div class=\"summary bad\"") && html.contains("converged, physically invalid") && html.contains("Where physics is broken"));
+    assert!(
+        html.contains("<div class=\"summary bad\"")
+            && html.contains("converged, physically invalid")
+            && html.contains("Where physics is broken")
+    );
     let (low, _) = fine_grid_extremes(&flagged);
     assert!(low < -100.0, "{low}");
 
     // with check points and iterations the solve removes it
-    let o = footfall(&["--quiet", "track", "--init", base.to_str().unwrap(), "--check-points", "--out", repaired.to_str().unwrap()]);
+    let o = footfall(&[
+        "--quiet",
+        "track",
+        "--init",
+        base.to_str().unwrap(),
+        "--check-points",
+        "--out",
+        repaired.to_str().unwrap(),
+    ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let s = summary(&repaired);
     assert_eq!(s["verdict"], "converged");
@@ -143,15 +265,32 @@ fn a_track_that_breaks_physics_between_nodes_is_flagged_and_check_points_repair_
     let n = s["check_points"].as_u64().unwrap();
     assert!((1..=12).contains(&n), "{n} check points");
     let (low, cone) = fine_grid_extremes(&repaired);
-    assert!(low >= -1.0 && cone <= 1.0, "normal force down to {low} N, cone excess {cone} N");
+    assert!(
+        low >= -1.0 && cone <= 1.0,
+        "normal force down to {low} N, cone excess {cone} N"
+    );
     let html = std::fs::read_to_string(repaired.join("report.html")).unwrap();
-    assert!(html.contains("<div class=\"summary good\"") && html.contains("physically valid between the nodes"));
+    assert!(
+        html.contains("<div class=\"summary good\"")
+            && html.contains("physically valid between the nodes")
+    );
     // report and diagnose rebuild the problem with its check points
-    let setup: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(repaired.join("setup.json")).unwrap()).unwrap();
+    let setup: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(repaired.join("setup.json")).unwrap())
+            .unwrap();
     assert_eq!(setup["check_points"].as_array().unwrap().len() as u64, n);
-    let o = footfall(&["--quiet", "report", repaired.to_str().unwrap(), "--out", tmp.path().join("again").to_str().unwrap()]);
+    let o = footfall(&[
+        "--quiet",
+        "report",
+        repaired.to_str().unwrap(),
+        "--out",
+        tmp.path().join("again").to_str().unwrap(),
+    ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    assert_eq!(summary(&tmp.path().join("again"))["check_points"].as_u64(), Some(n));
+    assert_eq!(
+        summary(&tmp.path().join("again"))["check_points"].as_u64(),
+        Some(n)
+    );
 }
 
 #[test]
@@ -159,10 +298,22 @@ fn the_double_circle_track_is_valid_between_its_nodes() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("dc");
     let base = common::root().join("tests/data/hidden/double_circle_base");
-    let o = footfall(&["--quiet", "track", "--foot", "double-circle", "--init", base.to_str().unwrap(), "--out", out.to_str().unwrap()]);
+    let o = footfall(&[
+        "--quiet",
+        "track",
+        "--foot",
+        "double-circle",
+        "--init",
+        base.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let s = summary(&out);
     assert_eq!(s["physically_valid"], true);
     let (low, cone) = fine_grid_extremes(&out);
-    assert!(low >= -1.0 && cone <= 1.0, "normal force down to {low} N, cone excess {cone} N");
+    assert!(
+        low >= -1.0 && cone <= 1.0,
+        "normal force down to {low} N, cone excess {cone} N"
+    );
 }

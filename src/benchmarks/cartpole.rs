@@ -186,15 +186,27 @@ impl ControlledOde for CartPole {
         xdot.copy_from_slice(&self.rhs(x, u[0]));
         finite(xdot)
     }
-    fn weighted_hessian(&self, x: &[f64], u: &[f64], _theta: &[f64], mu: &[f64], out: &mut [f64]) -> Result<bool, OdeError> {
+    fn weighted_hessian(
+        &self,
+        x: &[f64],
+        u: &[f64],
+        _theta: &[f64],
+        mu: &[f64],
+        out: &mut [f64],
+    ) -> Result<bool, OdeError> {
         if x.len() != NX || u.len() != NU || mu.len() != NX || out.len() != (NX + NU) * (NX + NU) {
-            return Err(OdeError::Fatal("weighted_hessian: wrong buffer lengths".into()));
+            return Err(OdeError::Fatal(
+                "weighted_hessian: wrong buffer lengths".into(),
+            ));
         }
         let z: Vec<f64> = x.iter().chain(u).copied().collect();
         let h = crate::problems::hessian::<{ NX + NU }>(&z, |zs| {
             let xs = [zs[0], zs[1], zs[2], zs[3]];
             let f = self.rhs(&xs, zs[4]);
-            f.iter().zip(mu).fold(num_dual::Dual2SVec64::<{ NX + NU }>::from(0.0), |acc, (fi, m)| acc + *fi * *m)
+            f.iter().zip(mu).fold(
+                num_dual::Dual2SVec64::<{ NX + NU }>::from(0.0),
+                |acc, (fi, m)| acc + *fi * *m,
+            )
         });
         out.copy_from_slice(&h);
         Ok(out.iter().all(|v| v.is_finite()))

@@ -173,7 +173,15 @@ fn dense_jacobian<const N: usize, const M: usize>(
 }
 
 /// Check the buffer lengths of a `ControlledOde` call on a model without parameters.
-pub(crate) fn check_dims(model: &str, nx: usize, nu: usize, x: &[f64], u: &[f64], theta: &[f64], xdot: &[f64]) -> Result<(), crate::integrate::OdeError> {
+pub(crate) fn check_dims(
+    model: &str,
+    nx: usize,
+    nu: usize,
+    x: &[f64],
+    u: &[f64],
+    theta: &[f64],
+    xdot: &[f64],
+) -> Result<(), crate::integrate::OdeError> {
     if x.len() != nx || u.len() != nu || !theta.is_empty() || xdot.len() != nx {
         return Err(crate::integrate::OdeError::Fatal(format!(
             "{model}: expected x, xdot of length {nx}, u of length {nu} and no θ, got {}, {}, {}, {}",
@@ -191,6 +199,8 @@ pub(crate) fn finite(model: &str, v: &[f64]) -> Result<(), crate::integrate::Ode
     if v.iter().all(|a| a.is_finite()) {
         Ok(())
     } else {
-        Err(crate::integrate::OdeError::Recoverable(format!("{model}: non-finite state derivative")))
+        Err(crate::integrate::OdeError::Recoverable(format!(
+            "{model}: non-finite state derivative"
+        )))
     }
 }

@@ -61,18 +61,27 @@ struct Outcome {
 
 fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     if args.feet.len() < 2 {
-        bail!("--feet: give at least two feet to compare, got {:?}", args.feet);
+        bail!(
+            "--feet: give at least two feet to compare, got {:?}",
+            args.feet
+        );
     }
     let mut inits: Vec<(String, GaitSolution)> = Vec::new();
     for i in &args.inits {
-        let (foot, path) = i.split_once('=').ok_or_else(|| anyhow!("--init {i}: expected FOOT=RUN_FOLDER_OR_FILE"))?;
+        let (foot, path) = i
+            .split_once('=')
+            .ok_or_else(|| anyhow!("--init {i}: expected FOOT=RUN_FOLDER_OR_FILE"))?;
         if !args.feet.iter().any(|f| f.split(':').next() == Some(foot)) {
             bail!("--init {i}: '{foot}' is not among --feet {:?}", args.feet);
         }
         inits.push((foot.to_string(), read_solution(std::path::Path::new(path))?));
     }
     if let Some(e) = &args.expect_transient {
-        if !args.feet.iter().any(|f| f.split(':').next() == Some(e.as_str())) {
+        if !args
+            .feet
+            .iter()
+            .any(|f| f.split(':').next() == Some(e.as_str()))
+        {
             bail!("--expect-transient {e}: not among --feet {:?}", args.feet);
         }
     }
@@ -83,7 +92,9 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
             Some((f, p)) => (f.to_string(), Some(PathBuf::from(p))),
             None => (spec.clone(), None),
         };
-        let name = std::path::Path::new(&foot).file_stem().map_or(foot.clone(), |s| s.to_string_lossy().replace('_', "-"));
+        let name = std::path::Path::new(&foot)
+            .file_stem()
+            .map_or(foot.clone(), |s| s.to_string_lossy().replace('_', "-"));
         let init = inits.iter().find(|(f, _)| *f == foot).map(|(_, s)| s);
         if !quiet {
             eprintln!("── {name} ──");
@@ -112,43 +123,103 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         r.extend(outcomes.iter().map(f));
         r
     };
-    let fine = |o: &Outcome, f: &dyn Fn(&super::gait_run::FineForces) -> String| o.out.fine_forces.as_ref().map_or("—".to_string(), f);
+    let fine = |o: &Outcome, f: &dyn Fn(&super::gait_run::FineForces) -> String| {
+        o.out.fine_forces.as_ref().map_or("—".to_string(), f)
+    };
     let mut rows = vec![
         row("status", &|o| o.status.clone()),
         row("physically valid (1 ms grid)", &|o| match &o.out.validity {
             Some(v) if v.is_valid() => "yes".into(),
-            Some(v) => format!("NO: {}", v.violations.iter().max_by(|a, b| a.amount.total_cmp(&b.amount)).map(|x| x.to_string()).unwrap_or_default()),
+            Some(v) => format!(
+                "NO: {}",
+                v.violations
+                    .iter()
+                    .max_by(|a, b| a.amount.total_cmp(&b.amount))
+                    .map(|x| x.to_string())
+                    .unwrap_or_default()
+            ),
             None => "unknown (no re-integration)".into(),
         }),
         row("solve time (s)", &|o| format!("{:.1}", o.seconds)),
         row("iterations", &|o| o.iterations.to_string()),
         row("objective", &|o| format!("{:.6}", o.objective)),
         row("KKT", &|o| format!("{:.1e}", o.kkt)),
-        row("peak normal force (N)", &|o| fine(o, &|f| format!("{:.1}", f.peak(1)))),
-        row("peak tangential force (N)", &|o| fine(o, &|f| format!("{:.1}", f.peak(0)))),
-        row("normal-force excess over the measurement (N)", &|o| fine(o, &|f| { let (e, t, s) = f.max_excess(1); format!("{e:.1} ({} foot, {t:.3} s)", ["right", "left"][s]) })),
-        row("tangential-force excess (N)", &|o| fine(o, &|f| format!("{:.1}", f.max_excess(0).0))),
-        row("largest transient", &|o| {
-            o.out.transients.first().map_or("none".into(), |t| format!("{} {}: {:.1} N for {:.1} ms in {} ({})", t.foot, t.component, t.excess_n, 1e3 * t.duration_s, t.phase, if t.between_nodes { "between nodes" } else { "at a node" }))
+        row("peak normal force (N)", &|o| {
+            fine(o, &|f| format!("{:.1}", f.peak(1)))
         }),
-        row("ankle ω at the transient (rad/s)", &|o| o.out.transients.first().map_or("—".into(), |t| format!("{:.2}", t.ankle_velocity_rad_s))),
-        row("largest Baumgarte force (N)", &|o| o.out.fine.as_ref().map_or("—".into(), |f| format!("{:.1e}", f.max_baumgarte_force_n))),
+        row("peak tangential force (N)", &|o| {
+            fine(o, &|f| format!("{:.1}", f.peak(0)))
+        }),
+        row("normal-force excess over the measurement (N)", &|o| {
+            fine(o, &|f| {
+                let (e, t, s) = f.max_excess(1);
+                format!("{e:.1} ({} foot, {t:.3} s)", ["right", "left"][s])
+            })
+        }),
+        row("tangential-force excess (N)", &|o| {
+            fine(o, &|f| format!("{:.1}", f.max_excess(0).0))
+        }),
+        row("largest transient", &|o| {
+            o.out.transients.first().map_or("none".into(), |t| {
+                format!(
+                    "{} {}: {:.1} N for {:.1} ms in {} ({})",
+                    t.foot,
+                    t.component,
+                    t.excess_n,
+                    1e3 * t.duration_s,
+                    t.phase,
+                    if t.between_nodes {
+                        "between nodes"
+                    } else {
+                        "at a node"
+                    }
+                )
+            })
+        }),
+        row("ankle ω at the transient (rad/s)", &|o| {
+            o.out
+                .transients
+                .first()
+                .map_or("—".into(), |t| format!("{:.2}", t.ankle_velocity_rad_s))
+        }),
+        row("largest Baumgarte force (N)", &|o| {
+            o.out
+                .fine
+                .as_ref()
+                .map_or("—".into(), |f| format!("{:.1e}", f.max_baumgarte_force_n))
+        }),
     ];
     for (c, ch) in outcomes[0].out.errors.iter().enumerate() {
-        rows.push(row(&format!("{} ({})", ch.name, ch.unit), &|o| o.out.errors[c].runs[0].map_or("—".into(), |s| s.cell(1))));
+        rows.push(row(&format!("{} ({})", ch.name, ch.unit), &|o| {
+            o.out.errors[c].runs[0].map_or("—".into(), |s| s.cell(1))
+        }));
     }
     let table = Table { title: "Prediction compared across feet (errors in the layout of seed Table 4; forces on the 1 ms grid)".into(), headers, rows };
 
     // normal forces of all feet over the measurement
     let mut plots = Vec::new();
     for (s, side) in ["right", "left"].iter().enumerate() {
-        let mut p = LinePlot::new(format!("Normal ground force, {side} foot"), "time (s)", "force (N)");
+        let mut p = LinePlot::new(
+            format!("Normal ground force, {side} foot"),
+            "time (s)",
+            "force (N)",
+        );
         if let Some(f) = outcomes.iter().find_map(|o| o.out.fine_forces.as_ref()) {
-            p.series.push(Series::new("measured", f.times.clone(), f.measured[s][1].clone(), LineStyle::Dashed));
+            p.series.push(Series::new(
+                "measured",
+                f.times.clone(),
+                f.measured[s][1].clone(),
+                LineStyle::Dashed,
+            ));
         }
         for o in &outcomes {
             if let Some(f) = &o.out.fine_forces {
-                p.series.push(Series::new(o.name.clone(), f.times.clone(), f.model[s][1].clone(), LineStyle::Solid));
+                p.series.push(Series::new(
+                    o.name.clone(),
+                    f.times.clone(),
+                    f.model[s][1].clone(),
+                    LineStyle::Solid,
+                ));
             }
         }
         plots.push(p.to_svg());
@@ -159,8 +230,13 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     let excess = |o: &Outcome| o.out.fine_forces.as_ref().map(|f| f.max_excess(1).0);
     let mut verdict: Option<(bool, String)> = None;
     if let Some(e) = &args.expect_transient {
-        let key = std::path::Path::new(e).file_stem().map_or(e.clone(), |s| s.to_string_lossy().replace('_', "-"));
-        let expected = outcomes.iter().find(|o| o.name == key).ok_or_else(|| anyhow!("--expect-transient {e}: no such foot in the comparison"))?;
+        let key = std::path::Path::new(e)
+            .file_stem()
+            .map_or(e.clone(), |s| s.to_string_lossy().replace('_', "-"));
+        let expected = outcomes
+            .iter()
+            .find(|o| o.name == key)
+            .ok_or_else(|| anyhow!("--expect-transient {e}: no such foot in the comparison"))?;
         let mut ok = outcomes.iter().all(|o| o.converged);
         let mut lines = Vec::new();
         if !ok {
@@ -170,7 +246,10 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         // cone between its nodes, and with check points there its re-solve stalls at KKT
         // 1e-4; the comparison says so beside the verdict
         for o in outcomes.iter().filter(|o| !valid(o)) {
-            lines.push(format!("NOTE {}: physically invalid on the 1 ms grid (see its report)", o.name));
+            lines.push(format!(
+                "NOTE {}: physically invalid on the 1 ms grid (see its report)",
+                o.name
+            ));
         }
         match excess(expected) {
             None => {
@@ -211,8 +290,14 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
             None if all_converged => "all converged",
             None => "not all converged",
         },
-        if verdict.as_ref().map_or(all_converged, |v| v.0) { Tone::Good } else { Tone::Warning },
-        verdict.as_ref().map_or_else(|| "comparison written".to_string(), |v| v.1.clone()),
+        if verdict.as_ref().map_or(all_converged, |v| v.0) {
+            Tone::Good
+        } else {
+            Tone::Warning
+        },
+        verdict
+            .as_ref()
+            .map_or_else(|| "comparison written".to_string(), |v| v.1.clone()),
     );
     summary.time_s = Some(outcomes.iter().map(|o| o.seconds).sum());
     let report = Report {
@@ -251,7 +336,10 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         "expectation_holds": verdict.as_ref().map(|v| v.0),
         "verdict": verdict.as_ref().map(|v| v.1.clone()),
     });
-    folder.write("summary.json", serde_json::to_string_pretty(&summary_json)?.as_bytes())?;
+    folder.write(
+        "summary.json",
+        serde_json::to_string_pretty(&summary_json)?.as_bytes(),
+    )?;
     folder.write("compare.md", table.to_markdown().as_bytes())?;
     folder.write("normal_force_right.svg", plots[0].as_bytes())?;
     folder.write("normal_force_left.svg", plots[1].as_bytes())?;
@@ -271,11 +359,20 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         SqpStatus::Infeasible => 1,
         _ => 2,
     };
-    if let Some(o) = outcomes.iter().filter(|o| !o.converged).min_by_key(|o| rank(o)) {
+    if let Some(o) = outcomes
+        .iter()
+        .filter(|o| !o.converged)
+        .min_by_key(|o| rank(o))
+    {
         return Err(super::Unsolved {
             status: o.result.clone(),
             at_start: o.at_start,
-            message: format!("not every prediction converged ({}: {}; results in {})", o.name, o.status, path.display()),
+            message: format!(
+                "not every prediction converged ({}: {}; results in {})",
+                o.name,
+                o.status,
+                path.display()
+            ),
         }
         .into());
     }

@@ -8,7 +8,10 @@ use super::track::{read_run_setup, tracking_sqp_settings, TrackedRun, TrackingPr
 use super::Failure;
 use anyhow::anyhow;
 use footfall::model::effects::{catalog, EffectSpec};
-use footfall::problems::diagnose::{channel_means, gauss_newton_decrease, refit_test, score_test, IdentifiedParameter, ScoreTest, TrackingRunSetup};
+use footfall::problems::diagnose::{
+    channel_means, gauss_newton_decrease, refit_test, score_test, IdentifiedParameter, ScoreTest,
+    TrackingRunSetup,
+};
 use footfall::problems::evaluation::GaitSolution;
 use footfall::report::diff::{fmt_value, RunDiff, RunSummary};
 use footfall::report::html::{Report, Section, Summary, Tone};
@@ -51,21 +54,54 @@ pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
 fn decrease_at_solution(prob: &TrackingProblem) -> anyhow::Result<(f64, f64, usize)> {
     prob.with_transcription(|tr, cycle, w| {
         let (j, dec) = gauss_newton_decrease(tr, &w).map_err(|e| anyhow!(e))?;
-        Ok((j, dec, prob.setup.data_rows(&prob.model, &prob.sets, &cycle.continuous)))
+        Ok((
+            j,
+            dec,
+            prob.setup
+                .data_rows(&prob.model, &prob.sets, &cycle.continuous),
+        ))
     })
 }
 
 /// Score test of candidate `effect` (its `k` parameters the last of θ); returns the test
 /// and the point its truncated re-fit reached, where a verifying re-fit starts.
-fn test_candidate(prob: &TrackingProblem, effect: &EffectSpec, k: usize, baseline: f64, rows: usize) -> anyhow::Result<(ScoreTest, GaitSolution)> {
+fn test_candidate(
+    prob: &TrackingProblem,
+    effect: &EffectSpec,
+    k: usize,
+    baseline: f64,
+    rows: usize,
+) -> anyhow::Result<(ScoreTest, GaitSolution)> {
     prob.with_transcription(|tr, cycle, w| {
         let free = prob.model.free_parameters();
-        let names: Vec<String> = free[free.len() - k..].iter().map(|&i| prob.model.parameters()[i].name.clone()).collect();
-        let (mut t, w1) = score_test(effect, names, tr, &w, baseline, rows).map_err(|e| anyhow!(e))?;
-        let means = |w: &[f64]| channel_means(tr, w, &cycle.continuous, prob.setup.window.0, &prob.model, &prob.sets, &prob.data).map_err(|e| anyhow!(e));
+        let names: Vec<String> = free[free.len() - k..]
+            .iter()
+            .map(|&i| prob.model.parameters()[i].name.clone())
+            .collect();
+        let (mut t, w1) =
+            score_test(effect, names, tr, &w, baseline, rows).map_err(|e| anyhow!(e))?;
+        let means = |w: &[f64]| {
+            channel_means(
+                tr,
+                w,
+                &cycle.continuous,
+                prob.setup.window.0,
+                &prob.model,
+                &prob.sets,
+                &prob.data,
+            )
+            .map_err(|e| anyhow!(e))
+        };
         let (before, after) = (means(&w)?, means(&w1)?);
-        t.expected_channels = before.into_iter().zip(after).map(|((c, u, b), (_, _, a))| (c, u, b, a)).collect();
-        Ok((t, GaitSolution::from_nlp(tr, &w1, &cycle.continuous, prob.setup.window.0)))
+        t.expected_channels = before
+            .into_iter()
+            .zip(after)
+            .map(|((c, u, b), (_, _, a))| (c, u, b, a))
+            .collect();
+        Ok((
+            t,
+            GaitSolution::from_nlp(tr, &w1, &cycle.continuous, prob.setup.window.0),
+        ))
     })
 }
 
@@ -83,7 +119,11 @@ struct Verified {
 
 /// Per-channel errors of the run `before` against its re-fit `run`.
 fn diff_with(before: &RunSummary, run: &TrackedRun) -> anyhow::Result<RunDiff> {
-    Ok(RunDiff::new(before, &RunSummary::read(&run.output.path)?, 5.0))
+    Ok(RunDiff::new(
+        before,
+        &RunSummary::read(&run.output.path)?,
+        5.0,
+    ))
 }
 
 impl Verified {
@@ -121,21 +161,39 @@ enum Evidence {
 /// The run's re-fit with `effect` added, from `start` (the run's solution, the effect's
 /// parameters at their initial values, or a truncated re-fit's point), written to
 /// `<RUN>+<effect>`.
-fn refit(args: &Args, setup: &TrackingRunSetup, effect: &EffectSpec, start: &GaitSolution, quiet: bool) -> anyhow::Result<TrackedRun> {
+fn refit(
+    args: &Args,
+    setup: &TrackingRunSetup,
+    effect: &EffectSpec,
+    start: &GaitSolution,
+    quiet: bool,
+) -> anyhow::Result<TrackedRun> {
     let dir = sibling(&args.run, &format!("+{}", effect.kind()));
     if !quiet {
         eprintln!("re-fitting with {} → {}", effect.label(), dir.display());
     }
     let mut prob = TrackingProblem::build(setup, std::slice::from_ref(effect))?;
-    prob.start_at(start).map_err(|e| anyhow!("{}: {e:#}", args.run.display()))?;
+    prob.start_at(start)
+        .map_err(|e| anyhow!("{}: {e:#}", args.run.display()))?;
     // sample terms enter the objective's curvature as Gauss–Newton only; with the exact
     // curvature of the constraints beside it the 100 Hz pad trial's re-fit stalled (KKT
     // 1e-3 to 0.2 from iteration 23 to 90), where Gauss–Newton converged in 36
     // (docs/heel-pad.md, section 6)
-    let hessian = if setup.sample_targets { HessianMode::GaussNewton } else { HessianMode::Exact };
+    let hessian = if setup.sample_targets {
+        HessianMode::GaussNewton
+    } else {
+        HessianMode::Exact
+    };
     let settings = tracking_sqp_settings(args.tol, args.max_iter, None, hessian, 1e-3);
     let rf = RunFolder::create(&dir, args.overwrite)?;
-    prob.solve_and_write(setup, std::slice::from_ref(effect), &settings, rf, super::gait_run::DEFAULT_TRANSIENT_THRESHOLD_N, quiet)
+    prob.solve_and_write(
+        setup,
+        std::slice::from_ref(effect),
+        &settings,
+        rf,
+        super::gait_run::DEFAULT_TRANSIENT_THRESHOLD_N,
+        quiet,
+    )
 }
 
 /// The run being diagnosed: its solution, summary, cost and data residual count.
@@ -148,22 +206,61 @@ struct Baseline<'a> {
 
 /// Test of the heel pad by a full re-fit ([`refit_test`]); its channel errors before and
 /// after are the re-fit's (returned too, for its verification).
-fn test_by_refit(args: &Args, setup: &TrackingRunSetup, effect: &EffectSpec, base: &Baseline<'_>, quiet: bool) -> anyhow::Result<(ScoreTest, TrackedRun, RunDiff)> {
-    let Baseline { solution, summary: before, objective, rows } = *base;
+fn test_by_refit(
+    args: &Args,
+    setup: &TrackingRunSetup,
+    effect: &EffectSpec,
+    base: &Baseline<'_>,
+    quiet: bool,
+) -> anyhow::Result<(ScoreTest, TrackedRun, RunDiff)> {
+    let Baseline {
+        solution,
+        summary: before,
+        objective,
+        rows,
+    } = *base;
     let run = refit(args, setup, effect, solution, quiet)?;
-    let added: Vec<&IdentifiedParameter> = run.record.parameters.iter().filter(|p| p.free && p.name.starts_with(&format!("{}.", effect.kind()))).collect();
+    let added: Vec<&IdentifiedParameter> = run
+        .record
+        .parameters
+        .iter()
+        .filter(|p| p.free && p.name.starts_with(&format!("{}.", effect.kind())))
+        .collect();
     let names = added.iter().map(|p| p.name.clone()).collect();
     let values = added.iter().map(|p| p.value).collect();
-    let mut t = refit_test(effect, names, values, objective, run.result.objective, rows, run.result.history.len().saturating_sub(1));
+    let mut t = refit_test(
+        effect,
+        names,
+        values,
+        objective,
+        run.result.objective,
+        rows,
+        run.result.history.len().saturating_sub(1),
+    );
     let diff = diff_with(before, &run)?;
-    t.expected_channels = diff.channels.iter().filter_map(|c| Some((c.channel.clone(), c.unit.clone(), c.a.as_ref()?.mean, c.b.as_ref()?.mean))).collect();
+    t.expected_channels = diff
+        .channels
+        .iter()
+        .filter_map(|c| {
+            Some((
+                c.channel.clone(),
+                c.unit.clone(),
+                c.a.as_ref()?.mean,
+                c.b.as_ref()?.mean,
+            ))
+        })
+        .collect();
     Ok((t, run, diff))
 }
 
 /// One progress line per tested candidate: its (predicted or re-fit) decrease, the steps
 /// or iterations it took, its statistic against the threshold.
 fn print_progress(t: &ScoreTest, converged: bool, seconds: f64) {
-    let (what, steps) = if t.refit { ("re-fit decrease  ", "iterations") } else { ("expected decrease", "steps") };
+    let (what, steps) = if t.refit {
+        ("re-fit decrease  ", "iterations")
+    } else {
+        ("expected decrease", "steps")
+    };
     eprintln!(
         "  {:<32} {what} {:>10.3e} ({:>5.1} % of J, {} {steps}{}), statistic {:>9.1} vs {:.1}{}  [{seconds:.1} s]",
         t.label,
@@ -178,7 +275,10 @@ fn print_progress(t: &ScoreTest, converged: bool, seconds: f64) {
 }
 
 fn sibling(run: &Path, suffix: &str) -> PathBuf {
-    let name = run.file_name().map(|s| s.to_string_lossy().to_string()).unwrap_or_else(|| "run".into());
+    let name = run
+        .file_name()
+        .map(|s| s.to_string_lossy().to_string())
+        .unwrap_or_else(|| "run".into());
     run.with_file_name(format!("{name}{suffix}"))
 }
 
@@ -193,7 +293,12 @@ fn sentence(label: &str, diff: &RunDiff) -> String {
     let Some((c, a, b)) = best else {
         return format!("{label} does not reduce the mean error of any channel");
     };
-    let mut s = format!("{label} explains {:.0} % of the {} error ({a:.3} → {b:.3} {})", 100.0 * (a - b) / a, c.channel, c.unit);
+    let mut s = format!(
+        "{label} explains {:.0} % of the {} error ({a:.3} → {b:.3} {})",
+        100.0 * (a - b) / a,
+        c.channel,
+        c.unit
+    );
     let phase = c
         .phases
         .iter()
@@ -201,7 +306,11 @@ fn sentence(label: &str, diff: &RunDiff) -> String {
         .filter(|(_, a, b)| *a > 0.0 && b < a)
         .max_by(|x, y| ((x.1 - x.2) / x.1).total_cmp(&((y.1 - y.2) / y.1)));
     if let Some((p, pa, pb)) = phase {
-        s += &format!(", {:.0} % in phase {} ({pa:.3} → {pb:.3})", 100.0 * (pa - pb) / pa, p.phase);
+        s += &format!(
+            ", {:.0} % in phase {} ({pa:.3} → {pb:.3})",
+            100.0 * (pa - pb) / pa,
+            p.phase
+        );
     }
     s
 }
@@ -224,16 +333,24 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     let setup = read_run_setup(&args.run)?;
     let solution = super::predict::read_solution(&args.run)?;
     let before = RunSummary::read(&args.run)?;
-    let out = args.out.clone().unwrap_or_else(|| sibling(&args.run, "-diagnose"));
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| sibling(&args.run, "-diagnose"));
     let folder = RunFolder::create(&out, args.overwrite)?;
     let mut candidates: Vec<EffectSpec> = if args.candidates.is_empty() {
         catalog()
     } else {
-        args.candidates.iter().map(|c| EffectSpec::parse_cli(c).map_err(|e| anyhow!("--candidate: {e}"))).collect::<Result<_, _>>()?
+        args.candidates
+            .iter()
+            .map(|c| EffectSpec::parse_cli(c).map_err(|e| anyhow!("--candidate: {e}")))
+            .collect::<Result<_, _>>()?
     };
     // the baseline: the run's own problem at its solution
     let mut base = TrackingProblem::build(&setup, &[])?;
-    base.setup.start_from(&solution).map_err(|e| anyhow!("{}: {e}", args.run.display()))?;
+    base.setup
+        .start_from(&solution)
+        .map_err(|e| anyhow!("{}: {e}", args.run.display()))?;
     let (objective, base_decrease, rows) = decrease_at_solution(&base)?;
     if !quiet {
         eprintln!(
@@ -247,7 +364,13 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     // the heel pad, not in the catalog, is a candidate on feet with a heel circle: tested
     // by a re-fit on runs with sample or one-sided targets, named as not scored on others
     let pad = EffectSpec::parse_cli("heel_pad_compliance").map_err(|e| anyhow!(e))?;
-    if args.candidates.is_empty() && base.model.contacts.iter().any(|c| c.name.ends_with(".heel")) {
+    if args.candidates.is_empty()
+        && base
+            .model
+            .contacts
+            .iter()
+            .any(|c| c.name.ends_with(".heel"))
+    {
         candidates.push(pad.clone());
     }
     for c in &candidates {
@@ -257,11 +380,20 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         }
         if c.kind() == pad.kind() {
             if !(setup.one_sided_targets || setup.sample_targets) {
-                skipped.push(format!("{}: {}", c.label(), UNSCORABLE_PAD.replace("RUN", &args.run.display().to_string())));
+                skipped.push(format!(
+                    "{}: {}",
+                    c.label(),
+                    UNSCORABLE_PAD.replace("RUN", &args.run.display().to_string())
+                ));
                 continue;
             }
             let t0 = std::time::Instant::now();
-            let baseline = Baseline { solution: &solution, summary: &before, objective, rows };
+            let baseline = Baseline {
+                solution: &solution,
+                summary: &before,
+                objective,
+                rows,
+            };
             let (t, run, diff) = test_by_refit(&args, &setup, c, &baseline, quiet)?;
             if !quiet {
                 print_progress(&t, run.converged, t0.elapsed().as_secs_f64());
@@ -289,7 +421,12 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     let (tests, evidence): (Vec<ScoreTest>, Vec<Evidence>) = tests.into_iter().unzip();
 
     let mut verified = Vec::new();
-    for (t, e) in tests.iter().zip(&evidence).filter(|(t, _)| t.significant).take(args.verify) {
+    for (t, e) in tests
+        .iter()
+        .zip(&evidence)
+        .filter(|(t, _)| t.significant)
+        .take(args.verify)
+    {
         let v = match e {
             // the test was the re-fit
             Evidence::Refit(run, diff) => Verified::new(t, run, diff.clone(), objective),
@@ -313,7 +450,11 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     // the score tests compare against the plain model's optimum; say so when the run
     // stopped short of it
     if before.status.as_deref().is_some_and(|s| s != "converged") {
-        let reason = before.stop_reason.as_deref().or(before.status.as_deref()).unwrap_or_default();
+        let reason = before
+            .stop_reason
+            .as_deref()
+            .or(before.status.as_deref())
+            .unwrap_or_default();
         verdict += &format!(
             " Caution: the run did not converge ({reason}), and the score tests assume the plain model's optimum; re-track it to convergence before trusting this ranking."
         );
@@ -340,7 +481,12 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     };
     // channels by name: a re-fit's come from its run summary, a score test's from the
     // problem
-    let channels: Vec<(String, String)> = tests.first().map_or(vec![], |t| t.expected_channels.iter().map(|c| (c.0.clone(), c.1.clone())).collect());
+    let channels: Vec<(String, String)> = tests.first().map_or(vec![], |t| {
+        t.expected_channels
+            .iter()
+            .map(|c| (c.0.clone(), c.1.clone()))
+            .collect()
+    });
     let expected = Table {
         title: "Expected mean error per channel after the truncated re-fit with each candidate (a full re-fit for the heel pad; before → after)".into(),
         headers: std::iter::once("effect".to_string()).chain(channels.iter().map(|(c, u)| format!("{c} ({u})"))).collect(),
@@ -357,18 +503,49 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         .iter()
         .zip(&evidence)
         .filter_map(|(t, e)| match e {
-            Evidence::Refit(run, _) => Some(format!("{} was tested by a full re-fit ({}, {}), as it has no null value for a score test", t.label, run.output.path.display(), if run.converged { "converged" } else { "did NOT converge" })),
+            Evidence::Refit(run, _) => Some(format!(
+                "{} was tested by a full re-fit ({}, {}), as it has no null value for a score test",
+                t.label,
+                run.output.path.display(),
+                if run.converged {
+                    "converged"
+                } else {
+                    "did NOT converge"
+                }
+            )),
             Evidence::Start(_) => None,
         })
         .collect();
-    let mut md = format!("# Diagnosis of {}\n\n{verdict}\n\n{}\n\n{}\n", args.run.display(), ranking.to_markdown(), expected.to_markdown());
+    let mut md = format!(
+        "# Diagnosis of {}\n\n{verdict}\n\n{}\n\n{}\n",
+        args.run.display(),
+        ranking.to_markdown(),
+        expected.to_markdown()
+    );
     for r in &refits {
         md += &format!("\n{r}.\n");
     }
-    let paragraphs = std::iter::once(verdict.clone()).chain(refits.iter().map(|r| format!("{r}."))).collect();
-    let mut sections = vec![Section { heading: "Ranking".into(), paragraphs, tables: vec![ranking.clone(), expected], svgs: vec![] }];
+    let paragraphs = std::iter::once(verdict.clone())
+        .chain(refits.iter().map(|r| format!("{r}.")))
+        .collect();
+    let mut sections = vec![Section {
+        heading: "Ranking".into(),
+        paragraphs,
+        tables: vec![ranking.clone(), expected],
+        svgs: vec![],
+    }];
     for v in &verified {
-        let params = v.parameters.iter().map(|(n, val, sd, u)| format!("{n} = {val:.5}{} {u}", sd.map_or(String::new(), |s| format!(" ± {s:.2e}")))).collect::<Vec<_>>().join("; ");
+        let params = v
+            .parameters
+            .iter()
+            .map(|(n, val, sd, u)| {
+                format!(
+                    "{n} = {val:.5}{} {u}",
+                    sd.map_or(String::new(), |s| format!(" ± {s:.2e}"))
+                )
+            })
+            .collect::<Vec<_>>()
+            .join("; ");
         let text = format!(
             "Re-fit with {} ({}): J {:.6} → {:.6} ({:.1} % lower; expected {:.1} %), {}. Identified: {params}. {}.",
             v.test.label,
@@ -380,8 +557,17 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
             if v.converged { "converged" } else { "did NOT converge" },
             v.sentence
         );
-        md += &format!("\n## {}\n\n{text}\n\n{}\n", v.test.label, v.diff.table().to_markdown());
-        sections.push(Section { heading: format!("Verified: {}", v.test.label), paragraphs: vec![text], tables: vec![v.diff.table()], svgs: vec![v.diff.chart().to_svg()] });
+        md += &format!(
+            "\n## {}\n\n{text}\n\n{}\n",
+            v.test.label,
+            v.diff.table().to_markdown()
+        );
+        sections.push(Section {
+            heading: format!("Verified: {}", v.test.label),
+            paragraphs: vec![text],
+            tables: vec![v.diff.table()],
+            svgs: vec![v.diff.chart().to_svg()],
+        });
     }
     if !skipped.is_empty() {
         md += &format!("\nNot tested: {}\n", skipped.join("; "));
@@ -416,16 +602,34 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         "skipped": skipped,
     });
     folder.write("diagnose.md", md.as_bytes())?;
-    folder.write("summary.json", serde_json::to_string_pretty(&summary)?.as_bytes())?;
+    folder.write(
+        "summary.json",
+        serde_json::to_string_pretty(&summary)?.as_bytes(),
+    )?;
     let summary_box = Summary {
-        status: if significant == 0 { "nothing significant".into() } else { format!("{} significant", significant) },
-        tone: if significant == 0 { Tone::Good } else { Tone::Warning },
+        status: if significant == 0 {
+            "nothing significant".into()
+        } else {
+            format!("{} significant", significant)
+        },
+        tone: if significant == 0 {
+            Tone::Good
+        } else {
+            Tone::Warning
+        },
         stop_reason: verdict.clone(),
         iterations: None,
         time_s: None,
-        extra: vec![("tracking cost J".into(), format!("{objective:.6}")), ("data residuals".into(), rows.to_string())],
+        extra: vec![
+            ("tracking cost J".into(), format!("{objective:.6}")),
+            ("data residuals".into(), rows.to_string()),
+        ],
     };
-    let report = Report { title: format!("footfall diagnose — {}", args.run.display()), summary: summary_box, sections };
+    let report = Report {
+        title: format!("footfall diagnose — {}", args.run.display()),
+        summary: summary_box,
+        sections,
+    };
     folder.write("report.html", report.to_html().as_bytes())?;
     let path = folder.commit()?;
     if !quiet {

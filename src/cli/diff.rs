@@ -33,11 +33,17 @@ pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
 
 /// Refuse an output folder that would replace (with `--overwrite`) one of the inputs.
 fn check_not_input(out: &Path, inputs: &[&Path]) -> anyhow::Result<()> {
-    let Ok(out_c) = out.canonicalize() else { return Ok(()) };
+    let Ok(out_c) = out.canonicalize() else {
+        return Ok(());
+    };
     for input in inputs {
         if let Ok(c) = input.canonicalize() {
             if c.starts_with(&out_c) {
-                bail!("--out {}: this would replace the input run {}", out.display(), input.display());
+                bail!(
+                    "--out {}: this would replace the input run {}",
+                    out.display(),
+                    input.display()
+                );
             }
         }
     }
@@ -48,7 +54,10 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     let a = RunSummary::read(&args.run_a).context("run A")?;
     let b = RunSummary::read(&args.run_b).context("run B")?;
     let diff = RunDiff::new(&a, &b, args.threshold_pct);
-    let out = args.out.clone().unwrap_or_else(|| PathBuf::from("runs").join(format!("diff-{}-vs-{}", a.name, b.name)));
+    let out = args
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("runs").join(format!("diff-{}-vs-{}", a.name, b.name)));
     check_not_input(&out, &[&a.path, &b.path])?;
 
     let table = diff.table();
@@ -57,7 +66,11 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     let notes = diff.notes();
     let runs = format!("A: {}\nB: {}", a.describe(), b.describe());
 
-    let mut md = format!("# footfall diff\n\n{}\n\n{}\n{headline}.\n", runs.replace('\n', "  \n"), table.to_markdown());
+    let mut md = format!(
+        "# footfall diff\n\n{}\n\n{}\n{headline}.\n",
+        runs.replace('\n', "  \n"),
+        table.to_markdown()
+    );
     for n in &notes {
         md.push_str(&format!("\n{n}\n"));
     }
@@ -71,8 +84,19 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         (0, _) => ("B worse", Tone::Bad),
         _ => ("mixed", Tone::Warning),
     };
-    let mut summary = Summary::new(status, tone, format!("compared {} channels of two run summaries", diff.channels.len()));
-    summary.extra = vec![("verdict".into(), format!("{headline}.")), ("run A".into(), a.describe()), ("run B".into(), b.describe())];
+    let mut summary = Summary::new(
+        status,
+        tone,
+        format!(
+            "compared {} channels of two run summaries",
+            diff.channels.len()
+        ),
+    );
+    summary.extra = vec![
+        ("verdict".into(), format!("{headline}.")),
+        ("run A".into(), a.describe()),
+        ("run B".into(), b.describe()),
+    ];
     let mut paragraphs = vec![
         "Mean of |model − measurement| at the shooting nodes (both legs pooled), per channel in its own unit. Change = B − A; negative is an improvement.".to_string(),
         "Chart: both runs' mean errors as per cent of run A's, so that channels in different units share one axis (A is 100 % by construction); each bar is labelled with the mean in the channel's unit.".to_string(),
@@ -82,17 +106,33 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         title: format!("footfall diff — {} vs {}", a.name, b.name),
         summary,
         sections: vec![
-            Section { heading: "Mean error per channel".into(), paragraphs, tables: vec![table.clone()], svgs: vec![svg.clone()] },
-            Section { heading: "By phase".into(), paragraphs: vec![], tables: vec![phase_table], svgs: vec![] },
+            Section {
+                heading: "Mean error per channel".into(),
+                paragraphs,
+                tables: vec![table.clone()],
+                svgs: vec![svg.clone()],
+            },
+            Section {
+                heading: "By phase".into(),
+                paragraphs: vec![],
+                tables: vec![phase_table],
+                svgs: vec![],
+            },
         ],
     };
     let mut summary_json = serde_json::to_value(&diff)?;
     if let Some(obj) = summary_json.as_object_mut() {
         obj.insert("command".into(), "diff".into());
-        let counts = [Verdict::Better, Verdict::Worse, Verdict::Unchanged, Verdict::OnlyInA, Verdict::OnlyInB]
-            .iter()
-            .map(|&v| (v.tag().to_string(), serde_json::Value::from(diff.count(v))))
-            .collect::<serde_json::Map<_, _>>();
+        let counts = [
+            Verdict::Better,
+            Verdict::Worse,
+            Verdict::Unchanged,
+            Verdict::OnlyInA,
+            Verdict::OnlyInB,
+        ]
+        .iter()
+        .map(|&v| (v.tag().to_string(), serde_json::Value::from(diff.count(v))))
+        .collect::<serde_json::Map<_, _>>();
         obj.insert("counts".into(), counts.into());
     }
 
@@ -101,7 +141,10 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     folder.write("diff.csv", diff.csv_table().to_csv().as_bytes())?;
     folder.write("diff.svg", svg.as_bytes())?;
     folder.write("report.html", report.to_html().as_bytes())?;
-    folder.write("summary.json", serde_json::to_string_pretty(&summary_json)?.as_bytes())?;
+    folder.write(
+        "summary.json",
+        serde_json::to_string_pretty(&summary_json)?.as_bytes(),
+    )?;
     let path = folder.commit()?;
 
     if !quiet {

@@ -44,25 +44,47 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     let model = GaitModel::load(&args.model, &foot_path)?;
     let foot = FootSpec::load(&foot_path)?;
     let data = super::load_data(args.data.as_deref())?;
-    let stances = stances_from_data(&model, &data).map_err(|e| anyhow!("{}: {e}", data.source.display()))?;
+    let stances =
+        stances_from_data(&model, &data).map_err(|e| anyhow!("{}: {e}", data.source.display()))?;
     let ground = model.contact_settings().ground_height;
     let folder = RunFolder::create(&args.out, args.overwrite)?;
     let n: usize = stances.iter().map(|s| s.len()).sum();
     if !quiet {
-        eprintln!("fitting '{}' ({} parameters, length {:.1} cm) to {} stances, {n} samples…", foot.name, parameters(&foot).len(), 100.0 * foot_length(&foot), stances.len());
+        eprintln!(
+            "fitting '{}' ({} parameters, length {:.1} cm) to {} stances, {n} samples…",
+            foot.name,
+            parameters(&foot).len(),
+            100.0 * foot_length(&foot),
+            stances.len()
+        );
     }
     let started = std::time::Instant::now();
-    let res = fit(&foot, &stances, ground, args.tol, args.max_iter as u64).map_err(|e| anyhow!(e))?;
+    let res =
+        fit(&foot, &stances, ground, args.tol, args.max_iter as u64).map_err(|e| anyhow!(e))?;
     let seconds = started.elapsed().as_secs_f64();
-    let (_, pos0, ang0) = fit_cost(&foot, &stances, ground).ok_or_else(|| anyhow!("the initial foot cannot roll"))?;
+    let (_, pos0, ang0) =
+        fit_cost(&foot, &stances, ground).ok_or_else(|| anyhow!("the initial foot cannot roll"))?;
     let deg = 180.0 / std::f64::consts::PI;
     let stats = |v: &[f64], k: f64| ErrorStats::from_errors(v).scaled(k);
     let table1 = Table {
-        title: "Ankle frame errors while rolling along the measured CoP (seed Table 1 layout)".into(),
-        headers: vec!["error".into(), format!("{} (initial)", foot.name), format!("{} (fitted)", foot.name)],
+        title: "Ankle frame errors while rolling along the measured CoP (seed Table 1 layout)"
+            .into(),
+        headers: vec![
+            "error".into(),
+            format!("{} (initial)", foot.name),
+            format!("{} (fitted)", foot.name),
+        ],
         rows: vec![
-            vec!["ankle position (cm)".into(), stats(&pos0, 100.0).cell(2), stats(&res.errors.0, 100.0).cell(2)],
-            vec!["ankle orientation (°)".into(), stats(&ang0, deg).cell(1), stats(&res.errors.1, deg).cell(1)],
+            vec![
+                "ankle position (cm)".into(),
+                stats(&pos0, 100.0).cell(2),
+                stats(&res.errors.0, 100.0).cell(2),
+            ],
+            vec![
+                "ankle orientation (°)".into(),
+                stats(&ang0, deg).cell(1),
+                stats(&res.errors.1, deg).cell(1),
+            ],
         ],
     };
     let names = param_names(&foot);
@@ -75,7 +97,11 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
             .enumerate()
             .map(|(i, nm)| {
                 let k = if nm.ends_with("angle") { deg } else { 100.0 };
-                vec![nm.clone(), format!("{:.2}", p0[i] * k), format!("{:.2}", p1[i] * k)]
+                vec![
+                    nm.clone(),
+                    format!("{:.2}", p0[i] * k),
+                    format!("{:.2}", p1[i] * k),
+                ]
             })
             .collect(),
     };
@@ -102,14 +128,27 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         "length_m": foot_length(&res.foot),
         "parameters": names.iter().zip(&p1).map(|(n, v)| serde_json::json!({"name": n, "value": v})).collect::<Vec<_>>(),
     });
-    folder.write(&format!("{}_fitted.json", foot.name), serde_json::to_string_pretty(&fitted)?.as_bytes())?;
+    folder.write(
+        &format!("{}_fitted.json", foot.name),
+        serde_json::to_string_pretty(&fitted)?.as_bytes(),
+    )?;
     folder.write("table1.md", table1.to_markdown().as_bytes())?;
     folder.write("table2.md", table2.to_markdown().as_bytes())?;
-    folder.write("summary.json", serde_json::to_string_pretty(&summary)?.as_bytes())?;
+    folder.write(
+        "summary.json",
+        serde_json::to_string_pretty(&summary)?.as_bytes(),
+    )?;
     let out = folder.commit()?;
     if !quiet {
         eprintln!("{}\n{}", table1.to_markdown(), table2.to_markdown());
-        eprintln!("eq. 13: {:.4} → {:.4} in {} iterations, {:.1} s → {}", res.cost.0, res.cost.1, res.iterations, seconds, out.display());
+        eprintln!(
+            "eq. 13: {:.4} → {:.4} in {} iterations, {:.1} s → {}",
+            res.cost.0,
+            res.cost.1,
+            res.iterations,
+            seconds,
+            out.display()
+        );
     }
     Ok(())
 }
@@ -121,7 +160,11 @@ fn param_names(foot: &FootSpec) -> Vec<String> {
         let n = &p.name;
         match p.shape {
             Shape::Point { .. } => v.extend([format!("{n}.x"), format!("{n}.y")]),
-            Shape::Circle { .. } => v.extend([format!("{n}.centre_x"), format!("{n}.centre_y"), format!("{n}.radius")]),
+            Shape::Circle { .. } => v.extend([
+                format!("{n}.centre_x"),
+                format!("{n}.centre_y"),
+                format!("{n}.radius"),
+            ]),
             Shape::Ellipse { .. } => v.extend([
                 format!("{n}.centre_x"),
                 format!("{n}.centre_y"),

@@ -7,7 +7,9 @@ use footfall::data::GaitData;
 use footfall::integrate::IntegratorSettings;
 use footfall::model::gait::COORDINATES;
 use footfall::model::{ConstraintSet, GaitModel};
-use footfall::problems::evaluation::{channel_errors, Comparison, FineGridFigures, GaitSolution, Reintegration, LOAD_NAMES};
+use footfall::problems::evaluation::{
+    channel_errors, Comparison, FineGridFigures, GaitSolution, Reintegration, LOAD_NAMES,
+};
 use footfall::problems::transient::{force_transients, ForceTransient};
 use footfall::report::csv::TimeSeries;
 use footfall::report::html::{Report, Section, Summary, Tone};
@@ -71,7 +73,10 @@ impl FineForces {
     }
     /// Peak |force| of component `c` over both feet (N).
     pub fn peak(&self, c: usize) -> f64 {
-        self.model.iter().flat_map(|m| m[c].iter()).fold(0.0, |a, v| a.max(v.abs()))
+        self.model
+            .iter()
+            .flat_map(|m| m[c].iter())
+            .fold(0.0, |a, v| a.max(v.abs()))
     }
 }
 
@@ -117,79 +122,168 @@ pub struct GaitRun<'a> {
 /// Evaluate, write and commit the run folder.
 pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
     let (model, sets, data, res, sol) = (run.model, run.sets, run.data, run.result, run.solution);
-    let nodes = sol.node_samples(model, sets).context("evaluating the solution at the nodes")?;
+    let nodes = sol
+        .node_samples(model, sets)
+        .context("evaluating the solution at the nodes")?;
     let cmp = Comparison::through_model(&nodes, data, model, &sol.theta)?;
     let channels = cmp.table_channels();
     let foot = model.foot_name.clone();
-    let what = if run.command == "predict" { "Prediction" } else { "Tracking" };
+    let what = if run.command == "predict" {
+        "Prediction"
+    } else {
+        "Tracking"
+    };
     let table = error_table(
-        &format!("{what} errors at the shooting nodes (seed Table {} layout; both legs pooled)", if run.command == "predict" { 4 } else { 3 }),
+        &format!(
+            "{what} errors at the shooting nodes (seed Table {} layout; both legs pooled)",
+            if run.command == "predict" { 4 } else { 3 }
+        ),
         &[foot],
         &channel_errors(&channels, &cmp, None),
     );
     let phase_ids: Vec<usize> = sol.phases.iter().map(|p| p.set).collect();
     let phase_names: Vec<String> = sol.phases.iter().map(|p| p.name.clone()).collect();
-    let by_phase = error_table(&format!("{what} errors by phase"), &phase_names, &channel_errors(&channels, &cmp, Some(&phase_ids)));
+    let by_phase = error_table(
+        &format!("{what} errors by phase"),
+        &phase_names,
+        &channel_errors(&channels, &cmp, Some(&phase_ids)),
+    );
 
     // fine grid: a failure (e.g. of an interrupted early iterate) is reported, not fatal
-    let fine_run: Result<Reintegration, String> =
-        sol.reintegrate(model, sets, FINE_STEP, &run.integrator).map_err(|e| format!("the 1 ms re-integration failed: {e}"));
+    let fine_run: Result<Reintegration, String> = sol
+        .reintegrate(model, sets, FINE_STEP, &run.integrator)
+        .map_err(|e| format!("the 1 ms re-integration failed: {e}"));
     let fine = fine_run.as_ref().ok().map(|f| f.figures(sets, FINE_STEP));
     let fine_cmp = match &fine_run {
-        Ok(f) => Some(Comparison::through_model(&f.result.samples, data, model, &sol.theta)?),
+        Ok(f) => Some(Comparison::through_model(
+            &f.result.samples,
+            data,
+            model,
+            &sol.theta,
+        )?),
         Err(_) => None,
     };
     let phase_file_names: Vec<String> = sets.iter().map(|s| s.name.clone()).collect();
     let validity = fine_run.as_ref().ok().map(|f| {
-        footfall::problems::validity::check(model, &f.result.samples, sets, &phase_file_names, &sol.theta, run.friction, Default::default())
+        footfall::problems::validity::check(
+            model,
+            &f.result.samples,
+            sets,
+            &phase_file_names,
+            &sol.theta,
+            run.friction,
+            Default::default(),
+        )
     });
     let transients = match (&fine_run, &fine_cmp) {
-        (Ok(f), Some(fc)) => force_transients(f, fc, sets, &cmp.times, model.nq(), run.transient_threshold_n),
+        (Ok(f), Some(fc)) => force_transients(
+            f,
+            fc,
+            sets,
+            &cmp.times,
+            model.nq(),
+            run.transient_threshold_n,
+        ),
         _ => Vec::new(),
     };
     // plots show the fine grid where there is one, else the nodes
     let line = fine_cmp.as_ref().unwrap_or(&cmp);
-    let line_label = if fine_cmp.is_some() { "model (1 ms re-integration)" } else { "model" };
+    let line_label = if fine_cmp.is_some() {
+        "model (1 ms re-integration)"
+    } else {
+        "model"
+    };
 
-    let spans: Vec<Span> = sol.phase_spans().iter().map(|p| Span::new(p.t0, p.t1, p.name.clone())).collect();
+    let spans: Vec<Span> = sol
+        .phase_spans()
+        .iter()
+        .map(|p| Span::new(p.t0, p.t1, p.name.clone()))
+        .collect();
     let deg = 180.0 / std::f64::consts::PI;
-    let plot = |title: &str, unit: &str, line_model: &[f64], measured: &[f64], node_model: &[f64], scale: f64| {
+    let plot = |title: &str,
+                unit: &str,
+                line_model: &[f64],
+                measured: &[f64],
+                node_model: &[f64],
+                scale: f64| {
         let mut p = LinePlot::new(title, "time (s)", unit);
         let scaled = |v: &[f64]| v.iter().map(|x| x * scale).collect::<Vec<f64>>();
-        p.series.push(Series::new(line_label, line.times.clone(), scaled(line_model), LineStyle::Solid));
-        p.series.push(Series::new("model at the nodes", cmp.times.clone(), scaled(node_model), LineStyle::Markers));
-        p.series.push(Series::new("measured", line.times.clone(), scaled(measured), LineStyle::Dashed));
+        p.series.push(Series::new(
+            line_label,
+            line.times.clone(),
+            scaled(line_model),
+            LineStyle::Solid,
+        ));
+        p.series.push(Series::new(
+            "model at the nodes",
+            cmp.times.clone(),
+            scaled(node_model),
+            LineStyle::Markers,
+        ));
+        p.series.push(Series::new(
+            "measured",
+            line.times.clone(),
+            scaled(measured),
+            LineStyle::Dashed,
+        ));
         p.shaded = spans.clone();
         p.to_svg()
     };
     let mut kin = Vec::new();
     for i in 2..9 {
-        kin.push(plot(&COORDINATES[i].replace('_', " "), "angle (°)", &line.model_q[i], &line.data_q[i], &cmp.model_q[i], deg));
+        kin.push(plot(
+            &COORDINATES[i].replace('_', " "),
+            "angle (°)",
+            &line.model_q[i],
+            &line.data_q[i],
+            &cmp.model_q[i],
+            deg,
+        ));
     }
     let mut forces = Vec::new();
     for (s, side) in ["right", "left"].iter().enumerate() {
-        for (c, label, unit) in [(1, "Normal GRF", "force (N)"), (0, "Tangential GRF", "force (N)"), (2, "CoP", "x (m)")] {
-            forces.push(plot(&format!("{label}, {side} foot"), unit, &line.model_feet[s][c], &line.data_feet[s][c], &cmp.model_feet[s][c], 1.0));
+        for (c, label, unit) in [
+            (1, "Normal GRF", "force (N)"),
+            (0, "Tangential GRF", "force (N)"),
+            (2, "CoP", "x (m)"),
+        ] {
+            forces.push(plot(
+                &format!("{label}, {side} foot"),
+                unit,
+                &line.model_feet[s][c],
+                &line.data_feet[s][c],
+                &cmp.model_feet[s][c],
+                1.0,
+            ));
         }
     }
 
     // time series at the nodes
     let mut ts = TimeSeries::new(cmp.times.clone())?;
-    ts.push_text("phase", cmp.phase.iter().map(|&p| sets[p].name.clone()).collect())?;
+    ts.push_text(
+        "phase",
+        cmp.phase.iter().map(|&p| sets[p].name.clone()).collect(),
+    )?;
     for i in 0..9 {
         ts.push(&format!("model_{}", COORDINATES[i]), cmp.model_q[i].clone())?;
         ts.push(&format!("data_{}", COORDINATES[i]), cmp.data_q[i].clone())?;
     }
     for (s, side) in ["r", "l"].iter().enumerate() {
         for (k, what) in LOAD_NAMES.iter().enumerate() {
-            ts.push(&format!("model_{what}_{side}"), cmp.model_feet[s][k].clone())?;
+            ts.push(
+                &format!("model_{what}_{side}"),
+                cmp.model_feet[s][k].clone(),
+            )?;
             ts.push(&format!("data_{what}_{side}"), cmp.data_feet[s][k].clone())?;
         }
     }
     let fine_ts = match (&fine_run, &fine_cmp) {
         (Ok(f), Some(fc)) => {
             let mut t = TimeSeries::new(fc.times.clone())?;
-            t.push_text("phase", fc.phase.iter().map(|&p| sets[p].name.clone()).collect())?;
+            t.push_text(
+                "phase",
+                fc.phase.iter().map(|&p| sets[p].name.clone()).collect(),
+            )?;
             for i in 0..9 {
                 t.push(&format!("model_{}", COORDINATES[i]), fc.model_q[i].clone())?;
             }
@@ -199,7 +293,19 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
                     t.push(&format!("data_{what}_{side}"), fc.data_feet[s][k].clone())?;
                 }
             }
-            t.push("baumgarte_max", f.result.samples.iter().map(|s| s.contact.baumgarte_force.iter().fold(0.0f64, |m, v| m.max(v.abs()))).collect())?;
+            t.push(
+                "baumgarte_max",
+                f.result
+                    .samples
+                    .iter()
+                    .map(|s| {
+                        s.contact
+                            .baumgarte_force
+                            .iter()
+                            .fold(0.0f64, |m, v| m.max(v.abs()))
+                    })
+                    .collect(),
+            )?;
             Some(t)
         }
         _ => None,
@@ -237,27 +343,51 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
     ];
     let fine_text = match (&fine, &fine_run) {
         (Some(f), _) => {
-            summary.extra.push(("peak normal GRF (1 ms grid)".into(), format!("right {:.1} N, left {:.1} N", f.peak_normal_force_n[0], f.peak_normal_force_n[1])));
-            summary.extra.push(("largest constraint drift (1 ms grid)".into(), format!("{:.2e} m, {:.2e} m/s", f.max_position_drift_m, f.max_velocity_drift_m_s)));
-            summary.extra.push(("largest Baumgarte force (1 ms grid)".into(), format!("{:.1e} N", f.max_baumgarte_force_n)));
+            summary.extra.push((
+                "peak normal GRF (1 ms grid)".into(),
+                format!(
+                    "right {:.1} N, left {:.1} N",
+                    f.peak_normal_force_n[0], f.peak_normal_force_n[1]
+                ),
+            ));
+            summary.extra.push((
+                "largest constraint drift (1 ms grid)".into(),
+                format!(
+                    "{:.2e} m, {:.2e} m/s",
+                    f.max_position_drift_m, f.max_velocity_drift_m_s
+                ),
+            ));
+            summary.extra.push((
+                "largest Baumgarte force (1 ms grid)".into(),
+                format!("{:.1e} N", f.max_baumgarte_force_n),
+            ));
             format!(
                 "Forces between the nodes come from the 1 ms re-integration (transients hide between nodes, seed §5): peak normal force {:.1} N (right) and {:.1} N (left); largest Baumgarte force {:.1e} N; largest position drift {:.2e} m.",
                 f.peak_normal_force_n[0], f.peak_normal_force_n[1], f.max_baumgarte_force_n, f.max_position_drift_m
             )
         }
         (None, Err(e)) => {
-            summary.extra.push(("1 ms re-integration".into(), e.clone()));
+            summary
+                .extra
+                .push(("1 ms re-integration".into(), e.clone()));
             format!("{e}; the plots show the shooting nodes only.")
         }
         (None, Ok(_)) => String::new(),
     };
     if let Some(v) = &validity {
         let text = if v.is_valid() {
-            format!("valid on the 1 ms grid ({} check point(s) between the nodes)", run.check_points)
+            format!(
+                "valid on the 1 ms grid ({} check point(s) between the nodes)",
+                run.check_points
+            )
         } else {
             format!(
                 "INVALID: {} ({} stretch(es); {} check point(s) between the nodes)",
-                v.violations.iter().max_by(|a, b| a.amount.total_cmp(&b.amount)).map(|x| x.to_string()).unwrap_or_default(),
+                v.violations
+                    .iter()
+                    .max_by(|a, b| a.amount.total_cmp(&b.amount))
+                    .map(|x| x.to_string())
+                    .unwrap_or_default(),
                 v.violations.len(),
                 run.check_points
             )
@@ -276,7 +406,11 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
     if let Some(v) = &validity {
         sections.push(validity_section(v, run.check_points));
     }
-    sections.push(transient_section(&transients, run.transient_threshold_n, fine_run.is_ok()));
+    sections.push(transient_section(
+        &transients,
+        run.transient_threshold_n,
+        fine_run.is_ok(),
+    ));
     sections.extend(run.extra_sections);
     sections.push(Section {
         heading: "Kinematics".into(),
@@ -290,9 +424,15 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
         tables: vec![],
         svgs: forces,
     });
-    let report = Report { title: run.title, summary, sections };
+    let report = Report {
+        title: run.title,
+        summary,
+        sections,
+    };
     // channels without a defined sample in a phase are left out (no nulls)
-    let stat_json = |s: &Option<footfall::report::table::ErrorStats>| s.map(|v| serde_json::json!({"mean": v.mean, "sd": v.sd, "max": v.max}));
+    let stat_json = |s: &Option<footfall::report::table::ErrorStats>| {
+        s.map(|v| serde_json::json!({"mean": v.mean, "sd": v.sd, "max": v.max}))
+    };
     let overall = channel_errors(&channels, &cmp, None);
     let phased = channel_errors(&channels, &cmp, Some(&phase_ids));
     let mut summary_json = serde_json::json!({
@@ -328,27 +468,66 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
         }
         obj.extend(run.extra_json);
     }
-    folder.write("summary.json", serde_json::to_string_pretty(&summary_json)?.as_bytes())?;
-    folder.write("solution.json", serde_json::to_string_pretty(sol)?.as_bytes())?;
-    let csv_name = if run.command == "predict" { "prediction" } else { "tracking" };
+    folder.write(
+        "summary.json",
+        serde_json::to_string_pretty(&summary_json)?.as_bytes(),
+    )?;
+    folder.write(
+        "solution.json",
+        serde_json::to_string_pretty(sol)?.as_bytes(),
+    )?;
+    let csv_name = if run.command == "predict" {
+        "prediction"
+    } else {
+        "tracking"
+    };
     folder.write(&format!("{csv_name}.csv"), ts.to_csv().as_bytes())?;
     if let Some(f) = &fine_ts {
         folder.write("fine_grid.csv", f.to_csv().as_bytes())?;
     }
-    folder.write("kinematics.sto", fine_ts.as_ref().unwrap_or(&ts).to_sto(&format!("footfall_{csv_name}")).as_bytes())?;
-    let table_file = if run.command == "predict" { "table4.md" } else { "table3.md" };
-    folder.write(table_file, format!("{}\n{}", table.to_markdown(), by_phase.to_markdown()).as_bytes())?;
+    folder.write(
+        "kinematics.sto",
+        fine_ts
+            .as_ref()
+            .unwrap_or(&ts)
+            .to_sto(&format!("footfall_{csv_name}"))
+            .as_bytes(),
+    )?;
+    let table_file = if run.command == "predict" {
+        "table4.md"
+    } else {
+        "table3.md"
+    };
+    folder.write(
+        table_file,
+        format!("{}\n{}", table.to_markdown(), by_phase.to_markdown()).as_bytes(),
+    )?;
     for (name, bytes) in &run.extra_files {
         folder.write(name, bytes)?;
     }
     folder.write("report.html", report.to_html().as_bytes())?;
     let path = folder.commit()?;
     let fine_forces = fine_cmp.map(|fc| FineForces {
-        model: [[fc.model_feet[0][0].clone(), fc.model_feet[0][1].clone()], [fc.model_feet[1][0].clone(), fc.model_feet[1][1].clone()]],
-        measured: [[fc.data_feet[0][0].clone(), fc.data_feet[0][1].clone()], [fc.data_feet[1][0].clone(), fc.data_feet[1][1].clone()]],
+        model: [
+            [fc.model_feet[0][0].clone(), fc.model_feet[0][1].clone()],
+            [fc.model_feet[1][0].clone(), fc.model_feet[1][1].clone()],
+        ],
+        measured: [
+            [fc.data_feet[0][0].clone(), fc.data_feet[0][1].clone()],
+            [fc.data_feet[1][0].clone(), fc.data_feet[1][1].clone()],
+        ],
         times: fc.times,
     });
-    Ok(GaitRunOutput { path, table, fine, transients, errors: overall, fine_forces, validity, enforce_validity: run.enforce_validity })
+    Ok(GaitRunOutput {
+        path,
+        table,
+        fine,
+        transients,
+        errors: overall,
+        fine_forces,
+        validity,
+        enforce_validity: run.enforce_validity,
+    })
 }
 
 /// The report's account of physical validity on the 1 ms grid.
@@ -363,24 +542,50 @@ fn validity_section(v: &footfall::problems::validity::Validity, check_points: us
     )];
     let mut tables = Vec::new();
     if v.is_valid() {
-        paragraphs.push("Nothing is broken: the solution is physically valid between the nodes.".into());
+        paragraphs
+            .push("Nothing is broken: the solution is physically valid between the nodes.".into());
     } else {
         paragraphs.push(format!("**The solution is physically invalid** in {} stretch(es): it is not a gait the model can walk. `--check-points` holds the contact constraints between the nodes where they break, and makes the verdict and exit code say so.", v.violations.len()));
         let mut t = Table {
             title: "Where physics is broken on the 1 ms grid".into(),
-            headers: ["what", "contact", "phase", "from (s)", "to (s)", "worst at (s)", "worst"].map(String::from).to_vec(),
+            headers: [
+                "what",
+                "contact",
+                "phase",
+                "from (s)",
+                "to (s)",
+                "worst at (s)",
+                "worst",
+            ]
+            .map(String::from)
+            .to_vec(),
             rows: Vec::new(),
         };
         for x in v.violations.iter().take(20) {
             let worst = match x.kind {
-                footfall::problems::validity::ViolationKind::Penetration => format!("{:.1} mm", x.amount * 1e3),
+                footfall::problems::validity::ViolationKind::Penetration => {
+                    format!("{:.1} mm", x.amount * 1e3)
+                }
                 _ => format!("{:.1} N", x.amount),
             };
-            t.rows.push(vec![x.kind.describe().into(), x.contact.clone(), x.phase.clone(), format!("{:.3}", x.from_s), format!("{:.3}", x.to_s), format!("{:.3}", x.worst_s), worst]);
+            t.rows.push(vec![
+                x.kind.describe().into(),
+                x.contact.clone(),
+                x.phase.clone(),
+                format!("{:.3}", x.from_s),
+                format!("{:.3}", x.to_s),
+                format!("{:.3}", x.worst_s),
+                worst,
+            ]);
         }
         tables.push(t);
     }
-    Section { heading: "Physical validity".into(), paragraphs, tables, svgs: vec![] }
+    Section {
+        heading: "Physical validity".into(),
+        paragraphs,
+        tables,
+        svgs: vec![],
+    }
 }
 
 /// The report's account of the ground-force transients.
@@ -432,5 +637,10 @@ fn transient_section(transients: &[ForceTransient], threshold: f64, have_fine: b
                 .collect(),
         });
     }
-    Section { heading: "Ground-force transients".into(), paragraphs, tables, svgs: vec![] }
+    Section {
+        heading: "Ground-force transients".into(),
+        paragraphs,
+        tables,
+        svgs: vec![],
+    }
 }

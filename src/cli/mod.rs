@@ -9,11 +9,11 @@
 mod compare;
 mod diagnose;
 mod diff;
-mod report;
 mod fit_foot;
 mod gait_run;
 mod predict;
 mod refine;
+mod report;
 mod session;
 mod simulate;
 mod solve;
@@ -93,7 +93,9 @@ impl Failure {
         if e.chain().any(|c| c.downcast_ref::<Invalid>().is_some()) {
             return Failure::PhysicallyInvalid(e);
         }
-        let Some(u) = e.chain().find_map(|c| c.downcast_ref::<Unsolved>()) else { return Failure::Input(e) };
+        let Some(u) = e.chain().find_map(|c| c.downcast_ref::<Unsolved>()) else {
+            return Failure::Input(e);
+        };
         match &u.status {
             SqpStatus::Infeasible => Failure::Infeasible(e),
             SqpStatus::Interrupted => Failure::Interrupted(e),
@@ -116,7 +118,11 @@ impl Failure {
 
     fn error(&self) -> &anyhow::Error {
         match self {
-            Failure::Input(e) | Failure::NotConverged(e) | Failure::Infeasible(e) | Failure::PhysicallyInvalid(e) | Failure::Interrupted(e) => e,
+            Failure::Input(e)
+            | Failure::NotConverged(e)
+            | Failure::Infeasible(e)
+            | Failure::PhysicallyInvalid(e)
+            | Failure::Interrupted(e) => e,
         }
     }
 }
@@ -136,7 +142,11 @@ impl Invalid {
             Some(v) if !v.is_valid() => Err(Invalid {
                 message: format!(
                     "converged, physically invalid: {} (results written to {})",
-                    v.violations.iter().map(|x| x.to_string()).collect::<Vec<_>>().join("; "),
+                    v.violations
+                        .iter()
+                        .map(|x| x.to_string())
+                        .collect::<Vec<_>>()
+                        .join("; "),
                     out.path.display()
                 ),
             }
@@ -168,7 +178,11 @@ impl Unsolved {
         Err(Unsolved {
             status: res.status.clone(),
             at_start: res.history.is_empty(),
-            message: format!("the solver stopped without converging: {} (results written to {})", res.status, written.display()),
+            message: format!(
+                "the solver stopped without converging: {} (results written to {})",
+                res.status,
+                written.display()
+            ),
         }
         .into())
     }
@@ -188,7 +202,9 @@ pub fn main() -> ExitCode {
     let recorded = match resuming {
         Some(sub) => session::prepare_resume(sub, &args).map(|original| {
             let quiet = cli.quiet;
-            cli = Cli::parse_from(std::iter::once("footfall".to_string()).chain(original.iter().cloned()));
+            cli = Cli::parse_from(
+                std::iter::once("footfall".to_string()).chain(original.iter().cloned()),
+            );
             cli.quiet |= quiet;
             original
         }),
@@ -257,7 +273,12 @@ mod tests {
     use super::*;
 
     fn code(status: SqpStatus, at_start: bool) -> u8 {
-        let e = anyhow::Error::new(Unsolved { status, at_start, message: String::new() }).context("wrapped");
+        let e = anyhow::Error::new(Unsolved {
+            status,
+            at_start,
+            message: String::new(),
+        })
+        .context("wrapped");
         Failure::classify(e).code()
     }
 

@@ -104,14 +104,29 @@ pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
 fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     let folder = super::session::create_checkpointed_run_folder(&args.out, args.overwrite)?;
     let init = args.init.as_deref().map(read_solution).transpose()?;
-    let (out, res) = predict(&args.options, &args.foot, args.phases.as_deref(), init.as_ref(), folder, quiet)?;
+    let (out, res) = predict(
+        &args.options,
+        &args.foot,
+        args.phases.as_deref(),
+        init.as_ref(),
+        folder,
+        quiet,
+    )?;
     finish(&out, &res, quiet)
 }
 
 /// Print the outcome; a solve that did not converge is an [`Unsolved`](super::Unsolved) error.
 pub fn finish(out: &GaitRunOutput, res: &SqpResult, quiet: bool) -> anyhow::Result<()> {
     if !quiet {
-        eprintln!("{}\n{}: J = {:.6}, KKT {:.2e}, {} iterations, {:.1} s", out.table.to_markdown(), res.status, res.objective, res.kkt, res.history.len().saturating_sub(1), res.seconds);
+        eprintln!(
+            "{}\n{}: J = {:.6}, KKT {:.2e}, {} iterations, {:.1} s",
+            out.table.to_markdown(),
+            res.status,
+            res.objective,
+            res.kkt,
+            res.history.len().saturating_sub(1),
+            res.seconds
+        );
         match out.transients.first() {
             Some(t) => eprintln!(
                 "largest ground-force transient: {} {} force {:.1} N at {:.3} s ({}), {:.1} N above the measurement for {:.1} ms",
@@ -133,9 +148,19 @@ pub fn read_solution(path: &Path) -> anyhow::Result<GaitSolution> {
     if !path.exists() {
         bail!("{}: no such run folder or solution file (give a track or predict run folder, or its solution.json)", path.display());
     }
-    let file = if path.is_dir() { path.join("solution.json") } else { path.to_path_buf() };
-    let text = std::fs::read_to_string(&file).with_context(|| format!("reading the initial solution {}", file.display()))?;
-    serde_json::from_str(&text).with_context(|| format!("{}: not a footfall solution (expected the solution.json of a track or predict run)", file.display()))
+    let file = if path.is_dir() {
+        path.join("solution.json")
+    } else {
+        path.to_path_buf()
+    };
+    let text = std::fs::read_to_string(&file)
+        .with_context(|| format!("reading the initial solution {}", file.display()))?;
+    serde_json::from_str(&text).with_context(|| {
+        format!(
+            "{}: not a footfall solution (expected the solution.json of a track or predict run)",
+            file.display()
+        )
+    })
 }
 
 /// The default phase file of a foot argument.
@@ -157,11 +182,14 @@ pub fn predict(
 ) -> anyhow::Result<(GaitRunOutput, SqpResult)> {
     let foot_path = super::simulate::foot_path(foot);
     let model = GaitModel::load(&o.model, &foot_path)?;
-    let phases = phases.map(Path::to_path_buf).unwrap_or_else(|| default_phases(foot));
+    let phases = phases
+        .map(Path::to_path_buf)
+        .unwrap_or_else(|| default_phases(foot));
     let seq = PhaseSequence::load(&phases)?;
     let sets = seq.resolve(&model, &phases)?;
     let data = super::load_data(o.data.as_deref())?;
-    let tracking = TrackingSetup::new(&model, &seq, &sets, &data).map_err(|e| anyhow!("{}: {e}", data.source.display()))?;
+    let tracking = TrackingSetup::new(&model, &seq, &sets, &data)
+        .map_err(|e| anyhow!("{}: {e}", data.source.display()))?;
     let mut settings = PredictionSettings::from_data(&tracking, &data);
     settings.step_length = o.step_length.unwrap_or(settings.step_length);
     settings.speed = o.speed.unwrap_or(settings.speed);
@@ -173,9 +201,17 @@ pub fn predict(
     }
     .map_err(|e| anyhow!("{}: {e}", phases.display()))?;
     let cycle = GaitCycle::new(&model, &setup.seq, &sets).map_err(|e| anyhow!(e))?;
-    let integrator = IntegratorSettings { rtol: o.integrator_tol, atol: o.integrator_tol, ..Default::default() };
+    let integrator = IntegratorSettings {
+        rtol: o.integrator_tol,
+        atol: o.integrator_tol,
+        ..Default::default()
+    };
     integrator.validate().context("--integrator-tol")?;
-    let build = || setup.ocp(&cycle, &model, &sets, integrator.clone()).map_err(|e| anyhow!(e));
+    let build = || {
+        setup
+            .ocp(&cycle, &model, &sets, integrator.clone())
+            .map_err(|e| anyhow!(e))
+    };
     let ocp = build()?;
     let tr = Transcription::new(&ocp).context("transcribing the prediction problem")?;
     let (_, _, w0) = tr.variable_bounds_and_guess();
@@ -212,15 +248,32 @@ pub fn predict(
         enabled: o.check_points,
         max_iter: sqp_settings.max_iter,
     };
-    let (sites, res) = refinement.solve(&build, &[], &w0, &mut |tr, w| super::solve_interruptibly(tr, w, &sqp_settings, quiet), quiet)?;
+    let (sites, res) = refinement.solve(
+        &build,
+        &[],
+        &w0,
+        &mut |tr, w| super::solve_interruptibly(tr, w, &sqp_settings, quiet),
+        quiet,
+    )?;
     let mut ocp = build()?;
     ocp.checks = refinement.checks(&sites);
     let tr = Transcription::new(&ocp).context("transcribing the prediction problem")?;
     let solution = GaitSolution::from_nlp(&tr, &res.w, &cycle.continuous, tracking.window.0);
-    let durations: Vec<String> = solution.phases.iter().map(|p| format!("{} {:.3} s", p.name, p.duration)).collect();
+    let durations: Vec<String> = solution
+        .phases
+        .iter()
+        .map(|p| format!("{} {:.3} s", p.name, p.duration))
+        .collect();
     let mut extra_json = serde_json::Map::new();
     extra_json.insert("prediction".into(), serde_json::to_value(&settings)?);
-    extra_json.insert("durations_s".into(), solution.phases.iter().map(|p| serde_json::json!({"phase": p.name, "duration": p.duration})).collect());
+    extra_json.insert(
+        "durations_s".into(),
+        solution
+            .phases
+            .iter()
+            .map(|p| serde_json::json!({"phase": p.name, "duration": p.duration}))
+            .collect(),
+    );
     let out = super::gait_run::write(
         GaitRun {
             command: "predict",

@@ -44,7 +44,10 @@ pub struct Refinement<'c, 'm> {
 impl<'m> Refinement<'_, 'm> {
     /// The check points at `sites`.
     pub fn checks(&self, sites: &[(usize, usize, f64)]) -> Vec<CheckPoint<'m>> {
-        sites.iter().flat_map(|&(j, k, tau)| self.cycle.contact_checks(j, k, tau)).collect()
+        sites
+            .iter()
+            .flat_map(|&(j, k, tau)| self.cycle.contact_checks(j, k, tau))
+            .collect()
     }
 
     /// Solve with `solve` (on the problem `build` makes, with the check points so far, from
@@ -68,7 +71,8 @@ impl<'m> Refinement<'_, 'm> {
         for round in 0..=MAX_ROUNDS {
             let mut ocp = build()?;
             ocp.checks = self.checks(&sites);
-            let tr = Transcription::new(&ocp).context("transcribing the problem with its check points")?;
+            let tr = Transcription::new(&ocp)
+                .context("transcribing the problem with its check points")?;
             let res = solve(&tr, &w)?;
             let converged = res.status == SqpStatus::Converged;
             let next = res.w.clone();
@@ -87,7 +91,11 @@ impl<'m> Refinement<'_, 'm> {
                 .refinement()
                 .iter()
                 .filter_map(|&(set, t)| locate_instant(&solution, set, t))
-                .filter(|s| !sites.iter().any(|o| o.0 == s.0 && o.1 == s.1 && (o.2 - s.2).abs() < 1e-3))
+                .filter(|s| {
+                    !sites
+                        .iter()
+                        .any(|o| o.0 == s.0 && o.1 == s.1 && (o.2 - s.2).abs() < 1e-3)
+                })
                 .collect();
             if new.is_empty() {
                 break;
@@ -96,8 +104,18 @@ impl<'m> Refinement<'_, 'm> {
                 for v in &found.violations {
                     eprintln!("between the nodes: {v}");
                 }
-                let at: Vec<String> = new.iter().map(|&(j, k, tau)| format!("{} interval {k} τ = {tau:.3}", solution.phases[j].name)).collect();
-                eprintln!("adding {} check point(s) ({}; {} in all) and solving again from this solution", new.len(), at.join(", "), sites.len() + new.len());
+                let at: Vec<String> = new
+                    .iter()
+                    .map(|&(j, k, tau)| {
+                        format!("{} interval {k} τ = {tau:.3}", solution.phases[j].name)
+                    })
+                    .collect();
+                eprintln!(
+                    "adding {} check point(s) ({}; {} in all) and solving again from this solution",
+                    new.len(),
+                    at.join(", "),
+                    sites.len() + new.len()
+                );
             }
             sites.extend(new);
             w = next;
@@ -107,8 +125,18 @@ impl<'m> Refinement<'_, 'm> {
 
     /// The validity of `solution` on the 1 ms grid.
     pub fn validity(&self, solution: &GaitSolution) -> anyhow::Result<validity::Validity> {
-        let re = solution.reintegrate(self.model, self.sets, GRID_STEP, &self.integrator).context("re-integrating on the validity grid")?;
+        let re = solution
+            .reintegrate(self.model, self.sets, GRID_STEP, &self.integrator)
+            .context("re-integrating on the validity grid")?;
         let names: Vec<String> = self.cycle.phase_names();
-        Ok(validity::check(self.model, &re.result.samples, self.sets, &names, &solution.theta, self.cycle.friction(), ValidityLimits::default()))
+        Ok(validity::check(
+            self.model,
+            &re.result.samples,
+            self.sets,
+            &names,
+            &solution.theta,
+            self.cycle.friction(),
+            ValidityLimits::default(),
+        ))
     }
 }

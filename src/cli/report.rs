@@ -50,11 +50,23 @@ struct SolverRecord {
 fn read_record(run: &Path) -> anyhow::Result<SolverRecord> {
     let file = run.join("summary.json");
     let text = std::fs::read_to_string(&file).with_context(|| format!("reading {} (a track run folder has one; it holds the solver's figures the report carries over)", file.display()))?;
-    let value: serde_json::Value = serde_json::from_str(&text).with_context(|| format!("{}: not JSON", file.display()))?;
+    let value: serde_json::Value =
+        serde_json::from_str(&text).with_context(|| format!("{}: not JSON", file.display()))?;
     if value.get("command").and_then(|c| c.as_str()) != Some("track") {
-        bail!("{}: field `command` is {}, expected \"track\" (footfall report rewrites track runs)", file.display(), value.get("command").map_or("missing".into(), |c| c.to_string()));
+        bail!(
+            "{}: field `command` is {}, expected \"track\" (footfall report rewrites track runs)",
+            file.display(),
+            value
+                .get("command")
+                .map_or("missing".into(), |c| c.to_string())
+        );
     }
-    serde_json::from_value(value).with_context(|| format!("{}: not the summary of a footfall track run", file.display()))
+    serde_json::from_value(value).with_context(|| {
+        format!(
+            "{}: not the summary of a footfall track run",
+            file.display()
+        )
+    })
 }
 
 pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
@@ -63,19 +75,27 @@ pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
 
 fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     if !args.run.is_dir() {
-        bail!("{}: not a run folder (give the folder a `footfall track` run wrote)", args.run.display());
+        bail!(
+            "{}: not a run folder (give the folder a `footfall track` run wrote)",
+            args.run.display()
+        );
     }
     let setup = read_run_setup(&args.run)?;
     let solution = super::predict::read_solution(&args.run)?;
     let record = read_record(&args.run)?;
     let mut prob = TrackingProblem::build(&setup, &[])?;
-    prob.setup.start_from(&solution).map_err(|e| anyhow!("{}: {e}", args.run.join("solution.json").display()))?;
+    prob.setup
+        .start_from(&solution)
+        .map_err(|e| anyhow!("{}: {e}", args.run.join("solution.json").display()))?;
     let (out, overwrite) = match &args.out {
         Some(o) => (o.clone(), args.overwrite),
         None => (args.run.clone(), true),
     };
     let folder = RunFolder::create(&out, overwrite)?;
-    let base = footfall::problems::diagnose::TrackingRunSetup { parameters: vec![], ..setup.clone() };
+    let base = footfall::problems::diagnose::TrackingRunSetup {
+        parameters: vec![],
+        ..setup.clone()
+    };
     let run = prob.with_transcription(|tr, cycle, w| {
         let ev = tr.evaluate(&w, true).context("evaluating the run's solution")?;
         let (lo, hi) = tr.constraint_bounds();
@@ -109,7 +129,12 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         println!("{}", run.output.table.to_markdown());
         if let Some(b) = &run.breakdown {
             let (share, normalised, windows) = super::track::cost_tables(b);
-            println!("{}\n{}\n{}", share.to_markdown(), normalised.to_markdown(), windows.to_markdown());
+            println!(
+                "{}\n{}\n{}",
+                share.to_markdown(),
+                normalised.to_markdown(),
+                windows.to_markdown()
+            );
         }
         if let Some(r) = &run.residuals {
             for t in &r.tables {

@@ -40,7 +40,11 @@ struct Session {
     resume: BTreeMap<usize, SqpCheckpoint>,
 }
 
-static SESSION: Mutex<Session> = Mutex::new(Session { command: None, checkpoint_dir: None, resume: BTreeMap::new() });
+static SESSION: Mutex<Session> = Mutex::new(Session {
+    command: None,
+    checkpoint_dir: None,
+    resume: BTreeMap::new(),
+});
 
 fn session() -> std::sync::MutexGuard<'static, Session> {
     SESSION.lock().unwrap_or_else(|p| p.into_inner())
@@ -113,13 +117,19 @@ impl Observer for Interruptible<'_> {
         self.checkpoints.is_some()
     }
     fn checkpoint(&mut self, state: &SqpCheckpoint) {
-        let Some((dir, name)) = &self.checkpoints else { return };
+        let Some((dir, name)) = &self.checkpoints else {
+            return;
+        };
         let written = serde_json::to_string(state)
             .map_err(|e| e.to_string())
-            .and_then(|text| runfolder::write_atomic(dir, name, text.as_bytes()).map_err(|e| e.to_string()));
+            .and_then(|text| {
+                runfolder::write_atomic(dir, name, text.as_bytes()).map_err(|e| e.to_string())
+            });
         if let Err(e) = written {
             // the solve goes on; only resuming it would be lost
-            eprintln!("warning: checkpoint not written ({e}); this run cannot be resumed if it is killed");
+            eprintln!(
+                "warning: checkpoint not written ({e}); this run cannot be resumed if it is killed"
+            );
             self.checkpoints = None;
         }
     }
@@ -128,11 +138,21 @@ impl Observer for Interruptible<'_> {
 /// Solve `nlp` from `w0` with Ctrl-C handled, logging each iteration to stderr unless
 /// `quiet`; checkpointed in a run folder made by [`create_checkpointed_run_folder`], and
 /// continued from the killed run's checkpoint when resuming.
-pub fn solve_interruptibly(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, quiet: bool) -> anyhow::Result<SqpResult> {
+pub fn solve_interruptibly(
+    nlp: &dyn Nlp,
+    w0: &[f64],
+    settings: &SqpSettings,
+    quiet: bool,
+) -> anyhow::Result<SqpResult> {
     let index = SOLVES.fetch_add(1, Ordering::SeqCst);
     let (resume, checkpoints) = {
         let mut s = session();
-        (s.resume.remove(&index), s.checkpoint_dir.clone().map(|d| (d, checkpoint_file(index))))
+        (
+            s.resume.remove(&index),
+            s.checkpoint_dir
+                .clone()
+                .map(|d| (d, checkpoint_file(index))),
+        )
     };
     let mut log = footfall::sqp::StderrLog;
     let mut silent = footfall::sqp::Silent;
@@ -141,9 +161,13 @@ pub fn solve_interruptibly(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, qu
     SOLVING.store(true, Ordering::SeqCst);
     let res = match &resume {
         Some(cp) => {
-            cp.check(nlp.n(), nlp.m()).context("resuming: the checkpoint does not fit the problem")?;
+            cp.check(nlp.n(), nlp.m())
+                .context("resuming: the checkpoint does not fit the problem")?;
             if !quiet {
-                eprintln!("resuming at iteration {} from the killed run's checkpoint", cp.next_iter);
+                eprintln!(
+                    "resuming at iteration {} from the killed run's checkpoint",
+                    cp.next_iter
+                );
             }
             footfall::sqp::solve_resumed(nlp, cp, settings, &mut observer)
         }
@@ -176,7 +200,10 @@ fn split_resume(args: &[String]) -> (Vec<String>, Option<String>) {
 pub fn prepare_resume(subcommand: &str, args: &[String]) -> anyhow::Result<Vec<String>> {
     let (rest, dir) = split_resume(args);
     let dir = dir.ok_or_else(|| anyhow!("--resume needs the output folder of the killed run"))?;
-    let others: Vec<&String> = rest.iter().filter(|a| a.as_str() != subcommand && a.as_str() != "--quiet").collect();
+    let others: Vec<&String> = rest
+        .iter()
+        .filter(|a| a.as_str() != subcommand && a.as_str() != "--quiet")
+        .collect();
     if !others.is_empty() {
         bail!(
             "--resume continues a run with the options it was started with; give no other options (found {})",
@@ -190,27 +217,53 @@ pub fn prepare_resume(subcommand: &str, args: &[String]) -> anyhow::Result<Vec<S
         .filter(|p| p.join(COMMAND_FILE).is_file())
         .collect();
     // the newest, if several runs into the same folder were killed
-    let newest = stale.iter().max_by_key(|p| std::fs::metadata(p.join(COMMAND_FILE)).and_then(|m| m.modified()).ok());
+    let newest = stale.iter().max_by_key(|p| {
+        std::fs::metadata(p.join(COMMAND_FILE))
+            .and_then(|m| m.modified())
+            .ok()
+    });
     let Some(staging) = newest else {
         bail!(
             "{dir}: no killed run to resume (a killed run leaves a hidden staging folder .NAME.partial-PID beside the output folder; a run that finished, failed or was stopped by Ctrl-C has none)"
         );
     };
-    let text = std::fs::read_to_string(staging.join(COMMAND_FILE)).with_context(|| staging.join(COMMAND_FILE).display().to_string())?;
-    let cmd: RecordedCommand = serde_json::from_str(&text).with_context(|| staging.join(COMMAND_FILE).display().to_string())?;
-    if cmd.args.iter().find(|a| !a.starts_with('-')).map(String::as_str) != Some(subcommand) {
-        bail!("{dir}: the killed run was not a `footfall {subcommand}` run (it was `footfall {}`)", cmd.args.join(" "));
+    let text = std::fs::read_to_string(staging.join(COMMAND_FILE))
+        .with_context(|| staging.join(COMMAND_FILE).display().to_string())?;
+    let cmd: RecordedCommand = serde_json::from_str(&text)
+        .with_context(|| staging.join(COMMAND_FILE).display().to_string())?;
+    if cmd
+        .args
+        .iter()
+        .find(|a| !a.starts_with('-'))
+        .map(String::as_str)
+        != Some(subcommand)
+    {
+        bail!(
+            "{dir}: the killed run was not a `footfall {subcommand}` run (it was `footfall {}`)",
+            cmd.args.join(" ")
+        );
     }
     let mut resume = BTreeMap::new();
-    for entry in std::fs::read_dir(staging).with_context(|| staging.display().to_string())?.flatten() {
+    for entry in std::fs::read_dir(staging)
+        .with_context(|| staging.display().to_string())?
+        .flatten()
+    {
         let name = entry.file_name().to_string_lossy().into_owned();
-        let Some(k) = name.strip_prefix(&format!("{RESUME_PREFIX}checkpoint-")).and_then(|r| r.strip_suffix(".json")) else { continue };
+        let Some(k) = name
+            .strip_prefix(&format!("{RESUME_PREFIX}checkpoint-"))
+            .and_then(|r| r.strip_suffix(".json"))
+        else {
+            continue;
+        };
         let Ok(k) = k.parse::<usize>() else { continue };
-        let text = std::fs::read_to_string(entry.path()).with_context(|| entry.path().display().to_string())?;
-        let cp: SqpCheckpoint = serde_json::from_str(&text).with_context(|| format!("{}: not a footfall checkpoint", entry.path().display()))?;
+        let text = std::fs::read_to_string(entry.path())
+            .with_context(|| entry.path().display().to_string())?;
+        let cp: SqpCheckpoint = serde_json::from_str(&text)
+            .with_context(|| format!("{}: not a footfall checkpoint", entry.path().display()))?;
         resume.insert(k, cp);
     }
-    std::env::set_current_dir(&cmd.cwd).with_context(|| format!("resuming in the run's working folder {}", cmd.cwd.display()))?;
+    std::env::set_current_dir(&cmd.cwd)
+        .with_context(|| format!("resuming in the run's working folder {}", cmd.cwd.display()))?;
     let mut s = session();
     s.resume = resume;
     s.command = Some(cmd.clone());

@@ -8,7 +8,9 @@ use footfall::model::gait::COORDINATES;
 use footfall::model::{GaitModel, RowKind};
 use footfall::phases::{InitialState, PhaseSequence};
 use footfall::runfolder::RunFolder;
-use footfall::simulate::{simulate, SanityTolerances, SimulationResult, SimulationSettings, SimulationWarning};
+use footfall::simulate::{
+    simulate, SanityTolerances, SimulationResult, SimulationSettings, SimulationWarning,
+};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -81,22 +83,40 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     let init: InitialState = match &args.initial {
         Some(p) => footfall::model::spec::read_json(p)?,
         None => seq.initial_state.clone().ok_or_else(|| {
-            anyhow!("{}: no `initial_state` in the phase file and no --initial given", args.phase_set.display())
+            anyhow!(
+                "{}: no `initial_state` in the phase file and no --initial given",
+                args.phase_set.display()
+            )
         })?,
     };
-    let src = args.initial.as_ref().unwrap_or(&args.phase_set).display().to_string();
+    let src = args
+        .initial
+        .as_ref()
+        .unwrap_or(&args.phase_set)
+        .display()
+        .to_string();
     let nq = model.nq();
     for (field, v, n) in [("q", &init.q, nq), ("qd", &init.qd, nq)] {
         if v.len() != n {
-            return Err(anyhow!("{src}: initial state field '{field}' has {} values, expected {n} ({})", v.len(), COORDINATES.join(", ")));
+            return Err(anyhow!(
+                "{src}: initial state field '{field}' has {} values, expected {n} ({})",
+                v.len(),
+                COORDINATES.join(", ")
+            ));
         }
         if let Some(i) = v.iter().position(|x| !x.is_finite()) {
-            return Err(anyhow!("{src}: initial state field '{field}[{i}]' is not finite"));
+            return Err(anyhow!(
+                "{src}: initial state field '{field}[{i}]' is not finite"
+            ));
         }
     }
     let a = match &init.a {
         Some(a) if a.len() != model.na() => {
-            return Err(anyhow!("{src}: initial state field 'a' has {} values, expected {}", a.len(), model.na()))
+            return Err(anyhow!(
+                "{src}: initial state field 'a' has {} values, expected {}",
+                a.len(),
+                model.na()
+            ))
         }
         Some(a) => a.clone(),
         None => vec![0.01; model.na()],
@@ -107,7 +127,12 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     } else {
         let (q, qd, gap) = model
             .project(&sets[0], &init.q, &init.qd, &theta)
-            .with_context(|| format!("projecting the initial state onto phase '{}'", seq.phases[0].name()))?;
+            .with_context(|| {
+                format!(
+                    "projecting the initial state onto phase '{}'",
+                    seq.phases[0].name()
+                )
+            })?;
         if gap > 1e-9 {
             return Err(anyhow!(
                 "{src}: the initial state cannot be placed on the contacts of phase '{}' (gap {gap:.3e} m remains)",
@@ -128,15 +153,28 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     };
     let settings = SimulationSettings {
         output_step: args.dt,
-        integrator: IntegratorSettings { rtol: args.tol, atol: args.tol, ..Default::default() },
+        integrator: IntegratorSettings {
+            rtol: args.tol,
+            atol: args.tol,
+            ..Default::default()
+        },
     };
-    settings.integrator.validate().context("integrator settings")?;
-    for (flag, v) in [("--gap-tolerance", args.gap_tolerance), ("--baumgarte-tolerance", args.baumgarte_tolerance)] {
+    settings
+        .integrator
+        .validate()
+        .context("integrator settings")?;
+    for (flag, v) in [
+        ("--gap-tolerance", args.gap_tolerance),
+        ("--baumgarte-tolerance", args.baumgarte_tolerance),
+    ] {
         if !(v.is_finite() && v > 0.0) {
             return Err(anyhow!("{flag} must be a positive number, got {v}"));
         }
     }
-    let tolerances = SanityTolerances { landing_gap_m: args.gap_tolerance, baumgarte_force_n: args.baumgarte_tolerance };
+    let tolerances = SanityTolerances {
+        landing_gap_m: args.gap_tolerance,
+        baumgarte_force_n: args.baumgarte_tolerance,
+    };
     if !quiet {
         eprintln!(
             "simulating {} phases of '{}' with model '{}' and foot '{}'…",
@@ -163,9 +201,24 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     for w in &warnings {
         eprintln!("warning: {w}");
     }
-    folder.write("timeseries.csv", timeseries_csv(&model, &sets, &res).as_bytes())?;
-    let summary = summary_json(&model, &seq, &sets, &res, &args, &tolerances, &warnings, started.elapsed().as_secs_f64());
-    folder.write("summary.json", serde_json::to_string_pretty(&summary)?.as_bytes())?;
+    folder.write(
+        "timeseries.csv",
+        timeseries_csv(&model, &sets, &res).as_bytes(),
+    )?;
+    let summary = summary_json(
+        &model,
+        &seq,
+        &sets,
+        &res,
+        &args,
+        &tolerances,
+        &warnings,
+        started.elapsed().as_secs_f64(),
+    );
+    folder.write(
+        "summary.json",
+        serde_json::to_string_pretty(&summary)?.as_bytes(),
+    )?;
     let out = folder.commit()?;
     if !quiet {
         eprintln!(
@@ -180,7 +233,11 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     Ok(())
 }
 
-fn timeseries_csv(model: &GaitModel, sets: &[footfall::model::ConstraintSet], res: &SimulationResult) -> String {
+fn timeseries_csv(
+    model: &GaitModel,
+    sets: &[footfall::model::ConstraintSet],
+    res: &SimulationResult,
+) -> String {
     let mut s = String::from("time,phase");
     for n in model.state_names() {
         write!(s, ",{n}").ok();
@@ -197,17 +254,33 @@ fn timeseries_csv(model: &GaitModel, sets: &[footfall::model::ConstraintSet], re
         .ok();
     }
     s.push('\n');
-    let cell = |v: Option<f64>| v.filter(|x| x.is_finite()).map(|x| format!("{x:.9e}")).unwrap_or_default();
+    let cell = |v: Option<f64>| {
+        v.filter(|x| x.is_finite())
+            .map(|x| format!("{x:.9e}"))
+            .unwrap_or_default()
+    };
     for smp in &res.samples {
         write!(s, "{:.6},{}", smp.t, sets[smp.phase].name).ok();
         for v in &smp.x {
             write!(s, ",{v:.9e}").ok();
         }
         for f in &smp.feet {
-            write!(s, ",{},{},{}", cell(Some(f.fx)), cell(Some(f.fy)), cell(Some(f.cop_x))).ok();
+            write!(
+                s,
+                ",{},{},{}",
+                cell(Some(f.fx)),
+                cell(Some(f.fy)),
+                cell(Some(f.cop_x))
+            )
+            .ok();
         }
         for (ci, _) in model.contacts.iter().enumerate() {
-            let row = |k: RowKind| sets[smp.phase].rows.iter().position(|r| r.contact == ci && r.kind == k);
+            let row = |k: RowKind| {
+                sets[smp.phase]
+                    .rows
+                    .iter()
+                    .position(|r| r.contact == ci && r.kind == k)
+            };
             let (rn, rt) = (row(RowKind::Normal), row(RowKind::Tangential));
             let get = |r: Option<usize>, v: &Vec<f64>| r.map(|r| v[r]);
             let c = &smp.contact;
@@ -250,7 +323,12 @@ fn summary_json(
             v
         })
         .collect();
-    let peak = |side: usize| res.samples.iter().map(|s| s.feet[side].fy).fold(0.0f64, f64::max);
+    let peak = |side: usize| {
+        res.samples
+            .iter()
+            .map(|s| s.feet[side].fy)
+            .fold(0.0f64, f64::max)
+    };
     let last = res.samples.last().map(|s| s.x.clone()).unwrap_or_default();
     serde_json::json!({
         "command": "simulate",

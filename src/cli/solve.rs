@@ -85,14 +85,20 @@ pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
 
 fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     // clap requires --problem unless --resume, which main replaces by the killed run's options
-    let problem = args.problem.clone().ok_or_else(|| anyhow!("--problem is required"))?;
+    let problem = args
+        .problem
+        .clone()
+        .ok_or_else(|| anyhow!("--problem is required"))?;
     let bench = Benchmark::load(&problem)?;
     let method = match args.integrator {
         MethodArg::Adams => Method::Adams,
         MethodArg::Bdf => Method::Bdf,
     };
     let ocp = bench
-        .ocp(IntegratorSettings { method, ..Default::default() })
+        .ocp(IntegratorSettings {
+            method,
+            ..Default::default()
+        })
         .map_err(|e| anyhow!("{}: {e}", problem.display()))?;
     let tr = Transcription::new(&ocp).context("transcribing the problem")?;
     let (_, _, mut w0) = tr.variable_bounds_and_guess();
@@ -101,20 +107,44 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         let w: Vec<f64> = v
             .get("w")
             .and_then(|w| w.as_array())
-            .ok_or_else(|| anyhow!("{}: field 'w' missing (expected a footfall solution.json)", ws.display()))?
+            .ok_or_else(|| {
+                anyhow!(
+                    "{}: field 'w' missing (expected a footfall solution.json)",
+                    ws.display()
+                )
+            })?
             .iter()
-            .map(|x| x.as_f64().ok_or_else(|| anyhow!("{}: field 'w' must hold numbers", ws.display())))
+            .map(|x| {
+                x.as_f64()
+                    .ok_or_else(|| anyhow!("{}: field 'w' must hold numbers", ws.display()))
+            })
             .collect::<anyhow::Result<_>>()?;
         if w.len() != w0.len() {
-            return Err(anyhow!("{}: field 'w' has {} values, this problem has {}", ws.display(), w.len(), w0.len()));
+            return Err(anyhow!(
+                "{}: field 'w' has {} values, this problem has {}",
+                ws.display(),
+                w.len(),
+                w0.len()
+            ));
         }
         w0 = w;
     }
     let hessian = args.hessian.map_or(HessianMode::Exact, HessianMode::from);
-    let settings = SqpSettings { tol_kkt: args.tol, max_iter: args.max_iter, max_time: args.max_time, hessian, ..Default::default() };
+    let settings = SqpSettings {
+        tol_kkt: args.tol,
+        max_iter: args.max_iter,
+        max_time: args.max_time,
+        hessian,
+        ..Default::default()
+    };
     let folder = super::session::create_checkpointed_run_folder(&args.out, args.overwrite)?;
     if !quiet {
-        eprintln!("solving {} ({} variables, {} constraints) with {hessian:?}", bench.name(), tr.n(), tr.m());
+        eprintln!(
+            "solving {} ({} variables, {} constraints) with {hessian:?}",
+            bench.name(),
+            tr.n(),
+            tr.m()
+        );
     }
     let res = super::solve_interruptibly(&tr, &w0, &settings, quiet)?;
 
@@ -123,10 +153,12 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     let mut csv = String::new();
     for (j, ph) in ocp.phases.iter().enumerate() {
         let h = ph.duration.value / ph.intervals as f64;
-        let states: Vec<Vec<f64>> =
-            (0..=ph.intervals).map(|k| res.w[tr.range(Block::State { phase: j, node: k })].to_vec()).collect();
-        let controls: Vec<Vec<f64>> =
-            (0..ph.control_nodes()).map(|k| res.w[tr.range(Block::Control { phase: j, node: k })].to_vec()).collect();
+        let states: Vec<Vec<f64>> = (0..=ph.intervals)
+            .map(|k| res.w[tr.range(Block::State { phase: j, node: k })].to_vec())
+            .collect();
+        let controls: Vec<Vec<f64>> = (0..ph.control_nodes())
+            .map(|k| res.w[tr.range(Block::Control { phase: j, node: k })].to_vec())
+            .collect();
         if j == 0 {
             csv.push_str("time,phase");
             for i in 0..ph.ode.nx() {
@@ -179,9 +211,15 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         "most_violated": res.most_violated,
         "history": res.history,
     });
-    folder.write("solution.json", serde_json::to_string_pretty(&solution)?.as_bytes())?;
+    folder.write(
+        "solution.json",
+        serde_json::to_string_pretty(&solution)?.as_bytes(),
+    )?;
     folder.write("solution.csv", csv.as_bytes())?;
-    folder.write("summary.json", serde_json::to_string_pretty(&summary)?.as_bytes())?;
+    folder.write(
+        "summary.json",
+        serde_json::to_string_pretty(&summary)?.as_bytes(),
+    )?;
     let out = folder.commit()?;
     if !quiet {
         eprintln!(

@@ -3,9 +3,9 @@
 
 use super::Failure;
 use anyhow::{anyhow, bail, Context};
-use footfall::model::effects::EffectSpec;
 use footfall::data::write_sagittal_csv;
 use footfall::integrate::IntegratorSettings;
+use footfall::model::effects::EffectSpec;
 use footfall::model::GaitModel;
 use footfall::phases::PhaseSequence;
 use footfall::problems::synth::{synthesize, MeasurementOffsets, NoiseModel, SynthSettings};
@@ -71,34 +71,80 @@ pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
 
 fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     if !(args.half_cycles.is_finite() && args.half_cycles >= 2.5) {
-        bail!("--half-cycles {}: need at least 2.5 (a gait cycle plus margins for the event search)", args.half_cycles);
+        bail!(
+            "--half-cycles {}: need at least 2.5 (a gait cycle plus margins for the event search)",
+            args.half_cycles
+        );
     }
-    let hidden: Vec<EffectSpec> = args.hidden_effects.iter().map(|e| EffectSpec::parse_cli(e).map(|s| s.fixed()).map_err(|r| anyhow!("--hidden-effect: {r}"))).collect::<Result<_, _>>()?;
+    let hidden: Vec<EffectSpec> = args
+        .hidden_effects
+        .iter()
+        .map(|e| {
+            EffectSpec::parse_cli(e)
+                .map(|s| s.fixed())
+                .map_err(|r| anyhow!("--hidden-effect: {r}"))
+        })
+        .collect::<Result<_, _>>()?;
     let mut offsets = MeasurementOffsets::default();
     let mut model_effects = Vec::new();
     for e in &hidden {
         match e {
-            EffectSpec::ForcePlateTimeOffset { offset, .. } => offsets.force_time_offset_s = *offset,
+            EffectSpec::ForcePlateTimeOffset { offset, .. } => {
+                offsets.force_time_offset_s = *offset
+            }
             EffectSpec::CopOffset { offset, .. } => offsets.cop_offset_m = *offset,
             other => model_effects.push(other.clone()),
         }
     }
     let mut solution = super::predict::read_solution(&args.from)?;
     // what the --from run was made with, unless given
-    let from_setup = if args.from.is_dir() && args.from.join("setup.json").is_file() { Some(super::track::read_run_setup(&args.from)?) } else { None };
-    let model_path = args.model.clone().or_else(|| from_setup.as_ref().map(|s| s.model.clone())).unwrap_or_else(|| PathBuf::from("models/opensim_subject01.json"));
-    let foot = args.foot.clone().or_else(|| from_setup.as_ref().map(|s| s.foot.clone())).unwrap_or_else(|| "ellipse".into());
+    let from_setup = if args.from.is_dir() && args.from.join("setup.json").is_file() {
+        Some(super::track::read_run_setup(&args.from)?)
+    } else {
+        None
+    };
+    let model_path = args
+        .model
+        .clone()
+        .or_else(|| from_setup.as_ref().map(|s| s.model.clone()))
+        .unwrap_or_else(|| PathBuf::from("models/opensim_subject01.json"));
+    let foot = args
+        .foot
+        .clone()
+        .or_else(|| from_setup.as_ref().map(|s| s.foot.clone()))
+        .unwrap_or_else(|| "ellipse".into());
     let mut model = GaitModel::load(&model_path, &super::simulate::foot_path(&foot))?;
-    let mut phases = args.phases.clone().or_else(|| from_setup.as_ref().map(|s| s.phases.clone())).unwrap_or_else(|| super::predict::default_phases(&foot));
+    let mut phases = args
+        .phases
+        .clone()
+        .or_else(|| from_setup.as_ref().map(|s| s.phases.clone()))
+        .unwrap_or_else(|| super::predict::default_phases(&foot));
     if !model_effects.is_empty() {
         // the truth: the --from run's problem re-solved with the effects in the model
-        let run = super::track::read_run_setup(&args.from).context("--hidden-effect with a model effect needs a track run folder as --from")?;
+        let run = super::track::read_run_setup(&args.from)
+            .context("--hidden-effect with a model effect needs a track run folder as --from")?;
         let mut prob = super::track::TrackingProblem::build(&run, &model_effects)?;
-        prob.setup.start_from(&solution).map_err(|e| anyhow!("{}: {e}", args.from.display()))?;
+        prob.setup
+            .start_from(&solution)
+            .map_err(|e| anyhow!("{}: {e}", args.from.display()))?;
         if !quiet {
-            eprintln!("re-fitting {} with {} hidden in the model", args.from.display(), model_effects.iter().map(|e| e.label()).collect::<Vec<_>>().join(" and "));
+            eprintln!(
+                "re-fitting {} with {} hidden in the model",
+                args.from.display(),
+                model_effects
+                    .iter()
+                    .map(|e| e.label())
+                    .collect::<Vec<_>>()
+                    .join(" and ")
+            );
         }
-        let settings = super::track::tracking_sqp_settings(1e-5, 200, None, footfall::sqp::HessianMode::Exact, 1e-3);
+        let settings = super::track::tracking_sqp_settings(
+            1e-5,
+            200,
+            None,
+            footfall::sqp::HessianMode::Exact,
+            1e-3,
+        );
         let (res, sol) = prob.solve(&settings, quiet)?;
         if res.status != footfall::sqp::SqpStatus::Converged {
             return Err(super::Unsolved {
@@ -114,11 +160,20 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     }
     let seq = PhaseSequence::load(&phases)?;
     let sets = seq.resolve(&model, &phases)?;
-    if solution.phases.iter().any(|p| p.set >= sets.len() || p.x.iter().any(|x| x.len() != model.nx())) {
+    if solution
+        .phases
+        .iter()
+        .any(|p| p.set >= sets.len() || p.x.iter().any(|x| x.len() != model.nx()))
+    {
         bail!("{}: the solution does not belong to this model and phase graph ({} states, phases of {})", args.from.display(), model.nx(), phases.display());
     }
     if solution.theta.len() != model.ntheta() {
-        bail!("{}: the solution has {} free parameters, the model {}", args.from.display(), solution.theta.len(), model.ntheta());
+        bail!(
+            "{}: the solution has {} free parameters, the model {}",
+            args.from.display(),
+            solution.theta.len(),
+            model.ntheta()
+        );
     }
     let mut truth_sol = solution.clone();
     let t0 = truth_sol.phases[0].t0;
@@ -138,11 +193,16 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         start_s: -0.5 * half,
         duration_s: args.half_cycles * half,
         noise,
-        integrator: IntegratorSettings { rtol: 1e-10, atol: 1e-10, ..Default::default() },
+        integrator: IntegratorSettings {
+            rtol: 1e-10,
+            atol: 1e-10,
+            ..Default::default()
+        },
         measurement: offsets,
     };
     let folder = RunFolder::create(&args.out, args.overwrite)?;
-    let (data, truth) = synthesize(&model, &sets, &truth_sol, &settings, "synthetic").map_err(|e| anyhow!("generating the trial: {e}"))?;
+    let (data, truth) = synthesize(&model, &sets, &truth_sol, &settings, "synthetic")
+        .map_err(|e| anyhow!("generating the trial: {e}"))?;
     let (csv, meta) = write_sagittal_csv(&data);
     let (clean_csv, _) = write_sagittal_csv(&truth.clean);
     let truth_json = serde_json::json!({
@@ -163,7 +223,10 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     folder.write("synthetic.csv", csv.as_bytes())?;
     folder.write("synthetic_meta.json", meta.as_bytes())?;
     folder.write("truth_clean.csv", clean_csv.as_bytes())?;
-    folder.write("truth.json", serde_json::to_string_pretty(&truth_json)?.as_bytes())?;
+    folder.write(
+        "truth.json",
+        serde_json::to_string_pretty(&truth_json)?.as_bytes(),
+    )?;
     let out = folder.commit()?;
     if !quiet {
         eprintln!(
@@ -180,7 +243,10 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
             args.noise_cop_mm,
             args.seed
         );
-        eprintln!("trial: {}  (track it with --data)", out.join("synthetic.csv").display());
+        eprintln!(
+            "trial: {}  (track it with --data)",
+            out.join("synthetic.csv").display()
+        );
     }
     Ok(())
 }

@@ -1,18 +1,18 @@
 //! `footfall track`: track measured walking with the model (seed 001 §3.4).
 
+use super::gait_run::GaitRun;
 use super::Failure;
 use anyhow::{anyhow, Context};
-use super::gait_run::GaitRun;
 use footfall::integrate::IntegratorSettings;
+use footfall::model::effects::EffectSpec;
 use footfall::model::GaitModel;
 use footfall::ocp::Transcription;
 use footfall::phases::PhaseSequence;
+use footfall::problems::diagnose::{parameter_sd, IdentifiedParameter, TrackingRunSetup};
+use footfall::problems::evaluation::GaitSolution;
 use footfall::problems::gait::GaitCycle;
 use footfall::problems::track::{TargetSides, TrackingSetup};
-use footfall::problems::evaluation::GaitSolution;
 use footfall::runfolder::RunFolder;
-use footfall::model::effects::EffectSpec;
-use footfall::problems::diagnose::{parameter_sd, IdentifiedParameter, TrackingRunSetup};
 use footfall::sqp::{ExactConvexification, HessianMode, SqpSettings, SqpStatus};
 use std::path::PathBuf;
 
@@ -148,28 +148,70 @@ pub const RESIDUAL_SCALE: f64 = 100.0;
 /// The residual actuators' profiles at the nodes (plots, phases shaded), their RMS and
 /// peak values (N or N·m) and how often they sit on their bounds, for a model that has
 /// them.
-fn residual_report(model: &GaitModel, sol: &GaitSolution) -> Option<(footfall::report::html::Section, serde_json::Value)> {
+fn residual_report(
+    model: &GaitModel,
+    sol: &GaitSolution,
+) -> Option<(footfall::report::html::Section, serde_json::Value)> {
     use footfall::report::plot::{LinePlot, LineStyle, Series, Span};
     let uses = footfall::problems::evaluation::residual_use(model, sol);
     if uses.is_empty() {
         return None;
     }
-    let spans: Vec<Span> = sol.phase_spans().iter().map(|p| Span::new(p.t0, p.t1, p.name.clone())).collect();
+    let spans: Vec<Span> = sol
+        .phase_spans()
+        .iter()
+        .map(|p| Span::new(p.t0, p.t1, p.name.clone()))
+        .collect();
     let mut forces = LinePlot::new("Residual forces on the pelvis", "time (s)", "force (N)");
     let mut torques = LinePlot::new("Residual torques", "time (s)", "torque (N·m)");
     for r in &uses {
-        let p = if r.unit == "N" { &mut forces } else { &mut torques };
-        p.series.push(Series::new(r.name.trim_end_matches("_residual").replace('_', " "), r.times.clone(), r.values.clone(), LineStyle::Solid));
+        let p = if r.unit == "N" {
+            &mut forces
+        } else {
+            &mut torques
+        };
+        p.series.push(Series::new(
+            r.name.trim_end_matches("_residual").replace('_', " "),
+            r.times.clone(),
+            r.values.clone(),
+            LineStyle::Solid,
+        ));
     }
     forces.shaded = spans.clone();
     torques.shaded = spans;
     let rows = uses
         .iter()
-        .map(|r| vec![r.name.clone(), format!("{:.2}", r.rms), format!("{:.2}", r.peak), format!("±{}", r.bound), format!("{:.0}", 100.0 * r.at_bound_fraction), r.unit.to_string()])
+        .map(|r| {
+            vec![
+                r.name.clone(),
+                format!("{:.2}", r.rms),
+                format!("{:.2}", r.peak),
+                format!("±{}", r.bound),
+                format!("{:.0}", 100.0 * r.at_bound_fraction),
+                r.unit.to_string(),
+            ]
+        })
         .collect();
-    let table = footfall::report::table::Table { title: "Residual actuators at the nodes".into(), headers: ["residual", "RMS", "peak |·|", "bound", "% of nodes at the bound", "unit"].map(String::from).to_vec(), rows };
+    let table = footfall::report::table::Table {
+        title: "Residual actuators at the nodes".into(),
+        headers: [
+            "residual",
+            "RMS",
+            "peak |·|",
+            "bound",
+            "% of nodes at the bound",
+            "unit",
+        ]
+        .map(String::from)
+        .to_vec(),
+        rows,
+    };
     let mut paragraphs = vec!["What the model needs beyond its own actuators to follow the data, and when: residual forces on the pelvis translations and torques on the pelvis tilt and the joints, at the shooting nodes.".to_string()];
-    let saturated: Vec<&str> = uses.iter().filter(|r| r.at_bound_fraction > 0.0).map(|r| r.name.as_str()).collect();
+    let saturated: Vec<&str> = uses
+        .iter()
+        .filter(|r| r.at_bound_fraction > 0.0)
+        .map(|r| r.name.as_str())
+        .collect();
     if !saturated.is_empty() {
         paragraphs.push(format!(
             "{} of {} residuals reach their bound ({}): where they do, the model needs more than the residual may give, so the profile is a lower bound of what is missing and the tracking error there carries the rest.",
@@ -223,15 +265,23 @@ impl TrackingProblem {
         for p in &run.parameters {
             // a free parameter the run knew is started at its value (one the model lacks
             // or holds fixed is left as it is)
-            if model.parameters().iter().any(|q| q.name == p.name && q.free) {
-                model.set_parameter_value(&p.name, p.value).map_err(|e| anyhow!(e))?;
+            if model
+                .parameters()
+                .iter()
+                .any(|q| q.name == p.name && q.free)
+            {
+                model
+                    .set_parameter_value(&p.name, p.value)
+                    .map_err(|e| anyhow!(e))?;
             }
         }
         let seq = PhaseSequence::load(&run.phases)?;
         let sets = seq.resolve(&model, &run.phases)?;
         let mut data = super::load_data(run.data.as_deref())?;
         let sides = if run.one_sided_targets {
-            TargetSides::OneSided { cutoff_hz: run.kinematics_cutoff }
+            TargetSides::OneSided {
+                cutoff_hz: run.kinematics_cutoff,
+            }
         } else if run.sample_targets {
             TargetSides::Samples
         } else {
@@ -240,12 +290,16 @@ impl TrackingProblem {
         if let Some(fc) = run.kinematics_cutoff {
             // one-sided targets filter segment by segment (the same sampling and cutoff checks)
             if run.one_sided_targets {
-                data.kinematics_filter_rate(fc).context("--kinematics-cutoff")?;
+                data.kinematics_filter_rate(fc)
+                    .context("--kinematics-cutoff")?;
             } else {
-                data = data.low_pass_kinematics(fc).context("--kinematics-cutoff")?;
+                data = data
+                    .low_pass_kinematics(fc)
+                    .context("--kinematics-cutoff")?;
             }
         }
-        let mut setup = TrackingSetup::new_with_sides(&model, &seq, &sets, &data, sides).map_err(|e| anyhow!("{}: {e}", data.source.display()))?;
+        let mut setup = TrackingSetup::new_with_sides(&model, &seq, &sets, &data, sides)
+            .map_err(|e| anyhow!("{}: {e}", data.source.display()))?;
         if run.track_pelvis_position {
             setup.weights = setup.weights.clone().with_pelvis_position();
         }
@@ -254,7 +308,9 @@ impl TrackingProblem {
         }
         if let Some(w) = run.regularisation {
             if !(w.is_finite() && w >= 0.0) {
-                return Err(anyhow!("--regularisation {w}: expected a finite weight ≥ 0 (the seed's is 1e-3)"));
+                return Err(anyhow!(
+                    "--regularisation {w}: expected a finite weight ≥ 0 (the seed's is 1e-3)"
+                ));
             }
             setup.weights.excitation = w;
             setup.weights.activation = w;
@@ -266,18 +322,50 @@ impl TrackingProblem {
             setup.weights = setup.weights.clone().with_velocity_weight(v);
         }
         // a pad (from the model file or `extra`) or residual actuators need a tighter tolerance
-        let stiff = run.residual_actuators || (0..model.contacts.len()).any(|c| model.is_compliant(c));
-        let tol = if stiff { run.integrator_tol.min(PADDED_INTEGRATOR_TOL) } else { run.integrator_tol };
-        let sens_tol = run.sensitivity_tol.unwrap_or(if run.residual_actuators { tol } else { run.integrator_tol });
+        let stiff =
+            run.residual_actuators || (0..model.contacts.len()).any(|c| model.is_compliant(c));
+        let tol = if stiff {
+            run.integrator_tol.min(PADDED_INTEGRATOR_TOL)
+        } else {
+            run.integrator_tol
+        };
+        let sens_tol = run.sensitivity_tol.unwrap_or(if run.residual_actuators {
+            tol
+        } else {
+            run.integrator_tol
+        });
         let sens_tol = (sens_tol != tol).then_some(sens_tol);
-        let integrator = IntegratorSettings { rtol: tol, atol: tol, sens_tol, ..Default::default() };
-        integrator.validate().context("--integrator-tol or --sensitivity-tol")?;
-        Ok(Self { model, sets, data, setup, phases: run.phases.clone(), integrator, check_sites: run.check_points.clone(), refine: false })
+        let integrator = IntegratorSettings {
+            rtol: tol,
+            atol: tol,
+            sens_tol,
+            ..Default::default()
+        };
+        integrator
+            .validate()
+            .context("--integrator-tol or --sensitivity-tol")?;
+        Ok(Self {
+            model,
+            sets,
+            data,
+            setup,
+            phases: run.phases.clone(),
+            integrator,
+            check_sites: run.check_points.clone(),
+            refine: false,
+        })
     }
 
     /// The run description of a solution `theta` of this problem with standard
     /// deviations `sd` (per θ).
-    pub fn record(&self, base: &TrackingRunSetup, extra: &[EffectSpec], theta: &[f64], sd: &[Option<f64>], check_points: &[(usize, usize, f64)]) -> TrackingRunSetup {
+    pub fn record(
+        &self,
+        base: &TrackingRunSetup,
+        extra: &[EffectSpec],
+        theta: &[f64],
+        sd: &[Option<f64>],
+        check_points: &[(usize, usize, f64)],
+    ) -> TrackingRunSetup {
         let free = self.model.free_parameters();
         let parameters = self
             .model
@@ -297,7 +385,14 @@ impl TrackingProblem {
             .collect();
         let mut effects = base.effects.clone();
         effects.extend(extra.iter().cloned());
-        TrackingRunSetup { effects, parameters, integrator_tol: self.integrator.rtol, sensitivity_tol: self.integrator.sens_tol, check_points: check_points.to_vec(), ..base.clone() }
+        TrackingRunSetup {
+            effects,
+            parameters,
+            integrator_tol: self.integrator.rtol,
+            sensitivity_tol: self.integrator.sens_tol,
+            check_points: check_points.to_vec(),
+            ..base.clone()
+        }
     }
 }
 
@@ -308,28 +403,65 @@ fn parse_noise_weights(text: &str) -> anyhow::Result<footfall::problems::trackin
     let keys = ["angle", "position", "force", "cop"];
     let mut v = [None; 4];
     for part in text.split(',') {
-        let (k, x) = part.split_once('=').ok_or_else(|| anyhow!("--noise-weights '{text}': '{part}' is not key=value ({KEYS})"))?;
-        let i = keys.iter().position(|n| *n == k.trim()).ok_or_else(|| anyhow!("--noise-weights: unknown key '{}' ({KEYS})", k.trim()))?;
-        let x: f64 = x.trim().parse().map_err(|_| anyhow!("--noise-weights: {k}='{x}' is not a number"))?;
+        let (k, x) = part.split_once('=').ok_or_else(|| {
+            anyhow!("--noise-weights '{text}': '{part}' is not key=value ({KEYS})")
+        })?;
+        let i = keys
+            .iter()
+            .position(|n| *n == k.trim())
+            .ok_or_else(|| anyhow!("--noise-weights: unknown key '{}' ({KEYS})", k.trim()))?;
+        let x: f64 = x
+            .trim()
+            .parse()
+            .map_err(|_| anyhow!("--noise-weights: {k}='{x}' is not a number"))?;
         if !(x.is_finite() && x > 0.0) {
-            return Err(anyhow!("--noise-weights: {k}={x}: a standard deviation must be positive and finite"));
+            return Err(anyhow!(
+                "--noise-weights: {k}={x}: a standard deviation must be positive and finite"
+            ));
         }
         if v[i].replace(x).is_some() {
             return Err(anyhow!("--noise-weights: '{k}' given twice"));
         }
     }
-    let missing: Vec<&str> = keys.iter().zip(&v).filter(|(_, x)| x.is_none()).map(|(k, _)| *k).collect();
+    let missing: Vec<&str> = keys
+        .iter()
+        .zip(&v)
+        .filter(|(_, x)| x.is_none())
+        .map(|(k, _)| *k)
+        .collect();
     if !missing.is_empty() {
-        return Err(anyhow!("--noise-weights '{text}': missing {} (give angle=DEG,position=MM,force=N,cop=MM)", missing.join(", ")));
+        return Err(anyhow!(
+            "--noise-weights '{text}': missing {} (give angle=DEG,position=MM,force=N,cop=MM)",
+            missing.join(", ")
+        ));
     }
     let [a, p, f, c] = v.map(|x| x.unwrap_or_default());
-    Ok(footfall::problems::tracking::ChannelNoise { angle_rad: a.to_radians(), position_m: p * 1e-3, force_n: f, cop_m: c * 1e-3 })
+    Ok(footfall::problems::tracking::ChannelNoise {
+        angle_rad: a.to_radians(),
+        position_m: p * 1e-3,
+        force_n: f,
+        cop_m: c * 1e-3,
+    })
 }
 
 /// The tracking solver's settings (exact Hessian once nearly feasible, as `track`'s
 /// defaults).
-pub fn tracking_sqp_settings(tol: f64, max_iter: usize, max_time: Option<f64>, hessian: HessianMode, exact_below: f64) -> SqpSettings {
-    SqpSettings { tol_kkt: tol, max_iter, max_time, hessian, exact_hessian_below: exact_below, exact_convexification: ExactConvexification::InertiaCorrection, ..Default::default() }
+pub fn tracking_sqp_settings(
+    tol: f64,
+    max_iter: usize,
+    max_time: Option<f64>,
+    hessian: HessianMode,
+    exact_below: f64,
+) -> SqpSettings {
+    SqpSettings {
+        tol_kkt: tol,
+        max_iter,
+        max_time,
+        hessian,
+        exact_hessian_below: exact_below,
+        exact_convexification: ExactConvexification::InertiaCorrection,
+        ..Default::default()
+    }
 }
 
 impl TrackingProblem {
@@ -338,19 +470,37 @@ impl TrackingProblem {
     /// re-fit where the candidate's truncated re-fit got to.
     pub fn start_at(&mut self, start: &GaitSolution) -> anyhow::Result<()> {
         self.setup.start_from(start).map_err(|e| anyhow!(e))?;
-        let names: Vec<String> = self.model.free_parameters().iter().map(|&i| self.model.parameters()[i].name.clone()).collect();
+        let names: Vec<String> = self
+            .model
+            .free_parameters()
+            .iter()
+            .map(|&i| self.model.parameters()[i].name.clone())
+            .collect();
         for (name, &v) in names.iter().zip(&start.theta) {
-            self.model.set_parameter_value(name, v).map_err(|e| anyhow!(e))?;
+            self.model
+                .set_parameter_value(name, v)
+                .map_err(|e| anyhow!(e))?;
         }
         Ok(())
     }
 
     /// Run `f` on the problem's transcription, its walking cycle and its initial point
     /// (the guess: the data, or the solution it was started from).
-    pub fn with_transcription<R>(&self, f: impl FnOnce(&Transcription, &GaitCycle, Vec<f64>) -> anyhow::Result<R>) -> anyhow::Result<R> {
-        let cycle = GaitCycle::new(&self.model, &self.setup.seq, &self.sets).map_err(|e| anyhow!(e))?;
-        let mut ocp = self.setup.ocp(&cycle, &self.model, &self.sets, self.integrator.clone()).map_err(|e| anyhow!(e))?;
-        ocp.checks = self.check_sites.iter().flat_map(|&(j, k, tau)| cycle.contact_checks(j, k, tau)).collect();
+    pub fn with_transcription<R>(
+        &self,
+        f: impl FnOnce(&Transcription, &GaitCycle, Vec<f64>) -> anyhow::Result<R>,
+    ) -> anyhow::Result<R> {
+        let cycle =
+            GaitCycle::new(&self.model, &self.setup.seq, &self.sets).map_err(|e| anyhow!(e))?;
+        let mut ocp = self
+            .setup
+            .ocp(&cycle, &self.model, &self.sets, self.integrator.clone())
+            .map_err(|e| anyhow!(e))?;
+        ocp.checks = self
+            .check_sites
+            .iter()
+            .flat_map(|&(j, k, tau)| cycle.contact_checks(j, k, tau))
+            .collect();
         let tr = Transcription::new(&ocp).context("transcribing the tracking problem")?;
         let (_, _, w0) = tr.variable_bounds_and_guess();
         f(&tr, &cycle, w0)
@@ -358,10 +508,15 @@ impl TrackingProblem {
 
     /// Solve the problem (interruptibly, with progress unless `quiet`) and read its
     /// solution.
-    pub fn solve(&self, settings: &SqpSettings, quiet: bool) -> anyhow::Result<(footfall::sqp::SqpResult, GaitSolution)> {
+    pub fn solve(
+        &self,
+        settings: &SqpSettings,
+        quiet: bool,
+    ) -> anyhow::Result<(footfall::sqp::SqpResult, GaitSolution)> {
         self.with_transcription(|tr, cycle, w0| {
             self.solve_staged(tr, cycle, &w0, settings, quiet, |tr, res| {
-                let sol = GaitSolution::from_nlp(tr, &res.w, &cycle.continuous, self.setup.window.0);
+                let sol =
+                    GaitSolution::from_nlp(tr, &res.w, &cycle.continuous, self.setup.window.0);
                 Ok((res, sol))
             })
         })
@@ -384,20 +539,31 @@ impl TrackingProblem {
         finish: impl FnOnce(&Transcription, footfall::sqp::SqpResult) -> anyhow::Result<R>,
     ) -> anyhow::Result<R> {
         let first = super::solve_interruptibly(tr, w0, settings, quiet)?;
-        let loose = self.integrator.sens_tol.filter(|&t| t > self.integrator.rtol);
-        let Some(sens_tol) = loose else { return finish(tr, first) };
+        let loose = self
+            .integrator
+            .sens_tol
+            .filter(|&t| t > self.integrator.rtol);
+        let Some(sens_tol) = loose else {
+            return finish(tr, first);
+        };
         if first.status != footfall::sqp::SqpStatus::LineSearchFailure {
             return finish(tr, first);
         }
         let used = first.history.len().saturating_sub(1);
-        let tight = IntegratorSettings { sens_tol: None, ..self.integrator.clone() };
+        let tight = IntegratorSettings {
+            sens_tol: None,
+            ..self.integrator.clone()
+        };
         if !quiet {
             eprintln!(
                 "line search failed at KKT {:.2e} with the sensitivities at {sens_tol:e}: going on from there with them at {:e} (the KKT residual is computed from them)",
                 first.kkt, tight.rtol
             );
         }
-        let ocp = self.setup.ocp(cycle, &self.model, &self.sets, tight).map_err(|e| anyhow!(e))?;
+        let ocp = self
+            .setup
+            .ocp(cycle, &self.model, &self.sets, tight)
+            .map_err(|e| anyhow!(e))?;
         let tr2 = Transcription::new(&ocp).context("transcribing the tracking problem")?;
         let rest = SqpSettings {
             max_iter: settings.max_iter.saturating_sub(used),
@@ -412,18 +578,42 @@ impl TrackingProblem {
 /// One result of two solves, the second started where the first stopped: the second's
 /// point and status, the iteration history of both (the second's numbered on, without
 /// its repeated initial point), their times added up.
-pub(super) fn merge_stages(first: footfall::sqp::SqpResult, second: footfall::sqp::SqpResult) -> footfall::sqp::SqpResult {
+pub(super) fn merge_stages(
+    first: footfall::sqp::SqpResult,
+    second: footfall::sqp::SqpResult,
+) -> footfall::sqp::SqpResult {
     let (used, elapsed) = (first.history.len().saturating_sub(1), first.seconds);
     let mut history = first.history;
-    history.extend(second.history.iter().skip(1).map(|r| footfall::sqp::IterationRecord { iter: r.iter + used, seconds: r.seconds + elapsed, ..r.clone() }));
+    history.extend(
+        second
+            .history
+            .iter()
+            .skip(1)
+            .map(|r| footfall::sqp::IterationRecord {
+                iter: r.iter + used,
+                seconds: r.seconds + elapsed,
+                ..r.clone()
+            }),
+    );
     let mut timings = first.timings;
     timings += second.timings;
-    footfall::sqp::SqpResult { history, timings, seconds: first.seconds + second.seconds, ..second }
+    footfall::sqp::SqpResult {
+        history,
+        timings,
+        seconds: first.seconds + second.seconds,
+        ..second
+    }
 }
 
 /// The cost-share table (channel × phase, % of J), the normalised-error table (channel ×
 /// phase) and the worst windows.
-pub fn cost_tables(b: &footfall::problems::track::CostBreakdown) -> (footfall::report::table::Table, footfall::report::table::Table, footfall::report::table::Table) {
+pub fn cost_tables(
+    b: &footfall::problems::track::CostBreakdown,
+) -> (
+    footfall::report::table::Table,
+    footfall::report::table::Table,
+    footfall::report::table::Table,
+) {
     use footfall::report::table::Table;
     let total = b.total().max(f64::MIN_POSITIVE);
     let mut order: Vec<usize> = (0..b.channels.len()).collect();
@@ -437,8 +627,15 @@ pub fn cost_tables(b: &footfall::problems::track::CostBreakdown) -> (footfall::r
         rows: order
             .iter()
             .map(|&c| {
-                let mut row = vec![b.channels[c].clone(), format!("{:.1}", 100.0 * sums[c] / total)];
-                row.extend(b.cost[c].iter().map(|v| format!("{:.1}", 100.0 * v / total)));
+                let mut row = vec![
+                    b.channels[c].clone(),
+                    format!("{:.1}", 100.0 * sums[c] / total),
+                ];
+                row.extend(
+                    b.cost[c]
+                        .iter()
+                        .map(|v| format!("{:.1}", 100.0 * v / total)),
+                );
                 row
             })
             .collect(),
@@ -453,18 +650,51 @@ pub fn cost_tables(b: &footfall::problems::track::CostBreakdown) -> (footfall::r
             .iter()
             .map(|&c| {
                 let n: usize = b.rows[c].iter().sum();
-                let mut row = vec![b.channels[c].clone(), if n > 0 { format!("{:.4}", (sums[c] / n as f64).sqrt()) } else { "—".into() }];
-                row.extend(rms[c].iter().map(|v| v.map_or("—".into(), |v| format!("{v:.4}"))));
+                let mut row = vec![
+                    b.channels[c].clone(),
+                    if n > 0 {
+                        format!("{:.4}", (sums[c] / n as f64).sqrt())
+                    } else {
+                        "—".into()
+                    },
+                ];
+                row.extend(
+                    rms[c]
+                        .iter()
+                        .map(|v| v.map_or("—".into(), |v| format!("{v:.4}"))),
+                );
                 row
             })
             .collect(),
     };
     let windows = Table {
         title: "Worst stretches (five nodes)".into(),
-        headers: ["from (s)", "to (s)", "% of the data cost", "largest channel"].map(String::from).to_vec(),
+        headers: [
+            "from (s)",
+            "to (s)",
+            "% of the data cost",
+            "largest channel",
+        ]
+        .map(String::from)
+        .to_vec(),
         rows: {
-            let data: f64 = b.nodes.iter().map(|n| n.data).sum::<f64>().max(f64::MIN_POSITIVE);
-            b.worst_windows(5, 3).into_iter().map(|(t0, t1, v, c)| vec![format!("{t0:.3}"), format!("{t1:.3}"), format!("{:.1}", 100.0 * v / data), c]).collect()
+            let data: f64 = b
+                .nodes
+                .iter()
+                .map(|n| n.data)
+                .sum::<f64>()
+                .max(f64::MIN_POSITIVE);
+            b.worst_windows(5, 3)
+                .into_iter()
+                .map(|(t0, t1, v, c)| {
+                    vec![
+                        format!("{t0:.3}"),
+                        format!("{t1:.3}"),
+                        format!("{:.1}", 100.0 * v / data),
+                        c,
+                    ]
+                })
+                .collect()
         },
     };
     (share, normalised, windows)
@@ -472,16 +702,28 @@ pub fn cost_tables(b: &footfall::problems::track::CostBreakdown) -> (footfall::r
 
 /// Read a run's `setup.json`.
 pub fn read_run_setup(run: &std::path::Path) -> anyhow::Result<TrackingRunSetup> {
-    let file = if run.is_dir() { run.join("setup.json") } else { run.to_path_buf() };
-    let text = std::fs::read_to_string(&file).with_context(|| format!("reading {} (a track run folder has one)", file.display()))?;
-    serde_json::from_str(&text).with_context(|| format!("{}: not a footfall tracking setup", file.display()))
+    let file = if run.is_dir() {
+        run.join("setup.json")
+    } else {
+        run.to_path_buf()
+    };
+    let text = std::fs::read_to_string(&file)
+        .with_context(|| format!("reading {} (a track run folder has one)", file.display()))?;
+    serde_json::from_str(&text)
+        .with_context(|| format!("{}: not a footfall tracking setup", file.display()))
 }
 
 /// Table of effect parameters (identified ones with their standard deviation).
 pub fn parameter_table(params: &[IdentifiedParameter]) -> footfall::report::table::Table {
     footfall::report::table::Table {
         title: "Effect parameters".into(),
-        headers: vec!["parameter".into(), "value".into(), "± sd".into(), "unit".into(), "identified".into()],
+        headers: vec![
+            "parameter".into(),
+            "value".into(),
+            "± sd".into(),
+            "unit".into(),
+            "identified".into(),
+        ],
         rows: params
             .iter()
             .map(|p| {
@@ -502,8 +744,15 @@ pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
 }
 
 fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
-    let phases = args.phases.clone().unwrap_or_else(|| super::predict::default_phases(&args.foot));
-    let extra: Vec<EffectSpec> = args.effects.iter().map(|e| EffectSpec::parse_cli(e).map_err(|r| anyhow!("--effect: {r}"))).collect::<Result<_, _>>()?;
+    let phases = args
+        .phases
+        .clone()
+        .unwrap_or_else(|| super::predict::default_phases(&args.foot));
+    let extra: Vec<EffectSpec> = args
+        .effects
+        .iter()
+        .map(|e| EffectSpec::parse_cli(e).map_err(|r| anyhow!("--effect: {r}")))
+        .collect::<Result<_, _>>()?;
     let mut base = TrackingRunSetup {
         model: args.model.clone(),
         foot: args.foot.clone(),
@@ -518,7 +767,11 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         velocity_weight: args.velocity_weight,
         one_sided_targets: args.one_sided_targets,
         sample_targets: args.sample_targets,
-        noise_weights: args.noise_weights.as_deref().map(parse_noise_weights).transpose()?,
+        noise_weights: args
+            .noise_weights
+            .as_deref()
+            .map(parse_noise_weights)
+            .transpose()?,
         check_points: vec![],
         effects: vec![],
         parameters: vec![],
@@ -539,17 +792,42 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     prob.refine = args.check_points;
     base.check_points.clear();
     if prob.integrator.rtol < base.integrator_tol && !quiet {
-        let why = if args.residual_actuators { "residual actuators" } else { "the heel pad's stiff dynamics" };
+        let why = if args.residual_actuators {
+            "residual actuators"
+        } else {
+            "the heel pad's stiff dynamics"
+        };
         eprintln!("{why}: integrator tolerance of the states {:e} → {:e} (integration noise stalls the line search at 1e-8), of the sensitivities {:e}", base.integrator_tol, prob.integrator.rtol, prob.integrator.sens_tol.unwrap_or(prob.integrator.rtol));
     }
     if let Some(sol) = &init {
-        prob.setup.start_from(sol).map_err(|e| anyhow!("--init {}: {e}", args.init.as_ref().map(|p| p.display().to_string()).unwrap_or_default()))?;
+        prob.setup.start_from(sol).map_err(|e| {
+            anyhow!(
+                "--init {}: {e}",
+                args.init
+                    .as_ref()
+                    .map(|p| p.display().to_string())
+                    .unwrap_or_default()
+            )
+        })?;
     }
     base.parameters.clear();
     let hessian: HessianMode = args.hessian.into();
-    let settings = tracking_sqp_settings(args.tol, args.max_iter, args.max_time, hessian, args.exact_below);
+    let settings = tracking_sqp_settings(
+        args.tol,
+        args.max_iter,
+        args.max_time,
+        hessian,
+        args.exact_below,
+    );
     let folder = super::session::create_checkpointed_run_folder(&args.out, args.overwrite)?;
-    let run = prob.solve_and_write(&base, &extra, &settings, folder, args.transient_threshold, quiet)?;
+    let run = prob.solve_and_write(
+        &base,
+        &extra,
+        &settings,
+        folder,
+        args.transient_threshold,
+        quiet,
+    )?;
     super::Unsolved::check(&run.result, &run.output.path)?;
     if args.check_points {
         super::Invalid::check(&run.output)?;
@@ -585,7 +863,8 @@ impl TrackingProblem {
             }
             Ok(w0)
         })?;
-        let cycle = GaitCycle::new(&self.model, &self.setup.seq, &self.sets).map_err(|e| anyhow!(e))?;
+        let cycle =
+            GaitCycle::new(&self.model, &self.setup.seq, &self.sets).map_err(|e| anyhow!(e))?;
         let refinement = super::refine::Refinement {
             cycle: &cycle,
             model: &self.model,
@@ -595,20 +874,61 @@ impl TrackingProblem {
             enabled: self.refine,
             max_iter: settings.max_iter,
         };
-        let build = || self.setup.ocp(&cycle, &self.model, &self.sets, self.integrator.clone()).map_err(|e| anyhow!(e));
-        let mut solve = |tr: &Transcription, w: &[f64]| self.solve_staged(tr, &cycle, w, settings, quiet, |_, res| Ok(res));
+        let build = || {
+            self.setup
+                .ocp(&cycle, &self.model, &self.sets, self.integrator.clone())
+                .map_err(|e| anyhow!(e))
+        };
+        let mut solve = |tr: &Transcription, w: &[f64]| {
+            self.solve_staged(tr, &cycle, w, settings, quiet, |_, res| Ok(res))
+        };
         let (sites, res) = refinement.solve(&build, &self.check_sites, &w0, &mut solve, quiet)?;
         let mut ocp = build()?;
         ocp.checks = refinement.checks(&sites);
         let tr = Transcription::new(&ocp).context("transcribing the tracking problem")?;
-        self.write_run(&tr, &cycle, res, RunWriting { base, extra, folder, transient_threshold, quiet, provenance: None, check_sites: &sites })
+        self.write_run(
+            &tr,
+            &cycle,
+            res,
+            RunWriting {
+                base,
+                extra,
+                folder,
+                transient_threshold,
+                quiet,
+                provenance: None,
+                check_sites: &sites,
+            },
+        )
     }
 
     /// Write the run folder of the solver result `res` of this problem's transcription
     /// `tr` (solved by `track`, or re-evaluated by `report`).
-    pub fn write_run(&self, tr: &Transcription, cycle: &GaitCycle, res: footfall::sqp::SqpResult, how: RunWriting) -> anyhow::Result<TrackedRun> {
-        let TrackingProblem { model, sets, data, setup, phases, integrator, .. } = self;
-        let RunWriting { base, extra, folder, transient_threshold, quiet, provenance, check_sites } = how;
+    pub fn write_run(
+        &self,
+        tr: &Transcription,
+        cycle: &GaitCycle,
+        res: footfall::sqp::SqpResult,
+        how: RunWriting,
+    ) -> anyhow::Result<TrackedRun> {
+        let TrackingProblem {
+            model,
+            sets,
+            data,
+            setup,
+            phases,
+            integrator,
+            ..
+        } = self;
+        let RunWriting {
+            base,
+            extra,
+            folder,
+            transient_threshold,
+            quiet,
+            provenance,
+            check_sites,
+        } = how;
         let solution = GaitSolution::from_nlp(tr, &res.w, &cycle.continuous, setup.window.0);
         let converged = res.status == SqpStatus::Converged;
         let data_rows = setup.data_rows(model, sets, &cycle.continuous);
@@ -629,17 +949,18 @@ impl TrackingProblem {
         if let Some(p) = &provenance {
             extra_summary.push(("report".into(), p.clone()));
         }
-        let breakdown = match setup.cost_breakdown(model, sets, &cycle.continuous, &solution, integrator) {
-            Ok(b) => {
-                extra_json.insert("cost_breakdown".into(), serde_json::to_value(&b)?);
-                extra_sections.push(where_it_fails(&b, &solution));
-                Some(b)
-            }
-            Err(e) => {
-                eprintln!("warning: no cost breakdown: {e}");
-                None
-            }
-        };
+        let breakdown =
+            match setup.cost_breakdown(model, sets, &cycle.continuous, &solution, integrator) {
+                Ok(b) => {
+                    extra_json.insert("cost_breakdown".into(), serde_json::to_value(&b)?);
+                    extra_sections.push(where_it_fails(&b, &solution));
+                    Some(b)
+                }
+                Err(e) => {
+                    eprintln!("warning: no cost breakdown: {e}");
+                    None
+                }
+            };
         let residuals = residual_report(model, &solution);
         if let Some((section, stats)) = &residuals {
             extra_sections.push(section.clone());
@@ -656,7 +977,10 @@ impl TrackingProblem {
         let out = super::gait_run::write(
             GaitRun {
                 command: "track",
-                title: format!("footfall tracking — {} foot, {}", model.foot_name, data.name),
+                title: format!(
+                    "footfall tracking — {} foot, {}",
+                    model.foot_name, data.name
+                ),
                 data,
                 model,
                 sets,
@@ -667,7 +991,10 @@ impl TrackingProblem {
                 extra_summary,
                 extra_json,
                 extra_sections,
-                extra_files: vec![("setup.json".into(), serde_json::to_string_pretty(&record)?.into_bytes())],
+                extra_files: vec![(
+                    "setup.json".into(),
+                    serde_json::to_string_pretty(&record)?.into_bytes(),
+                )],
                 transient_threshold_n: transient_threshold,
                 friction: cycle.friction(),
                 check_points: check_sites.len(),
@@ -679,7 +1006,15 @@ impl TrackingProblem {
             if !record.parameters.is_empty() {
                 eprintln!("{}", parameter_table(&record.parameters).to_markdown());
             }
-            eprintln!("{}\n{}: J = {:.6}, KKT {:.2e}, {} iterations, {:.1} s", out.table.to_markdown(), res.status, res.objective, res.kkt, res.history.len().saturating_sub(1), res.seconds);
+            eprintln!(
+                "{}\n{}: J = {:.6}, KKT {:.2e}, {} iterations, {:.1} s",
+                out.table.to_markdown(),
+                res.status,
+                res.objective,
+                res.kkt,
+                res.history.len().saturating_sub(1),
+                res.seconds
+            );
             if let Some(f) = &out.fine {
                 eprintln!(
                     "1 ms re-integration: peak normal force {:.1} N (right), {:.1} N (left); largest Baumgarte force {:.1e} N; largest drift {:.2e} m",
@@ -688,7 +1023,14 @@ impl TrackingProblem {
             }
             eprintln!("report: {}", out.path.join("report.html").display());
         }
-        Ok(TrackedRun { converged, result: res, output: out, record, breakdown, residuals: residuals.map(|r| r.0) })
+        Ok(TrackedRun {
+            converged,
+            result: res,
+            output: out,
+            record,
+            breakdown,
+            residuals: residuals.map(|r| r.0),
+        })
     }
 }
 
@@ -713,12 +1055,28 @@ pub struct RunWriting<'a> {
 /// The report section on where the model fails: normalised error and cost share per
 /// channel and phase, the node cost over time with the phases shaded and the worst
 /// stretches.
-pub fn where_it_fails(b: &footfall::problems::track::CostBreakdown, solution: &GaitSolution) -> footfall::report::html::Section {
+pub fn where_it_fails(
+    b: &footfall::problems::track::CostBreakdown,
+    solution: &GaitSolution,
+) -> footfall::report::html::Section {
     use footfall::report::plot::{LinePlot, LineStyle, Series, Span};
     let (share, normalised, windows) = cost_tables(b);
-    let mut plot = LinePlot::new("Data cost per shooting node", "time (s)", "Σ weighted residual²");
-    plot.series.push(Series::new("data cost", b.nodes.iter().map(|n| n.time).collect(), b.nodes.iter().map(|n| n.data).collect(), LineStyle::Solid));
-    plot.shaded = solution.phase_spans().iter().map(|p| Span::new(p.t0, p.t1, p.name.clone())).collect();
+    let mut plot = LinePlot::new(
+        "Data cost per shooting node",
+        "time (s)",
+        "Σ weighted residual²",
+    );
+    plot.series.push(Series::new(
+        "data cost",
+        b.nodes.iter().map(|n| n.time).collect(),
+        b.nodes.iter().map(|n| n.data).collect(),
+        LineStyle::Solid,
+    ));
+    plot.shaded = solution
+        .phase_spans()
+        .iter()
+        .map(|p| Span::new(p.t0, p.t1, p.name.clone()))
+        .collect();
     footfall::report::html::Section {
         heading: "Where the model fails".into(),
         paragraphs: vec![format!(
@@ -745,4 +1103,3 @@ pub struct TrackedRun {
     /// The residual actuators' section, for a model that has them.
     pub residuals: Option<footfall::report::html::Section>,
 }
-

@@ -4,7 +4,9 @@
 use footfall::limits::MAX_ITERATIONS;
 
 fn number(s: &str) -> Result<f64, String> {
-    s.trim().parse::<f64>().map_err(|_| format!("'{s}' is not a number"))
+    s.trim()
+        .parse::<f64>()
+        .map_err(|_| format!("'{s}' is not a number"))
 }
 
 /// A tolerance, time, rate or force: finite and > 0.
@@ -35,7 +37,9 @@ pub fn threshold(s: &str) -> Result<f64, String> {
 pub fn iterations(s: &str) -> Result<usize, String> {
     match s.trim().parse::<usize>() {
         Ok(n) if n <= MAX_ITERATIONS => Ok(n),
-        _ => Err(format!("expected a whole number of iterations from 0 to {MAX_ITERATIONS}")),
+        _ => Err(format!(
+            "expected a whole number of iterations from 0 to {MAX_ITERATIONS}"
+        )),
     }
 }
 

@@ -278,7 +278,11 @@ pub fn read_sagittal_csv_with(path: &Path, meta: &MetaSource) -> Result<GaitData
             data.name = name;
         }
         if let Some(ev) = m.events_s {
-            data.events = Some(given_events(&data, &ev, meta_path.as_deref().unwrap_or(path))?);
+            data.events = Some(given_events(
+                &data,
+                &ev,
+                meta_path.as_deref().unwrap_or(path),
+            )?);
         }
     }
     Ok(data)
@@ -286,7 +290,11 @@ pub fn read_sagittal_csv_with(path: &Path, meta: &MetaSource) -> Result<GaitData
 
 /// Events given in a meta file: both sides, increasing, inside the recording; a foot is
 /// loaded at the start when its first event is a toe off.
-fn given_events(data: &GaitData, ev: &BTreeMap<String, MetaEvents>, meta: &Path) -> Result<Events, DataError> {
+fn given_events(
+    data: &GaitData,
+    ev: &BTreeMap<String, MetaEvents>,
+    meta: &Path,
+) -> Result<Events, DataError> {
     let mut out = Events {
         heel_strike: [Vec::new(), Vec::new()],
         toe_off: [Vec::new(), Vec::new()],
@@ -296,13 +304,27 @@ fn given_events(data: &GaitData, ev: &BTreeMap<String, MetaEvents>, meta: &Path)
         source: data.source.clone(),
     };
     for (s, side) in ["r", "l"].iter().enumerate() {
-        let e = ev.get(*side).ok_or_else(|| DataError::invalid(meta, format!("events_s.{side}"), "missing: give heel_strike_s and toe_off_s for both sides r and l"))?;
-        for (what, v) in [("heel_strike_s", &e.heel_strike_s), ("toe_off_s", &e.toe_off_s)] {
-            if let Some(k) = (0..v.len()).find(|&k| !(v[k] >= out.span.0 && v[k] <= out.span.1) || (k > 0 && v[k] <= v[k - 1])) {
+        let e = ev.get(*side).ok_or_else(|| {
+            DataError::invalid(
+                meta,
+                format!("events_s.{side}"),
+                "missing: give heel_strike_s and toe_off_s for both sides r and l",
+            )
+        })?;
+        for (what, v) in [
+            ("heel_strike_s", &e.heel_strike_s),
+            ("toe_off_s", &e.toe_off_s),
+        ] {
+            if let Some(k) = (0..v.len()).find(|&k| {
+                !(v[k] >= out.span.0 && v[k] <= out.span.1) || (k > 0 && v[k] <= v[k - 1])
+            }) {
                 return Err(DataError::invalid(
                     meta,
                     format!("events_s.{side}.{what}[{k}]"),
-                    format!("{} s: events must increase and lie within the recording {}–{} s", v[k], out.span.0, out.span.1),
+                    format!(
+                        "{} s: events must increase and lie within the recording {}–{} s",
+                        v[k], out.span.0, out.span.1
+                    ),
                 ));
             }
         }
@@ -336,7 +358,18 @@ pub fn write_sagittal_csv(data: &GaitData) -> (String, String) {
             write!(csv, ",{}", q[k]).ok();
         }
         for f in &data.feet {
-            write!(csv, ",{},{},{}", f.fx[k], f.fy[k], if f.cop_x[k].is_finite() { f.cop_x[k].to_string() } else { "NaN".into() }).ok();
+            write!(
+                csv,
+                ",{},{},{}",
+                f.fx[k],
+                f.fy[k],
+                if f.cop_x[k].is_finite() {
+                    f.cop_x[k].to_string()
+                } else {
+                    "NaN".into()
+                }
+            )
+            .ok();
         }
         csv.push('\n');
     }
@@ -349,7 +382,10 @@ pub fn write_sagittal_csv(data: &GaitData) -> (String, String) {
         meta["body_mass_kg_model"] = m.into();
     }
     if let Some(e) = &data.events {
-        let side = |s: usize| MetaEvents { heel_strike_s: e.heel_strike[s].clone(), toe_off_s: e.toe_off[s].clone() };
+        let side = |s: usize| MetaEvents {
+            heel_strike_s: e.heel_strike[s].clone(),
+            toe_off_s: e.toe_off[s].clone(),
+        };
         meta["events_s"] = serde_json::json!({"r": side(0), "l": side(1)});
     }
     (csv, serde_json::to_string_pretty(&meta).unwrap_or_default())
@@ -491,8 +527,18 @@ fn parse_sagittal_csv(
 
     // ground forces beyond any walker's (forces are always in N)
     for &j in side_cols.iter().flatten().flat_map(|c| &c[3..5]) {
-        if let Some(k) = table[j].iter().position(|v| v.abs() > crate::limits::MAX_FORCE) {
-            return Err(DataError::OutOfRange { path: p, row: rows[k], column: cols[j].clone(), value: table[j][k], limit: crate::limits::MAX_FORCE, unit: "N" });
+        if let Some(k) = table[j]
+            .iter()
+            .position(|v| v.abs() > crate::limits::MAX_FORCE)
+        {
+            return Err(DataError::OutOfRange {
+                path: p,
+                row: rows[k],
+                column: cols[j].clone(),
+                value: table[j][k],
+                limit: crate::limits::MAX_FORCE,
+                unit: "N",
+            });
         }
     }
     // NaN only in cop_x_* while unloaded.

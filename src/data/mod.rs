@@ -42,8 +42,8 @@ pub mod spline;
 pub mod storage;
 
 pub use csv::{
-    read_meta, read_sagittal_csv, read_sagittal_csv_with, sibling_meta_path, write_sagittal_csv, MetaEvents,
-    MetaSource, TrialMeta,
+    read_meta, read_sagittal_csv, read_sagittal_csv_with, sibling_meta_path, write_sagittal_csv,
+    MetaEvents, MetaSource, TrialMeta,
 };
 pub use error::DataError;
 pub use events::{
@@ -293,7 +293,9 @@ impl GaitData {
         self.validate()?;
         let n = self.time.len();
         let dt = (self.time[n - 1] - self.time[0]) / (n - 1) as f64;
-        if let Some(k) = (1..n).find(|&k| ((self.time[k] - self.time[k - 1]) - dt).abs() > 0.01 * dt) {
+        if let Some(k) =
+            (1..n).find(|&k| ((self.time[k] - self.time[k - 1]) - dt).abs() > 0.01 * dt)
+        {
             return Err(DataError::invalid(
                 &self.source,
                 "time",
@@ -302,7 +304,14 @@ impl GaitData {
         }
         let fs = 1.0 / dt;
         if !(cutoff_hz > 0.0 && cutoff_hz < 0.5 * fs) {
-            return Err(DataError::invalid(&self.source, "cutoff", format!("the cutoff must lie in (0, {} Hz) for {fs} Hz sampling, got {cutoff_hz}", 0.5 * fs)));
+            return Err(DataError::invalid(
+                &self.source,
+                "cutoff",
+                format!(
+                    "the cutoff must lie in (0, {} Hz) for {fs} Hz sampling, got {cutoff_hz}",
+                    0.5 * fs
+                ),
+            ));
         }
         Ok(fs)
     }

@@ -513,19 +513,26 @@ unsafe extern "C" fn sens_rhs_callback(
 }
 
 /// `CVRootFn` (one function): gout[0] = g(t, y) of the call's event.
-unsafe extern "C" fn root_callback(t: f64, y: sys::N_Vector, gout: *mut f64, user_data: *mut c_void) -> c_int {
+unsafe extern "C" fn root_callback(
+    t: f64,
+    y: sys::N_Vector,
+    gout: *mut f64,
+    user_data: *mut c_void,
+) -> c_int {
     run_callback(user_data, t, |shared, ctx| {
         let nx = shared.nx;
-        let event = ctx
-            .event
-            .ok_or_else(|| OdeError::Fatal("internal error: root function called without an event".to_string()))?;
+        let event = ctx.event.ok_or_else(|| {
+            OdeError::Fatal("internal error: root function called without an event".to_string())
+        })?;
         // SAFETY: `y` is a serial vector of length nx; `gout` holds the one root function.
         let (y, g) = unsafe { (nv_slice(y, nx), &mut *gout) };
         *g = event(t, y);
         if g.is_finite() {
             Ok(())
         } else {
-            Err(OdeError::Fatal(format!("non-finite event function value at t = {t}")))
+            Err(OdeError::Fatal(format!(
+                "non-finite event function value at t = {t}"
+            )))
         }
     })
 }
@@ -882,7 +889,11 @@ impl Integrator {
     ) -> Result<IntegrationStats, IntegratorError> {
         check_dim("x1", self.nx, x1.len())?;
         self.start(ode, t0, t1, x0, p, false)?;
-        let ctx = CallCtx { ode, p, event: None };
+        let ctx = CallCtx {
+            ode,
+            p,
+            event: None,
+        };
         // SAFETY: `ctx` outlives the guard; `shared` is live.
         let guard = unsafe { CallGuard::new(self.shared, &ctx) };
         self.advance(t0, t1)?;
@@ -918,7 +929,11 @@ impl Integrator {
             s1.len(),
         )?;
         self.start(ode, t0, t1, x0, p, true)?;
-        let ctx = CallCtx { ode, p, event: None };
+        let ctx = CallCtx {
+            ode,
+            p,
+            event: None,
+        };
         // SAFETY: `ctx` outlives the guard; `shared` is live.
         let guard = unsafe { CallGuard::new(self.shared, &ctx) };
         self.advance(t0, t1)?;
@@ -969,7 +984,11 @@ impl Integrator {
             previous = t;
         }
         self.start(ode, t0, t1, x0, p, true)?;
-        let ctx = CallCtx { ode, p, event: None };
+        let ctx = CallCtx {
+            ode,
+            p,
+            event: None,
+        };
         // SAFETY: `ctx` outlives the guard; `shared` is live.
         let guard = unsafe { CallGuard::new(self.shared, &ctx) };
         let (lx, ls) = (xs.len(), ss.len());
@@ -990,7 +1009,8 @@ impl Integrator {
                 result = Err(self.failure(flag, t));
                 break;
             }
-            let finite = all_finite(self.state()) && (0..self.ns as usize).all(|i| all_finite(self.sensitivity(i)));
+            let finite = all_finite(self.state())
+                && (0..self.ns as usize).all(|i| all_finite(self.sensitivity(i)));
             if !finite {
                 result = Err(IntegratorError::NonFinite { t });
                 break;
@@ -1034,7 +1054,11 @@ impl Integrator {
             previous = t;
         }
         self.start(ode, t0, t1, x0, p, false)?;
-        let ctx = CallCtx { ode, p, event: None };
+        let ctx = CallCtx {
+            ode,
+            p,
+            event: None,
+        };
         // SAFETY: `ctx` outlives the guard; `shared` is live.
         let guard = unsafe { CallGuard::new(self.shared, &ctx) };
         let len = out.len();
@@ -1079,12 +1103,25 @@ impl Integrator {
         // SAFETY: `mem` is initialised; one root function; `direction` has one entry and
         // CVODES copies it.
         unsafe {
-            check_setup("CVodeRootInit", sys::CVodeRootInit(self.mem, 1, Some(root_callback)))?;
+            check_setup(
+                "CVodeRootInit",
+                sys::CVodeRootInit(self.mem, 1, Some(root_callback)),
+            )?;
             self.roots_on = true;
-            check_setup("CVodeSetRootDirection", sys::CVodeSetRootDirection(self.mem, direction.as_mut_ptr()))?;
-            check_setup("CVodeSetNoInactiveRootWarn", sys::CVodeSetNoInactiveRootWarn(self.mem))?;
+            check_setup(
+                "CVodeSetRootDirection",
+                sys::CVodeSetRootDirection(self.mem, direction.as_mut_ptr()),
+            )?;
+            check_setup(
+                "CVodeSetNoInactiveRootWarn",
+                sys::CVodeSetNoInactiveRootWarn(self.mem),
+            )?;
         }
-        let ctx = CallCtx { ode, p, event: Some(event) };
+        let ctx = CallCtx {
+            ode,
+            p,
+            event: Some(event),
+        };
         // SAFETY: `ctx` outlives the guard; `shared` is live.
         let guard = unsafe { CallGuard::new(self.shared, &ctx) };
         let len = out.len();

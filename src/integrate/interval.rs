@@ -40,7 +40,14 @@ pub trait ControlledOde: Sync {
     /// Exact curvature of the weighted dynamics: `∇²_{(x,u,θ)} (μᵀ f(x, u, θ))`
     /// ((nx+nu+nθ)², column-major) into `out`. Returns `Ok(false)` when the model does not
     /// provide second derivatives (the default).
-    fn weighted_hessian(&self, _x: &[f64], _u: &[f64], _theta: &[f64], _mu: &[f64], _out: &mut [f64]) -> Result<bool, OdeError> {
+    fn weighted_hessian(
+        &self,
+        _x: &[f64],
+        _u: &[f64],
+        _theta: &[f64],
+        _mu: &[f64],
+        _out: &mut [f64],
+    ) -> Result<bool, OdeError> {
         Ok(false)
     }
 }
@@ -326,7 +333,18 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
         s1: &mut [f64],
         hess: &mut [f64],
     ) -> Result<bool, IntegratorError> {
-        self.integrate_with_hessian_and_outputs(integ, x0, p, lambda, x1, s1, hess, &[], &mut Vec::new(), &mut Vec::new())
+        self.integrate_with_hessian_and_outputs(
+            integ,
+            x0,
+            p,
+            lambda,
+            x1,
+            s1,
+            hess,
+            &[],
+            &mut Vec::new(),
+            &mut Vec::new(),
+        )
     }
 
     /// As [`integrate_with_hessian`](Self::integrate_with_hessian), and in the same pass
@@ -347,7 +365,20 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
         xs_out: &mut Vec<f64>,
         ss_out: &mut Vec<f64>,
     ) -> Result<bool, IntegratorError> {
-        self.integrate_with_hessian_interior(integ, x0, p, lambda, x1, s1, hess, outputs, xs_out, ss_out, &[], &mut |_, _| Ok(Vec::new()))
+        self.integrate_with_hessian_interior(
+            integ,
+            x0,
+            p,
+            lambda,
+            x1,
+            s1,
+            hess,
+            outputs,
+            xs_out,
+            ss_out,
+            &[],
+            &mut |_, _| Ok(Vec::new()),
+        )
     }
 
     /// As [`integrate_with_hessian_and_outputs`](Self::integrate_with_hessian_and_outputs),
@@ -382,7 +413,11 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
         let mut times: Vec<f64> = nodes
             .iter()
             .map(|g| g.0)
-            .chain(interior.iter().flat_map(|&ti| nodes.iter().map(move |g| ti * g.0)))
+            .chain(
+                interior
+                    .iter()
+                    .flat_map(|&ti| nodes.iter().map(move |g| ti * g.0)),
+            )
             .chain(outputs.iter().copied())
             .chain([1.0])
             .collect();
@@ -390,7 +425,8 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
         times.dedup();
         let at = |t: f64| times.partition_point(|&v| v < t);
         let (mut xs, mut ss) = (Vec::new(), Vec::new());
-        integ.integrate_with_sensitivities_dense(self, 0.0, 1.0, x0, p, &times, &mut xs, &mut ss)?;
+        integ
+            .integrate_with_sensitivities_dense(self, 0.0, 1.0, x0, p, &times, &mut xs, &mut ss)?;
         let sz = nx * nz;
         let end = times.len() - 1;
         x1.copy_from_slice(&xs[end * nx..(end + 1) * nx]);
@@ -421,7 +457,17 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
     /// from the states and sensitivities `xs`, `ss` at `times`; `s_end` = S(t_end).
     #[allow(clippy::too_many_arguments)]
     /// Returns `Ok(false)` when the model has no second derivatives.
-    fn add_span_curvature(&self, p: &[f64], xs: &[f64], ss: &[f64], times: &[f64], t_end: f64, w_end: &[f64], s_end: &[f64], hess: &mut [f64]) -> Result<bool, IntegratorError> {
+    fn add_span_curvature(
+        &self,
+        p: &[f64],
+        xs: &[f64],
+        ss: &[f64],
+        times: &[f64],
+        t_end: f64,
+        w_end: &[f64],
+        s_end: &[f64],
+        hess: &mut [f64],
+    ) -> Result<bool, IntegratorError> {
         let m = self.model;
         let (nx, nu, nt) = (m.nx(), m.nu(), m.ntheta());
         let np = self.np();
@@ -430,7 +476,9 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
         let sz = nx * nz;
         let at = |t: f64| times.partition_point(|&v| v < t);
         // wᵀΨ(t_end)
-        let lam_psi1: Vec<f64> = (0..nx).map(|j| (0..nx).map(|i| w_end[i] * s_end[i + j * nx]).sum()).collect();
+        let lam_psi1: Vec<f64> = (0..nx)
+            .map(|j| (0..nx).map(|i| w_end[i] * s_end[i + j * nx]).sum())
+            .collect();
         let dur = p[self.p_duration()];
         let theta = &p[self.p_theta()];
         let mut u = vec![0.0; nu];
@@ -445,7 +493,11 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
             // μ(τ)ᵀ = λᵀΨ(1)Ψ(τ)⁻¹: solve Ψ(τ)ᵀ μ = (λᵀΨ(1))ᵀ
             let psi = nalgebra::DMatrix::from_column_slice(nx, nx, &s[..nx * nx]);
             let rhs = nalgebra::DVector::from_column_slice(&lam_psi1);
-            let mu = psi.transpose().lu().solve(&rhs).ok_or(IntegratorError::NonFinite { t: tau })?;
+            let mu = psi
+                .transpose()
+                .lu()
+                .solve(&rhs)
+                .ok_or(IntegratorError::NonFinite { t: tau })?;
             let mu: Vec<f64> = mu.iter().copied().collect();
             let u0 = &p[self.p_u0()];
             match self.p_u1() {
@@ -458,10 +510,14 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
                 None => u.copy_from_slice(u0),
             }
             let rhs_err = |e: OdeError| IntegratorError::Rhs { t: tau, source: e };
-            if !m.weighted_hessian(x, &u, theta, &mu, &mut h).map_err(rhs_err)? {
+            if !m
+                .weighted_hessian(x, &u, theta, &mu, &mut h)
+                .map_err(rhs_err)?
+            {
                 return Ok(false);
             }
-            m.f_jac(x, &u, theta, &mut xdot, &mut fx, &mut fu, &mut ft).map_err(rhs_err)?;
+            m.f_jac(x, &u, theta, &mut xdot, &mut fx, &mut fu, &mut ft)
+                .map_err(rhs_err)?;
             // gradient of h = μᵀf with respect to (x, u, θ)
             let grad_w: Vec<f64> = (0..nw)
                 .map(|c| {
@@ -483,7 +539,11 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
                 }
             }
             for i in 0..nu {
-                d[nx + i + (nx + self.p_u0().start + i) * nw] = if self.p_u1().is_some() { 1.0 - tau } else { 1.0 };
+                d[nx + i + (nx + self.p_u0().start + i) * nw] = if self.p_u1().is_some() {
+                    1.0 - tau
+                } else {
+                    1.0
+                };
                 if let Some(r) = self.p_u1() {
                     d[nx + i + (nx + r.start + i) * nw] = tau;
                 }
@@ -496,11 +556,14 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
                 .flat_map(|c| {
                     let h = &h;
                     let d = &d;
-                    (0..nw).map(move |r| (0..nw).map(|k| h[r + k * nw] * d[k + c * nw]).sum::<f64>())
+                    (0..nw)
+                        .map(move |r| (0..nw).map(|k| h[r + k * nw] * d[k + c * nw]).sum::<f64>())
                 })
                 .collect();
             let t_col = nx + self.p_duration();
-            let dg: Vec<f64> = (0..nz).map(|c| (0..nw).map(|r| d[r + c * nw] * grad_w[r]).sum()).collect();
+            let dg: Vec<f64> = (0..nz)
+                .map(|c| (0..nw).map(|r| d[r + c * nw] * grad_w[r]).sum())
+                .collect();
             for a in 0..nz {
                 for b in 0..nz {
                     let mut v = dur * (0..nw).map(|r| d[r + a * nw] * hd[r + b * nw]).sum::<f64>();

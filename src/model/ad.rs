@@ -20,7 +20,11 @@ pub type AdNested = num_dual::Dual<AdChunk>;
 /// Hessian of a scalar function `f: ℝⁿ → ℝ` (column-major n × n) by nested forward AD.
 /// Symmetry is used: outer direction `j` needs only the inner chunks up to `j`, so `f` is
 /// evaluated about `n²/(2·CHUNK) + n` times in [`AdNested`].
-pub fn hessian<E>(x: &[f64], mut f: impl FnMut(&[AdNested]) -> Result<AdNested, E>, out: &mut [f64]) -> Result<(), E> {
+pub fn hessian<E>(
+    x: &[f64],
+    mut f: impl FnMut(&[AdNested]) -> Result<AdNested, E>,
+    out: &mut [f64],
+) -> Result<(), E> {
     let n = x.len();
     let mut xs: Vec<AdNested> = Vec::with_capacity(n);
     for j in 0..n {
@@ -32,7 +36,11 @@ pub fn hessian<E>(x: &[f64], mut f: impl FnMut(&[AdNested]) -> Result<AdNested, 
                 if i >= start && i < start + CHUNK {
                     inner = inner.derivative(i - start);
                 }
-                let outer = if i == j { AdChunk::from_re(1.0) } else { AdChunk::from_re(0.0) };
+                let outer = if i == j {
+                    AdChunk::from_re(1.0)
+                } else {
+                    AdChunk::from_re(0.0)
+                };
                 xs.push(num_dual::Dual::new(inner, outer));
             }
             let y = f(&xs)?;

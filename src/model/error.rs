@@ -38,8 +38,16 @@ pub enum ModelError {
 }
 
 impl ModelError {
-    pub(crate) fn invalid(path: &std::path::Path, field: impl Into<String>, reason: impl Into<String>) -> Self {
-        ModelError::Invalid { path: path.to_path_buf(), field: field.into(), reason: reason.into() }
+    pub(crate) fn invalid(
+        path: &std::path::Path,
+        field: impl Into<String>,
+        reason: impl Into<String>,
+    ) -> Self {
+        ModelError::Invalid {
+            path: path.to_path_buf(),
+            field: field.into(),
+            reason: reason.into(),
+        }
     }
 }
 
@@ -53,7 +61,9 @@ pub enum DynamicsError {
         pivot: usize,
     },
     /// The active constraint rows are linearly dependent: the body is over-constrained.
-    #[error("constraint set '{set}' over-constrains the body (row {row} is dependent on the others)")]
+    #[error(
+        "constraint set '{set}' over-constrains the body (row {row} is dependent on the others)"
+    )]
     OverConstrained {
         /// Constraint set name.
         set: String,

@@ -19,7 +19,9 @@
 use super::actuators::{Joint as MtgJoint, JointActuatorSet};
 use super::ad::{self, AdChunk};
 use super::anthropometry;
-use super::effects::{DynEffect, EffectState, MeasurementAdjust, ModelAdjust, ModelScalar, ParamSpec};
+use super::effects::{
+    DynEffect, EffectState, MeasurementAdjust, ModelAdjust, ModelScalar, ParamSpec,
+};
 use super::error::{DynamicsError, ModelError};
 use super::geometry::Shape;
 use super::linalg::{cholesky, cholesky_solve};
@@ -31,8 +33,17 @@ use num_dual::Dual;
 use std::path::Path;
 
 /// Names of the generalised coordinates, in state order.
-pub const COORDINATES: [&str; 9] =
-    ["pelvis_x", "pelvis_y", "pelvis_tilt", "hip_r", "knee_r", "ankle_r", "hip_l", "knee_l", "ankle_l"];
+pub const COORDINATES: [&str; 9] = [
+    "pelvis_x",
+    "pelvis_y",
+    "pelvis_tilt",
+    "hip_r",
+    "knee_r",
+    "ankle_r",
+    "hip_l",
+    "knee_l",
+    "ankle_l",
+];
 
 /// Leg side.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
@@ -180,7 +191,11 @@ impl GaitModel {
 
     /// Build the model with `extra` effects added to those of the model file (e.g. from
     /// `--effect`); an extra effect that the file already has is refused.
-    pub fn load_with_effects(model_path: &Path, foot_path: &Path, extra: &[super::effects::EffectSpec]) -> Result<Self, ModelError> {
+    pub fn load_with_effects(
+        model_path: &Path,
+        foot_path: &Path,
+        extra: &[super::effects::EffectSpec],
+    ) -> Result<Self, ModelError> {
         let mut spec = ModelSpec::load(model_path)?;
         for e in extra {
             if let Some(j) = spec.effects.iter().position(|o| o.overlaps(e)) {
@@ -199,9 +214,16 @@ impl GaitModel {
     /// Set the value of the effect parameter `name` (e.g. an identified value read back
     /// from a run), within its bounds.
     pub fn set_parameter_value(&mut self, name: &str, value: f64) -> Result<(), String> {
-        let p = self.params.iter_mut().find(|p| p.name == name).ok_or_else(|| format!("the model has no parameter '{name}'"))?;
+        let p = self
+            .params
+            .iter_mut()
+            .find(|p| p.name == name)
+            .ok_or_else(|| format!("the model has no parameter '{name}'"))?;
         if !(value.is_finite() && value >= p.lower && value <= p.upper) {
-            return Err(format!("parameter '{name}': {value} is outside its bounds [{}, {}]", p.lower, p.upper));
+            return Err(format!(
+                "parameter '{name}': {value} is outside its bounds [{}, {}]",
+                p.lower, p.upper
+            ));
         }
         p.value = value;
         Ok(())
@@ -228,10 +250,13 @@ impl GaitModel {
                 segments_from_de_leva(&p)
             }
         };
-        let tree = Tree::new(build_bodies(&seg)).map_err(|r| ModelError::invalid(model_path, "body", r))?;
+        let tree = Tree::new(build_bodies(&seg))
+            .map_err(|r| ModelError::invalid(model_path, "body", r))?;
         let mut contacts = Vec::new();
         for side in [Side::Right, Side::Left] {
-            let body = tree.body_index(&format!("foot_{}", side.prefix())).expect("foot body exists");
+            let body = tree
+                .body_index(&format!("foot_{}", side.prefix()))
+                .expect("foot body exists");
             for p in &foot.primitives {
                 contacts.push(Contact {
                     name: format!("{}.{}", side.prefix(), p.name),
@@ -255,22 +280,33 @@ impl GaitModel {
                     BodySpec::DeLeva { height, .. } => *height,
                     _ => estimated_stature(&seg),
                 });
-                let mut set = JointActuatorSet::anderson2007_young_male_for(mass, height).scaled(*strength_scale);
+                let mut set = JointActuatorSet::anderson2007_young_male_for(mass, height)
+                    .scaled(*strength_scale);
                 set.eta = *eta;
                 set.activation.tau_activation = *tau_activation;
                 set.activation.tau_deactivation = *tau_deactivation;
-                set.validate().map_err(|r| ModelError::invalid(model_path, "actuators", r))?;
+                set.validate()
+                    .map_err(|r| ModelError::invalid(model_path, "actuators", r))?;
                 Actuation::Mtg(set)
             }
-            ActuatorSpec::JointTorques { max_torque } => Actuation::Torques { max_torque: *max_torque },
+            ActuatorSpec::JointTorques { max_torque } => Actuation::Torques {
+                max_torque: *max_torque,
+            },
         };
         let coords: Vec<String> = COORDINATES.iter().map(|s| s.to_string()).collect();
         let bodies: Vec<String> = tree.bodies().iter().map(|b| b.name.clone()).collect();
         let primitives: Vec<String> = foot.primitives.iter().map(|p| p.name.clone()).collect();
-        let ctx = super::effects::BuildContext { coordinates: &coords, bodies: &bodies, primitives: &primitives };
+        let ctx = super::effects::BuildContext {
+            coordinates: &coords,
+            bodies: &bodies,
+            primitives: &primitives,
+        };
         let mut effects = Vec::new();
         for (i, e) in spec.effects.iter().enumerate() {
-            effects.extend(e.build(&ctx).map_err(|r| ModelError::invalid(model_path, format!("effects[{i}]"), r))?);
+            effects.extend(
+                e.build(&ctx)
+                    .map_err(|r| ModelError::invalid(model_path, format!("effects[{i}]"), r))?,
+            );
         }
         let mut params = Vec::new();
         let mut effect_offsets = Vec::new();
@@ -287,10 +323,20 @@ impl GaitModel {
                 ));
             }
         }
-        let free = params.iter().enumerate().filter(|(_, p)| p.free).map(|(i, _)| i).collect();
+        let free = params
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| p.free)
+            .map(|(i, _)| i)
+            .collect();
         let compliant = contacts
             .iter()
-            .map(|c| effects.iter().position(|e| e.compliant_primitive().is_some_and(|p| c.name.split_once('.').is_some_and(|(_, n)| n == p))))
+            .map(|c| {
+                effects.iter().position(|e| {
+                    e.compliant_primitive()
+                        .is_some_and(|p| c.name.split_once('.').is_some_and(|(_, n)| n == p))
+                })
+            })
             .collect();
         let model = Self {
             name: spec.name.clone(),
@@ -371,7 +417,11 @@ impl GaitModel {
     /// controls follow the actuators' (names `<coordinate>_residual`), so a tracking
     /// problem can penalise them and show which residual the model needs, and when.
     pub fn with_residual_actuators(mut self, force_n: f64, torque_nm: f64) -> Self {
-        self.residuals = Some((0..self.nq()).map(|i| if i < 2 { force_n } else { torque_nm }).collect());
+        self.residuals = Some(
+            (0..self.nq())
+                .map(|i| if i < 2 { force_n } else { torque_nm })
+                .collect(),
+        );
         self
     }
 
@@ -413,7 +463,12 @@ impl GaitModel {
     pub fn state_names(&self) -> Vec<String> {
         let mut v: Vec<String> = COORDINATES.iter().map(|s| s.to_string()).collect();
         v.extend(COORDINATES.iter().map(|s| format!("{s}_dot")));
-        v.extend(self.control_names().into_iter().filter(|_| self.na() > 0).map(|s| s.replace("_excitation", "_activation")));
+        v.extend(
+            self.control_names()
+                .into_iter()
+                .filter(|_| self.na() > 0)
+                .map(|s| s.replace("_excitation", "_activation")),
+        );
         v
     }
     /// Names of the controls.
@@ -441,27 +496,49 @@ impl GaitModel {
 
     /// Build a constraint set from `(contact name, rolling)` pairs: every listed contact
     /// gets a normal row, and a tangential (rolling) row where `rolling` is true.
-    pub fn constraint_set(&self, name: &str, contacts: &[(&str, bool)]) -> Result<ConstraintSet, String> {
+    pub fn constraint_set(
+        &self,
+        name: &str,
+        contacts: &[(&str, bool)],
+    ) -> Result<ConstraintSet, String> {
         let mut rows = Vec::new();
         for (i, (c, rolling)) in contacts.iter().enumerate() {
             let idx = self.contact_index(c).ok_or_else(|| {
                 let known: Vec<&str> = self.contacts.iter().map(|c| c.name.as_str()).collect();
-                format!("constraint set '{name}': unknown contact '{c}' (this foot has: {})", known.join(", "))
+                format!(
+                    "constraint set '{name}': unknown contact '{c}' (this foot has: {})",
+                    known.join(", ")
+                )
             })?;
             if contacts[..i].iter().any(|(o, _)| o == c) {
-                return Err(format!("constraint set '{name}': contact '{c}' is listed twice"));
+                return Err(format!(
+                    "constraint set '{name}': contact '{c}' is listed twice"
+                ));
             }
             if *rolling {
-                rows.push(ConstraintRow { contact: idx, kind: RowKind::Tangential });
+                rows.push(ConstraintRow {
+                    contact: idx,
+                    kind: RowKind::Tangential,
+                });
             }
-            rows.push(ConstraintRow { contact: idx, kind: RowKind::Normal });
+            rows.push(ConstraintRow {
+                contact: idx,
+                kind: RowKind::Normal,
+            });
         }
-        Ok(ConstraintSet { name: name.to_string(), rows })
+        Ok(ConstraintSet {
+            name: name.to_string(),
+            rows,
+        })
     }
 
     /// Full parameter vector in scalar `S`: fixed values as constants, free ones from θ.
     fn full_params<S: Scalar>(&self, theta: &[S]) -> Vec<S> {
-        debug_assert_eq!(theta.len(), self.free.len(), "θ must hold the model's free parameters");
+        debug_assert_eq!(
+            theta.len(),
+            self.free.len(),
+            "θ must hold the model's free parameters"
+        );
         let mut p: Vec<S> = self.params.iter().map(|p| S::c(p.value)).collect();
         for (k, &i) in self.free.iter().enumerate() {
             p[i] = theta[k];
@@ -478,7 +555,10 @@ impl GaitModel {
     /// offsets without any).
     pub fn measurement_adjust<S: ModelScalar>(&self, theta: &[S]) -> MeasurementAdjust<S> {
         let p = self.full_params(theta);
-        let mut m = MeasurementAdjust { force_time_offset: S::c(0.0), cop_offset: S::c(0.0) };
+        let mut m = MeasurementAdjust {
+            force_time_offset: S::c(0.0),
+            cop_offset: S::c(0.0),
+        };
         for e in 0..self.effects.len() {
             S::measurement(self.effects[e].as_ref(), self.effect_params(&p, e), &mut m);
         }
@@ -514,7 +594,14 @@ impl GaitModel {
     }
 
     /// Generalised joint forces of the actuators (and passive damping) and effects.
-    fn generalized_forces<S: ModelScalar>(&self, q: &[S], qd: &[S], a: &[S], u: &[S], p: &[S]) -> Vec<S> {
+    fn generalized_forces<S: ModelScalar>(
+        &self,
+        q: &[S],
+        qd: &[S],
+        a: &[S],
+        u: &[S],
+        p: &[S],
+    ) -> Vec<S> {
         let mut tau = vec![S::c(0.0); self.nq()];
         match &self.actuation {
             Actuation::Mtg(set) => {
@@ -535,13 +622,23 @@ impl GaitModel {
             }
         }
         for e in 0..self.effects.len() {
-            S::forces(self.effects[e].as_ref(), self.effect_params(p, e), EffectState { q, qd }, &mut tau);
+            S::forces(
+                self.effects[e].as_ref(),
+                self.effect_params(p, e),
+                EffectState { q, qd },
+                &mut tau,
+            );
         }
         tau
     }
 
     /// Contact point `P`, offset `d` and `d' = ∂d/∂ψ` of contact `c` (world).
-    fn contact_geometry<S: Scalar>(&self, k: &Kinematics<S>, c: &Contact, n: V2<S>) -> (V2<S>, V2<S>, V2<S>) {
+    fn contact_geometry<S: Scalar>(
+        &self,
+        k: &Kinematics<S>,
+        c: &Contact,
+        n: V2<S>,
+    ) -> (V2<S>, V2<S>, V2<S>) {
         let centre = self.tree.point(k, c.body, lift(c.shape.centre()));
         let psi = Dual::new(k.angle[c.body], S::c(1.0));
         let nd = [Dual::from_re(n[0]), Dual::from_re(n[1])];
@@ -571,7 +668,8 @@ impl GaitModel {
         let k = self.tree.kinematics(q, qd);
         let mut m = vec![S::c(0.0); nq * nq];
         let mut c = vec![S::c(0.0); nq];
-        self.tree.mass_matrix_and_bias(&k, &inertia, gravity, &mut m, &mut c);
+        self.tree
+            .mass_matrix_and_bias(&k, &inertia, gravity, &mut m, &mut c);
         let tau = self.generalized_forces(q, qd, a, u, &p);
         cholesky(&mut m, nq, 1e-14).map_err(|e| DynamicsError::MassMatrix { pivot: e.pivot })?;
         let mut qdd: Vec<S> = tau.iter().zip(&c).map(|(t, c)| *t - *c).collect();
@@ -615,14 +713,22 @@ impl GaitModel {
                 rep_rows.push(([pt[0].value(), pt[1].value()], phi.value(), gqd.value()));
                 if let (RowKind::Normal, Some(eff)) = (row.kind, self.compliant[row.contact]) {
                     // depth below the ground and its rate: the pad's compression
-                    lambda[r] = S::normal_force(self.effects[eff].as_ref(), self.effect_params(&p, eff), -phi, -gqd);
+                    lambda[r] = S::normal_force(
+                        self.effects[eff].as_ref(),
+                        self.effect_params(&p, eff),
+                        -phi,
+                        -gqd,
+                    );
                     for j in 0..nq {
                         compliant_force[j] += g[r * nq + j] * lambda[r];
                     }
                     continue;
                 }
                 let stab = match row.kind {
-                    RowKind::Normal => gqd * (2.0 * cs.baumgarte_alpha) + phi * (cs.baumgarte_beta * cs.baumgarte_beta),
+                    RowKind::Normal => {
+                        gqd * (2.0 * cs.baumgarte_alpha)
+                            + phi * (cs.baumgarte_beta * cs.baumgarte_beta)
+                    }
                     RowKind::Tangential => gqd * cs.baumgarte_gamma,
                 };
                 b[r] = -dot(e, gdot_qd_vec) - stab;
@@ -638,7 +744,10 @@ impl GaitModel {
             let nr = rigid.len();
             let mut b_baum_rigid = vec![0.0; nr];
             if nr > 0 {
-                let g_rigid: Vec<S> = rigid.iter().flat_map(|&r| g[r * nq..(r + 1) * nq].iter().copied()).collect();
+                let g_rigid: Vec<S> = rigid
+                    .iter()
+                    .flat_map(|&r| g[r * nq..(r + 1) * nq].iter().copied())
+                    .collect();
                 let (y, amat, amat_f64) = schur_complement(&m, nq, &g_rigid, nr, &set.name)?;
                 let mut lam_rigid: Vec<S> = rigid
                     .iter()
@@ -669,10 +778,24 @@ impl GaitModel {
                     baum[r] = b_baum_rigid[i];
                 }
                 // a compliant row's depth is its pad's compression, not a constraint error
-                let rigid_or_zero = |r: usize, v: f64| if self.is_compliant_row(&set.rows[r]) { 0.0 } else { v };
+                let rigid_or_zero = |r: usize, v: f64| {
+                    if self.is_compliant_row(&set.rows[r]) {
+                        0.0
+                    } else {
+                        v
+                    }
+                };
                 rep.points = rep_rows.iter().map(|r| r.0).collect();
-                rep.position_error = rep_rows.iter().enumerate().map(|(r, x)| rigid_or_zero(r, x.1)).collect();
-                rep.velocity_error = rep_rows.iter().enumerate().map(|(r, x)| rigid_or_zero(r, x.2)).collect();
+                rep.position_error = rep_rows
+                    .iter()
+                    .enumerate()
+                    .map(|(r, x)| rigid_or_zero(r, x.1))
+                    .collect();
+                rep.velocity_error = rep_rows
+                    .iter()
+                    .enumerate()
+                    .map(|(r, x)| rigid_or_zero(r, x.2))
+                    .collect();
                 rep.lambda = lambda.iter().map(|v| v.value()).collect();
                 rep.baumgarte_force = baum;
             }
@@ -706,7 +829,8 @@ impl GaitModel {
         let k = self.tree.kinematics(q, qd_minus);
         let mut m = vec![S::c(0.0); nq * nq];
         let mut c = vec![S::c(0.0); nq];
-        self.tree.mass_matrix_and_bias(&k, &inertia, gravity, &mut m, &mut c);
+        self.tree
+            .mass_matrix_and_bias(&k, &inertia, gravity, &mut m, &mut c);
         cholesky(&mut m, nq, 1e-14).map_err(|e| DynamicsError::MassMatrix { pivot: e.pivot })?;
         // a compliant normal contact takes no impulse: its pad is compressed from here on
         let (rigid, idx) = self.rigid_rows(set_after);
@@ -718,7 +842,9 @@ impl GaitModel {
             return Ok((qd_plus, impulses));
         }
         let (y, amat, _) = schur_complement(&m, nq, &g, nc, &set_after.name)?;
-        let mut imp: Vec<S> = (0..nc).map(|i| -(0..nq).map(|l| g[i * nq + l] * qd_minus[l]).sum::<S>()).collect();
+        let mut imp: Vec<S> = (0..nc)
+            .map(|i| -(0..nq).map(|l| g[i * nq + l] * qd_minus[l]).sum::<S>())
+            .collect();
         cholesky_solve(&amat, nc, &mut imp);
         for i in 0..nc {
             for l in 0..nq {
@@ -732,8 +858,16 @@ impl GaitModel {
     /// The rows of `set` that are rigid constraints (all but the normal rows of compliant
     /// contacts), and each one's index in `set`.
     pub fn rigid_rows(&self, set: &ConstraintSet) -> (ConstraintSet, Vec<usize>) {
-        let idx: Vec<usize> = (0..set.rows.len()).filter(|&r| !self.is_compliant_row(&set.rows[r])).collect();
-        (ConstraintSet { name: set.name.clone(), rows: idx.iter().map(|&r| set.rows[r]).collect() }, idx)
+        let idx: Vec<usize> = (0..set.rows.len())
+            .filter(|&r| !self.is_compliant_row(&set.rows[r]))
+            .collect();
+        (
+            ConstraintSet {
+                name: set.name.clone(),
+                rows: idx.iter().map(|&r| set.rows[r]).collect(),
+            },
+            idx,
+        )
     }
 
     /// Whether `row` is the normal row of a compliant contact (a force, not a constraint).
@@ -746,7 +880,12 @@ impl GaitModel {
         self.compliant[c].is_some()
     }
 
-    fn constraint_jacobian<S: Scalar>(&self, k: &Kinematics<S>, set: &ConstraintSet, n: V2<S>) -> Vec<S> {
+    fn constraint_jacobian<S: Scalar>(
+        &self,
+        k: &Kinematics<S>,
+        set: &ConstraintSet,
+        n: V2<S>,
+    ) -> Vec<S> {
         let nq = self.nq();
         let t = [n[1], -n[0]];
         let mut g = vec![S::c(0.0); set.rows.len() * nq];
@@ -787,16 +926,29 @@ impl GaitModel {
     /// minimum-norm Gauss–Newton steps on the normal gaps φ = 0, velocities by the
     /// M-orthogonal projection onto `G q̇ = 0` (the plastic impact map). Returns the
     /// projected `(q, q̇)` and the largest remaining |φ| (m).
-    pub fn project(&self, set: &ConstraintSet, q: &[f64], qd: &[f64], theta: &[f64]) -> Result<(Vec<f64>, Vec<f64>, f64), DynamicsError> {
+    pub fn project(
+        &self,
+        set: &ConstraintSet,
+        q: &[f64],
+        qd: &[f64],
+        theta: &[f64],
+    ) -> Result<(Vec<f64>, Vec<f64>, f64), DynamicsError> {
         let nq = self.nq();
         let mut q = q.to_vec();
         // compliant contacts are left where they are (their pad holds them, not a constraint)
-        let normal: Vec<usize> = (0..set.rows.len()).filter(|&r| set.rows[r].kind == RowKind::Normal && !self.is_compliant_row(&set.rows[r])).collect();
+        let normal: Vec<usize> = (0..set.rows.len())
+            .filter(|&r| {
+                set.rows[r].kind == RowKind::Normal && !self.is_compliant_row(&set.rows[r])
+            })
+            .collect();
         let nn = normal.len();
         let mut worst = 0.0;
         for _ in 0..50 {
             let g = self.constraint_jacobian_at(set, &q, theta);
-            let phi: Vec<f64> = normal.iter().map(|&r| self.contact_point(set.rows[r].contact, &q, theta).1).collect();
+            let phi: Vec<f64> = normal
+                .iter()
+                .map(|&r| self.contact_point(set.rows[r].contact, &q, theta).1)
+                .collect();
             worst = phi.iter().fold(0.0f64, |a, v| a.max(v.abs()));
             if worst < 1e-12 || nn == 0 {
                 break;
@@ -807,7 +959,10 @@ impl GaitModel {
                     a[i * nn + j] = (0..nq).map(|l| g[ri * nq + l] * g[rj * nq + l]).sum();
                 }
             }
-            cholesky(&mut a, nn, 1e-12).map_err(|e| DynamicsError::OverConstrained { set: set.name.clone(), row: e.pivot })?;
+            cholesky(&mut a, nn, 1e-12).map_err(|e| DynamicsError::OverConstrained {
+                set: set.name.clone(),
+                row: e.pivot,
+            })?;
             let mut y = phi.clone();
             cholesky_solve(&a, nn, &mut y);
             for (i, &ri) in normal.iter().enumerate() {
@@ -816,12 +971,21 @@ impl GaitModel {
                 }
             }
         }
-        let qd = if set.rows.is_empty() { qd.to_vec() } else { self.impact(set, &q, qd, theta)?.0 };
+        let qd = if set.rows.is_empty() {
+            qd.to_vec()
+        } else {
+            self.impact(set, &q, qd, theta)?.0
+        };
         Ok((q, qd, worst))
     }
 
     /// Constraint Jacobian `G` (rows × nq, row-major) of `set` at `q` (f64).
-    pub fn constraint_jacobian_at(&self, set: &ConstraintSet, q: &[f64], theta: &[f64]) -> Vec<f64> {
+    pub fn constraint_jacobian_at(
+        &self,
+        set: &ConstraintSet,
+        q: &[f64],
+        theta: &[f64],
+    ) -> Vec<f64> {
         let p = self.full_params(theta);
         let (_, _, _, n) = self.adjusted(&p);
         let k = self.tree.kinematics(q, &vec![0.0; self.nq()]);
@@ -848,14 +1012,20 @@ impl GaitModel {
     }
 
     /// Mass matrix (row-major) and bias forces at `(q, q̇)`.
-    pub fn mass_matrix_and_bias(&self, q: &[f64], qd: &[f64], theta: &[f64]) -> (Vec<f64>, Vec<f64>) {
+    pub fn mass_matrix_and_bias(
+        &self,
+        q: &[f64],
+        qd: &[f64],
+        theta: &[f64],
+    ) -> (Vec<f64>, Vec<f64>) {
         let nq = self.nq();
         let p = self.full_params(theta);
         let (inertia, gravity, _, _) = self.adjusted(&p);
         let k = self.tree.kinematics(q, qd);
         let mut m = vec![0.0; nq * nq];
         let mut c = vec![0.0; nq];
-        self.tree.mass_matrix_and_bias(&k, &inertia, gravity, &mut m, &mut c);
+        self.tree
+            .mass_matrix_and_bias(&k, &inertia, gravity, &mut m, &mut c);
         (m, c)
     }
 
@@ -889,7 +1059,11 @@ impl GaitModel {
             }
         }
         for s in 0..2 {
-            out[s].cop_x = if out[s].fy.abs() > 1e-9 { moment[s] / out[s].fy } else { f64::NAN };
+            out[s].cop_x = if out[s].fy.abs() > 1e-9 {
+                moment[s] / out[s].fy
+            } else {
+                f64::NAN
+            };
         }
         out
     }
@@ -1022,7 +1196,10 @@ fn schur_complement<S: Scalar>(
         }
     }
     let amat_f64: Vec<f64> = amat.iter().map(|v| v.value()).collect();
-    cholesky(&mut amat, nc, 1e-10).map_err(|e| DynamicsError::OverConstrained { set: set_name.to_string(), row: e.pivot })?;
+    cholesky(&mut amat, nc, 1e-10).map_err(|e| DynamicsError::OverConstrained {
+        set: set_name.to_string(),
+        row: e.pivot,
+    })?;
     Ok((y, amat, amat_f64))
 }
 
@@ -1054,13 +1231,22 @@ impl ControlledOde for GaitOde<'_> {
     }
     fn f(&self, x: &[f64], u: &[f64], theta: &[f64], xdot: &mut [f64]) -> Result<(), OdeError> {
         let mut lam = vec![0.0; self.set.rows.len()];
-        self.model.dynamics(self.set, x, u, theta, xdot, &mut lam, None).map_err(ode_err)?;
+        self.model
+            .dynamics(self.set, x, u, theta, xdot, &mut lam, None)
+            .map_err(ode_err)?;
         if xdot.iter().any(|v| !v.is_finite()) {
             return Err(OdeError::Recoverable("non-finite state derivative".into()));
         }
         Ok(())
     }
-    fn weighted_hessian(&self, x: &[f64], u: &[f64], theta: &[f64], mu: &[f64], out: &mut [f64]) -> Result<bool, OdeError> {
+    fn weighted_hessian(
+        &self,
+        x: &[f64],
+        u: &[f64],
+        theta: &[f64],
+        mu: &[f64],
+        out: &mut [f64],
+    ) -> Result<bool, OdeError> {
         let (nx, nu) = (self.model.nx(), self.model.nu());
         let z: Vec<f64> = x.iter().chain(u).chain(theta).copied().collect();
         let mut xdot = vec![ad::AdNested::from(0.0); nx];
@@ -1070,8 +1256,12 @@ impl ControlledOde for GaitOde<'_> {
             |zs| {
                 let (xs, rest) = zs.split_at(nx);
                 let (us, ts) = rest.split_at(nu);
-                self.model.dynamics(self.set, xs, us, ts, &mut xdot, &mut lam, None)?;
-                Ok(xdot.iter().zip(mu).fold(ad::AdNested::from(0.0), |acc, (f, m)| acc + *f * *m))
+                self.model
+                    .dynamics(self.set, xs, us, ts, &mut xdot, &mut lam, None)?;
+                Ok(xdot
+                    .iter()
+                    .zip(mu)
+                    .fold(ad::AdNested::from(0.0), |acc, (f, m)| acc + *f * *m))
             },
             out,
         )
@@ -1093,7 +1283,9 @@ impl ControlledOde for GaitOde<'_> {
     ) -> Result<(), OdeError> {
         let (nx, nu, nt) = (self.model.nx(), self.model.nu(), theta.len());
         let mut jac = vec![0.0; nx * (nx + nu + nt)];
-        self.model.dynamics_jacobian(self.set, x, u, theta, xdot, &mut jac).map_err(ode_err)?;
+        self.model
+            .dynamics_jacobian(self.set, x, u, theta, xdot, &mut jac)
+            .map_err(ode_err)?;
         fx.copy_from_slice(&jac[..nx * nx]);
         fu.copy_from_slice(&jac[nx * nx..nx * (nx + nu)]);
         ftheta.copy_from_slice(&jac[nx * (nx + nu)..]);
@@ -1109,7 +1301,8 @@ impl ControlledOde for GaitOde<'_> {
 pub fn estimated_stature(s: &Segments) -> f64 {
     let len = |v: [f64; 2]| (v[0] * v[0] + v[1] * v[1]).sqrt();
     let t = &anthropometry::DE_LEVA_MALE;
-    (len(s.knee_in_thigh) + len(s.ankle_in_shank)) * t.stature_mm / (t.thigh.length_mm + t.shank.length_mm)
+    (len(s.knee_in_thigh) + len(s.ankle_in_shank)) * t.stature_mm
+        / (t.thigh.length_mm + t.shank.length_mm)
 }
 
 /// The planar bodies of the 9-DoF model from segment parameters.
@@ -1132,13 +1325,26 @@ pub fn build_bodies(s: &Segments) -> Vec<Body> {
         com: sp.com,
         izz: sp.izz,
     };
-    let mut b = vec![virt("pelvis_x", None, [1.0, 0.0]), virt("pelvis_y", Some(0), [0.0, 1.0])];
+    let mut b = vec![
+        virt("pelvis_x", None, [1.0, 0.0]),
+        virt("pelvis_y", Some(0), [0.0, 1.0]),
+    ];
     b.push(seg("hat".into(), 1, [0.0, 0.0], &s.hat));
     for side in ["r", "l"] {
         let base = b.len();
         b.push(seg(format!("thigh_{side}"), 2, s.hip_in_pelvis, &s.thigh));
-        b.push(seg(format!("shank_{side}"), base, s.knee_in_thigh, &s.shank));
-        b.push(seg(format!("foot_{side}"), base + 1, s.ankle_in_shank, &s.foot));
+        b.push(seg(
+            format!("shank_{side}"),
+            base,
+            s.knee_in_thigh,
+            &s.shank,
+        ));
+        b.push(seg(
+            format!("foot_{side}"),
+            base + 1,
+            s.ankle_in_shank,
+            &s.foot,
+        ));
     }
     b
 }
@@ -1165,12 +1371,19 @@ pub fn segments_from_de_leva(p: &anthropometry::PlanarBodySegments) -> Segments 
     let ankle_from_heel = ANKLE_FROM_HEEL_FRACTION * foot.length;
     let ankle_height = ANKLE_HEIGHT_FRACTION * p.height;
     Segments {
-        hat: spec::SegmentSpec { mass: p.hat.mass, com: [0.0, p.hat.com_from_proximal], izz: p.hat.inertia_com },
+        hat: spec::SegmentSpec {
+            mass: p.hat.mass,
+            com: [0.0, p.hat.com_from_proximal],
+            izz: p.hat.inertia_com,
+        },
         thigh: down(&p.thigh),
         shank: down(&p.shank),
         foot: spec::SegmentSpec {
             mass: foot.mass,
-            com: [foot.com_from_proximal - ankle_from_heel, -0.5 * ankle_height],
+            com: [
+                foot.com_from_proximal - ankle_from_heel,
+                -0.5 * ankle_height,
+            ],
             izz: foot.inertia_com,
         },
         hip_in_pelvis: [0.0, 0.0],

@@ -19,14 +19,20 @@ pub struct NotPositiveDefinite {
 /// is reported as rank deficiency (e.g. an over-constrained contact set).
 pub fn cholesky<S: Scalar>(a: &mut [S], n: usize, rel_tol: f64) -> Result<(), NotPositiveDefinite> {
     debug_assert_eq!(a.len(), n * n);
-    let scale = (0..n).map(|i| a[i * n + i].value().abs()).fold(0.0, f64::max).max(1e-300);
+    let scale = (0..n)
+        .map(|i| a[i * n + i].value().abs())
+        .fold(0.0, f64::max)
+        .max(1e-300);
     for j in 0..n {
         let mut d = a[j * n + j];
         for k in 0..j {
             d -= a[j * n + k] * a[j * n + k];
         }
         if !(d.value() > rel_tol * scale) {
-            return Err(NotPositiveDefinite { pivot: j, value: d.value() });
+            return Err(NotPositiveDefinite {
+                pivot: j,
+                value: d.value(),
+            });
         }
         let l = d.sqrt();
         a[j * n + j] = l;

@@ -143,7 +143,10 @@ impl Tree {
             if let Joint::Prismatic { axis } = body.joint {
                 let n = (axis[0] * axis[0] + axis[1] * axis[1]).sqrt();
                 if (n - 1.0).abs() > 1e-9 {
-                    return Err(format!("body '{}': prismatic axis must be a unit vector", body.name));
+                    return Err(format!(
+                        "body '{}': prismatic axis must be a unit vector",
+                        body.name
+                    ));
                 }
             }
         }
@@ -170,7 +173,11 @@ impl Tree {
     pub fn inertias<S: Scalar>(&self) -> Vec<Inertia<S>> {
         self.bodies
             .iter()
-            .map(|b| Inertia { mass: S::c(b.mass), com: lift(b.com), izz: S::c(b.izz) })
+            .map(|b| Inertia {
+                mass: S::c(b.mass),
+                com: lift(b.com),
+                izz: S::c(b.izz),
+            })
             .collect()
     }
 
@@ -189,7 +196,14 @@ impl Tree {
         };
         for (b, body) in self.bodies.iter().enumerate() {
             let (pa, pcs, po, pw, pv, pab) = match body.parent {
-                Some(p) => (k.angle[p], k.cs[p], k.origin[p], k.omega[p], k.vel[p], k.acc_bias[p]),
+                Some(p) => (
+                    k.angle[p],
+                    k.cs[p],
+                    k.origin[p],
+                    k.omega[p],
+                    k.vel[p],
+                    k.acc_bias[p],
+                ),
                 None => (z, (S::c(1.0), z), [z, z], z, [z, z], [z, z]),
             };
             let attach = add(po, rotate(pcs.0, pcs.1, lift(body.joint_in_parent)));
@@ -216,7 +230,8 @@ impl Tree {
                     k.cs.push(pcs);
                     k.origin.push(o);
                     k.omega.push(pw);
-                    k.vel.push(add(add(pv, scale(perp(ro), pw)), scale(u, qd[b])));
+                    k.vel
+                        .push(add(add(pv, scale(perp(ro), pw)), scale(u, qd[b])));
                     let coriolis = scale(perp(u), S::c(2.0) * pw * qd[b]);
                     k.acc_bias.push(add(sub(pab, scale(ro, pw * pw)), coriolis));
                     k.axis.push(u);
@@ -252,7 +267,10 @@ impl Tree {
     pub fn point_motion<S: Scalar>(&self, k: &Kinematics<S>, b: usize, p: V2<S>) -> (V2<S>, V2<S>) {
         let r = sub(p, k.origin[b]);
         let w = k.omega[b];
-        (add(k.vel[b], scale(perp(r), w)), sub(k.acc_bias[b], scale(r, w * w)))
+        (
+            add(k.vel[b], scale(perp(r), w)),
+            sub(k.acc_bias[b], scale(r, w * w)),
+        )
     }
 
     /// Mass matrix (row-major nq × nq) and bias forces `c(q, q̇)` including gravity
@@ -299,7 +317,12 @@ impl Tree {
     }
 
     /// Kinetic and potential energy (J) for gravity `gravity`.
-    pub fn energy<S: Scalar>(&self, k: &Kinematics<S>, inertia: &[Inertia<S>], gravity: V2<S>) -> (S, S) {
+    pub fn energy<S: Scalar>(
+        &self,
+        k: &Kinematics<S>,
+        inertia: &[Inertia<S>],
+        gravity: V2<S>,
+    ) -> (S, S) {
         let mut ke = S::c(0.0);
         let mut pe = S::c(0.0);
         for (b, ib) in inertia.iter().enumerate() {

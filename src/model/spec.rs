@@ -8,7 +8,10 @@
 use super::effects::EffectSpec;
 use super::error::ModelError;
 use super::geometry::Shape;
-use crate::limits::{show, MAX_BAUMGARTE, MAX_ETA, MAX_GRAVITY, MAX_GROUND_HEIGHT, MAX_HEIGHT, MAX_INERTIA, MAX_MASS, MAX_SEGMENT_EXTENT};
+use crate::limits::{
+    show, MAX_BAUMGARTE, MAX_ETA, MAX_GRAVITY, MAX_GROUND_HEIGHT, MAX_HEIGHT, MAX_INERTIA,
+    MAX_MASS, MAX_SEGMENT_EXTENT,
+};
 use serde::de::DeserializeOwned;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -648,7 +651,11 @@ fn check_at_most(path: &Path, field: &str, v: f64, max: f64, unit: &str) -> Resu
         Err(ModelError::invalid(
             path,
             field,
-            format!("{} {unit} is beyond the sensible limit; expected a value in (0, {}] {unit}", show(v), show(max)),
+            format!(
+                "{} {unit} is beyond the sensible limit; expected a value in (0, {}] {unit}",
+                show(v),
+                show(max)
+            ),
         ))
     }
 }
@@ -682,7 +689,13 @@ fn check_position(path: &Path, field: &str, v: &[f64; 2]) -> Result<(), ModelErr
 impl SegmentSpec {
     fn validate(&self, path: &Path, field: &str) -> Result<(), ModelError> {
         check_at_most(path, &format!("{field}.mass"), self.mass, MAX_MASS, "kg")?;
-        check_at_most(path, &format!("{field}.izz"), self.izz, MAX_INERTIA, "kg·m²")?;
+        check_at_most(
+            path,
+            &format!("{field}.izz"),
+            self.izz,
+            MAX_INERTIA,
+            "kg·m²",
+        )?;
         check_position(path, &format!("{field}.com"), &self.com)
     }
 }
@@ -763,7 +776,11 @@ impl ModelSpec {
                     return Err(ModelError::invalid(
                         path,
                         "actuators.eta",
-                        format!("must be in [0, {}] (the seed uses 0.4 to 2), got {}", show(MAX_ETA), show(*eta)),
+                        format!(
+                            "must be in [0, {}] (the seed uses 0.4 to 2), got {}",
+                            show(MAX_ETA),
+                            show(*eta)
+                        ),
                     ));
                 }
                 check_positive(path, "actuators.tau_activation", *tau_activation, "s")?;
@@ -791,7 +808,11 @@ impl ModelSpec {
                 return Err(ModelError::invalid(
                     path,
                     f,
-                    format!("must be in [0, {}] 1/s, got {}", show(MAX_BAUMGARTE), show(v)),
+                    format!(
+                        "must be in [0, {}] 1/s, got {}",
+                        show(MAX_BAUMGARTE),
+                        show(v)
+                    ),
                 ));
             }
         }
@@ -809,7 +830,11 @@ impl ModelSpec {
                     }
                     _ => ("type", format!("'{}' is already an effect of the model (effects[{j}]); give each effect one entry", e.kind())),
                 };
-                return Err(ModelError::invalid(path, format!("effects[{i}].{field}"), what));
+                return Err(ModelError::invalid(
+                    path,
+                    format!("effects[{i}].{field}"),
+                    what,
+                ));
             }
         }
         Ok(())

@@ -19,7 +19,16 @@ pub(super) struct CheckValues {
 /// time-scaled interval (the duration column enters through h = T/N, `hscale` = 1/N):
 /// `J = ∂g/∂x · S` plus the direct control and θ terms.
 #[allow(clippy::too_many_arguments)]
-pub(super) fn instant_jacobian<O: crate::integrate::ControlledOde + ?Sized>(interval: &ShootingInterval<'_, O>, nx: usize, nu: usize, d: usize, jz: &[f64], s: &[f64], tau: f64, hscale: f64) -> Vec<f64> {
+pub(super) fn instant_jacobian<O: crate::integrate::ControlledOde + ?Sized>(
+    interval: &ShootingInterval<'_, O>,
+    nx: usize,
+    nu: usize,
+    d: usize,
+    jz: &[f64],
+    s: &[f64],
+    tau: f64,
+    hscale: f64,
+) -> Vec<f64> {
     let ncols = nx + interval.np();
     let duration_col = nx + interval.p_duration();
     let mut jac = vec![0.0; d * ncols];
@@ -31,7 +40,9 @@ pub(super) fn instant_jacobian<O: crate::integrate::ControlledOde + ?Sized>(inte
         }
     }
     for k in 0..nu {
-        let direct = |c: usize, f: f64, jac: &mut [f64]| (0..d).for_each(|i| jac[i + c * d] += f * jz[i + (nx + k) * d]);
+        let direct = |c: usize, f: f64, jac: &mut [f64]| {
+            (0..d).for_each(|i| jac[i + c * d] += f * jz[i + (nx + k) * d])
+        };
         match interval.p_u1() {
             Some(r1) => {
                 direct(nx + interval.p_u0().start + k, 1.0 - tau, &mut jac);
@@ -50,10 +61,21 @@ pub(super) fn instant_jacobian<O: crate::integrate::ControlledOde + ?Sized>(inte
 
 /// The rows of `xs` (`nx` per instant) and `ss` (`ns` per instant, when `derivs`) at the
 /// instants `wanted`, each one of `taus` (the instants the interval was integrated to).
-pub(super) fn rows_at(wanted: impl Iterator<Item = f64>, taus: &[f64], nx: usize, ns: usize, xs: &[f64], ss: &[f64], derivs: bool) -> (Vec<f64>, Vec<f64>) {
+pub(super) fn rows_at(
+    wanted: impl Iterator<Item = f64>,
+    taus: &[f64],
+    nx: usize,
+    ns: usize,
+    xs: &[f64],
+    ss: &[f64],
+    derivs: bool,
+) -> (Vec<f64>, Vec<f64>) {
     let (mut xo, mut so) = (Vec::new(), Vec::new());
     for tau in wanted {
-        let q = taus.iter().position(|&t| t == tau).expect("every instant was integrated to");
+        let q = taus
+            .iter()
+            .position(|&t| t == tau)
+            .expect("every instant was integrated to");
         xo.extend_from_slice(&xs[q * nx..(q + 1) * nx]);
         if derivs {
             so.extend_from_slice(&ss[q * ns..(q + 1) * ns]);
@@ -87,15 +109,30 @@ pub(super) fn check_values(
     let mut out = Vec::with_capacity(checks.len());
     for &(tau, ci, row) in checks {
         let cp = &ocp.checks[ci];
-        let q = taus.iter().position(|&t| t == tau).expect("every check point was integrated to");
+        let q = taus
+            .iter()
+            .position(|&t| t == tau)
+            .expect("every check point was integrated to");
         let z = instant_args(&interval, &xs[q * nx..(q + 1) * nx], p, tau);
         let d = cp.f.dim();
         let mut values = vec![0.0; d];
         let mut jz = vec![0.0; d * nz];
         cp.f.eval(&z, &mut values, ss.is_some().then_some(&mut jz[..]))
-            .map_err(|reason| TranscriptionError::Term { term: cp.name.clone(), reason })?;
+            .map_err(|reason| TranscriptionError::Term {
+                term: cp.name.clone(),
+                reason,
+            })?;
         let jac = match ss {
-            Some(ss) => instant_jacobian(&interval, nx, nu, d, &jz, &ss[q * nx * ncols..(q + 1) * nx * ncols], tau, hscale),
+            Some(ss) => instant_jacobian(
+                &interval,
+                nx,
+                nu,
+                d,
+                &jz,
+                &ss[q * nx * ncols..(q + 1) * nx * ncols],
+                tau,
+                hscale,
+            ),
             None => Vec::new(),
         };
         out.push(CheckValues { row, values, jac });
@@ -105,19 +142,40 @@ pub(super) fn check_values(
 
 /// `(x(τ), u(τ), θ)` of an interval at `x` and τ, from its packed parameters `p` (the
 /// argument of sample terms and check points).
-pub(super) fn instant_args<O: crate::integrate::ControlledOde + ?Sized>(interval: &ShootingInterval<'_, O>, x: &[f64], p: &[f64], tau: f64) -> Vec<f64> {
+pub(super) fn instant_args<O: crate::integrate::ControlledOde + ?Sized>(
+    interval: &ShootingInterval<'_, O>,
+    x: &[f64],
+    p: &[f64],
+    tau: f64,
+) -> Vec<f64> {
     let u0 = &p[interval.p_u0()];
     let u: Vec<f64> = match interval.p_u1().map(|r| &p[r]) {
-        Some(u1) => u0.iter().zip(u1).map(|(a, b)| (1.0 - tau) * a + tau * b).collect(),
+        Some(u1) => u0
+            .iter()
+            .zip(u1)
+            .map(|(a, b)| (1.0 - tau) * a + tau * b)
+            .collect(),
         None => u0.to_vec(),
     };
-    x.iter().chain(&u).chain(&p[interval.p_theta()]).copied().collect()
+    x.iter()
+        .chain(&u)
+        .chain(&p[interval.p_theta()])
+        .copied()
+        .collect()
 }
 
 /// The weights `Σ_c Σ_r ν_r ∂g_r/∂x` (nx) on the state at `tau` of the check points of an
 /// interval there, with their multipliers `lambda` (the NLP's, by row): the state part of
 /// the checks' curvature comes from the interval's second-order pass with these weights.
-pub(super) fn state_weights(ocp: &Ocp<'_>, phase: usize, checks: &[(f64, usize, usize)], tau: f64, p: &[f64], x: &[f64], lambda: &[f64]) -> Result<Vec<f64>, String> {
+pub(super) fn state_weights(
+    ocp: &Ocp<'_>,
+    phase: usize,
+    checks: &[(f64, usize, usize)],
+    tau: f64,
+    p: &[f64],
+    x: &[f64],
+    lambda: &[f64],
+) -> Result<Vec<f64>, String> {
     let ph = &ocp.phases[phase];
     let interval = ShootingInterval::new(ph.ode, ph.controls);
     let nx = ph.ode.nx();
@@ -129,7 +187,8 @@ pub(super) fn state_weights(ocp: &Ocp<'_>, phase: usize, checks: &[(f64, usize, 
         let d = cp.f.dim();
         let mut v = vec![0.0; d];
         let mut jz = vec![0.0; d * nz];
-        cp.f.eval(&z, &mut v, Some(&mut jz)).map_err(|e| format!("check point '{}': {e}", cp.name))?;
+        cp.f.eval(&z, &mut v, Some(&mut jz))
+            .map_err(|e| format!("check point '{}': {e}", cp.name))?;
         for (k, wk) in w.iter_mut().enumerate() {
             *wk += (0..d).map(|i| lambda[row + i] * jz[i + k * d]).sum::<f64>();
         }
@@ -165,10 +224,14 @@ pub(super) fn add_direct_curvature(
         if !cp.f.has_hessian() || weights.iter().all(|v| *v == 0.0) {
             continue;
         }
-        let q = taus.iter().position(|&t| t == tau).expect("every check point was integrated to");
+        let q = taus
+            .iter()
+            .position(|&t| t == tau)
+            .expect("every check point was integrated to");
         let z = instant_args(&interval, &xs[q * nx..(q + 1) * nx], p, tau);
         let mut g = vec![0.0; nw * nw];
-        cp.f.weighted_hessian(&z, weights, &mut g).map_err(|e| format!("check point '{}': {e}", cp.name))?;
+        cp.f.weighted_hessian(&z, weights, &mut g)
+            .map_err(|e| format!("check point '{}': {e}", cp.name))?;
         // D (nw × ncols): the state rows are S(τ), the control and θ rows direct
         let s = &ss[q * nx * ncols..(q + 1) * nx * ncols];
         let mut dm = vec![0.0; nw * ncols];
@@ -187,10 +250,17 @@ pub(super) fn add_direct_curvature(
         for (k, c) in interval.p_theta().enumerate() {
             dm[nx + nu + k + (nx + c) * nw] = 1.0;
         }
-        let gd: Vec<f64> = (0..ncols).flat_map(|c| { let (g, dm) = (&g, &dm); (0..nw).map(move |r| (0..nw).map(|k| g[r + k * nw] * dm[k + c * nw]).sum::<f64>()) }).collect();
+        let gd: Vec<f64> = (0..ncols)
+            .flat_map(|c| {
+                let (g, dm) = (&g, &dm);
+                (0..nw).map(move |r| (0..nw).map(|k| g[r + k * nw] * dm[k + c * nw]).sum::<f64>())
+            })
+            .collect();
         for a in 0..ncols {
             for b in 0..ncols {
-                hess[a + b * ncols] += (0..nw).map(|r| dm[r + a * nw] * gd[r + b * nw]).sum::<f64>();
+                hess[a + b * ncols] += (0..nw)
+                    .map(|r| dm[r + a * nw] * gd[r + b * nw])
+                    .sum::<f64>();
             }
         }
     }

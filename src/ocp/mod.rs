@@ -10,6 +10,8 @@ pub mod problem;
 pub mod quadrature;
 pub mod transcription;
 
-pub use problem::{Block, CheckPoint, Constraint, NodeFunction, Ocp, Phase, PhaseDuration, SampleTerm, Term};
+pub use problem::{
+    Block, CheckPoint, Constraint, NodeFunction, Ocp, Phase, PhaseDuration, SampleTerm, Term,
+};
 pub use quadrature::{quadrature_cost, Integrand, WithQuadrature};
 pub use transcription::{shifted_instant, Evaluation, RowLabel, Transcription, TranscriptionError};

@@ -45,7 +45,12 @@ pub trait NodeFunction: Send + Sync {
     }
     /// Exact curvature `Σ_i weights_i ∇²f_i(z)` (nz × nz, column-major), for the SQP's
     /// Hessian of the Lagrangian. Only called when [`has_hessian`](Self::has_hessian).
-    fn weighted_hessian(&self, _z: &[f64], _weights: &[f64], _out: &mut [f64]) -> Result<(), String> {
+    fn weighted_hessian(
+        &self,
+        _z: &[f64],
+        _weights: &[f64],
+        _out: &mut [f64],
+    ) -> Result<(), String> {
         Err("no Hessian provided".into())
     }
 }
@@ -63,7 +68,10 @@ pub struct Term<'a> {
 
 impl std::fmt::Debug for Term<'_> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("Term").field("name", &self.name).field("args", &self.args).finish()
+        f.debug_struct("Term")
+            .field("name", &self.name)
+            .field("args", &self.args)
+            .finish()
     }
 }
 
@@ -133,7 +141,12 @@ pub struct CheckPoint<'a> {
 
 impl std::fmt::Debug for CheckPoint<'_> {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("CheckPoint").field("name", &self.name).field("phase", &self.phase).field("interval", &self.interval).field("tau", &self.tau).finish()
+        f.debug_struct("CheckPoint")
+            .field("name", &self.name)
+            .field("phase", &self.phase)
+            .field("interval", &self.interval)
+            .field("tau", &self.tau)
+            .finish()
     }
 }
 
@@ -162,7 +175,11 @@ pub struct PhaseDuration {
 impl PhaseDuration {
     /// A fixed duration.
     pub fn fixed(v: f64) -> Self {
-        Self { value: v, lb: v, ub: v }
+        Self {
+            value: v,
+            lb: v,
+            ub: v,
+        }
     }
     /// Whether the duration is a decision variable.
     pub fn is_free(&self) -> bool {

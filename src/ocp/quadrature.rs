@@ -16,9 +16,23 @@ pub trait Integrand: Send + Sync {
     fn dim(&self) -> usize;
     /// `L` and, when given, its Jacobian with respect to `(x, u, θ)` (dim × (nx+nu+nθ),
     /// column-major).
-    fn eval(&self, x: &[f64], u: &[f64], theta: &[f64], value: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), String>;
+    fn eval(
+        &self,
+        x: &[f64],
+        u: &[f64],
+        theta: &[f64],
+        value: &mut [f64],
+        jac: Option<&mut [f64]>,
+    ) -> Result<(), String>;
     /// `Σ_i w_i ∇²L_i` with respect to `(x, u, θ)`; `Ok(false)` if not provided.
-    fn weighted_hessian(&self, _x: &[f64], _u: &[f64], _theta: &[f64], _w: &[f64], _out: &mut [f64]) -> Result<bool, String> {
+    fn weighted_hessian(
+        &self,
+        _x: &[f64],
+        _u: &[f64],
+        _theta: &[f64],
+        _w: &[f64],
+        _out: &mut [f64],
+    ) -> Result<bool, String> {
         Ok(false)
     }
 }
@@ -44,7 +58,9 @@ impl ControlledOde for WithQuadrature<'_> {
     fn f(&self, x: &[f64], u: &[f64], theta: &[f64], xdot: &mut [f64]) -> Result<(), OdeError> {
         let n = self.ode.nx();
         self.ode.f(&x[..n], u, theta, &mut xdot[..n])?;
-        self.integrand.eval(&x[..n], u, theta, &mut xdot[n..], None).map_err(OdeError::Fatal)
+        self.integrand
+            .eval(&x[..n], u, theta, &mut xdot[n..], None)
+            .map_err(OdeError::Fatal)
     }
     fn f_jac(
         &self,
@@ -56,12 +72,20 @@ impl ControlledOde for WithQuadrature<'_> {
         fu: &mut [f64],
         ftheta: &mut [f64],
     ) -> Result<(), OdeError> {
-        let (n, nl, nu, nt) = (self.ode.nx(), self.integrand.dim(), self.ode.nu(), self.ode.ntheta());
+        let (n, nl, nu, nt) = (
+            self.ode.nx(),
+            self.integrand.dim(),
+            self.ode.nu(),
+            self.ode.ntheta(),
+        );
         let na = n + nl;
         let (mut gx, mut gu, mut gt) = (vec![0.0; n * n], vec![0.0; n * nu], vec![0.0; n * nt]);
-        self.ode.f_jac(&x[..n], u, theta, &mut xdot[..n], &mut gx, &mut gu, &mut gt)?;
+        self.ode
+            .f_jac(&x[..n], u, theta, &mut xdot[..n], &mut gx, &mut gu, &mut gt)?;
         let mut lj = vec![0.0; nl * (n + nu + nt)];
-        self.integrand.eval(&x[..n], u, theta, &mut xdot[n..], Some(&mut lj)).map_err(OdeError::Fatal)?;
+        self.integrand
+            .eval(&x[..n], u, theta, &mut xdot[n..], Some(&mut lj))
+            .map_err(OdeError::Fatal)?;
         fx.iter_mut().for_each(|v| *v = 0.0);
         for c in 0..n {
             fx[c * na..c * na + n].copy_from_slice(&gx[c * n..(c + 1) * n]);
@@ -83,15 +107,34 @@ impl ControlledOde for WithQuadrature<'_> {
         }
         Ok(())
     }
-    fn weighted_hessian(&self, x: &[f64], u: &[f64], theta: &[f64], mu: &[f64], out: &mut [f64]) -> Result<bool, OdeError> {
-        let (n, nl, nu, nt) = (self.ode.nx(), self.integrand.dim(), self.ode.nu(), self.ode.ntheta());
+    fn weighted_hessian(
+        &self,
+        x: &[f64],
+        u: &[f64],
+        theta: &[f64],
+        mu: &[f64],
+        out: &mut [f64],
+    ) -> Result<bool, OdeError> {
+        let (n, nl, nu, nt) = (
+            self.ode.nx(),
+            self.integrand.dim(),
+            self.ode.nu(),
+            self.ode.ntheta(),
+        );
         let nw = n + nu + nt;
         let mut hm = vec![0.0; nw * nw];
-        if !self.ode.weighted_hessian(&x[..n], u, theta, &mu[..n], &mut hm)? {
+        if !self
+            .ode
+            .weighted_hessian(&x[..n], u, theta, &mu[..n], &mut hm)?
+        {
             return Ok(false);
         }
         let mut hl = vec![0.0; nw * nw];
-        if !self.integrand.weighted_hessian(&x[..n], u, theta, &mu[n..n + nl], &mut hl).map_err(OdeError::Fatal)? {
+        if !self
+            .integrand
+            .weighted_hessian(&x[..n], u, theta, &mu[n..n + nl], &mut hl)
+            .map_err(OdeError::Fatal)?
+        {
             return Ok(false);
         }
         // variables of the extended model: (x, ℓ, u, θ); ℓ enters nothing nonlinearly
@@ -139,6 +182,8 @@ pub fn quadrature_cost<'a>(phase: usize, node: usize, offset: usize, nl: usize) 
     Term {
         name: "integrated_cost".into(),
         args: vec![Block::State { phase, node }],
-        f: Arc::new(Sum { range: offset..offset + nl }),
+        f: Arc::new(Sum {
+            range: offset..offset + nl,
+        }),
     }
 }

@@ -11,7 +11,9 @@
 
 use super::checks::CheckValues;
 use super::problem::{Block, Ocp};
-use crate::integrate::{ControlShape, IntegrationStats, Integrator, IntegratorError, ShootingInterval};
+use crate::integrate::{
+    ControlShape, IntegrationStats, Integrator, IntegratorError, ShootingInterval,
+};
 use rayon::prelude::*;
 use std::ops::Range;
 use std::sync::Mutex;
@@ -81,7 +83,6 @@ struct IntervalRef {
     checks: Vec<(f64, usize, usize)>,
 }
 
-
 /// Instants of the sample terms at one evaluation, per interval in transcription order
 /// (`None`: the fixed ones only), and per sample term the gradient of its instant in θ
 /// (s per unit; `None` where it does not move: not shifted, or held at its phase's ends).
@@ -101,7 +102,13 @@ const SHIFTED_SNAP: f64 = 1e-9;
 /// [`SampleTerm::shift`](super::SampleTerm) places it: `(interval, τ, moves)`, held
 /// inside the phase (`moves` false where it is held at either end, so the instant does
 /// not move with the shift there). A zero shift leaves it exactly where it was.
-pub fn shifted_instant(interval: usize, tau: f64, shift: f64, h: f64, intervals: usize) -> (usize, f64, bool) {
+pub fn shifted_instant(
+    interval: usize,
+    tau: f64,
+    shift: f64,
+    h: f64,
+    intervals: usize,
+) -> (usize, f64, bool) {
     // the instant in units of intervals from the phase's start
     let at = interval as f64 + tau + shift / h;
     if shift == 0.0 {
@@ -132,7 +139,14 @@ struct SampleSums {
 
 /// One interval's integration: end state, sensitivities, statistics, curvature block
 /// (with multipliers) and what its sample terms add.
-type IntervalResult = (Vec<f64>, Vec<f64>, IntegrationStats, Option<Vec<f64>>, Option<SampleSums>, Vec<CheckValues>);
+type IntervalResult = (
+    Vec<f64>,
+    Vec<f64>,
+    IntegrationStats,
+    Option<Vec<f64>>,
+    Option<SampleSums>,
+    Vec<CheckValues>,
+);
 
 #[derive(Debug, Clone)]
 struct TermRef {
@@ -215,7 +229,12 @@ impl<'o, 'a> Transcription<'o, 'a> {
                 return Err(inv(format!("phase '{}' has zero intervals", ph.name)));
             }
             if ph.ode.ntheta() != ocp.ntheta {
-                return Err(inv(format!("phase '{}': dynamics have {} parameters, problem has {}", ph.name, ph.ode.ntheta(), ocp.ntheta)));
+                return Err(inv(format!(
+                    "phase '{}': dynamics have {} parameters, problem has {}",
+                    ph.name,
+                    ph.ode.ntheta(),
+                    ocp.ntheta
+                )));
             }
             let nodes = ph.intervals + 1;
             let cn = ph.control_nodes();
@@ -228,7 +247,10 @@ impl<'o, 'a> Transcription<'o, 'a> {
                 ("u_guess", &ph.u_guess, cn, nu),
             ] {
                 if v.len() != len || v.iter().any(|r| r.len() != width) {
-                    return Err(inv(format!("phase '{}' ({j}): {what} must be {len} rows of {width}", ph.name)));
+                    return Err(inv(format!(
+                        "phase '{}' ({j}): {what} must be {len} rows of {width}",
+                        ph.name
+                    )));
                 }
             }
             let mut so = Vec::new();
@@ -269,13 +291,26 @@ impl<'o, 'a> Transcription<'o, 'a> {
             first_interval: Vec::new(),
         };
         // sample terms, grouped by interval and τ
-        let mut samples: Vec<Vec<Instants>> = ocp.phases.iter().map(|p| vec![Vec::new(); p.intervals]).collect();
+        let mut samples: Vec<Vec<Instants>> = ocp
+            .phases
+            .iter()
+            .map(|p| vec![Vec::new(); p.intervals])
+            .collect();
         for (si, st) in ocp.samples.iter().enumerate() {
-            let Some(list) = samples.get_mut(st.phase).and_then(|p| p.get_mut(st.interval)) else {
-                return Err(inv(format!("sample term '{}': phase {} has no interval {}", st.name, st.phase, st.interval)));
+            let Some(list) = samples
+                .get_mut(st.phase)
+                .and_then(|p| p.get_mut(st.interval))
+            else {
+                return Err(inv(format!(
+                    "sample term '{}': phase {} has no interval {}",
+                    st.name, st.phase, st.interval
+                )));
             };
             if !(st.tau > 0.0 && st.tau <= 1.0) {
-                return Err(inv(format!("sample term '{}': τ = {} is not in (0, 1]", st.name, st.tau)));
+                return Err(inv(format!(
+                    "sample term '{}': τ = {} is not in (0, 1]",
+                    st.name, st.tau
+                )));
             }
             if let Some(shift) = &st.shift {
                 let ph = &ocp.phases[st.phase];
@@ -283,7 +318,11 @@ impl<'o, 'a> Transcription<'o, 'a> {
                     return Err(inv(format!("sample term '{}': a shifted instant needs phase '{}' to have a fixed duration", st.name, ph.name)));
                 }
                 if shift.dim() != 1 {
-                    return Err(inv(format!("sample term '{}': its shift has dimension {}, not 1", st.name, shift.dim())));
+                    return Err(inv(format!(
+                        "sample term '{}': its shift has dimension {}, not 1",
+                        st.name,
+                        shift.dim()
+                    )));
                 }
                 t.shifted.push(si);
                 continue;
@@ -305,7 +344,14 @@ impl<'o, 'a> Transcription<'o, 'a> {
                 let row = t.m;
                 let fixed = std::mem::take(&mut samples[j][k]);
                 let sample_block = shifted_phase[j] || !fixed.is_empty();
-                t.intervals.push(IntervalRef { phase: j, k, row, samples: fixed, sample_block, checks: Vec::new() });
+                t.intervals.push(IntervalRef {
+                    phase: j,
+                    k,
+                    row,
+                    samples: fixed,
+                    sample_block,
+                    checks: Vec::new(),
+                });
                 let cols = t.interval_cols(j, k);
                 for i in 0..nx {
                     for &c in &cols {
@@ -314,7 +360,11 @@ impl<'o, 'a> Transcription<'o, 'a> {
                     }
                     t.jac_rows.push(row + i);
                     t.jac_cols.push(t.state_off[j][k + 1] + i);
-                    t.labels.push(RowLabel { phase: ph.name.clone(), node: k, name: format!("continuity[{i}]") });
+                    t.labels.push(RowLabel {
+                        phase: ph.name.clone(),
+                        node: k,
+                        name: format!("continuity[{i}]"),
+                    });
                 }
                 t.m += nx;
             }
@@ -327,10 +377,20 @@ impl<'o, 'a> Transcription<'o, 'a> {
             match tr {
                 Some(term) => {
                     if term.f.dim() != nx1 {
-                        return Err(inv(format!("transition '{}' has dimension {}, phase '{}' has {nx1} states", term.name, term.f.dim(), next.name)));
+                        return Err(inv(format!(
+                            "transition '{}' has dimension {}, phase '{}' has {nx1} states",
+                            term.name,
+                            term.f.dim(),
+                            next.name
+                        )));
                     }
                     let cols = t.term_cols(&term.args)?;
-                    t.terms.push(TermRef { term: j, kind: TermKind::Transition, row, cols: cols.clone() });
+                    t.terms.push(TermRef {
+                        term: j,
+                        kind: TermKind::Transition,
+                        row,
+                        cols: cols.clone(),
+                    });
                     for i in 0..nx1 {
                         for &c in &cols {
                             t.jac_rows.push(row + i);
@@ -341,7 +401,10 @@ impl<'o, 'a> Transcription<'o, 'a> {
                 None => {
                     let prev = &ocp.phases[j];
                     if prev.ode.nx() != nx1 {
-                        return Err(inv(format!("phases '{}' and '{}' differ in state dimension and need a transition", prev.name, next.name)));
+                        return Err(inv(format!(
+                            "phases '{}' and '{}' differ in state dimension and need a transition",
+                            prev.name, next.name
+                        )));
                     }
                     for i in 0..nx1 {
                         t.jac_rows.push(row + i);
@@ -352,7 +415,11 @@ impl<'o, 'a> Transcription<'o, 'a> {
             for i in 0..nx1 {
                 t.jac_rows.push(row + i);
                 t.jac_cols.push(t.state_off[j + 1][0] + i);
-                t.labels.push(RowLabel { phase: next.name.clone(), node: 0, name: format!("transition[{i}]") });
+                t.labels.push(RowLabel {
+                    phase: next.name.clone(),
+                    node: 0,
+                    name: format!("transition[{i}]"),
+                });
             }
             t.m += nx1;
         }
@@ -360,33 +427,58 @@ impl<'o, 'a> Transcription<'o, 'a> {
         for (ci, con) in ocp.constraints.iter().enumerate() {
             let d = con.term.f.dim();
             if con.lb.len() != d || con.ub.len() != d {
-                return Err(inv(format!("constraint '{}': bounds must have {d} entries", con.term.name)));
+                return Err(inv(format!(
+                    "constraint '{}': bounds must have {d} entries",
+                    con.term.name
+                )));
             }
             let cols = t.term_cols(&con.term.args)?;
             let row = t.m;
-            t.terms.push(TermRef { term: ci, kind: TermKind::Constraint, row, cols: cols.clone() });
+            t.terms.push(TermRef {
+                term: ci,
+                kind: TermKind::Constraint,
+                row,
+                cols: cols.clone(),
+            });
             let (phase, node) = t.locate(&con.term.args);
             for i in 0..d {
                 for &c in &cols {
                     t.jac_rows.push(row + i);
                     t.jac_cols.push(c);
                 }
-                t.labels.push(RowLabel { phase: phase.clone(), node, name: format!("{}[{i}]", con.term.name) });
+                t.labels.push(RowLabel {
+                    phase: phase.clone(),
+                    node,
+                    name: format!("{}[{i}]", con.term.name),
+                });
             }
             t.m += d;
         }
         // check points: rows in interval order, by τ within an interval
         let mut per_interval: Vec<Vec<(f64, usize)>> = vec![Vec::new(); t.intervals.len()];
         for (ci, cp) in ocp.checks.iter().enumerate() {
-            let Some(ph) = ocp.phases.get(cp.phase).filter(|ph| cp.interval < ph.intervals) else {
-                return Err(inv(format!("check point '{}': phase {} has no interval {}", cp.name, cp.phase, cp.interval)));
+            let Some(ph) = ocp
+                .phases
+                .get(cp.phase)
+                .filter(|ph| cp.interval < ph.intervals)
+            else {
+                return Err(inv(format!(
+                    "check point '{}': phase {} has no interval {}",
+                    cp.name, cp.phase, cp.interval
+                )));
             };
             if !(cp.tau > 0.0 && cp.tau < 1.0) {
-                return Err(inv(format!("check point '{}' in phase '{}': τ = {} is not in (0, 1)", cp.name, ph.name, cp.tau)));
+                return Err(inv(format!(
+                    "check point '{}' in phase '{}': τ = {} is not in (0, 1)",
+                    cp.name, ph.name, cp.tau
+                )));
             }
             let d = cp.f.dim();
             if cp.lb.len() != d || cp.ub.len() != d {
-                return Err(inv(format!("check point '{}': bounds must have {d} entries", cp.name)));
+                return Err(inv(format!(
+                    "check point '{}': bounds must have {d} entries",
+                    cp.name
+                )));
             }
             per_interval[t.first_interval[cp.phase] + cp.interval].push((cp.tau, ci));
         }
@@ -403,7 +495,11 @@ impl<'o, 'a> Transcription<'o, 'a> {
                         t.jac_rows.push(row + r);
                         t.jac_cols.push(c);
                     }
-                    t.labels.push(RowLabel { phase: ocp.phases[j].name.clone(), node: k, name: format!("{}@τ={tau:.3}[{r}]", cp.name) });
+                    t.labels.push(RowLabel {
+                        phase: ocp.phases[j].name.clone(),
+                        node: k,
+                        name: format!("{}@τ={tau:.3}[{r}]", cp.name),
+                    });
                 }
                 t.m += cp.f.dim();
             }
@@ -417,7 +513,12 @@ impl<'o, 'a> Transcription<'o, 'a> {
                     t.gn_cols.push(ca.max(cb));
                 }
             }
-            t.terms.push(TermRef { term: li, kind: TermKind::LeastSquares, row: 0, cols });
+            t.terms.push(TermRef {
+                term: li,
+                kind: TermKind::LeastSquares,
+                row: 0,
+                cols,
+            });
         }
         // the sample terms' Gauss–Newton blocks, after the least-squares terms', in
         // interval order
@@ -435,7 +536,12 @@ impl<'o, 'a> Transcription<'o, 'a> {
                 return Err(inv(format!("cost '{}' must be scalar", g.name)));
             }
             let cols = t.term_cols(&g.args)?;
-            t.terms.push(TermRef { term: gi, kind: TermKind::Cost, row: 0, cols });
+            t.terms.push(TermRef {
+                term: gi,
+                kind: TermKind::Cost,
+                row: 0,
+                cols,
+            });
         }
         Ok(t)
     }
@@ -448,7 +554,10 @@ impl<'o, 'a> Transcription<'o, 'a> {
         cols.extend(self.range(Block::State { phase: j, node: k }));
         cols.extend(self.range(Block::Control { phase: j, node: k }));
         if ph.controls == ControlShape::Linear {
-            cols.extend(self.range(Block::Control { phase: j, node: k + 1 }));
+            cols.extend(self.range(Block::Control {
+                phase: j,
+                node: k + 1,
+            }));
         }
         cols.push(self.duration_off[j]);
         cols.extend(self.range(Block::Params));
@@ -479,15 +588,21 @@ impl<'o, 'a> Transcription<'o, 'a> {
 
     fn check_block(&self, b: Block) -> Result<(), TranscriptionError> {
         let ok = match b {
-            Block::State { phase, node } => phase < self.ocp.phases.len() && node <= self.ocp.phases[phase].intervals,
-            Block::Control { phase, node } => phase < self.ocp.phases.len() && node < self.ocp.phases[phase].control_nodes(),
+            Block::State { phase, node } => {
+                phase < self.ocp.phases.len() && node <= self.ocp.phases[phase].intervals
+            }
+            Block::Control { phase, node } => {
+                phase < self.ocp.phases.len() && node < self.ocp.phases[phase].control_nodes()
+            }
             Block::Duration { phase } => phase < self.ocp.phases.len(),
             Block::Params => true,
         };
         if ok {
             Ok(())
         } else {
-            Err(TranscriptionError::Invalid(format!("block {b:?} does not exist")))
+            Err(TranscriptionError::Invalid(format!(
+                "block {b:?} does not exist"
+            )))
         }
     }
 
@@ -619,16 +734,28 @@ impl<'o, 'a> Transcription<'o, 'a> {
             let h = w[self.duration_off[st.phase]] / n as f64;
             let mut s = [0.0];
             let mut g = vec![0.0; self.ocp.ntheta];
-            shift.eval(theta, &mut s, Some(&mut g)).map_err(|reason| TranscriptionError::Term { term: format!("{} (shift)", st.name), reason })?;
+            shift
+                .eval(theta, &mut s, Some(&mut g))
+                .map_err(|reason| TranscriptionError::Term {
+                    term: format!("{} (shift)", st.name),
+                    reason,
+                })?;
             if !s[0].is_finite() || g.iter().any(|v| !v.is_finite()) {
-                return Err(TranscriptionError::Term { term: format!("{} (shift)", st.name), reason: format!("shift {} s is not finite", s[0]) });
+                return Err(TranscriptionError::Term {
+                    term: format!("{} (shift)", st.name),
+                    reason: format!("shift {} s is not finite", s[0]),
+                });
             }
             let (k, tau, moves) = shifted_instant(st.interval, st.tau, s[0], h, n);
             if moves {
                 gradients[si] = Some(g);
             }
             let i = self.first_interval[st.phase] + k;
-            add_instant(lists[i].get_or_insert_with(|| self.intervals[i].samples.clone()), tau, si);
+            add_instant(
+                lists[i].get_or_insert_with(|| self.intervals[i].samples.clone()),
+                tau,
+                si,
+            );
         }
         for list in lists.iter_mut().flatten() {
             list.sort_by(|a, b| a.0.total_cmp(&b.0));
@@ -649,17 +776,34 @@ impl<'o, 'a> Transcription<'o, 'a> {
         let ph = &self.ocp.phases[iv.phase];
         let interval = ShootingInterval::new(ph.ode, ph.controls);
         let (nx, np) = (ph.ode.nx(), interval.np());
-        let x0 = &w[self.range(Block::State { phase: iv.phase, node: iv.k })];
-        let u0 = &w[self.range(Block::Control { phase: iv.phase, node: iv.k })];
+        let x0 = &w[self.range(Block::State {
+            phase: iv.phase,
+            node: iv.k,
+        })];
+        let u0 = &w[self.range(Block::Control {
+            phase: iv.phase,
+            node: iv.k,
+        })];
         let u1 = match ph.controls {
-            ControlShape::Linear => Some(&w[self.range(Block::Control { phase: iv.phase, node: iv.k + 1 })]),
+            ControlShape::Linear => Some(
+                &w[self.range(Block::Control {
+                    phase: iv.phase,
+                    node: iv.k + 1,
+                })],
+            ),
             ControlShape::Constant => None,
         };
         let h = w[self.duration_off[iv.phase]] / ph.intervals as f64;
         let theta = &w[self.range(Block::Params)];
-        let err = |source| TranscriptionError::Integrator { phase: ph.name.clone(), interval: iv.k, source };
+        let err = |source| TranscriptionError::Integrator {
+            phase: ph.name.clone(),
+            interval: iv.k,
+            source,
+        };
         let mut p = Vec::with_capacity(np);
-        interval.pack_params(u0, u1, h, theta, &mut p).map_err(err)?;
+        interval
+            .pack_params(u0, u1, h, theta, &mut p)
+            .map_err(err)?;
         let pool = &self.pools[iv.phase];
         let taken = pool.lock().map(|mut v| v.pop()).unwrap_or(None);
         let mut integ = match taken {
@@ -695,20 +839,52 @@ impl<'o, 'a> Transcription<'o, 'a> {
                 v
             };
             let mut check_weights = |i: usize, x: &[f64]| {
-                super::checks::state_weights(self.ocp, iv.phase, &iv.checks, interior[i], &p, x, lam)
-                    .map_err(|reason| IntegratorError::BadSettings { field: "check point", reason })
+                super::checks::state_weights(
+                    self.ocp,
+                    iv.phase,
+                    &iv.checks,
+                    interior[i],
+                    &p,
+                    x,
+                    lam,
+                )
+                .map_err(|reason| IntegratorError::BadSettings {
+                    field: "check point",
+                    reason,
+                })
             };
-            match interval.integrate_with_hessian_interior(&mut integ, x0, &p, &weights, &mut x1, &mut s, &mut h, &taus, &mut xs, &mut ss, &interior, &mut check_weights) {
-                Ok(true) => match super::checks::add_direct_curvature(self.ocp, iv.phase, &iv.checks, &taus, &p, &xs, &ss, lam, &mut h) {
+            match interval.integrate_with_hessian_interior(
+                &mut integ,
+                x0,
+                &p,
+                &weights,
+                &mut x1,
+                &mut s,
+                &mut h,
+                &taus,
+                &mut xs,
+                &mut ss,
+                &interior,
+                &mut check_weights,
+            ) {
+                Ok(true) => match super::checks::add_direct_curvature(
+                    self.ocp, iv.phase, &iv.checks, &taus, &p, &xs, &ss, lam, &mut h,
+                ) {
                     Ok(()) => {
                         hess = Some(h);
                         Ok(integ.stats_snapshot())
                     }
-                    Err(reason) => Err(IntegratorError::BadSettings { field: "check point", reason }),
+                    Err(reason) => Err(IntegratorError::BadSettings {
+                        field: "check point",
+                        reason,
+                    }),
                 },
                 Ok(false) => Err(IntegratorError::BadSettings {
                     field: "hessian",
-                    reason: format!("the dynamics of phase '{}' provide no second derivatives", ph.name),
+                    reason: format!(
+                        "the dynamics of phase '{}' provide no second derivatives",
+                        ph.name
+                    ),
                 }),
                 Err(e) => Err(e),
             }
@@ -717,30 +893,52 @@ impl<'o, 'a> Transcription<'o, 'a> {
             if taus.is_empty() {
                 integ.integrate_with_sensitivities(&interval, 0.0, 1.0, x0, &p, &mut x1, &mut s)
             } else {
-                integ.integrate_with_sensitivities_dense(&interval, 0.0, 1.0, x0, &p, &times, &mut xs, &mut ss).inspect(|_| {
-                    let sz = nx * (nx + np);
-                    x1.copy_from_slice(&xs[xs.len() - nx..]);
-                    s.copy_from_slice(&ss[ss.len() - sz..]);
-                })
+                integ
+                    .integrate_with_sensitivities_dense(
+                        &interval, 0.0, 1.0, x0, &p, &times, &mut xs, &mut ss,
+                    )
+                    .inspect(|_| {
+                        let sz = nx * (nx + np);
+                        x1.copy_from_slice(&xs[xs.len() - nx..]);
+                        s.copy_from_slice(&ss[ss.len() - sz..]);
+                    })
             }
         } else if taus.is_empty() {
             integ.integrate(&interval, 0.0, 1.0, x0, &p, &mut x1)
         } else {
-            integ.integrate_dense(&interval, 0.0, 1.0, x0, &p, &times, &mut xs).inspect(|_| x1.copy_from_slice(&xs[xs.len() - nx..]))
+            integ
+                .integrate_dense(&interval, 0.0, 1.0, x0, &p, &times, &mut xs)
+                .inspect(|_| x1.copy_from_slice(&xs[xs.len() - nx..]))
         };
         if let Ok(mut v) = pool.lock() {
             v.push(integ);
         }
         let stats = res.map_err(err)?;
         let derivs = sens || lambda.is_some();
-        let checks = super::checks::check_values(self.ocp, iv.phase, &iv.checks, &taus, &p, &xs, derivs.then_some(&ss[..]))?;
+        let checks = super::checks::check_values(
+            self.ocp,
+            iv.phase,
+            &iv.checks,
+            &taus,
+            &p,
+            &xs,
+            derivs.then_some(&ss[..]),
+        )?;
         let sums = if !iv.sample_block {
             None
         } else if iv.checks.is_empty() {
             Some(self.sample_sums(iv, list, moves, &p, &xs, derivs.then_some(&ss[..]))?)
         } else {
             // the samples' own rows of the merged instants
-            let (xs, ss) = super::checks::rows_at(list.iter().map(|e| e.0), &taus, nx, nx * (nx + np), &xs, &ss, derivs);
+            let (xs, ss) = super::checks::rows_at(
+                list.iter().map(|e| e.0),
+                &taus,
+                nx,
+                nx * (nx + np),
+                &xs,
+                &ss,
+                derivs,
+            );
             Some(self.sample_sums(iv, list, moves, &p, &xs, derivs.then_some(&ss[..]))?)
         };
         Ok((x1, s, stats, hess, sums, checks))
@@ -770,7 +968,11 @@ impl<'o, 'a> Transcription<'o, 'a> {
         let u0 = &p[interval.p_u0()];
         let u1 = interval.p_u1().map(|r| &p[r]);
         let hscale = 1.0 / ph.intervals as f64;
-        let mut out = SampleSums { f: 0.0, grad: Vec::new(), gauss_newton: Vec::new() };
+        let mut out = SampleSums {
+            f: 0.0,
+            grad: Vec::new(),
+            gauss_newton: Vec::new(),
+        };
         if ss.is_some() {
             out.grad = vec![0.0; ncols];
             out.gauss_newton = vec![0.0; ncols * (ncols + 1) / 2];
@@ -786,22 +988,32 @@ impl<'o, 'a> Transcription<'o, 'a> {
                 let mut jz = vec![0.0; d * nz];
                 term.f
                     .eval(&z, &mut r, ss.is_some().then_some(&mut jz[..]))
-                    .map_err(|reason| TranscriptionError::Term { term: term.name.clone(), reason })?;
+                    .map_err(|reason| TranscriptionError::Term {
+                        term: term.name.clone(),
+                        reason,
+                    })?;
                 out.f += r.iter().map(|v| v * v).sum::<f64>();
                 let Some(ss) = ss else { continue };
                 let s = &ss[q * nx * ncols..(q + 1) * nx * ncols];
-                let mut jac = super::checks::instant_jacobian(&interval, nx, nu, d, &jz, s, *tau, hscale);
+                let mut jac =
+                    super::checks::instant_jacobian(&interval, nx, nu, d, &jz, s, *tau, hscale);
                 if let Some(g) = moves.get(si).and_then(Option::as_ref) {
                     // dr/dt along the trajectory (per second): ẋ = f(x, u, θ), u̇ = (u1 − u0)/h
                     let h = p[interval.p_duration()];
                     let mut xdot = vec![0.0; nx];
-                    ph.ode.f(x, &u, theta, &mut xdot).map_err(|e| TranscriptionError::Term { term: term.name.clone(), reason: e.to_string() })?;
+                    ph.ode
+                        .f(x, &u, theta, &mut xdot)
+                        .map_err(|e| TranscriptionError::Term {
+                            term: term.name.clone(),
+                            reason: e.to_string(),
+                        })?;
                     let udot: Vec<f64> = match u1 {
                         Some(u1) => u0.iter().zip(u1).map(|(a, b)| (b - a) / h).collect(),
                         None => vec![0.0; nu],
                     };
                     for i in 0..d {
-                        let rate = (0..nx).map(|k| jz[i + k * d] * xdot[k]).sum::<f64>() + (0..nu).map(|k| jz[i + (nx + k) * d] * udot[k]).sum::<f64>();
+                        let rate = (0..nx).map(|k| jz[i + k * d] * xdot[k]).sum::<f64>()
+                            + (0..nu).map(|k| jz[i + (nx + k) * d] * udot[k]).sum::<f64>();
                         for (k, c) in interval.p_theta().enumerate() {
                             jac[i + (nx + c) * d] += rate * g[k];
                         }
@@ -812,7 +1024,11 @@ impl<'o, 'a> Transcription<'o, 'a> {
                     let ja = &jac[a * d..(a + 1) * d];
                     out.grad[a] += 2.0 * ja.iter().zip(&r).map(|(j, v)| j * v).sum::<f64>();
                     for b in a..ncols {
-                        out.gauss_newton[at] += 2.0 * ja.iter().zip(&jac[b * d..(b + 1) * d]).map(|(x, y)| x * y).sum::<f64>();
+                        out.gauss_newton[at] += 2.0
+                            * ja.iter()
+                                .zip(&jac[b * d..(b + 1) * d])
+                                .map(|(x, y)| x * y)
+                                .sum::<f64>();
                         at += 1;
                     }
                 }
@@ -838,7 +1054,11 @@ impl<'o, 'a> Transcription<'o, 'a> {
     ) -> Result<(Evaluation, (Vec<usize>, Vec<usize>, Vec<f64>)), TranscriptionError> {
         let (ev, blocks) = self.evaluate_inner(w, true, Some(lambda))?;
         let (mut rows, mut cols, mut vals) =
-            self.term_curvature(w, lambda, true).map_err(|reason| TranscriptionError::Term { term: "hessian".into(), reason })?;
+            self.term_curvature(w, lambda, true)
+                .map_err(|reason| TranscriptionError::Term {
+                    term: "hessian".into(),
+                    reason,
+                })?;
         for (iv, h) in self.intervals.iter().zip(blocks) {
             let Some(h) = h else { continue };
             let ph = &self.ocp.phases[iv.phase];
@@ -846,10 +1066,28 @@ impl<'o, 'a> Transcription<'o, 'a> {
             let nx = ph.ode.nx();
             let nz = nx + interval.np();
             // z order: x0, u0, [u1], h, θ  → NLP columns (h = T/N)
-            let mut map: Vec<(usize, f64)> = self.range(Block::State { phase: iv.phase, node: iv.k }).map(|c| (c, 1.0)).collect();
-            map.extend(self.range(Block::Control { phase: iv.phase, node: iv.k }).map(|c| (c, 1.0)));
+            let mut map: Vec<(usize, f64)> = self
+                .range(Block::State {
+                    phase: iv.phase,
+                    node: iv.k,
+                })
+                .map(|c| (c, 1.0))
+                .collect();
+            map.extend(
+                self.range(Block::Control {
+                    phase: iv.phase,
+                    node: iv.k,
+                })
+                .map(|c| (c, 1.0)),
+            );
             if ph.controls == ControlShape::Linear {
-                map.extend(self.range(Block::Control { phase: iv.phase, node: iv.k + 1 }).map(|c| (c, 1.0)));
+                map.extend(
+                    self.range(Block::Control {
+                        phase: iv.phase,
+                        node: iv.k + 1,
+                    })
+                    .map(|c| (c, 1.0)),
+                );
             }
             map.push((self.duration_off[iv.phase], 1.0 / ph.intervals as f64));
             map.extend(self.range(Block::Params).map(|c| (c, 1.0)));
@@ -885,7 +1123,16 @@ impl<'o, 'a> Transcription<'o, 'a> {
             .intervals
             .par_iter()
             .zip(&lists)
-            .map(|(iv, list)| self.integrate_interval(iv, list.as_deref().unwrap_or(&iv.samples), &moves, w, derivs, lambda))
+            .map(|(iv, list)| {
+                self.integrate_interval(
+                    iv,
+                    list.as_deref().unwrap_or(&iv.samples),
+                    &moves,
+                    w,
+                    derivs,
+                    lambda,
+                )
+            })
             .collect();
         let mut blocks = Vec::with_capacity(results.len());
         let mut sample_sums = Vec::new();
@@ -893,9 +1140,21 @@ impl<'o, 'a> Transcription<'o, 'a> {
         let mut ev = Evaluation {
             f: 0.0,
             c: vec![0.0; self.m],
-            grad: if derivs { vec![0.0; self.n] } else { Vec::new() },
-            jac: if derivs { Vec::with_capacity(self.jac_rows.len()) } else { Vec::new() },
-            gauss_newton: if derivs { Vec::with_capacity(self.gn_rows.len()) } else { Vec::new() },
+            grad: if derivs {
+                vec![0.0; self.n]
+            } else {
+                Vec::new()
+            },
+            jac: if derivs {
+                Vec::with_capacity(self.jac_rows.len())
+            } else {
+                Vec::new()
+            },
+            gauss_newton: if derivs {
+                Vec::with_capacity(self.gn_rows.len())
+            } else {
+                Vec::new()
+            },
             stats: IntegrationStats::default(),
         };
         // continuity (Jacobian values in pattern order)
@@ -909,7 +1168,10 @@ impl<'o, 'a> Transcription<'o, 'a> {
             ev.stats += st;
             let ph = &self.ocp.phases[iv.phase];
             let nx = ph.ode.nx();
-            let next = &w[self.range(Block::State { phase: iv.phase, node: iv.k + 1 })];
+            let next = &w[self.range(Block::State {
+                phase: iv.phase,
+                node: iv.k + 1,
+            })];
             for i in 0..nx {
                 ev.c[iv.row + i] = next[i] - x1[i];
             }
@@ -939,7 +1201,11 @@ impl<'o, 'a> Transcription<'o, 'a> {
         for (j, tr) in self.ocp.transitions.iter().enumerate() {
             let next = &self.ocp.phases[j + 1];
             let nx1 = next.ode.nx();
-            let x0: Vec<f64> = w[self.range(Block::State { phase: j + 1, node: 0 })].to_vec();
+            let x0: Vec<f64> = w[self.range(Block::State {
+                phase: j + 1,
+                node: 0,
+            })]
+            .to_vec();
             match tr {
                 Some(term) => {
                     let t = self
@@ -952,7 +1218,10 @@ impl<'o, 'a> Transcription<'o, 'a> {
                     let mut jac = vec![0.0; nx1 * z.len()];
                     term.f
                         .eval(&z, &mut v, derivs.then_some(&mut jac[..]))
-                        .map_err(|reason| TranscriptionError::Term { term: term.name.clone(), reason })?;
+                        .map_err(|reason| TranscriptionError::Term {
+                            term: term.name.clone(),
+                            reason,
+                        })?;
                     for i in 0..nx1 {
                         ev.c[t.row + i] = x0[i] - v[i];
                     }
@@ -962,7 +1231,10 @@ impl<'o, 'a> Transcription<'o, 'a> {
                 }
                 None => {
                     let prev = &self.ocp.phases[j];
-                    let xe = &w[self.range(Block::State { phase: j, node: prev.intervals })];
+                    let xe = &w[self.range(Block::State {
+                        phase: j,
+                        node: prev.intervals,
+                    })];
                     let row = self.transition_row(j);
                     for i in 0..nx1 {
                         ev.c[row + i] = x0[i] - xe[i];
@@ -985,8 +1257,15 @@ impl<'o, 'a> Transcription<'o, 'a> {
                     let mut jac = vec![0.0; d * z.len()];
                     con.term
                         .f
-                        .eval(&z, &mut ev.c[t.row..t.row + d], derivs.then_some(&mut jac[..]))
-                        .map_err(|reason| TranscriptionError::Term { term: con.term.name.clone(), reason })?;
+                        .eval(
+                            &z,
+                            &mut ev.c[t.row..t.row + d],
+                            derivs.then_some(&mut jac[..]),
+                        )
+                        .map_err(|reason| TranscriptionError::Term {
+                            term: con.term.name.clone(),
+                            reason,
+                        })?;
                     if derivs {
                         for i in 0..d {
                             for c in 0..z.len() {
@@ -1003,7 +1282,10 @@ impl<'o, 'a> Transcription<'o, 'a> {
                     let mut jac = vec![0.0; d * z.len()];
                     term.f
                         .eval(&z, &mut r, derivs.then_some(&mut jac[..]))
-                        .map_err(|reason| TranscriptionError::Term { term: term.name.clone(), reason })?;
+                        .map_err(|reason| TranscriptionError::Term {
+                            term: term.name.clone(),
+                            reason,
+                        })?;
                     ev.f += r.iter().map(|v| v * v).sum::<f64>();
                     if derivs {
                         let nz = z.len();
@@ -1012,7 +1294,8 @@ impl<'o, 'a> Transcription<'o, 'a> {
                         }
                         for a in 0..nz {
                             for b in a..nz {
-                                let mut v = 2.0 * (0..d).map(|i| jac[i + a * d] * jac[i + b * d]).sum::<f64>();
+                                let mut v = 2.0
+                                    * (0..d).map(|i| jac[i + a * d] * jac[i + b * d]).sum::<f64>();
                                 if t.cols[a] == t.cols[b] && a != b {
                                     v *= 2.0;
                                 }
@@ -1028,7 +1311,10 @@ impl<'o, 'a> Transcription<'o, 'a> {
                     let mut jac = vec![0.0; z.len()];
                     term.f
                         .eval(&z, &mut v, derivs.then_some(&mut jac[..]))
-                        .map_err(|reason| TranscriptionError::Term { term: term.name.clone(), reason })?;
+                        .map_err(|reason| TranscriptionError::Term {
+                            term: term.name.clone(),
+                            reason,
+                        })?;
                     ev.f += v[0];
                     if derivs {
                         for (a, &ca) in t.cols.iter().enumerate() {
@@ -1070,7 +1356,12 @@ impl<'o, 'a> Transcription<'o, 'a> {
     /// Gauss–Newton matrix, and `∇²f` of general costs). Terms are evaluated in parallel
     /// and assembled in term order, so the result does not depend on the thread count.
     #[allow(clippy::type_complexity)]
-    fn term_curvature(&self, w: &[f64], lambda: &[f64], objective: bool) -> Result<(Vec<usize>, Vec<usize>, Vec<f64>), String> {
+    fn term_curvature(
+        &self,
+        w: &[f64],
+        lambda: &[f64],
+        objective: bool,
+    ) -> Result<(Vec<usize>, Vec<usize>, Vec<f64>), String> {
         let blocks: Vec<Result<Option<(&TermRef, Vec<f64>)>, String>> = self
             .terms
             .par_iter()
@@ -1079,12 +1370,20 @@ impl<'o, 'a> Transcription<'o, 'a> {
                 // transitions are written x0 − ψ(z): their curvature enters with −λ
                 let (f, name, weights): (&dyn super::NodeFunction, &str, Vec<f64>) = match t.kind {
                     TermKind::Transition => match &self.ocp.transitions[t.term] {
-                        Some(term) => (&*term.f, &term.name, (0..term.f.dim()).map(|i| -lambda[t.row + i]).collect()),
+                        Some(term) => (
+                            &*term.f,
+                            &term.name,
+                            (0..term.f.dim()).map(|i| -lambda[t.row + i]).collect(),
+                        ),
                         None => return Ok(None),
                     },
                     TermKind::Constraint => {
                         let term = &self.ocp.constraints[t.term].term;
-                        (&*term.f, &term.name, (0..term.f.dim()).map(|i| lambda[t.row + i]).collect())
+                        (
+                            &*term.f,
+                            &term.name,
+                            (0..term.f.dim()).map(|i| lambda[t.row + i]).collect(),
+                        )
                     }
                     TermKind::LeastSquares if objective => {
                         let term = &self.ocp.least_squares[t.term];
@@ -1092,7 +1391,9 @@ impl<'o, 'a> Transcription<'o, 'a> {
                             return Ok(None);
                         }
                         let mut r = vec![0.0; term.f.dim()];
-                        term.f.eval(&z, &mut r, None).map_err(|e| format!("term '{}': {e}", term.name))?;
+                        term.f
+                            .eval(&z, &mut r, None)
+                            .map_err(|e| format!("term '{}': {e}", term.name))?;
                         (&*term.f, &term.name, r.iter().map(|v| 2.0 * v).collect())
                     }
                     TermKind::Cost if objective => {
@@ -1106,7 +1407,8 @@ impl<'o, 'a> Transcription<'o, 'a> {
                 }
                 let nz = z.len();
                 let mut hm = vec![0.0; nz * nz];
-                f.weighted_hessian(&z, &weights, &mut hm).map_err(|e| format!("term '{name}': {e}"))?;
+                f.weighted_hessian(&z, &weights, &mut hm)
+                    .map_err(|e| format!("term '{name}': {e}"))?;
                 Ok(Some((t, hm)))
             })
             .collect();
@@ -1133,8 +1435,15 @@ impl<'o, 'a> Transcription<'o, 'a> {
     }
 
     fn transition_row(&self, j: usize) -> usize {
-        let cont: usize = self.ocp.phases.iter().map(|p| p.intervals * p.ode.nx()).sum();
-        cont + (0..j).map(|i| self.ocp.phases[i + 1].ode.nx()).sum::<usize>()
+        let cont: usize = self
+            .ocp
+            .phases
+            .iter()
+            .map(|p| p.intervals * p.ode.nx())
+            .sum();
+        cont + (0..j)
+            .map(|i| self.ocp.phases[i + 1].ode.nx())
+            .sum::<usize>()
     }
 
     fn push_transition_jac(&self, jac_out: &mut Vec<f64>, t: &TermRef, nx1: usize, jac: &[f64]) {
@@ -1184,20 +1493,49 @@ impl crate::sqp::Nlp for Transcription<'_, '_> {
     }
     fn evaluate(&self, w: &[f64], derivs: bool) -> Result<crate::sqp::NlpEval, String> {
         let ev = Transcription::evaluate(self, w, derivs).map_err(|e| error_chain(&e))?;
-        Ok(crate::sqp::NlpEval { f: ev.f, c: ev.c, grad: ev.grad, jac: ev.jac, gn: ev.gauss_newton })
+        Ok(crate::sqp::NlpEval {
+            f: ev.f,
+            c: ev.c,
+            grad: ev.grad,
+            jac: ev.jac,
+            gn: ev.gauss_newton,
+        })
     }
     fn elastic_weights(&self) -> Vec<f64> {
-        let dynamics = self.ocp.phases.iter().map(|p| p.intervals * p.ode.nx()).sum::<usize>()
-            + self.ocp.phases.iter().skip(1).map(|p| p.ode.nx()).sum::<usize>();
-        (0..self.m).map(|i| if i < dynamics { 10.0 } else { 1.0 }).collect()
+        let dynamics = self
+            .ocp
+            .phases
+            .iter()
+            .map(|p| p.intervals * p.ode.nx())
+            .sum::<usize>()
+            + self
+                .ocp
+                .phases
+                .iter()
+                .skip(1)
+                .map(|p| p.ode.nx())
+                .sum::<usize>();
+        (0..self.m)
+            .map(|i| if i < dynamics { 10.0 } else { 1.0 })
+            .collect()
     }
     fn evaluate_with_hessian(
         &self,
         w: &[f64],
         lambda: &[f64],
     ) -> Result<(crate::sqp::NlpEval, (Vec<usize>, Vec<usize>, Vec<f64>)), String> {
-        let (ev, h) = Transcription::evaluate_with_hessian(self, w, lambda).map_err(|e| error_chain(&e))?;
-        Ok((crate::sqp::NlpEval { f: ev.f, c: ev.c, grad: ev.grad, jac: ev.jac, gn: ev.gauss_newton }, h))
+        let (ev, h) =
+            Transcription::evaluate_with_hessian(self, w, lambda).map_err(|e| error_chain(&e))?;
+        Ok((
+            crate::sqp::NlpEval {
+                f: ev.f,
+                c: ev.c,
+                grad: ev.grad,
+                jac: ev.jac,
+                gn: ev.gauss_newton,
+            },
+            h,
+        ))
     }
     fn rows_with_exact_hessian(&self) -> Vec<bool> {
         let mut rows = vec![false; self.m];
@@ -1207,7 +1545,10 @@ impl crate::sqp::Nlp for Transcription<'_, '_> {
                     Some(term) => (&term.f, term.f.dim()),
                     None => continue,
                 },
-                TermKind::Constraint => (&self.ocp.constraints[t.term].term.f, self.ocp.constraints[t.term].term.f.dim()),
+                TermKind::Constraint => (
+                    &self.ocp.constraints[t.term].term.f,
+                    self.ocp.constraints[t.term].term.f.dim(),
+                ),
                 _ => continue,
             };
             if f.has_hessian() {
@@ -1216,7 +1557,11 @@ impl crate::sqp::Nlp for Transcription<'_, '_> {
         }
         rows
     }
-    fn exact_hessian(&self, w: &[f64], lambda: &[f64]) -> Result<(Vec<usize>, Vec<usize>, Vec<f64>), String> {
+    fn exact_hessian(
+        &self,
+        w: &[f64],
+        lambda: &[f64],
+    ) -> Result<(Vec<usize>, Vec<usize>, Vec<f64>), String> {
         self.term_curvature(w, lambda, false)
     }
     fn row_name(&self, i: usize) -> String {

@@ -58,7 +58,12 @@ pub enum Benchmark {
 }
 
 fn num(v: &Value, ptr: &str) -> Result<f64, String> {
-    v.pointer(ptr).and_then(Value::as_f64).ok_or_else(|| format!("field '{}' missing or not a number", ptr.trim_start_matches('/').replace('/', ".")))
+    v.pointer(ptr).and_then(Value::as_f64).ok_or_else(|| {
+        format!(
+            "field '{}' missing or not a number",
+            ptr.trim_start_matches('/').replace('/', ".")
+        )
+    })
 }
 
 /// Most shooting intervals a problem file may ask for: far more than any of these problems
@@ -76,12 +81,17 @@ fn intervals(v: &Value) -> Result<usize, String> {
 }
 
 fn vecn(v: &Value, ptr: &str, len: usize) -> Result<Vec<f64>, String> {
-    let a = v
-        .pointer(ptr)
-        .and_then(Value::as_array)
-        .ok_or_else(|| format!("field '{}' missing or not an array", ptr.trim_start_matches('/').replace('/', ".")))?;
+    let a = v.pointer(ptr).and_then(Value::as_array).ok_or_else(|| {
+        format!(
+            "field '{}' missing or not an array",
+            ptr.trim_start_matches('/').replace('/', ".")
+        )
+    })?;
     if a.len() != len {
-        return Err(format!("field '{}' must have {len} entries", ptr.trim_start_matches('/').replace('/', ".")));
+        return Err(format!(
+            "field '{}' must have {len} entries",
+            ptr.trim_start_matches('/').replace('/', ".")
+        ));
     }
     // null = unbounded
     a.iter()
@@ -90,14 +100,21 @@ fn vecn(v: &Value, ptr: &str, len: usize) -> Result<Vec<f64>, String> {
             if x.is_null() {
                 Ok(f64::NAN)
             } else {
-                x.as_f64().ok_or_else(|| format!("field '{}[{i}]' is not a number", ptr.trim_start_matches('/').replace('/', ".")))
+                x.as_f64().ok_or_else(|| {
+                    format!(
+                        "field '{}[{i}]' is not a number",
+                        ptr.trim_start_matches('/').replace('/', ".")
+                    )
+                })
             }
         })
         .collect()
 }
 
 fn bound(v: Vec<f64>, inf: f64) -> Vec<f64> {
-    v.into_iter().map(|x| if x.is_nan() { inf } else { x }).collect()
+    v.into_iter()
+        .map(|x| if x.is_nan() { inf } else { x })
+        .collect()
 }
 
 impl Benchmark {
@@ -105,9 +122,18 @@ impl Benchmark {
     /// the fields of the optimal control problem are checked too (by building it once), so
     /// that [`ocp`](Self::ocp) succeeds on what this returns.
     pub fn load(path: &Path) -> Result<Self, ProblemError> {
-        let text = std::fs::read_to_string(path).map_err(|source| ProblemError::Io { path: path.into(), source })?;
-        let json = serde_json::from_str(&text).map_err(|source| ProblemError::Json { path: path.into(), source })?;
-        let invalid = |reason| ProblemError::Invalid { path: path.into(), reason };
+        let text = std::fs::read_to_string(path).map_err(|source| ProblemError::Io {
+            path: path.into(),
+            source,
+        })?;
+        let json = serde_json::from_str(&text).map_err(|source| ProblemError::Json {
+            path: path.into(),
+            source,
+        })?;
+        let invalid = |reason| ProblemError::Invalid {
+            path: path.into(),
+            reason,
+        };
         let bench = Self::from_json(json).map_err(invalid)?;
         bench.ocp(IntegratorSettings::default()).map_err(invalid)?;
         Ok(bench)
@@ -142,11 +168,26 @@ impl Benchmark {
 
 fn u_squared_terms(n: usize, nu: usize, h: f64) -> Vec<Term<'static>> {
     let w = h.sqrt();
-    let f = Arc::new(Linear::new((0..nu * nu).map(|k| if k / nu == k % nu { w } else { 0.0 }).collect(), nu));
-    (0..n).map(|k| Term { name: "u_squared".into(), args: vec![Block::Control { phase: 0, node: k }], f: f.clone() }).collect()
+    let f = Arc::new(Linear::new(
+        (0..nu * nu)
+            .map(|k| if k / nu == k % nu { w } else { 0.0 })
+            .collect(),
+        nu,
+    ));
+    (0..n)
+        .map(|k| Term {
+            name: "u_squared".into(),
+            args: vec![Block::Control { phase: 0, node: k }],
+            f: f.clone(),
+        })
+        .collect()
 }
 
-fn cartpole<'a>(model: &'a CartPole, json: &Value, integrator: IntegratorSettings) -> Result<Ocp<'a>, String> {
+fn cartpole<'a>(
+    model: &'a CartPole,
+    json: &Value,
+    integrator: IntegratorSettings,
+) -> Result<Ocp<'a>, String> {
     let n = intervals(json)?;
     let t = num(json, "/horizon/T")?;
     let xi = vecn(json, "/boundary/x_initial", 4)?;
@@ -161,7 +202,13 @@ fn cartpole<'a>(model: &'a CartPole, json: &Value, integrator: IntegratorSetting
     xu[0] = xi.clone();
     xl[n] = xf.clone();
     xu[n] = xf.clone();
-    let x_guess = (0..=n).map(|k| (0..4).map(|i| xi[i] + k as f64 / n as f64 * (xf[i] - xi[i])).collect()).collect();
+    let x_guess = (0..=n)
+        .map(|k| {
+            (0..4)
+                .map(|i| xi[i] + k as f64 / n as f64 * (xf[i] - xi[i]))
+                .collect()
+        })
+        .collect();
     Ok(Ocp {
         phases: vec![Phase {
             name: "swing_up".into(),
@@ -190,7 +237,11 @@ fn cartpole<'a>(model: &'a CartPole, json: &Value, integrator: IntegratorSetting
     })
 }
 
-fn five_link_biped<'a>(model: &'a FiveLinkBiped, json: &Value, integrator: IntegratorSettings) -> Result<Ocp<'a>, String> {
+fn five_link_biped<'a>(
+    model: &'a FiveLinkBiped,
+    json: &Value,
+    integrator: IntegratorSettings,
+) -> Result<Ocp<'a>, String> {
     use biped::{NQ, NU, NX};
     let n = intervals(json)?;
     let t = num(json, "/horizon/T")?;
@@ -220,36 +271,47 @@ fn five_link_biped<'a>(model: &'a FiveLinkBiped, json: &Value, integrator: Integ
     let knee = Arc::new(Linear::new(a, 2));
     for k in 0..=n {
         constraints.push(Constraint {
-            term: Term { name: "knee_hyperextension".into(), args: vec![Block::State { phase: 0, node: k }], f: knee.clone() },
+            term: Term {
+                name: "knee_hyperextension".into(),
+                args: vec![Block::State { phase: 0, node: k }],
+                f: knee.clone(),
+            },
             lb: vec![f64::NEG_INFINITY; 2],
             ub: vec![0.0; 2],
         });
     }
     let m1 = model.clone();
     // periodicity through heel strike: x_0 − Δ(x_N) = 0
-    let periodic = FnTerm::new(NX, move |z: &[f64], v: &mut [f64], jac: Option<&mut [f64]>| {
-        let (x0, xn) = z.split_at(NX);
-        let (d, dj) = m1.heel_strike_jacobian(xn);
-        for i in 0..NX {
-            v[i] = x0[i] - d[i];
-        }
-        if let Some(j) = jac {
-            j.iter_mut().for_each(|x| *x = 0.0);
+    let periodic = FnTerm::new(
+        NX,
+        move |z: &[f64], v: &mut [f64], jac: Option<&mut [f64]>| {
+            let (x0, xn) = z.split_at(NX);
+            let (d, dj) = m1.heel_strike_jacobian(xn);
             for i in 0..NX {
-                j[i + i * NX] = 1.0;
-                for c in 0..NX {
-                    j[i + (NX + c) * NX] = -dj[i + c * NX];
+                v[i] = x0[i] - d[i];
+            }
+            if let Some(j) = jac {
+                j.iter_mut().for_each(|x| *x = 0.0);
+                for i in 0..NX {
+                    j[i + i * NX] = 1.0;
+                    for c in 0..NX {
+                        j[i + (NX + c) * NX] = -dj[i + c * NX];
+                    }
                 }
             }
-        }
-        Ok(())
-    });
+            Ok(())
+        },
+    );
     let m1h = model.clone();
     let periodic = periodic.with_hessian(Box::new(move |z: &[f64], w: &[f64], out: &mut [f64]| {
         // Σ w_i (x0_i − Δ_i(x_N)): curvature only in x_N
         let hx = hessian::<NX>(&z[NX..], |xs| {
             let d = m1h.heel_strike(xs);
-            d.iter().zip(w).fold(num_dual::Dual2SVec64::<NX>::from(0.0), |acc, (di, wi)| acc - *di * *wi)
+            d.iter()
+                .zip(w)
+                .fold(num_dual::Dual2SVec64::<NX>::from(0.0), |acc, (di, wi)| {
+                    acc - *di * *wi
+                })
         });
         out.iter_mut().for_each(|v| *v = 0.0);
         let nz = 2 * NX;
@@ -263,7 +325,10 @@ fn five_link_biped<'a>(model: &'a FiveLinkBiped, json: &Value, integrator: Integ
     constraints.push(Constraint {
         term: Term {
             name: "periodicity".into(),
-            args: vec![Block::State { phase: 0, node: 0 }, Block::State { phase: 0, node: n }],
+            args: vec![
+                Block::State { phase: 0, node: 0 },
+                Block::State { phase: 0, node: n },
+            ],
             f: Arc::new(periodic),
         },
         lb: vec![0.0; NX],
@@ -271,19 +336,22 @@ fn five_link_biped<'a>(model: &'a FiveLinkBiped, json: &Value, integrator: Integ
     });
     // step length and height of the swing foot at the end
     let m2 = model.clone();
-    let foot_end = FnTerm::new(2, move |z: &[f64], v: &mut [f64], jac: Option<&mut [f64]>| {
-        let (p, pj) = m2.swing_foot_jacobian(&z[..NQ]);
-        v[0] = p[0] - step;
-        v[1] = p[1];
-        if let Some(j) = jac {
-            j.iter_mut().for_each(|x| *x = 0.0);
-            for c in 0..NQ {
-                j[c * 2] = pj[c * 2];
-                j[1 + c * 2] = pj[1 + c * 2];
+    let foot_end = FnTerm::new(
+        2,
+        move |z: &[f64], v: &mut [f64], jac: Option<&mut [f64]>| {
+            let (p, pj) = m2.swing_foot_jacobian(&z[..NQ]);
+            v[0] = p[0] - step;
+            v[1] = p[1];
+            if let Some(j) = jac {
+                j.iter_mut().for_each(|x| *x = 0.0);
+                for c in 0..NQ {
+                    j[c * 2] = pj[c * 2];
+                    j[1 + c * 2] = pj[1 + c * 2];
+                }
             }
-        }
-        Ok(())
-    });
+            Ok(())
+        },
+    );
     let m2h = model.clone();
     let foot_end = foot_end.with_hessian(Box::new(move |z: &[f64], w: &[f64], out: &mut [f64]| {
         let hq = hessian::<NQ>(&z[..NQ], |qs| {
@@ -299,31 +367,47 @@ fn five_link_biped<'a>(model: &'a FiveLinkBiped, json: &Value, integrator: Integ
         Ok(())
     }));
     constraints.push(Constraint {
-        term: Term { name: "step_length_height".into(), args: vec![Block::State { phase: 0, node: n }], f: Arc::new(foot_end) },
+        term: Term {
+            name: "step_length_height".into(),
+            args: vec![Block::State { phase: 0, node: n }],
+            f: Arc::new(foot_end),
+        },
         lb: vec![0.0; 2],
         ub: vec![0.0; 2],
     });
     // lift-off (ẏ₅ ≥ 0 at t = 0) and touch-down (ẏ₅ ≤ 0 at t = T)
-    for (node, name, lb, ub) in [(0, "liftoff", 0.0, f64::INFINITY), (n, "touchdown", f64::NEG_INFINITY, 0.0)] {
+    for (node, name, lb, ub) in [
+        (0, "liftoff", 0.0, f64::INFINITY),
+        (n, "touchdown", f64::NEG_INFINITY, 0.0),
+    ] {
         let m3 = model.clone();
-        let vy = FnTerm::new(1, move |z: &[f64], v: &mut [f64], jac: Option<&mut [f64]>| {
-            let (vel, vj) = m3.swing_foot_velocity_jacobian(z);
-            v[0] = vel[1];
-            if let Some(j) = jac {
-                for c in 0..NX {
-                    j[c] = vj[1 + c * 2];
+        let vy = FnTerm::new(
+            1,
+            move |z: &[f64], v: &mut [f64], jac: Option<&mut [f64]>| {
+                let (vel, vj) = m3.swing_foot_velocity_jacobian(z);
+                v[0] = vel[1];
+                if let Some(j) = jac {
+                    for c in 0..NX {
+                        j[c] = vj[1 + c * 2];
+                    }
                 }
-            }
-            Ok(())
-        });
+                Ok(())
+            },
+        );
         let m4 = model.clone();
         let vy = vy.with_hessian(Box::new(move |z: &[f64], w: &[f64], out: &mut [f64]| {
-            let hx = hessian::<NX>(z, |xs| m4.swing_foot_velocity(&xs[..NQ], &xs[NQ..])[1] * w[0]);
+            let hx = hessian::<NX>(z, |xs| {
+                m4.swing_foot_velocity(&xs[..NQ], &xs[NQ..])[1] * w[0]
+            });
             out.copy_from_slice(&hx);
             Ok(())
         }));
         constraints.push(Constraint {
-            term: Term { name: name.into(), args: vec![Block::State { phase: 0, node }], f: Arc::new(vy) },
+            term: Term {
+                name: name.into(),
+                args: vec![Block::State { phase: 0, node }],
+                f: Arc::new(vy),
+            },
             lb: vec![lb],
             ub: vec![ub],
         });

@@ -139,11 +139,20 @@ pub struct ScoreTest {
 }
 
 /// Mean error per Table 3 channel of the tracking solution in `w` against `data`.
-pub fn channel_means(tr: &Transcription, w: &[f64], continuous: &[usize], t0: f64, model: &crate::model::GaitModel, sets: &[crate::model::ConstraintSet], data: &crate::data::GaitData) -> Result<Vec<(String, String, f64)>, String> {
+pub fn channel_means(
+    tr: &Transcription,
+    w: &[f64],
+    continuous: &[usize],
+    t0: f64,
+    model: &crate::model::GaitModel,
+    sets: &[crate::model::ConstraintSet],
+    data: &crate::data::GaitData,
+) -> Result<Vec<(String, String, f64)>, String> {
     use super::evaluation::{channel_errors, Comparison, GaitSolution};
     let sol = GaitSolution::from_nlp(tr, w, continuous, t0);
     let nodes = sol.node_samples(model, sets).map_err(|e| e.to_string())?;
-    let cmp = Comparison::through_model(&nodes, data, model, &sol.theta).map_err(|e| e.to_string())?;
+    let cmp =
+        Comparison::through_model(&nodes, data, model, &sol.theta).map_err(|e| e.to_string())?;
     let channels = cmp.table_channels();
     Ok(channel_errors(&channels, &cmp, None)
         .into_iter()
@@ -173,7 +182,12 @@ pub fn gauss_newton_decrease(tr: &Transcription, w: &[f64]) -> Result<(f64, f64)
 /// ones follow the cost where it is strongly nonlinear in the new parameters (a clock
 /// offset moves sharp impact transients). Returns the cost at `w`, its total decrease,
 /// the point reached and the number of steps.
-pub fn truncated_refit(tr: &Transcription, w: &[f64], max_steps: usize, rel_stop: f64) -> Result<(f64, f64, Vec<f64>, usize), String> {
+pub fn truncated_refit(
+    tr: &Transcription,
+    w: &[f64],
+    max_steps: usize,
+    rel_stop: f64,
+) -> Result<(f64, f64, Vec<f64>, usize), String> {
     let cost = |w: &[f64]| crate::sqp::Nlp::evaluate(tr, w, false).map(|e| e.f);
     let first = GaussNewtonModel::new(tr, w, 1e-12)?;
     let j0 = first.objective();
@@ -219,12 +233,29 @@ pub fn truncated_refit(tr: &Transcription, w: &[f64], max_steps: usize, rel_stop
 /// `baseline_decrease` the Gauss–Newton decrease of the problem without it, `data_rows`
 /// the number of data residuals.
 /// Returns the test and the point after the step.
-pub fn score_test(effect: &EffectSpec, parameters: Vec<String>, tr: &Transcription, w: &[f64], baseline_decrease: f64, data_rows: usize) -> Result<(ScoreTest, Vec<f64>), String> {
+pub fn score_test(
+    effect: &EffectSpec,
+    parameters: Vec<String>,
+    tr: &Transcription,
+    w: &[f64],
+    baseline_decrease: f64,
+    data_rows: usize,
+) -> Result<(ScoreTest, Vec<f64>), String> {
     let k = parameters.len();
     let (objective, decrease, w1, steps) = truncated_refit(tr, w, MAX_STEPS, REL_STOP)?;
     let theta = theta_of(tr, &w1);
     let values = theta[theta.len() - k..].to_vec();
-    let test = ScoreTest { steps, ..ScoreTest::from_decrease(effect, parameters, values, decrease - baseline_decrease, objective, data_rows) };
+    let test = ScoreTest {
+        steps,
+        ..ScoreTest::from_decrease(
+            effect,
+            parameters,
+            values,
+            decrease - baseline_decrease,
+            objective,
+            data_rows,
+        )
+    };
     Ok((test, w1))
 }
 
@@ -235,8 +266,27 @@ pub fn score_test(effect: &EffectSpec, parameters: Vec<String>, tr: &Transcripti
 /// lies on the boundary and one parameter (the damping) has no meaning there, so the
 /// χ²ₖ reference is an approximation; `diagnose` offers it only where the pad was shown
 /// not to gain on data without one (sample targets, one-sided node targets).
-pub fn refit_test(effect: &EffectSpec, parameters: Vec<String>, values: Vec<f64>, objective: f64, refit_objective: f64, data_rows: usize, iterations: usize) -> ScoreTest {
-    ScoreTest { steps: iterations, refit: true, ..ScoreTest::from_decrease(effect, parameters, values, objective - refit_objective, objective, data_rows) }
+pub fn refit_test(
+    effect: &EffectSpec,
+    parameters: Vec<String>,
+    values: Vec<f64>,
+    objective: f64,
+    refit_objective: f64,
+    data_rows: usize,
+    iterations: usize,
+) -> ScoreTest {
+    ScoreTest {
+        steps: iterations,
+        refit: true,
+        ..ScoreTest::from_decrease(
+            effect,
+            parameters,
+            values,
+            objective - refit_objective,
+            objective,
+            data_rows,
+        )
+    }
 }
 
 impl ScoreTest {
@@ -244,7 +294,14 @@ impl ScoreTest {
     /// cost `objective` by `decrease` (a negative one counts as none): the decrease in
     /// units of the residual mean square `objective / data_rows` against the χ²ₖ 0.1 %
     /// point, `k` the number of parameters. No steps, not a full re-fit.
-    fn from_decrease(effect: &EffectSpec, parameters: Vec<String>, values: Vec<f64>, decrease: f64, objective: f64, data_rows: usize) -> Self {
+    fn from_decrease(
+        effect: &EffectSpec,
+        parameters: Vec<String>,
+        values: Vec<f64>,
+        decrease: f64,
+        objective: f64,
+        data_rows: usize,
+    ) -> Self {
         let decrease = decrease.max(0.0);
         let statistic = decrease / (objective / data_rows.max(1) as f64);
         let threshold = chi2_999(parameters.len());
@@ -270,7 +327,11 @@ impl ScoreTest {
 /// linearised constraints and `s² = J/(N − p)` (`N` data residuals, `p` = number of θ).
 /// `(H⁻¹)_jj` comes from the step's response to a gradient shift in θ_j. A parameter at
 /// a bound gets `None`.
-pub fn parameter_sd(tr: &Transcription, w: &[f64], data_rows: usize) -> Result<Vec<Option<f64>>, String> {
+pub fn parameter_sd(
+    tr: &Transcription,
+    w: &[f64],
+    data_rows: usize,
+) -> Result<Vec<Option<f64>>, String> {
     let range = tr.range(Block::Params);
     let (w_lb, w_ub, _, _) = crate::sqp::Nlp::bounds(tr);
     let m = GaussNewtonModel::new(tr, w, 0.0)?;

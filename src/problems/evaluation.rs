@@ -52,7 +52,11 @@ impl PhaseSolution {
             ControlShape::Linear => self.u[k + 1].clone(),
             ControlShape::Constant => self.u[k].clone(),
         };
-        ControlTable { names: names.to_vec(), times: vec![self.node_time(k), self.node_time(k + 1)], values: vec![self.u[k].clone(), u1] }
+        ControlTable {
+            names: names.to_vec(),
+            times: vec![self.node_time(k), self.node_time(k + 1)],
+            values: vec![self.u[k].clone(), u1],
+        }
     }
 }
 
@@ -74,13 +78,32 @@ impl GaitSolution {
         let mut t = t0;
         let mut phases = Vec::new();
         for (j, ph) in ocp.phases.iter().enumerate() {
-            let duration = if ph.duration.is_free() { w[tr.range(Block::Duration { phase: j }).start] } else { ph.duration.value };
-            let x = (0..=ph.intervals).map(|k| w[tr.range(Block::State { phase: j, node: k })].to_vec()).collect();
-            let u = (0..ph.control_nodes()).map(|k| w[tr.range(Block::Control { phase: j, node: k })].to_vec()).collect();
-            phases.push(PhaseSolution { name: ph.name.clone(), set: continuous[j], t0: t, duration, controls: ph.controls, x, u });
+            let duration = if ph.duration.is_free() {
+                w[tr.range(Block::Duration { phase: j }).start]
+            } else {
+                ph.duration.value
+            };
+            let x = (0..=ph.intervals)
+                .map(|k| w[tr.range(Block::State { phase: j, node: k })].to_vec())
+                .collect();
+            let u = (0..ph.control_nodes())
+                .map(|k| w[tr.range(Block::Control { phase: j, node: k })].to_vec())
+                .collect();
+            phases.push(PhaseSolution {
+                name: ph.name.clone(),
+                set: continuous[j],
+                t0: t,
+                duration,
+                controls: ph.controls,
+                x,
+                u,
+            });
             t += duration;
         }
-        Self { phases, theta: w[tr.range(Block::Params)].to_vec() }
+        Self {
+            phases,
+            theta: w[tr.range(Block::Params)].to_vec(),
+        }
     }
 
     /// Start and end time (s).
@@ -91,12 +114,24 @@ impl GaitSolution {
 
     /// Phase spans for plots and tables.
     pub fn phase_spans(&self) -> Vec<PhaseSpan> {
-        self.phases.iter().map(|p| PhaseSpan { name: p.name.clone(), t0: p.t0, t1: p.t0 + p.duration, touchdown: None }).collect()
+        self.phases
+            .iter()
+            .map(|p| PhaseSpan {
+                name: p.name.clone(),
+                t0: p.t0,
+                t1: p.t0 + p.duration,
+                touchdown: None,
+            })
+            .collect()
     }
 
     /// The model evaluated at every shooting node (a node shared by two phases once, from
     /// the later phase: after the impact).
-    pub fn node_samples(&self, model: &GaitModel, sets: &[ConstraintSet]) -> Result<Vec<Sample>, DynamicsError> {
+    pub fn node_samples(
+        &self,
+        model: &GaitModel,
+        sets: &[ConstraintSet],
+    ) -> Result<Vec<Sample>, DynamicsError> {
         let mut out = Vec::new();
         for (j, ph) in self.phases.iter().enumerate() {
             let last = j + 1 == self.phases.len();
@@ -104,7 +139,15 @@ impl GaitSolution {
                 if k == ph.intervals() && !last {
                     continue;
                 }
-                out.push(evaluate(model, &sets[ph.set], ph.set, ph.node_time(k), &ph.x[k], ph.node_control(k), &self.theta)?);
+                out.push(evaluate(
+                    model,
+                    &sets[ph.set],
+                    ph.set,
+                    ph.node_time(k),
+                    &ph.x[k],
+                    ph.node_control(k),
+                    &self.theta,
+                )?);
             }
         }
         Ok(out)
@@ -115,72 +158,153 @@ impl GaitSolution {
     /// phase before its impact (so jumps show). Each interval starts from its own node,
     /// as in the shooting transcription; the mismatch at the next node is reported as
     /// [`Reintegration::max_defect`].
-    pub fn reintegrate(&self, model: &GaitModel, sets: &[ConstraintSet], step: f64, integrator: &IntegratorSettings) -> Result<Reintegration, SimulationError> {
+    pub fn reintegrate(
+        &self,
+        model: &GaitModel,
+        sets: &[ConstraintSet],
+        step: f64,
+        integrator: &IntegratorSettings,
+    ) -> Result<Reintegration, SimulationError> {
         if !(step.is_finite() && step > 0.0) {
-            return Err(SimulationError::Input(format!("the output step must be positive, got {step}")));
+            return Err(SimulationError::Input(format!(
+                "the output step must be positive, got {step}"
+            )));
         }
         let (t0, t1) = self.span();
-        let grid: Vec<f64> = (((t0 / step).ceil() as i64)..=((t1 / step).floor() as i64)).map(|i| i as f64 * step).collect();
+        let grid: Vec<f64> = (((t0 / step).ceil() as i64)..=((t1 / step).floor() as i64))
+            .map(|i| i as f64 * step)
+            .collect();
         self.integrate_intervals(model, sets, &grid, true, integrator)
     }
 
     /// The model at the strictly increasing `times` inside the solution's span, one sample
     /// per time (a time on a phase boundary is sampled after the impact), each interval
     /// integrated from its own node.
-    pub fn sample_at(&self, model: &GaitModel, sets: &[ConstraintSet], times: &[f64], integrator: &IntegratorSettings) -> Result<Vec<Sample>, SimulationError> {
+    pub fn sample_at(
+        &self,
+        model: &GaitModel,
+        sets: &[ConstraintSet],
+        times: &[f64],
+        integrator: &IntegratorSettings,
+    ) -> Result<Vec<Sample>, SimulationError> {
         let (t0, t1) = self.span();
-        if let Some(t) = times.iter().find(|&&t| !(t >= t0 - 1e-12 && t <= t1 + 1e-12)) {
-            return Err(SimulationError::Input(format!("sample time {t} s is outside the solution's span {t0}–{t1} s")));
+        if let Some(t) = times
+            .iter()
+            .find(|&&t| !(t >= t0 - 1e-12 && t <= t1 + 1e-12))
+        {
+            return Err(SimulationError::Input(format!(
+                "sample time {t} s is outside the solution's span {t0}–{t1} s"
+            )));
         }
         if times.windows(2).any(|w| w[1] <= w[0]) {
-            return Err(SimulationError::Input("sample times must increase strictly".into()));
+            return Err(SimulationError::Input(
+                "sample times must increase strictly".into(),
+            ));
         }
-        Ok(self.integrate_intervals(model, sets, times, false, integrator)?.result.samples)
+        Ok(self
+            .integrate_intervals(model, sets, times, false, integrator)?
+            .result
+            .samples)
     }
 
     /// Integrate every interval and sample at `times` (plus, with `with_nodes`, at the
     /// nodes and phase ends).
-    fn integrate_intervals(&self, model: &GaitModel, sets: &[ConstraintSet], times: &[f64], with_nodes: bool, integrator: &IntegratorSettings) -> Result<Reintegration, SimulationError> {
-        let first = self.phases.first().map_or("", |p| p.name.as_str()).to_string();
-        let mut int = Integrator::new(model.nx(), model.ntheta(), integrator.clone())
-            .map_err(|e| SimulationError::Integrator { phase: first, source: e })?;
+    fn integrate_intervals(
+        &self,
+        model: &GaitModel,
+        sets: &[ConstraintSet],
+        times: &[f64],
+        with_nodes: bool,
+        integrator: &IntegratorSettings,
+    ) -> Result<Reintegration, SimulationError> {
+        let first = self
+            .phases
+            .first()
+            .map_or("", |p| p.name.as_str())
+            .to_string();
+        let mut int =
+            Integrator::new(model.nx(), model.ntheta(), integrator.clone()).map_err(|e| {
+                SimulationError::Integrator {
+                    phase: first,
+                    source: e,
+                }
+            })?;
         let names = model.control_names();
-        let mut result = SimulationResult { samples: Vec::new(), impacts: Vec::new(), phases: self.phase_spans(), stats: Default::default() };
+        let mut result = SimulationResult {
+            samples: Vec::new(),
+            impacts: Vec::new(),
+            phases: self.phase_spans(),
+            stats: Default::default(),
+        };
         let mut max_defect = 0.0f64;
         let nx = model.nx();
         let tol = 1e-9;
         let np = self.phases.len();
         for (j, ph) in self.phases.iter().enumerate() {
             let set = &sets[ph.set];
-            let dyn_err = |t: f64, e: DynamicsError| SimulationError::Dynamics { phase: ph.name.clone(), t, source: e };
+            let dyn_err = |t: f64, e: DynamicsError| SimulationError::Dynamics {
+                phase: ph.name.clone(),
+                t,
+                source: e,
+            };
             let n = ph.intervals();
             for k in 0..n {
                 let (a, b) = (ph.node_time(k), ph.node_time(k + 1));
                 let last = j + 1 == np && k + 1 == n;
                 // requested times in [a, b) (and b itself at the very end)
-                let mut want: Vec<f64> = times.iter().copied().filter(|&t| t >= a - tol && (t < b - tol || (last && t <= b + tol))).collect();
+                let mut want: Vec<f64> = times
+                    .iter()
+                    .copied()
+                    .filter(|&t| t >= a - tol && (t < b - tol || (last && t <= b + tol)))
+                    .collect();
                 let at_start = with_nodes || want.first().is_some_and(|&t| (t - a).abs() <= tol);
                 if at_start {
-                    result.samples.push(evaluate(model, set, ph.set, a, &ph.x[k], ph.node_control(k), &self.theta).map_err(|e| dyn_err(a, e))?);
+                    result.samples.push(
+                        evaluate(
+                            model,
+                            set,
+                            ph.set,
+                            a,
+                            &ph.x[k],
+                            ph.node_control(k),
+                            &self.theta,
+                        )
+                        .map_err(|e| dyn_err(a, e))?,
+                    );
                 }
                 want.retain(|&t| t > a + tol && t < b - tol);
-                let with_end = with_nodes && k + 1 == n || times.iter().any(|&t| last && (t - b).abs() <= tol);
+                let with_end =
+                    with_nodes && k + 1 == n || times.iter().any(|&t| last && (t - b).abs() <= tol);
                 want.push(b);
                 let controls = ph.interval_controls(k, &names);
-                let ode = SimulationOde { model, set, controls: &controls };
+                let ode = SimulationOde {
+                    model,
+                    set,
+                    controls: &controls,
+                };
                 let mut out = Vec::new();
                 result.stats += int
                     .integrate_dense(&ode, a, b, &ph.x[k], &self.theta, &want, &mut out)
-                    .map_err(|e| SimulationError::Integrator { phase: ph.name.clone(), source: e })?;
+                    .map_err(|e| SimulationError::Integrator {
+                        phase: ph.name.clone(),
+                        source: e,
+                    })?;
                 let mut u = vec![0.0; model.nu()];
                 let keep = if with_end { want.len() } else { want.len() - 1 };
                 for (i, &t) in want.iter().enumerate().take(keep) {
                     controls.at(t, &mut u);
                     let xi = &out[i * nx..(i + 1) * nx];
-                    result.samples.push(evaluate(model, set, ph.set, t, xi, &u, &self.theta).map_err(|e| dyn_err(t, e))?);
+                    result.samples.push(
+                        evaluate(model, set, ph.set, t, xi, &u, &self.theta)
+                            .map_err(|e| dyn_err(t, e))?,
+                    );
                 }
                 let end = &out[out.len() - nx..];
-                let defect = end.iter().zip(&ph.x[k + 1]).map(|(p, q)| (p - q).abs()).fold(0.0, f64::max);
+                let defect = end
+                    .iter()
+                    .zip(&ph.x[k + 1])
+                    .map(|(p, q)| (p - q).abs())
+                    .fold(0.0, f64::max);
                 max_defect = max_defect.max(defect);
             }
         }
@@ -189,12 +313,26 @@ impl GaitSolution {
 }
 
 /// The model at one instant: state, foot loads and constraint details.
-fn evaluate(model: &GaitModel, set: &ConstraintSet, phase: usize, t: f64, x: &[f64], u: &[f64], theta: &[f64]) -> Result<Sample, DynamicsError> {
+fn evaluate(
+    model: &GaitModel,
+    set: &ConstraintSet,
+    phase: usize,
+    t: f64,
+    x: &[f64],
+    u: &[f64],
+    theta: &[f64],
+) -> Result<Sample, DynamicsError> {
     let mut xdot = vec![0.0; model.nx()];
     let mut lam = vec![0.0; set.rows.len()];
     let mut rep = ContactReport::default();
     model.dynamics(set, x, u, theta, &mut xdot, &mut lam, Some(&mut rep))?;
-    Ok(Sample { t, phase, x: x.to_vec(), feet: model.foot_loads(set, &rep), contact: rep })
+    Ok(Sample {
+        t,
+        phase,
+        x: x.to_vec(),
+        feet: model.foot_loads(set, &rep),
+        contact: rep,
+    })
 }
 
 /// A solution re-integrated on a fine grid.
@@ -287,24 +425,51 @@ impl Comparison {
     /// Hold `samples` of the model against `data` through the measurement effects of
     /// `model` at parameters `theta` (the force plates read at t + clock offset, their
     /// CoP less the CoP offset), as the tracking cost compares them.
-    pub fn through_model(samples: &[Sample], data: &GaitData, model: &crate::model::GaitModel, theta: &[f64]) -> Result<Self, DataError> {
+    pub fn through_model(
+        samples: &[Sample],
+        data: &GaitData,
+        model: &crate::model::GaitModel,
+        theta: &[f64],
+    ) -> Result<Self, DataError> {
         let adj = model.measurement_adjust::<f64>(theta);
         Self::with_offsets(samples, data, adj.force_time_offset, adj.cop_offset)
     }
 
     /// As [`new`](Self::new) with the force plates read at t + `force_time_offset` (s)
     /// and `cop_offset` (m) taken off their CoP.
-    pub fn with_offsets(samples: &[Sample], data: &GaitData, force_time_offset: f64, cop_offset: f64) -> Result<Self, DataError> {
-        let splines: Vec<CubicSpline> = COORDINATES.iter().map(|c| data.spline(c)).collect::<Result<_, _>>()?;
+    pub fn with_offsets(
+        samples: &[Sample],
+        data: &GaitData,
+        force_time_offset: f64,
+        cop_offset: f64,
+    ) -> Result<Self, DataError> {
+        let splines: Vec<CubicSpline> = COORDINATES
+            .iter()
+            .map(|c| data.spline(c))
+            .collect::<Result<_, _>>()?;
         let times: Vec<f64> = samples.iter().map(|s| s.t).collect();
-        let model_q = (0..9).map(|i| samples.iter().map(|s| s.x[i]).collect()).collect();
-        let data_q = splines.iter().map(|sp| times.iter().map(|&t| sp.eval(t)).collect()).collect();
+        let model_q = (0..9)
+            .map(|i| samples.iter().map(|s| s.x[i]).collect())
+            .collect();
+        let data_q = splines
+            .iter()
+            .map(|sp| times.iter().map(|&t| sp.eval(t)).collect())
+            .collect();
         let th = data.cop_threshold;
         let model_side = |k: usize| -> [Vec<f64>; 3] {
             [
                 samples.iter().map(|s| s.feet[k].fx).collect(),
                 samples.iter().map(|s| s.feet[k].fy).collect(),
-                samples.iter().map(|s| if s.feet[k].fy > th { s.feet[k].cop_x } else { f64::NAN }).collect(),
+                samples
+                    .iter()
+                    .map(|s| {
+                        if s.feet[k].fy > th {
+                            s.feet[k].cop_x
+                        } else {
+                            f64::NAN
+                        }
+                    })
+                    .collect(),
             ]
         };
         let plate_times: Vec<f64> = times.iter().map(|t| t + force_time_offset).collect();
@@ -313,7 +478,10 @@ impl Comparison {
             [
                 interp_linear(&plate_times, &data.time, &f.fx),
                 interp_linear(&plate_times, &data.time, &f.fy),
-                interp_linear(&plate_times, &data.time, &f.cop_x).into_iter().map(|c| c - cop_offset).collect(),
+                interp_linear(&plate_times, &data.time, &f.cop_x)
+                    .into_iter()
+                    .map(|c| c - cop_offset)
+                    .collect(),
             ]
         };
         Ok(Self {
@@ -345,14 +513,39 @@ impl Comparison {
     pub fn table_channels(&self) -> Vec<ErrorChannel> {
         let deg = 180.0 / std::f64::consts::PI;
         let n = self.len();
-        let both = |f: &dyn Fn(usize, usize) -> f64| -> Vec<f64> { (0..2).flat_map(|s| (0..n).map(move |k| (s, k))).map(|(s, k)| f(s, k)).collect() };
-        let foot = |q: &Vec<Vec<f64>>, s: usize, k: usize| q[2][k] + q[3 + 3 * s][k] + q[4 + 3 * s][k] + q[5 + 3 * s][k];
+        let both = |f: &dyn Fn(usize, usize) -> f64| -> Vec<f64> {
+            (0..2)
+                .flat_map(|s| (0..n).map(move |k| (s, k)))
+                .map(|(s, k)| f(s, k))
+                .collect()
+        };
+        let foot = |q: &Vec<Vec<f64>>, s: usize, k: usize| {
+            q[2][k] + q[3 + 3 * s][k] + q[4 + 3 * s][k] + q[5 + 3 * s][k]
+        };
         let loaded = |s: usize, k: usize| self.data_feet[s][1][k] > self.cop_threshold;
-        let load_err = |c: usize| move |s: usize, k: usize| if loaded(s, k) { self.model_feet[s][c][k] - self.data_feet[s][c][k] } else { f64::NAN };
-        let joint = |j: usize| move |s: usize, k: usize| deg * (self.model_q[j + 3 * s][k] - self.data_q[j + 3 * s][k]);
+        let load_err = |c: usize| {
+            move |s: usize, k: usize| {
+                if loaded(s, k) {
+                    self.model_feet[s][c][k] - self.data_feet[s][c][k]
+                } else {
+                    f64::NAN
+                }
+            }
+        };
+        let joint = |j: usize| {
+            move |s: usize, k: usize| deg * (self.model_q[j + 3 * s][k] - self.data_q[j + 3 * s][k])
+        };
         vec![
-            ErrorChannel::new("foot orientation", "°", both(&|s, k| deg * (foot(&self.model_q, s, k) - foot(&self.data_q, s, k)))),
-            ErrorChannel::new("CoP", "cm", both(&|s, k| 100.0 * (self.model_feet[s][2][k] - self.data_feet[s][2][k]))),
+            ErrorChannel::new(
+                "foot orientation",
+                "°",
+                both(&|s, k| deg * (foot(&self.model_q, s, k) - foot(&self.data_q, s, k))),
+            ),
+            ErrorChannel::new(
+                "CoP",
+                "cm",
+                both(&|s, k| 100.0 * (self.model_feet[s][2][k] - self.data_feet[s][2][k])),
+            ),
             ErrorChannel::new("tangential GRF", "N", both(&load_err(0))),
             ErrorChannel::new("normal GRF", "N", both(&load_err(1))),
             ErrorChannel::new("ankle angle", "°", both(&joint(5))),
@@ -380,19 +573,33 @@ pub struct ErrorChannel {
 
 impl ErrorChannel {
     fn new(name: &str, unit: &str, errors: Vec<f64>) -> Self {
-        Self { name: name.into(), unit: unit.into(), errors }
+        Self {
+            name: name.into(),
+            unit: unit.into(),
+            errors,
+        }
     }
 
     /// Statistics of |error| over the entries `keep` selects (None: no defined entry).
     pub fn stats(&self, keep: impl Fn(usize) -> bool) -> Option<ErrorStats> {
-        let e: Vec<f64> = self.errors.iter().enumerate().filter(|(i, v)| keep(*i) && v.is_finite()).map(|(_, v)| v.abs()).collect();
+        let e: Vec<f64> = self
+            .errors
+            .iter()
+            .enumerate()
+            .filter(|(i, v)| keep(*i) && v.is_finite())
+            .map(|(_, v)| v.abs())
+            .collect();
         (!e.is_empty()).then(|| ErrorStats::from_errors(&e))
     }
 }
 
 /// Table rows for `channels`: one column over all samples when `by_phase` is `None`,
 /// otherwise one column per listed phase (phase file indices).
-pub fn channel_errors(channels: &[ErrorChannel], comparison: &Comparison, by_phase: Option<&[usize]>) -> Vec<ChannelErrors> {
+pub fn channel_errors(
+    channels: &[ErrorChannel],
+    comparison: &Comparison,
+    by_phase: Option<&[usize]>,
+) -> Vec<ChannelErrors> {
     channels
         .iter()
         .map(|c| ChannelErrors {
@@ -401,7 +608,10 @@ pub fn channel_errors(channels: &[ErrorChannel], comparison: &Comparison, by_pha
             decimals: 1,
             runs: match by_phase {
                 None => vec![c.stats(|_| true)],
-                Some(ph) => ph.iter().map(|&p| c.stats(|i| comparison.channel_phase(i) == p)).collect(),
+                Some(ph) => ph
+                    .iter()
+                    .map(|&p| c.stats(|i| comparison.channel_phase(i) == p))
+                    .collect(),
             },
         })
         .collect()
@@ -460,7 +670,9 @@ pub fn residual_use(model: &GaitModel, sol: &GaitSolution) -> Vec<ResidualUse> {
                 bound,
                 rms: (v.iter().map(|a| a * a).sum::<f64>() / n).sqrt(),
                 peak: v.iter().fold(0.0f64, |m, a| m.max(a.abs())),
-                at_bound_fraction: v.iter().filter(|a| a.abs() >= (1.0 - 1e-3) * bound).count() as f64 / n,
+                at_bound_fraction: v.iter().filter(|a| a.abs() >= (1.0 - 1e-3) * bound).count()
+                    as f64
+                    / n,
                 times: times.clone(),
                 values: v,
             }

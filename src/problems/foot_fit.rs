@@ -59,7 +59,11 @@ fn outline(foot: &FootSpec) -> Vec<[f64; 2]> {
                     pts.push([centre[0] + radius * a.cos(), centre[1] + radius * a.sin()]);
                 }
             }
-            Shape::Ellipse { centre, angle, semi_axes } => {
+            Shape::Ellipse {
+                centre,
+                angle,
+                semi_axes,
+            } => {
                 let (s, c) = angle.sin_cos();
                 for k in 0..1440 {
                     let t = k as f64 * std::f64::consts::TAU / 1440.0;
@@ -79,7 +83,9 @@ fn convex_hull(mut p: Vec<[f64; 2]>) -> Vec<[f64; 2]> {
     if p.len() < 3 {
         return p;
     }
-    let cross = |o: [f64; 2], a: [f64; 2], b: [f64; 2]| (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
+    let cross = |o: [f64; 2], a: [f64; 2], b: [f64; 2]| {
+        (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0])
+    };
     let mut h: Vec<[f64; 2]> = Vec::new();
     for &pt in p.iter().chain(p.iter().rev().skip(1)) {
         while h.len() >= 2 && cross(h[h.len() - 2], h[h.len() - 1], pt) <= 0.0 {
@@ -94,13 +100,21 @@ fn convex_hull(mut p: Vec<[f64; 2]>) -> Vec<[f64; 2]> {
 /// Total length of the foot along its frame's x axis (m).
 pub fn foot_length(foot: &FootSpec) -> f64 {
     let o = outline(foot);
-    let (lo, hi) = o.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| (a.min(p[0]), b.max(p[0])));
+    let (lo, hi) = o
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), p| {
+            (a.min(p[0]), b.max(p[0]))
+        });
     hi - lo
 }
 
 /// Predicted ankle positions and angles when the foot rolls along the measured CoP,
 /// posed at the last sample (toe-off), for a ground at height `ground`.
-pub fn roll(foot: &FootSpec, stance: &StanceSamples, ground: f64) -> Option<(Vec<[f64; 2]>, Vec<f64>)> {
+pub fn roll(
+    foot: &FootSpec,
+    stance: &StanceSamples,
+    ground: f64,
+) -> Option<(Vec<[f64; 2]>, Vec<f64>)> {
     let hull = outline(foot);
     let n = hull.len();
     if n < 3 || stance.is_empty() {
@@ -120,7 +134,10 @@ pub fn roll(foot: &FootSpec, stance: &StanceSamples, ground: f64) -> Option<(Vec
         let (a, b) = (hull[i], hull[(i + 1) % n]);
         let len = s[i + 1] - s[i];
         let w = if len > 0.0 { (u - s[i]) / len } else { 0.0 };
-        ([a[0] + w * (b[0] - a[0]), a[1] + w * (b[1] - a[1])], (b[1] - a[1]).atan2(b[0] - a[0]))
+        (
+            [a[0] + w * (b[0] - a[0]), a[1] + w * (b[1] - a[1])],
+            (b[1] - a[1]).atan2(b[0] - a[0]),
+        )
     };
     let last = stance.len() - 1;
     // toe-off pose: lowest hull vertex at the measured orientation
@@ -138,7 +155,11 @@ pub fn roll(foot: &FootSpec, stance: &StanceSamples, ground: f64) -> Option<(Vec
         // counter-clockwise along the bottom runs heel → toe; going back in time the
         // contact moves towards the heel by the distance the CoP moves back
         let u = u_n + (stance.cop[i] - stance.cop[last]);
-        let (p, beta) = if i == last { (hull[k], f64::NAN) } else { at(u) };
+        let (p, beta) = if i == last {
+            (hull[k], f64::NAN)
+        } else {
+            at(u)
+        };
         // orientation that makes the contact edge horizontal (the toe-off pose keeps the
         // measured angle)
         let psi = if i == last { psi_n } else { -beta };
@@ -151,7 +172,11 @@ pub fn roll(foot: &FootSpec, stance: &StanceSamples, ground: f64) -> Option<(Vec
 }
 
 /// Eq. 13 and the per-sample errors.
-pub fn fit_cost(foot: &FootSpec, stances: &[StanceSamples], ground: f64) -> Option<(f64, Vec<f64>, Vec<f64>)> {
+pub fn fit_cost(
+    foot: &FootSpec,
+    stances: &[StanceSamples],
+    ground: f64,
+) -> Option<(f64, Vec<f64>, Vec<f64>)> {
     let mut cost = 0.0;
     let (mut pos, mut ang) = (Vec::new(), Vec::new());
     for st in stances {
@@ -177,7 +202,11 @@ pub fn parameters(foot: &FootSpec) -> Vec<f64> {
                 p.extend(centre);
                 p.push(radius);
             }
-            Shape::Ellipse { centre, angle, semi_axes } => {
+            Shape::Ellipse {
+                centre,
+                angle,
+                semi_axes,
+            } => {
                 p.extend(centre);
                 p.push(angle);
                 p.extend(semi_axes);
@@ -202,7 +231,11 @@ pub fn with_parameters(foot: &FootSpec, p: &[f64]) -> FootSpec {
                 *radius = p[k + 2];
                 k += 3;
             }
-            Shape::Ellipse { centre, angle, semi_axes } => {
+            Shape::Ellipse {
+                centre,
+                angle,
+                semi_axes,
+            } => {
                 *centre = [p[k], p[k + 1]];
                 *angle = p[k + 2];
                 *semi_axes = [p[k + 3], p[k + 4]];
@@ -249,40 +282,74 @@ pub struct FitResult {
 
 /// Fit `foot` to the stances by Nelder–Mead (simplex steps of 5 mm / 0.05 rad, stopping
 /// when the simplex's cost spread falls below `tol`) with its length fixed.
-pub fn fit(foot: &FootSpec, stances: &[StanceSamples], ground: f64, tol: f64, max_iter: u64) -> Result<FitResult, String> {
+pub fn fit(
+    foot: &FootSpec,
+    stances: &[StanceSamples],
+    ground: f64,
+    tol: f64,
+    max_iter: u64,
+) -> Result<FitResult, String> {
     let p0 = parameters(foot);
     let length = foot_length(foot);
-    let before = fit_cost(foot, stances, ground).ok_or("the foot cannot roll along the measured CoP")?.0;
+    let before = fit_cost(foot, stances, ground)
+        .ok_or("the foot cannot roll along the measured CoP")?
+        .0;
     let mut simplex = vec![p0.clone()];
     for i in 0..p0.len() {
         let mut p = p0.clone();
         p[i] += 0.005;
         simplex.push(p);
     }
-    let problem = FitProblem { foot, stances, ground, length };
-    let solver = NelderMead::new(simplex).with_sd_tolerance(tol).map_err(|e| e.to_string())?;
+    let problem = FitProblem {
+        foot,
+        stances,
+        ground,
+        length,
+    };
+    let solver = NelderMead::new(simplex)
+        .with_sd_tolerance(tol)
+        .map_err(|e| e.to_string())?;
     let res = Executor::new(problem, solver)
         .configure(|s| s.max_iters(max_iter))
         .run()
         .map_err(|e| e.to_string())?;
     let best = res.state().best_param.clone().unwrap_or(p0);
     let fitted = with_parameters(foot, &best);
-    let (after, pos, ang) = fit_cost(&fitted, stances, ground).ok_or("the fitted foot cannot roll")?;
-    Ok(FitResult { foot: fitted, cost: (before, after), iterations: res.state().iter, errors: (pos, ang) })
+    let (after, pos, ang) =
+        fit_cost(&fitted, stances, ground).ok_or("the fitted foot cannot roll")?;
+    Ok(FitResult {
+        foot: fitted,
+        cost: (before, after),
+        iterations: res.state().iter,
+        errors: (pos, ang),
+    })
 }
 
 /// The complete stances of both feet in `data` (heel strike to toe-off of the 5 % events,
 /// samples above the threshold with a measured CoP), with the ankle poses from the
 /// model's forward kinematics of the measured joint angles.
-pub fn stances_from_data(model: &crate::model::GaitModel, data: &crate::data::GaitData) -> Result<Vec<StanceSamples>, String> {
+pub fn stances_from_data(
+    model: &crate::model::GaitModel,
+    data: &crate::data::GaitData,
+) -> Result<Vec<StanceSamples>, String> {
     use crate::data::{detect_events, DEFAULT_EVENT_FRACTION};
     let events = detect_events(data, DEFAULT_EVENT_FRACTION).map_err(|e| e.to_string())?;
-    let peak = data.feet.iter().flat_map(|f| f.fy.iter()).copied().fold(0.0, f64::max);
+    let peak = data
+        .feet
+        .iter()
+        .flat_map(|f| f.fy.iter())
+        .copied()
+        .fold(0.0, f64::max);
     let mut out = Vec::new();
     for (s, side) in ["r", "l"].iter().enumerate() {
-        let body = model.tree().body_index(&format!("foot_{side}")).ok_or("the model has no foot body")?;
+        let body = model
+            .tree()
+            .body_index(&format!("foot_{side}"))
+            .ok_or("the model has no foot body")?;
         for &hs in &events.heel_strike[s] {
-            let Some(&to) = events.toe_off[s].iter().find(|&&t| t > hs) else { continue };
+            let Some(&to) = events.toe_off[s].iter().find(|&&t| t > hs) else {
+                continue;
+            };
             let mut st = StanceSamples::default();
             for (k, &t) in data.time.iter().enumerate() {
                 let (fy, cop) = (data.feet[s].fy[k], data.feet[s].cop_x[k]);
@@ -303,7 +370,10 @@ pub fn stances_from_data(model: &crate::model::GaitModel, data: &crate::data::Ga
         }
     }
     if out.is_empty() {
-        return Err("the data contain no complete stance (heel strike to toe-off) with a measured CoP".into());
+        return Err(
+            "the data contain no complete stance (heel strike to toe-off) with a measured CoP"
+                .into(),
+        );
     }
     Ok(out)
 }

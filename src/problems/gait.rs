@@ -8,8 +8,8 @@
 //! of the mirrored cycle: the state after the last impact, mirrored, is the first state.
 
 use super::{AdTerm, GenericFunction, Linear};
-use crate::model::effects::ModelScalar;
 use crate::integrate::{ControlShape, IntegratorSettings};
+use crate::model::effects::ModelScalar;
 use crate::model::gait::COORDINATES;
 use crate::model::{ConstraintSet, GaitModel, GaitOde, RowKind};
 use crate::ocp::{Block, CheckPoint, Constraint, Ocp, Phase as OcpPhase, PhaseDuration, Term};
@@ -82,32 +82,74 @@ pub struct GaitCycle<'m> {
 
 impl<'m> GaitCycle<'m> {
     /// Resolve `seq` (with its constraint sets `sets`, one per phase) for `model`.
-    pub fn new(model: &'m GaitModel, seq: &PhaseSequence, sets: &'m [ConstraintSet]) -> Result<Self, String> {
+    pub fn new(
+        model: &'m GaitModel,
+        seq: &PhaseSequence,
+        sets: &'m [ConstraintSet],
+    ) -> Result<Self, String> {
         if sets.len() != seq.phases.len() {
-            return Err(format!("{} constraint sets for {} phases", sets.len(), seq.phases.len()));
+            return Err(format!(
+                "{} constraint sets for {} phases",
+                sets.len(),
+                seq.phases.len()
+            ));
         }
-        let continuous: Vec<usize> =
-            seq.phases.iter().enumerate().filter(|(_, p)| matches!(p, Phase::Continuous { .. })).map(|(i, _)| i).collect();
+        let continuous: Vec<usize> = seq
+            .phases
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| matches!(p, Phase::Continuous { .. }))
+            .map(|(i, _)| i)
+            .collect();
         if continuous.is_empty() {
             return Err("the phase file has no continuous phase".into());
         }
-        let odes = continuous.iter().map(|&i| GaitOde { model, set: &sets[i] }).collect();
-        Ok(Self { model, seq: seq.clone(), sets, odes, continuous })
+        let odes = continuous
+            .iter()
+            .map(|&i| GaitOde {
+                model,
+                set: &sets[i],
+            })
+            .collect();
+        Ok(Self {
+            model,
+            seq: seq.clone(),
+            sets,
+            odes,
+            continuous,
+        })
     }
 
     /// The optimal control problem with initial guess and bounds `guess`.
-    pub fn ocp(&self, guess: &GaitGuess, integrator: IntegratorSettings) -> Result<Ocp<'_>, String> {
-        gait_ocp(self.model, &self.seq, self.sets, &self.odes, guess, integrator)
+    pub fn ocp(
+        &self,
+        guess: &GaitGuess,
+        integrator: IntegratorSettings,
+    ) -> Result<Ocp<'_>, String> {
+        gait_ocp(
+            self.model, &self.seq, self.sets, &self.odes, guess, integrator,
+        )
     }
 
     /// Whole-cycle constraints: step length `L` = pelvis_x(end) − pelvis_x(start) (m) and
     /// average forward speed `L / Σ T_j` (m/s), each when given (seed §3.5).
-    pub fn step_constraints<'s>(&'s self, ocp: &Ocp<'s>, step_length: Option<f64>, speed: Option<f64>) -> Vec<Constraint<'s>> {
+    pub fn step_constraints<'s>(
+        &'s self,
+        ocp: &Ocp<'s>,
+        step_length: Option<f64>,
+        speed: Option<f64>,
+    ) -> Vec<Constraint<'s>> {
         let last = ocp.phases.len() - 1;
         let n_last = ocp.phases[last].intervals;
         let nx = self.model.nx();
         let np = ocp.phases.len();
-        let mut args = vec![Block::State { phase: 0, node: 0 }, Block::State { phase: last, node: n_last }];
+        let mut args = vec![
+            Block::State { phase: 0, node: 0 },
+            Block::State {
+                phase: last,
+                node: n_last,
+            },
+        ];
         args.extend((0..np).map(|j| Block::Duration { phase: j }));
         let mut out = Vec::new();
         if let Some(l) = step_length {
@@ -115,7 +157,11 @@ impl<'m> GaitCycle<'m> {
             a[0] = -1.0;
             a[nx] = 1.0;
             out.push(Constraint {
-                term: Term { name: "step_length".into(), args: args.clone(), f: Arc::new(Linear::new(a, 1)) },
+                term: Term {
+                    name: "step_length".into(),
+                    args: args.clone(),
+                    f: Arc::new(Linear::new(a, 1)),
+                },
                 lb: vec![l],
                 ub: vec![l],
             });
@@ -127,7 +173,15 @@ impl<'m> GaitCycle<'m> {
             a[nx] = 1.0;
             a[2 * nx..].iter_mut().for_each(|v| *v = -v_avg);
             let f = Linear::new(a, 1);
-            out.push(Constraint { term: Term { name: "average_speed".into(), args, f: Arc::new(f) }, lb: vec![0.0], ub: vec![0.0] });
+            out.push(Constraint {
+                term: Term {
+                    name: "average_speed".into(),
+                    args,
+                    f: Arc::new(f),
+                },
+                lb: vec![0.0],
+                ub: vec![0.0],
+            });
         }
         out
     }
@@ -141,7 +195,10 @@ fn gait_ocp<'a>(
     guess: &GaitGuess,
     integrator: IntegratorSettings,
 ) -> Result<Ocp<'a>, String> {
-    let spec = seq.gait.clone().unwrap_or_else(|| serde_json::from_str("{}").expect("defaults"));
+    let spec = seq
+        .gait
+        .clone()
+        .unwrap_or_else(|| serde_json::from_str("{}").expect("defaults"));
     let (nx, nu) = (model.nx(), model.nu());
     let theta = model.theta0();
     let nt = theta.len();
@@ -153,8 +210,17 @@ fn gait_ocp<'a>(
     for (i, ph) in seq.phases.iter().enumerate() {
         match ph {
             Phase::Impact { .. } => pending_impact = Some(i),
-            Phase::Continuous { name, duration, intervals, .. } => {
-                impact_before.push(if cont.is_empty() { None } else { pending_impact.take() });
+            Phase::Continuous {
+                name,
+                duration,
+                intervals,
+                ..
+            } => {
+                impact_before.push(if cont.is_empty() {
+                    None
+                } else {
+                    pending_impact.take()
+                });
                 if cont.is_empty() {
                     pending_impact = None;
                 }
@@ -169,15 +235,27 @@ fn gait_ocp<'a>(
         return Err("the phase file has no continuous phase".into());
     }
     if guess.x.len() != cont.len() || guess.u.len() != cont.len() {
-        return Err(format!("the guess has {} phases, the file {} continuous phases", guess.x.len(), cont.len()));
+        return Err(format!(
+            "the guess has {} phases, the file {} continuous phases",
+            guess.x.len(),
+            cont.len()
+        ));
     }
     let mut phases = Vec::new();
     for (j, &(_, name, n, dur)) in cont.iter().enumerate() {
         let duration = match dur {
             Duration::Fixed(v) => PhaseDuration::fixed(v),
-            Duration::Free { initial, min, max } => PhaseDuration { value: initial, lb: min, ub: max },
+            Duration::Free { initial, min, max } => PhaseDuration {
+                value: initial,
+                lb: min,
+                ub: max,
+            },
         };
-        let cn = if spec.controls == ControlShape::Linear { n + 1 } else { n };
+        let cn = if spec.controls == ControlShape::Linear {
+            n + 1
+        } else {
+            n
+        };
         phases.push(OcpPhase {
             name: name.to_string(),
             ode: &odes[j],
@@ -195,7 +273,8 @@ fn gait_ocp<'a>(
     // transitions: impact maps where an impact phase separates continuous phases
     let mut transitions = Vec::new();
     for j in 1..cont.len() {
-        transitions.push(impact_before[j].map(|i| impact_term(model, &sets[i], cont[j - 1].2, j - 1)));
+        transitions
+            .push(impact_before[j].map(|i| impact_term(model, &sets[i], cont[j - 1].2, j - 1)));
     }
     let mut constraints = Vec::new();
     let mu = spec.friction;
@@ -203,12 +282,22 @@ fn gait_ocp<'a>(
         let set = &sets[i];
         // contact forces at every node with the node's control
         for k in 0..=n {
-            let ku = if spec.controls == ControlShape::Linear { k } else { k.min(n - 1) };
-            let Some((f, rows_lb, rows_ub)) = contact_force_rows(model, set, mu) else { continue };
+            let ku = if spec.controls == ControlShape::Linear {
+                k
+            } else {
+                k.min(n - 1)
+            };
+            let Some((f, rows_lb, rows_ub)) = contact_force_rows(model, set, mu) else {
+                continue;
+            };
             constraints.push(Constraint {
                 term: Term {
                     name: "contact_forces".into(),
-                    args: vec![Block::State { phase: j, node: k }, Block::Control { phase: j, node: ku }, Block::Params],
+                    args: vec![
+                        Block::State { phase: j, node: k },
+                        Block::Control { phase: j, node: ku },
+                        Block::Params,
+                    ],
                     f: Arc::new(f),
                 },
                 lb: rows_lb,
@@ -220,27 +309,67 @@ fn gait_ocp<'a>(
             let active: Vec<usize> = set.rows.iter().map(|r| r.contact).collect();
             // a compliant contact leaves the ground when its pad force vanishes, with the pad
             // still compressed: no clearance at the first node after it was in contact
-            let was_active: Vec<usize> = if j > 0 { sets[cont[j - 1].0].rows.iter().map(|r| r.contact).collect() } else { Vec::new() };
-            for (c, _) in model.contacts.iter().enumerate().filter(|(c, _)| !active.contains(c)) {
-                let first = if model.is_compliant(c) && was_active.contains(&c) { 1 } else { 0 };
+            let was_active: Vec<usize> = if j > 0 {
+                sets[cont[j - 1].0].rows.iter().map(|r| r.contact).collect()
+            } else {
+                Vec::new()
+            };
+            for (c, _) in model
+                .contacts
+                .iter()
+                .enumerate()
+                .filter(|(c, _)| !active.contains(c))
+            {
+                let first = if model.is_compliant(c) && was_active.contains(&c) {
+                    1
+                } else {
+                    0
+                };
                 for k in first..=n {
-                    constraints.push(gap_constraint(model, c, j, k, "clearance", 0.0, f64::INFINITY));
+                    constraints.push(gap_constraint(
+                        model,
+                        c,
+                        j,
+                        k,
+                        "clearance",
+                        0.0,
+                        f64::INFINITY,
+                    ));
                 }
             }
         }
         // contacts on the ground at the first node of the first phase
         if j == 0 {
-            for c in set.rows.iter().filter(|r| r.kind == RowKind::Normal).map(|r| r.contact) {
+            for c in set
+                .rows
+                .iter()
+                .filter(|r| r.kind == RowKind::Normal)
+                .map(|r| r.contact)
+            {
                 constraints.push(gap_constraint(model, c, 0, 0, "on_ground", 0.0, 0.0));
             }
         }
         // a landing contact touches the ground at the impact (last node of the phase before)
         if j > 0 {
             if let Some(ii) = impact_before[j] {
-                let prev_active: Vec<usize> = sets[cont[j - 1].0].rows.iter().map(|r| r.contact).collect();
-                for c in sets[ii].rows.iter().filter(|r| r.kind == RowKind::Normal).map(|r| r.contact) {
+                let prev_active: Vec<usize> =
+                    sets[cont[j - 1].0].rows.iter().map(|r| r.contact).collect();
+                for c in sets[ii]
+                    .rows
+                    .iter()
+                    .filter(|r| r.kind == RowKind::Normal)
+                    .map(|r| r.contact)
+                {
                     if !prev_active.contains(&c) {
-                        constraints.push(gap_constraint(model, c, j - 1, cont[j - 1].2, "landing", 0.0, 0.0));
+                        constraints.push(gap_constraint(
+                            model,
+                            c,
+                            j - 1,
+                            cont[j - 1].2,
+                            "landing",
+                            0.0,
+                            0.0,
+                        ));
                     }
                 }
             }
@@ -251,7 +380,12 @@ fn gait_ocp<'a>(
     let n_last = cont[last].2;
     if let Some(ti) = trailing_impact {
         let prev_active: Vec<usize> = sets[cont[last].0].rows.iter().map(|r| r.contact).collect();
-        for c in sets[ti].rows.iter().filter(|r| r.kind == RowKind::Normal).map(|r| r.contact) {
+        for c in sets[ti]
+            .rows
+            .iter()
+            .filter(|r| r.kind == RowKind::Normal)
+            .map(|r| r.contact)
+        {
             if !prev_active.contains(&c) {
                 constraints.push(gap_constraint(model, c, last, n_last, "landing", 0.0, 0.0));
             }
@@ -261,11 +395,23 @@ fn gait_ocp<'a>(
         let (xmap, umap) = mirror_maps(model, &spec);
         let skip = 0usize; // pelvis_x is not periodic
         let impact = trailing_impact.map(|ti| sets[ti].clone());
-        let f = AdTerm(Periodicity { model, impact, xmap, skip });
+        let f = AdTerm(Periodicity {
+            model,
+            impact,
+            xmap,
+            skip,
+        });
         constraints.push(Constraint {
             term: Term {
                 name: "periodicity".into(),
-                args: vec![Block::State { phase: 0, node: 0 }, Block::State { phase: last, node: n_last }, Block::Params],
+                args: vec![
+                    Block::State { phase: 0, node: 0 },
+                    Block::State {
+                        phase: last,
+                        node: n_last,
+                    },
+                    Block::Params,
+                ],
                 f: Arc::new(f),
             },
             lb: vec![0.0; nx - 1],
@@ -280,7 +426,13 @@ fn gait_ocp<'a>(
             constraints.push(Constraint {
                 term: Term {
                     name: "control_periodicity".into(),
-                    args: vec![Block::Control { phase: 0, node: 0 }, Block::Control { phase: last, node: n_last }],
+                    args: vec![
+                        Block::Control { phase: 0, node: 0 },
+                        Block::Control {
+                            phase: last,
+                            node: n_last,
+                        },
+                    ],
                     f: Arc::new(Linear::new(a, nu)),
                 },
                 lb: vec![0.0; nu],
@@ -293,8 +445,16 @@ fn gait_ocp<'a>(
         transitions,
         ntheta: nt,
         theta_guess: theta.clone(),
-        theta_lb: model.free_parameters().iter().map(|&i| model.parameters()[i].lower).collect(),
-        theta_ub: model.free_parameters().iter().map(|&i| model.parameters()[i].upper).collect(),
+        theta_lb: model
+            .free_parameters()
+            .iter()
+            .map(|&i| model.parameters()[i].lower)
+            .collect(),
+        theta_ub: model
+            .free_parameters()
+            .iter()
+            .map(|&i| model.parameters()[i].upper)
+            .collect(),
         constraints,
         least_squares: Vec::new(),
         samples: Vec::new(),
@@ -307,7 +467,11 @@ fn gait_ocp<'a>(
 /// The unilateral-contact and friction-cone rows of a contact set (λn ≥ 0 per normal
 /// row; μλn − λt ≥ 0 and μλn + λt ≥ 0 per rolling contact) as one function of
 /// `(x, u, θ)` with its bounds; `None` for a set without contacts.
-fn contact_force_rows<'a>(model: &'a GaitModel, set: &ConstraintSet, mu: f64) -> Option<(AdTerm<ContactForceRows<'a>>, Vec<f64>, Vec<f64>)> {
+fn contact_force_rows<'a>(
+    model: &'a GaitModel,
+    set: &ConstraintSet,
+    mu: f64,
+) -> Option<(AdTerm<ContactForceRows<'a>>, Vec<f64>, Vec<f64>)> {
     let mut rows_lb = Vec::new();
     let mut rows_ub = Vec::new();
     let mut a_rows: Vec<Vec<(usize, f64)>> = Vec::new();
@@ -316,7 +480,11 @@ fn contact_force_rows<'a>(model: &'a GaitModel, set: &ConstraintSet, mu: f64) ->
             a_rows.push(vec![(r, 1.0)]);
             rows_lb.push(0.0);
             rows_ub.push(f64::INFINITY);
-            if let Some(t) = set.rows.iter().position(|o| o.contact == row.contact && o.kind == RowKind::Tangential) {
+            if let Some(t) = set
+                .rows
+                .iter()
+                .position(|o| o.contact == row.contact && o.kind == RowKind::Tangential)
+            {
                 a_rows.push(vec![(r, mu), (t, -1.0)]);
                 a_rows.push(vec![(r, mu), (t, 1.0)]);
                 rows_lb.extend([0.0, 0.0]);
@@ -324,13 +492,27 @@ fn contact_force_rows<'a>(model: &'a GaitModel, set: &ConstraintSet, mu: f64) ->
             }
         }
     }
-    (!a_rows.is_empty()).then(|| (AdTerm(ContactForceRows { model, set: set.clone(), rows: a_rows }), rows_lb, rows_ub))
+    (!a_rows.is_empty()).then(|| {
+        (
+            AdTerm(ContactForceRows {
+                model,
+                set: set.clone(),
+                rows: a_rows,
+            }),
+            rows_lb,
+            rows_ub,
+        )
+    })
 }
 
 impl<'m> GaitCycle<'m> {
     /// The name of every phase of the phase file, in its order.
     pub fn phase_names(&self) -> Vec<String> {
-        self.seq.phases.iter().map(|p| p.name().to_string()).collect()
+        self.seq
+            .phases
+            .iter()
+            .map(|p| p.name().to_string())
+            .collect()
     }
 
     /// Friction coefficient of the cone (the phase file's, default 0.8).
@@ -347,13 +529,29 @@ impl<'m> GaitCycle<'m> {
         let set = &self.sets[self.continuous[j]];
         let mut out = Vec::new();
         if let Some((f, lb, ub)) = contact_force_rows(model, set, self.friction()) {
-            out.push(CheckPoint { name: "contact_forces".into(), phase: j, interval, tau, f: Arc::new(f), lb, ub });
+            out.push(CheckPoint {
+                name: "contact_forces".into(),
+                phase: j,
+                interval,
+                tau,
+                f: Arc::new(f),
+                lb,
+                ub,
+            });
         }
         if self.seq.gait.as_ref().is_none_or(|g| g.clearance) {
             let active: Vec<usize> = set.rows.iter().map(|r| r.contact).collect();
             for c in (0..model.contacts.len()).filter(|c| !active.contains(c)) {
                 let f = AdTerm(GapOfState { model, contact: c });
-                out.push(CheckPoint { name: format!("clearance({})", model.contacts[c].name), phase: j, interval, tau, f: Arc::new(f), lb: vec![0.0], ub: vec![f64::INFINITY] });
+                out.push(CheckPoint {
+                    name: format!("clearance({})", model.contacts[c].name),
+                    phase: j,
+                    interval,
+                    tau,
+                    f: Arc::new(f),
+                    lb: vec![0.0],
+                    ub: vec![f64::INFINITY],
+                });
             }
         }
         out
@@ -363,8 +561,16 @@ impl<'m> GaitCycle<'m> {
 /// Where the instant `t` (s) of phase-file phase `set` falls in a solution's continuous
 /// phases: (continuous phase, interval, τ) with τ in (0, 1), or `None` at a node (where
 /// the node constraints already hold) or outside every phase.
-pub fn locate_instant(solution: &super::evaluation::GaitSolution, set: usize, t: f64) -> Option<(usize, usize, f64)> {
-    let (j, ph) = solution.phases.iter().enumerate().find(|(_, p)| p.set == set && t >= p.t0 - 1e-12 && t <= p.t0 + p.duration + 1e-12)?;
+pub fn locate_instant(
+    solution: &super::evaluation::GaitSolution,
+    set: usize,
+    t: f64,
+) -> Option<(usize, usize, f64)> {
+    let (j, ph) = solution
+        .phases
+        .iter()
+        .enumerate()
+        .find(|(_, p)| p.set == set && t >= p.t0 - 1e-12 && t <= p.t0 + p.duration + 1e-12)?;
     let n = ph.intervals();
     let s = ((t - ph.t0) / ph.duration * n as f64).clamp(0.0, n as f64);
     let k = (s.floor() as usize).min(n - 1);
@@ -372,11 +578,25 @@ pub fn locate_instant(solution: &super::evaluation::GaitSolution, set: usize, t:
     (tau > 1e-6 && tau < 1.0 - 1e-6).then_some((j, k, tau))
 }
 
-fn impact_term<'a>(model: &'a GaitModel, set: &ConstraintSet, n_prev: usize, prev: usize) -> Term<'a> {
-    let f = AdTerm(ImpactMap { model, set: set.clone() });
+fn impact_term<'a>(
+    model: &'a GaitModel,
+    set: &ConstraintSet,
+    n_prev: usize,
+    prev: usize,
+) -> Term<'a> {
+    let f = AdTerm(ImpactMap {
+        model,
+        set: set.clone(),
+    });
     Term {
         name: "impact".into(),
-        args: vec![Block::State { phase: prev, node: n_prev }, Block::Params],
+        args: vec![
+            Block::State {
+                phase: prev,
+                node: n_prev,
+            },
+            Block::Params,
+        ],
         f: Arc::new(f),
     }
 }
@@ -421,7 +641,9 @@ impl GenericFunction for ContactForceRows<'_> {
         let (u, th) = rest.split_at(nu);
         let mut xdot = vec![S::c(0.0); nx];
         let mut lam = vec![S::c(0.0); self.set.rows.len()];
-        self.model.dynamics(&self.set, x, u, th, &mut xdot, &mut lam, None).map_err(|e| e.to_string())?;
+        self.model
+            .dynamics(&self.set, x, u, th, &mut xdot, &mut lam, None)
+            .map_err(|e| e.to_string())?;
         for (o, row) in self.rows.iter().enumerate() {
             out[o] = row.iter().fold(S::c(0.0), |acc, &(r, c)| acc + lam[r] * c);
         }
@@ -461,7 +683,10 @@ impl GenericFunction for ImpactMap<'_> {
     fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), String> {
         let (nx, nq) = (self.model.nx(), self.model.nq());
         let (x, th) = z.split_at(nx);
-        let (qd_plus, _) = self.model.impact(&self.set, &x[..nq], &x[nq..2 * nq], th).map_err(|e| e.to_string())?;
+        let (qd_plus, _) = self
+            .model
+            .impact(&self.set, &x[..nq], &x[nq..2 * nq], th)
+            .map_err(|e| e.to_string())?;
         out.copy_from_slice(x);
         out[nq..2 * nq].copy_from_slice(&qd_plus);
         Ok(())
@@ -488,7 +713,10 @@ impl GenericFunction for Periodicity<'_> {
         let (xe, th) = rest.split_at(nx);
         let mut xp = xe.to_vec();
         if let Some(set) = &self.impact {
-            let (qd_plus, _) = self.model.impact(set, &xe[..nq], &xe[nq..2 * nq], th).map_err(|e| e.to_string())?;
+            let (qd_plus, _) = self
+                .model
+                .impact(set, &xe[..nq], &xe[nq..2 * nq], th)
+                .map_err(|e| e.to_string())?;
             xp[nq..2 * nq].copy_from_slice(&qd_plus);
         }
         for (o, i) in (0..nx).filter(|&i| i != self.skip).enumerate() {

@@ -10,8 +10,8 @@ pub mod gait;
 pub mod predict;
 pub mod synth;
 pub mod track;
-pub mod transient;
 pub mod tracking;
+pub mod transient;
 pub mod validity;
 
 use crate::model::ad::{self, AdChunk, AdNested};
@@ -42,7 +42,13 @@ impl<T: GenericFunction> NodeFunction for AdTerm<T> {
     fn eval(&self, z: &[f64], value: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), String> {
         match jac {
             None => self.0.eval(z, value),
-            Some(j) => ad::jacobian(z, self.0.dim(), |zs: &[AdChunk], out: &mut [AdChunk]| self.0.eval(zs, out), value, j),
+            Some(j) => ad::jacobian(
+                z,
+                self.0.dim(),
+                |zs: &[AdChunk], out: &mut [AdChunk]| self.0.eval(zs, out),
+                value,
+                j,
+            ),
         }
     }
     fn has_hessian(&self) -> bool {
@@ -58,7 +64,9 @@ impl<T: GenericFunction> NodeFunction for AdTerm<T> {
             z,
             |zs| {
                 self.0.eval(zs, &mut y)?;
-                Ok(y.iter().zip(weights).fold(AdNested::from(0.0), |acc, (v, w)| acc + *v * *w))
+                Ok(y.iter()
+                    .zip(weights)
+                    .fold(AdNested::from(0.0), |acc, (v, w)| acc + *v * *w))
             },
             out,
         )
@@ -82,7 +90,11 @@ where
 {
     /// Wrap `f` with output dimension `dim`.
     pub fn new(dim: usize, f: F) -> Self {
-        Self { dim, f, hessian: None }
+        Self {
+            dim,
+            f,
+            hessian: None,
+        }
     }
 
     /// Attach the exact weighted Hessian.
@@ -99,7 +111,9 @@ pub fn hessian<const N: usize>(
     f: impl Fn(&[num_dual::Dual2SVec64<N>]) -> num_dual::Dual2SVec64<N>,
 ) -> Vec<f64> {
     use num_dual::{Derivative, Dual2SVec64};
-    let xs: Vec<Dual2SVec64<N>> = (0..N).map(|i| Dual2SVec64::from_re(z[i]).derivative(i)).collect();
+    let xs: Vec<Dual2SVec64<N>> = (0..N)
+        .map(|i| Dual2SVec64::from_re(z[i]).derivative(i))
+        .collect();
     let y = f(&xs);
     let mut out = vec![0.0; N * N];
     if let Derivative(Some(m)) = &y.v2 {
@@ -155,7 +169,12 @@ impl NodeFunction for Linear {
     fn has_hessian(&self) -> bool {
         true
     }
-    fn weighted_hessian(&self, _z: &[f64], _weights: &[f64], out: &mut [f64]) -> Result<(), String> {
+    fn weighted_hessian(
+        &self,
+        _z: &[f64],
+        _weights: &[f64],
+        out: &mut [f64],
+    ) -> Result<(), String> {
         out.iter_mut().for_each(|v| *v = 0.0);
         Ok(())
     }

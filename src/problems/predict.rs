@@ -46,7 +46,12 @@ impl PredictionSettings {
         let (t0, t1) = setup.window;
         let x = crate::data::interp_linear(&[t0, t1], &data.time, &data.q[0]);
         let step_length = x[1] - x[0];
-        Self { step_length, speed: step_length / (t1 - t0), impulse_weight: SEED_IMPULSE_WEIGHT, ankle_velocity_limit: None }
+        Self {
+            step_length,
+            speed: step_length / (t1 - t0),
+            impulse_weight: SEED_IMPULSE_WEIGHT,
+            ankle_velocity_limit: None,
+        }
     }
 }
 
@@ -67,14 +72,38 @@ pub struct PredictionSetup {
 impl PredictionSetup {
     /// Start from `solution` (e.g. a tracking solution of the same model and phase file),
     /// with the state bounds of the tracking problem of `tracking` (seed §3.3).
-    pub fn from_solution(original: &PhaseSequence, tracking: &TrackingSetup, solution: &GaitSolution, settings: PredictionSettings) -> Result<Self, String> {
-        let cont: Vec<usize> = original.phases.iter().enumerate().filter(|(_, p)| matches!(p, Phase::Continuous { .. })).map(|(i, _)| i).collect();
+    pub fn from_solution(
+        original: &PhaseSequence,
+        tracking: &TrackingSetup,
+        solution: &GaitSolution,
+        settings: PredictionSettings,
+    ) -> Result<Self, String> {
+        let cont: Vec<usize> = original
+            .phases
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| matches!(p, Phase::Continuous { .. }))
+            .map(|(i, _)| i)
+            .collect();
         if cont.len() != solution.phases.len() {
-            return Err(format!("the initial solution has {} continuous phases, the phase file '{}' {}", solution.phases.len(), original.name, cont.len()));
+            return Err(format!(
+                "the initial solution has {} continuous phases, the phase file '{}' {}",
+                solution.phases.len(),
+                original.name,
+                cont.len()
+            ));
         }
         let mut seq = original.clone();
         for (&i, ph) in cont.iter().zip(&solution.phases) {
-            let Phase::Continuous { name, intervals, duration, .. } = &mut seq.phases[i] else { unreachable!() };
+            let Phase::Continuous {
+                name,
+                intervals,
+                duration,
+                ..
+            } = &mut seq.phases[i]
+            else {
+                unreachable!()
+            };
             if *name != ph.name || *intervals != ph.intervals() {
                 return Err(format!(
                     "the initial solution's phase '{}' ({} intervals) does not match the phase file's '{name}' ({intervals} intervals)",
@@ -84,7 +113,11 @@ impl PredictionSetup {
             }
             *duration = match *duration {
                 Duration::Fixed(_) => Duration::Fixed(ph.duration),
-                Duration::Free { min, max, .. } => Duration::Free { initial: ph.duration.clamp(min, max), min, max },
+                Duration::Free { min, max, .. } => Duration::Free {
+                    initial: ph.duration.clamp(min, max),
+                    min,
+                    max,
+                },
             };
         }
         let mut guess = tracking.guess.clone();
@@ -95,26 +128,56 @@ impl PredictionSetup {
 
     /// Start from the data, as tracking does (positions projected onto the contacts,
     /// activations 0.01, excitations 0.025), with the measured durations as initial values.
-    pub fn from_data(original: &PhaseSequence, tracking: &TrackingSetup, settings: PredictionSettings) -> Result<Self, String> {
+    pub fn from_data(
+        original: &PhaseSequence,
+        tracking: &TrackingSetup,
+        settings: PredictionSettings,
+    ) -> Result<Self, String> {
         let mut seq = original.clone();
         for (p, measured) in seq.phases.iter_mut().zip(&tracking.seq.phases) {
-            if let (Phase::Continuous { duration: Duration::Free { initial, min, max }, .. }, Phase::Continuous { duration: m, .. }) = (p, measured) {
+            if let (
+                Phase::Continuous {
+                    duration: Duration::Free { initial, min, max },
+                    ..
+                },
+                Phase::Continuous { duration: m, .. },
+            ) = (p, measured)
+            {
                 *initial = m.value().clamp(*min, *max);
             }
         }
-        Self::new(seq, tracking.guess.clone(), settings, tracking.guess.x[0][0][0])
+        Self::new(
+            seq,
+            tracking.guess.clone(),
+            settings,
+            tracking.guess.x[0][0][0],
+        )
     }
 
-    fn new(seq: PhaseSequence, mut guess: GaitGuess, settings: PredictionSettings, pelvis_x0: f64) -> Result<Self, String> {
-        if !(settings.step_length.is_finite() && settings.speed.is_finite() && settings.speed > 0.0) {
-            return Err(format!("step length {} m and speed {} m/s: need finite values and a positive speed", settings.step_length, settings.speed));
+    fn new(
+        seq: PhaseSequence,
+        mut guess: GaitGuess,
+        settings: PredictionSettings,
+        pelvis_x0: f64,
+    ) -> Result<Self, String> {
+        if !(settings.step_length.is_finite() && settings.speed.is_finite() && settings.speed > 0.0)
+        {
+            return Err(format!(
+                "step length {} m and speed {} m/s: need finite values and a positive speed",
+                settings.step_length, settings.speed
+            ));
         }
         if !(settings.impulse_weight.is_finite() && settings.impulse_weight >= 0.0) {
-            return Err(format!("impulse weight {}: need a finite value ≥ 0", settings.impulse_weight));
+            return Err(format!(
+                "impulse weight {}: need a finite value ≥ 0",
+                settings.impulse_weight
+            ));
         }
         if let Some(w) = settings.ankle_velocity_limit {
             if !(w.is_finite() && w > 0.0) {
-                return Err(format!("ankle angular velocity limit {w} rad/s: need a positive value"));
+                return Err(format!(
+                    "ankle angular velocity limit {w} rad/s: need a positive value"
+                ));
             }
             // ankle_r and ankle_l are coordinates 5 and 8; their velocities follow the nq positions
             let nq = crate::model::gait::COORDINATES.len();
@@ -130,16 +193,31 @@ impl PredictionSetup {
                 }
             }
         }
-        Ok(Self { seq, guess, settings, pelvis_x0 })
+        Ok(Self {
+            seq,
+            guess,
+            settings,
+            pelvis_x0,
+        })
     }
 
     /// The prediction OCP on `cycle` (built from [`Self::seq`]).
-    pub fn ocp<'c>(&self, cycle: &'c GaitCycle<'c>, model: &'c GaitModel, sets: &'c [ConstraintSet], integrator: IntegratorSettings) -> Result<Ocp<'c>, String> {
+    pub fn ocp<'c>(
+        &self,
+        cycle: &'c GaitCycle<'c>,
+        model: &'c GaitModel,
+        sets: &'c [ConstraintSet],
+        integrator: IntegratorSettings,
+    ) -> Result<Ocp<'c>, String> {
         let mut ocp = cycle.ocp(&self.guess, integrator)?;
         ocp.phases[0].x_lb[0][0] = self.pelvis_x0;
         ocp.phases[0].x_ub[0][0] = self.pelvis_x0;
         ocp.phases[0].x_guess[0][0] = self.pelvis_x0;
-        let steps = cycle.step_constraints(&ocp, Some(self.settings.step_length), Some(self.settings.speed));
+        let steps = cycle.step_constraints(
+            &ocp,
+            Some(self.settings.step_length),
+            Some(self.settings.speed),
+        );
         ocp.constraints.extend(steps);
         let (nq, na) = (model.nq(), model.na());
         // eq. 20: ∫ Σ a² dt by the trapezoidal rule over the nodes
@@ -148,10 +226,18 @@ impl PredictionSetup {
                 let n = ph.intervals;
                 for k in 0..=n {
                     let c = if k == 0 || k == n { 0.5 } else { 1.0 };
-                    let f = ActivationEffort { offset: 2 * nq, na, nx: model.nx(), weight: c / n as f64 };
+                    let f = ActivationEffort {
+                        offset: 2 * nq,
+                        na,
+                        nx: model.nx(),
+                        weight: c / n as f64,
+                    };
                     ocp.least_squares.push(Term {
                         name: "activation".into(),
-                        args: vec![Block::State { phase: j, node: k }, Block::Duration { phase: j }],
+                        args: vec![
+                            Block::State { phase: j, node: k },
+                            Block::Duration { phase: j },
+                        ],
                         f: Arc::new(AdTerm(f)),
                     });
                 }
@@ -164,13 +250,31 @@ impl PredictionSetup {
             let mut prev: Option<usize> = None;
             for (i, ph) in seq.phases.iter().enumerate() {
                 match ph {
-                    Phase::Continuous { .. } => prev = Some(cycle.continuous.iter().position(|&c| c == i).expect("a continuous phase")),
+                    Phase::Continuous { .. } => {
+                        prev = Some(
+                            cycle
+                                .continuous
+                                .iter()
+                                .position(|&c| c == i)
+                                .expect("a continuous phase"),
+                        )
+                    }
                     Phase::Impact { name, .. } => {
                         let Some(j) = prev else { continue };
-                        let f = ImpactImpulses { model, set: sets[i].clone(), scale: self.settings.impulse_weight.sqrt() };
+                        let f = ImpactImpulses {
+                            model,
+                            set: sets[i].clone(),
+                            scale: self.settings.impulse_weight.sqrt(),
+                        };
                         ocp.least_squares.push(Term {
                             name: format!("impulse({name})"),
-                            args: vec![Block::State { phase: j, node: ocp.phases[j].intervals }, Block::Params],
+                            args: vec![
+                                Block::State {
+                                    phase: j,
+                                    node: ocp.phases[j].intervals,
+                                },
+                                Block::Params,
+                            ],
                             f: Arc::new(AdTerm(f)),
                         });
                     }
@@ -219,7 +323,10 @@ impl GenericFunction for ImpactImpulses<'_> {
     fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), String> {
         let (nx, nq) = (self.model.nx(), self.model.nq());
         let (x, th) = z.split_at(nx);
-        let (_, imp) = self.model.impact(&self.set, &x[..nq], &x[nq..2 * nq], th).map_err(|e| e.to_string())?;
+        let (_, imp) = self
+            .model
+            .impact(&self.set, &x[..nq], &x[nq..2 * nq], th)
+            .map_err(|e| e.to_string())?;
         for (o, v) in out.iter_mut().zip(imp) {
             *o = v * self.scale;
         }

@@ -38,7 +38,13 @@ pub struct NoiseModel {
 impl NoiseModel {
     /// No noise.
     pub fn none() -> Self {
-        Self { position_m: 0.0, angle_rad: 0.0, force_n: 0.0, cop_m: 0.0, seed: 0 }
+        Self {
+            position_m: 0.0,
+            angle_rad: 0.0,
+            force_n: 0.0,
+            cop_m: 0.0,
+            seed: 0,
+        }
     }
 }
 
@@ -98,7 +104,12 @@ pub fn synthesize(
     settings: &SynthSettings,
     name: &str,
 ) -> Result<(GaitData, SynthTruth), SimulationError> {
-    if !(settings.rate_hz.is_finite() && settings.rate_hz > 0.0 && settings.duration_s.is_finite() && settings.duration_s > 0.0 && settings.start_s.is_finite()) {
+    if !(settings.rate_hz.is_finite()
+        && settings.rate_hz > 0.0
+        && settings.duration_s.is_finite()
+        && settings.duration_s > 0.0
+        && settings.start_s.is_finite())
+    {
         return Err(SimulationError::Input(format!(
             "synthetic trial: rate {} Hz, start {} s, duration {} s (need a positive rate and duration)",
             settings.rate_hz, settings.start_s, settings.duration_s
@@ -106,7 +117,13 @@ pub fn synthesize(
     }
     let (s0, s1) = solution.span();
     let half = s1 - s0;
-    let nodes = solution.node_samples(model, sets).map_err(|e| SimulationError::Dynamics { phase: "node".into(), t: s0, source: e })?;
+    let nodes = solution
+        .node_samples(model, sets)
+        .map_err(|e| SimulationError::Dynamics {
+            phase: "node".into(),
+            t: s0,
+            source: e,
+        })?;
     let step_length = nodes.last().map_or(0.0, |l| l.x[0]) - nodes[0].x[0];
     let dt = 1.0 / settings.rate_hz;
     let n = (settings.duration_s * settings.rate_hz).floor() as usize + 1;
@@ -145,7 +162,11 @@ pub fn synthesize(
             let l = &s.feet[if odd { 1 - side } else { side }];
             foot.fx.push(l.fx);
             foot.fy.push(l.fy);
-            foot.cop_x.push(if l.fy > 0.0 { l.cop_x + shift } else { f64::NAN });
+            foot.cop_x.push(if l.fy > 0.0 {
+                l.cop_x + shift
+            } else {
+                f64::NAN
+            });
         }
     }
     let clean = GaitData {
@@ -172,13 +193,26 @@ pub fn synthesize(
     let mut noisy = noisy;
     noisy.events = Some(events.clone());
     clean.events = Some(events.clone());
-    Ok((noisy, SynthTruth { clean, half_period_s: half, step_length_m: step_length, events }))
+    Ok((
+        noisy,
+        SynthTruth {
+            clean,
+            half_period_s: half,
+            step_length_m: step_length,
+            events,
+        },
+    ))
 }
 
 /// Heel strikes and toe offs of the periodic extension over the span of `data`: the
 /// instants where the contact sets of consecutive continuous phases put a foot on or off
 /// the ground.
-fn exact_events(model: &GaitModel, sets: &[ConstraintSet], solution: &GaitSolution, data: &GaitData) -> Events {
+fn exact_events(
+    model: &GaitModel,
+    sets: &[ConstraintSet],
+    solution: &GaitSolution,
+    data: &GaitData,
+) -> Events {
     let (s0, s1) = solution.span();
     let half = s1 - s0;
     let (t_start, t_end) = (data.time[0], data.time[data.time.len() - 1]);
@@ -269,10 +303,22 @@ pub fn add_noise(data: &GaitData, noise: &NoiseModel) -> GaitData {
         }
     };
     for (i, qi) in out.q.iter_mut().enumerate() {
-        perturb(qi, if i < 2 { noise.position_m } else { noise.angle_rad }, &|_| true);
+        perturb(
+            qi,
+            if i < 2 {
+                noise.position_m
+            } else {
+                noise.angle_rad
+            },
+            &|_| true,
+        );
     }
     for f in out.feet.iter_mut() {
-        let loaded: Vec<bool> = f.fy.iter().zip(&f.fx).map(|(y, x)| *y != 0.0 || *x != 0.0).collect();
+        let loaded: Vec<bool> =
+            f.fy.iter()
+                .zip(&f.fx)
+                .map(|(y, x)| *y != 0.0 || *x != 0.0)
+                .collect();
         perturb(&mut f.fx, noise.force_n, &|k| loaded[k]);
         perturb(&mut f.fy, noise.force_n, &|k| loaded[k]);
         perturb(&mut f.cop_x, noise.cop_m, &|_| true);

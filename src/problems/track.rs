@@ -4,8 +4,12 @@
 //! excitations 0.025, seed §3.6), and the node-wise least-squares residuals of eq. 18.
 
 use super::gait::{GaitCycle, GaitGuess};
-use super::tracking::{ForceClockShift, MeasuredLoads, NodeTarget, TrackingResidual, TrackingWeights};
-use crate::data::{detect_events, interp_linear, CubicSpline, Events, GaitData, DEFAULT_EVENT_FRACTION};
+use super::tracking::{
+    ForceClockShift, MeasuredLoads, NodeTarget, TrackingResidual, TrackingWeights,
+};
+use crate::data::{
+    detect_events, interp_linear, CubicSpline, Events, GaitData, DEFAULT_EVENT_FRACTION,
+};
 use crate::model::gait::COORDINATES;
 use crate::model::{ConstraintSet, GaitModel, Side};
 use crate::ocp::{shifted_instant, Block, NodeFunction, Ocp, SampleTerm, Term};
@@ -29,7 +33,11 @@ pub fn half_cycle(events: &Events) -> Result<(f64, f64), String> {
 pub fn loaded_feet(model: &GaitModel, set: &ConstraintSet) -> [bool; 2] {
     let mut f = [false; 2];
     for r in &set.rows {
-        f[if model.contacts[r.contact].side == Side::Right { 0 } else { 1 }] = true;
+        f[if model.contacts[r.contact].side == Side::Right {
+            0
+        } else {
+            1
+        }] = true;
     }
     f
 }
@@ -92,8 +100,16 @@ pub const MIN_SEGMENT_SAMPLES: usize = 4;
 
 /// Splines of `columns` through the samples strictly inside `(a, b)` (low-passed at
 /// `cutoff_hz` first, if given); `what` names the span in errors.
-fn segment_splines(data: &GaitData, columns: &[&[f64]], (a, b): (f64, f64), cutoff_hz: Option<f64>, what: &str) -> Result<Vec<CubicSpline>, String> {
-    let idx: Vec<usize> = (0..data.time.len()).filter(|&k| data.time[k] > a + 1e-9 && data.time[k] < b - 1e-9).collect();
+fn segment_splines(
+    data: &GaitData,
+    columns: &[&[f64]],
+    (a, b): (f64, f64),
+    cutoff_hz: Option<f64>,
+    what: &str,
+) -> Result<Vec<CubicSpline>, String> {
+    let idx: Vec<usize> = (0..data.time.len())
+        .filter(|&k| data.time[k] > a + 1e-9 && data.time[k] < b - 1e-9)
+        .collect();
     if idx.len() < MIN_SEGMENT_SAMPLES {
         return Err(format!(
             "one-sided targets: {what} ({a:.4}–{b:.4} s) holds {} samples, fewer than {MIN_SEGMENT_SAMPLES}; sample faster or use interpolated targets",
@@ -119,13 +135,29 @@ fn segment_splines(data: &GaitData, columns: &[&[f64]], (a, b): (f64, f64), cuto
 /// first starting at `t0`), located in its shooting interval, with the angles and the
 /// loads of the feet its phase loads (the CoP where the normal force reaches the data's
 /// CoP threshold); samples on a phase boundary are left out.
-fn sample_targets(model: &GaitModel, seq: &PhaseSequence, sets: &[ConstraintSet], data: &GaitData, t0: f64) -> Result<Vec<SampleTarget>, String> {
-    let angles: Vec<&[f64]> = COORDINATES.iter().map(|c| data.channel(c).ok_or_else(|| format!("no channel {c}"))).collect::<Result<_, _>>()?;
+fn sample_targets(
+    model: &GaitModel,
+    seq: &PhaseSequence,
+    sets: &[ConstraintSet],
+    data: &GaitData,
+    t0: f64,
+) -> Result<Vec<SampleTarget>, String> {
+    let angles: Vec<&[f64]> = COORDINATES
+        .iter()
+        .map(|c| data.channel(c).ok_or_else(|| format!("no channel {c}")))
+        .collect::<Result<_, _>>()?;
     let nq = angles.len();
     let mut out = Vec::new();
     let (mut a, mut j) = (t0, 0);
     for (i, ph) in seq.phases.iter().enumerate() {
-        let Phase::Continuous { duration, intervals, .. } = ph else { continue };
+        let Phase::Continuous {
+            duration,
+            intervals,
+            ..
+        } = ph
+        else {
+            continue;
+        };
         let b = a + duration.value();
         let h = duration.value() / *intervals as f64;
         let feet = loaded_feet(model, &sets[i]);
@@ -143,10 +175,30 @@ fn sample_targets(model: &GaitModel, seq: &PhaseSequence, sets: &[ConstraintSet]
             }
             let load = |f: usize| {
                 let fd = &data.feet[f];
-                feet[f].then(|| (fd.fx[n], fd.fy[n], (fd.fy[n] >= data.cop_threshold && fd.cop_x[n].is_finite()).then_some(fd.cop_x[n])))
+                feet[f].then(|| {
+                    (
+                        fd.fx[n],
+                        fd.fy[n],
+                        (fd.fy[n] >= data.cop_threshold && fd.cop_x[n].is_finite())
+                            .then_some(fd.cop_x[n]),
+                    )
+                })
             };
-            let q = angles.iter().map(|c| c[n].is_finite().then_some(c[n])).collect();
-            out.push(SampleTarget { phase: j, interval: k, tau, target: NodeTarget { time: t, q, qd: vec![None; nq], feet: [load(0), load(1)] } });
+            let q = angles
+                .iter()
+                .map(|c| c[n].is_finite().then_some(c[n]))
+                .collect();
+            out.push(SampleTarget {
+                phase: j,
+                interval: k,
+                tau,
+                target: NodeTarget {
+                    time: t,
+                    q,
+                    qd: vec![None; nq],
+                    feet: [load(0), load(1)],
+                },
+            });
         }
         a = b;
         j += 1;
@@ -166,7 +218,13 @@ pub fn fix_durations(
     t1: f64,
 ) -> Result<PhaseSequence, String> {
     let measured = events.contact_phases(t0, t1);
-    let cont: Vec<usize> = seq.phases.iter().enumerate().filter(|(_, p)| matches!(p, Phase::Continuous { .. })).map(|(i, _)| i).collect();
+    let cont: Vec<usize> = seq
+        .phases
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| matches!(p, Phase::Continuous { .. }))
+        .map(|(i, _)| i)
+        .collect();
     let mut groups: Vec<([bool; 2], Vec<usize>)> = Vec::new();
     for &i in &cont {
         let feet = loaded_feet(model, &sets[i]);
@@ -236,14 +294,25 @@ impl TrackingSetup {
     /// Build from `data` for `model` and the phase file `seq` (with its resolved
     /// constraint sets `sets`), with the events given with the data or else detected from
     /// the force threshold (5 % of peak).
-    pub fn new(model: &GaitModel, seq: &PhaseSequence, sets: &[ConstraintSet], data: &GaitData) -> Result<Self, String> {
+    pub fn new(
+        model: &GaitModel,
+        seq: &PhaseSequence,
+        sets: &[ConstraintSet],
+        data: &GaitData,
+    ) -> Result<Self, String> {
         Self::new_with_sides(model, seq, sets, data, TargetSides::Interpolated)
     }
 
     /// As [`new`](Self::new), with the node targets read as `sides` says. For
     /// [`TargetSides::OneSided`] `data` is the unfiltered trial (its cutoff filters each
     /// segment instead of the whole trial).
-    pub fn new_with_sides(model: &GaitModel, seq: &PhaseSequence, sets: &[ConstraintSet], data: &GaitData, sides: TargetSides) -> Result<Self, String> {
+    pub fn new_with_sides(
+        model: &GaitModel,
+        seq: &PhaseSequence,
+        sets: &[ConstraintSet],
+        data: &GaitData,
+        sides: TargetSides,
+    ) -> Result<Self, String> {
         let events = match &data.events {
             Some(e) => e.clone(),
             None => detect_events(data, DEFAULT_EVENT_FRACTION).map_err(|e| e.to_string())?,
@@ -253,23 +322,44 @@ impl TrackingSetup {
 
     /// As [`new`](Self::new), with the gait events given instead of detected from the
     /// force threshold (e.g. the exact events of a synthetic trial).
-    pub fn with_events(model: &GaitModel, seq: &PhaseSequence, sets: &[ConstraintSet], data: &GaitData, events: Events) -> Result<Self, String> {
+    pub fn with_events(
+        model: &GaitModel,
+        seq: &PhaseSequence,
+        sets: &[ConstraintSet],
+        data: &GaitData,
+        events: Events,
+    ) -> Result<Self, String> {
         Self::with_events_and_sides(model, seq, sets, data, events, TargetSides::Interpolated)
     }
 
     /// As [`with_events`](Self::with_events), with the node targets read as `sides` says.
-    pub fn with_events_and_sides(model: &GaitModel, seq: &PhaseSequence, sets: &[ConstraintSet], data: &GaitData, events: Events, sides: TargetSides) -> Result<Self, String> {
+    pub fn with_events_and_sides(
+        model: &GaitModel,
+        seq: &PhaseSequence,
+        sets: &[ConstraintSet],
+        data: &GaitData,
+        events: Events,
+        sides: TargetSides,
+    ) -> Result<Self, String> {
         let (t0, t1) = half_cycle(&events)?;
         let seq = fix_durations(seq, model, sets, &events, t0, t1)?;
-        let splines: Vec<CubicSpline> =
-            COORDINATES.iter().map(|c| data.spline(c).map_err(|e| e.to_string())).collect::<Result<_, _>>()?;
+        let splines: Vec<CubicSpline> = COORDINATES
+            .iter()
+            .map(|c| data.spline(c).map_err(|e| e.to_string()))
+            .collect::<Result<_, _>>()?;
         let force = |s: usize, k: usize| -> Result<CubicSpline, String> {
             let f = &data.feet[s];
-            CubicSpline::new(&data.time, if k == 0 { &f.fx } else { &f.fy }).map_err(|e| e.to_string())
+            CubicSpline::new(&data.time, if k == 0 { &f.fx } else { &f.fy })
+                .map_err(|e| e.to_string())
         };
         let fx = [force(0, 0)?, force(1, 0)?];
         let fy = [force(0, 1)?, force(1, 1)?];
-        let peak = data.feet.iter().flat_map(|f| f.fy.iter()).copied().fold(0.0, f64::max);
+        let peak = data
+            .feet
+            .iter()
+            .flat_map(|f| f.fy.iter())
+            .copied()
+            .fold(0.0, f64::max);
         let cop_at = |s: usize, t: f64| -> Option<f64> {
             // linear interpolation of the measured CoP where the foot is loaded
             let v = interp_linear(&[t], &data.time, &data.feet[s].cop_x)[0];
@@ -282,7 +372,10 @@ impl TrackingSetup {
         let mut gx = Vec::new();
         let mut gu = Vec::new();
         let mut t = t0;
-        let linear = seq.gait.as_ref().is_none_or(|g| g.controls == crate::integrate::ControlShape::Linear);
+        let linear = seq
+            .gait
+            .as_ref()
+            .is_none_or(|g| g.controls == crate::integrate::ControlShape::Linear);
         // the impacts' times (with the window's ends), where one-sided angle segments break
         let mut impacts = vec![t0];
         let mut at = t0;
@@ -294,27 +387,58 @@ impl TrackingSetup {
         }
         impacts.push(t1);
         for (i, ph) in seq.phases.iter().enumerate() {
-            let Phase::Continuous { name, duration, intervals, .. } = ph else { continue };
+            let Phase::Continuous {
+                name,
+                duration,
+                intervals,
+                ..
+            } = ph
+            else {
+                continue;
+            };
             let h = duration.value() / *intervals as f64;
             let one_sided = match sides {
                 TargetSides::Interpolated | TargetSides::Samples => None,
                 TargetSides::OneSided { cutoff_hz } => {
                     let end = t + duration.value();
-                    let a = impacts.iter().copied().filter(|&x| x <= t + 1e-9).fold(t0, f64::max);
-                    let b = impacts.iter().copied().filter(|&x| x >= end - 1e-9).fold(t1, f64::min);
-                    let angles: Vec<&[f64]> = COORDINATES.iter().map(|c| data.channel(c).ok_or_else(|| format!("no channel {c}"))).collect::<Result<_, _>>()?;
-                    let angles = segment_splines(data, &angles, (a, b), cutoff_hz, &format!("the segment between the impacts around phase {name}"))?;
+                    let a = impacts
+                        .iter()
+                        .copied()
+                        .filter(|&x| x <= t + 1e-9)
+                        .fold(t0, f64::max);
+                    let b = impacts
+                        .iter()
+                        .copied()
+                        .filter(|&x| x >= end - 1e-9)
+                        .fold(t1, f64::min);
+                    let angles: Vec<&[f64]> = COORDINATES
+                        .iter()
+                        .map(|c| data.channel(c).ok_or_else(|| format!("no channel {c}")))
+                        .collect::<Result<_, _>>()?;
+                    let angles = segment_splines(
+                        data,
+                        &angles,
+                        (a, b),
+                        cutoff_hz,
+                        &format!("the segment between the impacts around phase {name}"),
+                    )?;
                     let (f, phase) = (&data.feet, format!("phase {name}"));
                     let fx = segment_splines(data, &[&f[0].fx, &f[1].fx], (t, end), None, &phase)?;
                     let fy = segment_splines(data, &[&f[0].fy, &f[1].fy], (t, end), None, &phase)?;
                     Some((angles, fx, fy))
                 }
             };
-            let untracked = NodeTarget { time: 0.0, q: vec![None; nq], qd: vec![None; nq], feet: [None, None] };
-            let (splines, fx, fy): (&[CubicSpline], &[CubicSpline], &[CubicSpline]) = match &one_sided {
-                Some((a, x, y)) => (a, x, y),
-                None => (&splines, &fx, &fy),
+            let untracked = NodeTarget {
+                time: 0.0,
+                q: vec![None; nq],
+                qd: vec![None; nq],
+                feet: [None, None],
             };
+            let (splines, fx, fy): (&[CubicSpline], &[CubicSpline], &[CubicSpline]) =
+                match &one_sided {
+                    Some((a, x, y)) => (a, x, y),
+                    None => (&splines, &fx, &fy),
+                };
             let feet = loaded_feet(model, &sets[i]);
             let times: Vec<f64> = (0..=*intervals).map(|k| t + k as f64 * h).collect();
             let mut tg = Vec::new();
@@ -325,15 +449,33 @@ impl TrackingSetup {
                 let foot_target = |s: usize| {
                     feet[s].then(|| {
                         let fyv = fy[s].eval(tk);
-                        (fx[s].eval(tk), fyv, if fyv >= data.cop_threshold { cop_at(s, tk) } else { None })
+                        (
+                            fx[s].eval(tk),
+                            fyv,
+                            if fyv >= data.cop_threshold {
+                                cop_at(s, tk)
+                            } else {
+                                None
+                            },
+                        )
                     })
                 };
                 tg.push(if sides == TargetSides::Samples {
-                    NodeTarget { time: tk, ..untracked.clone() }
+                    NodeTarget {
+                        time: tk,
+                        ..untracked.clone()
+                    }
                 } else {
-                    NodeTarget { time: tk, q: q.iter().map(|v| Some(*v)).collect(), qd: qd.iter().map(|v| Some(*v)).collect(), feet: [foot_target(0), foot_target(1)] }
+                    NodeTarget {
+                        time: tk,
+                        q: q.iter().map(|v| Some(*v)).collect(),
+                        qd: qd.iter().map(|v| Some(*v)).collect(),
+                        feet: [foot_target(0), foot_target(1)],
+                    }
                 });
-                let (qp, qdp, _) = model.project(&sets[i], &q, &qd, &theta).map_err(|e| format!("projecting the data at t = {tk:.3} s: {e}"))?;
+                let (qp, qdp, _) = model
+                    .project(&sets[i], &q, &qd, &theta)
+                    .map_err(|e| format!("projecting the data at t = {tk:.3} s: {e}"))?;
                 let mut x = qp;
                 x.extend(qdp);
                 x.extend(vec![0.01; na]);
@@ -352,9 +494,19 @@ impl TrackingSetup {
         // velocities (seed §3.3); knee hyper-extension up to 0.1 rad; a, u in [0, 1]
         let (mut x_lb, mut x_ub) = (vec![0.0; model.nx()], vec![0.0; model.nx()]);
         for i in 0..nq {
-            let (lo, hi) = data.q[i].iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+            let (lo, hi) = data.q[i]
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                    (a.min(v), b.max(v))
+                });
             let sp = &splines[i];
-            let (dlo, dhi) = data.time.iter().map(|&tt| sp.derivative(tt)).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| (a.min(v), b.max(v)));
+            let (dlo, dhi) = data
+                .time
+                .iter()
+                .map(|&tt| sp.derivative(tt))
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+                    (a.min(v), b.max(v))
+                });
             x_lb[i] = lo - 1.0;
             x_ub[i] = hi + 1.0;
             x_lb[nq + i] = dlo - 1.0;
@@ -370,12 +522,38 @@ impl TrackingSetup {
         // excitations in [0, 1]; residual actuators (if any) in [−1, 1]
         let na_u = model.nu_actuators();
         let u_lb: Vec<f64> = (0..nu).map(|i| if i < na_u { 0.0 } else { -1.0 }).collect();
-        let guess = GaitGuess { x: gx, u: gu, x_lb, x_ub, u_lb, u_ub: vec![1.0; nu] };
+        let guess = GaitGuess {
+            x: gx,
+            u: gu,
+            x_lb,
+            x_ub,
+            u_lb,
+            u_ub: vec![1.0; nu],
+        };
         let foot_length = 0.305;
         let weights = TrackingWeights::seed(nq, peak, foot_length);
-        let measured = Arc::new(MeasuredLoads { fx, fy, time: data.time.clone(), cop_x: [data.feet[0].cop_x.clone(), data.feet[1].cop_x.clone()] });
-        let samples = if sides == TargetSides::Samples { sample_targets(model, &seq, sets, data, t0)? } else { Vec::new() };
-        Ok(Self { seq, window: (t0, t1), node_times, guess, targets, weights, events, measured, samples })
+        let measured = Arc::new(MeasuredLoads {
+            fx,
+            fy,
+            time: data.time.clone(),
+            cop_x: [data.feet[0].cop_x.clone(), data.feet[1].cop_x.clone()],
+        });
+        let samples = if sides == TargetSides::Samples {
+            sample_targets(model, &seq, sets, data, t0)?
+        } else {
+            Vec::new()
+        };
+        Ok(Self {
+            seq,
+            window: (t0, t1),
+            node_times,
+            guess,
+            targets,
+            weights,
+            events,
+            measured,
+            samples,
+        })
     }
 
     /// Start from `solution` (a solution of the same phase graph, e.g. of a tracking run
@@ -386,21 +564,40 @@ impl TrackingSetup {
             .phases
             .iter()
             .filter_map(|p| match p {
-                Phase::Continuous { name, intervals, .. } => Some((name.as_str(), *intervals)),
+                Phase::Continuous {
+                    name, intervals, ..
+                } => Some((name.as_str(), *intervals)),
                 Phase::Impact { .. } => None,
             })
             .collect();
         if cont.len() != solution.phases.len() {
-            return Err(format!("the initial solution has {} continuous phases, the phase graph '{}' {}", solution.phases.len(), self.seq.name, cont.len()));
+            return Err(format!(
+                "the initial solution has {} continuous phases, the phase graph '{}' {}",
+                solution.phases.len(),
+                self.seq.name,
+                cont.len()
+            ));
         }
         for (((name, n), ph), gu) in cont.iter().zip(&solution.phases).zip(&self.guess.u) {
             if *name != ph.name || *n != ph.intervals() || ph.u.len() != gu.len() {
                 return Err(format!("the initial solution's phase '{}' ({} intervals) does not match the phase graph's '{name}' ({n} intervals)", ph.name, ph.intervals()));
             }
         }
-        let nu = self.guess.u.first().and_then(|u| u.first()).map_or(0, Vec::len);
-        if solution.phases.iter().flat_map(|p| &p.u).any(|u| u.len() > nu) {
-            return Err(format!("the initial solution has more controls than the model's {nu}"));
+        let nu = self
+            .guess
+            .u
+            .first()
+            .and_then(|u| u.first())
+            .map_or(0, Vec::len);
+        if solution
+            .phases
+            .iter()
+            .flat_map(|p| &p.u)
+            .any(|u| u.len() > nu)
+        {
+            return Err(format!(
+                "the initial solution has more controls than the model's {nu}"
+            ));
         }
         self.guess.x = solution.phases.iter().map(|p| p.x.clone()).collect();
         // a solution without the residual actuators starts them at zero
@@ -408,14 +605,29 @@ impl TrackingSetup {
             .phases
             .iter()
             .zip(&self.guess.u)
-            .map(|(p, g)| p.u.iter().zip(g).map(|(u, gu)| u.iter().copied().chain(gu[u.len()..].iter().copied()).collect()).collect())
+            .map(|(p, g)| {
+                p.u.iter()
+                    .zip(g)
+                    .map(|(u, gu)| {
+                        u.iter()
+                            .copied()
+                            .chain(gu[u.len()..].iter().copied())
+                            .collect()
+                    })
+                    .collect()
+            })
             .collect();
         Ok(())
     }
 
     /// Number of data residuals (angles, velocities, forces and CoP at the nodes; not the
     /// regularisation of excitations and activations).
-    pub fn data_rows(&self, model: &GaitModel, sets: &[ConstraintSet], continuous: &[usize]) -> usize {
+    pub fn data_rows(
+        &self,
+        model: &GaitModel,
+        sets: &[ConstraintSet],
+        continuous: &[usize],
+    ) -> usize {
         let mut n = 0;
         for (j, tg) in self.targets.iter().enumerate() {
             let last = j + 1 == self.targets.len();
@@ -423,12 +635,22 @@ impl TrackingSetup {
                 if k + 1 == tg.len() && !last {
                     continue;
                 }
-                let r = TrackingResidual::new(model, sets[continuous[j]].clone(), target.clone(), self.weights.clone(), None);
+                let r = TrackingResidual::new(
+                    model,
+                    sets[continuous[j]].clone(),
+                    target.clone(),
+                    self.weights.clone(),
+                    None,
+                );
                 n += super::GenericFunction::dim(&r) - model.nu() - model.na();
             }
         }
         for s in &self.samples {
-            n += self.sample_residuals(model, sets, continuous, s).iter().map(|(r, _)| super::GenericFunction::dim(r)).sum::<usize>();
+            n += self
+                .sample_residuals(model, sets, continuous, s)
+                .iter()
+                .map(|(r, _)| super::GenericFunction::dim(r))
+                .sum::<usize>();
         }
         n
     }
@@ -438,16 +660,39 @@ impl TrackingSetup {
     /// model shifts that clock and the sample has loads, the angles at the sample's
     /// instant and the loads, at their measured values, at the instant the offset moves
     /// them to ([`ForceClockShift`]).
-    fn sample_residuals<'m>(&self, model: &'m GaitModel, sets: &[ConstraintSet], continuous: &[usize], s: &SampleTarget) -> Vec<(TrackingResidual<'m>, bool)> {
+    fn sample_residuals<'m>(
+        &self,
+        model: &'m GaitModel,
+        sets: &[ConstraintSet],
+        continuous: &[usize],
+        s: &SampleTarget,
+    ) -> Vec<(TrackingResidual<'m>, bool)> {
         let residual = |target: NodeTarget| {
-            TrackingResidual::new(model, sets[continuous[s.phase]].clone(), target, self.weights.clone(), Some(self.measured.clone())).data_only()
+            TrackingResidual::new(
+                model,
+                sets[continuous[s.phase]].clone(),
+                target,
+                self.weights.clone(),
+                Some(self.measured.clone()),
+            )
+            .data_only()
         };
         if !model.shifts_force_clock() || s.target.feet.iter().all(Option::is_none) {
             return vec![(residual(s.target.clone()), false)];
         }
-        let angles = residual(NodeTarget { feet: [None, None], ..s.target.clone() });
-        let loads = residual(NodeTarget { q: vec![None; s.target.q.len()], ..s.target.clone() }).at_measured_values();
-        [(angles, false), (loads, true)].into_iter().filter(|(r, _)| super::GenericFunction::dim(r) > 0).collect()
+        let angles = residual(NodeTarget {
+            feet: [None, None],
+            ..s.target.clone()
+        });
+        let loads = residual(NodeTarget {
+            q: vec![None; s.target.q.len()],
+            ..s.target.clone()
+        })
+        .at_measured_values();
+        [(angles, false), (loads, true)]
+            .into_iter()
+            .filter(|(r, _)| super::GenericFunction::dim(r) > 0)
+            .collect()
     }
 
     /// Where the tracking cost of `solution` comes from: per channel
@@ -461,7 +706,10 @@ impl TrackingSetup {
         solution: &super::evaluation::GaitSolution,
         integrator: &crate::integrate::IntegratorSettings,
     ) -> Result<CostBreakdown, String> {
-        let linear = solution.phases.first().is_none_or(|p| p.controls == crate::integrate::ControlShape::Linear);
+        let linear = solution
+            .phases
+            .first()
+            .is_none_or(|p| p.controls == crate::integrate::ControlShape::Linear);
         let mut channels: Vec<String> = Vec::new();
         let mut phases = Vec::new();
         let mut cost: Vec<Vec<f64>> = Vec::new();
@@ -476,19 +724,37 @@ impl TrackingSetup {
                 if k == n && !last {
                     continue;
                 }
-                let r = TrackingResidual::new(model, sets[continuous[j]].clone(), target.clone(), self.weights.clone(), Some(self.measured.clone()));
+                let r = TrackingResidual::new(
+                    model,
+                    sets[continuous[j]].clone(),
+                    target.clone(),
+                    self.weights.clone(),
+                    Some(self.measured.clone()),
+                );
                 let ku = if linear { k } else { k.min(n - 1) };
-                let z: Vec<f64> = ph.x[k].iter().chain(&ph.u[ku]).chain(&solution.theta).copied().collect();
+                let z: Vec<f64> = ph.x[k]
+                    .iter()
+                    .chain(&ph.u[ku])
+                    .chain(&solution.theta)
+                    .copied()
+                    .collect();
                 let (data, largest, _) = add_costs(&r, &z, j, &mut channels, &mut cost, &mut rows)?;
                 if !largest.is_empty() {
-                    nodes.push(NodeCost { time: ph.t0 + k as f64 * h, phase: ph.name.clone(), data, largest });
+                    nodes.push(NodeCost {
+                        time: ph.t0 + k as f64 * h,
+                        phase: ph.name.clone(),
+                        data,
+                        largest,
+                    });
                 }
             }
         }
         if !self.samples.is_empty() {
             // each residual's instant: (interval, τ, time), the loads' moved by the force
             // plates' clock offset as the OCP's shifted sample terms are
-            let shift = -model.measurement_adjust::<f64>(&solution.theta).force_time_offset;
+            let shift = -model
+                .measurement_adjust::<f64>(&solution.theta)
+                .force_time_offset;
             let mut parts = Vec::new();
             for (i, st) in self.samples.iter().enumerate() {
                 let ph = &solution.phases[st.phase];
@@ -497,7 +763,12 @@ impl TrackingSetup {
                     let (k, tau, time) = if shifted {
                         let (k, tau, _) = shifted_instant(st.interval, st.tau, shift, h, n);
                         // a phase's end is sampled before its impact
-                        (k, tau, (ph.t0 + (k as f64 + tau) * h).min(ph.t0 + ph.duration - CLOCK_SHIFT_END))
+                        (
+                            k,
+                            tau,
+                            (ph.t0 + (k as f64 + tau) * h)
+                                .min(ph.t0 + ph.duration - CLOCK_SHIFT_END),
+                        )
                     } else {
                         (st.interval, st.tau, st.target.time)
                     };
@@ -507,18 +778,30 @@ impl TrackingSetup {
             let mut times: Vec<f64> = parts.iter().map(|p| p.4).collect();
             times.sort_by(f64::total_cmp);
             times.dedup();
-            let states = solution.sample_at(model, sets, &times, integrator).map_err(|e| format!("integrating to the samples: {e}"))?;
+            let states = solution
+                .sample_at(model, sets, &times, integrator)
+                .map_err(|e| format!("integrating to the samples: {e}"))?;
             let mut data_by_sample = vec![(0.0, String::new(), 0.0); self.samples.len()];
             for (i, r, k, tau, time) in &parts {
                 let st = &self.samples[*i];
                 let ph = &solution.phases[st.phase];
                 let at = &states[times.partition_point(|t| t < time)];
                 let u: Vec<f64> = match ph.controls {
-                    crate::integrate::ControlShape::Linear => ph.u[*k].iter().zip(&ph.u[k + 1]).map(|(a, b)| (1.0 - tau) * a + tau * b).collect(),
+                    crate::integrate::ControlShape::Linear => ph.u[*k]
+                        .iter()
+                        .zip(&ph.u[k + 1])
+                        .map(|(a, b)| (1.0 - tau) * a + tau * b)
+                        .collect(),
                     crate::integrate::ControlShape::Constant => ph.u[*k].clone(),
                 };
-                let z: Vec<f64> = at.x.iter().chain(&u).chain(&solution.theta).copied().collect();
-                let (data, largest, largest_cost) = add_costs(r, &z, st.phase, &mut channels, &mut cost, &mut rows)?;
+                let z: Vec<f64> =
+                    at.x.iter()
+                        .chain(&u)
+                        .chain(&solution.theta)
+                        .copied()
+                        .collect();
+                let (data, largest, largest_cost) =
+                    add_costs(r, &z, st.phase, &mut channels, &mut cost, &mut rows)?;
                 // the parts' channels are disjoint: the sample's largest is the parts' largest
                 let entry = &mut data_by_sample[*i];
                 entry.0 += data;
@@ -527,7 +810,12 @@ impl TrackingSetup {
                 }
             }
             for (st, (data, largest, _)) in self.samples.iter().zip(data_by_sample) {
-                nodes.push(NodeCost { time: st.target.time, phase: solution.phases[st.phase].name.clone(), data, largest });
+                nodes.push(NodeCost {
+                    time: st.target.time,
+                    phase: solution.phases[st.phase].name.clone(),
+                    data,
+                    largest,
+                });
             }
             nodes.sort_by(|a, b| a.time.total_cmp(&b.time));
         }
@@ -537,13 +825,28 @@ impl TrackingSetup {
         for r in &mut rows {
             r.resize(phases.len(), 0);
         }
-        Ok(CostBreakdown { channels, phases, cost, rows, nodes })
+        Ok(CostBreakdown {
+            channels,
+            phases,
+            cost,
+            rows,
+            nodes,
+        })
     }
 
     /// The tracking OCP: the walking cycle of `cycle` plus the node-wise residuals.
-    pub fn ocp<'c>(&self, cycle: &'c GaitCycle<'c>, model: &'c GaitModel, sets: &'c [ConstraintSet], integrator: crate::integrate::IntegratorSettings) -> Result<Ocp<'c>, String> {
+    pub fn ocp<'c>(
+        &self,
+        cycle: &'c GaitCycle<'c>,
+        model: &'c GaitModel,
+        sets: &'c [ConstraintSet],
+        integrator: crate::integrate::IntegratorSettings,
+    ) -> Result<Ocp<'c>, String> {
         let mut ocp = cycle.ocp(&self.guess, integrator)?;
-        let linear = ocp.phases.iter().all(|p| p.controls == crate::integrate::ControlShape::Linear);
+        let linear = ocp
+            .phases
+            .iter()
+            .all(|p| p.controls == crate::integrate::ControlShape::Linear);
         for (j, tg) in self.targets.iter().enumerate() {
             let set = &sets[cycle.continuous[j]];
             let n = ocp.phases[j].intervals;
@@ -554,18 +857,37 @@ impl TrackingSetup {
                     continue;
                 }
                 let ku = if linear { k } else { k.min(n - 1) };
-                let r = TrackingResidual::new(model, set.clone(), target.clone(), self.weights.clone(), Some(self.measured.clone()));
+                let r = TrackingResidual::new(
+                    model,
+                    set.clone(),
+                    target.clone(),
+                    self.weights.clone(),
+                    Some(self.measured.clone()),
+                );
                 ocp.least_squares.push(Term {
                     name: "tracking".into(),
-                    args: vec![Block::State { phase: j, node: k }, Block::Control { phase: j, node: ku }, Block::Params],
+                    args: vec![
+                        Block::State { phase: j, node: k },
+                        Block::Control { phase: j, node: ku },
+                        Block::Params,
+                    ],
                     f: Arc::new(super::AdTerm(r)),
                 });
             }
         }
         for s in &self.samples {
             for (r, shifted) in self.sample_residuals(model, sets, &cycle.continuous, s) {
-                let shift = shifted.then(|| Arc::new(super::AdTerm(ForceClockShift { model })) as Arc<dyn NodeFunction + 'c>);
-                ocp.samples.push(SampleTerm { name: "tracking sample".into(), phase: s.phase, interval: s.interval, tau: s.tau, f: Arc::new(super::AdTerm(r)), shift });
+                let shift = shifted.then(|| {
+                    Arc::new(super::AdTerm(ForceClockShift { model })) as Arc<dyn NodeFunction + 'c>
+                });
+                ocp.samples.push(SampleTerm {
+                    name: "tracking sample".into(),
+                    phase: s.phase,
+                    interval: s.interval,
+                    tau: s.tau,
+                    f: Arc::new(super::AdTerm(r)),
+                    shift,
+                });
             }
         }
         Ok(ocp)
@@ -575,7 +897,14 @@ impl TrackingSetup {
 /// Add the squared rows of residual `r` at `z` to the cost of phase `j` per channel
 /// (new channels appended); returns the data cost (without regularisation) and the
 /// channel contributing most to it with its cost (empty and 0 without data rows).
-fn add_costs(r: &TrackingResidual, z: &[f64], j: usize, channels: &mut Vec<String>, cost: &mut Vec<Vec<f64>>, rows: &mut Vec<Vec<usize>>) -> Result<(f64, String, f64), String> {
+fn add_costs(
+    r: &TrackingResidual,
+    z: &[f64],
+    j: usize,
+    channels: &mut Vec<String>,
+    cost: &mut Vec<Vec<f64>>,
+    rows: &mut Vec<Vec<usize>>,
+) -> Result<(f64, String, f64), String> {
     let mut v = vec![0.0; super::GenericFunction::dim(r)];
     super::GenericFunction::eval(r, z, &mut v)?;
     let mut node_data: Vec<(String, f64)> = Vec::new();
@@ -603,7 +932,10 @@ fn add_costs(r: &TrackingResidual, z: &[f64], j: usize, channels: &mut Vec<Strin
         }
     }
     let data = node_data.iter().map(|e| e.1).sum();
-    let (largest, largest_cost) = node_data.into_iter().max_by(|a, b| a.1.total_cmp(&b.1)).unwrap_or_default();
+    let (largest, largest_cost) = node_data
+        .into_iter()
+        .max_by(|a, b| a.1.total_cmp(&b.1))
+        .unwrap_or_default();
     Ok((data, largest, largest_cost))
 }
 
@@ -645,7 +977,16 @@ impl CostBreakdown {
     /// error in units of the channel's weighting scale (1 = an error as large as the
     /// scale, e.g. π/4 for an angle); None where the channel has no rows in the phase.
     pub fn normalised_rms(&self) -> Vec<Vec<Option<f64>>> {
-        self.cost.iter().zip(&self.rows).map(|(c, r)| c.iter().zip(r).map(|(&v, &n)| (n > 0).then(|| (v / n as f64).sqrt())).collect()).collect()
+        self.cost
+            .iter()
+            .zip(&self.rows)
+            .map(|(c, r)| {
+                c.iter()
+                    .zip(r)
+                    .map(|(&v, &n)| (n > 0).then(|| (v / n as f64).sqrt()))
+                    .collect()
+            })
+            .collect()
     }
 
     /// The `n` windows of `width` consecutive nodes with the largest data cost, not
@@ -656,7 +997,9 @@ impl CostBreakdown {
             return Vec::new();
         }
         let w = width.clamp(1, m);
-        let mut sums: Vec<(usize, f64)> = (0..=m - w).map(|i| (i, self.nodes[i..i + w].iter().map(|c| c.data).sum())).collect();
+        let mut sums: Vec<(usize, f64)> = (0..=m - w)
+            .map(|i| (i, self.nodes[i..i + w].iter().map(|c| c.data).sum()))
+            .collect();
         sums.sort_by(|a, b| b.1.total_cmp(&a.1));
         let mut taken: Vec<(usize, f64)> = Vec::new();
         for (i, v) in sums {
@@ -678,7 +1021,11 @@ impl CostBreakdown {
                         None => by.push((c.largest.clone(), c.data)),
                     }
                 }
-                let top = by.into_iter().max_by(|a, b| a.1.total_cmp(&b.1)).map(|e| e.0).unwrap_or_default();
+                let top = by
+                    .into_iter()
+                    .max_by(|a, b| a.1.total_cmp(&b.1))
+                    .map(|e| e.0)
+                    .unwrap_or_default();
                 (win[0].time, win[w - 1].time, v, top)
             })
             .collect()

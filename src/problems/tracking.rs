@@ -105,7 +105,17 @@ impl TrackingWeights {
             angle[i] *= 0.01;
             velocity[i] *= 0.01;
         }
-        Self { angle, velocity, force_scale: peak_force, force: 1.0, cop_length: foot_length, cop: 1.0, excitation: 1e-3, activation: 1e-3, residual: 1e-2 }
+        Self {
+            angle,
+            velocity,
+            force_scale: peak_force,
+            force: 1.0,
+            cop_length: foot_length,
+            cop: 1.0,
+            excitation: 1e-3,
+            activation: 1e-3,
+            residual: 1e-2,
+        }
     }
 
     /// The seed's weight of the angular-velocity targets relative to the angles' (eq. 18).
@@ -116,7 +126,9 @@ impl TrackingWeights {
     /// 1/100, untracked coordinates staying untracked); 0 drops the velocity targets,
     /// which come from differentiating the smoothed angles rather than from a measurement.
     pub fn with_velocity_weight(mut self, relative: f64) -> Self {
-        self.velocity.iter_mut().for_each(|v| *v *= relative / Self::SEED_VELOCITY);
+        self.velocity
+            .iter_mut()
+            .for_each(|v| *v *= relative / Self::SEED_VELOCITY);
         self
     }
 
@@ -140,7 +152,12 @@ impl TrackingWeights {
         for (i, (a, v)) in self.angle.iter_mut().zip(&mut self.velocity).enumerate() {
             if *a > 0.0 {
                 let relative = *v / *a;
-                *a = c / if i < 2 { noise.position_m } else { noise.angle_rad }.powi(2);
+                *a = c / if i < 2 {
+                    noise.position_m
+                } else {
+                    noise.angle_rad
+                }
+                .powi(2);
                 *v = relative * *a;
             } else {
                 *v = 0.0;
@@ -236,7 +253,16 @@ impl<'a> TrackingResidual<'a> {
         }
         dim += model.nu() + model.na();
         let measured = measured.filter(|_| model.has_measurement_effects());
-        Self { model, set, target, weights, measured, regularised: true, as_measured: false, dim }
+        Self {
+            model,
+            set,
+            target,
+            weights,
+            measured,
+            regularised: true,
+            as_measured: false,
+            dim,
+        }
     }
 
     /// The same residual with the loads compared with the target's own values (the CoP
@@ -270,7 +296,11 @@ impl<'a> TrackingResidual<'a> {
         let mut out = Vec::with_capacity(self.dim);
         for i in 0..nq {
             if self.target.q.get(i).copied().flatten().is_some() && w.angle[i] > 0.0 {
-                out.push(names.get(i).map_or_else(|| format!("q{i}"), |n| n.to_string()));
+                out.push(
+                    names
+                        .get(i)
+                        .map_or_else(|| format!("q{i}"), |n| n.to_string()),
+                );
             }
             if self.target.qd.get(i).copied().flatten().is_some() && w.velocity[i] > 0.0 {
                 out.push("velocities".into());
@@ -284,14 +314,31 @@ impl<'a> TrackingResidual<'a> {
             }
         }
         if self.regularised {
-            out.extend(std::iter::repeat_n("excitations".to_string(), self.model.nu_actuators()));
-            out.extend(self.model.control_names().into_iter().skip(self.model.nu_actuators()));
-            out.extend(std::iter::repeat_n("activations".to_string(), self.model.na()));
+            out.extend(std::iter::repeat_n(
+                "excitations".to_string(),
+                self.model.nu_actuators(),
+            ));
+            out.extend(
+                self.model
+                    .control_names()
+                    .into_iter()
+                    .skip(self.model.nu_actuators()),
+            );
+            out.extend(std::iter::repeat_n(
+                "activations".to_string(),
+                self.model.na(),
+            ));
         }
         out
     }
 
-    fn residual<S: ModelScalar>(&self, x: &[S], u: &[S], th: &[S], out: &mut [S]) -> Result<(), String> {
+    fn residual<S: ModelScalar>(
+        &self,
+        x: &[S],
+        u: &[S],
+        th: &[S],
+        out: &mut [S],
+    ) -> Result<(), String> {
         let (nq, w) = (self.model.nq(), &self.weights);
         let mut o = 0;
         for i in 0..nq {
@@ -309,13 +356,21 @@ impl<'a> TrackingResidual<'a> {
             }
         }
         if self.target.feet.iter().any(Option::is_some) {
-            let loads = self.model.foot_loads_generic(&self.set, x, u, th).map_err(|e| e.to_string())?;
-            let adjust = self.measured.as_ref().map(|m| (m, self.model.measurement_adjust(th)));
+            let loads = self
+                .model
+                .foot_loads_generic(&self.set, x, u, th)
+                .map_err(|e| e.to_string())?;
+            let adjust = self
+                .measured
+                .as_ref()
+                .map(|m| (m, self.model.measurement_adjust(th)));
             for (s, tgt) in self.target.feet.iter().enumerate() {
                 let Some((fx, fy, cop)) = *tgt else { continue };
                 // targets at the node time, or through the measurement effects
                 let (tfx, tfy, tcop, cop_offset) = match &adjust {
-                    Some((_, adj)) if self.as_measured => (S::c(fx), S::c(fy), cop.map(S::c), adj.cop_offset),
+                    Some((_, adj)) if self.as_measured => {
+                        (S::c(fx), S::c(fy), cop.map(S::c), adj.cop_offset)
+                    }
                     Some((m, adj)) => {
                         let t = adj.force_time_offset + self.target.time;
                         let (a, b) = m.forces(s, t);
@@ -329,7 +384,8 @@ impl<'a> TrackingResidual<'a> {
                 out[o + 1] = (loads[s].1 - tfy) * sc;
                 o += 2;
                 if let Some(xc) = tcop {
-                    out[o] = (loads[s].2 + loads[s].1 * (cop_offset - xc)) * (w.cop.sqrt() / (w.force_scale * w.cop_length));
+                    out[o] = (loads[s].2 + loads[s].1 * (cop_offset - xc))
+                        * (w.cop.sqrt() / (w.force_scale * w.cop_length));
                     o += 1;
                 }
             }
@@ -340,7 +396,12 @@ impl<'a> TrackingResidual<'a> {
         }
         let n_act = self.model.nu_actuators();
         for (k, v) in u.iter().enumerate() {
-            out[o] = *v * if k < n_act { w.excitation.sqrt() } else { w.residual.sqrt() };
+            out[o] = *v
+                * if k < n_act {
+                    w.excitation.sqrt()
+                } else {
+                    w.residual.sqrt()
+                };
             o += 1;
         }
         for i in 0..self.model.na() {

@@ -63,7 +63,13 @@ pub fn excursions(times: &[f64], signal: &[f64], threshold: f64) -> Vec<Excursio
             }
         }
         let end = if e + 1 < n { crossing(e) } else { times[e] };
-        out.push(Excursion { start, end, t_peak: times[best], peak: signal[best], index: best });
+        out.push(Excursion {
+            start,
+            end,
+            t_peak: times[best],
+            peak: signal[best],
+            index: best,
+        });
         k = e + 1;
     }
     out
@@ -101,7 +107,14 @@ pub struct ForceTransient {
 /// Transients of the normal and tangential ground forces of both feet on the fine grid
 /// `fine` (held against the measurement in `cmp`, built from the same samples): runs of
 /// excess over `threshold_n`, strongest first. `node_times` are the shooting nodes.
-pub fn force_transients(fine: &Reintegration, cmp: &Comparison, sets: &[ConstraintSet], node_times: &[f64], nq: usize, threshold_n: f64) -> Vec<ForceTransient> {
+pub fn force_transients(
+    fine: &Reintegration,
+    cmp: &Comparison,
+    sets: &[ConstraintSet],
+    node_times: &[f64],
+    nq: usize,
+    threshold_n: f64,
+) -> Vec<ForceTransient> {
     let samples = &fine.result.samples;
     let mut out = Vec::new();
     for (s, foot) in ["right", "left"].into_iter().enumerate() {
@@ -111,7 +124,11 @@ pub fn force_transients(fine: &Reintegration, cmp: &Comparison, sets: &[Constrai
                     let m = cmp.model_feet[s][c][k];
                     let d = cmp.data_feet[s][c][k];
                     // tangential: excess of magnitude in the direction of the model force
-                    if c == 0 { (m - d) * m.signum() } else { m - d }
+                    if c == 0 {
+                        (m - d) * m.signum()
+                    } else {
+                        m - d
+                    }
                 })
                 .collect();
             for e in excursions(&cmp.times, &excess, threshold_n) {

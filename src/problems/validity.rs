@@ -29,7 +29,12 @@ impl Default for ValidityLimits {
         // −1 N and the cone's 1 N: the bounds, well above integration noise; 1 mm of
         // penetration: the clearance a fine grid can resolve; 50 N of stabilisation: a
         // converged solution has below 1e-4 N (README), the simulated examples up to 128 N
-        Self { normal_force_n: 1.0, friction_n: 1.0, penetration_m: 1e-3, baumgarte_n: 50.0 }
+        Self {
+            normal_force_n: 1.0,
+            friction_n: 1.0,
+            penetration_m: 1e-3,
+            baumgarte_n: 50.0,
+        }
     }
 }
 
@@ -151,7 +156,9 @@ pub fn check(
     let mut done: Vec<Open> = Vec::new();
     let nq = model.nq();
     for (si, s) in samples.iter().enumerate() {
-        let Some(set) = sets.get(s.phase) else { continue };
+        let Some(set) = sets.get(s.phase) else {
+            continue;
+        };
         let mut found: Vec<(ViolationKind, usize, f64)> = Vec::new();
         for (r, row) in set.rows.iter().enumerate() {
             let lam = s.contact.lambda.get(r).copied().unwrap_or(0.0);
@@ -159,7 +166,11 @@ pub fn check(
                 if lam < -limits.normal_force_n {
                     found.push((ViolationKind::NegativeNormalForce, row.contact, -lam));
                 }
-                if let Some(t) = set.rows.iter().position(|o| o.contact == row.contact && o.kind == RowKind::Tangential) {
+                if let Some(t) = set
+                    .rows
+                    .iter()
+                    .position(|o| o.contact == row.contact && o.kind == RowKind::Tangential)
+                {
                     let lt = s.contact.lambda.get(t).copied().unwrap_or(0.0);
                     let excess = lt.abs() - mu * lam;
                     if excess > limits.friction_n {
@@ -167,7 +178,13 @@ pub fn check(
                     }
                 }
             }
-            let b = s.contact.baumgarte_force.get(r).copied().unwrap_or(0.0).abs();
+            let b = s
+                .contact
+                .baumgarte_force
+                .get(r)
+                .copied()
+                .unwrap_or(0.0)
+                .abs();
             if b > limits.baumgarte_n {
                 found.push((ViolationKind::BaumgarteForce, row.contact, b));
             }
@@ -182,7 +199,12 @@ pub fn check(
             }
         }
         for (kind, contact, amount) in found {
-            match open.iter_mut().find(|o| o.kind == kind && o.contact == contact && o.phase == s.phase && o.last_index + 1 == si) {
+            match open.iter_mut().find(|o| {
+                o.kind == kind
+                    && o.contact == contact
+                    && o.phase == s.phase
+                    && o.last_index + 1 == si
+            }) {
                 Some(o) => {
                     o.to = s.t;
                     o.last_index = si;
@@ -191,17 +213,31 @@ pub fn check(
                         o.worst_t = s.t;
                     }
                 }
-                None => open.push(Open { kind, contact, phase: s.phase, from: s.t, to: s.t, worst_t: s.t, amount, last_index: si }),
+                None => open.push(Open {
+                    kind,
+                    contact,
+                    phase: s.phase,
+                    from: s.t,
+                    to: s.t,
+                    worst_t: s.t,
+                    amount,
+                    last_index: si,
+                }),
             }
         }
         // close the stretches this sample did not continue
-        let (still, closed): (Vec<Open>, Vec<Open>) = open.into_iter().partition(|o| o.last_index == si);
+        let (still, closed): (Vec<Open>, Vec<Open>) =
+            open.into_iter().partition(|o| o.last_index == si);
         open = still;
         done.extend(closed);
     }
     done.extend(open);
     done.sort_by(|a, b| a.from.total_cmp(&b.from).then(a.contact.cmp(&b.contact)));
-    let worst = done.iter().filter(|o| o.kind != ViolationKind::BaumgarteForce).map(|o| (o.phase, o.worst_t)).collect();
+    let worst = done
+        .iter()
+        .filter(|o| o.kind != ViolationKind::BaumgarteForce)
+        .map(|o| (o.phase, o.worst_t))
+        .collect();
     let violations = done
         .into_iter()
         .map(|o| Violation {
@@ -214,5 +250,9 @@ pub fn check(
             amount: o.amount,
         })
         .collect();
-    Validity { limits, violations, worst }
+    Validity {
+        limits,
+        violations,
+        worst,
+    }
 }

@@ -794,7 +794,13 @@ fn svg_header(out: &mut String, title: &str, w: f64, h: f64, at: Option<(f64, f6
     }
     .ok();
     writeln!(out, "<title>{escaped}</title>").ok();
-    writeln!(out, r##"<rect width="{}" height="{}" fill="#ffffff"/>"##, px(w), px(h)).ok();
+    writeln!(
+        out,
+        r##"<rect width="{}" height="{}" fill="#ffffff"/>"##,
+        px(w),
+        px(h)
+    )
+    .ok();
     if !title.is_empty() {
         writeln!(
             out,

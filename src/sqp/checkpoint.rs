@@ -54,7 +54,15 @@ impl From<&IterationRecord> for ExactRecord {
 impl From<&ExactRecord> for IterationRecord {
     fn from(r: &ExactRecord) -> Self {
         let [objective, infeasibility, kkt, step, seconds] = r.figures.map(f64::from_bits);
-        Self { iter: r.iter, objective, infeasibility, kkt, step, seconds, qp_iterations: r.qp_iterations }
+        Self {
+            iter: r.iter,
+            objective,
+            infeasibility,
+            kkt,
+            step,
+            seconds,
+            qp_iterations: r.qp_iterations,
+        }
     }
 }
 
@@ -118,19 +126,32 @@ impl SqpCheckpoint {
     /// constraints.
     pub fn check(&self, n: usize, m: usize) -> Result<(), CheckpointError> {
         if self.version != CHECKPOINT_VERSION {
-            return Err(CheckpointError::Version { found: self.version });
+            return Err(CheckpointError::Version {
+                found: self.version,
+            });
         }
         if self.n != n || self.m != m {
-            return Err(CheckpointError::Size { found_n: self.n, found_m: self.m, n, m });
+            return Err(CheckpointError::Size {
+                found_n: self.n,
+                found_m: self.m,
+                n,
+                m,
+            });
         }
         if self.w.0.len() != n || self.nu.0.len() != n || self.lambda.0.len() != m {
-            return Err(CheckpointError::Damaged("vector lengths differ from the problem size"));
+            return Err(CheckpointError::Damaged(
+                "vector lengths differ from the problem size",
+            ));
         }
         if self.scalars.0.len() != 6 || self.filter.0.len() % 2 != 0 {
-            return Err(CheckpointError::Damaged("scalars or filter of the wrong length"));
+            return Err(CheckpointError::Damaged(
+                "scalars or filter of the wrong length",
+            ));
         }
         if self.history.len() != self.next_iter {
-            return Err(CheckpointError::Damaged("history length differs from the iteration count"));
+            return Err(CheckpointError::Damaged(
+                "history length differs from the iteration count",
+            ));
         }
         Ok(())
     }

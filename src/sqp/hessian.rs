@@ -45,17 +45,31 @@ impl BlockBfgs {
             })
             .collect();
         let scaled = vec![false; blocks.len()];
-        Self { blocks, mats, scaled, rule }
+        Self {
+            blocks,
+            mats,
+            scaled,
+            rule,
+        }
     }
 
     /// The blocks (row-major) and whether each has been scaled: the state a checkpoint keeps.
     pub fn state(&self) -> Vec<(Vec<f64>, bool)> {
-        self.mats.iter().cloned().zip(self.scaled.iter().copied()).collect()
+        self.mats
+            .iter()
+            .cloned()
+            .zip(self.scaled.iter().copied())
+            .collect()
     }
 
     /// Restore the blocks from [`state`](Self::state); `false` if the block sizes differ.
     pub fn restore(&mut self, state: Vec<(Vec<f64>, bool)>) -> bool {
-        if state.len() != self.mats.len() || state.iter().zip(&self.mats).any(|((m, _), own)| m.len() != own.len()) {
+        if state.len() != self.mats.len()
+            || state
+                .iter()
+                .zip(&self.mats)
+                .any(|((m, _), own)| m.len() != own.len())
+        {
             return false;
         }
         for (i, (m, s)) in state.into_iter().enumerate() {
@@ -97,7 +111,9 @@ impl BlockBfgs {
                     self.scaled[bi] = true;
                 }
             }
-            let bs: Vec<f64> = (0..k).map(|i| (0..k).map(|j| m[i * k + j] * sb[j]).sum()).collect();
+            let bs: Vec<f64> = (0..k)
+                .map(|i| (0..k).map(|j| m[i * k + j] * sb[j]).sum())
+                .collect();
             let sbs: f64 = sb.iter().zip(&bs).map(|(a, b)| a * b).sum();
             if sbs <= 0.0 {
                 continue;
@@ -111,8 +127,14 @@ impl BlockBfgs {
                     yb
                 }
                 BfgsUpdate::PowellDamped => {
-                    let theta = if sy >= 0.2 * sbs { 1.0 } else { 0.8 * sbs / (sbs - sy) };
-                    (0..k).map(|i| theta * yb[i] + (1.0 - theta) * bs[i]).collect()
+                    let theta = if sy >= 0.2 * sbs {
+                        1.0
+                    } else {
+                        0.8 * sbs / (sbs - sy)
+                    };
+                    (0..k)
+                        .map(|i| theta * yb[i] + (1.0 - theta) * bs[i])
+                        .collect()
                 }
             };
             let sr: f64 = sb.iter().zip(&r).map(|(a, b)| a * b).sum();
@@ -166,7 +188,9 @@ impl BlockBfgs {
                 let eig = sym.symmetric_eigen();
                 let top = eig.eigenvalues.iter().fold(0.0f64, |a, v| a.max(v.abs()));
                 let clipped = eig.eigenvalues.map(|v| v.max(1e-8 * top));
-                let proj = &eig.eigenvectors * nalgebra::DMatrix::from_diagonal(&clipped) * eig.eigenvectors.transpose();
+                let proj = &eig.eigenvectors
+                    * nalgebra::DMatrix::from_diagonal(&clipped)
+                    * eig.eigenvectors.transpose();
                 for i in 0..k {
                     for j in 0..k {
                         m[i * k + j] = proj[(i, j)];
@@ -196,42 +220,123 @@ impl BlockBfgs {
     }
 }
 
-use super::qp::Triplets;
+use super::qp::{CscPattern, Triplets};
+use clarabel::qdldl::{QDLDLFactorisation, QDLDLSettings};
 
-/// Whether the symmetric matrix `h` (upper-triangle triplets, duplicates summed) plus
-/// `shift·I` is positive definite: a sparse LDLᵀ (QDLDL with AMD ordering, no
-/// regularisation) has `n` positive pivots.
-pub fn is_positive_definite(n: usize, h: &Triplets, shift: f64) -> bool {
-    let mut t = Triplets { rows: Vec::with_capacity(h.rows.len() + n), cols: Vec::with_capacity(h.rows.len() + n), vals: Vec::new() };
-    t.vals.reserve(h.rows.len() + n);
-    for k in 0..h.rows.len() {
-        let (r, c) = (h.rows[k].min(h.cols[k]), h.rows[k].max(h.cols[k]));
-        t.push(r, c, h.vals[k]);
+/// The matrices `h + ρ g + δI` of one convexity test (`h`, `g` symmetric, as triplets on
+/// either triangle, duplicates summed). They share one sparsity pattern and one symbolic
+/// LDLᵀ (QDLDL, AMD ordering), so each trial `(ρ, δ)` costs a numeric refactorisation
+/// only: the exact-Hessian SQP tries up to three ρ and a sequence of δ per iteration on
+/// patterns of a million entries, where sorting and ordering anew each time cost more
+/// than the iteration's QP.
+pub struct ConvexityTest {
+    n: usize,
+    nz_h: Vec<f64>,
+    nz_g: Vec<f64>,
+    diagonal: Vec<usize>,
+    all: Vec<usize>,
+    nz: Vec<f64>,
+    factor: Option<QDLDLFactorisation<f64>>,
+}
+
+impl ConvexityTest {
+    /// The test of `h + ρ g + δI` for `n` variables.
+    pub fn new(n: usize, h: &Triplets, g: &Triplets) -> Self {
+        let len = h.rows.len() + g.rows.len() + n;
+        let (mut rows, mut cols) = (Vec::with_capacity(len), Vec::with_capacity(len));
+        for t in [h, g] {
+            for k in 0..t.rows.len() {
+                rows.push(t.rows[k].min(t.cols[k]));
+                cols.push(t.rows[k].max(t.cols[k]));
+            }
+        }
+        rows.extend(0..n);
+        cols.extend(0..n);
+        let pattern = CscPattern::new(n, n, &rows, &cols);
+        let (mut nz_h, mut nz_g) = (vec![0.0; pattern.nnz()], vec![0.0; pattern.nnz()]);
+        for k in 0..h.vals.len() {
+            nz_h[pattern.slot(k)] += h.vals[k];
+        }
+        for k in 0..g.vals.len() {
+            nz_g[pattern.slot(h.vals.len() + k)] += g.vals[k];
+        }
+        let diagonal = (0..n)
+            .map(|i| pattern.slot(h.vals.len() + g.vals.len() + i))
+            .collect();
+        let nz = vec![0.0; pattern.nnz()];
+        let settings = QDLDLSettings {
+            regularize_enable: false,
+            logical: true,
+            ..Default::default()
+        };
+        let factor = QDLDLFactorisation::new(&pattern.matrix(nz.clone()), Some(settings)).ok();
+        Self {
+            n,
+            nz_h,
+            nz_g,
+            diagonal,
+            all: (0..pattern.nnz()).collect(),
+            nz,
+            factor,
+        }
     }
-    for i in 0..n {
-        t.push(i, i, shift);
+
+    /// Whether `h + ρ g + δI` is positive definite: its LDLᵀ (no regularisation) has `n`
+    /// positive, finite pivots.
+    pub fn is_positive_definite(&mut self, rho: f64, shift: f64) -> bool {
+        let Some(factor) = self.factor.as_mut() else {
+            return false;
+        };
+        for (k, v) in self.nz.iter_mut().enumerate() {
+            *v = self.nz_h[k] + if rho != 0.0 { rho * self.nz_g[k] } else { 0.0 };
+        }
+        for &k in &self.diagonal {
+            self.nz[k] += shift;
+        }
+        factor.update_values(&self.all, &self.nz);
+        factor.refactor().is_ok()
+            && factor.positive_inertia() == self.n
+            && factor.D.iter().all(|d| d.is_finite() && *d > 0.0)
     }
-    let a = super::qp::csc(n, n, &t);
-    let settings = clarabel::qdldl::QDLDLSettings { regularize_enable: false, ..Default::default() };
-    match clarabel::qdldl::QDLDLFactorisation::new(&a, Some(settings)) {
-        Ok(f) => f.positive_inertia() == n && f.D.iter().all(|d| d.is_finite() && *d > 0.0),
-        Err(_) => false,
+
+    /// Smallest shift δ of the sequence `0, δ₀, 8δ₀, 64δ₀, …` (δ₀ = a third of the
+    /// previous shift, at least `min_shift`) that makes `h + ρ g + δI` positive definite
+    /// (the inertia correction of Wächter & Biegler 2006, §3.1); `None` above `max_shift`.
+    pub fn shift(
+        &mut self,
+        rho: f64,
+        previous: f64,
+        min_shift: f64,
+        max_shift: f64,
+    ) -> Option<f64> {
+        if self.is_positive_definite(rho, 0.0) {
+            return Some(0.0);
+        }
+        let mut delta = (previous / 3.0).max(min_shift);
+        while delta <= max_shift {
+            if self.is_positive_definite(rho, delta) {
+                return Some(delta);
+            }
+            delta *= 8.0;
+        }
+        None
     }
 }
 
-/// Smallest shift δ of the sequence `0, δ₀, 8δ₀, 64δ₀, …` (δ₀ = a third of the previous
-/// shift, at least `min_shift`) that makes `h + δI` positive definite (the inertia
-/// correction of Wächter & Biegler 2006, §3.1); `None` above `max_shift`.
-pub fn convexity_shift(n: usize, h: &Triplets, previous: f64, min_shift: f64, max_shift: f64) -> Option<f64> {
-    if is_positive_definite(n, h, 0.0) {
-        return Some(0.0);
-    }
-    let mut delta = (previous / 3.0).max(min_shift);
-    while delta <= max_shift {
-        if is_positive_definite(n, h, delta) {
-            return Some(delta);
-        }
-        delta *= 8.0;
-    }
-    None
+/// Whether the symmetric matrix `h` (upper-triangle triplets, duplicates summed) plus
+/// `shift·I` is positive definite (a [`ConvexityTest`] of one trial).
+pub fn is_positive_definite(n: usize, h: &Triplets, shift: f64) -> bool {
+    ConvexityTest::new(n, h, &Triplets::default()).is_positive_definite(0.0, shift)
+}
+
+/// Smallest shift of the inertia-correction sequence that makes `h + δI` positive
+/// definite (see [`ConvexityTest::shift`]); `None` above `max_shift`.
+pub fn convexity_shift(
+    n: usize,
+    h: &Triplets,
+    previous: f64,
+    min_shift: f64,
+    max_shift: f64,
+) -> Option<f64> {
+    ConvexityTest::new(n, h, &Triplets::default()).shift(0.0, previous, min_shift, max_shift)
 }

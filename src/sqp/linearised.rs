@@ -34,17 +34,36 @@ impl<'a> GaussNewtonModel<'a> {
     /// see (e.g. a parameter with no effect) stay put instead of making the QP singular.
     pub fn new(nlp: &'a dyn Nlp, w: &[f64], regularization: f64) -> Result<Self, String> {
         let bounds = nlp.bounds();
-        let w: Vec<f64> = w.iter().zip(bounds.0.iter().zip(&bounds.1)).map(|(&v, (&l, &u))| v.max(l).min(u)).collect();
+        let w: Vec<f64> = w
+            .iter()
+            .zip(bounds.0.iter().zip(&bounds.1))
+            .map(|(&v, (&l, &u))| v.max(l).min(u))
+            .collect();
         let ev = nlp.evaluate(&w, true)?;
         let (hr, hc) = nlp.gauss_newton_pattern();
-        let mut h = Triplets { rows: hr, cols: hc, vals: ev.gn.clone() };
+        let mut h = Triplets {
+            rows: hr,
+            cols: hc,
+            vals: ev.gn.clone(),
+        };
         let hmax = h.vals.iter().fold(0.0f64, |m, v| m.max(v.abs())).max(1e-12);
         for i in 0..nlp.n() {
             h.push(i, i, regularization * hmax);
         }
         let (jr, jc) = nlp.jacobian_pattern();
-        let jac = Triplets { rows: jr, cols: jc, vals: ev.jac.clone() };
-        Ok(Self { nlp, w, ev, h, jac, bounds })
+        let jac = Triplets {
+            rows: jr,
+            cols: jc,
+            vals: ev.jac.clone(),
+        };
+        Ok(Self {
+            nlp,
+            w,
+            ev,
+            h,
+            jac,
+            bounds,
+        })
     }
 
     /// Objective at the point.
@@ -92,6 +111,9 @@ impl<'a> GaussNewtonModel<'a> {
         }
         let gd: f64 = self.ev.grad.iter().zip(&sol.d).map(|(a, b)| a * b).sum();
         let dhd: f64 = hd.iter().zip(&sol.d).map(|(a, b)| a * b).sum();
-        Ok(GaussNewtonStep { predicted_decrease: -(gd + 0.5 * dhd), d: sol.d })
+        Ok(GaussNewtonStep {
+            predicted_decrease: -(gd + 0.5 * dhd),
+            d: sol.d,
+        })
     }
 }

@@ -55,7 +55,11 @@ pub trait Nlp {
     /// `Σ λ_i ∇²c_i` (upper-triangle triplets), for [`HessianMode::Exact`]. Default:
     /// [`evaluate`](Self::evaluate) plus [`exact_hessian`](Self::exact_hessian).
     #[allow(clippy::type_complexity)]
-    fn evaluate_with_hessian(&self, w: &[f64], lambda: &[f64]) -> Result<(NlpEval, (Vec<usize>, Vec<usize>, Vec<f64>)), String> {
+    fn evaluate_with_hessian(
+        &self,
+        w: &[f64],
+        lambda: &[f64],
+    ) -> Result<(NlpEval, (Vec<usize>, Vec<usize>, Vec<f64>)), String> {
         Ok((self.evaluate(w, true)?, self.exact_hessian(w, lambda)?))
     }
     /// Rows whose curvature [`exact_hessian`](Self::exact_hessian) provides (the
@@ -64,7 +68,11 @@ pub trait Nlp {
         vec![false; self.m()]
     }
     /// Exact curvature `Σ λ_i ∇²c_i` of those rows at `w`, as upper-triangle triplets.
-    fn exact_hessian(&self, _w: &[f64], _lambda: &[f64]) -> Result<(Vec<usize>, Vec<usize>, Vec<f64>), String> {
+    fn exact_hessian(
+        &self,
+        _w: &[f64],
+        _lambda: &[f64],
+    ) -> Result<(Vec<usize>, Vec<usize>, Vec<f64>), String> {
         Ok((Vec::new(), Vec::new(), Vec::new()))
     }
 }
@@ -307,7 +315,10 @@ pub struct StderrLog;
 impl Observer for StderrLog {
     fn iteration(&mut self, r: &IterationRecord) -> bool {
         if r.iter == 0 {
-            eprintln!("{:>5} {:>16} {:>10} {:>10} {:>8} {:>8}", "iter", "objective", "infeas", "kkt", "step", "seconds");
+            eprintln!(
+                "{:>5} {:>16} {:>10} {:>10} {:>8} {:>8}",
+                "iter", "objective", "infeas", "kkt", "step", "seconds"
+            );
         }
         eprintln!(
             "{:>5} {:>16.9e} {:>10.3e} {:>10.3e} {:>8.2e} {:>8.2}",
@@ -327,7 +338,10 @@ impl Observer for Silent {
 
 /// Violation of each constraint value `c` of its bounds `[lb, ub]` (0 when satisfied).
 pub fn violations(c: &[f64], lb: &[f64], ub: &[f64]) -> Vec<f64> {
-    c.iter().zip(lb.iter().zip(ub)).map(|(&v, (&l, &u))| (l - v).max(v - u).max(0.0)).collect()
+    c.iter()
+        .zip(lb.iter().zip(ub))
+        .map(|(&v, (&l, &u))| (l - v).max(v - u).max(0.0))
+        .collect()
 }
 
 struct State {
@@ -342,7 +356,12 @@ struct State {
 }
 
 /// Solve `nlp` from `w0` (clipped into the bounds).
-pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut dyn Observer) -> SqpResult {
+pub fn solve(
+    nlp: &dyn Nlp,
+    w0: &[f64],
+    settings: &SqpSettings,
+    observer: &mut dyn Observer,
+) -> SqpResult {
     solve_impl(nlp, w0, settings, observer, None)
 }
 
@@ -350,25 +369,47 @@ pub fn solve(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut d
 /// settings it follows the same iterates, bit for bit, as the solve that wrote it, and
 /// its result holds the whole history. The checkpoint must pass
 /// [`SqpCheckpoint::check`] for this NLP (a mismatch is an evaluation failure).
-pub fn solve_resumed(nlp: &dyn Nlp, from: &SqpCheckpoint, settings: &SqpSettings, observer: &mut dyn Observer) -> SqpResult {
+pub fn solve_resumed(
+    nlp: &dyn Nlp,
+    from: &SqpCheckpoint,
+    settings: &SqpSettings,
+    observer: &mut dyn Observer,
+) -> SqpResult {
     solve_impl(nlp, &from.w.values(), settings, observer, Some(from))
 }
 
-fn solve_impl(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut dyn Observer, resume: Option<&SqpCheckpoint>) -> SqpResult {
-    let elapsed_before = resume.map_or(0.0, |cp| cp.scalars.values().get(5).copied().unwrap_or(0.0));
-    let start = Instant::now().checked_sub(std::time::Duration::from_secs_f64(elapsed_before.max(0.0))).unwrap_or_else(Instant::now);
+fn solve_impl(
+    nlp: &dyn Nlp,
+    w0: &[f64],
+    settings: &SqpSettings,
+    observer: &mut dyn Observer,
+    resume: Option<&SqpCheckpoint>,
+) -> SqpResult {
+    let elapsed_before =
+        resume.map_or(0.0, |cp| cp.scalars.values().get(5).copied().unwrap_or(0.0));
+    let start = Instant::now()
+        .checked_sub(std::time::Duration::from_secs_f64(elapsed_before.max(0.0)))
+        .unwrap_or_else(Instant::now);
     let (n, m) = (nlp.n(), nlp.m());
     let (w_lb, w_ub, c_lb, c_ub) = nlp.bounds();
     let (jr, jc) = nlp.jacobian_pattern();
     let elastic_weights = nlp.elastic_weights();
-    let exact_rows = if settings.exact_term_hessians { nlp.rows_with_exact_hessian() } else { vec![false; m] };
+    let exact_rows = if settings.exact_term_hessians {
+        nlp.rows_with_exact_hessian()
+    } else {
+        vec![false; m]
+    };
     let any_exact = exact_rows.iter().any(|&r| r);
     let (hr, hc) = nlp.gauss_newton_pattern();
     let mut bfgs = BlockBfgs::new(nlp.hessian_blocks(), settings.bfgs_update);
     if settings.hessian == HessianMode::GaussNewtonBfgs {
         bfgs.scale(1e-4);
     }
-    let w: Vec<f64> = w0.iter().zip(w_lb.iter().zip(&w_ub)).map(|(&v, (&l, &u))| v.max(l).min(u)).collect();
+    let w: Vec<f64> = w0
+        .iter()
+        .zip(w_lb.iter().zip(&w_ub))
+        .map(|(&v, (&l, &u))| v.max(l).min(u))
+        .collect();
     let fail = |status: SqpStatus, w: Vec<f64>| SqpResult {
         lambda: vec![0.0; m],
         nu: vec![0.0; n],
@@ -387,7 +428,12 @@ fn solve_impl(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut 
             return fail(SqpStatus::EvaluationFailure(e.to_string()), w);
         }
         if !bfgs.restore(cp.bfgs.iter().map(|(b, s)| (b.values(), *s)).collect()) {
-            return fail(SqpStatus::EvaluationFailure("the checkpoint's BFGS blocks do not fit this problem".into()), w);
+            return fail(
+                SqpStatus::EvaluationFailure(
+                    "the checkpoint's BFGS blocks do not fit this problem".into(),
+                ),
+                w,
+            );
         }
     }
     let timings = std::cell::Cell::new(resume.map_or_else(SqpTimings::default, |cp| cp.timings));
@@ -420,7 +466,16 @@ fn solve_impl(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut 
         let mut out = Err(String::new());
         timed(true, &mut || {
             out = if exact {
-                nlp.evaluate_with_hessian(w, lam).map(|(ev, (r, c, v))| (ev, Some(Triplets { rows: r, cols: c, vals: v })))
+                nlp.evaluate_with_hessian(w, lam).map(|(ev, (r, c, v))| {
+                    (
+                        ev,
+                        Some(Triplets {
+                            rows: r,
+                            cols: c,
+                            vals: v,
+                        }),
+                    )
+                })
             } else {
                 nlp.evaluate(w, true).map(|ev| (ev, None))
             }
@@ -459,15 +514,28 @@ fn solve_impl(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut 
     if let Some(cp) = resume {
         nu = cp.nu.values();
         let sc = cp.scalars.values();
-        (lam_est, test_rho_scale, shift, theta_max, last_step) = (sc[0], sc[1], sc[2], sc[3], sc[4]);
-        filter = cp.filter.values().chunks_exact(2).map(|p| (p[0], p[1])).collect();
+        (lam_est, test_rho_scale, shift, theta_max, last_step) =
+            (sc[0], sc[1], sc[2], sc[3], sc[4]);
+        filter = cp
+            .filter
+            .values()
+            .chunks_exact(2)
+            .map(|p| (p[0], p[1]))
+            .collect();
         history = cp.records();
         first_iter = cp.next_iter;
     }
-    let jt = |vals: &[f64]| Triplets { rows: jr.clone(), cols: jc.clone(), vals: vals.to_vec() };
+    let jt = |vals: &[f64]| Triplets {
+        rows: jr.clone(),
+        cols: jc.clone(),
+        vals: vals.to_vec(),
+    };
     for iter in first_iter..=settings.max_iter {
         // --- QP subproblem at the current point
-        let infeas0 = violations(&st.ev.c, &c_lb, &c_ub).iter().copied().fold(0.0, f64::max);
+        let infeas0 = violations(&st.ev.c, &c_lb, &c_ub)
+            .iter()
+            .copied()
+            .fold(0.0, f64::max);
         let mut h = Triplets::default();
         let mut h_elastic: Option<Triplets> = None;
         // augmentation ρ of the exact mode's QP (ExactConvexification::Augmented)
@@ -482,7 +550,11 @@ fn solve_impl(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut 
             HessianMode::Bfgs if !any_exact => bfgs.push_upper(&mut h),
             HessianMode::Bfgs => {}
             HessianMode::Exact => {
-                let mut ex = Triplets { rows: hr.clone(), cols: hc.clone(), vals: st.ev.gn.clone() };
+                let mut ex = Triplets {
+                    rows: hr.clone(),
+                    cols: hc.clone(),
+                    vals: st.ev.gn.clone(),
+                };
                 // far from feasibility the multipliers (and so the curvature) are unreliable:
                 // use the curvature only once the violation is below `exact_hessian_below`
                 let use_curvature = infeas0 <= settings.exact_hessian_below && st.hess.is_some();
@@ -504,22 +576,25 @@ fn solve_impl(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut 
                     eq_rows = sparse_rows(m, &jr, &jc, &st.ev.jac, |i| c_lb[i] == c_ub[i]);
                     ex.extend_scaled(&row_gram(&eq_rows), aug_rho);
                 } else if use_curvature {
-                    shift = exact_qp_hessian(&mut ex, &ExactQpContext {
-                        n,
-                        w: &st.w,
-                        w_lb: &w_lb,
-                        w_ub: &w_ub,
-                        nu: &nu,
-                        c: &st.ev.c,
-                        c_lb: &c_lb,
-                        c_ub: &c_ub,
-                        lambda: &lambda,
-                        jac_rows: &jr,
-                        jac_cols: &jc,
-                        jac: &st.ev.jac,
-                        test_rho_scale,
-                        previous_shift: shift,
-                    });
+                    shift = exact_qp_hessian(
+                        &mut ex,
+                        &ExactQpContext {
+                            n,
+                            w: &st.w,
+                            w_lb: &w_lb,
+                            w_ub: &w_ub,
+                            nu: &nu,
+                            c: &st.ev.c,
+                            c_lb: &c_lb,
+                            c_ub: &c_ub,
+                            lambda: &lambda,
+                            jac_rows: &jr,
+                            jac_cols: &jc,
+                            jac: &st.ev.jac,
+                            test_rho_scale,
+                            previous_shift: shift,
+                        },
+                    );
                 }
                 h = ex;
             }
@@ -532,10 +607,19 @@ fn solve_impl(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut 
                 }
             }
         }
-        if any_exact && matches!(settings.hessian, HessianMode::Bfgs | HessianMode::GaussNewtonBfgs) {
+        if any_exact
+            && matches!(
+                settings.hessian,
+                HessianMode::Bfgs | HessianMode::GaussNewtonBfgs
+            )
+        {
             match nlp.exact_hessian(&st.w, &lambda) {
                 Ok((r, c, v)) => {
-                    let mut ex = Triplets { rows: r, cols: c, vals: v };
+                    let mut ex = Triplets {
+                        rows: r,
+                        cols: c,
+                        vals: v,
+                    };
                     bfgs.convexify_into(&mut ex, &mut h);
                 }
                 Err(e) => {
@@ -553,7 +637,11 @@ fn solve_impl(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut 
         let viol = violations(&st.ev.c, &c_lb, &c_ub);
         let infeas = viol.iter().copied().fold(0.0, f64::max);
         let data = |elastic: Option<f64>| QpData {
-            h: if elastic.is_some() { h_elastic.as_ref().unwrap_or(&h) } else { &h },
+            h: if elastic.is_some() {
+                h_elastic.as_ref().unwrap_or(&h)
+            } else {
+                &h
+            },
             g: &st.ev.grad,
             jac: &jac,
             c: &st.ev.c,
@@ -571,7 +659,10 @@ fn solve_impl(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut 
             // with a larger ρ from now on and solve this one with the block-convexified Hessian
             test_rho_scale *= 10.0;
             aug_rho = 0.0;
-            first = solve_qp(&QpData { h: hc, ..data(None) });
+            first = solve_qp(&QpData {
+                h: hc,
+                ..data(None)
+            });
         }
         let (sol, elastic) = match first {
             Ok(s) => (s, false),
@@ -588,7 +679,10 @@ fn solve_impl(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut 
                         for i in 0..n {
                             hs.push(i, i, delta * hmax);
                         }
-                        if let Ok(s) = solve_qp(&QpData { h: &hs, ..data(None) }) {
+                        if let Ok(s) = solve_qp(&QpData {
+                            h: &hs,
+                            ..data(None)
+                        }) {
                             rescued = Some(s);
                             break;
                         }
@@ -663,7 +757,10 @@ fn solve_impl(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut 
             status = SqpStatus::MaxIterations;
             break;
         }
-        if settings.max_time.is_some_and(|t| start.elapsed().as_secs_f64() > t) {
+        if settings
+            .max_time
+            .is_some_and(|t| start.elapsed().as_secs_f64() > t)
+        {
             status = SqpStatus::MaxTime;
             break;
         }
@@ -683,7 +780,8 @@ fn solve_impl(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut 
             theta_max = (1e4f64).max(1.2 * theta0);
             filter.push((theta_max, f64::NEG_INFINITY));
         }
-        let (gamma_t, gamma_f, eta, delta, s_t, s_f) = (1e-5, 1e-5, settings.line_search_armijo, 1.0, 1.1, 2.3);
+        let (gamma_t, gamma_f, eta, delta, s_t, s_f) =
+            (1e-5, 1e-5, settings.line_search_armijo, 1.0, 1.1, 2.3);
         let f0 = st.plain.0;
         let acceptable = |ev: &NlpEval, a: f64, filter: &[(f64, f64)]| -> Option<bool> {
             let th = violations(&ev.c, &c_lb, &c_ub).iter().sum::<f64>();
@@ -704,7 +802,9 @@ fn solve_impl(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut 
             }
         };
         let trial = |a: f64, dir: &[f64]| -> Vec<f64> {
-            (0..n).map(|i| (st.w[i] + a * dir[i]).max(w_lb[i]).min(w_ub[i])).collect()
+            (0..n)
+                .map(|i| (st.w[i] + a * dir[i]).max(w_lb[i]).min(w_ub[i]))
+                .collect()
         };
         // trial points are evaluated without derivatives (a plain sweep); derivatives and
         // curvature are computed once, at the accepted point
@@ -722,7 +822,10 @@ fn solve_impl(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut 
                         jd[jr[k]] += st.ev.jac[k] * sol.d[jc[k]];
                     }
                     let c_soc: Vec<f64> = (0..m).map(|i| ev1.c[i] - jd[i]).collect();
-                    let soc = QpData { c: &c_soc, ..data(None) };
+                    let soc = QpData {
+                        c: &c_soc,
+                        ..data(None)
+                    };
                     if let Ok(s2) = solve_qp(&soc) {
                         let w2 = trial(1.0, &s2.d);
                         if let Ok(ev2) = eval_plain(&w2) {
@@ -763,17 +866,30 @@ fn solve_impl(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut 
         });
         let Some((w_new, ev_new, hess_new)) = accepted else {
             if !matches!(status, SqpStatus::EvaluationFailure(_)) {
-                status = if elastic { SqpStatus::Infeasible } else { SqpStatus::LineSearchFailure };
+                status = if elastic {
+                    SqpStatus::Infeasible
+                } else {
+                    SqpStatus::LineSearchFailure
+                };
             }
             break;
         };
         last_step = alpha;
         // --- quasi-Newton update with the new multipliers
-        if settings.hessian == HessianMode::Bfgs || settings.hessian == HessianMode::GaussNewtonBfgs {
+        if settings.hessian == HessianMode::Bfgs || settings.hessian == HessianMode::GaussNewtonBfgs
+        {
             // full Lagrangian gradient for BFGS, constraint part only for the structured mode
             let structured = settings.hessian == HessianMode::GaussNewtonBfgs;
-            let mut gl_new = if structured { vec![0.0; n] } else { ev_new.grad.clone() };
-            let mut gl_old = if structured { vec![0.0; n] } else { st.ev.grad.clone() };
+            let mut gl_new = if structured {
+                vec![0.0; n]
+            } else {
+                ev_new.grad.clone()
+            };
+            let mut gl_old = if structured {
+                vec![0.0; n]
+            } else {
+                st.ev.grad.clone()
+            };
             for k in 0..jr.len() {
                 if exact_rows[jr[k]] {
                     continue;
@@ -785,7 +901,12 @@ fn solve_impl(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut 
             let y: Vec<f64> = (0..n).map(|i| gl_new[i] - gl_old[i]).collect();
             bfgs.update(&s, &y);
         }
-        st = State { w: w_new, ev: ev_new, hess: hess_new, plain: plain_new };
+        st = State {
+            w: w_new,
+            ev: ev_new,
+            hess: hess_new,
+            plain: plain_new,
+        };
         if observer.wants_checkpoints() {
             observer.checkpoint(&SqpCheckpoint {
                 version: CHECKPOINT_VERSION,
@@ -795,9 +916,25 @@ fn solve_impl(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut 
                 w: ExactVec::new(&st.w),
                 lambda: ExactVec::new(&lambda),
                 nu: ExactVec::new(&nu),
-                scalars: ExactVec::new(&[lam_est, test_rho_scale, shift, theta_max, last_step, start.elapsed().as_secs_f64()]),
-                filter: ExactVec::new(&filter.iter().flat_map(|&(a, b)| [a, b]).collect::<Vec<f64>>()),
-                bfgs: bfgs.state().into_iter().map(|(b, s)| (ExactVec::new(&b), s)).collect(),
+                scalars: ExactVec::new(&[
+                    lam_est,
+                    test_rho_scale,
+                    shift,
+                    theta_max,
+                    last_step,
+                    start.elapsed().as_secs_f64(),
+                ]),
+                filter: ExactVec::new(
+                    &filter
+                        .iter()
+                        .flat_map(|&(a, b)| [a, b])
+                        .collect::<Vec<f64>>(),
+                ),
+                bfgs: bfgs
+                    .state()
+                    .into_iter()
+                    .map(|(b, s)| (ExactVec::new(&b), s))
+                    .collect(),
                 history: history.iter().map(ExactRecord::from).collect(),
                 timings: timings.get(),
             });
@@ -806,7 +943,14 @@ fn solve_impl(nlp: &dyn Nlp, w0: &[f64], settings: &SqpSettings, observer: &mut 
     let viol = violations(&st.ev.c, &c_lb, &c_ub);
     let mut order: Vec<usize> = (0..m).filter(|&i| viol[i] > settings.tol_kkt).collect();
     order.sort_by(|&a, &b| viol[b].total_cmp(&viol[a]));
-    let most_violated = order.iter().take(10).map(|&i| Violation { name: nlp.row_name(i), amount: viol[i] }).collect();
+    let most_violated = order
+        .iter()
+        .take(10)
+        .map(|&i| Violation {
+            name: nlp.row_name(i),
+            amount: viol[i],
+        })
+        .collect();
     SqpResult {
         objective: st.ev.f,
         infeasibility: viol.iter().copied().fold(0.0, f64::max),
@@ -872,13 +1016,18 @@ fn exact_qp_hessian(h: &mut Triplets, cx: &ExactQpContext<'_>) -> f64 {
             cx.c_lb[i] == cx.c_ub[i] || (active && cx.lambda[i].abs() > 1e-8 * lam_max)
         })
         .collect();
-    let jtj = row_gram(&sparse_rows(cx.c.len(), cx.jac_rows, cx.jac_cols, cx.jac, |i| tested[i]));
+    let jtj = row_gram(&sparse_rows(
+        cx.c.len(),
+        cx.jac_rows,
+        cx.jac_cols,
+        cx.jac,
+        |i| tested[i],
+    ));
     let mut best: Option<f64> = None;
+    let mut test = hessian::ConvexityTest::new(n, h, &jtj);
     for f in [1.0, 1e2, 1e4] {
         let rho = cx.test_rho_scale * hmax * f;
-        let mut t = h.clone();
-        t.extend_scaled(&jtj, rho);
-        if let Some(d) = hessian::convexity_shift(n, &t, cx.previous_shift, 1e-12 * hmax, 1e2 * hmax) {
+        if let Some(d) = test.shift(rho, cx.previous_shift, 1e-12 * hmax, 1e2 * hmax) {
             if best.is_none_or(|b| d < b) {
                 best = Some(d);
             }
@@ -898,7 +1047,13 @@ fn exact_qp_hessian(h: &mut Triplets, cx: &ExactQpContext<'_>) -> f64 {
 
 /// The rows `i` of a sparse Jacobian (triplets in pattern order) with `keep(i)`, each as
 /// `(column, value)` pairs; the other rows empty.
-fn sparse_rows(m: usize, rows: &[usize], cols: &[usize], vals: &[f64], keep: impl Fn(usize) -> bool) -> Vec<Vec<(usize, f64)>> {
+fn sparse_rows(
+    m: usize,
+    rows: &[usize],
+    cols: &[usize],
+    vals: &[f64],
+    keep: impl Fn(usize) -> bool,
+) -> Vec<Vec<(usize, f64)>> {
     let mut out: Vec<Vec<(usize, f64)>> = vec![Vec::new(); m];
     for k in 0..rows.len() {
         if keep(rows[k]) {
@@ -915,7 +1070,11 @@ fn row_gram(rows: &[Vec<(usize, f64)>]) -> Triplets {
         for a in 0..row.len() {
             for b in a..row.len() {
                 let ((ca, va), (cb, vb)) = (row[a], row[b]);
-                let v = if ca == cb && a != b { 2.0 * va * vb } else { va * vb };
+                let v = if ca == cb && a != b {
+                    2.0 * va * vb
+                } else {
+                    va * vb
+                };
                 t.push(ca.min(cb), ca.max(cb), v);
             }
         }

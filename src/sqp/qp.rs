@@ -38,31 +38,92 @@ impl Triplets {
     }
 }
 
-/// Compressed sparse column matrix from triplets, summing duplicates.
-pub fn csc(m: usize, n: usize, t: &Triplets) -> CscMatrix<f64> {
-    let mut idx: Vec<usize> = (0..t.vals.len()).collect();
-    idx.sort_unstable_by_key(|&i| (t.cols[i], t.rows[i]));
-    let mut colptr = vec![0usize; n + 1];
-    let mut rowval: Vec<usize> = Vec::with_capacity(idx.len());
-    let mut nzval: Vec<f64> = Vec::with_capacity(idx.len());
-    let mut last: Option<(usize, usize)> = None;
-    for &i in &idx {
-        let key = (t.cols[i], t.rows[i]);
-        if last == Some(key) {
-            if let Some(v) = nzval.last_mut() {
-                *v += t.vals[i];
+/// The compressed-sparse-column pattern of a list of triplet positions: where each
+/// triplet's value goes (duplicates share one entry). Built by a counting sort over the
+/// columns and a sort of each column's rows, so a pattern of a million entries takes
+/// milliseconds; matrices with the same positions and other values reuse it.
+#[derive(Debug, Clone)]
+pub struct CscPattern {
+    m: usize,
+    n: usize,
+    colptr: Vec<usize>,
+    rowval: Vec<usize>,
+    /// For each triplet, the index of its entry in `rowval`.
+    slot: Vec<usize>,
+}
+
+impl CscPattern {
+    /// The pattern of the positions `(rows[k], cols[k])` in an `m × n` matrix.
+    pub fn new(m: usize, n: usize, rows: &[usize], cols: &[usize]) -> Self {
+        // counting sort of the triplets by column (stable: equal positions keep their order)
+        let mut start = vec![0usize; n + 1];
+        for &c in cols {
+            start[c + 1] += 1;
+        }
+        for c in 0..n {
+            start[c + 1] += start[c];
+        }
+        let mut order = vec![0usize; cols.len()];
+        let mut next = start.clone();
+        for (k, &c) in cols.iter().enumerate() {
+            order[next[c]] = k;
+            next[c] += 1;
+        }
+        let mut colptr = vec![0usize; n + 1];
+        let mut rowval = Vec::with_capacity(cols.len());
+        let mut slot = vec![0usize; cols.len()];
+        for c in 0..n {
+            let col = &mut order[start[c]..start[c + 1]];
+            col.sort_unstable_by_key(|&k| (rows[k], k));
+            let mut last = None;
+            for &k in col.iter() {
+                if last != Some(rows[k]) {
+                    rowval.push(rows[k]);
+                    last = Some(rows[k]);
+                }
+                slot[k] = rowval.len() - 1;
             }
-        } else {
-            rowval.push(key.1);
-            nzval.push(t.vals[i]);
-            colptr[key.0 + 1] += 1;
-            last = Some(key);
+            colptr[c + 1] = rowval.len();
+        }
+        Self {
+            m,
+            n,
+            colptr,
+            rowval,
+            slot,
         }
     }
-    for c in 0..n {
-        colptr[c + 1] += colptr[c];
+
+    /// Number of distinct entries.
+    pub fn nnz(&self) -> usize {
+        self.rowval.len()
     }
-    CscMatrix::new(m, n, colptr, rowval, nzval)
+
+    /// The entry of triplet `k`.
+    pub fn slot(&self, k: usize) -> usize {
+        self.slot[k]
+    }
+
+    /// Add `scale · vals[k]` to the entry of each triplet `k` (duplicates are summed, in
+    /// triplet order).
+    pub fn accumulate(&self, nz: &mut [f64], vals: &[f64], scale: f64) {
+        for (k, v) in vals.iter().enumerate() {
+            nz[self.slot[k]] += scale * v;
+        }
+    }
+
+    /// The matrix with the entries `nz`.
+    pub fn matrix(&self, nz: Vec<f64>) -> CscMatrix<f64> {
+        CscMatrix::new(self.m, self.n, self.colptr.clone(), self.rowval.clone(), nz)
+    }
+}
+
+/// Compressed sparse column matrix from triplets, summing duplicates.
+pub fn csc(m: usize, n: usize, t: &Triplets) -> CscMatrix<f64> {
+    let pattern = CscPattern::new(m, n, &t.rows, &t.cols);
+    let mut nz = vec![0.0; pattern.nnz()];
+    pattern.accumulate(&mut nz, &t.vals, 1.0);
+    pattern.matrix(nz)
 }
 
 /// Data of one QP subproblem.
@@ -233,7 +294,10 @@ pub fn solve(q: &QpData<'_>) -> Result<QpSolution, QpError> {
     }
     let pm = csc(nt, nt, &p);
     let am = csc(neq + nin, nt, &a);
-    let cones = [SupportedConeT::ZeroConeT(neq), SupportedConeT::NonnegativeConeT(nin)];
+    let cones = [
+        SupportedConeT::ZeroConeT(neq),
+        SupportedConeT::NonnegativeConeT(nin),
+    ];
     // tight tolerances first (the SQP's KKT test needs accurate multipliers); Clarabel's
     // defaults as a fallback when it stalls
     let mut last = String::new();
@@ -250,12 +314,20 @@ pub fn solve(q: &QpData<'_>) -> Result<QpSolution, QpError> {
             tol_feas: tol,
             max_iter: if robust { 500 } else { 200 },
             presolve_enable: false,
-            static_regularization_constant: if robust { 1e-6 } else { base.static_regularization_constant },
-            iterative_refinement_max_iter: if robust { 50 } else { base.iterative_refinement_max_iter },
+            static_regularization_constant: if robust {
+                1e-6
+            } else {
+                base.static_regularization_constant
+            },
+            iterative_refinement_max_iter: if robust {
+                50
+            } else {
+                base.iterative_refinement_max_iter
+            },
             ..base
         };
-        let mut solver =
-            DefaultSolver::new(&pm, &qv, &am, &b, &cones, settings).map_err(|e| QpError::Failed(e.to_string()))?;
+        let mut solver = DefaultSolver::new(&pm, &qv, &am, &b, &cones, settings)
+            .map_err(|e| QpError::Failed(e.to_string()))?;
         solver.solve();
         let sol = solver.solution;
         match sol.status {
@@ -263,17 +335,28 @@ pub fn solve(q: &QpData<'_>) -> Result<QpSolution, QpError> {
                 solved = Some(sol);
                 break;
             }
-            SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => return Err(QpError::Infeasible),
-            SolverStatus::InsufficientProgress | SolverStatus::MaxIterations | SolverStatus::NumericalError
+            SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => {
+                return Err(QpError::Infeasible)
+            }
+            SolverStatus::InsufficientProgress
+            | SolverStatus::MaxIterations
+            | SolverStatus::NumericalError
                 if sol.r_prim < 1e-7 && sol.r_dual < 1e-7 =>
             {
                 solved = Some(sol);
                 break;
             }
-            other => last = format!("{other:?} (primal residual {:.1e}, dual residual {:.1e})", sol.r_prim, sol.r_dual),
+            other => {
+                last = format!(
+                    "{other:?} (primal residual {:.1e}, dual residual {:.1e})",
+                    sol.r_prim, sol.r_dual
+                )
+            }
         }
     }
-    let Some(sol) = solved else { return Err(QpError::Failed(last)) };
+    let Some(sol) = solved else {
+        return Err(QpError::Failed(last));
+    };
     let mut lambda = vec![0.0; m];
     let mut nu = vec![0.0; n];
     for (r, map) in eq_map.iter().chain(ineq_map.iter()).enumerate() {
@@ -287,5 +370,11 @@ pub fn solve(q: &QpData<'_>) -> Result<QpSolution, QpError> {
     let elastic_violation = (0..ns)
         .map(|s| sol.x[n + s].max(0.0) * q.elastic_weights.get(s / 2).copied().unwrap_or(1.0))
         .sum();
-    Ok(QpSolution { d: sol.x[..n].to_vec(), lambda, nu, elastic_violation, iterations: sol.iterations })
+    Ok(QpSolution {
+        d: sol.x[..n].to_vec(),
+        lambda,
+        nu,
+        elastic_violation,
+        iterations: sol.iterations,
+    })
 }

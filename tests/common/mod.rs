@@ -15,8 +15,11 @@ pub fn root() -> PathBuf {
 /// Load a model file and a foot file from `models/`.
 pub fn model(model: &str, foot: &str) -> GaitModel {
     let r = root();
-    GaitModel::load(&r.join("models").join(model), &r.join("models/feet").join(foot))
-        .unwrap_or_else(|e| panic!("loading {model} + {foot}: {e}"))
+    GaitModel::load(
+        &r.join("models").join(model),
+        &r.join("models/feet").join(foot),
+    )
+    .unwrap_or_else(|e| panic!("loading {model} + {foot}: {e}"))
 }
 
 /// Deterministic pseudo-random numbers (xorshift), so tests need no seed handling.
@@ -43,19 +46,29 @@ pub fn peer_gait_problem() -> serde_json::Value {
 
 /// Whether the shared peer folder exists beside the project (it does in CI and for developers).
 pub fn have_shared() -> bool {
-    root().join("../shared/peer_gait/problem/gait_track_ellipse.json").exists()
+    root()
+        .join("../shared/peer_gait/problem/gait_track_ellipse.json")
+        .exists()
 }
 
 /// Vector from a JSON array.
 pub fn vecf(v: &serde_json::Value) -> Vec<f64> {
-    v.as_array().expect("array").iter().map(|x| x.as_f64().expect("number")).collect()
+    v.as_array()
+        .expect("array")
+        .iter()
+        .map(|x| x.as_f64().expect("number"))
+        .collect()
 }
 
 /// Max-norm relative difference with a floor on the scale.
 pub fn rel_diff(a: &[f64], b: &[f64], floor: f64) -> f64 {
     assert_eq!(a.len(), b.len());
     let scale = b.iter().map(|x| x.abs()).fold(floor, f64::max);
-    a.iter().zip(b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max) / scale
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| (x - y).abs())
+        .fold(0.0, f64::max)
+        / scale
 }
 
 pub fn path(p: &str) -> PathBuf {
@@ -80,7 +93,9 @@ pub fn model_with_effects(model_file: &str, foot: &str, effects: serde_json::Val
 /// Generalised positions with the joint angles given and pelvis height chosen so that
 /// contact `c` touches the ground.
 pub fn pose_on_ground(m: &GaitModel, joints: [f64; 7], contact: &str) -> Vec<f64> {
-    let mut q = vec![0.0, 1.0, joints[0], joints[1], joints[2], joints[3], joints[4], joints[5], joints[6]];
+    let mut q = vec![
+        0.0, 1.0, joints[0], joints[1], joints[2], joints[3], joints[4], joints[5], joints[6],
+    ];
     let c = m.contact_index(contact).expect("contact");
     let (_, gap) = m.contact_point(c, &q, &m.theta0());
     q[1] -= gap;
@@ -98,9 +113,22 @@ pub fn constraint_sets(foot: &str) -> Vec<(&'static str, Vec<(&'static str, bool
         _ => vec![
             ("heel", vec![("r.heel", true)]),
             ("forefoot", vec![("r.forefoot", true)]),
-            ("both_circles", vec![("r.heel", true), ("r.forefoot", false)]),
-            ("double_stance", vec![("r.forefoot", true), ("l.heel", true)]),
-            ("three_circles", vec![("r.forefoot", true), ("l.heel", true), ("l.forefoot", false)]),
+            (
+                "both_circles",
+                vec![("r.heel", true), ("r.forefoot", false)],
+            ),
+            (
+                "double_stance",
+                vec![("r.forefoot", true), ("l.heel", true)],
+            ),
+            (
+                "three_circles",
+                vec![
+                    ("r.forefoot", true),
+                    ("l.heel", true),
+                    ("l.forefoot", false),
+                ],
+            ),
         ],
     }
 }
@@ -168,13 +196,23 @@ pub fn chromium(args: &[String], timeout: Duration) -> Vec<u8> {
     stdout
 }
 
-
 /// The tracking problem of the bundled trial for the model `opensim_subject01.json`, foot
 /// file `foot` and phase file `phases`: the model, the phase file's constraint sets and
 /// the tracking setup.
 #[allow(dead_code)]
-pub fn bundled_tracking(foot: &str, phases: &str) -> (GaitModel, Vec<footfall::model::ConstraintSet>, footfall::problems::track::TrackingSetup) {
-    bundled_tracking_with(foot, phases, footfall::problems::track::TargetSides::Interpolated)
+pub fn bundled_tracking(
+    foot: &str,
+    phases: &str,
+) -> (
+    GaitModel,
+    Vec<footfall::model::ConstraintSet>,
+    footfall::problems::track::TrackingSetup,
+) {
+    bundled_tracking_with(
+        foot,
+        phases,
+        footfall::problems::track::TargetSides::Interpolated,
+    )
 }
 
 /// As [`bundled_tracking`], with the targets read as `sides` says.
@@ -183,12 +221,18 @@ pub fn bundled_tracking_with(
     foot: &str,
     phases: &str,
     sides: footfall::problems::track::TargetSides,
-) -> (GaitModel, Vec<footfall::model::ConstraintSet>, footfall::problems::track::TrackingSetup) {
+) -> (
+    GaitModel,
+    Vec<footfall::model::ConstraintSet>,
+    footfall::problems::track::TrackingSetup,
+) {
     let data = footfall::data::GaitData::bundled(&root()).unwrap();
     let m = model("opensim_subject01.json", foot);
     let p = path(phases);
     let seq = footfall::phases::PhaseSequence::load(&p).unwrap();
     let sets = seq.resolve(&m, &p).unwrap();
-    let setup = footfall::problems::track::TrackingSetup::new_with_sides(&m, &seq, &sets, &data, sides).unwrap();
+    let setup =
+        footfall::problems::track::TrackingSetup::new_with_sides(&m, &seq, &sets, &data, sides)
+            .unwrap();
     (m, sets, setup)
 }

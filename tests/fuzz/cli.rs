@@ -12,10 +12,25 @@ use std::time::{Duration, Instant};
 
 /// Tolerances that every command refuses (`simulate` and `solve` check them before
 /// simulating or solving).
-const BAD_TOL: &[&str] = &["-1", "0", "-0", "NaN", "inf", "-inf", "1e400", "2", "abc", "", "0x1", "1e-9999"];
+const BAD_TOL: &[&str] = &[
+    "-1", "0", "-0", "NaN", "inf", "-inf", "1e400", "2", "abc", "", "0x1", "1e-9999",
+];
 
 /// Values of numeric options that need not be valid.
-const ANY_NUMBER: &[&str] = &["1", "0.5", "0", "-1", "NaN", "inf", "1e308", "-1e308", "x", "", "1e-300", "18446744073709551616"];
+const ANY_NUMBER: &[&str] = &[
+    "1",
+    "0.5",
+    "0",
+    "-1",
+    "NaN",
+    "inf",
+    "1e308",
+    "-1e308",
+    "x",
+    "",
+    "1e-300",
+    "18446744073709551616",
+];
 
 /// One command-line case.
 #[derive(Debug, Clone)]
@@ -32,13 +47,26 @@ pub struct CliCase {
 
 /// Any command-line case.
 pub fn case() -> impl Strategy<Value = CliCase> {
-    (0usize..4, any::<Index>(), mutations(), any::<(Index, Index)>())
-        .prop_map(|(command, seed, mutations, values)| CliCase { command, seed, mutations, values })
+    (
+        0usize..4,
+        any::<Index>(),
+        mutations(),
+        any::<(Index, Index)>(),
+    )
+        .prop_map(|(command, seed, mutations, values)| CliCase {
+            command,
+            seed,
+            mutations,
+            values,
+        })
 }
 
 const SEEDS: [&[&str]; 4] = [
     &["phases/sim_ellipse_step.json"],
-    &["problem/cartpole_swingup.json", "problem/five_link_biped.json"],
+    &[
+        "problem/cartpole_swingup.json",
+        "problem/five_link_biped.json",
+    ],
     &["summary/run_a.json", "summary/run_b.json"],
     &["summary/run_a.json"],
 ];
@@ -56,13 +84,27 @@ fn arguments(c: &CliCase, dir: &Path) -> Vec<String> {
     match c.command {
         0 => {
             std::fs::write(dir.join("phases.json"), &bytes).unwrap();
-            args.extend(v(&["simulate", "--phase-set", &d("phases.json"), "--out", &d("out"), "--overwrite"]));
+            args.extend(v(&[
+                "simulate",
+                "--phase-set",
+                &d("phases.json"),
+                "--out",
+                &d("out"),
+                "--overwrite",
+            ]));
             args.push(format!("--tol={tol}"));
             args.push(format!("--dt={any}"));
         }
         1 => {
             std::fs::write(dir.join("problem.json"), &bytes).unwrap();
-            args.extend(v(&["solve", "--problem", &d("problem.json"), "--out", &d("out"), "--overwrite"]));
+            args.extend(v(&[
+                "solve",
+                "--problem",
+                &d("problem.json"),
+                "--out",
+                &d("out"),
+                "--overwrite",
+            ]));
             args.push(format!("--tol={tol}"));
             args.push(format!("--max-iter={any}"));
         }
@@ -70,7 +112,14 @@ fn arguments(c: &CliCase, dir: &Path) -> Vec<String> {
             std::fs::write(dir.join("A/summary.json"), &bytes).unwrap();
             std::fs::create_dir_all(dir.join("B")).unwrap();
             std::fs::write(dir.join("B/summary.json"), seed("summary/run_b.json")).unwrap();
-            args.extend(v(&["diff", &d("A"), &d("B"), "--out", &d("out"), "--overwrite"]));
+            args.extend(v(&[
+                "diff",
+                &d("A"),
+                &d("B"),
+                "--out",
+                &d("out"),
+                "--overwrite",
+            ]));
             args.push(format!("--threshold-pct={any}"));
         }
         _ => {
@@ -110,7 +159,9 @@ pub fn run(c: &CliCase, dir: &Path, limit: Duration) -> Result<(), String> {
         if start.elapsed() > limit {
             child.kill().ok();
             child.wait().ok();
-            return Err(format!("footfall {args:?} still running after {limit:?} (killed)"));
+            return Err(format!(
+                "footfall {args:?} still running after {limit:?} (killed)"
+            ));
         }
         std::thread::sleep(Duration::from_millis(5));
     };
@@ -123,7 +174,9 @@ pub fn run(c: &CliCase, dir: &Path, limit: Duration) -> Result<(), String> {
         return Err(format!("footfall {args:?} accepted a refused tolerance"));
     }
     if !status.success() && !stderr.starts_with("error:") {
-        return Err(format!("footfall {args:?} failed ({status}) without an `error:` line:\n{stderr}"));
+        return Err(format!(
+            "footfall {args:?} failed ({status}) without an `error:` line:\n{stderr}"
+        ));
     }
     Ok(())
 }

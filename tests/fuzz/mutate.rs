@@ -7,10 +7,43 @@ use serde_json::Value;
 
 /// Values that numbers, fields and spans are replaced by.
 pub const EXTREMES: &[&str] = &[
-    "1e308", "-1e308", "1e309", "NaN", "nan", "inf", "-inf", "Infinity", "-0", "0", "-1",
-    "4.9e-324", "18446744073709551615", "18446744073709551616", "-9223372036854775809",
-    "99999999999999999999999999", "1e-400", "\"\"", "\"x\"", "null", "true", "[]", "{}",
-    "", " ", ",", "\t", "\n", "#", "1.0.0", "0x10", "+5", "1e", "-", "\u{0}", "é", "\u{feff}",
+    "1e308",
+    "-1e308",
+    "1e309",
+    "NaN",
+    "nan",
+    "inf",
+    "-inf",
+    "Infinity",
+    "-0",
+    "0",
+    "-1",
+    "4.9e-324",
+    "18446744073709551615",
+    "18446744073709551616",
+    "-9223372036854775809",
+    "99999999999999999999999999",
+    "1e-400",
+    "\"\"",
+    "\"x\"",
+    "null",
+    "true",
+    "[]",
+    "{}",
+    "",
+    " ",
+    ",",
+    "\t",
+    "\n",
+    "#",
+    "1.0.0",
+    "0x10",
+    "+5",
+    "1e",
+    "-",
+    "\u{0}",
+    "é",
+    "\u{feff}",
 ];
 
 /// JSON values that replace a node of the document.
@@ -121,7 +154,8 @@ fn number_spans(text: &[u8]) -> Vec<(usize, usize)> {
     let mut k = 0;
     while k < text.len() {
         let start = k;
-        let prev_word = start > 0 && (text[start - 1].is_ascii_alphanumeric() || text[start - 1] == b'_');
+        let prev_word =
+            start > 0 && (text[start - 1].is_ascii_alphanumeric() || text[start - 1] == b'_');
         if text[k] == b'-' || text[k] == b'+' {
             k += 1;
         }
@@ -196,7 +230,10 @@ fn json_edit(text: &[u8], m: &Mutation) -> Option<Vec<u8>> {
             *doc.pointer_mut(&pick(a))? = vals[b.index(vals.len())].clone();
         }
         Mutation::JsonNumber(a, b) => {
-            let nums: Vec<&String> = ps.iter().filter(|p| doc.pointer(p).is_some_and(Value::is_number)).collect();
+            let nums: Vec<&String> = ps
+                .iter()
+                .filter(|p| doc.pointer(p).is_some_and(Value::is_number))
+                .collect();
             if nums.is_empty() {
                 return None;
             }

@@ -47,14 +47,72 @@ pub struct Target {
 
 /// Every library target.
 pub const TARGETS: &[Target] = &[
-    Target { name: "model", seeds: &["model/opensim_subject01.json", "model/gait9dof.json", "model/opensim_subject01_torque.json", "model/opensim_subject01_seed_damping.json"], check: check_model },
-    Target { name: "foot", seeds: &["foot/ellipse.json", "foot/double_circle.json", "foot/heel_circle_forefoot_ellipse.json", "foot/peer_ellipse.json"], check: check_foot },
-    Target { name: "phases", seeds: &["phases/sim_ellipse_step.json", "phases/sim_double_circle_step.json", "phases/ellipse_walk.json", "phases/double_circle_walk.json", "phases/heel_circle_forefoot_ellipse_walk.json"], check: check_phases },
-    Target { name: "csv", seeds: &["csv/opensim_subject01_sagittal.csv", "csv/opensim_subject01_meta.json"], check: check_csv },
-    Target { name: "storage", seeds: &["storage/subject01_walk1_ik.mot", "storage/subject01_walk1_grf.mot", "storage/walk_gait1018_state_reference.sto"], check: check_storage },
-    Target { name: "problem", seeds: &["problem/cartpole_swingup.json", "problem/five_link_biped.json"], check: check_problem },
-    Target { name: "summary", seeds: &["summary/run_a.json", "summary/run_b.json"], check: check_summary },
-    Target { name: "controls", seeds: &["controls/sim_controls_cocontraction.csv"], check: check_controls },
+    Target {
+        name: "model",
+        seeds: &[
+            "model/opensim_subject01.json",
+            "model/gait9dof.json",
+            "model/opensim_subject01_torque.json",
+            "model/opensim_subject01_seed_damping.json",
+        ],
+        check: check_model,
+    },
+    Target {
+        name: "foot",
+        seeds: &[
+            "foot/ellipse.json",
+            "foot/double_circle.json",
+            "foot/heel_circle_forefoot_ellipse.json",
+            "foot/peer_ellipse.json",
+        ],
+        check: check_foot,
+    },
+    Target {
+        name: "phases",
+        seeds: &[
+            "phases/sim_ellipse_step.json",
+            "phases/sim_double_circle_step.json",
+            "phases/ellipse_walk.json",
+            "phases/double_circle_walk.json",
+            "phases/heel_circle_forefoot_ellipse_walk.json",
+        ],
+        check: check_phases,
+    },
+    Target {
+        name: "csv",
+        seeds: &[
+            "csv/opensim_subject01_sagittal.csv",
+            "csv/opensim_subject01_meta.json",
+        ],
+        check: check_csv,
+    },
+    Target {
+        name: "storage",
+        seeds: &[
+            "storage/subject01_walk1_ik.mot",
+            "storage/subject01_walk1_grf.mot",
+            "storage/walk_gait1018_state_reference.sto",
+        ],
+        check: check_storage,
+    },
+    Target {
+        name: "problem",
+        seeds: &[
+            "problem/cartpole_swingup.json",
+            "problem/five_link_biped.json",
+        ],
+        check: check_problem,
+    },
+    Target {
+        name: "summary",
+        seeds: &["summary/run_a.json", "summary/run_b.json"],
+        check: check_summary,
+    },
+    Target {
+        name: "controls",
+        seeds: &["controls/sim_controls_cocontraction.csv"],
+        check: check_controls,
+    },
 ];
 
 /// Write `bytes` to `dir/rel` (creating folders) and return the path.
@@ -78,11 +136,32 @@ fn refused(dir: &Path, what: &str, msg: String) -> Result<Outcome, String> {
 
 /// Model, foot and phase file in `dir` (the OpenSim summary beside them, as in the
 /// repository), with `mutated` (0 model, 1 foot, 2 phases) replaced by `bytes`.
-fn gait_case(dir: &Path, files: [&str; 3], mutated: usize, bytes: &[u8]) -> Result<Outcome, String> {
+fn gait_case(
+    dir: &Path,
+    files: [&str; 3],
+    mutated: usize,
+    bytes: &[u8],
+) -> Result<Outcome, String> {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    put(dir, "data/opensim_subject01_model.json", &std::fs::read(root.join("data/opensim_subject01_model.json")).unwrap());
-    let rel = ["models/model.json", "models/feet/foot.json", "phases/phases.json"];
-    let paths: Vec<PathBuf> = (0..3).map(|i| if i == mutated { put(dir, rel[i], bytes) } else { put(dir, rel[i], &seed(files[i])) }).collect();
+    put(
+        dir,
+        "data/opensim_subject01_model.json",
+        &std::fs::read(root.join("data/opensim_subject01_model.json")).unwrap(),
+    );
+    let rel = [
+        "models/model.json",
+        "models/feet/foot.json",
+        "phases/phases.json",
+    ];
+    let paths: Vec<PathBuf> = (0..3)
+        .map(|i| {
+            if i == mutated {
+                put(dir, rel[i], bytes)
+            } else {
+                put(dir, rel[i], &seed(files[i]))
+            }
+        })
+        .collect();
     let r = (|| {
         let spec = ModelSpec::load(&paths[0])?;
         let foot = FootSpec::load(&paths[1])?;
@@ -100,10 +179,18 @@ fn gait_case(dir: &Path, files: [&str; 3], mutated: usize, bytes: &[u8]) -> Resu
 
 /// One right-hand side evaluation at the phase file's initial state (or a standing pose):
 /// `Ok` with a finite derivative or an error with a message.
-fn evaluate(model: &GaitModel, seq: &PhaseSequence, set: &footfall::model::ConstraintSet) -> Result<Outcome, String> {
+fn evaluate(
+    model: &GaitModel,
+    seq: &PhaseSequence,
+    set: &footfall::model::ConstraintSet,
+) -> Result<Outcome, String> {
     let nq = model.nq();
     let (q, qd, a) = match &seq.initial_state {
-        Some(s) => (s.q.clone(), s.qd.clone(), s.a.clone().unwrap_or_else(|| vec![0.01; model.na()])),
+        Some(s) => (
+            s.q.clone(),
+            s.qd.clone(),
+            s.a.clone().unwrap_or_else(|| vec![0.01; model.na()]),
+        ),
         None => {
             let mut q = vec![0.0; nq];
             q[1] = 1.0;
@@ -117,16 +204,26 @@ fn evaluate(model: &GaitModel, seq: &PhaseSequence, set: &footfall::model::Const
     let mut xdot = vec![0.0; model.nx()];
     match (GaitOde { model, set }).f(&x, &u, &model.theta0(), &mut xdot) {
         Ok(()) if xdot.iter().all(|v| v.is_finite()) => Ok(Outcome::Accepted),
-        Ok(()) => Err(format!("dynamics returned a non-finite derivative silently: {xdot:?}")),
-        Err(e) if e.to_string().trim().is_empty() => Err("dynamics error with an empty message".into()),
+        Ok(()) => Err(format!(
+            "dynamics returned a non-finite derivative silently: {xdot:?}"
+        )),
+        Err(e) if e.to_string().trim().is_empty() => {
+            Err("dynamics error with an empty message".into())
+        }
         Err(e) => Ok(Outcome::UseFailed(e.to_string())),
     }
 }
 
 const GAIT_PAIRS: [(&str, &str); 3] = [
     ("foot/ellipse.json", "phases/sim_ellipse_step.json"),
-    ("foot/double_circle.json", "phases/sim_double_circle_step.json"),
-    ("foot/heel_circle_forefoot_ellipse.json", "phases/heel_circle_forefoot_ellipse_walk.json"),
+    (
+        "foot/double_circle.json",
+        "phases/sim_double_circle_step.json",
+    ),
+    (
+        "foot/heel_circle_forefoot_ellipse.json",
+        "phases/heel_circle_forefoot_ellipse_walk.json",
+    ),
 ];
 
 fn check_model(dir: &Path, s: usize, bytes: &[u8]) -> Result<Outcome, String> {
@@ -140,7 +237,12 @@ fn check_foot(dir: &Path, s: usize, bytes: &[u8]) -> Result<Outcome, String> {
         2 => GAIT_PAIRS[2].1,
         _ => GAIT_PAIRS[0].1,
     };
-    gait_case(dir, ["model/opensim_subject01.json", TARGETS[1].seeds[s], phases], 1, bytes)
+    gait_case(
+        dir,
+        ["model/opensim_subject01.json", TARGETS[1].seeds[s], phases],
+        1,
+        bytes,
+    )
 }
 
 fn check_phases(dir: &Path, s: usize, bytes: &[u8]) -> Result<Outcome, String> {
@@ -149,7 +251,12 @@ fn check_phases(dir: &Path, s: usize, bytes: &[u8]) -> Result<Outcome, String> {
         4 => GAIT_PAIRS[2].0,
         _ => GAIT_PAIRS[0].0,
     };
-    gait_case(dir, ["model/opensim_subject01.json", foot, TARGETS[2].seeds[s]], 2, bytes)
+    gait_case(
+        dir,
+        ["model/opensim_subject01.json", foot, TARGETS[2].seeds[s]],
+        2,
+        bytes,
+    )
 }
 
 /// The sagittal CSV with its sibling meta file, one of them mutated; on success the
@@ -157,7 +264,15 @@ fn check_phases(dir: &Path, s: usize, bytes: &[u8]) -> Result<Outcome, String> {
 fn check_csv(dir: &Path, s: usize, bytes: &[u8]) -> Result<Outcome, String> {
     let names = ["trial_sagittal.csv", "trial_meta.json"];
     for (i, n) in names.iter().enumerate() {
-        put(dir, n, &if i == s { bytes.to_vec() } else { seed(TARGETS[3].seeds[i]) });
+        put(
+            dir,
+            n,
+            &if i == s {
+                bytes.to_vec()
+            } else {
+                seed(TARGETS[3].seeds[i])
+            },
+        );
     }
     let r = read_sagittal_csv(&dir.join(names[0])).and_then(|d| {
         d.validate()?;
@@ -166,7 +281,8 @@ fn check_csv(dir: &Path, s: usize, bytes: &[u8]) -> Result<Outcome, String> {
             _ => Ok(()),
         }
     });
-    r.map(|()| Outcome::Accepted).or_else(|e| refused(dir, "sagittal CSV", e.to_string()))
+    r.map(|()| Outcome::Accepted)
+        .or_else(|e| refused(dir, "sagittal CSV", e.to_string()))
 }
 
 /// A storage file; the kinematics and forces are combined into gait data as
@@ -190,7 +306,8 @@ fn check_storage(dir: &Path, s: usize, bytes: &[u8]) -> Result<Outcome, String> 
         }
         .and_then(|d| d.validate())
     });
-    r.map(|()| Outcome::Accepted).or_else(|e| refused(dir, "storage", e.to_string()))
+    r.map(|()| Outcome::Accepted)
+        .or_else(|e| refused(dir, "storage", e.to_string()))
 }
 
 /// A problem file of `footfall solve`, and its optimal control problem.
@@ -221,7 +338,12 @@ fn check_controls(dir: &Path, _s: usize, bytes: &[u8]) -> Result<Outcome, String
     static NAMES: std::sync::OnceLock<Vec<String>> = std::sync::OnceLock::new();
     let names = NAMES.get_or_init(|| {
         let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-        GaitModel::load(&root.join("models/opensim_subject01.json"), &root.join("models/feet/ellipse.json")).unwrap().control_names()
+        GaitModel::load(
+            &root.join("models/opensim_subject01.json"),
+            &root.join("models/feet/ellipse.json"),
+        )
+        .unwrap()
+        .control_names()
     });
     match ControlTable::load_csv(&p, names) {
         Err(e) => refused(dir, "controls", e.to_string()),

@@ -5,8 +5,21 @@
 use super::{Effect, EffectState, MeasurementAdjust, ModelAdjust, ParamSpec};
 use crate::model::Scalar;
 
-fn param(name: String, value: f64, (lower, upper): (f64, f64), unit: &str, free: bool) -> ParamSpec {
-    ParamSpec { name, value, lower, upper, unit: unit.into(), free }
+fn param(
+    name: String,
+    value: f64,
+    (lower, upper): (f64, f64),
+    unit: &str,
+    free: bool,
+) -> ParamSpec {
+    ParamSpec {
+        name,
+        value,
+        lower,
+        upper,
+        unit: unit.into(),
+        free,
+    }
 }
 
 /// A linear torsional spring at a joint: τ = −k (θ − θ₀), at one coordinate or with one
@@ -40,8 +53,20 @@ impl PassiveJointStiffness {
         Self {
             coordinates,
             params: vec![
-                param(format!("{base}.stiffness"), stiffness, Self::STIFFNESS_BOUNDS, "N·m/rad", free_stiffness),
-                param(format!("{base}.rest_angle"), rest_angle, (-pi, pi), "rad", free_rest_angle),
+                param(
+                    format!("{base}.stiffness"),
+                    stiffness,
+                    Self::STIFFNESS_BOUNDS,
+                    "N·m/rad",
+                    free_stiffness,
+                ),
+                param(
+                    format!("{base}.rest_angle"),
+                    rest_angle,
+                    (-pi, pi),
+                    "rad",
+                    free_rest_angle,
+                ),
             ],
         }
     }
@@ -77,7 +102,15 @@ impl GroundSlope {
 
     /// Slope `angle` (rad).
     pub fn new(angle: f64, free: bool) -> Self {
-        Self { params: vec![param("ground_slope.angle".into(), angle, Self::BOUNDS, "rad", free)] }
+        Self {
+            params: vec![param(
+                "ground_slope.angle".into(),
+                angle,
+                Self::BOUNDS,
+                "rad",
+                free,
+            )],
+        }
     }
 }
 
@@ -112,12 +145,30 @@ impl TrunkMass {
     pub const OFFSET_BOUNDS: (f64, f64) = (-0.15, 0.15);
 
     /// Trunk body index `body`; `added_mass` (kg), `com_offset` (m).
-    pub fn new(body: usize, added_mass: f64, com_offset: f64, free_mass: bool, free_offset: bool) -> Self {
+    pub fn new(
+        body: usize,
+        added_mass: f64,
+        com_offset: f64,
+        free_mass: bool,
+        free_offset: bool,
+    ) -> Self {
         Self {
             body,
             params: vec![
-                param("trunk_mass.added_mass".into(), added_mass, Self::MASS_BOUNDS, "kg", free_mass),
-                param("trunk_mass.com_offset".into(), com_offset, Self::OFFSET_BOUNDS, "m", free_offset),
+                param(
+                    "trunk_mass.added_mass".into(),
+                    added_mass,
+                    Self::MASS_BOUNDS,
+                    "kg",
+                    free_mass,
+                ),
+                param(
+                    "trunk_mass.com_offset".into(),
+                    com_offset,
+                    Self::OFFSET_BOUNDS,
+                    "m",
+                    free_offset,
+                ),
             ],
         }
     }
@@ -152,7 +203,15 @@ impl ForcePlateTimeOffset {
 
     /// Clock offset `offset` (s).
     pub fn new(offset: f64, free: bool) -> Self {
-        Self { params: vec![param("force_plate_time_offset.offset".into(), offset, Self::BOUNDS, "s", free)] }
+        Self {
+            params: vec![param(
+                "force_plate_time_offset.offset".into(),
+                offset,
+                Self::BOUNDS,
+                "s",
+                free,
+            )],
+        }
     }
 }
 
@@ -187,7 +246,15 @@ impl CopOffset {
 
     /// CoP offset `offset` (m).
     pub fn new(offset: f64, free: bool) -> Self {
-        Self { params: vec![param("cop_offset.offset".into(), offset, Self::BOUNDS, "m", free)] }
+        Self {
+            params: vec![param(
+                "cop_offset.offset".into(),
+                offset,
+                Self::BOUNDS,
+                "m",
+                free,
+            )],
+        }
     }
 }
 
@@ -231,12 +298,30 @@ impl HeelPadCompliance {
 
     /// Pad under primitive `primitive` of both feet with stiffness `stiffness` (N/mm) and
     /// damping `damping` (N·s/mm).
-    pub fn new(primitive: &str, stiffness: f64, damping: f64, free_stiffness: bool, free_damping: bool) -> Self {
+    pub fn new(
+        primitive: &str,
+        stiffness: f64,
+        damping: f64,
+        free_stiffness: bool,
+        free_damping: bool,
+    ) -> Self {
         Self {
             primitive: primitive.to_string(),
             params: vec![
-                param("heel_pad_compliance.stiffness".into(), stiffness, Self::STIFFNESS_BOUNDS, "N/mm", free_stiffness),
-                param("heel_pad_compliance.damping".into(), damping, Self::DAMPING_BOUNDS, "N·s/mm", free_damping),
+                param(
+                    "heel_pad_compliance.stiffness".into(),
+                    stiffness,
+                    Self::STIFFNESS_BOUNDS,
+                    "N/mm",
+                    free_stiffness,
+                ),
+                param(
+                    "heel_pad_compliance.damping".into(),
+                    damping,
+                    Self::DAMPING_BOUNDS,
+                    "N·s/mm",
+                    free_damping,
+                ),
             ],
         }
     }

@@ -16,7 +16,10 @@
 mod kinds;
 mod spec;
 
-pub use kinds::{CopOffset, ForcePlateTimeOffset, GroundSlope, HeelPadCompliance, PassiveJointStiffness, TrunkMass};
+pub use kinds::{
+    CopOffset, ForcePlateTimeOffset, GroundSlope, HeelPadCompliance, PassiveJointStiffness,
+    TrunkMass,
+};
 pub use spec::{catalog, BuildContext, EffectSpec};
 
 use super::ad::{AdChunk, AdNested};
@@ -238,8 +241,31 @@ macro_rules! model_scalar {
         }
     };
 }
-model_scalar!(f64, adjust_f64, forces_f64, measurement_f64, normal_force_f64);
-model_scalar!(Dual64, adjust_dual, forces_dual, measurement_dual, normal_force_dual);
-model_scalar!(AdChunk, adjust_chunk, forces_chunk, measurement_chunk, normal_force_chunk);
-model_scalar!(AdNested, adjust_nested, forces_nested, measurement_nested, normal_force_nested);
-
+model_scalar!(
+    f64,
+    adjust_f64,
+    forces_f64,
+    measurement_f64,
+    normal_force_f64
+);
+model_scalar!(
+    Dual64,
+    adjust_dual,
+    forces_dual,
+    measurement_dual,
+    normal_force_dual
+);
+model_scalar!(
+    AdChunk,
+    adjust_chunk,
+    forces_chunk,
+    measurement_chunk,
+    normal_force_chunk
+);
+model_scalar!(
+    AdNested,
+    adjust_nested,
+    forces_nested,
+    measurement_nested,
+    normal_force_nested
+);

@@ -1,7 +1,10 @@
 //! Effects as written in a model JSON file or on the command line, and the catalog of
 //! candidate effects `footfall diagnose` tries.
 
-use super::kinds::{CopOffset, ForcePlateTimeOffset, GroundSlope, HeelPadCompliance, PassiveJointStiffness, TrunkMass};
+use super::kinds::{
+    CopOffset, ForcePlateTimeOffset, GroundSlope, HeelPadCompliance, PassiveJointStiffness,
+    TrunkMass,
+};
 use super::DynEffect;
 use serde::{Deserialize, Serialize};
 
@@ -113,7 +116,14 @@ fn both() -> String {
 }
 
 /// The names that may appear on the command line: `--effect NAME[:key=value,…]`.
-pub const EFFECT_KINDS: [&str; 6] = ["ground_slope", "trunk_mass", "passive_joint_stiffness", "force_plate_time_offset", "cop_offset", "heel_pad_compliance"];
+pub const EFFECT_KINDS: [&str; 6] = [
+    "ground_slope",
+    "trunk_mass",
+    "passive_joint_stiffness",
+    "force_plate_time_offset",
+    "cop_offset",
+    "heel_pad_compliance",
+];
 
 impl EffectSpec {
     /// Kind name as in JSON.
@@ -131,8 +141,12 @@ impl EffectSpec {
     /// A short human label, e.g. `passive joint stiffness (knee)`.
     pub fn label(&self) -> String {
         match self {
-            EffectSpec::PassiveJointStiffness { joint, side, .. } if side == "both" => format!("passive {joint} stiffness"),
-            EffectSpec::PassiveJointStiffness { joint, side, .. } => format!("passive {joint} stiffness ({side})"),
+            EffectSpec::PassiveJointStiffness { joint, side, .. } if side == "both" => {
+                format!("passive {joint} stiffness")
+            }
+            EffectSpec::PassiveJointStiffness { joint, side, .. } => {
+                format!("passive {joint} stiffness ({side})")
+            }
             EffectSpec::GroundSlope { .. } => "ground slope".into(),
             EffectSpec::TrunkMass { .. } => "trunk mass and COM offset".into(),
             EffectSpec::ForcePlateTimeOffset { .. } => "force-plate time offset".into(),
@@ -145,17 +159,42 @@ impl EffectSpec {
     fn parameter_values(&self) -> Vec<(&'static str, f64, (f64, f64))> {
         let pi = std::f64::consts::PI;
         match self {
-            EffectSpec::PassiveJointStiffness { stiffness, rest_angle, .. } => {
-                vec![("stiffness", *stiffness, PassiveJointStiffness::STIFFNESS_BOUNDS), ("rest_angle", *rest_angle, (-pi, pi))]
+            EffectSpec::PassiveJointStiffness {
+                stiffness,
+                rest_angle,
+                ..
+            } => {
+                vec![
+                    (
+                        "stiffness",
+                        *stiffness,
+                        PassiveJointStiffness::STIFFNESS_BOUNDS,
+                    ),
+                    ("rest_angle", *rest_angle, (-pi, pi)),
+                ]
             }
             EffectSpec::GroundSlope { angle, .. } => vec![("angle", *angle, GroundSlope::BOUNDS)],
-            EffectSpec::TrunkMass { added_mass, com_offset, .. } => {
-                vec![("added_mass", *added_mass, TrunkMass::MASS_BOUNDS), ("com_offset", *com_offset, TrunkMass::OFFSET_BOUNDS)]
+            EffectSpec::TrunkMass {
+                added_mass,
+                com_offset,
+                ..
+            } => {
+                vec![
+                    ("added_mass", *added_mass, TrunkMass::MASS_BOUNDS),
+                    ("com_offset", *com_offset, TrunkMass::OFFSET_BOUNDS),
+                ]
             }
-            EffectSpec::ForcePlateTimeOffset { offset, .. } => vec![("offset", *offset, ForcePlateTimeOffset::BOUNDS)],
+            EffectSpec::ForcePlateTimeOffset { offset, .. } => {
+                vec![("offset", *offset, ForcePlateTimeOffset::BOUNDS)]
+            }
             EffectSpec::CopOffset { offset, .. } => vec![("offset", *offset, CopOffset::BOUNDS)],
-            EffectSpec::HeelPadCompliance { stiffness, damping, .. } => {
-                vec![("stiffness", *stiffness, HeelPadCompliance::STIFFNESS_BOUNDS), ("damping", *damping, HeelPadCompliance::DAMPING_BOUNDS)]
+            EffectSpec::HeelPadCompliance {
+                stiffness, damping, ..
+            } => {
+                vec![
+                    ("stiffness", *stiffness, HeelPadCompliance::STIFFNESS_BOUNDS),
+                    ("damping", *damping, HeelPadCompliance::DAMPING_BOUNDS),
+                ]
             }
         }
     }
@@ -193,7 +232,9 @@ impl EffectSpec {
             .parameter_values()
             .iter()
             .map(|p| p.0)
-            .filter(|n| !(matches!(self, EffectSpec::PassiveJointStiffness { .. }) && *n == "rest_angle"))
+            .filter(|n| {
+                !(matches!(self, EffectSpec::PassiveJointStiffness { .. }) && *n == "rest_angle")
+            })
             .map(String::from)
             .collect();
         *self.free_mut() = names;
@@ -213,13 +254,18 @@ impl EffectSpec {
     pub fn parse_cli(text: &str) -> Result<Self, String> {
         let (name, rest) = text.split_once(':').unwrap_or((text, ""));
         if !EFFECT_KINDS.contains(&name) {
-            return Err(format!("'{name}' is not a known effect; use one of {}", EFFECT_KINDS.join(", ")));
+            return Err(format!(
+                "'{name}' is not a known effect; use one of {}",
+                EFFECT_KINDS.join(", ")
+            ));
         }
         let mut obj = serde_json::Map::new();
         obj.insert("type".into(), name.into());
         let mut free_given = false;
         for kv in rest.split(',').filter(|s| !s.is_empty()) {
-            let (k, v) = kv.split_once('=').ok_or_else(|| format!("'{kv}' in '{text}' is not key=value"))?;
+            let (k, v) = kv
+                .split_once('=')
+                .ok_or_else(|| format!("'{kv}' in '{text}' is not key=value"))?;
             let value = if k == "free" {
                 free_given = true;
                 serde_json::Value::from(v.split('+').filter(|s| !s.is_empty()).collect::<Vec<_>>())
@@ -230,12 +276,13 @@ impl EffectSpec {
             };
             obj.insert(k.into(), value);
         }
-        let mut spec: EffectSpec =
-            serde_json::from_value(serde_json::Value::Object(obj)).map_err(|e| format!("effect '{text}': {e}"))?;
+        let mut spec: EffectSpec = serde_json::from_value(serde_json::Value::Object(obj))
+            .map_err(|e| format!("effect '{text}': {e}"))?;
         if !free_given {
             spec.free_all();
         }
-        spec.check().map_err(|(f, r)| format!("effect '{text}': {f}: {r}"))?;
+        spec.check()
+            .map_err(|(f, r)| format!("effect '{text}': {f}: {r}"))?;
         Ok(spec)
     }
 
@@ -244,7 +291,10 @@ impl EffectSpec {
     pub fn check(&self) -> Result<(), (&'static str, String)> {
         if let EffectSpec::PassiveJointStiffness { joint, side, .. } = self {
             if !["hip", "knee", "ankle"].contains(&joint.as_str()) {
-                return Err(("joint", format!("'{joint}' is not a joint of the model; use one of hip, knee, ankle")));
+                return Err((
+                    "joint",
+                    format!("'{joint}' is not a joint of the model; use one of hip, knee, ankle"),
+                ));
             }
             if !["both", "right", "left"].contains(&side.as_str()) {
                 return Err(("side", format!("'{side}' is not one of both, right, left")));
@@ -253,14 +303,20 @@ impl EffectSpec {
         let params = self.parameter_values();
         for &(name, value, (lo, hi)) in &params {
             if !(value.is_finite() && value >= lo && value <= hi) {
-                return Err((name, format!("must be a finite number in [{lo}, {hi}], got {value}")));
+                return Err((
+                    name,
+                    format!("must be a finite number in [{lo}, {hi}], got {value}"),
+                ));
             }
         }
         let free = self.free();
         for (k, f) in free.iter().enumerate() {
             if !params.iter().any(|p| p.0 == f) {
                 let names: Vec<&str> = params.iter().map(|p| p.0).collect();
-                return Err(("free", format!("entry {k} '{f}' is not one of {}", names.join(", "))));
+                return Err((
+                    "free",
+                    format!("entry {k} '{f}' is not one of {}", names.join(", ")),
+                ));
             }
             if free[..k].contains(f) {
                 return Err(("free", format!("'{f}' is listed twice")));
@@ -271,9 +327,16 @@ impl EffectSpec {
 
     /// Build the effect instances for a model.
     pub fn build(&self, ctx: &BuildContext<'_>) -> Result<Vec<Box<dyn DynEffect>>, String> {
-        self.check().map_err(|(field, reason)| format!("{field}: {reason}"))?;
+        self.check()
+            .map_err(|(field, reason)| format!("{field}: {reason}"))?;
         Ok(match self {
-            EffectSpec::PassiveJointStiffness { joint, side, stiffness, rest_angle, .. } => {
+            EffectSpec::PassiveJointStiffness {
+                joint,
+                side,
+                stiffness,
+                rest_angle,
+                ..
+            } => {
                 let (sides, name): (&[&str], String) = match side.as_str() {
                     "right" => (&["r"], format!("{joint}_r")),
                     "left" => (&["l"], format!("{joint}_l")),
@@ -283,25 +346,67 @@ impl EffectSpec {
                 for s in sides {
                     let c = format!("{joint}_{s}");
                     coords.push(
-                        ctx.coordinates.iter().position(|x| *x == c).ok_or_else(|| format!("joint: the model has no coordinate '{c}'"))?,
+                        ctx.coordinates
+                            .iter()
+                            .position(|x| *x == c)
+                            .ok_or_else(|| format!("joint: the model has no coordinate '{c}'"))?,
                     );
                 }
-                vec![Box::new(PassiveJointStiffness::new(coords, &name, *stiffness, *rest_angle, self.is_free("stiffness"), self.is_free("rest_angle")))]
+                vec![Box::new(PassiveJointStiffness::new(
+                    coords,
+                    &name,
+                    *stiffness,
+                    *rest_angle,
+                    self.is_free("stiffness"),
+                    self.is_free("rest_angle"),
+                ))]
             }
-            EffectSpec::GroundSlope { angle, .. } => vec![Box::new(GroundSlope::new(*angle, self.is_free("angle")))],
-            EffectSpec::TrunkMass { added_mass, com_offset, .. } => {
-                let body = ctx.bodies.iter().position(|b| b == "hat").ok_or("the model has no trunk body 'hat'")?;
-                vec![Box::new(TrunkMass::new(body, *added_mass, *com_offset, self.is_free("added_mass"), self.is_free("com_offset")))]
+            EffectSpec::GroundSlope { angle, .. } => {
+                vec![Box::new(GroundSlope::new(*angle, self.is_free("angle")))]
+            }
+            EffectSpec::TrunkMass {
+                added_mass,
+                com_offset,
+                ..
+            } => {
+                let body = ctx
+                    .bodies
+                    .iter()
+                    .position(|b| b == "hat")
+                    .ok_or("the model has no trunk body 'hat'")?;
+                vec![Box::new(TrunkMass::new(
+                    body,
+                    *added_mass,
+                    *com_offset,
+                    self.is_free("added_mass"),
+                    self.is_free("com_offset"),
+                ))]
             }
             EffectSpec::ForcePlateTimeOffset { offset, .. } => {
-                vec![Box::new(ForcePlateTimeOffset::new(*offset, self.is_free("offset")))]
+                vec![Box::new(ForcePlateTimeOffset::new(
+                    *offset,
+                    self.is_free("offset"),
+                ))]
             }
-            EffectSpec::CopOffset { offset, .. } => vec![Box::new(CopOffset::new(*offset, self.is_free("offset")))],
-            EffectSpec::HeelPadCompliance { primitive, stiffness, damping, .. } => {
+            EffectSpec::CopOffset { offset, .. } => {
+                vec![Box::new(CopOffset::new(*offset, self.is_free("offset")))]
+            }
+            EffectSpec::HeelPadCompliance {
+                primitive,
+                stiffness,
+                damping,
+                ..
+            } => {
                 if !ctx.primitives.contains(primitive) {
                     return Err(format!("primitive: this foot has no primitive '{primitive}' (it has: {}); the pad goes under a heel circle", ctx.primitives.join(", ")));
                 }
-                vec![Box::new(HeelPadCompliance::new(primitive, *stiffness, *damping, self.is_free("stiffness"), self.is_free("damping")))]
+                vec![Box::new(HeelPadCompliance::new(
+                    primitive,
+                    *stiffness,
+                    *damping,
+                    self.is_free("stiffness"),
+                    self.is_free("damping"),
+                ))]
             }
         })
     }
@@ -311,8 +416,12 @@ impl EffectSpec {
     pub fn overlaps(&self, other: &EffectSpec) -> bool {
         match (self, other) {
             (
-                EffectSpec::PassiveJointStiffness { joint: a, side: sa, .. },
-                EffectSpec::PassiveJointStiffness { joint: b, side: sb, .. },
+                EffectSpec::PassiveJointStiffness {
+                    joint: a, side: sa, ..
+                },
+                EffectSpec::PassiveJointStiffness {
+                    joint: b, side: sb, ..
+                },
             ) => a == b && (sa == sb || sa == "both" || sb == "both"),
             _ => self.kind() == other.kind(),
         }
@@ -325,14 +434,33 @@ impl EffectSpec {
 /// CoP offset.
 pub fn catalog() -> Vec<EffectSpec> {
     let mut out = vec![
-        EffectSpec::GroundSlope { angle: 0.0, free: vec![] },
-        EffectSpec::TrunkMass { added_mass: 0.0, com_offset: 0.0, free: vec![] },
+        EffectSpec::GroundSlope {
+            angle: 0.0,
+            free: vec![],
+        },
+        EffectSpec::TrunkMass {
+            added_mass: 0.0,
+            com_offset: 0.0,
+            free: vec![],
+        },
     ];
     for joint in ["hip", "knee", "ankle"] {
-        out.push(EffectSpec::PassiveJointStiffness { joint: joint.into(), side: "both".into(), stiffness: 0.0, rest_angle: 0.0, free: vec![] });
+        out.push(EffectSpec::PassiveJointStiffness {
+            joint: joint.into(),
+            side: "both".into(),
+            stiffness: 0.0,
+            rest_angle: 0.0,
+            free: vec![],
+        });
     }
-    out.push(EffectSpec::ForcePlateTimeOffset { offset: 0.0, free: vec![] });
-    out.push(EffectSpec::CopOffset { offset: 0.0, free: vec![] });
+    out.push(EffectSpec::ForcePlateTimeOffset {
+        offset: 0.0,
+        free: vec![],
+    });
+    out.push(EffectSpec::CopOffset {
+        offset: 0.0,
+        free: vec![],
+    });
     for e in &mut out {
         e.free_all();
     }
