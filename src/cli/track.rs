@@ -496,11 +496,7 @@ impl TrackingProblem {
             .setup
             .ocp(&cycle, &self.model, &self.sets, self.integrator.clone())
             .map_err(|e| anyhow!(e))?;
-        ocp.checks = self
-            .check_sites
-            .iter()
-            .flat_map(|&(j, k, tau)| cycle.contact_checks(j, k, tau))
-            .collect();
+        ocp.checks = self.checks(&cycle);
         let tr = Transcription::new(&ocp).context("transcribing the tracking problem")?;
         let (_, _, w0) = tr.variable_bounds_and_guess();
         f(&tr, &cycle, w0)
@@ -523,12 +519,17 @@ impl TrackingProblem {
     }
 
     /// Solve on `tr` from `w0` and hand the result, with the transcription it was last
-    /// iterated on, to `finish`. When the sensitivities are looser than the states (a
-    /// heel pad) and the line search fails, the solve goes on from that iterate with the
-    /// sensitivities at the states' tolerance: the KKT residual is computed from them, so
-    /// the looser ones can leave an optimum uncertified (a padded 100 Hz trial's re-fit
-    /// stopped at KKT 2.4e-5 with them at 1e-8 and converged at 1e-10 to the same
-    /// parameters).
+    /// iterated on, to `finish`. When the line search fails, the solve goes on once from
+    /// that iterate with more precise integration, because near an optimum the
+    /// integrator's error is what stops it:
+    /// - sensitivities looser than the states (a heel pad): at the states' tolerance. The
+    ///   KKT residual is computed from them, so the looser ones can leave an optimum
+    ///   uncertified (a padded 100 Hz trial's re-fit stopped at KKT 2.4e-5 with them at
+    ///   1e-8 and converged at 1e-10 to the same parameters);
+    /// - otherwise states and sensitivities 100× tighter (down to 1e-12): the force-plate
+    ///   clock's re-fit of its hidden-effect trial stalled at J = 0.2988352308, KKT 9.7e-4,
+    ///   with every trial step rejected; restarted at 1e-8 its line search fails at once,
+    ///   at 1e-10 it converges in 8 iterations (KKT 4.9e-7).
     fn solve_staged<R>(
         &self,
         tr: &Transcription,
@@ -539,31 +540,35 @@ impl TrackingProblem {
         finish: impl FnOnce(&Transcription, footfall::sqp::SqpResult) -> anyhow::Result<R>,
     ) -> anyhow::Result<R> {
         let first = super::solve_interruptibly(tr, w0, settings, quiet)?;
-        let loose = self
-            .integrator
-            .sens_tol
-            .filter(|&t| t > self.integrator.rtol);
-        let Some(sens_tol) = loose else {
-            return finish(tr, first);
-        };
         if first.status != footfall::sqp::SqpStatus::LineSearchFailure {
             return finish(tr, first);
         }
-        let used = first.history.len().saturating_sub(1);
-        let tight = IntegratorSettings {
-            sens_tol: None,
-            ..self.integrator.clone()
+        let current = &self.integrator;
+        let (tight, what) = match current.sens_tol.filter(|&t| t > current.rtol) {
+            Some(sens_tol) => (
+                IntegratorSettings { sens_tol: None, ..current.clone() },
+                format!("the sensitivities at {sens_tol:e}: going on from there with them at {:e} (the KKT residual is computed from them)", current.rtol),
+            ),
+            None if current.rtol > TIGHTEST_TOL => {
+                let rtol = (current.rtol * 1e-2).max(TIGHTEST_TOL);
+                let atol = (current.atol * 1e-2).max(TIGHTEST_TOL);
+                let sens_tol = current.sens_tol.map(|t| (t * 1e-2).max(TIGHTEST_TOL));
+                (
+                    IntegratorSettings { rtol, atol, sens_tol, ..current.clone() },
+                    format!("the integrator at {:e}: going on from there at {rtol:e} (integration error stalls a line search near an optimum)", current.rtol),
+                )
+            }
+            None => return finish(tr, first),
         };
+        let used = first.history.len().saturating_sub(1);
         if !quiet {
-            eprintln!(
-                "line search failed at KKT {:.2e} with the sensitivities at {sens_tol:e}: going on from there with them at {:e} (the KKT residual is computed from them)",
-                first.kkt, tight.rtol
-            );
+            eprintln!("line search failed at KKT {:.2e} with {what}", first.kkt);
         }
-        let ocp = self
+        let mut ocp = self
             .setup
             .ocp(cycle, &self.model, &self.sets, tight)
             .map_err(|e| anyhow!(e))?;
+        ocp.checks = self.checks(cycle);
         let tr2 = Transcription::new(&ocp).context("transcribing the tracking problem")?;
         let rest = SqpSettings {
             max_iter: settings.max_iter.saturating_sub(used),
@@ -573,7 +578,18 @@ impl TrackingProblem {
         let second = super::solve_interruptibly(&tr2, &first.w, &rest, quiet)?;
         finish(&tr2, merge_stages(first, second))
     }
+
+    /// The path constraints at this problem's check points.
+    fn checks<'m>(&self, cycle: &GaitCycle<'m>) -> Vec<footfall::ocp::CheckPoint<'m>> {
+        self.check_sites
+            .iter()
+            .flat_map(|&(j, k, tau)| cycle.contact_checks(j, k, tau))
+            .collect()
+    }
 }
+
+/// The tightest integrator tolerance a failed line search moves a tracking solve to.
+const TIGHTEST_TOL: f64 = 1e-12;
 
 /// One result of two solves, the second started where the first stopped: the second's
 /// point and status, the iteration history of both (the second's numbered on, without
