@@ -353,6 +353,18 @@ fn track_interrupted_by_ctrl_c_writes_the_last_iterate() {
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["status"], "interrupted");
     assert!(summary["iterations"].as_u64().unwrap() >= 1);
+    // the integrator's counters of the solve: every step takes at least one right-hand
+    // side and one Newton iteration, the staggered sensitivity corrector iterates too,
+    // and the Newton matrix is factored at most once per step
+    let n = |k: &str| {
+        summary["integration"][k]
+            .as_u64()
+            .unwrap_or_else(|| panic!("integration.{k}: {}", summary["integration"]))
+    };
+    assert!(n("steps") > 1000, "{}", summary["integration"]);
+    assert!(n("rhs_evals") >= n("steps") && n("nonlinear_iters") >= n("steps"));
+    assert!(n("sens_nonlinear_iters") > 0 && n("sens_rhs_evals") > 0);
+    assert!(n("linear_setups") >= 1 && n("linear_setups") <= n("steps"));
     assert_all_finite(&summary, "summary");
     for f in ["tracking.csv", "kinematics.sto", "table3.md", "report.html"] {
         assert!(out.join(f).is_file(), "{f} missing");

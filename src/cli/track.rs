@@ -245,6 +245,9 @@ pub struct TrackingProblem {
     /// Whether a solve adds check points where the solution breaks a contact constraint
     /// between the nodes.
     pub refine: bool,
+    /// Integrator counters of every solve of this problem so far (all stages and
+    /// refinement rounds), written to `summary.json` as `integration`.
+    pub integration: std::cell::Cell<footfall::integrate::IntegrationStats>,
 }
 
 impl TrackingProblem {
@@ -353,6 +356,7 @@ impl TrackingProblem {
             integrator,
             check_sites: run.check_points.clone(),
             refine: false,
+            integration: Default::default(),
         })
     }
 
@@ -539,7 +543,9 @@ impl TrackingProblem {
         quiet: bool,
         finish: impl FnOnce(&Transcription, footfall::sqp::SqpResult) -> anyhow::Result<R>,
     ) -> anyhow::Result<R> {
-        let first = super::solve_interruptibly(tr, w0, settings, quiet)?;
+        let first = super::solve_interruptibly(tr, w0, settings, quiet);
+        self.count_integration(tr);
+        let first = first?;
         if first.status != footfall::sqp::SqpStatus::LineSearchFailure {
             return finish(tr, first);
         }
@@ -575,8 +581,16 @@ impl TrackingProblem {
             max_time: settings.max_time.map(|t| (t - first.seconds).max(0.0)),
             ..settings.clone()
         };
-        let second = super::solve_interruptibly(&tr2, &first.w, &rest, quiet)?;
-        finish(&tr2, merge_stages(first, second))
+        let second = super::solve_interruptibly(&tr2, &first.w, &rest, quiet);
+        self.count_integration(&tr2);
+        finish(&tr2, merge_stages(first, second?))
+    }
+
+    /// Add the integrator counters of `tr`'s evaluations to this problem's.
+    fn count_integration(&self, tr: &Transcription) {
+        let mut total = self.integration.get();
+        total += tr.integration_totals();
+        self.integration.set(total);
     }
 
     /// The path constraints at this problem's check points.
@@ -960,6 +974,10 @@ impl TrackingProblem {
         let mut extra_json = serde_json::Map::new();
         extra_json.insert("setup".into(), serde_json::to_value(&record)?);
         extra_json.insert("data_residuals".into(), data_rows.into());
+        extra_json.insert(
+            "integration".into(),
+            serde_json::to_value(self.integration.get())?,
+        );
         let mut extra_sections = Vec::new();
         let mut extra_summary = Vec::new();
         if let Some(p) = &provenance {

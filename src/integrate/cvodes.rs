@@ -171,14 +171,11 @@ pub struct IntegrationStats {
     /// Nonlinear (Newton) convergence failures of the state corrector (`ncfn`).
     pub nonlinear_conv_failures: u64,
     /// Newton iterations of the state corrector (`nni`).
-    #[serde(default)]
     pub nonlinear_iters: u64,
     /// Newton iterations of the staggered sensitivity corrector, all columns at once
     /// (`nniS`); each solves one linear system per sensitivity column.
-    #[serde(default)]
     pub sens_nonlinear_iters: u64,
     /// Newton-matrix factorisations (`nsetups`).
-    #[serde(default)]
     pub linear_setups: u64,
 }
 

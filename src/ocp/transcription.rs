@@ -203,9 +203,18 @@ pub struct Transcription<'o, 'a> {
     shifted: Vec<usize>,
     /// Index in `intervals` of each phase's first interval.
     first_interval: Vec<usize>,
+    /// Integrator counters summed over every evaluation so far.
+    totals: Mutex<IntegrationStats>,
 }
 
 impl<'o, 'a> Transcription<'o, 'a> {
+    /// Integrator counters summed over every evaluation of this transcription so far
+    /// (steps, right-hand sides, Newton iterations of states and sensitivities, ...): where
+    /// a solve's integration time went.
+    pub fn integration_totals(&self) -> IntegrationStats {
+        self.totals.lock().map(|t| *t).unwrap_or_default()
+    }
+
     /// Lay out variables and constraints and build the sparsity patterns.
     pub fn new(ocp: &'o Ocp<'a>) -> Result<Self, TranscriptionError> {
         let inv = |s: String| TranscriptionError::Invalid(s);
@@ -289,6 +298,7 @@ impl<'o, 'a> Transcription<'o, 'a> {
             labels: Vec::new(),
             shifted: Vec::new(),
             first_interval: Vec::new(),
+            totals: Mutex::new(IntegrationStats::default()),
         };
         // sample terms, grouped by interval and τ
         let mut samples: Vec<Vec<Instants>> = ocp
@@ -1346,6 +1356,9 @@ impl<'o, 'a> Transcription<'o, 'a> {
                 }
                 ev.gauss_newton.extend_from_slice(&sums.gauss_newton);
             }
+        }
+        if let Ok(mut t) = self.totals.lock() {
+            *t += ev.stats;
         }
         Ok((ev, blocks))
     }
