@@ -288,7 +288,7 @@ impl ConvexityTest {
             return false;
         };
         for (k, v) in self.nz.iter_mut().enumerate() {
-            *v = self.nz_h[k] + if rho != 0.0 { rho * self.nz_g[k] } else { 0.0 };
+            *v = self.nz_h[k] + rho * self.nz_g[k];
         }
         for &k in &self.diagonal {
             self.nz[k] += shift;
