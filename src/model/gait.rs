@@ -1068,6 +1068,20 @@ impl GaitModel {
         out
     }
 
+    /// The inputs of `(x, u, θ)` that can appear in a second derivative of the dynamics
+    /// or of anything computed from them (contact forces, ground loads): all of them,
+    /// except the excitations of muscle-torque generators without residual actuators.
+    /// Those enter only `ȧ = (e − a)/τ`, affinely with constant coefficients, so every
+    /// second derivative involving them is exactly zero and AD can skip them.
+    pub fn curved_inputs(&self) -> Vec<usize> {
+        let (nx, nu, nt) = (self.nx(), self.nu(), self.ntheta());
+        let controls_affine =
+            matches!(self.actuation, Actuation::Mtg(_)) && self.residuals.is_none();
+        (0..nx + nu + nt)
+            .filter(|&i| !(controls_affine && (nx..nx + nu).contains(&i)))
+            .collect()
+    }
+
     /// Evaluate `ẋ` and its Jacobians with respect to `(x, u, θ)` by chunked forward AD;
     /// `jac` is nx × (nx + nu + nθ), column-major.
     pub fn dynamics_jacobian(
@@ -1248,11 +1262,12 @@ impl ControlledOde for GaitOde<'_> {
         out: &mut [f64],
     ) -> Result<bool, OdeError> {
         let (nx, nu) = (self.model.nx(), self.model.nu());
-        let z: Vec<f64> = x.iter().chain(u).chain(theta).copied().collect();
         let mut xdot = vec![ad::AdNested::from(0.0); nx];
         let mut lam = vec![ad::AdNested::from(0.0); self.set.rows.len()];
-        ad::hessian(
+        let z: Vec<f64> = x.iter().chain(u).chain(theta).copied().collect();
+        ad::hessian_over(
             &z,
+            &self.model.curved_inputs(),
             |zs| {
                 let (xs, rest) = zs.split_at(nx);
                 let (us, ts) = rest.split_at(nu);

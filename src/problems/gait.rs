@@ -649,6 +649,9 @@ impl GenericFunction for ContactForceRows<'_> {
         }
         Ok(())
     }
+    fn curved_inputs(&self) -> Option<Vec<usize>> {
+        Some(self.model.curved_inputs())
+    }
 }
 
 /// Normal gap of one contact primitive as a function of `(x, u, θ)` (the control has no
@@ -666,6 +669,15 @@ impl GenericFunction for GapOfState<'_> {
         let (nx, nu, nq) = (self.model.nx(), self.model.nu(), self.model.nq());
         out[0] = self.model.gap(self.contact, &z[..nq], &z[nx + nu..]);
         Ok(())
+    }
+    /// The positions and θ.
+    fn curved_inputs(&self) -> Option<Vec<usize>> {
+        let (nx, nu, nq) = (self.model.nx(), self.model.nu(), self.model.nq());
+        Some(
+            (0..nq)
+                .chain(nx + nu..nx + nu + self.model.ntheta())
+                .collect(),
+        )
     }
 }
 
@@ -740,5 +752,10 @@ impl GenericFunction for Gap<'_> {
         let (nx, nq) = (self.model.nx(), self.model.nq());
         out[0] = self.model.gap(self.contact, &z[..nq], &z[nx..]);
         Ok(())
+    }
+    /// The positions and θ.
+    fn curved_inputs(&self) -> Option<Vec<usize>> {
+        let (nx, nq) = (self.model.nx(), self.model.nq());
+        Some((0..nq).chain(nx..nx + self.model.ntheta()).collect())
     }
 }

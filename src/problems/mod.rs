@@ -30,6 +30,13 @@ pub trait GenericFunction: Send + Sync {
     fn is_linear(&self) -> bool {
         false
     }
+    /// The inputs that can appear in a second derivative, strictly increasing (`None`:
+    /// all). Every second derivative involving another input must be exactly zero (an
+    /// input absent from `eval`, or entering it affinely with constant coefficients); the
+    /// Hessian then skips those inputs.
+    fn curved_inputs(&self) -> Option<Vec<usize>> {
+        None
+    }
 }
 
 /// [`NodeFunction`] view of a [`GenericFunction`], with exact Jacobian and Hessian.
@@ -60,8 +67,13 @@ impl<T: GenericFunction> NodeFunction for AdTerm<T> {
             return Ok(());
         }
         let mut y = vec![AdNested::from(0.0); self.0.dim()];
-        ad::hessian(
+        let curved = self
+            .0
+            .curved_inputs()
+            .unwrap_or_else(|| (0..z.len()).collect());
+        ad::hessian_over(
             z,
+            &curved,
             |zs| {
                 self.0.eval(zs, &mut y)?;
                 Ok(y.iter()

@@ -427,4 +427,8 @@ impl GenericFunction for TrackingResidual<'_> {
     fn is_linear(&self) -> bool {
         self.target.feet.iter().all(Option::is_none)
     }
+    /// The controls enter only through the ground loads, that is through the dynamics.
+    fn curved_inputs(&self) -> Option<Vec<usize>> {
+        Some(self.model.curved_inputs())
+    }
 }
