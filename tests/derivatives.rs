@@ -207,19 +207,41 @@ fn cvodes_sensitivities_match_finite_differences_for_every_constraint_set() {
 }
 
 /// Exact second derivatives of the gait dynamics, `∇²(μᵀf)` over (x, u, θ) by nested AD,
-/// against central differences of the exact AD Jacobian.
+/// against central differences of the exact AD Jacobian: muscle-torque generators (AD
+/// over the states and θ only, the activations leading), the same with residual
+/// actuators (their controls lead beside the activations) and joint torques.
 #[test]
 fn dynamics_second_derivatives_match_finite_differences() {
     use footfall::integrate::ControlledOde;
     let mut rng = Rng::new(21);
-    for (foot, contacts) in [
-        ("ellipse.json", vec![("r.sole", true)]),
+    let knee = serde_json::json!([{ "type": "passive_joint_stiffness", "joint": "knee", "stiffness": 20.0, "rest_angle": -0.2, "free": ["stiffness"] }]);
+    for (model, foot, contacts) in [
         (
+            stiff_model("ellipse.json"),
+            "ellipse.json",
+            vec![("r.sole", true)],
+        ),
+        (
+            stiff_model("double_circle.json"),
             "double_circle.json",
             vec![("r.heel", true), ("r.forefoot", false)],
         ),
+        (
+            stiff_model("ellipse.json").with_residual_actuators(100.0, 50.0),
+            "ellipse.json with residual actuators",
+            vec![("r.sole", true)],
+        ),
+        (
+            model_with_effects(
+                "opensim_subject01_torque.json",
+                "ellipse.json",
+                knee.clone(),
+            ),
+            "ellipse.json, joint torques",
+            vec![("r.sole", true)],
+        ),
     ] {
-        let m = stiff_model(foot);
+        let m = model;
         let set = m.constraint_set("s", &contacts).unwrap();
         let ode = GaitOde {
             model: &m,

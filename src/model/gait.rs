@@ -1069,17 +1069,27 @@ impl GaitModel {
     }
 
     /// The inputs of `(x, u, θ)` that can appear in a second derivative of the dynamics
-    /// or of anything computed from them (contact forces, ground loads): all of them,
-    /// except the excitations of muscle-torque generators without residual actuators.
-    /// Those enter only `ȧ = (e − a)/τ`, affinely with constant coefficients, so every
-    /// second derivative involving them is exactly zero and AD can skip them.
-    pub fn curved_inputs(&self) -> Vec<usize> {
-        let (nx, nu, nt) = (self.nx(), self.nu(), self.ntheta());
+    /// or of anything computed from them (contact forces, ground loads), and how many of
+    /// them lead as a group the dynamics are jointly affine in. All inputs can, except
+    /// the excitations of muscle-torque generators without residual actuators: those
+    /// enter only `ȧ = (e − a)/τ`, affinely with constant coefficients, so every second
+    /// derivative involving them is exactly zero. The activations and the controls that
+    /// remain (joint torques, residual actuators, excitations beside residuals) lead: the
+    /// joint torques are linear in them at fixed (q, q̇, θ) (`s·τ₀·a·f^A(q)·f^V(q̇)`, or
+    /// the control itself), the accelerations and contact forces are linear in the torques
+    /// for a fixed contact set, and ȧ is linear in (e, a).
+    pub fn curved_inputs(&self) -> (Vec<usize>, usize) {
+        let (nq, nx, nu, nt) = (self.nq(), self.nx(), self.nu(), self.ntheta());
         let controls_affine =
             matches!(self.actuation, Actuation::Mtg(_)) && self.residuals.is_none();
-        (0..nx + nu + nt)
-            .filter(|&i| !(controls_affine && (nx..nx + nu).contains(&i)))
-            .collect()
+        let mut order: Vec<usize> = (2 * nq..nx).collect();
+        if !controls_affine {
+            order.extend(nx..nx + nu);
+        }
+        let lead = order.len();
+        order.extend(0..2 * nq);
+        order.extend(nx + nu..nx + nu + nt);
+        (order, lead)
     }
 
     /// Evaluate `ẋ` and its Jacobians with respect to `(x, u, θ)` by chunked forward AD;
@@ -1265,9 +1275,11 @@ impl ControlledOde for GaitOde<'_> {
         let mut xdot = vec![ad::AdNested::from(0.0); nx];
         let mut lam = vec![ad::AdNested::from(0.0); self.set.rows.len()];
         let z: Vec<f64> = x.iter().chain(u).chain(theta).copied().collect();
+        let (curved, lead) = self.model.curved_inputs();
         ad::hessian_over(
             &z,
-            &self.model.curved_inputs(),
+            &curved,
+            lead,
             |zs| {
                 let (xs, rest) = zs.split_at(nx);
                 let (us, ts) = rest.split_at(nu);

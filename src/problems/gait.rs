@@ -649,7 +649,7 @@ impl GenericFunction for ContactForceRows<'_> {
         }
         Ok(())
     }
-    fn curved_inputs(&self) -> Option<Vec<usize>> {
+    fn curved_inputs(&self) -> Option<(Vec<usize>, usize)> {
         Some(self.model.curved_inputs())
     }
 }
@@ -671,13 +671,10 @@ impl GenericFunction for GapOfState<'_> {
         Ok(())
     }
     /// The positions and θ.
-    fn curved_inputs(&self) -> Option<Vec<usize>> {
+    fn curved_inputs(&self) -> Option<(Vec<usize>, usize)> {
         let (nx, nu, nq) = (self.model.nx(), self.model.nu(), self.model.nq());
-        Some(
-            (0..nq)
-                .chain(nx + nu..nx + nu + self.model.ntheta())
-                .collect(),
-        )
+        let curved = (0..nq).chain(nx + nu..nx + nu + self.model.ntheta());
+        Some((curved.collect(), 0))
     }
 }
 
@@ -754,8 +751,8 @@ impl GenericFunction for Gap<'_> {
         Ok(())
     }
     /// The positions and θ.
-    fn curved_inputs(&self) -> Option<Vec<usize>> {
+    fn curved_inputs(&self) -> Option<(Vec<usize>, usize)> {
         let (nx, nq) = (self.model.nx(), self.model.nq());
-        Some((0..nq).chain(nx..nx + self.model.ntheta()).collect())
+        Some(((0..nq).chain(nx..nx + self.model.ntheta()).collect(), 0))
     }
 }

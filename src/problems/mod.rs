@@ -30,11 +30,12 @@ pub trait GenericFunction: Send + Sync {
     fn is_linear(&self) -> bool {
         false
     }
-    /// The inputs that can appear in a second derivative, strictly increasing (`None`:
-    /// all). Every second derivative involving another input must be exactly zero (an
-    /// input absent from `eval`, or entering it affinely with constant coefficients); the
-    /// Hessian then skips those inputs.
-    fn curved_inputs(&self) -> Option<Vec<usize>> {
+    /// The inputs that can appear in a second derivative (`None`: all) and how many of
+    /// them lead as a group the function is jointly affine in, as for
+    /// [`ad::hessian_over`]. Every second derivative involving another input must be
+    /// exactly zero (an input absent from `eval`, or entering it affinely with constant
+    /// coefficients); the Hessian then skips those inputs.
+    fn curved_inputs(&self) -> Option<(Vec<usize>, usize)> {
         None
     }
 }
@@ -67,13 +68,14 @@ impl<T: GenericFunction> NodeFunction for AdTerm<T> {
             return Ok(());
         }
         let mut y = vec![AdNested::from(0.0); self.0.dim()];
-        let curved = self
+        let (curved, lead) = self
             .0
             .curved_inputs()
-            .unwrap_or_else(|| (0..z.len()).collect());
+            .unwrap_or_else(|| ((0..z.len()).collect(), 0));
         ad::hessian_over(
             z,
             &curved,
+            lead,
             |zs| {
                 self.0.eval(zs, &mut y)?;
                 Ok(y.iter()

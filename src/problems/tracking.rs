@@ -428,7 +428,7 @@ impl GenericFunction for TrackingResidual<'_> {
         self.target.feet.iter().all(Option::is_none)
     }
     /// The controls enter only through the ground loads, that is through the dynamics.
-    fn curved_inputs(&self) -> Option<Vec<usize>> {
+    fn curved_inputs(&self) -> Option<(Vec<usize>, usize)> {
         Some(self.model.curved_inputs())
     }
 }
