@@ -13,13 +13,22 @@ pub const CHUNK: usize = 8;
 /// Dual number carrying [`CHUNK`] directional derivatives.
 pub type AdChunk = DualSVec64<CHUNK>;
 
-/// A dual number over [`AdChunk`]: one outer direction over [`CHUNK`] inner directions,
+/// Number of inner directions of one [`AdNested`]. Narrower than [`CHUNK`]: the nested
+/// number's cost per operation grows faster with the width than the number of
+/// evaluations falls (knee-stiffness re-fit, evaluations: 20.5 s at 8, 18.3 s at 6,
+/// 17.5 s at 4).
+pub const HESSIAN_CHUNK: usize = 4;
+
+/// The inner dual number of [`AdNested`].
+pub type AdInner = DualSVec64<HESSIAN_CHUNK>;
+
+/// A dual number over [`AdInner`]: one outer direction over [`HESSIAN_CHUNK`] inner directions,
 /// for second derivatives (one Hessian column block per evaluation).
-pub type AdNested = num_dual::Dual<AdChunk>;
+pub type AdNested = num_dual::Dual<AdInner>;
 
 /// Hessian of a scalar function `f: ℝⁿ → ℝ` (column-major n × n) by nested forward AD.
 /// Symmetry is used: outer direction `j` needs only the inner chunks up to `j`, so `f` is
-/// evaluated about `n²/(2·CHUNK) + n` times in [`AdNested`].
+/// evaluated about `n²/(2·HESSIAN_CHUNK) + n` times in [`AdNested`].
 pub fn hessian<E>(
     x: &[f64],
     f: impl FnMut(&[AdNested]) -> Result<AdNested, E>,
@@ -35,8 +44,8 @@ pub fn hessian<E>(
 /// columns of `out` are set to zero. The first `affine_lead` of `curved` form a group in
 /// which `f` is jointly affine (their second derivatives among themselves are zero, e.g.
 /// activations that scale torques), so only their cross terms with the rest are
-/// computed. Costs about `(k² − a²)/(2·CHUNK) + k − a` evaluations for `k` curved inputs
-/// of which `a` lead, instead of `n²/(2·CHUNK) + n`.
+/// computed. Costs about `(k² − a²)/(2·HESSIAN_CHUNK) + k − a` evaluations for `k` curved inputs
+/// of which `a` lead, instead of `n²/(2·HESSIAN_CHUNK) + n`.
 pub fn hessian_over<E>(
     x: &[f64],
     curved: &[usize],
@@ -65,30 +74,30 @@ pub fn hessian_over<E>(
             xs.clear();
             for (i, &v) in x.iter().enumerate() {
                 let s = slot[i];
-                let mut inner = AdChunk::from_re(v);
-                if s != usize::MAX && s >= start && s < start + CHUNK {
+                let mut inner = AdInner::from_re(v);
+                if s != usize::MAX && s >= start && s < start + HESSIAN_CHUNK {
                     inner = inner.derivative(s - start);
                 }
                 let outer = if s == jj {
-                    AdChunk::from_re(1.0)
+                    AdInner::from_re(1.0)
                 } else {
-                    AdChunk::from_re(0.0)
+                    AdInner::from_re(0.0)
                 };
                 xs.push(num_dual::Dual::new(inner, outer));
             }
             let y = f(&xs)?;
             let j = curved[jj];
-            for c in 0..CHUNK.min(k - start) {
+            for c in 0..HESSIAN_CHUNK.min(k - start) {
                 let ii = start + c;
                 if ii > jj {
                     break;
                 }
                 let i = curved[ii];
-                let v = eps(&y.eps, c);
+                let v = eps_inner(&y.eps, c);
                 out[i + j * n] = v;
                 out[j + i * n] = v;
             }
-            start += CHUNK;
+            start += HESSIAN_CHUNK;
         }
     }
     Ok(())
@@ -110,6 +119,15 @@ pub fn seed_chunk(x: &[f64], start: usize, out: &mut Vec<AdChunk>) {
 /// Derivative part `k` of `v` (0 if the derivative is structurally zero).
 #[inline]
 pub fn eps(v: &AdChunk, k: usize) -> f64 {
+    match &v.eps {
+        Derivative(Some(m)) => m[k],
+        Derivative(None) => 0.0,
+    }
+}
+
+/// Derivative part `k` of an inner dual number (0 if structurally zero).
+#[inline]
+fn eps_inner(v: &AdInner, k: usize) -> f64 {
     match &v.eps {
         Derivative(Some(m)) => m[k],
         Derivative(None) => 0.0,
