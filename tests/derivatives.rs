@@ -215,7 +215,7 @@ fn dynamics_second_derivatives_match_finite_differences() {
     use footfall::integrate::ControlledOde;
     let mut rng = Rng::new(21);
     let knee = serde_json::json!([{ "type": "passive_joint_stiffness", "joint": "knee", "stiffness": 20.0, "rest_angle": -0.2, "free": ["stiffness"] }]);
-    for (model, foot, contacts) in [
+    for (m, foot, contacts) in [
         (
             stiff_model("ellipse.json"),
             "ellipse.json",
@@ -232,16 +232,11 @@ fn dynamics_second_derivatives_match_finite_differences() {
             vec![("r.sole", true)],
         ),
         (
-            model_with_effects(
-                "opensim_subject01_torque.json",
-                "ellipse.json",
-                knee.clone(),
-            ),
+            model_with_effects("opensim_subject01_torque.json", "ellipse.json", knee),
             "ellipse.json, joint torques",
             vec![("r.sole", true)],
         ),
     ] {
-        let m = model;
         let set = m.constraint_set("s", &contacts).unwrap();
         let ode = GaitOde {
             model: &m,

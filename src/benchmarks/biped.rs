@@ -13,8 +13,9 @@
 use num_dual::DualSVec64;
 use serde_json::Value;
 
-use super::{dense_jacobian, eps, number, numbers, seed};
+use super::{dense_jacobian, number, numbers, seed};
 use crate::integrate::{ControlledOde, OdeError};
+use crate::model::ad::eps;
 use crate::model::linalg::{cholesky, cholesky_solve};
 use crate::model::Scalar;
 

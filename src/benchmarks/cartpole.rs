@@ -3,8 +3,9 @@
 use num_dual::DualSVec64;
 use serde_json::Value;
 
-use super::{eps, number, seed};
+use super::{number, seed};
 use crate::integrate::{ControlledOde, OdeError};
+use crate::model::ad::eps;
 use crate::model::Scalar;
 
 /// Number of states (x, θ, ẋ, θ̇).

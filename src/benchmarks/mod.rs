@@ -75,7 +75,8 @@ pub use cartpole::CartPole;
 
 use std::path::Path;
 
-use num_dual::{Derivative, DualSVec64};
+use crate::model::ad::eps;
+use num_dual::DualSVec64;
 use serde_json::Value;
 
 /// Read and parse a problem JSON file; errors name the file.
@@ -137,15 +138,6 @@ fn numbers<const N: usize>(problem: &Value, path: &[&str], what: &str) -> Result
 #[inline]
 fn seed<const N: usize>(v: f64, k: usize) -> DualSVec64<N> {
     DualSVec64::<N>::from_re(v).derivative(k)
-}
-
-/// Derivative part `k` of `v` (0 when structurally zero).
-#[inline]
-fn eps<const N: usize>(v: &DualSVec64<N>, k: usize) -> f64 {
-    match &v.eps {
-        Derivative(Some(d)) => d[k],
-        Derivative(None) => 0.0,
-    }
 }
 
 /// Value and column-major Jacobian (`jac[i + j * M]`) of `f: ℝᴺ → ℝᴹ` by one forward pass

@@ -93,7 +93,7 @@ pub fn hessian_over<E>(
                     break;
                 }
                 let i = curved[ii];
-                let v = eps_inner(&y.eps, c);
+                let v = eps(&y.eps, c);
                 out[i + j * n] = v;
                 out[j + i * n] = v;
             }
@@ -116,18 +116,10 @@ pub fn seed_chunk(x: &[f64], start: usize, out: &mut Vec<AdChunk>) {
     }
 }
 
-/// Derivative part `k` of `v` (0 if the derivative is structurally zero).
+/// Derivative part `k` of a vector dual number of any width (0 if the derivative is
+/// structurally zero).
 #[inline]
-pub fn eps(v: &AdChunk, k: usize) -> f64 {
-    match &v.eps {
-        Derivative(Some(m)) => m[k],
-        Derivative(None) => 0.0,
-    }
-}
-
-/// Derivative part `k` of an inner dual number (0 if structurally zero).
-#[inline]
-fn eps_inner(v: &AdInner, k: usize) -> f64 {
+pub fn eps<const N: usize>(v: &DualSVec64<N>, k: usize) -> f64 {
     match &v.eps {
         Derivative(Some(m)) => m[k],
         Derivative(None) => 0.0,
