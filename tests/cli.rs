@@ -369,6 +369,26 @@ fn track_interrupted_by_ctrl_c_writes_the_last_iterate() {
     for f in ["tracking.csv", "kinematics.sto", "table3.md", "report.html"] {
         assert!(out.join(f).is_file(), "{f} missing");
     }
+    // the report says so: an amber box with the status and the infeasibility, and a
+    // caution across every plot
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    assert!(
+        html.contains(r#"<div class="summary warning" id="summary">"#),
+        "not an amber box"
+    );
+    assert!(html.contains(r#"<p class="status">interrupted</p>"#));
+    let inf = summary["infeasibility"].as_f64().unwrap();
+    assert!(
+        html.contains(&format!("<dt>infeasibility</dt><dd>{inf:.2e}</dd>")),
+        "the infeasibility {inf:.2e} is not in the status box"
+    );
+    let plots = html.matches(">% of gait cycle").count();
+    let notes = html.matches(r#"class="plot-note""#).count();
+    assert!(
+        plots >= 20 && notes == plots,
+        "{notes} cautions on {plots} plots"
+    );
+    assert!(html.contains(">interrupted</text>"));
     report_rewrites_a_track_run(&out, &summary);
 }
 

@@ -557,6 +557,24 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
             if v.converged { "converged" } else { "did NOT converge" },
             v.sentence
         );
+        // the curves before and after, side by side, in a report of their own
+        let side_by_side = format!("before_after_{}.html", v.test.effect.kind());
+        let text = match [&args.run, &v.folder]
+            .iter()
+            .map(|p| footfall::report::runs::RunCurves::read(p))
+            .collect::<Result<Vec<_>, _>>()
+        {
+            Ok(runs) => {
+                folder.write(
+                    &side_by_side,
+                    footfall::report::runs::side_by_side(&runs)
+                        .to_html()
+                        .as_bytes(),
+                )?;
+                format!("{text} The curves before and after, side by side: {side_by_side}.")
+            }
+            Err(e) => format!("{text} (No side-by-side curves: {e}.)"),
+        };
         md += &format!(
             "\n## {}\n\n{text}\n\n{}\n",
             v.test.label,

@@ -11,9 +11,10 @@ use footfall::problems::evaluation::{
     channel_errors, Comparison, FineGridFigures, GaitSolution, Reintegration, LOAD_NAMES,
 };
 use footfall::problems::transient::{force_transients, ForceTransient};
+use footfall::report::body::{BodyAnimation, BodyFrame, Pose};
 use footfall::report::csv::TimeSeries;
+use footfall::report::gait_figures::{phase_legend, ActuatorTraces, ChannelFigures, CycleAxis};
 use footfall::report::html::{Report, Section, Summary, Tone};
-use footfall::report::plot::{LinePlot, LineStyle, Series, Span};
 use footfall::report::table::{error_table, Table};
 use footfall::runfolder::RunFolder;
 use footfall::sqp::{SqpResult, SqpStatus};
@@ -94,6 +95,8 @@ pub struct GaitRun<'a> {
     pub sets: &'a [ConstraintSet],
     /// Phase file.
     pub phases_path: &'a std::path::Path,
+    /// The measured events (heel strikes set each leg's percent of the gait cycle).
+    pub events: &'a footfall::data::events::Events,
     /// Solver result.
     pub result: &'a SqpResult,
     /// The solution read from `result.w`.
@@ -194,69 +197,55 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
         "model"
     };
 
-    let spans: Vec<Span> = sol
-        .phase_spans()
-        .iter()
-        .map(|p| Span::new(p.t0, p.t1, p.name.clone()))
-        .collect();
-    let deg = 180.0 / std::f64::consts::PI;
-    let plot = |title: &str,
-                unit: &str,
-                line_model: &[f64],
-                measured: &[f64],
-                node_model: &[f64],
-                scale: f64| {
-        let mut p = LinePlot::new(title, "time (s)", unit);
-        let scaled = |v: &[f64]| v.iter().map(|x| x * scale).collect::<Vec<f64>>();
-        p.series.push(Series::new(
-            line_label,
-            line.times.clone(),
-            scaled(line_model),
-            LineStyle::Solid,
-        ));
-        p.series.push(Series::new(
-            "model at the nodes",
-            cmp.times.clone(),
-            scaled(node_model),
-            LineStyle::Markers,
-        ));
-        p.series.push(Series::new(
-            "measured",
-            line.times.clone(),
-            scaled(measured),
-            LineStyle::Dashed,
-        ));
-        p.shaded = spans.clone();
-        p.to_svg()
+    let (t0, t1) = sol.span();
+    let converged = res.status == SqpStatus::Converged;
+    let interrupted = res.status == footfall::sqp::SqpStatus::Interrupted;
+    let invalid = run.enforce_validity && validity.as_ref().is_some_and(|v| !v.is_valid());
+    let verdict = match (converged, invalid) {
+        (true, false) => "converged",
+        (true, true) => "converged, physically invalid",
+        (false, true) if interrupted => "interrupted, physically invalid",
+        (false, false) if interrupted => "interrupted",
+        (false, true) => "not converged, physically invalid",
+        (false, false) => "not converged",
     };
-    let mut kin = Vec::new();
-    for i in 2..9 {
-        kin.push(plot(
-            &COORDINATES[i].replace('_', " "),
-            "angle (°)",
-            &line.model_q[i],
-            &line.data_q[i],
-            &cmp.model_q[i],
-            deg,
-        ));
-    }
-    let mut forces = Vec::new();
-    for (s, side) in ["right", "left"].iter().enumerate() {
-        for (c, label, unit) in [
-            (1, "Normal GRF", "force (N)"),
-            (0, "Tangential GRF", "force (N)"),
-            (2, "CoP", "x (m)"),
-        ] {
-            forces.push(plot(
-                &format!("{label}, {side} foot"),
-                unit,
-                &line.model_feet[s][c],
-                &line.data_feet[s][c],
-                &cmp.model_feet[s][c],
-                1.0,
-            ));
-        }
-    }
+    let cycle = CycleAxis::from_events(run.events, (t0, t1));
+    let figures = ChannelFigures {
+        line,
+        nodes: &cmp,
+        line_label,
+        cycle,
+        window: (t0, t1),
+        phases: sol
+            .phase_spans()
+            .iter()
+            .map(|p| (p.t0, p.t1, p.name.clone()))
+            .collect(),
+        note: (verdict != "converged").then(|| verdict.to_string()),
+    };
+    let (angle_plots, velocity_plots) = figures.kinematics();
+    let kin: Vec<String> = angle_plots.iter().map(|p| p.to_svg()).collect();
+    let vel: Vec<String> = velocity_plots.iter().map(|p| p.to_svg()).collect();
+    let forces: Vec<String> = figures.loads().iter().map(|p| p.to_svg()).collect();
+    let sequence = footfall::phases::PhaseSequence::load(run.phases_path)
+        .with_context(|| format!("reading {}", run.phases_path.display()))?;
+    let legend = phase_legend(&sequence, &sol.phases, &cycle, (t0, t1));
+    // the states the figures of the body and the actuators show: the fine grid's, else
+    // the nodes'
+    let states: Vec<&footfall::simulate::Sample> = match &fine_run {
+        Ok(f) => f.result.samples.iter().collect(),
+        Err(_) => nodes.iter().collect(),
+    };
+    let owned: Vec<footfall::simulate::Sample> = states.iter().map(|s| (*s).clone()).collect();
+    let bounds = control_bounds(model);
+    let actuators = ActuatorTraces::from_samples(model, sol, &owned, Some(bounds));
+    let actuator_svgs: Vec<String> = figures
+        .actuators(&actuators)
+        .iter()
+        .map(|p| p.to_svg())
+        .collect();
+    let animation = body_animation(model, sol, line, &owned, &cycle, (t0, t1));
+    let film_strip = animation.film_strip();
 
     // time series at the nodes
     let mut ts = TimeSeries::new(cmp.times.clone())?;
@@ -311,17 +300,6 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
         _ => None,
     };
 
-    let converged = res.status == SqpStatus::Converged;
-    let interrupted = res.status == footfall::sqp::SqpStatus::Interrupted;
-    let invalid = run.enforce_validity && validity.as_ref().is_some_and(|v| !v.is_valid());
-    let verdict = match (converged, invalid) {
-        (true, false) => "converged",
-        (true, true) => "converged, physically invalid",
-        (false, true) if interrupted => "interrupted, physically invalid",
-        (false, false) if interrupted => "interrupted",
-        (false, true) => "not converged, physically invalid",
-        (false, false) => "not converged",
-    };
     let mut summary = Summary::new(
         verdict,
         if invalid {
@@ -335,10 +313,10 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
     );
     summary.iterations = Some(res.history.len().saturating_sub(1));
     summary.time_s = Some(res.seconds);
-    let (t0, t1) = sol.span();
     summary.extra = vec![
         ("objective".into(), format!("{:.6}", res.objective)),
         ("KKT residual".into(), format!("{:.2e}", res.kkt)),
+        ("infeasibility".into(), format!("{:.2e}", res.infeasibility)),
         ("window".into(), format!("{t0:.3}–{t1:.3} s")),
     ];
     let fine_text = match (&fine, &fine_run) {
@@ -412,17 +390,57 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
         fine_run.is_ok(),
     ));
     sections.extend(run.extra_sections);
+    let axis_note = format!(
+        "The x axis is percent of the gait cycle ({:.3} s), each leg from its own heel strike (right {:.3} s, left {:.3} s): over a mirrored half cycle one leg fills 0–50 % and the other 50–100 % of one leg's cycle. The trial's clock runs along the top. Lines: the solution re-integrated interval by interval on a 1 ms grid; markers: the shooting nodes; dashes: the measurement; the tinted band between them is the residual the cost sees. Phases shaded and named in the phase legend.",
+        cycle.period, cycle.heel_strike[0], cycle.heel_strike[1]
+    );
+    let mut phase_paragraphs = vec![];
+    if !sequence.description.is_empty() {
+        phase_paragraphs.push(sequence.description.clone());
+    }
+    phase_paragraphs.push("Impacts are instantaneous; a contact listed as on the ground rolls without slipping unless marked normal only.".into());
     sections.push(Section {
-        heading: "Kinematics".into(),
-        paragraphs: vec!["Lines: the solution re-integrated interval by interval on a 1 ms grid; markers: the shooting nodes; dashes: the measurement. Phases shaded.".into()],
+        heading: "Phases".into(),
+        paragraphs: phase_paragraphs,
+        tables: vec![legend],
+        svgs: vec![],
+    });
+    sections.push(Section {
+        heading: "Kinematics: angles".into(),
+        paragraphs: vec![axis_note],
         tables: vec![],
         svgs: kin,
+    });
+    sections.push(Section {
+        heading: "Kinematics: angular velocities".into(),
+        paragraphs: vec!["Model and measured velocities (the derivative of the measurement's spline, as the cost's velocity targets).".into()],
+        tables: vec![],
+        svgs: vel,
     });
     sections.push(Section {
         heading: "Ground reaction forces and centre of pressure".into(),
         paragraphs: vec![fine_text],
         tables: vec![],
         svgs: forces,
+    });
+    sections.push(Section {
+        heading: "Actuators".into(),
+        paragraphs: vec!["Joint torques by source (the actuators with their passive damping, each effect, residual actuators), then activations and controls per joint; black dots mark a control held at its bound. Solid: right leg; dashed: left.".into()],
+        tables: vec![],
+        svgs: actuator_svgs,
+    });
+    let mut body_svgs = vec![];
+    if !animation.frames.is_empty() {
+        body_svgs.push(animation.to_html());
+    }
+    if !animation.keys.is_empty() {
+        body_svgs.push(film_strip.clone());
+    }
+    sections.push(Section {
+        heading: "The body, moving".into(),
+        paragraphs: vec!["The model (black, feet in colour: right blue, left orange) over the measured pose (grey, dashed: the data's coordinates on the same model). Arrows: each foot's ground force from its centre of pressure (0.4 m per kN); filled dots: the model's CoP, rings: the measured CoP. Below: the key instants for print.".into()],
+        tables: vec![],
+        svgs: body_svgs,
     });
     let report = Report {
         title: run.title,
@@ -442,6 +460,8 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
         "phases": run.phases_path,
         "data": data.source,
         "window_s": [t0, t1],
+        "gait_cycle": {"period_s": cycle.period, "heel_strike_s": cycle.heel_strike},
+        "phase_spans": sol.phase_spans().iter().map(|p| serde_json::json!({"phase": p.name, "from_s": p.t0, "to_s": p.t1})).collect::<Vec<_>>(),
         "status": res.status,
         "verdict": verdict,
         "physically_valid": validity.as_ref().map(|v| v.is_valid()),
@@ -481,9 +501,27 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
     } else {
         "tracking"
     };
-    folder.write(&format!("{csv_name}.csv"), ts.to_csv().as_bytes())?;
-    if let Some(f) = &fine_ts {
-        folder.write("fine_grid.csv", f.to_csv().as_bytes())?;
+    // the CSV files also carry the measured coordinates and both velocities (what the
+    // cost compares, and what `footfall report RUN_A RUN_B` overlays); the `.sto` keeps
+    // the model's coordinates only
+    let with_kinematics = |series: &TimeSeries, c: &Comparison| -> anyhow::Result<TimeSeries> {
+        let mut t = series.clone();
+        for (i, coordinate) in COORDINATES.iter().enumerate() {
+            let data = format!("data_{coordinate}");
+            if !t.names().contains(&data.as_str()) {
+                t.push(data, c.data_q[i].clone())?;
+            }
+            t.push(format!("model_{coordinate}_dot"), c.model_qd[i].clone())?;
+            t.push(format!("data_{coordinate}_dot"), c.data_qd[i].clone())?;
+        }
+        Ok(t)
+    };
+    folder.write(
+        &format!("{csv_name}.csv"),
+        with_kinematics(&ts, &cmp)?.to_csv().as_bytes(),
+    )?;
+    if let (Some(f), Some(fc)) = (&fine_ts, &fine_cmp) {
+        folder.write("fine_grid.csv", with_kinematics(f, fc)?.to_csv().as_bytes())?;
     }
     folder.write(
         "kinematics.sto",
@@ -504,6 +542,9 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
     )?;
     for (name, bytes) in &run.extra_files {
         folder.write(name, bytes)?;
+    }
+    if !animation.keys.is_empty() {
+        folder.write("film_strip.svg", film_strip.as_bytes())?;
     }
     folder.write("report.html", report.to_html().as_bytes())?;
     let path = folder.commit()?;
@@ -643,4 +684,69 @@ fn transient_section(transients: &[ForceTransient], threshold: f64, have_fine: b
         tables,
         svgs: vec![],
     }
+}
+
+/// Bounds of each control: excitations in [0, 1], joint torques within their bound,
+/// residual actuators unbounded.
+fn control_bounds(model: &GaitModel) -> (Vec<f64>, Vec<f64>) {
+    let n = model.nu();
+    let na = model.nu_actuators();
+    let (lo, hi) = match model.actuation() {
+        footfall::model::gait::Actuation::Mtg(_) => (0.0, 1.0),
+        footfall::model::gait::Actuation::Torques { max_torque } => (-max_torque, *max_torque),
+    };
+    (
+        (0..n)
+            .map(|i| if i < na { lo } else { f64::NEG_INFINITY })
+            .collect(),
+        (0..n)
+            .map(|i| if i < na { hi } else { f64::INFINITY })
+            .collect(),
+    )
+}
+
+/// Frame step of the body animation (s).
+const FRAME_STEP: f64 = 0.01;
+
+/// The body animation over `states` (one frame per 10 ms), with the measured pose and
+/// loads from `line` (the comparison at the same instants).
+fn body_animation(
+    model: &GaitModel,
+    sol: &GaitSolution,
+    line: &Comparison,
+    states: &[footfall::simulate::Sample],
+    cycle: &CycleAxis,
+    window: (f64, f64),
+) -> BodyAnimation {
+    let (h, n) = model.ground(&sol.theta);
+    let lead = cycle.lead_side(window);
+    let mut frames = Vec::new();
+    let mut next = f64::NEG_INFINITY;
+    for (k, s) in states.iter().enumerate() {
+        if s.t + 1e-9 < next || k >= line.times.len() {
+            continue;
+        }
+        next = s.t + FRAME_STEP;
+        let q: Vec<f64> = s.x[..model.nq()].to_vec();
+        let qd: Vec<f64> = (0..model.nq()).map(|i| line.data_q[i][k]).collect();
+        let opt = |v: f64| v.is_finite().then_some(v);
+        frames.push(BodyFrame {
+            t: s.t,
+            percent: cycle.percent(lead, s.t),
+            model: Pose::of_model(model, &q),
+            measured: Pose::of_model(model, &qd),
+            cop_model: [0, 1].map(|f| opt(line.model_feet[f][2][k])),
+            cop_measured: [0, 1].map(|f| opt(line.data_feet[f][2][k])),
+            grf_model: [0, 1].map(|f| [line.model_feet[f][0][k], line.model_feet[f][1][k]]),
+            grf_measured: [0, 1].map(|f| [line.data_feet[f][0][k], line.data_feet[f][1][k]]),
+        });
+    }
+    let mut a = BodyAnimation {
+        frames,
+        ground_height: h,
+        ground_normal: n,
+        keys: vec![],
+    };
+    a.find_keys(lead);
+    a
 }

@@ -282,6 +282,7 @@ pub fn predict(
             model: &model,
             sets: &sets,
             phases_path: &phases,
+            events: &tracking.events,
             result: &res,
             solution: &solution,
             integrator,

@@ -14,10 +14,12 @@ use std::path::{Path, PathBuf};
 /// Arguments of `footfall report`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// A track run folder (with setup.json, solution.json and summary.json).
-    run: PathBuf,
-    /// Output folder (default: the run folder itself, replaced as a whole once the new
-    /// report is complete).
+    /// A track run folder (with setup.json, solution.json and summary.json); or two or
+    /// more run folders of `track` or `predict` to set side by side in one report.
+    #[arg(required = true, num_args = 1..)]
+    runs: Vec<PathBuf>,
+    /// Output folder (default for one run: the run folder itself, replaced as a whole
+    /// once the new report is complete; required for several runs).
     #[arg(long)]
     out: Option<PathBuf>,
     /// Replace `--out` if it exists.
@@ -69,11 +71,59 @@ fn read_record(run: &Path) -> anyhow::Result<SolverRecord> {
     })
 }
 
+/// The arguments for re-writing one run.
+struct OneRun {
+    run: PathBuf,
+    out: Option<PathBuf>,
+    overwrite: bool,
+    transient_threshold: f64,
+}
+
+/// `footfall report RUN_A RUN_B … --out DIR`: the runs' curves on the same plots and
+/// their errors side by side, read from their files.
+fn side_by_side(args: &Args, quiet: bool) -> anyhow::Result<()> {
+    let Some(out) = &args.out else {
+        bail!("--out: required with several runs (the side-by-side report gets its own folder; the run folders are left as they are)");
+    };
+    let mut runs = Vec::new();
+    for r in &args.runs {
+        if !r.is_dir() {
+            bail!("{}: not a run folder (give folders that `footfall track` or `footfall predict` wrote)", r.display());
+        }
+        runs.push(footfall::report::runs::RunCurves::read(r)?);
+    }
+    let folder = RunFolder::create(out, args.overwrite)?;
+    let report = footfall::report::runs::side_by_side(&runs);
+    let listing = serde_json::json!({
+        "command": "report",
+        "runs": args.runs.iter().zip(&runs).map(|(p, r)| serde_json::json!({"path": p, "name": r.name, "verdict": r.verdict})).collect::<Vec<_>>(),
+    });
+    folder.write(
+        "runs.json",
+        serde_json::to_string_pretty(&listing)?.as_bytes(),
+    )?;
+    folder.write("report.html", report.to_html().as_bytes())?;
+    let path = folder.commit()?;
+    if !quiet {
+        eprintln!("report: {}", path.join("report.html").display());
+    }
+    Ok(())
+}
+
 pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
     run_inner(args, quiet).map_err(Failure::classify)
 }
 
 fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
+    if args.runs.len() > 1 {
+        return side_by_side(&args, quiet);
+    }
+    let args = OneRun {
+        run: args.runs[0].clone(),
+        out: args.out,
+        overwrite: args.overwrite,
+        transient_threshold: args.transient_threshold,
+    };
     if !args.run.is_dir() {
         bail!(
             "{}: not a run folder (give the folder a `footfall track` run wrote)",

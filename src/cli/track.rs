@@ -1019,6 +1019,7 @@ impl TrackingProblem {
                 model,
                 sets,
                 phases_path: phases,
+                events: &self.setup.events,
                 result: &res,
                 solution: &solution,
                 integrator: integrator.clone(),

@@ -153,6 +153,18 @@ pub struct GaitModel {
     free: Vec<usize>,
 }
 
+/// The generalised forces of the dynamics by source (N·m or N per coordinate).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ForceParts {
+    /// The actuators: muscle-torque generators with their passive damping, or the joint
+    /// torques.
+    pub actuators: Vec<f64>,
+    /// The residual actuators (zero without them).
+    pub residual: Vec<f64>,
+    /// Each effect's, by its kind.
+    pub effects: Vec<(String, Vec<f64>)>,
+}
+
 /// Quantities of one dynamics evaluation that reports need (f64 only).
 #[derive(Debug, Clone, Default, serde::Serialize)]
 pub struct ContactReport {
@@ -591,6 +603,53 @@ impl GaitModel {
             S::adjust(self.effects[e].as_ref(), self.effect_params(p, e), &mut adj);
         }
         (inertia, gravity, ground_height, ground_normal)
+    }
+
+    /// The generalised forces of [`dynamics`](Self::dynamics) split by source, at state
+    /// `x = (q, q̇, a)`, controls `u` and free parameters `theta` (N·m or N per
+    /// coordinate): the actuators (muscle-torque generators with their passive damping, or
+    /// the joint torques), the residual actuators, and each effect by its kind.
+    pub fn generalized_force_parts(&self, x: &[f64], u: &[f64], theta: &[f64]) -> ForceParts {
+        let nq = self.nq();
+        let (q, qd, a) = (&x[..nq], &x[nq..2 * nq], &x[2 * nq..]);
+        let p = self.full_params(theta);
+        let mut act = vec![0.0; nq];
+        match &self.actuation {
+            Actuation::Mtg(set) => {
+                for (k, &(c, joint)) in LEG_JOINTS.iter().enumerate() {
+                    act[c] += set.joint_torque(joint, a[2 * k], a[2 * k + 1], q[c], qd[c]);
+                }
+            }
+            Actuation::Torques { .. } => {
+                for (k, &(c, _)) in LEG_JOINTS.iter().enumerate() {
+                    act[c] += u[k];
+                }
+            }
+        }
+        let mut residual = vec![0.0; nq];
+        if let Some(scales) = &self.residuals {
+            let base = self.nu_actuators();
+            for (i, &sc) in scales.iter().enumerate() {
+                residual[i] = u[base + i] * sc;
+            }
+        }
+        let effects = (0..self.effects.len())
+            .map(|e| {
+                let mut tau = vec![0.0; nq];
+                f64::forces(
+                    self.effects[e].as_ref(),
+                    self.effect_params(&p, e),
+                    EffectState { q, qd },
+                    &mut tau,
+                );
+                (self.effects[e].kind().to_string(), tau)
+            })
+            .collect();
+        ForceParts {
+            actuators: act,
+            residual,
+            effects,
+        }
     }
 
     /// Generalised joint forces of the actuators (and passive damping) and effects.
@@ -1035,6 +1094,14 @@ impl GaitModel {
         let (inertia, gravity, _, _) = self.adjusted(&p);
         let k = self.tree.kinematics(q, qd);
         self.tree.energy(&k, &inertia, gravity)
+    }
+
+    /// The ground at free parameters `theta` (a slope effect tilts it): its height h (m)
+    /// and unit normal n, the ground being the points p with n·p = h.
+    pub fn ground(&self, theta: &[f64]) -> (f64, [f64; 2]) {
+        let p = self.full_params(theta);
+        let (_, _, h, n) = self.adjusted(&p);
+        (h, n)
     }
 
     /// World position of a point given in a body frame, at `q`.

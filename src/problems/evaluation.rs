@@ -106,6 +106,26 @@ impl GaitSolution {
         }
     }
 
+    /// The controls at time `t` (s): interpolated between the control nodes of the phase
+    /// holding `t` as the phase's parameterisation says (None outside the solution).
+    pub fn control_at(&self, t: f64) -> Option<Vec<f64>> {
+        let p = self
+            .phases
+            .iter()
+            .find(|p| t >= p.t0 - 1e-12 && t <= p.t0 + p.duration + 1e-12)?;
+        let n = p.intervals();
+        let r = ((t - p.t0) / p.duration * n as f64).clamp(0.0, n as f64);
+        let k = (r.floor() as usize).min(n - 1);
+        match p.controls {
+            ControlShape::Constant => Some(p.u[k.min(p.u.len() - 1)].clone()),
+            ControlShape::Linear => {
+                let f = r - k as f64;
+                let (a, b) = (&p.u[k], &p.u[(k + 1).min(p.u.len() - 1)]);
+                Some(a.iter().zip(b).map(|(a, b)| a + f * (b - a)).collect())
+            }
+        }
+    }
+
     /// Start and end time (s).
     pub fn span(&self) -> (f64, f64) {
         let last = self.phases.last().map_or(0.0, |p| p.t0 + p.duration);
@@ -404,6 +424,11 @@ pub struct Comparison {
     pub model_q: Vec<Vec<f64>>,
     /// Measured coordinates (cubic spline of the data).
     pub data_q: Vec<Vec<f64>>,
+    /// Model generalised velocities `[coordinate][sample]` (m/s, rad/s).
+    pub model_qd: Vec<Vec<f64>>,
+    /// Measured velocities: the derivative of the data's spline, as the tracking cost's
+    /// velocity targets.
+    pub data_qd: Vec<Vec<f64>>,
     /// Model foot loads `[side][fx, fy, cop_x][sample]` (N, N, m); side 0 = right. The
     /// model CoP is NaN where the model foot carries less than the CoP threshold.
     pub model_feet: [[Vec<f64>; 3]; 2],
@@ -455,6 +480,14 @@ impl Comparison {
             .iter()
             .map(|sp| times.iter().map(|&t| sp.eval(t)).collect())
             .collect();
+        let nq = COORDINATES.len();
+        let model_qd = (0..nq)
+            .map(|i| samples.iter().map(|s| s.x[nq + i]).collect())
+            .collect();
+        let data_qd = splines
+            .iter()
+            .map(|sp| times.iter().map(|&t| sp.derivative(t)).collect())
+            .collect();
         let th = data.cop_threshold;
         let model_side = |k: usize| -> [Vec<f64>; 3] {
             [
@@ -488,6 +521,8 @@ impl Comparison {
             phase: samples.iter().map(|s| s.phase).collect(),
             model_q,
             data_q,
+            model_qd,
+            data_qd,
             model_feet: [model_side(0), model_side(1)],
             data_feet: [data_side(0), data_side(1)],
             cop_threshold: th,

@@ -1,5 +1,5 @@
-//! One self-contained `report.html`: inline CSS, inline SVG, no external resources and no
-//! JavaScript, with a summary box (status, stop reason, iterations, time) at the top, a
+//! One self-contained `report.html`: inline CSS, inline SVG, no external resources (the
+//! only script is the body animation's, [`super::body`]; everything else reads without it), with a summary box (status, stop reason, iterations, time) at the top, a
 //! list of contents, then the sections in order (paragraphs, tables, figures).
 //!
 //! Text (titles, paragraphs, table cells) is escaped; SVG strings are embedded as given
@@ -63,7 +63,8 @@ pub struct Section {
     pub paragraphs: Vec<String>,
     /// Tables.
     pub tables: Vec<Table>,
-    /// SVG documents (e.g. [`super::plot::LinePlot::to_svg`] or [`super::plot::grid`]).
+    /// SVG documents (e.g. [`super::plot::LinePlot::to_svg`] or [`super::plot::grid`]), or
+    /// trusted HTML figure fragments ([`super::body::BodyAnimation::to_html`]).
     pub svgs: Vec<String>,
 }
 
@@ -102,6 +103,11 @@ tbody th{font-weight:normal;background:#fafbfc}
 td{font-variant-numeric:tabular-nums;white-space:nowrap}
 figure{margin:12px 0 20px;overflow-x:auto}
 figure svg{max-width:100%;height:auto;display:block}
+.anim .frame{display:none}
+.anim .frame.on{display:inline}
+.anim-controls{margin:4px 0 8px;display:flex;gap:10px;align-items:center}
+.anim-scrub{flex:1;max-width:420px}
+@media print{.anim{display:none}}
 ";
 
 /// Wall-clock seconds as "0.42 s", "12.3 s" or "3 min 05 s".

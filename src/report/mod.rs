@@ -5,7 +5,7 @@
 //!
 //! This layer knows nothing about how a solution was found: callers hand it numbers,
 //! names and strings. Every output is deterministic (the same input gives the same bytes)
-//! and self-contained (no external resources, no JavaScript).
+//! and self-contained (no external resources; the one script plays the body animation).
 //!
 //! The SVG is written by hand rather than through a plotting crate: the plots need only
 //! lines, bars, markers, shaded spans and text, and writing them directly keeps full control of
@@ -33,10 +33,13 @@
 //! assert!(html.contains("<svg") && html.contains("knee angle"));
 //! ```
 
+pub mod body;
 pub mod csv;
 pub mod diff;
+pub mod gait_figures;
 pub mod html;
 pub mod plot;
+pub mod runs;
 pub mod table;
 
 use std::path::PathBuf;

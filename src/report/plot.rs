@@ -50,6 +50,8 @@ pub struct Series {
     pub y: Vec<f64>,
     /// Drawing style.
     pub style: LineStyle,
+    /// Palette index of its colour; `None`: the series' own index.
+    pub colour: Option<usize>,
 }
 
 impl Series {
@@ -60,7 +62,14 @@ impl Series {
             x,
             y,
             style,
+            colour: None,
         }
+    }
+
+    /// The same series drawn in palette colour `k` (so that related series share one).
+    pub fn coloured(mut self, k: usize) -> Self {
+        self.colour = Some(k);
+        self
     }
 }
 
@@ -86,6 +95,31 @@ impl Span {
     }
 }
 
+/// A filled band between two curves over the same abscissae, such as the residual
+/// between a model and its measurement. Points where any value is not finite break it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Band {
+    /// Legend entry (empty: not listed in the legend).
+    pub name: String,
+    /// Abscissae.
+    pub x: Vec<f64>,
+    /// One edge.
+    pub y0: Vec<f64>,
+    /// The other edge.
+    pub y1: Vec<f64>,
+}
+
+/// A second x axis along the top of the plot, piecewise linear in the first: each
+/// segment maps `[x0, x1]` of the plot to `[t0, t1]` of its own scale (for example the
+/// trial's clock over a percent-of-cycle axis, where each leg's half shows its own times).
+#[derive(Debug, Clone, PartialEq)]
+pub struct TopAxis {
+    /// Label, with units.
+    pub label: String,
+    /// Segments `(x0, x1, t0, t1)`.
+    pub segments: Vec<(f64, f64, f64, f64)>,
+}
+
 /// A line plot rendered to SVG.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LinePlot {
@@ -107,6 +141,12 @@ pub struct LinePlot {
     pub x_range: Option<(f64, f64)>,
     /// Fixed y range; `None`: the data's range with 4 % margins (default `None`).
     pub y_range: Option<(f64, f64)>,
+    /// Filled bands, drawn under the curves in a light tint.
+    pub bands: Vec<Band>,
+    /// A second x axis along the top (default `None`).
+    pub top_axis: Option<TopAxis>,
+    /// A caution written across the plot area, e.g. "not converged" (default `None`).
+    pub note: Option<String>,
 }
 
 /// Colour-blind-safe palette (Okabe & Ito 2008), yellow left out for contrast on white.
@@ -326,6 +366,9 @@ impl LinePlot {
             height: 360.0,
             x_range: None,
             y_range: None,
+            bands: Vec::new(),
+            top_axis: None,
+            note: None,
         }
     }
 
@@ -352,6 +395,14 @@ impl LinePlot {
             for (x, y) in Self::points(s) {
                 xr = (xr.0.min(x), xr.1.max(x));
                 yr = (yr.0.min(y), yr.1.max(y));
+            }
+        }
+        for b in &self.bands {
+            for ((&x, &a), &c) in b.x.iter().zip(&b.y0).zip(&b.y1) {
+                if x.is_finite() && a.is_finite() && c.is_finite() {
+                    xr = (xr.0.min(x), xr.1.max(x));
+                    yr = (yr.0.min(a.min(c)), yr.1.max(a.max(c)));
+                }
             }
         }
         for sp in &self.shaded {
@@ -421,13 +472,15 @@ impl LinePlot {
         // Legend rows below the x-axis label, wrapping at the plot width.
         let mut legend = Vec::new();
         let (mut lx, mut lrow) = (0.0, 0usize);
-        for (i, s) in self
+        // bands are listed after the series, as legend items `series.len() + band`
+        let names: Vec<&str> = self
             .series
             .iter()
-            .enumerate()
-            .filter(|(_, s)| !s.name.is_empty())
-        {
-            let item_w = LEGEND_SAMPLE + 6.0 + text_width(&s.name, LEGEND_SIZE);
+            .map(|s| s.name.as_str())
+            .chain(self.bands.iter().map(|b| b.name.as_str()))
+            .collect();
+        for (i, name) in names.iter().enumerate().filter(|(_, n)| !n.is_empty()) {
+            let item_w = LEGEND_SAMPLE + 6.0 + text_width(name, LEGEND_SIZE);
             if lx > 0.0 && lx + item_w > pw {
                 lx = 0.0;
                 lrow += 1;
@@ -482,7 +535,12 @@ impl LinePlot {
         } else {
             TITLE_SIZE + 14.0
         };
-        let top = title_band + span_rows as f64 * SPAN_ROW + 6.0;
+        let top_axis_band = if self.top_axis.is_some() {
+            LABEL_SIZE + 6.0 + TICK_SIZE + 6.0
+        } else {
+            0.0
+        };
+        let top = title_band + span_rows as f64 * SPAN_ROW + top_axis_band + 6.0;
         let x_label_band = if self.x_label.is_empty() {
             0.0
         } else {
@@ -623,10 +681,35 @@ impl LinePlot {
             .ok();
         }
 
-        // Series.
+        if let Some(ta) = &self.top_axis {
+            self.render_top_axis(
+                out,
+                ta,
+                &sx,
+                (x_axis.lo, x_axis.hi),
+                top,
+                title_band + span_rows as f64 * SPAN_ROW,
+            );
+        }
+
+        // Bands, under the curves.
         let bx = (x_axis.lo, x_axis.hi, y_axis.lo, y_axis.hi);
+        for (i, b) in self.bands.iter().enumerate() {
+            let d = band_path(b, bx, &sx, &sy);
+            if !d.is_empty() {
+                writeln!(
+                    out,
+                    r#"<path d="{d}" fill="{}" fill-opacity="0.22" stroke="none"><title>{}</title></path>"#,
+                    BAND_PALETTE[i % BAND_PALETTE.len()],
+                    escape_xml(&b.name)
+                )
+                .ok();
+            }
+        }
+
+        // Series.
         for (i, s) in self.series.iter().enumerate() {
-            let colour = PALETTE[i % PALETTE.len()];
+            let colour = PALETTE[s.colour.unwrap_or(i) % PALETTE.len()];
             let d = match s.style {
                 LineStyle::Markers => markers_path(s, bx, &sx, &sy),
                 LineStyle::Solid | LineStyle::Dashed => line_path(s, bx, &sx, &sy),
@@ -652,10 +735,25 @@ impl LinePlot {
         // Legend.
         let legend_top = top + ph + 12.0 + TICK_SIZE + x_label_band + 4.0;
         for it in &legend {
-            let s = &self.series[it.series];
-            let colour = PALETTE[it.series % PALETTE.len()];
             let x = left + it.x;
             let y = legend_top + it.row as f64 * LEGEND_ROW + LEGEND_ROW / 2.0;
+            if it.series >= self.series.len() {
+                let k = it.series - self.series.len();
+                writeln!(
+                    out,
+                    r##"<rect x="{}" y="{}" width="{LEGEND_SAMPLE}" height="8" fill="{}" fill-opacity="0.35"/><text x="{}" y="{}" font-size="{LEGEND_SIZE}" fill="#222222">{}</text>"##,
+                    px(x),
+                    px(y - 4.0),
+                    BAND_PALETTE[k % BAND_PALETTE.len()],
+                    px(x + LEGEND_SAMPLE + 6.0),
+                    px(y + LEGEND_SIZE * 0.35),
+                    escape_xml(&self.bands[k].name)
+                )
+                .ok();
+                continue;
+            }
+            let s = &self.series[it.series];
+            let colour = PALETTE[s.colour.unwrap_or(it.series) % PALETTE.len()];
             match s.style {
                 LineStyle::Markers => writeln!(
                     out,
@@ -683,6 +781,19 @@ impl LinePlot {
             )
             .ok();
         }
+        if let Some(note) = &self.note {
+            let (cx, cy) = (left + pw / 2.0, top + ph / 2.0);
+            let size = (pw / (text_width(note, 1.0) + 1.0)).clamp(10.0, 30.0);
+            writeln!(
+                out,
+                r##"<text class="plot-note" x="{x}" y="{y}" font-size="{}" font-weight="bold" text-anchor="middle" fill="#c62828" fill-opacity="0.3" transform="rotate(-12 {x} {y})">{}</text>"##,
+                px(size),
+                escape_xml(note),
+                x = px(cx),
+                y = px(cy)
+            )
+            .ok();
+        }
         if self.series.iter().all(|s| Self::points(s).next().is_none()) {
             writeln!(
                 out,
@@ -694,6 +805,128 @@ impl LinePlot {
         }
         out.push_str("</svg>\n");
     }
+}
+
+impl LinePlot {
+    /// The second x axis along the top: per segment, nice ticks of its own scale placed
+    /// through the segment's linear map; labels that would touch the previous are left out.
+    fn render_top_axis(
+        &self,
+        out: &mut String,
+        ta: &TopAxis,
+        sx: &dyn Fn(f64) -> f64,
+        (lo, hi): (f64, f64),
+        top: f64,
+        band_top: f64,
+    ) {
+        let mut labels: Vec<(f64, String)> = Vec::new();
+        for &(x0, x1, t0, t1) in &ta.segments {
+            if !(x0.is_finite() && x1.is_finite() && t0.is_finite() && t1.is_finite())
+                || x1 <= x0
+                || t1 == t0
+            {
+                continue;
+            }
+            let width = (sx(x1.min(hi)) - sx(x0.max(lo))).max(0.0);
+            let target = ((width / 45.0).floor() as usize).clamp(3, 10);
+            let (a, b) = (t0.min(t1), t0.max(t1));
+            let step = nice_step((b - a) / (target - 1) as f64);
+            let ticks = nice_ticks(a, b, target);
+            for (t, l) in ticks.iter().zip(tick_labels(&ticks, step)) {
+                let x = x0 + (t - t0) / (t1 - t0) * (x1 - x0);
+                if x < lo || x > hi {
+                    continue;
+                }
+                let px_x = sx(x);
+                writeln!(
+                    out,
+                    r##"<line x1="{x}" y1="{}" x2="{x}" y2="{}" stroke="#333333"/>"##,
+                    px(top - 4.0),
+                    px(top),
+                    x = px(px_x)
+                )
+                .ok();
+                labels.push((px_x, l));
+            }
+        }
+        // labels left to right, each kept clear of the one before
+        labels.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let mut last_end = f64::NEG_INFINITY;
+        for (px_x, l) in labels {
+            let tw = text_width(&l, TICK_SIZE);
+            if px_x - tw / 2.0 < last_end + 8.0 {
+                continue;
+            }
+            last_end = px_x + tw / 2.0;
+            writeln!(
+                out,
+                r##"<text x="{}" y="{}" font-size="{TICK_SIZE}" text-anchor="middle" fill="#555555">{l}</text>"##,
+                px(px_x),
+                px(top - 6.0)
+            )
+            .ok();
+        }
+        writeln!(
+            out,
+            r##"<text x="{}" y="{}" font-size="{LABEL_SIZE}" text-anchor="middle" fill="#444444">{}</text>"##,
+            px((sx(lo) + sx(hi)) / 2.0),
+            px(band_top + LABEL_SIZE),
+            escape_xml(&ta.label)
+        )
+        .ok();
+    }
+}
+
+/// Fill colours of bands.
+const BAND_PALETTE: [&str; 3] = ["#D55E00", "#0072B2", "#009E73"];
+
+/// Path data of a band: one closed polygon per run of finite points, along one edge and
+/// back along the other, with values clamped to the axes.
+fn band_path(
+    b: &Band,
+    bx: (f64, f64, f64, f64),
+    sx: &dyn Fn(f64) -> f64,
+    sy: &dyn Fn(f64) -> f64,
+) -> String {
+    let n = b.x.len().min(b.y0.len()).min(b.y1.len());
+    let ok = |i: usize| {
+        b.x[i].is_finite()
+            && b.y0[i].is_finite()
+            && b.y1[i].is_finite()
+            && b.x[i] >= bx.0
+            && b.x[i] <= bx.1
+    };
+    let cy = |y: f64| sy(y.clamp(bx.2, bx.3));
+    let mut d = String::new();
+    let mut i = 0;
+    while i < n {
+        if !ok(i) {
+            i += 1;
+            continue;
+        }
+        let start = i;
+        while i < n && ok(i) {
+            i += 1;
+        }
+        if i - start < 2 {
+            continue;
+        }
+        for k in start..i {
+            write!(
+                d,
+                "{}{} {}",
+                if k == start { "M" } else { "L" },
+                px(sx(b.x[k])),
+                px(cy(b.y0[k]))
+            )
+            .ok();
+        }
+        for k in (start..i).rev() {
+            write!(d, "L{} {}", px(sx(b.x[k])), px(cy(b.y1[k]))).ok();
+        }
+        d.push('Z');
+    }
+    d
 }
 
 /// Path data of a line series: segments between consecutive finite points, clipped to

@@ -1,0 +1,659 @@
+//! The gait figures of a run in the conventions of gait papers: every tracked channel
+//! (angles, angular velocities, ground forces, CoP) against percent of the gait cycle,
+//! each leg from its own heel strike, so that over a mirrored half cycle the left leg
+//! fills 0–50 % and the right 50–100 % of one leg's cycle; the trial's clock on a second
+//! axis along the top; the residual between model and measurement as a band; a phase
+//! legend that names each phase's contacts and what begins and ends it.
+
+use super::plot::{Band, LinePlot, LineStyle, Series, Span, TopAxis};
+use super::table::Table;
+use crate::data::events::Events;
+use crate::model::gait::COORDINATES;
+use crate::phases::{Phase, PhaseSequence};
+use crate::problems::evaluation::{Comparison, PhaseSolution};
+
+/// Sides in the order of [`Comparison::model_feet`].
+const SIDES: [&str; 2] = ["right", "left"];
+
+/// Percent of the gait cycle for each leg, from its own heel strike.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CycleAxis {
+    /// Duration of one gait cycle (s).
+    pub period: f64,
+    /// Reference heel strike of each leg `[right, left]` (s): 0 % of its cycle.
+    pub heel_strike: [f64; 2],
+}
+
+impl CycleAxis {
+    /// From the measured events: each leg's last heel strike at or before the start of
+    /// `window` (else its first one after, less a period), and the period of the cycles
+    /// that contain the window's start (else twice the window: a half cycle).
+    pub fn from_events(events: &Events, window: (f64, f64)) -> Self {
+        let tol = 1e-6;
+        let mut periods = Vec::new();
+        for s in 0..2 {
+            for w in events.heel_strike[s].windows(2) {
+                if w[0] <= window.0 + tol && window.0 < w[1] {
+                    periods.push(w[1] - w[0]);
+                }
+            }
+        }
+        let period = if periods.is_empty() {
+            2.0 * (window.1 - window.0)
+        } else {
+            periods.iter().sum::<f64>() / periods.len() as f64
+        };
+        let heel_strike = [0, 1].map(|s| {
+            let hs = &events.heel_strike[s];
+            match hs.iter().rev().find(|&&t| t <= window.0 + tol) {
+                Some(&t) => t,
+                None => hs.first().map_or(window.0, |&t| t - period),
+            }
+        });
+        Self {
+            period,
+            heel_strike,
+        }
+    }
+
+    /// Percent of leg `side`'s gait cycle at time `t` (s).
+    pub fn percent(&self, side: usize, t: f64) -> f64 {
+        100.0 * (t - self.heel_strike[side]) / self.period
+    }
+
+    /// The leg whose cycle starts nearest the window's start (its percent axis carries
+    /// the channels that belong to neither leg, such as the trunk).
+    pub fn lead_side(&self, window: (f64, f64)) -> usize {
+        let d = |s: usize| (window.0 - self.heel_strike[s]).abs();
+        if d(1) < d(0) {
+            1
+        } else {
+            0
+        }
+    }
+
+    fn top_axis(&self, window: (f64, f64), sides: &[usize]) -> TopAxis {
+        let label = if sides.len() == 2 {
+            "trial time (s) of each leg's part".to_string()
+        } else {
+            "trial time (s)".to_string()
+        };
+        TopAxis {
+            label,
+            segments: sides
+                .iter()
+                .map(|&s| {
+                    (
+                        self.percent(s, window.0),
+                        self.percent(s, window.1),
+                        window.0,
+                        window.1,
+                    )
+                })
+                .collect(),
+        }
+    }
+}
+
+/// What the channel plots show.
+pub struct ChannelFigures<'a> {
+    /// Model and measurement on the line grid (the fine re-integration, or the nodes).
+    pub line: &'a Comparison,
+    /// The model at the shooting nodes.
+    pub nodes: &'a Comparison,
+    /// Legend of the model line.
+    pub line_label: &'a str,
+    /// The percent-of-cycle axis.
+    pub cycle: CycleAxis,
+    /// Tracked window (s).
+    pub window: (f64, f64),
+    /// Continuous phases `(start s, end s, name)`.
+    pub phases: Vec<(f64, f64, String)>,
+    /// A caution written across every plot (e.g. "not converged").
+    pub note: Option<String>,
+}
+
+/// A channel of the plots: one per coordinate, or per load component of a foot.
+#[derive(Clone, Copy)]
+enum Channel {
+    Angle(usize),
+    Velocity(usize),
+    Load(usize),
+}
+
+impl ChannelFigures<'_> {
+    fn pick<'c>(&self, cmp: &'c Comparison, ch: Channel, side: usize, model: bool) -> &'c [f64] {
+        match (ch, model) {
+            (Channel::Angle(i), true) => &cmp.model_q[i + 3 * side],
+            (Channel::Angle(i), false) => &cmp.data_q[i + 3 * side],
+            (Channel::Velocity(i), true) => &cmp.model_qd[i + 3 * side],
+            (Channel::Velocity(i), false) => &cmp.data_qd[i + 3 * side],
+            (Channel::Load(c), true) => &cmp.model_feet[side][c],
+            (Channel::Load(c), false) => &cmp.data_feet[side][c],
+        }
+    }
+
+    /// Percent of leg `side`'s cycle at each of `times`.
+    pub fn percent(&self, side: usize, times: &[f64]) -> Vec<f64> {
+        times.iter().map(|&t| self.cycle.percent(side, t)).collect()
+    }
+
+    /// An empty plot over percent of the cycle of `sides`: phases shaded on each leg's
+    /// axis, the trial's clock along the top, the caution note.
+    pub fn cycle_plot(&self, title: &str, unit: &str, sides: &[usize]) -> LinePlot {
+        let mut p = LinePlot::new(
+            title,
+            if sides.len() == 2 {
+                "% of gait cycle (each leg from its heel strike)"
+            } else {
+                "% of gait cycle"
+            },
+            unit,
+        );
+        for &s in sides {
+            for (t0, t1, name) in &self.phases {
+                p.shaded.push(Span::new(
+                    self.cycle.percent(s, *t0),
+                    self.cycle.percent(s, *t1),
+                    name.clone(),
+                ));
+            }
+        }
+        p.top_axis = Some(self.cycle.top_axis(self.window, sides));
+        p.note = self.note.clone();
+        p
+    }
+
+    /// One plot of a channel: both legs overlaid on their own percent of the cycle (or
+    /// one series on the lead leg's axis for a coordinate of neither leg), model line,
+    /// model at the nodes, measurement dashed, and the residual band between them.
+    /// `every`: draw every so many samples of the line grid (smooth channels need no
+    /// more than one point per 3 ms; forces keep every sample, where transients hide).
+    fn plot(
+        &self,
+        title: &str,
+        unit: &str,
+        ch: Channel,
+        bilateral: bool,
+        scale: f64,
+        every: usize,
+    ) -> LinePlot {
+        let lead = self.cycle.lead_side(self.window);
+        let sides: Vec<usize> = if bilateral { vec![0, 1] } else { vec![lead] };
+        let mut p = self.cycle_plot(title, unit, &sides);
+        let n = self.line.times.len();
+        let keep = |i: usize| i.is_multiple_of(every.max(1)) || i + 1 == n;
+        let thin = |v: &[f64]| {
+            v.iter()
+                .enumerate()
+                .filter(|(i, _)| keep(*i))
+                .map(|(_, x)| *x)
+                .collect::<Vec<f64>>()
+        };
+        let line_times = thin(&self.line.times);
+        let pct = |s: usize, t: &[f64]| self.percent(s, t);
+        let scaled = |v: &[f64]| thin(v).iter().map(|x| x * scale).collect::<Vec<f64>>();
+        let scaled_nodes = |v: &[f64]| v.iter().map(|x| x * scale).collect::<Vec<f64>>();
+        for &s in &sides {
+            let who = if bilateral {
+                format!("{}, ", SIDES[s])
+            } else {
+                String::new()
+            };
+            let (m, d) = (
+                self.pick(self.line, ch, s, true),
+                self.pick(self.line, ch, s, false),
+            );
+            p.bands.push(Band {
+                name: if s == sides[0] {
+                    "residual".into()
+                } else {
+                    String::new()
+                },
+                x: pct(s, &line_times),
+                y0: scaled(m),
+                y1: scaled(d),
+            });
+            p.series.push(
+                Series::new(
+                    format!("{who}{}", self.line_label),
+                    pct(s, &line_times),
+                    scaled(m),
+                    LineStyle::Solid,
+                )
+                .coloured(2 * s),
+            );
+            p.series.push(
+                Series::new(
+                    format!("{who}measured"),
+                    pct(s, &line_times),
+                    scaled(d),
+                    LineStyle::Dashed,
+                )
+                .coloured(2 * s + 1),
+            );
+            p.series.push(
+                Series::new(
+                    if s == sides[0] {
+                        "model at the nodes"
+                    } else {
+                        ""
+                    },
+                    pct(s, &self.nodes.times),
+                    scaled_nodes(self.pick(self.nodes, ch, s, true)),
+                    LineStyle::Markers,
+                )
+                .coloured(2 * s),
+            );
+        }
+        p
+    }
+
+    /// Angle plots (pelvis position, trunk, then hip, knee, ankle with both legs) and the
+    /// matching velocity plots, in display units (°, °/s, m, m/s).
+    pub fn kinematics(&self) -> (Vec<LinePlot>, Vec<LinePlot>) {
+        let deg = 180.0 / std::f64::consts::PI;
+        let mut angles = Vec::new();
+        let mut velocities = Vec::new();
+        for (i, coordinate) in COORDINATES.iter().enumerate().take(3) {
+            let name = coordinate.replace('_', " ");
+            let (unit, vunit, scale) = if i < 2 {
+                ("position (m)", "velocity (m/s)", 1.0)
+            } else {
+                ("angle (°)", "angular velocity (°/s)", deg)
+            };
+            angles.push(self.plot(&name, unit, Channel::Angle(i), false, scale, 3));
+            velocities.push(self.plot(
+                &format!("{name} velocity"),
+                vunit,
+                Channel::Velocity(i),
+                false,
+                scale,
+                3,
+            ));
+        }
+        for (j, joint) in ["hip", "knee", "ankle"].iter().enumerate() {
+            let i = 3 + j;
+            angles.push(self.plot(
+                &format!("{joint} angle"),
+                "angle (°)",
+                Channel::Angle(i),
+                true,
+                deg,
+                3,
+            ));
+            velocities.push(self.plot(
+                &format!("{joint} angular velocity"),
+                "angular velocity (°/s)",
+                Channel::Velocity(i),
+                true,
+                deg,
+                3,
+            ));
+        }
+        (angles, velocities)
+    }
+
+    /// Normal and tangential ground force and CoP, both feet overlaid.
+    pub fn loads(&self) -> Vec<LinePlot> {
+        [
+            (1, "normal GRF", "force (N)"),
+            (0, "tangential GRF", "force (N)"),
+            (2, "CoP", "x (m)"),
+        ]
+        .iter()
+        .map(|&(c, title, unit)| self.plot(title, unit, Channel::Load(c), true, 1.0, 1))
+        .collect()
+    }
+}
+
+/// One actuator quantity of one leg joint over time.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Trace {
+    /// Joint: 0 hip, 1 knee, 2 ankle.
+    pub joint: usize,
+    /// 0 right, 1 left.
+    pub side: usize,
+    /// Legend, e.g. "flexor" or "passive_joint_stiffness".
+    pub name: String,
+    /// Values at [`ActuatorTraces::times`].
+    pub values: Vec<f64>,
+    /// Bounds of a control, to mark where it is held at one.
+    pub bounds: Option<(f64, f64)>,
+}
+
+/// What drives the joints over a run: torques by source, and the muscle-torque
+/// generators' activations and excitations.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ActuatorTraces {
+    /// Times (s).
+    pub times: Vec<f64>,
+    /// Joint torques (N·m): the actuators, each effect acting on the joint, residuals.
+    pub torques: Vec<Trace>,
+    /// Activations (MTG models).
+    pub activations: Vec<Trace>,
+    /// Excitations, or the joint torques as controls (with their bounds).
+    pub controls: Vec<Trace>,
+}
+
+const JOINTS: [&str; 3] = ["hip", "knee", "ankle"];
+
+impl ActuatorTraces {
+    /// From the model at the states `samples` and the solution's controls there.
+    pub fn from_samples(
+        model: &crate::model::GaitModel,
+        solution: &crate::problems::evaluation::GaitSolution,
+        samples: &[crate::simulate::Sample],
+        control_bounds: Option<(Vec<f64>, Vec<f64>)>,
+    ) -> Self {
+        let nq = model.nq();
+        let mut out = Self {
+            times: samples.iter().map(|s| s.t).collect(),
+            ..Self::default()
+        };
+        let controls: Vec<Vec<f64>> = samples
+            .iter()
+            .map(|s| {
+                solution
+                    .control_at(s.t)
+                    .unwrap_or_else(|| vec![f64::NAN; model.nu()])
+            })
+            .collect();
+        let parts: Vec<_> = samples
+            .iter()
+            .zip(&controls)
+            .map(|(s, u)| model.generalized_force_parts(&s.x, u, &solution.theta))
+            .collect();
+        let joint_of = |c: usize| (3..nq).contains(&c).then(|| ((c - 3) % 3, (c - 3) / 3));
+        let column = |f: &dyn Fn(usize) -> f64| (0..samples.len()).map(f).collect::<Vec<f64>>();
+        for c in 3..nq.min(9) {
+            let Some((joint, side)) = joint_of(c) else {
+                continue;
+            };
+            out.torques.push(Trace {
+                joint,
+                side,
+                name: "actuators".into(),
+                values: column(&|k| parts[k].actuators[c]),
+                bounds: None,
+            });
+            for e in 0..parts.first().map_or(0, |p| p.effects.len()) {
+                let v = column(&|k| parts[k].effects[e].1[c]);
+                if v.iter().any(|x| *x != 0.0) {
+                    out.torques.push(Trace {
+                        joint,
+                        side,
+                        name: parts[0].effects[e].0.clone(),
+                        values: v,
+                        bounds: None,
+                    });
+                }
+            }
+            let r = column(&|k| parts[k].residual[c]);
+            if r.iter().any(|x| *x != 0.0) {
+                out.torques.push(Trace {
+                    joint,
+                    side,
+                    name: "residual actuator".into(),
+                    values: r,
+                    bounds: None,
+                });
+            }
+        }
+        let split = |name: &str| -> Option<(usize, usize, String)> {
+            let joint = JOINTS
+                .iter()
+                .position(|j| name.starts_with(&format!("{j}_")))?;
+            let rest = &name[JOINTS[joint].len() + 1..];
+            let side = match rest.get(..2) {
+                Some("r_") => 0,
+                Some("l_") => 1,
+                _ => return None,
+            };
+            Some((joint, side, rest[2..].to_string()))
+        };
+        let na = model.na();
+        for (i, name) in model.state_names().iter().enumerate().skip(2 * nq).take(na) {
+            if let Some((joint, side, what)) = split(name) {
+                out.activations.push(Trace {
+                    joint,
+                    side,
+                    name: what.replace("_activation", ""),
+                    values: column(&|k| samples[k].x[i]),
+                    bounds: None,
+                });
+            }
+        }
+        for (i, name) in model
+            .control_names()
+            .iter()
+            .enumerate()
+            .take(model.nu_actuators())
+        {
+            if let Some((joint, side, what)) = split(name) {
+                out.controls.push(Trace {
+                    joint,
+                    side,
+                    name: what
+                        .replace("_excitation", "")
+                        .replace("torque", "torque control"),
+                    values: column(&|k| controls[k][i]),
+                    bounds: control_bounds.as_ref().map(|(lo, hi)| (lo[i], hi[i])),
+                });
+            }
+        }
+        out
+    }
+}
+
+impl ChannelFigures<'_> {
+    /// Per joint: torques by source, then activations and excitations (or torque
+    /// controls) with the points held at a bound marked; both legs on their own percent
+    /// of the cycle.
+    pub fn actuators(&self, a: &ActuatorTraces) -> Vec<LinePlot> {
+        let mut plots = Vec::new();
+        for (group, title, unit) in [
+            (&a.torques, "torques", "torque (N·m)"),
+            (&a.activations, "activations", "activation"),
+            (&a.controls, "controls", "control"),
+        ] {
+            for (j, joint) in JOINTS.iter().enumerate() {
+                let traces: Vec<&Trace> = group.iter().filter(|t| t.joint == j).collect();
+                if traces.is_empty() {
+                    continue;
+                }
+                let title = match (title, traces[0].name.contains("torque control")) {
+                    ("controls", true) => format!("{joint} torque controls"),
+                    ("controls", false) => format!("{joint} excitations"),
+                    _ => format!("{joint} {title}"),
+                };
+                let mut p = self.cycle_plot(&title, unit, &[0, 1]);
+                let mut names: Vec<&str> = Vec::new();
+                for t in &traces {
+                    if !names.contains(&t.name.as_str()) {
+                        names.push(&t.name);
+                    }
+                }
+                let mut at_bound = (Vec::new(), Vec::new());
+                // one point per 3 samples is plenty for these smooth curves
+                let n = a.times.len();
+                let thin = |v: &[f64]| {
+                    v.iter()
+                        .enumerate()
+                        .filter(|(i, _)| i % 3 == 0 || i + 1 == n)
+                        .map(|(_, x)| *x)
+                        .collect::<Vec<f64>>()
+                };
+                for t in &traces {
+                    let k = names.iter().position(|n| *n == t.name).unwrap_or(0);
+                    let x = thin(&self.percent(t.side, &a.times));
+                    let values = thin(&t.values);
+                    let style = if t.side == 0 {
+                        LineStyle::Solid
+                    } else {
+                        LineStyle::Dashed
+                    };
+                    p.series.push(
+                        Series::new(
+                            format!("{}, {}", SIDES[t.side], t.name),
+                            x.clone(),
+                            values.clone(),
+                            style,
+                        )
+                        .coloured(k),
+                    );
+                    if let Some((lo, hi)) = t.bounds {
+                        let tol = 1e-3 * (hi - lo).abs().max(1e-12);
+                        for (xi, &v) in x.iter().zip(&values) {
+                            if v <= lo + tol || v >= hi - tol {
+                                at_bound.0.push(*xi);
+                                at_bound.1.push(v);
+                            }
+                        }
+                    }
+                }
+                if !at_bound.0.is_empty() {
+                    p.series.push(
+                        Series::new("at a bound", at_bound.0, at_bound.1, LineStyle::Markers)
+                            .coloured(6),
+                    );
+                }
+                plots.push(p);
+            }
+        }
+        plots
+    }
+}
+
+/// The phase legend: every phase of the file in order, what kind it is, which contacts
+/// are on the ground, its times and percent of the lead leg's cycle, and what begins and
+/// ends it (an impact and the contact it lands, or the contacts that lift off).
+pub fn phase_legend(
+    seq: &PhaseSequence,
+    solved: &[PhaseSolution],
+    cycle: &CycleAxis,
+    window: (f64, f64),
+) -> Table {
+    let lead = cycle.lead_side(window);
+    let names = |c: &[crate::phases::ContactUse]| -> String {
+        if c.is_empty() {
+            "none (flight)".into()
+        } else {
+            c.iter()
+                .map(|u| {
+                    format!(
+                        "{}{}",
+                        u.contact,
+                        if u.rolling { "" } else { " (normal only)" }
+                    )
+                })
+                .collect::<Vec<_>>()
+                .join(", ")
+        }
+    };
+    let set_of =
+        |c: &[crate::phases::ContactUse]| c.iter().map(|u| u.contact.clone()).collect::<Vec<_>>();
+    let minus = |a: &[String], b: &[String]| {
+        a.iter()
+            .filter(|x| !b.contains(x))
+            .cloned()
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    // the contacts on the ground before phase `i` (those of the closest earlier phase)
+    let before = |i: usize| -> Option<Vec<String>> {
+        (0..i)
+            .rev()
+            .map(|k| set_of(seq.phases[k].contacts()))
+            .next()
+    };
+    let transition = |from: Option<Vec<String>>, to: &Phase| -> String {
+        let now = set_of(to.contacts());
+        match (to, from) {
+            (Phase::Impact { name, .. }, Some(prev)) => {
+                let landing = minus(&now, &prev);
+                if landing.is_empty() {
+                    format!("impact {name}")
+                } else {
+                    format!("impact {name}: {landing} lands")
+                }
+            }
+            (Phase::Impact { name, .. }, None) => format!("impact {name} (the window's start)"),
+            (Phase::Continuous { .. }, Some(prev)) => {
+                let off = minus(&prev, &now);
+                let on = minus(&now, &prev);
+                match (off.is_empty(), on.is_empty()) {
+                    (false, _) => format!("{off} lifts off"),
+                    (true, false) => format!("{on} touches down"),
+                    (true, true) => "the previous phase's end".into(),
+                }
+            }
+            (Phase::Continuous { .. }, None) => "the window's start".into(),
+        }
+    };
+    let mut rows = Vec::new();
+    let mut solved_iter = solved.iter();
+    let mut t = window.0;
+    for (i, ph) in seq.phases.iter().enumerate() {
+        let begins = match (ph, i.checked_sub(1).map(|k| &seq.phases[k])) {
+            (Phase::Continuous { .. }, Some(prev @ Phase::Impact { .. })) => {
+                transition(before(i - 1), prev)
+            }
+            _ => transition(before(i), ph),
+        };
+        let ends = match (ph, seq.phases.get(i + 1)) {
+            (Phase::Impact { .. }, _) => "instantaneous".into(),
+            (_, Some(next)) => transition(Some(set_of(ph.contacts())), next),
+            (_, None) => "the window's end".into(),
+        };
+        let (kind, times, pct) = match ph {
+            Phase::Impact { .. } => (
+                "impact".to_string(),
+                format!("{t:.3}"),
+                format!("{:.1}", cycle.percent(lead, t)),
+            ),
+            Phase::Continuous { .. } => match solved_iter.next() {
+                Some(p) => {
+                    t = p.t0 + p.duration;
+                    (
+                        "continuous".to_string(),
+                        format!("{:.3}–{:.3}", p.t0, t),
+                        format!(
+                            "{:.1}–{:.1}",
+                            cycle.percent(lead, p.t0),
+                            cycle.percent(lead, t)
+                        ),
+                    )
+                }
+                None => ("continuous".to_string(), "—".into(), "—".into()),
+            },
+        };
+        rows.push(vec![
+            ph.name().to_string(),
+            kind,
+            names(ph.contacts()),
+            times,
+            pct,
+            begins,
+            ends,
+        ]);
+    }
+    Table {
+        title: format!(
+            "Phases of {} (percent of the {} leg's cycle)",
+            seq.name, SIDES[lead]
+        ),
+        headers: [
+            "phase",
+            "kind",
+            "on the ground",
+            "time (s)",
+            "% of cycle",
+            "begins with",
+            "ends with",
+        ]
+        .map(String::from)
+        .to_vec(),
+        rows,
+    }
+}
