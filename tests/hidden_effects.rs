@@ -415,6 +415,27 @@ fn single_effect(name: &str, how: Setup, floor_factor: f64) {
             );
         }
         assert!(dom.matches("<svg").count() >= 1, "the before/after plot");
+        // and the curves before and after, side by side, in their own report
+        let page = PathBuf::from(format!(
+            "{}-diagnose/before_after_ground_slope.html",
+            run.display()
+        ));
+        let html =
+            std::fs::read_to_string(&page).unwrap_or_else(|e| panic!("{}: {e}", page.display()));
+        let before = run.file_name().unwrap().to_string_lossy().to_string();
+        let after = refit.file_name().unwrap().to_string_lossy().to_string();
+        for plot in ["knee angle", "ankle angular velocity", "normal GRF"] {
+            let at = html
+                .find(&format!("aria-label=\"{plot}\""))
+                .unwrap_or_else(|| panic!("no {plot} plot in {}", page.display()));
+            let svg = &html[at..at + html[at..].find("</svg>").unwrap()];
+            for name in [&before, &after] {
+                assert!(
+                    svg.contains(&format!(">{name}</text>")),
+                    "{plot}: no curve of {name}"
+                );
+            }
+        }
     }
 }
 
