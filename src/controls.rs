@@ -35,11 +35,36 @@ impl ControlTable {
         Self::parse_csv(&text, path, model_controls)
     }
 
+    /// As [`load_csv`](Self::load_csv), refusing a value outside its control's range:
+    /// `ranges[i]` = `(low, high, what)` for `model_controls[i]` (e.g. `(0, 1,
+    /// "an excitation")`), `None` for a control without one.
+    pub fn load_csv_within(
+        path: &Path,
+        model_controls: &[String],
+        ranges: &[Option<(f64, f64, &str)>],
+    ) -> Result<Self, ModelError> {
+        let text = std::fs::read_to_string(path).map_err(|source| ModelError::Io {
+            path: path.to_path_buf(),
+            source,
+        })?;
+        Self::parse_csv_within(&text, path, model_controls, ranges)
+    }
+
     /// Parse CSV text (see [`load_csv`](Self::load_csv)).
     pub fn parse_csv(
         text: &str,
         path: &Path,
         model_controls: &[String],
+    ) -> Result<Self, ModelError> {
+        Self::parse_csv_within(text, path, model_controls, &[])
+    }
+
+    /// Parse CSV text with control ranges (see [`load_csv_within`](Self::load_csv_within)).
+    pub fn parse_csv_within(
+        text: &str,
+        path: &Path,
+        model_controls: &[String],
+        ranges: &[Option<(f64, f64, &str)>],
     ) -> Result<Self, ModelError> {
         let mut lines = text
             .lines()
@@ -145,12 +170,22 @@ impl ControlTable {
                 }
             }
             times.push(t);
-            values.push(
-                index
-                    .iter()
-                    .map(|&c| parse(c))
-                    .collect::<Result<Vec<_>, _>>()?,
-            );
+            let row_values = index
+                .iter()
+                .map(|&c| parse(c))
+                .collect::<Result<Vec<_>, _>>()?;
+            for (i, (&v, &c)) in row_values.iter().zip(&index).enumerate() {
+                if let Some(Some((lo, hi, what))) = ranges.get(i) {
+                    if v < *lo || v > *hi {
+                        return Err(ModelError::invalid(
+                            path,
+                            field(c),
+                            format!("{v} is outside [{lo}, {hi}], the range of {what}"),
+                        ));
+                    }
+                }
+            }
+            values.push(row_values);
         }
         if times.is_empty() {
             return Err(ModelError::invalid(

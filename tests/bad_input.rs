@@ -1402,3 +1402,26 @@ fn mutated_files_never_panic() {
     }
     assert!(errors > 1000, "only {errors} mutations were refused");
 }
+
+#[test]
+fn an_excitation_outside_zero_to_one_is_refused_naming_line_and_column() {
+    let s = Scratch::new();
+    let names: Vec<String> = vec!["hip_r_flexor_excitation".into(), "hip_r_residual".into()];
+    let ranges = [Some((0.0, 1.0, "an excitation")), None];
+    let ok = s.write(
+        "ok.csv",
+        "time,hip_r_flexor_excitation,hip_r_residual\n0,0.2,-3\n0.1,1,5\n",
+    );
+    ControlTable::load_csv_within(&ok, &names, &ranges).unwrap();
+    let bad = s.write(
+        "bad.csv",
+        "time,hip_r_flexor_excitation,hip_r_residual\n0,0.2,-3\n0.1,1.3,5\n",
+    );
+    let e = ControlTable::load_csv_within(&bad, &names, &ranges).unwrap_err();
+    assert_invalid(
+        e,
+        &bad,
+        "row at line 3, column `hip_r_flexor_excitation`",
+        &["1.3 is outside [0, 1]", "an excitation"],
+    );
+}

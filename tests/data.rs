@@ -289,6 +289,156 @@ fn csv_units_from_the_meta_file_are_converted() {
     }
 }
 
+// ---------------------------------------------------------------- units and conventions
+
+/// The bundled CSV with `edit` applied to the cells of the named columns, written beside
+/// `meta` (none: no meta file); read and moved overground as the command line does.
+fn edited_trial(
+    s: &Scratch,
+    columns: &[&str],
+    edit: fn(f64) -> f64,
+    meta: Option<&str>,
+) -> (PathBuf, GaitData) {
+    let mut cells = csv_cells();
+    let idx: Vec<usize> = columns.iter().map(|n| col_index(&cells, n)).collect();
+    for r in cells.iter_mut().skip(1) {
+        for &j in &idx {
+            let v: f64 = r[j].parse().unwrap();
+            r[j] = format!("{:.15e}", edit(v));
+        }
+    }
+    let csv = s.write("trial_sagittal.csv", &join(&cells));
+    if let Some(m) = meta {
+        s.write("trial_meta.json", m);
+    }
+    let d = read_sagittal_csv(&csv).unwrap();
+    let d = match d.belt_speed {
+        Some(v) => d.to_overground(v).unwrap(),
+        None => d,
+    };
+    (csv, d)
+}
+
+fn assert_refused(e: DataError, file: &Path, column: &str, words: &[&str]) {
+    let msg = e.to_string();
+    assert!(
+        msg.contains(&file.display().to_string()),
+        "no file in: {msg}"
+    );
+    assert!(msg.contains(column), "no column {column} in: {msg}");
+    for w in words {
+        assert!(msg.contains(w), "{w:?} not in: {msg}");
+    }
+}
+
+const TREADMILL_META: &str = r#"{"belt_speed_m_s": 1.1322}"#;
+
+#[test]
+fn angles_in_degrees_are_detected_unless_declared() {
+    let s = Scratch::new();
+    let angles = [
+        "pelvis_tilt",
+        "hip_r",
+        "knee_r",
+        "ankle_r",
+        "hip_l",
+        "knee_l",
+        "ankle_l",
+    ];
+    let (csv, d) = edited_trial(&s, &angles, f64::to_degrees, Some(TREADMILL_META));
+    let e = d.check_conventions(false).unwrap_err();
+    assert_refused(
+        e,
+        &csv,
+        "pelvis_tilt",
+        &["looks like degrees", "\"angles\": \"deg\""],
+    );
+    // one knee alone in degrees is caught too
+    let (csv, d) = edited_trial(&s, &["knee_r"], f64::to_degrees, Some(TREADMILL_META));
+    assert_refused(
+        d.check_conventions(false).unwrap_err(),
+        &csv,
+        "knee_r",
+        &["more than π"],
+    );
+    // declared in the meta file, the same degrees are converted and pass
+    let (_, d) = edited_trial(
+        &s,
+        &angles,
+        f64::to_degrees,
+        Some(r#"{"belt_speed_m_s": 1.1322, "units": {"angles": "deg"}}"#),
+    );
+    d.check_conventions(false).unwrap();
+    // the bundled trial passes
+    GaitData::bundled(&root())
+        .unwrap()
+        .check_conventions(false)
+        .unwrap();
+}
+
+#[test]
+fn a_flipped_vertical_force_is_detected() {
+    let s = Scratch::new();
+    let (csv, d) = edited_trial(&s, &["grf_y_l"], |v| -v, Some(TREADMILL_META));
+    let e = d.check_conventions(false).unwrap_err();
+    assert_refused(e, &csv, "grf_y_l", &["sign looks flipped", "never above"]);
+}
+
+#[test]
+fn a_treadmill_trial_without_a_belt_speed_is_refused_unless_overground() {
+    let s = Scratch::new();
+    let (csv, d) = edited_trial(&s, &[], |v| v, None);
+    assert!(d.belt_speed.is_none() && !d.overground);
+    let e = d.check_conventions(false).unwrap_err();
+    assert_refused(
+        e,
+        &csv,
+        "pelvis_x",
+        &["treadmill", "belt_speed_m_s", "--overground"],
+    );
+    d.check_conventions(true).unwrap();
+    // with its belt speed it is moved overground and passes
+    let (_, d) = edited_trial(&s, &[], |v| v, Some(TREADMILL_META));
+    assert!(d.overground);
+    d.check_conventions(false).unwrap();
+}
+
+#[test]
+fn the_command_line_refuses_a_trial_in_degrees_before_solving() {
+    let s = Scratch::new();
+    let angles = [
+        "pelvis_tilt",
+        "hip_r",
+        "knee_r",
+        "ankle_r",
+        "hip_l",
+        "knee_l",
+        "ankle_l",
+    ];
+    let (csv, _) = edited_trial(&s, &angles, f64::to_degrees, Some(TREADMILL_META));
+    for cmd in [&["track", "--max-iter", "1"][..], &["fit-foot"][..]] {
+        let out = s.0.path().join("out");
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_footfall"))
+            .current_dir(root())
+            .args(cmd)
+            .args([
+                "--data",
+                csv.to_str().unwrap(),
+                "--out",
+                out.to_str().unwrap(),
+            ])
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(1), "{cmd:?}: {err}");
+        assert!(
+            err.contains("pelvis_tilt") && err.contains("looks like degrees"),
+            "{cmd:?}: {err}"
+        );
+        assert!(!out.exists(), "{cmd:?} left an output folder");
+    }
+}
+
 // ---------------------------------------------------------------- OpenSim storage
 
 #[test]

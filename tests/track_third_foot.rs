@@ -142,9 +142,11 @@ fn third_foot_is_fitted_then_tracked_from_json_files_only() {
     ] {
         assert!(track_dir.join(f).is_file(), "{f} missing");
     }
-    // the run's own report renders in headless Chromium with every plot: 7 kinematic
-    // channels, normal force, tangential force and CoP of both feet, and the data cost
-    // per node of "Where the model fails"
+    // the run's own report renders in headless Chromium with every plot: the angles and
+    // the velocities (pelvis x, y, tilt, and hip, knee, ankle with both legs overlaid),
+    // normal force, tangential force and CoP (both feet overlaid), the actuators' torques,
+    // activations and excitations per joint, the data cost per node of "Where the model
+    // fails", the body animation, and the film strip with its three panels
     let url = format!("file://{}", track_dir.join("report.html").display());
     let dom = String::from_utf8(common::chromium(
         &["--dump-dom".into(), url],
@@ -153,14 +155,16 @@ fn third_foot_is_fitted_then_tracked_from_json_files_only() {
     .unwrap();
     assert_eq!(
         dom.matches("<svg").count(),
-        14,
+        6 + 6 + 3 + 9 + 1 + 1 + 4,
         "plots in the rendered report"
     );
     for title in [
-        "knee r",
-        "ankle l",
-        "Normal GRF, right foot",
-        "CoP, left foot",
+        "knee angle",
+        "ankle angular velocity",
+        "normal GRF",
+        "CoP",
+        "hip excitations",
+        "heel strike (left)",
         "Tracking errors by phase",
         "Ground-force transients",
         "Where the model fails",

@@ -21,6 +21,9 @@ pub struct Args {
     /// Sagittal CSV (default: the bundled trial).
     #[arg(long)]
     data: Option<PathBuf>,
+    /// Take a trial whose meta file gives no belt speed as overground, as it is.
+    #[arg(long)]
+    overground: bool,
     /// Output folder.
     #[arg(long, default_value = "runs/fit-foot")]
     out: PathBuf,
@@ -43,7 +46,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     let foot_path = super::simulate::foot_path(&args.foot);
     let model = GaitModel::load(&args.model, &foot_path)?;
     let foot = FootSpec::load(&foot_path)?;
-    let data = super::load_data(args.data.as_deref())?;
+    let data = super::load_data(args.data.as_deref(), args.overground)?;
     let stances =
         stances_from_data(&model, &data).map_err(|e| anyhow!("{}: {e}", data.source.display()))?;
     let ground = model.contact_settings().ground_height;

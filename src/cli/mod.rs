@@ -252,9 +252,14 @@ fn render_chain(e: &anyhow::Error) -> String {
 }
 
 /// Measured data from a sagittal CSV (moved overground when its meta file gives a belt
-/// speed), or the bundled trial.
-pub fn load_data(path: Option<&std::path::Path>) -> anyhow::Result<footfall::data::GaitData> {
-    Ok(match path {
+/// speed), or the bundled trial; its units and conventions checked
+/// ([`footfall::data::GaitData::check_conventions`]; `overground`: take a trial without a
+/// belt speed as it is).
+pub fn load_data(
+    path: Option<&std::path::Path>,
+    overground: bool,
+) -> anyhow::Result<footfall::data::GaitData> {
+    let data = match path {
         Some(p) => {
             let d = footfall::data::read_sagittal_csv(p)?;
             match d.belt_speed {
@@ -263,7 +268,9 @@ pub fn load_data(path: Option<&std::path::Path>) -> anyhow::Result<footfall::dat
             }
         }
         None => footfall::data::GaitData::bundled(std::path::Path::new("."))?,
-    })
+    };
+    data.check_conventions(overground)?;
+    Ok(data)
 }
 
 pub use session::solve_interruptibly;

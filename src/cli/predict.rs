@@ -32,6 +32,9 @@ pub struct PredictOptions {
     /// Sagittal CSV (default: the bundled OpenSim subject01 trial, moved overground).
     #[arg(long)]
     pub data: Option<PathBuf>,
+    /// Take a trial whose meta file gives no belt speed as overground, as it is.
+    #[arg(long)]
+    pub overground: bool,
     /// Step length (m; default: the subject's over the tracked half cycle).
     #[arg(long)]
     pub step_length: Option<f64>,
@@ -187,7 +190,7 @@ pub fn predict(
         .unwrap_or_else(|| default_phases(foot));
     let seq = PhaseSequence::load(&phases)?;
     let sets = seq.resolve(&model, &phases)?;
-    let data = super::load_data(o.data.as_deref())?;
+    let data = super::load_data(o.data.as_deref(), o.overground)?;
     let tracking = TrackingSetup::new(&model, &seq, &sets, &data)
         .map_err(|e| anyhow!("{}: {e}", data.source.display()))?;
     let mut settings = PredictionSettings::from_data(&tracking, &data);

@@ -145,7 +145,15 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     x0.extend(&qd0);
     x0.extend(&a);
     let controls = match &args.controls {
-        Some(p) => ControlTable::load_csv(p, &model.control_names())?,
+        Some(p) => {
+            // excitations of muscle-torque generators are fractions of full activation
+            let names = model.control_names();
+            let mtg = matches!(model.actuation(), footfall::model::gait::Actuation::Mtg(_));
+            let ranges: Vec<Option<(f64, f64, &str)>> = (0..names.len())
+                .map(|i| (mtg && i < model.nu_actuators()).then_some((0.0, 1.0, "an excitation")))
+                .collect();
+            ControlTable::load_csv_within(p, &names, &ranges)?
+        }
         None => {
             let v = if model.na() > 0 { 0.025 } else { 0.0 };
             ControlTable::constant(model.control_names(), vec![v; model.nu()])

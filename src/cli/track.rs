@@ -31,6 +31,10 @@ pub struct Args {
     /// Sagittal CSV (default: the bundled OpenSim subject01 trial, moved overground).
     #[arg(long)]
     data: Option<PathBuf>,
+    /// Take a trial whose meta file gives no belt speed as overground, as it is (a
+    /// treadmill trial without a belt speed is refused otherwise).
+    #[arg(long)]
+    overground: bool,
     /// Low-pass the measured coordinates at this cutoff (Hz; zero-phase 2nd-order
     /// Butterworth) before tracking, for raw motion-capture data.
     #[arg(long, value_parser = super::validate::positive)]
@@ -280,7 +284,7 @@ impl TrackingProblem {
         }
         let seq = PhaseSequence::load(&run.phases)?;
         let sets = seq.resolve(&model, &run.phases)?;
-        let mut data = super::load_data(run.data.as_deref())?;
+        let mut data = super::load_data(run.data.as_deref(), run.overground)?;
         let sides = if run.one_sided_targets {
             TargetSides::OneSided {
                 cutoff_hz: run.kinematics_cutoff,
@@ -788,6 +792,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         foot: args.foot.clone(),
         phases,
         data: args.data.clone(),
+        overground: args.overground,
         kinematics_cutoff: args.kinematics_cutoff,
         integrator_tol: args.integrator_tol,
         sensitivity_tol: args.sensitivity_tol,

@@ -35,6 +35,10 @@ pub struct TrackingRunSetup {
     /// Data file (`None`: the bundled trial).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub data: Option<PathBuf>,
+    /// Whether a trial without a belt speed is taken as overground as it is
+    /// (`--overground`; otherwise a treadmill trial without one is refused).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub overground: bool,
     /// Kinematics low-pass cutoff (Hz).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub kinematics_cutoff: Option<f64>,
