@@ -7,11 +7,10 @@
 //! node table `tracking.csv`/`prediction.csv`), so nothing is solved or re-evaluated.
 
 use super::diff::RunSummary;
-use super::gait_figures::CycleAxis;
+use super::gait_figures::{channel_plots, ChannelPlot, CycleAxis};
 use super::html::{Report, Section, Summary, Tone};
 use super::plot::{LinePlot, LineStyle, Series, Span};
 use super::table::Table;
-use crate::model::gait::COORDINATES;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -180,7 +179,6 @@ impl RunCurves {
 
 /// The side-by-side report of `runs` (at least one).
 pub fn side_by_side(runs: &[RunCurves]) -> Report {
-    let deg = 180.0 / std::f64::consts::PI;
     let all_converged = runs.iter().all(|r| r.verdict == "converged");
     let mut summary = Summary::new(
         format!("{} runs side by side", runs.len()),
@@ -204,75 +202,34 @@ pub fn side_by_side(runs: &[RunCurves]) -> Report {
             )
         })
         .collect();
-    // one plot per channel: (title, unit, column template, bilateral, scale); the
-    // template's {who} is `model` or `data`, its {s} the side `r` or `l`
-    let mut channels: Vec<(String, &str, String, bool, f64)> = Vec::new();
-    for (i, coordinate) in COORDINATES.iter().enumerate().take(3) {
-        let name = coordinate.replace('_', " ");
-        let (u, vu, sc) = if i < 2 {
-            ("position (m)", "velocity (m/s)", 1.0)
-        } else {
-            ("angle (°)", "angular velocity (°/s)", deg)
-        };
-        channels.push((name.clone(), u, format!("{{who}}_{coordinate}"), false, sc));
-        channels.push((
-            format!("{name} velocity"),
-            vu,
-            format!("{{who}}_{coordinate}_dot"),
-            false,
-            sc,
-        ));
-    }
-    for joint in ["hip", "knee", "ankle"] {
-        channels.push((
-            format!("{joint} angle"),
-            "angle (°)",
-            format!("{{who}}_{joint}_{{s}}"),
-            true,
-            deg,
-        ));
-        channels.push((
-            format!("{joint} angular velocity"),
-            "angular velocity (°/s)",
-            format!("{{who}}_{joint}_{{s}}_dot"),
-            true,
-            deg,
-        ));
-    }
-    for (stem, title, unit) in [
-        ("grf_y", "normal GRF", "force (N)"),
-        ("grf_x", "tangential GRF", "force (N)"),
-        ("cop_x", "CoP", "x (m)"),
-    ] {
-        channels.push((
-            title.into(),
-            unit,
-            format!("{{who}}_{stem}_{{s}}"),
-            true,
-            1.0,
-        ));
-    }
+    // the channels of a run's own report, each angle beside its velocity, then the loads
+    let [angles, velocities, loads] = channel_plots();
+    let channels: Vec<&ChannelPlot> = angles
+        .iter()
+        .zip(&velocities)
+        .flat_map(|(a, v)| [a, v])
+        .chain(&loads)
+        .collect();
     let first = &runs[0];
     let lead = first.cycle.lead_side((
         first.time.first().copied().unwrap_or(0.0),
         first.time.last().copied().unwrap_or(0.0),
     ));
     let mut svgs = Vec::new();
-    for (title, unit, template, bilateral, scale) in &channels {
-        let sides: Vec<usize> = if *bilateral { vec![0, 1] } else { vec![lead] };
+    for cp in channels {
+        let sides: Vec<usize> = if cp.bilateral { vec![0, 1] } else { vec![lead] };
         let col = |r: &RunCurves, who: &str, s: usize| -> Option<Vec<f64>> {
-            let name = template.replace("{who}", who).replace("{s}", ["r", "l"][s]);
-            r.column(&name)
-                .map(|v| v.iter().map(|x| x * scale).collect())
+            r.column(&cp.csv_column(who, cp.bilateral.then_some(s)))
+                .map(|v| v.iter().map(|x| x * cp.scale).collect())
         };
         let mut p = LinePlot::new(
-            title.as_str(),
-            if *bilateral {
+            cp.title.as_str(),
+            if cp.bilateral {
                 "% of gait cycle (each leg from its heel strike)"
             } else {
                 "% of gait cycle"
             },
-            *unit,
+            cp.unit,
         );
         let mut any = false;
         for (k, r) in runs.iter().enumerate() {
