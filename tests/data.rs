@@ -336,16 +336,9 @@ const TREADMILL_META: &str = r#"{"belt_speed_m_s": 1.1322}"#;
 #[test]
 fn angles_in_degrees_are_detected_unless_declared() {
     let s = Scratch::new();
-    let angles = [
-        "pelvis_tilt",
-        "hip_r",
-        "knee_r",
-        "ankle_r",
-        "hip_l",
-        "knee_l",
-        "ankle_l",
-    ];
-    let (csv, d) = edited_trial(&s, &angles, f64::to_degrees, Some(TREADMILL_META));
+    // the trunk and joint angles
+    let angles = &Q_NAMES[2..];
+    let (csv, d) = edited_trial(&s, angles, f64::to_degrees, Some(TREADMILL_META));
     let e = d.check_conventions(false).unwrap_err();
     assert_refused(
         e,
@@ -364,7 +357,7 @@ fn angles_in_degrees_are_detected_unless_declared() {
     // declared in the meta file, the same degrees are converted and pass
     let (_, d) = edited_trial(
         &s,
-        &angles,
+        angles,
         f64::to_degrees,
         Some(r#"{"belt_speed_m_s": 1.1322, "units": {"angles": "deg"}}"#),
     );
@@ -406,16 +399,9 @@ fn a_treadmill_trial_without_a_belt_speed_is_refused_unless_overground() {
 #[test]
 fn the_command_line_refuses_a_trial_in_degrees_before_solving() {
     let s = Scratch::new();
-    let angles = [
-        "pelvis_tilt",
-        "hip_r",
-        "knee_r",
-        "ankle_r",
-        "hip_l",
-        "knee_l",
-        "ankle_l",
-    ];
-    let (csv, _) = edited_trial(&s, &angles, f64::to_degrees, Some(TREADMILL_META));
+    // the trunk and joint angles
+    let angles = &Q_NAMES[2..];
+    let (csv, _) = edited_trial(&s, angles, f64::to_degrees, Some(TREADMILL_META));
     for cmd in [&["track", "--max-iter", "1"][..], &["fit-foot"][..]] {
         let out = s.0.path().join("out");
         let o = std::process::Command::new(env!("CARGO_BIN_EXE_footfall"))

@@ -95,6 +95,11 @@ pub struct GaitRun<'a> {
     pub sets: &'a [ConstraintSet],
     /// Phase file.
     pub phases_path: &'a std::path::Path,
+    /// The phase sequence the problem was built from (for the phase legend).
+    pub sequence: &'a footfall::phases::PhaseSequence,
+    /// Lower and upper bounds of the controls in the solved problem (to mark a control
+    /// held at one).
+    pub control_bounds: (&'a [f64], &'a [f64]),
     /// The measured events (heel strikes set each leg's percent of the gait cycle).
     pub events: &'a footfall::data::events::Events,
     /// Solver result.
@@ -227,24 +232,23 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
     let kin: Vec<String> = angle_plots.iter().map(|p| p.to_svg()).collect();
     let vel: Vec<String> = velocity_plots.iter().map(|p| p.to_svg()).collect();
     let forces: Vec<String> = figures.loads().iter().map(|p| p.to_svg()).collect();
-    let sequence = footfall::phases::PhaseSequence::load(run.phases_path)
-        .with_context(|| format!("reading {}", run.phases_path.display()))?;
-    let legend = phase_legend(&sequence, &sol.phases, &cycle, (t0, t1));
+    let sequence = run.sequence;
+    let legend = phase_legend(sequence, &sol.phases, &cycle, (t0, t1));
     // the states the figures of the body and the actuators show: the fine grid's, else
     // the nodes'
-    let states: Vec<&footfall::simulate::Sample> = match &fine_run {
-        Ok(f) => f.result.samples.iter().collect(),
-        Err(_) => nodes.iter().collect(),
+    let states: &[footfall::simulate::Sample] = match &fine_run {
+        Ok(f) => &f.result.samples,
+        Err(_) => &nodes,
     };
-    let owned: Vec<footfall::simulate::Sample> = states.iter().map(|s| (*s).clone()).collect();
-    let bounds = control_bounds(model);
-    let actuators = ActuatorTraces::from_samples(model, sol, &owned, Some(bounds));
+    let (lo, hi) = run.control_bounds;
+    let actuators =
+        ActuatorTraces::from_samples(model, sol, states, Some((lo.to_vec(), hi.to_vec())));
     let actuator_svgs: Vec<String> = figures
         .actuators(&actuators)
         .iter()
         .map(|p| p.to_svg())
         .collect();
-    let animation = body_animation(model, sol, line, &owned, &cycle, (t0, t1));
+    let animation = body_animation(model, sol, line, states, &cycle, (t0, t1));
     let film_strip = animation.film_strip();
 
     // time series at the nodes
@@ -684,25 +688,6 @@ fn transient_section(transients: &[ForceTransient], threshold: f64, have_fine: b
         tables,
         svgs: vec![],
     }
-}
-
-/// Bounds of each control: excitations in [0, 1], joint torques within their bound,
-/// residual actuators unbounded.
-fn control_bounds(model: &GaitModel) -> (Vec<f64>, Vec<f64>) {
-    let n = model.nu();
-    let na = model.nu_actuators();
-    let (lo, hi) = match model.actuation() {
-        footfall::model::gait::Actuation::Mtg(_) => (0.0, 1.0),
-        footfall::model::gait::Actuation::Torques { max_torque } => (-max_torque, *max_torque),
-    };
-    (
-        (0..n)
-            .map(|i| if i < na { lo } else { f64::NEG_INFINITY })
-            .collect(),
-        (0..n)
-            .map(|i| if i < na { hi } else { f64::INFINITY })
-            .collect(),
-    )
 }
 
 /// Frame step of the body animation (s).

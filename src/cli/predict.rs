@@ -286,6 +286,8 @@ pub fn predict(
             sets: &sets,
             phases_path: &phases,
             events: &tracking.events,
+            sequence: &setup.seq,
+            control_bounds: (&setup.guess.u_lb, &setup.guess.u_ub),
             result: &res,
             solution: &solution,
             integrator,

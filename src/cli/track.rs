@@ -1025,6 +1025,8 @@ impl TrackingProblem {
                 sets,
                 phases_path: phases,
                 events: &self.setup.events,
+                sequence: &self.setup.seq,
+                control_bounds: (&self.setup.guess.u_lb, &self.setup.guess.u_ub),
                 result: &res,
                 solution: &solution,
                 integrator: integrator.clone(),

@@ -15,6 +15,7 @@
 //! attribute holds the frame shown.
 
 use super::escape_xml;
+use super::plot::px;
 use crate::model::geometry::Shape;
 use crate::model::GaitModel;
 use std::fmt::Write;
@@ -185,12 +186,6 @@ const SCALE: f64 = 300.0;
 const FORCE_LENGTH: f64 = 4e-4;
 const SIDE_COLOUR: [&str; 2] = ["#0072B2", "#D55E00"];
 const SIDE_CLASS: [&str; 2] = ["side-r", "side-l"];
-
-fn px(v: f64) -> String {
-    let r = (v * 10.0).round() / 10.0;
-    let r = if r == 0.0 { 0.0 } else { r };
-    format!("{r}")
-}
 
 /// World → SVG coordinates over a view `[x0, x1] × [y0, y1]` (m).
 #[derive(Clone, Copy)]

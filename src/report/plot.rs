@@ -171,7 +171,7 @@ fn text_width(s: &str, size: f64) -> f64 {
 }
 
 /// A coordinate rounded to 0.1 px, never written as `-0.0`.
-fn px(v: f64) -> String {
+pub(crate) fn px(v: f64) -> String {
     let r = (v * 10.0).round() / 10.0;
     let r = if r == 0.0 { 0.0 } else { r };
     if r.fract() == 0.0 {
