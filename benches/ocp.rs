@@ -1,6 +1,7 @@
 //! Criterion benchmarks of the OCP engine on the generic problems (same definitions as the
 //! CasADi peer in `../shared/peer`): one forward-sensitivity sweep over all intervals,
-//! one QP subproblem, and full solves from the problem's initial guess.
+//! one QP subproblem, and full solves from the problem's initial guess; and the
+//! per-iteration evaluations of the CasADi gait peer's tracking problem.
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use footfall::benchmarks::read_problem_json;
@@ -97,5 +98,35 @@ fn bench(c: &mut Criterion) {
     }
 }
 
-criterion_group!(benches, bench);
+/// The CasADi gait peer's tracking problem: what one SQP iteration costs at the data
+/// guess (the sweep with first-order sensitivities of all 50 intervals, the same with the
+/// exact Hessian of the Lagrangian, and the plain sweep of a line-search trial). The whole
+/// solve (about 185 iterations in two stages) is measured by `footfall solve`.
+fn gait(c: &mut Criterion) {
+    let bench = Benchmark::load(std::path::Path::new(
+        "problems/peer_gait_track_ellipse.json",
+    ))
+    .expect("problem");
+    bench
+        .with_ocp(IntegratorSettings::default(), |ocp| {
+            let tr = Transcription::new(ocp).expect("transcription");
+            let (_, _, w0) = tr.variable_bounds_and_guess();
+            let lambda = vec![1e-2; tr.m()];
+            let mut g = c.benchmark_group("gait_track_ellipse");
+            g.sample_size(10).measurement_time(Duration::from_secs(10));
+            g.bench_function("sensitivity_sweep", |b| {
+                b.iter(|| tr.evaluate(&w0, true).expect("sweep"))
+            });
+            g.bench_function("sweep_with_exact_hessian", |b| {
+                b.iter(|| tr.evaluate_with_hessian(&w0, &lambda).expect("sweep"))
+            });
+            g.bench_function("plain_sweep", |b| {
+                b.iter(|| tr.evaluate(&w0, false).expect("sweep"))
+            });
+            g.finish();
+        })
+        .expect("ocp");
+}
+
+criterion_group!(benches, bench, gait);
 criterion_main!(benches);

@@ -613,13 +613,15 @@ fn track_tightens_the_integrator_for_a_pad_in_the_model_file() {
     assert!(setup.get("sensitivity_tol").is_none(), "{setup}");
 }
 
-/// A pad re-fit whose line search fails with the sensitivities looser than the states
-/// goes on from that iterate with them at the states' tolerance and converges: started
-/// where `diagnose`'s re-fit of a padded 100 Hz trial (noise seed 3) stalled at KKT 2.4e-5
-/// with them at 1e-8, the first stage fails at once and the second converges to the
-/// same parameters.
+/// A pad re-fit from where `diagnose`'s re-fit of a padded 100 Hz trial (noise seed 3)
+/// once stalled at KKT 2.4e-5 converges to the same parameters. The stall was not the
+/// loose sensitivities: the swing foot's clearance rows repeated, at the node after
+/// lift-off and the node before landing, rows the problem already held, and their
+/// multipliers grew without bound. Without them the first stage converges in 2
+/// iterations; when a line search still fails, the solve goes on once with the
+/// sensitivities at the states' tolerance.
 #[test]
-fn a_pad_fit_stalled_by_loose_sensitivities_goes_on_with_tight_ones() {
+fn a_pad_fit_from_its_once_stalled_iterate_converges_to_the_same_parameters() {
     let tmp = tempfile::tempdir().unwrap();
     let trial = root().join("tests/data/hidden/heel_pad_compliance_seed3");
     let out = tmp.path().join("run");
@@ -649,12 +651,6 @@ fn a_pad_fit_stalled_by_loose_sensitivities_goes_on_with_tight_ones() {
         .unwrap();
     let err = String::from_utf8_lossy(&o.stderr);
     assert!(o.status.success(), "{err}");
-    assert!(
-        err.contains("line search failed at KKT")
-            && err
-                .contains("with the sensitivities at 1e-8: going on from there with them at 1e-10"),
-        "{err}"
-    );
     let summary: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(summary["status"], "converged", "{summary}");

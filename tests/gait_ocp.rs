@@ -82,9 +82,11 @@ fn seed_phase_graphs_transcribe_with_the_seed_interval_counts() {
             names.iter().any(|n| n.starts_with("clearance(")),
             "{phases}: no clearance"
         );
+        // periodic through the trailing impact: the landing row puts the first node's
+        // feet on the ground, so it has no on-ground rows that would repeat it
         assert!(
-            names.iter().any(|n| n.starts_with("on_ground(")),
-            "{phases}: no on-ground constraint"
+            !names.iter().any(|n| n.starts_with("on_ground(")),
+            "{phases}: on-ground rows repeat the landing row"
         );
         assert!(
             names.iter().any(|n| n.starts_with("landing(")),
@@ -166,7 +168,9 @@ fn gait_constraint_jacobians_match_finite_differences() {
             "{kind}: Jacobian differs from FD by {worst:e}"
         );
     }
-    assert!(seen.len() >= 9, "checked {seen:?}");
+    // every kind of row of a periodic cycle (its first node has no on-ground rows: the
+    // periodic landing puts its feet on the ground)
+    assert!(seen.len() >= 8, "checked {seen:?}");
 }
 
 fn write(dir: &Path, name: &str, text: &str) -> std::path::PathBuf {

@@ -77,7 +77,9 @@ fn forward_dynamics_match_peer_for_every_contact_set() {
     let m = peer_model();
     let q = vecf(&cv["q"]);
     let qd = vecf(&cv["qd"]);
-    let tau = vecf(&cv["tau"]);
+    // the controls are the peer's torques (N·m) in the model's torque unit
+    let unit = m.torque_unit().expect("a torque-driven model");
+    let u: Vec<f64> = vecf(&cv["tau"]).iter().map(|t| t / unit).collect();
     let mut x = q.clone();
     x.extend(&qd);
     for (key, contacts) in [
@@ -90,7 +92,7 @@ fn forward_dynamics_match_peer_for_every_contact_set() {
         let set = m.constraint_set(key, &list).unwrap();
         let mut xdot = vec![0.0; 18];
         let mut lam = vec![0.0; set.rows.len()];
-        m.dynamics(&set, &x, &tau, &[], &mut xdot, &mut lam, None)
+        m.dynamics(&set, &x, &u, &[], &mut xdot, &mut lam, None)
             .unwrap();
         let want_qdd = vecf(&cv[key]["qdd"]);
         assert!(

@@ -3,12 +3,14 @@
 
 use super::Failure;
 use anyhow::{anyhow, Context};
-use footfall::integrate::{IntegratorSettings, Method};
-use footfall::ocp::{Block, Transcription};
+use footfall::integrate::{IntegrationStats, IntegratorSettings, Method};
+use footfall::ocp::{Block, Ocp, Transcription};
 use footfall::problems::benchmark::Benchmark;
-use footfall::sqp::{HessianMode, SqpSettings};
+use footfall::problems::peer_gait::{stages, STAGE2_TOL};
+use footfall::runfolder::RunFolder;
+use footfall::sqp::{ExactConvexification, HessianMode, SqpResult, SqpSettings, SqpStatus};
 use std::fmt::Write as _;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Hessian choice on the command line.
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]
@@ -71,9 +73,10 @@ pub struct Args {
     /// Wall-time limit (s).
     #[arg(long, value_parser = super::validate::positive)]
     max_time: Option<f64>,
-    /// CVODES method for the shooting intervals.
-    #[arg(long, value_enum, default_value = "adams")]
-    integrator: MethodArg,
+    /// CVODES method for the shooting intervals (default: adams, or bdf for the gait
+    /// problem).
+    #[arg(long, value_enum)]
+    integrator: Option<MethodArg>,
     /// Hessian approximation (default: exact).
     #[arg(long, value_enum)]
     hessian: Option<HessianArg>,
@@ -90,17 +93,135 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         .clone()
         .ok_or_else(|| anyhow!("--problem is required"))?;
     let bench = Benchmark::load(&problem)?;
+    // Adams for the smooth generic problems; BDF for the gait, whose light feet make the
+    // contact dynamics stiff
     let method = match args.integrator {
-        MethodArg::Adams => Method::Adams,
-        MethodArg::Bdf => Method::Bdf,
+        Some(MethodArg::Adams) => Method::Adams,
+        Some(MethodArg::Bdf) => Method::Bdf,
+        None if matches!(bench, Benchmark::GaitTrack(_)) => Method::Bdf,
+        None => Method::Adams,
     };
-    let ocp = bench
-        .ocp(IntegratorSettings {
-            method,
-            ..Default::default()
+    let integrator = IntegratorSettings {
+        method,
+        ..Default::default()
+    };
+    let in_file = |e: String| anyhow!("{}: {e}", problem.display());
+    // the gait problem from its data guess: block BFGS, then the exact Hessian with tight
+    // integration (peer_gait::stages), unless the Hessian or integrator is chosen
+    let staged = matches!(bench, Benchmark::GaitTrack(_))
+        && args.hessian.is_none()
+        && args.integrator.is_none();
+    if !staged {
+        let settings = single_stage_settings(&bench, &args);
+        return bench
+            .with_ocp(integrator, |ocp| {
+                let tr = Transcription::new(ocp).context("transcribing the problem")?;
+                let w0 = start(&tr, &args)?;
+                let folder =
+                    super::session::create_checkpointed_run_folder(&args.out, args.overwrite)?;
+                announce(&bench, &tr, &format!("{:?}", settings.hessian), quiet);
+                let res = super::solve_interruptibly(&tr, &w0, &settings, quiet)?;
+                let counters = tr.integration_totals();
+                write_run(
+                    folder, ocp, &tr, &bench, &problem, &settings, res, counters, quiet,
+                )
+            })
+            .map_err(in_file)?;
+    }
+    let [first, second] = stages(args.tol);
+    let limit =
+        |stage: &footfall::problems::peer_gait::SolveStage, used: usize, spent: f64| SqpSettings {
+            max_iter: args.max_iter.saturating_sub(used),
+            max_time: args.max_time.map(|t| (t - spent).max(0.0)),
+            ..stage.settings.clone()
+        };
+    let s1 = limit(&first, 0, 0.0);
+    let mut folder = None;
+    let mut counters = IntegrationStats::default();
+    let r1 = bench
+        .with_ocp(first.integrator.clone(), |ocp| {
+            let tr = Transcription::new(ocp).context("transcribing the problem")?;
+            let w0 = start(&tr, &args)?;
+            folder = Some(super::session::create_checkpointed_run_folder(
+                &args.out,
+                args.overwrite,
+            )?);
+            announce(
+                &bench,
+                &tr,
+                &format!(
+                    "block BFGS to KKT {:.0e}, then the exact Hessian with CVODES at {STAGE2_TOL:.0e}",
+                    s1.tol_kkt
+                ),
+                quiet,
+            );
+            let res = super::solve_interruptibly(&tr, &w0, &s1, quiet);
+            counters += tr.integration_totals();
+            res
         })
-        .map_err(|e| anyhow!("{}: {e}", problem.display()))?;
-    let tr = Transcription::new(&ocp).context("transcribing the problem")?;
+        .map_err(in_file)??;
+    let folder = folder.expect("created by the first stage");
+    let go_on = r1.status == SqpStatus::Converged && r1.kkt > args.tol;
+    let s2 = limit(&second, r1.history.len().saturating_sub(1), r1.seconds);
+    let integrator2 = if go_on {
+        second.integrator.clone()
+    } else {
+        first.integrator.clone()
+    };
+    bench
+        .with_ocp(integrator2, |ocp| {
+            let tr = Transcription::new(ocp).context("transcribing the problem")?;
+            if !go_on {
+                return write_run(folder, ocp, &tr, &bench, &problem, &s1, r1, counters, quiet);
+            }
+            if !quiet {
+                eprintln!(
+                    "KKT {:.2e} ≤ {:.0e}: on with the exact Hessian and CVODES at {STAGE2_TOL:.0e}",
+                    r1.kkt, s1.tol_kkt
+                );
+            }
+            let r2 = super::solve_interruptibly(&tr, &r1.w, &s2, quiet)?;
+            let res = super::track::merge_stages(r1, r2);
+            counters += tr.integration_totals();
+            write_run(
+                folder, ocp, &tr, &bench, &problem, &s2, res, counters, quiet,
+            )
+        })
+        .map_err(in_file)?
+}
+
+/// SQP settings of a one-stage solve: the command line's, and for the gait problem
+/// footfall track's globalisation (Gauss–Newton steps until the constraints nearly hold,
+/// then the exact curvature kept convex by an inertia correction).
+fn single_stage_settings(bench: &Benchmark, args: &Args) -> SqpSettings {
+    let hessian = args.hessian.map_or(HessianMode::Exact, HessianMode::from);
+    let mut settings = SqpSettings {
+        tol_kkt: args.tol,
+        max_iter: args.max_iter,
+        max_time: args.max_time,
+        hessian,
+        ..Default::default()
+    };
+    if matches!(bench, Benchmark::GaitTrack(_)) {
+        settings.exact_hessian_below = 1e-3;
+        settings.exact_convexification = ExactConvexification::InertiaCorrection;
+    }
+    settings
+}
+
+fn announce(bench: &Benchmark, tr: &Transcription, how: &str, quiet: bool) {
+    if !quiet {
+        eprintln!(
+            "solving {} ({} variables, {} constraints) with {how}",
+            bench.name(),
+            tr.n(),
+            tr.m()
+        );
+    }
+}
+
+/// The starting point: the problem's guess, or the variables of `--warm-start`.
+fn start(tr: &Transcription, args: &Args) -> anyhow::Result<Vec<f64>> {
     let (_, _, mut w0) = tr.variable_bounds_and_guess();
     if let Some(ws) = &args.warm_start {
         let v: serde_json::Value = footfall::model::spec::read_json(ws)?;
@@ -129,25 +250,23 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         }
         w0 = w;
     }
-    let hessian = args.hessian.map_or(HessianMode::Exact, HessianMode::from);
-    let settings = SqpSettings {
-        tol_kkt: args.tol,
-        max_iter: args.max_iter,
-        max_time: args.max_time,
-        hessian,
-        ..Default::default()
-    };
-    let folder = super::session::create_checkpointed_run_folder(&args.out, args.overwrite)?;
-    if !quiet {
-        eprintln!(
-            "solving {} ({} variables, {} constraints) with {hessian:?}",
-            bench.name(),
-            tr.n(),
-            tr.m()
-        );
-    }
-    let res = super::solve_interruptibly(&tr, &w0, &settings, quiet)?;
+    Ok(w0)
+}
 
+/// Write the run folder of the result `res` of `ocp` (transcribed as `tr`; `integration`:
+/// the integrator counters of every stage) and commit it.
+#[allow(clippy::too_many_arguments)]
+fn write_run(
+    folder: RunFolder,
+    ocp: &Ocp<'_>,
+    tr: &Transcription,
+    bench: &Benchmark,
+    problem: &Path,
+    settings: &SqpSettings,
+    res: SqpResult,
+    integration: IntegrationStats,
+    quiet: bool,
+) -> anyhow::Result<()> {
     // solution: variables, and node states/controls per phase on their time grid
     let mut phases = Vec::new();
     let mut csv = String::new();
@@ -205,6 +324,14 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         "infeasibility": res.infeasibility,
         "iterations": res.history.len().saturating_sub(1),
         "seconds": res.seconds,
+        "time_split_s": {
+            "evaluations": res.timings.evaluation_s,
+            "qp": res.timings.qp_s,
+            "other": (res.seconds - res.timings.evaluation_s - res.timings.qp_s).max(0.0),
+        },
+        "evaluations": res.timings.evaluations,
+        "qp_solves": res.timings.qp_solves,
+        "integration": integration,
         "variables": tr.n(),
         "constraints": tr.m(),
         "settings": settings,

@@ -115,6 +115,8 @@ pub enum Actuation {
     Torques {
         /// Bound on each torque (N·m).
         max_torque: f64,
+        /// A typical torque (N·m) that effort terms normalise by.
+        reference_torque: f64,
     },
 }
 
@@ -301,8 +303,12 @@ impl GaitModel {
                     .map_err(|r| ModelError::invalid(model_path, "actuators", r))?;
                 Actuation::Mtg(set)
             }
-            ActuatorSpec::JointTorques { max_torque } => Actuation::Torques {
+            ActuatorSpec::JointTorques {
+                max_torque,
+                reference_torque,
+            } => Actuation::Torques {
                 max_torque: *max_torque,
+                reference_torque: *reference_torque,
             },
         };
         let coords: Vec<String> = COORDINATES.iter().map(|s| s.to_string()).collect();
@@ -420,6 +426,37 @@ impl GaitModel {
         match self.actuation {
             Actuation::Mtg(_) => 2 * LEG_JOINTS.len(),
             Actuation::Torques { .. } => LEG_JOINTS.len(),
+        }
+    }
+    /// Lower and upper bound of every control, in [`Self::control_names`] order:
+    /// excitations in [0, 1], joint torques in ±`max_torque` (in units of
+    /// [`Self::torque_unit`]), residual actuators in [−1, 1] (their scale is in the model).
+    pub fn control_bounds(&self) -> (Vec<f64>, Vec<f64>) {
+        let (lo, hi) = match self.actuation {
+            Actuation::Mtg(_) => (0.0, 1.0),
+            Actuation::Torques {
+                max_torque,
+                reference_torque,
+            } => (
+                -max_torque / reference_torque,
+                max_torque / reference_torque,
+            ),
+        };
+        let n = self.nu_actuators();
+        let lb = (0..self.nu()).map(|i| if i < n { lo } else { -1.0 });
+        let ub = (0..self.nu()).map(|i| if i < n { hi } else { 1.0 });
+        (lb.collect(), ub.collect())
+    }
+    /// The torque (N·m) of a unit joint-torque control: controls are torques over the
+    /// model's `reference_torque`, so they are of order one like excitations and the QP
+    /// stays well scaled. `None` for muscle-torque generators (their controls are
+    /// excitations).
+    pub fn torque_unit(&self) -> Option<f64> {
+        match self.actuation {
+            Actuation::Mtg(_) => None,
+            Actuation::Torques {
+                reference_torque, ..
+            } => Some(reference_torque),
         }
     }
 
@@ -620,9 +657,11 @@ impl GaitModel {
                     act[c] += set.joint_torque(joint, a[2 * k], a[2 * k + 1], q[c], qd[c]);
                 }
             }
-            Actuation::Torques { .. } => {
+            Actuation::Torques {
+                reference_torque, ..
+            } => {
                 for (k, &(c, _)) in LEG_JOINTS.iter().enumerate() {
-                    act[c] += u[k];
+                    act[c] += u[k] * *reference_torque;
                 }
             }
         }
@@ -668,9 +707,11 @@ impl GaitModel {
                     tau[c] += set.joint_torque(joint, a[2 * k], a[2 * k + 1], q[c], qd[c]);
                 }
             }
-            Actuation::Torques { .. } => {
+            Actuation::Torques {
+                reference_torque, ..
+            } => {
                 for (k, &(c, _)) in LEG_JOINTS.iter().enumerate() {
-                    tau[c] += u[k];
+                    tau[c] += u[k] * S::c(*reference_torque);
                 }
             }
         }
@@ -1062,12 +1103,39 @@ impl GaitModel {
         self.contact_point_generic(c, q, theta).1
     }
 
-    fn contact_point_generic<S: ModelScalar>(&self, c: usize, q: &[S], theta: &[S]) -> (V2<S>, S) {
+    /// World contact point (m) and normal gap φ (m) of contact `c` at `q`, over any model
+    /// scalar (for exact derivatives of a cost on the contact point).
+    pub fn contact_point_generic<S: ModelScalar>(
+        &self,
+        c: usize,
+        q: &[S],
+        theta: &[S],
+    ) -> (V2<S>, S) {
         let p = self.full_params(theta);
         let (_, _, h, n) = self.adjusted(&p);
         let k = self.tree.kinematics(q, &vec![S::c(0.0); self.nq()]);
         let (pt, _, _) = self.contact_geometry(&k, &self.contacts[c], n);
         (pt, dot(n, pt) - h)
+    }
+
+    /// Velocity `G q̇` (m/s) of every row of `set` at the state `x = (q, q̇, …)`: the
+    /// tangential or normal velocity of each foot's material point at its contact point,
+    /// which the Baumgarte rows drive to zero but do not hold (a state on the contact
+    /// manifold needs `G q̇ = 0` as a constraint of its own).
+    pub fn constraint_velocity<S: ModelScalar>(
+        &self,
+        set: &ConstraintSet,
+        x: &[S],
+        theta: &[S],
+    ) -> Vec<S> {
+        let nq = self.nq();
+        let p = self.full_params(theta);
+        let (_, _, _, n) = self.adjusted(&p);
+        let k = self.tree.kinematics(&x[..nq], &vec![S::c(0.0); nq]);
+        let g = self.constraint_jacobian(&k, set, n);
+        (0..set.rows.len())
+            .map(|r| (0..nq).map(|l| g[r * nq + l] * x[nq + l]).sum())
+            .collect()
     }
 
     /// Mass matrix (row-major) and bias forces at `(q, q̇)`.

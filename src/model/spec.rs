@@ -188,6 +188,11 @@ pub enum ActuatorSpec {
         /// Bound on each torque (N·m, default 500), used by optimal control problems.
         #[serde(default = "default_max_torque")]
         max_torque: f64,
+        /// A typical torque (N·m, default 100, as the CasADi gait peer): the unit of the
+        /// torque controls, so that `u = τ/τ_ref` is of order one like an excitation and
+        /// an effort term `u²` is the peer's `(τ/τ_ref)²`.
+        #[serde(default = "default_reference_torque")]
+        reference_torque: f64,
     },
 }
 
@@ -202,6 +207,9 @@ fn default_tau_d() -> f64 {
 }
 fn default_max_torque() -> f64 {
     500.0
+}
+fn default_reference_torque() -> f64 {
+    100.0
 }
 
 /// A foot file: named contact primitives in the ankle frame.
@@ -786,8 +794,12 @@ impl ModelSpec {
                 check_positive(path, "actuators.tau_activation", *tau_activation, "s")?;
                 check_positive(path, "actuators.tau_deactivation", *tau_deactivation, "s")?;
             }
-            ActuatorSpec::JointTorques { max_torque } => {
-                check_positive(path, "actuators.max_torque", *max_torque, "N·m")?
+            ActuatorSpec::JointTorques {
+                max_torque,
+                reference_torque,
+            } => {
+                check_positive(path, "actuators.max_torque", *max_torque, "N·m")?;
+                check_positive(path, "actuators.reference_torque", *reference_torque, "N·m")?
             }
         }
         let c = &self.contact;

@@ -2,6 +2,7 @@
 //! exactly as defined there: N equal intervals, piecewise-constant controls, objective
 //! `h Σ_k |u_k|²`, bounds and path constraints at the N + 1 nodes, the same initial guess.
 
+use super::peer_gait::PeerGaitTrack;
 use super::{hessian, FnTerm, Linear};
 use crate::benchmarks::{biped, CartPole, FiveLinkBiped};
 use crate::integrate::{ControlShape, IntegratorSettings};
@@ -39,6 +40,9 @@ pub enum ProblemError {
     },
 }
 
+/// The `name` of the CasADi gait peer's tracking problem.
+pub const GAIT_TRACK: &str = "gait_track_ellipse";
+
 /// A benchmark model with its problem definition.
 pub enum Benchmark {
     /// Cart-pole swing-up.
@@ -55,6 +59,9 @@ pub enum Benchmark {
         /// Problem JSON.
         json: Value,
     },
+    /// The CasADi gait peer's torque-driven tracking of one measured cycle
+    /// (`gait_track_ellipse`).
+    GaitTrack(Box<PeerGaitTrack>),
 }
 
 fn num(v: &Value, ptr: &str) -> Result<f64, String> {
@@ -126,7 +133,7 @@ impl Benchmark {
             path: path.into(),
             source,
         })?;
-        let json = serde_json::from_str(&text).map_err(|source| ProblemError::Json {
+        let json: Value = serde_json::from_str(&text).map_err(|source| ProblemError::Json {
             path: path.into(),
             source,
         })?;
@@ -134,17 +141,43 @@ impl Benchmark {
             path: path.into(),
             reason,
         };
-        let bench = Self::from_json(json).map_err(invalid)?;
-        bench.ocp(IntegratorSettings::default()).map_err(invalid)?;
+        let bench = match json.get("name").and_then(Value::as_str) {
+            Some(GAIT_TRACK) => Benchmark::GaitTrack(Box::new(
+                PeerGaitTrack::from_json(&json, path).map_err(invalid)?,
+            )),
+            _ => Self::from_json(json).map_err(invalid)?,
+        };
+        bench
+            .with_ocp(IntegratorSettings::default(), |_| ())
+            .map_err(invalid)?;
         Ok(bench)
     }
 
-    /// Recognise the problem by its `name` and build its model.
+    /// Call `f` with the OCP of the problem with CVODES settings `integrator` (the gait
+    /// problem's OCP borrows a walking cycle built here, so it is lent, not returned).
+    pub fn with_ocp<R>(
+        &self,
+        integrator: IntegratorSettings,
+        f: impl FnOnce(&Ocp<'_>) -> R,
+    ) -> Result<R, String> {
+        match self {
+            Benchmark::GaitTrack(g) => {
+                let cycle = g.cycle()?;
+                let ocp = g.ocp(&cycle, integrator)?;
+                Ok(f(&ocp))
+            }
+            _ => Ok(f(&self.ocp(integrator)?)),
+        }
+    }
+
+    /// Recognise a generic problem by its `name` and build its model (the gait problem
+    /// names model files relative to its own: [`load`](Self::load) it).
     pub fn from_json(json: Value) -> Result<Self, String> {
         match json.get("name").and_then(Value::as_str) {
             Some("cartpole_swingup") => Ok(Benchmark::CartPole { model: CartPole::from_problem_json(&json)?, json }),
             Some("five_link_biped") => Ok(Benchmark::Biped { model: FiveLinkBiped::from_problem_json(&json)?, json }),
-            Some(other) => Err(format!("field 'name': unknown problem '{other}' (known: cartpole_swingup, five_link_biped)")),
+            Some(GAIT_TRACK) => Err(format!("{GAIT_TRACK} names its model files relative to the problem file: load it with Benchmark::load")),
+            Some(other) => Err(format!("field 'name': unknown problem '{other}' (known: cartpole_swingup, five_link_biped, {GAIT_TRACK})")),
             None => Err("field 'name' missing".into()),
         }
     }
@@ -154,14 +187,19 @@ impl Benchmark {
         match self {
             Benchmark::CartPole { .. } => "cartpole_swingup",
             Benchmark::Biped { .. } => "five_link_biped",
+            Benchmark::GaitTrack(_) => GAIT_TRACK,
         }
     }
 
-    /// The OCP with CVODES settings `integrator`.
+    /// The OCP with CVODES settings `integrator`, for the generic problems; the gait
+    /// problem's OCP is lent by [`with_ocp`](Self::with_ocp).
     pub fn ocp(&self, integrator: IntegratorSettings) -> Result<Ocp<'_>, String> {
         match self {
             Benchmark::CartPole { model, json } => cartpole(model, json, integrator),
             Benchmark::Biped { model, json } => five_link_biped(model, json, integrator),
+            Benchmark::GaitTrack(_) => Err(format!(
+                "the {GAIT_TRACK} OCP borrows its walking cycle: use Benchmark::with_ocp"
+            )),
         }
     }
 }

@@ -7,6 +7,7 @@ pub mod diagnose;
 pub mod evaluation;
 pub mod foot_fit;
 pub mod gait;
+pub mod peer_gait;
 pub mod predict;
 pub mod synth;
 pub mod track;

@@ -482,8 +482,14 @@ impl TrackingSetup {
                 xs.push(x);
             }
             let cn = if linear { *intervals + 1 } else { *intervals };
+            // excitations 0.025; joint torques and residual actuators 0
+            let excitations = if model.na() > 0 {
+                model.nu_actuators()
+            } else {
+                0
+            };
             let mut u0 = vec![0.025; nu];
-            u0[model.nu_actuators()..].iter_mut().for_each(|v| *v = 0.0);
+            u0[excitations..].iter_mut().for_each(|v| *v = 0.0);
             gu.push(vec![u0; cn]);
             gx.push(xs);
             targets.push(tg);
@@ -519,16 +525,15 @@ impl TrackingSetup {
             x_lb[i] = 0.0;
             x_ub[i] = 1.0;
         }
-        // excitations in [0, 1]; residual actuators (if any) in [−1, 1]
-        let na_u = model.nu_actuators();
-        let u_lb: Vec<f64> = (0..nu).map(|i| if i < na_u { 0.0 } else { -1.0 }).collect();
+        // excitations in [0, 1], joint torques in ±max_torque, residual actuators in [−1, 1]
+        let (u_lb, u_ub) = model.control_bounds();
         let guess = GaitGuess {
             x: gx,
             u: gu,
             x_lb,
             x_ub,
             u_lb,
-            u_ub: vec![1.0; nu],
+            u_ub,
         };
         let foot_length = 0.305;
         let weights = TrackingWeights::seed(nq, peak, foot_length);
@@ -924,7 +929,11 @@ fn add_costs(
         }
         cost[c][j] += value * value;
         rows[c][j] += 1;
-        if label != "excitations" && label != "activations" && !label.ends_with("residual") {
+        if label != "excitations"
+            && label != "joint torques"
+            && label != "activations"
+            && !label.ends_with("residual")
+        {
             match node_data.iter_mut().find(|(l, _)| *l == label) {
                 Some(e) => e.1 += value * value,
                 None => node_data.push((label, value * value)),

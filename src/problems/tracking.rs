@@ -79,7 +79,8 @@ pub struct TrackingWeights {
     pub cop_length: f64,
     /// Weight of the normalised CoP (moment) errors.
     pub cop: f64,
-    /// Weight of the squared excitations (seed: 1e-3).
+    /// Weight of the squared excitations (seed: 1e-3), or of the squared joint-torque
+    /// controls, torques over the model's reference torque (the CasADi peer's 1e-3).
     pub excitation: f64,
     /// Weight of the squared activations (seed: 1e-3).
     pub activation: f64,
@@ -226,6 +227,16 @@ impl GenericFunction for ForceClockShift<'_> {
     }
 }
 
+/// The cost breakdown's name for the actuators' effort rows: `excitations` of muscle
+/// torque generators, or `joint torques` of a torque-driven model.
+pub fn effort_channel(model: &GaitModel) -> &'static str {
+    if model.na() > 0 {
+        "excitations"
+    } else {
+        "joint torques"
+    }
+}
+
 impl<'a> TrackingResidual<'a> {
     /// Residual of a node in a phase with constraint set `set`; its arguments are the
     /// node's state, its control and θ. With a model that has measurement effects, the
@@ -315,7 +326,7 @@ impl<'a> TrackingResidual<'a> {
         }
         if self.regularised {
             out.extend(std::iter::repeat_n(
-                "excitations".to_string(),
+                effort_channel(self.model).to_string(),
                 self.model.nu_actuators(),
             ));
             out.extend(
@@ -396,12 +407,8 @@ impl<'a> TrackingResidual<'a> {
         }
         let n_act = self.model.nu_actuators();
         for (k, v) in u.iter().enumerate() {
-            out[o] = *v
-                * if k < n_act {
-                    w.excitation.sqrt()
-                } else {
-                    w.residual.sqrt()
-                };
+            let weight = if k < n_act { w.excitation } else { w.residual };
+            out[o] = *v * weight.sqrt();
             o += 1;
         }
         for i in 0..self.model.na() {

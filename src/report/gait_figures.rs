@@ -401,7 +401,7 @@ pub struct ActuatorTraces {
     pub torques: Vec<Trace>,
     /// Activations (MTG models).
     pub activations: Vec<Trace>,
-    /// Excitations, or the joint torques as controls (with their bounds).
+    /// Excitations, or the joint torques as controls (N·m, with their bounds).
     pub controls: Vec<Trace>,
 }
 
@@ -493,6 +493,8 @@ impl ActuatorTraces {
                 });
             }
         }
+        // torque controls are drawn in N·m (the model's controls are in its torque unit)
+        let unit = model.torque_unit().unwrap_or(1.0);
         for (i, name) in model
             .control_names()
             .iter()
@@ -506,8 +508,10 @@ impl ActuatorTraces {
                     name: what
                         .replace("_excitation", "")
                         .replace("torque", "torque control"),
-                    values: column(&|k| controls[k][i]),
-                    bounds: control_bounds.as_ref().map(|(lo, hi)| (lo[i], hi[i])),
+                    values: column(&|k| controls[k][i] * unit),
+                    bounds: control_bounds
+                        .as_ref()
+                        .map(|(lo, hi)| (lo[i] * unit, hi[i] * unit)),
                 });
             }
         }
@@ -531,10 +535,10 @@ impl ChannelFigures<'_> {
                 if traces.is_empty() {
                     continue;
                 }
-                let title = match (title, traces[0].name.contains("torque control")) {
-                    ("controls", true) => format!("{joint} torque controls"),
-                    ("controls", false) => format!("{joint} excitations"),
-                    _ => format!("{joint} {title}"),
+                let (title, unit) = match (title, traces[0].name.contains("torque control")) {
+                    ("controls", true) => (format!("{joint} torque controls"), "torque (N·m)"),
+                    ("controls", false) => (format!("{joint} excitations"), unit),
+                    _ => (format!("{joint} {title}"), unit),
                 };
                 let mut p = self.cycle_plot(&title, unit, &[0, 1]);
                 let mut names: Vec<&str> = Vec::new();

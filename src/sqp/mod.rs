@@ -159,6 +159,11 @@ pub struct SqpSettings {
     /// block) in the quasi-Newton modes (default: false; on the five-link biped it
     /// converged more slowly: J = 470.11354 vs 470.11126 after 150 iterations).
     pub exact_term_hessians: bool,
+    /// Fault injection for tests: the QP solves (numbered from 0 over the whole solve,
+    /// elastic and second-order-correction QPs included) that fail as if Clarabel had
+    /// stopped with a numerical error, so that the recovery path can be shown to work.
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub inject_qp_failures: Vec<usize>,
 }
 
 impl Default for SqpSettings {
@@ -175,6 +180,7 @@ impl Default for SqpSettings {
             exact_term_hessians: false,
             exact_hessian_below: f64::INFINITY,
             exact_convexification: ExactConvexification::Augmented,
+            inject_qp_failures: Vec::new(),
         }
     }
 }
@@ -457,6 +463,15 @@ fn solve_impl(
     };
     let solve_qp = |d: &QpData<'_>| {
         let mut r = Err(QpError::Failed(String::new()));
+        if settings
+            .inject_qp_failures
+            .contains(&timings.get().qp_solves)
+        {
+            timed(false, &mut || {
+                r = Err(QpError::Failed("NumericalError (injected)".into()))
+            });
+            return r;
+        }
         timed(false, &mut || r = qp::solve(d));
         r
     };

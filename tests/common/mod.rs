@@ -226,8 +226,23 @@ pub fn bundled_tracking_with(
     Vec<footfall::model::ConstraintSet>,
     footfall::problems::track::TrackingSetup,
 ) {
+    bundled_tracking_of("opensim_subject01.json", foot, phases, sides)
+}
+
+/// As [`bundled_tracking_with`], for the model file `model_file` in `models/`.
+#[allow(dead_code)]
+pub fn bundled_tracking_of(
+    model_file: &str,
+    foot: &str,
+    phases: &str,
+    sides: footfall::problems::track::TargetSides,
+) -> (
+    GaitModel,
+    Vec<footfall::model::ConstraintSet>,
+    footfall::problems::track::TrackingSetup,
+) {
     let data = footfall::data::GaitData::bundled(&root()).unwrap();
-    let m = model("opensim_subject01.json", foot);
+    let m = model(model_file, foot);
     let p = path(phases);
     let seq = footfall::phases::PhaseSequence::load(&p).unwrap();
     let sets = seq.resolve(&m, &p).unwrap();

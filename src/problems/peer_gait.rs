@@ -1,0 +1,786 @@
+//! The CasADi gait peer's tracking problem, exactly as its problem file defines it
+//! (`problems/peer_gait_track_ellipse.json`, a copy of
+//! `shared/peer_gait/problem/gait_track_ellipse.json` with a `footfall` block naming the
+//! model and foot files that realise its body): one measured gait cycle, torque driven,
+//! rigid ellipse feet, phases DS1 → SS_R → impact → DS2 → SS_L → terminal impact with
+//! [7, 18, 7, 18] intervals of fixed duration, the peer's cost weights, references at the
+//! cost nodes and initial guess from the data.
+//!
+//! What the walking-cycle OCP ([`super::gait`]) already holds is taken from it: node
+//! states and controls, impact maps, the landing rows, swing clearance at the inner nodes
+//! of single stance, and the friction cone at every node with that node's interval
+//! control. This module adds what a non-periodic tracked cycle needs beside it: the first
+//! node at rest on the double-stance manifold (`G q̇ = 0`), the landing foot's impulse in
+//! the friction cone at both impacts, and the peer's least-squares cost:
+//!
+//! `J = Σₙ [Σₐ w_θ(q−θ)² + w_ω(q̇−ω)² + Σ_feet (w_cop (x_cp−cop)² + w_f((fx−fx̂)² + (fy−fŷ)²))
+//!      + w_τ Σ (τ/τ_ref)²] + terminal angle and velocity terms + w_Λ Σ Λ²`
+//!
+//! over the 50 interval starts. The peer's optimum, J* = 1.2584987, is the check.
+
+use super::gait::{GaitCycle, GaitGuess};
+use super::{AdTerm, GenericFunction};
+use crate::integrate::IntegratorSettings;
+use crate::model::effects::ModelScalar;
+use crate::model::gait::COORDINATES;
+use crate::model::{ConstraintSet, GaitModel, RowKind};
+use crate::ocp::{Block, Constraint, Ocp, Term};
+use crate::phases::PhaseSequence;
+use crate::sqp::{ExactConvexification, HessianMode, SqpSettings};
+use serde_json::{json, Value};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// The feet in the problem file's order: right, then left.
+const FEET: [&str; 2] = ["r", "l"];
+
+/// The references and weights of one cost node (the start of a shooting interval).
+#[derive(Debug, Clone)]
+struct NodeTargets {
+    /// Continuous phase index.
+    phase: usize,
+    /// Interval (= node) index within the phase.
+    node: usize,
+    /// Angle references of the tracked coordinates (rad).
+    theta: Vec<f64>,
+    /// Angular velocity references (rad/s).
+    omega: Vec<f64>,
+    /// The feet in contact.
+    feet: Vec<FootTarget>,
+}
+
+/// The references of one foot in contact at a cost node.
+#[derive(Debug, Clone, Copy)]
+struct FootTarget {
+    /// Foot: 0 right, 1 left.
+    side: usize,
+    /// Tangential force reference (N).
+    fx: f64,
+    /// Normal force reference (N).
+    fy: f64,
+    /// CoP reference (m) and its weight (1/m²), where the CoP is weighted.
+    cop: Option<(f64, f64)>,
+}
+
+/// The peer's tracking problem with the model that realises its body.
+pub struct PeerGaitTrack {
+    /// The model (torque driven, ellipse feet), loaded from the `footfall` block's files.
+    pub model: GaitModel,
+    /// The phases of the problem file as a phase sequence (non-periodic).
+    pub seq: PhaseSequence,
+    /// Constraint set of every phase of `seq`.
+    pub sets: Vec<ConstraintSet>,
+    /// Contact index of each foot's primitive (right, left).
+    contacts: [usize; 2],
+    /// Indices of the tracked coordinates in `q`.
+    tracked: Vec<usize>,
+    w_theta: Vec<f64>,
+    w_omega: Vec<f64>,
+    w_force: f64,
+    w_torque: f64,
+    w_impulse: f64,
+    friction: f64,
+    nodes: Vec<NodeTargets>,
+    terminal_theta: Vec<f64>,
+    terminal_omega: Vec<f64>,
+    guess: GaitGuess,
+}
+
+fn field<'v>(v: &'v Value, ptr: &str) -> Result<&'v Value, String> {
+    v.pointer(ptr).ok_or_else(|| {
+        format!(
+            "field '{}' missing",
+            ptr.trim_start_matches('/').replace('/', ".")
+        )
+    })
+}
+
+fn number(v: &Value, ptr: &str) -> Result<f64, String> {
+    field(v, ptr)?.as_f64().ok_or_else(|| {
+        format!(
+            "field '{}' must be a number",
+            ptr.trim_start_matches('/').replace('/', ".")
+        )
+    })
+}
+
+fn numbers(v: &Value, ptr: &str, len: Option<usize>) -> Result<Vec<f64>, String> {
+    let name = ptr.trim_start_matches('/').replace('/', ".");
+    let a = field(v, ptr)?
+        .as_array()
+        .ok_or_else(|| format!("field '{name}' must be an array of numbers"))?;
+    if let Some(n) = len {
+        if a.len() != n {
+            return Err(format!(
+                "field '{name}' has {} entries, expected {n}",
+                a.len()
+            ));
+        }
+    }
+    a.iter()
+        .enumerate()
+        .map(|(i, x)| {
+            x.as_f64()
+                .ok_or_else(|| format!("field '{name}[{i}]' must be a number"))
+        })
+        .collect()
+}
+
+fn string<'v>(v: &'v Value, ptr: &str) -> Result<&'v str, String> {
+    field(v, ptr)?.as_str().ok_or_else(|| {
+        format!(
+            "field '{}' must be a string",
+            ptr.trim_start_matches('/').replace('/', ".")
+        )
+    })
+}
+
+impl PeerGaitTrack {
+    /// Build the problem from the problem file's JSON `json` (read from `path`, against
+    /// which the `footfall` block's files are resolved). Refuses a model whose mass matrix
+    /// and bias forces differ from the file's check values: the problem is only the
+    /// peer's if the body is.
+    pub fn from_json(json: &Value, path: &Path) -> Result<Self, String> {
+        let dir = path.parent().unwrap_or(Path::new("."));
+        let file = |ptr: &str| -> Result<PathBuf, String> { Ok(dir.join(string(json, ptr)?)) };
+        let model_path = file("/footfall/model")?;
+        let foot_path = file("/footfall/foot")?;
+        let model = GaitModel::load(&model_path, &foot_path).map_err(|e| e.to_string())?;
+        if model.na() > 0 || model.torque_unit().is_none() {
+            return Err(format!(
+                "field 'footfall.model': {} must be torque driven (\"actuators\": {{\"type\": \"joint_torques\"}}), as the problem is",
+                model_path.display()
+            ));
+        }
+        check_body(&model, json)?;
+        let contacts = [0, 1].map(|s| {
+            let name = string(json, &format!("/footfall/contacts/{}", FEET[s]))?;
+            model.contact_index(name).ok_or_else(|| {
+                format!(
+                    "field 'footfall.contacts.{}': the foot has no contact '{name}'",
+                    FEET[s]
+                )
+            })
+        });
+        let contacts = [contacts[0].clone()?, contacts[1].clone()?];
+
+        // phases and transitions as a phase sequence
+        let phases = field(json, "/phases")?
+            .as_array()
+            .ok_or("field 'phases' must be an array")?;
+        let transitions = field(json, "/transitions")?
+            .as_array()
+            .ok_or("field 'transitions' must be an array")?;
+        let contact_list = |ptr: &str| -> Result<Vec<Value>, String> {
+            let feet = field(json, ptr)?
+                .as_array()
+                .ok_or_else(|| format!("field '{}' must be an array", &ptr[1..]))?;
+            feet.iter()
+                .map(|f| {
+                    let s = FEET
+                        .iter()
+                        .position(|n| Some(*n) == f.as_str())
+                        .ok_or_else(|| {
+                            format!("field '{}': feet are \"r\" or \"l\", got {f}", &ptr[1..])
+                        })?;
+                    Ok(json!({ "contact": model.contacts[contacts[s]].name }))
+                })
+                .collect()
+        };
+        // impacts: after continuous phase j (the terminal one after the last)
+        let mut impact_after: Vec<Option<(String, Vec<Value>)>> = vec![None; phases.len()];
+        let mut j = 0usize;
+        for (t, tr) in transitions.iter().enumerate() {
+            match string(tr, "/type")? {
+                "initial" => {}
+                "continuous" => j += 1,
+                "impact" | "terminal impact" => {
+                    let at = string(tr, "/at").unwrap_or("impact");
+                    let name = at.split('(').nth(1).map_or("impact", |s| s.trim_end_matches(')'));
+                    let slot = impact_after.get_mut(j).ok_or_else(|| {
+                        format!("field 'transitions[{t}]': an impact after the last phase's end")
+                    })?;
+                    *slot = Some((
+                        name.to_string(),
+                        contact_list(&format!("/transitions/{t}/feet_after"))?,
+                    ));
+                    j += 1;
+                }
+                other => {
+                    return Err(format!(
+                        "field 'transitions[{t}].type': unknown '{other}' (initial, continuous, impact, terminal impact)"
+                    ))
+                }
+            }
+        }
+        let mut seq_phases = Vec::new();
+        let mut intervals = Vec::new();
+        for (j, _) in phases.iter().enumerate() {
+            let n = number(json, &format!("/phases/{j}/intervals"))?;
+            if !(n >= 1.0 && n.fract() == 0.0) {
+                return Err(format!(
+                    "field 'phases[{j}].intervals' must be a whole number ≥ 1"
+                ));
+            }
+            intervals.push(n as usize);
+            seq_phases.push(json!({
+                "type": "continuous",
+                "name": string(json, &format!("/phases/{j}/name"))?,
+                "contacts": contact_list(&format!("/phases/{j}/contacts"))?,
+                "intervals": n as usize,
+                "duration": number(json, &format!("/phases/{j}/duration"))?,
+            }));
+            if let Some((name, feet)) = &impact_after[j] {
+                seq_phases.push(json!({ "type": "impact", "name": name, "contacts": feet }));
+            }
+        }
+        let friction = number(json, "/constraints/friction_mu")?;
+        let seq: PhaseSequence = serde_json::from_value(json!({
+            "name": string(json, "/name")?,
+            "description": string(json, "/summary").unwrap_or(""),
+            "phases": seq_phases,
+            "gait": { "friction": friction, "periodic": false, "clearance": true, "controls": "constant" },
+        }))
+        .map_err(|e| format!("phases: {e}"))?;
+        seq.validate(path).map_err(|e| e.to_string())?;
+        let sets = seq.resolve(&model, path).map_err(|e| e.to_string())?;
+
+        // bounds and initial guess
+        let nq = model.nq();
+        let mut x_lb = numbers(json, "/constraints/bounds/q_lb", Some(nq))?;
+        x_lb.extend(numbers(json, "/constraints/bounds/qd_lb", Some(nq))?);
+        let mut x_ub = numbers(json, "/constraints/bounds/q_ub", Some(nq))?;
+        x_ub.extend(numbers(json, "/constraints/bounds/qd_ub", Some(nq))?);
+        let unit = model.torque_unit().expect("checked above");
+        let tau_max = number(json, "/constraints/bounds/tau_max_Nm")?;
+        let nu = model.nu();
+        let u_lb = vec![-tau_max / unit; nu];
+        let u_ub = vec![tau_max / unit; nu];
+        let node_count: usize = intervals.iter().map(|n| n + 1).sum();
+        let q = field(json, "/initial_guess/nodes/q")?
+            .as_array()
+            .ok_or("field 'initial_guess.nodes.q' must be an array")?;
+        if q.len() != node_count {
+            return Err(format!(
+                "field 'initial_guess.nodes.q' has {} nodes, the phases {node_count} (intervals + 1 each)",
+                q.len()
+            ));
+        }
+        let (mut gx, mut gu) = (Vec::new(), Vec::new());
+        let mut at = 0usize;
+        for &n in &intervals {
+            let mut xs = Vec::new();
+            let mut us = Vec::new();
+            for k in 0..=n {
+                let mut x = numbers(
+                    json,
+                    &format!("/initial_guess/nodes/q/{}", at + k),
+                    Some(nq),
+                )?;
+                x.extend(numbers(
+                    json,
+                    &format!("/initial_guess/nodes/qd/{}", at + k),
+                    Some(nq),
+                )?);
+                xs.push(x);
+                if k < n {
+                    let tau = numbers(
+                        json,
+                        &format!("/initial_guess/nodes/tau/{}", at + k),
+                        Some(nu),
+                    )?;
+                    us.push(
+                        tau.iter()
+                            .map(|t| (t / unit).clamp(-tau_max / unit, tau_max / unit))
+                            .collect(),
+                    );
+                }
+            }
+            at += n + 1;
+            gx.push(xs);
+            gu.push(us);
+        }
+        let guess = GaitGuess {
+            x: gx,
+            u: gu,
+            x_lb,
+            x_ub,
+            u_lb,
+            u_ub,
+        };
+
+        // cost
+        let tracked_names: Vec<String> = field(json, "/cost/tracked")?
+            .as_array()
+            .ok_or("field 'cost.tracked' must be an array")?
+            .iter()
+            .map(|v| {
+                v.as_str()
+                    .map(String::from)
+                    .ok_or("field 'cost.tracked' must hold coordinate names".to_string())
+            })
+            .collect::<Result<_, _>>()?;
+        let tracked = tracked_names
+            .iter()
+            .map(|n| {
+                COORDINATES.iter().position(|c| c == n).ok_or_else(|| {
+                    format!(
+                        "field 'cost.tracked': unknown coordinate '{n}' (known: {})",
+                        COORDINATES.join(", ")
+                    )
+                })
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let per = |ptr: &str| -> Result<Vec<f64>, String> {
+            tracked_names
+                .iter()
+                .map(|n| number(json, &format!("{ptr}/{n}")))
+                .collect()
+        };
+        let w_theta = per("/cost/w_theta")?;
+        let w_omega = per("/cost/w_omega")?;
+        let w_force = number(json, "/cost/w_f")?;
+        let w_torque = number(json, "/cost/w_tau")?;
+        let tau_ref = number(json, "/cost/tau_ref_Nm")?;
+        if (tau_ref - unit).abs() > 1e-12 * unit {
+            return Err(format!(
+                "field 'cost.tau_ref_Nm' is {tau_ref} N·m, but the model's torque controls are in units of {unit} N·m (its 'reference_torque'): make them equal"
+            ));
+        }
+        let w_impulse = number(json, "/cost/w_impulse")?;
+        let ncost: usize = intervals.iter().sum();
+        let phase_of = numbers(json, "/references/phase", Some(ncost))?;
+        let mut nodes = Vec::with_capacity(ncost);
+        let mut count = vec![0usize; intervals.len()];
+        for (i, p) in phase_of.iter().enumerate() {
+            let j = *p as usize;
+            if j >= intervals.len() || p.fract() != 0.0 {
+                return Err(format!(
+                    "field 'references.phase[{i}]' must be a phase index"
+                ));
+            }
+            let node = count[j];
+            count[j] += 1;
+            let at = |ptr: String| number(json, &format!("{ptr}/{i}"));
+            let theta = tracked_names
+                .iter()
+                .map(|n| at(format!("/references/theta/{n}")))
+                .collect::<Result<_, _>>()?;
+            let omega = tracked_names
+                .iter()
+                .map(|n| at(format!("/references/omega/{n}")))
+                .collect::<Result<_, _>>()?;
+            let in_contact = string(json, &format!("/phases/{j}/contacts/0")).is_ok();
+            let mut feet = Vec::new();
+            if in_contact {
+                for (s, foot) in FEET.iter().enumerate() {
+                    let listed = field(json, &format!("/phases/{j}/contacts"))?
+                        .as_array()
+                        .is_some_and(|a| a.iter().any(|f| f.as_str() == Some(foot)));
+                    if !listed {
+                        continue;
+                    }
+                    let fx = at(format!("/references/grf/fx_{foot}"))?;
+                    let fy = at(format!("/references/grf/fy_{foot}"))?;
+                    let w = at(format!("/references/cop_weight/{foot}"))?;
+                    let cop = if w > 0.0 {
+                        Some((at(format!("/references/cop/{foot}"))?, w))
+                    } else {
+                        None
+                    };
+                    feet.push(FootTarget {
+                        side: s,
+                        fx,
+                        fy,
+                        cop,
+                    });
+                }
+            }
+            nodes.push(NodeTargets {
+                phase: j,
+                node,
+                theta,
+                omega,
+                feet,
+            });
+        }
+        if count != intervals {
+            return Err(format!(
+                "field 'references.phase': {count:?} cost nodes per phase, the phases have {intervals:?} intervals"
+            ));
+        }
+        let terminal_theta = per("/references/terminal/theta")?;
+        let terminal_omega = per("/references/terminal/omega")?;
+        Ok(Self {
+            model,
+            seq,
+            sets,
+            contacts,
+            tracked,
+            w_theta,
+            w_omega,
+            w_force,
+            w_torque,
+            w_impulse,
+            friction,
+            nodes,
+            terminal_theta,
+            terminal_omega,
+            guess,
+        })
+    }
+
+    /// The walking cycle of the problem's phases.
+    pub fn cycle(&self) -> Result<GaitCycle<'_>, String> {
+        GaitCycle::new(&self.model, &self.seq, &self.sets)
+    }
+
+    /// The optimal control problem on `cycle` (from [`cycle`](Self::cycle)).
+    pub fn ocp<'c>(
+        &'c self,
+        cycle: &'c GaitCycle<'c>,
+        integrator: IntegratorSettings,
+    ) -> Result<Ocp<'c>, String> {
+        let model = &self.model;
+        let mut ocp = cycle.ocp(&self.guess, integrator)?;
+        let cont = &cycle.continuous;
+        let last = cont.len() - 1;
+        // the first node at rest on the contact manifold of its phase
+        let first = &self.sets[cont[0]];
+        ocp.constraints.push(Constraint {
+            term: Term {
+                name: "at_rest(first node)".into(),
+                args: vec![Block::State { phase: 0, node: 0 }, Block::Params],
+                f: Arc::new(AdTerm(ContactVelocity {
+                    model,
+                    set: first.clone(),
+                })),
+            },
+            lb: vec![0.0; first.rows.len()],
+            ub: vec![0.0; first.rows.len()],
+        });
+        // impacts after continuous phase j (the last one after the final phase): the
+        // impulses are costed, the landing foot's kept in the friction cone
+        for (j, &i) in cont.iter().enumerate() {
+            let impact = i + 1;
+            let Some(crate::phases::Phase::Impact { name, .. }) = self.seq.phases.get(impact)
+            else {
+                continue;
+            };
+            let (before, after) = (&self.sets[i], &self.sets[impact]);
+            let pre = Block::State {
+                phase: j,
+                node: ocp.phases[j].intervals,
+            };
+            let rows = after.rows.len();
+            let scale = self.w_impulse.sqrt();
+            ocp.least_squares.push(Term {
+                name: format!("impulses({name})"),
+                args: vec![pre, Block::Params],
+                f: Arc::new(AdTerm(Impulses {
+                    model,
+                    set: after.clone(),
+                    rows: (0..rows).map(|r| vec![(r, scale)]).collect(),
+                })),
+            });
+            let mut cone = Vec::new();
+            for (r, row) in after.rows.iter().enumerate() {
+                let landing = !before.rows.iter().any(|b| b.contact == row.contact);
+                if landing && row.kind == RowKind::Normal {
+                    if let Some(t) = after
+                        .rows
+                        .iter()
+                        .position(|o| o.contact == row.contact && o.kind == RowKind::Tangential)
+                    {
+                        cone.push(vec![(r, self.friction), (t, -1.0)]);
+                        cone.push(vec![(r, self.friction), (t, 1.0)]);
+                    }
+                }
+            }
+            if !cone.is_empty() {
+                let n = cone.len();
+                ocp.constraints.push(Constraint {
+                    term: Term {
+                        name: format!("impulse_cone({name})"),
+                        args: vec![pre, Block::Params],
+                        f: Arc::new(AdTerm(Impulses {
+                            model,
+                            set: after.clone(),
+                            rows: cone,
+                        })),
+                    },
+                    lb: vec![0.0; n],
+                    ub: vec![f64::INFINITY; n],
+                });
+            }
+        }
+        // tracking at the start of every interval, with that interval's torques
+        let sq = |w: &[f64]| w.iter().map(|v| v.sqrt()).collect::<Vec<_>>();
+        let (sw_theta, sw_omega) = (sq(&self.w_theta), sq(&self.w_omega));
+        for t in &self.nodes {
+            ocp.least_squares.push(Term {
+                name: "tracking".into(),
+                args: vec![
+                    Block::State {
+                        phase: t.phase,
+                        node: t.node,
+                    },
+                    Block::Control {
+                        phase: t.phase,
+                        node: t.node,
+                    },
+                    Block::Params,
+                ],
+                f: Arc::new(AdTerm(NodeResidual {
+                    model,
+                    set: self.sets[cont[t.phase]].clone(),
+                    contacts: self.contacts,
+                    tracked: self.tracked.clone(),
+                    sw_theta: sw_theta.clone(),
+                    sw_omega: sw_omega.clone(),
+                    sw_force: self.w_force.sqrt(),
+                    sw_torque: self.w_torque.sqrt(),
+                    targets: t.clone(),
+                })),
+            });
+        }
+        // the terminal (pre-impact) node's angles and angular velocities
+        ocp.least_squares.push(Term {
+            name: "tracking(terminal)".into(),
+            args: vec![Block::State {
+                phase: last,
+                node: ocp.phases[last].intervals,
+            }],
+            f: Arc::new(AdTerm(TerminalResidual {
+                nq: model.nq(),
+                tracked: self.tracked.clone(),
+                sw_theta,
+                sw_omega,
+                theta: self.terminal_theta.clone(),
+                omega: self.terminal_omega.clone(),
+            })),
+        });
+        Ok(ocp)
+    }
+}
+
+/// One stage of [`stages`]: the integrator and the SQP settings it solves with.
+#[derive(Debug, Clone)]
+pub struct SolveStage {
+    /// CVODES settings of the shooting intervals.
+    pub integrator: IntegratorSettings,
+    /// SQP settings (the iteration limit is what is left of the whole solve's).
+    pub settings: SqpSettings,
+}
+
+/// CVODES tolerance (relative and absolute) of the second stage of [`stages`].
+pub const STAGE2_TOL: f64 = 1e-12;
+
+/// KKT residual at which [`stages`] hands over from block BFGS to the exact Hessian.
+pub const EXACT_BELOW_KKT: f64 = 1e-3;
+
+/// How the problem is solved from its data guess, to the KKT tolerance `tol`:
+/// 1. block BFGS (per node) with CVODES at 1e-8, until the KKT residual is
+///    [`EXACT_BELOW_KKT`]. The exact Hessian of the Lagrangian is far from convex on the
+///    way: from the data its inertia correction needed shifts of 1e2–4e3 and crawled at
+///    J = 1.3096 (KKT 2e-2) for hundreds of iterations, where BFGS walks on to the
+///    peer's optimum;
+/// 2. the exact Hessian (inertia correction) with CVODES at [`STAGE2_TOL`]: near the
+///    optimum it is convex on the active constraints' null space, and the tight
+///    integration keeps its noise below the line search's (at 1e-8 both Hessians stall
+///    at KKT 1e-5 to 1e-6 with every step rejected, at 1e-10 the exact one at 3e-5;
+///    at 1e-12 it converges in about 10 iterations).
+pub fn stages(tol: f64) -> [SolveStage; 2] {
+    let base = IntegratorSettings::default();
+    [
+        SolveStage {
+            integrator: base.clone(),
+            settings: SqpSettings {
+                tol_kkt: tol.max(EXACT_BELOW_KKT),
+                hessian: HessianMode::Bfgs,
+                ..Default::default()
+            },
+        },
+        SolveStage {
+            integrator: IntegratorSettings {
+                rtol: STAGE2_TOL,
+                atol: STAGE2_TOL,
+                ..base
+            },
+            settings: SqpSettings {
+                tol_kkt: tol,
+                hessian: HessianMode::Exact,
+                exact_convexification: ExactConvexification::InertiaCorrection,
+                ..Default::default()
+            },
+        },
+    ]
+}
+
+/// Refuse a model whose mass matrix and bias forces at the file's check state differ from
+/// its check values by more than 1e-7 (relative to the largest entry).
+fn check_body(model: &GaitModel, json: &Value) -> Result<(), String> {
+    let nq = model.nq();
+    let q = numbers(json, "/check_values/q", Some(nq))?;
+    let qd = numbers(json, "/check_values/qd", Some(nq))?;
+    let want_m: Vec<f64> = field(json, "/check_values/M")?
+        .as_array()
+        .ok_or("field 'check_values.M' must be an array of rows")?
+        .iter()
+        .enumerate()
+        .map(|(r, _)| numbers(json, &format!("/check_values/M/{r}"), Some(nq)))
+        .collect::<Result<Vec<_>, _>>()?
+        .concat();
+    let want_c = numbers(json, "/check_values/bias", Some(nq))?;
+    let (m, c) = model.mass_matrix_and_bias(&q, &qd, &model.theta0());
+    let rel = |a: &[f64], b: &[f64]| {
+        let scale = b.iter().fold(1.0f64, |s, v| s.max(v.abs()));
+        a.iter()
+            .zip(b)
+            .fold(0.0f64, |w, (x, y)| w.max((x - y).abs() / scale))
+    };
+    if want_m.len() != m.len() || rel(&m, &want_m) > 1e-7 || rel(&c, &want_c) > 1e-7 {
+        return Err(format!(
+            "the model of field 'footfall.model' is not the problem's body: its mass matrix differs from 'check_values.M' by {:.1e} and its bias forces from 'check_values.bias' by {:.1e} (relative; at most 1e-7 allowed)",
+            rel(&m, &want_m),
+            rel(&c, &want_c)
+        ));
+    }
+    Ok(())
+}
+
+/// `G q̇` of every row of a contact set. Arguments: `(x, θ)`.
+struct ContactVelocity<'a> {
+    model: &'a GaitModel,
+    set: ConstraintSet,
+}
+
+impl GenericFunction for ContactVelocity<'_> {
+    fn dim(&self) -> usize {
+        self.set.rows.len()
+    }
+    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), String> {
+        let nx = self.model.nx();
+        let v = self
+            .model
+            .constraint_velocity(&self.set, &z[..nx], &z[nx..]);
+        out.copy_from_slice(&v);
+        Ok(())
+    }
+}
+
+/// Combinations `Σ c_r Λ_r` of the impulses (N·s) of the plastic impact into `set` from the
+/// pre-impact state. Arguments: `(x, θ)`.
+struct Impulses<'a> {
+    model: &'a GaitModel,
+    set: ConstraintSet,
+    rows: Vec<Vec<(usize, f64)>>,
+}
+
+impl GenericFunction for Impulses<'_> {
+    fn dim(&self) -> usize {
+        self.rows.len()
+    }
+    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), String> {
+        let (nx, nq) = (self.model.nx(), self.model.nq());
+        let (x, th) = z.split_at(nx);
+        let (_, imp) = self
+            .model
+            .impact(&self.set, &x[..nq], &x[nq..2 * nq], th)
+            .map_err(|e| e.to_string())?;
+        for (o, row) in self.rows.iter().enumerate() {
+            out[o] = row.iter().fold(S::c(0.0), |acc, &(r, c)| acc + imp[r] * c);
+        }
+        Ok(())
+    }
+}
+
+/// The weighted residuals of one cost node: tracked angles and angular velocities, each
+/// loaded foot's forces and contact-point CoP, and the torques. Arguments: `(x, u, θ)`.
+struct NodeResidual<'a> {
+    model: &'a GaitModel,
+    set: ConstraintSet,
+    contacts: [usize; 2],
+    tracked: Vec<usize>,
+    sw_theta: Vec<f64>,
+    sw_omega: Vec<f64>,
+    sw_force: f64,
+    sw_torque: f64,
+    targets: NodeTargets,
+}
+
+impl GenericFunction for NodeResidual<'_> {
+    fn dim(&self) -> usize {
+        let feet: usize = self
+            .targets
+            .feet
+            .iter()
+            .map(|f| 2 + usize::from(f.cop.is_some()))
+            .sum();
+        2 * self.tracked.len() + feet + self.model.nu()
+    }
+    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), String> {
+        let (nx, nu, nq) = (self.model.nx(), self.model.nu(), self.model.nq());
+        let (x, rest) = z.split_at(nx);
+        let (u, th) = rest.split_at(nu);
+        let t = &self.targets;
+        let mut o = 0;
+        for (a, &c) in self.tracked.iter().enumerate() {
+            out[o] = (x[c] - S::c(t.theta[a])) * S::c(self.sw_theta[a]);
+            out[o + 1] = (x[nq + c] - S::c(t.omega[a])) * S::c(self.sw_omega[a]);
+            o += 2;
+        }
+        if !t.feet.is_empty() {
+            let loads = self
+                .model
+                .foot_loads_generic(&self.set, x, u, th)
+                .map_err(|e| e.to_string())?;
+            for f in &t.feet {
+                let s = f.side;
+                out[o] = (loads[s].0 - S::c(f.fx)) * S::c(self.sw_force);
+                out[o + 1] = (loads[s].1 - S::c(f.fy)) * S::c(self.sw_force);
+                o += 2;
+                if let Some((cop, w)) = f.cop {
+                    let (pt, _) = self
+                        .model
+                        .contact_point_generic(self.contacts[s], &x[..nq], th);
+                    out[o] = (pt[0] - S::c(cop)) * S::c(w.sqrt());
+                    o += 1;
+                }
+            }
+        }
+        for (i, ui) in u.iter().enumerate() {
+            out[o + i] = *ui * S::c(self.sw_torque);
+        }
+        Ok(())
+    }
+    fn curved_inputs(&self) -> Option<(Vec<usize>, usize)> {
+        Some(self.model.curved_inputs())
+    }
+}
+
+/// The terminal node's weighted angle and angular-velocity residuals. Argument: `x`.
+struct TerminalResidual {
+    nq: usize,
+    tracked: Vec<usize>,
+    sw_theta: Vec<f64>,
+    sw_omega: Vec<f64>,
+    theta: Vec<f64>,
+    omega: Vec<f64>,
+}
+
+impl GenericFunction for TerminalResidual {
+    fn dim(&self) -> usize {
+        2 * self.tracked.len()
+    }
+    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), String> {
+        for (a, &c) in self.tracked.iter().enumerate() {
+            out[2 * a] = (z[c] - S::c(self.theta[a])) * S::c(self.sw_theta[a]);
+            out[2 * a + 1] = (z[self.nq + c] - S::c(self.omega[a])) * S::c(self.sw_omega[a]);
+        }
+        Ok(())
+    }
+    fn is_linear(&self) -> bool {
+        true
+    }
+}
