@@ -140,3 +140,33 @@ fn noise_model_events_and_csv_round_trip() {
         s2.window
     );
 }
+
+/// A model effect is hidden by re-fitting the `--from` run's data with the effect held in
+/// the model. A downhill slope of −0.022 rad once stopped that re-fit on Clarabel's
+/// numerical error (issue 22); it converges, and the truth it keeps is the slope.
+#[test]
+fn a_downhill_slope_is_hidden_by_a_converged_refit() {
+    let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"));
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("slope");
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_footfall"))
+        .current_dir(&root)
+        .args([
+            "synth",
+            "--from",
+            "tests/data/hidden/base",
+            "--hidden-effect",
+            "ground_slope:angle=-0.022",
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    let truth: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("truth.json")).unwrap()).unwrap();
+    assert_eq!(truth["effect_parameters"][0]["name"], "ground_slope.angle");
+    assert_eq!(truth["effect_parameters"][0]["value"], -0.022);
+    assert!(out.join("synthetic.csv").exists());
+}

@@ -14,7 +14,7 @@ use footfall::problems::predict::{PredictionSettings, PredictionSetup, SEED_IMPU
 use footfall::problems::track::TrackingSetup;
 use footfall::report::html::Section;
 use footfall::runfolder::RunFolder;
-use footfall::sqp::{ExactConvexification, SqpResult, SqpSettings};
+use footfall::sqp::{ExactConvexification, HessianMode, SqpResult, SqpSettings, SqpStatus};
 use std::path::{Path, PathBuf};
 
 /// Options shared by `predict` and `compare`.
@@ -251,13 +251,36 @@ pub fn predict(
         enabled: o.check_points,
         max_iter: sqp_settings.max_iter,
     };
-    let (sites, res) = refinement.solve(
-        &build,
-        &[],
-        &w0,
-        &mut |tr, w| super::solve_interruptibly(tr, w, &sqp_settings, quiet),
-        quiet,
-    )?;
+    // a failed line search of the exact Hessian goes on once from that iterate with block
+    // BFGS. Near a stationary point the inertia correction can shift the QP's Hessian by
+    // far more than its curvature, and the QP's step and multipliers with it: the CI's
+    // double-circle prediction stalled at KKT 3.7e-3 with steps of 1e-5, its integrator at
+    // 1e-10 or 1e-12, where block BFGS certifies the same point at KKT 2.4e-7 at once
+    let solve_staged = |tr: &Transcription, w: &[f64]| -> anyhow::Result<SqpResult> {
+        let first = super::solve_interruptibly(tr, w, &sqp_settings, quiet)?;
+        if first.status != SqpStatus::LineSearchFailure
+            || sqp_settings.hessian != HessianMode::Exact
+        {
+            return Ok(first);
+        }
+        if !quiet {
+            eprintln!(
+                "line search failed at KKT {:.2e} with the exact Hessian: going on from there with block BFGS",
+                first.kkt
+            );
+        }
+        let used = first.history.len().saturating_sub(1);
+        let rest = SqpSettings {
+            max_iter: sqp_settings.max_iter.saturating_sub(used),
+            max_time: sqp_settings.max_time.map(|t| (t - first.seconds).max(0.0)),
+            hessian: HessianMode::Bfgs,
+            ..sqp_settings.clone()
+        };
+        let second = super::solve_interruptibly(tr, &first.w, &rest, quiet)?;
+        Ok(super::track::merge_stages(first, second))
+    };
+    let (sites, res) =
+        refinement.solve(&build, &[], &w0, &mut |tr, w| solve_staged(tr, w), quiet)?;
     let mut ocp = build()?;
     ocp.checks = refinement.checks(&sites);
     let tr = Transcription::new(&ocp).context("transcribing the prediction problem")?;
