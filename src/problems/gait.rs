@@ -715,6 +715,53 @@ impl GenericFunction for GapOfState<'_> {
     }
 }
 
+/// Combinations `Σ c_r Λ_r` of the impulses (N·s) of the plastic impact into `set` from the
+/// pre-impact state: the impulses themselves scaled for a cost, or the friction cone of a
+/// landing foot's impulse. Arguments: `(x, θ)`.
+pub(crate) struct ImpulseRows<'a> {
+    model: &'a GaitModel,
+    set: ConstraintSet,
+    rows: Vec<Vec<(usize, f64)>>,
+}
+
+impl<'a> ImpulseRows<'a> {
+    /// The combinations `rows` (each a list of (row of `set`, coefficient)).
+    pub(crate) fn new(
+        model: &'a GaitModel,
+        set: &ConstraintSet,
+        rows: Vec<Vec<(usize, f64)>>,
+    ) -> Self {
+        Self {
+            model,
+            set: set.clone(),
+            rows,
+        }
+    }
+    /// `scale · Λ`, every impulse of `set`.
+    pub(crate) fn scaled(model: &'a GaitModel, set: &ConstraintSet, scale: f64) -> Self {
+        let rows = (0..set.rows.len()).map(|r| vec![(r, scale)]).collect();
+        Self::new(model, set, rows)
+    }
+}
+
+impl GenericFunction for ImpulseRows<'_> {
+    fn dim(&self) -> usize {
+        self.rows.len()
+    }
+    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), String> {
+        let (nx, nq) = (self.model.nx(), self.model.nq());
+        let (x, th) = z.split_at(nx);
+        let (_, imp) = self
+            .model
+            .impact(&self.set, &x[..nq], &x[nq..2 * nq], th)
+            .map_err(|e| e.to_string())?;
+        for (o, row) in self.rows.iter().enumerate() {
+            out[o] = row.iter().fold(S::c(0.0), |acc, &(r, c)| acc + imp[r] * c);
+        }
+        Ok(())
+    }
+}
+
 /// Post-impact state `(q, q̇⁺, a)` of the plastic impact with the contacts of `set`.
 /// Arguments: `(x, θ)`.
 struct ImpactMap<'a> {

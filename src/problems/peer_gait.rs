@@ -18,7 +18,7 @@
 //!
 //! over the 50 interval starts. The peer's optimum, J* = 1.2584987, is the check.
 
-use super::gait::{GaitCycle, GaitGuess};
+use super::gait::{GaitCycle, GaitGuess, ImpulseRows};
 use super::{AdTerm, GenericFunction};
 use crate::integrate::IntegratorSettings;
 use crate::model::effects::ModelScalar;
@@ -153,7 +153,7 @@ impl PeerGaitTrack {
             ));
         }
         check_body(&model, json)?;
-        let contacts = [0, 1].map(|s| {
+        let [right, left] = [0, 1].map(|s| {
             let name = string(json, &format!("/footfall/contacts/{}", FEET[s]))?;
             model.contact_index(name).ok_or_else(|| {
                 format!(
@@ -162,7 +162,7 @@ impl PeerGaitTrack {
                 )
             })
         });
-        let contacts = [contacts[0].clone()?, contacts[1].clone()?];
+        let contacts = [right?, left?];
 
         // phases and transitions as a phase sequence
         let phases = field(json, "/phases")?
@@ -370,31 +370,28 @@ impl PeerGaitTrack {
                 .iter()
                 .map(|n| at(format!("/references/omega/{n}")))
                 .collect::<Result<_, _>>()?;
-            let in_contact = string(json, &format!("/phases/{j}/contacts/0")).is_ok();
             let mut feet = Vec::new();
-            if in_contact {
-                for (s, foot) in FEET.iter().enumerate() {
-                    let listed = field(json, &format!("/phases/{j}/contacts"))?
-                        .as_array()
-                        .is_some_and(|a| a.iter().any(|f| f.as_str() == Some(foot)));
-                    if !listed {
-                        continue;
-                    }
-                    let fx = at(format!("/references/grf/fx_{foot}"))?;
-                    let fy = at(format!("/references/grf/fy_{foot}"))?;
-                    let w = at(format!("/references/cop_weight/{foot}"))?;
-                    let cop = if w > 0.0 {
-                        Some((at(format!("/references/cop/{foot}"))?, w))
-                    } else {
-                        None
-                    };
-                    feet.push(FootTarget {
-                        side: s,
-                        fx,
-                        fy,
-                        cop,
-                    });
+            for (s, foot) in FEET.iter().enumerate() {
+                let listed = field(json, &format!("/phases/{j}/contacts"))?
+                    .as_array()
+                    .is_some_and(|a| a.iter().any(|f| f.as_str() == Some(foot)));
+                if !listed {
+                    continue;
                 }
+                let fx = at(format!("/references/grf/fx_{foot}"))?;
+                let fy = at(format!("/references/grf/fy_{foot}"))?;
+                let w = at(format!("/references/cop_weight/{foot}"))?;
+                let cop = if w > 0.0 {
+                    Some((at(format!("/references/cop/{foot}"))?, w))
+                } else {
+                    None
+                };
+                feet.push(FootTarget {
+                    side: s,
+                    fx,
+                    fy,
+                    cop,
+                });
             }
             nodes.push(NodeTargets {
                 phase: j,
@@ -472,16 +469,11 @@ impl PeerGaitTrack {
                 phase: j,
                 node: ocp.phases[j].intervals,
             };
-            let rows = after.rows.len();
             let scale = self.w_impulse.sqrt();
             ocp.least_squares.push(Term {
                 name: format!("impulses({name})"),
                 args: vec![pre, Block::Params],
-                f: Arc::new(AdTerm(Impulses {
-                    model,
-                    set: after.clone(),
-                    rows: (0..rows).map(|r| vec![(r, scale)]).collect(),
-                })),
+                f: Arc::new(AdTerm(ImpulseRows::scaled(model, after, scale))),
             });
             let mut cone = Vec::new();
             for (r, row) in after.rows.iter().enumerate() {
@@ -503,11 +495,7 @@ impl PeerGaitTrack {
                     term: Term {
                         name: format!("impulse_cone({name})"),
                         args: vec![pre, Block::Params],
-                        f: Arc::new(AdTerm(Impulses {
-                            model,
-                            set: after.clone(),
-                            rows: cone,
-                        })),
+                        f: Arc::new(AdTerm(ImpulseRows::new(model, after, cone))),
                     },
                     lb: vec![0.0; n],
                     ub: vec![f64::INFINITY; n],
@@ -665,32 +653,6 @@ impl GenericFunction for ContactVelocity<'_> {
             .model
             .constraint_velocity(&self.set, &z[..nx], &z[nx..]);
         out.copy_from_slice(&v);
-        Ok(())
-    }
-}
-
-/// Combinations `Σ c_r Λ_r` of the impulses (N·s) of the plastic impact into `set` from the
-/// pre-impact state. Arguments: `(x, θ)`.
-struct Impulses<'a> {
-    model: &'a GaitModel,
-    set: ConstraintSet,
-    rows: Vec<Vec<(usize, f64)>>,
-}
-
-impl GenericFunction for Impulses<'_> {
-    fn dim(&self) -> usize {
-        self.rows.len()
-    }
-    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), String> {
-        let (nx, nq) = (self.model.nx(), self.model.nq());
-        let (x, th) = z.split_at(nx);
-        let (_, imp) = self
-            .model
-            .impact(&self.set, &x[..nq], &x[nq..2 * nq], th)
-            .map_err(|e| e.to_string())?;
-        for (o, row) in self.rows.iter().enumerate() {
-            out[o] = row.iter().fold(S::c(0.0), |acc, &(r, c)| acc + imp[r] * c);
-        }
         Ok(())
     }
 }

@@ -11,7 +11,7 @@
 //! and the phase duration.
 
 use super::evaluation::GaitSolution;
-use super::gait::{GaitCycle, GaitGuess};
+use super::gait::{GaitCycle, GaitGuess, ImpulseRows};
 use super::track::TrackingSetup;
 use super::{AdTerm, GenericFunction};
 use crate::data::GaitData;
@@ -261,11 +261,11 @@ impl PredictionSetup {
                     }
                     Phase::Impact { name, .. } => {
                         let Some(j) = prev else { continue };
-                        let f = ImpactImpulses {
+                        let f = ImpulseRows::scaled(
                             model,
-                            set: sets[i].clone(),
-                            scale: self.settings.impulse_weight.sqrt(),
-                        };
+                            &sets[i],
+                            self.settings.impulse_weight.sqrt(),
+                        );
                         ocp.least_squares.push(Term {
                             name: format!("impulse({name})"),
                             args: vec![
@@ -303,32 +303,6 @@ impl GenericFunction for ActivationEffort {
         let s = (t * self.weight).sqrt();
         for (o, a) in out.iter_mut().zip(&z[self.offset..self.offset + self.na]) {
             *o = s * *a;
-        }
-        Ok(())
-    }
-}
-
-/// `√w_Δ · Δ`: the impulses of the plastic impact with the contacts of `set`.
-/// Arguments: `(x, θ)`.
-struct ImpactImpulses<'a> {
-    model: &'a GaitModel,
-    set: ConstraintSet,
-    scale: f64,
-}
-
-impl GenericFunction for ImpactImpulses<'_> {
-    fn dim(&self) -> usize {
-        self.set.rows.len()
-    }
-    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), String> {
-        let (nx, nq) = (self.model.nx(), self.model.nq());
-        let (x, th) = z.split_at(nx);
-        let (_, imp) = self
-            .model
-            .impact(&self.set, &x[..nq], &x[nq..2 * nq], th)
-            .map_err(|e| e.to_string())?;
-        for (o, v) in out.iter_mut().zip(imp) {
-            *o = v * self.scale;
         }
         Ok(())
     }
