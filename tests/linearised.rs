@@ -38,7 +38,7 @@ impl Nlp for LinearLs {
     fn hessian_blocks(&self) -> Vec<Vec<usize>> {
         vec![vec![0, 1, 2]]
     }
-    fn evaluate(&self, w: &[f64], derivs: bool) -> Result<NlpEval, String> {
+    fn evaluate(&self, w: &[f64], derivs: bool) -> Result<NlpEval, footfall::sqp::EvalError> {
         let x = DVector::from_column_slice(w);
         let r = &self.a * &x - &self.b;
         let mut ev = NlpEval {

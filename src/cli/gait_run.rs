@@ -42,8 +42,6 @@ pub struct GaitRunOutput {
     pub fine_forces: Option<FineForces>,
     /// Physical validity on the fine grid (None when the re-integration failed).
     pub validity: Option<footfall::problems::validity::Validity>,
-    /// Whether the validity decides the verdict and the exit code.
-    pub enforce_validity: bool,
 }
 
 /// Ground forces of both feet on the fine grid, model and measurement.
@@ -122,9 +120,6 @@ pub struct GaitRun<'a> {
     pub friction: f64,
     /// Number of check points holding the contact constraints between the nodes.
     pub check_points: usize,
-    /// Whether an invalid solution changes the verdict (`--check-points`); otherwise its
-    /// validity is reported beside it.
-    pub enforce_validity: bool,
 }
 
 /// Evaluate, write and commit the run folder.
@@ -205,7 +200,7 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
     let (t0, t1) = sol.span();
     let converged = res.status == SqpStatus::Converged;
     let interrupted = res.status == footfall::sqp::SqpStatus::Interrupted;
-    let invalid = run.enforce_validity && validity.as_ref().is_some_and(|v| !v.is_valid());
+    let invalid = validity.as_ref().is_some_and(|v| !v.is_valid());
     let verdict = match (converged, invalid) {
         (true, false) => "converged",
         (true, true) => "converged, physically invalid",
@@ -306,7 +301,9 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
 
     let mut summary = Summary::new(
         verdict,
-        if invalid {
+        // red for a converged solution that breaks physics: presented as a solution, it is
+        // not one; an unfinished solve stays amber, its verdict naming the invalidity
+        if invalid && converged {
             Tone::Bad
         } else if converged {
             Tone::Good
@@ -571,7 +568,6 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
         errors: overall,
         fine_forces,
         validity,
-        enforce_validity: run.enforce_validity,
     })
 }
 
@@ -590,7 +586,7 @@ fn validity_section(v: &footfall::problems::validity::Validity, check_points: us
         paragraphs
             .push("Nothing is broken: the solution is physically valid between the nodes.".into());
     } else {
-        paragraphs.push(format!("**The solution is physically invalid** in {} stretch(es): it is not a gait the model can walk. `--check-points` holds the contact constraints between the nodes where they break, and makes the verdict and exit code say so.", v.violations.len()));
+        paragraphs.push(format!("**The solution is physically invalid** in {} stretch(es): it is not a gait the model can walk. Check points (on unless `--no-check-points`) hold the contact constraints between the nodes where they break; here they did not repair it (no check point could be placed, or the rounds or iterations ran out).", v.violations.len()));
         let mut t = Table {
             title: "Where physics is broken on the 1 ms grid".into(),
             headers: [

@@ -33,7 +33,7 @@ Exit codes:
   2    usage error (unknown option, missing or malformed value, a number out of range)
   3    solved but not converged (iteration or time limit, line search, QP or evaluation failure); the run folder is written
   4    infeasible: the constraints cannot be satisfied; the run folder is written
-  5    converged but physically invalid (--check-points): on the 1 ms grid a ground pulls, a contact leaves its friction cone, a foot is inside the floor or a stabilisation force is large; the run folder is written
+  5    converged but physically invalid (with or without check points): on the 1 ms grid a ground pulls, a contact leaves its friction cone, a foot is inside the floor or a stabilisation force is large; the run folder is written
   130  interrupted (Ctrl-C); the run folder is written from the last accepted iterate";
 
 /// Fit and predict human gait with rigid foot-ground contact models.

@@ -20,12 +20,8 @@ use std::path::{Path, PathBuf};
 /// Options shared by `predict` and `compare`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct PredictOptions {
-    /// Hold the contact constraints between the nodes: where the converged solution's 1 ms
-    /// re-integration breaks one, add check points and solve again (up to 6 rounds, while
-    /// iterations remain), and flag a run that stays invalid (exit 5). Without it the
-    /// validity is reported only.
-    #[arg(long)]
-    pub check_points: bool,
+    #[command(flatten)]
+    pub check_points: super::refine::CheckPointArgs,
     /// Model file.
     #[arg(long, default_value = "models/opensim_subject01.json")]
     pub model: PathBuf,
@@ -140,9 +136,7 @@ pub fn finish(out: &GaitRunOutput, res: &SqpResult, quiet: bool) -> anyhow::Resu
         eprintln!("report: {}", out.path.join("report.html").display());
     }
     super::Unsolved::check(res, &out.path)?;
-    if out.enforce_validity {
-        super::Invalid::check(out)?;
-    }
+    super::Invalid::check(out)?;
     Ok(())
 }
 
@@ -248,7 +242,7 @@ pub fn predict(
         sets: &sets,
         integrator: integrator.clone(),
         t0: tracking.window.0,
-        enabled: o.check_points,
+        enabled: o.check_points.enabled(),
         max_iter: sqp_settings.max_iter,
     };
     // a failed line search of the exact Hessian goes on once from that iterate with block
@@ -335,7 +329,6 @@ pub fn predict(
             extra_files: vec![],
             friction: cycle.friction(),
             check_points: sites.len(),
-            enforce_validity: o.check_points,
             transient_threshold_n: o.transient_threshold,
         },
         folder,

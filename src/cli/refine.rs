@@ -14,6 +14,28 @@ use footfall::problems::gait::{locate_instant, GaitCycle};
 use footfall::problems::validity::{self, ValidityLimits};
 use footfall::sqp::{SqpResult, SqpStatus};
 
+/// The check-point switch shared by `track`, `predict` and `compare`.
+#[derive(Debug, Clone, Default, clap::Args)]
+pub struct CheckPointArgs {
+    /// Solve once and only report the validity on the 1 ms grid, without adding check
+    /// points where a contact constraint breaks between the nodes (a run that breaks one
+    /// still ends `converged, physically invalid`, exit 5).
+    #[arg(long)]
+    no_check_points: bool,
+    /// Add check points where the converged solution's 1 ms re-integration breaks a
+    /// contact constraint, and solve again (up to 6 rounds, while iterations remain): the
+    /// default, kept for scripts that ask for it.
+    #[arg(long, overrides_with = "no_check_points", hide = true)]
+    check_points: bool,
+}
+
+impl CheckPointArgs {
+    /// Whether check points are added.
+    pub fn enabled(&self) -> bool {
+        !self.no_check_points
+    }
+}
+
 /// Most rounds of check points after the first solve.
 pub const MAX_ROUNDS: usize = 6;
 

@@ -45,12 +45,8 @@ pub struct Args {
     /// Replace the output folder if it exists.
     #[arg(long)]
     overwrite: bool,
-    /// Hold the contact constraints between the nodes: where the converged solution's 1 ms
-    /// re-integration breaks one, add check points and solve again (up to 6 rounds, while
-    /// iterations remain), and flag a run that stays invalid (exit 5). Without it the
-    /// validity is reported only.
-    #[arg(long)]
-    check_points: bool,
+    #[command(flatten)]
+    check_points: super::refine::CheckPointArgs,
     /// Continue the run a killed process left unfinished in this output folder, from its
     /// last SQP iteration, with the options it was started with (give no others).
     #[arg(long, value_name = "DIR")]
@@ -824,7 +820,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         None => None,
     };
     let mut prob = TrackingProblem::build(&base, &extra)?;
-    prob.refine = args.check_points;
+    prob.refine = args.check_points.enabled();
     base.check_points.clear();
     if prob.integrator.rtol < base.integrator_tol && !quiet {
         let why = if args.residual_actuators {
@@ -864,9 +860,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         quiet,
     )?;
     super::Unsolved::check(&run.result, &run.output.path)?;
-    if args.check_points {
-        super::Invalid::check(&run.output)?;
-    }
+    super::Invalid::check(&run.output)?;
     Ok(())
 }
 
@@ -1040,8 +1034,7 @@ impl TrackingProblem {
                 transient_threshold_n: transient_threshold,
                 friction: cycle.friction(),
                 check_points: check_sites.len(),
-                enforce_validity: self.refine,
-            },
+                },
             folder,
         )?;
         if !quiet {

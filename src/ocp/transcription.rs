@@ -11,6 +11,7 @@
 
 use super::checks::CheckValues;
 use super::problem::{Block, Ocp};
+use crate::sqp::EvalError;
 use crate::integrate::{
     ControlShape, IntegrationStats, Integrator, IntegratorError, ShootingInterval,
 };
@@ -43,6 +44,43 @@ pub enum TranscriptionError {
         /// Cause.
         reason: String,
     },
+}
+
+impl TranscriptionError {
+    /// Whether another point may evaluate where this one failed: an integrator that cannot
+    /// take a step, a model or user function outside its domain, a non-finite value. A
+    /// malformed problem or invalid integrator settings fail everywhere.
+    pub fn is_recoverable(&self) -> bool {
+        match self {
+            TranscriptionError::Invalid(_) => false,
+            TranscriptionError::Term { .. } => true,
+            TranscriptionError::Integrator { source, .. } => match source {
+                IntegratorError::Failed { .. }
+                | IntegratorError::Rhs { .. }
+                | IntegratorError::NonFinite { .. }
+                | IntegratorError::BadInterval { .. }
+                | IntegratorError::BadOutputTime { .. } => true,
+                // a check point's function failed at this point's states
+                IntegratorError::BadSettings {
+                    field: "check point",
+                    ..
+                } => true,
+                IntegratorError::Setup { .. }
+                | IntegratorError::Dimension { .. }
+                | IntegratorError::BadSettings { .. } => false,
+            },
+        }
+    }
+}
+
+impl From<TranscriptionError> for EvalError {
+    fn from(e: TranscriptionError) -> Self {
+        if e.is_recoverable() {
+            EvalError::Recoverable(Box::new(e))
+        } else {
+            EvalError::Fatal(Box::new(e))
+        }
+    }
 }
 
 /// Where a constraint row comes from, for reports of violated constraints.
@@ -1471,18 +1509,6 @@ impl<'o, 'a> Transcription<'o, 'a> {
     }
 }
 
-/// An error and its causes as one line.
-fn error_chain(e: &dyn std::error::Error) -> String {
-    let mut s = e.to_string();
-    let mut src = e.source();
-    while let Some(c) = src {
-        s.push_str(": ");
-        s.push_str(&c.to_string());
-        src = c.source();
-    }
-    s
-}
-
 impl crate::sqp::Nlp for Transcription<'_, '_> {
     fn n(&self) -> usize {
         self.n
@@ -1504,8 +1530,8 @@ impl crate::sqp::Nlp for Transcription<'_, '_> {
     fn hessian_blocks(&self) -> Vec<Vec<usize>> {
         Transcription::hessian_blocks(self)
     }
-    fn evaluate(&self, w: &[f64], derivs: bool) -> Result<crate::sqp::NlpEval, String> {
-        let ev = Transcription::evaluate(self, w, derivs).map_err(|e| error_chain(&e))?;
+    fn evaluate(&self, w: &[f64], derivs: bool) -> Result<crate::sqp::NlpEval, EvalError> {
+        let ev = Transcription::evaluate(self, w, derivs)?;
         Ok(crate::sqp::NlpEval {
             f: ev.f,
             c: ev.c,
@@ -1536,9 +1562,8 @@ impl crate::sqp::Nlp for Transcription<'_, '_> {
         &self,
         w: &[f64],
         lambda: &[f64],
-    ) -> Result<(crate::sqp::NlpEval, (Vec<usize>, Vec<usize>, Vec<f64>)), String> {
-        let (ev, h) =
-            Transcription::evaluate_with_hessian(self, w, lambda).map_err(|e| error_chain(&e))?;
+    ) -> Result<(crate::sqp::NlpEval, (Vec<usize>, Vec<usize>, Vec<f64>)), EvalError> {
+        let (ev, h) = Transcription::evaluate_with_hessian(self, w, lambda)?;
         Ok((
             crate::sqp::NlpEval {
                 f: ev.f,
@@ -1574,8 +1599,9 @@ impl crate::sqp::Nlp for Transcription<'_, '_> {
         &self,
         w: &[f64],
         lambda: &[f64],
-    ) -> Result<(Vec<usize>, Vec<usize>, Vec<f64>), String> {
+    ) -> Result<(Vec<usize>, Vec<usize>, Vec<f64>), EvalError> {
         self.term_curvature(w, lambda, false)
+            .map_err(EvalError::recoverable)
     }
     fn row_name(&self, i: usize) -> String {
         let l = &self.labels[i];

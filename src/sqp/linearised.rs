@@ -39,7 +39,7 @@ impl<'a> GaussNewtonModel<'a> {
             .zip(bounds.0.iter().zip(&bounds.1))
             .map(|(&v, (&l, &u))| v.max(l).min(u))
             .collect();
-        let ev = nlp.evaluate(&w, true)?;
+        let ev = nlp.evaluate(&w, true).map_err(|e| e.chain())?;
         let (hr, hc) = nlp.gauss_newton_pattern();
         let mut h = Triplets {
             rows: hr,

@@ -15,10 +15,12 @@
 //! complementarity, falls below the tolerance.
 
 pub mod checkpoint;
+mod eval_error;
 pub mod hessian;
 pub mod linearised;
 pub mod qp;
 
+pub use eval_error::{Cause, EvalError};
 use checkpoint::{ExactRecord, ExactVec, SqpCheckpoint, CHECKPOINT_VERSION};
 use hessian::BlockBfgs;
 use qp::{QpData, QpError, Triplets};
@@ -40,8 +42,9 @@ pub trait Nlp {
     /// Variable groups for block-wise quasi-Newton updates.
     fn hessian_blocks(&self) -> Vec<Vec<usize>>;
     /// Evaluate at `w`; with `derivs` also gradient, Jacobian values and Gauss–Newton
-    /// Hessian values (in pattern order).
-    fn evaluate(&self, w: &[f64], derivs: bool) -> Result<NlpEval, String>;
+    /// Hessian values (in pattern order). A [recoverable](EvalError::Recoverable) failure
+    /// at a trial point shortens the step; a [fatal](EvalError::Fatal) one stops the solve.
+    fn evaluate(&self, w: &[f64], derivs: bool) -> Result<NlpEval, EvalError>;
     /// Human-readable name of constraint row `i`.
     fn row_name(&self, i: usize) -> String;
     /// Relative weights of the rows' violations in elastic mode (default all 1). A
@@ -59,7 +62,7 @@ pub trait Nlp {
         &self,
         w: &[f64],
         lambda: &[f64],
-    ) -> Result<(NlpEval, (Vec<usize>, Vec<usize>, Vec<f64>)), String> {
+    ) -> Result<(NlpEval, (Vec<usize>, Vec<usize>, Vec<f64>)), EvalError> {
         Ok((self.evaluate(w, true)?, self.exact_hessian(w, lambda)?))
     }
     /// Rows whose curvature [`exact_hessian`](Self::exact_hessian) provides (the
@@ -72,8 +75,16 @@ pub trait Nlp {
         &self,
         _w: &[f64],
         _lambda: &[f64],
-    ) -> Result<(Vec<usize>, Vec<usize>, Vec<f64>), String> {
+    ) -> Result<(Vec<usize>, Vec<usize>, Vec<f64>), EvalError> {
         Ok((Vec::new(), Vec::new(), Vec::new()))
+    }
+}
+
+/// Keep the first fatal evaluation failure of a line search; recoverable ones only
+/// shorten the step.
+fn keep_fatal(slot: &mut Option<EvalError>, e: EvalError) {
+    if !e.is_recoverable() && slot.is_none() {
+        *slot = Some(e);
     }
 }
 
@@ -457,7 +468,7 @@ fn solve_impl(
         timings.set(tm);
     };
     let eval_plain = |w: &[f64]| {
-        let mut r = Err(String::new());
+        let mut r = Err(EvalError::fatal("not evaluated"));
         timed(true, &mut || r = nlp.evaluate(w, false));
         r
     };
@@ -477,8 +488,8 @@ fn solve_impl(
     };
     let exact = settings.hessian == HessianMode::Exact;
     // derivatives at a point; in Exact mode with the curvature for multipliers `lam`
-    let eval_derivs = |w: &[f64], lam: &[f64]| -> Result<(NlpEval, Option<Triplets>), String> {
-        let mut out = Err(String::new());
+    let eval_derivs = |w: &[f64], lam: &[f64]| -> Result<(NlpEval, Option<Triplets>), EvalError> {
+        let mut out = Err(EvalError::fatal("not evaluated"));
         timed(true, &mut || {
             out = if exact {
                 nlp.evaluate_with_hessian(w, lam).map(|(ev, (r, c, v))| {
@@ -500,11 +511,11 @@ fn solve_impl(
     let lambda0 = resume.map_or_else(|| vec![0.0; m], |cp| cp.lambda.values());
     let (ev, hess) = match eval_derivs(&w, &lambda0) {
         Ok(r) => r,
-        Err(e) => return fail(SqpStatus::EvaluationFailure(e), w),
+        Err(e) => return fail(SqpStatus::EvaluationFailure(e.chain()), w),
     };
     let plain = match eval_plain(&w) {
         Ok(p) => (p.f, violations(&p.c, &c_lb, &c_ub).iter().sum::<f64>()),
-        Err(e) => return fail(SqpStatus::EvaluationFailure(e), w),
+        Err(e) => return fail(SqpStatus::EvaluationFailure(e.chain()), w),
     };
     let mut st = State { w, ev, hess, plain };
     let mut zero_blocks = BlockBfgs::new(nlp.hessian_blocks(), settings.bfgs_update);
@@ -638,7 +649,7 @@ fn solve_impl(
                     bfgs.convexify_into(&mut ex, &mut h);
                 }
                 Err(e) => {
-                    status = SqpStatus::EvaluationFailure(e);
+                    status = SqpStatus::EvaluationFailure(e.chain());
                     break;
                 }
             }
@@ -826,6 +837,8 @@ fn solve_impl(
         let mut alpha = 1.0;
         let mut found: Option<(Vec<f64>, bool, (f64, f64))> = None;
         let summary = |ev: &NlpEval| (ev.f, violations(&ev.c, &c_lb, &c_ub).iter().sum::<f64>());
+        // a recoverable failure at a trial point shortens the step; a fatal one stops
+        let mut fatal: Option<EvalError> = None;
         let w1 = trial(1.0, &sol.d);
         match eval_plain(&w1) {
             Ok(ev1) => match acceptable(&ev1, 1.0, &filter) {
@@ -843,26 +856,39 @@ fn solve_impl(
                     };
                     if let Ok(s2) = solve_qp(&soc) {
                         let w2 = trial(1.0, &s2.d);
-                        if let Ok(ev2) = eval_plain(&w2) {
-                            if let Some(aug) = acceptable(&ev2, 1.0, &filter) {
-                                found = Some((w2, aug, summary(&ev2)));
+                        match eval_plain(&w2) {
+                            Ok(ev2) => {
+                                if let Some(aug) = acceptable(&ev2, 1.0, &filter) {
+                                    found = Some((w2, aug, summary(&ev2)));
+                                }
                             }
+                            Err(e) => keep_fatal(&mut fatal, e),
                         }
                     }
                     alpha = 0.5;
                 }
             },
-            Err(_) => alpha = 0.5,
+            Err(e) => {
+                keep_fatal(&mut fatal, e);
+                alpha = 0.5;
+            }
         }
-        while found.is_none() && alpha >= settings.line_search_min_step {
+        while found.is_none() && fatal.is_none() && alpha >= settings.line_search_min_step {
             let wa = trial(alpha, &sol.d);
-            if let Ok(eva) = eval_plain(&wa) {
-                if let Some(aug) = acceptable(&eva, alpha, &filter) {
-                    found = Some((wa, aug, summary(&eva)));
-                    break;
+            match eval_plain(&wa) {
+                Ok(eva) => {
+                    if let Some(aug) = acceptable(&eva, alpha, &filter) {
+                        found = Some((wa, aug, summary(&eva)));
+                        break;
+                    }
                 }
+                Err(e) => keep_fatal(&mut fatal, e),
             }
             alpha *= 0.5;
+        }
+        if let Some(e) = fatal {
+            status = SqpStatus::EvaluationFailure(e.chain());
+            break;
         }
         let mut accepted: Option<(Vec<f64>, NlpEval, Option<Triplets>, bool)> = None;
         let mut plain_new = (0.0, 0.0);
@@ -870,7 +896,7 @@ fn solve_impl(
             plain_new = pl;
             match eval_derivs(&wa, &sol.lambda) {
                 Ok((ev, hw)) => accepted = Some((wa, ev, hw, aug)),
-                Err(e) => status = SqpStatus::EvaluationFailure(e),
+                Err(e) => status = SqpStatus::EvaluationFailure(e.chain()),
             }
         }
         let accepted = accepted.map(|(w, ev, hw, aug)| {
