@@ -18,3 +18,4 @@ pub mod report;
 pub mod runfolder;
 pub mod simulate;
 pub mod sqp;
+pub mod workflows;

@@ -376,7 +376,9 @@ fn track_interrupted_by_ctrl_c_writes_the_last_iterate() {
         html.contains(r#"<div class="summary warning" id="summary">"#),
         "not an amber box"
     );
-    assert!(html.contains(r#"<p class="status">interrupted</p>"#));
+    // ("interrupted", or "interrupted, physically invalid" when the last iterate breaks
+    // physics between the nodes)
+    assert!(html.contains(r#"<p class="status">interrupted"#));
     let inf = summary["infeasibility"].as_f64().unwrap();
     assert!(
         html.contains(&format!("<dt>infeasibility</dt><dd>{inf:.2e}</dd>")),

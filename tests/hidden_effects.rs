@@ -1,5 +1,5 @@
-//! Data with a hidden effect, end to end from the command line: `track` the synthetic
-//! trial with the plain model, `diagnose` it, and check that the hidden effect ranks
+//! Data with a hidden effect, end to end through the library's workflows
+//! ([`footfall::workflows`]): `track` the synthetic trial with the plain model, `diagnose` it, and check that the hidden effect ranks
 //! first, that its re-fit brings every channel's error to the noise floor and that the
 //! identified parameter is the truth.
 //!
@@ -15,39 +15,31 @@
 
 mod common;
 
+use footfall::problems::tracking::ChannelNoise;
+use footfall::runfolder::RunFolder;
+use footfall::workflows::diagnose::DiagnoseRequest;
+use footfall::workflows::track::{check_tracked, track, TrackRequest};
+use footfall::workflows::Quiet;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
-use std::process::Command;
 use std::sync::OnceLock;
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
-/// Runs the CLI and prints how long it took (the hidden-effect tests are most of CI's time).
-fn footfall(args: &[&str]) -> std::process::Output {
+/// Prints how long a step took (the hidden-effect tests are most of CI's time).
+fn timed<R>(what: &str, name: &Path, f: impl FnOnce() -> R) -> R {
     let start = std::time::Instant::now();
-    let o = Command::new(env!("CARGO_BIN_EXE_footfall"))
-        .current_dir(root())
-        .arg("--quiet")
-        .args(args)
-        .output()
-        .unwrap();
-    let name = args
-        .iter()
-        .position(|a| *a == "--out")
-        .map_or(args[1], |i| args[i + 1]);
+    let r = f();
     eprintln!(
-        "footfall {} {name}: {:.1} s",
-        args[0],
+        "{what} {}: {:.1} s",
+        name.display(),
         start.elapsed().as_secs_f64()
     );
-    o
+    r
 }
 
-fn s(p: &Path) -> &str {
-    p.to_str().unwrap()
-}
 
 fn read_json(p: &Path) -> Value {
     serde_json::from_str(
@@ -141,54 +133,46 @@ impl Setup {
 /// current problem, which saves about a minute of iterations per trial.
 fn baseline(name: &str, dir: &Path, how: Setup) -> PathBuf {
     let trial = root().join("tests/data/hidden").join(name);
-    let data = trial.join("synthetic.csv");
-    let init = trial.join(format!("tracked_{}", how.slug()));
     let out = dir.join(name);
-    let mut args = vec![
-        "track",
-        "--data",
-        s(&data),
-        "--init",
-        s(&init),
-        "--out",
-        s(&out),
-    ];
+    let foot = match how {
+        Setup::Samples | Setup::ForcePlateRate => "double-circle",
+        _ => "ellipse",
+    };
+    let mut req = TrackRequest::new(foot);
+    req.run.data = Some(trial.join("synthetic.csv"));
+    req.init = Some(trial.join(format!("tracked_{}", how.slug())));
     if !matches!(how, Setup::Samples | Setup::ForcePlateRate) {
-        args.extend(["--kinematics-cutoff", "10"]);
+        req.run.kinematics_cutoff = Some(10.0);
     }
+    let noise = ChannelNoise {
+        angle_rad: 0.5f64.to_radians(),
+        position_m: 2e-3,
+        force_n: 5.0,
+        cop_m: 5e-3,
+    };
     match how {
         Setup::Seed => {}
-        Setup::Pelvis => args.push("--track-pelvis-position"),
-        Setup::Identify => args.extend([
-            "--track-pelvis-position",
-            "--regularisation",
-            "1e-4",
-            "--velocity-weight",
-            "0",
-        ]),
-        Setup::Samples => args.extend([
-            "--foot",
-            "double-circle",
-            "--sample-targets",
-            "--noise-weights",
-            "angle=0.5,position=2,force=5,cop=5",
-        ]),
-        Setup::ForcePlateRate => args.extend([
-            "--foot",
-            "double-circle",
-            "--sample-targets",
-            "--noise-weights",
-            "angle=0.5,position=2,force=5,cop=5",
-            "--tol",
-            "1e-4",
-        ]),
+        Setup::Pelvis => req.run.track_pelvis_position = true,
+        Setup::Identify => {
+            req.run.track_pelvis_position = true;
+            req.run.regularisation = Some(1e-4);
+            req.run.velocity_weight = Some(0.0);
+        }
+        Setup::Samples => {
+            req.run.sample_targets = true;
+            req.run.noise_weights = Some(noise);
+        }
+        Setup::ForcePlateRate => {
+            req.run.sample_targets = true;
+            req.run.noise_weights = Some(noise);
+            req.sqp.tol_kkt = 1e-4;
+        }
     }
-    let o = footfall(&args);
-    assert!(
-        o.status.success(),
-        "track {name}: {}",
-        String::from_utf8_lossy(&o.stderr)
-    );
+    timed("track", &out, || {
+        let folder = RunFolder::create(&out, false).unwrap();
+        let run = track(&req, folder, &Quiet).unwrap_or_else(|e| panic!("track {name}: {e:#}"));
+        check_tracked(&run).unwrap_or_else(|e| panic!("track {name}: {e:#}"));
+    });
     out
 }
 
@@ -196,18 +180,19 @@ fn baseline(name: &str, dir: &Path, how: Setup) -> PathBuf {
 /// `candidates`).
 fn diagnose(run: &Path, verify: usize, candidates: &[&str]) -> Value {
     let out = PathBuf::from(format!("{}-diagnose", run.display()));
-    let verify = verify.to_string();
-    let mut args = vec!["diagnose", s(run), "--verify", &verify];
-    for c in candidates {
-        args.extend(["--candidate", c]);
-    }
-    let o = footfall(&args);
-    assert!(
-        o.status.success(),
-        "diagnose {}: {}",
-        run.display(),
-        String::from_utf8_lossy(&o.stderr)
-    );
+    let req = DiagnoseRequest {
+        run: run.to_path_buf(),
+        verify,
+        candidates: candidates.iter().map(|c| c.to_string()).collect(),
+        out: None,
+        overwrite: false,
+        tol: 1e-5,
+        max_iter: 200,
+    };
+    timed("diagnose", run, || {
+        footfall::workflows::diagnose::run(&req, &Quiet)
+            .unwrap_or_else(|e| panic!("diagnose {}: {e:#}", run.display()))
+    });
     let summary = read_json(&out.join("summary.json"));
     eprintln!(
         "{}",

@@ -46,7 +46,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     let foot_path = super::simulate::foot_path(&args.foot);
     let model = GaitModel::load(&args.model, &foot_path)?;
     let foot = FootSpec::load(&foot_path)?;
-    let data = super::load_data(args.data.as_deref(), args.overground)?;
+    let data = footfall::workflows::load_data(args.data.as_deref(), args.overground)?;
     let stances =
         stances_from_data(&model, &data).map_err(|e| anyhow!("{}: {e}", data.source.display()))?;
     let ground = model.contact_settings().ground_height;

@@ -6,15 +6,13 @@
 //! [`Failure`]; a solve that did not converge is an [`Unsolved`] error, whose status
 //! picks the code.
 
+mod args;
 mod compare;
 mod diagnose;
 mod diff;
 mod fit_foot;
-mod gait_run;
 mod predict;
-mod refine;
 mod report;
-mod session;
 mod simulate;
 mod solve;
 mod synth;
@@ -22,6 +20,7 @@ mod track;
 mod validate;
 
 use clap::{Parser, Subcommand};
+pub use args::{CheckPointArgs, CliProgress};
 use footfall::sqp::SqpStatus;
 use std::process::ExitCode;
 
@@ -90,10 +89,10 @@ impl Failure {
     /// The class of an error: an [`Unsolved`] in its chain by its status, anything else
     /// bad input.
     pub fn classify(e: anyhow::Error) -> Self {
-        if e.chain().any(|c| c.downcast_ref::<Invalid>().is_some()) {
+        if e.chain().any(|c| c.downcast_ref::<footfall::workflows::Invalid>().is_some()) {
             return Failure::PhysicallyInvalid(e);
         }
-        let Some(u) = e.chain().find_map(|c| c.downcast_ref::<Unsolved>()) else {
+        let Some(u) = e.chain().find_map(|c| c.downcast_ref::<footfall::workflows::Unsolved>()) else {
             return Failure::Input(e);
         };
         match &u.status {
@@ -127,70 +126,9 @@ impl Failure {
     }
 }
 
-/// A converged solution that breaks physics on the 1 ms grid (exit 5).
-#[derive(Debug, thiserror::Error)]
-#[error("{message}")]
-pub struct Invalid {
-    /// What to print.
-    pub message: String,
-}
-
-impl Invalid {
-    /// The error of a written gait run that converged but is physically invalid.
-    pub fn check(out: &gait_run::GaitRunOutput) -> anyhow::Result<()> {
-        match &out.validity {
-            Some(v) if !v.is_valid() => Err(Invalid {
-                message: format!(
-                    "converged, physically invalid: {} (results written to {})",
-                    v.violations
-                        .iter()
-                        .map(|x| x.to_string())
-                        .collect::<Vec<_>>()
-                        .join("; "),
-                    out.path.display()
-                ),
-            }
-            .into()),
-            _ => Ok(()),
-        }
-    }
-}
-
-/// A solve that stopped without converging; its status picks the exit code.
-#[derive(Debug, thiserror::Error)]
-#[error("{message}")]
-pub struct Unsolved {
-    /// Why the solver stopped.
-    pub status: SqpStatus,
-    /// Whether it stopped at the initial point, before any iteration.
-    pub at_start: bool,
-    /// What to print.
-    pub message: String,
-}
-
-impl Unsolved {
-    /// The error of a solve that ended with `res` (None when it converged); `written`
-    /// names the run folder.
-    pub fn check(res: &footfall::sqp::SqpResult, written: &std::path::Path) -> anyhow::Result<()> {
-        if res.status == SqpStatus::Converged {
-            return Ok(());
-        }
-        Err(Unsolved {
-            status: res.status.clone(),
-            at_start: res.history.is_empty(),
-            message: format!(
-                "the solver stopped without converging: {} (results written to {})",
-                res.status,
-                written.display()
-            ),
-        }
-        .into())
-    }
-}
-
 pub fn main() -> ExitCode {
     // before any work: a Ctrl-C during setup removes what this process staged and exits 130
-    session::install_interrupt_handler();
+    footfall::workflows::session::install_interrupt_handler();
     let mut cli = Cli::parse();
     let args: Vec<String> = std::env::args().skip(1).collect();
     let resuming = match &cli.command {
@@ -200,7 +138,7 @@ pub fn main() -> ExitCode {
         _ => None,
     };
     let recorded = match resuming {
-        Some(sub) => session::prepare_resume(sub, &args).map(|original| {
+        Some(sub) => footfall::workflows::session::prepare_resume(sub, &args).map(|original| {
             let quiet = cli.quiet;
             cli = Cli::parse_from(
                 std::iter::once("footfall".to_string()).chain(original.iter().cloned()),
@@ -210,16 +148,17 @@ pub fn main() -> ExitCode {
         }),
         None => Ok(args),
     };
-    if let Err(e) = recorded.and_then(session::record_command) {
+    if let Err(e) = recorded.and_then(footfall::workflows::session::record_command) {
         eprintln!("error: {}", render_chain(&e));
         return ExitCode::from(1);
     }
+    let progress = CliProgress { quiet: cli.quiet };
     let result = match cli.command {
         Command::Simulate(args) => simulate::run(args, cli.quiet),
         Command::Solve(args) => solve::run(args, cli.quiet),
-        Command::Track(args) => track::run(args, cli.quiet),
+        Command::Track(args) => track::run(args, &progress),
         Command::FitFoot(args) => fit_foot::run(args, cli.quiet),
-        Command::Predict(args) => predict::run(args, cli.quiet),
+        Command::Predict(args) => predict::run(args, &progress),
         Command::Compare(args) => compare::run(args, cli.quiet),
         Command::Synth(args) => synth::run(args, cli.quiet),
         Command::Diagnose(args) => diagnose::run(args, cli.quiet),
@@ -251,36 +190,12 @@ fn render_chain(e: &anyhow::Error) -> String {
     out
 }
 
-/// Measured data from a sagittal CSV (moved overground when its meta file gives a belt
-/// speed), or the bundled trial; its units and conventions checked
-/// ([`footfall::data::GaitData::check_conventions`]; `overground`: take a trial without a
-/// belt speed as it is).
-pub fn load_data(
-    path: Option<&std::path::Path>,
-    overground: bool,
-) -> anyhow::Result<footfall::data::GaitData> {
-    let data = match path {
-        Some(p) => {
-            let d = footfall::data::read_sagittal_csv(p)?;
-            match d.belt_speed {
-                Some(v) if !d.overground => d.to_overground(v)?,
-                _ => d,
-            }
-        }
-        None => footfall::data::GaitData::bundled(std::path::Path::new("."))?,
-    };
-    data.check_conventions(overground)?;
-    Ok(data)
-}
-
-pub use session::solve_interruptibly;
-
 #[cfg(test)]
 mod tests {
     use super::*;
 
     fn code(status: SqpStatus, at_start: bool) -> u8 {
-        let e = anyhow::Error::new(Unsolved {
+        let e = anyhow::Error::new(footfall::workflows::Unsolved {
             status,
             at_start,
             message: String::new(),

@@ -1,27 +1,18 @@
-//! `footfall predict`: the gait the model prefers (seed 001 §3.5): minimum activation plus
-//! impulses, at the subject's step length and speed, started from a tracking solution.
+//! `footfall predict`: arguments and printing of the prediction workflow
+//! ([`footfall::workflows::predict`]).
 
-use super::gait_run::{GaitRun, GaitRunOutput, DEFAULT_TRANSIENT_THRESHOLD_N};
-use super::Failure;
-use anyhow::{anyhow, bail, Context};
-use footfall::integrate::IntegratorSettings;
-use footfall::model::GaitModel;
-use footfall::ocp::Transcription;
-use footfall::phases::PhaseSequence;
-use footfall::problems::evaluation::GaitSolution;
-use footfall::problems::gait::GaitCycle;
-use footfall::problems::predict::{PredictionSettings, PredictionSetup, SEED_IMPULSE_WEIGHT};
-use footfall::problems::track::TrackingSetup;
-use footfall::report::html::Section;
-use footfall::runfolder::RunFolder;
-use footfall::sqp::{ExactConvexification, HessianMode, SqpResult, SqpSettings, SqpStatus};
-use std::path::{Path, PathBuf};
+use super::{Failure, CliProgress};
+use footfall::problems::predict::SEED_IMPULSE_WEIGHT;
+use footfall::workflows::predict::{check_outcome, outcome_text, predict, PredictionOptions};
+use footfall::workflows::run_folder::DEFAULT_TRANSIENT_THRESHOLD_N;
+use footfall::workflows::{read_solution, Progress};
+use std::path::PathBuf;
 
 /// Options shared by `predict` and `compare`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct PredictOptions {
     #[command(flatten)]
-    pub check_points: super::refine::CheckPointArgs,
+    pub check_points: super::CheckPointArgs,
     /// Model file.
     #[arg(long, default_value = "models/opensim_subject01.json")]
     pub model: PathBuf,
@@ -96,242 +87,44 @@ pub struct Args {
     options: PredictOptions,
 }
 
-pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
-    run_inner(args, quiet).map_err(Failure::classify)
+impl From<&PredictOptions> for PredictionOptions {
+    fn from(o: &PredictOptions) -> Self {
+        PredictionOptions {
+            check_points: o.check_points.enabled(),
+            model: o.model.clone(),
+            data: o.data.clone(),
+            overground: o.overground,
+            step_length: o.step_length,
+            speed: o.speed,
+            impulse_weight: o.impulse_weight,
+            ankle_velocity_limit: o.ankle_velocity_limit,
+            hessian: o.hessian.into(),
+            tol: o.tol,
+            integrator_tol: o.integrator_tol,
+            exact_below: o.exact_below,
+            max_iter: o.max_iter,
+            max_time: o.max_time,
+            transient_threshold: o.transient_threshold,
+        }
+    }
 }
 
-fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
-    let folder = super::session::create_checkpointed_run_folder(&args.out, args.overwrite)?;
+pub fn run(args: Args, progress: &CliProgress) -> Result<(), Failure> {
+    run_inner(args, progress).map_err(Failure::classify)
+}
+
+fn run_inner(args: Args, progress: &CliProgress) -> anyhow::Result<()> {
+    let folder =
+        footfall::workflows::session::create_checkpointed_run_folder(&args.out, args.overwrite)?;
     let init = args.init.as_deref().map(read_solution).transpose()?;
     let (out, res) = predict(
-        &args.options,
+        &(&args.options).into(),
         &args.foot,
         args.phases.as_deref(),
         init.as_ref(),
         folder,
-        quiet,
+        progress,
     )?;
-    finish(&out, &res, quiet)
-}
-
-/// Print the outcome; a solve that did not converge is an [`Unsolved`](super::Unsolved) error.
-pub fn finish(out: &GaitRunOutput, res: &SqpResult, quiet: bool) -> anyhow::Result<()> {
-    if !quiet {
-        eprintln!(
-            "{}\n{}: J = {:.6}, KKT {:.2e}, {} iterations, {:.1} s",
-            out.table.to_markdown(),
-            res.status,
-            res.objective,
-            res.kkt,
-            res.history.len().saturating_sub(1),
-            res.seconds
-        );
-        match out.transients.first() {
-            Some(t) => eprintln!(
-                "largest ground-force transient: {} {} force {:.1} N at {:.3} s ({}), {:.1} N above the measurement for {:.1} ms",
-                t.foot, t.component, t.peak_n, t.t_peak, t.phase, t.excess_n, 1e3 * t.duration_s
-            ),
-            None => eprintln!("no ground-force transient above the threshold on the 1 ms grid"),
-        }
-        eprintln!("report: {}", out.path.join("report.html").display());
-    }
-    super::Unsolved::check(res, &out.path)?;
-    super::Invalid::check(out)?;
-    Ok(())
-}
-
-/// A solution from a run folder (`solution.json` inside) or a solution file.
-pub fn read_solution(path: &Path) -> anyhow::Result<GaitSolution> {
-    if !path.exists() {
-        bail!("{}: no such run folder or solution file (give a track or predict run folder, or its solution.json)", path.display());
-    }
-    let file = if path.is_dir() {
-        path.join("solution.json")
-    } else {
-        path.to_path_buf()
-    };
-    let text = std::fs::read_to_string(&file)
-        .with_context(|| format!("reading the initial solution {}", file.display()))?;
-    serde_json::from_str(&text).with_context(|| {
-        format!(
-            "{}: not a footfall solution (expected the solution.json of a track or predict run)",
-            file.display()
-        )
-    })
-}
-
-/// The default phase file of a foot argument.
-pub fn default_phases(foot: &str) -> PathBuf {
-    match foot {
-        "double-circle" | "double_circle" => PathBuf::from("phases/double_circle_walk.json"),
-        _ => PathBuf::from("phases/ellipse_walk.json"),
-    }
-}
-
-/// Solve one prediction and write its run folder.
-pub fn predict(
-    o: &PredictOptions,
-    foot: &str,
-    phases: Option<&Path>,
-    init: Option<&GaitSolution>,
-    folder: RunFolder,
-    quiet: bool,
-) -> anyhow::Result<(GaitRunOutput, SqpResult)> {
-    let foot_path = super::simulate::foot_path(foot);
-    let model = GaitModel::load(&o.model, &foot_path)?;
-    let phases = phases
-        .map(Path::to_path_buf)
-        .unwrap_or_else(|| default_phases(foot));
-    let seq = PhaseSequence::load(&phases)?;
-    let sets = seq.resolve(&model, &phases)?;
-    let data = super::load_data(o.data.as_deref(), o.overground)?;
-    let tracking = TrackingSetup::new(&model, &seq, &sets, &data)
-        .map_err(|e| anyhow!("{}: {e}", data.source.display()))?;
-    let mut settings = PredictionSettings::from_data(&tracking, &data);
-    settings.step_length = o.step_length.unwrap_or(settings.step_length);
-    settings.speed = o.speed.unwrap_or(settings.speed);
-    settings.impulse_weight = o.impulse_weight;
-    settings.ankle_velocity_limit = o.ankle_velocity_limit;
-    let setup = match init {
-        Some(sol) => PredictionSetup::from_solution(&seq, &tracking, sol, settings.clone()),
-        None => PredictionSetup::from_data(&seq, &tracking, settings.clone()),
-    }
-    .map_err(|e| anyhow!("{}: {e}", phases.display()))?;
-    let cycle = GaitCycle::new(&model, &setup.seq, &sets).map_err(|e| anyhow!(e))?;
-    let integrator = IntegratorSettings {
-        rtol: o.integrator_tol,
-        atol: o.integrator_tol,
-        ..Default::default()
-    };
-    integrator.validate().context("--integrator-tol")?;
-    let build = || {
-        setup
-            .ocp(&cycle, &model, &sets, integrator.clone())
-            .map_err(|e| anyhow!(e))
-    };
-    let ocp = build()?;
-    let tr = Transcription::new(&ocp).context("transcribing the prediction problem")?;
-    let (_, _, w0) = tr.variable_bounds_and_guess();
-    let hessian = o.hessian.into();
-    let sqp_settings = SqpSettings {
-        tol_kkt: o.tol,
-        max_iter: o.max_iter,
-        max_time: o.max_time,
-        hessian,
-        exact_hessian_below: o.exact_below,
-        exact_convexification: ExactConvexification::InertiaCorrection,
-        ..Default::default()
-    };
-    if !quiet {
-        eprintln!(
-            "predicting with the {} foot: step length {:.3} m, speed {:.3} m/s, w_Δ = {}{} ({} variables, {} constraints, {:?}, from {})",
-            model.foot_name,
-            settings.step_length,
-            settings.speed,
-            settings.impulse_weight,
-            settings.ankle_velocity_limit.map_or(String::new(), |w| format!(", |ankle ω| ≤ {w} rad/s")),
-            tr.n(),
-            tr.m(),
-            hessian,
-            if init.is_some() { "the given solution" } else { "the data" }
-        );
-    }
-    let refinement = super::refine::Refinement {
-        cycle: &cycle,
-        model: &model,
-        sets: &sets,
-        integrator: integrator.clone(),
-        t0: tracking.window.0,
-        enabled: o.check_points.enabled(),
-        max_iter: sqp_settings.max_iter,
-    };
-    // a failed line search of the exact Hessian goes on once from that iterate with block
-    // BFGS. Near a stationary point the inertia correction can shift the QP's Hessian by
-    // far more than its curvature, and the QP's step and multipliers with it: the CI's
-    // double-circle prediction stalled at KKT 3.7e-3 with steps of 1e-5, its integrator at
-    // 1e-10 or 1e-12, where block BFGS certifies the same point at KKT 2.4e-7 at once
-    let solve_staged = |tr: &Transcription, w: &[f64]| -> anyhow::Result<SqpResult> {
-        let first = super::solve_interruptibly(tr, w, &sqp_settings, quiet)?;
-        if first.status != SqpStatus::LineSearchFailure
-            || sqp_settings.hessian != HessianMode::Exact
-        {
-            return Ok(first);
-        }
-        if !quiet {
-            eprintln!(
-                "line search failed at KKT {:.2e} with the exact Hessian: going on from there with block BFGS",
-                first.kkt
-            );
-        }
-        let used = first.history.len().saturating_sub(1);
-        let rest = SqpSettings {
-            max_iter: sqp_settings.max_iter.saturating_sub(used),
-            max_time: sqp_settings.max_time.map(|t| (t - first.seconds).max(0.0)),
-            hessian: HessianMode::Bfgs,
-            ..sqp_settings.clone()
-        };
-        let second = super::solve_interruptibly(tr, &first.w, &rest, quiet)?;
-        Ok(super::track::merge_stages(first, second))
-    };
-    let (sites, res) =
-        refinement.solve(&build, &[], &w0, &mut |tr, w| solve_staged(tr, w), quiet)?;
-    let mut ocp = build()?;
-    ocp.checks = refinement.checks(&sites);
-    let tr = Transcription::new(&ocp).context("transcribing the prediction problem")?;
-    let solution = GaitSolution::from_nlp(&tr, &res.w, &cycle.continuous, tracking.window.0);
-    let durations: Vec<String> = solution
-        .phases
-        .iter()
-        .map(|p| format!("{} {:.3} s", p.name, p.duration))
-        .collect();
-    let mut extra_json = serde_json::Map::new();
-    extra_json.insert("prediction".into(), serde_json::to_value(&settings)?);
-    extra_json.insert(
-        "durations_s".into(),
-        solution
-            .phases
-            .iter()
-            .map(|p| serde_json::json!({"phase": p.name, "duration": p.duration}))
-            .collect(),
-    );
-    let out = super::gait_run::write(
-        GaitRun {
-            command: "predict",
-            title: format!("footfall prediction — {} foot, {}", model.foot_name, data.name),
-            data: &data,
-            model: &model,
-            sets: &sets,
-            phases_path: &phases,
-            events: &tracking.events,
-            sequence: &setup.seq,
-            control_bounds: (&setup.guess.u_lb, &setup.guess.u_ub),
-            result: &res,
-            solution: &solution,
-            integrator,
-            extra_summary: vec![
-                ("targets".into(), format!("step length {:.3} m, speed {:.3} m/s", settings.step_length, settings.speed)),
-                ("phase durations".into(), durations.join(", ")),
-            ],
-            extra_json,
-            extra_sections: vec![Section {
-                heading: "Problem".into(),
-                paragraphs: vec![format!(
-                    "Minimum ∫Σa² dt (eq. 20) plus w_Δ ΣΔ² with w_Δ = {} (eq. 21), at step length {:.3} m and average speed {:.3} m/s{}; started from {}. The errors above compare the predicted gait with the measurement in the layout of seed Table 4.",
-                    settings.impulse_weight,
-                    settings.step_length,
-                    settings.speed,
-                    settings.ankle_velocity_limit.map_or(String::new(), |w| format!(", ankle angular velocity bounded by {w} rad/s")),
-                    if init.is_some() { "the given solution" } else { "the data" }
-                )],
-                tables: vec![],
-                svgs: vec![],
-            }],
-            extra_files: vec![],
-            friction: cycle.friction(),
-            check_points: sites.len(),
-            transient_threshold_n: o.transient_threshold,
-        },
-        folder,
-    )?;
-    Ok((out, res))
+    progress.note(&outcome_text(&out, &res));
+    check_outcome(&out, &res)
 }

@@ -1,15 +1,10 @@
-//! `footfall report RUN`: re-evaluate a track run's solution and rewrite its run folder —
-//! errors per channel and phase, where the cost comes from, the worst stretches, the
-//! residual actuators, plots with the phases shaded — without solving again. Useful after
-//! an upgrade of footfall, or to write the report somewhere else; the solver's own figures
-//! (status, iterations, KKT residual, time) are carried over from the run's summary.
+//! `footfall report`: the arguments of the `report` workflow
+//! ([`footfall::workflows::report`]).
 
-use super::track::{read_run_setup, RunWriting, TrackingProblem};
-use super::Failure;
-use anyhow::{anyhow, bail, Context};
-use footfall::runfolder::RunFolder;
-use footfall::sqp::{IterationRecord, SqpResult, SqpStatus, SqpTimings, Violation};
-use std::path::{Path, PathBuf};
+use super::{CliProgress, Failure};
+use footfall::workflows::report::ReportRequest;
+#[allow(unused_imports)]
+use std::path::PathBuf;
 
 /// Arguments of `footfall report`.
 #[derive(Debug, clap::Args)]
@@ -26,172 +21,21 @@ pub struct Args {
     #[arg(long)]
     overwrite: bool,
     /// Report ground-force excursions above the measurement larger than this (N).
-    #[arg(long, default_value_t = super::gait_run::DEFAULT_TRANSIENT_THRESHOLD_N, value_parser = super::validate::positive)]
+    #[arg(long, default_value_t = footfall::workflows::run_folder::DEFAULT_TRANSIENT_THRESHOLD_N, value_parser = super::validate::positive)]
     transient_threshold: f64,
 }
 
-/// Relative objective difference above which the re-evaluation does not reproduce the
-/// run (the model, foot, phases or data changed since).
-const OBJECTIVE_MISMATCH: f64 = 1e-6;
-
-/// The solver's figures as the run recorded them in `summary.json`.
-#[derive(Debug, serde::Deserialize)]
-struct SolverRecord {
-    status: SqpStatus,
-    objective: f64,
-    kkt: f64,
-    seconds: f64,
-    #[serde(default)]
-    timings: SqpTimings,
-    #[serde(default)]
-    history: Vec<IterationRecord>,
-    #[serde(default)]
-    most_violated: Vec<Violation>,
-}
-
-fn read_record(run: &Path) -> anyhow::Result<SolverRecord> {
-    let file = run.join("summary.json");
-    let text = std::fs::read_to_string(&file).with_context(|| format!("reading {} (a track run folder has one; it holds the solver's figures the report carries over)", file.display()))?;
-    let value: serde_json::Value =
-        serde_json::from_str(&text).with_context(|| format!("{}: not JSON", file.display()))?;
-    if value.get("command").and_then(|c| c.as_str()) != Some("track") {
-        bail!(
-            "{}: field `command` is {}, expected \"track\" (footfall report rewrites track runs)",
-            file.display(),
-            value
-                .get("command")
-                .map_or("missing".into(), |c| c.to_string())
-        );
-    }
-    serde_json::from_value(value).with_context(|| {
-        format!(
-            "{}: not the summary of a footfall track run",
-            file.display()
-        )
-    })
-}
-
-/// The arguments for re-writing one run.
-struct OneRun {
-    run: PathBuf,
-    out: Option<PathBuf>,
-    overwrite: bool,
-    transient_threshold: f64,
-}
-
-/// `footfall report RUN_A RUN_B … --out DIR`: the runs' curves on the same plots and
-/// their errors side by side, read from their files.
-fn side_by_side(args: &Args, quiet: bool) -> anyhow::Result<()> {
-    let Some(out) = &args.out else {
-        bail!("--out: required with several runs (the side-by-side report gets its own folder; the run folders are left as they are)");
-    };
-    let mut runs = Vec::new();
-    for r in &args.runs {
-        if !r.is_dir() {
-            bail!("{}: not a run folder (give folders that `footfall track` or `footfall predict` wrote)", r.display());
+impl From<Args> for ReportRequest {
+    fn from(a: Args) -> Self {
+        ReportRequest {
+            runs: a.runs,
+            out: a.out,
+            overwrite: a.overwrite,
+            transient_threshold: a.transient_threshold,
         }
-        runs.push(footfall::report::runs::RunCurves::read(r)?);
     }
-    let folder = RunFolder::create(out, args.overwrite)?;
-    let report = footfall::report::runs::side_by_side(&runs);
-    let listing = serde_json::json!({
-        "command": "report",
-        "runs": args.runs.iter().zip(&runs).map(|(p, r)| serde_json::json!({"path": p, "name": r.name, "verdict": r.verdict})).collect::<Vec<_>>(),
-    });
-    folder.write(
-        "runs.json",
-        serde_json::to_string_pretty(&listing)?.as_bytes(),
-    )?;
-    folder.write("report.html", report.to_html().as_bytes())?;
-    let path = folder.commit()?;
-    if !quiet {
-        eprintln!("report: {}", path.join("report.html").display());
-    }
-    Ok(())
 }
 
 pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
-    run_inner(args, quiet).map_err(Failure::classify)
-}
-
-fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
-    if args.runs.len() > 1 {
-        return side_by_side(&args, quiet);
-    }
-    let args = OneRun {
-        run: args.runs[0].clone(),
-        out: args.out,
-        overwrite: args.overwrite,
-        transient_threshold: args.transient_threshold,
-    };
-    if !args.run.is_dir() {
-        bail!(
-            "{}: not a run folder (give the folder a `footfall track` run wrote)",
-            args.run.display()
-        );
-    }
-    let setup = read_run_setup(&args.run)?;
-    let solution = super::predict::read_solution(&args.run)?;
-    let record = read_record(&args.run)?;
-    let mut prob = TrackingProblem::build(&setup, &[])?;
-    prob.setup
-        .start_from(&solution)
-        .map_err(|e| anyhow!("{}: {e}", args.run.join("solution.json").display()))?;
-    let (out, overwrite) = match &args.out {
-        Some(o) => (o.clone(), args.overwrite),
-        None => (args.run.clone(), true),
-    };
-    let folder = RunFolder::create(&out, overwrite)?;
-    let base = footfall::problems::diagnose::TrackingRunSetup {
-        parameters: vec![],
-        ..setup.clone()
-    };
-    let run = prob.with_transcription(|tr, cycle, w| {
-        let ev = tr.evaluate(&w, true).context("evaluating the run's solution")?;
-        let (lo, hi) = tr.constraint_bounds();
-        let infeasibility = footfall::sqp::violations(&ev.c, &lo, &hi).into_iter().fold(0.0, f64::max);
-        let mismatch = (ev.f - record.objective).abs() / record.objective.abs().max(1e-12);
-        if mismatch > OBJECTIVE_MISMATCH {
-            bail!(
-                "{}: the solution re-evaluates to J = {:.8} but the run recorded J = {:.8} (relative difference {mismatch:.1e}): the model, foot, phases or data changed since the run; re-run `footfall track` instead",
-                args.run.display(),
-                ev.f,
-                record.objective
-            );
-        }
-        let res = SqpResult {
-            w,
-            lambda: vec![],
-            nu: vec![],
-            objective: ev.f,
-            infeasibility,
-            kkt: record.kkt,
-            status: record.status,
-            history: record.history,
-            most_violated: record.most_violated,
-            seconds: record.seconds,
-            timings: record.timings,
-        };
-        let provenance = format!("re-evaluated from {} by footfall report (J reproduced to {mismatch:.0e}); solver figures as the run recorded them", args.run.join("solution.json").display());
-        prob.write_run(tr, cycle, res, RunWriting { base: &base, extra: &[], folder, transient_threshold: args.transient_threshold, quiet: true, provenance: Some(provenance), check_sites: &prob.check_sites })
-    })?;
-    if !quiet {
-        println!("{}", run.output.table.to_markdown());
-        if let Some(b) = &run.breakdown {
-            let (share, normalised, windows) = super::track::cost_tables(b);
-            println!(
-                "{}\n{}\n{}",
-                share.to_markdown(),
-                normalised.to_markdown(),
-                windows.to_markdown()
-            );
-        }
-        if let Some(r) = &run.residuals {
-            for t in &r.tables {
-                println!("{}", t.to_markdown());
-            }
-        }
-        eprintln!("report: {}", run.output.path.join("report.html").display());
-    }
-    Ok(())
+    footfall::workflows::report::run(&args.into(), &CliProgress { quiet }).map_err(Failure::classify)
 }

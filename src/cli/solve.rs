@@ -118,9 +118,9 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
                 let tr = Transcription::new(ocp).context("transcribing the problem")?;
                 let w0 = start(&tr, &args)?;
                 let folder =
-                    super::session::create_checkpointed_run_folder(&args.out, args.overwrite)?;
+                    footfall::workflows::session::create_checkpointed_run_folder(&args.out, args.overwrite)?;
                 announce(&bench, &tr, &format!("{:?}", settings.hessian), quiet);
-                let res = super::solve_interruptibly(&tr, &w0, &settings, quiet)?;
+                let res = footfall::workflows::solve_interruptibly(&tr, &w0, &settings, &super::CliProgress { quiet })?;
                 let counters = tr.integration_totals();
                 write_run(
                     folder, ocp, &tr, &bench, &problem, &settings, res, counters, quiet,
@@ -142,7 +142,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         .with_ocp(first.integrator.clone(), |ocp| {
             let tr = Transcription::new(ocp).context("transcribing the problem")?;
             let w0 = start(&tr, &args)?;
-            folder = Some(super::session::create_checkpointed_run_folder(
+            folder = Some(footfall::workflows::session::create_checkpointed_run_folder(
                 &args.out,
                 args.overwrite,
             )?);
@@ -155,7 +155,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
                 ),
                 quiet,
             );
-            let res = super::solve_interruptibly(&tr, &w0, &s1, quiet);
+            let res = footfall::workflows::solve_interruptibly(&tr, &w0, &s1, &super::CliProgress { quiet });
             counters += tr.integration_totals();
             res
         })
@@ -180,8 +180,8 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
                     r1.kkt, s1.tol_kkt
                 );
             }
-            let r2 = super::solve_interruptibly(&tr, &r1.w, &s2, quiet)?;
-            let res = super::track::merge_stages(r1, r2);
+            let r2 = footfall::workflows::solve_interruptibly(&tr, &r1.w, &s2, &super::CliProgress { quiet })?;
+            let res = footfall::workflows::track::merge_stages(r1, r2);
             counters += tr.integration_totals();
             write_run(
                 folder, ocp, &tr, &bench, &problem, &s2, res, counters, quiet,
@@ -362,5 +362,5 @@ fn write_run(
             eprintln!("  violated: {} by {:.3e}", v.name, v.amount);
         }
     }
-    super::Unsolved::check(&res, &out)
+    footfall::workflows::Unsolved::check(&res, &out)
 }

@@ -1,15 +1,9 @@
-//! `footfall synth`: a measurement set generated from a model solution, with a documented
-//! noise model and the truth kept apart — data with a known answer.
+//! `footfall synth`: the arguments of the `synth` workflow
+//! ([`footfall::workflows::synth`]).
 
-use super::Failure;
-use anyhow::{anyhow, bail, Context};
-use footfall::data::write_sagittal_csv;
-use footfall::integrate::IntegratorSettings;
-use footfall::model::effects::EffectSpec;
-use footfall::model::GaitModel;
-use footfall::phases::PhaseSequence;
-use footfall::problems::synth::{synthesize, MeasurementOffsets, NoiseModel, SynthSettings};
-use footfall::runfolder::RunFolder;
+use super::{CliProgress, Failure};
+use footfall::workflows::synth::SynthRequest;
+#[allow(unused_imports)]
 use std::path::PathBuf;
 
 /// Arguments of `footfall synth`.
@@ -65,188 +59,27 @@ pub struct Args {
     hidden_effects: Vec<String>,
 }
 
-pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
-    run_inner(args, quiet).map_err(Failure::classify)
+impl From<Args> for SynthRequest {
+    fn from(a: Args) -> Self {
+        SynthRequest {
+            from: a.from,
+            model: a.model,
+            foot: a.foot,
+            phases: a.phases,
+            rate: a.rate,
+            half_cycles: a.half_cycles,
+            noise_angle_deg: a.noise_angle_deg,
+            noise_position_mm: a.noise_position_mm,
+            noise_force_n: a.noise_force_n,
+            noise_cop_mm: a.noise_cop_mm,
+            seed: a.seed,
+            out: a.out,
+            overwrite: a.overwrite,
+            hidden_effects: a.hidden_effects,
+        }
+    }
 }
 
-fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
-    if !(args.half_cycles.is_finite() && args.half_cycles >= 2.5) {
-        bail!(
-            "--half-cycles {}: need at least 2.5 (a gait cycle plus margins for the event search)",
-            args.half_cycles
-        );
-    }
-    let hidden: Vec<EffectSpec> = args
-        .hidden_effects
-        .iter()
-        .map(|e| {
-            EffectSpec::parse_cli(e)
-                .map(|s| s.fixed())
-                .map_err(|r| anyhow!("--hidden-effect: {r}"))
-        })
-        .collect::<Result<_, _>>()?;
-    let mut offsets = MeasurementOffsets::default();
-    let mut model_effects = Vec::new();
-    for e in &hidden {
-        match e {
-            EffectSpec::ForcePlateTimeOffset { offset, .. } => {
-                offsets.force_time_offset_s = *offset
-            }
-            EffectSpec::CopOffset { offset, .. } => offsets.cop_offset_m = *offset,
-            other => model_effects.push(other.clone()),
-        }
-    }
-    let mut solution = super::predict::read_solution(&args.from)?;
-    // what the --from run was made with, unless given
-    let from_setup = if args.from.is_dir() && args.from.join("setup.json").is_file() {
-        Some(super::track::read_run_setup(&args.from)?)
-    } else {
-        None
-    };
-    let model_path = args
-        .model
-        .clone()
-        .or_else(|| from_setup.as_ref().map(|s| s.model.clone()))
-        .unwrap_or_else(|| PathBuf::from("models/opensim_subject01.json"));
-    let foot = args
-        .foot
-        .clone()
-        .or_else(|| from_setup.as_ref().map(|s| s.foot.clone()))
-        .unwrap_or_else(|| "ellipse".into());
-    let mut model = GaitModel::load(&model_path, &super::simulate::foot_path(&foot))?;
-    let mut phases = args
-        .phases
-        .clone()
-        .or_else(|| from_setup.as_ref().map(|s| s.phases.clone()))
-        .unwrap_or_else(|| super::predict::default_phases(&foot));
-    if !model_effects.is_empty() {
-        // the truth: the --from run's problem re-solved with the effects in the model
-        let run = super::track::read_run_setup(&args.from)
-            .context("--hidden-effect with a model effect needs a track run folder as --from")?;
-        let mut prob = super::track::TrackingProblem::build(&run, &model_effects)?;
-        prob.setup
-            .start_from(&solution)
-            .map_err(|e| anyhow!("{}: {e}", args.from.display()))?;
-        if !quiet {
-            eprintln!(
-                "re-fitting {} with {} hidden in the model",
-                args.from.display(),
-                model_effects
-                    .iter()
-                    .map(|e| e.label())
-                    .collect::<Vec<_>>()
-                    .join(" and ")
-            );
-        }
-        let settings = super::track::tracking_sqp_settings(
-            1e-5,
-            200,
-            None,
-            footfall::sqp::HessianMode::Exact,
-            1e-3,
-        );
-        let (res, sol) = prob.solve(&settings, quiet)?;
-        if res.status != footfall::sqp::SqpStatus::Converged {
-            return Err(super::Unsolved {
-                status: res.status.clone(),
-                at_start: res.history.is_empty(),
-                message: format!("the model with the hidden effect did not converge on the --from run's data: {}", res.status),
-            }
-            .into());
-        }
-        solution = sol;
-        phases = run.phases.clone();
-        model = prob.model;
-    }
-    let seq = PhaseSequence::load(&phases)?;
-    let sets = seq.resolve(&model, &phases)?;
-    if solution
-        .phases
-        .iter()
-        .any(|p| p.set >= sets.len() || p.x.iter().any(|x| x.len() != model.nx()))
-    {
-        bail!("{}: the solution does not belong to this model and phase graph ({} states, phases of {})", args.from.display(), model.nx(), phases.display());
-    }
-    if solution.theta.len() != model.ntheta() {
-        bail!(
-            "{}: the solution has {} free parameters, the model {}",
-            args.from.display(),
-            solution.theta.len(),
-            model.ntheta()
-        );
-    }
-    let mut truth_sol = solution.clone();
-    let t0 = truth_sol.phases[0].t0;
-    truth_sol.phases.iter_mut().for_each(|p| p.t0 -= t0);
-    let half = truth_sol.span().1;
-    let deg = std::f64::consts::PI / 180.0;
-    let noise = NoiseModel {
-        position_m: args.noise_position_mm * 1e-3,
-        angle_rad: args.noise_angle_deg * deg,
-        force_n: args.noise_force_n,
-        cop_m: args.noise_cop_mm * 1e-3,
-        seed: args.seed,
-    };
-    // start half a half cycle early so the first heel strike lies inside the trial
-    let settings = SynthSettings {
-        rate_hz: args.rate,
-        start_s: -0.5 * half,
-        duration_s: args.half_cycles * half,
-        noise,
-        integrator: IntegratorSettings {
-            rtol: 1e-10,
-            atol: 1e-10,
-            ..Default::default()
-        },
-        measurement: offsets,
-    };
-    let folder = RunFolder::create(&args.out, args.overwrite)?;
-    let (data, truth) = synthesize(&model, &sets, &truth_sol, &settings, "synthetic")
-        .map_err(|e| anyhow!("generating the trial: {e}"))?;
-    let (csv, meta) = write_sagittal_csv(&data);
-    let (clean_csv, _) = write_sagittal_csv(&truth.clean);
-    let truth_json = serde_json::json!({
-        "from": args.from,
-        "model": model_path,
-        "foot": model.foot_name,
-        "phases": phases,
-        "hidden_effects": hidden,
-        "measurement_offsets": offsets,
-        "effect_parameters": model.parameters().iter().map(|p| serde_json::json!({"name": p.name, "value": p.value, "unit": p.unit})).collect::<Vec<_>>(),
-        "noise": noise,
-        "noise_model": "independent Gaussian per channel and sample (ChaCha8, seeded); an unloaded foot reads exactly zero; CoP undefined below the CoP threshold",
-        "rate_hz": args.rate,
-        "half_period_s": truth.half_period_s,
-        "step_length_m": truth.step_length_m,
-        "solution_time_offset_s": t0,
-    });
-    folder.write("synthetic.csv", csv.as_bytes())?;
-    folder.write("synthetic_meta.json", meta.as_bytes())?;
-    folder.write("truth_clean.csv", clean_csv.as_bytes())?;
-    folder.write(
-        "truth.json",
-        serde_json::to_string_pretty(&truth_json)?.as_bytes(),
-    )?;
-    let out = folder.commit()?;
-    if !quiet {
-        eprintln!(
-            "{} samples at {} Hz over {:.3} s ({} half cycles of {:.3} s, step {:.3} m), noise {}° / {} mm / {} N / {} mm (seed {})",
-            data.time.len(),
-            args.rate,
-            data.time[data.time.len() - 1] - data.time[0],
-            args.half_cycles,
-            half,
-            truth.step_length_m,
-            args.noise_angle_deg,
-            args.noise_position_mm,
-            args.noise_force_n,
-            args.noise_cop_mm,
-            args.seed
-        );
-        eprintln!(
-            "trial: {}  (track it with --data)",
-            out.join("synthetic.csv").display()
-        );
-    }
-    Ok(())
+pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
+    footfall::workflows::synth::run(&args.into(), &CliProgress { quiet }).map_err(Failure::classify)
 }

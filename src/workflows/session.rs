@@ -15,10 +15,11 @@
 //!   staged solve resumes at the stage it reached). Evaluations are deterministic, so the
 //!   resumed run follows the same iterates, bit for bit, as one that was never killed.
 
+use super::{note, warn_note, Progress};
 use anyhow::{anyhow, bail, Context};
-use footfall::runfolder::{self, RunFolder, RESUME_PREFIX};
-use footfall::sqp::checkpoint::SqpCheckpoint;
-use footfall::sqp::{IterationRecord, Nlp, Observer, SqpResult, SqpSettings};
+use crate::runfolder::{self, RunFolder, RESUME_PREFIX};
+use crate::sqp::checkpoint::SqpCheckpoint;
+use crate::sqp::{IterationRecord, Nlp, Observer, SqpResult, SqpSettings};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -104,14 +105,14 @@ pub fn create_checkpointed_run_folder(out: &Path, overwrite: bool) -> anyhow::Re
 /// Wraps an SQP observer: Ctrl-C stops the solve after the current iteration, and
 /// checkpoints go to the run's staging folder.
 struct Interruptible<'a> {
-    inner: &'a mut dyn Observer,
+    progress: &'a dyn Progress,
     checkpoints: Option<(PathBuf, String)>,
 }
 
 impl Observer for Interruptible<'_> {
     fn iteration(&mut self, rec: &IterationRecord) -> bool {
-        let go_on = self.inner.iteration(rec);
-        go_on && !INTERRUPTED.load(Ordering::SeqCst)
+        self.progress.iteration(rec);
+        !INTERRUPTED.load(Ordering::SeqCst)
     }
     fn wants_checkpoints(&self) -> bool {
         self.checkpoints.is_some()
@@ -127,8 +128,7 @@ impl Observer for Interruptible<'_> {
             });
         if let Err(e) = written {
             // the solve goes on; only resuming it would be lost
-            eprintln!(
-                "warning: checkpoint not written ({e}); this run cannot be resumed if it is killed"
+            warn_note!(self.progress, "warning: checkpoint not written ({e}); this run cannot be resumed if it is killed"
             );
             self.checkpoints = None;
         }
@@ -136,13 +136,13 @@ impl Observer for Interruptible<'_> {
 }
 
 /// Solve `nlp` from `w0` with Ctrl-C handled, logging each iteration to stderr unless
-/// `quiet`; checkpointed in a run folder made by [`create_checkpointed_run_folder`], and
+/// `progress`; checkpointed in a run folder made by [`create_checkpointed_run_folder`], and
 /// continued from the killed run's checkpoint when resuming.
 pub fn solve_interruptibly(
     nlp: &dyn Nlp,
     w0: &[f64],
     settings: &SqpSettings,
-    quiet: bool,
+    progress: &dyn Progress,
 ) -> anyhow::Result<SqpResult> {
     let index = SOLVES.fetch_add(1, Ordering::SeqCst);
     let (resume, checkpoints) = {
@@ -154,24 +154,24 @@ pub fn solve_interruptibly(
                 .map(|d| (d, checkpoint_file(index))),
         )
     };
-    let mut log = footfall::sqp::StderrLog;
-    let mut silent = footfall::sqp::Silent;
-    let inner: &mut dyn Observer = if quiet { &mut silent } else { &mut log };
-    let mut observer = Interruptible { inner, checkpoints };
+    let mut observer = Interruptible {
+        progress,
+        checkpoints,
+    };
     SOLVING.store(true, Ordering::SeqCst);
     let res = match &resume {
         Some(cp) => {
             cp.check(nlp.n(), nlp.m())
                 .context("resuming: the checkpoint does not fit the problem")?;
-            if !quiet {
-                eprintln!(
+            {
+                note!(progress, 
                     "resuming at iteration {} from the killed run's checkpoint",
                     cp.next_iter
                 );
             }
-            footfall::sqp::solve_resumed(nlp, cp, settings, &mut observer)
+            crate::sqp::solve_resumed(nlp, cp, settings, &mut observer)
         }
-        None => footfall::sqp::solve(nlp, w0, settings, &mut observer),
+        None => crate::sqp::solve(nlp, w0, settings, &mut observer),
     };
     SOLVING.store(false, Ordering::SeqCst);
     Ok(res)

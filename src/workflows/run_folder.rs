@@ -2,22 +2,24 @@
 //! the nodes, overall and by phase, the 1 ms re-integration figures, plots, the solution
 //! for later runs, `summary.json` and `report.html`.
 
+#[allow(unused_imports)]
+use super::{note, warn_note, Progress};
 use anyhow::Context;
-use footfall::data::GaitData;
-use footfall::integrate::IntegratorSettings;
-use footfall::model::gait::COORDINATES;
-use footfall::model::{ConstraintSet, GaitModel};
-use footfall::problems::evaluation::{
+use crate::data::GaitData;
+use crate::integrate::IntegratorSettings;
+use crate::model::gait::COORDINATES;
+use crate::model::{ConstraintSet, GaitModel};
+use crate::problems::evaluation::{
     channel_errors, Comparison, FineGridFigures, GaitSolution, Reintegration, LOAD_NAMES,
 };
-use footfall::problems::transient::{force_transients, ForceTransient};
-use footfall::report::body::{BodyAnimation, BodyFrame, Pose};
-use footfall::report::csv::TimeSeries;
-use footfall::report::gait_figures::{phase_legend, ActuatorTraces, ChannelFigures, CycleAxis};
-use footfall::report::html::{Report, Section, Summary, Tone};
-use footfall::report::table::{error_table, Table};
-use footfall::runfolder::RunFolder;
-use footfall::sqp::{SqpResult, SqpStatus};
+use crate::problems::transient::{force_transients, ForceTransient};
+use crate::report::body::{BodyAnimation, BodyFrame, Pose};
+use crate::report::csv::TimeSeries;
+use crate::report::gait_figures::{phase_legend, ActuatorTraces, ChannelFigures, CycleAxis};
+use crate::report::html::{Report, Section, Summary, Tone};
+use crate::report::table::{error_table, Table};
+use crate::runfolder::RunFolder;
+use crate::sqp::{SqpResult, SqpStatus};
 use std::path::PathBuf;
 
 /// Step of the fine re-integration grid (s).
@@ -37,11 +39,11 @@ pub struct GaitRunOutput {
     /// Ground-force transients on the fine grid, strongest first.
     pub transients: Vec<ForceTransient>,
     /// Overall error statistics per channel (name, unit, stats).
-    pub errors: Vec<footfall::report::table::ChannelErrors>,
+    pub errors: Vec<crate::report::table::ChannelErrors>,
     /// Ground forces on the fine grid (None when the re-integration failed).
     pub fine_forces: Option<FineForces>,
     /// Physical validity on the fine grid (None when the re-integration failed).
-    pub validity: Option<footfall::problems::validity::Validity>,
+    pub validity: Option<crate::problems::validity::Validity>,
 }
 
 /// Ground forces of both feet on the fine grid, model and measurement.
@@ -94,12 +96,12 @@ pub struct GaitRun<'a> {
     /// Phase file.
     pub phases_path: &'a std::path::Path,
     /// The phase sequence the problem was built from (for the phase legend).
-    pub sequence: &'a footfall::phases::PhaseSequence,
+    pub sequence: &'a crate::phases::PhaseSequence,
     /// Lower and upper bounds of the controls in the solved problem (to mark a control
     /// held at one).
     pub control_bounds: (&'a [f64], &'a [f64]),
     /// The measured events (heel strikes set each leg's percent of the gait cycle).
-    pub events: &'a footfall::data::events::Events,
+    pub events: &'a crate::data::events::Events,
     /// Solver result.
     pub result: &'a SqpResult,
     /// The solution read from `result.w`.
@@ -168,7 +170,7 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
     };
     let phase_file_names: Vec<String> = sets.iter().map(|s| s.name.clone()).collect();
     let validity = fine_run.as_ref().ok().map(|f| {
-        footfall::problems::validity::check(
+        crate::problems::validity::check(
             model,
             &f.result.samples,
             sets,
@@ -199,7 +201,7 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
 
     let (t0, t1) = sol.span();
     let converged = res.status == SqpStatus::Converged;
-    let interrupted = res.status == footfall::sqp::SqpStatus::Interrupted;
+    let interrupted = res.status == crate::sqp::SqpStatus::Interrupted;
     let invalid = validity.as_ref().is_some_and(|v| !v.is_valid());
     let verdict = match (converged, invalid) {
         (true, false) => "converged",
@@ -231,7 +233,7 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
     let legend = phase_legend(sequence, &sol.phases, &cycle, (t0, t1));
     // the states the figures of the body and the actuators show: the fine grid's, else
     // the nodes'
-    let states: &[footfall::simulate::Sample] = match &fine_run {
+    let states: &[crate::simulate::Sample] = match &fine_run {
         Ok(f) => &f.result.samples,
         Err(_) => &nodes,
     };
@@ -449,7 +451,7 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
         sections,
     };
     // channels without a defined sample in a phase are left out (no nulls)
-    let stat_json = |s: &Option<footfall::report::table::ErrorStats>| {
+    let stat_json = |s: &Option<crate::report::table::ErrorStats>| {
         s.map(|v| serde_json::json!({"mean": v.mean, "sd": v.sd, "max": v.max}))
     };
     let overall = channel_errors(&channels, &cmp, None);
@@ -572,7 +574,7 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
 }
 
 /// The report's account of physical validity on the 1 ms grid.
-fn validity_section(v: &footfall::problems::validity::Validity, check_points: usize) -> Section {
+fn validity_section(v: &crate::problems::validity::Validity, check_points: usize) -> Section {
     let l = &v.limits;
     let mut paragraphs = vec![format!(
         "The solution re-integrated on the 1 ms grid, checked for a normal force below −{} N, a tangential force beyond the friction cone by more than {} N, a primitive not in contact more than {} mm below the ground, and a Baumgarte force above {} N. The contact constraints hold at the shooting nodes and at {check_points} check point(s) between them.",
@@ -604,7 +606,7 @@ fn validity_section(v: &footfall::problems::validity::Validity, check_points: us
         };
         for x in v.violations.iter().take(20) {
             let worst = match x.kind {
-                footfall::problems::validity::ViolationKind::Penetration => {
+                crate::problems::validity::ViolationKind::Penetration => {
                     format!("{:.1} mm", x.amount * 1e3)
                 }
                 _ => format!("{:.1} N", x.amount),
@@ -695,7 +697,7 @@ fn body_animation(
     model: &GaitModel,
     sol: &GaitSolution,
     line: &Comparison,
-    states: &[footfall::simulate::Sample],
+    states: &[crate::simulate::Sample],
     cycle: &CycleAxis,
     window: (f64, f64),
 ) -> BodyAnimation {

@@ -1,40 +1,20 @@
 //! Solve a gait problem until it is physically valid between its nodes: after each
 //! converged solve the solution is re-integrated on a 1 ms grid, and where the ground pulls
 //! a foot, a contact leaves its friction cone or a swing foot enters the floor, check points
-//! ([`footfall::ocp::CheckPoint`]) hold the contact constraints at the worst instants; the
+//! ([`crate::ocp::CheckPoint`]) hold the contact constraints at the worst instants; the
 //! problem is solved again from the last solution, until nothing is broken or no new check
 //! point can be placed.
 
+#[allow(unused_imports)]
+use super::{note, warn_note, Progress};
 use anyhow::{anyhow, Context};
-use footfall::integrate::IntegratorSettings;
-use footfall::model::{ConstraintSet, GaitModel};
-use footfall::ocp::{CheckPoint, Ocp, Transcription};
-use footfall::problems::evaluation::GaitSolution;
-use footfall::problems::gait::{locate_instant, GaitCycle};
-use footfall::problems::validity::{self, ValidityLimits};
-use footfall::sqp::{SqpResult, SqpStatus};
-
-/// The check-point switch shared by `track`, `predict` and `compare`.
-#[derive(Debug, Clone, Default, clap::Args)]
-pub struct CheckPointArgs {
-    /// Solve once and only report the validity on the 1 ms grid, without adding check
-    /// points where a contact constraint breaks between the nodes (a run that breaks one
-    /// still ends `converged, physically invalid`, exit 5).
-    #[arg(long)]
-    no_check_points: bool,
-    /// Add check points where the converged solution's 1 ms re-integration breaks a
-    /// contact constraint, and solve again (up to 6 rounds, while iterations remain): the
-    /// default, kept for scripts that ask for it.
-    #[arg(long, overrides_with = "no_check_points", hide = true)]
-    check_points: bool,
-}
-
-impl CheckPointArgs {
-    /// Whether check points are added.
-    pub fn enabled(&self) -> bool {
-        !self.no_check_points
-    }
-}
+use crate::integrate::IntegratorSettings;
+use crate::model::{ConstraintSet, GaitModel};
+use crate::ocp::{CheckPoint, Ocp, Transcription};
+use crate::problems::evaluation::GaitSolution;
+use crate::problems::gait::{locate_instant, GaitCycle};
+use crate::problems::validity::{self, ValidityLimits};
+use crate::sqp::{SqpResult, SqpStatus};
 
 /// Most rounds of check points after the first solve.
 pub const MAX_ROUNDS: usize = 6;
@@ -82,7 +62,7 @@ impl<'m> Refinement<'_, 'm> {
         initial: &[(usize, usize, f64)],
         w0: &[f64],
         solve: &mut dyn FnMut(&Transcription, &[f64]) -> anyhow::Result<SqpResult>,
-        quiet: bool,
+        progress: &dyn Progress,
     ) -> anyhow::Result<(CheckSites, SqpResult)>
     where
         'm: 'o,
@@ -122,9 +102,9 @@ impl<'m> Refinement<'_, 'm> {
             if new.is_empty() {
                 break;
             }
-            if !quiet {
+            {
                 for v in &found.violations {
-                    eprintln!("between the nodes: {v}");
+                    note!(progress, "between the nodes: {v}");
                 }
                 let at: Vec<String> = new
                     .iter()
@@ -132,7 +112,7 @@ impl<'m> Refinement<'_, 'm> {
                         format!("{} interval {k} τ = {tau:.3}", solution.phases[j].name)
                     })
                     .collect();
-                eprintln!(
+                note!(progress, 
                     "adding {} check point(s) ({}; {} in all) and solving again from this solution",
                     new.len(),
                     at.join(", "),

@@ -1,0 +1,49 @@
+//! Arguments and printing shared by several subcommands.
+
+use footfall::sqp::{IterationRecord, Observer, StderrLog};
+use footfall::workflows::Progress;
+
+/// The check-point switch shared by `track`, `predict` and `compare`.
+#[derive(Debug, Clone, Default, clap::Args)]
+pub struct CheckPointArgs {
+    /// Solve once and only report the validity on the 1 ms grid, without adding check
+    /// points where a contact constraint breaks between the nodes (a run that breaks one
+    /// still ends `converged, physically invalid`, exit 5).
+    #[arg(long)]
+    no_check_points: bool,
+    /// Add check points where the converged solution's 1 ms re-integration breaks a
+    /// contact constraint, and solve again (up to 6 rounds, while iterations remain): the
+    /// default, kept for scripts that ask for it.
+    #[arg(long, overrides_with = "no_check_points", hide = true)]
+    check_points: bool,
+}
+
+impl CheckPointArgs {
+    /// Whether check points are added.
+    pub fn enabled(&self) -> bool {
+        !self.no_check_points
+    }
+}
+
+/// Progress printed to stderr: news and the SQP's iteration table unless `--quiet`,
+/// warnings always.
+pub struct CliProgress {
+    /// Print only warnings.
+    pub quiet: bool,
+}
+
+impl Progress for CliProgress {
+    fn note(&self, text: &str) {
+        if !self.quiet {
+            eprintln!("{text}");
+        }
+    }
+    fn warn(&self, text: &str) {
+        eprintln!("{text}");
+    }
+    fn iteration(&self, rec: &IterationRecord) {
+        if !self.quiet {
+            StderrLog.iteration(rec);
+        }
+    }
+}

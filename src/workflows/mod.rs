@@ -1,0 +1,215 @@
+//! The user's workflows as library calls: track, predict, compare, synth and diagnose
+//! (and the report of a run), each taking a setup struct and returning a result struct,
+//! reporting progress through a [`Progress`] observer, and writing run folders through one
+//! writer ([`run_folder`]). The command line (`src/cli/`) parses arguments into these
+//! structs, prints what the observer receives and maps the errors to exit codes.
+//!
+//! Errors are `anyhow` chains whose root says what kind of failure it was: an
+//! [`Unsolved`] solve (with the solver's status), a physically [`Invalid`] solution, or
+//! anything else (bad input, I/O).
+
+pub mod compare;
+pub mod diagnose;
+pub mod predict;
+pub mod refine;
+pub mod report;
+pub mod run_folder;
+pub mod session;
+pub mod synth;
+pub mod track;
+
+use crate::data::GaitData;
+use crate::problems::evaluation::GaitSolution;
+use crate::sqp::{IterationRecord, SqpStatus};
+use anyhow::{bail, Context};
+use std::path::{Path, PathBuf};
+
+pub use session::solve_interruptibly;
+
+/// Where a workflow reports what it is doing.
+///
+/// `Sync`, so that a workflow may report from worker threads.
+pub trait Progress: Sync {
+    /// A line of news: what is being solved, a stage that starts, a result.
+    fn note(&self, text: &str);
+    /// Something the user should see even when news is not wanted (a warning).
+    fn warn(&self, text: &str) {
+        self.note(text)
+    }
+    /// An SQP iteration (iteration 0 is the starting point).
+    fn iteration(&self, _rec: &IterationRecord) {}
+}
+
+/// Progress that goes nowhere (warnings included).
+pub struct Quiet;
+
+impl Progress for Quiet {
+    fn note(&self, _text: &str) {}
+}
+
+/// Only the warnings of another progress (for a step whose news would repeat the
+/// caller's).
+pub struct WarningsOnly<'a>(pub &'a dyn Progress);
+
+impl Progress for WarningsOnly<'_> {
+    fn note(&self, _text: &str) {}
+    fn warn(&self, text: &str) {
+        self.0.warn(text)
+    }
+}
+
+/// Progress kept in memory: notes, warnings and iterations, in order (for tests and
+/// notebooks).
+#[derive(Default)]
+pub struct Collected {
+    /// Every note and warning.
+    pub lines: std::sync::Mutex<Vec<String>>,
+    /// Every SQP iteration.
+    pub iterations: std::sync::Mutex<Vec<IterationRecord>>,
+}
+
+impl Progress for Collected {
+    fn note(&self, text: &str) {
+        self.lines
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .push(text.to_string());
+    }
+    fn iteration(&self, rec: &IterationRecord) {
+        self.iterations
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .push(rec.clone());
+    }
+}
+
+/// A formatted note to a [`Progress`].
+macro_rules! note {
+    ($p:expr, $($t:tt)*) => {
+        $p.note(&format!($($t)*))
+    };
+}
+/// A formatted warning to a [`Progress`].
+macro_rules! warn_note {
+    ($p:expr, $($t:tt)*) => {
+        $p.warn(&format!($($t)*))
+    };
+}
+pub(crate) use {note, warn_note};
+
+/// The foot file of a foot argument: `ellipse`, `double-circle` or a file.
+pub fn foot_path(arg: &str) -> PathBuf {
+    match arg {
+        "ellipse" => PathBuf::from("models/feet/ellipse.json"),
+        "double-circle" | "double_circle" => PathBuf::from("models/feet/double_circle.json"),
+        other => PathBuf::from(other),
+    }
+}
+
+/// The default phase file of a foot argument.
+pub fn default_phases(foot: &str) -> PathBuf {
+    match foot {
+        "double-circle" | "double_circle" => PathBuf::from("phases/double_circle_walk.json"),
+        _ => PathBuf::from("phases/ellipse_walk.json"),
+    }
+}
+
+/// A solution from a run folder (`solution.json` inside) or a solution file.
+pub fn read_solution(path: &Path) -> anyhow::Result<GaitSolution> {
+    if !path.exists() {
+        bail!("{}: no such run folder or solution file (give a track or predict run folder, or its solution.json)", path.display());
+    }
+    let file = if path.is_dir() {
+        path.join("solution.json")
+    } else {
+        path.to_path_buf()
+    };
+    let text = std::fs::read_to_string(&file)
+        .with_context(|| format!("reading the initial solution {}", file.display()))?;
+    serde_json::from_str(&text).with_context(|| {
+        format!(
+            "{}: not a footfall solution (expected the solution.json of a track or predict run)",
+            file.display()
+        )
+    })
+}
+
+/// Measured data from a sagittal CSV (moved overground when its meta file gives a belt
+/// speed), or the bundled trial; its units and conventions checked
+/// ([`GaitData::check_conventions`]; `overground`: take a trial without a belt speed as
+/// it is).
+pub fn load_data(path: Option<&Path>, overground: bool) -> anyhow::Result<GaitData> {
+    let data = match path {
+        Some(p) => {
+            let d = crate::data::read_sagittal_csv(p)?;
+            match d.belt_speed {
+                Some(v) if !d.overground => d.to_overground(v)?,
+                _ => d,
+            }
+        }
+        None => GaitData::bundled(Path::new("."))?,
+    };
+    data.check_conventions(overground)?;
+    Ok(data)
+}
+
+/// A converged solution that breaks physics on the 1 ms grid (exit 5).
+#[derive(Debug, thiserror::Error)]
+#[error("{message}")]
+pub struct Invalid {
+    /// What to print.
+    pub message: String,
+}
+
+impl Invalid {
+    /// The error of a written gait run that converged but is physically invalid.
+    pub fn check(out: &run_folder::GaitRunOutput) -> anyhow::Result<()> {
+        match &out.validity {
+            Some(v) if !v.is_valid() => Err(Invalid {
+                message: format!(
+                    "converged, physically invalid: {} (results written to {})",
+                    v.violations
+                        .iter()
+                        .map(|x| x.to_string())
+                        .collect::<Vec<_>>()
+                        .join("; "),
+                    out.path.display()
+                ),
+            }
+            .into()),
+            _ => Ok(()),
+        }
+    }
+}
+
+/// A solve that stopped without converging; its status picks the exit code.
+#[derive(Debug, thiserror::Error)]
+#[error("{message}")]
+pub struct Unsolved {
+    /// Why the solver stopped.
+    pub status: SqpStatus,
+    /// Whether it stopped at the initial point, before any iteration.
+    pub at_start: bool,
+    /// What to print.
+    pub message: String,
+}
+
+impl Unsolved {
+    /// The error of a solve that ended with `res` (None when it converged); `written`
+    /// names the run folder.
+    pub fn check(res: &crate::sqp::SqpResult, written: &std::path::Path) -> anyhow::Result<()> {
+        if res.status == SqpStatus::Converged {
+            return Ok(());
+        }
+        Err(Unsolved {
+            status: res.status.clone(),
+            at_start: res.history.is_empty(),
+            message: format!(
+                "the solver stopped without converging: {} (results written to {})",
+                res.status,
+                written.display()
+            ),
+        }
+        .into())
+    }
+}

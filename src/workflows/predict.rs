@@ -1,0 +1,306 @@
+//! The prediction workflow: the gait the model prefers (seed 001 §3.5): minimum activation
+//! plus impulses, at the subject's step length and speed, started from a tracking solution.
+
+#[allow(unused_imports)]
+use super::{note, warn_note, Progress};
+use super::run_folder::{GaitRun, GaitRunOutput, DEFAULT_TRANSIENT_THRESHOLD_N};
+use anyhow::{anyhow, bail, Context};
+use crate::integrate::IntegratorSettings;
+use crate::model::GaitModel;
+use crate::ocp::Transcription;
+use crate::phases::PhaseSequence;
+use crate::problems::evaluation::GaitSolution;
+use crate::problems::gait::GaitCycle;
+use crate::problems::predict::{PredictionSettings, PredictionSetup, SEED_IMPULSE_WEIGHT};
+use crate::problems::track::TrackingSetup;
+use crate::report::html::Section;
+use crate::runfolder::RunFolder;
+use crate::sqp::{ExactConvexification, HessianMode, SqpResult, SqpSettings, SqpStatus};
+use std::path::{Path, PathBuf};
+
+/// How to predict: the model, data, targets and solver settings of a prediction (the
+/// `predict` and `compare` commands fill it from their arguments).
+#[derive(Debug, Clone)]
+pub struct PredictionOptions {
+    /// Add check points where the 1 ms re-integration breaks a contact constraint, and
+    /// solve again.
+    pub check_points: bool,
+    /// Model file.
+    pub model: PathBuf,
+    /// Sagittal CSV (None: the bundled trial).
+    pub data: Option<PathBuf>,
+    /// Take a trial whose meta file gives no belt speed as overground.
+    pub overground: bool,
+    /// Step length (m; None: the subject's).
+    pub step_length: Option<f64>,
+    /// Average forward speed (m/s; None: the subject's).
+    pub speed: Option<f64>,
+    /// Impulse weight w_Δ of eq. 21.
+    pub impulse_weight: f64,
+    /// Bound on |ankle angular velocity| (rad/s; None: the data's range ± 1 rad/s).
+    pub ankle_velocity_limit: Option<f64>,
+    /// Hessian of the SQP.
+    pub hessian: HessianMode,
+    /// KKT tolerance.
+    pub tol: f64,
+    /// Relative and absolute CVODES tolerance.
+    pub integrator_tol: f64,
+    /// With the exact Hessian: Gauss–Newton steps until the violation is below this.
+    pub exact_below: f64,
+    /// Iteration limit.
+    pub max_iter: usize,
+    /// Wall-time limit per solve (s).
+    pub max_time: Option<f64>,
+    /// Report ground-force excursions above the measurement larger than this (N).
+    pub transient_threshold: f64,
+}
+
+impl Default for PredictionOptions {
+    /// The `predict` command's defaults.
+    fn default() -> Self {
+        Self {
+            check_points: true,
+            model: PathBuf::from("models/opensim_subject01.json"),
+            data: None,
+            overground: false,
+            step_length: None,
+            speed: None,
+            impulse_weight: SEED_IMPULSE_WEIGHT,
+            ankle_velocity_limit: None,
+            hessian: HessianMode::Exact,
+            tol: 1e-5,
+            integrator_tol: 1e-8,
+            exact_below: f64::INFINITY,
+            max_iter: 300,
+            max_time: None,
+            transient_threshold: DEFAULT_TRANSIENT_THRESHOLD_N,
+        }
+    }
+}
+
+/// The outcome lines of a written gait run: its error table, the solver's stop, the
+/// largest ground-force transient and where the report is.
+pub fn outcome_text(out: &GaitRunOutput, res: &SqpResult) -> String {
+    let mut text = format!(
+        "{}\n{}: J = {:.6}, KKT {:.2e}, {} iterations, {:.1} s\n",
+        out.table.to_markdown(),
+        res.status,
+        res.objective,
+        res.kkt,
+        res.history.len().saturating_sub(1),
+        res.seconds
+    );
+    text += &match out.transients.first() {
+        Some(t) => format!(
+            "largest ground-force transient: {} {} force {:.1} N at {:.3} s ({}), {:.1} N above the measurement for {:.1} ms",
+            t.foot, t.component, t.peak_n, t.t_peak, t.phase, t.excess_n, 1e3 * t.duration_s
+        ),
+        None => "no ground-force transient above the threshold on the 1 ms grid".to_string(),
+    };
+    text += &format!("\nreport: {}", out.path.join("report.html").display());
+    text
+}
+
+/// The error of a written gait run that did not converge ([`Unsolved`](super::Unsolved))
+/// or breaks physics on the 1 ms grid ([`Invalid`](super::Invalid)).
+pub fn check_outcome(out: &GaitRunOutput, res: &SqpResult) -> anyhow::Result<()> {
+    super::Unsolved::check(res, &out.path)?;
+    super::Invalid::check(out)?;
+    Ok(())
+}
+
+/// A solution from a run folder (`solution.json` inside) or a solution file.
+pub fn read_solution(path: &Path) -> anyhow::Result<GaitSolution> {
+    if !path.exists() {
+        bail!("{}: no such run folder or solution file (give a track or predict run folder, or its solution.json)", path.display());
+    }
+    let file = if path.is_dir() {
+        path.join("solution.json")
+    } else {
+        path.to_path_buf()
+    };
+    let text = std::fs::read_to_string(&file)
+        .with_context(|| format!("reading the initial solution {}", file.display()))?;
+    serde_json::from_str(&text).with_context(|| {
+        format!(
+            "{}: not a footfall solution (expected the solution.json of a track or predict run)",
+            file.display()
+        )
+    })
+}
+
+/// The default phase file of a foot argument.
+pub fn default_phases(foot: &str) -> PathBuf {
+    match foot {
+        "double-circle" | "double_circle" => PathBuf::from("phases/double_circle_walk.json"),
+        _ => PathBuf::from("phases/ellipse_walk.json"),
+    }
+}
+
+/// Solve one prediction and write its run folder.
+pub fn predict(
+    o: &PredictionOptions,
+    foot: &str,
+    phases: Option<&Path>,
+    init: Option<&GaitSolution>,
+    folder: RunFolder,
+    progress: &dyn Progress,
+) -> anyhow::Result<(GaitRunOutput, SqpResult)> {
+    let foot_path = super::foot_path(foot);
+    let model = GaitModel::load(&o.model, &foot_path)?;
+    let phases = phases
+        .map(Path::to_path_buf)
+        .unwrap_or_else(|| default_phases(foot));
+    let seq = PhaseSequence::load(&phases)?;
+    let sets = seq.resolve(&model, &phases)?;
+    let data = super::load_data(o.data.as_deref(), o.overground)?;
+    let tracking = TrackingSetup::new(&model, &seq, &sets, &data)
+        .map_err(|e| anyhow!("{}: {e}", data.source.display()))?;
+    let mut settings = PredictionSettings::from_data(&tracking, &data);
+    settings.step_length = o.step_length.unwrap_or(settings.step_length);
+    settings.speed = o.speed.unwrap_or(settings.speed);
+    settings.impulse_weight = o.impulse_weight;
+    settings.ankle_velocity_limit = o.ankle_velocity_limit;
+    let setup = match init {
+        Some(sol) => PredictionSetup::from_solution(&seq, &tracking, sol, settings.clone()),
+        None => PredictionSetup::from_data(&seq, &tracking, settings.clone()),
+    }
+    .map_err(|e| anyhow!("{}: {e}", phases.display()))?;
+    let cycle = GaitCycle::new(&model, &setup.seq, &sets).map_err(|e| anyhow!(e))?;
+    let integrator = IntegratorSettings {
+        rtol: o.integrator_tol,
+        atol: o.integrator_tol,
+        ..Default::default()
+    };
+    integrator.validate().context("--integrator-tol")?;
+    let build = || {
+        setup
+            .ocp(&cycle, &model, &sets, integrator.clone())
+            .map_err(|e| anyhow!(e))
+    };
+    let ocp = build()?;
+    let tr = Transcription::new(&ocp).context("transcribing the prediction problem")?;
+    let (_, _, w0) = tr.variable_bounds_and_guess();
+    let hessian = o.hessian.into();
+    let sqp_settings = SqpSettings {
+        tol_kkt: o.tol,
+        max_iter: o.max_iter,
+        max_time: o.max_time,
+        hessian,
+        exact_hessian_below: o.exact_below,
+        exact_convexification: ExactConvexification::InertiaCorrection,
+        ..Default::default()
+    };
+    {
+        note!(progress, 
+            "predicting with the {} foot: step length {:.3} m, speed {:.3} m/s, w_Δ = {}{} ({} variables, {} constraints, {:?}, from {})",
+            model.foot_name,
+            settings.step_length,
+            settings.speed,
+            settings.impulse_weight,
+            settings.ankle_velocity_limit.map_or(String::new(), |w| format!(", |ankle ω| ≤ {w} rad/s")),
+            tr.n(),
+            tr.m(),
+            hessian,
+            if init.is_some() { "the given solution" } else { "the data" }
+        );
+    }
+    let refinement = super::refine::Refinement {
+        cycle: &cycle,
+        model: &model,
+        sets: &sets,
+        integrator: integrator.clone(),
+        t0: tracking.window.0,
+        enabled: o.check_points,
+        max_iter: sqp_settings.max_iter,
+    };
+    // a failed line search of the exact Hessian goes on once from that iterate with block
+    // BFGS. Near a stationary point the inertia correction can shift the QP's Hessian by
+    // far more than its curvature, and the QP's step and multipliers with it: the CI's
+    // double-circle prediction stalled at KKT 3.7e-3 with steps of 1e-5, its integrator at
+    // 1e-10 or 1e-12, where block BFGS certifies the same point at KKT 2.4e-7 at once
+    let solve_staged = |tr: &Transcription, w: &[f64]| -> anyhow::Result<SqpResult> {
+        let first = super::solve_interruptibly(tr, w, &sqp_settings, progress)?;
+        if first.status != SqpStatus::LineSearchFailure
+            || sqp_settings.hessian != HessianMode::Exact
+        {
+            return Ok(first);
+        }
+        {
+            note!(progress, 
+                "line search failed at KKT {:.2e} with the exact Hessian: going on from there with block BFGS",
+                first.kkt
+            );
+        }
+        let used = first.history.len().saturating_sub(1);
+        let rest = SqpSettings {
+            max_iter: sqp_settings.max_iter.saturating_sub(used),
+            max_time: sqp_settings.max_time.map(|t| (t - first.seconds).max(0.0)),
+            hessian: HessianMode::Bfgs,
+            ..sqp_settings.clone()
+        };
+        let second = super::solve_interruptibly(tr, &first.w, &rest, progress)?;
+        Ok(super::track::merge_stages(first, second))
+    };
+    let (sites, res) =
+        refinement.solve(&build, &[], &w0, &mut |tr, w| solve_staged(tr, w), progress)?;
+    let mut ocp = build()?;
+    ocp.checks = refinement.checks(&sites);
+    let tr = Transcription::new(&ocp).context("transcribing the prediction problem")?;
+    let solution = GaitSolution::from_nlp(&tr, &res.w, &cycle.continuous, tracking.window.0);
+    let durations: Vec<String> = solution
+        .phases
+        .iter()
+        .map(|p| format!("{} {:.3} s", p.name, p.duration))
+        .collect();
+    let mut extra_json = serde_json::Map::new();
+    extra_json.insert("prediction".into(), serde_json::to_value(&settings)?);
+    extra_json.insert(
+        "durations_s".into(),
+        solution
+            .phases
+            .iter()
+            .map(|p| serde_json::json!({"phase": p.name, "duration": p.duration}))
+            .collect(),
+    );
+    let out = super::run_folder::write(
+        GaitRun {
+            command: "predict",
+            title: format!("footfall prediction — {} foot, {}", model.foot_name, data.name),
+            data: &data,
+            model: &model,
+            sets: &sets,
+            phases_path: &phases,
+            events: &tracking.events,
+            sequence: &setup.seq,
+            control_bounds: (&setup.guess.u_lb, &setup.guess.u_ub),
+            result: &res,
+            solution: &solution,
+            integrator,
+            extra_summary: vec![
+                ("targets".into(), format!("step length {:.3} m, speed {:.3} m/s", settings.step_length, settings.speed)),
+                ("phase durations".into(), durations.join(", ")),
+            ],
+            extra_json,
+            extra_sections: vec![Section {
+                heading: "Problem".into(),
+                paragraphs: vec![format!(
+                    "Minimum ∫Σa² dt (eq. 20) plus w_Δ ΣΔ² with w_Δ = {} (eq. 21), at step length {:.3} m and average speed {:.3} m/s{}; started from {}. The errors above compare the predicted gait with the measurement in the layout of seed Table 4.",
+                    settings.impulse_weight,
+                    settings.step_length,
+                    settings.speed,
+                    settings.ankle_velocity_limit.map_or(String::new(), |w| format!(", ankle angular velocity bounded by {w} rad/s")),
+                    if init.is_some() { "the given solution" } else { "the data" }
+                )],
+                tables: vec![],
+                svgs: vec![],
+            }],
+            extra_files: vec![],
+            friction: cycle.friction(),
+            check_points: sites.len(),
+            transient_threshold_n: o.transient_threshold,
+        },
+        folder,
+    )?;
+    Ok((out, res))
+}

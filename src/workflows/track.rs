@@ -1,0 +1,1000 @@
+//! The tracking workflow: track measured walking with the model (seed 001 §3.4), solve
+//! until valid between the nodes, and write the run folder.
+
+use super::run_folder::GaitRun;
+use super::{note, warn_note, Progress};
+use anyhow::{anyhow, Context};
+use crate::integrate::IntegratorSettings;
+use crate::model::effects::EffectSpec;
+use crate::model::GaitModel;
+use crate::ocp::Transcription;
+use crate::phases::PhaseSequence;
+use crate::problems::diagnose::{parameter_sd, IdentifiedParameter, TrackingRunSetup};
+use crate::problems::evaluation::GaitSolution;
+use crate::problems::gait::GaitCycle;
+use crate::problems::track::{TargetSides, TrackingSetup};
+use crate::runfolder::RunFolder;
+use crate::sqp::{ExactConvexification, HessianMode, SqpSettings, SqpStatus};
+use std::path::PathBuf;
+
+/// CVODES tolerance of the states of problems with a compliant heel pad or residual
+/// actuators: at 1e-8 integration noise stalls the line search (a pad near KKT 2e-4; the
+/// bundled trial with residual actuators at KKT 3.2e-5 after 103 iterations, where 1e-10
+/// converges in 38). With a pad the sensitivities keep the run's tolerance: at 1e-10 they
+/// cost 37–46 % of a pad re-fit's time (`diagnose` on the 100 Hz sample-target trials:
+/// the padded one's re-fit reaches the same optimum in the same 22 iterations, 90 → 57 s;
+/// the no-effect one's in 43 instead of 49, 177 → 96 s). With residual actuators they
+/// stay at 1e-10: the KKT residual is computed from them, and at 1e-8 the bundled trial's
+/// residual fit reaches the same J but stalls at KKT 2.4e-5.
+pub const PADDED_INTEGRATOR_TOL: f64 = 1e-10;
+
+/// Force (N) or torque (N·m) of a residual actuator per unit control.
+pub const RESIDUAL_SCALE: f64 = 100.0;
+
+/// The residual actuators' profiles at the nodes (plots, phases shaded), their RMS and
+/// peak values (N or N·m) and how often they sit on their bounds, for a model that has
+/// them.
+fn residual_report(
+    model: &GaitModel,
+    sol: &GaitSolution,
+) -> Option<(crate::report::html::Section, serde_json::Value)> {
+    use crate::report::plot::{LinePlot, LineStyle, Series, Span};
+    let uses = crate::problems::evaluation::residual_use(model, sol);
+    if uses.is_empty() {
+        return None;
+    }
+    let spans: Vec<Span> = sol
+        .phase_spans()
+        .iter()
+        .map(|p| Span::new(p.t0, p.t1, p.name.clone()))
+        .collect();
+    let mut forces = LinePlot::new("Residual forces on the pelvis", "time (s)", "force (N)");
+    let mut torques = LinePlot::new("Residual torques", "time (s)", "torque (N·m)");
+    for r in &uses {
+        let p = if r.unit == "N" {
+            &mut forces
+        } else {
+            &mut torques
+        };
+        p.series.push(Series::new(
+            r.name.trim_end_matches("_residual").replace('_', " "),
+            r.times.clone(),
+            r.values.clone(),
+            LineStyle::Solid,
+        ));
+    }
+    forces.shaded = spans.clone();
+    torques.shaded = spans;
+    let rows = uses
+        .iter()
+        .map(|r| {
+            vec![
+                r.name.clone(),
+                format!("{:.2}", r.rms),
+                format!("{:.2}", r.peak),
+                format!("±{}", r.bound),
+                format!("{:.0}", 100.0 * r.at_bound_fraction),
+                r.unit.to_string(),
+            ]
+        })
+        .collect();
+    let table = crate::report::table::Table {
+        title: "Residual actuators at the nodes".into(),
+        headers: [
+            "residual",
+            "RMS",
+            "peak |·|",
+            "bound",
+            "% of nodes at the bound",
+            "unit",
+        ]
+        .map(String::from)
+        .to_vec(),
+        rows,
+    };
+    let mut paragraphs = vec!["What the model needs beyond its own actuators to follow the data, and when: residual forces on the pelvis translations and torques on the pelvis tilt and the joints, at the shooting nodes.".to_string()];
+    let saturated: Vec<&str> = uses
+        .iter()
+        .filter(|r| r.at_bound_fraction > 0.0)
+        .map(|r| r.name.as_str())
+        .collect();
+    if !saturated.is_empty() {
+        paragraphs.push(format!(
+            "{} of {} residuals reach their bound ({}): where they do, the model needs more than the residual may give, so the profile is a lower bound of what is missing and the tracking error there carries the rest.",
+            saturated.len(),
+            uses.len(),
+            saturated.join(", ")
+        ));
+    }
+    let stats = serde_json::to_value(&uses).unwrap_or_default();
+    Some((
+        crate::report::html::Section {
+            heading: "Residual actuators".into(),
+            paragraphs,
+            tables: vec![table],
+            svgs: vec![forces.to_svg(), torques.to_svg()],
+        },
+        stats,
+    ))
+}
+
+/// The parts of a tracking problem that do not borrow each other.
+pub struct TrackingProblem {
+    /// The model with the run's effects and parameter values.
+    pub model: GaitModel,
+    /// Contact set of every phase of the phase file.
+    pub sets: Vec<crate::model::ConstraintSet>,
+    /// The measurement.
+    pub data: crate::data::GaitData,
+    /// Targets, weights, events and the initial guess.
+    pub setup: TrackingSetup,
+    /// The phase file.
+    pub phases: PathBuf,
+    /// The shooting intervals' integrator.
+    pub integrator: IntegratorSettings,
+    /// Check points the problem has from the start (those of the run it was rebuilt from).
+    pub check_sites: super::refine::CheckSites,
+    /// Whether a solve adds check points where the solution breaks a contact constraint
+    /// between the nodes.
+    pub refine: bool,
+    /// Integrator counters of every solve of this problem so far (all stages and
+    /// refinement rounds), written to `summary.json` as `integration`.
+    pub integration: std::cell::Cell<crate::integrate::IntegrationStats>,
+}
+
+impl TrackingProblem {
+    /// Rebuild the problem a run describes, with `extra` effects added (parameters free
+    /// at their values) and the run's identified parameter values. The run's values
+    /// only start free parameters; a fixed one keeps the value its effect gives (a fixed
+    /// parameter does not move, so a run's value of it is its effect's — except for
+    /// `extra`: `--effect trunk_mass:added_mass=4,com_offset=0.03,free=` with `--init` of
+    /// a run that identified other values holds 4 kg and 0.03 m).
+    pub fn build(run: &TrackingRunSetup, extra: &[EffectSpec]) -> anyhow::Result<Self> {
+        let foot_path = super::foot_path(&run.foot);
+        let mut effects = run.effects.clone();
+        effects.extend(extra.iter().cloned());
+        let mut model = GaitModel::load_with_effects(&run.model, &foot_path, &effects)?;
+        if run.residual_actuators {
+            model = model.with_residual_actuators(RESIDUAL_SCALE, RESIDUAL_SCALE);
+        }
+        for p in &run.parameters {
+            // a free parameter the run knew is started at its value (one the model lacks
+            // or holds fixed is left as it is)
+            if model
+                .parameters()
+                .iter()
+                .any(|q| q.name == p.name && q.free)
+            {
+                model
+                    .set_parameter_value(&p.name, p.value)
+                    .map_err(|e| anyhow!(e))?;
+            }
+        }
+        let seq = PhaseSequence::load(&run.phases)?;
+        let sets = seq.resolve(&model, &run.phases)?;
+        let mut data = super::load_data(run.data.as_deref(), run.overground)?;
+        let sides = if run.one_sided_targets {
+            TargetSides::OneSided {
+                cutoff_hz: run.kinematics_cutoff,
+            }
+        } else if run.sample_targets {
+            TargetSides::Samples
+        } else {
+            TargetSides::Interpolated
+        };
+        if let Some(fc) = run.kinematics_cutoff {
+            // one-sided targets filter segment by segment (the same sampling and cutoff checks)
+            if run.one_sided_targets {
+                data.kinematics_filter_rate(fc)
+                    .context("--kinematics-cutoff")?;
+            } else {
+                data = data
+                    .low_pass_kinematics(fc)
+                    .context("--kinematics-cutoff")?;
+            }
+        }
+        let mut setup = TrackingSetup::new_with_sides(&model, &seq, &sets, &data, sides)
+            .map_err(|e| anyhow!("{}: {e}", data.source.display()))?;
+        if run.track_pelvis_position {
+            setup.weights = setup.weights.clone().with_pelvis_position();
+        }
+        if let Some(noise) = &run.noise_weights {
+            setup.weights = setup.weights.clone().with_noise_weights(noise);
+        }
+        if let Some(w) = run.regularisation {
+            if !(w.is_finite() && w >= 0.0) {
+                return Err(anyhow!(
+                    "--regularisation {w}: expected a finite weight ≥ 0 (the seed's is 1e-3)"
+                ));
+            }
+            setup.weights.excitation = w;
+            setup.weights.activation = w;
+        }
+        if let Some(v) = run.velocity_weight {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(anyhow!("--velocity-weight {v}: expected a finite weight ≥ 0 relative to the angles' (the seed's is 0.1)"));
+            }
+            setup.weights = setup.weights.clone().with_velocity_weight(v);
+        }
+        // a pad (from the model file or `extra`) or residual actuators need a tighter tolerance
+        let stiff =
+            run.residual_actuators || (0..model.contacts.len()).any(|c| model.is_compliant(c));
+        let tol = if stiff {
+            run.integrator_tol.min(PADDED_INTEGRATOR_TOL)
+        } else {
+            run.integrator_tol
+        };
+        let sens_tol = run.sensitivity_tol.unwrap_or(if run.residual_actuators {
+            tol
+        } else {
+            run.integrator_tol
+        });
+        let sens_tol = (sens_tol != tol).then_some(sens_tol);
+        let integrator = IntegratorSettings {
+            rtol: tol,
+            atol: tol,
+            sens_tol,
+            ..Default::default()
+        };
+        integrator
+            .validate()
+            .context("--integrator-tol or --sensitivity-tol")?;
+        Ok(Self {
+            model,
+            sets,
+            data,
+            setup,
+            phases: run.phases.clone(),
+            integrator,
+            check_sites: run.check_points.clone(),
+            refine: false,
+            integration: Default::default(),
+        })
+    }
+
+    /// The run description of a solution `theta` of this problem with standard
+    /// deviations `sd` (per θ).
+    pub fn record(
+        &self,
+        base: &TrackingRunSetup,
+        extra: &[EffectSpec],
+        theta: &[f64],
+        sd: &[Option<f64>],
+        check_points: &[(usize, usize, f64)],
+    ) -> TrackingRunSetup {
+        let free = self.model.free_parameters();
+        let parameters = self
+            .model
+            .parameters()
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                let k = free.iter().position(|&f| f == i);
+                IdentifiedParameter {
+                    name: p.name.clone(),
+                    value: k.map_or(p.value, |k| theta[k]),
+                    sd: k.and_then(|k| sd.get(k).copied().flatten()),
+                    unit: p.unit.clone(),
+                    free: p.free,
+                }
+            })
+            .collect();
+        let mut effects = base.effects.clone();
+        effects.extend(extra.iter().cloned());
+        TrackingRunSetup {
+            effects,
+            parameters,
+            integrator_tol: self.integrator.rtol,
+            sensitivity_tol: self.integrator.sens_tol,
+            check_points: check_points.to_vec(),
+            ..base.clone()
+        }
+    }
+}
+
+/// The tracking solver's settings (exact Hessian once nearly feasible, as `track`'s
+/// defaults).
+pub fn tracking_sqp_settings(
+    tol: f64,
+    max_iter: usize,
+    max_time: Option<f64>,
+    hessian: HessianMode,
+    exact_below: f64,
+) -> SqpSettings {
+    SqpSettings {
+        tol_kkt: tol,
+        max_iter,
+        max_time,
+        hessian,
+        exact_hessian_below: exact_below,
+        exact_convexification: ExactConvexification::InertiaCorrection,
+        ..Default::default()
+    }
+}
+
+impl TrackingProblem {
+    /// Start the problem at `start`: its states, controls and free parameters (its
+    /// θ lists the free parameters in the model's order). `diagnose` starts a verifying
+    /// re-fit where the candidate's truncated re-fit got to.
+    pub fn start_at(&mut self, start: &GaitSolution) -> anyhow::Result<()> {
+        self.setup.start_from(start).map_err(|e| anyhow!(e))?;
+        let names: Vec<String> = self
+            .model
+            .free_parameters()
+            .iter()
+            .map(|&i| self.model.parameters()[i].name.clone())
+            .collect();
+        for (name, &v) in names.iter().zip(&start.theta) {
+            self.model
+                .set_parameter_value(name, v)
+                .map_err(|e| anyhow!(e))?;
+        }
+        Ok(())
+    }
+
+    /// Run `f` on the problem's transcription, its walking cycle and its initial point
+    /// (the guess: the data, or the solution it was started from).
+    pub fn with_transcription<R>(
+        &self,
+        f: impl FnOnce(&Transcription, &GaitCycle, Vec<f64>) -> anyhow::Result<R>,
+    ) -> anyhow::Result<R> {
+        let cycle =
+            GaitCycle::new(&self.model, &self.setup.seq, &self.sets).map_err(|e| anyhow!(e))?;
+        let mut ocp = self
+            .setup
+            .ocp(&cycle, &self.model, &self.sets, self.integrator.clone())
+            .map_err(|e| anyhow!(e))?;
+        ocp.checks = self.checks(&cycle);
+        let tr = Transcription::new(&ocp).context("transcribing the tracking problem")?;
+        let (_, _, w0) = tr.variable_bounds_and_guess();
+        f(&tr, &cycle, w0)
+    }
+
+    /// Solve the problem (interruptibly, with `progress`) and read its
+    /// solution.
+    pub fn solve(
+        &self,
+        settings: &SqpSettings,
+        progress: &dyn Progress,
+    ) -> anyhow::Result<(crate::sqp::SqpResult, GaitSolution)> {
+        self.with_transcription(|tr, cycle, w0| {
+            self.solve_staged(tr, cycle, &w0, settings, progress, |tr, res| {
+                let sol =
+                    GaitSolution::from_nlp(tr, &res.w, &cycle.continuous, self.setup.window.0);
+                Ok((res, sol))
+            })
+        })
+    }
+
+    /// Solve on `tr` from `w0` and hand the result, with the transcription it was last
+    /// iterated on, to `finish`. When the line search fails, the solve goes on once from
+    /// that iterate with more precise integration, because near an optimum the
+    /// integrator's error is what stops it:
+    /// - sensitivities looser than the states (a heel pad): at the states' tolerance. The
+    ///   KKT residual is computed from them, so the looser ones can leave an optimum
+    ///   uncertified (a padded 100 Hz trial's re-fit stopped at KKT 2.4e-5 with them at
+    ///   1e-8 and converged at 1e-10 to the same parameters);
+    /// - otherwise states and sensitivities 100× tighter (down to 1e-12): the force-plate
+    ///   clock's re-fit of its hidden-effect trial stalled at J = 0.2988352308, KKT 9.7e-4,
+    ///   with every trial step rejected; restarted at 1e-8 its line search fails at once,
+    ///   at 1e-10 it converges in 8 iterations (KKT 4.9e-7).
+    fn solve_staged<R>(
+        &self,
+        tr: &Transcription,
+        cycle: &GaitCycle,
+        w0: &[f64],
+        settings: &SqpSettings,
+        progress: &dyn Progress,
+        finish: impl FnOnce(&Transcription, crate::sqp::SqpResult) -> anyhow::Result<R>,
+    ) -> anyhow::Result<R> {
+        let first = super::solve_interruptibly(tr, w0, settings, progress);
+        self.count_integration(tr);
+        let first = first?;
+        if first.status != crate::sqp::SqpStatus::LineSearchFailure {
+            return finish(tr, first);
+        }
+        let current = &self.integrator;
+        let (tight, what) = match current.sens_tol.filter(|&t| t > current.rtol) {
+            Some(sens_tol) => (
+                IntegratorSettings { sens_tol: None, ..current.clone() },
+                format!("the sensitivities at {sens_tol:e}: going on from there with them at {:e} (the KKT residual is computed from them)", current.rtol),
+            ),
+            None if current.rtol > TIGHTEST_TOL => {
+                let rtol = (current.rtol * 1e-2).max(TIGHTEST_TOL);
+                let atol = (current.atol * 1e-2).max(TIGHTEST_TOL);
+                let sens_tol = current.sens_tol.map(|t| (t * 1e-2).max(TIGHTEST_TOL));
+                (
+                    IntegratorSettings { rtol, atol, sens_tol, ..current.clone() },
+                    format!("the integrator at {:e}: going on from there at {rtol:e} (integration error stalls a line search near an optimum)", current.rtol),
+                )
+            }
+            None => return finish(tr, first),
+        };
+        let used = first.history.len().saturating_sub(1);
+        {
+            note!(progress, "line search failed at KKT {:.2e} with {what}", first.kkt);
+        }
+        let mut ocp = self
+            .setup
+            .ocp(cycle, &self.model, &self.sets, tight)
+            .map_err(|e| anyhow!(e))?;
+        ocp.checks = self.checks(cycle);
+        let tr2 = Transcription::new(&ocp).context("transcribing the tracking problem")?;
+        let rest = SqpSettings {
+            max_iter: settings.max_iter.saturating_sub(used),
+            max_time: settings.max_time.map(|t| (t - first.seconds).max(0.0)),
+            ..settings.clone()
+        };
+        let second = super::solve_interruptibly(&tr2, &first.w, &rest, progress);
+        self.count_integration(&tr2);
+        finish(&tr2, merge_stages(first, second?))
+    }
+
+    /// Add the integrator counters of `tr`'s evaluations to this problem's.
+    fn count_integration(&self, tr: &Transcription) {
+        let mut total = self.integration.get();
+        total += tr.integration_totals();
+        self.integration.set(total);
+    }
+
+    /// The path constraints at this problem's check points.
+    fn checks<'m>(&self, cycle: &GaitCycle<'m>) -> Vec<crate::ocp::CheckPoint<'m>> {
+        self.check_sites
+            .iter()
+            .flat_map(|&(j, k, tau)| cycle.contact_checks(j, k, tau))
+            .collect()
+    }
+}
+
+/// The tightest integrator tolerance a failed line search moves a tracking solve to.
+const TIGHTEST_TOL: f64 = 1e-12;
+
+/// One result of two solves, the second started where the first stopped: the second's
+/// point and status, the iteration history of both (the second's numbered on, without
+/// its repeated initial point), their times added up.
+pub fn merge_stages(
+    first: crate::sqp::SqpResult,
+    second: crate::sqp::SqpResult,
+) -> crate::sqp::SqpResult {
+    let (used, elapsed) = (first.history.len().saturating_sub(1), first.seconds);
+    let mut history = first.history;
+    history.extend(
+        second
+            .history
+            .iter()
+            .skip(1)
+            .map(|r| crate::sqp::IterationRecord {
+                iter: r.iter + used,
+                seconds: r.seconds + elapsed,
+                ..r.clone()
+            }),
+    );
+    let mut timings = first.timings;
+    timings += second.timings;
+    crate::sqp::SqpResult {
+        history,
+        timings,
+        seconds: first.seconds + second.seconds,
+        ..second
+    }
+}
+
+/// The cost-share table (channel × phase, % of J), the normalised-error table (channel ×
+/// phase) and the worst windows.
+pub fn cost_tables(
+    b: &crate::problems::track::CostBreakdown,
+) -> (
+    crate::report::table::Table,
+    crate::report::table::Table,
+    crate::report::table::Table,
+) {
+    use crate::report::table::Table;
+    let total = b.total().max(f64::MIN_POSITIVE);
+    let mut order: Vec<usize> = (0..b.channels.len()).collect();
+    let sums: Vec<f64> = b.cost.iter().map(|per| per.iter().sum()).collect();
+    order.sort_by(|&x, &y| sums[y].total_cmp(&sums[x]));
+    let mut headers = vec!["channel".to_string(), "% of J".into()];
+    headers.extend(b.phases.iter().map(|p| format!("{p} %")));
+    let share = Table {
+        title: "Share of the tracking cost per channel and phase".into(),
+        headers,
+        rows: order
+            .iter()
+            .map(|&c| {
+                let mut row = vec![
+                    b.channels[c].clone(),
+                    format!("{:.1}", 100.0 * sums[c] / total),
+                ];
+                row.extend(
+                    b.cost[c]
+                        .iter()
+                        .map(|v| format!("{:.1}", 100.0 * v / total)),
+                );
+                row
+            })
+            .collect(),
+    };
+    let rms = b.normalised_rms();
+    let mut headers = vec!["channel".to_string(), "all".into()];
+    headers.extend(b.phases.iter().cloned());
+    let normalised = Table {
+        title: "Normalised error per channel and phase (RMS of the weighted residual)".into(),
+        headers,
+        rows: order
+            .iter()
+            .map(|&c| {
+                let n: usize = b.rows[c].iter().sum();
+                let mut row = vec![
+                    b.channels[c].clone(),
+                    if n > 0 {
+                        format!("{:.4}", (sums[c] / n as f64).sqrt())
+                    } else {
+                        "—".into()
+                    },
+                ];
+                row.extend(
+                    rms[c]
+                        .iter()
+                        .map(|v| v.map_or("—".into(), |v| format!("{v:.4}"))),
+                );
+                row
+            })
+            .collect(),
+    };
+    let windows = Table {
+        title: "Worst stretches (five nodes)".into(),
+        headers: [
+            "from (s)",
+            "to (s)",
+            "% of the data cost",
+            "largest channel",
+        ]
+        .map(String::from)
+        .to_vec(),
+        rows: {
+            let data: f64 = b
+                .nodes
+                .iter()
+                .map(|n| n.data)
+                .sum::<f64>()
+                .max(f64::MIN_POSITIVE);
+            b.worst_windows(5, 3)
+                .into_iter()
+                .map(|(t0, t1, v, c)| {
+                    vec![
+                        format!("{t0:.3}"),
+                        format!("{t1:.3}"),
+                        format!("{:.1}", 100.0 * v / data),
+                        c,
+                    ]
+                })
+                .collect()
+        },
+    };
+    (share, normalised, windows)
+}
+
+/// Read a run's `setup.json`.
+pub fn read_run_setup(run: &std::path::Path) -> anyhow::Result<TrackingRunSetup> {
+    let file = if run.is_dir() {
+        run.join("setup.json")
+    } else {
+        run.to_path_buf()
+    };
+    let text = std::fs::read_to_string(&file)
+        .with_context(|| format!("reading {} (a track run folder has one)", file.display()))?;
+    serde_json::from_str(&text)
+        .with_context(|| format!("{}: not a footfall tracking setup", file.display()))
+}
+
+/// Table of effect parameters (identified ones with their standard deviation).
+pub fn parameter_table(params: &[IdentifiedParameter]) -> crate::report::table::Table {
+    crate::report::table::Table {
+        title: "Effect parameters".into(),
+        headers: vec![
+            "parameter".into(),
+            "value".into(),
+            "± sd".into(),
+            "unit".into(),
+            "identified".into(),
+        ],
+        rows: params
+            .iter()
+            .map(|p| {
+                vec![
+                    p.name.clone(),
+                    format!("{:.5}", p.value),
+                    p.sd.map_or("—".into(), |v| format!("{v:.2e}")),
+                    p.unit.clone(),
+                    if p.free { "yes".into() } else { "no".into() },
+                ]
+            })
+            .collect(),
+    }
+}
+
+/// What the tracking workflow solves: the run's description, the effects added to it,
+/// where it starts and how it is solved.
+#[derive(Debug, Clone)]
+pub struct TrackRequest {
+    /// Model, foot, phases, data and the problem's options (its `parameters` and
+    /// `check_points` come from `init`'s run, when it has a `setup.json`).
+    pub run: TrackingRunSetup,
+    /// Effects added to the model, their free parameters identified.
+    pub effects: Vec<EffectSpec>,
+    /// Start from this solution (a run folder or a `solution.json`; None: the data).
+    pub init: Option<PathBuf>,
+    /// Add check points where the 1 ms re-integration breaks a contact constraint, and
+    /// solve again.
+    pub check_points: bool,
+    /// The solver's settings.
+    pub sqp: SqpSettings,
+    /// Report ground-force excursions above the measurement larger than this (N).
+    pub transient_threshold: f64,
+}
+
+impl TrackRequest {
+    /// The `track` command's defaults for `foot` (`ellipse`, `double-circle` or a foot
+    /// file) on the bundled trial, paths relative to the repository root.
+    pub fn new(foot: &str) -> Self {
+        TrackRequest {
+            run: TrackingRunSetup {
+                model: PathBuf::from("models/opensim_subject01.json"),
+                foot: foot.to_string(),
+                phases: super::default_phases(foot),
+                data: None,
+                overground: false,
+                kinematics_cutoff: None,
+                integrator_tol: 1e-8,
+                sensitivity_tol: None,
+                residual_actuators: false,
+                track_pelvis_position: false,
+                regularisation: None,
+                one_sided_targets: false,
+                sample_targets: false,
+                noise_weights: None,
+                velocity_weight: None,
+                check_points: vec![],
+                effects: vec![],
+                parameters: vec![],
+            },
+            effects: vec![],
+            init: None,
+            check_points: true,
+            sqp: tracking_sqp_settings(1e-5, 200, None, HessianMode::Exact, 1e-3),
+            transient_threshold: super::run_folder::DEFAULT_TRANSIENT_THRESHOLD_N,
+        }
+    }
+}
+
+/// Track: build the problem `req` describes, solve it (with check points until valid
+/// between the nodes, if asked) and write its run folder into `folder`. A solve that
+/// does not converge or stays physically invalid is still written; [`check_tracked`]
+/// turns it into an error.
+pub fn track(
+    req: &TrackRequest,
+    folder: RunFolder,
+    progress: &dyn Progress,
+) -> anyhow::Result<TrackedRun> {
+    let mut base = req.run.clone();
+    let init = match &req.init {
+        Some(p) => {
+            let sol = super::read_solution(p)?;
+            if p.is_dir() && p.join("setup.json").exists() {
+                let from = read_run_setup(p)?;
+                base.parameters = from.parameters;
+                base.check_points = from.check_points;
+            }
+            Some(sol)
+        }
+        None => None,
+    };
+    let mut prob = TrackingProblem::build(&base, &req.effects)?;
+    prob.refine = req.check_points;
+    base.check_points.clear();
+    if prob.integrator.rtol < base.integrator_tol {
+        let why = if base.residual_actuators {
+            "residual actuators"
+        } else {
+            "the heel pad's stiff dynamics"
+        };
+        progress.note(&format!("{why}: integrator tolerance of the states {:e} → {:e} (integration noise stalls the line search at 1e-8), of the sensitivities {:e}", base.integrator_tol, prob.integrator.rtol, prob.integrator.sens_tol.unwrap_or(prob.integrator.rtol)));
+    }
+    if let (Some(sol), Some(p)) = (&init, &req.init) {
+        prob.setup
+            .start_from(sol)
+            .map_err(|e| anyhow!("--init {}: {e}", p.display()))?;
+    }
+    base.parameters.clear();
+    prob.solve_and_write(
+        &base,
+        &req.effects,
+        &req.sqp,
+        folder,
+        req.transient_threshold,
+        progress,
+    )
+}
+
+/// The error of a written tracking run that did not converge
+/// ([`Unsolved`](super::Unsolved)) or breaks physics on the 1 ms grid
+/// ([`Invalid`](super::Invalid)).
+pub fn check_tracked(run: &TrackedRun) -> anyhow::Result<()> {
+    super::Unsolved::check(&run.result, &run.output.path)?;
+    super::Invalid::check(&run.output)
+}
+
+impl TrackingProblem {
+    /// Solve the problem and write its run folder (`setup.json` records the effects and
+    /// the identified parameters with their uncertainty). `base` describes the run
+    /// without `extra` effects.
+    pub fn solve_and_write(
+        &self,
+        base: &TrackingRunSetup,
+        extra: &[EffectSpec],
+        settings: &SqpSettings,
+        folder: RunFolder,
+        transient_threshold: f64,
+        progress: &dyn Progress,
+    ) -> anyhow::Result<TrackedRun> {
+        let w0 = self.with_transcription(|tr, _, w0| {
+            {
+                note!(progress, 
+                    "tracking {:.3}–{:.3} s of {} with the {} foot ({} variables, {} constraints, {:?})",
+                    self.setup.window.0,
+                    self.setup.window.1,
+                    self.data.name,
+                    self.model.foot_name,
+                    tr.n(),
+                    tr.m(),
+                    settings.hessian
+                );
+            }
+            Ok(w0)
+        })?;
+        let cycle =
+            GaitCycle::new(&self.model, &self.setup.seq, &self.sets).map_err(|e| anyhow!(e))?;
+        let refinement = super::refine::Refinement {
+            cycle: &cycle,
+            model: &self.model,
+            sets: &self.sets,
+            integrator: self.integrator.clone(),
+            t0: self.setup.window.0,
+            enabled: self.refine,
+            max_iter: settings.max_iter,
+        };
+        let build = || {
+            self.setup
+                .ocp(&cycle, &self.model, &self.sets, self.integrator.clone())
+                .map_err(|e| anyhow!(e))
+        };
+        let mut solve = |tr: &Transcription, w: &[f64]| {
+            self.solve_staged(tr, &cycle, w, settings, progress, |_, res| Ok(res))
+        };
+        let (sites, res) = refinement.solve(&build, &self.check_sites, &w0, &mut solve, progress)?;
+        let mut ocp = build()?;
+        ocp.checks = refinement.checks(&sites);
+        let tr = Transcription::new(&ocp).context("transcribing the tracking problem")?;
+        self.write_run(
+            &tr,
+            &cycle,
+            res,
+            RunWriting {
+                base,
+                extra,
+                folder,
+                transient_threshold,
+                progress,
+                provenance: None,
+                check_sites: &sites,
+            },
+        )
+    }
+
+    /// Write the run folder of the solver result `res` of this problem's transcription
+    /// `tr` (solved by `track`, or re-evaluated by `report`).
+    pub fn write_run(
+        &self,
+        tr: &Transcription,
+        cycle: &GaitCycle,
+        res: crate::sqp::SqpResult,
+        how: RunWriting,
+    ) -> anyhow::Result<TrackedRun> {
+        let TrackingProblem {
+            model,
+            sets,
+            data,
+            setup,
+            phases,
+            integrator,
+            ..
+        } = self;
+        let RunWriting {
+            base,
+            extra,
+            folder,
+            transient_threshold,
+            progress,
+            provenance,
+            check_sites,
+        } = how;
+        let solution = GaitSolution::from_nlp(tr, &res.w, &cycle.continuous, setup.window.0);
+        let converged = res.status == SqpStatus::Converged;
+        let data_rows = setup.data_rows(model, sets, &cycle.continuous);
+        let sd = if model.ntheta() > 0 && converged {
+            parameter_sd(tr, &res.w, data_rows).unwrap_or_else(|e| {
+                warn_note!(progress, "warning: no parameter uncertainty: {e}");
+                vec![None; model.ntheta()]
+            })
+        } else {
+            vec![None; model.ntheta()]
+        };
+        let record = self.record(base, extra, &solution.theta, &sd, check_sites);
+        let mut extra_json = serde_json::Map::new();
+        extra_json.insert("setup".into(), serde_json::to_value(&record)?);
+        extra_json.insert("data_residuals".into(), data_rows.into());
+        extra_json.insert(
+            "integration".into(),
+            serde_json::to_value(self.integration.get())?,
+        );
+        let mut extra_sections = Vec::new();
+        let mut extra_summary = Vec::new();
+        if let Some(p) = &provenance {
+            extra_summary.push(("report".into(), p.clone()));
+        }
+        let breakdown =
+            match setup.cost_breakdown(model, sets, &cycle.continuous, &solution, integrator) {
+                Ok(b) => {
+                    extra_json.insert("cost_breakdown".into(), serde_json::to_value(&b)?);
+                    extra_sections.push(where_it_fails(&b, &solution));
+                    Some(b)
+                }
+                Err(e) => {
+                    warn_note!(progress, "warning: no cost breakdown: {e}");
+                    None
+                }
+            };
+        let residuals = residual_report(model, &solution);
+        if let Some((section, stats)) = &residuals {
+            extra_sections.push(section.clone());
+            extra_json.insert("residual_actuators".into(), stats.clone());
+        }
+        if !record.parameters.is_empty() {
+            extra_sections.push(crate::report::html::Section {
+                heading: "Effects".into(),
+                paragraphs: vec!["Effect parameters of the model; identified ones with an approximate standard deviation from the Gauss–Newton Hessian reduced to the constraints, s² = J/(N − p).".into()],
+                tables: vec![parameter_table(&record.parameters)],
+                svgs: vec![],
+            });
+        }
+        let out = super::run_folder::write(
+            GaitRun {
+                command: "track",
+                title: format!(
+                    "footfall tracking — {} foot, {}",
+                    model.foot_name, data.name
+                ),
+                data,
+                model,
+                sets,
+                phases_path: phases,
+                events: &self.setup.events,
+                sequence: &self.setup.seq,
+                control_bounds: (&self.setup.guess.u_lb, &self.setup.guess.u_ub),
+                result: &res,
+                solution: &solution,
+                integrator: integrator.clone(),
+                extra_summary,
+                extra_json,
+                extra_sections,
+                extra_files: vec![(
+                    "setup.json".into(),
+                    serde_json::to_string_pretty(&record)?.into_bytes(),
+                )],
+                transient_threshold_n: transient_threshold,
+                friction: cycle.friction(),
+                check_points: check_sites.len(),
+                },
+            folder,
+        )?;
+        {
+            if !record.parameters.is_empty() {
+                note!(progress, "{}", parameter_table(&record.parameters).to_markdown());
+            }
+            note!(progress, 
+                "{}\n{}: J = {:.6}, KKT {:.2e}, {} iterations, {:.1} s",
+                out.table.to_markdown(),
+                res.status,
+                res.objective,
+                res.kkt,
+                res.history.len().saturating_sub(1),
+                res.seconds
+            );
+            if let Some(f) = &out.fine {
+                note!(progress, 
+                    "1 ms re-integration: peak normal force {:.1} N (right), {:.1} N (left); largest Baumgarte force {:.1e} N; largest drift {:.2e} m",
+                    f.peak_normal_force_n[0], f.peak_normal_force_n[1], f.max_baumgarte_force_n, f.max_position_drift_m
+                );
+            }
+            note!(progress, "report: {}", out.path.join("report.html").display());
+        }
+        Ok(TrackedRun {
+            converged,
+            result: res,
+            output: out,
+            record,
+            breakdown,
+            residuals: residuals.map(|r| r.0),
+        })
+    }
+}
+
+/// How [`TrackingProblem::write_run`] writes a run.
+pub struct RunWriting<'a> {
+    /// The run without `extra` effects.
+    pub base: &'a TrackingRunSetup,
+    /// Effects added to `base`.
+    pub extra: &'a [EffectSpec],
+    /// Where to write.
+    pub folder: RunFolder,
+    /// Report ground-force excursions above the measurement larger than this (N).
+    pub transient_threshold: f64,
+    /// Print nothing.
+    pub progress: &'a dyn Progress,
+    /// Where the figures come from, when not from a solve just made.
+    pub provenance: Option<String>,
+    /// The problem's check points (recorded in `setup.json`).
+    pub check_sites: &'a [(usize, usize, f64)],
+}
+
+/// The report section on where the model fails: normalised error and cost share per
+/// channel and phase, the node cost over time with the phases shaded and the worst
+/// stretches.
+pub fn where_it_fails(
+    b: &crate::problems::track::CostBreakdown,
+    solution: &GaitSolution,
+) -> crate::report::html::Section {
+    use crate::report::plot::{LinePlot, LineStyle, Series, Span};
+    let (share, normalised, windows) = cost_tables(b);
+    let mut plot = LinePlot::new(
+        "Data cost per shooting node",
+        "time (s)",
+        "Σ weighted residual²",
+    );
+    plot.series.push(Series::new(
+        "data cost",
+        b.nodes.iter().map(|n| n.time).collect(),
+        b.nodes.iter().map(|n| n.data).collect(),
+        LineStyle::Solid,
+    ));
+    plot.shaded = solution
+        .phase_spans()
+        .iter()
+        .map(|p| Span::new(p.t0, p.t1, p.name.clone()))
+        .collect();
+    crate::report::html::Section {
+        heading: "Where the model fails".into(),
+        paragraphs: vec![format!(
+            "The tracking cost J = {:.6} (weighted squared residuals at the nodes, seed eq. 18) by channel and phase: its share, and the normalised error (RMS of the weighted residual: the error in units of the channel's weighting scale). Below, the data cost of every node over time (phases shaded) and the stretches of five nodes where it is largest.",
+            b.total()
+        )],
+        tables: vec![share, normalised, windows],
+        svgs: vec![plot.to_svg()],
+    }
+}
+
+/// A solved and written tracking run.
+pub struct TrackedRun {
+    /// Whether the solver converged.
+    pub converged: bool,
+    /// The solver's result.
+    pub result: crate::sqp::SqpResult,
+    /// What the run folder holds.
+    pub output: super::run_folder::GaitRunOutput,
+    /// The run's description.
+    pub record: TrackingRunSetup,
+    /// Where the cost comes from (None when it could not be evaluated).
+    pub breakdown: Option<crate::problems::track::CostBreakdown>,
+    /// The residual actuators' section, for a model that has them.
+    pub residuals: Option<crate::report::html::Section>,
+}
