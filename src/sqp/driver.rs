@@ -1,6 +1,6 @@
 //! The SQP iteration: start (or resume from a checkpoint), then per iteration the step
-//! ([`step`](super::step)), the KKT test ([`kkt`](super::kkt)), the filter line search
-//! ([`line_search`](super::line_search)) and the quasi-Newton update, with a checkpoint
+//! ([`step`]), the KKT test ([`kkt`]), the filter line search
+//! ([`line_search`]) and the quasi-Newton update, with a checkpoint
 //! after every accepted step.
 
 use super::checkpoint::{ExactRecord, ExactVec, SqpCheckpoint, CHECKPOINT_VERSION};

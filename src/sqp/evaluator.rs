@@ -1,6 +1,6 @@
 //! The NLP evaluations and QP solves of one solve, timed and counted for
-//! [`SqpTimings`](super::SqpTimings), with the test-only injected QP failures
-//! ([`SqpSettings::inject_qp_failures`](super::SqpSettings::inject_qp_failures)).
+//! [`SqpTimings`], with the test-only injected QP failures
+//! ([`SqpSettings::inject_qp_failures`]).
 
 use super::qp::{self, QpData, QpError, QpSolution, Triplets};
 use super::{EvalError, HessianMode, Nlp, NlpEval, SqpSettings, SqpTimings};

@@ -35,8 +35,8 @@ pub(super) fn residual(p: &KktPoint<'_>) -> f64 {
     for k in 0..p.jac_rows.len() {
         stat[p.jac_cols[k]] += p.jac[k] * p.lambda[p.jac_rows[k]];
     }
-    for i in 0..n {
-        stat[i] += p.nu[i];
+    for (s, v) in stat.iter_mut().zip(p.nu) {
+        *s += v;
     }
     let mult_l1: f64 = p.lambda.iter().chain(p.nu).map(|v| v.abs()).sum();
     let sd = (mult_l1 / ((m + n) as f64 * 100.0)).max(1.0);

@@ -116,6 +116,10 @@ pub(super) enum Search {
     Fatal(EvalError),
 }
 
+/// An acceptable trial point's verdict: whether to augment the filter, and its
+/// (objective, l1 violation).
+type Verdict = (bool, (f64, f64));
+
 /// Keep the first fatal evaluation failure of a line search; recoverable ones only
 /// shorten the step.
 fn keep_fatal(slot: &mut Option<EvalError>, e: EvalError) {
@@ -148,8 +152,7 @@ pub(super) fn search(
         grad_d: st.ev.grad.iter().zip(d).map(|(a, b)| a * b).sum(),
         eta: settings.line_search_armijo,
     };
-    // (augment, (objective, violation)) of an acceptable trial point
-    let judge = |ev: &NlpEval, a: f64| {
+    let judge = |ev: &NlpEval, a: f64| -> Option<Verdict> {
         let th = violations(&ev.c, &s.c_lb, &s.c_ub).iter().sum::<f64>();
         filter
             .acceptable(&r, ev.f, th, a)
@@ -161,7 +164,7 @@ pub(super) fn search(
             .collect()
     };
     let mut alpha = 1.0;
-    let mut found: Option<(Vec<f64>, (bool, (f64, f64)))> = None;
+    let mut found: Option<(Vec<f64>, Verdict)> = None;
     let mut fatal: Option<EvalError> = None;
     let w1 = trial(1.0, d);
     match eval(&w1) {
@@ -274,26 +277,35 @@ mod tests {
         0.0
     }
 
+    /// Search along `d` from x = 0 with objective `f` (gradient `grad` there) and `m`
+    /// rows x − 1 = 0; the outcome and the number of trial evaluations.
+    fn run(
+        f: fn(f64) -> f64,
+        grad: f64,
+        m: usize,
+        d: f64,
+        filter: &mut Filter,
+        soc: &dyn Fn(&[f64]) -> Option<Vec<f64>>,
+    ) -> (Search, usize) {
+        let s = structure(m);
+        let st = state(f, grad, m, 0.0);
+        let evals = Cell::new(0);
+        let eval = |w: &[f64]| {
+            evals.set(evals.get() + 1);
+            Ok(eval_at(f, m, w[0]))
+        };
+        let out = search(&s, &settings(), filter, &st, &[d], &eval, soc);
+        (out, evals.get())
+    }
+
     /// From x = 0 (θ = 1) the Newton step d = 1 reaches the feasible x = 1 (θ = 0): an
     /// h-type step at α = 1; the first search sets θ_max = 10⁴.
     #[test]
     fn a_full_step_that_reduces_the_violation_is_accepted() {
-        let s = structure(1);
-        let st = state(zero, 0.0, 1, 0.0);
         let mut filter = Filter::new();
-        let evals = Cell::new(0);
-        let out = search(
-            &s,
-            &settings(),
-            &mut filter,
-            &st,
-            &[1.0],
-            &|w| {
-                evals.set(evals.get() + 1);
-                Ok(eval_at(zero, 1, w[0]))
-            },
-            &|_| panic!("no second-order correction for an accepted full step"),
-        );
+        let (out, evals) = run(zero, 0.0, 1, 1.0, &mut filter, &|_| {
+            panic!("no second-order correction for an accepted full step")
+        });
         let Search::Accepted(t) = out else {
             panic!("{out:?}")
         };
@@ -301,7 +313,7 @@ mod tests {
             (t.w, t.step, t.augment, t.plain),
             (vec![1.0], 1.0, true, (0.0, 0.0))
         );
-        assert_eq!(evals.get(), 1);
+        assert_eq!(evals, 1);
         assert_eq!(filter.theta_max, 1e4);
         assert_eq!(filter.entries, vec![(1e4, f64::NEG_INFINITY)]);
     }
@@ -312,51 +324,36 @@ mod tests {
     /// accepted with the reported step 0.5.
     #[test]
     fn a_rejected_full_step_is_rescued_by_the_second_order_correction() {
-        let s = structure(1);
-        let st = state(zero, 0.0, 1, 0.0);
-        let mut filter = Filter::new();
         let seen = RefCell::new(Vec::new());
-        let out = search(
-            &s,
-            &settings(),
-            &mut filter,
-            &st,
-            &[3.0],
-            &|w| Ok(eval_at(zero, 1, w[0])),
-            &|c_soc| {
-                seen.borrow_mut().push(c_soc.to_vec());
-                let h = Triplets {
-                    rows: vec![0],
-                    cols: vec![0],
-                    vals: vec![1.0],
-                };
-                let jac = Triplets {
-                    rows: vec![0],
-                    cols: vec![0],
-                    vals: vec![1.0],
-                };
-                qp::solve(&QpData {
-                    h: &h,
-                    g: &[0.0],
-                    jac: &jac,
-                    c: c_soc,
-                    c_lb: &[0.0],
-                    c_ub: &[0.0],
-                    d_lb: &[-10.0],
-                    d_ub: &[10.0],
-                    elastic: None,
-                    elastic_weights: &[1.0],
-                })
-                .ok()
-                .map(|q| q.d)
-            },
-        );
+        let one = Triplets {
+            rows: vec![0],
+            cols: vec![0],
+            vals: vec![1.0],
+        };
+        let soc = |c_soc: &[f64]| {
+            seen.borrow_mut().push(c_soc.to_vec());
+            qp::solve(&QpData {
+                h: &one,
+                g: &[0.0],
+                jac: &one,
+                c: c_soc,
+                c_lb: &[0.0],
+                c_ub: &[0.0],
+                d_lb: &[-10.0],
+                d_ub: &[10.0],
+                elastic: None,
+                elastic_weights: &[1.0],
+            })
+            .ok()
+            .map(|q| q.d)
+        };
+        let (out, evals) = run(zero, 0.0, 1, 3.0, &mut Filter::new(), &soc);
         assert_eq!(*seen.borrow(), vec![vec![-1.0]]);
         let Search::Accepted(t) = out else {
             panic!("{out:?}")
         };
         assert!((t.w[0] - 1.0).abs() < 1e-7, "{:?}", t.w);
-        assert_eq!((t.step, t.augment), (0.5, true));
+        assert_eq!((t.step, t.augment, evals), (0.5, true, 2));
     }
 
     /// From x = 0 the step d = −1 raises the violation at every length (θ = 1 + α) and
@@ -367,25 +364,10 @@ mod tests {
         fn sq(x: f64) -> f64 {
             x * x
         }
-        let s = structure(1);
-        let st = state(sq, 0.0, 1, 0.0);
-        let mut filter = Filter::new();
-        let evals = Cell::new(0);
-        let out = search(
-            &s,
-            &settings(),
-            &mut filter,
-            &st,
-            &[-1.0],
-            &|w| {
-                evals.set(evals.get() + 1);
-                Ok(eval_at(sq, 1, w[0]))
-            },
-            &|_| Some(vec![-1.0]),
-        );
+        let (out, evals) = run(sq, 0.0, 1, -1.0, &mut Filter::new(), &|_| Some(vec![-1.0]));
         assert!(matches!(out, Search::Failed), "{out:?}");
         // α = 1, the correction, then 0.5, 0.25, … down to the last α ≥ 10⁻¹⁰ (2⁻³³)
-        assert_eq!(evals.get(), 2 + 33);
+        assert_eq!(evals, 2 + 33);
     }
 
     /// Unconstrained f(x) = (x − 1)² from x = 0 (f₀ = 1, ∇f = −2) along d = 2: θ₀ = 0,
@@ -397,21 +379,11 @@ mod tests {
         fn f(x: f64) -> f64 {
             (x - 1.0) * (x - 1.0)
         }
-        let s = structure(0);
-        let st = state(f, -2.0, 0, 0.0);
         let mut filter = Filter::new();
-        let out = search(
-            &s,
-            &settings(),
-            &mut filter,
-            &st,
-            &[2.0],
-            &|w| Ok(eval_at(f, 0, w[0])),
-            &|c| {
-                assert!(c.is_empty());
-                None
-            },
-        );
+        let (out, _) = run(f, -2.0, 0, 2.0, &mut filter, &|c| {
+            assert!(c.is_empty());
+            None
+        });
         let Search::Accepted(t) = out else {
             panic!("{out:?}")
         };
@@ -419,6 +391,7 @@ mod tests {
             (t.w, t.step, t.augment, t.plain),
             (vec![1.0], 0.5, false, (0.0, 0.0))
         );
+        assert_eq!(filter.entries.len(), 1);
     }
 
     /// A recoverable failure beyond x = 0.6 shortens the step d = 1 to α = 0.5; a fatal
