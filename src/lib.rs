@@ -4,6 +4,7 @@
 //! actuators, effects), [`integrate`] (CVODES with forward sensitivities), and on top the
 //! phase sequences, forward simulation and run folders.
 #![warn(missing_docs)]
+#![deny(unsafe_code)]
 
 pub mod benchmarks;
 pub mod controls;

@@ -1,0 +1,385 @@
+//! The shooting intervals at one point: where the shifted sample terms fall, each
+//! interval's integration (with sensitivities and curvature on request), and what its
+//! sample terms add to the objective.
+
+use super::{add_instant, Instants, IntervalRef, Transcription, TranscriptionError};
+use crate::integrate::{
+    ControlShape, IntegrationStats, Integrator, IntegratorError, ShootingInterval,
+};
+use crate::ocp::checks::{self, CheckValues};
+use crate::ocp::problem::Block;
+
+/// Instants of the sample terms at one evaluation, per interval in transcription order
+/// (`None`: the fixed ones only), and per sample term the gradient of its instant in θ
+/// (s per unit; `None` where it does not move: not shifted, or held at its phase's ends).
+type Placement = (Vec<Option<Instants>>, Vec<Option<Vec<f64>>>);
+
+/// A shifted sample's instant is held at least this far (as a fraction of an interval)
+/// after its phase's start, where CVODES can take a first step towards it.
+const SHIFTED_PHASE_START: f64 = 1e-6;
+
+/// A shifted instant closer than this (fraction of an interval) to an interval's start
+/// is taken at the end of the interval before it (an instant moved by at most 1e-9 of an
+/// interval, instead of a first CVODES step of that size).
+const SHIFTED_SNAP: f64 = 1e-9;
+
+/// Where a sample term at `(interval, τ)` of a phase of `intervals` intervals of length
+/// `h` (s) falls when its instant is shifted by `shift` (s), as
+/// [`SampleTerm::shift`](crate::ocp::SampleTerm) places it: `(interval, τ, moves)`, held
+/// inside the phase (`moves` false where it is held at either end, so the instant does
+/// not move with the shift there). A zero shift leaves it exactly where it was.
+pub fn shifted_instant(
+    interval: usize,
+    tau: f64,
+    shift: f64,
+    h: f64,
+    intervals: usize,
+) -> (usize, f64, bool) {
+    // the instant in units of intervals from the phase's start
+    let at = interval as f64 + tau + shift / h;
+    if shift == 0.0 {
+        (interval, tau, true)
+    } else if at <= SHIFTED_PHASE_START {
+        (0, SHIFTED_PHASE_START, false)
+    } else if at >= intervals as f64 {
+        (intervals - 1, 1.0, false)
+    } else {
+        let k = (at.ceil() as usize).saturating_sub(1).min(intervals - 1);
+        let tau = (at - k as f64).min(1.0);
+        if tau < SHIFTED_SNAP && k > 0 {
+            (k - 1, 1.0, true)
+        } else {
+            (k, tau, true)
+        }
+    }
+}
+
+/// What an interval's sample terms add to the objective: their value, the gradient and the
+/// Gauss–Newton block (upper triangle, row by row) over the interval's columns.
+#[derive(Debug, Default)]
+pub(super) struct SampleSums {
+    pub(super) f: f64,
+    pub(super) grad: Vec<f64>,
+    pub(super) gauss_newton: Vec<f64>,
+}
+
+/// One interval's integration: end state, sensitivities, statistics, curvature block
+/// (with multipliers) and what its sample terms add.
+type IntervalResult = (
+    Vec<f64>,
+    Vec<f64>,
+    IntegrationStats,
+    Option<Vec<f64>>,
+    Option<SampleSums>,
+    Vec<CheckValues>,
+);
+
+impl<'o, 'a> Transcription<'o, 'a> {
+    /// Where the shifted sample terms fall at `w` ([`SampleTerm::shift`](crate::ocp::SampleTerm)):
+    /// the instant `(interval + τ) h + s(θ)` located in its phase's intervals (the node
+    /// times are fixed: the phase's duration is), held inside the phase.
+    pub(super) fn place_shifted(&self, w: &[f64]) -> Result<Placement, TranscriptionError> {
+        let mut lists: Vec<Option<Instants>> = vec![None; self.intervals.len()];
+        let mut gradients = vec![None; self.ocp.samples.len()];
+        let theta = &w[self.range(Block::Params)];
+        for &si in &self.shifted {
+            let st = &self.ocp.samples[si];
+            let Some(shift) = &st.shift else { continue };
+            let n = self.ocp.phases[st.phase].intervals;
+            let h = w[self.duration_off[st.phase]] / n as f64;
+            let mut s = [0.0];
+            let mut g = vec![0.0; self.ocp.ntheta];
+            shift
+                .eval(theta, &mut s, Some(&mut g))
+                .map_err(|reason| TranscriptionError::Term {
+                    term: format!("{} (shift)", st.name),
+                    reason,
+                })?;
+            if !s[0].is_finite() || g.iter().any(|v| !v.is_finite()) {
+                return Err(TranscriptionError::Term {
+                    term: format!("{} (shift)", st.name),
+                    reason: format!("shift {} s is not finite", s[0]),
+                });
+            }
+            let (k, tau, moves) = shifted_instant(st.interval, st.tau, s[0], h, n);
+            if moves {
+                gradients[si] = Some(g);
+            }
+            let i = self.first_interval[st.phase] + k;
+            add_instant(
+                lists[i].get_or_insert_with(|| self.intervals[i].samples.clone()),
+                tau,
+                si,
+            );
+        }
+        for list in lists.iter_mut().flatten() {
+            list.sort_by(|a, b| a.0.total_cmp(&b.0));
+        }
+        Ok((lists, gradients))
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    pub(super) fn integrate_interval(
+        &self,
+        iv: &IntervalRef,
+        list: &[(f64, Vec<usize>)],
+        moves: &[Option<Vec<f64>>],
+        w: &[f64],
+        sens: bool,
+        lambda: Option<&[f64]>,
+    ) -> Result<IntervalResult, TranscriptionError> {
+        let ph = &self.ocp.phases[iv.phase];
+        let interval = ShootingInterval::new(ph.ode, ph.controls);
+        let (nx, np) = (ph.ode.nx(), interval.np());
+        let x0 = &w[self.range(Block::State {
+            phase: iv.phase,
+            node: iv.k,
+        })];
+        let u0 = &w[self.range(Block::Control {
+            phase: iv.phase,
+            node: iv.k,
+        })];
+        let u1 = match ph.controls {
+            ControlShape::Linear => Some(
+                &w[self.range(Block::Control {
+                    phase: iv.phase,
+                    node: iv.k + 1,
+                })],
+            ),
+            ControlShape::Constant => None,
+        };
+        let h = w[self.duration_off[iv.phase]] / ph.intervals as f64;
+        let theta = &w[self.range(Block::Params)];
+        let err = |source| TranscriptionError::Integrator {
+            phase: ph.name.clone(),
+            interval: iv.k,
+            source,
+        };
+        let mut p = Vec::with_capacity(np);
+        interval
+            .pack_params(u0, u1, h, theta, &mut p)
+            .map_err(err)?;
+        let pool = &self.pools[iv.phase];
+        let taken = pool.lock().map(|mut v| v.pop()).unwrap_or(None);
+        let mut integ = match taken {
+            Some(i) => i,
+            None => Integrator::new(nx, np, self.ocp.integrator.clone()).map_err(err)?,
+        };
+        let mut x1 = vec![0.0; nx];
+        let mut s = Vec::new();
+        let mut hess = None;
+        // the sample terms' and check points' instants, with the interval's end for one
+        // pass to all
+        let mut taus: Vec<f64> = list.iter().map(|e| e.0).collect();
+        if !iv.checks.is_empty() {
+            taus.extend(iv.checks.iter().map(|c| c.0));
+            taus.sort_by(f64::total_cmp);
+            taus.dedup();
+        }
+        let mut times = taus.clone();
+        if times.last().is_some_and(|&t| t < 1.0) {
+            times.push(1.0);
+        }
+        let (mut xs, mut ss) = (Vec::new(), Vec::new());
+        let res = if let Some(lam) = lambda {
+            // continuity rows are s_{k+1} − x(1): their curvature is that of −λᵀx(1)
+            s = vec![0.0; nx * (nx + np)];
+            let weights: Vec<f64> = lam[iv.row..iv.row + nx].iter().map(|v| -v).collect();
+            let mut h = vec![0.0; (nx + np) * (nx + np)];
+            // the samples' and check points' states and sensitivities come from the same
+            // pass, with the curvature of the check points' state dependence
+            let interior: Vec<f64> = {
+                let mut v: Vec<f64> = iv.checks.iter().map(|c| c.0).collect();
+                v.dedup();
+                v
+            };
+            let mut check_weights = |i: usize, x: &[f64]| {
+                checks::state_weights(self.ocp, iv.phase, &iv.checks, interior[i], &p, x, lam)
+                    .map_err(|reason| IntegratorError::BadSettings {
+                        field: "check point",
+                        reason,
+                    })
+            };
+            match interval.integrate_with_hessian_interior(
+                &mut integ,
+                x0,
+                &p,
+                &weights,
+                &mut x1,
+                &mut s,
+                &mut h,
+                &taus,
+                &mut xs,
+                &mut ss,
+                &interior,
+                &mut check_weights,
+            ) {
+                Ok(true) => match checks::add_direct_curvature(
+                    self.ocp, iv.phase, &iv.checks, &taus, &p, &xs, &ss, lam, &mut h,
+                ) {
+                    Ok(()) => {
+                        hess = Some(h);
+                        Ok(integ.stats_snapshot())
+                    }
+                    Err(reason) => Err(IntegratorError::BadSettings {
+                        field: "check point",
+                        reason,
+                    }),
+                },
+                Ok(false) => Err(IntegratorError::BadSettings {
+                    field: "hessian",
+                    reason: format!(
+                        "the dynamics of phase '{}' provide no second derivatives",
+                        ph.name
+                    ),
+                }),
+                Err(e) => Err(e),
+            }
+        } else if sens {
+            s = vec![0.0; nx * (nx + np)];
+            if taus.is_empty() {
+                integ.integrate_with_sensitivities(&interval, 0.0, 1.0, x0, &p, &mut x1, &mut s)
+            } else {
+                integ
+                    .integrate_with_sensitivities_dense(
+                        &interval, 0.0, 1.0, x0, &p, &times, &mut xs, &mut ss,
+                    )
+                    .inspect(|_| {
+                        let sz = nx * (nx + np);
+                        x1.copy_from_slice(&xs[xs.len() - nx..]);
+                        s.copy_from_slice(&ss[ss.len() - sz..]);
+                    })
+            }
+        } else if taus.is_empty() {
+            integ.integrate(&interval, 0.0, 1.0, x0, &p, &mut x1)
+        } else {
+            integ
+                .integrate_dense(&interval, 0.0, 1.0, x0, &p, &times, &mut xs)
+                .inspect(|_| x1.copy_from_slice(&xs[xs.len() - nx..]))
+        };
+        if let Ok(mut v) = pool.lock() {
+            v.push(integ);
+        }
+        let stats = res.map_err(err)?;
+        let derivs = sens || lambda.is_some();
+        let checks = checks::check_values(
+            self.ocp,
+            iv.phase,
+            &iv.checks,
+            &taus,
+            &p,
+            &xs,
+            derivs.then_some(&ss[..]),
+        )?;
+        let sums = if !iv.sample_block {
+            None
+        } else if iv.checks.is_empty() {
+            Some(self.sample_sums(iv, list, moves, &p, &xs, derivs.then_some(&ss[..]))?)
+        } else {
+            // the samples' own rows of the merged instants
+            let (xs, ss) = checks::rows_at(
+                list.iter().map(|e| e.0),
+                &taus,
+                nx,
+                nx * (nx + np),
+                &xs,
+                &ss,
+                derivs,
+            );
+            Some(self.sample_sums(iv, list, moves, &p, &xs, derivs.then_some(&ss[..]))?)
+        };
+        Ok((x1, s, stats, hess, sums, checks))
+    }
+
+    /// The sample terms `list` of interval `iv` at its integrated states `xs` (nx per τ,
+    /// in τ order) with, when `ss` is given, their sensitivities (nx·(nx+np) per τ):
+    /// value, gradient and Gauss–Newton block over the interval's columns (x0, u0, [u1],
+    /// T, θ), by the chain rule through `x(τ) = Φ(τ; x0, p)` and `u(τ)`; a term whose
+    /// instant moves with θ (gradient in `moves`) adds `(∂r/∂x ẋ + ∂r/∂u u̇) ∂t/∂θ`.
+    #[allow(clippy::too_many_arguments)]
+    fn sample_sums(
+        &self,
+        iv: &IntervalRef,
+        list: &[(f64, Vec<usize>)],
+        moves: &[Option<Vec<f64>>],
+        p: &[f64],
+        xs: &[f64],
+        ss: Option<&[f64]>,
+    ) -> Result<SampleSums, TranscriptionError> {
+        let ph = &self.ocp.phases[iv.phase];
+        let interval = ShootingInterval::new(ph.ode, ph.controls);
+        let (nx, nu, nt) = (ph.ode.nx(), ph.ode.nu(), self.ocp.ntheta);
+        let ncols = nx + interval.np();
+        let nz = nx + nu + nt;
+        let theta = &p[interval.p_theta()];
+        let u0 = &p[interval.p_u0()];
+        let u1 = interval.p_u1().map(|r| &p[r]);
+        let hscale = 1.0 / ph.intervals as f64;
+        let mut out = SampleSums {
+            f: 0.0,
+            grad: Vec::new(),
+            gauss_newton: Vec::new(),
+        };
+        if ss.is_some() {
+            out.grad = vec![0.0; ncols];
+            out.gauss_newton = vec![0.0; ncols * (ncols + 1) / 2];
+        }
+        for (q, (tau, terms)) in list.iter().enumerate() {
+            let x = &xs[q * nx..(q + 1) * nx];
+            let z = checks::instant_args(&interval, x, p, *tau);
+            let u = &z[nx..nx + nu];
+            for &si in terms {
+                let term = &self.ocp.samples[si];
+                let d = term.f.dim();
+                let mut r = vec![0.0; d];
+                let mut jz = vec![0.0; d * nz];
+                term.f
+                    .eval(&z, &mut r, ss.is_some().then_some(&mut jz[..]))
+                    .map_err(|reason| TranscriptionError::Term {
+                        term: term.name.clone(),
+                        reason,
+                    })?;
+                out.f += r.iter().map(|v| v * v).sum::<f64>();
+                let Some(ss) = ss else { continue };
+                let s = &ss[q * nx * ncols..(q + 1) * nx * ncols];
+                let mut jac = checks::instant_jacobian(&interval, nx, nu, d, &jz, s, *tau, hscale);
+                if let Some(g) = moves.get(si).and_then(Option::as_ref) {
+                    // dr/dt along the trajectory (per second): ẋ = f(x, u, θ), u̇ = (u1 − u0)/h
+                    let h = p[interval.p_duration()];
+                    let mut xdot = vec![0.0; nx];
+                    ph.ode
+                        .f(x, &u, theta, &mut xdot)
+                        .map_err(|e| TranscriptionError::Term {
+                            term: term.name.clone(),
+                            reason: e.to_string(),
+                        })?;
+                    let udot: Vec<f64> = match u1 {
+                        Some(u1) => u0.iter().zip(u1).map(|(a, b)| (b - a) / h).collect(),
+                        None => vec![0.0; nu],
+                    };
+                    for i in 0..d {
+                        let rate = (0..nx).map(|k| jz[i + k * d] * xdot[k]).sum::<f64>()
+                            + (0..nu).map(|k| jz[i + (nx + k) * d] * udot[k]).sum::<f64>();
+                        for (k, c) in interval.p_theta().enumerate() {
+                            jac[i + (nx + c) * d] += rate * g[k];
+                        }
+                    }
+                }
+                let mut at = 0;
+                for a in 0..ncols {
+                    let ja = &jac[a * d..(a + 1) * d];
+                    out.grad[a] += 2.0 * ja.iter().zip(&r).map(|(j, v)| j * v).sum::<f64>();
+                    for b in a..ncols {
+                        out.gauss_newton[at] += 2.0
+                            * ja.iter()
+                                .zip(&jac[b * d..(b + 1) * d])
+                                .map(|(x, y)| x * y)
+                                .sum::<f64>();
+                        at += 1;
+                    }
+                }
+            }
+        }
+        Ok(out)
+    }
+}

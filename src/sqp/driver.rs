@@ -1,0 +1,431 @@
+//! The SQP iteration: start (or resume from a checkpoint), then per iteration the step
+//! ([`step`]), the KKT test ([`kkt`]), the filter line search
+//! ([`line_search`]) and the quasi-Newton update, with a checkpoint
+//! after every accepted step.
+
+use super::checkpoint::{ExactRecord, ExactVec, SqpCheckpoint, CHECKPOINT_VERSION};
+use super::evaluator::Evaluator;
+use super::hessian::BlockBfgs;
+use super::kkt::{self, KktPoint};
+use super::line_search::{self, Filter, Search};
+use super::qp::{QpData, Triplets};
+use super::step::{self, StepMemory};
+use super::{
+    violations, HessianMode, IterationRecord, Nlp, NlpEval, Observer, SqpResult, SqpSettings,
+    SqpStatus, SqpTimings, Violation,
+};
+use std::time::Instant;
+
+/// What the SQP reads from the NLP once per solve: sizes, bounds, sparsity patterns and
+/// row weights.
+#[derive(Debug, Clone, Default)]
+pub(super) struct Structure {
+    /// Number of variables.
+    pub(super) n: usize,
+    /// Number of constraints.
+    pub(super) m: usize,
+    /// Variable lower bounds.
+    pub(super) w_lb: Vec<f64>,
+    /// Variable upper bounds.
+    pub(super) w_ub: Vec<f64>,
+    /// Constraint lower bounds.
+    pub(super) c_lb: Vec<f64>,
+    /// Constraint upper bounds.
+    pub(super) c_ub: Vec<f64>,
+    /// Jacobian pattern rows.
+    pub(super) jac_rows: Vec<usize>,
+    /// Jacobian pattern columns.
+    pub(super) jac_cols: Vec<usize>,
+    /// Gauss–Newton Hessian pattern rows (upper triangle).
+    pub(super) gn_rows: Vec<usize>,
+    /// Gauss–Newton Hessian pattern columns.
+    pub(super) gn_cols: Vec<usize>,
+    /// Elastic-mode weights of the rows' violations.
+    pub(super) elastic_weights: Vec<f64>,
+    /// Rows whose exact curvature the quasi-Newton modes use
+    /// ([`SqpSettings::exact_term_hessians`]); the BFGS update leaves them out.
+    pub(super) exact_rows: Vec<bool>,
+    /// Whether any row is in `exact_rows`.
+    pub(super) any_exact: bool,
+}
+
+impl Structure {
+    fn new(nlp: &dyn Nlp, settings: &SqpSettings) -> Self {
+        let (n, m) = (nlp.n(), nlp.m());
+        let (w_lb, w_ub, c_lb, c_ub) = nlp.bounds();
+        let (jac_rows, jac_cols) = nlp.jacobian_pattern();
+        let elastic_weights = nlp.elastic_weights();
+        let exact_rows = if settings.exact_term_hessians {
+            nlp.rows_with_exact_hessian()
+        } else {
+            vec![false; m]
+        };
+        let any_exact = exact_rows.iter().any(|&r| r);
+        let (gn_rows, gn_cols) = nlp.gauss_newton_pattern();
+        Self {
+            n,
+            m,
+            w_lb,
+            w_ub,
+            c_lb,
+            c_ub,
+            jac_rows,
+            jac_cols,
+            gn_rows,
+            gn_cols,
+            elastic_weights,
+            exact_rows,
+            any_exact,
+        }
+    }
+
+    /// The Jacobian with values `vals` (in pattern order).
+    pub(super) fn jacobian(&self, vals: &[f64]) -> Triplets {
+        Triplets {
+            rows: self.jac_rows.clone(),
+            cols: self.jac_cols.clone(),
+            vals: vals.to_vec(),
+        }
+    }
+}
+
+/// The current iterate.
+pub(super) struct State {
+    /// Variables.
+    pub(super) w: Vec<f64>,
+    /// Evaluation with derivatives at `w`.
+    pub(super) ev: NlpEval,
+    /// Exact constraint curvature at `w` (Exact mode).
+    pub(super) hess: Option<Triplets>,
+    /// Objective and l1 violation from a plain evaluation at `w`: the line search compares
+    /// trial points (plain evaluations) with these, so that integrator noise, which differs
+    /// between runs with and without sensitivity error control, cannot mislead it.
+    pub(super) plain: (f64, f64),
+}
+
+/// Solve `nlp` from `w0`, or continue the solve `resume` checkpointed.
+pub(super) fn run(
+    nlp: &dyn Nlp,
+    w0: &[f64],
+    settings: &SqpSettings,
+    observer: &mut dyn Observer,
+    resume: Option<&SqpCheckpoint>,
+) -> SqpResult {
+    let elapsed_before =
+        resume.map_or(0.0, |cp| cp.scalars.values().get(5).copied().unwrap_or(0.0));
+    let start = Instant::now()
+        .checked_sub(std::time::Duration::from_secs_f64(elapsed_before.max(0.0)))
+        .unwrap_or_else(Instant::now);
+    let s = Structure::new(nlp, settings);
+    let (n, m) = (s.n, s.m);
+    let mut bfgs = BlockBfgs::new(nlp.hessian_blocks(), settings.bfgs_update);
+    if settings.hessian == HessianMode::GaussNewtonBfgs {
+        bfgs.scale(1e-4);
+    }
+    let w: Vec<f64> = w0
+        .iter()
+        .zip(s.w_lb.iter().zip(&s.w_ub))
+        .map(|(&v, (&l, &u))| v.max(l).min(u))
+        .collect();
+    let fail = |status: SqpStatus, w: Vec<f64>| SqpResult {
+        lambda: vec![0.0; m],
+        nu: vec![0.0; n],
+        objective: f64::NAN,
+        infeasibility: f64::NAN,
+        kkt: f64::NAN,
+        status,
+        history: Vec::new(),
+        most_violated: Vec::new(),
+        seconds: start.elapsed().as_secs_f64(),
+        timings: SqpTimings::default(),
+        w,
+    };
+    if let Some(cp) = resume {
+        if let Err(e) = cp.check(n, m) {
+            return fail(SqpStatus::EvaluationFailure(e.to_string()), w);
+        }
+        if !bfgs.restore(cp.bfgs.iter().map(|(b, s)| (b.values(), *s)).collect()) {
+            return fail(
+                SqpStatus::EvaluationFailure(
+                    "the checkpoint's BFGS blocks do not fit this problem".into(),
+                ),
+                w,
+            );
+        }
+    }
+    let eval = Evaluator::new(
+        nlp,
+        settings,
+        resume.map_or_else(SqpTimings::default, |cp| cp.timings),
+    );
+    let lambda0 = resume.map_or_else(|| vec![0.0; m], |cp| cp.lambda.values());
+    let (ev, hess) = match eval.derivs(&w, &lambda0) {
+        Ok(r) => r,
+        Err(e) => return fail(SqpStatus::EvaluationFailure(e.chain()), w),
+    };
+    let plain = match eval.plain(&w) {
+        Ok(p) => (p.f, violations(&p.c, &s.c_lb, &s.c_ub).iter().sum::<f64>()),
+        Err(e) => return fail(SqpStatus::EvaluationFailure(e.chain()), w),
+    };
+    let mut st = State { w, ev, hess, plain };
+    let mut zero_blocks = BlockBfgs::new(nlp.hessian_blocks(), settings.bfgs_update);
+    zero_blocks.scale(0.0);
+    let mut mem = StepMemory::default();
+    let mut lambda = lambda0;
+    let mut nu = vec![0.0; n];
+    let mut filter = Filter::new();
+    let mut history = Vec::new();
+    let mut status = SqpStatus::MaxIterations;
+    let mut kkt = f64::INFINITY;
+    let mut last_step = 0.0;
+    let mut first_iter = 0;
+    if let Some(cp) = resume {
+        nu = cp.nu.values();
+        let sc = cp.scalars.values();
+        (
+            mem.lam_est,
+            mem.test_rho_scale,
+            mem.shift,
+            filter.theta_max,
+            last_step,
+        ) = (sc[0], sc[1], sc[2], sc[3], sc[4]);
+        filter.entries = cp
+            .filter
+            .values()
+            .chunks_exact(2)
+            .map(|p| (p[0], p[1]))
+            .collect();
+        history = cp.records();
+        first_iter = cp.next_iter;
+    }
+    for iter in first_iter..=settings.max_iter {
+        // --- QP subproblem at the current point
+        let viol = violations(&st.ev.c, &s.c_lb, &s.c_ub);
+        let infeas = viol.iter().copied().fold(0.0, f64::max);
+        let sub = match step::subproblem(
+            nlp,
+            settings,
+            &s,
+            &st,
+            (&lambda, &nu),
+            infeas,
+            (&bfgs, &zero_blocks),
+            &mut mem,
+        ) {
+            Ok(sub) => sub,
+            Err(e) => {
+                status = e;
+                break;
+            }
+        };
+        let (sol, elastic) = match step::solve(&eval, &sub, &mut mem) {
+            Ok(step) => (step.sol, step.elastic),
+            Err(e) => {
+                status = e;
+                break;
+            }
+        };
+        // --- KKT residual at the current point with the QP multipliers
+        kkt = kkt::residual(&KktPoint {
+            grad: &st.ev.grad,
+            jac_rows: &s.jac_rows,
+            jac_cols: &s.jac_cols,
+            jac: &st.ev.jac,
+            c: &st.ev.c,
+            c_lb: &s.c_lb,
+            c_ub: &s.c_ub,
+            lambda: &sol.lambda,
+            nu: &sol.nu,
+            infeasibility: infeas,
+        });
+        let rec = IterationRecord {
+            iter,
+            objective: st.ev.f,
+            infeasibility: infeas,
+            kkt,
+            step: last_step,
+            seconds: start.elapsed().as_secs_f64(),
+            qp_iterations: sol.iterations,
+        };
+        let go_on = observer.iteration(&rec);
+        history.push(rec);
+        lambda.clone_from(&sol.lambda);
+        nu.clone_from(&sol.nu);
+        if kkt::converged(kkt, settings.tol_kkt, elastic) {
+            status = SqpStatus::Converged;
+            break;
+        }
+        if !go_on {
+            status = SqpStatus::Interrupted;
+            break;
+        }
+        if iter == settings.max_iter {
+            status = SqpStatus::MaxIterations;
+            break;
+        }
+        if settings
+            .max_time
+            .is_some_and(|t| start.elapsed().as_secs_f64() > t)
+        {
+            status = SqpStatus::MaxTime;
+            break;
+        }
+        if kkt::stationary_infeasible(&sol.d, &st.w, elastic, infeas, settings.tol_kkt) {
+            status = SqpStatus::Infeasible;
+            break;
+        }
+        // --- filter line search; derivatives and curvature are computed once, at the
+        // accepted point
+        let (f0, theta0) = st.plain;
+        let search = line_search::search(
+            &s,
+            settings,
+            &mut filter,
+            &st,
+            &sol.d,
+            &|w| eval.plain(w),
+            &|c_soc| {
+                eval.qp(&QpData {
+                    c: c_soc,
+                    ..sub.data(None)
+                })
+                .ok()
+                .map(|q| q.d)
+            },
+        );
+        let trial = match search {
+            Search::Accepted(trial) => trial,
+            Search::Failed => {
+                status = if elastic {
+                    SqpStatus::Infeasible
+                } else {
+                    SqpStatus::LineSearchFailure
+                };
+                break;
+            }
+            Search::Fatal(e) => {
+                status = SqpStatus::EvaluationFailure(e.chain());
+                break;
+            }
+        };
+        let (ev_new, hess_new) = match eval.derivs(&trial.w, &sol.lambda) {
+            Ok(r) => r,
+            Err(e) => {
+                status = SqpStatus::EvaluationFailure(e.chain());
+                break;
+            }
+        };
+        if trial.augment {
+            filter.augment(theta0, f0);
+        }
+        last_step = trial.step;
+        // --- quasi-Newton update with the new multipliers
+        if settings.hessian == HessianMode::Bfgs || settings.hessian == HessianMode::GaussNewtonBfgs
+        {
+            quasi_newton_update(
+                &mut bfgs,
+                &s,
+                settings.hessian == HessianMode::GaussNewtonBfgs,
+                (&st, &trial.w, &ev_new),
+                &sol.lambda,
+            );
+        }
+        st = State {
+            w: trial.w,
+            ev: ev_new,
+            hess: hess_new,
+            plain: trial.plain,
+        };
+        if observer.wants_checkpoints() {
+            observer.checkpoint(&SqpCheckpoint {
+                version: CHECKPOINT_VERSION,
+                n,
+                m,
+                next_iter: iter + 1,
+                w: ExactVec::new(&st.w),
+                lambda: ExactVec::new(&lambda),
+                nu: ExactVec::new(&nu),
+                scalars: ExactVec::new(&[
+                    mem.lam_est,
+                    mem.test_rho_scale,
+                    mem.shift,
+                    filter.theta_max,
+                    last_step,
+                    start.elapsed().as_secs_f64(),
+                ]),
+                filter: ExactVec::new(
+                    &filter
+                        .entries
+                        .iter()
+                        .flat_map(|&(a, b)| [a, b])
+                        .collect::<Vec<f64>>(),
+                ),
+                bfgs: bfgs
+                    .state()
+                    .into_iter()
+                    .map(|(b, s)| (ExactVec::new(&b), s))
+                    .collect(),
+                history: history.iter().map(ExactRecord::from).collect(),
+                timings: eval.timings(),
+            });
+        }
+    }
+    let viol = violations(&st.ev.c, &s.c_lb, &s.c_ub);
+    let mut order: Vec<usize> = (0..m).filter(|&i| viol[i] > settings.tol_kkt).collect();
+    order.sort_by(|&a, &b| viol[b].total_cmp(&viol[a]));
+    let most_violated = order
+        .iter()
+        .take(10)
+        .map(|&i| Violation {
+            name: nlp.row_name(i),
+            amount: viol[i],
+        })
+        .collect();
+    SqpResult {
+        objective: st.ev.f,
+        infeasibility: viol.iter().copied().fold(0.0, f64::max),
+        kkt,
+        status,
+        history,
+        most_violated,
+        seconds: start.elapsed().as_secs_f64(),
+        timings: eval.timings(),
+        w: st.w,
+        lambda,
+        nu,
+    }
+}
+
+/// BFGS update of the Lagrangian's curvature from `old` to the accepted point
+/// (`w_new`, `ev_new`) with the new multipliers: the full Lagrangian gradient, or with
+/// `structured` (Gauss–Newton + BFGS) only the constraint part; rows with exact curvature
+/// are left out.
+fn quasi_newton_update(
+    bfgs: &mut BlockBfgs,
+    s: &Structure,
+    structured: bool,
+    (old, w_new, ev_new): (&State, &[f64], &NlpEval),
+    lambda: &[f64],
+) {
+    let n = s.n;
+    let mut gl_new = if structured {
+        vec![0.0; n]
+    } else {
+        ev_new.grad.clone()
+    };
+    let mut gl_old = if structured {
+        vec![0.0; n]
+    } else {
+        old.ev.grad.clone()
+    };
+    for k in 0..s.jac_rows.len() {
+        if s.exact_rows[s.jac_rows[k]] {
+            continue;
+        }
+        gl_new[s.jac_cols[k]] += ev_new.jac[k] * lambda[s.jac_rows[k]];
+        gl_old[s.jac_cols[k]] += old.ev.jac[k] * lambda[s.jac_rows[k]];
+    }
+    let sv: Vec<f64> = (0..n).map(|i| w_new[i] - old.w[i]).collect();
+    let y: Vec<f64> = (0..n).map(|i| gl_new[i] - gl_old[i]).collect();
+    bfgs.update(&sv, &y);
+}

@@ -1,0 +1,161 @@
+//! The convergence test: the KKT residual at the current point with the QP's
+//! multipliers, and the stop tests built on it.
+
+/// A point with its first derivatives and multipliers, as the KKT test reads it.
+pub(super) struct KktPoint<'a> {
+    /// Objective gradient (length n).
+    pub(super) grad: &'a [f64],
+    /// Jacobian pattern rows.
+    pub(super) jac_rows: &'a [usize],
+    /// Jacobian pattern columns.
+    pub(super) jac_cols: &'a [usize],
+    /// Jacobian values in pattern order.
+    pub(super) jac: &'a [f64],
+    /// Constraint values (length m).
+    pub(super) c: &'a [f64],
+    /// Constraint lower bounds.
+    pub(super) c_lb: &'a [f64],
+    /// Constraint upper bounds.
+    pub(super) c_ub: &'a [f64],
+    /// Constraint multipliers λ (Lagrangian `f + λᵀc + νᵀw`).
+    pub(super) lambda: &'a [f64],
+    /// Bound multipliers ν.
+    pub(super) nu: &'a [f64],
+    /// Largest constraint violation.
+    pub(super) infeasibility: f64,
+}
+
+/// The KKT residual: the largest of the scaled stationarity
+/// `‖∇f + Jᵀλ + ν‖∞ / s_d` (IPOPT's scaling, `s_d = max(1, ‖(λ, ν)‖₁ / ((m + n) 100))`),
+/// the constraint violation and the scaled complementarity of the inequality rows
+/// (`|λ_i|` times the distance to the bound its sign says is active).
+pub(super) fn residual(p: &KktPoint<'_>) -> f64 {
+    let (n, m) = (p.grad.len(), p.c.len());
+    let mut stat = p.grad.to_vec();
+    for k in 0..p.jac_rows.len() {
+        stat[p.jac_cols[k]] += p.jac[k] * p.lambda[p.jac_rows[k]];
+    }
+    for (s, v) in stat.iter_mut().zip(p.nu) {
+        *s += v;
+    }
+    let mult_l1: f64 = p.lambda.iter().chain(p.nu).map(|v| v.abs()).sum();
+    let sd = (mult_l1 / ((m + n) as f64 * 100.0)).max(1.0);
+    let stat_inf = stat.iter().map(|v| v.abs()).fold(0.0, f64::max) / sd;
+    let compl = (0..m)
+        .map(|i| {
+            let (c, l, u) = (p.c[i], p.c_lb[i], p.c_ub[i]);
+            if l == u {
+                0.0
+            } else if p.lambda[i] > 0.0 {
+                (p.lambda[i] * (u - c)).abs()
+            } else {
+                (p.lambda[i] * (c - l)).abs()
+            }
+        })
+        .fold(0.0, f64::max);
+    stat_inf.max(p.infeasibility).max(compl / sd)
+}
+
+/// Converged: the residual is within the tolerance and the step came from a consistent
+/// QP (an elastic QP's multipliers belong to the penalty problem, not the NLP).
+pub(super) fn converged(kkt: f64, tol: f64, elastic: bool) -> bool {
+    kkt <= tol && !elastic
+}
+
+/// Locally infeasible: the elastic QP, which minimises the linearised violation, no
+/// longer moves (`‖d‖∞ ≤ 10⁻¹⁰ max(1, ‖w‖∞)`) while the violation exceeds the tolerance.
+pub(super) fn stationary_infeasible(
+    d: &[f64],
+    w: &[f64],
+    elastic: bool,
+    infeasibility: f64,
+    tol: f64,
+) -> bool {
+    let dnorm = d.iter().map(|v| v.abs()).fold(0.0, f64::max);
+    let wnorm = w.iter().map(|v| v.abs()).fold(1.0, f64::max);
+    elastic && dnorm <= 1e-10 * wnorm && infeasibility > tol
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// min x² + y² s.t. x + y = 1 (row 0) and 0 ≤ x − y ≤ 1 (row 1), at `w` with the
+    /// given multipliers (`store` holds the gradient, constraints and Jacobian).
+    fn point<'a>(
+        w: [f64; 2],
+        lambda: &'a [f64],
+        nu: &'a [f64],
+        store: &'a mut (Vec<f64>, Vec<f64>, Vec<f64>),
+    ) -> KktPoint<'a> {
+        let (x, y) = (w[0], w[1]);
+        store.0 = vec![2.0 * x, 2.0 * y];
+        store.1 = vec![x + y, x - y];
+        store.2 = vec![1.0, 1.0, 1.0, -1.0];
+        let infeasibility = ((x + y) - 1.0)
+            .abs()
+            .max((0.0 - (x - y)).max((x - y) - 1.0).max(0.0));
+        KktPoint {
+            grad: &store.0,
+            jac_rows: &[0, 0, 1, 1],
+            jac_cols: &[0, 1, 0, 1],
+            jac: &store.2,
+            c: &store.1,
+            c_lb: &[1.0, 0.0],
+            c_ub: &[1.0, 1.0],
+            lambda,
+            nu,
+            infeasibility,
+        }
+    }
+
+    /// At the optimum (½, ½) with λ = (−1, 0), ν = 0 every part vanishes.
+    #[test]
+    fn the_residual_vanishes_at_a_kkt_point() {
+        let mut s = Default::default();
+        let p = point([0.5, 0.5], &[-1.0, 0.0], &[0.0, 0.0], &mut s);
+        assert_eq!(residual(&p), 0.0);
+        assert!(converged(residual(&p), 1e-12, false));
+        assert!(!converged(residual(&p), 1e-12, true));
+    }
+
+    /// Hand-computed parts at (0.6, 0.3), λ = (−1, 0.5), ν = (0, 0.1):
+    /// ∇f + Jᵀλ + ν = (1.2 − 1 + 0.5, 0.6 − 1 − 0.5 + 0.1) = (0.7, −0.8) → 0.8 (s_d = 1);
+    /// violation |0.9 − 1| = 0.1; complementarity of row 1 (λ > 0: upper bound active)
+    /// |0.5 · (1 − 0.3)| = 0.35. The residual is the largest, 0.8.
+    #[test]
+    fn the_residual_is_the_largest_of_its_hand_computed_parts() {
+        let mut s = Default::default();
+        let p = point([0.6, 0.3], &[-1.0, 0.5], &[0.0, 0.1], &mut s);
+        assert!((p.infeasibility - 0.1).abs() < 1e-15);
+        assert!((residual(&p) - 0.8).abs() < 1e-15, "{}", residual(&p));
+        // with the stationarity fixed by ν, the complementarity 0.35 decides
+        let p = point([0.6, 0.3], &[-1.0, 0.5], &[-0.7, 0.9], &mut s);
+        assert!((residual(&p) - 0.35).abs() < 1e-15, "{}", residual(&p));
+    }
+
+    /// Large multipliers scale the stationarity down by
+    /// s_d = ‖(λ, ν)‖₁ / ((m + n) 100), not the violation: with λ = (−1000, 0) and
+    /// ν = (996.8, 999.4) at (0.6, 0.3) the stationarity is (−2, 0) and
+    /// s_d = 2996.2 / 400, so the residual is 2 / s_d ≈ 0.267 (above the violation 0.1).
+    #[test]
+    fn large_multipliers_scale_the_dual_parts() {
+        let mut s = Default::default();
+        let p = point([0.6, 0.3], &[-1000.0, 0.0], &[996.8, 999.4], &mut s);
+        let want = 2.0 / (2996.2 / 400.0);
+        assert!(
+            (residual(&p) - want).abs() < 1e-12,
+            "{} vs {want}",
+            residual(&p)
+        );
+    }
+
+    #[test]
+    fn an_elastic_step_that_no_longer_moves_means_infeasible() {
+        let w = [2.0, -3.0];
+        assert!(stationary_infeasible(&[2e-10, 0.0], &w, true, 1.0, 1e-6));
+        assert!(!stationary_infeasible(&[4e-10, 0.0], &w, true, 1.0, 1e-6));
+        assert!(!stationary_infeasible(&[0.0, 0.0], &w, false, 1.0, 1e-6));
+        assert!(!stationary_infeasible(&[0.0, 0.0], &w, true, 1e-7, 1e-6));
+    }
+}

@@ -1,0 +1,613 @@
+//! The step: the QP subproblem at the current iterate and its solution.
+//!
+//! The QP's Hessian follows [`HessianMode`]: Gauss–Newton, block BFGS, the structured
+//! mix, or the exact Hessian of the Lagrangian made convex ([`ExactConvexification`]).
+//! When the QP fails, the exact mode retries with its block-convexified Hessian; an
+//! inconsistent (or stalled) QP is solved in elastic mode, with every row's violation
+//! penalised; when that fails too, a growing proximal shift `δ I` gives a
+//! better-conditioned QP with a shorter step.
+
+use super::driver::{State, Structure};
+use super::evaluator::Evaluator;
+use super::hessian::{self, BlockBfgs};
+use super::qp::{QpData, QpError, QpSolution, Triplets};
+use super::{ExactConvexification, HessianMode, Nlp, SqpSettings, SqpStatus};
+
+/// What the step computation carries from one iteration to the next (and in
+/// checkpoints).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct StepMemory {
+    /// Size of the multipliers of the last consistent QP: the elastic penalty exceeds it.
+    pub(super) lam_est: f64,
+    /// ρ of the exact mode's augmentation or convexity test is this times max|H|
+    /// (raised when a QP fails).
+    pub(super) test_rho_scale: f64,
+    /// Inertia-correction shift of the exact mode's QP Hessian (last value).
+    pub(super) shift: f64,
+}
+
+impl Default for StepMemory {
+    fn default() -> Self {
+        Self {
+            lam_est: 1.0,
+            test_rho_scale: 1.0,
+            shift: 0.0,
+        }
+    }
+}
+
+/// The QP subproblem at one iterate.
+pub(super) struct Subproblem<'a> {
+    s: &'a Structure,
+    /// The QP Hessian (upper triangle, regularised).
+    h: Triplets,
+    /// Exact mode: the block-convexified Hessian, for elastic QPs and when the QP fails.
+    h_elastic: Option<Triplets>,
+    /// Augmentation ρ of the exact mode's QP ([`ExactConvexification::Augmented`]).
+    aug_rho: f64,
+    /// The equality rows of the Jacobian, when augmented.
+    eq_rows: Vec<Vec<(usize, f64)>>,
+    jac: Triplets,
+    g: &'a [f64],
+    c: &'a [f64],
+    d_lb: Vec<f64>,
+    d_ub: Vec<f64>,
+}
+
+impl Subproblem<'_> {
+    /// The QP; in elastic mode (penalty ρ) with the convexified Hessian if there is one.
+    pub(super) fn data(&self, elastic: Option<f64>) -> QpData<'_> {
+        QpData {
+            h: if elastic.is_some() {
+                self.h_elastic.as_ref().unwrap_or(&self.h)
+            } else {
+                &self.h
+            },
+            g: self.g,
+            jac: &self.jac,
+            c: self.c,
+            c_lb: &self.s.c_lb,
+            c_ub: &self.s.c_ub,
+            d_lb: &self.d_lb,
+            d_ub: &self.d_ub,
+            elastic,
+            elastic_weights: &self.s.elastic_weights,
+        }
+    }
+}
+
+/// A solved subproblem.
+#[derive(Debug)]
+pub(super) struct Step {
+    /// Step and multipliers (the equality multipliers corrected for the augmentation).
+    pub(super) sol: QpSolution,
+    /// Whether it came from the elastic QP.
+    pub(super) elastic: bool,
+}
+
+/// Build the QP at `st` with multipliers `lambda`, `nu` of the last QP; `infeas` is the
+/// largest constraint violation at `st`. `zero_blocks` is the Hessian's block structure
+/// with zero matrices (convexification block by block). An error is the solve's status.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn subproblem<'a>(
+    nlp: &dyn Nlp,
+    settings: &SqpSettings,
+    s: &'a Structure,
+    st: &'a State,
+    (lambda, nu): (&[f64], &[f64]),
+    infeas: f64,
+    (bfgs, zero_blocks): (&BlockBfgs, &BlockBfgs),
+    mem: &mut StepMemory,
+) -> Result<Subproblem<'a>, SqpStatus> {
+    let (n, m) = (s.n, s.m);
+    let mut h = Triplets::default();
+    let mut h_elastic: Option<Triplets> = None;
+    let mut aug_rho = 0.0;
+    let mut eq_rows: Vec<Vec<(usize, f64)>> = Vec::new();
+    match settings.hessian {
+        HessianMode::GaussNewton => {
+            h.rows.clone_from(&s.gn_rows);
+            h.cols.clone_from(&s.gn_cols);
+            h.vals.clone_from(&st.ev.gn);
+        }
+        HessianMode::Bfgs if !s.any_exact => bfgs.push_upper(&mut h),
+        HessianMode::Bfgs => {}
+        HessianMode::Exact => {
+            let mut ex = Triplets {
+                rows: s.gn_rows.clone(),
+                cols: s.gn_cols.clone(),
+                vals: st.ev.gn.clone(),
+            };
+            // far from feasibility the multipliers (and so the curvature) are unreliable:
+            // use the curvature only once the violation is below `exact_hessian_below`
+            let use_curvature = infeas <= settings.exact_hessian_below && st.hess.is_some();
+            if let (Some(hx), true) = (&st.hess, use_curvature) {
+                ex.rows.extend_from_slice(&hx.rows);
+                ex.cols.extend_from_slice(&hx.cols);
+                ex.vals.extend_from_slice(&hx.vals);
+            }
+            // block-convexified copy: for elastic QPs and when a QP fails
+            let mut conv = Triplets::default();
+            zero_blocks.convexify_into(&mut ex.clone(), &mut conv);
+            for i in 0..n {
+                conv.push(i, i, settings.regularization);
+            }
+            h_elastic = Some(conv);
+            if settings.exact_convexification == ExactConvexification::Augmented {
+                let hmax = ex.vals.iter().map(|v| v.abs()).fold(1.0, f64::max);
+                aug_rho = mem.test_rho_scale * hmax;
+                eq_rows = sparse_rows(m, &s.jac_rows, &s.jac_cols, &st.ev.jac, |i| {
+                    s.c_lb[i] == s.c_ub[i]
+                });
+                ex.extend_scaled(&row_gram(&eq_rows), aug_rho);
+            } else if use_curvature {
+                mem.shift = exact_qp_hessian(
+                    &mut ex,
+                    &ExactQpContext {
+                        n,
+                        w: &st.w,
+                        w_lb: &s.w_lb,
+                        w_ub: &s.w_ub,
+                        nu,
+                        c: &st.ev.c,
+                        c_lb: &s.c_lb,
+                        c_ub: &s.c_ub,
+                        lambda,
+                        jac_rows: &s.jac_rows,
+                        jac_cols: &s.jac_cols,
+                        jac: &st.ev.jac,
+                        test_rho_scale: mem.test_rho_scale,
+                        previous_shift: mem.shift,
+                    },
+                );
+            }
+            h = ex;
+        }
+        HessianMode::GaussNewtonBfgs => {
+            h.rows.clone_from(&s.gn_rows);
+            h.cols.clone_from(&s.gn_cols);
+            h.vals.clone_from(&st.ev.gn);
+            if !s.any_exact {
+                bfgs.push_upper(&mut h);
+            }
+        }
+    }
+    if s.any_exact
+        && matches!(
+            settings.hessian,
+            HessianMode::Bfgs | HessianMode::GaussNewtonBfgs
+        )
+    {
+        match nlp.exact_hessian(&st.w, lambda) {
+            Ok((r, c, v)) => {
+                let mut ex = Triplets {
+                    rows: r,
+                    cols: c,
+                    vals: v,
+                };
+                bfgs.convexify_into(&mut ex, &mut h);
+            }
+            Err(e) => return Err(SqpStatus::EvaluationFailure(e.chain())),
+        }
+    }
+    for i in 0..n {
+        h.push(i, i, settings.regularization);
+    }
+    Ok(Subproblem {
+        s,
+        h,
+        h_elastic,
+        aug_rho,
+        eq_rows,
+        jac: s.jacobian(&st.ev.jac),
+        g: &st.ev.grad,
+        c: &st.ev.c,
+        d_lb: (0..n).map(|i| s.w_lb[i] - st.w[i]).collect(),
+        d_ub: (0..n).map(|i| s.w_ub[i] - st.w[i]).collect(),
+    })
+}
+
+/// Solve the subproblem: the QP; in the exact mode after a failure its block-convexified
+/// version (and a larger ρ from now on); if inconsistent or failed, the elastic QP with
+/// penalty `clamp(10 λ_est, 10³, 10⁸)`; if that fails, the proximal rescue. An error is
+/// the solve's status ([`SqpStatus::QpFailure`] with the elastic QP's error).
+pub(super) fn solve(
+    eval: &Evaluator<'_>,
+    sub: &Subproblem<'_>,
+    mem: &mut StepMemory,
+) -> Result<Step, SqpStatus> {
+    let rho = (10.0 * mem.lam_est).clamp(1e3, 1e8);
+    let mut aug_rho = sub.aug_rho;
+    let mut first = eval.qp(&sub.data(None));
+    if let (Err(QpError::Failed(_)), Some(hc)) = (&first, sub.h_elastic.as_ref()) {
+        // exact mode: the QP was not solved with the exact curvature; test convexity
+        // with a larger ρ from now on and solve this one with the block-convexified Hessian
+        mem.test_rho_scale *= 10.0;
+        aug_rho = 0.0;
+        first = eval.qp(&QpData {
+            h: hc,
+            ..sub.data(None)
+        });
+    }
+    let (mut sol, elastic) = match first {
+        Ok(s) => (s, false),
+        // inconsistent linearisation (or a stalled, nearly inconsistent one): elastic mode
+        Err(QpError::Infeasible | QpError::Failed(_)) => match eval.qp(&sub.data(Some(rho))) {
+            Ok(s) => (s, true),
+            Err(e) => match rescue(eval, sub) {
+                Some(s) => (s, false),
+                None => return Err(SqpStatus::QpFailure(e.to_string())),
+            },
+        },
+    };
+    if aug_rho > 0.0 && !elastic {
+        // ρ JₑᵀJₑ moves the QP's equality multipliers by −ρ·(Jₑ d)
+        for (i, row) in sub.eq_rows.iter().enumerate() {
+            sol.lambda[i] += aug_rho * row.iter().map(|&(c, v)| v * sol.d[c]).sum::<f64>();
+        }
+    }
+    if !elastic {
+        mem.lam_est = sol.lambda.iter().map(|v| v.abs()).fold(1.0, f64::max);
+    }
+    Ok(Step { sol, elastic })
+}
+
+/// The interior-point solver lost accuracy on this QP: a proximal shift δI (growing,
+/// δ = (10⁻⁶, 10⁻⁴, 10⁻², 1) · max(1, max|H|)) gives a better-conditioned QP with a
+/// shorter step; the first that solves.
+fn rescue(eval: &Evaluator<'_>, sub: &Subproblem<'_>) -> Option<QpSolution> {
+    let hmax = sub.h.vals.iter().fold(1.0f64, |m, v| m.max(v.abs()));
+    for delta in [1e-6, 1e-4, 1e-2, 1.0] {
+        let mut hs = sub.h.clone();
+        for i in 0..sub.s.n {
+            hs.push(i, i, delta * hmax);
+        }
+        if let Ok(s) = eval.qp(&QpData {
+            h: &hs,
+            ..sub.data(None)
+        }) {
+            return Some(s);
+        }
+    }
+    None
+}
+
+/// What [`exact_qp_hessian`] needs to know about the current iterate.
+struct ExactQpContext<'a> {
+    n: usize,
+    w: &'a [f64],
+    w_lb: &'a [f64],
+    w_ub: &'a [f64],
+    /// Bound multipliers of the last QP.
+    nu: &'a [f64],
+    c: &'a [f64],
+    c_lb: &'a [f64],
+    c_ub: &'a [f64],
+    /// Constraint multipliers of the last QP.
+    lambda: &'a [f64],
+    jac_rows: &'a [usize],
+    jac_cols: &'a [usize],
+    jac: &'a [f64],
+    test_rho_scale: f64,
+    previous_shift: f64,
+}
+
+/// Make the exact Hessian of the Lagrangian `h` usable in a convex QP without changing
+/// the Newton step where that is possible; returns the shift δ applied.
+///
+/// Multiple-shooting Hessians are indefinite; what matters is the curvature on the
+/// directions the linearised active constraints leave free. (1) Variables held at a bound
+/// (at it, with a bound multiplier in the last QP) get a diagonal of the Hessian's size,
+/// which costs nothing while they stay there. (2) Convexity on the null space of the
+/// equalities and active inequalities is tested by a sparse LDLᵀ of `h + ρ Σ J_iᵀJ_i` over
+/// those rows for ρ = (1, 10², 10⁴) · max|h| (Finsler: positive definite for some ρ iff the
+/// reduced Hessian is); where it fails, δI is added, δ the smallest of a geometric
+/// sequence that passes (the inertia correction of Wächter & Biegler 2006, §3.1). The QP
+/// itself gets `h + δI` without the ρ term, so its multipliers are the Lagrangian's.
+fn exact_qp_hessian(h: &mut Triplets, cx: &ExactQpContext<'_>) -> f64 {
+    let n = cx.n;
+    let hmax = h.vals.iter().map(|v| v.abs()).fold(1.0, f64::max);
+    for i in 0..n {
+        let tol = 1e-9 * (1.0 + cx.w[i].abs());
+        if (cx.w[i] - cx.w_lb[i] <= tol || cx.w_ub[i] - cx.w[i] <= tol) && cx.nu[i] != 0.0 {
+            h.push(i, i, hmax);
+        }
+    }
+    // the rows of the test: equalities and inequalities active in the last QP
+    let lam_max = cx.lambda.iter().fold(1.0f64, |a, v| a.max(v.abs()));
+    let tested: Vec<bool> = (0..cx.c.len())
+        .map(|i| {
+            let tol = 1e-6 * (1.0 + cx.c[i].abs());
+            let active = (cx.c[i] - cx.c_lb[i]).abs() <= tol || (cx.c_ub[i] - cx.c[i]).abs() <= tol;
+            cx.c_lb[i] == cx.c_ub[i] || (active && cx.lambda[i].abs() > 1e-8 * lam_max)
+        })
+        .collect();
+    let jtj = row_gram(&sparse_rows(
+        cx.c.len(),
+        cx.jac_rows,
+        cx.jac_cols,
+        cx.jac,
+        |i| tested[i],
+    ));
+    let mut best: Option<f64> = None;
+    let mut test = hessian::ConvexityTest::new(n, h, &jtj);
+    for f in [1.0, 1e2, 1e4] {
+        let rho = cx.test_rho_scale * hmax * f;
+        if let Some(d) = test.shift(rho, cx.previous_shift, 1e-12 * hmax, 1e2 * hmax) {
+            if best.is_none_or(|b| d < b) {
+                best = Some(d);
+            }
+            if d == 0.0 {
+                break;
+            }
+        }
+    }
+    let delta = best.unwrap_or(1e2 * hmax);
+    if delta > 0.0 {
+        for i in 0..n {
+            h.push(i, i, delta);
+        }
+    }
+    delta
+}
+
+/// The rows `i` of a sparse Jacobian (triplets in pattern order) with `keep(i)`, each as
+/// `(column, value)` pairs; the other rows empty.
+fn sparse_rows(
+    m: usize,
+    rows: &[usize],
+    cols: &[usize],
+    vals: &[f64],
+    keep: impl Fn(usize) -> bool,
+) -> Vec<Vec<(usize, f64)>> {
+    let mut out: Vec<Vec<(usize, f64)>> = vec![Vec::new(); m];
+    for k in 0..rows.len() {
+        if keep(rows[k]) {
+            out[rows[k]].push((cols[k], vals[k]));
+        }
+    }
+    out
+}
+
+/// `Σ_i J_iᵀJ_i` over the given sparse rows, as upper-triangle triplets.
+fn row_gram(rows: &[Vec<(usize, f64)>]) -> Triplets {
+    let mut t = Triplets::default();
+    for row in rows {
+        for a in 0..row.len() {
+            for b in a..row.len() {
+                let ((ca, va), (cb, vb)) = (row[a], row[b]);
+                let v = if ca == cb && a != b {
+                    2.0 * va * vb
+                } else {
+                    va * vb
+                };
+                t.push(ca.min(cb), ca.max(cb), v);
+            }
+        }
+    }
+    t
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sqp::{EvalError, NlpEval};
+
+    /// An NLP the step never evaluates (the subproblems below are built by hand).
+    struct Unused;
+
+    impl Nlp for Unused {
+        fn n(&self) -> usize {
+            unreachable!()
+        }
+        fn m(&self) -> usize {
+            unreachable!()
+        }
+        fn bounds(&self) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
+            unreachable!()
+        }
+        fn jacobian_pattern(&self) -> (Vec<usize>, Vec<usize>) {
+            unreachable!()
+        }
+        fn gauss_newton_pattern(&self) -> (Vec<usize>, Vec<usize>) {
+            unreachable!()
+        }
+        fn hessian_blocks(&self) -> Vec<Vec<usize>> {
+            unreachable!()
+        }
+        fn evaluate(&self, _: &[f64], _: bool) -> Result<NlpEval, EvalError> {
+            unreachable!()
+        }
+        fn row_name(&self, i: usize) -> String {
+            format!("row {i}")
+        }
+    }
+
+    fn settings(inject: &[usize]) -> SqpSettings {
+        SqpSettings {
+            inject_qp_failures: inject.to_vec(),
+            ..SqpSettings::default()
+        }
+    }
+
+    /// Equality rows `c_i = 0` with a dense Jacobian pattern (row by row), variable
+    /// bounds ±10, elastic weights `weights`.
+    fn structure(n: usize, weights: &[f64]) -> Structure {
+        let m = weights.len();
+        Structure {
+            n,
+            m,
+            w_lb: vec![-10.0; n],
+            w_ub: vec![10.0; n],
+            c_lb: vec![0.0; m],
+            c_ub: vec![0.0; m],
+            jac_rows: (0..m * n).map(|k| k / n).collect(),
+            jac_cols: (0..m * n).map(|k| k % n).collect(),
+            elastic_weights: weights.to_vec(),
+            exact_rows: vec![false; m],
+            ..Structure::default()
+        }
+    }
+
+    fn diagonal(d: &[f64]) -> Triplets {
+        let mut t = Triplets::default();
+        for (i, &v) in d.iter().enumerate() {
+            t.push(i, i, v);
+        }
+        t
+    }
+
+    fn subproblem<'a>(
+        s: &'a Structure,
+        h: Triplets,
+        jac: &[f64],
+        g: &'a [f64],
+        c: &'a [f64],
+    ) -> Subproblem<'a> {
+        Subproblem {
+            s,
+            h,
+            h_elastic: None,
+            aug_rho: 0.0,
+            eq_rows: Vec::new(),
+            jac: s.jacobian(jac),
+            g,
+            c,
+            d_lb: s.w_lb.clone(),
+            d_ub: s.w_ub.clone(),
+        }
+    }
+
+    /// x − 1 = 0 (weight 10) and x + 1 = 0 (weight 1) at x = 0: the linearisation asks
+    /// for d = 1 and d = −1 at once. The elastic QP (penalty 10³) keeps the heavier row:
+    /// min ½d² + 10³(10|d − 1| + |d + 1|) is at d = 1.
+    #[test]
+    fn an_inconsistent_linearisation_is_solved_in_elastic_mode() {
+        let s = structure(1, &[10.0, 1.0]);
+        let sub = subproblem(&s, diagonal(&[1.0]), &[1.0, 1.0], &[0.0], &[-1.0, 1.0]);
+        let settings = settings(&[]);
+        let eval = Evaluator::new(&Unused, &settings, Default::default());
+        let mut mem = StepMemory::default();
+        let step = solve(&eval, &sub, &mut mem).expect("elastic QP");
+        assert!(step.elastic);
+        assert!((step.sol.d[0] - 1.0).abs() < 1e-6, "{:?}", step.sol.d);
+        // the estimate of the multipliers' size is kept from consistent QPs only
+        assert_eq!(mem.lam_est, 1.0);
+        assert_eq!(eval.timings().qp_solves, 2);
+    }
+
+    /// min d² − 2d (d = 1) when the QP and its elastic version fail: the proximal rescue
+    /// solves with H + 10⁻⁶·max|H|·I = 2 + 2·10⁻⁶, d = 1/(1 + 10⁻⁶); when every
+    /// shift fails too, the solve stops with the elastic QP's error.
+    #[test]
+    fn a_failed_qp_is_rescued_by_a_proximal_shift() {
+        let s = structure(1, &[]);
+        let sub = subproblem(&s, diagonal(&[2.0]), &[], &[-2.0], &[]);
+        let settings = settings(&[0, 1]);
+        let eval = Evaluator::new(&Unused, &settings, Default::default());
+        let step = solve(&eval, &sub, &mut StepMemory::default()).expect("rescued");
+        assert!(!step.elastic);
+        let want = 1.0 / (1.0 + 1e-6);
+        assert!((step.sol.d[0] - want).abs() < 1e-9, "{:?}", step.sol.d);
+        assert_eq!(eval.timings().qp_solves, 3);
+
+        let settings = self::settings(&[0, 1, 2, 3, 4, 5]);
+        let eval = Evaluator::new(&Unused, &settings, Default::default());
+        match solve(&eval, &sub, &mut StepMemory::default()) {
+            Err(SqpStatus::QpFailure(e)) => assert!(e.contains("injected"), "{e}"),
+            other => panic!("{other:?}"),
+        }
+        assert_eq!(eval.timings().qp_solves, 6);
+    }
+
+    /// min ½|d|² s.t. d₁ + d₂ = 1 (c = −1): d = (½, ½), λ = −½ (Lagrangian f + λc).
+    /// With the augmentation ρ JᵀJ (ρ = 10) the QP's multiplier is −½ − ρ; the step
+    /// corrects it back to −½. When the QP fails, the exact mode solves with its
+    /// convexified Hessian instead, raises the test's ρ scale tenfold and corrects
+    /// nothing.
+    #[test]
+    fn the_augmented_qp_returns_the_lagrangian_multipliers() {
+        let s = structure(2, &[1.0]);
+        let mut sub = subproblem(&s, diagonal(&[1.0, 1.0]), &[1.0, 1.0], &[0.0, 0.0], &[-1.0]);
+        sub.aug_rho = 10.0;
+        sub.eq_rows = sparse_rows(1, &s.jac_rows, &s.jac_cols, &[1.0, 1.0], |_| true);
+        sub.h.extend_scaled(&row_gram(&sub.eq_rows), sub.aug_rho);
+        let settings = settings(&[]);
+        let eval = Evaluator::new(&Unused, &settings, Default::default());
+        let step = solve(&eval, &sub, &mut StepMemory::default()).expect("QP");
+        assert!((step.sol.d[0] - 0.5).abs() < 1e-7 && (step.sol.d[1] - 0.5).abs() < 1e-7);
+        assert!(
+            (step.sol.lambda[0] + 0.5).abs() < 1e-6,
+            "{:?}",
+            step.sol.lambda
+        );
+
+        sub.h_elastic = Some(diagonal(&[2.0, 2.0]));
+        let settings = self::settings(&[0]);
+        let eval = Evaluator::new(&Unused, &settings, Default::default());
+        let mut mem = StepMemory::default();
+        let step = solve(&eval, &sub, &mut mem).expect("convexified QP");
+        assert_eq!(mem.test_rho_scale, 10.0);
+        // H = 2I: d = (½, ½), λ = −1, uncorrected
+        assert!(
+            (step.sol.lambda[0] + 1.0).abs() < 1e-6,
+            "{:?}",
+            step.sol.lambda
+        );
+        assert_eq!(mem.lam_est, step.sol.lambda[0].abs().max(1.0));
+    }
+
+    /// The Gauss–Newton subproblem: the Gauss–Newton values plus the regularisation on
+    /// the diagonal, the step bounds w_lb − w and w_ub − w.
+    #[test]
+    fn the_gauss_newton_subproblem_is_the_gauss_newton_matrix_regularised() {
+        let mut s = structure(2, &[1.0]);
+        s.gn_rows = vec![0, 0, 1];
+        s.gn_cols = vec![0, 1, 1];
+        let st = State {
+            w: vec![1.0, -2.0],
+            ev: NlpEval {
+                f: 0.0,
+                c: vec![0.5],
+                grad: vec![1.0, 2.0],
+                jac: vec![1.0, 1.0],
+                gn: vec![4.0, 1.0, 3.0],
+            },
+            hess: None,
+            plain: (0.0, 0.5),
+        };
+        let settings = settings(&[]);
+        let blocks = BlockBfgs::new(vec![vec![0], vec![1]], settings.bfgs_update);
+        let sub = subproblem_of(&settings, &s, &st, &blocks);
+        assert_eq!(sub.h.rows, vec![0, 0, 1, 0, 1]);
+        assert_eq!(sub.h.cols, vec![0, 1, 1, 0, 1]);
+        assert_eq!(sub.h.vals, vec![4.0, 1.0, 3.0, 1e-9, 1e-9]);
+        assert_eq!(
+            (sub.d_lb.clone(), sub.d_ub.clone()),
+            (vec![-11.0, -8.0], vec![9.0, 12.0])
+        );
+        assert_eq!(sub.data(None).g, &[1.0, 2.0]);
+    }
+
+    fn subproblem_of<'a>(
+        settings: &SqpSettings,
+        s: &'a Structure,
+        st: &'a State,
+        blocks: &BlockBfgs,
+    ) -> Subproblem<'a> {
+        let (lambda, nu) = (vec![0.0; s.m], vec![0.0; s.n]);
+        let Ok(sub) = super::subproblem(
+            &Unused,
+            settings,
+            s,
+            st,
+            (&lambda, &nu),
+            0.5,
+            (blocks, blocks),
+            &mut StepMemory::default(),
+        ) else {
+            panic!("subproblem")
+        };
+        sub
+    }
+}
