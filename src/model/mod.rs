@@ -12,5 +12,5 @@ pub mod scalar;
 pub mod spec;
 
 pub use error::{DynamicsError, ModelError};
-pub use gait::{ConstraintSet, ContactReport, FootLoad, GaitModel, GaitOde, RowKind, Side};
+pub use gait::{ConstraintSet, ContactReport, FootLoad, GaitModel, RowKind, Side};
 pub use scalar::Scalar;
