@@ -2,8 +2,11 @@
 //! actuators and effects, loaded from a model file and a foot file.
 //!
 //! [`GaitModel`] holds the model and its parameters; its methods live beside it by
-//! concept: [`contact`] (constraint sets and constraint kinematics), [`dynamics`] (forward
-//! dynamics with contact and the impact map) and [`jacobians`] (derivatives by AD).
+//! concept: `gait/contact.rs` (constraint sets and constraint kinematics),
+//! `gait/dynamics.rs` (forward dynamics with contact and the impact map) and
+//! `gait/jacobians.rs` (derivatives by AD). The body is built in
+//! [`anthropometry`](super::anthropometry); the integrator's view of the model is
+//! `problems::GaitOde`, above this layer.
 
 mod contact;
 mod dynamics;

@@ -6,6 +6,7 @@ pub mod effects;
 pub mod error;
 pub mod gait;
 pub mod geometry;
+pub mod json;
 pub mod linalg;
 pub mod multibody;
 pub mod scalar;
