@@ -8,7 +8,8 @@
 
 use criterion::{black_box, criterion_group, criterion_main, Criterion};
 use footfall::integrate::{ControlShape, Integrator, IntegratorSettings, ShootingInterval};
-use footfall::model::{GaitModel, GaitOde};
+use footfall::model::GaitModel;
+use footfall::problems::GaitOde;
 use std::path::Path;
 
 fn setup(foot: &str, contacts: &[(&str, bool)]) -> (GaitModel, Vec<f64>, Vec<f64>) {

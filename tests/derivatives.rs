@@ -5,7 +5,8 @@
 mod common;
 use common::*;
 use footfall::integrate::{ControlShape, Integrator, IntegratorSettings, Ode, ShootingInterval};
-use footfall::model::{GaitModel, GaitOde};
+use footfall::model::GaitModel;
+use footfall::problems::GaitOde;
 
 fn stiff_model(foot: &str) -> GaitModel {
     model_with_effects(

@@ -6,11 +6,12 @@ pub mod effects;
 pub mod error;
 pub mod gait;
 pub mod geometry;
+pub mod json;
 pub mod linalg;
 pub mod multibody;
 pub mod scalar;
 pub mod spec;
 
 pub use error::{DynamicsError, ModelError};
-pub use gait::{ConstraintSet, ContactReport, FootLoad, GaitModel, GaitOde, RowKind, Side};
+pub use gait::{ConstraintSet, ContactReport, FootLoad, GaitModel, RowKind, Side};
 pub use scalar::Scalar;

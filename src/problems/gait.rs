@@ -7,11 +7,11 @@
 //! Leading impact phases of a phase file (e.g. `1e*`) are realised by the trailing impact
 //! of the mirrored cycle: the state after the last impact, mirrored, is the first state.
 
-use super::{AdTerm, GenericFunction, Linear};
+use super::{AdTerm, GaitOde, GenericFunction, Linear};
 use crate::integrate::{ControlShape, IntegratorSettings};
 use crate::model::effects::ModelScalar;
 use crate::model::gait::COORDINATES;
-use crate::model::{ConstraintSet, GaitModel, GaitOde, RowKind};
+use crate::model::{ConstraintSet, GaitModel, RowKind};
 use crate::ocp::{Block, CheckPoint, Constraint, Ocp, Phase as OcpPhase, PhaseDuration, Term};
 use crate::phases::{Duration, GaitSpec, Phase, PhaseSequence};
 

@@ -7,6 +7,7 @@ pub mod diagnose;
 pub mod evaluation;
 pub mod foot_fit;
 pub mod gait;
+pub mod gait_ode;
 pub mod peer_gait;
 pub mod predict;
 pub mod synth;
@@ -14,6 +15,8 @@ pub mod track;
 pub mod tracking;
 pub mod transient;
 pub mod validity;
+
+pub use gait_ode::GaitOde;
 
 use crate::model::ad::{self, AdChunk, AdNested};
 use crate::model::effects::ModelScalar;

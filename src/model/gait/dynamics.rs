@@ -1,0 +1,404 @@
+//! Forward dynamics of the gait model with contact, and the impact map.
+//!
+//! Forward dynamics solve the index-reduced DAE (seed eq. 1–2)
+//! $$\begin{bmatrix} M & G^T \\ G & 0\end{bmatrix}\begin{bmatrix}\ddot q \\ -\lambda\end{bmatrix}
+//!   = \begin{bmatrix}\tau - c \\ b\end{bmatrix},$$
+//! by Cholesky factors of $M$ and of $G M^{-1} G^T$ (a rank-deficient $G$, i.e. an
+//! over-constrained foot, is reported, never silently regularised). Row $i$ of $G$ is
+//! $e_i^T J_P$, the velocity of the foot's material point at the contact point $P$ along
+//! the ground normal or tangent, and
+//! $b_i = -\dot G_i\dot q - 2\alpha G_i\dot q - \beta^2\phi_i$ (normal) or
+//! $b_i = -\dot G_i\dot q - \gamma G_i\dot q$ (tangential), with
+//! $\dot G_i\dot q = e_i^T\big(a_P + \omega^2(\hat z\times d' + d)\big)$, where $a_P$ is the
+//! material acceleration of $P$ at $\ddot q = 0$, $d(\psi)$ the offset of $P$ from the
+//! primitive's centre and $d'$ its derivative in the foot angle (the contact point moves
+//! over the foot surface while it rolls). $\lambda$ is the ground force on the foot at $P$
+//! (N) along the row's direction.
+
+use super::{Actuation, ConstraintSet, ContactReport, GaitModel, RowKind, LEG_JOINTS};
+use crate::model::effects::{EffectState, ModelScalar};
+use crate::model::error::DynamicsError;
+use crate::model::linalg::{cholesky, cholesky_solve};
+use crate::model::multibody::{add, dot, perp, scale, V2};
+use crate::model::Scalar;
+
+/// The generalised forces of the dynamics by source (N·m or N per coordinate).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ForceParts {
+    /// The actuators: muscle-torque generators with their passive damping, or the joint
+    /// torques.
+    pub actuators: Vec<f64>,
+    /// The residual actuators (zero without them).
+    pub residual: Vec<f64>,
+    /// Each effect's, by its kind.
+    pub effects: Vec<(String, Vec<f64>)>,
+}
+
+impl GaitModel {
+    /// The generalised forces of [`dynamics`](Self::dynamics) split by source, at state
+    /// `x = (q, q̇, a)`, controls `u` and free parameters `theta` (N·m or N per
+    /// coordinate): the actuators (muscle-torque generators with their passive damping, or
+    /// the joint torques), the residual actuators, and each effect by its kind.
+    pub fn generalized_force_parts(&self, x: &[f64], u: &[f64], theta: &[f64]) -> ForceParts {
+        let nq = self.nq();
+        let (q, qd, a) = (&x[..nq], &x[nq..2 * nq], &x[2 * nq..]);
+        let p = self.full_params(theta);
+        let mut act = vec![0.0; nq];
+        match &self.actuation {
+            Actuation::Mtg(set) => {
+                for (k, &(c, joint)) in LEG_JOINTS.iter().enumerate() {
+                    act[c] += set.joint_torque(joint, a[2 * k], a[2 * k + 1], q[c], qd[c]);
+                }
+            }
+            Actuation::Torques {
+                reference_torque, ..
+            } => {
+                for (k, &(c, _)) in LEG_JOINTS.iter().enumerate() {
+                    act[c] += u[k] * *reference_torque;
+                }
+            }
+        }
+        let mut residual = vec![0.0; nq];
+        if let Some(scales) = &self.residuals {
+            let base = self.nu_actuators();
+            for (i, &sc) in scales.iter().enumerate() {
+                residual[i] = u[base + i] * sc;
+            }
+        }
+        let effects = (0..self.effects.len())
+            .map(|e| {
+                let mut tau = vec![0.0; nq];
+                f64::forces(
+                    self.effects[e].as_ref(),
+                    self.effect_params(&p, e),
+                    EffectState { q, qd },
+                    &mut tau,
+                );
+                (self.effects[e].kind().to_string(), tau)
+            })
+            .collect();
+        ForceParts {
+            actuators: act,
+            residual,
+            effects,
+        }
+    }
+
+    /// Generalised joint forces of the actuators (and passive damping) and effects.
+    fn generalized_forces<S: ModelScalar>(
+        &self,
+        q: &[S],
+        qd: &[S],
+        a: &[S],
+        u: &[S],
+        p: &[S],
+    ) -> Vec<S> {
+        let mut tau = vec![S::c(0.0); self.nq()];
+        match &self.actuation {
+            Actuation::Mtg(set) => {
+                for (k, &(c, joint)) in LEG_JOINTS.iter().enumerate() {
+                    tau[c] += set.joint_torque(joint, a[2 * k], a[2 * k + 1], q[c], qd[c]);
+                }
+            }
+            Actuation::Torques {
+                reference_torque, ..
+            } => {
+                for (k, &(c, _)) in LEG_JOINTS.iter().enumerate() {
+                    tau[c] += u[k] * S::c(*reference_torque);
+                }
+            }
+        }
+        if let Some(scales) = &self.residuals {
+            let base = self.nu_actuators();
+            for (i, &sc) in scales.iter().enumerate() {
+                tau[i] += u[base + i] * sc;
+            }
+        }
+        for e in 0..self.effects.len() {
+            S::forces(
+                self.effects[e].as_ref(),
+                self.effect_params(p, e),
+                EffectState { q, qd },
+                &mut tau,
+            );
+        }
+        tau
+    }
+
+    /// Forward dynamics `ẋ = f(x, u, θ)` under constraint set `set`. Returns `ẋ` and
+    /// the constraint forces λ (one per row). With `report`, also fills contact details.
+    pub fn dynamics<S: ModelScalar>(
+        &self,
+        set: &ConstraintSet,
+        x: &[S],
+        u: &[S],
+        theta: &[S],
+        xdot: &mut [S],
+        lambda: &mut [S],
+        report: Option<&mut ContactReport>,
+    ) -> Result<(), DynamicsError> {
+        let nq = self.nq();
+        let (q, rest) = x.split_at(nq);
+        let (qd, a) = rest.split_at(nq);
+        let p = self.full_params(theta);
+        let (inertia, gravity, ground_h, n) = self.adjusted(&p);
+        let k = self.tree.kinematics(q, qd);
+        let mut m = vec![S::c(0.0); nq * nq];
+        let mut c = vec![S::c(0.0); nq];
+        self.tree
+            .mass_matrix_and_bias(&k, &inertia, gravity, &mut m, &mut c);
+        let tau = self.generalized_forces(q, qd, a, u, &p);
+        cholesky(&mut m, nq, 1e-14).map_err(|e| DynamicsError::MassMatrix { pivot: e.pivot })?;
+        let mut qdd: Vec<S> = tau.iter().zip(&c).map(|(t, c)| *t - *c).collect();
+        cholesky_solve(&m, nq, &mut qdd);
+
+        let nc = set.rows.len();
+        if nc > 0 {
+            let t = [n[1], -n[0]];
+            let cs = &self.contact_settings;
+            let mut g = vec![S::c(0.0); nc * nq];
+            let mut b = vec![S::c(0.0); nc];
+            let mut b_baum = vec![0.0; nc];
+            let mut jp = vec![S::c(0.0); 2 * nq];
+            let mut rep_rows = Vec::new();
+            // geometry once per contact (a rolling contact has two rows)
+            let mut geo: Vec<(usize, V2<S>, V2<S>)> = Vec::with_capacity(nc);
+            // compliant normal rows: an explicit force, not a constraint
+            let mut compliant_force = vec![S::c(0.0); nq];
+            let mut rigid = Vec::with_capacity(nc);
+            for (r, row) in set.rows.iter().enumerate() {
+                let contact = &self.contacts[row.contact];
+                let (pt, bias) = match geo.iter().find(|g| g.0 == row.contact) {
+                    Some(&(_, pt, bias)) => (pt, bias),
+                    None => {
+                        let (pt, d, d1) = self.contact_geometry(&k, contact, n);
+                        let (_, acc) = self.tree.point_motion(&k, contact.body, pt);
+                        let w = k.omega[contact.body];
+                        let bias = add(acc, scale(add(perp(d1), d), w * w));
+                        geo.push((row.contact, pt, bias));
+                        (pt, bias)
+                    }
+                };
+                let gdot_qd_vec = bias;
+                self.tree.point_jacobian(&k, contact.body, pt, &mut jp);
+                let e = if row.kind == RowKind::Normal { n } else { t };
+                for j in 0..nq {
+                    g[r * nq + j] = e[0] * jp[j] + e[1] * jp[nq + j];
+                }
+                let gqd: S = (0..nq).map(|j| g[r * nq + j] * qd[j]).sum();
+                let phi = dot(n, pt) - ground_h;
+                rep_rows.push(([pt[0].value(), pt[1].value()], phi.value(), gqd.value()));
+                if let (RowKind::Normal, Some(eff)) = (row.kind, self.compliant[row.contact]) {
+                    // depth below the ground and its rate: the pad's compression
+                    lambda[r] = S::normal_force(
+                        self.effects[eff].as_ref(),
+                        self.effect_params(&p, eff),
+                        -phi,
+                        -gqd,
+                    );
+                    for j in 0..nq {
+                        compliant_force[j] += g[r * nq + j] * lambda[r];
+                    }
+                    continue;
+                }
+                let stab = match row.kind {
+                    RowKind::Normal => {
+                        gqd * (2.0 * cs.baumgarte_alpha)
+                            + phi * (cs.baumgarte_beta * cs.baumgarte_beta)
+                    }
+                    RowKind::Tangential => gqd * cs.baumgarte_gamma,
+                };
+                b[r] = -dot(e, gdot_qd_vec) - stab;
+                b_baum[r] = -stab.value();
+                rigid.push(r);
+            }
+            if rigid.len() < nc {
+                cholesky_solve(&m, nq, &mut compliant_force);
+                for (a, f) in qdd.iter_mut().zip(&compliant_force) {
+                    *a += *f;
+                }
+            }
+            let nr = rigid.len();
+            let mut b_baum_rigid = vec![0.0; nr];
+            if nr > 0 {
+                let g_rigid: Vec<S> = rigid
+                    .iter()
+                    .flat_map(|&r| g[r * nq..(r + 1) * nq].iter().copied())
+                    .collect();
+                let (y, amat, amat_f64) = schur_complement(&m, nq, &g_rigid, nr, &set.name)?;
+                let mut lam_rigid: Vec<S> = rigid
+                    .iter()
+                    .enumerate()
+                    .map(|(i, &r)| {
+                        let gq: S = (0..nq).map(|l| g_rigid[i * nq + l] * qdd[l]).sum();
+                        b[r] - gq
+                    })
+                    .collect();
+                cholesky_solve(&amat, nr, &mut lam_rigid);
+                for i in 0..nr {
+                    for l in 0..nq {
+                        qdd[l] += y[i * nq + l] * lam_rigid[i];
+                    }
+                    lambda[rigid[i]] = lam_rigid[i];
+                }
+                if report.is_some() {
+                    let mut af = amat_f64;
+                    b_baum_rigid = rigid.iter().map(|&r| b_baum[r]).collect();
+                    if cholesky(&mut af, nr, 1e-10).is_ok() {
+                        cholesky_solve(&af, nr, &mut b_baum_rigid);
+                    }
+                }
+            }
+            if let Some(rep) = report {
+                let mut baum = vec![0.0; nc];
+                for (i, &r) in rigid.iter().enumerate() {
+                    baum[r] = b_baum_rigid[i];
+                }
+                // a compliant row's depth is its pad's compression, not a constraint error
+                let rigid_or_zero = |r: usize, v: f64| {
+                    if self.is_compliant_row(&set.rows[r]) {
+                        0.0
+                    } else {
+                        v
+                    }
+                };
+                rep.points = rep_rows.iter().map(|r| r.0).collect();
+                rep.position_error = rep_rows
+                    .iter()
+                    .enumerate()
+                    .map(|(r, x)| rigid_or_zero(r, x.1))
+                    .collect();
+                rep.velocity_error = rep_rows
+                    .iter()
+                    .enumerate()
+                    .map(|(r, x)| rigid_or_zero(r, x.2))
+                    .collect();
+                rep.lambda = lambda.iter().map(|v| v.value()).collect();
+                rep.baumgarte_force = baum;
+            }
+        } else if let Some(rep) = report {
+            *rep = ContactReport::default();
+        }
+
+        xdot[..nq].copy_from_slice(qd);
+        xdot[nq..2 * nq].copy_from_slice(&qdd);
+        if let Actuation::Mtg(set) = &self.actuation {
+            for i in 0..self.na() {
+                xdot[2 * nq + i] = set.activation.rate(u[i], a[i]);
+            }
+        }
+        Ok(())
+    }
+
+    /// Plastic impact map: post-impact velocities and impulses (N·s, one per row) for
+    /// the constraint set active after the impact,
+    /// $[M\;G^T;\,G\;0][\dot q^+; -\Lambda] = [M\dot q^-; 0]$.
+    pub fn impact<S: ModelScalar>(
+        &self,
+        set_after: &ConstraintSet,
+        q: &[S],
+        qd_minus: &[S],
+        theta: &[S],
+    ) -> Result<(Vec<S>, Vec<S>), DynamicsError> {
+        let nq = self.nq();
+        let p = self.full_params(theta);
+        let (inertia, gravity, _, n) = self.adjusted(&p);
+        let k = self.tree.kinematics(q, qd_minus);
+        let mut m = vec![S::c(0.0); nq * nq];
+        let mut c = vec![S::c(0.0); nq];
+        self.tree
+            .mass_matrix_and_bias(&k, &inertia, gravity, &mut m, &mut c);
+        cholesky(&mut m, nq, 1e-14).map_err(|e| DynamicsError::MassMatrix { pivot: e.pivot })?;
+        // a compliant normal contact takes no impulse: its pad is compressed from here on
+        let (rigid, idx) = self.rigid_rows(set_after);
+        let g = self.constraint_jacobian(&k, &rigid, n);
+        let nc = rigid.rows.len();
+        let mut qd_plus = qd_minus.to_vec();
+        let mut impulses = vec![S::c(0.0); set_after.rows.len()];
+        if nc == 0 {
+            return Ok((qd_plus, impulses));
+        }
+        let (y, amat, _) = schur_complement(&m, nq, &g, nc, &set_after.name)?;
+        let mut imp: Vec<S> = (0..nc)
+            .map(|i| -(0..nq).map(|l| g[i * nq + l] * qd_minus[l]).sum::<S>())
+            .collect();
+        cholesky_solve(&amat, nc, &mut imp);
+        for i in 0..nc {
+            for l in 0..nq {
+                qd_plus[l] += y[i * nq + l] * imp[i];
+            }
+            impulses[idx[i]] = imp[i];
+        }
+        Ok((qd_plus, impulses))
+    }
+
+    /// Mass matrix (row-major) and bias forces at `(q, q̇)`.
+    pub fn mass_matrix_and_bias(
+        &self,
+        q: &[f64],
+        qd: &[f64],
+        theta: &[f64],
+    ) -> (Vec<f64>, Vec<f64>) {
+        let nq = self.nq();
+        let p = self.full_params(theta);
+        let (inertia, gravity, _, _) = self.adjusted(&p);
+        let k = self.tree.kinematics(q, qd);
+        let mut m = vec![0.0; nq * nq];
+        let mut c = vec![0.0; nq];
+        self.tree
+            .mass_matrix_and_bias(&k, &inertia, gravity, &mut m, &mut c);
+        (m, c)
+    }
+
+    /// Kinetic and potential energy (J) at `(q, q̇)`.
+    pub fn energy(&self, q: &[f64], qd: &[f64], theta: &[f64]) -> (f64, f64) {
+        let p = self.full_params(theta);
+        let (inertia, gravity, _, _) = self.adjusted(&p);
+        let k = self.tree.kinematics(q, qd);
+        self.tree.energy(&k, &inertia, gravity)
+    }
+
+    /// The ground at free parameters `theta` (a slope effect tilts it): its height h (m)
+    /// and unit normal n, the ground being the points p with n·p = h.
+    pub fn ground(&self, theta: &[f64]) -> (f64, [f64; 2]) {
+        let p = self.full_params(theta);
+        let (_, _, h, n) = self.adjusted(&p);
+        (h, n)
+    }
+
+    /// World position of a point given in a body frame, at `q`.
+    pub fn body_point(&self, body: usize, local: [f64; 2], q: &[f64]) -> [f64; 2] {
+        let k = self.tree.kinematics(q, &vec![0.0; self.nq()]);
+        self.tree.point(&k, body, local)
+    }
+}
+
+/// With the Cholesky factor of `M` and the constraint rows `G` (nc × nq, row-major):
+/// `Y = M⁻¹Gᵀ` (row r of `y` = column r), the Cholesky factor of the Schur complement
+/// `A = G M⁻¹ Gᵀ` and `A` itself in f64 (for reports). A dependent row of `G` is an
+/// over-constrained contact set and is reported, never regularised.
+#[allow(clippy::type_complexity)]
+fn schur_complement<S: Scalar>(
+    m_chol: &[S],
+    nq: usize,
+    g: &[S],
+    nc: usize,
+    set_name: &str,
+) -> Result<(Vec<S>, Vec<S>, Vec<f64>), DynamicsError> {
+    let mut y = g.to_vec();
+    for r in 0..nc {
+        cholesky_solve(m_chol, nq, &mut y[r * nq..(r + 1) * nq]);
+    }
+    let mut amat = vec![S::c(0.0); nc * nc];
+    for i in 0..nc {
+        for j in 0..nc {
+            amat[i * nc + j] = (0..nq).map(|l| g[i * nq + l] * y[j * nq + l]).sum();
+        }
+    }
+    let amat_f64: Vec<f64> = amat.iter().map(|v| v.value()).collect();
+    cholesky(&mut amat, nc, 1e-10).map_err(|e| DynamicsError::OverConstrained {
+        set: set_name.to_string(),
+        row: e.pivot,
+    })?;
+    Ok((y, amat, amat_f64))
+}

@@ -1,0 +1,104 @@
+//! The gait model under one constraint set as a [`ControlledOde`], the view the
+//! multiple-shooting transcription integrates (CVODES with forward sensitivities) and
+//! differentiates. It lives here, above the integrator, so that the model does not depend
+//! on the layers that use it.
+
+use crate::integrate::{ControlledOde, OdeError};
+use crate::model::ad;
+use crate::model::{ConstraintSet, DynamicsError, GaitModel};
+
+/// `ControlledOde` view of the model under one constraint set.
+#[derive(Debug, Clone, Copy)]
+pub struct GaitOde<'a> {
+    /// The model.
+    pub model: &'a GaitModel,
+    /// Active constraints.
+    pub set: &'a ConstraintSet,
+}
+
+fn ode_err(e: DynamicsError) -> OdeError {
+    match e {
+        DynamicsError::NonFinite { .. } => OdeError::Recoverable(e.to_string()),
+        other => OdeError::Fatal(other.to_string()),
+    }
+}
+
+impl ControlledOde for GaitOde<'_> {
+    fn nx(&self) -> usize {
+        self.model.nx()
+    }
+    fn nu(&self) -> usize {
+        self.model.nu()
+    }
+    fn ntheta(&self) -> usize {
+        self.model.ntheta()
+    }
+    fn f(&self, x: &[f64], u: &[f64], theta: &[f64], xdot: &mut [f64]) -> Result<(), OdeError> {
+        let mut lam = vec![0.0; self.set.rows.len()];
+        self.model
+            .dynamics(self.set, x, u, theta, xdot, &mut lam, None)
+            .map_err(ode_err)?;
+        if xdot.iter().any(|v| !v.is_finite()) {
+            return Err(OdeError::Recoverable("non-finite state derivative".into()));
+        }
+        Ok(())
+    }
+    fn weighted_hessian(
+        &self,
+        x: &[f64],
+        u: &[f64],
+        theta: &[f64],
+        mu: &[f64],
+        out: &mut [f64],
+    ) -> Result<bool, OdeError> {
+        let (nx, nu) = (self.model.nx(), self.model.nu());
+        let mut xdot = vec![ad::AdNested::from(0.0); nx];
+        let mut lam = vec![ad::AdNested::from(0.0); self.set.rows.len()];
+        let z: Vec<f64> = x.iter().chain(u).chain(theta).copied().collect();
+        let (curved, lead) = self.model.curved_inputs();
+        ad::hessian_over(
+            &z,
+            &curved,
+            lead,
+            |zs| {
+                let (xs, rest) = zs.split_at(nx);
+                let (us, ts) = rest.split_at(nu);
+                self.model
+                    .dynamics(self.set, xs, us, ts, &mut xdot, &mut lam, None)?;
+                Ok(xdot
+                    .iter()
+                    .zip(mu)
+                    .fold(ad::AdNested::from(0.0), |acc, (f, m)| acc + *f * *m))
+            },
+            out,
+        )
+        .map_err(ode_err)?;
+        if out.iter().any(|v| !v.is_finite()) {
+            return Err(OdeError::Recoverable("non-finite Hessian".into()));
+        }
+        Ok(true)
+    }
+    fn f_jac(
+        &self,
+        x: &[f64],
+        u: &[f64],
+        theta: &[f64],
+        xdot: &mut [f64],
+        fx: &mut [f64],
+        fu: &mut [f64],
+        ftheta: &mut [f64],
+    ) -> Result<(), OdeError> {
+        let (nx, nu, nt) = (self.model.nx(), self.model.nu(), theta.len());
+        let mut jac = vec![0.0; nx * (nx + nu + nt)];
+        self.model
+            .dynamics_jacobian(self.set, x, u, theta, xdot, &mut jac)
+            .map_err(ode_err)?;
+        fx.copy_from_slice(&jac[..nx * nx]);
+        fu.copy_from_slice(&jac[nx * nx..nx * (nx + nu)]);
+        ftheta.copy_from_slice(&jac[nx * (nx + nu)..]);
+        if xdot.iter().chain(jac.iter()).any(|v| !v.is_finite()) {
+            return Err(OdeError::Recoverable("non-finite derivative".into()));
+        }
+        Ok(())
+    }
+}
