@@ -41,9 +41,14 @@ impl Nlp for OutsideTheDomain {
         let outside = w[0] > 3.0;
         self.evaluated.borrow_mut().push((w[0], outside));
         if outside {
-            let cause = format!("CVODES failed at t = 0.1: the model is undefined at w₀ = {}", w[0]);
+            let cause = format!(
+                "CVODES failed at t = 0.1: the model is undefined at w₀ = {}",
+                w[0]
+            );
             return Err(if self.fatal {
-                EvalError::fatal(format!("specification: phase 'swing' names no dynamics ({cause})"))
+                EvalError::fatal(format!(
+                    "specification: phase 'swing' names no dynamics ({cause})"
+                ))
             } else {
                 EvalError::recoverable(cause)
             });
@@ -86,10 +91,15 @@ fn a_recoverable_failure_at_a_trial_point_shortens_the_step() {
     assert!((res.w[0] - 1.0).abs() < 1e-9, "{:?}", res.w);
     let evaluated = nlp.evaluated.borrow();
     // the full step was tried, failed, and the search went on to shorter steps
-    let failed = evaluated.iter().position(|e| e.1).expect("the full step failed");
+    let failed = evaluated
+        .iter()
+        .position(|e| e.1)
+        .expect("the full step failed");
     assert!((evaluated[failed].0 - 4.0).abs() < 1e-9, "{evaluated:?}");
     assert!(
-        evaluated[failed + 1..].iter().any(|e| (e.0 - 1.0).abs() < 1e-9),
+        evaluated[failed + 1..]
+            .iter()
+            .any(|e| (e.0 - 1.0).abs() < 1e-9),
         "{evaluated:?}"
     );
 }

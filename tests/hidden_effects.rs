@@ -18,7 +18,7 @@ mod common;
 use footfall::problems::tracking::ChannelNoise;
 use footfall::runfolder::RunFolder;
 use footfall::workflows::diagnose::DiagnoseRequest;
-use footfall::workflows::track::{check_tracked, track, TrackRequest};
+use footfall::workflows::track::{track, TrackRequest};
 use footfall::workflows::Quiet;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -39,7 +39,6 @@ fn timed<R>(what: &str, name: &Path, f: impl FnOnce() -> R) -> R {
     );
     r
 }
-
 
 fn read_json(p: &Path) -> Value {
     serde_json::from_str(
@@ -139,6 +138,10 @@ fn baseline(name: &str, dir: &Path, how: Setup) -> PathBuf {
         _ => "ellipse",
     };
     let mut req = TrackRequest::new(foot);
+    // as the kept solutions were made: the contact constraints at the nodes only (the
+    // ellipse's let the ground pull a foot between two nodes after heel strike, as the
+    // bundled trial's does); the diagnosis compares fits of one problem
+    req.check_points = false;
     req.run.data = Some(trial.join("synthetic.csv"));
     req.init = Some(trial.join(format!("tracked_{}", how.slug())));
     if !matches!(how, Setup::Samples | Setup::ForcePlateRate) {
@@ -171,7 +174,12 @@ fn baseline(name: &str, dir: &Path, how: Setup) -> PathBuf {
     timed("track", &out, || {
         let folder = RunFolder::create(&out, false).unwrap();
         let run = track(&req, folder, &Quiet).unwrap_or_else(|e| panic!("track {name}: {e:#}"));
-        check_tracked(&run).unwrap_or_else(|e| panic!("track {name}: {e:#}"));
+        assert!(
+            run.converged,
+            "track {name}: {} ({})",
+            run.result.status,
+            run.output.path.display()
+        );
     });
     out
 }

@@ -1,8 +1,8 @@
 //! `footfall compare`: the arguments of the `compare` workflow
 //! ([`footfall::workflows::compare`]).
 
-use super::{CliProgress, Failure};
 use super::predict::PredictOptions;
+use super::{CliProgress, Failure};
 use footfall::workflows::compare::CompareRequest;
 #[allow(unused_imports)]
 use std::path::PathBuf;
@@ -51,5 +51,6 @@ impl From<Args> for CompareRequest {
 }
 
 pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
-    footfall::workflows::compare::run(&args.into(), &CliProgress { quiet }).map_err(Failure::classify)
+    footfall::workflows::compare::run(&args.into(), &CliProgress { quiet })
+        .map_err(Failure::classify)
 }

@@ -46,5 +46,6 @@ impl From<Args> for DiagnoseRequest {
 }
 
 pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
-    footfall::workflows::diagnose::run(&args.into(), &CliProgress { quiet }).map_err(Failure::classify)
+    footfall::workflows::diagnose::run(&args.into(), &CliProgress { quiet })
+        .map_err(Failure::classify)
 }

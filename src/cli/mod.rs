@@ -19,8 +19,8 @@ mod synth;
 mod track;
 mod validate;
 
-use clap::{Parser, Subcommand};
 pub use args::{CheckPointArgs, CliProgress};
+use clap::{Parser, Subcommand};
 use footfall::sqp::SqpStatus;
 use std::process::ExitCode;
 
@@ -89,10 +89,15 @@ impl Failure {
     /// The class of an error: an [`Unsolved`] in its chain by its status, anything else
     /// bad input.
     pub fn classify(e: anyhow::Error) -> Self {
-        if e.chain().any(|c| c.downcast_ref::<footfall::workflows::Invalid>().is_some()) {
+        if e.chain()
+            .any(|c| c.downcast_ref::<footfall::workflows::Invalid>().is_some())
+        {
             return Failure::PhysicallyInvalid(e);
         }
-        let Some(u) = e.chain().find_map(|c| c.downcast_ref::<footfall::workflows::Unsolved>()) else {
+        let Some(u) = e
+            .chain()
+            .find_map(|c| c.downcast_ref::<footfall::workflows::Unsolved>())
+        else {
             return Failure::Input(e);
         };
         match &u.status {

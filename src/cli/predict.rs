@@ -1,7 +1,7 @@
 //! `footfall predict`: arguments and printing of the prediction workflow
 //! ([`footfall::workflows::predict`]).
 
-use super::{Failure, CliProgress};
+use super::{CliProgress, Failure};
 use footfall::problems::predict::SEED_IMPULSE_WEIGHT;
 use footfall::workflows::predict::{check_outcome, outcome_text, predict, PredictionOptions};
 use footfall::workflows::run_folder::DEFAULT_TRANSIENT_THRESHOLD_N;

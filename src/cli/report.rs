@@ -37,5 +37,6 @@ impl From<Args> for ReportRequest {
 }
 
 pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
-    footfall::workflows::report::run(&args.into(), &CliProgress { quiet }).map_err(Failure::classify)
+    footfall::workflows::report::run(&args.into(), &CliProgress { quiet })
+        .map_err(Failure::classify)
 }

@@ -117,10 +117,17 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
             .with_ocp(integrator, |ocp| {
                 let tr = Transcription::new(ocp).context("transcribing the problem")?;
                 let w0 = start(&tr, &args)?;
-                let folder =
-                    footfall::workflows::session::create_checkpointed_run_folder(&args.out, args.overwrite)?;
+                let folder = footfall::workflows::session::create_checkpointed_run_folder(
+                    &args.out,
+                    args.overwrite,
+                )?;
                 announce(&bench, &tr, &format!("{:?}", settings.hessian), quiet);
-                let res = footfall::workflows::solve_interruptibly(&tr, &w0, &settings, &super::CliProgress { quiet })?;
+                let res = footfall::workflows::solve_interruptibly(
+                    &tr,
+                    &w0,
+                    &settings,
+                    &super::CliProgress { quiet },
+                )?;
                 let counters = tr.integration_totals();
                 write_run(
                     folder, ocp, &tr, &bench, &problem, &settings, res, counters, quiet,
@@ -180,7 +187,12 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
                     r1.kkt, s1.tol_kkt
                 );
             }
-            let r2 = footfall::workflows::solve_interruptibly(&tr, &r1.w, &s2, &super::CliProgress { quiet })?;
+            let r2 = footfall::workflows::solve_interruptibly(
+                &tr,
+                &r1.w,
+                &s2,
+                &super::CliProgress { quiet },
+            )?;
             let res = footfall::workflows::track::merge_stages(r1, r2);
             counters += tr.integration_totals();
             write_run(

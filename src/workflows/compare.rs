@@ -1,18 +1,18 @@
 //! `footfall compare`: the same prediction for two or more feet, side by side (seed 001
 //! §4: the ellipse foot's ground-force transient against the double-circle foot).
 
-#[allow(unused_imports)]
-use super::{note, warn_note, Progress};
-use super::run_folder::GaitRunOutput;
 use super::predict::predict;
 use super::read_solution;
-use anyhow::{anyhow, bail};
+use super::run_folder::GaitRunOutput;
+#[allow(unused_imports)]
+use super::{note, warn_note, Progress};
 use crate::problems::evaluation::GaitSolution;
 use crate::report::html::{Report, Section, Summary, Tone};
 use crate::report::plot::{LinePlot, LineStyle, Series};
 use crate::report::table::Table;
 use crate::runfolder::RunFolder;
 use crate::sqp::SqpStatus;
+use anyhow::{anyhow, bail};
 use std::path::PathBuf;
 
 /// What `compare` does: the arguments of `footfall compare`.
@@ -94,14 +94,7 @@ pub fn run(args: &CompareRequest, progress: &dyn Progress) -> anyhow::Result<()>
             note!(progress, "── {name} ──");
         }
         let sub = RunFolder::create(&folder.staging_path().join(&name), false)?;
-        let (out, res) = predict(
-            &args.options,
-            &foot,
-            phases.as_deref(),
-            init,
-            sub,
-            progress,
-        )?;
+        let (out, res) = predict(&args.options, &foot, phases.as_deref(), init, sub, progress)?;
         outcomes.push(Outcome {
             name,
             converged: res.status == SqpStatus::Converged,

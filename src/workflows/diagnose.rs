@@ -4,10 +4,9 @@
 //! (each written as a track run folder, so `diff` and a second `diagnose` can start from
 //! it).
 
+use super::track::{read_run_setup, tracking_sqp_settings, TrackedRun, TrackingProblem};
 #[allow(unused_imports)]
 use super::{note, warn_note, Progress};
-use super::track::{read_run_setup, tracking_sqp_settings, TrackedRun, TrackingProblem};
-use anyhow::anyhow;
 use crate::model::effects::{catalog, EffectSpec};
 use crate::problems::diagnose::{
     channel_means, gauss_newton_decrease, refit_test, score_test, IdentifiedParameter, ScoreTest,
@@ -19,6 +18,7 @@ use crate::report::html::{Report, Section, Summary, Tone};
 use crate::report::table::Table;
 use crate::runfolder::RunFolder;
 use crate::sqp::HessianMode;
+use anyhow::anyhow;
 use std::path::{Path, PathBuf};
 
 /// What `diagnose` does: the arguments of `footfall diagnose`.
@@ -161,7 +161,12 @@ fn refit(
 ) -> anyhow::Result<TrackedRun> {
     let dir = sibling(&args.run, &format!("+{}", effect.kind()));
     {
-        note!(progress, "re-fitting with {} → {}", effect.label(), dir.display());
+        note!(
+            progress,
+            "re-fitting with {} → {}",
+            effect.label(),
+            dir.display()
+        );
     }
     let mut prob = TrackingProblem::build(setup, std::slice::from_ref(effect))?;
     prob.start_at(start)
@@ -252,7 +257,7 @@ fn print_progress(progress: &dyn Progress, t: &ScoreTest, converged: bool, secon
     } else {
         ("expected decrease", "steps")
     };
-    note!(progress, 
+    note!(progress,
         "  {:<32} {what} {:>10.3e} ({:>5.1} % of J, {} {steps}{}), statistic {:>9.1} vs {:.1}{}  [{seconds:.1} s]",
         t.label,
         t.predicted_decrease,
@@ -345,7 +350,7 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
         .map_err(|e| anyhow!("{}: {e}", args.run.display()))?;
     let (objective, base_decrease, rows) = decrease_at_solution(&base)?;
     {
-        note!(progress, 
+        note!(progress,
             "diagnosing {}: J = {objective:.6} over {rows} data residuals (mean square {:.3e}); Gauss–Newton decrease left at the solution {base_decrease:.2e}",
             args.run.display(),
             objective / rows as f64
@@ -642,6 +647,10 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
     };
     folder.write("report.html", report.to_html().as_bytes())?;
     let path = folder.commit()?;
-    note!(progress, "\n{md}\nreport: {}", path.join("report.html").display());
+    note!(
+        progress,
+        "\n{md}\nreport: {}",
+        path.join("report.html").display()
+    );
     Ok(())
 }

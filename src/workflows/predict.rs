@@ -1,10 +1,9 @@
 //! The prediction workflow: the gait the model prefers (seed 001 §3.5): minimum activation
 //! plus impulses, at the subject's step length and speed, started from a tracking solution.
 
+use super::run_folder::{GaitRun, GaitRunOutput, DEFAULT_TRANSIENT_THRESHOLD_N};
 #[allow(unused_imports)]
 use super::{note, warn_note, Progress};
-use super::run_folder::{GaitRun, GaitRunOutput, DEFAULT_TRANSIENT_THRESHOLD_N};
-use anyhow::{anyhow, bail, Context};
 use crate::integrate::IntegratorSettings;
 use crate::model::GaitModel;
 use crate::ocp::Transcription;
@@ -16,6 +15,7 @@ use crate::problems::track::TrackingSetup;
 use crate::report::html::Section;
 use crate::runfolder::RunFolder;
 use crate::sqp::{ExactConvexification, HessianMode, SqpResult, SqpSettings, SqpStatus};
+use anyhow::{anyhow, Context};
 use std::path::{Path, PathBuf};
 
 /// How to predict: the model, data, targets and solver settings of a prediction (the
@@ -109,34 +109,6 @@ pub fn check_outcome(out: &GaitRunOutput, res: &SqpResult) -> anyhow::Result<()>
     Ok(())
 }
 
-/// A solution from a run folder (`solution.json` inside) or a solution file.
-pub fn read_solution(path: &Path) -> anyhow::Result<GaitSolution> {
-    if !path.exists() {
-        bail!("{}: no such run folder or solution file (give a track or predict run folder, or its solution.json)", path.display());
-    }
-    let file = if path.is_dir() {
-        path.join("solution.json")
-    } else {
-        path.to_path_buf()
-    };
-    let text = std::fs::read_to_string(&file)
-        .with_context(|| format!("reading the initial solution {}", file.display()))?;
-    serde_json::from_str(&text).with_context(|| {
-        format!(
-            "{}: not a footfall solution (expected the solution.json of a track or predict run)",
-            file.display()
-        )
-    })
-}
-
-/// The default phase file of a foot argument.
-pub fn default_phases(foot: &str) -> PathBuf {
-    match foot {
-        "double-circle" | "double_circle" => PathBuf::from("phases/double_circle_walk.json"),
-        _ => PathBuf::from("phases/ellipse_walk.json"),
-    }
-}
-
 /// Solve one prediction and write its run folder.
 pub fn predict(
     o: &PredictionOptions,
@@ -150,7 +122,7 @@ pub fn predict(
     let model = GaitModel::load(&o.model, &foot_path)?;
     let phases = phases
         .map(Path::to_path_buf)
-        .unwrap_or_else(|| default_phases(foot));
+        .unwrap_or_else(|| super::default_phases(foot));
     let seq = PhaseSequence::load(&phases)?;
     let sets = seq.resolve(&model, &phases)?;
     let data = super::load_data(o.data.as_deref(), o.overground)?;
@@ -192,7 +164,7 @@ pub fn predict(
         ..Default::default()
     };
     {
-        note!(progress, 
+        note!(progress,
             "predicting with the {} foot: step length {:.3} m, speed {:.3} m/s, w_Δ = {}{} ({} variables, {} constraints, {:?}, from {})",
             model.foot_name,
             settings.step_length,
@@ -227,7 +199,7 @@ pub fn predict(
             return Ok(first);
         }
         {
-            note!(progress, 
+            note!(progress,
                 "line search failed at KKT {:.2e} with the exact Hessian: going on from there with block BFGS",
                 first.kkt
             );

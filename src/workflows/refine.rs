@@ -7,7 +7,6 @@
 
 #[allow(unused_imports)]
 use super::{note, warn_note, Progress};
-use anyhow::{anyhow, Context};
 use crate::integrate::IntegratorSettings;
 use crate::model::{ConstraintSet, GaitModel};
 use crate::ocp::{CheckPoint, Ocp, Transcription};
@@ -15,6 +14,7 @@ use crate::problems::evaluation::GaitSolution;
 use crate::problems::gait::{locate_instant, GaitCycle};
 use crate::problems::validity::{self, ValidityLimits};
 use crate::sqp::{SqpResult, SqpStatus};
+use anyhow::{anyhow, Context};
 
 /// Most rounds of check points after the first solve.
 pub const MAX_ROUNDS: usize = 6;
@@ -112,7 +112,8 @@ impl<'m> Refinement<'_, 'm> {
                         format!("{} interval {k} τ = {tau:.3}", solution.phases[j].name)
                     })
                     .collect();
-                note!(progress, 
+                note!(
+                    progress,
                     "adding {} check point(s) ({}; {} in all) and solving again from this solution",
                     new.len(),
                     at.join(", "),

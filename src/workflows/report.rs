@@ -4,12 +4,12 @@
 //! an upgrade of footfall, or to write the report somewhere else; the solver's own figures
 //! (status, iterations, KKT residual, time) are carried over from the run's summary.
 
+use super::track::{read_run_setup, RunWriting, TrackingProblem};
 #[allow(unused_imports)]
 use super::{note, warn_note, Progress};
-use super::track::{read_run_setup, RunWriting, TrackingProblem};
-use anyhow::{anyhow, bail, Context};
 use crate::runfolder::RunFolder;
 use crate::sqp::{IterationRecord, SqpResult, SqpStatus, SqpTimings, Violation};
+use anyhow::{anyhow, bail, Context};
 use std::path::{Path, PathBuf};
 
 /// What `report` does: the arguments of `footfall report`.
@@ -185,7 +185,11 @@ pub fn run(args: &ReportRequest, progress: &dyn Progress) -> anyhow::Result<()> 
                 println!("{}", t.to_markdown());
             }
         }
-        note!(progress, "report: {}", run.output.path.join("report.html").display());
+        note!(
+            progress,
+            "report: {}",
+            run.output.path.join("report.html").display()
+        );
     }
     Ok(())
 }

@@ -4,7 +4,6 @@
 
 #[allow(unused_imports)]
 use super::{note, warn_note, Progress};
-use anyhow::Context;
 use crate::data::GaitData;
 use crate::integrate::IntegratorSettings;
 use crate::model::gait::COORDINATES;
@@ -20,6 +19,7 @@ use crate::report::html::{Report, Section, Summary, Tone};
 use crate::report::table::{error_table, Table};
 use crate::runfolder::RunFolder;
 use crate::sqp::{SqpResult, SqpStatus};
+use anyhow::Context;
 use std::path::PathBuf;
 
 /// Step of the fine re-integration grid (s).

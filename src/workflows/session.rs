@@ -16,10 +16,10 @@
 //!   resumed run follows the same iterates, bit for bit, as one that was never killed.
 
 use super::{note, warn_note, Progress};
-use anyhow::{anyhow, bail, Context};
 use crate::runfolder::{self, RunFolder, RESUME_PREFIX};
 use crate::sqp::checkpoint::SqpCheckpoint;
 use crate::sqp::{IterationRecord, Nlp, Observer, SqpResult, SqpSettings};
+use anyhow::{anyhow, bail, Context};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -128,7 +128,9 @@ impl Observer for Interruptible<'_> {
             });
         if let Err(e) = written {
             // the solve goes on; only resuming it would be lost
-            warn_note!(self.progress, "warning: checkpoint not written ({e}); this run cannot be resumed if it is killed"
+            warn_note!(
+                self.progress,
+                "warning: checkpoint not written ({e}); this run cannot be resumed if it is killed"
             );
             self.checkpoints = None;
         }
@@ -164,7 +166,8 @@ pub fn solve_interruptibly(
             cp.check(nlp.n(), nlp.m())
                 .context("resuming: the checkpoint does not fit the problem")?;
             {
-                note!(progress, 
+                note!(
+                    progress,
                     "resuming at iteration {} from the killed run's checkpoint",
                     cp.next_iter
                 );

@@ -3,7 +3,6 @@
 
 #[allow(unused_imports)]
 use super::{note, warn_note, Progress};
-use anyhow::{anyhow, bail, Context};
 use crate::data::write_sagittal_csv;
 use crate::integrate::IntegratorSettings;
 use crate::model::effects::EffectSpec;
@@ -11,6 +10,7 @@ use crate::model::GaitModel;
 use crate::phases::PhaseSequence;
 use crate::problems::synth::{synthesize, MeasurementOffsets, NoiseModel, SynthSettings};
 use crate::runfolder::RunFolder;
+use anyhow::{anyhow, bail, Context};
 use std::path::PathBuf;
 
 /// What `synth` does: the arguments of `footfall synth`.
@@ -112,7 +112,8 @@ pub fn run(args: &SynthRequest, progress: &dyn Progress) -> anyhow::Result<()> {
             .start_from(&solution)
             .map_err(|e| anyhow!("{}: {e}", args.from.display()))?;
         {
-            note!(progress, 
+            note!(
+                progress,
                 "re-fitting {} with {} hidden in the model",
                 args.from.display(),
                 model_effects
@@ -213,7 +214,7 @@ pub fn run(args: &SynthRequest, progress: &dyn Progress) -> anyhow::Result<()> {
     )?;
     let out = folder.commit()?;
     {
-        note!(progress, 
+        note!(progress,
             "{} samples at {} Hz over {:.3} s ({} half cycles of {:.3} s, step {:.3} m), noise {}° / {} mm / {} N / {} mm (seed {})",
             data.time.len(),
             args.rate,
@@ -227,7 +228,8 @@ pub fn run(args: &SynthRequest, progress: &dyn Progress) -> anyhow::Result<()> {
             args.noise_cop_mm,
             args.seed
         );
-        note!(progress, 
+        note!(
+            progress,
             "trial: {}  (track it with --data)",
             out.join("synthetic.csv").display()
         );

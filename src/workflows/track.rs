@@ -3,7 +3,6 @@
 
 use super::run_folder::GaitRun;
 use super::{note, warn_note, Progress};
-use anyhow::{anyhow, Context};
 use crate::integrate::IntegratorSettings;
 use crate::model::effects::EffectSpec;
 use crate::model::GaitModel;
@@ -15,6 +14,7 @@ use crate::problems::gait::GaitCycle;
 use crate::problems::track::{TargetSides, TrackingSetup};
 use crate::runfolder::RunFolder;
 use crate::sqp::{ExactConvexification, HessianMode, SqpSettings, SqpStatus};
+use anyhow::{anyhow, Context};
 use std::path::PathBuf;
 
 /// CVODES tolerance of the states of problems with a compliant heel pad or residual
@@ -412,7 +412,11 @@ impl TrackingProblem {
         };
         let used = first.history.len().saturating_sub(1);
         {
-            note!(progress, "line search failed at KKT {:.2e} with {what}", first.kkt);
+            note!(
+                progress,
+                "line search failed at KKT {:.2e} with {what}",
+                first.kkt
+            );
         }
         let mut ocp = self
             .setup
@@ -739,7 +743,7 @@ impl TrackingProblem {
     ) -> anyhow::Result<TrackedRun> {
         let w0 = self.with_transcription(|tr, _, w0| {
             {
-                note!(progress, 
+                note!(progress,
                     "tracking {:.3}–{:.3} s of {} with the {} foot ({} variables, {} constraints, {:?})",
                     self.setup.window.0,
                     self.setup.window.1,
@@ -771,7 +775,8 @@ impl TrackingProblem {
         let mut solve = |tr: &Transcription, w: &[f64]| {
             self.solve_staged(tr, &cycle, w, settings, progress, |_, res| Ok(res))
         };
-        let (sites, res) = refinement.solve(&build, &self.check_sites, &w0, &mut solve, progress)?;
+        let (sites, res) =
+            refinement.solve(&build, &self.check_sites, &w0, &mut solve, progress)?;
         let mut ocp = build()?;
         ocp.checks = refinement.checks(&sites);
         let tr = Transcription::new(&ocp).context("transcribing the tracking problem")?;
@@ -894,14 +899,19 @@ impl TrackingProblem {
                 transient_threshold_n: transient_threshold,
                 friction: cycle.friction(),
                 check_points: check_sites.len(),
-                },
+            },
             folder,
         )?;
         {
             if !record.parameters.is_empty() {
-                note!(progress, "{}", parameter_table(&record.parameters).to_markdown());
+                note!(
+                    progress,
+                    "{}",
+                    parameter_table(&record.parameters).to_markdown()
+                );
             }
-            note!(progress, 
+            note!(
+                progress,
                 "{}\n{}: J = {:.6}, KKT {:.2e}, {} iterations, {:.1} s",
                 out.table.to_markdown(),
                 res.status,
@@ -911,12 +921,16 @@ impl TrackingProblem {
                 res.seconds
             );
             if let Some(f) = &out.fine {
-                note!(progress, 
+                note!(progress,
                     "1 ms re-integration: peak normal force {:.1} N (right), {:.1} N (left); largest Baumgarte force {:.1e} N; largest drift {:.2e} m",
                     f.peak_normal_force_n[0], f.peak_normal_force_n[1], f.max_baumgarte_force_n, f.max_position_drift_m
                 );
             }
-            note!(progress, "report: {}", out.path.join("report.html").display());
+            note!(
+                progress,
+                "report: {}",
+                out.path.join("report.html").display()
+            );
         }
         Ok(TrackedRun {
             converged,

@@ -1,0 +1,146 @@
+//! `import footfall`: the library's workflows from Python, results as numpy arrays.
+//!
+//! ```python
+//! import footfall
+//! run = footfall.track(foot="ellipse", out="runs/py_track")
+//! print(run["status"], run["objective"], run["states"].shape)
+//! ```
+//!
+//! Paths are relative to the working folder (the repository root for the bundled model
+//! and trial), as for the command line.
+
+use footfall::runfolder::RunFolder;
+use footfall::sqp::IterationRecord;
+use footfall::workflows::track::{track as track_workflow, TrackRequest};
+use footfall::workflows::{read_solution, Progress};
+use numpy::{PyArray1, PyArray2};
+use pyo3::exceptions::{PyRuntimeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::PyDict;
+use std::path::PathBuf;
+
+/// Progress printed to stderr unless quiet (warnings always).
+struct Printed {
+    quiet: bool,
+}
+
+impl Progress for Printed {
+    fn note(&self, text: &str) {
+        if !self.quiet {
+            eprintln!("{text}");
+        }
+    }
+    fn warn(&self, text: &str) {
+        eprintln!("{text}");
+    }
+    fn iteration(&self, r: &IterationRecord) {
+        if !self.quiet {
+            eprintln!(
+                "{:>5} {:>16.9e} {:>10.3e} {:>10.3e}",
+                r.iter, r.objective, r.infeasibility, r.kkt
+            );
+        }
+    }
+}
+
+/// Track measured walking with the model and write the run folder `out`.
+///
+/// Returns a dict: `status`, `converged`, `physically_valid`, `objective`, `kkt`,
+/// `iterations`, `seconds`, `run_folder`, and at the shooting nodes `time` (s, n),
+/// `states` (n × states: q, q̇, activations) and `state_names`.
+#[pyfunction]
+#[pyo3(signature = (foot="ellipse", out="runs/py_track", data=None, init=None, model=None, phases=None, max_iter=200, tol=1e-5, check_points=true, overwrite=true, quiet=false))]
+#[allow(clippy::too_many_arguments)]
+fn track<'py>(
+    py: Python<'py>,
+    foot: &str,
+    out: &str,
+    data: Option<PathBuf>,
+    init: Option<PathBuf>,
+    model: Option<PathBuf>,
+    phases: Option<PathBuf>,
+    max_iter: usize,
+    tol: f64,
+    check_points: bool,
+    overwrite: bool,
+    quiet: bool,
+) -> PyResult<Bound<'py, PyDict>> {
+    if !(tol.is_finite() && tol > 0.0) {
+        return Err(PyValueError::new_err(format!(
+            "tol = {tol}: expected a positive KKT tolerance"
+        )));
+    }
+    let mut req = TrackRequest::new(foot);
+    req.run.data = data;
+    if let Some(m) = model {
+        req.run.model = m;
+    }
+    if let Some(p) = phases {
+        req.run.phases = p;
+    }
+    req.init = init;
+    req.check_points = check_points;
+    req.sqp.max_iter = max_iter;
+    req.sqp.tol_kkt = tol;
+    let out = PathBuf::from(out);
+    let run = py
+        .detach(|| -> anyhow::Result<_> {
+            let folder = RunFolder::create(&out, overwrite)?;
+            let run = track_workflow(&req, folder, &Printed { quiet })?;
+            let solution = read_solution(&run.output.path)?;
+            Ok((run, solution))
+        })
+        .map_err(|e| PyRuntimeError::new_err(format!("{e:#}")))?;
+    let (run, solution) = run;
+    let mut time = Vec::new();
+    let mut states: Vec<Vec<f64>> = Vec::new();
+    for (j, p) in solution.phases.iter().enumerate() {
+        // a phase's first node is the previous phase's last one (after an impact, the
+        // post-impact state): every node once, the later phase's
+        for k in 0..p.x.len() {
+            let t = p.node_time(k);
+            if j > 0 && k == 0 {
+                time.pop();
+                states.pop();
+            }
+            time.push(t);
+            states.push(p.x[k].clone());
+        }
+    }
+    let names: Vec<String> = footfall::model::gait::COORDINATES
+        .iter()
+        .map(|c| c.to_string())
+        .chain(
+            footfall::model::gait::COORDINATES
+                .iter()
+                .map(|c| format!("{c}_velocity")),
+        )
+        .collect();
+    let d = PyDict::new(py);
+    d.set_item("status", run.result.status.to_string())?;
+    d.set_item("converged", run.converged)?;
+    d.set_item(
+        "physically_valid",
+        run.output.validity.as_ref().map(|v| v.is_valid()),
+    )?;
+    d.set_item("objective", run.result.objective)?;
+    d.set_item("kkt", run.result.kkt)?;
+    d.set_item("iterations", run.result.history.len().saturating_sub(1))?;
+    d.set_item("seconds", run.result.seconds)?;
+    d.set_item("run_folder", run.output.path.display().to_string())?;
+    d.set_item("time", PyArray1::from_vec(py, time))?;
+    d.set_item(
+        "states",
+        PyArray2::from_vec2(py, &states).map_err(|e| PyValueError::new_err(e.to_string()))?,
+    )?;
+    d.set_item("state_names", names)?;
+    Ok(d)
+}
+
+/// footfall: fit and predict human gait with foot-ground contact models.
+#[pymodule]
+#[pyo3(name = "footfall")]
+fn footfall_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(track, m)?)?;
+    Ok(())
+}
