@@ -41,6 +41,7 @@ pub mod html;
 pub mod plot;
 pub mod runs;
 pub mod table;
+pub mod tracking;
 
 use std::path::PathBuf;
 

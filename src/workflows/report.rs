@@ -172,7 +172,7 @@ pub fn run(args: &ReportRequest, progress: &dyn Progress) -> anyhow::Result<()> 
     {
         println!("{}", run.output.table.to_markdown());
         if let Some(b) = &run.breakdown {
-            let (share, normalised, windows) = super::track::cost_tables(b);
+            let (share, normalised, windows) = crate::report::tracking::cost_tables(b);
             println!(
                 "{}\n{}\n{}",
                 share.to_markdown(),

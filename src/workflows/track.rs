@@ -31,93 +31,6 @@ pub const PADDED_INTEGRATOR_TOL: f64 = 1e-10;
 /// Force (N) or torque (N·m) of a residual actuator per unit control.
 pub const RESIDUAL_SCALE: f64 = 100.0;
 
-/// The residual actuators' profiles at the nodes (plots, phases shaded), their RMS and
-/// peak values (N or N·m) and how often they sit on their bounds, for a model that has
-/// them.
-fn residual_report(
-    model: &GaitModel,
-    sol: &GaitSolution,
-) -> Option<(crate::report::html::Section, serde_json::Value)> {
-    use crate::report::plot::{LinePlot, LineStyle, Series, Span};
-    let uses = crate::problems::evaluation::residual_use(model, sol);
-    if uses.is_empty() {
-        return None;
-    }
-    let spans: Vec<Span> = sol
-        .phase_spans()
-        .iter()
-        .map(|p| Span::new(p.t0, p.t1, p.name.clone()))
-        .collect();
-    let mut forces = LinePlot::new("Residual forces on the pelvis", "time (s)", "force (N)");
-    let mut torques = LinePlot::new("Residual torques", "time (s)", "torque (N·m)");
-    for r in &uses {
-        let p = if r.unit == "N" {
-            &mut forces
-        } else {
-            &mut torques
-        };
-        p.series.push(Series::new(
-            r.name.trim_end_matches("_residual").replace('_', " "),
-            r.times.clone(),
-            r.values.clone(),
-            LineStyle::Solid,
-        ));
-    }
-    forces.shaded = spans.clone();
-    torques.shaded = spans;
-    let rows = uses
-        .iter()
-        .map(|r| {
-            vec![
-                r.name.clone(),
-                format!("{:.2}", r.rms),
-                format!("{:.2}", r.peak),
-                format!("±{}", r.bound),
-                format!("{:.0}", 100.0 * r.at_bound_fraction),
-                r.unit.to_string(),
-            ]
-        })
-        .collect();
-    let table = crate::report::table::Table {
-        title: "Residual actuators at the nodes".into(),
-        headers: [
-            "residual",
-            "RMS",
-            "peak |·|",
-            "bound",
-            "% of nodes at the bound",
-            "unit",
-        ]
-        .map(String::from)
-        .to_vec(),
-        rows,
-    };
-    let mut paragraphs = vec!["What the model needs beyond its own actuators to follow the data, and when: residual forces on the pelvis translations and torques on the pelvis tilt and the joints, at the shooting nodes.".to_string()];
-    let saturated: Vec<&str> = uses
-        .iter()
-        .filter(|r| r.at_bound_fraction > 0.0)
-        .map(|r| r.name.as_str())
-        .collect();
-    if !saturated.is_empty() {
-        paragraphs.push(format!(
-            "{} of {} residuals reach their bound ({}): where they do, the model needs more than the residual may give, so the profile is a lower bound of what is missing and the tracking error there carries the rest.",
-            saturated.len(),
-            uses.len(),
-            saturated.join(", ")
-        ));
-    }
-    let stats = serde_json::to_value(&uses).unwrap_or_default();
-    Some((
-        crate::report::html::Section {
-            heading: "Residual actuators".into(),
-            paragraphs,
-            tables: vec![table],
-            svgs: vec![forces.to_svg(), torques.to_svg()],
-        },
-        stats,
-    ))
-}
-
 /// The parts of a tracking problem that do not borrow each other.
 pub struct TrackingProblem {
     /// The model with the run's effects and parameter values.
@@ -483,101 +396,6 @@ pub fn merge_stages(
     }
 }
 
-/// The cost-share table (channel × phase, % of J), the normalised-error table (channel ×
-/// phase) and the worst windows.
-pub fn cost_tables(
-    b: &crate::problems::track::CostBreakdown,
-) -> (
-    crate::report::table::Table,
-    crate::report::table::Table,
-    crate::report::table::Table,
-) {
-    use crate::report::table::Table;
-    let total = b.total().max(f64::MIN_POSITIVE);
-    let mut order: Vec<usize> = (0..b.channels.len()).collect();
-    let sums: Vec<f64> = b.cost.iter().map(|per| per.iter().sum()).collect();
-    order.sort_by(|&x, &y| sums[y].total_cmp(&sums[x]));
-    let mut headers = vec!["channel".to_string(), "% of J".into()];
-    headers.extend(b.phases.iter().map(|p| format!("{p} %")));
-    let share = Table {
-        title: "Share of the tracking cost per channel and phase".into(),
-        headers,
-        rows: order
-            .iter()
-            .map(|&c| {
-                let mut row = vec![
-                    b.channels[c].clone(),
-                    format!("{:.1}", 100.0 * sums[c] / total),
-                ];
-                row.extend(
-                    b.cost[c]
-                        .iter()
-                        .map(|v| format!("{:.1}", 100.0 * v / total)),
-                );
-                row
-            })
-            .collect(),
-    };
-    let rms = b.normalised_rms();
-    let mut headers = vec!["channel".to_string(), "all".into()];
-    headers.extend(b.phases.iter().cloned());
-    let normalised = Table {
-        title: "Normalised error per channel and phase (RMS of the weighted residual)".into(),
-        headers,
-        rows: order
-            .iter()
-            .map(|&c| {
-                let n: usize = b.rows[c].iter().sum();
-                let mut row = vec![
-                    b.channels[c].clone(),
-                    if n > 0 {
-                        format!("{:.4}", (sums[c] / n as f64).sqrt())
-                    } else {
-                        "—".into()
-                    },
-                ];
-                row.extend(
-                    rms[c]
-                        .iter()
-                        .map(|v| v.map_or("—".into(), |v| format!("{v:.4}"))),
-                );
-                row
-            })
-            .collect(),
-    };
-    let windows = Table {
-        title: "Worst stretches (five nodes)".into(),
-        headers: [
-            "from (s)",
-            "to (s)",
-            "% of the data cost",
-            "largest channel",
-        ]
-        .map(String::from)
-        .to_vec(),
-        rows: {
-            let data: f64 = b
-                .nodes
-                .iter()
-                .map(|n| n.data)
-                .sum::<f64>()
-                .max(f64::MIN_POSITIVE);
-            b.worst_windows(5, 3)
-                .into_iter()
-                .map(|(t0, t1, v, c)| {
-                    vec![
-                        format!("{t0:.3}"),
-                        format!("{t1:.3}"),
-                        format!("{:.1}", 100.0 * v / data),
-                        c,
-                    ]
-                })
-                .collect()
-        },
-    };
-    (share, normalised, windows)
-}
-
 /// Read a run's `setup.json`.
 pub fn read_run_setup(run: &std::path::Path) -> anyhow::Result<TrackingRunSetup> {
     let file = if run.is_dir() {
@@ -589,32 +407,6 @@ pub fn read_run_setup(run: &std::path::Path) -> anyhow::Result<TrackingRunSetup>
         .with_context(|| format!("reading {} (a track run folder has one)", file.display()))?;
     serde_json::from_str(&text)
         .with_context(|| format!("{}: not a footfall tracking setup", file.display()))
-}
-
-/// Table of effect parameters (identified ones with their standard deviation).
-pub fn parameter_table(params: &[IdentifiedParameter]) -> crate::report::table::Table {
-    crate::report::table::Table {
-        title: "Effect parameters".into(),
-        headers: vec![
-            "parameter".into(),
-            "value".into(),
-            "± sd".into(),
-            "unit".into(),
-            "identified".into(),
-        ],
-        rows: params
-            .iter()
-            .map(|p| {
-                vec![
-                    p.name.clone(),
-                    format!("{:.5}", p.value),
-                    p.sd.map_or("—".into(), |v| format!("{v:.2e}")),
-                    p.unit.clone(),
-                    if p.free { "yes".into() } else { "no".into() },
-                ]
-            })
-            .collect(),
-    }
 }
 
 /// What the tracking workflow solves: the run's description, the effects added to it,
@@ -851,7 +643,7 @@ impl TrackingProblem {
             match setup.cost_breakdown(model, sets, &cycle.continuous, &solution, integrator) {
                 Ok(b) => {
                     extra_json.insert("cost_breakdown".into(), serde_json::to_value(&b)?);
-                    extra_sections.push(where_it_fails(&b, &solution));
+                    extra_sections.push(crate::report::tracking::where_it_fails(&b, &solution));
                     Some(b)
                 }
                 Err(e) => {
@@ -859,7 +651,7 @@ impl TrackingProblem {
                     None
                 }
             };
-        let residuals = residual_report(model, &solution);
+        let residuals = crate::report::tracking::residual_report(model, &solution);
         if let Some((section, stats)) = &residuals {
             extra_sections.push(section.clone());
             extra_json.insert("residual_actuators".into(), stats.clone());
@@ -868,7 +660,7 @@ impl TrackingProblem {
             extra_sections.push(crate::report::html::Section {
                 heading: "Effects".into(),
                 paragraphs: vec!["Effect parameters of the model; identified ones with an approximate standard deviation from the Gauss–Newton Hessian reduced to the constraints, s² = J/(N − p).".into()],
-                tables: vec![parameter_table(&record.parameters)],
+                tables: vec![crate::report::tracking::parameter_table(&record.parameters)],
                 svgs: vec![],
             });
         }
@@ -907,7 +699,7 @@ impl TrackingProblem {
                 note!(
                     progress,
                     "{}",
-                    parameter_table(&record.parameters).to_markdown()
+                    crate::report::tracking::parameter_table(&record.parameters).to_markdown()
                 );
             }
             note!(
@@ -959,42 +751,6 @@ pub struct RunWriting<'a> {
     pub provenance: Option<String>,
     /// The problem's check points (recorded in `setup.json`).
     pub check_sites: &'a [(usize, usize, f64)],
-}
-
-/// The report section on where the model fails: normalised error and cost share per
-/// channel and phase, the node cost over time with the phases shaded and the worst
-/// stretches.
-pub fn where_it_fails(
-    b: &crate::problems::track::CostBreakdown,
-    solution: &GaitSolution,
-) -> crate::report::html::Section {
-    use crate::report::plot::{LinePlot, LineStyle, Series, Span};
-    let (share, normalised, windows) = cost_tables(b);
-    let mut plot = LinePlot::new(
-        "Data cost per shooting node",
-        "time (s)",
-        "Σ weighted residual²",
-    );
-    plot.series.push(Series::new(
-        "data cost",
-        b.nodes.iter().map(|n| n.time).collect(),
-        b.nodes.iter().map(|n| n.data).collect(),
-        LineStyle::Solid,
-    ));
-    plot.shaded = solution
-        .phase_spans()
-        .iter()
-        .map(|p| Span::new(p.t0, p.t1, p.name.clone()))
-        .collect();
-    crate::report::html::Section {
-        heading: "Where the model fails".into(),
-        paragraphs: vec![format!(
-            "The tracking cost J = {:.6} (weighted squared residuals at the nodes, seed eq. 18) by channel and phase: its share, and the normalised error (RMS of the weighted residual: the error in units of the channel's weighting scale). Below, the data cost of every node over time (phases shaded) and the stretches of five nodes where it is largest.",
-            b.total()
-        )],
-        tables: vec![share, normalised, windows],
-        svgs: vec![plot.to_svg()],
-    }
 }
 
 /// A solved and written tracking run.
