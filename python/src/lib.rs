@@ -12,7 +12,7 @@
 use footfall::runfolder::RunFolder;
 use footfall::sqp::IterationRecord;
 use footfall::workflows::track::{track as track_workflow, TrackRequest};
-use footfall::workflows::{read_solution, Progress};
+use footfall::workflows::Progress;
 use numpy::{PyArray1, PyArray2};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
@@ -47,7 +47,8 @@ impl Progress for Printed {
 ///
 /// Returns a dict: `status`, `converged`, `physically_valid`, `objective`, `kkt`,
 /// `iterations`, `seconds`, `run_folder`, and at the shooting nodes `time` (s, n),
-/// `states` (n × states: q, q̇, activations) and `state_names`.
+/// `states` (n × states: q, q̇, activations) and `state_names`, and `parameters` (the
+/// model's effect parameters by name).
 #[pyfunction]
 #[pyo3(signature = (foot="ellipse", out="runs/py_track", data=None, init=None, model=None, phases=None, max_iter=200, tol=1e-5, check_points=true, overwrite=true, quiet=false))]
 #[allow(clippy::too_many_arguments)]
@@ -86,12 +87,10 @@ fn track<'py>(
     let run = py
         .detach(|| -> anyhow::Result<_> {
             let folder = RunFolder::create(&out, overwrite)?;
-            let run = track_workflow(&req, folder, &Printed { quiet })?;
-            let solution = read_solution(&run.output.path)?;
-            Ok((run, solution))
+            Ok(track_workflow(&req, folder, &Printed { quiet })?)
         })
         .map_err(|e| PyRuntimeError::new_err(format!("{e:#}")))?;
-    let (run, solution) = run;
+    let solution = &run.solution;
     let mut time = Vec::new();
     let mut states: Vec<Vec<f64>> = Vec::new();
     for (j, p) in solution.phases.iter().enumerate() {
@@ -107,15 +106,7 @@ fn track<'py>(
             states.push(p.x[k].clone());
         }
     }
-    let names: Vec<String> = footfall::model::gait::COORDINATES
-        .iter()
-        .map(|c| c.to_string())
-        .chain(
-            footfall::model::gait::COORDINATES
-                .iter()
-                .map(|c| format!("{c}_velocity")),
-        )
-        .collect();
+    let names = run.state_names.clone();
     let d = PyDict::new(py);
     d.set_item("status", run.result.status.to_string())?;
     d.set_item("converged", run.converged)?;
@@ -134,6 +125,11 @@ fn track<'py>(
         PyArray2::from_vec2(py, &states).map_err(|e| PyValueError::new_err(e.to_string()))?,
     )?;
     d.set_item("state_names", names)?;
+    let parameters = PyDict::new(py);
+    for p in &run.record.parameters {
+        parameters.set_item(&p.name, p.value)?;
+    }
+    d.set_item("parameters", parameters)?;
     Ok(d)
 }
 

@@ -731,6 +731,8 @@ impl TrackingProblem {
             record,
             breakdown,
             residuals: residuals.map(|r| r.0),
+            state_names: model.state_names(),
+            solution,
         })
     }
 }
@@ -767,4 +769,8 @@ pub struct TrackedRun {
     pub breakdown: Option<crate::problems::track::CostBreakdown>,
     /// The residual actuators' section, for a model that has them.
     pub residuals: Option<crate::report::html::Section>,
+    /// The solution: states and controls at the shooting nodes, free parameters.
+    pub solution: GaitSolution,
+    /// Names of the states (`q`, `q̇`, activations), in the solution's order.
+    pub state_names: Vec<String>,
 }
