@@ -10,7 +10,7 @@ use crate::integrate::{ControlShape, Integrator, IntegratorSettings};
 use crate::model::gait::{ContactReport, COORDINATES};
 use crate::model::{ConstraintSet, DynamicsError, GaitModel};
 use crate::ocp::{Block, Transcription};
-use crate::report::table::{ChannelErrors, ErrorStats};
+use super::errors::{ChannelErrors, ErrorStats};
 use crate::simulate::{PhaseSpan, Sample, SimulationError, SimulationOde, SimulationResult};
 use serde::{Deserialize, Serialize};
 

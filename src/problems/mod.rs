@@ -4,6 +4,7 @@
 
 pub mod benchmark;
 pub mod diagnose;
+pub mod errors;
 pub mod evaluation;
 pub mod foot_fit;
 pub mod gait;
