@@ -5,7 +5,6 @@
 //! phase sequences, forward simulation and run folders.
 #![warn(missing_docs)]
 
-pub mod benchmarks;
 pub mod controls;
 pub mod data;
 pub mod integrate;

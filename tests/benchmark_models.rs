@@ -10,7 +10,7 @@ use std::hint::black_box;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use footfall::benchmarks::{read_problem_json, CartPole, FiveLinkBiped};
+use footfall::problems::benchmarks::{read_problem_json, CartPole, FiveLinkBiped};
 use footfall::integrate::{
     ControlShape, ControlledOde, Integrator, IntegratorSettings, Method, ShootingInterval,
 };

@@ -9,7 +9,7 @@ use footfall::integrate::{ControlledOde, IntegratorSettings};
 use footfall::model::spec::{FootSpec, ModelSpec};
 use footfall::model::{GaitModel, GaitOde};
 use footfall::phases::PhaseSequence;
-use footfall::problems::benchmark::Benchmark;
+use footfall::problems::benchmarks::Benchmark;
 use footfall::report::diff::RunSummary;
 use std::path::{Path, PathBuf};
 
