@@ -1,5 +1,5 @@
 //! Tracking-error statistics: what the error tables of seed 001 Tables 3/4 report,
-//! computed here and rendered by [`crate::report::table`].
+//! computed here; the report layer (`table` module) renders them.
 //!
 //! [`ErrorStats`] summarises a tracking error ε(t) = |model − measurement| over the
 //! samples where it is defined: mean, standard deviation (population, 1/n, as NumPy's
