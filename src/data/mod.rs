@@ -53,7 +53,8 @@ pub use events::{
 pub use fourier::{half_cycle_shift, half_cycle_shift_order, FourierSeries, SEED_FOURIER_ORDER};
 pub use spline::CubicSpline;
 pub use storage::{
-    parse_storage, read_storage, storage_text, ColumnMap, ForceColumns, Storage, StorageMap};
+    parse_storage, read_storage, storage_text, ColumnMap, ForceColumns, Storage, StorageMap,
+};
 
 use crate::model::Side;
 use std::collections::BTreeMap;

@@ -139,7 +139,10 @@ pub fn dense_jacobian<const N: usize, const M: usize>(
         x.len()
     );
     let x = SVector::<f64, N>::from_column_slice(x);
-    let (value, jac) = num_dual::jacobian(|xs: SVector<DualSVec64<N>, N>| SVector::from(f(&xs.into())), &x);
+    let (value, jac) = num_dual::jacobian(
+        |xs: SVector<DualSVec64<N>, N>| SVector::from(f(&xs.into())),
+        &x,
+    );
     (value.as_slice().to_vec(), jac.as_slice().to_vec())
 }
 

@@ -3,11 +3,11 @@
 //! `h Σ_k |u_k|²`, bounds and path constraints at the N + 1 nodes, the same initial guess.
 
 use super::{biped, CartPole, FiveLinkBiped};
+use crate::integrate::{ControlShape, IntegratorSettings};
 use crate::model::ad::dense_hessian;
+use crate::ocp::{Block, Constraint, Ocp, Phase, PhaseDuration, Term};
 use crate::problems::peer_gait::PeerGaitTrack;
 use crate::problems::{FnTerm, Linear};
-use crate::integrate::{ControlShape, IntegratorSettings};
-use crate::ocp::{Block, Constraint, Ocp, Phase, PhaseDuration, Term};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
