@@ -4,10 +4,9 @@
 //! per-iteration evaluations of the CasADi gait peer's tracking problem.
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use footfall::benchmarks::read_problem_json;
 use footfall::integrate::IntegratorSettings;
 use footfall::ocp::Transcription;
-use footfall::problems::benchmark::Benchmark;
+use footfall::problems::benchmarks::{read_problem_json, Benchmark};
 use footfall::sqp::qp::{self, QpData, Triplets};
 use footfall::sqp::{self, HessianMode, Nlp, Silent, SqpSettings};
 use std::time::Duration;

@@ -26,7 +26,6 @@
 #![warn(missing_docs)]
 #![deny(unsafe_code)]
 
-pub mod benchmarks;
 pub mod controls;
 pub mod data;
 pub mod integrate;

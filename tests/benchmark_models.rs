@@ -10,11 +10,11 @@ use std::hint::black_box;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use footfall::benchmarks::{read_problem_json, CartPole, FiveLinkBiped};
 use footfall::integrate::{
     ControlShape, ControlledOde, Integrator, IntegratorSettings, Method, ShootingInterval,
 };
 use footfall::model::ad;
+use footfall::problems::benchmarks::{read_problem_json, CartPole, FiveLinkBiped};
 use num_dual::{Dual64, DualNum};
 use serde_json::Value;
 

@@ -2,10 +2,9 @@
 //! problem files, solved by multiple shooting + SQP and compared with the peer's reference
 //! optima; node defects re-integrated at 1e-12.
 
-use footfall::benchmarks::read_problem_json;
 use footfall::integrate::{ControlShape, Integrator, IntegratorSettings, ShootingInterval};
 use footfall::ocp::{Block, Transcription};
-use footfall::problems::benchmark::Benchmark;
+use footfall::problems::benchmarks::{read_problem_json, Benchmark};
 use footfall::sqp::{self, HessianMode, Silent, SqpSettings, SqpStatus};
 use std::path::PathBuf;
 

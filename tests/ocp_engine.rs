@@ -1,10 +1,9 @@
 //! Engine properties: results independent of the thread count (bit for bit), and a clear
 //! 'infeasible' stop naming the violated constraints.
 
-use footfall::benchmarks::read_problem_json;
 use footfall::integrate::{ControlShape, ControlledOde, IntegratorSettings, OdeError};
 use footfall::ocp::{Block, Constraint, Ocp, Phase, PhaseDuration, Term, Transcription};
-use footfall::problems::benchmark::Benchmark;
+use footfall::problems::benchmarks::{read_problem_json, Benchmark};
 use footfall::problems::Linear;
 use footfall::sqp::{self, HessianMode, Silent, SqpResult, SqpSettings, SqpStatus};
 use std::path::PathBuf;
@@ -232,8 +231,8 @@ fn biped_term_hessians_match_finite_differences() {
 /// and the cart-pole, constant and linear controls.
 #[test]
 fn interval_hessian_matches_finite_differences_of_sensitivities() {
-    use footfall::benchmarks::{CartPole, FiveLinkBiped};
     use footfall::integrate::{Integrator, ShootingInterval};
+    use footfall::problems::benchmarks::{CartPole, FiveLinkBiped};
     let tight = IntegratorSettings {
         rtol: 1e-12,
         atol: 1e-12,

@@ -5,7 +5,7 @@
 
 use footfall::integrate::IntegratorSettings;
 use footfall::ocp::{Block, Transcription};
-use footfall::problems::benchmark::Benchmark;
+use footfall::problems::benchmarks::Benchmark;
 use std::path::PathBuf;
 
 fn root() -> PathBuf {

@@ -5,10 +5,9 @@
 //! without being attempted), so the test does not depend on finding a QP that Clarabel
 //! happens to fail on.
 
-use footfall::benchmarks::read_problem_json;
 use footfall::integrate::{IntegratorSettings, Method};
 use footfall::ocp::Transcription;
-use footfall::problems::benchmark::Benchmark;
+use footfall::problems::benchmarks::{read_problem_json, Benchmark};
 use footfall::sqp::{self, HessianMode, Silent, SqpResult, SqpSettings, SqpStatus};
 use std::path::PathBuf;
 

@@ -9,14 +9,15 @@
 
 mod common;
 
-use footfall::report::csv::{parse_sto, TimeSeries};
+use footfall::data::{parse_storage, DataError};
+use footfall::report::csv::TimeSeries;
 use footfall::report::html::{Report, Section, Summary, Tone};
 use footfall::report::plot::{
     grid, nice_step, nice_ticks, tick_labels, LinePlot, LineStyle, Series, Span,
 };
 use footfall::report::table::{error_table, ChannelErrors, ErrorStats, Table};
 use footfall::report::ReportError;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 // ---------------------------------------------------------------------------------------
@@ -583,28 +584,30 @@ fn sto_round_trip() {
             "time\tknee_angle_r\tgrf_y_r"
         ]
     );
-    let sto = parse_sto(&text).unwrap();
+    // read back by the crate's one .sto reader, as a user reads the run's kinematics.sto
+    let path = Path::new("kinematics.sto");
+    let sto = parse_storage(&text, path).unwrap();
     assert_eq!(sto.name, "footfall tracking");
-    assert!(!sto.in_degrees);
-    assert_eq!(sto.labels, ["time", "knee_angle_r", "grf_y_r"]);
-    assert_eq!(sto.rows.len(), 5);
+    assert!(!sto.in_degrees && sto.angle_unit_stated);
+    assert_eq!(sto.columns, ["time", "knee_angle_r", "grf_y_r"]);
+    assert_eq!(sto.len(), 5);
     let close = |a: &[f64], b: &[f64]| {
         a.iter()
             .zip(b)
             .all(|(x, y)| (x.is_nan() && y.is_nan()) || (x - y).abs() <= 1e-9 * y.abs().max(1e-300))
     };
-    assert!(close(&sto.column("time").unwrap(), &time));
-    assert!(close(&sto.column("knee_angle_r").unwrap(), &knee));
-    assert!(close(&sto.column("grf_y_r").unwrap(), &grf));
+    assert!(close(sto.column("time").unwrap(), &time));
+    assert!(close(sto.column("knee_angle_r").unwrap(), &knee));
+    assert!(close(sto.column("grf_y_r").unwrap(), &grf));
     assert!(sto.column("phase").is_none());
 
     // A header that disagrees with the data, and a short row, are refused with the line.
     let bad = text.replace("nRows=5", "nRows=6");
-    assert!(matches!(parse_sto(&bad), Err(ReportError::Sto { .. })));
+    assert!(matches!(parse_storage(&bad, path), Err(DataError::Format { .. })));
     let short = format!("{}1.0\t2.0\n", text);
-    let e = parse_sto(&short).unwrap_err().to_string();
+    let e = parse_storage(&short, path).unwrap_err().to_string();
     assert!(e.contains("line 13"), "{e}");
-    assert!(parse_sto("name\nversion=1\n").is_err());
+    assert!(parse_storage("name\nversion=1\n", path).is_err());
 }
 
 // ---------------------------------------------------------------------------------------

@@ -5,7 +5,7 @@ use super::Failure;
 use anyhow::{anyhow, Context};
 use footfall::integrate::{IntegrationStats, IntegratorSettings, Method};
 use footfall::ocp::{Block, Ocp, Transcription};
-use footfall::problems::benchmark::Benchmark;
+use footfall::problems::benchmarks::Benchmark;
 use footfall::problems::peer_gait::{stages, STAGE2_TOL};
 use footfall::runfolder::RunFolder;
 use footfall::sqp::{ExactConvexification, HessianMode, SqpResult, SqpSettings, SqpStatus};

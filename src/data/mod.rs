@@ -52,7 +52,9 @@ pub use events::{
 };
 pub use fourier::{half_cycle_shift, half_cycle_shift_order, FourierSeries, SEED_FOURIER_ORDER};
 pub use spline::CubicSpline;
-pub use storage::{parse_storage, read_storage, ColumnMap, ForceColumns, Storage, StorageMap};
+pub use storage::{
+    parse_storage, read_storage, storage_text, ColumnMap, ForceColumns, Storage, StorageMap,
+};
 
 use crate::model::Side;
 use std::collections::BTreeMap;

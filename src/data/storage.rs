@@ -1,5 +1,6 @@
 //! OpenSim storage files (`.mot`, `.sto`): the form gait labs export processed
-//! kinematics and ground reaction forces in.
+//! kinematics and ground reaction forces in, read by [`read_storage`] and written by
+//! [`storage_text`] (the one reader and writer of the format in the crate).
 //!
 //! Layout: header lines up to a line `endheader`, then one line of column labels (the
 //! first is `time`), then one row of numbers per sample, separated by tabs or spaces.
@@ -383,6 +384,43 @@ pub fn parse_storage(text: &str, path: &Path) -> Result<Storage, DataError> {
         in_degrees,
         angle_unit_stated,
     })
+}
+
+/// The text of an OpenSim 4 storage file that [`parse_storage`] (and OpenSim's `Storage`
+/// and `TimeSeriesTable`) read back: `name` on the first line (line breaks and tabs in it
+/// become spaces), `version=1`, `nRows`, `nColumns`, `inDegrees=no` (SI units and
+/// radians), `endheader`, the tab-separated labels `time` and `columns`, then one row per
+/// sample of `time` (s). Numbers are written as `{:.9e}`, a NaN as `NaN` (OpenSim parses
+/// numbers with `strtod`/`std::stod`, which accept it). Every column must be as long as
+/// `time`.
+pub fn storage_text(name: &str, time: &[f64], columns: &[(&str, &[f64])]) -> String {
+    use std::fmt::Write;
+    let name = name.replace(['\n', '\r', '\t'], " ");
+    let mut out = String::new();
+    writeln!(
+        out,
+        "{name}\nversion=1\nnRows={}\nnColumns={}\ninDegrees=no\nendheader",
+        time.len(),
+        columns.len() + 1
+    )
+    .ok();
+    out.push_str("time");
+    for (n, _) in columns {
+        write!(out, "\t{n}").ok();
+    }
+    out.push('\n');
+    for (i, t) in time.iter().enumerate() {
+        write!(out, "{t:.9e}").ok();
+        for (_, x) in columns {
+            if x[i].is_nan() {
+                out.push_str("\tNaN");
+            } else {
+                write!(out, "\t{:.9e}", x[i]).ok();
+            }
+        }
+        out.push('\n');
+    }
+    out
 }
 
 /// Time must be finite and strictly increasing; `lines` gives each sample's line.

@@ -1,11 +1,15 @@
-//! Forward-mode AD plumbing: the dual-number types the model is evaluated with, and the
-//! chunked Jacobian driver.
+//! Forward-mode AD plumbing, the crate's one home for it: the dual-number types the model
+//! is evaluated with, and the Jacobian and Hessian drivers.
 //!
 //! A Jacobian of `f: ℝⁿ → ℝᵐ` is evaluated in chunks of [`CHUNK`] input directions with
 //! the vector dual number [`AdChunk`], so one evaluation of the generic model code yields
-//! [`CHUNK`] exact columns at once.
+//! [`CHUNK`] exact columns at once ([`jacobian`]); Hessians of a scalar come from nested
+//! duals ([`hessian`], [`hessian_over`]). Small functions whose input size is known at
+//! compile time (the benchmark models) use num-dual's own one-pass drivers through
+//! [`dense_jacobian`] and [`dense_hessian`].
 
-use num_dual::{Derivative, DualSVec64, DualStruct};
+use nalgebra::SVector;
+use num_dual::{Derivative, Dual2SVec64, DualSVec64, DualStruct};
 
 /// Number of derivative directions carried by one [`AdChunk`].
 pub const CHUNK: usize = 8;
@@ -114,6 +118,43 @@ pub fn seed_chunk(x: &[f64], start: usize, out: &mut Vec<AdChunk>) {
             out.push(d);
         }
     }
+}
+
+/// `v` with derivative direction `k` of `N` seeded (a unit direction).
+#[inline]
+pub fn seed<const N: usize>(v: f64, k: usize) -> DualSVec64<N> {
+    DualSVec64::<N>::from_re(v).derivative(k)
+}
+
+/// Value and column-major Jacobian (`jac[i + j * M]`) of `f: ℝᴺ → ℝᴹ` by one forward pass
+/// with an `N`-lane vector dual number (num-dual's [`num_dual::jacobian`]).
+pub fn dense_jacobian<const N: usize, const M: usize>(
+    x: &[f64],
+    f: impl FnOnce(&[DualSVec64<N>; N]) -> [DualSVec64<N>; M],
+) -> (Vec<f64>, Vec<f64>) {
+    assert_eq!(
+        x.len(),
+        N,
+        "expected an input of length {N}, got {}",
+        x.len()
+    );
+    let x = SVector::<f64, N>::from_column_slice(x);
+    let (value, jac) = num_dual::jacobian(
+        |xs: SVector<DualSVec64<N>, N>| SVector::from(f(&xs.into())),
+        &x,
+    );
+    (value.as_slice().to_vec(), jac.as_slice().to_vec())
+}
+
+/// Hessian (column-major, `N × N`) of a scalar function of `N` variables by one
+/// second-order forward pass (num-dual's [`num_dual::hessian`]).
+pub fn dense_hessian<const N: usize>(
+    z: &[f64],
+    f: impl Fn(&[Dual2SVec64<N>]) -> Dual2SVec64<N>,
+) -> Vec<f64> {
+    let z = SVector::<f64, N>::from_column_slice(&z[..N]);
+    let (_, _, h) = num_dual::hessian(|zs: SVector<Dual2SVec64<N>, N>| f(zs.as_slice()), &z);
+    h.as_slice().to_vec()
 }
 
 /// Derivative part `k` of a vector dual number of any width (0 if the derivative is

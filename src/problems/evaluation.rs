@@ -4,13 +4,13 @@
 //! re-integration of every shooting interval on a 1 ms grid, where force transients that
 //! fall between nodes show (seed §5).
 
+use super::errors::{ChannelErrors, ErrorStats};
 use crate::controls::ControlTable;
 use crate::data::{interp_linear, CubicSpline, DataError, GaitData};
 use crate::integrate::{ControlShape, Integrator, IntegratorSettings};
 use crate::model::gait::{ContactReport, COORDINATES};
 use crate::model::{ConstraintSet, DynamicsError, GaitModel};
 use crate::ocp::{Block, Transcription};
-use crate::report::table::{ChannelErrors, ErrorStats};
 use crate::simulate::{PhaseSpan, Sample, SimulationError, SimulationOde, SimulationResult};
 use serde::{Deserialize, Serialize};
 

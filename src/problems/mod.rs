@@ -2,8 +2,9 @@
 //! problems (cart-pole swing-up, five-link biped) that prove the OCP engine knows
 //! nothing about gait.
 
-pub mod benchmark;
+pub mod benchmarks;
 pub mod diagnose;
+pub mod errors;
 pub mod evaluation;
 pub mod foot_fit;
 pub mod gait;
@@ -120,28 +121,6 @@ where
         self.hessian = Some(h);
         self
     }
-}
-
-/// Hessian of a scalar function of `N` variables by second-order forward AD
-/// (column-major, `N × N`).
-pub fn hessian<const N: usize>(
-    z: &[f64],
-    f: impl Fn(&[num_dual::Dual2SVec64<N>]) -> num_dual::Dual2SVec64<N>,
-) -> Vec<f64> {
-    use num_dual::{Derivative, Dual2SVec64};
-    let xs: Vec<Dual2SVec64<N>> = (0..N)
-        .map(|i| Dual2SVec64::from_re(z[i]).derivative(i))
-        .collect();
-    let y = f(&xs);
-    let mut out = vec![0.0; N * N];
-    if let Derivative(Some(m)) = &y.v2 {
-        for a in 0..N {
-            for b in 0..N {
-                out[a + b * N] = m[(a, b)];
-            }
-        }
-    }
-    out
 }
 
 impl<F> NodeFunction for FnTerm<F>

@@ -79,14 +79,6 @@ pub enum ReportError {
         /// What is wrong with it.
         reason: &'static str,
     },
-    /// A malformed `.sto` file.
-    #[error("line {line} of the .sto file: {message}")]
-    Sto {
-        /// Line number (1-based).
-        line: usize,
-        /// What is wrong.
-        message: String,
-    },
     /// An I/O error on a path.
     #[error("{path}: {source}")]
     Io {

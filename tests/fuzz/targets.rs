@@ -10,7 +10,7 @@ use footfall::model::spec::{FootSpec, ModelSpec};
 use footfall::model::GaitModel;
 use footfall::problems::GaitOde;
 use footfall::phases::PhaseSequence;
-use footfall::problems::benchmark::Benchmark;
+use footfall::problems::benchmarks::Benchmark;
 use footfall::report::diff::RunSummary;
 use std::path::{Path, PathBuf};
 

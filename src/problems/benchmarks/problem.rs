@@ -2,11 +2,12 @@
 //! exactly as defined there: N equal intervals, piecewise-constant controls, objective
 //! `h Σ_k |u_k|²`, bounds and path constraints at the N + 1 nodes, the same initial guess.
 
-use super::peer_gait::PeerGaitTrack;
-use super::{hessian, FnTerm, Linear};
-use crate::benchmarks::{biped, CartPole, FiveLinkBiped};
+use super::{biped, CartPole, FiveLinkBiped};
 use crate::integrate::{ControlShape, IntegratorSettings};
+use crate::model::ad::dense_hessian;
 use crate::ocp::{Block, Constraint, Ocp, Phase, PhaseDuration, Term};
+use crate::problems::peer_gait::PeerGaitTrack;
+use crate::problems::{FnTerm, Linear};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -343,7 +344,7 @@ fn five_link_biped<'a>(
     let m1h = model.clone();
     let periodic = periodic.with_hessian(Box::new(move |z: &[f64], w: &[f64], out: &mut [f64]| {
         // Σ w_i (x0_i − Δ_i(x_N)): curvature only in x_N
-        let hx = hessian::<NX>(&z[NX..], |xs| {
+        let hx = dense_hessian::<NX>(&z[NX..], |xs| {
             let d = m1h.heel_strike(xs);
             d.iter()
                 .zip(w)
@@ -392,7 +393,7 @@ fn five_link_biped<'a>(
     );
     let m2h = model.clone();
     let foot_end = foot_end.with_hessian(Box::new(move |z: &[f64], w: &[f64], out: &mut [f64]| {
-        let hq = hessian::<NQ>(&z[..NQ], |qs| {
+        let hq = dense_hessian::<NQ>(&z[..NQ], |qs| {
             let p = m2h.swing_foot(qs);
             p[0] * w[0] + p[1] * w[1]
         });
@@ -434,7 +435,7 @@ fn five_link_biped<'a>(
         );
         let m4 = model.clone();
         let vy = vy.with_hessian(Box::new(move |z: &[f64], w: &[f64], out: &mut [f64]| {
-            let hx = hessian::<NX>(z, |xs| {
+            let hx = dense_hessian::<NX>(z, |xs| {
                 m4.swing_foot_velocity(&xs[..NQ], &xs[NQ..])[1] * w[0]
             });
             out.copy_from_slice(&hx);

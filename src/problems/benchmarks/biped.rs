@@ -13,9 +13,9 @@
 use num_dual::DualSVec64;
 use serde_json::Value;
 
-use super::{dense_jacobian, number, numbers, seed};
+use super::{number, numbers};
 use crate::integrate::{ControlledOde, OdeError};
-use crate::model::ad::eps;
+use crate::model::ad::{dense_hessian, dense_jacobian, eps, seed};
 use crate::model::linalg::{cholesky, cholesky_solve};
 use crate::model::Scalar;
 
@@ -665,7 +665,7 @@ impl ControlledOde for FiveLinkBiped {
             ));
         }
         let z: Vec<f64> = x.iter().chain(u).copied().collect();
-        let h = crate::problems::hessian::<{ NX + NU }>(&z, |zs| {
+        let h = dense_hessian::<{ NX + NU }>(&z, |zs| {
             let f = self.rhs(&zs[..NX], &zs[NX..]);
             f.iter().zip(mu).fold(
                 num_dual::Dual2SVec64::<{ NX + NU }>::from(0.0),

@@ -1,7 +1,8 @@
 //! Two standard non-gait optimal-control benchmark models, used to prove the generic
 //! multiple-shooting engine against an independent CasADi/IPOPT implementation of the same
 //! problems (the peer problem files `problems/cartpole_swingup.json` and
-//! `problems/five_link_biped.json`).
+//! `problems/five_link_biped.json`), and the [`Benchmark`] problems built on them
+//! ([`problem`]: JSON problem loading and transcription).
 //!
 //! Both models implement [`ControlledOde`](crate::integrate::ControlledOde) with no free
 //! model parameters (nθ = 0).  Their dynamics are written once, generic over
@@ -69,14 +70,14 @@
 
 pub mod biped;
 pub mod cartpole;
+pub mod problem;
 
 pub use biped::{FiveLinkBiped, HeelStrike};
 pub use cartpole::CartPole;
+pub use problem::{Benchmark, ProblemError, GAIT_TRACK, MAX_INTERVALS};
 
 use std::path::Path;
 
-use crate::model::ad::eps;
-use num_dual::DualSVec64;
 use serde_json::Value;
 
 /// Read and parse a problem JSON file; errors name the file.
@@ -132,36 +133,6 @@ fn numbers<const N: usize>(problem: &Value, path: &[&str], what: &str) -> Result
         *o = x.as_f64().filter(|x| x.is_finite()).ok_or_else(bad)?;
     }
     Ok(out)
-}
-
-/// `v` with derivative direction `k` of `N` seeded.
-#[inline]
-fn seed<const N: usize>(v: f64, k: usize) -> DualSVec64<N> {
-    DualSVec64::<N>::from_re(v).derivative(k)
-}
-
-/// Value and column-major Jacobian (`jac[i + j * M]`) of `f: ℝᴺ → ℝᴹ` by one forward pass
-/// with an `N`-lane vector dual number.
-fn dense_jacobian<const N: usize, const M: usize>(
-    x: &[f64],
-    f: impl FnOnce(&[DualSVec64<N>; N]) -> [DualSVec64<N>; M],
-) -> (Vec<f64>, Vec<f64>) {
-    assert_eq!(
-        x.len(),
-        N,
-        "expected an input of length {N}, got {}",
-        x.len()
-    );
-    let xs: [DualSVec64<N>; N] = std::array::from_fn(|k| seed(x[k], k));
-    let ys = f(&xs);
-    let value = ys.iter().map(|y| y.re).collect();
-    let mut jac = vec![0.0; M * N];
-    for j in 0..N {
-        for (i, y) in ys.iter().enumerate() {
-            jac[i + j * M] = eps(y, j);
-        }
-    }
-    (value, jac)
 }
 
 /// Check the buffer lengths of a `ControlledOde` call on a model without parameters.

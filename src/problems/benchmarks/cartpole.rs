@@ -3,9 +3,9 @@
 use num_dual::DualSVec64;
 use serde_json::Value;
 
-use super::{number, seed};
+use super::number;
 use crate::integrate::{ControlledOde, OdeError};
-use crate::model::ad::eps;
+use crate::model::ad::{dense_hessian, eps, seed};
 use crate::model::Scalar;
 
 /// Number of states (x, θ, ẋ, θ̇).
@@ -201,7 +201,7 @@ impl ControlledOde for CartPole {
             ));
         }
         let z: Vec<f64> = x.iter().chain(u).copied().collect();
-        let h = crate::problems::hessian::<{ NX + NU }>(&z, |zs| {
+        let h = dense_hessian::<{ NX + NU }>(&z, |zs| {
             let xs = [zs[0], zs[1], zs[2], zs[3]];
             let f = self.rhs(&xs, zs[4]);
             f.iter().zip(mu).fold(

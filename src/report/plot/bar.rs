@@ -1,0 +1,368 @@
+//! Grouped bar charts on the line plots' axes, palette and legend layout.
+
+use super::*;
+use std::fmt::Write;
+
+/// One named set of bars in a [`BarChart`]: one value per category, all in one colour.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BarSeries {
+    /// Legend entry.
+    pub name: String,
+    /// Bar heights, one per category (y units); a non-finite value draws no bar.
+    pub values: Vec<f64>,
+    /// Text above each bar (e.g. the value in its own unit); missing or empty: none.
+    /// A category without a bar still shows its label, at the baseline.
+    pub labels: Vec<String>,
+}
+
+impl BarSeries {
+    /// A series from its parts.
+    pub fn new(name: impl Into<String>, values: Vec<f64>, labels: Vec<String>) -> Self {
+        Self {
+            name: name.into(),
+            values,
+            labels,
+        }
+    }
+}
+
+/// A grouped bar chart rendered to SVG: one group of bars per category, one bar per
+/// series, bars from zero, an optional dashed reference line (e.g. 100 % = "as before").
+///
+/// Text is laid out as in [`LinePlot`]; the figure grows wider than [`BarChart::width`]
+/// when the category or bar labels need the room, so labels never overlap. Bars beyond
+/// a fixed `y_range` are clipped at the frame (their label still gives the value).
+///
+/// ```
+/// use footfall::report::plot::{BarChart, BarSeries};
+///
+/// let mut c = BarChart::new("mean error, % of run A", "% of A");
+/// c.categories = vec!["knee angle\n(°)".into(), "CoP\n(cm)".into()];
+/// c.series.push(BarSeries::new("A", vec![100.0, 100.0], vec!["4.00 °".into(), "2.00 cm".into()]));
+/// c.series.push(BarSeries::new("B", vec![75.0, 150.0], vec!["3.00 °".into(), "3.00 cm".into()]));
+/// c.reference = Some((100.0, "A".into()));
+/// let svg = c.to_svg();
+/// assert!(svg.starts_with("<svg") && svg.contains("3.00 cm"));
+/// assert_eq!(svg, c.to_svg()); // deterministic
+/// ```
+#[derive(Debug, Clone, PartialEq)]
+pub struct BarChart {
+    /// Title, drawn above the plot.
+    pub title: String,
+    /// y-axis label, with units.
+    pub y_label: String,
+    /// Category labels along the x axis; `\n` starts a further line.
+    pub categories: Vec<String>,
+    /// Bar series, drawn side by side within each category; colours as in [`LinePlot`].
+    pub series: Vec<BarSeries>,
+    /// A dashed horizontal line at this y value, labelled at its right end.
+    pub reference: Option<(f64, String)>,
+    /// Minimum width of the whole figure (px, default 640).
+    pub width: f64,
+    /// Height of the whole figure (px, default 380).
+    pub height: f64,
+    /// Fixed y range; `None`: from zero (or the lowest bar) to the highest bar or
+    /// reference with a 4 % margin (default `None`).
+    pub y_range: Option<(f64, f64)>,
+}
+
+impl BarChart {
+    /// An empty 640 × 380 chart.
+    pub fn new(title: impl Into<String>, y_label: impl Into<String>) -> Self {
+        Self {
+            title: title.into(),
+            y_label: y_label.into(),
+            categories: Vec::new(),
+            series: Vec::new(),
+            reference: None,
+            width: 640.0,
+            height: 380.0,
+            y_range: None,
+        }
+    }
+
+    /// Value of series `s` in category `c` when it is drawn.
+    fn value(&self, s: usize, c: usize) -> Option<f64> {
+        self.series[s]
+            .values
+            .get(c)
+            .copied()
+            .filter(|v| v.is_finite())
+    }
+
+    /// Label of series `s` in category `c` ("" when none).
+    fn label(&self, s: usize, c: usize) -> &str {
+        self.series[s].labels.get(c).map_or("", String::as_str)
+    }
+
+    /// The chart as a standalone SVG document (`<svg xmlns=…>…</svg>`, newline-terminated).
+    pub fn to_svg(&self) -> String {
+        let n_cat = self.categories.len();
+        let n_ser = self.series.len().max(1);
+        let h = self.height.max(160.0);
+
+        // y axis
+        let mut yr = (0.0f64, f64::NEG_INFINITY);
+        for s in 0..self.series.len() {
+            for c in 0..n_cat {
+                if let Some(v) = self.value(s, c) {
+                    yr = (yr.0.min(v), yr.1.max(v));
+                }
+            }
+        }
+        if let Some((r, _)) = self.reference.as_ref().filter(|r| r.0.is_finite()) {
+            yr = (yr.0.min(*r), yr.1.max(*r));
+        }
+        let y_target = (((h - 130.0) / 35.0).floor() as usize).clamp(3, 10);
+        let (ya, yb) = match self.y_range {
+            Some((a, b)) => widen(a, b),
+            None => {
+                let (a, b) = widen(yr.0, yr.1);
+                let m = 0.04 * (b - a);
+                (if a < 0.0 { a - m } else { a }, b + m)
+            }
+        };
+        let y_axis = Axis::new(ya, yb, nice_step((yb - ya) / (y_target - 1) as f64));
+        let tick_w = y_axis
+            .labels
+            .iter()
+            .map(|l| text_width(l, TICK_SIZE))
+            .fold(0.0, f64::max);
+        let y_label_band = if self.y_label.is_empty() {
+            0.0
+        } else {
+            LABEL_SIZE + 8.0
+        };
+        let left = 8.0 + y_label_band + tick_w + 8.0;
+        let ref_w = self
+            .reference
+            .as_ref()
+            .map_or(0.0, |r| text_width(&r.1, SPAN_SIZE) + 8.0);
+        let right = ref_w.max(24.0);
+
+        // x layout: each category gets a slot wide enough for its label lines and for
+        // the labels of its bars side by side.
+        let cat_lines: Vec<Vec<&str>> = self
+            .categories
+            .iter()
+            .map(|c| c.split('\n').collect())
+            .collect();
+        let n_lines = cat_lines.iter().map(Vec::len).max().unwrap_or(0);
+        let cat_w = cat_lines
+            .iter()
+            .flatten()
+            .map(|l| text_width(l, TICK_SIZE))
+            .fold(0.0, f64::max);
+        let bar_label_w = (0..self.series.len())
+            .flat_map(|s| (0..n_cat).map(move |c| (s, c)))
+            .map(|(s, c)| text_width(self.label(s, c), SPAN_SIZE))
+            .fold(0.0, f64::max);
+        let slot_min = (cat_w + 14.0)
+            .max((bar_label_w + 6.0) * n_ser as f64 / 0.8)
+            .max(40.0);
+        let pw = (self.width - left - right).max(slot_min * n_cat.max(1) as f64);
+        let w = left + pw + right;
+        let slot = pw / n_cat.max(1) as f64;
+        let bar_w = slot * 0.8 / n_ser as f64;
+
+        // legend rows below the category labels, wrapping at the plot width
+        let mut legend = Vec::new();
+        let (mut lx, mut lrow) = (0.0, 0usize);
+        for (i, s) in self
+            .series
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| !s.name.is_empty())
+        {
+            let item_w = 14.0 + 6.0 + text_width(&s.name, LEGEND_SIZE);
+            if lx > 0.0 && lx + item_w > pw {
+                lx = 0.0;
+                lrow += 1;
+            }
+            legend.push(LegendItem {
+                series: i,
+                x: lx,
+                row: lrow,
+            });
+            lx += item_w + 18.0;
+        }
+        let legend_rows = if legend.is_empty() { 0 } else { lrow + 1 };
+
+        let title_band = if self.title.is_empty() {
+            4.0
+        } else {
+            TITLE_SIZE + 14.0
+        };
+        let top = title_band + SPAN_SIZE + 8.0; // room for bar labels at the top
+        let cat_band = n_lines as f64 * (TICK_SIZE + 3.0);
+        let legend_band = if legend_rows == 0 {
+            0.0
+        } else {
+            legend_rows as f64 * LEGEND_ROW + 6.0
+        };
+        let bottom = 8.0 + cat_band + legend_band + 8.0;
+        let ph = (h - top - bottom).max(40.0);
+        let sy = |y: f64| {
+            top + ph - (y.clamp(y_axis.lo, y_axis.hi) - y_axis.lo) / (y_axis.hi - y_axis.lo) * ph
+        };
+
+        let mut out = String::new();
+        svg_header(&mut out, &self.title, w, h, None, left + pw / 2.0);
+
+        // grid, frame, y ticks and label
+        for &t in &y_axis.ticks {
+            writeln!(
+                out,
+                r##"<line x1="{}" y1="{y}" x2="{}" y2="{y}" stroke="{}" stroke-width="{}"/>"##,
+                px(left),
+                px(left + pw),
+                if t == 0.0 { "#9a9a9a" } else { "#e3e3e3" },
+                if t == 0.0 { "1" } else { "0.8" },
+                y = px(sy(t))
+            )
+            .ok();
+        }
+        for (t, l) in y_axis.ticks.iter().zip(&y_axis.labels) {
+            let y = sy(*t);
+            writeln!(
+                out,
+                r##"<line x1="{}" y1="{y}" x2="{}" y2="{y}" stroke="#333333"/><text x="{}" y="{}" font-size="{TICK_SIZE}" text-anchor="end" fill="#333333">{l}</text>"##,
+                px(left - 4.0),
+                px(left),
+                px(left - 6.0),
+                px(y + TICK_SIZE * 0.35),
+                y = px(y)
+            )
+            .ok();
+        }
+        if !self.y_label.is_empty() {
+            let (x, y) = (8.0 + LABEL_SIZE, top + ph / 2.0);
+            writeln!(
+                out,
+                r##"<text x="{x}" y="{y}" font-size="{LABEL_SIZE}" text-anchor="middle" fill="#222222" transform="rotate(-90 {x} {y})">{}</text>"##,
+                escape_xml(&self.y_label),
+                x = px(x),
+                y = px(y)
+            )
+            .ok();
+        }
+
+        // the reference line behind the bars, labelled right of the frame
+        if let Some((r, name)) = self
+            .reference
+            .as_ref()
+            .filter(|r| r.0.is_finite() && r.0 >= y_axis.lo && r.0 <= y_axis.hi)
+        {
+            let y = sy(*r);
+            writeln!(
+                out,
+                r##"<line x1="{}" y1="{y}" x2="{}" y2="{y}" stroke="#333333" stroke-width="1" stroke-dasharray="5 3"/>"##,
+                px(left),
+                px(left + pw),
+                y = px(y)
+            )
+            .ok();
+            if !name.is_empty() {
+                writeln!(
+                    out,
+                    r##"<text x="{}" y="{}" font-size="{SPAN_SIZE}" text-anchor="start" fill="#333333">{}</text>"##,
+                    px(left + pw + 3.0),
+                    px(y + SPAN_SIZE * 0.35),
+                    escape_xml(name)
+                )
+                .ok();
+            }
+        }
+
+        // bars and their labels
+        let base = sy(0.0);
+        for (c, lines) in cat_lines.iter().enumerate() {
+            let x0 = left + c as f64 * slot + 0.1 * slot;
+            for (s, series) in self.series.iter().enumerate() {
+                let x = x0 + s as f64 * bar_w;
+                let label = self.label(s, c);
+                let label_y = match self.value(s, c) {
+                    Some(v) => {
+                        let (y0, y1) = (sy(v).min(base), sy(v).max(base));
+                        writeln!(
+                            out,
+                            r#"<rect x="{}" y="{}" width="{}" height="{}" fill="{}"><title>{}</title></rect>"#,
+                            px(x + 1.0),
+                            px(y0),
+                            px((bar_w - 2.0).max(1.0)),
+                            px(y1 - y0),
+                            PALETTE[s % PALETTE.len()],
+                            escape_xml(&format!("{}: {}", series.name, if label.is_empty() { format!("{v}") } else { label.to_string() }))
+                        )
+                        .ok();
+                        y0
+                    }
+                    None => base,
+                };
+                if !label.is_empty() {
+                    writeln!(
+                        out,
+                        r##"<text x="{}" y="{}" font-size="{SPAN_SIZE}" text-anchor="middle" fill="#222222">{}</text>"##,
+                        px(x + bar_w / 2.0),
+                        px(label_y - 3.0),
+                        escape_xml(label)
+                    )
+                    .ok();
+                }
+            }
+            for (k, line) in lines.iter().enumerate() {
+                writeln!(
+                    out,
+                    r##"<text x="{}" y="{}" font-size="{TICK_SIZE}" text-anchor="middle" fill="#333333">{}</text>"##,
+                    px(left + (c as f64 + 0.5) * slot),
+                    px(top + ph + 6.0 + (k as f64 + 1.0) * (TICK_SIZE + 3.0) - 3.0),
+                    escape_xml(line)
+                )
+                .ok();
+            }
+        }
+        writeln!(
+            out,
+            r##"<rect x="{}" y="{}" width="{}" height="{}" fill="none" stroke="#333333" stroke-width="1"/>"##,
+            px(left),
+            px(top),
+            px(pw),
+            px(ph)
+        )
+        .ok();
+
+        // legend
+        let legend_top = top + ph + 8.0 + cat_band + 4.0;
+        for it in &legend {
+            let x = left + it.x;
+            let y = legend_top + it.row as f64 * LEGEND_ROW + LEGEND_ROW / 2.0;
+            writeln!(
+                out,
+                r#"<rect x="{}" y="{}" width="14" height="10" fill="{}"/>"#,
+                px(x),
+                px(y - 5.0),
+                PALETTE[it.series % PALETTE.len()]
+            )
+            .ok();
+            writeln!(
+                out,
+                r##"<text x="{}" y="{}" font-size="{LEGEND_SIZE}" fill="#222222">{}</text>"##,
+                px(x + 20.0),
+                px(y + LEGEND_SIZE * 0.35),
+                escape_xml(&self.series[it.series].name)
+            )
+            .ok();
+        }
+        if n_cat == 0 {
+            writeln!(
+                out,
+                r##"<text x="{}" y="{}" font-size="{LABEL_SIZE}" text-anchor="middle" fill="#888888">no data</text>"##,
+                px(left + pw / 2.0),
+                px(top + ph / 2.0)
+            )
+            .ok();
+        }
+        out.push_str("</svg>\n");
+        out
+    }
+}
