@@ -322,3 +322,38 @@ fn the_double_circle_track_is_valid_between_its_nodes() {
         "normal force down to {low} N, cone excess {cone} N"
     );
 }
+
+/// The synthetic trial without a hidden effect (tests/data/hidden/none), tracked from its
+/// kept solution through the library's tracking workflow: the ground pulls the left sole
+/// with 89 N just after the window's first node, and three rounds of check points
+/// remove it. Two faults made this run end invalid with the start's 89 N: a round added
+/// the same check point twice (a pulling ground and a broken cone worst at one instant),
+/// its solve's line search failed on the repeated rows, and the stage that goes on with a
+/// tighter integrator rebuilt the problem without the round's check points.
+#[test]
+fn check_points_repair_a_synthetic_trial_in_rounds() {
+    use footfall::runfolder::RunFolder;
+    use footfall::workflows::track::{check_tracked, track, TrackRequest};
+    use footfall::workflows::Collected;
+    let trial = common::root().join("tests/data/hidden/none");
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("none");
+    let mut req = TrackRequest::new("ellipse");
+    req.run.data = Some(trial.join("synthetic.csv"));
+    req.run.kinematics_cutoff = Some(10.0);
+    req.init = Some(trial.join("tracked_seed"));
+    let progress = Collected::default();
+    let run = track(&req, RunFolder::create(&out, false).unwrap(), &progress).unwrap();
+    let lines = progress.lines.lock().unwrap().join("\n");
+    check_tracked(&run).unwrap_or_else(|e| panic!("{e:#}\n{lines}"));
+    assert!(lines.contains("adding"), "{lines}");
+    let s = summary(&out);
+    assert_eq!(s["verdict"], "converged");
+    let n = s["check_points"].as_u64().unwrap();
+    assert!((2..=12).contains(&n), "{n} check points");
+    let (low, cone) = fine_grid_extremes(&out);
+    assert!(
+        low >= -1.0 && cone <= 1.0,
+        "normal force down to {low} N, cone excess {cone} N"
+    );
+}

@@ -89,16 +89,21 @@ impl<'m> Refinement<'_, 'm> {
             }
             let solution = GaitSolution::from_nlp(&tr, &next, &self.cycle.continuous, self.t0);
             let found = self.validity(&solution)?;
-            let new: CheckSites = found
+            // one check point per instant: a pulling ground and a broken cone are often
+            // worst at the same instant
+            let same = |o: &(usize, usize, f64), s: &(usize, usize, f64)| {
+                o.0 == s.0 && o.1 == s.1 && (o.2 - s.2).abs() < 1e-3
+            };
+            let mut new: CheckSites = Vec::new();
+            for s in found
                 .refinement()
                 .iter()
                 .filter_map(|&(set, t)| locate_instant(&solution, set, t))
-                .filter(|s| {
-                    !sites
-                        .iter()
-                        .any(|o| o.0 == s.0 && o.1 == s.1 && (o.2 - s.2).abs() < 1e-3)
-                })
-                .collect();
+            {
+                if !sites.iter().chain(&new).any(|o| same(o, &s)) {
+                    new.push(s);
+                }
+            }
             if new.is_empty() {
                 break;
             }

@@ -335,7 +335,9 @@ impl TrackingProblem {
             .setup
             .ocp(cycle, &self.model, &self.sets, tight)
             .map_err(|e| anyhow!(e))?;
-        ocp.checks = self.checks(cycle);
+        // the check points of the problem being solved: a refinement round's, not only
+        // those the problem started with
+        ocp.checks = tr.ocp().checks.clone();
         let tr2 = Transcription::new(&ocp).context("transcribing the tracking problem")?;
         let rest = SqpSettings {
             max_iter: settings.max_iter.saturating_sub(used),
