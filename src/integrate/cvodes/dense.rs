@@ -41,11 +41,7 @@ impl Integrator {
             previous = t;
         }
         self.start(ode, t0, t1, x0, p, true)?;
-        let ctx = CallCtx {
-            ode,
-            p,
-            event: None,
-        };
+        let ctx = CallCtx::new(ode, p);
         // SAFETY: `ctx` outlives the guard; `shared` is live.
         let guard = unsafe { CallGuard::new(self.shared, &ctx) };
         let (lx, ls) = (xs.len(), ss.len());
@@ -102,20 +98,9 @@ impl Integrator {
         out: &mut Vec<f64>,
     ) -> Result<IntegrationStats, IntegratorError> {
         check_interval(t0, t1)?;
-        let mut previous = f64::NEG_INFINITY;
-        for (index, &t) in times.iter().enumerate() {
-            // NaN fails every comparison and is rejected here too.
-            if !(t >= t0 && t <= t1 && t > previous) {
-                return Err(IntegratorError::BadOutputTime { index, t });
-            }
-            previous = t;
-        }
+        check_output_times(t0, t1, times)?;
         self.start(ode, t0, t1, x0, p, false)?;
-        let ctx = CallCtx {
-            ode,
-            p,
-            event: None,
-        };
+        let ctx = CallCtx::new(ode, p);
         // SAFETY: `ctx` outlives the guard; `shared` is live.
         let guard = unsafe { CallGuard::new(self.shared, &ctx) };
         let len = out.len();
@@ -148,13 +133,7 @@ impl Integrator {
         out: &mut Vec<f64>,
     ) -> Result<(IntegrationStats, Option<f64>), IntegratorError> {
         check_interval(t0, t1)?;
-        let mut previous = f64::NEG_INFINITY;
-        for (index, &t) in times.iter().enumerate() {
-            if !(t >= t0 && t <= t1 && t > previous) {
-                return Err(IntegratorError::BadOutputTime { index, t });
-            }
-            previous = t;
-        }
+        check_output_times(t0, t1, times)?;
         self.start(ode, t0, t1, x0, p, false)?;
         let mut direction: [c_int; 1] = [-1];
         // SAFETY: `mem` is initialised; one root function; `direction` has one entry and
@@ -246,4 +225,17 @@ impl Integrator {
         }
         Ok(())
     }
+}
+
+/// Output times must increase strictly within `[t0, t1]`.
+fn check_output_times(t0: f64, t1: f64, times: &[f64]) -> Result<(), IntegratorError> {
+    let mut previous = f64::NEG_INFINITY;
+    for (index, &t) in times.iter().enumerate() {
+        // NaN fails every comparison and is rejected here too.
+        if !(t >= t0 && t <= t1 && t > previous) {
+            return Err(IntegratorError::BadOutputTime { index, t });
+        }
+        previous = t;
+    }
+    Ok(())
 }
