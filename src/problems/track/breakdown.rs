@@ -35,13 +35,7 @@ impl TrackingSetup {
                 if k == n && !last {
                     continue;
                 }
-                let r = TrackingResidual::new(
-                    model,
-                    sets[continuous[j]].clone(),
-                    target.clone(),
-                    self.weights.clone(),
-                    Some(self.measured.clone()),
-                );
+                let r = self.residual(model, &sets[continuous[j]], target.clone(), true);
                 let ku = if linear { k } else { k.min(n - 1) };
                 let z: Vec<f64> = ph.x[k]
                     .iter()

@@ -345,12 +345,7 @@ impl TrackingSetup {
         };
         let fx = [force(0, 0)?, force(1, 0)?];
         let fy = [force(0, 1)?, force(1, 1)?];
-        let peak = data
-            .feet
-            .iter()
-            .flat_map(|f| f.fy.iter())
-            .copied()
-            .fold(0.0, f64::max);
+        let peak = data.peak_vertical_force();
         let cop_at = |s: usize, t: f64| -> Option<f64> {
             // linear interpolation of the measured CoP where the foot is loaded
             let v = interp_linear(&[t], &data.time, &data.feet[s].cop_x)[0];

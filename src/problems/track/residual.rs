@@ -9,6 +9,24 @@ use crate::problems::tracking::{ForceClockShift, NodeTarget, TrackingResidual};
 use std::sync::Arc;
 
 impl TrackingSetup {
+    /// The residual of `target` on contact set `set`, with the measured loads (for their
+    /// force and CoP rows) when `with_loads`.
+    pub(super) fn residual<'m>(
+        &self,
+        model: &'m GaitModel,
+        set: &ConstraintSet,
+        target: NodeTarget,
+        with_loads: bool,
+    ) -> TrackingResidual<'m> {
+        TrackingResidual::new(
+            model,
+            set.clone(),
+            target,
+            self.weights.clone(),
+            with_loads.then(|| self.measured.clone()),
+        )
+    }
+
     /// Number of data residuals (angles, velocities, forces and CoP at the nodes; not the
     /// regularisation of excitations and activations).
     pub fn data_rows(
@@ -24,13 +42,7 @@ impl TrackingSetup {
                 if k + 1 == tg.len() && !last {
                     continue;
                 }
-                let r = TrackingResidual::new(
-                    model,
-                    sets[continuous[j]].clone(),
-                    target.clone(),
-                    self.weights.clone(),
-                    None,
-                );
+                let r = self.residual(model, &sets[continuous[j]], target.clone(), false);
                 n += crate::problems::GenericFunction::dim(&r) - model.nu() - model.na();
             }
         }
@@ -57,14 +69,8 @@ impl TrackingSetup {
         s: &SampleTarget,
     ) -> Vec<(TrackingResidual<'m>, bool)> {
         let residual = |target: NodeTarget| {
-            TrackingResidual::new(
-                model,
-                sets[continuous[s.phase]].clone(),
-                target,
-                self.weights.clone(),
-                Some(self.measured.clone()),
-            )
-            .data_only()
+            self.residual(model, &sets[continuous[s.phase]], target, true)
+                .data_only()
         };
         if !model.shifts_force_clock() || s.target.feet.iter().all(Option::is_none) {
             return vec![(residual(s.target.clone()), false)];
@@ -107,13 +113,7 @@ impl TrackingSetup {
                     continue;
                 }
                 let ku = if linear { k } else { k.min(n - 1) };
-                let r = TrackingResidual::new(
-                    model,
-                    set.clone(),
-                    target.clone(),
-                    self.weights.clone(),
-                    Some(self.measured.clone()),
-                );
+                let r = self.residual(model, set, target.clone(), true);
                 ocp.least_squares.push(Term {
                     name: "tracking".into(),
                     args: vec![
