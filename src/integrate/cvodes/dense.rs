@@ -176,14 +176,8 @@ impl Integrator {
         times: &[f64],
         out: &mut Vec<f64>,
     ) -> Result<Option<f64>, IntegratorError> {
-        let mut started = false;
         let mut t_reached = t0;
-        for &t in times {
-            if !started && t - t0 <= 4.0 * f64::EPSILON * t0.abs().max(t.abs()) {
-                out.extend_from_slice(x0);
-                continue;
-            }
-            started = true;
+        for &t in outputs_at_t0(t0, x0, times, out) {
             let (tr, flag) = self.advance_flag(t_reached, t)?;
             t_reached = tr;
             let y = self.state();
@@ -206,16 +200,8 @@ impl Integrator {
         out: &mut Vec<f64>,
     ) -> Result<(), IntegratorError> {
         out.reserve(times.len() * self.nx);
-        let mut started = false;
         let mut t_reached = t0;
-        for &t in times {
-            // CVODES refuses a first output time within a few ulp of t0 (CV_TOO_CLOSE);
-            // the state there is x0 to working precision.
-            if !started && t - t0 <= 4.0 * f64::EPSILON * t0.abs().max(t.abs()) {
-                out.extend_from_slice(x0);
-                continue;
-            }
-            started = true;
+        for &t in outputs_at_t0(t0, x0, times, out) {
             t_reached = self.advance(t_reached, t)?;
             let y = self.state();
             if !all_finite(y) {
@@ -238,4 +224,18 @@ fn check_output_times(t0: f64, t1: f64, times: &[f64]) -> Result<(), IntegratorE
         previous = t;
     }
     Ok(())
+}
+
+/// Append `x0` for the leading output times within a few ulp of `t0` and return the
+/// others: CVODES refuses a first output time that close (CV_TOO_CLOSE), and the state
+/// there is x0 to working precision.
+fn outputs_at_t0<'t>(t0: f64, x0: &[f64], times: &'t [f64], out: &mut Vec<f64>) -> &'t [f64] {
+    let k = times
+        .iter()
+        .take_while(|&&t| t - t0 <= 4.0 * f64::EPSILON * t0.abs().max(t.abs()))
+        .count();
+    for _ in 0..k {
+        out.extend_from_slice(x0);
+    }
+    &times[k..]
 }
