@@ -447,7 +447,7 @@ fn y_label(out: &mut String, label: &str, top: f64, ph: f64) {
         writeln!(
             out,
             r##"<text x="{x}" y="{y}" font-size="{LABEL_SIZE}" text-anchor="middle" fill="#222222" transform="rotate(-90 {x} {y})">{}</text>"##,
-            escape_xml(&label),
+            escape_xml(label),
             x = px(x),
             y = px(y)
         )
