@@ -248,6 +248,16 @@ fn linear() -> crate::integrate::ControlShape {
 }
 
 impl PhaseSequence {
+    /// Indices (into `phases`) of the continuous phases, in order.
+    pub fn continuous_indices(&self) -> Vec<usize> {
+        self.phases
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| matches!(p, Phase::Continuous { .. }))
+            .map(|(i, _)| i)
+            .collect()
+    }
+
     /// Read a phase file (structure only; see [`resolve`](Self::resolve)).
     pub fn load(path: &Path) -> Result<Self, ModelError> {
         let s: PhaseSequence = read_json(path)?;

@@ -331,13 +331,7 @@ impl SimulationResult {
             let mut worst: Vec<Option<(usize, f64, f64)>> = vec![None; model.contacts.len()];
             for smp in self.samples.iter().filter(|s| s.phase == pi) {
                 for (r, row) in set.rows.iter().enumerate() {
-                    let v = smp
-                        .contact
-                        .baumgarte_force
-                        .get(r)
-                        .copied()
-                        .unwrap_or(0.0)
-                        .abs();
+                    let v = smp.contact.baumgarte_abs(r);
                     let w = &mut worst[row.contact];
                     if v > tol.baumgarte_force_n && w.is_none_or(|(_, m, _)| v > m) {
                         *w = Some((r, v, smp.t));

@@ -2,6 +2,18 @@
 
 use footfall::sqp::{IterationRecord, Observer, StderrLog};
 use footfall::workflows::Progress;
+use std::path::PathBuf;
+
+/// The model and foot shared by `simulate`, `fit-foot` and `track`.
+#[derive(Debug, Clone, clap::Args)]
+pub struct ModelArgs {
+    /// Model file (JSON).
+    #[arg(long, default_value = "models/opensim_subject01.json")]
+    pub model: PathBuf,
+    /// Foot: `ellipse`, `double-circle` or a foot file (JSON).
+    #[arg(long, default_value = "ellipse")]
+    pub foot: String,
+}
 
 /// The check-point switch shared by `track`, `predict` and `compare`.
 #[derive(Debug, Clone, Default, clap::Args)]
@@ -46,4 +58,14 @@ impl Progress for CliProgress {
             StderrLog.iteration(rec);
         }
     }
+}
+
+/// Write `value` as pretty JSON to `name` in the run folder's staging area.
+pub fn write_json(
+    folder: &footfall::runfolder::RunFolder,
+    name: &str,
+    value: &impl serde::Serialize,
+) -> anyhow::Result<()> {
+    folder.write(name, serde_json::to_string_pretty(value)?.as_bytes())?;
+    Ok(())
 }

@@ -12,12 +12,8 @@ use std::path::PathBuf;
 /// Arguments of `footfall fit-foot`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Model file (segment lengths for the ankle kinematics, ground height).
-    #[arg(long, default_value = "models/opensim_subject01.json")]
-    model: PathBuf,
-    /// Foot to fit: `ellipse`, `double-circle` or a foot file (its values are the start).
-    #[arg(long, default_value = "ellipse")]
-    foot: String,
+    #[command(flatten)]
+    model: super::ModelArgs,
     /// Sagittal CSV (default: the bundled trial).
     #[arg(long)]
     data: Option<PathBuf>,
@@ -43,8 +39,8 @@ pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
 }
 
 fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
-    let foot_path = super::simulate::foot_path(&args.foot);
-    let model = GaitModel::load(&args.model, &foot_path)?;
+    let foot_path = super::simulate::foot_path(&args.model.foot);
+    let model = GaitModel::load(&args.model.model, &foot_path)?;
     let foot = FootSpec::load(&foot_path)?;
     let data = footfall::workflows::load_data(args.data.as_deref(), args.overground)?;
     let stances =
@@ -137,10 +133,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     )?;
     folder.write("table1.md", table1.to_markdown().as_bytes())?;
     folder.write("table2.md", table2.to_markdown().as_bytes())?;
-    folder.write(
-        "summary.json",
-        serde_json::to_string_pretty(&summary)?.as_bytes(),
-    )?;
+    super::write_json(&folder, "summary.json", &summary)?;
     let out = folder.commit()?;
     if !quiet {
         eprintln!("{}\n{}", table1.to_markdown(), table2.to_markdown());

@@ -19,7 +19,7 @@ mod synth;
 mod track;
 mod validate;
 
-pub use args::{CheckPointArgs, CliProgress};
+pub use args::{write_json, CheckPointArgs, CliProgress, ModelArgs};
 use clap::{Parser, Subcommand};
 use footfall::sqp::SqpStatus;
 use std::process::ExitCode;
@@ -52,7 +52,8 @@ enum Command {
     Simulate(simulate::Args),
     /// Solve a generic optimal control problem (cart-pole, five-link biped).
     Solve(solve::Args),
-    /// Fit a foot's geometry to the measured stance (seed §3.2).
+    /// Fit a foot's geometry to the measured stance (seed §3.2); a foot file's values are
+    /// the start.
     FitFoot(fit_foot::Args),
     /// Track measured walking (default: the bundled trial with the ellipse foot).
     Track(track::Args),

@@ -18,12 +18,8 @@ use std::time::Instant;
 /// Arguments of `footfall simulate`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Model file (JSON).
-    #[arg(long, default_value = "models/opensim_subject01.json")]
-    model: PathBuf,
-    /// Foot file (JSON) or a bundled foot name: `ellipse`, `double-circle`.
-    #[arg(long, default_value = "ellipse")]
-    foot: String,
+    #[command(flatten)]
+    model: super::ModelArgs,
     /// Phase sequence file (JSON) with the contacts and durations of each phase.
     #[arg(long)]
     phase_set: PathBuf,
@@ -76,8 +72,8 @@ pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
 
 fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
     let started = Instant::now();
-    let foot = foot_path(&args.foot);
-    let model = GaitModel::load(&args.model, &foot)?;
+    let foot = foot_path(&args.model.foot);
+    let model = GaitModel::load(&args.model.model, &foot)?;
     let seq = PhaseSequence::load(&args.phase_set)?;
     let sets = seq.resolve(&model, &args.phase_set)?;
     let init: InitialState = match &args.initial {
@@ -223,10 +219,7 @@ fn run_inner(args: Args, quiet: bool) -> anyhow::Result<()> {
         &warnings,
         started.elapsed().as_secs_f64(),
     );
-    folder.write(
-        "summary.json",
-        serde_json::to_string_pretty(&summary)?.as_bytes(),
-    )?;
+    super::write_json(&folder, "summary.json", &summary)?;
     let out = folder.commit()?;
     if !quiet {
         eprintln!(
@@ -341,7 +334,7 @@ fn summary_json(
     serde_json::json!({
         "command": "simulate",
         "model": model.name,
-        "model_file": args.model,
+        "model_file": args.model.model,
         "foot": model.foot_name,
         "phase_set": seq.name,
         "phase_file": args.phase_set,

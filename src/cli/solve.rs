@@ -350,15 +350,9 @@ fn write_run(
         "most_violated": res.most_violated,
         "history": res.history,
     });
-    folder.write(
-        "solution.json",
-        serde_json::to_string_pretty(&solution)?.as_bytes(),
-    )?;
+    super::write_json(&folder, "solution.json", &solution)?;
     folder.write("solution.csv", csv.as_bytes())?;
-    folder.write(
-        "summary.json",
-        serde_json::to_string_pretty(&summary)?.as_bytes(),
-    )?;
+    super::write_json(&folder, "summary.json", &summary)?;
     let out = folder.commit()?;
     if !quiet {
         eprintln!(

@@ -14,12 +14,8 @@ use std::path::PathBuf;
 /// Arguments of `footfall track`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Model file.
-    #[arg(long, default_value = "models/opensim_subject01.json")]
-    model: PathBuf,
-    /// Foot: `ellipse`, `double-circle` or a foot file.
-    #[arg(long, default_value = "ellipse")]
-    foot: String,
+    #[command(flatten)]
+    model: super::ModelArgs,
     /// Phase graph (default: the seed's graph for the bundled feet).
     #[arg(long)]
     phases: Option<PathBuf>,
@@ -182,7 +178,7 @@ fn run_inner(args: Args, progress: &CliProgress) -> anyhow::Result<()> {
     let phases = args
         .phases
         .clone()
-        .unwrap_or_else(|| default_phases(&args.foot));
+        .unwrap_or_else(|| default_phases(&args.model.foot));
     let effects: Vec<EffectSpec> = args
         .effects
         .iter()
@@ -190,8 +186,8 @@ fn run_inner(args: Args, progress: &CliProgress) -> anyhow::Result<()> {
         .collect::<Result<_, _>>()?;
     let req = TrackRequest {
         run: TrackingRunSetup {
-            model: args.model.clone(),
-            foot: args.foot.clone(),
+            model: args.model.model.clone(),
+            foot: args.model.foot.clone(),
             phases,
             data: args.data.clone(),
             overground: args.overground,

@@ -491,14 +491,7 @@ fn parse_sagittal_csv(
     let mut rows = Vec::new();
     for (row, line) in lines {
         let fields: Vec<&str> = line.split(',').collect();
-        if fields.len() != ncol {
-            return Err(DataError::RowLength {
-                path: p,
-                row,
-                expected: ncol,
-                found: fields.len(),
-            });
-        }
+        DataError::check_row_length(&p, row, ncol, fields.len())?;
         for (j, f) in fields.iter().enumerate() {
             let t = f.trim();
             let v = if t.is_empty() {

@@ -175,6 +175,25 @@ pub enum DataError {
 }
 
 impl DataError {
+    /// A [`DataError::RowLength`] when data row `row` of `path` has `found` fields
+    /// instead of one per column label (`expected`).
+    pub(crate) fn check_row_length(
+        path: &Path,
+        row: usize,
+        expected: usize,
+        found: usize,
+    ) -> Result<(), DataError> {
+        if found == expected {
+            return Ok(());
+        }
+        Err(DataError::RowLength {
+            path: path.to_path_buf(),
+            row,
+            expected,
+            found,
+        })
+    }
+
     /// The file the error is about.
     pub fn path(&self) -> &Path {
         match self {

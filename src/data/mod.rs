@@ -61,17 +61,7 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// Names of the nine generalised coordinates, in model order (m, m, rad × 7).
-pub const Q_NAMES: [&str; 9] = [
-    "pelvis_x",
-    "pelvis_y",
-    "pelvis_tilt",
-    "hip_r",
-    "knee_r",
-    "ankle_r",
-    "hip_l",
-    "knee_l",
-    "ankle_l",
-];
+pub const Q_NAMES: [&str; 9] = crate::model::gait::COORDINATES;
 
 /// Normal force below which the CoP is undefined (N), as in `data/README.md`.
 pub const DEFAULT_COP_THRESHOLD: f64 = 20.0;
@@ -196,6 +186,15 @@ impl GaitData {
     /// Whether there are no samples.
     pub fn is_empty(&self) -> bool {
         self.time.is_empty()
+    }
+
+    /// Largest vertical ground force of either foot (N; 0 without samples).
+    pub fn peak_vertical_force(&self) -> f64 {
+        self.feet
+            .iter()
+            .flat_map(|f| f.fy.iter())
+            .copied()
+            .fold(0.0, f64::max)
     }
 
     /// Forces and CoP of one foot.

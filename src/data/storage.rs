@@ -332,14 +332,7 @@ pub fn parse_storage(text: &str, path: &Path) -> Result<Storage, DataError> {
             continue;
         }
         let fields = split_fields(raw);
-        if fields.len() != ncol {
-            return Err(DataError::RowLength {
-                path: p,
-                row,
-                expected: ncol,
-                found: fields.len(),
-            });
-        }
+        DataError::check_row_length(&p, row, ncol, fields.len())?;
         for (j, f) in fields.iter().enumerate() {
             let v = f.parse::<f64>().map_err(|e| DataError::Parse {
                 path: p.clone(),

@@ -154,17 +154,7 @@ impl<'a, O: ControlledOde + ?Sized> ShootingInterval<'a, O> {
         p: &mut Vec<f64>,
     ) -> Result<(), IntegratorError> {
         let nu = self.model.nu();
-        let dim = |what, expected, found| {
-            if expected == found {
-                Ok(())
-            } else {
-                Err(IntegratorError::Dimension {
-                    what,
-                    expected,
-                    found,
-                })
-            }
-        };
+        let dim = super::cvodes::check_dim;
         dim("u0", nu, u0.len())?;
         dim("theta", self.model.ntheta(), theta.len())?;
         match (self.shape, u1) {

@@ -38,6 +38,19 @@ pub enum ModelError {
 }
 
 impl ModelError {
+    /// The error of a foot none of whose primitives reaches below the ankle (`lowest`: its
+    /// lowest point above the ankle in the neutral pose, m).
+    pub(crate) fn foot_above_ankle(path: &std::path::Path, lowest: f64) -> Self {
+        ModelError::invalid(
+            path,
+            "primitives",
+            format!(
+                "no primitive reaches below the ankle (lowest point {lowest:.4} m above it in the neutral pose), \
+                 so the foot cannot touch the ground; primitive positions are in the ankle frame, y up"
+            ),
+        )
+    }
+
     pub(crate) fn invalid(
         path: &std::path::Path,
         field: impl Into<String>,

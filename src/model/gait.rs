@@ -297,14 +297,7 @@ impl GaitModel {
             .map(|c| c.shape.centre()[1] + c.shape.contact_offset::<f64>(0.0, n)[1])
             .fold(f64::INFINITY, f64::min);
         if !(lowest < 0.0) {
-            return Err(ModelError::invalid(
-                foot_path,
-                "primitives",
-                format!(
-                    "no primitive reaches below the ankle (lowest point {lowest:.4} m above it in the neutral pose), \
-                     so the foot cannot touch the ground; primitive positions are in the ankle frame, y up"
-                ),
-            ));
+            return Err(ModelError::foot_above_ankle(foot_path, lowest));
         }
         Ok(())
     }

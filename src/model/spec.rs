@@ -502,14 +502,7 @@ impl FootSpec {
             .filter_map(|p| p.shape.lowest_y())
             .fold(f64::INFINITY, f64::min);
         if lowest >= 0.0 {
-            return Err(ModelError::invalid(
-                path,
-                "primitives",
-                format!(
-                    "no primitive reaches below the ankle (lowest point {lowest:.4} m above it in the neutral pose), \
-                     so the foot cannot touch the ground; primitive positions are in the ankle frame, y up"
-                ),
-            ));
+            return Err(ModelError::foot_above_ankle(path, lowest));
         }
         Ok(())
     }

@@ -334,12 +334,7 @@ pub fn stances_from_data(
 ) -> Result<Vec<StanceSamples>, String> {
     use crate::data::{detect_events, DEFAULT_EVENT_FRACTION};
     let events = detect_events(data, DEFAULT_EVENT_FRACTION).map_err(|e| e.to_string())?;
-    let peak = data
-        .feet
-        .iter()
-        .flat_map(|f| f.fy.iter())
-        .copied()
-        .fold(0.0, f64::max);
+    let peak = data.peak_vertical_force();
     let mut out = Vec::new();
     for (s, side) in ["r", "l"].iter().enumerate() {
         let body = model

@@ -78,13 +78,7 @@ impl PredictionSetup {
         solution: &GaitSolution,
         settings: PredictionSettings,
     ) -> Result<Self, String> {
-        let cont: Vec<usize> = original
-            .phases
-            .iter()
-            .enumerate()
-            .filter(|(_, p)| matches!(p, Phase::Continuous { .. }))
-            .map(|(i, _)| i)
-            .collect();
+        let cont: Vec<usize> = original.continuous_indices();
         if cont.len() != solution.phases.len() {
             return Err(format!(
                 "the initial solution has {} continuous phases, the phase file '{}' {}",

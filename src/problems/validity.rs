@@ -178,13 +178,7 @@ pub fn check(
                     }
                 }
             }
-            let b = s
-                .contact
-                .baumgarte_force
-                .get(r)
-                .copied()
-                .unwrap_or(0.0)
-                .abs();
+            let b = s.contact.baumgarte_abs(r);
             if b > limits.baumgarte_n {
                 found.push((ViolationKind::BaumgarteForce, row.contact, b));
             }

@@ -81,15 +81,7 @@ impl Default for PredictionOptions {
 /// The outcome lines of a written gait run: its error table, the solver's stop, the
 /// largest ground-force transient and where the report is.
 pub fn outcome_text(out: &GaitRunOutput, res: &SqpResult) -> String {
-    let mut text = format!(
-        "{}\n{}: J = {:.6}, KKT {:.2e}, {} iterations, {:.1} s\n",
-        out.table.to_markdown(),
-        res.status,
-        res.objective,
-        res.kkt,
-        res.history.len().saturating_sub(1),
-        res.seconds
-    );
+    let mut text = out.solve_summary(res) + "\n";
     text += &match out.transients.first() {
         Some(t) => format!(
             "largest ground-force transient: {} {} force {:.1} N at {:.3} s ({}), {:.1} N above the measurement for {:.1} ms",

@@ -46,6 +46,22 @@ pub struct GaitRunOutput {
     pub validity: Option<crate::problems::validity::Validity>,
 }
 
+impl GaitRunOutput {
+    /// The run's error table and the solver's stop (status, objective, KKT error,
+    /// iterations, seconds), as printed after a gait run.
+    pub fn solve_summary(&self, res: &SqpResult) -> String {
+        format!(
+            "{}\n{}: J = {:.6}, KKT {:.2e}, {} iterations, {:.1} s",
+            self.table.to_markdown(),
+            res.status,
+            res.objective,
+            res.kkt,
+            res.history.len().saturating_sub(1),
+            res.seconds
+        )
+    }
+}
+
 /// Ground forces of both feet on the fine grid, model and measurement.
 pub struct FineForces {
     /// Times (s).

@@ -704,16 +704,7 @@ impl TrackingProblem {
                     crate::report::tracking::parameter_table(&record.parameters).to_markdown()
                 );
             }
-            note!(
-                progress,
-                "{}\n{}: J = {:.6}, KKT {:.2e}, {} iterations, {:.1} s",
-                out.table.to_markdown(),
-                res.status,
-                res.objective,
-                res.kkt,
-                res.history.len().saturating_sub(1),
-                res.seconds
-            );
+            note!(progress, "{}", out.solve_summary(&res));
             if let Some(f) = &out.fine {
                 note!(progress,
                     "1 ms re-integration: peak normal force {:.1} N (right), {:.1} N (left); largest Baumgarte force {:.1e} N; largest drift {:.2e} m",

@@ -24,6 +24,17 @@ pub(super) struct CallCtx<'a> {
     pub(super) event: Option<&'a dyn Fn(f64, &[f64]) -> f64>,
 }
 
+impl<'a> CallCtx<'a> {
+    /// The context of a call without root finding.
+    pub(super) fn new(ode: &'a dyn Ode, p: &'a [f64]) -> Self {
+        CallCtx {
+            ode,
+            p,
+            event: None,
+        }
+    }
+}
+
 /// Heap block shared with the C callbacks through CVODES's user-data and error-handler
 /// pointers.  Its address is fixed for the integrator's lifetime.
 pub(super) struct Shared {
@@ -388,7 +399,8 @@ pub(super) fn null_error(function: &'static str) -> IntegratorError {
     }
 }
 
-pub(super) fn check_dim(
+/// A [`IntegratorError::Dimension`] when a buffer `what` has `found` entries, not `expected`.
+pub(crate) fn check_dim(
     what: &'static str,
     expected: usize,
     found: usize,

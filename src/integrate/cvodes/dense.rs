@@ -41,11 +41,7 @@ impl Integrator {
             previous = t;
         }
         self.start(ode, t0, t1, x0, p, true)?;
-        let ctx = CallCtx {
-            ode,
-            p,
-            event: None,
-        };
+        let ctx = CallCtx::new(ode, p);
         // SAFETY: `ctx` outlives the guard; `shared` is live.
         let guard = unsafe { CallGuard::new(self.shared, &ctx) };
         let (lx, ls) = (xs.len(), ss.len());
@@ -102,20 +98,9 @@ impl Integrator {
         out: &mut Vec<f64>,
     ) -> Result<IntegrationStats, IntegratorError> {
         check_interval(t0, t1)?;
-        let mut previous = f64::NEG_INFINITY;
-        for (index, &t) in times.iter().enumerate() {
-            // NaN fails every comparison and is rejected here too.
-            if !(t >= t0 && t <= t1 && t > previous) {
-                return Err(IntegratorError::BadOutputTime { index, t });
-            }
-            previous = t;
-        }
+        check_output_times(t0, t1, times)?;
         self.start(ode, t0, t1, x0, p, false)?;
-        let ctx = CallCtx {
-            ode,
-            p,
-            event: None,
-        };
+        let ctx = CallCtx::new(ode, p);
         // SAFETY: `ctx` outlives the guard; `shared` is live.
         let guard = unsafe { CallGuard::new(self.shared, &ctx) };
         let len = out.len();
@@ -148,13 +133,7 @@ impl Integrator {
         out: &mut Vec<f64>,
     ) -> Result<(IntegrationStats, Option<f64>), IntegratorError> {
         check_interval(t0, t1)?;
-        let mut previous = f64::NEG_INFINITY;
-        for (index, &t) in times.iter().enumerate() {
-            if !(t >= t0 && t <= t1 && t > previous) {
-                return Err(IntegratorError::BadOutputTime { index, t });
-            }
-            previous = t;
-        }
+        check_output_times(t0, t1, times)?;
         self.start(ode, t0, t1, x0, p, false)?;
         let mut direction: [c_int; 1] = [-1];
         // SAFETY: `mem` is initialised; one root function; `direction` has one entry and
@@ -197,14 +176,8 @@ impl Integrator {
         times: &[f64],
         out: &mut Vec<f64>,
     ) -> Result<Option<f64>, IntegratorError> {
-        let mut started = false;
         let mut t_reached = t0;
-        for &t in times {
-            if !started && t - t0 <= 4.0 * f64::EPSILON * t0.abs().max(t.abs()) {
-                out.extend_from_slice(x0);
-                continue;
-            }
-            started = true;
+        for &t in outputs_at_t0(t0, x0, times, out) {
             let (tr, flag) = self.advance_flag(t_reached, t)?;
             t_reached = tr;
             let y = self.state();
@@ -227,16 +200,8 @@ impl Integrator {
         out: &mut Vec<f64>,
     ) -> Result<(), IntegratorError> {
         out.reserve(times.len() * self.nx);
-        let mut started = false;
         let mut t_reached = t0;
-        for &t in times {
-            // CVODES refuses a first output time within a few ulp of t0 (CV_TOO_CLOSE);
-            // the state there is x0 to working precision.
-            if !started && t - t0 <= 4.0 * f64::EPSILON * t0.abs().max(t.abs()) {
-                out.extend_from_slice(x0);
-                continue;
-            }
-            started = true;
+        for &t in outputs_at_t0(t0, x0, times, out) {
             t_reached = self.advance(t_reached, t)?;
             let y = self.state();
             if !all_finite(y) {
@@ -246,4 +211,31 @@ impl Integrator {
         }
         Ok(())
     }
+}
+
+/// Output times must increase strictly within `[t0, t1]`.
+fn check_output_times(t0: f64, t1: f64, times: &[f64]) -> Result<(), IntegratorError> {
+    let mut previous = f64::NEG_INFINITY;
+    for (index, &t) in times.iter().enumerate() {
+        // NaN fails every comparison and is rejected here too.
+        if !(t >= t0 && t <= t1 && t > previous) {
+            return Err(IntegratorError::BadOutputTime { index, t });
+        }
+        previous = t;
+    }
+    Ok(())
+}
+
+/// Append `x0` for the leading output times within a few ulp of `t0` and return the
+/// others: CVODES refuses a first output time that close (CV_TOO_CLOSE), and the state
+/// there is x0 to working precision.
+fn outputs_at_t0<'t>(t0: f64, x0: &[f64], times: &'t [f64], out: &mut Vec<f64>) -> &'t [f64] {
+    let k = times
+        .iter()
+        .take_while(|&&t| t - t0 <= 4.0 * f64::EPSILON * t0.abs().max(t.abs()))
+        .count();
+    for _ in 0..k {
+        out.extend_from_slice(x0);
+    }
+    &times[k..]
 }

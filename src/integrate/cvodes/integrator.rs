@@ -245,11 +245,7 @@ impl Integrator {
     ) -> Result<IntegrationStats, IntegratorError> {
         check_dim("x1", self.nx, x1.len())?;
         self.start(ode, t0, t1, x0, p, false)?;
-        let ctx = CallCtx {
-            ode,
-            p,
-            event: None,
-        };
+        let ctx = CallCtx::new(ode, p);
         // SAFETY: `ctx` outlives the guard; `shared` is live.
         let guard = unsafe { CallGuard::new(self.shared, &ctx) };
         self.advance(t0, t1)?;
@@ -285,11 +281,7 @@ impl Integrator {
             s1.len(),
         )?;
         self.start(ode, t0, t1, x0, p, true)?;
-        let ctx = CallCtx {
-            ode,
-            p,
-            event: None,
-        };
+        let ctx = CallCtx::new(ode, p);
         // SAFETY: `ctx` outlives the guard; `shared` is live.
         let guard = unsafe { CallGuard::new(self.shared, &ctx) };
         self.advance(t0, t1)?;

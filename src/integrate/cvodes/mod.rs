@@ -23,5 +23,6 @@ mod dense_lu;
 mod integrator;
 mod settings;
 
+pub(crate) use callbacks::check_dim;
 pub use integrator::Integrator;
 pub use settings::{IntegrationStats, IntegratorError, IntegratorSettings, Method};

@@ -68,6 +68,13 @@ pub struct ContactReport {
     pub baumgarte_force: Vec<f64>,
 }
 
+impl ContactReport {
+    /// |Baumgarte part of λ| of row `r` (N; 0 for a row the evaluation did not report).
+    pub fn baumgarte_abs(&self, r: usize) -> f64 {
+        self.baumgarte_force.get(r).copied().unwrap_or(0.0).abs()
+    }
+}
+
 /// Ground reaction force and centre of pressure of one foot.
 #[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize)]
 pub struct FootLoad {

@@ -118,12 +118,7 @@ impl<'o, 'a> Transcription<'o, 'a> {
                     let z = self.gather(w, &t.cols);
                     let mut v = vec![0.0; nx1];
                     let mut jac = vec![0.0; nx1 * z.len()];
-                    term.f
-                        .eval(&z, &mut v, derivs.then_some(&mut jac[..]))
-                        .map_err(|reason| TranscriptionError::Term {
-                            term: term.name.clone(),
-                            reason,
-                        })?;
+                    eval_term(term, &z, &mut v, derivs.then_some(&mut jac[..]))?;
                     for i in 0..nx1 {
                         ev.c[t.row + i] = x0[i] - v[i];
                     }
@@ -157,17 +152,12 @@ impl<'o, 'a> Transcription<'o, 'a> {
                     let d = con.term.f.dim();
                     let z = self.gather(w, &t.cols);
                     let mut jac = vec![0.0; d * z.len()];
-                    con.term
-                        .f
-                        .eval(
-                            &z,
-                            &mut ev.c[t.row..t.row + d],
-                            derivs.then_some(&mut jac[..]),
-                        )
-                        .map_err(|reason| TranscriptionError::Term {
-                            term: con.term.name.clone(),
-                            reason,
-                        })?;
+                    eval_term(
+                        &con.term,
+                        &z,
+                        &mut ev.c[t.row..t.row + d],
+                        derivs.then_some(&mut jac[..]),
+                    )?;
                     if derivs {
                         for i in 0..d {
                             for c in 0..z.len() {
@@ -182,12 +172,7 @@ impl<'o, 'a> Transcription<'o, 'a> {
                     let z = self.gather(w, &t.cols);
                     let mut r = vec![0.0; d];
                     let mut jac = vec![0.0; d * z.len()];
-                    term.f
-                        .eval(&z, &mut r, derivs.then_some(&mut jac[..]))
-                        .map_err(|reason| TranscriptionError::Term {
-                            term: term.name.clone(),
-                            reason,
-                        })?;
+                    eval_term(term, &z, &mut r, derivs.then_some(&mut jac[..]))?;
                     ev.f += r.iter().map(|v| v * v).sum::<f64>();
                     if derivs {
                         let nz = z.len();
@@ -211,12 +196,7 @@ impl<'o, 'a> Transcription<'o, 'a> {
                     let z = self.gather(w, &t.cols);
                     let mut v = [0.0];
                     let mut jac = vec![0.0; z.len()];
-                    term.f
-                        .eval(&z, &mut v, derivs.then_some(&mut jac[..]))
-                        .map_err(|reason| TranscriptionError::Term {
-                            term: term.name.clone(),
-                            reason,
-                        })?;
+                    eval_term(term, &z, &mut v, derivs.then_some(&mut jac[..]))?;
                     ev.f += v[0];
                     if derivs {
                         for (a, &ca) in t.cols.iter().enumerate() {
@@ -277,4 +257,20 @@ impl<'o, 'a> Transcription<'o, 'a> {
             jac_out.push(1.0);
         }
     }
+}
+
+/// Evaluate `term` at `z` into `out`, with its Jacobian into `jac` when given; a failure
+/// names the term.
+fn eval_term(
+    term: &crate::ocp::Term<'_>,
+    z: &[f64],
+    out: &mut [f64],
+    jac: Option<&mut [f64]>,
+) -> Result<(), TranscriptionError> {
+    term.f
+        .eval(z, out, jac)
+        .map_err(|reason| TranscriptionError::Term {
+            term: term.name.clone(),
+            reason,
+        })
 }

@@ -15,7 +15,7 @@ use serde_json::Value;
 
 use super::{number, numbers};
 use crate::integrate::{ControlledOde, OdeError};
-use crate::model::ad::{dense_hessian, dense_jacobian, eps, seed};
+use crate::model::ad::{dense_jacobian, eps, seed};
 use crate::model::linalg::{cholesky, cholesky_solve};
 use crate::model::Scalar;
 
@@ -659,21 +659,9 @@ impl ControlledOde for FiveLinkBiped {
         mu: &[f64],
         out: &mut [f64],
     ) -> Result<bool, OdeError> {
-        if x.len() != NX || u.len() != NU || mu.len() != NX || out.len() != (NX + NU) * (NX + NU) {
-            return Err(OdeError::Fatal(
-                "weighted_hessian: wrong buffer lengths".into(),
-            ));
-        }
-        let z: Vec<f64> = x.iter().chain(u).copied().collect();
-        let h = dense_hessian::<{ NX + NU }>(&z, |zs| {
-            let f = self.rhs(&zs[..NX], &zs[NX..]);
-            f.iter().zip(mu).fold(
-                num_dual::Dual2SVec64::<{ NX + NU }>::from(0.0),
-                |acc, (fi, m)| acc + *fi * *m,
-            )
-        });
-        out.copy_from_slice(&h);
-        Ok(out.iter().all(|v| v.is_finite()))
+        super::weighted_hessian::<{ NX + NU }, _>(NX, x, u, mu, out, |zs| {
+            self.rhs(&zs[..NX], &zs[NX..])
+        })
     }
     fn f_jac(
         &self,
@@ -686,21 +674,8 @@ impl ControlledOde for FiveLinkBiped {
         _ftheta: &mut [f64],
     ) -> Result<(), OdeError> {
         check_dims(x, u, theta, xdot)?;
-        if fx.len() != NX * NX || fu.len() != NX * NU {
-            return Err(OdeError::Fatal(format!(
-                "five-link biped: expected fx of length {} and fu of length {}, got {}, {}",
-                NX * NX,
-                NX * NU,
-                fx.len(),
-                fu.len()
-            )));
-        }
-        let (v, jx, ju) = self.rhs_jacobian(x, u);
-        xdot.copy_from_slice(&v);
-        fx.copy_from_slice(&jx);
-        fu.copy_from_slice(&ju);
-        finite(xdot)?;
-        finite(fx)?;
-        finite(fu)
+        super::write_f_jac("five-link biped", (NX, NU), xdot, fx, fu, || {
+            self.rhs_jacobian(x, u)
+        })
     }
 }

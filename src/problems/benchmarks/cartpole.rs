@@ -5,7 +5,7 @@ use serde_json::Value;
 
 use super::number;
 use crate::integrate::{ControlledOde, OdeError};
-use crate::model::ad::{dense_hessian, eps, seed};
+use crate::model::ad::{eps, seed};
 use crate::model::Scalar;
 
 /// Number of states (x, θ, ẋ, θ̇).
@@ -195,22 +195,9 @@ impl ControlledOde for CartPole {
         mu: &[f64],
         out: &mut [f64],
     ) -> Result<bool, OdeError> {
-        if x.len() != NX || u.len() != NU || mu.len() != NX || out.len() != (NX + NU) * (NX + NU) {
-            return Err(OdeError::Fatal(
-                "weighted_hessian: wrong buffer lengths".into(),
-            ));
-        }
-        let z: Vec<f64> = x.iter().chain(u).copied().collect();
-        let h = dense_hessian::<{ NX + NU }>(&z, |zs| {
-            let xs = [zs[0], zs[1], zs[2], zs[3]];
-            let f = self.rhs(&xs, zs[4]);
-            f.iter().zip(mu).fold(
-                num_dual::Dual2SVec64::<{ NX + NU }>::from(0.0),
-                |acc, (fi, m)| acc + *fi * *m,
-            )
-        });
-        out.copy_from_slice(&h);
-        Ok(out.iter().all(|v| v.is_finite()))
+        super::weighted_hessian::<{ NX + NU }, _>(NX, x, u, mu, out, |zs| {
+            self.rhs(&[zs[0], zs[1], zs[2], zs[3]], zs[4])
+        })
     }
     fn f_jac(
         &self,
@@ -223,22 +210,8 @@ impl ControlledOde for CartPole {
         _ftheta: &mut [f64],
     ) -> Result<(), OdeError> {
         check_dims(x, u, theta, xdot)?;
-        if fx.len() != NX * NX || fu.len() != NX * NU {
-            return Err(OdeError::Fatal(format!(
-                "cart-pole: expected fx of length {} and fu of length {}, got {}, {}",
-                NX * NX,
-                NX * NU,
-                fx.len(),
-                fu.len()
-            )));
-        }
-        let x: &[f64; NX] = x.try_into().expect("length checked");
-        let (v, jx, ju) = self.rhs_jacobian(x, u[0]);
-        xdot.copy_from_slice(&v);
-        fx.copy_from_slice(&jx);
-        fu.copy_from_slice(&ju);
-        finite(xdot)?;
-        finite(fx)?;
-        finite(fu)
+        super::write_f_jac("cart-pole", (NX, NU), xdot, fx, fu, || {
+            self.rhs_jacobian(x.try_into().expect("length checked"), u[0])
+        })
     }
 }

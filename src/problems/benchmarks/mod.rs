@@ -167,3 +167,68 @@ pub(crate) fn finite(model: &str, v: &[f64]) -> Result<(), crate::integrate::Ode
         )))
     }
 }
+
+/// `∇²_{(x,u)} (μᵀ f)` of a parameter-free model with `nx` states and `N − nx` controls into
+/// `out` (`N × N`, column-major), for [`ControlledOde::weighted_hessian`]; `f` maps
+/// `z = (x, u)` to the state derivative. `Ok(false)` when the Hessian is not finite.
+///
+/// [`ControlledOde::weighted_hessian`]: crate::integrate::ControlledOde::weighted_hessian
+pub(crate) fn weighted_hessian<const N: usize, F>(
+    nx: usize,
+    x: &[f64],
+    u: &[f64],
+    mu: &[f64],
+    out: &mut [f64],
+    f: impl Fn(&[num_dual::Dual2SVec64<N>]) -> F,
+) -> Result<bool, crate::integrate::OdeError>
+where
+    F: IntoIterator<Item = num_dual::Dual2SVec64<N>>,
+{
+    if x.len() != nx || u.len() != N - nx || mu.len() != nx || out.len() != N * N {
+        return Err(crate::integrate::OdeError::Fatal(
+            "weighted_hessian: wrong buffer lengths".into(),
+        ));
+    }
+    let z: Vec<f64> = x.iter().chain(u).copied().collect();
+    let h = crate::model::ad::dense_hessian::<N>(&z, |zs| {
+        f(zs)
+            .into_iter()
+            .zip(mu)
+            .fold(num_dual::Dual2SVec64::<N>::from(0.0), |acc, (fi, m)| {
+                acc + fi * *m
+            })
+    });
+    out.copy_from_slice(&h);
+    Ok(out.iter().all(|v| v.is_finite()))
+}
+
+/// The state derivative and its Jacobians `(f, fx, fu)` from `eval` into the buffers of
+/// [`ControlledOde::f_jac`] of a parameter-free model, after checking the lengths of `fx`
+/// (nx×nx) and `fu` (nx×nu); a non-finite value is recoverable.
+///
+/// [`ControlledOde::f_jac`]: crate::integrate::ControlledOde::f_jac
+pub(crate) fn write_f_jac<A: AsRef<[f64]>, B: AsRef<[f64]>, C: AsRef<[f64]>>(
+    model: &str,
+    (nx, nu): (usize, usize),
+    xdot: &mut [f64],
+    fx: &mut [f64],
+    fu: &mut [f64],
+    eval: impl FnOnce() -> (A, B, C),
+) -> Result<(), crate::integrate::OdeError> {
+    if fx.len() != nx * nx || fu.len() != nx * nu {
+        return Err(crate::integrate::OdeError::Fatal(format!(
+            "{model}: expected fx of length {} and fu of length {}, got {}, {}",
+            nx * nx,
+            nx * nu,
+            fx.len(),
+            fu.len()
+        )));
+    }
+    let (v, jx, ju) = eval();
+    xdot.copy_from_slice(v.as_ref());
+    fx.copy_from_slice(jx.as_ref());
+    fu.copy_from_slice(ju.as_ref());
+    finite(model, xdot)?;
+    finite(model, fx)?;
+    finite(model, fu)
+}

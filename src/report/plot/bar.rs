@@ -123,17 +123,7 @@ impl BarChart {
             }
         };
         let y_axis = Axis::new(ya, yb, nice_step((yb - ya) / (y_target - 1) as f64));
-        let tick_w = y_axis
-            .labels
-            .iter()
-            .map(|l| text_width(l, TICK_SIZE))
-            .fold(0.0, f64::max);
-        let y_label_band = if self.y_label.is_empty() {
-            0.0
-        } else {
-            LABEL_SIZE + 8.0
-        };
-        let left = 8.0 + y_label_band + tick_w + 8.0;
+        let left = left_margin(&y_axis, &self.y_label);
         let ref_w = self
             .reference
             .as_ref()
@@ -166,40 +156,13 @@ impl BarChart {
         let bar_w = slot * 0.8 / n_ser as f64;
 
         // legend rows below the category labels, wrapping at the plot width
-        let mut legend = Vec::new();
-        let (mut lx, mut lrow) = (0.0, 0usize);
-        for (i, s) in self
-            .series
-            .iter()
-            .enumerate()
-            .filter(|(_, s)| !s.name.is_empty())
-        {
-            let item_w = 14.0 + 6.0 + text_width(&s.name, LEGEND_SIZE);
-            if lx > 0.0 && lx + item_w > pw {
-                lx = 0.0;
-                lrow += 1;
-            }
-            legend.push(LegendItem {
-                series: i,
-                x: lx,
-                row: lrow,
-            });
-            lx += item_w + 18.0;
-        }
-        let legend_rows = if legend.is_empty() { 0 } else { lrow + 1 };
+        let names = self.series.iter().map(|s| s.name.as_str());
+        let (legend, legend_rows) = legend_layout(names, 14.0, pw);
 
-        let title_band = if self.title.is_empty() {
-            4.0
-        } else {
-            TITLE_SIZE + 14.0
-        };
+        let title_band = title_band(&self.title);
         let top = title_band + SPAN_SIZE + 8.0; // room for bar labels at the top
         let cat_band = n_lines as f64 * (TICK_SIZE + 3.0);
-        let legend_band = if legend_rows == 0 {
-            0.0
-        } else {
-            legend_rows as f64 * LEGEND_ROW + 6.0
-        };
+        let legend_band = legend_band(legend_rows);
         let bottom = 8.0 + cat_band + legend_band + 8.0;
         let ph = (h - top - bottom).max(40.0);
         let sy = |y: f64| {
@@ -210,42 +173,9 @@ impl BarChart {
         svg_header(&mut out, &self.title, w, h, None, left + pw / 2.0);
 
         // grid, frame, y ticks and label
-        for &t in &y_axis.ticks {
-            writeln!(
-                out,
-                r##"<line x1="{}" y1="{y}" x2="{}" y2="{y}" stroke="{}" stroke-width="{}"/>"##,
-                px(left),
-                px(left + pw),
-                if t == 0.0 { "#9a9a9a" } else { "#e3e3e3" },
-                if t == 0.0 { "1" } else { "0.8" },
-                y = px(sy(t))
-            )
-            .ok();
-        }
-        for (t, l) in y_axis.ticks.iter().zip(&y_axis.labels) {
-            let y = sy(*t);
-            writeln!(
-                out,
-                r##"<line x1="{}" y1="{y}" x2="{}" y2="{y}" stroke="#333333"/><text x="{}" y="{}" font-size="{TICK_SIZE}" text-anchor="end" fill="#333333">{l}</text>"##,
-                px(left - 4.0),
-                px(left),
-                px(left - 6.0),
-                px(y + TICK_SIZE * 0.35),
-                y = px(y)
-            )
-            .ok();
-        }
-        if !self.y_label.is_empty() {
-            let (x, y) = (8.0 + LABEL_SIZE, top + ph / 2.0);
-            writeln!(
-                out,
-                r##"<text x="{x}" y="{y}" font-size="{LABEL_SIZE}" text-anchor="middle" fill="#222222" transform="rotate(-90 {x} {y})">{}</text>"##,
-                escape_xml(&self.y_label),
-                x = px(x),
-                y = px(y)
-            )
-            .ok();
-        }
+        y_grid(&mut out, &y_axis, left, pw, sy);
+        y_ticks(&mut out, &y_axis, left, sy);
+        y_label(&mut out, &self.y_label, top, ph);
 
         // the reference line behind the bars, labelled right of the frame
         if let Some((r, name)) = self
@@ -321,15 +251,7 @@ impl BarChart {
                 .ok();
             }
         }
-        writeln!(
-            out,
-            r##"<rect x="{}" y="{}" width="{}" height="{}" fill="none" stroke="#333333" stroke-width="1"/>"##,
-            px(left),
-            px(top),
-            px(pw),
-            px(ph)
-        )
-        .ok();
+        frame(&mut out, left, top, pw, ph);
 
         // legend
         let legend_top = top + ph + 8.0 + cat_band + 4.0;
@@ -354,13 +276,7 @@ impl BarChart {
             .ok();
         }
         if n_cat == 0 {
-            writeln!(
-                out,
-                r##"<text x="{}" y="{}" font-size="{LABEL_SIZE}" text-anchor="middle" fill="#888888">no data</text>"##,
-                px(left + pw / 2.0),
-                px(top + ph / 2.0)
-            )
-            .ok();
+            no_data(&mut out, left, top, pw, ph);
         }
         out.push_str("</svg>\n");
         out

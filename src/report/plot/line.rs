@@ -91,17 +91,7 @@ impl LinePlot {
                 Axis::new(a, b, nice_step((b - a) / (y_target - 1) as f64))
             }
         };
-        let tick_w = y_axis
-            .labels
-            .iter()
-            .map(|l| text_width(l, TICK_SIZE))
-            .fold(0.0, f64::max);
-        let y_label_band = if self.y_label.is_empty() {
-            0.0
-        } else {
-            LABEL_SIZE + 8.0
-        };
-        let left = 8.0 + y_label_band + tick_w + 8.0;
+        let left = left_margin(&y_axis, &self.y_label);
         let right = 24.0;
         let pw = (w - left - right).max(40.0);
 
@@ -125,29 +115,13 @@ impl LinePlot {
         let sx = |x: f64| left + (x - x_axis.lo) / (x_axis.hi - x_axis.lo) * pw;
 
         // Legend rows below the x-axis label, wrapping at the plot width.
-        let mut legend = Vec::new();
-        let (mut lx, mut lrow) = (0.0, 0usize);
         // bands are listed after the series, as legend items `series.len() + band`
-        let names: Vec<&str> = self
+        let names = self
             .series
             .iter()
             .map(|s| s.name.as_str())
-            .chain(self.bands.iter().map(|b| b.name.as_str()))
-            .collect();
-        for (i, name) in names.iter().enumerate().filter(|(_, n)| !n.is_empty()) {
-            let item_w = LEGEND_SAMPLE + 6.0 + text_width(name, LEGEND_SIZE);
-            if lx > 0.0 && lx + item_w > pw {
-                lx = 0.0;
-                lrow += 1;
-            }
-            legend.push(LegendItem {
-                series: i,
-                x: lx,
-                row: lrow,
-            });
-            lx += item_w + 18.0;
-        }
-        let legend_rows = if legend.is_empty() { 0 } else { lrow + 1 };
+            .chain(self.bands.iter().map(|b| b.name.as_str()));
+        let (legend, legend_rows) = legend_layout(names, LEGEND_SAMPLE, pw);
 
         // Span labels: centred on their span, moved to a further row when they would
         // overlap a label already placed.
@@ -185,11 +159,7 @@ impl LinePlot {
         }
         let span_rows = span_labels.iter().map(|l| l.row + 1).max().unwrap_or(0);
 
-        let title_band = if self.title.is_empty() {
-            4.0
-        } else {
-            TITLE_SIZE + 14.0
-        };
+        let title_band = title_band(&self.title);
         let top_axis_band = if self.top_axis.is_some() {
             LABEL_SIZE + 6.0 + TICK_SIZE + 6.0
         } else {
@@ -201,11 +171,7 @@ impl LinePlot {
         } else {
             LABEL_SIZE + 8.0
         };
-        let legend_band = if legend_rows == 0 {
-            0.0
-        } else {
-            legend_rows as f64 * LEGEND_ROW + 6.0
-        };
+        let legend_band = legend_band(legend_rows);
         let bottom = 6.0 + TICK_SIZE + 6.0 + x_label_band + legend_band + 6.0;
         let ph = (h - top - bottom).max(40.0);
         let sy = |y: f64| top + ph - (y - y_axis.lo) / (y_axis.hi - y_axis.lo) * ph;
@@ -258,18 +224,7 @@ impl LinePlot {
         }
 
         // Grid, zero line, frame, ticks.
-        for &t in &y_axis.ticks {
-            writeln!(
-                out,
-                r##"<line x1="{}" y1="{y}" x2="{}" y2="{y}" stroke="{}" stroke-width="{}"/>"##,
-                px(left),
-                px(left + pw),
-                if t == 0.0 { "#9a9a9a" } else { "#e3e3e3" },
-                if t == 0.0 { "1" } else { "0.8" },
-                y = px(sy(t))
-            )
-            .ok();
-        }
+        y_grid(out, &y_axis, left, pw, sy);
         for &t in &x_axis.ticks {
             writeln!(
                 out,
@@ -280,28 +235,8 @@ impl LinePlot {
             )
             .ok();
         }
-        writeln!(
-            out,
-            r##"<rect x="{}" y="{}" width="{}" height="{}" fill="none" stroke="#333333" stroke-width="1"/>"##,
-            px(left),
-            px(top),
-            px(pw),
-            px(ph)
-        )
-        .ok();
-        for (t, l) in y_axis.ticks.iter().zip(&y_axis.labels) {
-            let y = sy(*t);
-            writeln!(
-                out,
-                r##"<line x1="{}" y1="{y}" x2="{}" y2="{y}" stroke="#333333"/><text x="{}" y="{}" font-size="{TICK_SIZE}" text-anchor="end" fill="#333333">{l}</text>"##,
-                px(left - 4.0),
-                px(left),
-                px(left - 6.0),
-                px(y + TICK_SIZE * 0.35),
-                y = px(y)
-            )
-            .ok();
-        }
+        frame(out, left, top, pw, ph);
+        y_ticks(out, &y_axis, left, sy);
         for (t, l) in x_axis.ticks.iter().zip(&x_axis.labels) {
             let x = sx(*t);
             writeln!(
@@ -324,17 +259,7 @@ impl LinePlot {
             )
             .ok();
         }
-        if !self.y_label.is_empty() {
-            let (x, y) = (8.0 + LABEL_SIZE, top + ph / 2.0);
-            writeln!(
-                out,
-                r##"<text x="{x}" y="{y}" font-size="{LABEL_SIZE}" text-anchor="middle" fill="#222222" transform="rotate(-90 {x} {y})">{}</text>"##,
-                escape_xml(&self.y_label),
-                x = px(x),
-                y = px(y)
-            )
-            .ok();
-        }
+        y_label(out, &self.y_label, top, ph);
 
         if let Some(ta) = &self.top_axis {
             self.render_top_axis(
@@ -450,13 +375,7 @@ impl LinePlot {
             .ok();
         }
         if self.series.iter().all(|s| Self::points(s).next().is_none()) {
-            writeln!(
-                out,
-                r##"<text x="{}" y="{}" font-size="{LABEL_SIZE}" text-anchor="middle" fill="#888888">no data</text>"##,
-                px(left + pw / 2.0),
-                px(top + ph / 2.0)
-            )
-            .ok();
+            no_data(out, left, top, pw, ph);
         }
         out.push_str("</svg>\n");
     }

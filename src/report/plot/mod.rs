@@ -347,6 +347,138 @@ struct LegendItem {
     row: usize,
 }
 
+/// Left margin (px): gap, the y label's band, the widest y tick label, gap.
+fn left_margin(y_axis: &Axis, y_label: &str) -> f64 {
+    let tick_w = y_axis
+        .labels
+        .iter()
+        .map(|l| text_width(l, TICK_SIZE))
+        .fold(0.0, f64::max);
+    let y_label_band = if y_label.is_empty() {
+        0.0
+    } else {
+        LABEL_SIZE + 8.0
+    };
+    8.0 + y_label_band + tick_w + 8.0
+}
+
+/// Legend entries of the non-empty `names` (item `i` for the `i`-th name) in rows that wrap
+/// at `width` px, each entry a `sample` px wide swatch and its name; the entries and the
+/// number of rows.
+fn legend_layout<'a>(
+    names: impl Iterator<Item = &'a str>,
+    sample: f64,
+    width: f64,
+) -> (Vec<LegendItem>, usize) {
+    let mut legend = Vec::new();
+    let (mut lx, mut lrow) = (0.0, 0usize);
+    for (i, name) in names.enumerate().filter(|(_, n)| !n.is_empty()) {
+        let item_w = sample + 6.0 + text_width(name, LEGEND_SIZE);
+        if lx > 0.0 && lx + item_w > width {
+            lx = 0.0;
+            lrow += 1;
+        }
+        legend.push(LegendItem {
+            series: i,
+            x: lx,
+            row: lrow,
+        });
+        lx += item_w + 18.0;
+    }
+    let rows = if legend.is_empty() { 0 } else { lrow + 1 };
+    (legend, rows)
+}
+
+/// Height (px) of the title band above the plot.
+fn title_band(title: &str) -> f64 {
+    if title.is_empty() {
+        4.0
+    } else {
+        TITLE_SIZE + 14.0
+    }
+}
+
+/// Height (px) of `rows` legend rows below the plot.
+fn legend_band(rows: usize) -> f64 {
+    if rows == 0 {
+        0.0
+    } else {
+        rows as f64 * LEGEND_ROW + 6.0
+    }
+}
+
+/// Horizontal grid lines at the y ticks (the zero line darker), `sy` mapping a value to px.
+fn y_grid(out: &mut String, y_axis: &Axis, left: f64, pw: f64, sy: impl Fn(f64) -> f64) {
+    for &t in &y_axis.ticks {
+        writeln!(
+            out,
+            r##"<line x1="{}" y1="{y}" x2="{}" y2="{y}" stroke="{}" stroke-width="{}"/>"##,
+            px(left),
+            px(left + pw),
+            if t == 0.0 { "#9a9a9a" } else { "#e3e3e3" },
+            if t == 0.0 { "1" } else { "0.8" },
+            y = px(sy(t))
+        )
+        .ok();
+    }
+}
+
+/// The y ticks with their labels left of the frame.
+fn y_ticks(out: &mut String, y_axis: &Axis, left: f64, sy: impl Fn(f64) -> f64) {
+    for (t, l) in y_axis.ticks.iter().zip(&y_axis.labels) {
+        let y = sy(*t);
+        writeln!(
+            out,
+            r##"<line x1="{}" y1="{y}" x2="{}" y2="{y}" stroke="#333333"/><text x="{}" y="{}" font-size="{TICK_SIZE}" text-anchor="end" fill="#333333">{l}</text>"##,
+            px(left - 4.0),
+            px(left),
+            px(left - 6.0),
+            px(y + TICK_SIZE * 0.35),
+            y = px(y)
+        )
+        .ok();
+    }
+}
+
+/// The y label, rotated, centred on the plot's height.
+fn y_label(out: &mut String, label: &str, top: f64, ph: f64) {
+    if !label.is_empty() {
+        let (x, y) = (8.0 + LABEL_SIZE, top + ph / 2.0);
+        writeln!(
+            out,
+            r##"<text x="{x}" y="{y}" font-size="{LABEL_SIZE}" text-anchor="middle" fill="#222222" transform="rotate(-90 {x} {y})">{}</text>"##,
+            escape_xml(label),
+            x = px(x),
+            y = px(y)
+        )
+        .ok();
+    }
+}
+
+/// The plot's frame.
+fn frame(out: &mut String, left: f64, top: f64, pw: f64, ph: f64) {
+    writeln!(
+        out,
+        r##"<rect x="{}" y="{}" width="{}" height="{}" fill="none" stroke="#333333" stroke-width="1"/>"##,
+        px(left),
+        px(top),
+        px(pw),
+        px(ph)
+    )
+    .ok();
+}
+
+/// "no data" in the middle of an empty plot.
+fn no_data(out: &mut String, left: f64, top: f64, pw: f64, ph: f64) {
+    writeln!(
+        out,
+        r##"<text x="{}" y="{}" font-size="{LABEL_SIZE}" text-anchor="middle" fill="#888888">no data</text>"##,
+        px(left + pw / 2.0),
+        px(top + ph / 2.0)
+    )
+    .ok();
+}
+
 /// A placed span label: span index, centre x (px), row.
 struct SpanLabel {
     span: usize,

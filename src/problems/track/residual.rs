@@ -1,0 +1,146 @@
+//! The tracking OCP and its data residuals: rows per node and sample, the OCP with its
+//! node-wise least-squares terms.
+
+use super::{SampleTarget, TrackingSetup};
+use crate::model::{ConstraintSet, GaitModel};
+use crate::ocp::{Block, NodeFunction, Ocp, SampleTerm, Term};
+use crate::problems::gait::GaitCycle;
+use crate::problems::tracking::{ForceClockShift, NodeTarget, TrackingResidual};
+use std::sync::Arc;
+
+impl TrackingSetup {
+    /// The residual of `target` on contact set `set`, with the measured loads (for their
+    /// force and CoP rows) when `with_loads`.
+    pub(super) fn residual<'m>(
+        &self,
+        model: &'m GaitModel,
+        set: &ConstraintSet,
+        target: NodeTarget,
+        with_loads: bool,
+    ) -> TrackingResidual<'m> {
+        TrackingResidual::new(
+            model,
+            set.clone(),
+            target,
+            self.weights.clone(),
+            with_loads.then(|| self.measured.clone()),
+        )
+    }
+
+    /// Number of data residuals (angles, velocities, forces and CoP at the nodes; not the
+    /// regularisation of excitations and activations).
+    pub fn data_rows(
+        &self,
+        model: &GaitModel,
+        sets: &[ConstraintSet],
+        continuous: &[usize],
+    ) -> usize {
+        let mut n = 0;
+        for (j, tg) in self.targets.iter().enumerate() {
+            let last = j + 1 == self.targets.len();
+            for (k, target) in tg.iter().enumerate() {
+                if k + 1 == tg.len() && !last {
+                    continue;
+                }
+                let r = self.residual(model, &sets[continuous[j]], target.clone(), false);
+                n += crate::problems::GenericFunction::dim(&r) - model.nu() - model.na();
+            }
+        }
+        for s in &self.samples {
+            n += self
+                .sample_residuals(model, sets, continuous, s)
+                .iter()
+                .map(|(r, _)| crate::problems::GenericFunction::dim(r))
+                .sum::<usize>();
+        }
+        n
+    }
+
+    /// The data-only residuals of a sample target, each with whether its instant is
+    /// moved by the force plates' clock offset: one residual; or, when an effect of the
+    /// model shifts that clock and the sample has loads, the angles at the sample's
+    /// instant and the loads, at their measured values, at the instant the offset moves
+    /// them to ([`ForceClockShift`]).
+    pub(super) fn sample_residuals<'m>(
+        &self,
+        model: &'m GaitModel,
+        sets: &[ConstraintSet],
+        continuous: &[usize],
+        s: &SampleTarget,
+    ) -> Vec<(TrackingResidual<'m>, bool)> {
+        let residual = |target: NodeTarget| {
+            self.residual(model, &sets[continuous[s.phase]], target, true)
+                .data_only()
+        };
+        if !model.shifts_force_clock() || s.target.feet.iter().all(Option::is_none) {
+            return vec![(residual(s.target.clone()), false)];
+        }
+        let angles = residual(NodeTarget {
+            feet: [None, None],
+            ..s.target.clone()
+        });
+        let loads = residual(NodeTarget {
+            q: vec![None; s.target.q.len()],
+            ..s.target.clone()
+        })
+        .at_measured_values();
+        [(angles, false), (loads, true)]
+            .into_iter()
+            .filter(|(r, _)| crate::problems::GenericFunction::dim(r) > 0)
+            .collect()
+    }
+
+    /// The tracking OCP: the walking cycle of `cycle` plus the node-wise residuals.
+    pub fn ocp<'c>(
+        &self,
+        cycle: &'c GaitCycle<'c>,
+        model: &'c GaitModel,
+        sets: &'c [ConstraintSet],
+        integrator: crate::integrate::IntegratorSettings,
+    ) -> Result<Ocp<'c>, String> {
+        let mut ocp = cycle.ocp(&self.guess, integrator)?;
+        let linear = ocp
+            .phases
+            .iter()
+            .all(|p| p.controls == crate::integrate::ControlShape::Linear);
+        for (j, tg) in self.targets.iter().enumerate() {
+            let set = &sets[cycle.continuous[j]];
+            let n = ocp.phases[j].intervals;
+            let last = j + 1 == self.targets.len();
+            for (k, target) in tg.iter().enumerate() {
+                // a phase's last node coincides with the next phase's first: count it once
+                if k == n && !last {
+                    continue;
+                }
+                let ku = if linear { k } else { k.min(n - 1) };
+                let r = self.residual(model, set, target.clone(), true);
+                ocp.least_squares.push(Term {
+                    name: "tracking".into(),
+                    args: vec![
+                        Block::State { phase: j, node: k },
+                        Block::Control { phase: j, node: ku },
+                        Block::Params,
+                    ],
+                    f: Arc::new(crate::problems::AdTerm(r)),
+                });
+            }
+        }
+        for s in &self.samples {
+            for (r, shifted) in self.sample_residuals(model, sets, &cycle.continuous, s) {
+                let shift = shifted.then(|| {
+                    Arc::new(crate::problems::AdTerm(ForceClockShift { model }))
+                        as Arc<dyn NodeFunction + 'c>
+                });
+                ocp.samples.push(SampleTerm {
+                    name: "tracking sample".into(),
+                    phase: s.phase,
+                    interval: s.interval,
+                    tau: s.tau,
+                    f: Arc::new(crate::problems::AdTerm(r)),
+                    shift,
+                });
+            }
+        }
+        Ok(ocp)
+    }
+}
