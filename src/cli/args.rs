@@ -53,6 +53,11 @@ impl Progress for CliProgress {
     fn warn(&self, text: &str) {
         eprintln!("{text}");
     }
+    fn result(&self, text: &str) {
+        if !self.quiet {
+            println!("{text}");
+        }
+    }
     fn iteration(&self, rec: &IterationRecord) {
         if !self.quiet {
             StderrLog.iteration(rec);
@@ -60,12 +65,44 @@ impl Progress for CliProgress {
     }
 }
 
-/// Write `value` as pretty JSON to `name` in the run folder's staging area.
-pub fn write_json(
-    folder: &footfall::runfolder::RunFolder,
-    name: &str,
-    value: &impl serde::Serialize,
-) -> anyhow::Result<()> {
-    folder.write(name, serde_json::to_string_pretty(value)?.as_bytes())?;
-    Ok(())
+/// Hessian choice on the command line.
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+pub enum HessianArg {
+    /// Gauss–Newton of the least-squares objective.
+    GaussNewton,
+    /// Block-diagonal BFGS of the Lagrangian.
+    Bfgs,
+    /// Gauss–Newton plus block BFGS of the constraint curvature.
+    GaussNewtonBfgs,
+    /// Exact Hessian of the Lagrangian (second-order sensitivities).
+    Exact,
+}
+
+impl From<HessianArg> for footfall::sqp::HessianMode {
+    fn from(h: HessianArg) -> Self {
+        match h {
+            HessianArg::GaussNewton => footfall::sqp::HessianMode::GaussNewton,
+            HessianArg::Bfgs => footfall::sqp::HessianMode::Bfgs,
+            HessianArg::GaussNewtonBfgs => footfall::sqp::HessianMode::GaussNewtonBfgs,
+            HessianArg::Exact => footfall::sqp::HessianMode::Exact,
+        }
+    }
+}
+
+/// CVODES linear multistep method.
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+pub enum MethodArg {
+    /// Adams–Moulton (non-stiff problems; default for the generic problems).
+    Adams,
+    /// BDF (stiff problems).
+    Bdf,
+}
+
+impl From<MethodArg> for footfall::integrate::Method {
+    fn from(m: MethodArg) -> Self {
+        match m {
+            MethodArg::Adams => footfall::integrate::Method::Adams,
+            MethodArg::Bdf => footfall::integrate::Method::Bdf,
+        }
+    }
 }

@@ -19,7 +19,7 @@ mod synth;
 mod track;
 mod validate;
 
-pub use args::{write_json, CheckPointArgs, CliProgress, ModelArgs};
+pub use args::{CheckPointArgs, CliProgress, HessianArg, MethodArg, ModelArgs};
 use clap::{Parser, Subcommand};
 use footfall::sqp::SqpStatus;
 use std::process::ExitCode;

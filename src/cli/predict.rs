@@ -37,7 +37,7 @@ pub struct PredictOptions {
     pub ankle_velocity_limit: Option<f64>,
     /// Hessian: exact (default) or an approximation.
     #[arg(long, value_enum, default_value = "exact")]
-    pub hessian: super::solve::HessianArg,
+    pub hessian: super::HessianArg,
     /// KKT tolerance.
     #[arg(long, default_value_t = 1e-5, value_parser = super::validate::positive)]
     pub tol: f64,

@@ -44,7 +44,7 @@ pub struct Args {
     pub resume: Option<PathBuf>,
     /// Hessian: exact (converges), or gauss-newton (the seed's; stalls near KKT 3e-5).
     #[arg(long, value_enum, default_value = "exact")]
-    hessian: super::solve::HessianArg,
+    hessian: super::HessianArg,
     /// KKT tolerance.
     #[arg(long, default_value_t = 1e-5, value_parser = super::validate::positive)]
     tol: f64,

@@ -10,11 +10,15 @@
 
 pub mod compare;
 pub mod diagnose;
+pub mod diff;
+pub mod fit_foot;
 pub mod predict;
 pub mod refine;
 pub mod report;
 pub mod run_folder;
 pub mod session;
+pub mod simulate;
+pub mod solve;
 pub mod synth;
 pub mod track;
 
@@ -38,6 +42,10 @@ pub trait Progress: Sync {
     }
     /// An SQP iteration (iteration 0 is the starting point).
     fn iteration(&self, _rec: &IterationRecord) {}
+    /// A result to show the user (the command line prints it on standard output).
+    fn result(&self, text: &str) {
+        self.note(text)
+    }
 }
 
 /// Progress that goes nowhere (warnings included).
@@ -95,7 +103,32 @@ macro_rules! warn_note {
         $p.warn(&format!($($t)*))
     };
 }
-pub(crate) use {note, warn_note};
+/// A formatted result to a [`Progress`].
+macro_rules! result_note {
+    ($p:expr, $($t:tt)*) => {
+        $p.result(&format!($($t)*))
+    };
+}
+pub(crate) use {note, result_note, warn_note};
+
+/// A model file and a foot (`ellipse`, `double-circle` or a foot file).
+#[derive(Debug, Clone)]
+pub struct ModelFiles {
+    /// Model file (JSON).
+    pub model: PathBuf,
+    /// Foot: `ellipse`, `double-circle` or a foot file (JSON).
+    pub foot: String,
+}
+
+/// Write `value` as pretty JSON to `name` in the run folder's staging area.
+pub fn write_json(
+    folder: &crate::runfolder::RunFolder,
+    name: &str,
+    value: &impl serde::Serialize,
+) -> anyhow::Result<()> {
+    folder.write(name, serde_json::to_string_pretty(value)?.as_bytes())?;
+    Ok(())
+}
 
 /// The foot file of a foot argument: `ellipse`, `double-circle` or a file.
 pub fn foot_path(arg: &str) -> PathBuf {

@@ -6,7 +6,7 @@
 
 use super::track::{read_run_setup, RunWriting, TrackingProblem};
 #[allow(unused_imports)]
-use super::{note, warn_note, Progress};
+use super::{note, result_note, warn_note, Progress};
 use crate::runfolder::RunFolder;
 use crate::sqp::{IterationRecord, SqpResult, SqpStatus, SqpTimings, Violation};
 use anyhow::{anyhow, bail, Context};
@@ -170,10 +170,11 @@ pub fn run(args: &ReportRequest, progress: &dyn Progress) -> anyhow::Result<()> 
         prob.write_run(tr, cycle, res, RunWriting { base: &base, extra: &[], folder, transient_threshold: args.transient_threshold, progress: &super::WarningsOnly(progress), provenance: Some(provenance), check_sites: &prob.check_sites })
     })?;
     {
-        println!("{}", run.output.table.to_markdown());
+        result_note!(progress, "{}", run.output.table.to_markdown());
         if let Some(b) = &run.breakdown {
             let (share, normalised, windows) = crate::report::tracking::cost_tables(b);
-            println!(
+            result_note!(
+                progress,
                 "{}\n{}\n{}",
                 share.to_markdown(),
                 normalised.to_markdown(),
@@ -182,7 +183,7 @@ pub fn run(args: &ReportRequest, progress: &dyn Progress) -> anyhow::Result<()> 
         }
         if let Some(r) = &run.residuals {
             for t in &r.tables {
-                println!("{}", t.to_markdown());
+                result_note!(progress, "{}", t.to_markdown());
             }
         }
         note!(
