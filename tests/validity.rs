@@ -333,7 +333,7 @@ fn the_double_circle_track_is_valid_between_its_nodes() {
 #[test]
 fn check_points_repair_a_synthetic_trial_in_rounds() {
     use footfall::runfolder::RunFolder;
-    use footfall::workflows::track::{check_tracked, track, TrackRequest};
+    use footfall::workflows::track::{track, TrackRequest};
     use footfall::workflows::Collected;
     let trial = common::root().join("tests/data/hidden/none");
     let tmp = tempfile::tempdir().unwrap();
@@ -345,7 +345,8 @@ fn check_points_repair_a_synthetic_trial_in_rounds() {
     let progress = Collected::default();
     let run = track(&req, RunFolder::create(&out, false).unwrap(), &progress).unwrap();
     let lines = progress.lines.lock().unwrap().join("\n");
-    check_tracked(&run).unwrap_or_else(|e| panic!("{e:#}\n{lines}"));
+    footfall::workflows::check_run(&run.output, &run.result)
+        .unwrap_or_else(|e| panic!("{e:#}\n{lines}"));
     assert!(lines.contains("adding"), "{lines}");
     let s = summary(&out);
     assert_eq!(s["verdict"], "converged");

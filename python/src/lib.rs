@@ -10,38 +10,13 @@
 //! and trial), as for the command line.
 
 use footfall::runfolder::RunFolder;
-use footfall::sqp::IterationRecord;
 use footfall::workflows::track::{track as track_workflow, TrackRequest};
-use footfall::workflows::Progress;
+use footfall::workflows::Printed;
 use numpy::{PyArray1, PyArray2};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::PathBuf;
-
-/// Progress printed to stderr unless quiet (warnings always).
-struct Printed {
-    quiet: bool,
-}
-
-impl Progress for Printed {
-    fn note(&self, text: &str) {
-        if !self.quiet {
-            eprintln!("{text}");
-        }
-    }
-    fn warn(&self, text: &str) {
-        eprintln!("{text}");
-    }
-    fn iteration(&self, r: &IterationRecord) {
-        if !self.quiet {
-            eprintln!(
-                "{:>5} {:>16.9e} {:>10.3e} {:>10.3e}",
-                r.iter, r.objective, r.infeasibility, r.kkt
-            );
-        }
-    }
-}
 
 /// Track measured walking with the model and write the run folder `out`.
 ///

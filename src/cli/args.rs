@@ -1,7 +1,6 @@
 //! Arguments and printing shared by several subcommands.
 
-use footfall::sqp::{IterationRecord, Observer, StderrLog};
-use footfall::workflows::Progress;
+use footfall::workflows::Printed;
 use std::path::PathBuf;
 
 /// The model and foot shared by `simulate`, `fit-foot` and `track`.
@@ -37,33 +36,8 @@ impl CheckPointArgs {
     }
 }
 
-/// Progress printed to stderr: news and the SQP's iteration table unless `--quiet`,
-/// warnings always.
-pub struct CliProgress {
-    /// Print only warnings.
-    pub quiet: bool,
-}
-
-impl Progress for CliProgress {
-    fn note(&self, text: &str) {
-        if !self.quiet {
-            eprintln!("{text}");
-        }
-    }
-    fn warn(&self, text: &str) {
-        eprintln!("{text}");
-    }
-    fn result(&self, text: &str) {
-        if !self.quiet {
-            println!("{text}");
-        }
-    }
-    fn iteration(&self, rec: &IterationRecord) {
-        if !self.quiet {
-            StderrLog.iteration(rec);
-        }
-    }
-}
+/// Progress printed as the command line shows it (the library's [`Printed`]).
+pub type CliProgress = Printed;
 
 /// Hessian choice on the command line.
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]

@@ -3,7 +3,7 @@
 
 use super::{CliProgress, Failure};
 use footfall::problems::predict::SEED_IMPULSE_WEIGHT;
-use footfall::workflows::predict::{check_outcome, outcome_text, predict, PredictionOptions};
+use footfall::workflows::predict::{outcome_text, predict, PredictionOptions};
 use footfall::workflows::run_folder::DEFAULT_TRANSIENT_THRESHOLD_N;
 use footfall::workflows::{read_solution, Progress};
 use std::path::PathBuf;
@@ -126,5 +126,5 @@ fn run_inner(args: Args, progress: &CliProgress) -> anyhow::Result<()> {
         progress,
     )?;
     progress.note(&outcome_text(&out, &res));
-    check_outcome(&out, &res)
+    footfall::workflows::check_run(&out, &res)
 }

@@ -7,7 +7,7 @@ use footfall::model::effects::EffectSpec;
 use footfall::problems::diagnose::TrackingRunSetup;
 use footfall::problems::tracking::ChannelNoise;
 use footfall::workflows::run_folder::DEFAULT_TRANSIENT_THRESHOLD_N;
-use footfall::workflows::track::{check_tracked, track, tracking_sqp_settings, TrackRequest};
+use footfall::workflows::track::{track, tracking_sqp_settings, TrackRequest};
 use footfall::workflows::{default_phases, session};
 use std::path::PathBuf;
 
@@ -223,5 +223,5 @@ fn run_inner(args: Args, progress: &CliProgress) -> anyhow::Result<()> {
     };
     let folder = session::create_checkpointed_run_folder(&args.out, args.overwrite)?;
     let run = track(&req, folder, progress)?;
-    check_tracked(&run)
+    footfall::workflows::check_run(&run.output, &run.result)
 }

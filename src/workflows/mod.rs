@@ -66,6 +66,35 @@ impl Progress for WarningsOnly<'_> {
     }
 }
 
+/// Progress printed as a terminal shows it (the command line and the Python binding):
+/// news and the SQP's iteration table on standard error and results on standard output,
+/// unless quiet; warnings always.
+pub struct Printed {
+    /// Print only warnings.
+    pub quiet: bool,
+}
+
+impl Progress for Printed {
+    fn note(&self, text: &str) {
+        if !self.quiet {
+            eprintln!("{text}");
+        }
+    }
+    fn warn(&self, text: &str) {
+        eprintln!("{text}");
+    }
+    fn result(&self, text: &str) {
+        if !self.quiet {
+            println!("{text}");
+        }
+    }
+    fn iteration(&self, rec: &IterationRecord) {
+        if !self.quiet {
+            crate::sqp::Observer::iteration(&mut crate::sqp::StderrLog, rec);
+        }
+    }
+}
+
 /// Progress kept in memory: notes, warnings and iterations, in order (for tests and
 /// notebooks).
 #[derive(Default)]
@@ -184,6 +213,17 @@ pub fn load_data(path: Option<&Path>, overground: bool) -> anyhow::Result<GaitDa
     };
     data.check_conventions(overground)?;
     Ok(data)
+}
+
+/// The error of a written gait run (`track`, `predict`) whose solve `res` did not
+/// converge ([`Unsolved`]) or whose solution breaks physics on the 1 ms grid
+/// ([`Invalid`]).
+pub fn check_run(
+    out: &run_folder::GaitRunOutput,
+    res: &crate::sqp::SqpResult,
+) -> anyhow::Result<()> {
+    Unsolved::check(res, &out.path)?;
+    Invalid::check(out)
 }
 
 /// A converged solution that breaks physics on the 1 ms grid (exit 5).

@@ -93,14 +93,6 @@ pub fn outcome_text(out: &GaitRunOutput, res: &SqpResult) -> String {
     text
 }
 
-/// The error of a written gait run that did not converge ([`Unsolved`](super::Unsolved))
-/// or breaks physics on the 1 ms grid ([`Invalid`](super::Invalid)).
-pub fn check_outcome(out: &GaitRunOutput, res: &SqpResult) -> anyhow::Result<()> {
-    super::Unsolved::check(res, &out.path)?;
-    super::Invalid::check(out)?;
-    Ok(())
-}
-
 /// Solve one prediction and write its run folder.
 pub fn predict(
     o: &PredictionOptions,

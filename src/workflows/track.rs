@@ -467,7 +467,7 @@ impl TrackRequest {
 
 /// Track: build the problem `req` describes, solve it (with check points until valid
 /// between the nodes, if asked) and write its run folder into `folder`. A solve that
-/// does not converge or stays physically invalid is still written; [`check_tracked`]
+/// does not converge or stays physically invalid is still written; [`check_run`](super::check_run)
 /// turns it into an error.
 pub fn track(
     req: &TrackRequest,
@@ -512,14 +512,6 @@ pub fn track(
         req.transient_threshold,
         progress,
     )
-}
-
-/// The error of a written tracking run that did not converge
-/// ([`Unsolved`](super::Unsolved)) or breaks physics on the 1 ms grid
-/// ([`Invalid`](super::Invalid)).
-pub fn check_tracked(run: &TrackedRun) -> anyhow::Result<()> {
-    super::Unsolved::check(&run.result, &run.output.path)?;
-    super::Invalid::check(&run.output)
 }
 
 impl TrackingProblem {
