@@ -201,7 +201,7 @@ pub fn predict(
     let (sites, res) =
         refinement.solve(&build, &[], &w0, &mut |tr, w| solve_staged(tr, w), progress)?;
     let mut ocp = build()?;
-    ocp.checks = refinement.checks(&sites);
+    ocp.checks = cycle.checks_at(&sites);
     let tr = Transcription::new(&ocp).context("transcribing the prediction problem")?;
     let solution = GaitSolution::from_nlp(&tr, &res.w, &cycle.continuous, tracking.window.0);
     let durations: Vec<String> = solution

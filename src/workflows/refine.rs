@@ -9,7 +9,7 @@
 use super::{note, warn_note, Progress};
 use crate::integrate::IntegratorSettings;
 use crate::model::{ConstraintSet, GaitModel};
-use crate::ocp::{CheckPoint, Ocp, Transcription};
+use crate::ocp::{Ocp, Transcription};
 use crate::problems::evaluation::GaitSolution;
 use crate::problems::gait::{locate_instant, GaitCycle};
 use crate::problems::validity::{self, ValidityLimits};
@@ -44,14 +44,6 @@ pub struct Refinement<'c, 'm> {
 }
 
 impl<'m> Refinement<'_, 'm> {
-    /// The check points at `sites`.
-    pub fn checks(&self, sites: &[(usize, usize, f64)]) -> Vec<CheckPoint<'m>> {
-        sites
-            .iter()
-            .flat_map(|&(j, k, tau)| self.cycle.contact_checks(j, k, tau))
-            .collect()
-    }
-
     /// Solve with `solve` (on the problem `build` makes, with the check points so far, from
     /// the last solution), starting with the check points at `initial` and adding more
     /// while the re-integration breaks a contact constraint. Returns the check sites and the result of the last solve, its history
@@ -72,7 +64,7 @@ impl<'m> Refinement<'_, 'm> {
         let mut merged: Option<SqpResult> = None;
         for round in 0..=MAX_ROUNDS {
             let mut ocp = build()?;
-            ocp.checks = self.checks(&sites);
+            ocp.checks = self.cycle.checks_at(&sites);
             let tr = Transcription::new(&ocp)
                 .context("transcribing the problem with its check points")?;
             let res = solve(&tr, &w)?;

@@ -257,7 +257,7 @@ impl TrackingProblem {
             .setup
             .ocp(&cycle, &self.model, &self.sets, self.integrator.clone())
             .map_err(|e| anyhow!(e))?;
-        ocp.checks = self.checks(&cycle);
+        ocp.checks = cycle.checks_at(&self.check_sites);
         let tr = Transcription::new(&ocp).context("transcribing the tracking problem")?;
         let (_, _, w0) = tr.variable_bounds_and_guess();
         f(&tr, &cycle, w0)
@@ -354,14 +354,6 @@ impl TrackingProblem {
         let mut total = self.integration.get();
         total += tr.integration_totals();
         self.integration.set(total);
-    }
-
-    /// The path constraints at this problem's check points.
-    fn checks<'m>(&self, cycle: &GaitCycle<'m>) -> Vec<crate::ocp::CheckPoint<'m>> {
-        self.check_sites
-            .iter()
-            .flat_map(|&(j, k, tau)| cycle.contact_checks(j, k, tau))
-            .collect()
     }
 }
 
@@ -564,7 +556,7 @@ impl TrackingProblem {
         let (sites, res) =
             refinement.solve(&build, &self.check_sites, &w0, &mut solve, progress)?;
         let mut ocp = build()?;
-        ocp.checks = refinement.checks(&sites);
+        ocp.checks = cycle.checks_at(&sites);
         let tr = Transcription::new(&ocp).context("transcribing the tracking problem")?;
         self.write_run(
             &tr,

@@ -550,6 +550,15 @@ impl<'m> GaitCycle<'m> {
         self.seq.gait.as_ref().map_or(0.8, |g| g.friction)
     }
 
+    /// The check points at every site `(continuous phase, interval, τ)` of `sites`
+    /// ([`contact_checks`](Self::contact_checks) of each).
+    pub fn checks_at(&self, sites: &[(usize, usize, f64)]) -> Vec<CheckPoint<'m>> {
+        sites
+            .iter()
+            .flat_map(|&(j, k, tau)| self.contact_checks(j, k, tau))
+            .collect()
+    }
+
     /// Check points that hold the contact constraints of continuous phase `j` at
     /// `(interval, τ)`: λn ≥ 0 and the friction cone of its contacts, and (when the phase
     /// file asks for clearance) every primitive not in contact above the ground, as the
