@@ -11,6 +11,7 @@ pub mod linalg;
 pub mod multibody;
 pub mod scalar;
 pub mod spec;
+pub mod volumetric;
 
 pub use error::{DynamicsError, ModelError};
 pub use gait::{ConstraintSet, ContactReport, FootLoad, GaitModel, RowKind, Side};

@@ -1,0 +1,280 @@
+//! The sagittal volumetric contact law (`model::volumetric`) against independent truth:
+//! the penetrated area, its centroid and the plate CoP from a direct numerical
+//! integration of the ellipse's vertical chords below the ground line, and the exact
+//! derivatives (AD) against central differences, for circles and ellipses at several
+//! depths and angles, down to first contact.
+
+use footfall::model::volumetric::{disc_segment, penetration, VolumetricLaw};
+use footfall::model::Scalar;
+use num_dual::{Dual2_64, Dual64, DualNum};
+use std::f64::consts::PI;
+
+/// Area, centroid x and centroid y of the part of the ellipse (centre `c`, world angle
+/// `alpha`, semi-axes `ab`) below `g`, by composite Simpson integration over x of the
+/// vertical chord, from the ellipse's implicit equation (nothing of the affine-disc
+/// formulas under test).
+fn integrated(c: [f64; 2], alpha: f64, (a, b): (f64, f64), g: f64) -> (f64, f64, f64) {
+    let (s, co) = alpha.sin_cos();
+    // M⁻¹ = R diag(1/a², 1/b²) Rᵀ
+    let q11 = co * co / (a * a) + s * s / (b * b);
+    let q12 = s * co * (1.0 / (a * a) - 1.0 / (b * b));
+    let q22 = s * s / (a * a) + co * co / (b * b);
+    // half width of the ellipse in x
+    let w = (a * a * co * co + b * b * s * s).sqrt();
+    let chord = |x: f64| -> (f64, f64) {
+        let dx = x - c[0];
+        let disc = q12 * q12 * dx * dx - q22 * (q11 * dx * dx - 1.0);
+        if disc <= 0.0 {
+            return (0.0, 0.0);
+        }
+        let r = disc.sqrt();
+        let lo = c[1] + (-q12 * dx - r) / q22;
+        let hi = (c[1] + (-q12 * dx + r) / q22).min(g);
+        if hi <= lo {
+            (0.0, 0.0)
+        } else {
+            (hi - lo, 0.5 * (hi + lo))
+        }
+    };
+    let n = 400_000; // even
+    let h = 2.0 * w / n as f64;
+    let (mut area, mut mx, mut my) = (0.0, 0.0, 0.0);
+    for k in 0..=n {
+        let x = c[0] - w + h * k as f64;
+        let wt = if k == 0 || k == n {
+            1.0
+        } else if k % 2 == 1 {
+            4.0
+        } else {
+            2.0
+        };
+        let (len, mid) = chord(x);
+        area += wt * len;
+        mx += wt * len * x;
+        my += wt * len * mid;
+    }
+    let f = h / 3.0;
+    (area * f, mx / area, my / area)
+}
+
+/// The shapes tested: a circle and two ellipses (flat and tilted), each as (a, b, alpha).
+const SHAPES: [(f64, f64, f64); 4] = [
+    (0.0487, 0.0487, 0.3),
+    (0.1525, 0.0403, 0.0),
+    (0.1525, 0.0403, 0.25),
+    (0.1525, 0.0403, -1.1),
+];
+
+fn half_height(a: f64, b: f64, alpha: f64) -> f64 {
+    (a * a * alpha.sin().powi(2) + b * b * alpha.cos().powi(2)).sqrt()
+}
+
+#[test]
+fn area_and_centroid_match_a_direct_integration_of_the_chords() {
+    let g = -0.0075;
+    for &(a, b, alpha) in &SHAPES {
+        let h = half_height(a, b, alpha);
+        // normalised depths from just after first contact to past the centre
+        for s in [1e-3, 0.02, 0.1, 0.25, 0.5, 1.0, 1.4, 1.9] {
+            let c = [0.31, g + h * (1.0 - s)];
+            let p = penetration(c, alpha, (a, b), g).expect("penetrates");
+            let (area, cx, cy) = integrated(c, alpha, (a, b), g);
+            assert!(
+                (p.area - area).abs() <= 2e-7 * area,
+                "area {a} {b} {alpha} s={s}: formula {} vs integrated {area}",
+                p.area
+            );
+            // centroid to 1e-7 m (a micrometre of a 30 cm foot is far below any CoP error)
+            for (got, want, what) in [(p.centroid[0], cx, "x"), (p.centroid[1], cy, "y")] {
+                assert!(
+                    (got - want).abs() <= 1e-7,
+                    "centroid {what} {a} {b} {alpha} s={s}: formula {got} vs integrated {want}"
+                );
+            }
+            assert!((p.depth - s * h).abs() < 1e-15);
+        }
+    }
+}
+
+#[test]
+fn clear_of_the_ground_there_is_no_contact_and_fully_sunk_is_the_whole_area() {
+    let g = 0.0;
+    let (a, b, alpha) = (0.1525, 0.0403, 0.2);
+    let h = half_height(a, b, alpha);
+    assert!(penetration([0.0, g + h + 1e-12], alpha, (a, b), g).is_none());
+    assert!(penetration([0.0, g + h], alpha, (a, b), g).is_none());
+    let sunk = penetration([0.0, g - h - 1e-3], alpha, (a, b), g).unwrap();
+    assert!((sunk.area - PI * a * b).abs() < 1e-15);
+    // the disc segment: half the disc at the centre, centroid 4/(3π) of the radius deep
+    let (half, tau) = disc_segment(1.0);
+    assert!((half - PI / 2.0).abs() < 1e-15);
+    assert!((tau - 4.0 / (3.0 * PI)).abs() < 1e-15);
+}
+
+#[test]
+fn first_contact_keeps_full_precision_and_finite_derivatives() {
+    // near first contact the segment's area is (4√2/3) s^{3/2} (1 − 3s/20 + O(s²)) of the
+    // unit disc and its centroid sits at the lowest point (τ → 1 − 3s/5 + …)
+    for s in [1e-12, 1e-9, 1e-6, 1e-4] {
+        let (area, tau) = disc_segment(s);
+        let leading = 4.0 * 2f64.sqrt() / 3.0 * s.powf(1.5);
+        let series = leading * (1.0 - 3.0 * s / 20.0);
+        assert!(
+            (area - series).abs() <= 1e-12 * series + 0.05 * leading * s * s,
+            "s={s}: {area} vs {series}"
+        );
+        assert!(
+            (tau - (1.0 - 0.6 * s)).abs() < 1e-9 + s * s,
+            "s={s}: τ={tau}"
+        );
+        // first and second derivatives exist and are what the series says:
+        // S' = 2√2 s^{1/2}(1 − …), S'' = √2 s^{−1/2}(1 − …)
+        let d = disc_segment(Dual2_64::from_re(s).derivative()).0;
+        let d1 = 2.0 * 2f64.sqrt() * s.sqrt();
+        let d2 = 2f64.sqrt() / s.sqrt();
+        assert!((d.v1 - d1).abs() <= 1e-3 * d1, "s={s}: S'={}", d.v1);
+        assert!(
+            (d.v2 - d2).abs() <= 1e-3 * d2,
+            "s={s}: S''={} vs {d2}",
+            d.v2
+        );
+    }
+    // the force's derivative with respect to height vanishes as contact begins (C¹ onset)
+    let law = law();
+    let (a, b) = (0.1525, 0.0403);
+    let depth_grad = |depth: f64| {
+        let cy = Dual64::from_re(b - depth).derivative();
+        let f = law
+            .force(
+                [Dual64::c(0.0), cy],
+                Dual64::c(0.0),
+                (a, b),
+                [Dual64::c(0.0); 2],
+                Dual64::c(0.0),
+                0.0,
+            )
+            .unwrap();
+        assert!(f.force[1].re.is_finite() && f.force[1].eps.is_finite());
+        f.force[1].eps
+    };
+    // dF/dδ = k ab S'(s)/h ∝ √δ: a thousandth of the depth, √1000 less steep
+    let (g9, g6) = (depth_grad(1e-9), depth_grad(1e-6));
+    assert!(
+        (g9 / g6 - 1e-3f64.sqrt()).abs() < 1e-4,
+        "dF/dy at onset: {g9} at 1 nm, {g6} at 1 µm"
+    );
+}
+
+fn law() -> VolumetricLaw {
+    VolumetricLaw {
+        stiffness: 5e5,
+        damping: 0.8,
+        mu_dynamic: 0.5,
+        mu_static: 0.8,
+        transition_velocity: 0.1,
+    }
+}
+
+#[test]
+fn friction_is_odd_smooth_and_reaches_its_coefficients() {
+    let law = law();
+    for v in [1e-4f64, 0.01, 0.1, 0.5, 3.0] {
+        let m = law.friction_coefficient(v);
+        assert!((m + law.friction_coefficient(-v)).abs() < 1e-15);
+        assert!(m > 0.0);
+    }
+    // at v_t: μ_d tanh 4 + (μ_s − μ_d); far beyond: μ_d
+    let at_vt = law.friction_coefficient(0.1f64);
+    assert!((at_vt - (0.5 * 4f64.tanh() + 0.3)).abs() < 1e-12);
+    assert!((law.friction_coefficient(100.0f64) - 0.5).abs() < 1e-6);
+    assert_eq!(law.friction_coefficient(0.0f64), 0.0);
+    for bad in [
+        VolumetricLaw {
+            stiffness: -1.0,
+            ..law
+        },
+        VolumetricLaw {
+            mu_static: 0.1,
+            ..law
+        },
+        VolumetricLaw {
+            transition_velocity: 0.0,
+            ..law
+        },
+        VolumetricLaw {
+            damping: f64::NAN,
+            ..law
+        },
+    ] {
+        assert!(bad.check().is_err());
+    }
+    assert!(law.check().is_ok());
+}
+
+/// The force, point and CoP as one vector of the inputs
+/// (cx, cy, α, vx, vy, ω).
+fn outputs<S: Scalar>(law: &VolumetricLaw, ab: (f64, f64), g: f64, x: [S; 6]) -> [S; 5] {
+    let f = law
+        .force([x[0], x[1]], x[2], ab, [x[3], x[4]], x[5], g)
+        .expect("in contact");
+    [f.force[0], f.force[1], f.point[0], f.point[1], f.cop_x]
+}
+
+#[test]
+fn force_centroid_and_cop_derivatives_match_central_differences() {
+    let law = law();
+    let g = -0.0075;
+    for &(a, b, alpha) in &SHAPES {
+        let h = half_height(a, b, alpha);
+        for s in [1e-4, 0.05, 0.3, 1.2] {
+            let x0 = [0.2, g + h * (1.0 - s), alpha, 0.03, -0.12, 0.7];
+            for j in 0..6 {
+                let xd: [Dual64; 6] = std::array::from_fn(|i| {
+                    let v = Dual64::from_re(x0[i]);
+                    if i == j {
+                        v.derivative()
+                    } else {
+                        v
+                    }
+                });
+                let ad = outputs(&law, (a, b), g, xd);
+                // step small against the depth so that the difference stays in contact
+                let e = match j {
+                    1 => 1e-4 * s * h,
+                    2 => 1e-4 * s.min(1.0) * 1e-2,
+                    _ => 1e-6,
+                };
+                let mut xp = x0;
+                let mut xm = x0;
+                xp[j] += e;
+                xm[j] -= e;
+                let fp = outputs(&law, (a, b), g, xp);
+                let fm = outputs(&law, (a, b), g, xm);
+                for o in 0..5 {
+                    let fd = (fp[o] - fm[o]) / (2.0 * e);
+                    // truncation error of the difference, and its rounding error
+                    let noise = 1e-13 * fp[o].abs().max(1.0) / e;
+                    let scale = fd.abs().max(ad[o].eps.abs());
+                    assert!(
+                        (ad[o].eps - fd).abs() <= 1e-5 * scale + noise,
+                        "shape ({a}, {b}, {alpha}) s={s}: d out{o}/d in{j}: AD {} vs FD {fd}",
+                        ad[o].eps
+                    );
+                }
+            }
+            // the law itself: F_n = k A (1 + a_V v_cn), F_t = −μ(v) F_n, at the centroid
+            let f = law
+                .force([x0[0], x0[1]], x0[2], (a, b), [x0[3], x0[4]], x0[5], g)
+                .unwrap();
+            let p = f.penetration;
+            let r = [p.centroid[0] - x0[0], p.centroid[1] - x0[1]];
+            let v = [x0[3] - x0[5] * r[1], x0[4] + x0[5] * r[0]];
+            let normal = law.stiffness * p.area * (1.0 - law.damping * v[1]);
+            assert!((f.force[1] - normal).abs() <= 1e-12 * normal);
+            assert!((f.force[0] + law.friction_coefficient(v[0]) * normal).abs() <= 1e-12 * normal);
+            // plate CoP: no moment of the force about (cop_x, g)
+            let m = (p.centroid[0] - f.cop_x) * f.force[1] - (p.centroid[1] - g) * f.force[0];
+            assert!(m.abs() <= 1e-12 * normal, "moment about the CoP {m}");
+        }
+    }
+}
