@@ -87,6 +87,7 @@ fn the_check_finds_each_kind_of_violation_in_stretches() {
             position_error: vec![0.0; 2],
             velocity_error: vec![0.0; 2],
             baumgarte_force: vec![baumgarte, 0.0],
+            volumetric: Vec::new(),
         };
         Sample {
             t,

@@ -151,7 +151,7 @@ fn first_contact_keeps_full_precision_and_finite_derivatives() {
                 (a, b),
                 [Dual64::c(0.0); 2],
                 Dual64::c(0.0),
-                0.0,
+                Dual64::c(0.0),
             )
             .unwrap();
         assert!(f.force[1].re.is_finite() && f.force[1].eps.is_finite());
@@ -215,7 +215,7 @@ fn friction_is_odd_smooth_and_reaches_its_coefficients() {
 /// (cx, cy, α, vx, vy, ω).
 fn outputs<S: Scalar>(law: &VolumetricLaw, ab: (f64, f64), g: f64, x: [S; 6]) -> [S; 5] {
     let f = law
-        .force([x[0], x[1]], x[2], ab, [x[3], x[4]], x[5], g)
+        .force([x[0], x[1]], x[2], ab, [x[3], x[4]], x[5], S::c(g))
         .expect("in contact");
     [f.force[0], f.force[1], f.point[0], f.point[1], f.cop_x]
 }
@@ -277,4 +277,194 @@ fn force_centroid_and_cop_derivatives_match_central_differences() {
             assert!(m.abs() <= 1e-12 * normal, "moment about the CoP {m}");
         }
     }
+}
+
+/// A torque-driven body (no torques) on two volumetric circles (the double-circle foot's
+/// heel and forefoot) with `damping` and no friction, dropped from the shipped step's
+/// initial state: its samples and the model.
+fn drop_on_circles(
+    damping: f64,
+) -> (
+    footfall::model::GaitModel,
+    footfall::simulate::SimulationResult,
+) {
+    use footfall::controls::ControlTable;
+    use footfall::model::GaitModel;
+    use footfall::phases::PhaseSequence;
+    use footfall::simulate::{simulate, SimulationSettings};
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dir = tempfile::tempdir().unwrap();
+    let foot = dir.path().join("foot.json");
+    let law = format!(
+        r#"{{"type": "volumetric", "stiffness": 1e6, "damping": {damping}, "mu_dynamic": 0.0, "mu_static": 0.0, "transition_velocity": 0.1}}"#
+    );
+    std::fs::write(
+        &foot,
+        format!(
+            r#"{{"name": "volumetric_circles", "primitives": [
+                {{"name": "heel", "shape": {{"type": "circle", "centre": [-0.0619, -0.0664], "radius": 0.0487}}, "contact": {law}}},
+                {{"name": "forefoot", "shape": {{"type": "circle", "centre": [0.1197, -0.0656], "radius": 0.0746}}, "contact": {law}}}
+            ]}}"#
+        ),
+    )
+    .unwrap();
+    let model = GaitModel::load(&root.join("models/opensim_subject01_torque.json"), &foot).unwrap();
+    let seq = PhaseSequence::load(&root.join("phases/sim_volumetric_ellipse_step.json")).unwrap();
+    let sets = seq.resolve(&model, std::path::Path::new("<test>")).unwrap();
+    let init = seq.initial_state.clone().unwrap();
+    let mut x0 = init.q.clone();
+    x0.extend(&init.qd);
+    let controls = ControlTable::constant(model.control_names(), vec![0.0; model.nu()]);
+    let mut settings = SimulationSettings::default();
+    settings.integrator.rtol = 1e-11;
+    settings.integrator.atol = 1e-11;
+    let res = simulate(
+        &model,
+        &seq,
+        &sets,
+        &x0,
+        &controls,
+        &model.theta0(),
+        &settings,
+    )
+    .unwrap();
+    (model, res)
+}
+
+/// Elastic energy of a circle (centre `c`, radius `r`) pressed into the ground at `g`:
+/// the Winkler foundation's $\frac{k}{2}\int d(x)^2\,dx$ over its vertical chords below the
+/// ground, integrated numerically. For a circle the volumetric force (k·area, vertical,
+/// through the centre's x) is this energy's gradient.
+fn circle_energy(k: f64, c: [f64; 2], r: f64, g: f64) -> f64 {
+    let n = 20_000;
+    let h = 2.0 * r / n as f64;
+    let mut sum = 0.0;
+    for i in 0..=n {
+        let x = -r + h * i as f64;
+        let half = (r * r - x * x).max(0.0).sqrt();
+        let d = (g.min(c[1] + half) - (c[1] - half)).max(0.0);
+        let w = if i == 0 || i == n {
+            1.0
+        } else if i % 2 == 1 {
+            4.0
+        } else {
+            2.0
+        };
+        sum += w * d * d;
+    }
+    0.5 * k * sum * h / 3.0
+}
+
+/// Kinetic + gravitational + elastic energy of every sample.
+fn energies(
+    model: &footfall::model::GaitModel,
+    res: &footfall::simulate::SimulationResult,
+) -> Vec<f64> {
+    let nq = model.nq();
+    let theta = model.theta0();
+    let g = -0.0075; // the torque model's ground height
+    res.samples
+        .iter()
+        .map(|s| {
+            let (q, qd) = (&s.x[..nq], &s.x[nq..2 * nq]);
+            let (kinetic, potential) = model.energy(q, qd, &theta);
+            let elastic: f64 = model
+                .contacts
+                .iter()
+                .map(|c| match c.shape {
+                    footfall::model::geometry::Shape::Circle { centre, radius } => {
+                        circle_energy(1e6, model.body_point(c.body, centre, q), radius, g)
+                    }
+                    _ => unreachable!(),
+                })
+                .sum();
+            kinetic + potential + elastic
+        })
+        .collect()
+}
+
+#[test]
+fn volumetric_circles_without_damping_or_friction_conserve_energy_and_with_damping_dissipate() {
+    let (model, res) = drop_on_circles(0.0);
+    // the feet do land: some sample has a volumetric force of several hundred newtons
+    let peak = res
+        .samples
+        .iter()
+        .flat_map(|s| s.contact.volumetric.iter().map(|v| v.force[1]))
+        .fold(0.0, f64::max);
+    assert!(peak > 300.0, "peak volumetric force {peak} N");
+    let e = energies(&model, &res);
+    let drift = e.iter().map(|v| (v - e[0]).abs()).fold(0.0, f64::max);
+    eprintln!(
+        "energy {:.6} J, largest drift {drift:.3e} J, peak force {peak:.1} N",
+        e[0]
+    );
+    assert!(drift < 1e-4, "energy drifts by {drift} J");
+
+    // with damping the contact dissipates: the energy never rises (beyond the
+    // integration noise measured above) and ends lower
+    let (model, res) = drop_on_circles(0.9);
+    let e = energies(&model, &res);
+    for w in e.windows(2) {
+        assert!(
+            w[1] <= w[0] + 1e-4,
+            "energy rises from {} to {} J",
+            w[0],
+            w[1]
+        );
+    }
+    assert!(
+        e[e.len() - 1] < e[0] - 1.0,
+        "{} J → {} J",
+        e[0],
+        e[e.len() - 1]
+    );
+}
+
+#[test]
+fn a_bad_volumetric_foot_is_refused_naming_the_field() {
+    use footfall::model::GaitModel;
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let dir = tempfile::tempdir().unwrap();
+    let law = r#""contact": {"type": "volumetric", "stiffness": STIFF, "damping": 0.9, "mu_dynamic": 0.35, "mu_static": 0.4, "transition_velocity": 0.1}"#;
+    let cases = [
+        (
+            r#"{"type": "point", "position": [0.0, -0.08]}"#,
+            "1e6",
+            "primitives[0].contact",
+            "a point has no area",
+        ),
+        (
+            r#"{"type": "circle", "centre": [0.0, -0.06], "radius": 0.05}"#,
+            "-1e6",
+            "primitives[0].contact.stiffness",
+            "must be a positive number of N/m²",
+        ),
+    ];
+    for (shape, stiffness, field, reason) in cases {
+        let foot = dir.path().join("foot.json");
+        std::fs::write(
+            &foot,
+            format!(
+                r#"{{"name": "f", "primitives": [{{"name": "p", "shape": {shape}, {}}}]}}"#,
+                law.replace("STIFF", stiffness)
+            ),
+        )
+        .unwrap();
+        let err = GaitModel::load(&root.join("models/opensim_subject01.json"), &foot)
+            .unwrap_err()
+            .to_string();
+        assert!(err.contains(field) && err.contains(reason), "{err}");
+        assert!(err.contains("foot.json"), "{err}");
+    }
+    // a volumetric primitive is never a constraint: a phase file that lists it is refused
+    let model = GaitModel::load(
+        &root.join("models/opensim_subject01.json"),
+        &root.join("models/feet/volumetric_ellipse.json"),
+    )
+    .unwrap();
+    let err = model
+        .constraint_set("stance", &[("r.sole", true)])
+        .unwrap_err();
+    assert!(err.contains("'r.sole' is volumetric"), "{err}");
 }

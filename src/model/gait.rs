@@ -11,9 +11,11 @@
 mod contact;
 mod dynamics;
 mod jacobians;
+mod volumetric;
 
 pub use contact::{ConstraintRow, ConstraintSet, Contact, ContactReport, FootLoad, RowKind};
 pub use dynamics::ForceParts;
+pub use volumetric::VolumetricReport;
 
 use super::actuators::{Joint as MtgJoint, JointActuatorSet};
 use super::anthropometry::{self, build_bodies, estimated_stature, segments_from_de_leva};
@@ -188,6 +190,10 @@ impl GaitModel {
                     side,
                     body,
                     shape: p.shape.clone(),
+                    law: match p.contact {
+                        spec::ContactLaw::Rigid => None,
+                        spec::ContactLaw::Volumetric(law) => Some(law),
+                    },
                 });
             }
         }

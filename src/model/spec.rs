@@ -234,6 +234,23 @@ pub struct PrimitiveSpec {
     pub name: String,
     /// Geometry.
     pub shape: Shape,
+    /// How it meets the ground (default: rigid, held by the phases' contact constraints).
+    #[serde(default)]
+    pub contact: ContactLaw,
+}
+
+/// How a primitive meets the ground.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Serialize, Deserialize)]
+#[serde(tag = "type", rename_all = "snake_case")]
+pub enum ContactLaw {
+    /// A rigid contact: the phase file's constraint sets hold it on the ground (rolling
+    /// without slipping), with impacts where it lands.
+    #[default]
+    Rigid,
+    /// A compliant volumetric contact ([`crate::model::volumetric`]): a force from the
+    /// penetrated area in every phase, never a constraint; the phase file leaves it out of
+    /// its contact sets.
+    Volumetric(crate::model::volumetric::VolumetricLaw),
 }
 
 fn check_positive(path: &Path, field: &str, v: f64, unit: &str) -> Result<(), ModelError> {
@@ -486,6 +503,18 @@ impl FootSpec {
             p.shape.check().map_err(|(f, r)| {
                 ModelError::invalid(path, format!("primitives[{i}].shape.{f}"), r)
             })?;
+            if let ContactLaw::Volumetric(law) = &p.contact {
+                if matches!(p.shape, Shape::Point { .. }) {
+                    return Err(ModelError::invalid(
+                        path,
+                        format!("primitives[{i}].contact"),
+                        "a point has no area to penetrate the ground; a volumetric contact needs a circle or an ellipse",
+                    ));
+                }
+                law.check().map_err(|(f, r)| {
+                    ModelError::invalid(path, format!("primitives[{i}].contact.{f}"), r)
+                })?;
+            }
             if p.shape.lowest_y().is_none() {
                 return Err(ModelError::invalid(
                     path,

@@ -151,7 +151,7 @@ pub fn penetration<S: Scalar>(
     centre: V2<S>,
     alpha: S,
     (a, b): (f64, f64),
-    ground_y: f64,
+    ground_y: S,
 ) -> Option<Penetration<S>> {
     let (sin, cos) = (alpha.sin(), alpha.cos());
     let (a2, b2) = (a * a, b * b);
@@ -206,7 +206,7 @@ impl VolumetricLaw {
         semi_axes: (f64, f64),
         centre_velocity: V2<S>,
         omega: S,
-        ground_y: f64,
+        ground_y: S,
     ) -> Option<ContactForce<S>> {
         let p = penetration(centre, alpha, semi_axes, ground_y)?;
         let r = [p.centroid[0] - centre[0], p.centroid[1] - centre[1]];

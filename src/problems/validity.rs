@@ -183,8 +183,15 @@ pub fn check(
                 found.push((ViolationKind::BaumgarteForce, row.contact, b));
             }
         }
+        // a volumetric primitive's ground pulls where its damping outweighs its stiffness
+        for v in &s.contact.volumetric {
+            if v.force[1] < -limits.normal_force_n {
+                found.push((ViolationKind::NegativeNormalForce, v.contact, -v.force[1]));
+            }
+        }
         for c in 0..model.contacts.len() {
-            if set.rows.iter().any(|r| r.contact == c) {
+            // a volumetric primitive penetrates the ground by design
+            if set.rows.iter().any(|r| r.contact == c) || model.is_volumetric(c) {
                 continue;
             }
             let gap = model.gap(c, &s.x[..nq], theta);

@@ -254,7 +254,21 @@ fn timeseries_csv(
             )
             .ok();
         }
-        for (ci, _) in model.contacts.iter().enumerate() {
+        for (ci, contact) in model.contacts.iter().enumerate() {
+            if contact.law.is_some() {
+                // a volumetric primitive: its force from the law, its gap the depth of its
+                // lowest point below the ground (negative), no constraint errors
+                let v = smp.contact.volumetric.iter().find(|v| v.contact == ci);
+                write!(
+                    s,
+                    ",{},{},{},,,,",
+                    cell(Some(v.map_or(0.0, |v| v.force[1]))),
+                    cell(Some(v.map_or(0.0, |v| v.force[0]))),
+                    cell(v.map(|v| -v.depth)),
+                )
+                .ok();
+                continue;
+            }
             let row = |k: RowKind| {
                 sets[smp.phase]
                     .rows

@@ -22,6 +22,9 @@ pub struct Contact {
     pub body: usize,
     /// Geometry in the foot frame.
     pub shape: Shape,
+    /// The volumetric contact law of a compliant primitive; `None`: rigid (held by
+    /// constraint sets).
+    pub law: Option<crate::model::volumetric::VolumetricLaw>,
 }
 
 /// Direction of one constraint row.
@@ -66,6 +69,8 @@ pub struct ContactReport {
     pub velocity_error: Vec<f64>,
     /// Part of λ caused by the Baumgarte terms (N).
     pub baumgarte_force: Vec<f64>,
+    /// The force of every volumetric primitive in contact with the ground.
+    pub volumetric: Vec<super::VolumetricReport>,
 }
 
 impl ContactReport {
@@ -109,6 +114,11 @@ impl GaitModel {
                     known.join(", ")
                 )
             })?;
+            if self.contacts[idx].law.is_some() {
+                return Err(format!(
+                    "constraint set '{name}': contact '{c}' is volumetric: its force acts in every phase and it is never a constraint; leave it out of the phase file's contacts"
+                ));
+            }
             if contacts[..i].iter().any(|(o, _)| o == c) {
                 return Err(format!(
                     "constraint set '{name}': contact '{c}' is listed twice"
@@ -345,6 +355,12 @@ impl GaitModel {
                 RowKind::Tangential => out[s].fx += rep.lambda[r],
             }
         }
+        for v in &rep.volumetric {
+            let s = if self.contacts[v.contact].side == Side::Right { 0 } else { 1 };
+            out[s].fx += v.force[0];
+            out[s].fy += v.force[1];
+            moment[s] += v.force[1] * v.cop_x;
+        }
         for s in 0..2 {
             out[s].cop_x = if out[s].fy.abs() > 1e-9 {
                 moment[s] / out[s].fy
@@ -372,11 +388,16 @@ impl GaitModel {
         let mut lam = vec![S::c(0.0); set.rows.len()];
         self.dynamics(set, x, u, theta, &mut xdot, &mut lam, None)?;
         let p = self.full_params(theta);
-        let (_, _, _, n) = self.adjusted(&p);
-        let zeros = vec![S::c(0.0); nq];
-        let k = self.tree.kinematics(&x[..nq], &zeros);
+        let (_, _, ground_h, n) = self.adjusted(&p);
+        let k = self.tree.kinematics(&x[..nq], &x[nq..2 * nq]);
         let z = S::c(0.0);
         let mut out = [(z, z, z); 2];
+        for (c, f) in self.volumetric_forces(&k, ground_h, n) {
+            let s = if self.contacts[c].side == Side::Right { 0 } else { 1 };
+            out[s].0 += f.tangential;
+            out[s].1 += f.normal;
+            out[s].2 += f.normal * f.cop_x;
+        }
         for (r, row) in set.rows.iter().enumerate() {
             let c = &self.contacts[row.contact];
             let s = if c.side == Side::Right { 0 } else { 1 };

@@ -135,7 +135,7 @@ impl GaitModel {
         theta: &[S],
         xdot: &mut [S],
         lambda: &mut [S],
-        report: Option<&mut ContactReport>,
+        mut report: Option<&mut ContactReport>,
     ) -> Result<(), DynamicsError> {
         let nq = self.nq();
         let (q, rest) = x.split_at(nq);
@@ -147,7 +147,20 @@ impl GaitModel {
         let mut c = vec![S::c(0.0); nq];
         self.tree
             .mass_matrix_and_bias(&k, &inertia, gravity, &mut m, &mut c);
-        let tau = self.generalized_forces(q, qd, a, u, &p);
+        let mut tau = self.generalized_forces(q, qd, a, u, &p);
+        // volumetric primitives: a ground force in every phase, applied at the centroid of
+        // the penetrated area
+        let volumetric = self.volumetric_forces(&k, ground_h, n);
+        if !volumetric.is_empty() {
+            let mut jp = vec![S::c(0.0); 2 * nq];
+            for (c, f) in &volumetric {
+                self.tree
+                    .point_jacobian(&k, self.contacts[*c].body, f.point, &mut jp);
+                for j in 0..nq {
+                    tau[j] += f.world[0] * jp[j] + f.world[1] * jp[nq + j];
+                }
+            }
+        }
         cholesky(&mut m, nq, 1e-14).map_err(|e| DynamicsError::MassMatrix { pivot: e.pivot })?;
         let mut qdd: Vec<S> = tau.iter().zip(&c).map(|(t, c)| *t - *c).collect();
         cholesky_solve(&m, nq, &mut qdd);
@@ -249,7 +262,7 @@ impl GaitModel {
                     }
                 }
             }
-            if let Some(rep) = report {
+            if let Some(rep) = report.as_deref_mut() {
                 let mut baum = vec![0.0; nc];
                 for (i, &r) in rigid.iter().enumerate() {
                     baum[r] = b_baum_rigid[i];
@@ -276,8 +289,11 @@ impl GaitModel {
                 rep.lambda = lambda.iter().map(|v| v.value()).collect();
                 rep.baumgarte_force = baum;
             }
-        } else if let Some(rep) = report {
+        } else if let Some(rep) = report.as_deref_mut() {
             *rep = ContactReport::default();
+        }
+        if let Some(rep) = report {
+            rep.volumetric = volumetric.iter().map(|(c, f)| f.report(*c)).collect();
         }
 
         xdot[..nq].copy_from_slice(qd);

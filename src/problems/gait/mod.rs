@@ -334,7 +334,8 @@ fn gait_ocp<'a>(
                 .contacts
                 .iter()
                 .enumerate()
-                .filter(|(c, _)| !active.contains(c))
+                // a volumetric primitive penetrates the ground by design
+                .filter(|(c, _)| !active.contains(c) && !model.is_volumetric(*c))
             {
                 let first = usize::from(was_active.contains(&c));
                 let last = if lands_after[j].contains(&c) {
@@ -580,7 +581,9 @@ impl<'m> GaitCycle<'m> {
         }
         if self.seq.gait.as_ref().is_none_or(|g| g.clearance) {
             let active: Vec<usize> = set.rows.iter().map(|r| r.contact).collect();
-            for c in (0..model.contacts.len()).filter(|c| !active.contains(c)) {
+            for c in (0..model.contacts.len())
+                .filter(|&c| !active.contains(&c) && !model.is_volumetric(c))
+            {
                 let f = AdTerm(GapOfState { model, contact: c });
                 out.push(CheckPoint {
                     name: format!("clearance({})", model.contacts[c].name),
