@@ -468,3 +468,60 @@ fn a_bad_volumetric_foot_is_refused_naming_the_field() {
         .unwrap_err();
     assert!(err.contains("'r.sole' is volumetric"), "{err}");
 }
+
+/// Exact derivatives of the dynamics with the volumetric ellipse foot (the MTG model, both
+/// feet pressing into the ground, one sliding): the state columns of the dynamics
+/// Jacobian (forward AD) against central differences.
+#[test]
+fn volumetric_dynamics_jacobian_matches_central_differences() {
+    use footfall::model::GaitModel;
+    use footfall::phases::PhaseSequence;
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let m = GaitModel::load(
+        &root.join("models/opensim_subject01.json"),
+        &root.join("models/feet/volumetric_ellipse.json"),
+    )
+    .unwrap();
+    let seq = PhaseSequence::load(&root.join("phases/sim_volumetric_ellipse_step.json")).unwrap();
+    let set = seq.resolve(&m, std::path::Path::new("<test>")).unwrap()[0].clone();
+    let init = seq.initial_state.unwrap();
+    let (nx, nu, nq) = (m.nx(), m.nu(), m.nq());
+    let mut x = init.q.clone();
+    x.extend(&init.qd);
+    x.extend(vec![0.2; m.na()]);
+    // lower the body until the left foot touches too
+    x[1] -= 0.01;
+    let theta = m.theta0();
+    let u = vec![0.3; nu];
+    let f = |x: &[f64]| {
+        let mut xd = vec![0.0; nx];
+        let mut lam = vec![0.0; set.rows.len()];
+        let mut rep = footfall::model::ContactReport::default();
+        m.dynamics::<f64>(&set, x, &u, &theta, &mut xd, &mut lam, Some(&mut rep))
+            .unwrap();
+        (xd, rep)
+    };
+    let (_, rep) = f(&x);
+    assert!(
+        rep.volumetric.iter().any(|v| v.force[1] > 100.0),
+        "the feet press into the ground: {:?}",
+        rep.volumetric
+    );
+    let mut xdot = vec![0.0; nx];
+    let mut jac = vec![0.0; nx * (nx + nu + theta.len())];
+    m.dynamics_jacobian(&set, &x, &u, &theta, &mut xdot, &mut jac)
+        .unwrap();
+    let mut worst = 0.0f64;
+    for c in 0..2 * nq {
+        let h = 1e-6;
+        let (mut a, mut b) = (x.clone(), x.clone());
+        a[c] += h;
+        b[c] -= h;
+        let (fa, fb) = (f(&a).0, f(&b).0);
+        for r in 0..nx {
+            let fd = (fa[r] - fb[r]) / (2.0 * h);
+            worst = worst.max((fd - jac[c * nx + r]).abs() / (1.0 + fd.abs()));
+        }
+    }
+    assert!(worst < 1e-5, "AD vs central differences: {worst:e}");
+}
