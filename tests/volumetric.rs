@@ -525,3 +525,26 @@ fn volumetric_dynamics_jacobian_matches_central_differences() {
     }
     assert!(worst < 1e-5, "AD vs central differences: {worst:e}");
 }
+
+#[test]
+fn sinking_whole_keeps_finite_derivatives() {
+    // mirror image of first contact: the area lacks (4√2/3) ε^{3/2} of the disc at depth
+    // 2 − ε, and its derivatives stay finite
+    for eps in [1e-12, 1e-9, 1e-6, 1e-3] {
+        let (area, tau) = disc_segment(2.0 - eps);
+        let missing = 4.0 * 2f64.sqrt() / 3.0 * eps.powf(1.5) * (1.0 - 3.0 * eps / 20.0);
+        assert!(
+            (PI - area - missing).abs() <= 0.05 * missing * eps * eps + 4e-16,
+            "ε={eps}: {area}"
+        );
+        assert!(tau.abs() < 1e-3 && tau.is_finite());
+        let d = disc_segment(Dual2_64::from_re(2.0 - eps).derivative()).0;
+        assert!(d.v1.is_finite() && d.v2.is_finite(), "ε={eps}: {d:?}");
+        assert!((d.v1 - 2.0 * 2f64.sqrt() * eps.sqrt()).abs() <= 1e-3 * d.v1 + 1e-15);
+    }
+    // the two branches meet at the centre: half the disc, continuous derivative
+    let below = disc_segment(Dual64::from_re(1.0 - 1e-12).derivative());
+    let above = disc_segment(Dual64::from_re(1.0 + 1e-12).derivative());
+    assert!((below.0.re - above.0.re).abs() < 1e-11);
+    assert!((below.0.eps - 2.0).abs() < 1e-9 && (above.0.eps - 2.0).abs() < 1e-9);
+}

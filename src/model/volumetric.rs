@@ -27,8 +27,9 @@
 //! $2\theta - \sin 2\theta$ is summed as its series for small angles, so the area keeps
 //! its full relative precision down to first contact, where $A \propto s^{3/2}$: the
 //! force, its first derivative and the CoP are continuous there, and the derivatives are
-//! finite for every $s > 0$ (at $s \le 0$ the primitive is clear of the ground and
-//! everything is zero).
+//! finite for every $0 < s < 2$ (at $s \le 0$ the primitive is clear of the ground and
+//! everything is zero; at $s \ge 2$ it is sunk whole). Past the centre the segment is
+//! the disc less the other side's, so the derivatives stay finite as $s \to 2$ too.
 
 use super::multibody::V2;
 use super::Scalar;
@@ -135,9 +136,25 @@ fn x_minus_sin<S: Scalar>(x: S) -> S {
 /// The segment of the unit disc beyond a chord at normalised depth `s` (the chord's
 /// distance from the disc's edge, as a fraction of the radius; 0 < s < 2): its area and
 /// the fraction of the radius (towards the segment) at which its centroid lies.
+///
+/// Past the centre (s > 1) the segment is the disc less the segment of depth 2 − s on the
+/// other side, so that near either end (first contact, fully sunk) the angle comes from
+/// the small depth, where its derivatives stay finite.
 pub fn disc_segment<S: Scalar>(s: S) -> (S, S) {
-    let theta = (s * 0.5).sqrt().asin() * 2.0;
-    let area = x_minus_sin(theta * 2.0) * 0.5;
+    let (small, past_centre) = if s.value() <= 1.0 {
+        (s, false)
+    } else {
+        (-s + 2.0, true)
+    };
+    let theta = (small * 0.5).sqrt().asin() * 2.0;
+    let segment = x_minus_sin(theta * 2.0) * 0.5;
+    let area = if past_centre {
+        -segment + std::f64::consts::PI
+    } else {
+        segment
+    };
+    // the first moment of either part about the centre is ⅔ sin³θ (of the chord's
+    // half-angle θ, the same for both parts)
     let sin = theta.sin();
     (area, sin * sin * sin * (2.0 / 3.0) / area)
 }

@@ -26,15 +26,16 @@ pub fn half_cycle(events: &Events) -> Result<(f64, f64), String> {
     Err("the data contain no left heel strike followed by a right heel strike".into())
 }
 
-/// Which feet touch the ground in a constraint set: `[right, left]`.
+/// Which feet can carry a ground force in a phase with constraint set `set`:
+/// `[right, left]`. A foot with a volumetric primitive can in every phase.
 pub fn loaded_feet(model: &GaitModel, set: &ConstraintSet) -> [bool; 2] {
+    let side = |c: usize| usize::from(model.contacts[c].side != Side::Right);
     let mut f = [false; 2];
     for r in &set.rows {
-        f[if model.contacts[r.contact].side == Side::Right {
-            0
-        } else {
-            1
-        }] = true;
+        f[side(r.contact)] = true;
+    }
+    for c in (0..model.contacts.len()).filter(|&c| model.is_volumetric(c)) {
+        f[side(c)] = true;
     }
     f
 }
@@ -214,8 +215,26 @@ pub fn fix_durations(
     t0: f64,
     t1: f64,
 ) -> Result<PhaseSequence, String> {
-    let measured = events.contact_phases(t0, t1);
     let cont: Vec<usize> = seq.continuous_indices();
+    if model.contacts.iter().all(|c| c.law.is_some()) {
+        // compliant feet only: no contact changes to match; the continuous phases share
+        // the window in proportion to their initial durations
+        let total: f64 = cont
+            .iter()
+            .map(|&i| match &seq.phases[i] {
+                Phase::Continuous { duration, .. } => duration.value(),
+                Phase::Impact { .. } => 0.0,
+            })
+            .sum();
+        let mut out = seq.clone();
+        for &i in &cont {
+            if let Phase::Continuous { duration, .. } = &mut out.phases[i] {
+                *duration = Duration::Fixed((t1 - t0) * duration.value() / total);
+            }
+        }
+        return Ok(out);
+    }
+    let measured = events.contact_phases(t0, t1);
     let mut groups: Vec<([bool; 2], Vec<usize>)> = Vec::new();
     for &i in &cont {
         let feet = loaded_feet(model, &sets[i]);
