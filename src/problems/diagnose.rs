@@ -39,6 +39,16 @@ pub struct TrackingRunSetup {
     /// (`--overground`; otherwise a treadmill trial without one is refused).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub overground: bool,
+    /// OpenSim external loads going with an OpenSim `data` (`--forces`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub forces: Option<PathBuf>,
+    /// Force-column prefix of each foot in `forces`, `r=PREFIX` / `l=PREFIX` (`--plate`;
+    /// empty: detected).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub plates: Vec<String>,
+    /// Treadmill belt speed (m/s) moving the trial overground (`--belt-speed`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub belt_speed: Option<f64>,
     /// Kinematics low-pass cutoff (Hz).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub kinematics_cutoff: Option<f64>,
@@ -79,6 +89,19 @@ pub struct TrackingRunSetup {
     pub effects: Vec<EffectSpec>,
     /// Every effect parameter of the model at the solution.
     pub parameters: Vec<IdentifiedParameter>,
+}
+
+impl TrackingRunSetup {
+    /// The trial files and what they do not say ([`crate::workflows::trial::TrialFiles`]).
+    pub fn trial(&self) -> crate::workflows::trial::TrialFiles {
+        crate::workflows::trial::TrialFiles {
+            data: self.data.clone(),
+            forces: self.forces.clone(),
+            plates: self.plates.clone(),
+            belt_speed: self.belt_speed,
+            overground: self.overground,
+        }
+    }
 }
 
 /// An effect parameter at a solution.

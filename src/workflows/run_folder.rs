@@ -542,11 +542,15 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
     if let (Some(f), Some(fc)) = (&fine_ts, &fine_cmp) {
         folder.write("fine_grid.csv", with_kinematics(f, fc)?.to_csv().as_bytes())?;
     }
+    // the model's coordinates under OpenSim's names (radians, inDegrees=no), on the 1 ms
+    // grid when there is one, so the motion loads onto the subject's OpenSim model
+    let mut kinematics = TimeSeries::new(line.times.clone())?;
+    for (name, q) in crate::data::OPENSIM_COORDINATES.iter().zip(&line.model_q) {
+        kinematics.push(*name, q.clone())?;
+    }
     folder.write(
         "kinematics.sto",
-        fine_ts
-            .as_ref()
-            .unwrap_or(&ts)
+        kinematics
             .to_sto(&format!("footfall_{csv_name}"))
             .as_bytes(),
     )?;
