@@ -523,6 +523,48 @@ fn degrees_said_to_be_radians_are_refused_naming_file_and_column() {
 }
 
 #[test]
+fn radians_said_to_be_degrees_are_refused_naming_file_and_column() {
+    // the 2-D kinematics in radians under a header that says degrees
+    let dir = tempfile::tempdir().unwrap();
+    let k = read_storage(&states()).unwrap();
+    assert!(k.in_degrees);
+    let rotational = |c: &str| !matches!(c, "pelvis_tx" | "pelvis_ty");
+    let data: Vec<Vec<f64>> = k.columns[1..]
+        .iter()
+        .zip(&k.data[1..])
+        .map(|(c, v)| {
+            v.iter()
+                .map(|x| if rotational(c) { x.to_radians() } else { *x })
+                .collect()
+        })
+        .collect();
+    let cols: Vec<(&str, &[f64])> = k.columns[1..]
+        .iter()
+        .zip(&data)
+        .map(|(n, v)| (n.as_str(), v.as_slice()))
+        .collect();
+    let text = storage_text("radians", k.time(), &cols);
+    let p = dir.path().join("states_in_radians.mot");
+    std::fs::write(&p, text.replace("inDegrees=no", "inDegrees=yes")).unwrap();
+    let mut t = files(&p, Some(&grf()));
+    t.belt_speed = Some(1.1322);
+    refused(
+        &t,
+        &[
+            "states_in_radians.mot",
+            "knee_angle",
+            "look like radians",
+            "inDegrees=no",
+        ],
+    );
+    // the same numbers under a header that says radians are the bundled trial
+    std::fs::write(&p, text).unwrap();
+    let d = load_trial(&t).unwrap().data;
+    let csv = footfall::data::GaitData::bundled(&root()).unwrap();
+    assert!((d.q[4][10] - csv.q[4][10]).abs() < 1e-6);
+}
+
+#[test]
 fn a_flipped_vertical_force_is_refused_naming_the_force_file_and_column() {
     let dir = tempfile::tempdir().unwrap();
     let flipped = edited_grf(dir.path(), str::to_string, Some("l_ground_force_vy"));

@@ -279,10 +279,54 @@ fn load_opensim(ik_path: &Path, t: &TrialFiles) -> anyhow::Result<LoadedTrial> {
     }
     data.check_conventions(t.overground)
         .map_err(|e| opensim_error(e, &ik, &grf, &map))?;
+    check_radians_said_degrees(&data, &ik, &map)?;
     Ok(LoadedTrial {
         data,
         notes: vec![note],
     })
+}
+
+/// Smallest span (rad, 5.7°) of the widest-moving leg joint of a walk longer than
+/// [`MIN_SPAN_DURATION`]: a knee spans about 60°, so joints that all stay within this
+/// after a conversion from degrees were radians.
+pub const MIN_LEG_SPAN_RAD: f64 = 0.1;
+
+/// Shortest trial (s) on which [`MIN_LEG_SPAN_RAD`] is judged (about half a gait cycle).
+pub const MIN_SPAN_DURATION: f64 = 0.5;
+
+/// Radians in a file whose header says degrees: after the conversion every leg joint
+/// barely moves.
+fn check_radians_said_degrees(
+    data: &GaitData,
+    ik: &Storage,
+    map: &StorageMap,
+) -> Result<(), DataError> {
+    let duration = data.time[data.time.len() - 1] - data.time[0];
+    if !ik.in_degrees || duration < MIN_SPAN_DURATION {
+        return Ok(());
+    }
+    let span = |v: &[f64]| {
+        let (lo, hi) = v
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+                (a.min(x), b.max(x))
+            });
+        hi - lo
+    };
+    let (widest, s) = (3..9)
+        .map(|i| (i, span(&data.q[i])))
+        .fold((3, f64::NEG_INFINITY), |a, b| if b.1 > a.1 { b } else { a });
+    if s < MIN_LEG_SPAN_RAD {
+        return Err(DataError::invalid(
+            &ik.path,
+            map.q[widest].column.clone(),
+            format!(
+                "spans only {:.3}° in {duration:.2} s, the most of any leg joint, read as degrees as the header says: a walking knee spans about 60°, so the values look like radians; set 'inDegrees=no' above 'endheader' if they are",
+                s.to_degrees()
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// A convention error of a trial read from an OpenSim pair, told in that pair's terms:
@@ -303,18 +347,16 @@ fn opensim_error(e: DataError, ik: &Storage, grf: &Storage, map: &StorageMap) ->
                 ),
             );
         }
-        let unit = if ik.in_degrees { "degrees" } else { "radians" };
         let head = reason
             .split(": this looks like degrees")
             .next()
             .unwrap_or(reason);
-        return DataError::invalid(
-            &ik.path,
-            column,
-            format!(
-                "{head} (read as {unit}, as the header says): this looks like degrees in a file whose header says radians (or declares degrees twice over); set 'inDegrees=yes' above 'endheader' if the values are in degrees"
-            ),
-        );
+        let advice = if ik.in_degrees {
+            "after converting from degrees, as the header says: the values are beyond a joint's range in degrees too; check the column"
+        } else {
+            "read as radians, as the header says: this looks like degrees; set 'inDegrees=yes' above 'endheader' if the values are in degrees"
+        };
+        return DataError::invalid(&ik.path, column, format!("{head}; {advice}"));
     }
     for (s, side) in ["r", "l"].iter().enumerate() {
         if field == &format!("grf_y_{side}") {
