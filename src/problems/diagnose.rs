@@ -91,19 +91,6 @@ pub struct TrackingRunSetup {
     pub parameters: Vec<IdentifiedParameter>,
 }
 
-impl TrackingRunSetup {
-    /// The trial files and what they do not say ([`crate::workflows::trial::TrialFiles`]).
-    pub fn trial(&self) -> crate::workflows::trial::TrialFiles {
-        crate::workflows::trial::TrialFiles {
-            data: self.data.clone(),
-            forces: self.forces.clone(),
-            plates: self.plates.clone(),
-            belt_speed: self.belt_speed,
-            overground: self.overground,
-        }
-    }
-}
-
 /// An effect parameter at a solution.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct IdentifiedParameter {

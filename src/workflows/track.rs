@@ -87,7 +87,7 @@ impl TrackingProblem {
         }
         let seq = PhaseSequence::load(&run.phases)?;
         let sets = seq.resolve(&model, &run.phases)?;
-        let trial = super::trial::load_trial(&run.trial())?;
+        let trial = super::trial::load_trial(&run.into())?;
         let trial_notes = trial.notes;
         let mut data = trial.data;
         let sides = if run.one_sided_targets {

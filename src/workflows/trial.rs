@@ -368,6 +368,19 @@ fn opensim_error(e: DataError, ik: &Storage, grf: &Storage, map: &StorageMap) ->
     e
 }
 
+impl From<&crate::problems::diagnose::TrackingRunSetup> for TrialFiles {
+    /// The trial a tracking run describes (its `setup.json`).
+    fn from(run: &crate::problems::diagnose::TrackingRunSetup) -> Self {
+        TrialFiles {
+            data: run.data.clone(),
+            forces: run.forces.clone(),
+            plates: run.plates.clone(),
+            belt_speed: run.belt_speed,
+            overground: run.overground,
+        }
+    }
+}
+
 impl TrialFiles {
     /// The trial of `data` and `overground` alone (a CSV or the bundled trial).
     pub fn csv(data: Option<PathBuf>, overground: bool) -> Self {
