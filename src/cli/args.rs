@@ -14,6 +14,37 @@ pub struct ModelArgs {
     pub foot: String,
 }
 
+/// The measured trial shared by `track`, `fit-foot`, `predict` and `compare`: a sagittal
+/// CSV, or an OpenSim pair (inverse kinematics and external loads), and what its files do
+/// not say.
+#[derive(Debug, Clone, Default, clap::Args)]
+pub struct TrialArgs {
+    /// Trial: a sagittal CSV (with its `_meta.json`), or OpenSim inverse kinematics
+    /// (`.mot`/`.sto`: pelvis_tx, pelvis_ty, pelvis_tilt, hip_flexion_r, knee_angle_r,
+    /// ankle_angle_r, … the same `_l`; inDegrees honoured) with `--forces` (default: the
+    /// bundled OpenSim subject01 trial, moved overground).
+    #[arg(long)]
+    pub data: Option<PathBuf>,
+    /// OpenSim external loads (`.mot`/`.sto`) of an OpenSim `--data`: ground_force_vx,
+    /// ground_force_vy, ground_force_px of each foot, per prefix (see `--plate`).
+    #[arg(long, value_name = "GRF.mot")]
+    pub forces: Option<PathBuf>,
+    /// Which force columns belong to which foot: `r=PREFIX` or `l=PREFIX` (repeatable),
+    /// e.g. `--plate r=1_ --plate l=2_`, `r=` for the unprefixed ground_force_*. Default:
+    /// `""` or `r_` is the right foot, `l_` the left (the choice is printed).
+    #[arg(long = "plate", value_name = "FOOT=PREFIX")]
+    pub plates: Vec<String>,
+    /// Treadmill belt speed (m/s): moves the trial to the overground frame (an OpenSim
+    /// pair has no meta file; a treadmill trial without a belt speed is refused unless
+    /// `--overground`).
+    #[arg(long, value_name = "M/S", conflicts_with = "overground", value_parser = super::validate::positive)]
+    pub belt_speed: Option<f64>,
+    /// Take a trial without a belt speed as overground, as it is (a treadmill trial
+    /// without one is refused otherwise).
+    #[arg(long)]
+    pub overground: bool,
+}
+
 /// The check-point switch shared by `track`, `predict` and `compare`.
 #[derive(Debug, Clone, Default, clap::Args)]
 pub struct CheckPointArgs {

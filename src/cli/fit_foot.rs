@@ -11,12 +11,8 @@ use std::path::PathBuf;
 pub struct Args {
     #[command(flatten)]
     model: super::ModelArgs,
-    /// Sagittal CSV (default: the bundled trial).
-    #[arg(long)]
-    data: Option<PathBuf>,
-    /// Take a trial whose meta file gives no belt speed as overground, as it is.
-    #[arg(long)]
-    overground: bool,
+    #[command(flatten)]
+    trial: super::TrialArgs,
     /// Output folder.
     #[arg(long, default_value = "runs/fit-foot")]
     out: PathBuf,
@@ -38,8 +34,11 @@ impl From<Args> for FitFootRequest {
                 model: a.model.model,
                 foot: a.model.foot,
             },
-            data: a.data,
-            overground: a.overground,
+            data: a.trial.data,
+            overground: a.trial.overground,
+            forces: a.trial.forces,
+            plates: a.trial.plates,
+            belt_speed: a.trial.belt_speed,
             out: a.out,
             overwrite: a.overwrite,
             tol: a.tol,

@@ -19,7 +19,7 @@ mod synth;
 mod track;
 mod validate;
 
-pub use args::{CheckPointArgs, CliProgress, HessianArg, MethodArg, ModelArgs};
+pub use args::{CheckPointArgs, CliProgress, HessianArg, MethodArg, ModelArgs, TrialArgs};
 use clap::{Parser, Subcommand};
 use footfall::sqp::SqpStatus;
 use std::process::ExitCode;

@@ -16,12 +16,8 @@ pub struct PredictOptions {
     /// Model file.
     #[arg(long, default_value = "models/opensim_subject01.json")]
     pub model: PathBuf,
-    /// Sagittal CSV (default: the bundled OpenSim subject01 trial, moved overground).
-    #[arg(long)]
-    pub data: Option<PathBuf>,
-    /// Take a trial whose meta file gives no belt speed as overground, as it is.
-    #[arg(long)]
-    pub overground: bool,
+    #[command(flatten)]
+    pub trial: super::TrialArgs,
     /// Step length (m; default: the subject's over the tracked half cycle).
     #[arg(long)]
     pub step_length: Option<f64>,
@@ -92,8 +88,11 @@ impl From<&PredictOptions> for PredictionOptions {
         PredictionOptions {
             check_points: o.check_points.enabled(),
             model: o.model.clone(),
-            data: o.data.clone(),
-            overground: o.overground,
+            data: o.trial.data.clone(),
+            overground: o.trial.overground,
+            forces: o.trial.forces.clone(),
+            plates: o.trial.plates.clone(),
+            belt_speed: o.trial.belt_speed,
             step_length: o.step_length,
             speed: o.speed,
             impulse_weight: o.impulse_weight,

@@ -19,13 +19,8 @@ pub struct Args {
     /// Phase graph (default: the seed's graph for the bundled feet).
     #[arg(long)]
     phases: Option<PathBuf>,
-    /// Sagittal CSV (default: the bundled OpenSim subject01 trial, moved overground).
-    #[arg(long)]
-    data: Option<PathBuf>,
-    /// Take a trial whose meta file gives no belt speed as overground, as it is (a
-    /// treadmill trial without a belt speed is refused otherwise).
-    #[arg(long)]
-    overground: bool,
+    #[command(flatten)]
+    trial: super::TrialArgs,
     /// Low-pass the measured coordinates at this cutoff (Hz; zero-phase 2nd-order
     /// Butterworth) before tracking, for raw motion-capture data.
     #[arg(long, value_parser = super::validate::positive)]
@@ -189,8 +184,11 @@ fn run_inner(args: Args, progress: &CliProgress) -> anyhow::Result<()> {
             model: args.model.model.clone(),
             foot: args.model.foot.clone(),
             phases,
-            data: args.data.clone(),
-            overground: args.overground,
+            data: args.trial.data.clone(),
+            overground: args.trial.overground,
+            forces: args.trial.forces.clone(),
+            plates: args.trial.plates.clone(),
+            belt_speed: args.trial.belt_speed,
             kinematics_cutoff: args.kinematics_cutoff,
             integrator_tol: args.integrator_tol,
             sensitivity_tol: args.sensitivity_tol,

@@ -100,7 +100,7 @@ impl GaitData {
                 &self.source,
                 "pelvis_x",
                 format!(
-                    "moves {:.3} m in {duration:.2} s ({:.3} m/s): a treadmill trial, and no belt speed is given. Give \"belt_speed_m_s\" in the trial's meta file (<name>_meta.json beside the CSV), or pass --overground to take the trial as it is",
+                    "moves {:.3} m in {duration:.2} s ({:.3} m/s): a treadmill trial, and no belt speed is given. Give \"belt_speed_m_s\" in the trial's meta file (<name>_meta.json beside the CSV) or --belt-speed M/S, or pass --overground to take the trial as it is",
                     hi - lo,
                     (hi - lo) / duration
                 ),

@@ -54,6 +54,7 @@ pub use fourier::{half_cycle_shift, half_cycle_shift_order, FourierSeries, SEED_
 pub use spline::CubicSpline;
 pub use storage::{
     parse_storage, read_storage, storage_text, ColumnMap, ForceColumns, Storage, StorageMap,
+    OPENSIM_COORDINATES,
 };
 
 use crate::model::Side;

@@ -444,6 +444,21 @@ pub(crate) fn check_time(
     Ok(())
 }
 
+/// OpenSim's names (gait10dof18musc, gait2354) of the coordinates in [`Q_NAMES`] order:
+/// what [`StorageMap::gait10dof18musc`] reads and what run folders' `kinematics.sto`
+/// holds, so a result loads onto the subject's OpenSim model.
+pub const OPENSIM_COORDINATES: [&str; 9] = [
+    "pelvis_tx",
+    "pelvis_ty",
+    "pelvis_tilt",
+    "hip_flexion_r",
+    "knee_angle_r",
+    "ankle_angle_r",
+    "hip_flexion_l",
+    "knee_angle_l",
+    "ankle_angle_l",
+];
+
 /// A storage column that becomes one generalised coordinate or extra channel.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ColumnMap {

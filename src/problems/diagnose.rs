@@ -39,6 +39,16 @@ pub struct TrackingRunSetup {
     /// (`--overground`; otherwise a treadmill trial without one is refused).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub overground: bool,
+    /// OpenSim external loads going with an OpenSim `data` (`--forces`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub forces: Option<PathBuf>,
+    /// Force-column prefix of each foot in `forces`, `r=PREFIX` / `l=PREFIX` (`--plate`;
+    /// empty: detected).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub plates: Vec<String>,
+    /// Treadmill belt speed (m/s) moving the trial overground (`--belt-speed`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub belt_speed: Option<f64>,
     /// Kinematics low-pass cutoff (Hz).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub kinematics_cutoff: Option<f64>,

@@ -19,6 +19,12 @@ pub struct FitFootRequest {
     pub data: Option<PathBuf>,
     /// Take a trial whose meta file gives no belt speed as overground, as it is.
     pub overground: bool,
+    /// OpenSim external loads going with an OpenSim `data` (`--forces`).
+    pub forces: Option<PathBuf>,
+    /// Force-column prefix of each foot, `r=PREFIX` / `l=PREFIX` (`--plate`; empty: detected).
+    pub plates: Vec<String>,
+    /// Treadmill belt speed (m/s) moving the trial overground (`--belt-speed`).
+    pub belt_speed: Option<f64>,
     /// Output folder.
     pub out: PathBuf,
     /// Replace the output folder if it exists.
@@ -34,7 +40,17 @@ pub fn run(args: &FitFootRequest, progress: &dyn Progress) -> anyhow::Result<()>
     let foot_path = super::foot_path(&args.model.foot);
     let model = GaitModel::load(&args.model.model, &foot_path)?;
     let foot = FootSpec::load(&foot_path)?;
-    let data = super::load_data(args.data.as_deref(), args.overground)?;
+    let trial = super::trial::load_trial(&super::trial::TrialFiles {
+        data: args.data.clone(),
+        forces: args.forces.clone(),
+        plates: args.plates.clone(),
+        belt_speed: args.belt_speed,
+        overground: args.overground,
+    })?;
+    for n in &trial.notes {
+        progress.note(n);
+    }
+    let data = trial.data;
     let stances =
         stances_from_data(&model, &data).map_err(|e| anyhow!("{}: {e}", data.source.display()))?;
     let ground = model.contact_settings().ground_height;
@@ -111,6 +127,9 @@ pub fn run(args: &FitFootRequest, progress: &dyn Progress) -> anyhow::Result<()>
         "command": "fit-foot",
         "foot": foot.name,
         "data": data.source,
+        "forces": args.forces,
+        "plates": args.plates,
+        "belt_speed_m_s": data.belt_speed,
         "stances": stances.len(),
         "samples": n,
         "cost_initial": res.cost.0,

@@ -21,6 +21,7 @@ pub mod simulate;
 pub mod solve;
 pub mod synth;
 pub mod track;
+pub mod trial;
 
 use crate::data::GaitData;
 use crate::problems::evaluation::GaitSolution;
@@ -200,19 +201,10 @@ pub fn read_solution(path: &Path) -> anyhow::Result<GaitSolution> {
 /// speed), or the bundled trial; its units and conventions checked
 /// ([`GaitData::check_conventions`]; `overground`: take a trial without a belt speed as
 /// it is).
+///
+/// A `.mot`/`.sto` path needs its forces: read it with [`trial::load_trial`].
 pub fn load_data(path: Option<&Path>, overground: bool) -> anyhow::Result<GaitData> {
-    let data = match path {
-        Some(p) => {
-            let d = crate::data::read_sagittal_csv(p)?;
-            match d.belt_speed {
-                Some(v) if !d.overground => d.to_overground(v)?,
-                _ => d,
-            }
-        }
-        None => GaitData::bundled(Path::new("."))?,
-    };
-    data.check_conventions(overground)?;
-    Ok(data)
+    Ok(trial::load_trial(&trial::TrialFiles::csv(path.map(Path::to_path_buf), overground))?.data)
 }
 
 /// The error of a written gait run (`track`, `predict`) whose solve `res` did not

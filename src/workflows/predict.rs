@@ -31,6 +31,12 @@ pub struct PredictionOptions {
     pub data: Option<PathBuf>,
     /// Take a trial whose meta file gives no belt speed as overground.
     pub overground: bool,
+    /// OpenSim external loads going with an OpenSim `data` (`--forces`).
+    pub forces: Option<PathBuf>,
+    /// Force-column prefix of each foot, `r=PREFIX` / `l=PREFIX` (`--plate`; empty: detected).
+    pub plates: Vec<String>,
+    /// Treadmill belt speed (m/s) moving the trial overground (`--belt-speed`).
+    pub belt_speed: Option<f64>,
     /// Step length (m; None: the subject's).
     pub step_length: Option<f64>,
     /// Average forward speed (m/s; None: the subject's).
@@ -63,6 +69,9 @@ impl Default for PredictionOptions {
             model: PathBuf::from("models/opensim_subject01.json"),
             data: None,
             overground: false,
+            forces: None,
+            plates: vec![],
+            belt_speed: None,
             step_length: None,
             speed: None,
             impulse_weight: SEED_IMPULSE_WEIGHT,
@@ -109,7 +118,17 @@ pub fn predict(
         .unwrap_or_else(|| super::default_phases(foot));
     let seq = PhaseSequence::load(&phases)?;
     let sets = seq.resolve(&model, &phases)?;
-    let data = super::load_data(o.data.as_deref(), o.overground)?;
+    let trial = super::trial::load_trial(&super::trial::TrialFiles {
+        data: o.data.clone(),
+        forces: o.forces.clone(),
+        plates: o.plates.clone(),
+        belt_speed: o.belt_speed,
+        overground: o.overground,
+    })?;
+    for n in &trial.notes {
+        progress.note(n);
+    }
+    let data = trial.data;
     let tracking = TrackingSetup::new(&model, &seq, &sets, &data)
         .map_err(|e| anyhow!("{}: {e}", data.source.display()))?;
     let mut settings = PredictionSettings::from_data(&tracking, &data);

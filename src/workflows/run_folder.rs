@@ -542,11 +542,21 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
     if let (Some(f), Some(fc)) = (&fine_ts, &fine_cmp) {
         folder.write("fine_grid.csv", with_kinematics(f, fc)?.to_csv().as_bytes())?;
     }
+    // the model's coordinates under OpenSim's names (radians, inDegrees=no), on the 1 ms
+    // grid when there is one, so the motion loads onto the subject's OpenSim model; an
+    // impact's second sample (the same instant, the same coordinates) is left out, as
+    // OpenSim's tables need time strictly increasing
+    let keep: Vec<usize> = (0..line.times.len())
+        .filter(|&k| k == 0 || line.times[k] > line.times[k - 1])
+        .collect();
+    let pick = |v: &[f64]| keep.iter().map(|&k| v[k]).collect::<Vec<f64>>();
+    let mut kinematics = TimeSeries::new(pick(&line.times))?;
+    for (name, q) in crate::data::OPENSIM_COORDINATES.iter().zip(&line.model_q) {
+        kinematics.push(*name, pick(q))?;
+    }
     folder.write(
         "kinematics.sto",
-        fine_ts
-            .as_ref()
-            .unwrap_or(&ts)
+        kinematics
             .to_sto(&format!("footfall_{csv_name}"))
             .as_bytes(),
     )?;

@@ -53,6 +53,8 @@ pub struct TrackingProblem {
     /// Integrator counters of every solve of this problem so far (all stages and
     /// refinement rounds), written to `summary.json` as `integration`.
     pub integration: std::cell::Cell<crate::integrate::IntegrationStats>,
+    /// What was chosen reading the trial (an OpenSim pair's plates), to tell the user.
+    pub trial_notes: Vec<String>,
 }
 
 impl TrackingProblem {
@@ -85,7 +87,9 @@ impl TrackingProblem {
         }
         let seq = PhaseSequence::load(&run.phases)?;
         let sets = seq.resolve(&model, &run.phases)?;
-        let mut data = super::load_data(run.data.as_deref(), run.overground)?;
+        let trial = super::trial::load_trial(&run.into())?;
+        let trial_notes = trial.notes;
+        let mut data = trial.data;
         let sides = if run.one_sided_targets {
             TargetSides::OneSided {
                 cutoff_hz: run.kinematics_cutoff,
@@ -162,6 +166,7 @@ impl TrackingProblem {
             check_sites: run.check_points.clone(),
             refine: false,
             integration: Default::default(),
+            trial_notes,
         })
     }
 
@@ -434,6 +439,9 @@ impl TrackRequest {
                 phases: super::default_phases(foot),
                 data: None,
                 overground: false,
+                forces: None,
+                plates: vec![],
+                belt_speed: None,
                 kinematics_cutoff: None,
                 integrator_tol: 1e-8,
                 sensitivity_tol: None,
@@ -481,6 +489,9 @@ pub fn track(
     };
     let mut prob = TrackingProblem::build(&base, &req.effects)?;
     prob.refine = req.check_points;
+    for n in &prob.trial_notes {
+        progress.note(n);
+    }
     base.check_points.clear();
     if prob.integrator.rtol < base.integrator_tol {
         let why = if base.residual_actuators {

@@ -1,0 +1,393 @@
+//! The measured trial a workflow reads, from either form a lab exports: a sagittal CSV
+//! (with its `_meta.json`), or an OpenSim pair: inverse kinematics (`.mot`/`.sto`,
+//! coordinate names `pelvis_tx`, `hip_flexion_r`, …) and external loads (`.mot`/`.sto`,
+//! `ground_force_vx/vy/px` per foot). The format follows the extension of `data`.
+//!
+//! An OpenSim pair carries no meta file, so what a CSV's meta file says is given here:
+//! the belt speed of a treadmill trial ([`TrialFiles::belt_speed`]) or that the trial is
+//! overground ([`TrialFiles::overground`]), and which force columns belong to which foot
+//! ([`TrialFiles::plates`], detected when not given). The body mass comes from the model
+//! file in every workflow, so a trial needs none.
+
+use crate::data::{
+    read_storage, ColumnMap, DataError, ForceColumns, GaitData, Storage, StorageMap, Q_NAMES,
+};
+use anyhow::bail;
+use std::path::{Path, PathBuf};
+
+/// Where a trial comes from and what its files do not say (the command line's `--data`,
+/// `--forces`, `--plate`, `--belt-speed` and `--overground`).
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct TrialFiles {
+    /// Sagittal CSV, or OpenSim inverse kinematics (`.mot`/`.sto`); `None`: the bundled
+    /// trial.
+    pub data: Option<PathBuf>,
+    /// OpenSim external loads (`.mot`/`.sto`), required with an OpenSim `data` and refused
+    /// with a CSV (which holds its forces).
+    pub forces: Option<PathBuf>,
+    /// Force-column prefix of each foot, `r=PREFIX` / `l=PREFIX` (e.g. `r=1_`, `l=2_`,
+    /// `r=` for the unprefixed `ground_force_*`); a foot not named is detected
+    /// (`""` or `r_` right, `l_` left).
+    pub plates: Vec<String>,
+    /// Treadmill belt speed (m/s): the trial is moved to the overground frame with it. With
+    /// a CSV it may stand in for a meta file that gives none.
+    pub belt_speed: Option<f64>,
+    /// Take a trial without a belt speed as overground, as it is (otherwise a treadmill
+    /// trial without one is refused).
+    pub overground: bool,
+}
+
+/// The two forms a trial is read from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TrialFormat {
+    /// A sagittal CSV (`.csv`) with its meta file.
+    Csv,
+    /// An OpenSim storage (`.mot`, `.sto`).
+    Storage,
+}
+
+/// The format of a trial file by its extension (case-insensitive).
+pub fn trial_format(path: &Path, option: &str) -> anyhow::Result<TrialFormat> {
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    match ext.as_deref() {
+        Some("csv") => Ok(TrialFormat::Csv),
+        Some("mot") | Some("sto") => Ok(TrialFormat::Storage),
+        other => bail!(
+            "{}: {option}: cannot tell the format from the extension {}: give a sagittal CSV (.csv) or an OpenSim storage (.mot or .sto)",
+            path.display(),
+            other.map_or("(none)".to_string(), |e| format!("'.{e}'"))
+        ),
+    }
+}
+
+/// A trial read, and what was chosen on the way that the user should hear (which plate
+/// was taken for which foot).
+#[derive(Debug, Clone)]
+pub struct LoadedTrial {
+    /// The trial, in the overground frame when a belt speed was given.
+    pub data: GaitData,
+    /// Choices to report, one line each.
+    pub notes: Vec<String>,
+}
+
+/// Read the trial `t` describes and check its units and conventions
+/// ([`GaitData::check_conventions`]); a treadmill trial is moved overground with its belt
+/// speed (the CSV's meta file or [`TrialFiles::belt_speed`]).
+///
+/// Errors: an unknown extension; `--forces` or `--plate` with a CSV; an OpenSim `data`
+/// without `forces`; `--belt-speed` with `--overground`, or contradicting the CSV's meta
+/// file; any [`DataError`] of the files (naming file, column and what would be valid).
+pub fn load_trial(t: &TrialFiles) -> anyhow::Result<LoadedTrial> {
+    if t.overground && t.belt_speed.is_some() {
+        bail!("--belt-speed and --overground: give one (a belt speed moves a treadmill trial overground; --overground takes the trial as it is)");
+    }
+    if let Some(v) = t.belt_speed {
+        if !v.is_finite() {
+            bail!("--belt-speed {v}: expected a finite speed in m/s");
+        }
+    }
+    let Some(path) = t.data.as_deref() else {
+        if t.forces.is_some() || !t.plates.is_empty() || t.belt_speed.is_some() {
+            bail!("--forces, --plate and --belt-speed describe an OpenSim trial given with --data IK.mot (without --data the bundled trial is read, whose meta file gives all of it)");
+        }
+        let data = GaitData::bundled(Path::new("."))?;
+        data.check_conventions(t.overground)?;
+        return Ok(LoadedTrial {
+            data,
+            notes: vec![],
+        });
+    };
+    match trial_format(path, "--data")? {
+        TrialFormat::Csv => load_csv(path, t),
+        TrialFormat::Storage => load_opensim(path, t),
+    }
+}
+
+fn load_csv(path: &Path, t: &TrialFiles) -> anyhow::Result<LoadedTrial> {
+    if let Some(f) = &t.forces {
+        bail!(
+            "--forces {}: a sagittal CSV ({}) holds its own forces (grf_x_r, grf_y_r, cop_x_r, …); --forces goes with an OpenSim --data IK.mot",
+            f.display(),
+            path.display()
+        );
+    }
+    if !t.plates.is_empty() {
+        bail!(
+            "--plate {}: a sagittal CSV ({}) names its feet in its columns (_r, _l); --plate goes with an OpenSim --forces GRF.mot",
+            t.plates.join(" --plate "),
+            path.display()
+        );
+    }
+    let mut data = crate::data::read_sagittal_csv(path)?;
+    let belt = match (data.belt_speed, t.belt_speed) {
+        (Some(meta), Some(arg)) if (meta - arg).abs() > 1e-9 * meta.abs().max(1.0) => {
+            return Err(DataError::invalid(
+                path,
+                "belt_speed_m_s",
+                format!(
+                    "the meta file gives {meta} m/s but --belt-speed gives {arg} m/s: give one"
+                ),
+            )
+            .into())
+        }
+        (m, a) => m.or(a),
+    };
+    if let Some(v) = belt {
+        if !data.overground {
+            data = data.to_overground(v)?;
+        }
+    }
+    data.check_conventions(t.overground)?;
+    Ok(LoadedTrial {
+        data,
+        notes: vec![],
+    })
+}
+
+/// The foot prefixes of a GRF storage: `[right, left]` and the sentence that says how
+/// they were chosen.
+pub fn foot_prefixes(grf: &Storage, plates: &[String]) -> anyhow::Result<([String; 2], String)> {
+    const SUFFIX: &str = "ground_force_vy";
+    let found: Vec<String> = grf
+        .columns
+        .iter()
+        .filter_map(|c| c.strip_suffix(SUFFIX).map(str::to_string))
+        .collect();
+    let listed = || {
+        if found.is_empty() {
+            "none".to_string()
+        } else {
+            found
+                .iter()
+                .map(|p| format!("'{p}' ({p}{SUFFIX})"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        }
+    };
+    let mut given: [Option<String>; 2] = [None, None];
+    for p in plates {
+        let Some((side, prefix)) = p.split_once('=') else {
+            bail!("--plate {p}: expected FOOT=PREFIX, e.g. r=1_ or l=2_ (r= for the unprefixed ground_force_*)");
+        };
+        let s = match side.trim().to_ascii_lowercase().as_str() {
+            "r" | "right" => 0,
+            "l" | "left" => 1,
+            other => bail!("--plate {p}: foot '{other}' is neither r nor l"),
+        };
+        if given[s].is_some() {
+            bail!(
+                "--plate {p}: the {} foot is given twice",
+                ["right", "left"][s]
+            );
+        }
+        let prefix = prefix.trim().to_string();
+        if !found.contains(&prefix) {
+            return Err(DataError::MissingColumn {
+                path: grf.path.clone(),
+                row: grf.label_line,
+                column: format!("{prefix}{SUFFIX}"),
+                reason: format!(
+                    "--plate {p} names it; the file's vertical-force prefixes are {}",
+                    listed()
+                ),
+            }
+            .into());
+        }
+        given[s] = Some(prefix);
+    }
+    let detect = |candidates: &[&str]| {
+        candidates
+            .iter()
+            .find(|c| found.iter().any(|f| f == *c))
+            .map(|c| c.to_string())
+    };
+    let detected = [!given[0].is_some(), !given[1].is_some()];
+    let right = match given[0].take().or_else(|| detect(&["", "r_", "R_"])) {
+        Some(p) => p,
+        None => bail!(
+            "{}: cannot tell which force columns belong to the right foot (none named ground_force_vy or r_ground_force_vy); its vertical-force prefixes are {}: name them with --plate r=PREFIX --plate l=PREFIX",
+            grf.path.display(),
+            listed()
+        ),
+    };
+    let left = match given[1].take().or_else(|| detect(&["l_", "L_"])) {
+        Some(p) => p,
+        None => bail!(
+            "{}: cannot tell which force columns belong to the left foot (none named l_ground_force_vy); its vertical-force prefixes are {}: name them with --plate l=PREFIX",
+            grf.path.display(),
+            listed()
+        ),
+    };
+    if right == left {
+        bail!("--plate: both feet would read the columns {right}{SUFFIX}; give each foot its own plate");
+    }
+    let how = |d: bool| if d { "detected" } else { "--plate" };
+    let text = format!(
+        "forces of {}: right foot {right}ground_force_vx/vy/px ({}), left foot {left}ground_force_vx/vy/px ({}); --plate r=PREFIX --plate l=PREFIX chooses others",
+        grf.path.display(),
+        how(detected[0]),
+        how(detected[1])
+    );
+    Ok(([right, left], text))
+}
+
+/// The map of an OpenSim pair: the gait10dof18musc coordinate names, the extras the
+/// kinematics hold, and the feet's force columns.
+fn opensim_map(ik: &Storage, prefixes: &[String; 2]) -> StorageMap {
+    let mut map = StorageMap::gait10dof18musc();
+    map.extras
+        .retain(|(_, c): &(String, ColumnMap)| ik.column_index(&c.column).is_some());
+    map.feet = [
+        Some(ForceColumns::opensim(&prefixes[0])),
+        Some(ForceColumns::opensim(&prefixes[1])),
+    ];
+    map
+}
+
+fn load_opensim(ik_path: &Path, t: &TrialFiles) -> anyhow::Result<LoadedTrial> {
+    let Some(grf_path) = t.forces.as_deref() else {
+        bail!(
+            "{}: an OpenSim kinematics file holds no forces: give the trial's external loads with --forces GRF.mot (ground_force_vx/vy/px of each foot)",
+            ik_path.display()
+        );
+    };
+    if trial_format(grf_path, "--forces")? != TrialFormat::Storage {
+        bail!(
+            "--forces {}: expected an OpenSim external-loads storage (.mot or .sto); a CSV trial is given whole with --data",
+            grf_path.display()
+        );
+    }
+    let ik = read_storage(ik_path)?;
+    let grf = read_storage(grf_path)?;
+    if !ik.angle_unit_stated {
+        return Err(DataError::Units {
+            path: ik.path.clone(),
+            row: None,
+            column: "inDegrees".into(),
+            text: String::new(),
+            reason: "the header states neither 'inDegrees=yes|no' nor 'Angles are in degrees|radians': add the line 'inDegrees=yes' (or 'inDegrees=no' for radians) above 'endheader'".into(),
+        }
+        .into());
+    }
+    let (prefixes, note) = foot_prefixes(&grf, &t.plates)?;
+    let map = opensim_map(&ik, &prefixes);
+    let mut data = GaitData::from_storage(&ik, Some(&grf), &map)?;
+    if let Some(v) = t.belt_speed {
+        data = data.to_overground(v)?;
+    }
+    data.check_conventions(t.overground)
+        .map_err(|e| opensim_error(e, &ik, &grf, &map))?;
+    check_radians_said_degrees(&data, &ik, &map)?;
+    Ok(LoadedTrial {
+        data,
+        notes: vec![note],
+    })
+}
+
+/// Smallest span (rad, 5.7°) of the widest-moving leg joint of a walk longer than
+/// [`MIN_SPAN_DURATION`]: a knee spans about 60°, so joints that all stay within this
+/// after a conversion from degrees were radians.
+pub const MIN_LEG_SPAN_RAD: f64 = 0.1;
+
+/// Shortest trial (s) on which [`MIN_LEG_SPAN_RAD`] is judged (about half a gait cycle).
+pub const MIN_SPAN_DURATION: f64 = 0.5;
+
+/// Radians in a file whose header says degrees: after the conversion every leg joint
+/// barely moves.
+fn check_radians_said_degrees(
+    data: &GaitData,
+    ik: &Storage,
+    map: &StorageMap,
+) -> Result<(), DataError> {
+    let duration = data.time[data.time.len() - 1] - data.time[0];
+    if !ik.in_degrees || duration < MIN_SPAN_DURATION {
+        return Ok(());
+    }
+    let span = |v: &[f64]| {
+        let (lo, hi) = v
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
+                (a.min(x), b.max(x))
+            });
+        hi - lo
+    };
+    let (widest, s) = (3..9)
+        .map(|i| (i, span(&data.q[i])))
+        .fold((3, f64::NEG_INFINITY), |a, b| if b.1 > a.1 { b } else { a });
+    if s < MIN_LEG_SPAN_RAD {
+        return Err(DataError::invalid(
+            &ik.path,
+            map.q[widest].column.clone(),
+            format!(
+                "spans only {:.3}° in {duration:.2} s, the most of any leg joint, read as degrees as the header says: a walking knee spans about 60°, so the values look like radians; set 'inDegrees=no' above 'endheader' if they are",
+                s.to_degrees()
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// A convention error of a trial read from an OpenSim pair, told in that pair's terms:
+/// the file and column it came from and what to change there.
+fn opensim_error(e: DataError, ik: &Storage, grf: &Storage, map: &StorageMap) -> DataError {
+    let DataError::Invalid { field, reason, .. } = &e else {
+        return e;
+    };
+    if let Some(i) = Q_NAMES.iter().position(|n| n == field) {
+        let column = map.q[i].column.clone();
+        if i == 0 {
+            return DataError::invalid(
+                &ik.path,
+                column,
+                format!(
+                    "{}: a treadmill trial, and no belt speed is given; an OpenSim pair has no meta file, so give the belt speed with --belt-speed M/S, or pass --overground to take the trial as it is",
+                    reason.split(": a treadmill trial").next().unwrap_or(reason)
+                ),
+            );
+        }
+        let head = reason
+            .split(": this looks like degrees")
+            .next()
+            .unwrap_or(reason);
+        let advice = if ik.in_degrees {
+            "after converting from degrees, as the header says: the values are beyond a joint's range in degrees too; check the column"
+        } else {
+            "read as radians, as the header says: this looks like degrees; set 'inDegrees=yes' above 'endheader' if the values are in degrees"
+        };
+        return DataError::invalid(&ik.path, column, format!("{head}; {advice}"));
+    }
+    for (s, side) in ["r", "l"].iter().enumerate() {
+        if field == &format!("grf_y_{side}") {
+            if let Some(cols) = &map.feet[s] {
+                return DataError::invalid(&grf.path, cols.fy.clone(), reason.clone());
+            }
+        }
+    }
+    e
+}
+
+impl From<&crate::problems::diagnose::TrackingRunSetup> for TrialFiles {
+    /// The trial a tracking run describes (its `setup.json`).
+    fn from(run: &crate::problems::diagnose::TrackingRunSetup) -> Self {
+        TrialFiles {
+            data: run.data.clone(),
+            forces: run.forces.clone(),
+            plates: run.plates.clone(),
+            belt_speed: run.belt_speed,
+            overground: run.overground,
+        }
+    }
+}
+
+impl TrialFiles {
+    /// The trial of `data` and `overground` alone (a CSV or the bundled trial).
+    pub fn csv(data: Option<PathBuf>, overground: bool) -> Self {
+        TrialFiles {
+            data,
+            overground,
+            ..Default::default()
+        }
+    }
+}
