@@ -125,6 +125,81 @@ fn a_fatal_failure_at_a_trial_point_stops_the_solve_with_its_cause() {
     assert_eq!(res.w[0], 0.0);
 }
 
+/// f(w) = (w₀ − 10)² with the constraint w₁ = 0 and a Gauss–Newton Hessian twice the true
+/// one, so every step goes half-way to the optimum: the first from w₀ = 0 to w₀ = 5,
+/// where the plain evaluation succeeds but the derivatives fail (as sensitivities can
+/// fail where the states alone integrate), recoverably, on 4 < w₀ < 6.
+struct DerivativesFailOnAnIsland {
+    derivatives_at: RefCell<Vec<(f64, bool)>>,
+}
+
+impl Nlp for DerivativesFailOnAnIsland {
+    fn n(&self) -> usize {
+        2
+    }
+    fn m(&self) -> usize {
+        1
+    }
+    fn bounds(&self) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
+        (vec![-20.0; 2], vec![20.0; 2], vec![0.0], vec![0.0])
+    }
+    fn jacobian_pattern(&self) -> (Vec<usize>, Vec<usize>) {
+        (vec![0], vec![1])
+    }
+    fn gauss_newton_pattern(&self) -> (Vec<usize>, Vec<usize>) {
+        (vec![0, 1], vec![0, 1])
+    }
+    fn hessian_blocks(&self) -> Vec<Vec<usize>> {
+        vec![vec![0], vec![1]]
+    }
+    fn evaluate(&self, w: &[f64], derivs: bool) -> Result<NlpEval, EvalError> {
+        let mut ev = NlpEval {
+            f: (w[0] - 10.0).powi(2),
+            c: vec![w[1]],
+            ..Default::default()
+        };
+        if derivs {
+            let island = w[0] > 4.0 && w[0] < 6.0;
+            self.derivatives_at.borrow_mut().push((w[0], island));
+            if island {
+                return Err(EvalError::recoverable(format!(
+                    "the sensitivities do not integrate at w₀ = {}",
+                    w[0]
+                )));
+            }
+            ev.grad = vec![2.0 * (w[0] - 10.0), 0.0];
+            ev.jac = vec![1.0];
+            ev.gn = vec![4.0, 1.0];
+        }
+        Ok(ev)
+    }
+    fn row_name(&self, _i: usize) -> String {
+        "w1".into()
+    }
+}
+
+#[test]
+fn a_recoverable_failure_of_the_derivatives_at_an_accepted_point_shortens_the_step() {
+    let nlp = DerivativesFailOnAnIsland {
+        derivatives_at: RefCell::new(Vec::new()),
+    };
+    let settings = SqpSettings {
+        tol_kkt: 1e-8,
+        max_iter: 80,
+        ..settings()
+    };
+    let res = sqp::solve(&nlp, &[0.0, 0.0], &settings, &mut Silent);
+    assert_eq!(res.status, SqpStatus::Converged, "{res:?}");
+    assert!((res.w[0] - 10.0).abs() < 1e-6, "{:?}", res.w);
+    let at = nlp.derivatives_at.borrow();
+    // the first step's point (w₀ = 5) failed; the search was repeated with half the step
+    // and took w₀ = 2.5, from where the next step jumps over the island
+    let failed = at.iter().position(|e| e.1).expect("the island was hit");
+    assert!((at[failed].0 - 5.0).abs() < 1e-9, "{at:?}");
+    assert!((at[failed + 1].0 - 2.5).abs() < 1e-9, "{at:?}");
+    assert!(!at[failed + 1].1);
+}
+
 /// ẋ = u, defined only for x ≤ 1 (a fatal right-hand-side error beyond it, which stops
 /// CVODES).
 struct Bounded;

@@ -277,41 +277,53 @@ pub(super) fn run(
         // --- filter line search; derivatives and curvature are computed once, at the
         // accepted point
         let (f0, theta0) = st.plain;
-        let search = line_search::search(
-            &s,
-            settings,
-            &mut filter,
-            &st,
-            &sol.d,
-            &|w| eval.plain(w),
-            &|c_soc| {
-                eval.qp(&QpData {
-                    c: c_soc,
-                    ..sub.data(None)
-                })
-                .ok()
-                .map(|q| q.d)
-            },
-        );
-        let trial = match search {
-            Search::Accepted(trial) => trial,
-            Search::Failed => {
-                status = if elastic {
-                    SqpStatus::Infeasible
-                } else {
-                    SqpStatus::LineSearchFailure
-                };
-                break;
-            }
-            Search::Fatal(e) => {
-                status = SqpStatus::EvaluationFailure(e.chain());
-                break;
+        // derivatives where the plain evaluation succeeded can still fail (the
+        // sensitivities' integration, a non-finite curvature): a recoverable failure there
+        // rejects the point, and the search is repeated with at most half its step
+        let mut max_step = 1.0;
+        let found = loop {
+            let search = line_search::search(
+                &s,
+                settings,
+                &mut filter,
+                &st,
+                &sol.d,
+                max_step,
+                &|w| eval.plain(w),
+                &|c_soc| {
+                    eval.qp(&QpData {
+                        c: c_soc,
+                        ..sub.data(None)
+                    })
+                    .ok()
+                    .map(|q| q.d)
+                },
+            );
+            let trial = match search {
+                Search::Accepted(trial) => trial,
+                Search::Failed => {
+                    break Err(if elastic {
+                        SqpStatus::Infeasible
+                    } else {
+                        SqpStatus::LineSearchFailure
+                    })
+                }
+                Search::Fatal(e) => break Err(SqpStatus::EvaluationFailure(e.chain())),
+            };
+            match eval.derivs(&trial.w, &sol.lambda) {
+                Ok((ev, hess)) => break Ok((trial, ev, hess)),
+                Err(e)
+                    if e.is_recoverable() && 0.5 * trial.step >= settings.line_search_min_step =>
+                {
+                    max_step = 0.5 * trial.step;
+                }
+                Err(e) => break Err(SqpStatus::EvaluationFailure(e.chain())),
             }
         };
-        let (ev_new, hess_new) = match eval.derivs(&trial.w, &sol.lambda) {
-            Ok(r) => r,
-            Err(e) => {
-                status = SqpStatus::EvaluationFailure(e.chain());
+        let (trial, ev_new, hess_new) = match found {
+            Ok(found) => found,
+            Err(stop) => {
+                status = stop;
                 break;
             }
         };

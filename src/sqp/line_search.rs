@@ -139,6 +139,7 @@ pub(super) fn search(
     filter: &mut Filter,
     st: &State,
     d: &[f64],
+    max_step: f64,
     eval: &dyn Fn(&[f64]) -> Result<NlpEval, EvalError>,
     soc: &dyn Fn(&[f64]) -> Option<Vec<f64>>,
 ) -> Search {
@@ -163,37 +164,41 @@ pub(super) fn search(
             .map(|i| (st.w[i] + a * dir[i]).max(s.w_lb[i]).min(s.w_ub[i]))
             .collect()
     };
-    let mut alpha = 1.0;
+    let mut alpha = max_step.min(1.0);
     let mut found: Option<(Vec<f64>, Verdict)> = None;
     let mut fatal: Option<EvalError> = None;
-    let w1 = trial(1.0, d);
-    match eval(&w1) {
-        Ok(ev1) => match judge(&ev1, 1.0) {
-            Some(j) => found = Some((w1, j)),
-            None => {
-                // second-order correction: re-solve with the constraint values at w + d
-                let mut jd = vec![0.0; m];
-                for k in 0..s.jac_rows.len() {
-                    jd[s.jac_rows[k]] += st.ev.jac[k] * d[s.jac_cols[k]];
-                }
-                let c_soc: Vec<f64> = (0..m).map(|i| ev1.c[i] - jd[i]).collect();
-                if let Some(d2) = soc(&c_soc) {
-                    let w2 = trial(1.0, &d2);
-                    match eval(&w2) {
-                        Ok(ev2) => {
-                            if let Some(j) = judge(&ev2, 1.0) {
-                                found = Some((w2, j));
-                            }
-                        }
-                        Err(e) => keep_fatal(&mut fatal, e),
+    // the full step and its second-order correction, unless a shorter step is asked for
+    // (a point of an earlier search was rejected)
+    if alpha >= 1.0 {
+        let w1 = trial(1.0, d);
+        match eval(&w1) {
+            Ok(ev1) => match judge(&ev1, 1.0) {
+                Some(j) => found = Some((w1, j)),
+                None => {
+                    // second-order correction: re-solve with the constraint values at w + d
+                    let mut jd = vec![0.0; m];
+                    for k in 0..s.jac_rows.len() {
+                        jd[s.jac_rows[k]] += st.ev.jac[k] * d[s.jac_cols[k]];
                     }
+                    let c_soc: Vec<f64> = (0..m).map(|i| ev1.c[i] - jd[i]).collect();
+                    if let Some(d2) = soc(&c_soc) {
+                        let w2 = trial(1.0, &d2);
+                        match eval(&w2) {
+                            Ok(ev2) => {
+                                if let Some(j) = judge(&ev2, 1.0) {
+                                    found = Some((w2, j));
+                                }
+                            }
+                            Err(e) => keep_fatal(&mut fatal, e),
+                        }
+                    }
+                    alpha = 0.5;
                 }
+            },
+            Err(e) => {
+                keep_fatal(&mut fatal, e);
                 alpha = 0.5;
             }
-        },
-        Err(e) => {
-            keep_fatal(&mut fatal, e);
-            alpha = 0.5;
         }
     }
     while found.is_none() && fatal.is_none() && alpha >= settings.line_search_min_step {
@@ -294,7 +299,7 @@ mod tests {
             evals.set(evals.get() + 1);
             Ok(eval_at(f, m, w[0]))
         };
-        let out = search(&s, &settings(), filter, &st, &[d], &eval, soc);
+        let out = search(&s, &settings(), filter, &st, &[d], 1.0, &eval, soc);
         (out, evals.get())
     }
 
@@ -407,6 +412,7 @@ mod tests {
                 &mut Filter::new(),
                 &st,
                 &[1.0],
+                1.0,
                 &|w| {
                     if w[0] > 0.6 {
                         Err(if fatal {
