@@ -118,6 +118,11 @@ fn length_scale(path: &Path, units: &str) -> Result<f64, DataError> {
         "mm" => Ok(1e-3),
         "cm" => Ok(1e-2),
         "m" => Ok(1.0),
+        "" => Err(c3d_err(
+            path,
+            "POINT:UNITS",
+            "missing or blank; FORCE_PLATFORM:CORNERS and ORIGIN need a length unit (valid: mm, cm, m)",
+        )),
         other => Err(c3d_err(
             path,
             "POINT:UNITS",
@@ -199,6 +204,7 @@ fn supported_list() -> String {
         .join(", ")
 }
 
+#[allow(clippy::result_large_err)] // c3dio's error type, converted at once
 fn load(path: &Path) -> Result<c3dio::C3d, DataError> {
     if let Err(source) = std::fs::metadata(path) {
         return Err(DataError::io(path, source));
@@ -252,7 +258,14 @@ pub fn read_c3d_plates(path: &Path, cop_threshold: f64) -> Result<C3dForces, Dat
             format!("{rate} Hz; the analog rate must be positive to time the plate samples"),
         ));
     }
-    let units: String = c3d.points.units.iter().collect();
+    // c3dio fills `points.units` only when there are markers; a plate-only file keeps
+    // POINT:UNITS among the raw parameters.
+    let mut units: String = c3d.points.units.iter().collect();
+    if units.trim().is_empty() {
+        if let Some(p) = c3d.parameters.get("POINT", "UNITS") {
+            units = String::try_from(p).unwrap_or_default();
+        }
+    }
     let ls = length_scale(path, &units)?;
     let t0 = if c3d.points.frame_rate > 0.0 {
         (c3d.points.first_frame.max(1) as f64 - 1.0) / c3d.points.frame_rate as f64
@@ -348,6 +361,7 @@ pub fn read_c3d_plates(path: &Path, cop_threshold: f64) -> Result<C3dForces, Dat
         let mut force = Vec::with_capacity(n);
         let mut cop = Vec::with_capacity(n);
         let mut free = Vec::with_capacity(n);
+        #[allow(clippy::needless_range_loop)] // k indexes the analog grid too
         for k in 0..n {
             let v = |j: usize| analog.get(k, ch[j]).copied().unwrap_or(f64::NAN);
             let f = [v(0), v(1), v(2)];
