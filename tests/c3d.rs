@@ -38,6 +38,33 @@ const SCALE: f32 = 0.5;
 const GEN_SCALE: f32 = 0.25;
 const OFFSET: [i16; 7] = [0, 3, -7, 11, 0, 5, -2];
 
+/// Calibration matrix of the type-4 variant, `CAL[i][j]` taking channel `j` (V) into
+/// output `i` (`Fx Fy Fz` in N, `Mx My Mz` in N·mm): scaled, permuted channels with two
+/// cross-talk terms, so that a transposed or misindexed matrix gives another load.
+const CAL: [[f64; 6]; 6] = [
+    [0.0, 2.0, 0.0, 0.0, 0.0, 0.0],
+    [4.0, 0.0, 0.0, 0.0, 0.0, 0.0],
+    [0.5, 0.0, 8.0, 0.0, 0.0, 0.0],
+    [0.0, 0.0, 0.0, 0.0, 64.0, 0.0],
+    [0.0, 0.0, 0.0, 128.0, 0.0, 0.0],
+    [0.0, -2.0, 0.0, 0.0, 0.0, 32.0],
+];
+
+/// The channel voltages that `CAL` turns into the plate outputs `l`: `CAL`'s inverse by
+/// hand (exact in binary for these entries).
+fn volts(l: [f64; 6]) -> [f64; 6] {
+    let v0 = l[1] / 4.0;
+    let v1 = l[0] / 2.0;
+    [
+        v0,
+        v1,
+        (l[2] - 0.5 * v0) / 8.0,
+        l[4] / 128.0,
+        l[3] / 64.0,
+        (l[5] + 2.0 * v1) / 32.0,
+    ]
+}
+
 /// The known load at analog sample `k`: ground reaction on the foot (N, lab), CoP (mm,
 /// lab) and free moment on the foot about the upward normal (N·mm).
 fn load(k: usize) -> ([f64; 3], [f64; 3], f64) {
@@ -95,6 +122,8 @@ enum Variant {
     NoPlate,
     /// The plate declared as type 3 (Kistler, eight channels).
     Type3,
+    /// A type-4 plate: channels in volts, turned into the load by `CAL`.
+    Type4,
 }
 
 /// Write the test trial with c3dio's writer.
@@ -132,13 +161,22 @@ fn write_trial(path: &Path, variant: Variant) {
     units[0] = "V".into();
     for (j, &ch) in CHANNEL.iter().enumerate() {
         labels[ch - 1] = names[j].into();
-        units[ch - 1] = if j < 3 { "N" } else { "Nmm" }.into();
+        units[ch - 1] = match (variant, j < 3) {
+            (Variant::Type4, _) => "V",
+            (_, true) => "N",
+            _ => "Nmm",
+        }
+        .into();
     }
     a.labels = labels;
     a.descriptions = vec!["test".into(); 7];
     a.units = units;
     for k in 0..N {
-        let v = plate_channels(k);
+        let v = if variant == Variant::Type4 {
+            volts(plate_channels(k))
+        } else {
+            plate_channels(k)
+        };
         let mut row = vec![1.25; 7];
         for (j, &ch) in CHANNEL.iter().enumerate() {
             row[ch - 1] = v[j];
@@ -147,11 +185,18 @@ fn write_trial(path: &Path, variant: Variant) {
     }
     if variant != Variant::NoPlate {
         let mut fp = ForcePlatform::default();
-        fp.plate_type = if variant == Variant::Type3 {
-            ForcePlatformType::Type3
-        } else {
-            ForcePlatformType::Type2
+        fp.plate_type = match variant {
+            Variant::Type3 => ForcePlatformType::Type3,
+            Variant::Type4 => ForcePlatformType::Type4,
+            _ => ForcePlatformType::Type2,
         };
+        if variant == Variant::Type4 {
+            // c3dio's writer stores m[a][b] at element 6a + b; the C3D guide's
+            // CAL_MATRIX(i, j) (first index fastest) is element i + 6j: m = CALᵀ.
+            fp.cal_matrix = Some(std::array::from_fn(|a| {
+                std::array::from_fn(|b| CAL[b][a] as f32)
+            }));
+        }
         let quadrant = [[1.0, 1.0], [-1.0, 1.0], [-1.0, -1.0], [1.0, -1.0]];
         for (i, q) in quadrant.iter().enumerate() {
             let off = plate_to_lab([q[0] * HALF[0], q[1] * HALF[1], 0.0]);
@@ -231,12 +276,27 @@ fn regenerate_when_asked() {
 
 #[test]
 fn reads_the_known_load_in_the_lab_frame() {
-    let truth = committed_truth();
     let f = read_c3d_plates(&committed(), THRESHOLD).unwrap();
+    assert_eq!((f.plates[0].plate, f.plates[0].plate_type), (1, 2));
+    check_against_truth(&f, &committed_truth());
+}
+
+#[test]
+fn a_type_4_plate_is_calibrated_by_its_matrix() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("type4.c3d");
+    write_trial(&p, Variant::Type4);
+    let f = read_c3d_plates(&p, THRESHOLD).unwrap();
+    assert_eq!((f.plates[0].plate, f.plates[0].plate_type), (1, 4));
+    check_against_truth(&f, &truth_roundtrip());
+}
+
+/// The plate read agrees with the truth to 1e-6 (N, m, N·m); NaN CoP exactly where the
+/// truth has none.
+fn check_against_truth(f: &footfall::data::c3d::C3dForces, truth: &Value) {
     assert_eq!(f.plates.len(), 1);
     assert_eq!(f.analog_rate, truth["analog_rate_hz"].as_f64().unwrap());
     let p = &f.plates[0];
-    assert_eq!((p.plate, p.plate_type), (1, 2));
     let samples = truth["samples"].as_array().unwrap();
     assert_eq!(p.time.len(), samples.len());
     let mut loaded = 0;
@@ -433,7 +493,7 @@ fn an_unsupported_plate_type_is_refused_naming_the_valid_one() {
     assert_eq!(path, p);
     assert_eq!(parameter, "FORCE_PLATFORM:TYPE");
     assert!(
-        reason.contains("plate 1 is type 3") && reason.contains("converts type 2"),
+        reason.contains("plate 1 is type 3") && reason.contains("converts types 2, 4"),
         "{reason}"
     );
     assert!(
@@ -460,4 +520,29 @@ fn a_file_that_is_not_c3d_is_an_error_not_a_panic() {
     }
     let e = read_c3d_plates(&committed(), f64::NAN).unwrap_err();
     assert!(e.to_string().contains("cop_threshold"), "{e}");
+}
+
+#[test]
+fn a_plate_type_c3dio_refuses_is_named_with_its_value() {
+    // Patch FORCE_PLATFORM:TYPE of the committed file from 2 to 5 (AMTI 6-channel with a
+    // 6×8 matrix): the record is name length 4, a positive group id, "TYPE", a 2-byte
+    // offset, data type 2 (i16), one dimension of 1, the value.
+    let mut bytes = std::fs::read(committed()).unwrap();
+    let hits: Vec<usize> = (0..bytes.len() - 12)
+        .filter(|&i| bytes[i] == 4 && (bytes[i + 1] as i8) > 0 && &bytes[i + 2..i + 6] == b"TYPE")
+        .collect();
+    assert_eq!(hits.len(), 1, "one TYPE record");
+    let at = hits[0] + 8;
+    assert_eq!(&bytes[at..at + 5], &[2, 1, 1, 2, 0], "an i16 TYPE = 2");
+    bytes[at + 3] = 5;
+    let dir = tempfile::tempdir().unwrap();
+    let p = dir.path().join("type5.c3d");
+    std::fs::write(&p, bytes).unwrap();
+    let (path, parameter, reason) = c3d_error(read_c3d_plates(&p, THRESHOLD).unwrap_err());
+    assert_eq!(path, p);
+    assert_eq!(parameter, "FORCE_PLATFORM:TYPE");
+    assert!(
+        reason.contains("plate 1 is of type 5") && reason.contains("valid: 2, 4"),
+        "{reason}"
+    );
 }

@@ -25,14 +25,19 @@
 //!   $T = M_z - p_x F_y + p_y F_x$ (with $z_0 = -o_z$ the depth of the origin these are the
 //!   guide's $(-M_y - z_0F_x)/F_z$ and $(M_x - z_0 F_y)/F_z$). The CoP in the lab is
 //!   $O + R\,p$, on the surface.
+//! * **Type 4** is type 2 with a 6×6 calibration matrix: the outputs are
+//!   $(F, M) = C\,v$ for the six channels $v$ (often volts), with
+//!   $C_{ij}$ = `FORCE_PLATFORM:CAL_MATRIX(i, j, plate)` (first index fastest, as the guide
+//!   stores arrays, as ezc3d reads it), in N and N·(POINT unit). `c3dio` 0.8
+//!   parses this matrix but drops it (it appends the matrices after one `None` per
+//!   plate), so it is read here from the parameter section directly (a small reader of
+//!   the guide's parameter records, `params`).
 //!
-//! Types 1, 3 and 4 are refused with [`DataError::C3d`]: type 3 (Kistler, eight channels)
-//! and type 1 (CoP channels) are not converted here, and `c3dio` 0.8 parses a type-4
-//! plate's `FORCE_PLATFORM:CAL_MATRIX` but does not hand it over (it appends the matrices
-//! after one `None` per plate), so a type-4 plate cannot be calibrated from what it gives.
+//! Types 1 and 3 (CoP channels; eight-channel Kistler) and types beyond 4 are refused
+//! with a [`DataError::C3d`] naming the plate, its type and the types converted.
 //!
-//! Positions are scaled to metres by `POINT:UNITS` (`mm`, `cm` or `m`), moments to N·m by
-//! the moment channels' `ANALOG:UNITS` (`Nmm`, `N.mm`, `Nm`, `N.m`; blank means N·(POINT
+//! Positions are scaled to metres by `POINT:UNITS` (`mm`, `cm` or `m`), type-2 moments to
+//! N·m by the moment channels' `ANALOG:UNITS` (`Nmm`, `N.mm`, `Nm`, `N.m`; blank means N·(POINT
 //! unit)), forces must be in N.
 
 use super::error::DataError;
@@ -41,8 +46,10 @@ use crate::model::Side;
 use std::path::{Path, PathBuf};
 use std::str::FromStr;
 
+mod params;
+
 /// Plate types [`read_c3d_plates`] converts (`FORCE_PLATFORM:TYPE`).
-pub const SUPPORTED_PLATE_TYPES: [i64; 1] = [2];
+pub const SUPPORTED_PLATE_TYPES: [i64; 2] = [2, 4];
 
 /// One force plate's ground reaction, at the analog rate, in the lab frame of the C3D file.
 ///
@@ -205,15 +212,31 @@ fn supported_list() -> String {
 }
 
 #[allow(clippy::result_large_err)] // c3dio's error type, converted at once
-fn load(path: &Path) -> Result<c3dio::C3d, DataError> {
-    if let Err(source) = std::fs::metadata(path) {
-        return Err(DataError::io(path, source));
+fn load(path: &Path) -> Result<(c3dio::C3d, Vec<u8>), DataError> {
+    let bytes = std::fs::read(path).map_err(|e| DataError::io(path, e))?;
+    // c3dio refuses a plate type beyond 1–4 without saying which plate: look first.
+    if let Ok(Some(t)) = params::find(&bytes, "FORCE_PLATFORM", "TYPE") {
+        if let Some((i, v)) = t
+            .values
+            .iter()
+            .enumerate()
+            .find(|(_, v)| !(1.0..=4.0).contains(*v))
+        {
+            return Err(c3d_err(
+                path,
+                "FORCE_PLATFORM:TYPE",
+                format!(
+                    "plate {} is of type {v}, which this reader does not convert; valid: {}",
+                    i + 1,
+                    supported_list()
+                ),
+            ));
+        }
     }
     // c3dio indexes slices from header values; a corrupt file must become an error here,
     // never a panic of the caller.
-    let p = path.to_path_buf();
-    match std::panic::catch_unwind(move || c3dio::C3d::load_path(p)) {
-        Ok(Ok(c)) => Ok(c),
+    match std::panic::catch_unwind(|| c3dio::C3d::from_bytes(&bytes)) {
+        Ok(Ok(c)) => Ok((c, bytes)),
         Ok(Err(e)) => Err(parse_error(path, e)),
         Err(_) => Err(c3d_err(
             path,
@@ -223,7 +246,52 @@ fn load(path: &Path) -> Result<c3dio::C3d, DataError> {
     }
 }
 
-/// Read every force plate of a C3D file to ground reaction force, CoP and free moment in
+/// The 6×6 calibration matrix of plate `number` (1-based), `C[i][j]` multiplying channel
+/// `j` into output `i` (`Fx Fy Fz Mx My Mz`): `FORCE_PLATFORM:CAL_MATRIX(i, j, plate)`,
+/// first index fastest, as the C3D guide stores arrays. The third dimension counts all
+/// plates, or only the type-4 plates when it is smaller than `USED`.
+fn cal_matrix(
+    path: &Path,
+    bytes: &[u8],
+    number: usize,
+    type4_ordinal: usize,
+    used: usize,
+) -> Result<[[f64; 6]; 6], DataError> {
+    let what = "FORCE_PLATFORM:CAL_MATRIX";
+    let raw = params::find(bytes, "FORCE_PLATFORM", "CAL_MATRIX")
+        .map_err(|e| c3d_err(path, what, e))?
+        .ok_or_else(|| {
+            c3d_err(
+                path,
+                what,
+                format!(
+                    "missing; plate {number} is of type 4, which needs its 6×6 calibration matrix"
+                ),
+            )
+        })?;
+    let count = raw.dims.get(2).copied().unwrap_or(1);
+    let k = if count >= used {
+        number - 1
+    } else {
+        type4_ordinal
+    };
+    if raw.dims.len() < 2 || raw.dims[0] != 6 || raw.dims[1] != 6 || k >= count {
+        return Err(c3d_err(
+            path,
+            what,
+            format!(
+                "dimensions {:?} hold no 6×6 matrix for plate {number}; valid: (6, 6, USED = {used})",
+                raw.dims
+            ),
+        ));
+    }
+    let v = &raw.values[36 * k..36 * (k + 1)];
+    Ok(std::array::from_fn(|i| {
+        std::array::from_fn(|j| v[i + 6 * j])
+    }))
+}
+
+/// Read every force plate of a C3D file (types 2 and 4) to ground reaction force, CoP and free moment in
 /// the file's lab frame, at the analog rate (see the module documentation for the
 /// equations and conventions). The force returned is the ground's force **on the foot**.
 /// CoP and free moment are NaN where the normal load ($F_z$ in the plate frame, pressing
@@ -241,7 +309,7 @@ pub fn read_c3d_plates(path: &Path, cop_threshold: f64) -> Result<C3dForces, Dat
             format!("must be finite and ≥ 0 N, got {cop_threshold}"),
         ));
     }
-    let c3d = load(path)?;
+    let (c3d, bytes) = load(path)?;
     if c3d.forces.is_empty() {
         return Err(c3d_err(
             path,
@@ -275,6 +343,8 @@ pub fn read_c3d_plates(path: &Path, cop_threshold: f64) -> Result<C3dForces, Dat
     let n = analog.rows();
     let time: Vec<f64> = (0..n).map(|k| t0 + k as f64 / rate).collect();
     let mut plates = Vec::new();
+    let used = c3d.forces.len();
+    let mut type4_seen = 0;
     for (i, fp) in c3d.forces.iter().enumerate() {
         let number = i + 1;
         let plate_type = match fp.plate_type {
@@ -287,13 +357,13 @@ pub fn read_c3d_plates(path: &Path, cop_threshold: f64) -> Result<C3dForces, Dat
             let why = match plate_type {
                 1 => "type 1 (force and CoP channels)",
                 3 => "type 3 (eight-channel Kistler)",
-                _ => "type 4 (six channels with a calibration matrix, which c3dio 0.8 does not hand over)",
+                _ => "of an unknown type",
             };
             return Err(c3d_err(
                 path,
                 "FORCE_PLATFORM:TYPE",
                 format!(
-                    "plate {number} is {why}; this reader converts type {} (six channels Fx Fy Fz Mx My Mz in N and N·m)",
+                    "plate {number} is {why}; this reader converts types {} (six channels Fx Fy Fz Mx My Mz, type 4 through its calibration matrix)",
                     supported_list()
                 ),
             ));
@@ -317,23 +387,32 @@ pub fn read_c3d_plates(path: &Path, cop_threshold: f64) -> Result<C3dForces, Dat
             *c = idx - 1;
         }
         let unit_of = |c: usize| analog.units.get(c).map(String::as_str).unwrap_or("");
-        for &c in &ch[..3] {
-            let u = unit_of(c).trim();
-            if !(u.is_empty() || u.eq_ignore_ascii_case("n")) {
-                return Err(c3d_err(
-                    path,
-                    "ANALOG:UNITS",
-                    format!(
-                        "analog channel {} is a plate force in '{u}'; valid: N (or blank)",
-                        c + 1
-                    ),
-                ));
+        // Type 2: channels in N and N·m (or N·mm); type 4: channels (V) through the
+        // calibration matrix to N and N·(POINT unit).
+        let (cal, ms) = if plate_type == 4 {
+            let c = cal_matrix(path, &bytes, number, type4_seen, used)?;
+            type4_seen += 1;
+            (Some(c), vec![ls; 3])
+        } else {
+            for &c in &ch[..3] {
+                let u = unit_of(c).trim();
+                if !(u.is_empty() || u.eq_ignore_ascii_case("n")) {
+                    return Err(c3d_err(
+                        path,
+                        "ANALOG:UNITS",
+                        format!(
+                            "analog channel {} is a plate force in '{u}'; valid: N (or blank)",
+                            c + 1
+                        ),
+                    ));
+                }
             }
-        }
-        let ms: Vec<f64> = ch[3..]
-            .iter()
-            .map(|&c| moment_scale(path, unit_of(c), ls, c + 1))
-            .collect::<Result<_, _>>()?;
+            let ms = ch[3..]
+                .iter()
+                .map(|&c| moment_scale(path, unit_of(c), ls, c + 1))
+                .collect::<Result<Vec<f64>, _>>()?;
+            (None, ms)
+        };
         let corners: [[f64; 3]; 4] =
             std::array::from_fn(|k| std::array::from_fn(|d| fp.corners[k][d] as f64 * ls));
         let origin: [f64; 3] = std::array::from_fn(|d| fp.origin[d] as f64 * ls);
@@ -364,8 +443,13 @@ pub fn read_c3d_plates(path: &Path, cop_threshold: f64) -> Result<C3dForces, Dat
         #[allow(clippy::needless_range_loop)] // k indexes the analog grid too
         for k in 0..n {
             let v = |j: usize| analog.get(k, ch[j]).copied().unwrap_or(f64::NAN);
-            let f = [v(0), v(1), v(2)];
-            let m = [v(3) * ms[0], v(4) * ms[1], v(5) * ms[2]];
+            let raw: [f64; 6] = std::array::from_fn(v);
+            let out: [f64; 6] = match &cal {
+                Some(c) => std::array::from_fn(|i| (0..6).map(|j| c[i][j] * raw[j]).sum()),
+                None => raw,
+            };
+            let f = [out[0], out[1], out[2]];
+            let m = [out[3] * ms[0], out[4] * ms[1], out[5] * ms[2]];
             if let Some(j) = (0..3).find(|&j| !(f[j].is_finite() && m[j].is_finite())) {
                 return Err(c3d_err(
                     path,
