@@ -546,3 +546,64 @@ fn a_plate_type_c3dio_refuses_is_named_with_its_value() {
         "{reason}"
     );
 }
+
+#[test]
+fn a_foot_on_two_plates_gets_the_summed_force_and_the_weighted_cop() {
+    use footfall::data::c3d::{C3dForces, PlateForces};
+    let time = vec![0.0, 0.001, 0.002];
+    let plate = |n: usize, f: [[f64; 3]; 3], x: [f64; 3]| PlateForces {
+        plate: n,
+        plate_type: 2,
+        time: time.clone(),
+        force: f.to_vec(),
+        cop: x
+            .iter()
+            .map(|&x| {
+                if x.is_nan() {
+                    [f64::NAN; 3]
+                } else {
+                    [x, 0.3, 0.0]
+                }
+            })
+            .collect(),
+        free_moment: vec![0.0; 3],
+        centre: [0.0; 3],
+        up: [0.0, 0.0, 1.0],
+    };
+    let forces = C3dForces {
+        path: PathBuf::from("two.c3d"),
+        analog_rate: 1000.0,
+        cop_threshold: 20.0,
+        plates: vec![
+            // heel on plate 1 unloading, toe on plate 2 loading
+            plate(
+                1,
+                [[5.0, 0.0, 300.0], [4.0, 0.0, 100.0], [0.0, 0.0, 0.0]],
+                [1.0, 1.1, f64::NAN],
+            ),
+            plate(
+                2,
+                [[0.0, 0.0, 0.0], [-2.0, 0.0, 300.0], [-3.0, 0.0, 400.0]],
+                [f64::NAN, 1.5, 1.6],
+            ),
+        ],
+    };
+    let feet = feet_from_plates(
+        &forces,
+        &[(Side::Right, 1), (Side::Right, 2)],
+        AxisMap::default(),
+        &time,
+    )
+    .unwrap();
+    let r = &feet[0];
+    assert_eq!(r.fx, vec![5.0, 2.0, -3.0]);
+    assert_eq!(r.fy, vec![300.0, 400.0, 400.0]);
+    // (100·1.1 + 300·1.5)/400 = 1.4
+    close(r.cop_x[0], 1.0, 1e-12, "cop on plate 1 alone");
+    close(r.cop_x[1], 1.4, 1e-12, "weighted cop");
+    close(r.cop_x[2], 1.6, 1e-12, "cop on plate 2 alone");
+    assert!(
+        feet[1].fy.iter().all(|v| v.is_nan()),
+        "the left foot was not measured"
+    );
+}

@@ -39,6 +39,19 @@
 //! Positions are scaled to metres by `POINT:UNITS` (`mm`, `cm` or `m`), type-2 moments to
 //! N·m by the moment channels' `ANALOG:UNITS` (`Nmm`, `N.mm`, `Nm`, `N.m`; blank means N·(POINT
 //! unit)), forces must be in N.
+//!
+//! # Example
+//! ```no_run
+//! use footfall::data::c3d::{feet_from_plates, read_c3d_plates, AxisMap};
+//! use footfall::data::DEFAULT_COP_THRESHOLD;
+//! use footfall::model::Side;
+//! let forces = read_c3d_plates("trial.c3d".as_ref(), DEFAULT_COP_THRESHOLD)?;
+//! let map = AxisMap::new("+x", "+z")?; // walking along lab +x, z up (the default)
+//! let time: Vec<f64> = (0..100).map(|k| k as f64 / 100.0).collect();
+//! let [right, left] = feet_from_plates(&forces, &[(Side::Right, 1), (Side::Left, 2)], map, &time)?;
+//! println!("right heel-strike load {} N, left CoP {} m", right.fy[0], left.cop_x[0]);
+//! # Ok::<(), footfall::data::DataError>(())
+//! ```
 
 use super::error::DataError;
 use super::{interp_linear, side_index, FootData};
@@ -291,16 +304,16 @@ fn cal_matrix(
     }))
 }
 
-/// Read every force plate of a C3D file (types 2 and 4) to ground reaction force, CoP and free moment in
-/// the file's lab frame, at the analog rate (see the module documentation for the
-/// equations and conventions). The force returned is the ground's force **on the foot**.
+/// Read every force plate of a C3D file (types 2 and 4) to ground reaction force, CoP and
+/// free moment in the file's lab frame, at the analog rate (see the module documentation
+/// for the equations and conventions). The force returned is the ground's force **on the foot**.
 /// CoP and free moment are NaN where the normal load ($F_z$ in the plate frame, pressing
 /// into the plate) is below `cop_threshold` (N).
 ///
 /// Errors ([`DataError::C3d`] naming the file and the parameter, or [`DataError::Io`]): a
 /// missing or unreadable file; no force platform (`FORCE_PLATFORM:USED` = 0); a plate type
 /// other than [`SUPPORTED_PLATE_TYPES`]; channels outside `ANALOG:USED`; unknown units;
-/// degenerate corners; no analog rate; a threshold that is not finite and ≥ 0.
+/// degenerate corners; no analog rate or no analog samples; a threshold that is not finite and ≥ 0.
 pub fn read_c3d_plates(path: &Path, cop_threshold: f64) -> Result<C3dForces, DataError> {
     if !(cop_threshold.is_finite() && cop_threshold >= 0.0) {
         return Err(DataError::invalid(
@@ -314,7 +327,7 @@ pub fn read_c3d_plates(path: &Path, cop_threshold: f64) -> Result<C3dForces, Dat
         return Err(c3d_err(
             path,
             "FORCE_PLATFORM:USED",
-            "the file has no force platform (USED is 0 or absent); a plate of type 2 is needed",
+            "the file has no force platform (USED is 0 or absent); a plate of type 2 or 4 is needed",
         ));
     }
     let analog = &c3d.analog;
@@ -341,6 +354,16 @@ pub fn read_c3d_plates(path: &Path, cop_threshold: f64) -> Result<C3dForces, Dat
         0.0
     };
     let n = analog.rows();
+    if n == 0 || analog.cols() == 0 {
+        return Err(c3d_err(
+            path,
+            "ANALOG:USED",
+            format!(
+                "{} analog channel(s) with {n} sample(s); the plates' channels need samples",
+                analog.cols()
+            ),
+        ));
+    }
     let time: Vec<f64> = (0..n).map(|k| t0 + k as f64 / rate).collect();
     let mut plates = Vec::new();
     let used = c3d.forces.len();
