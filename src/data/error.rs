@@ -162,6 +162,18 @@ pub enum DataError {
         /// What was found (heel strikes per foot, time span).
         reason: String,
     },
+    /// A C3D file's parameters cannot be converted (no force platform, an unsupported
+    /// plate type, unknown units, channels out of range) or the file does not parse as C3D.
+    #[error("{path}: C3D parameter {parameter}: {reason}")]
+    C3d {
+        /// File.
+        path: PathBuf,
+        /// `GROUP:NAME` of the parameter (e.g. `FORCE_PLATFORM:TYPE`), or `file` when the
+        /// file as a whole does not parse.
+        parameter: String,
+        /// What is wrong and what would be valid.
+        reason: String,
+    },
     /// An argument or an in-memory value is invalid.
     #[error("{path}: {field}: {reason}")]
     Invalid {
@@ -210,6 +222,7 @@ impl DataError {
             | DataError::Units { path, .. }
             | DataError::NoStance { path, .. }
             | DataError::TooShort { path, .. }
+            | DataError::C3d { path, .. }
             | DataError::Invalid { path, .. } => path,
         }
     }
@@ -241,6 +254,7 @@ impl DataError {
             | DataError::OutOfRange { column, .. }
             | DataError::Units { column, .. } => Some(column),
             DataError::Invalid { field, .. } => Some(field),
+            DataError::C3d { parameter, .. } => Some(parameter),
             _ => None,
         }
     }

@@ -33,6 +33,7 @@
 //! # Ok::<(), footfall::data::DataError>(())
 //! ```
 
+pub mod c3d;
 pub mod conventions;
 pub mod csv;
 pub mod error;
