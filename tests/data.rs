@@ -881,6 +881,7 @@ fn synthetic(period: f64) -> (GaitData, impl Fn(usize, f64) -> f64) {
             },
         ],
         time,
+        forces: None,
         extra: BTreeMap::new(),
         body_mass: None,
         force_plate_height: None,

@@ -623,6 +623,7 @@ fn parse_sagittal_csv(
         time,
         q,
         feet,
+        forces: None,
         extra,
         body_mass: None,
         force_plate_height: None,

@@ -741,6 +741,7 @@ impl GaitData {
             time,
             q,
             feet,
+            forces: None,
             extra,
             body_mass: None,
             force_plate_height,
