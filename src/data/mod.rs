@@ -99,6 +99,65 @@ pub struct ForceSamples {
     pub feet: [FootData; 2],
 }
 
+impl ForceSamples {
+    /// Foot `s`'s record read at the instants `at` (s): linear interpolation inside a
+    /// measured stretch ([`stretch_indices`]), `NaN` outside (and the CoP `NaN` where a
+    /// neighbouring sample's is).
+    pub fn resample_foot(&self, s: usize, at: &[f64]) -> FootData {
+        let f = &self.feet[s];
+        let mut out = FootData {
+            fx: vec![f64::NAN; at.len()],
+            fy: vec![f64::NAN; at.len()],
+            cop_x: vec![f64::NAN; at.len()],
+        };
+        for (a, b) in stretch_indices(&self.time, &f.fy) {
+            let (ta, tb) = (self.time[a], self.time[b]);
+            let idx: Vec<usize> = (0..at.len())
+                .filter(|&k| at[k] >= ta && at[k] <= tb)
+                .collect();
+            let tt: Vec<f64> = idx.iter().map(|&k| at[k]).collect();
+            let t = &self.time[a..=b];
+            for (dst, src) in [
+                (&mut out.fx, &f.fx),
+                (&mut out.fy, &f.fy),
+                (&mut out.cop_x, &f.cop_x),
+            ] {
+                for (&k, v) in idx.iter().zip(interp_linear(&tt, t, &src[a..=b])) {
+                    dst[k] = v;
+                }
+            }
+        }
+        out
+    }
+}
+
+/// The measured stretches of a force channel `fy` sampled at `t`, as index ranges
+/// `(first, last)`: runs of consecutive finite samples, broken also where a time step is
+/// more than 1.5 times the median step (rows left out of a mixed-rate file).
+pub fn stretch_indices(t: &[f64], fy: &[f64]) -> Vec<(usize, usize)> {
+    let n = t.len().min(fy.len());
+    let mut steps: Vec<f64> = t[..n].windows(2).map(|w| w[1] - w[0]).collect();
+    steps.sort_by(f64::total_cmp);
+    let gap = steps.get(steps.len() / 2).map_or(f64::INFINITY, |m| 1.5 * m);
+    let mut out = Vec::new();
+    let mut start: Option<usize> = None;
+    for k in 0..n {
+        if let Some(a) = start {
+            if !fy[k].is_finite() || t[k] - t[k - 1] > gap {
+                out.push((a, k - 1));
+                start = None;
+            }
+        }
+        if start.is_none() && fy[k].is_finite() {
+            start = Some(k);
+        }
+    }
+    if let Some(a) = start {
+        out.push((a, n - 1));
+    }
+    out
+}
+
 /// Where one side's data come from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum SideSource {
@@ -583,23 +642,10 @@ impl GaitData {
     /// per force plate the foot stepped on; the whole trial when nothing is missing).
     pub fn measured_stretches(&self, side: Side) -> Vec<(f64, f64)> {
         let (t, feet) = self.force_record();
-        let fy = &feet[side_index(side)].fy;
-        let mut out = Vec::new();
-        let mut start = None;
-        for k in 0..t.len().min(fy.len()) {
-            match (fy[k].is_finite(), start) {
-                (true, None) => start = Some(k),
-                (false, Some(a)) => {
-                    out.push((t[a], t[k - 1]));
-                    start = None;
-                }
-                _ => {}
-            }
-        }
-        if let Some(a) = start {
-            out.push((t[a], t[t.len().min(fy.len()) - 1]));
-        }
-        out
+        stretch_indices(t, &feet[side_index(side)].fy)
+            .into_iter()
+            .map(|(a, b)| (t[a], t[b]))
+            .collect()
     }
 
     /// Whether foot `side`'s forces are known over all of `[t0, t1]` (inside one measured

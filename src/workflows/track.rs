@@ -499,9 +499,10 @@ pub fn track(
     };
     let mut prob = TrackingProblem::build(&base, &req.effects)?;
     for n in &prob.setup.notes {
-        match n.strip_prefix("warning: ") {
-            Some(w) => progress.warn(&format!("warning: {w}")),
-            None => progress.note(n),
+        if n.starts_with("warning: ") {
+            progress.warn(n)
+        } else {
+            progress.note(n)
         }
     }
     prob.refine = req.check_points;
