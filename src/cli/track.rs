@@ -134,7 +134,9 @@ pub struct Args {
 fn parse_window(s: &str) -> Result<(f64, f64), String> {
     let parts: Vec<&str> = s.split(',').map(str::trim).collect();
     let [a, b] = parts.as_slice() else {
-        return Err(format!("expected T0,T1 in seconds (e.g. 0.5,1.6), got '{s}'"));
+        return Err(format!(
+            "expected T0,T1 in seconds (e.g. 0.5,1.6), got '{s}'"
+        ));
     };
     let num = |v: &str| {
         v.parse::<f64>()

@@ -31,9 +31,7 @@
 
 use super::error::DataError;
 use super::storage::check_time;
-use super::{
-    Events, FootData, ForceSamples, GaitData, SideSource, DEFAULT_COP_THRESHOLD, Q_NAMES,
-};
+use super::{Events, FootData, ForceSamples, GaitData, SideSource, DEFAULT_COP_THRESHOLD, Q_NAMES};
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};

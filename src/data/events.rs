@@ -116,9 +116,7 @@ pub fn detect_events(data: &GaitData, fraction: f64) -> Result<Events, DataError
         .filter(|v| !v.is_nan())
         .fold(f64::NAN, f64::max);
     let threshold = fraction * peak;
-    let stance = feet
-        .iter()
-        .any(|f| f.fy.iter().any(|&v| v > threshold));
+    let stance = feet.iter().any(|f| f.fy.iter().any(|&v| v > threshold));
     if peak.is_nan() || peak <= 0.0 || !stance {
         return Err(DataError::NoStance {
             path: data.source.clone(),

@@ -138,7 +138,9 @@ pub fn stretch_indices(t: &[f64], fy: &[f64]) -> Vec<(usize, usize)> {
     let n = t.len().min(fy.len());
     let mut steps: Vec<f64> = t[..n].windows(2).map(|w| w[1] - w[0]).collect();
     steps.sort_by(f64::total_cmp);
-    let gap = steps.get(steps.len() / 2).map_or(f64::INFINITY, |m| 1.5 * m);
+    let gap = steps
+        .get(steps.len() / 2)
+        .map_or(f64::INFINITY, |m| 1.5 * m);
     let mut out = Vec::new();
     let mut start: Option<usize> = None;
     for k in 0..n {
@@ -743,7 +745,10 @@ impl GaitData {
         }
         for (name, v, t) in &loads {
             if v.len() != t.len() {
-                return bad(name, format!("{} samples but its time has {}", v.len(), t.len()));
+                return bad(
+                    name,
+                    format!("{} samples but its time has {}", v.len(), t.len()),
+                );
             }
             if let Some(k) = v.iter().position(|x| x.is_infinite()) {
                 return bad(

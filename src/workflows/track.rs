@@ -108,7 +108,9 @@ impl TrackingProblem {
         }
         let choice = match (run.window, run.stride) {
             (Some(_), Some(_)) => {
-                return Err(anyhow!("--window and --stride both choose the half cycle; give one"))
+                return Err(anyhow!(
+                    "--window and --stride both choose the half cycle; give one"
+                ))
             }
             (Some((a, b)), None) => WindowChoice::Within(a, b),
             (None, Some(n)) => WindowChoice::Stride(n),

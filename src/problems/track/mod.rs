@@ -759,8 +759,8 @@ mod residual;
 mod window;
 
 pub use window::{
-    choose_window, combined_events, half_cycles, kinematic_events, missing_forces,
-    KinematicEvents, WindowChoice,
+    choose_window, combined_events, half_cycles, kinematic_events, missing_forces, KinematicEvents,
+    WindowChoice,
 };
 
 pub use breakdown::{CostBreakdown, NodeCost};

@@ -168,7 +168,12 @@ pub fn combined_events(
         };
         let mut added = Vec::new();
         for (kind, force, k, off) in [
-            ("heel strike", &mut ev.heel_strike[s], &kin.heel_strike[s], hs_off),
+            (
+                "heel strike",
+                &mut ev.heel_strike[s],
+                &kin.heel_strike[s],
+                hs_off,
+            ),
             ("toe off", &mut ev.toe_off[s], &kin.toe_off[s], to_off),
         ] {
             for &g in k {
@@ -181,7 +186,11 @@ pub fn combined_events(
             }
             force.sort_by(f64::total_cmp);
         }
-        if data.force_record().1[s].fy.first().is_none_or(|v| v.is_nan()) {
+        if data.force_record().1[s]
+            .fy
+            .first()
+            .is_none_or(|v| v.is_nan())
+        {
             // unknown at the start: loaded if the foot's first event is a toe off
             let first_hs = ev.heel_strike[s].first().copied().unwrap_or(f64::INFINITY);
             let first_to = ev.toe_off[s].first().copied().unwrap_or(f64::INFINITY);
