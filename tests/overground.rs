@@ -233,7 +233,7 @@ fn kinematic_events_agree_with_the_force_events() {
         assert!(v.iter().all(|d| (d - m).abs() < 0.01), "{v:?} around {m}");
     }
     // the overground trial's events: the right heel strike that ends the half cycle
-    // comes from the kinematics, within 25 ms of the force plate's
+    // comes from the kinematics, within 10 ms of the 60 Hz force threshold's
     let tmp = tempfile::tempdir().unwrap();
     let (csv, _) = write_overground_trial(tmp.path());
     let d = read_sagittal_csv(&csv).unwrap();
@@ -242,12 +242,13 @@ fn kinematic_events_agree_with_the_force_events() {
     let (a, b) = half_cycles(&ev)[0];
     let (oa, ob) = half_cycles(&ov)[0];
     println!("half cycle full {a:.4}–{b:.4} s, overground {oa:.4}–{ob:.4} s");
+    // on the plate at 600 Hz: the 60 Hz record interpolates the same crossing
     assert!(
-        (oa - a).abs() < 1e-9,
+        (oa - a).abs() < 0.003,
         "left heel strike on the plate: {oa} vs {a}"
     );
     assert!(
-        (ob - b).abs() < 0.025,
+        (ob - b).abs() < 0.01,
         "right heel strike from kinematics: {ob} vs {b}"
     );
 }
