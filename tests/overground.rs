@@ -308,9 +308,10 @@ fn an_overground_two_plate_trial_is_tracked_end_to_end() {
         "every Table 3 channel is defined"
     );
     for ((n, _, x), (_, _, y)) in a.iter().zip(&b) {
-        // the same half cycle, its end from the kinematics (a few ms off the plate's)
+        // the same half cycle, its end from the kinematics (a ms off the 60 Hz force
+        // threshold's), its forces at 600 Hz: measured 0–3 % apart (2.9 % tangential GRF)
         assert!(
-            (x - y).abs() <= 0.5 * y + 0.5,
+            (x - y).abs() <= 0.08 * y + 0.05,
             "{n}: overground {x:.2} vs full coverage {y:.2}"
         );
     }
