@@ -316,3 +316,207 @@ fn an_overground_two_plate_trial_is_tracked_end_to_end() {
         );
     }
 }
+
+/// The model, phase file and constraint sets `track` uses by default (ellipse foot).
+fn problem() -> (
+    footfall::model::GaitModel,
+    footfall::phases::PhaseSequence,
+    Vec<footfall::model::ConstraintSet>,
+) {
+    let m = common::model("opensim_subject01.json", "ellipse.json");
+    let p = root().join(footfall::workflows::default_phases("ellipse"));
+    let seq = footfall::phases::PhaseSequence::load(&p).unwrap();
+    let sets = seq.resolve(&m, &p).unwrap();
+    (m, seq, sets)
+}
+
+#[test]
+fn windows_are_chosen_among_the_half_cycles_with_measured_forces() {
+    use footfall::problems::track::{TargetSides, TrackingSetup, WindowChoice};
+    let (m, seq, sets) = problem();
+    let tmp = tempfile::tempdir().unwrap();
+    let (csv, _) = write_overground_trial(tmp.path());
+    let d = read_sagittal_csv(&csv).unwrap();
+    let build = |c| TrackingSetup::for_window(&m, &seq, &sets, &d, TargetSides::Interpolated, c);
+    // the default: the half cycle on the plates, with the notes on the kinematic events
+    let s = build(WindowChoice::First).unwrap();
+    let (ev, _) = combined_events(&m, &d).unwrap();
+    let all = half_cycles(&ev);
+    assert_eq!(s.window, all[0]);
+    assert!(s.notes.iter().any(|n| n.contains("from the kinematics")));
+    assert!(
+        !s.notes.iter().any(|n| n.starts_with("warning")),
+        "{:?}",
+        s.notes
+    );
+    // every node of a phase that loads a foot has that foot's force target
+    let loaded = s
+        .targets
+        .iter()
+        .flatten()
+        .filter(|t| t.feet.iter().any(Option::is_some))
+        .count();
+    assert_eq!(loaded, s.targets.iter().map(Vec::len).sum::<usize>());
+    assert!(s
+        .targets
+        .iter()
+        .flatten()
+        .flat_map(|t| t.feet.iter().flatten())
+        .all(|f| f.0.is_finite() && f.1.is_finite()));
+    // --window and --stride pick the same one
+    assert_eq!(build(WindowChoice::Stride(1)).unwrap().window, all[0]);
+    let (a, b) = all[0];
+    assert_eq!(
+        build(WindowChoice::Within(a - 0.1, b + 0.1))
+            .unwrap()
+            .window,
+        all[0]
+    );
+    // a window with no half cycle inside, a stride that does not exist: clear refusals
+    let e = build(WindowChoice::Within(a + 0.1, b + 0.1)).err().unwrap();
+    assert!(e.contains("no half cycle") && e.contains("1: "), "{e}");
+    let e = build(WindowChoice::Stride(all.len() + 1)).err().unwrap();
+    assert!(e.contains("does not exist"), "{e}");
+    // no plate under the left foot: no default window, and the refusal says why
+    let mut off = d.clone();
+    if let Some(f) = &mut off.forces {
+        f.feet[1].fx.iter_mut().for_each(|v| *v = f64::NAN);
+        f.feet[1].fy.iter_mut().for_each(|v| *v = f64::NAN);
+        f.feet[1].cop_x.iter_mut().for_each(|v| *v = f64::NAN);
+    }
+    off.events = Some(ev.clone());
+    let e = TrackingSetup::for_window(
+        &m,
+        &seq,
+        &sets,
+        &off,
+        TargetSides::Interpolated,
+        WindowChoice::First,
+    )
+    .err()
+    .unwrap();
+    assert!(
+        e.contains("Left foot loaded") && e.contains("left nowhere"),
+        "{e}"
+    );
+    // chosen explicitly it is tracked, its left force terms left out, with a warning
+    let s = TrackingSetup::for_window(
+        &m,
+        &seq,
+        &sets,
+        &off,
+        TargetSides::Interpolated,
+        WindowChoice::Stride(1),
+    )
+    .unwrap();
+    assert!(
+        s.notes.iter().any(|n| n.starts_with("warning:")),
+        "{:?}",
+        s.notes
+    );
+    assert!(s.targets.iter().flatten().all(|t| t.feet[1].is_none()));
+    assert!(s.targets.iter().flatten().any(|t| t.feet[0].is_some()));
+}
+
+#[test]
+fn sample_targets_use_each_channel_at_its_own_instants() {
+    use footfall::problems::track::{TargetSides, TrackingSetup, WindowChoice};
+    let (m, seq, sets) = problem();
+    let tmp = tempfile::tempdir().unwrap();
+    let (csv, _) = write_overground_trial(tmp.path());
+    let d = read_sagittal_csv(&csv).unwrap();
+    let s = TrackingSetup::for_window(
+        &m,
+        &seq,
+        &sets,
+        &d,
+        TargetSides::Samples,
+        WindowChoice::First,
+    )
+    .unwrap();
+    let (t0, t1) = s.window;
+    let f = d.forces.as_ref().unwrap();
+    let kin: Vec<_> = s
+        .samples
+        .iter()
+        .filter(|x| x.target.q.iter().any(Option::is_some))
+        .collect();
+    let frc: Vec<_> = s
+        .samples
+        .iter()
+        .filter(|x| x.target.feet.iter().any(Option::is_some))
+        .collect();
+    // angles at every kinematic instant inside the window, forces at every force instant
+    let inside = |t: &[f64]| {
+        t.iter()
+            .filter(|&&x| x > t0 + 1e-6 && x < t1 - 1e-6)
+            .count()
+    };
+    assert!(
+        kin.len() + 2 >= inside(&d.time) && kin.len() <= inside(&d.time),
+        "{} angle samples",
+        kin.len()
+    );
+    assert!(
+        frc.len() + 6 >= inside(&f.time) && frc.len() <= inside(&f.time),
+        "{} force samples",
+        frc.len()
+    );
+    assert!(kin
+        .iter()
+        .all(|x| x.target.feet.iter().all(Option::is_none)));
+    assert!(kin.iter().all(|x| d.time.contains(&x.target.time)));
+    assert!(frc.iter().all(|x| x.target.q.iter().all(Option::is_none)));
+    assert!(frc.iter().all(|x| f.time.contains(&x.target.time)));
+    println!(
+        "{} angle samples at 60 Hz, {} force samples at 600 Hz in {t0:.3}–{t1:.3} s",
+        kin.len(),
+        frc.len()
+    );
+}
+
+#[test]
+fn a_loaded_foot_without_cop_keeps_its_forces_and_is_warned_about() {
+    use footfall::problems::track::{TargetSides, TrackingSetup, WindowChoice};
+    let (m, seq, sets) = problem();
+    let mut d = GaitData::bundled(&root()).unwrap();
+    let (a, b) = {
+        let ev = detect_events(&d, DEFAULT_EVENT_FRACTION).unwrap();
+        half_cycles(&ev)[0]
+    };
+    // the left CoP missing over the middle third of the half cycle, the foot loaded
+    let (c0, c1) = (a + (b - a) / 3.0, a + 2.0 * (b - a) / 3.0);
+    for k in 0..d.len() {
+        if d.time[k] > c0 && d.time[k] < c1 {
+            d.feet[1].cop_x[k] = f64::NAN;
+        }
+    }
+    d.validate().unwrap();
+    let s = TrackingSetup::for_window(
+        &m,
+        &seq,
+        &sets,
+        &d,
+        TargetSides::Interpolated,
+        WindowChoice::First,
+    )
+    .unwrap();
+    assert!(
+        s.notes.iter().any(|n| n.starts_with("warning")
+            && n.contains("left foot is loaded but its CoP is missing")),
+        "{:?}",
+        s.notes
+    );
+    let mut gap_nodes = 0;
+    for t in s.targets.iter().flatten() {
+        let left = t.feet[1].expect("the left foot is loaded throughout the half cycle");
+        if t.time > c0 + 0.02 && t.time < c1 - 0.02 {
+            assert!(left.2.is_none(), "CoP target at {} s", t.time);
+            assert!(left.0.is_finite() && left.1 > 20.0);
+            gap_nodes += 1;
+        } else if t.time < c0 - 0.02 || t.time > c1 + 0.02 {
+            assert!(left.2.is_some() || left.1 < 20.0, "no CoP at {} s", t.time);
+        }
+    }
+    assert!(gap_nodes > 3);
+}
