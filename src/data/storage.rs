@@ -760,7 +760,7 @@ impl GaitData {
                     };
                     let mut f = raw.resample_foot(0, &time);
                     for (c, &fy) in f.cop_x.iter_mut().zip(&f.fy) {
-                        if !(fy >= map.cop_threshold) {
+                        if fy.is_nan() || fy < map.cop_threshold {
                             *c = f64::NAN;
                         }
                     }
