@@ -6,7 +6,11 @@
 //!   SI units, radians, x forward, y up, angles counter-clockwise positive seen from the
 //!   right, knee flexion negative) with an optional meta JSON ([`TrialMeta`]).
 //! * [`read_storage`] and [`GaitData::from_storage`]: OpenSim `.mot`/`.sto` files, with
-//!   the angle unit from the header and forces resampled onto the kinematic instants.
+//!   the angle unit from the header; the forces kept at their own instants
+//!   ([`GaitData::forces`]) and read at the kinematic instants in [`GaitData::feet`].
+//! * Partial force coverage: `NaN` forces or CoP are "not measured" (an overground trial's
+//!   foot off the plates); [`GaitData::measured_stretches`] says where a foot's force is
+//!   known, [`GaitData::cop_missing_while_loaded`] where a loaded foot lacks its CoP.
 //! * [`CubicSpline`] / [`GaitData::spline`]: tracked quantities as smooth ($C^2$) functions
 //!   of time, interpolated before integration.
 //! * [`detect_events`]: heel strike and toe off from the normal-force threshold
