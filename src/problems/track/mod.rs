@@ -526,6 +526,11 @@ impl TrackingSetup {
             let one_sided = match sides {
                 TargetSides::Interpolated | TargetSides::Samples => None,
                 TargetSides::OneSided { cutoff_hz } => {
+                    if data.forces.is_some()
+                        || data.feet.iter().any(|f| f.fy.iter().any(|v| v.is_nan()))
+                    {
+                        return Err("one-sided targets need the forces measured throughout at the kinematic instants; for forces at their own rate or not measured everywhere use interpolated or sample targets".into());
+                    }
                     let end = t + duration.value();
                     let a = impacts
                         .iter()
