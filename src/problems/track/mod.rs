@@ -146,18 +146,19 @@ fn sample_targets(
     let nq = angles.len();
     // each channel at its own instants: (time, kinematic row, force row)
     let (force_time, force_feet) = data.force_record();
-    let instants: Vec<(f64, Option<usize>, Option<usize>)> = if data.forces.is_some() {
-        let mut v: Vec<_> = (0..data.time.len())
-            .map(|n| (data.time[n], Some(n), None))
-            .chain((0..force_time.len()).map(|n| (force_time[n], None, Some(n))))
-            .collect();
-        v.sort_by(|x, y| x.0.total_cmp(&y.0));
-        v
-    } else {
-        (0..data.time.len())
-            .map(|n| (data.time[n], Some(n), Some(n)))
-            .collect()
-    };
+    let instants: Vec<(f64, Option<usize>, Option<usize>)> =
+        if data.feet.iter().any(|f| f.fy.iter().any(|v| v.is_nan())) {
+            let mut v: Vec<_> = (0..data.time.len())
+                .map(|n| (data.time[n], Some(n), None))
+                .chain((0..force_time.len()).map(|n| (force_time[n], None, Some(n))))
+                .collect();
+            v.sort_by(|x, y| x.0.total_cmp(&y.0));
+            v
+        } else {
+            (0..data.time.len())
+                .map(|n| (data.time[n], Some(n), Some(n)))
+                .collect()
+        };
     let mut out = Vec::new();
     let (mut a, mut j) = (t0, 0);
     for (i, ph) in seq.phases.iter().enumerate() {
@@ -529,7 +530,7 @@ impl TrackingSetup {
                     if data.forces.is_some()
                         || data.feet.iter().any(|f| f.fy.iter().any(|v| v.is_nan()))
                     {
-                        return Err("one-sided targets need the forces measured throughout at the kinematic instants; for forces at their own rate or not measured everywhere use interpolated or sample targets".into());
+                        return Err("one-sided targets read the forces at the kinematic instants and need them measured throughout; where they are not, use interpolated or sample targets".into());
                     }
                     let end = t + duration.value();
                     let a = impacts
