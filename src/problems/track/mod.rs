@@ -146,19 +146,18 @@ fn sample_targets(
     let nq = angles.len();
     // each channel at its own instants: (time, kinematic row, force row)
     let (force_time, force_feet) = data.force_record();
-    let instants: Vec<(f64, Option<usize>, Option<usize>)> =
-        if data.feet.iter().any(|f| f.fy.iter().any(|v| v.is_nan())) {
-            let mut v: Vec<_> = (0..data.time.len())
-                .map(|n| (data.time[n], Some(n), None))
-                .chain((0..force_time.len()).map(|n| (force_time[n], None, Some(n))))
-                .collect();
-            v.sort_by(|x, y| x.0.total_cmp(&y.0));
-            v
-        } else {
-            (0..data.time.len())
-                .map(|n| (data.time[n], Some(n), Some(n)))
-                .collect()
-        };
+    let instants: Vec<(f64, Option<usize>, Option<usize>)> = if data.forces.is_some() {
+        let mut v: Vec<_> = (0..data.time.len())
+            .map(|n| (data.time[n], Some(n), None))
+            .chain((0..force_time.len()).map(|n| (force_time[n], None, Some(n))))
+            .collect();
+        v.sort_by(|x, y| x.0.total_cmp(&y.0));
+        v
+    } else {
+        (0..data.time.len())
+            .map(|n| (data.time[n], Some(n), Some(n)))
+            .collect()
+    };
     let mut out = Vec::new();
     let (mut a, mut j) = (t0, 0);
     for (i, ph) in seq.phases.iter().enumerate() {
@@ -527,9 +526,7 @@ impl TrackingSetup {
             let one_sided = match sides {
                 TargetSides::Interpolated | TargetSides::Samples => None,
                 TargetSides::OneSided { cutoff_hz } => {
-                    if data.forces.is_some()
-                        || data.feet.iter().any(|f| f.fy.iter().any(|v| v.is_nan()))
-                    {
+                    if data.feet.iter().any(|f| f.fy.iter().any(|v| v.is_nan())) {
                         return Err("one-sided targets read the forces at the kinematic instants and need them measured throughout; where they are not, use interpolated or sample targets".into());
                     }
                     let end = t + duration.value();
