@@ -83,6 +83,17 @@ fn out_of_range_option_values_are_usage_errors_naming_the_option() {
             finite_positive,
         ),
         (
+            &["track", "--window", "1.6,0.5"],
+            "'--window <T0,T1>'",
+            "must be before",
+        ),
+        (
+            &["track", "--window", "0.5"],
+            "'--window <T0,T1>'",
+            "expected T0,T1",
+        ),
+        (&["track", "--stride", "0"], "'--stride <N>'", "not in 1.."),
+        (
             &[
                 "solve",
                 "--problem",
@@ -294,4 +305,15 @@ fn help_lists_the_exit_codes() {
     ] {
         assert!(help.contains(line), "{line:?} missing: {help}");
     }
+}
+
+#[test]
+fn a_window_without_a_half_cycle_is_bad_input_listing_the_half_cycles() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("run");
+    let o = footfall(&["track", "--window", "0.0,0.4", "--out", s(&out), "--quiet"]);
+    let err = assert_exit(&o, 1, &["no half cycle", "0–0.4 s", "1: "]);
+    assert!(!out.join("summary.json").exists(), "{err}");
+    let o = footfall(&["track", "--stride", "9", "--out", s(&out), "--quiet"]);
+    assert_exit(&o, 1, &["stride 9 does not exist", "half cycle(s)"]);
 }

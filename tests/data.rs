@@ -881,6 +881,7 @@ fn synthetic(period: f64) -> (GaitData, impl Fn(usize, f64) -> f64) {
             },
         ],
         time,
+        forces: None,
         extra: BTreeMap::new(),
         body_mass: None,
         force_plate_height: None,
@@ -1063,15 +1064,34 @@ fn nan_in_a_kinematic_column_is_refused_with_row_and_column() {
     let e = csv_error(&cells);
     assert!(matches!(e, DataError::NotFinite { .. }), "{e}");
     assert_eq!((e.row(), e.column()), (Some(6), Some("hip_r")));
-    // A CoP may be NaN only while that foot is unloaded.
+    // A CoP missing while the foot is loaded is not measured, not refused: it is listed
+    // (the tracking warns and leaves out only that CoP term).
     let mut cells = csv_cells();
     let (jc, jf) = (col_index(&cells, "cop_x_r"), col_index(&cells, "grf_y_r"));
     let k = (1..cells.len())
         .find(|&k| cells[k][jf].parse::<f64>().unwrap() > 500.0)
         .unwrap();
     cells[k][jc] = "NaN".into();
+    let s = Scratch::new();
+    let d = read_sagittal_csv(&s.write("cop_gap_sagittal.csv", &join(&cells))).unwrap();
+    let t: f64 = cells[k][0].parse().unwrap();
+    assert_eq!(d.cop_missing_while_loaded()[0], vec![t]);
+    assert!(d.cop_missing_while_loaded()[1].is_empty());
+    // A force not measured (NaN) is read as such.
+    let mut cells = csv_cells();
+    let jx = col_index(&cells, "grf_x_l");
+    cells[1][jx] = "NaN".into();
+    let d = read_sagittal_csv(&s.write("force_gap_sagittal.csv", &join(&cells))).unwrap();
+    assert!(d.feet[1].fx[0].is_nan() && d.forces.is_none());
+    // NaN in some but not all kinematic columns of a row is refused.
+    let mut cells = csv_cells();
+    for c in ["pelvis_x", "pelvis_y", "pelvis_tilt", "hip_r"] {
+        let j = col_index(&cells, c);
+        cells[4][j] = "NaN".into();
+    }
     let e = csv_error(&cells);
-    assert_eq!((e.row(), e.column()), (Some(k + 1), Some("cop_x_r")), "{e}");
+    assert!(matches!(e, DataError::NotFinite { .. }), "{e}");
+    assert_eq!(e.row(), Some(5), "{e}");
     // Infinity anywhere.
     let mut cells = csv_cells();
     let j = col_index(&cells, "lumbar_extension");

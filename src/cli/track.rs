@@ -110,11 +110,40 @@ pub struct Args {
     /// the filter's bias and its low-passed noise, which a fit can follow.
     #[arg(long, allow_negative_numbers = true, value_parser = super::validate::non_negative)]
     velocity_weight: Option<f64>,
+    /// Track the first half cycle (left heel strike to the next right heel strike) that
+    /// lies inside T0–T1 (s). Default: the first half cycle in which every loaded foot's
+    /// force was measured (overground trials with force plates in places).
+    #[arg(long, value_name = "T0,T1", value_parser = parse_window, conflicts_with = "stride")]
+    window: Option<(f64, f64)>,
+    /// Track the N-th half cycle of the trial (1 = the first).
+    #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
+    stride: Option<u64>,
     /// Start from the solution of a track run (its folder or solution.json) of the same
     /// phase graph instead of the data; effect parameters it identified start at its
     /// values, unless an `--effect` holds them fixed at its own.
     #[arg(long)]
     init: Option<PathBuf>,
+}
+
+/// `--window T0,T1`: two finite times (s), T0 < T1.
+fn parse_window(s: &str) -> Result<(f64, f64), String> {
+    let parts: Vec<&str> = s.split(',').map(str::trim).collect();
+    let [a, b] = parts.as_slice() else {
+        return Err(format!(
+            "expected T0,T1 in seconds (e.g. 0.5,1.6), got '{s}'"
+        ));
+    };
+    let num = |v: &str| {
+        v.parse::<f64>()
+            .ok()
+            .filter(|x| x.is_finite())
+            .ok_or_else(|| format!("'{v}' is not a finite time in seconds"))
+    };
+    let (t0, t1) = (num(a)?, num(b)?);
+    if t0 >= t1 {
+        return Err(format!("T0 = {t0} s must be before T1 = {t1} s"));
+    }
+    Ok((t0, t1))
 }
 
 /// `--noise-weights angle=DEG,position=MM,force=N,cop=MM`: every key once, each a
@@ -198,6 +227,8 @@ fn run_inner(args: Args, progress: &CliProgress) -> anyhow::Result<()> {
             velocity_weight: args.velocity_weight,
             one_sided_targets: args.one_sided_targets,
             sample_targets: args.sample_targets,
+            window: args.window,
+            stride: args.stride.map(|n| n as usize),
             noise_weights: args
                 .noise_weights
                 .as_deref()

@@ -16,14 +16,22 @@
 //! The six columns of one side (`hip`, `knee`, `ankle`, `grf_x`, `grf_y`, `cop_x`) may be
 //! left out together when only one side was measured ([`SideSource::Missing`]; fill it
 //! with [`GaitData::mirror_missing_side`]); leaving out some of them is an error. `NaN`
-//! is allowed only in `cop_x_*` while that foot is unloaded.
+//! in `grf_*` and `cop_x_*` means "not measured" (a foot off the force plates; a CoP the
+//! lab did not export while the foot is loaded, which then tracks its forces only).
+//!
+//! **Mixed rates in one file.** Kinematics at 60–200 Hz and forces at 600–2,000 Hz may
+//! share one file: a row whose kinematic columns (pelvis, angles, extras) are all `NaN`
+//! is a force-only row. The kinematics are then the other rows, and the forces are kept
+//! at their own instants ([`GaitData::forces`]: the force-only rows and the kinematic
+//! rows that carry a force), with their view at the kinematic instants in
+//! [`GaitData::feet`].
 //!
 //! The optional meta JSON ([`TrialMeta`]) supplies the body mass, the treadmill belt
 //! speed, the force-plate height, the CoP threshold and the units.
 
 use super::error::DataError;
 use super::storage::check_time;
-use super::{Events, FootData, GaitData, SideSource, DEFAULT_COP_THRESHOLD, Q_NAMES};
+use super::{Events, FootData, ForceSamples, GaitData, SideSource, DEFAULT_COP_THRESHOLD, Q_NAMES};
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -248,8 +256,8 @@ pub fn read_sagittal_csv(path: &Path) -> Result<GaitData, DataError> {
 /// Errors ([`DataError`]): unreadable file; empty file or fewer than two data rows;
 /// duplicate or missing columns (a side's six columns may only be missing together, and
 /// not both sides); a row with the wrong number of fields; an unparsable number (row,
-/// column); NaN or ∞ outside `cop_x_*`, or `cop_x_*` NaN while that foot's `grf_y` is at
-/// or above the CoP threshold (row, column); time not strictly increasing (row); a meta
+/// column); ∞ anywhere, NaN in a kinematic column of a row that has kinematics (row,
+/// column); time not strictly increasing (row); a meta
 /// file that is not valid JSON, has invalid values or units that do not parse.
 pub fn read_sagittal_csv_with(path: &Path, meta: &MetaSource) -> Result<GaitData, DataError> {
     let meta_path = match meta {
@@ -534,30 +542,30 @@ fn parse_sagittal_csv(
             });
         }
     }
-    // NaN only in cop_x_* while unloaded.
-    let cop_cols: Vec<(usize, usize)> = side_cols.iter().flatten().map(|c| (c[5], c[4])).collect();
+    // NaN: in forces and CoP it means "not measured" (off the plates, a CoP the lab did
+    // not export); in kinematics only in force-only rows of a mixed-rate file (every
+    // kinematic column NaN). ∞ nowhere.
+    let load_cols: Vec<usize> = side_cols
+        .iter()
+        .flatten()
+        .flat_map(|c| c[3..6].iter().copied())
+        .collect();
+    let kin_cols: Vec<usize> = (0..ncol)
+        .filter(|j| *j != t_col && !load_cols.contains(j))
+        .collect();
+    let force_only: Vec<bool> = (0..rows.len())
+        .map(|k| kin_cols.iter().all(|&j| table[j][k].is_nan()))
+        .collect();
     for (j, col) in table.iter().enumerate() {
-        let cop_fy = cop_cols.iter().find(|(c, _)| *c == j).map(|(_, fy)| *fy);
+        let load = load_cols.contains(&j);
         for (k, &v) in col.iter().enumerate() {
-            if v.is_finite() {
+            if v.is_finite() || (v.is_nan() && (load || force_only[k])) {
                 continue;
             }
-            let reason = match cop_fy {
-                Some(fyc) if v.is_nan() => {
-                    let fy = table[fyc][k];
-                    if fy < cop_threshold {
-                        continue;
-                    }
-                    format!(
-                        "CoP is NaN while {} = {} N ≥ {} N (CoP may be NaN only while the foot is unloaded)",
-                        cols[fyc],
-                        crate::limits::show(fy),
-                        crate::limits::show(cop_threshold)
-                    )
-                }
-                _ => format!(
-                    "value is {v}; NaN is allowed only in cop_x_* while that foot is unloaded"
-                ),
+            let reason = if v.is_nan() {
+                "value is NaN; NaN is allowed in grf_* and cop_x_* (not measured), and in kinematic columns only in a force-only row of a mixed-rate file (every kinematic column NaN)".to_string()
+            } else {
+                format!("value is {v}; NaN marks a value that was not measured")
             };
             return Err(DataError::NotFinite {
                 path: p,
@@ -567,6 +575,54 @@ fn parse_sagittal_csv(
             });
         }
     }
+    // A mixed-rate file: kinematic rows and force-only rows (forces at their own rate).
+    let mixed = force_only.iter().any(|&f| f);
+    let (table, rows, force_record) = if mixed {
+        let all_time: Vec<f64> = table[t_col].iter().map(|t| t * units.time).collect();
+        check_time(&all_time, &rows, "time", path)?;
+        // force instants: force-only rows, and kinematic rows that carry a force
+        let frows: Vec<usize> = (0..rows.len())
+            .filter(|&k| force_only[k] || load_cols.iter().any(|&j| table[j][k].is_finite()))
+            .collect();
+        let pick = |j: usize, f: f64, idx: &[usize]| -> Vec<f64> {
+            idx.iter().map(|&k| table[j][k] * f).collect()
+        };
+        let n = frows.len();
+        let record = ForceSamples {
+            time: frows.iter().map(|&k| all_time[k]).collect(),
+            feet: std::array::from_fn(|s| match side_cols[s] {
+                Some(c) => FootData {
+                    fx: pick(c[3], 1.0, &frows),
+                    fy: pick(c[4], 1.0, &frows),
+                    cop_x: pick(c[5], units.position, &frows),
+                },
+                None => FootData {
+                    fx: vec![f64::NAN; n],
+                    fy: vec![f64::NAN; n],
+                    cop_x: vec![f64::NAN; n],
+                },
+            }),
+        };
+        let krows: Vec<usize> = (0..rows.len()).filter(|&k| !force_only[k]).collect();
+        if krows.len() < 2 {
+            return Err(DataError::Format {
+                path: p,
+                row: header_row,
+                reason: format!(
+                    "{} kinematic row(s) (rows whose kinematic columns are not all NaN); at least two are needed",
+                    krows.len()
+                ),
+            });
+        }
+        let kt: Vec<Vec<f64>> = table
+            .iter()
+            .map(|col| krows.iter().map(|&k| col[k]).collect())
+            .collect();
+        let kr: Vec<usize> = krows.iter().map(|&k| rows[k]).collect();
+        (kt, kr, Some(record))
+    } else {
+        (table, rows, None)
+    };
     let time: Vec<f64> = table[t_col].iter().map(|t| t * units.time).collect();
     check_time(&time, &rows, "time", path)?;
 
@@ -600,6 +656,9 @@ fn parse_sagittal_csv(
             },
         };
     }
+    if let Some(rec) = &force_record {
+        feet = std::array::from_fn(|s| rec.resample_foot(s, &time));
+    }
     let extra = extra_cols
         .iter()
         .map(|&j| {
@@ -623,6 +682,7 @@ fn parse_sagittal_csv(
         time,
         q,
         feet,
+        forces: force_record,
         extra,
         body_mass: None,
         force_plate_height: None,

@@ -88,8 +88,9 @@ pub enum DataError {
         /// The parser's reason.
         reason: String,
     },
-    /// A value is NaN or infinite where that is not allowed (NaN is allowed only in
-    /// `cop_x_*` while that foot is unloaded).
+    /// A value is NaN or infinite where that is not allowed (in the sagittal CSV NaN
+    /// means "not measured" in `grf_*` and `cop_x_*`, and marks a force-only row when
+    /// every kinematic column of the row is NaN).
     #[error("{path}: line {row}, column '{column}': {reason}")]
     NotFinite {
         /// File.

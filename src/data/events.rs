@@ -57,7 +57,9 @@ impl ContactPhase {
 /// Rising and falling crossings of `threshold` by `force` sampled at `time`, with linear
 /// interpolation of the crossing instants: `(rises, falls)`.
 ///
-/// A sample is "above" when `force > threshold`. NaN samples are treated as not above.
+/// A sample is "above" when `force > threshold`. A crossing is counted only between two
+/// measured (finite) samples: where the force is `NaN` (the foot off the plates) nothing
+/// is known, and the edge of a measured stretch is not an event.
 /// `time` and `force` must have the same length (extra samples of the longer are ignored).
 pub fn threshold_crossings(time: &[f64], force: &[f64], threshold: f64) -> (Vec<f64>, Vec<f64>) {
     let n = time.len().min(force.len());
@@ -65,7 +67,7 @@ pub fn threshold_crossings(time: &[f64], force: &[f64], threshold: f64) -> (Vec<
     let (mut rises, mut falls) = (Vec::new(), Vec::new());
     for k in 0..n.saturating_sub(1) {
         let (a, b) = (above(k), above(k + 1));
-        if a == b {
+        if a == b || force[k].is_nan() || force[k + 1].is_nan() {
             continue;
         }
         let (f0, f1) = (force[k], force[k + 1]);
@@ -88,11 +90,15 @@ pub fn threshold_crossings(time: &[f64], force: &[f64], threshold: f64) -> (Vec<
 /// `fraction × peak normal force` (see the module docs; the seed uses
 /// [`DEFAULT_EVENT_FRACTION`] = 0.05).
 ///
-/// A foot whose normal force was not measured (all NaN) has no events. Errors: data
+/// The forces are read at their own instants ([`GaitData::force_record`]). A foot has
+/// events only where its normal force was measured (none where it is NaN, e.g. off the
+/// plates; events there come from the meta file or the kinematics, see
+/// `problems::track::combined_events`). Errors: data
 /// that fail [`GaitData::validate`]; `fraction` outside (0, 1); [`DataError::NoStance`] when no normal force exceeds the
 /// threshold (also when no force was measured at all or the peak is not positive);
-/// [`DataError::TooShort`] when neither foot has two heel strikes (less than one gait
-/// cycle). Detect events on the whole trial before cutting it with [`GaitData::window`].
+/// [`DataError::TooShort`] when the forces were measured throughout and neither foot
+/// has two heel strikes (less than one gait cycle). Detect events on the whole trial
+/// before cutting it with [`GaitData::window`].
 pub fn detect_events(data: &GaitData, fraction: f64) -> Result<Events, DataError> {
     data.validate()?;
     if !(fraction > 0.0 && fraction < 1.0) {
@@ -102,18 +108,15 @@ pub fn detect_events(data: &GaitData, fraction: f64) -> Result<Events, DataError
             format!("the event threshold must be a fraction of the peak force in (0, 1), got {fraction}"),
         ));
     }
-    let peak = data
-        .feet
+    let (time, feet) = data.force_record();
+    let peak = feet
         .iter()
         .flat_map(|f| f.fy.iter())
         .copied()
         .filter(|v| !v.is_nan())
         .fold(f64::NAN, f64::max);
     let threshold = fraction * peak;
-    let stance = data
-        .feet
-        .iter()
-        .any(|f| f.fy.iter().any(|&v| v > threshold));
+    let stance = feet.iter().any(|f| f.fy.iter().any(|&v| v > threshold));
     if peak.is_nan() || peak <= 0.0 || !stance {
         return Err(DataError::NoStance {
             path: data.source.clone(),
@@ -125,15 +128,19 @@ pub fn detect_events(data: &GaitData, fraction: f64) -> Result<Events, DataError
     let mut toe_off = [Vec::new(), Vec::new()];
     let mut loaded_at_start = [false; 2];
     for s in 0..2 {
-        let fy = &data.feet[s].fy;
-        let (hs, to) = threshold_crossings(&data.time, fy, threshold);
+        let fy = &feet[s].fy;
+        let (hs, to) = threshold_crossings(time, fy, threshold);
         heel_strike[s] = hs;
         toe_off[s] = to;
         loaded_at_start[s] = fy.first().is_some_and(|&v| v > threshold);
     }
     let n = data.time.len();
     let span = (data.time[0], data.time[n - 1]);
-    if heel_strike.iter().all(|h| h.len() < 2) {
+    let measured_throughout = feet
+        .iter()
+        .zip(&data.sides)
+        .all(|(f, &side)| side == super::SideSource::Missing || f.fy.iter().all(|v| v.is_finite()));
+    if measured_throughout && heel_strike.iter().all(|h| h.len() < 2) {
         return Err(DataError::TooShort {
             path: data.source.clone(),
             reason: format!(

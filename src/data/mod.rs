@@ -6,7 +6,11 @@
 //!   SI units, radians, x forward, y up, angles counter-clockwise positive seen from the
 //!   right, knee flexion negative) with an optional meta JSON ([`TrialMeta`]).
 //! * [`read_storage`] and [`GaitData::from_storage`]: OpenSim `.mot`/`.sto` files, with
-//!   the angle unit from the header and forces resampled onto the kinematic instants.
+//!   the angle unit from the header; the forces kept at their own instants
+//!   ([`GaitData::forces`]) and read at the kinematic instants in [`GaitData::feet`].
+//! * Partial force coverage: `NaN` forces or CoP are "not measured" (an overground trial's
+//!   foot off the plates); [`GaitData::measured_stretches`] says where a foot's force is
+//!   known, [`GaitData::cop_missing_while_loaded`] where a loaded foot lacks its CoP.
 //! * [`CubicSpline`] / [`GaitData::spline`]: tracked quantities as smooth ($C^2$) functions
 //!   of time, interpolated before integration.
 //! * [`detect_events`]: heel strike and toe off from the normal-force threshold
@@ -89,6 +93,79 @@ pub struct FootData {
     pub cop_x: Vec<f64>,
 }
 
+/// Ground reaction forces and CoP sampled at their own instants (force plates at
+/// 600–2,000 Hz beside kinematics at 60–200 Hz), as [`GaitData::forces`].
+///
+/// A sample is `NaN` where that foot's force was not measured (off the plates).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct ForceSamples {
+    /// Sample times (s), strictly increasing.
+    pub time: Vec<f64>,
+    /// `[right, left]` forces and CoP at `time`.
+    pub feet: [FootData; 2],
+}
+
+impl ForceSamples {
+    /// Foot `s`'s record read at the instants `at` (s): linear interpolation inside a
+    /// measured stretch ([`stretch_indices`]), `NaN` outside (and the CoP `NaN` where a
+    /// neighbouring sample's is).
+    pub fn resample_foot(&self, s: usize, at: &[f64]) -> FootData {
+        let f = &self.feet[s];
+        let mut out = FootData {
+            fx: vec![f64::NAN; at.len()],
+            fy: vec![f64::NAN; at.len()],
+            cop_x: vec![f64::NAN; at.len()],
+        };
+        for (a, b) in stretch_indices(&self.time, &f.fy) {
+            let (ta, tb) = (self.time[a], self.time[b]);
+            let idx: Vec<usize> = (0..at.len())
+                .filter(|&k| at[k] >= ta && at[k] <= tb)
+                .collect();
+            let tt: Vec<f64> = idx.iter().map(|&k| at[k]).collect();
+            let t = &self.time[a..=b];
+            for (dst, src) in [
+                (&mut out.fx, &f.fx),
+                (&mut out.fy, &f.fy),
+                (&mut out.cop_x, &f.cop_x),
+            ] {
+                for (&k, v) in idx.iter().zip(interp_linear(&tt, t, &src[a..=b])) {
+                    dst[k] = v;
+                }
+            }
+        }
+        out
+    }
+}
+
+/// The measured stretches of a force channel `fy` sampled at `t`, as index ranges
+/// `(first, last)`: runs of consecutive finite samples, broken also where a time step is
+/// more than 1.5 times the median step (rows left out of a mixed-rate file).
+pub fn stretch_indices(t: &[f64], fy: &[f64]) -> Vec<(usize, usize)> {
+    let n = t.len().min(fy.len());
+    let mut steps: Vec<f64> = t[..n].windows(2).map(|w| w[1] - w[0]).collect();
+    steps.sort_by(f64::total_cmp);
+    let gap = steps
+        .get(steps.len() / 2)
+        .map_or(f64::INFINITY, |m| 1.5 * m);
+    let mut out = Vec::new();
+    let mut start: Option<usize> = None;
+    for k in 0..n {
+        if let Some(a) = start {
+            if !fy[k].is_finite() || t[k] - t[k - 1] > gap {
+                out.push((a, k - 1));
+                start = None;
+            }
+        }
+        if start.is_none() && fy[k].is_finite() {
+            start = Some(k);
+        }
+    }
+    if let Some(a) = start {
+        out.push((a, n - 1));
+    }
+    out
+}
+
 /// Where one side's data come from.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum SideSource {
@@ -120,8 +197,14 @@ pub struct GaitData {
     /// `pelvis_x, pelvis_y, pelvis_tilt, hip_r, knee_r, ankle_r, hip_l, knee_l, ankle_l`
     /// (m, rad); NaN for a [`SideSource::Missing`] side.
     pub q: [Vec<f64>; 9],
-    /// `[right, left]` forces and CoP.
+    /// `[right, left]` forces and CoP at the kinematic instants `time` (`NaN` where not
+    /// measured). With [`Self::forces`] these are that record read at `time` (linear
+    /// interpolation inside a measured stretch), for plots and summaries.
     pub feet: [FootData; 2],
+    /// The forces at their own instants when they were sampled apart from the kinematics
+    /// (a force file or the force-only rows of a mixed-rate CSV); `None` when they were
+    /// sampled at `time`. Event detection, force targets and error tables read these.
+    pub forces: Option<ForceSamples>,
     /// Other channels by name, e.g. `lumbar_extension` (rad), `hip_center_x`, `hip_center_y` (m).
     pub extra: BTreeMap<String, Vec<f64>>,
     /// Body mass (kg), from the meta file.
@@ -192,7 +275,8 @@ impl GaitData {
 
     /// Largest vertical ground force of either foot (N; 0 without samples).
     pub fn peak_vertical_force(&self) -> f64 {
-        self.feet
+        self.force_record()
+            .1
             .iter()
             .flat_map(|f| f.fy.iter())
             .copied()
@@ -367,6 +451,20 @@ impl GaitData {
                 .iter()
                 .map(|(k, v)| (k.clone(), pick(v)))
                 .collect(),
+            forces: self.forces.as_ref().map(|f| {
+                let keep: Vec<usize> = (0..f.time.len())
+                    .filter(|&k| f.time[k] >= t0 - eps && f.time[k] <= t1 + eps)
+                    .collect();
+                let pick = |v: &[f64]| keep.iter().map(|&k| v[k]).collect::<Vec<f64>>();
+                ForceSamples {
+                    time: pick(&f.time),
+                    feet: std::array::from_fn(|s| FootData {
+                        fx: pick(&f.feet[s].fx),
+                        fy: pick(&f.feet[s].fy),
+                        cop_x: pick(&f.feet[s].cop_x),
+                    }),
+                }
+            }),
             body_mass: self.body_mass,
             force_plate_height: self.force_plate_height,
             belt_speed: self.belt_speed,
@@ -410,6 +508,13 @@ impl GaitData {
         for name in OVERGROUND_SHIFTED_EXTRAS {
             if let Some(v) = self.extra.get_mut(name) {
                 shift(v);
+            }
+        }
+        if let Some(f) = &mut self.forces {
+            for foot in &mut f.feet {
+                for (x, &tk) in foot.cop_x.iter_mut().zip(&f.time) {
+                    *x += belt_speed * tk;
+                }
             }
         }
         self.belt_speed = Some(belt_speed);
@@ -531,10 +636,59 @@ impl GaitData {
         Ok(Some(side_of(dst)))
     }
 
+    /// The force record at its own instants: [`Self::forces`] if the forces were sampled
+    /// apart from the kinematics, else `(time, feet)`.
+    pub fn force_record(&self) -> (&[f64], &[FootData; 2]) {
+        match &self.forces {
+            Some(f) => (&f.time, &f.feet),
+            None => (&self.time, &self.feet),
+        }
+    }
+
+    /// The stretches (s) over which foot `s`'s normal force was measured: the first and
+    /// last instant of each run of consecutive finite samples of the force record (one
+    /// per force plate the foot stepped on; the whole trial when nothing is missing).
+    pub fn measured_stretches(&self, side: Side) -> Vec<(f64, f64)> {
+        let (t, feet) = self.force_record();
+        stretch_indices(t, &feet[side_index(side)].fy)
+            .into_iter()
+            .map(|(a, b)| (t[a], t[b]))
+            .collect()
+    }
+
+    /// Whether foot `side`'s forces are known over all of `[t0, t1]` (inside one measured
+    /// stretch, to within one force sample interval at either end).
+    pub fn forces_known(&self, side: Side, t0: f64, t1: f64) -> bool {
+        let (t, _) = self.force_record();
+        let dt = if t.len() > 1 {
+            (t[t.len() - 1] - t[0]) / (t.len() - 1) as f64
+        } else {
+            0.0
+        };
+        self.measured_stretches(side)
+            .iter()
+            .any(|&(a, b)| a <= t0 + dt && b >= t1 - dt)
+    }
+
+    /// Instants (s) of the force record where a foot is loaded (`fy` ≥ the CoP
+    /// threshold) but its CoP is missing (`NaN`), `[right, left]`: those samples track
+    /// the forces only (labs export the CoP with their own thresholds).
+    pub fn cop_missing_while_loaded(&self) -> [Vec<f64>; 2] {
+        let (t, feet) = self.force_record();
+        std::array::from_fn(|s| {
+            let f = &feet[s];
+            (0..t.len())
+                .filter(|&k| f.fy[k] >= self.cop_threshold && f.cop_x[k].is_nan())
+                .map(|k| t[k])
+                .collect()
+        })
+    }
+
     /// Check the invariants of data built or edited in memory: every channel as long as
-    /// `time`; time finite and strictly increasing; pelvis, extras and every non-missing
-    /// side finite, except CoP, which may be NaN only where that foot's `fy` is below
-    /// `cop_threshold`, and a foot's forces, which may be all NaN (not measured). The
+    /// its time vector; times finite and strictly increasing; pelvis, extras and every
+    /// non-missing side's angles finite. Forces and CoP may be `NaN` anywhere (not
+    /// measured: off the plates, or a CoP a lab did not export) but never infinite; a
+    /// loaded foot without CoP is listed by [`Self::cop_missing_while_loaded`]. The
     /// readers return only data that pass.
     pub fn validate(&self) -> Result<(), DataError> {
         let n = self.time.len();
@@ -543,37 +697,48 @@ impl GaitData {
         if n < 2 {
             return bad("time", format!("{n} sample(s); at least two are needed"));
         }
-        for k in 0..n {
-            if !self.time[k].is_finite() || (k > 0 && self.time[k] <= self.time[k - 1]) {
-                return bad(
-                    "time",
-                    format!(
-                        "sample {k} ({}) is not finite and larger than the previous",
-                        self.time[k]
-                    ),
-                );
+        let increasing = |name: &str, t: &[f64]| -> Result<(), DataError> {
+            for k in 0..t.len() {
+                if !t[k].is_finite() || (k > 0 && t[k] <= t[k - 1]) {
+                    return bad(
+                        name,
+                        format!(
+                            "sample {k} ({}) is not finite and larger than the previous",
+                            t[k]
+                        ),
+                    );
+                }
             }
-        }
-        let mut channels: Vec<(String, &[f64], bool)> = Vec::new();
+            Ok(())
+        };
+        increasing("time", &self.time)?;
+        let mut channels: Vec<(String, &[f64], bool, usize)> = Vec::new();
         for (i, name) in Q_NAMES.iter().enumerate() {
             let required = i < 3 || self.sides[(i - 3) / 3] != SideSource::Missing;
-            channels.push((name.to_string(), &self.q[i], required));
+            channels.push((name.to_string(), &self.q[i], required, n));
         }
+        let mut loads: Vec<(String, &[f64], &[f64])> = Vec::new();
         for (s, side) in ["r", "l"].iter().enumerate() {
-            // Forces not measured (no GRF file) are all NaN; otherwise all finite.
             let f = &self.feet[s];
-            let unmeasured = f.fx.iter().chain(&f.fy).all(|v| v.is_nan());
-            let required = self.sides[s] != SideSource::Missing && !unmeasured;
-            channels.push((format!("grf_x_{side}"), &f.fx, required));
-            channels.push((format!("grf_y_{side}"), &f.fy, required));
-            channels.push((format!("cop_x_{side}"), &self.feet[s].cop_x, false));
+            loads.push((format!("grf_x_{side}"), &f.fx, &self.time));
+            loads.push((format!("grf_y_{side}"), &f.fy, &self.time));
+            loads.push((format!("cop_x_{side}"), &f.cop_x, &self.time));
+        }
+        if let Some(fs) = &self.forces {
+            increasing("force time", &fs.time)?;
+            for (s, side) in ["r", "l"].iter().enumerate() {
+                let f = &fs.feet[s];
+                loads.push((format!("grf_x_{side} (force record)"), &f.fx, &fs.time));
+                loads.push((format!("grf_y_{side} (force record)"), &f.fy, &fs.time));
+                loads.push((format!("cop_x_{side} (force record)"), &f.cop_x, &fs.time));
+            }
         }
         for (k, v) in &self.extra {
-            channels.push((k.clone(), v, true));
+            channels.push((k.clone(), v, true, n));
         }
-        for (name, v, required) in &channels {
-            if v.len() != n {
-                return bad(name, format!("{} samples but time has {n}", v.len()));
+        for (name, v, required, len) in &channels {
+            if v.len() != *len {
+                return bad(name, format!("{} samples but time has {len}", v.len()));
             }
             if *required {
                 if let Some(k) = v.iter().position(|x| !x.is_finite()) {
@@ -584,19 +749,19 @@ impl GaitData {
                 }
             }
         }
-        for s in 0..2 {
-            if self.sides[s] == SideSource::Missing {
-                continue;
-            }
-            let f = &self.feet[s];
-            if let Some(k) = (0..n).find(|&k| {
-                f.cop_x[k].is_infinite() || (f.cop_x[k].is_nan() && f.fy[k] >= self.cop_threshold)
-            }) {
+        for (name, v, t) in &loads {
+            if v.len() != t.len() {
                 return bad(
-                    &format!("cop_x_{}", ["r", "l"][s]),
+                    name,
+                    format!("{} samples but its time has {}", v.len(), t.len()),
+                );
+            }
+            if let Some(k) = v.iter().position(|x| x.is_infinite()) {
+                return bad(
+                    name,
                     format!(
-                        "sample {k} (t = {} s) is {} while grf_y = {} N ≥ {} N",
-                        self.time[k], f.cop_x[k], f.fy[k], self.cop_threshold
+                        "sample {k} (t = {} s) is {}; a force or CoP is finite, or NaN where not measured",
+                        t[k], v[k]
                     ),
                 );
             }

@@ -17,7 +17,7 @@
 //! which is why [`StorageMap`] says which columns are rotational.
 
 use super::error::DataError;
-use super::{interp_linear, FootData, GaitData, SideSource, Q_NAMES};
+use super::{FootData, ForceSamples, GaitData, SideSource, Q_NAMES};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
@@ -593,6 +593,21 @@ fn check_finite(s: &Storage, name: &str, v: &[f64]) -> Result<(), DataError> {
     Ok(())
 }
 
+fn check_not_infinite(s: &Storage, name: &str, v: &[f64]) -> Result<(), DataError> {
+    if let Some(k) = v.iter().position(|x| x.is_infinite()) {
+        return Err(DataError::NotFinite {
+            path: s.path.clone(),
+            row: s.line_of(k),
+            column: name.to_string(),
+            reason: format!(
+                "value is {}; a force or CoP is finite, or NaN where not measured",
+                v[k]
+            ),
+        });
+    }
+    Ok(())
+}
+
 impl GaitData {
     /// Sagittal gait data from OpenSim storages: `kinematics` (coordinates) and, optionally,
     /// `grf` (external loads), with the columns named in `map`.
@@ -675,8 +690,18 @@ impl GaitData {
         };
         let mut feet = [nan_foot(), nan_foot()];
         let mut plate = Vec::new();
+        let mut forces = None;
         if let Some(g) = grf {
             let tg = g.time();
+            let mut raw_px = [Vec::new(), Vec::new()];
+            let mut record = ForceSamples {
+                time: Vec::new(),
+                feet: std::array::from_fn(|_| FootData {
+                    fx: vec![f64::NAN; tg.len()],
+                    fy: vec![f64::NAN; tg.len()],
+                    cop_x: vec![f64::NAN; tg.len()],
+                }),
+            };
             let (g0, g1) = (tg[0], tg[tg.len() - 1]);
             let tol = 1e-9 * (1.0 + g1.abs());
             if time[0] < g0 - tol || time[n - 1] > g1 + tol {
@@ -696,43 +721,25 @@ impl GaitData {
                 let fx = column(g, &cols.fx, "the horizontal ground reaction force")?;
                 let fy = column(g, &cols.fy, "the vertical ground reaction force")?;
                 let px = column(g, &cols.cop_x, "the centre of pressure")?;
-                check_finite(g, &cols.fx, fx)?;
-                check_finite(g, &cols.fy, fy)?;
-                if let Some(k) =
-                    (0..px.len()).find(|&k| px[k].is_nan() && fy[k] >= map.cop_threshold)
-                {
-                    return Err(DataError::NotFinite {
-                        path: g.path.clone(),
-                        row: g.line_of(k),
-                        column: cols.cop_x.clone(),
-                        reason: format!(
-                            "CoP is NaN while {} = {} N ≥ {} N (CoP may be NaN only while the foot is unloaded)",
-                            cols.fy, fy[k], map.cop_threshold
-                        ),
-                    });
-                }
-                let rfx = interp_linear(&time, tg, fx);
-                let rfy = interp_linear(&time, tg, fy);
-                let rpx = interp_linear(&time, tg, px);
-                let cop: Vec<f64> = (0..n)
+                // NaN is "not measured" (the foot off the plates); ∞ is refused
+                check_not_infinite(g, &cols.fx, fx)?;
+                check_not_infinite(g, &cols.fy, fy)?;
+                check_not_infinite(g, &cols.cop_x, px)?;
+                let cop: Vec<f64> = (0..px.len())
                     .map(|k| {
-                        if rfy[k] >= map.cop_threshold {
-                            rpx[k]
+                        if fy[k] >= map.cop_threshold {
+                            px[k]
                         } else {
                             f64::NAN
                         }
                     })
                     .collect();
-                if let Some(k) = (0..n).find(|&k| cop[k].is_nan() && rfy[k] >= map.cop_threshold) {
-                    return Err(DataError::invalid(
-                        &g.path,
-                        cols.cop_x.clone(),
-                        format!(
-                            "the CoP resampled at t = {} s is NaN (a neighbouring raw sample is NaN) while the foot is loaded",
-                            time[k]
-                        ),
-                    ));
-                }
+                record.feet[s] = FootData {
+                    fx: fx.to_vec(),
+                    fy: fy.to_vec(),
+                    cop_x: cop,
+                };
+                raw_px[s] = px.to_vec();
                 if let Some(py) = cols.cop_y.as_deref().and_then(|c| g.column(c)) {
                     plate.extend(
                         (0..py.len())
@@ -740,12 +747,42 @@ impl GaitData {
                             .map(|k| py[k]),
                     );
                 }
-                feet[s] = FootData {
-                    fx: rfx,
-                    fy: rfy,
-                    cop_x: cop,
-                };
             }
+            // the record at its own instants over the kinematic span (one sample beyond
+            // either end, for interpolation), and its view at the kinematic instants
+            let k0 = tg.partition_point(|&t| t < time[0]).saturating_sub(1);
+            let k1 = (tg.partition_point(|&t| t <= time[n - 1]) + 1).min(tg.len());
+            let crop = |v: &[f64]| v[k0..k1].to_vec();
+            let record = ForceSamples {
+                time: crop(tg),
+                feet: std::array::from_fn(|s| FootData {
+                    fx: crop(&record.feet[s].fx),
+                    fy: crop(&record.feet[s].fy),
+                    cop_x: crop(&record.feet[s].cop_x),
+                }),
+            };
+            for s in 0..2 {
+                if map.feet[s].is_some() {
+                    // the CoP view: the raw CoP resampled, NaN where the resampled normal
+                    // force is below the threshold
+                    let raw = ForceSamples {
+                        time: record.time.clone(),
+                        feet: std::array::from_fn(|_| FootData {
+                            fx: record.feet[s].fx.clone(),
+                            fy: record.feet[s].fy.clone(),
+                            cop_x: crop(&raw_px[s]),
+                        }),
+                    };
+                    let mut f = raw.resample_foot(0, &time);
+                    for (c, &fy) in f.cop_x.iter_mut().zip(&f.fy) {
+                        if fy.is_nan() || fy < map.cop_threshold {
+                            *c = f64::NAN;
+                        }
+                    }
+                    feet[s] = f;
+                }
+            }
+            forces = Some(record);
         }
         let force_plate_height =
             (!plate.is_empty()).then(|| plate.iter().sum::<f64>() / plate.len() as f64);
@@ -756,6 +793,7 @@ impl GaitData {
             time,
             q,
             feet,
+            forces,
             extra,
             body_mass: None,
             force_plate_height,

@@ -75,6 +75,12 @@ pub struct TrackingRunSetup {
     /// targets (`--sample-targets`).
     #[serde(default)]
     pub sample_targets: bool,
+    /// Track the first half cycle inside this span (s, `--window T0,T1`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub window: Option<(f64, f64)>,
+    /// Track the n-th half cycle of the trial (1-based, `--stride N`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub stride: Option<usize>,
     /// Channels weighted by their noise (`--noise-weights`; `None`: the seed's weights).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub noise_weights: Option<crate::problems::tracking::ChannelNoise>,

@@ -506,12 +506,15 @@ impl Comparison {
             ]
         };
         let plate_times: Vec<f64> = times.iter().map(|t| t + force_time_offset).collect();
+        // the forces at their own instants; NaN (not measured) propagates to the
+        // neighbouring samples and leaves those entries out of the error tables
+        let (force_time, force_feet) = data.force_record();
         let data_side = |k: usize| -> [Vec<f64>; 3] {
-            let f = &data.feet[k];
+            let f = &force_feet[k];
             [
-                interp_linear(&plate_times, &data.time, &f.fx),
-                interp_linear(&plate_times, &data.time, &f.fy),
-                interp_linear(&plate_times, &data.time, &f.cop_x)
+                interp_linear(&plate_times, force_time, &f.fx),
+                interp_linear(&plate_times, force_time, &f.fy),
+                interp_linear(&plate_times, force_time, &f.cop_x)
                     .into_iter()
                     .map(|c| c - cop_offset)
                     .collect(),

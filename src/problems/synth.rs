@@ -175,6 +175,7 @@ pub fn synthesize(
         time,
         q,
         feet,
+        forces: None,
         extra: BTreeMap::new(),
         body_mass: None,
         force_plate_height: None,

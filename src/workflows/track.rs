@@ -11,7 +11,7 @@ use crate::phases::PhaseSequence;
 use crate::problems::diagnose::{parameter_sd, IdentifiedParameter, TrackingRunSetup};
 use crate::problems::evaluation::GaitSolution;
 use crate::problems::gait::GaitCycle;
-use crate::problems::track::{TargetSides, TrackingSetup};
+use crate::problems::track::{TargetSides, TrackingSetup, WindowChoice};
 use crate::runfolder::RunFolder;
 use crate::sqp::{ExactConvexification, HessianMode, SqpSettings, SqpStatus};
 use anyhow::{anyhow, Context};
@@ -110,7 +110,17 @@ impl TrackingProblem {
                     .context("--kinematics-cutoff")?;
             }
         }
-        let mut setup = TrackingSetup::new_with_sides(&model, &seq, &sets, &data, sides)
+        let choice = match (run.window, run.stride) {
+            (Some(_), Some(_)) => {
+                return Err(anyhow!(
+                    "--window and --stride both choose the half cycle; give one"
+                ))
+            }
+            (Some((a, b)), None) => WindowChoice::Within(a, b),
+            (None, Some(n)) => WindowChoice::Stride(n),
+            (None, None) => WindowChoice::First,
+        };
+        let mut setup = TrackingSetup::for_window(&model, &seq, &sets, &data, sides, choice)
             .map_err(|e| anyhow!("{}: {e}", data.source.display()))?;
         if run.track_pelvis_position {
             setup.weights = setup.weights.clone().with_pelvis_position();
@@ -450,6 +460,8 @@ impl TrackRequest {
                 regularisation: None,
                 one_sided_targets: false,
                 sample_targets: false,
+                window: None,
+                stride: None,
                 noise_weights: None,
                 velocity_weight: None,
                 check_points: vec![],
@@ -488,6 +500,13 @@ pub fn track(
         None => None,
     };
     let mut prob = TrackingProblem::build(&base, &req.effects)?;
+    for n in &prob.setup.notes {
+        if n.starts_with("warning: ") {
+            progress.warn(n)
+        } else {
+            progress.note(n)
+        }
+    }
     prob.refine = req.check_points;
     for n in &prob.trial_notes {
         progress.note(n);

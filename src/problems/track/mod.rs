@@ -5,9 +5,7 @@
 
 use super::gait::GaitGuess;
 use super::tracking::{MeasuredLoads, NodeTarget, TrackingWeights};
-use crate::data::{
-    detect_events, interp_linear, CubicSpline, Events, GaitData, DEFAULT_EVENT_FRACTION,
-};
+use crate::data::{interp_linear, CubicSpline, Events, GaitData};
 use crate::model::gait::COORDINATES;
 use crate::model::{ConstraintSet, GaitModel, Side};
 use crate::phases::{Duration, Phase, PhaseSequence};
@@ -132,7 +130,9 @@ fn segment_splines(
 /// Every sample of `data` inside the continuous phases of `seq` (durations fixed, the
 /// first starting at `t0`), located in its shooting interval, with the angles and the
 /// loads of the feet its phase loads (the CoP where the normal force reaches the data's
-/// CoP threshold); samples on a phase boundary are left out.
+/// CoP threshold); samples on a phase boundary are left out. Forces sampled apart from
+/// the kinematics ([`GaitData::forces`]) give their own samples at their own instants;
+/// unmeasured (`NaN`) forces and CoP give no terms.
 fn sample_targets(
     model: &GaitModel,
     seq: &PhaseSequence,
@@ -145,6 +145,20 @@ fn sample_targets(
         .map(|c| data.channel(c).ok_or_else(|| format!("no channel {c}")))
         .collect::<Result<_, _>>()?;
     let nq = angles.len();
+    // each channel at its own instants: (time, kinematic row, force row)
+    let (force_time, force_feet) = data.force_record();
+    let instants: Vec<(f64, Option<usize>, Option<usize>)> = if data.forces.is_some() {
+        let mut v: Vec<_> = (0..data.time.len())
+            .map(|n| (data.time[n], Some(n), None))
+            .chain((0..force_time.len()).map(|n| (force_time[n], None, Some(n))))
+            .collect();
+        v.sort_by(|x, y| x.0.total_cmp(&y.0));
+        v
+    } else {
+        (0..data.time.len())
+            .map(|n| (data.time[n], Some(n), Some(n)))
+            .collect()
+    };
     let mut out = Vec::new();
     let (mut a, mut j) = (t0, 0);
     for (i, ph) in seq.phases.iter().enumerate() {
@@ -159,7 +173,7 @@ fn sample_targets(
         let b = a + duration.value();
         let h = duration.value() / *intervals as f64;
         let feet = loaded_feet(model, &sets[i]);
-        for (n, &t) in data.time.iter().enumerate() {
+        for &(t, kin, frc) in &instants {
             if !(t > a + SAMPLE_EDGE && t < b - SAMPLE_EDGE) {
                 continue;
             }
@@ -171,9 +185,12 @@ fn sample_targets(
                 k -= 1;
                 tau = 1.0;
             }
+            // the loads of the feet the phase loads, where measured (a NaN force is
+            // not measured: no force terms; a NaN CoP of a loaded foot: no CoP term)
             let load = |f: usize| {
-                let fd = &data.feet[f];
-                feet[f].then(|| {
+                let n = frc?;
+                let fd = &force_feet[f];
+                (feet[f] && fd.fx[n].is_finite() && fd.fy[n].is_finite()).then(|| {
                     (
                         fd.fx[n],
                         fd.fy[n],
@@ -182,20 +199,27 @@ fn sample_targets(
                     )
                 })
             };
-            let q = angles
-                .iter()
-                .map(|c| c[n].is_finite().then_some(c[n]))
-                .collect();
+            let q = match kin {
+                Some(n) => angles
+                    .iter()
+                    .map(|c| c[n].is_finite().then_some(c[n]))
+                    .collect(),
+                None => vec![None; nq],
+            };
+            let target = NodeTarget {
+                time: t,
+                q,
+                qd: vec![None; nq],
+                feet: [load(0), load(1)],
+            };
+            if target.q.iter().all(Option::is_none) && target.feet.iter().all(Option::is_none) {
+                continue;
+            }
             out.push(SampleTarget {
                 phase: j,
                 interval: k,
                 tau,
-                target: NodeTarget {
-                    time: t,
-                    q,
-                    qd: vec![None; nq],
-                    feet: [load(0), load(1)],
-                },
+                target,
             });
         }
         a = b;
@@ -298,6 +322,68 @@ pub struct TrackingSetup {
     pub measured: Arc<MeasuredLoads>,
     /// Measurements compared inside the shooting intervals ([`TargetSides::Samples`]).
     pub samples: Vec<SampleTarget>,
+    /// Where the events came from and what the data lack in the window (lines for the
+    /// run's log; those starting `warning:` are warnings).
+    pub notes: Vec<String>,
+}
+
+/// One foot's measured forces as splines over the measured stretch that overlaps the
+/// tracked window most (all of the record when nothing is missing).
+#[derive(Clone)]
+struct ForceTrack {
+    fx: CubicSpline,
+    fy: CubicSpline,
+    /// The stretch (s); node targets outside it have no force terms for this foot.
+    stretch: (f64, f64),
+}
+
+impl ForceTrack {
+    fn new(data: &GaitData, s: usize, (t0, t1): (f64, f64)) -> Result<Self, String> {
+        let (time, feet) = data.force_record();
+        let f = &feet[s];
+        if f.fx.iter().chain(&f.fy).all(|v| v.is_finite()) {
+            return Ok(Self {
+                fx: CubicSpline::new(time, &f.fx).map_err(|e| e.to_string())?,
+                fy: CubicSpline::new(time, &f.fy).map_err(|e| e.to_string())?,
+                stretch: (f64::NEG_INFINITY, f64::INFINITY),
+            });
+        }
+        let overlap = |(a, b): (f64, f64)| (b.min(t1) - a.max(t0)).max(0.0);
+        let best = data
+            .measured_stretches([Side::Right, Side::Left][s])
+            .into_iter()
+            .filter(|&(a, b)| {
+                let k = time.iter().filter(|&&t| t >= a && t <= b).count();
+                k >= 4 && b > a
+            })
+            .max_by(|x, y| overlap(*x).total_cmp(&overlap(*y)));
+        let Some((a, b)) = best else {
+            // never measured: zero splines that no target reads (every node is outside
+            // the empty stretch)
+            let z = vec![0.0; data.time.len()];
+            let zs = CubicSpline::new(&data.time, &z).map_err(|e| e.to_string())?;
+            return Ok(Self {
+                fx: zs.clone(),
+                fy: zs,
+                stretch: (f64::INFINITY, f64::NEG_INFINITY),
+            });
+        };
+        let idx: Vec<usize> = (0..time.len())
+            .filter(|&k| time[k] >= a && time[k] <= b && f.fx[k].is_finite())
+            .collect();
+        let t: Vec<f64> = idx.iter().map(|&k| time[k]).collect();
+        let pick = |v: &[f64]| idx.iter().map(|&k| v[k]).collect::<Vec<f64>>();
+        Ok(Self {
+            fx: CubicSpline::new(&t, &pick(&f.fx)).map_err(|e| e.to_string())?,
+            fy: CubicSpline::new(&t, &pick(&f.fy)).map_err(|e| e.to_string())?,
+            stretch: (t[0], t[t.len() - 1]),
+        })
+    }
+
+    /// Whether `t` (s) lies in the measured stretch (to 1e-9 s).
+    fn covers(&self, t: f64) -> bool {
+        t >= self.stretch.0 - 1e-9 && t <= self.stretch.1 + 1e-9
+    }
 }
 
 impl TrackingSetup {
@@ -323,11 +409,22 @@ impl TrackingSetup {
         data: &GaitData,
         sides: TargetSides,
     ) -> Result<Self, String> {
-        let events = match &data.events {
-            Some(e) => e.clone(),
-            None => detect_events(data, DEFAULT_EVENT_FRACTION).map_err(|e| e.to_string())?,
-        };
-        Self::with_events_and_sides(model, seq, sets, data, events, sides)
+        Self::for_window(model, seq, sets, data, sides, WindowChoice::First)
+    }
+
+    /// As [`new_with_sides`](Self::new_with_sides), tracking the half cycle `choice`
+    /// selects, with the events of [`combined_events`] (the meta file's, else the force
+    /// threshold's completed by kinematic events where a foot is off the plates).
+    pub fn for_window(
+        model: &GaitModel,
+        seq: &PhaseSequence,
+        sets: &[ConstraintSet],
+        data: &GaitData,
+        sides: TargetSides,
+        choice: WindowChoice,
+    ) -> Result<Self, String> {
+        let (events, notes) = combined_events(model, data)?;
+        Self::build(model, seq, sets, data, events, sides, choice, notes)
     }
 
     /// As [`new`](Self::new), with the gait events given instead of detected from the
@@ -351,25 +448,68 @@ impl TrackingSetup {
         events: Events,
         sides: TargetSides,
     ) -> Result<Self, String> {
-        let (t0, t1) = half_cycle(&events)?;
+        Self::build(
+            model,
+            seq,
+            sets,
+            data,
+            events,
+            sides,
+            WindowChoice::First,
+            Vec::new(),
+        )
+    }
+
+    #[allow(clippy::too_many_arguments)]
+    fn build(
+        model: &GaitModel,
+        seq: &PhaseSequence,
+        sets: &[ConstraintSet],
+        data: &GaitData,
+        events: Events,
+        sides: TargetSides,
+        choice: WindowChoice,
+        mut notes: Vec<String>,
+    ) -> Result<Self, String> {
+        let ((t0, t1), gap) = choose_window(data, &events, choice)?;
+        if let Some(g) = gap {
+            notes.push(format!(
+                "warning: {g}; those feet's force and CoP terms are left out there"
+            ));
+        }
         let seq = fix_durations(seq, model, sets, &events, t0, t1)?;
         let splines: Vec<CubicSpline> = COORDINATES
             .iter()
             .map(|c| data.spline(c).map_err(|e| e.to_string()))
             .collect::<Result<_, _>>()?;
-        let force = |s: usize, k: usize| -> Result<CubicSpline, String> {
-            let f = &data.feet[s];
-            CubicSpline::new(&data.time, if k == 0 { &f.fx } else { &f.fy })
-                .map_err(|e| e.to_string())
-        };
-        let fx = [force(0, 0)?, force(1, 0)?];
-        let fy = [force(0, 1)?, force(1, 1)?];
+        let tracks = [
+            ForceTrack::new(data, 0, (t0, t1))?,
+            ForceTrack::new(data, 1, (t0, t1))?,
+        ];
+        let [r, l] = tracks.clone();
+        let (fx, fy) = ([r.fx, l.fx], [r.fy, l.fy]);
         let peak = data.peak_vertical_force();
+        let (force_time, force_feet) = data.force_record();
         let cop_at = |s: usize, t: f64| -> Option<f64> {
             // linear interpolation of the measured CoP where the foot is loaded
-            let v = interp_linear(&[t], &data.time, &data.feet[s].cop_x)[0];
+            let v = interp_linear(&[t], force_time, &force_feet[s].cop_x)[0];
             v.is_finite().then_some(v)
         };
+        let cop_gaps = data.cop_missing_while_loaded();
+        for (s, gaps) in cop_gaps.iter().enumerate() {
+            let inside: Vec<f64> = gaps
+                .iter()
+                .copied()
+                .filter(|&t| t >= t0 && t <= t1)
+                .collect();
+            if let (Some(a), Some(b)) = (inside.first(), inside.last()) {
+                notes.push(format!(
+                    "warning: the {} foot is loaded but its CoP is missing at {} sample(s) between {a:.3} and {b:.3} s; there it tracks the forces only",
+                    ["right", "left"][s],
+                    inside.len()
+                ));
+            }
+        }
         let (nq, na, nu) = (model.nq(), model.na(), model.nu());
         let theta = model.theta0();
         let mut node_times = Vec::new();
@@ -405,6 +545,9 @@ impl TrackingSetup {
             let one_sided = match sides {
                 TargetSides::Interpolated | TargetSides::Samples => None,
                 TargetSides::OneSided { cutoff_hz } => {
+                    if data.feet.iter().any(|f| f.fy.iter().any(|v| v.is_nan())) {
+                        return Err("one-sided targets read the forces at the kinematic instants and need them measured throughout; where they are not, use interpolated or sample targets".into());
+                    }
                     let end = t + duration.value();
                     let a = impacts
                         .iter()
@@ -452,7 +595,8 @@ impl TrackingSetup {
                 let q: Vec<f64> = splines.iter().map(|s| s.eval(tk)).collect();
                 let qd: Vec<f64> = splines.iter().map(|s| s.derivative(tk)).collect();
                 let foot_target = |s: usize| {
-                    feet[s].then(|| {
+                    // a foot whose force was not measured here loses its force terms
+                    (feet[s] && tracks[s].covers(tk)).then(|| {
                         let fyv = fy[s].eval(tk);
                         (
                             fx[s].eval(tk),
@@ -545,8 +689,8 @@ impl TrackingSetup {
         let measured = Arc::new(MeasuredLoads {
             fx,
             fy,
-            time: data.time.clone(),
-            cop_x: [data.feet[0].cop_x.clone(), data.feet[1].cop_x.clone()],
+            time: force_time.to_vec(),
+            cop_x: [force_feet[0].cop_x.clone(), force_feet[1].cop_x.clone()],
         });
         let samples = if sides == TargetSides::Samples {
             sample_targets(model, &seq, sets, data, t0)?
@@ -563,6 +707,7 @@ impl TrackingSetup {
             events,
             measured,
             samples,
+            notes,
         })
     }
 
@@ -633,5 +778,11 @@ impl TrackingSetup {
 
 mod breakdown;
 mod residual;
+mod window;
+
+pub use window::{
+    choose_window, combined_events, half_cycles, kinematic_events, missing_forces, KinematicEvents,
+    WindowChoice,
+};
 
 pub use breakdown::{CostBreakdown, NodeCost};
