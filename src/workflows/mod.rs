@@ -12,6 +12,7 @@ pub mod compare;
 pub mod diagnose;
 pub mod diff;
 pub mod fit_foot;
+pub mod inputs;
 pub mod predict;
 pub mod refine;
 pub mod report;
@@ -209,7 +210,11 @@ pub fn load_data(path: Option<&Path>, overground: bool) -> anyhow::Result<GaitDa
                 _ => d,
             }
         }
-        None => GaitData::bundled(Path::new("."))?,
+        None => {
+            // the compiled-in copy, wherever footfall is started
+            let root = crate::bundled::root().map_err(anyhow::Error::msg)?;
+            GaitData::bundled(&root)?
+        }
     };
     data.check_conventions(overground)?;
     Ok(data)

@@ -111,6 +111,8 @@ pub struct GaitRun<'a> {
     pub sets: &'a [ConstraintSet],
     /// Phase file.
     pub phases_path: &'a std::path::Path,
+    /// The inputs copied into the run folder (`summary.json` then names the copies).
+    pub inputs: Option<&'a super::inputs::RunInputs>,
     /// The phase sequence the problem was built from (for the phase legend).
     pub sequence: &'a crate::phases::PhaseSequence,
     /// Lower and upper bounds of the controls in the solved problem (to mark a control
@@ -476,8 +478,9 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
         "command": run.command,
         "model": model.name,
         "foot": model.foot_name,
-        "phases": run.phases_path,
-        "data": data.source,
+        "phases": run.inputs.map_or(run.phases_path, |i| &i.phases),
+        "data": run.inputs.map_or(&data.source, |i| &i.data),
+        "inputs": run.inputs,
         "window_s": [t0, t1],
         "gait_cycle": {"period_s": cycle.period, "heel_strike_s": cycle.heel_strike},
         "phase_spans": sol.phase_spans().iter().map(|p| serde_json::json!({"phase": p.name, "from_s": p.t0, "to_s": p.t1})).collect::<Vec<_>>(),

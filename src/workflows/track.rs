@@ -398,17 +398,25 @@ pub fn merge_stages(
     }
 }
 
-/// Read a run's `setup.json`.
+/// Read a run's `setup.json` (`run`: the run folder or the file). The inputs it names
+/// inside the run folder (`inputs/…`) are returned as paths to read from here; older
+/// run folders' paths, recorded as typed, are returned as they are.
 pub fn read_run_setup(run: &std::path::Path) -> anyhow::Result<TrackingRunSetup> {
-    let file = if run.is_dir() {
-        run.join("setup.json")
+    let (file, folder) = if run.is_dir() {
+        (run.join("setup.json"), run.to_path_buf())
     } else {
-        run.to_path_buf()
+        let parent = run.parent().unwrap_or(std::path::Path::new(""));
+        (run.to_path_buf(), parent.to_path_buf())
     };
-    let text = std::fs::read_to_string(&file)
-        .with_context(|| format!("reading {} (a track run folder has one)", file.display()))?;
-    serde_json::from_str(&text)
-        .with_context(|| format!("{}: not a footfall tracking setup", file.display()))
+    let mut setup = TrackingRunSetup::read(&file)?;
+    let inside = |p: &std::path::Path| super::inputs::in_run(&folder, p);
+    setup.model = inside(&setup.model);
+    setup.phases = inside(&setup.phases);
+    setup.data = setup.data.as_deref().map(inside);
+    setup.foot = inside(std::path::Path::new(&setup.foot))
+        .to_string_lossy()
+        .into_owned();
+    Ok(setup)
 }
 
 /// What the tracking workflow solves: the run's description, the effects added to it,
@@ -621,8 +629,23 @@ impl TrackingProblem {
             vec![None; model.ntheta()]
         };
         let record = self.record(base, extra, &solution.theta, &sd, check_sites);
+        // the run folder holds its inputs; setup.json names them relative to it
+        let inputs = super::inputs::copy_inputs(
+            &folder,
+            &record.model,
+            &record.foot,
+            &record.phases,
+            record.data.as_deref(),
+        )?;
+        let stored = TrackingRunSetup {
+            model: inputs.model.clone(),
+            foot: inputs.foot.to_string_lossy().into_owned(),
+            phases: inputs.phases.clone(),
+            data: Some(inputs.data.clone()),
+            ..record.clone()
+        };
         let mut extra_json = serde_json::Map::new();
-        extra_json.insert("setup".into(), serde_json::to_value(&record)?);
+        extra_json.insert("setup".into(), serde_json::to_value(&stored)?);
         extra_json.insert("data_residuals".into(), data_rows.into());
         extra_json.insert(
             "integration".into(),
@@ -669,6 +692,7 @@ impl TrackingProblem {
                 model,
                 sets,
                 phases_path: phases,
+                inputs: Some(&inputs),
                 events: &self.setup.events,
                 sequence: &self.setup.seq,
                 control_bounds: (&self.setup.guess.u_lb, &self.setup.guess.u_ub),
@@ -680,7 +704,7 @@ impl TrackingProblem {
                 extra_sections,
                 extra_files: vec![(
                     "setup.json".into(),
-                    serde_json::to_string_pretty(&record)?.into_bytes(),
+                    serde_json::to_string_pretty(&stored)?.into_bytes(),
                 )],
                 transient_threshold_n: transient_threshold,
                 friction: cycle.friction(),
