@@ -82,16 +82,16 @@ fn copy_model(folder: &RunFolder, model: &Path) -> anyhow::Result<PathBuf> {
     Ok(rel)
 }
 
-/// Copy a run's model, foot (`ellipse`, `double-circle` or a foot file), phase file and
-/// trial (`None`: the bundled trial) into `folder`'s `inputs/`; bundled names missing
-/// from the current folder are copied from footfall's own copies, as they were read.
-pub fn copy_inputs(
+/// Copy a model file (with the OpenSim model it names), a foot (`ellipse`,
+/// `double-circle` or a foot file) and a phase file into `folder`'s `inputs/`; returns
+/// their paths relative to the run folder. Bundled names missing from the current
+/// folder are copied from footfall's own copies, as they were read.
+pub fn copy_model_inputs(
     folder: &RunFolder,
     model: &Path,
     foot: &str,
     phases: &Path,
-    data: Option<&Path>,
-) -> anyhow::Result<RunInputs> {
+) -> anyhow::Result<(PathBuf, PathBuf, PathBuf)> {
     let model = copy_model(folder, model)?;
     let foot = copy(
         folder,
@@ -100,6 +100,19 @@ pub fn copy_inputs(
         None,
     )?;
     let phases = copy(folder, "phases", &crate::bundled::resolve(phases), None)?;
+    Ok((model, foot, phases))
+}
+
+/// Copy a run's model, foot, phase file ([`copy_model_inputs`]) and trial (`None`: the
+/// bundled trial; its meta file beside it) into `folder`'s `inputs/`.
+pub fn copy_inputs(
+    folder: &RunFolder,
+    model: &Path,
+    foot: &str,
+    phases: &Path,
+    data: Option<&Path>,
+) -> anyhow::Result<RunInputs> {
+    let (model, foot, phases) = copy_model_inputs(folder, model, foot, phases)?;
     let csv = match data {
         Some(p) => p.to_path_buf(),
         None => {
