@@ -12,18 +12,7 @@ use std::path::{Path, PathBuf};
 /// The subfolder of a run folder holding the run's inputs.
 pub const INPUTS: &str = "inputs";
 
-/// Paths of a run's inputs relative to its run folder (as `setup.json` records them).
-#[derive(Debug, Clone, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct RunInputs {
-    /// Model file.
-    pub model: PathBuf,
-    /// Foot file.
-    pub foot: PathBuf,
-    /// Phase file.
-    pub phases: PathBuf,
-    /// Sagittal CSV (its meta file, if any, beside it).
-    pub data: PathBuf,
-}
+pub use crate::report::run_summary::RunInputs;
 
 /// The file name of `path` (for messages and copies).
 fn file_name(path: &Path) -> anyhow::Result<String> {
