@@ -161,6 +161,50 @@ fn runs_from_anywhere_and_run_folders_carry_their_inputs() {
         .is_file());
     assert_eq!(json(&reported.join("setup.json"))["model"], setup["model"]);
 
+    // the run and its re-report side by side, from their files
+    let o = footfall(
+        &other,
+        &[
+            "report",
+            moved.to_str().unwrap(),
+            "reported",
+            "--out",
+            "side",
+            "--quiet",
+        ],
+    );
+    assert!(o.status.success(), "side by side: {}", stderr(&o));
+    assert!(other.join("side/report.html").is_file());
+
+    // a broken setup.json is named with its field; a missing input by its path in the
+    // run folder
+    let broken = tmp.path().join("broken");
+    copy_dir(&moved, &broken);
+    let mut bad = setup.clone();
+    bad["integrator_tol"] = "tight".into();
+    std::fs::write(broken.join("setup.json"), bad.to_string()).unwrap();
+    let o = footfall(&other, &["report", broken.to_str().unwrap(), "--out", "b1"]);
+    assert!(!o.status.success());
+    for want in [
+        "setup.json",
+        "`integrator_tol`",
+        "expected a number",
+        "\"tight\"",
+    ] {
+        assert!(stderr(&o).contains(want), "{want} not in: {}", stderr(&o));
+    }
+    std::fs::write(broken.join("setup.json"), setup.to_string()).unwrap();
+    std::fs::remove_file(broken.join("inputs/phases/ellipse_walk.json")).unwrap();
+    let o = footfall(&other, &["report", broken.to_str().unwrap(), "--out", "b2"]);
+    assert!(!o.status.success());
+    let missing = broken.join("inputs/phases/ellipse_walk.json");
+    assert!(
+        stderr(&o).contains(missing.to_str().unwrap()),
+        "{}",
+        stderr(&o)
+    );
+    assert!(!other.join("b1").exists() && !other.join("b2").exists());
+
     // report in place, from the run's own folder's parent
     let o = footfall(&here, &["report", "run", "--quiet"]);
     assert!(o.status.success(), "report in place: {}", stderr(&o));

@@ -280,3 +280,100 @@ impl RunSummaryFile {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn stats(mean: f64) -> SummaryStats {
+        SummaryStats {
+            mean,
+            sd: Some(0.5),
+            max: Some(2.0 * mean),
+        }
+    }
+
+    #[test]
+    fn written_summary_reads_back_with_its_extra_fields_beside() {
+        let s = RunSummaryFile {
+            command: Some("track".into()),
+            status: Some(SqpStatus::MaxIterations),
+            objective: Some(1.25),
+            window_s: Some([0.1, 0.7]),
+            errors: vec![ChannelStats {
+                channel: "knee angle".into(),
+                unit: "°".into(),
+                stats: stats(3.0),
+            }],
+            errors_by_phase: Some(vec![ChannelPhaseErrors {
+                channel: "knee angle".into(),
+                unit: "°".into(),
+                phases: vec![PhaseErrors {
+                    phase: "1e".into(),
+                    stats: stats(1.5),
+                }],
+            }]),
+            ..Default::default()
+        };
+        let mut extra = serde_json::Map::new();
+        extra.insert(
+            "setup".into(),
+            serde_json::json!({"model": "inputs/model/m.json"}),
+        );
+        let v = s.to_json(extra).unwrap();
+        // the file's field names
+        assert_eq!(v["status"], "max_iterations");
+        assert_eq!(v["errors"][0]["stats"]["mean"], 3.0);
+        assert_eq!(v["errors_by_phase"][0]["phases"][0]["phase"], "1e");
+        assert_eq!(v["setup"]["model"], "inputs/model/m.json");
+        assert!(v.get("fine_grid_error").is_none() && v.get("inputs").is_none());
+        let back = RunSummaryFile::parse(&v.to_string(), Path::new("r/summary.json")).unwrap();
+        assert_eq!(back.errors, s.errors);
+        assert_eq!(back.errors_by_phase, s.errors_by_phase);
+        assert_eq!(back.status, s.status);
+        assert_eq!(back.window_s, s.window_s);
+    }
+
+    #[test]
+    fn bad_summaries_name_the_file_and_the_field() {
+        let cases = [
+            (r#"{"command": "track"}"#, "field `errors`: missing"),
+            (
+                "[1]",
+                "field `(top level)`: expected a JSON object, found an array",
+            ),
+            (
+                r#"{"errors": [{"channel": "k", "unit": "°", "stats": {"mean": "4"}}]}"#,
+                "field `errors[0].stats.mean`: expected a number, found the string \"4\"",
+            ),
+            (
+                r#"{"errors": [{"channel": "k", "unit": "°", "stats": {"mean": -1}}]}"#,
+                "field `errors[0].stats.mean`: -1 is not a mean of absolute errors",
+            ),
+            (
+                r#"{"errors": [{"channel": "k", "unit": "°"}]}"#,
+                "field `errors[0].stats`: missing",
+            ),
+            (
+                r#"{"errors": [{"channel": " ", "unit": "°", "stats": {"mean": 1}}]}"#,
+                "field `errors[0].channel`: empty name",
+            ),
+            (r#"{"errors": [], "window_s": [0.1]}"#, "field `window_s`"),
+            (
+                r#"{"errors": {}}"#,
+                "field `errors`: expected an array, found an object",
+            ),
+            (
+                r#"{"errors": [], "errors_by_phase": [{"channel": "k", "unit": "°", "phases": [{"phase": "1", "stats": {"mean": 1}}, {"phase": "1", "stats": {"mean": 1}}]}]}"#,
+                "field `errors_by_phase[0].phases[1].phase`: phase \"1\" appears twice",
+            ),
+        ];
+        for (text, want) in cases {
+            let e = RunSummaryFile::parse(text, Path::new("r/summary.json"))
+                .unwrap_err()
+                .to_string();
+            assert!(e.starts_with("r/summary.json: "), "{e}");
+            assert!(e.contains(want), "{text}: {e} (want {want})");
+        }
+    }
+}

@@ -121,12 +121,15 @@ pub fn copy_inputs(
     })
 }
 
-/// `path` as read for the run in `folder`: a relative path that names a file inside the
-/// run folder (an input copied there) is taken from the run folder, any other path as it
-/// is (older run folders recorded the paths as typed, relative to the current folder).
+/// `path` as read for the run in `folder`: a relative path under `inputs/` names an
+/// input copied into the run folder and is taken from there (also when it is missing, so
+/// that the error names the run folder's file, unless the current folder has it); any
+/// other path as it is (older run folders recorded the paths as typed, relative to the
+/// current folder).
 pub fn in_run(folder: &Path, path: &Path) -> PathBuf {
-    if path.is_relative() && path.starts_with(INPUTS) && folder.join(path).is_file() {
-        folder.join(path)
+    let inside = folder.join(path);
+    if path.is_relative() && path.starts_with(INPUTS) && (inside.is_file() || !path.exists()) {
+        inside
     } else {
         path.to_path_buf()
     }
