@@ -441,7 +441,8 @@ pub struct TrackRequest {
 
 impl TrackRequest {
     /// The `track` command's defaults for `foot` (`ellipse`, `double-circle` or a foot
-    /// file) on the bundled trial, paths relative to the repository root.
+    /// file) on the bundled trial: the repository's paths, read from the compiled-in
+    /// copies where the current folder lacks them ([`crate::bundled`]).
     pub fn new(foot: &str) -> Self {
         TrackRequest {
             run: TrackingRunSetup {
