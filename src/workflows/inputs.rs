@@ -134,3 +134,32 @@ pub fn in_run(folder: &Path, path: &Path) -> PathBuf {
         path.to_path_buf()
     }
 }
+
+/// Read a run's `setup.json` (`run`: the run folder or the file). The inputs it names
+/// inside the run folder (`inputs/…`) are returned as paths to read from here; older
+/// run folders' paths, recorded as typed, are returned as they are.
+pub fn read_run_setup(
+    run: &std::path::Path,
+) -> anyhow::Result<crate::problems::diagnose::TrackingRunSetup> {
+    let (file, folder) = if run.is_dir() {
+        (run.join("setup.json"), run.to_path_buf())
+    } else {
+        let parent = run.parent().unwrap_or(std::path::Path::new(""));
+        (run.to_path_buf(), parent.to_path_buf())
+    };
+    if !file.is_file() {
+        anyhow::bail!(
+            "{}: not found (a track run folder has one; it says how the run was set up)",
+            file.display()
+        );
+    }
+    let mut setup = crate::problems::diagnose::TrackingRunSetup::read(&file)?;
+    let inside = |p: &std::path::Path| in_run(&folder, p);
+    setup.model = inside(&setup.model);
+    setup.phases = inside(&setup.phases);
+    setup.data = setup.data.as_deref().map(inside);
+    setup.foot = inside(std::path::Path::new(&setup.foot))
+        .to_string_lossy()
+        .into_owned();
+    Ok(setup)
+}
