@@ -28,6 +28,7 @@ impl ControlTable {
     /// Read a CSV file with a header `time,<control names…>`; columns may come in any order
     /// but every name in `model_controls` must be present exactly once and no other.
     pub fn load_csv(path: &Path, model_controls: &[String]) -> Result<Self, ModelError> {
+        let path = &crate::bundled::resolve(path);
         let text = std::fs::read_to_string(path).map_err(|source| ModelError::Io {
             path: path.to_path_buf(),
             source,
@@ -43,6 +44,7 @@ impl ControlTable {
         model_controls: &[String],
         ranges: &[Option<(f64, f64, &str)>],
     ) -> Result<Self, ModelError> {
+        let path = &crate::bundled::resolve(path);
         let text = std::fs::read_to_string(path).map_err(|source| ModelError::Io {
             path: path.to_path_buf(),
             source,

@@ -19,13 +19,14 @@
 //! | [`integrate`] | the safe wrapper over CVODES (the only module with `unsafe`): integrators, forward sensitivities, dense output | — |
 //! | [`data`], [`controls`] | measured gait data (CSV, OpenSim storage files) and control tables | model, limits |
 //! | [`model`] | planar multibody dynamics, contact sets, impact maps, actuators, effects, JSON model specs | limits |
-//! | [`limits`], [`runfolder`] | limits of plausible input; run folders that are complete or absent | — |
+//! | [`limits`], [`runfolder`], [`bundled`] | limits of plausible input; run folders that are complete or absent, their `setup.json` and `summary.json`; the files footfall ships with, compiled in | — |
 //!
 //! `ocp`, `sqp` and `integrate` know nothing of gait: they solve the cart-pole and the
 //! five-link biped as well ([`problems`]' benchmark problems).
 #![warn(missing_docs)]
 #![deny(unsafe_code)]
 
+pub mod bundled;
 pub mod controls;
 pub mod data;
 pub mod integrate;

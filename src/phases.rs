@@ -260,6 +260,8 @@ impl PhaseSequence {
 
     /// Read a phase file (structure only; see [`resolve`](Self::resolve)).
     pub fn load(path: &Path) -> Result<Self, ModelError> {
+        // a bundled name missing from the current folder is read from footfall's copy
+        let path = &crate::bundled::resolve(path);
         let s: PhaseSequence = read_json(path)?;
         s.validate(path)?;
         Ok(s)

@@ -103,9 +103,17 @@ pub fn remove_unfinished() {
 pub const RESUME_PREFIX: &str = ".resume-";
 
 /// Write `dir/name` whole or not at all: written under a temporary name, then renamed.
+/// `name` may name a file in a subfolder (`inputs/model/x.json`); the subfolders are made.
 pub fn write_atomic(dir: &Path, name: &str, bytes: &[u8]) -> Result<(), RunFolderError> {
     let p = dir.join(name);
-    let tmp = dir.join(format!(".{name}.tmp"));
+    let (sub, file) = match (p.parent(), p.file_name()) {
+        (Some(sub), Some(file)) => (sub.to_path_buf(), file.to_string_lossy().into_owned()),
+        _ => (dir.to_path_buf(), name.to_string()),
+    };
+    if sub != dir {
+        std::fs::create_dir_all(&sub).map_err(io(&sub))?;
+    }
+    let tmp = sub.join(format!(".{file}.tmp"));
     let mut f = std::fs::File::create(&tmp).map_err(io(&tmp))?;
     f.write_all(bytes).map_err(io(&tmp))?;
     drop(f);
@@ -321,6 +329,149 @@ impl Drop for RunFolder {
             }
         }
     }
+}
+
+/// Failure to read a JSON file of a run folder (`setup.json`, `summary.json`): every
+/// message names the file, and the field (as a JSON path such as `errors[2].stats.mean`)
+/// where one is at fault.
+#[derive(Debug, thiserror::Error)]
+pub enum RunFileError {
+    /// The file could not be read.
+    #[error("{path}: {source}")]
+    Read {
+        /// The file.
+        path: PathBuf,
+        /// Cause.
+        source: std::io::Error,
+    },
+    /// The file is not JSON.
+    #[error("{path}: not valid JSON: {source}")]
+    Json {
+        /// The file.
+        path: PathBuf,
+        /// Cause (with line and column).
+        source: serde_json::Error,
+    },
+    /// A field is missing or has the wrong type or value.
+    #[error("{path}: field `{field}`: {message}")]
+    Field {
+        /// The file.
+        path: PathBuf,
+        /// JSON path of the field, e.g. `errors[2].stats.mean`.
+        field: String,
+        /// What is wrong.
+        message: String,
+    },
+}
+
+impl RunFileError {
+    /// A field of `path` at fault.
+    pub fn field(path: &Path, field: impl Into<String>, message: impl Into<String>) -> Self {
+        RunFileError::Field {
+            path: path.to_path_buf(),
+            field: field.into(),
+            message: message.into(),
+        }
+    }
+}
+
+/// A JSON value's kind in words, for error messages.
+pub fn json_kind(v: &serde_json::Value) -> String {
+    use serde_json::Value;
+    match v {
+        Value::Null => "null".into(),
+        Value::Bool(b) => format!("the boolean {b}"),
+        Value::Number(n) => format!("the number {n}"),
+        Value::String(s) => format!("the string {s:?}"),
+        Value::Array(_) => "an array".into(),
+        Value::Object(_) => "an object".into(),
+    }
+}
+
+/// serde's "expected …" in words (`f64` → a number).
+fn expected_in_words(what: &str) -> String {
+    let w = what.trim();
+    if ["f64", "f32", "i64", "u64", "usize", "u32", "i32"].contains(&w) {
+        "a number".into()
+    } else if w == "a sequence" || w.starts_with("an array") || w.starts_with("a tuple") {
+        "an array".into()
+    } else if w.starts_with("struct ") || w == "a map" {
+        "an object".into()
+    } else if w == "a boolean" {
+        "true or false".into()
+    } else {
+        w.into()
+    }
+}
+
+/// Decode `value` (read from `path`) as `T`: a field of the wrong type or missing is
+/// named by its JSON path, with what was expected and what was found.
+pub fn decode_json<T: serde::de::DeserializeOwned>(
+    value: &serde_json::Value,
+    path: &Path,
+) -> Result<T, RunFileError> {
+    match serde_path_to_error::deserialize::<_, T>(value) {
+        Ok(v) => Ok(v),
+        Err(e) => {
+            let at = e.path().to_string();
+            let at = if at == "." { String::new() } else { at };
+            let inner = e.into_inner().to_string();
+            let join = |a: &str, b: &str| {
+                if a.is_empty() {
+                    b.to_string()
+                } else {
+                    format!("{a}.{b}")
+                }
+            };
+            let found = || {
+                // the value at the path, for "found …"
+                let mut v = Some(value);
+                for seg in at.split('.').filter(|s| !s.is_empty()) {
+                    let (key, idx) = match seg.find('[') {
+                        Some(i) => (&seg[..i], Some(&seg[i..])),
+                        None => (seg, None),
+                    };
+                    v = v.and_then(|x| x.get(key));
+                    for ix in idx.into_iter().flat_map(|s| s.split(['[', ']'])) {
+                        if let Ok(k) = ix.parse::<usize>() {
+                            v = v.and_then(|x| x.get(k));
+                        }
+                    }
+                }
+                v.map(json_kind)
+            };
+            let (field, message) = if let Some(rest) = inner.strip_prefix("missing field `") {
+                let name = rest.split('`').next().unwrap_or_default();
+                (join(&at, name), "missing".to_string())
+            } else if let Some(i) = inner.find(", expected ") {
+                let expected = expected_in_words(&inner[i + ", expected ".len()..]);
+                let found = found().unwrap_or_else(|| inner[..i].to_string());
+                (at, format!("expected {expected}, found {found}"))
+            } else {
+                (at, inner)
+            };
+            let field = if field.is_empty() {
+                "(top level)".to_string()
+            } else {
+                field
+            };
+            Err(RunFileError::field(path, field, message))
+        }
+    }
+}
+
+/// Read the JSON file `path` of a run folder as `T` (see [`decode_json`]).
+pub fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, RunFileError> {
+    let text = std::fs::read_to_string(path).map_err(|source| RunFileError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let value: serde_json::Value =
+        serde_json::from_str(&text).map_err(|source| RunFileError::Json {
+            path: path.to_path_buf(),
+            source,
+        })?;
+    decode_json(&value, path)
 }
 
 #[cfg(test)]

@@ -451,6 +451,16 @@ fn report_rewrites_a_track_run(run: &Path, summary: &serde_json::Value) {
     for f in ["setup.json", "solution.json"] {
         std::fs::copy(run.join(f), changed.join(f)).unwrap();
     }
+    // with the inputs the run folder holds (setup.json names them inside it)
+    for sub in std::fs::read_dir(run.join("inputs")).unwrap() {
+        let sub = sub.unwrap().path();
+        let to = changed.join("inputs").join(sub.file_name().unwrap());
+        std::fs::create_dir_all(&to).unwrap();
+        for f in std::fs::read_dir(&sub).unwrap() {
+            let f = f.unwrap().path();
+            std::fs::copy(&f, to.join(f.file_name().unwrap())).unwrap();
+        }
+    }
     let mut s2 = summary.clone();
     s2["objective"] = (summary["objective"].as_f64().unwrap() * 1.01).into();
     std::fs::write(changed.join("summary.json"), s2.to_string()).unwrap();

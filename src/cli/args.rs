@@ -6,7 +6,8 @@ use std::path::PathBuf;
 /// The model and foot shared by `simulate`, `fit-foot` and `track`.
 #[derive(Debug, Clone, clap::Args)]
 pub struct ModelArgs {
-    /// Model file (JSON).
+    /// Model file (JSON). Read from the current folder; footfall's own `models/…`,
+    /// `phases/…` files are found wherever it is started.
     #[arg(long, default_value = "models/opensim_subject01.json")]
     pub model: PathBuf,
     /// Foot: `ellipse`, `double-circle` or a foot file (JSON).

@@ -13,7 +13,8 @@ use std::path::PathBuf;
 pub struct PredictOptions {
     #[command(flatten)]
     pub check_points: super::CheckPointArgs,
-    /// Model file.
+    /// Model file. Read from the current folder; footfall's own `models/…`, `phases/…`
+    /// files are found wherever it is started.
     #[arg(long, default_value = "models/opensim_subject01.json")]
     pub model: PathBuf,
     #[command(flatten)]

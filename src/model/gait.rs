@@ -111,6 +111,11 @@ pub struct GaitModel {
 impl GaitModel {
     /// Build the model from a model file and a foot file.
     pub fn load(model_path: &Path, foot_path: &Path) -> Result<Self, ModelError> {
+        // a bundled name missing from the current folder is read from footfall's copy
+        let (model_path, foot_path) = (
+            &crate::bundled::resolve(model_path),
+            &crate::bundled::resolve(foot_path),
+        );
         let spec = ModelSpec::load(model_path)?;
         let foot = FootSpec::load(foot_path)?;
         Self::from_specs(&spec, model_path, &foot, foot_path)
@@ -123,6 +128,11 @@ impl GaitModel {
         foot_path: &Path,
         extra: &[super::effects::EffectSpec],
     ) -> Result<Self, ModelError> {
+        // a bundled name missing from the current folder is read from footfall's copy
+        let (model_path, foot_path) = (
+            &crate::bundled::resolve(model_path),
+            &crate::bundled::resolve(foot_path),
+        );
         let mut spec = ModelSpec::load(model_path)?;
         for e in extra {
             if let Some(j) = spec.effects.iter().position(|o| o.overlaps(e)) {

@@ -344,6 +344,7 @@ impl Segments {
 impl ModelSpec {
     /// Read and validate a model file.
     pub fn load(path: &Path) -> Result<Self, ModelError> {
+        let path = &crate::bundled::resolve(path);
         let spec: ModelSpec = read_json(path)?;
         spec.validate(path)?;
         Ok(spec)
@@ -471,6 +472,7 @@ impl ModelSpec {
 impl FootSpec {
     /// Read and validate a foot file.
     pub fn load(path: &Path) -> Result<Self, ModelError> {
+        let path = &crate::bundled::resolve(path);
         let spec: FootSpec = read_json(path)?;
         spec.validate(path)?;
         Ok(spec)

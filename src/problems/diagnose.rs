@@ -97,6 +97,14 @@ pub struct TrackingRunSetup {
     pub parameters: Vec<IdentifiedParameter>,
 }
 
+impl TrackingRunSetup {
+    /// Read a `setup.json` (paths as recorded; see `workflows::track::read_run_setup`
+    /// for a run folder's own inputs). Errors name the file and the field.
+    pub fn read(path: &std::path::Path) -> Result<Self, crate::runfolder::RunFileError> {
+        crate::runfolder::read_json(path)
+    }
+}
+
 /// An effect parameter at a solution.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct IdentifiedParameter {

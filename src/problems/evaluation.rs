@@ -366,7 +366,7 @@ pub struct Reintegration {
 }
 
 /// Figures of a fine-grid re-integration for the run summary.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, serde::Deserialize)]
 pub struct FineGridFigures {
     /// Output step (s).
     pub step_s: f64,

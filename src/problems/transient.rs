@@ -76,12 +76,12 @@ pub fn excursions(times: &[f64], signal: &[f64], threshold: f64) -> Vec<Excursio
 }
 
 /// A ground-force transient of one foot.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, serde::Deserialize)]
 pub struct ForceTransient {
     /// `right` or `left`.
-    pub foot: &'static str,
+    pub foot: String,
     /// `normal` or `tangential`.
-    pub component: &'static str,
+    pub component: String,
     /// Phase the peak falls in.
     pub phase: String,
     /// Time of the peak (s).
@@ -140,8 +140,8 @@ pub fn force_transients(
                     .flat_map(|x| x.contact.baumgarte_force.iter().map(|v| v.abs()))
                     .fold(0.0, f64::max);
                 out.push(ForceTransient {
-                    foot,
-                    component,
+                    foot: foot.to_string(),
+                    component: component.to_string(),
                     phase: sets[samples[k].phase].name.clone(),
                     t_peak: e.t_peak,
                     peak_n: cmp.model_feet[s][c][k],

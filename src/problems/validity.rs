@@ -12,7 +12,7 @@ use crate::simulate::Sample;
 use serde::Serialize;
 
 /// Tolerances of [`check`].
-#[derive(Debug, Clone, Copy, Serialize)]
+#[derive(Debug, Clone, Copy, Serialize, serde::Deserialize)]
 pub struct ValidityLimits {
     /// A normal force below −this pulls the foot (N).
     pub normal_force_n: f64,
@@ -39,7 +39,7 @@ impl Default for ValidityLimits {
 }
 
 /// What is broken.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, serde::Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum ViolationKind {
     /// λₙ < 0: the ground pulls.
@@ -65,7 +65,7 @@ impl ViolationKind {
 }
 
 /// One stretch of the fine grid where one contact breaks one condition.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, serde::Deserialize)]
 pub struct Violation {
     /// What is broken.
     pub kind: ViolationKind,
@@ -103,7 +103,7 @@ impl std::fmt::Display for Violation {
 }
 
 /// The validity of a re-integrated solution.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, serde::Deserialize)]
 pub struct Validity {
     /// Tolerances used.
     pub limits: ValidityLimits,

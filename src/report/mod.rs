@@ -39,6 +39,7 @@ pub mod diff;
 pub mod gait_figures;
 pub mod html;
 pub mod plot;
+pub mod run_summary;
 pub mod runs;
 pub mod table;
 pub mod tracking;

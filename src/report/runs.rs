@@ -105,26 +105,22 @@ impl RunCurves {
         let summary =
             RunSummary::read(dir).map_err(|e| err(&dir.join("summary.json"), e.to_string()))?;
         let sp = dir.join("summary.json");
-        let json: serde_json::Value = serde_json::from_str(
-            &std::fs::read_to_string(&sp).map_err(|e| err(&sp, e.to_string()))?,
-        )
-        .map_err(|e| err(&sp, e.to_string()))?;
-        let f = |v: &serde_json::Value| v.as_f64();
-        let window = match json.get("window_s").and_then(|w| w.as_array()) {
-            Some(w) if w.len() == 2 && w.iter().all(|v| v.is_f64()) => (w[0].as_f64().unwrap_or(0.0), w[1].as_f64().unwrap_or(0.0)),
-            _ => return Err(err(&sp, "field `window_s`: missing or not [start, end] in seconds (a run folder written by `track` or `predict` has it)")),
+        let file =
+            super::run_summary::RunSummaryFile::read(&sp).map_err(|e| err(&sp, e.to_string()))?;
+        let window = match file.window_s {
+            Some([a, b]) => (a, b),
+            None => return Err(err(&sp, "field `window_s`: missing (a run folder written by `track` or `predict` has it: [start, end] in seconds)")),
         };
-        let cycle = match json.get("gait_cycle") {
-            Some(c) => {
-                let period = c.get("period_s").and_then(f);
-                let hs = c
-                    .get("heel_strike_s")
-                    .and_then(|h| h.as_array())
-                    .map(|h| h.iter().filter_map(f).collect::<Vec<f64>>());
-                match (period, hs) {
-                    (Some(p), Some(h)) if h.len() == 2 && p > 0.0 => CycleAxis { period: p, heel_strike: [h[0], h[1]] },
-                    _ => return Err(err(&sp, "field `gait_cycle`: expected {\"period_s\": > 0, \"heel_strike_s\": [right, left]}")),
-                }
+        let cycle = match file.gait_cycle {
+            Some(c) if c.period_s > 0.0 => CycleAxis {
+                period: c.period_s,
+                heel_strike: c.heel_strike_s,
+            },
+            Some(_) => {
+                return Err(err(
+                    &sp,
+                    "field `gait_cycle.period_s`: expected a period > 0 s",
+                ))
             }
             // runs written before the field: their window is a half cycle from a left heel strike
             None => {
@@ -135,21 +131,11 @@ impl RunCurves {
                 }
             }
         };
-        let phases = json
-            .get("phase_spans")
-            .and_then(|p| p.as_array())
-            .map(|p| {
-                p.iter()
-                    .filter_map(|x| {
-                        Some((
-                            x.get("from_s").and_then(f)?,
-                            x.get("to_s").and_then(f)?,
-                            x.get("phase")?.as_str()?.to_string(),
-                        ))
-                    })
-                    .collect()
-            })
-            .unwrap_or_default();
+        let phases = file
+            .phase_spans
+            .iter()
+            .map(|p| (p.from_s, p.to_s, p.phase.clone()))
+            .collect();
         let csv = ["fine_grid.csv", "tracking.csv", "prediction.csv"]
             .iter()
             .map(|n| dir.join(n))
@@ -158,12 +144,11 @@ impl RunCurves {
         let (time, columns) = read_csv(&csv)?;
         Ok(Self {
             name: summary.name.clone(),
-            verdict: json
-                .get("verdict")
-                .and_then(|v| v.as_str())
-                .or(summary.status.as_deref())
-                .unwrap_or("unknown")
-                .to_string(),
+            verdict: file
+                .verdict
+                .clone()
+                .or_else(|| summary.status.clone())
+                .unwrap_or_else(|| "unknown".to_string()),
             summary,
             time,
             columns,

@@ -12,6 +12,7 @@ pub mod compare;
 pub mod diagnose;
 pub mod diff;
 pub mod fit_foot;
+pub mod inputs;
 pub mod predict;
 pub mod refine;
 pub mod report;

@@ -238,6 +238,8 @@ pub fn predict(
             .map(|p| serde_json::json!({"phase": p.name, "duration": p.duration}))
             .collect(),
     );
+    // the run folder holds its inputs (summary.json names the copies)
+    let inputs = super::inputs::copy_inputs(&folder, &o.model, foot, &phases, o.data.as_deref())?;
     let out = super::run_folder::write(
         GaitRun {
             command: "predict",
@@ -246,6 +248,7 @@ pub fn predict(
             model: &model,
             sets: &sets,
             phases_path: &phases,
+            inputs: Some(&inputs),
             events: &tracking.events,
             sequence: &setup.seq,
             control_bounds: (&setup.guess.u_lb, &setup.guess.u_ub),

@@ -7,6 +7,7 @@
 use super::track::{read_run_setup, RunWriting, TrackingProblem};
 #[allow(unused_imports)]
 use super::{note, result_note, warn_note, Progress};
+use crate::report::run_summary::RunSummaryFile;
 use crate::runfolder::RunFolder;
 use crate::sqp::{IterationRecord, SqpResult, SqpStatus, SqpTimings, Violation};
 use anyhow::{anyhow, bail, Context};
@@ -32,39 +33,50 @@ pub struct ReportRequest {
 const OBJECTIVE_MISMATCH: f64 = 1e-6;
 
 /// The solver's figures as the run recorded them in `summary.json`.
-#[derive(Debug, serde::Deserialize)]
 struct SolverRecord {
     status: SqpStatus,
     objective: f64,
     kkt: f64,
     seconds: f64,
-    #[serde(default)]
     timings: SqpTimings,
-    #[serde(default)]
     history: Vec<IterationRecord>,
-    #[serde(default)]
     most_violated: Vec<Violation>,
 }
 
 fn read_record(run: &Path) -> anyhow::Result<SolverRecord> {
     let file = run.join("summary.json");
-    let text = std::fs::read_to_string(&file).with_context(|| format!("reading {} (a track run folder has one; it holds the solver's figures the report carries over)", file.display()))?;
-    let value: serde_json::Value =
-        serde_json::from_str(&text).with_context(|| format!("{}: not JSON", file.display()))?;
-    if value.get("command").and_then(|c| c.as_str()) != Some("track") {
+    if !file.is_file() {
+        bail!("{}: not found (a track run folder has one; it holds the solver's figures the report carries over)", file.display());
+    }
+    let s = RunSummaryFile::read(&file)?;
+    if s.command.as_deref() != Some("track") {
         bail!(
             "{}: field `command` is {}, expected \"track\" (footfall report rewrites track runs)",
             file.display(),
-            value
-                .get("command")
-                .map_or("missing".into(), |c| c.to_string())
+            s.command.map_or("missing".into(), |c| format!("{c:?}"))
         );
     }
-    serde_json::from_value(value).with_context(|| {
-        format!(
-            "{}: not the summary of a footfall track run",
-            file.display()
-        )
+    let need = |v: Option<f64>, field: &str| {
+        v.ok_or_else(|| {
+            anyhow!(
+                "{}: field `{field}`: missing (a track run records it)",
+                file.display()
+            )
+        })
+    };
+    Ok(SolverRecord {
+        status: s.status.clone().ok_or_else(|| {
+            anyhow!(
+                "{}: field `status`: missing (a track run records it)",
+                file.display()
+            )
+        })?,
+        objective: need(s.objective, "objective")?,
+        kkt: need(s.kkt, "kkt")?,
+        seconds: need(s.seconds, "seconds")?,
+        timings: s.timings,
+        history: s.history,
+        most_violated: s.most_violated,
     })
 }
 

@@ -111,6 +111,8 @@ pub struct GaitRun<'a> {
     pub sets: &'a [ConstraintSet],
     /// Phase file.
     pub phases_path: &'a std::path::Path,
+    /// The inputs copied into the run folder (`summary.json` then names the copies).
+    pub inputs: Option<&'a super::inputs::RunInputs>,
     /// The phase sequence the problem was built from (for the phase legend).
     pub sequence: &'a crate::phases::PhaseSequence,
     /// Lower and upper bounds of the controls in the solved problem (to mark a control
@@ -467,46 +469,90 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
         sections,
     };
     // channels without a defined sample in a phase are left out (no nulls)
-    let stat_json = |s: &Option<crate::report::table::ErrorStats>| {
-        s.map(|v| serde_json::json!({"mean": v.mean, "sd": v.sd, "max": v.max}))
+    use crate::report::run_summary as rs;
+    let stats = |s: &Option<crate::report::table::ErrorStats>| {
+        s.map(|v| rs::SummaryStats {
+            mean: v.mean,
+            sd: Some(v.sd),
+            max: Some(v.max),
+        })
     };
     let overall = channel_errors(&channels, &cmp, None);
     let phased = channel_errors(&channels, &cmp, Some(&phase_ids));
-    let mut summary_json = serde_json::json!({
-        "command": run.command,
-        "model": model.name,
-        "foot": model.foot_name,
-        "phases": run.phases_path,
-        "data": data.source,
-        "window_s": [t0, t1],
-        "gait_cycle": {"period_s": cycle.period, "heel_strike_s": cycle.heel_strike},
-        "phase_spans": sol.phase_spans().iter().map(|p| serde_json::json!({"phase": p.name, "from_s": p.t0, "to_s": p.t1})).collect::<Vec<_>>(),
-        "status": res.status,
-        "verdict": verdict,
-        "physically_valid": validity.as_ref().map(|v| v.is_valid()),
-        "validity": validity,
-        "check_points": run.check_points,
-        "stop_reason": res.status.to_string(),
-        "iterations": res.history.len().saturating_sub(1),
-        "seconds": res.seconds,
-        "objective": res.objective,
-        "kkt": res.kkt,
-        "infeasibility": res.infeasibility,
-        "timings": res.timings,
-        "errors": overall.iter().filter_map(|c| stat_json(&c.runs[0]).map(|s| serde_json::json!({"channel": c.name, "unit": c.unit, "stats": s}))).collect::<Vec<_>>(),
-        "errors_by_phase": phased.iter().map(|c| serde_json::json!({"channel": c.name, "unit": c.unit, "phases": phase_names.iter().zip(&c.runs).filter_map(|(p, s)| stat_json(s).map(|s| serde_json::json!({"phase": p, "stats": s}))).collect::<Vec<_>>()})).collect::<Vec<_>>(),
-        "fine_grid": fine,
-        "transient_threshold_n": run.transient_threshold_n,
-        "transients": transients,
-        "most_violated": res.most_violated,
-        "history": res.history,
-    });
-    if let Some(obj) = summary_json.as_object_mut() {
-        if let Err(e) = &fine_run {
-            obj.insert("fine_grid_error".into(), e.clone().into());
-        }
-        obj.extend(run.extra_json);
-    }
+    let summary_file = rs::RunSummaryFile {
+        command: Some(run.command.to_string()),
+        model: Some(model.name.clone()),
+        foot: Some(model.foot_name.clone()),
+        phases: Some(
+            run.inputs
+                .map_or(run.phases_path, |i| &i.phases)
+                .to_path_buf(),
+        ),
+        data: Some(run.inputs.map_or(&data.source, |i| &i.data).clone()),
+        inputs: run.inputs.cloned(),
+        window_s: Some([t0, t1]),
+        gait_cycle: Some(rs::GaitCycleRecord {
+            period_s: cycle.period,
+            heel_strike_s: cycle.heel_strike,
+        }),
+        phase_spans: sol
+            .phase_spans()
+            .iter()
+            .map(|p| rs::PhaseSpan {
+                phase: p.name.clone(),
+                from_s: p.t0,
+                to_s: p.t1,
+            })
+            .collect(),
+        status: Some(res.status.clone()),
+        verdict: Some(verdict.to_string()),
+        physically_valid: validity.as_ref().map(|v| v.is_valid()),
+        validity: validity.clone(),
+        check_points: Some(run.check_points),
+        stop_reason: Some(res.status.to_string()),
+        iterations: Some(res.history.len().saturating_sub(1)),
+        seconds: Some(res.seconds),
+        objective: Some(res.objective),
+        kkt: Some(res.kkt),
+        infeasibility: Some(res.infeasibility),
+        timings: res.timings,
+        errors: overall
+            .iter()
+            .filter_map(|c| {
+                stats(&c.runs[0]).map(|s| rs::ChannelStats {
+                    channel: c.name.clone(),
+                    unit: c.unit.clone(),
+                    stats: s,
+                })
+            })
+            .collect(),
+        errors_by_phase: Some(
+            phased
+                .iter()
+                .map(|c| rs::ChannelPhaseErrors {
+                    channel: c.name.clone(),
+                    unit: c.unit.clone(),
+                    phases: phase_names
+                        .iter()
+                        .zip(&c.runs)
+                        .filter_map(|(p, s)| {
+                            stats(s).map(|s| rs::PhaseErrors {
+                                phase: p.clone(),
+                                stats: s,
+                            })
+                        })
+                        .collect(),
+                })
+                .collect(),
+        ),
+        fine_grid: fine.clone(),
+        fine_grid_error: fine_run.as_ref().err().cloned(),
+        transient_threshold_n: Some(run.transient_threshold_n),
+        transients: transients.clone(),
+        most_violated: res.most_violated.clone(),
+        history: res.history.clone(),
+    };
+    let summary_json = summary_file.to_json(run.extra_json)?;
     folder.write(
         "summary.json",
         serde_json::to_string_pretty(&summary_json)?.as_bytes(),

@@ -190,11 +190,15 @@ pub fn run(args: &SynthRequest, progress: &dyn Progress) -> anyhow::Result<()> {
         .map_err(|e| anyhow!("generating the trial: {e}"))?;
     let (csv, meta) = write_sagittal_csv(&data);
     let (clean_csv, _) = write_sagittal_csv(&truth.clean);
+    // the trial's model, foot and phases, copied into the folder
+    let (model_copy, foot_copy, phases_copy) =
+        super::inputs::copy_model_inputs(&folder, &model_path, &foot, &phases)?;
     let truth_json = serde_json::json!({
         "from": args.from,
         "model": model_path,
         "foot": model.foot_name,
         "phases": phases,
+        "inputs": {"model": model_copy, "foot": foot_copy, "phases": phases_copy},
         "hidden_effects": hidden,
         "measurement_offsets": offsets,
         "effect_parameters": model.parameters().iter().map(|p| serde_json::json!({"name": p.name, "value": p.value, "unit": p.unit})).collect::<Vec<_>>(),

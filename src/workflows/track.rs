@@ -405,18 +405,7 @@ pub fn merge_stages(
     }
 }
 
-/// Read a run's `setup.json`.
-pub fn read_run_setup(run: &std::path::Path) -> anyhow::Result<TrackingRunSetup> {
-    let file = if run.is_dir() {
-        run.join("setup.json")
-    } else {
-        run.to_path_buf()
-    };
-    let text = std::fs::read_to_string(&file)
-        .with_context(|| format!("reading {} (a track run folder has one)", file.display()))?;
-    serde_json::from_str(&text)
-        .with_context(|| format!("{}: not a footfall tracking setup", file.display()))
-}
+pub use super::inputs::read_run_setup;
 
 /// What the tracking workflow solves: the run's description, the effects added to it,
 /// where it starts and how it is solved.
@@ -440,7 +429,8 @@ pub struct TrackRequest {
 
 impl TrackRequest {
     /// The `track` command's defaults for `foot` (`ellipse`, `double-circle` or a foot
-    /// file) on the bundled trial, paths relative to the repository root.
+    /// file) on the bundled trial: the repository's paths, read from the compiled-in
+    /// copies where the current folder lacks them ([`crate::bundled`]).
     pub fn new(foot: &str) -> Self {
         TrackRequest {
             run: TrackingRunSetup {
@@ -643,8 +633,23 @@ impl TrackingProblem {
             vec![None; model.ntheta()]
         };
         let record = self.record(base, extra, &solution.theta, &sd, check_sites);
+        // the run folder holds its inputs; setup.json names them relative to it
+        let inputs = super::inputs::copy_inputs(
+            &folder,
+            &record.model,
+            &record.foot,
+            &record.phases,
+            record.data.as_deref(),
+        )?;
+        let stored = TrackingRunSetup {
+            model: inputs.model.clone(),
+            foot: inputs.foot.to_string_lossy().into_owned(),
+            phases: inputs.phases.clone(),
+            data: Some(inputs.data.clone()),
+            ..record.clone()
+        };
         let mut extra_json = serde_json::Map::new();
-        extra_json.insert("setup".into(), serde_json::to_value(&record)?);
+        extra_json.insert("setup".into(), serde_json::to_value(&stored)?);
         extra_json.insert("data_residuals".into(), data_rows.into());
         extra_json.insert(
             "integration".into(),
@@ -691,6 +696,7 @@ impl TrackingProblem {
                 model,
                 sets,
                 phases_path: phases,
+                inputs: Some(&inputs),
                 events: &self.setup.events,
                 sequence: &self.setup.seq,
                 control_bounds: (&self.setup.guess.u_lb, &self.setup.guess.u_ub),
@@ -702,7 +708,7 @@ impl TrackingProblem {
                 extra_sections,
                 extra_files: vec![(
                     "setup.json".into(),
-                    serde_json::to_string_pretty(&record)?.into_bytes(),
+                    serde_json::to_string_pretty(&stored)?.into_bytes(),
                 )],
                 transient_threshold_n: transient_threshold,
                 friction: cycle.friction(),

@@ -92,7 +92,9 @@ pub fn load_trial(t: &TrialFiles) -> anyhow::Result<LoadedTrial> {
         if t.forces.is_some() || !t.plates.is_empty() || t.belt_speed.is_some() {
             bail!("--forces, --plate and --belt-speed describe an OpenSim trial given with --data IK.mot (without --data the bundled trial is read, whose meta file gives all of it)");
         }
-        let data = GaitData::bundled(Path::new("."))?;
+        // the compiled-in copy, wherever footfall is started
+        let root = crate::bundled::root().map_err(anyhow::Error::msg)?;
+        let data = GaitData::bundled(&root)?;
         data.check_conventions(t.overground)?;
         return Ok(LoadedTrial {
             data,

@@ -1,8 +1,9 @@
 //! Reading a run's `summary.json` back: its per-channel error statistics, overall and
 //! phase by phase ([`RunSummary`]), with errors that name the file and the field.
 
+use crate::report::run_summary::RunSummaryFile;
+use crate::runfolder::RunFileError;
 use serde::Serialize;
-use serde_json::Value;
 use std::path::{Path, PathBuf};
 
 /// Failure to read a run's `summary.json`: every message names the file, and the field
@@ -43,26 +44,7 @@ pub enum DiffError {
     },
 }
 
-/// Error statistics of one channel as a run summary records them: mean, standard
-/// deviation and maximum of |model − measurement|, in the channel's display unit.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct SummaryStats {
-    /// Mean of |error| (finite, ≥ 0).
-    pub mean: f64,
-    /// Population standard deviation of |error|, when recorded.
-    pub sd: Option<f64>,
-    /// Largest |error|, when recorded.
-    pub max: Option<f64>,
-}
-
-/// The errors of one channel within one phase of the gait cycle.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct PhaseErrors {
-    /// Phase name as in the phase file, e.g. "1e".
-    pub phase: String,
-    /// Statistics over the nodes of that phase.
-    pub stats: SummaryStats,
-}
+pub use crate::report::run_summary::{PhaseErrors, SummaryStats};
 
 /// The errors of one channel in one run.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -124,109 +106,21 @@ fn locate(run: &Path) -> Result<(PathBuf, String), DiffError> {
     }
 }
 
-/// A JSON value's kind in words, for error messages.
-fn kind(v: &Value) -> String {
-    match v {
-        Value::Null => "null".into(),
-        Value::Bool(b) => format!("the boolean {b}"),
-        Value::Number(n) => format!("the number {n}"),
-        Value::String(s) => format!("the string {s:?}"),
-        Value::Array(_) => "an array".into(),
-        Value::Object(_) => "an object".into(),
-    }
-}
-
-/// Reads fields of one summary file, naming the file and field in every error.
-struct Reader<'a> {
-    path: &'a Path,
-}
-
-impl Reader<'_> {
-    fn err(&self, field: &str, message: impl Into<String>) -> DiffError {
-        DiffError::Field {
-            path: self.path.to_path_buf(),
-            field: field.to_string(),
-            message: message.into(),
+impl From<RunFileError> for DiffError {
+    fn from(e: RunFileError) -> Self {
+        match e {
+            RunFileError::Read { path, source } => DiffError::Read { path, source },
+            RunFileError::Json { path, source } => DiffError::Json { path, source },
+            RunFileError::Field {
+                path,
+                field,
+                message,
+            } => DiffError::Field {
+                path,
+                field,
+                message,
+            },
         }
-    }
-
-    /// Field `key` of the object `v` (at JSON path `at`), which must be present.
-    fn get<'v>(&self, v: &'v Value, at: &str, key: &str) -> Result<&'v Value, DiffError> {
-        let field = if at.is_empty() {
-            key.to_string()
-        } else {
-            format!("{at}.{key}")
-        };
-        v.get(key).ok_or_else(|| self.err(&field, "missing"))
-    }
-
-    fn array<'v>(&self, v: &'v Value, field: &str) -> Result<&'v Vec<Value>, DiffError> {
-        v.as_array()
-            .ok_or_else(|| self.err(field, format!("expected an array, found {}", kind(v))))
-    }
-
-    fn string(&self, v: &Value, at: &str, key: &str) -> Result<String, DiffError> {
-        let s = self.get(v, at, key)?;
-        s.as_str().map(str::to_string).ok_or_else(|| {
-            self.err(
-                &format!("{at}.{key}"),
-                format!("expected a string, found {}", kind(s)),
-            )
-        })
-    }
-
-    /// The non-empty channel or phase name `key` of `v`.
-    fn name(&self, v: &Value, at: &str, key: &str) -> Result<String, DiffError> {
-        let s = self.string(v, at, key)?;
-        if s.trim().is_empty() {
-            return Err(self.err(&format!("{at}.{key}"), "empty name"));
-        }
-        Ok(s)
-    }
-
-    /// An optional number: absent or null gives `None`.
-    fn optional_number(&self, v: &Value, at: &str, key: &str) -> Result<Option<f64>, DiffError> {
-        match v.get(key) {
-            None | Some(Value::Null) => Ok(None),
-            Some(x) => x.as_f64().map(Some).ok_or_else(|| {
-                self.err(
-                    &format!("{at}.{key}"),
-                    format!("expected a number, found {}", kind(x)),
-                )
-            }),
-        }
-    }
-
-    fn stats(&self, v: &Value, at: &str) -> Result<SummaryStats, DiffError> {
-        let at = format!("{at}.stats");
-        let s = v.get("stats").ok_or_else(|| self.err(&at, "missing"))?;
-        if !s.is_object() {
-            return Err(self.err(
-                &at,
-                format!(
-                    "expected an object with mean, sd and max, found {}",
-                    kind(s)
-                ),
-            ));
-        }
-        let m = self.get(s, &at, "mean")?;
-        let mean = m.as_f64().ok_or_else(|| {
-            self.err(
-                &format!("{at}.mean"),
-                format!("expected a number, found {}", kind(m)),
-            )
-        })?;
-        if !(mean.is_finite() && mean >= 0.0) {
-            return Err(self.err(
-                &format!("{at}.mean"),
-                format!("{mean} is not a mean of absolute errors (need a finite number ≥ 0)"),
-            ));
-        }
-        Ok(SummaryStats {
-            mean,
-            sd: self.optional_number(s, &at, "sd")?,
-            max: self.optional_number(s, &at, "max")?,
-        })
     }
 }
 
@@ -243,120 +137,51 @@ impl RunSummary {
     }
 
     /// Parse summary text; `path` is only used to name the file in errors and in the
-    /// result. `"errors"` is required, `"errors_by_phase"` optional.
+    /// result. `"errors"` is required, `"errors_by_phase"` optional (read through the
+    /// summary's one serde struct, [`RunSummaryFile`]).
     pub fn parse(text: &str, path: &Path, name: impl Into<String>) -> Result<Self, DiffError> {
-        let root: Value = serde_json::from_str(text).map_err(|source| DiffError::Json {
-            path: path.to_path_buf(),
-            source,
-        })?;
-        let r = Reader { path };
-        if !root.is_object() {
-            return Err(r.err(
-                "(top level)",
-                format!("expected a JSON object, found {}", kind(&root)),
-            ));
-        }
-        let errors = root.get("errors").ok_or_else(|| r.err("errors", "missing (a run folder written by `track` or `predict` records its per-channel errors here)"))?;
-        let mut channels: Vec<ChannelSummary> = Vec::new();
-        for (i, e) in r.array(errors, "errors")?.iter().enumerate() {
-            let at = format!("errors[{i}]");
-            if !e.is_object() {
-                return Err(r.err(
-                    &at,
-                    format!(
-                        "expected an object with channel, unit and stats, found {}",
-                        kind(e)
-                    ),
-                ));
-            }
-            let channel = r.name(e, &at, "channel")?;
-            let unit = r.string(e, &at, "unit")?;
-            if let Some(j) = channels
-                .iter()
-                .position(|c| c.channel == channel && c.unit == unit)
-            {
-                return Err(r.err(
-                    &format!("{at}.channel"),
-                    format!("channel {channel:?} ({unit}) appears twice (also errors[{j}])"),
-                ));
-            }
-            channels.push(ChannelSummary {
-                channel,
-                unit,
-                stats: r.stats(e, &at)?,
-                phases: Vec::new(),
-            });
-        }
-        let has_phases = match root.get("errors_by_phase") {
-            None | Some(Value::Null) => false,
-            Some(by_phase) => {
-                for (i, e) in r.array(by_phase, "errors_by_phase")?.iter().enumerate() {
-                    let at = format!("errors_by_phase[{i}]");
-                    if !e.is_object() {
-                        return Err(r.err(
-                            &at,
-                            format!(
-                                "expected an object with channel, unit and phases, found {}",
-                                kind(e)
-                            ),
-                        ));
-                    }
-                    let channel = r.name(e, &at, "channel")?;
-                    let unit = r.string(e, &at, "unit")?;
-                    let list = r.array(r.get(e, &at, "phases")?, &format!("{at}.phases"))?;
-                    let mut phases: Vec<PhaseErrors> = Vec::new();
-                    for (k, p) in list.iter().enumerate() {
-                        let pat = format!("{at}.phases[{k}]");
-                        if !p.is_object() {
-                            return Err(r.err(
-                                &pat,
-                                format!(
-                                    "expected an object with phase and stats, found {}",
-                                    kind(p)
-                                ),
-                            ));
-                        }
-                        let phase = r.name(p, &pat, "phase")?;
-                        if phases.iter().any(|q| q.phase == phase) {
-                            return Err(r.err(
-                                &format!("{pat}.phase"),
-                                format!("phase {phase:?} appears twice"),
-                            ));
-                        }
-                        phases.push(PhaseErrors {
-                            phase,
-                            stats: r.stats(p, &pat)?,
-                        });
-                    }
-                    // a channel without any defined sample has no overall entry; its
-                    // (then empty) phase list has nothing to add
-                    if let Some(c) = channels
-                        .iter_mut()
-                        .find(|c| c.channel == channel && c.unit == unit)
-                    {
-                        if !c.phases.is_empty() {
-                            return Err(r.err(
-                                &format!("{at}.channel"),
-                                format!("channel {channel:?} ({unit}) appears twice"),
-                            ));
-                        }
-                        c.phases = phases;
-                    }
+        let file = RunSummaryFile::parse(text, path)?;
+        Ok(Self::from_file(file, path, name))
+    }
+
+    /// The errors of a summary already read from `path`.
+    pub fn from_file(file: RunSummaryFile, path: &Path, name: impl Into<String>) -> Self {
+        let has_phases = file.errors_by_phase.is_some();
+        let by_phase = file.errors_by_phase.unwrap_or_default();
+        let channels = file
+            .errors
+            .into_iter()
+            .map(|c| {
+                // a channel without any defined sample has no overall entry; its (then
+                // empty) phase list has nothing to add
+                let phases = by_phase
+                    .iter()
+                    .find(|p| p.channel == c.channel && p.unit == c.unit && !p.phases.is_empty())
+                    .map(|p| p.phases.clone())
+                    .unwrap_or_default();
+                ChannelSummary {
+                    channel: c.channel,
+                    unit: c.unit,
+                    stats: c.stats,
+                    phases,
                 }
-                true
-            }
-        };
-        let text_field = |k: &str| root.get(k).and_then(Value::as_str).map(str::to_string);
-        Ok(Self {
+            })
+            .collect();
+        // the status as its one word (`converged`, …), as the file spells it
+        let status = file.status.as_ref().map(|s| match serde_json::to_value(s) {
+            Ok(serde_json::Value::String(w)) => w,
+            _ => s.to_string(),
+        });
+        Self {
             path: path.to_path_buf(),
             name: name.into(),
-            command: text_field("command"),
-            foot: text_field("foot"),
-            status: text_field("status"),
-            stop_reason: text_field("stop_reason"),
+            command: file.command,
+            foot: file.foot,
+            status,
+            stop_reason: file.stop_reason,
             channels,
             has_phases,
-        })
+        }
     }
 
     /// One line describing the run: its name, command and foot, and the summary's path.
