@@ -22,8 +22,11 @@ pub struct RunInputs {
     pub foot: PathBuf,
     /// Phase file.
     pub phases: PathBuf,
-    /// Sagittal CSV (its meta file, if any, beside it).
+    /// Sagittal CSV (its meta file, if any, beside it), or OpenSim kinematics.
     pub data: PathBuf,
+    /// The forces file of a trial given as kinematics and forces (OpenSim external loads).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub forces: Option<PathBuf>,
 }
 
 /// Error statistics of one channel as a run summary records them: mean, standard

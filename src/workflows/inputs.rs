@@ -93,13 +93,15 @@ pub fn copy_model_inputs(
 }
 
 /// Copy a run's model, foot, phase file ([`copy_model_inputs`]) and trial (`None`: the
-/// bundled trial; its meta file beside it) into `folder`'s `inputs/`.
+/// bundled trial; its meta file beside it; and its forces file, if given apart) into
+/// `folder`'s `inputs/`.
 pub fn copy_inputs(
     folder: &RunFolder,
     model: &Path,
     foot: &str,
     phases: &Path,
     data: Option<&Path>,
+    forces: Option<&Path>,
 ) -> anyhow::Result<RunInputs> {
     let (model, foot, phases) = copy_model_inputs(folder, model, foot, phases)?;
     let csv = match data {
@@ -113,11 +115,15 @@ pub fn copy_inputs(
     if let Some(meta) = crate::data::sibling_meta_path(&csv) {
         copy(folder, "data", &meta, None)?;
     }
+    let forces = forces
+        .map(|f| copy(folder, "data", f, None))
+        .transpose()?;
     Ok(RunInputs {
         model,
         foot,
         phases,
         data,
+        forces,
     })
 }
 
@@ -158,6 +164,7 @@ pub fn read_run_setup(
     setup.model = inside(&setup.model);
     setup.phases = inside(&setup.phases);
     setup.data = setup.data.as_deref().map(inside);
+    setup.forces = setup.forces.as_deref().map(inside);
     setup.foot = inside(std::path::Path::new(&setup.foot))
         .to_string_lossy()
         .into_owned();

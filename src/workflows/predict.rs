@@ -239,7 +239,14 @@ pub fn predict(
             .collect(),
     );
     // the run folder holds its inputs (summary.json names the copies)
-    let inputs = super::inputs::copy_inputs(&folder, &o.model, foot, &phases, o.data.as_deref())?;
+    let inputs = super::inputs::copy_inputs(
+        &folder,
+        &o.model,
+        foot,
+        &phases,
+        o.data.as_deref(),
+        o.forces.as_deref(),
+    )?;
     let out = super::run_folder::write(
         GaitRun {
             command: "predict",

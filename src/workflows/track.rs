@@ -640,12 +640,14 @@ impl TrackingProblem {
             &record.foot,
             &record.phases,
             record.data.as_deref(),
+            record.forces.as_deref(),
         )?;
         let stored = TrackingRunSetup {
             model: inputs.model.clone(),
             foot: inputs.foot.to_string_lossy().into_owned(),
             phases: inputs.phases.clone(),
             data: Some(inputs.data.clone()),
+            forces: inputs.forces.clone(),
             ..record.clone()
         };
         let mut extra_json = serde_json::Map::new();
