@@ -137,8 +137,16 @@ fn track_reads_the_raw_opensim_pair_and_writes_opensim_coordinate_names() {
         err.contains("right foot ground_force_vx/vy/px (detected), left foot l_ground_force_vx/vy/px (detected)"),
         "the plate choice is not said: {err}"
     );
+    // the run folder holds a copy of the forces file, which setup.json names
     let setup = json(&out.join("setup.json"));
-    assert_eq!(setup["forces"].as_str(), Some(s(&grf())));
+    assert_eq!(
+        setup["forces"].as_str(),
+        Some("inputs/data/subject01_walk1_grf.mot")
+    );
+    assert_eq!(
+        std::fs::read(out.join("inputs/data/subject01_walk1_grf.mot")).unwrap(),
+        std::fs::read(grf()).unwrap()
+    );
     assert_eq!(setup["belt_speed"].as_f64(), Some(1.1322));
 
     // kinematics.sto: OpenSim's coordinate names, radians stated, the model's coordinates
@@ -244,41 +252,55 @@ fn the_opensim_pair_gives_the_converted_csv_trials_targets_and_starting_cost() {
             .as_f64()
             .unwrap()
     };
+    // the pair's forces are used at their own 600 Hz instants (the spline targets pass
+    // through ten times the samples of the CSV's 60 Hz copy), so the costs agree to the
+    // difference that makes: 0.09 % when measured
     let (ja, jb) = (j(&a), j(&b));
     assert!(
-        (ja - jb).abs() < 1e-4 * jb,
+        (ja - jb).abs() < 2e-3 * jb,
         "starting cost {ja} (OpenSim pair) vs {jb} (CSV)"
     );
+    // the tracked half cycle starts and ends at the same heel strikes, found on the
+    // 600 Hz forces (the pair) and on their 60 Hz copy (the CSV, whose threshold crossings
+    // are interpolated between samples 16.7 ms apart): within a quarter of a kinematic
+    // sample (measured: 1.7 ms)
     let (na, nb) = (
         csv_columns(&a.join("tracking.csv")),
         csv_columns(&b.join("tracking.csv")),
     );
-    // the node times follow the events of the 600 Hz forces either way (the CSV's are
-    // rounded to 7 digits)
     for (x, y) in column(&na, "time").iter().zip(column(&nb, "time")) {
-        assert!((x - y).abs() < 1e-6, "node time {x} vs {y}");
+        assert!((x - y).abs() < 0.25 / 60.0, "node time {x} vs {y}");
     }
-    let mut compared = 0;
-    for (name, va) in &na {
-        if !name.starts_with("data_") || name.ends_with("_dot") {
-            continue;
+    // and at the kinematic instants the two trials are the same: the CSV is the pair
+    // rounded to 7 digits
+    let pair = load_trial(&TrialFiles {
+        data: Some(states()),
+        forces: Some(grf()),
+        belt_speed: Some(1.1322),
+        ..Default::default()
+    })
+    .unwrap()
+    .data;
+    let csv = load_trial(&TrialFiles::default()).unwrap().data;
+    assert_eq!(pair.time.len(), csv.time.len());
+    for (c, (qa, qb)) in pair.q.iter().zip(&csv.q).enumerate() {
+        for (x, y) in qa.iter().zip(qb) {
+            assert!((x - y).abs() < 1e-5, "coordinate {c}: {x} vs {y}");
         }
-        let vb = column(&nb, name);
-        // forces in N (measured: 6e-4 N), the rest in m or rad (4e-6)
-        let tol = if name.contains("grf") || name.contains("force") {
-            5e-3
-        } else {
-            1e-5
-        };
-        for (x, y) in va.iter().zip(vb) {
+    }
+    for (f, (fa, fb)) in pair.feet.iter().zip(&csv.feet).enumerate() {
+        for (va, vb, what) in [(&fa.fx, &fb.fx, "fx"), (&fa.fy, &fb.fy, "fy")] {
+            for (x, y) in va.iter().zip(vb) {
+                assert!((x - y).abs() < 5e-3, "foot {f} {what}: {x} vs {y}");
+            }
+        }
+        for (x, y) in fa.cop_x.iter().zip(&fb.cop_x) {
             assert!(
-                (x.is_nan() && y.is_nan()) || (x - y).abs() <= tol,
-                "{name}: {x} vs {y}"
+                (x.is_nan() && y.is_nan()) || (x - y).abs() < 1e-5,
+                "foot {f} CoP: {x} vs {y}"
             );
         }
-        compared += 1;
     }
-    assert!(compared >= 15, "only {compared} data columns");
 }
 
 #[test]
@@ -325,7 +347,8 @@ fn fit_foot_reads_the_opensim_pair() {
         a["cost_initial"].as_f64().unwrap(),
         b["cost_initial"].as_f64().unwrap(),
     );
-    assert!((ca - cb).abs() < 1e-4 * cb, "eq. 13 cost {ca} vs {cb}");
+    // the forces at their own 600 Hz instants against the CSV's 60 Hz copy: 0.1 % apart
+    assert!((ca - cb).abs() < 2e-3 * cb, "eq. 13 cost {ca} vs {cb}");
 }
 
 #[test]
