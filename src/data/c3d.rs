@@ -724,8 +724,8 @@ pub fn feet_from_plates(
             }
             let rx = interp_linear(time, &p.time, &p.fx);
             let ry = interp_linear(time, &p.time, &p.fy);
-            // The CoP only where this plate is loaded at both neighbouring samples.
-            let rc = interp_linear(time, &p.time, &p.cop_x);
+            // The CoP between a loaded and an unloaded sample is the loaded one's.
+            let rc = interp_defined(time, &p.time, &p.cop_x);
             for k in 0..n {
                 fx[k] += rx[k];
                 fy[k] += ry[k];
@@ -747,4 +747,25 @@ pub fn feet_from_plates(
         feet[s] = FootData { fx, fy, cop_x: cop };
     }
     Ok(feet)
+}
+
+/// [`interp_linear`] of a channel that is NaN where undefined (the CoP of an unloaded
+/// plate): between a defined and an undefined sample the defined one is taken, so that an
+/// instant just inside a loaded stretch keeps its CoP; NaN between two undefined ones.
+fn interp_defined(xn: &[f64], x: &[f64], y: &[f64]) -> Vec<f64> {
+    let lin = interp_linear(xn, x, y);
+    xn.iter()
+        .zip(lin)
+        .map(|(&t, v)| {
+            if !v.is_nan() || t <= x[0] || t >= x[x.len() - 1] {
+                return v;
+            }
+            let i = x.partition_point(|&u| u <= t) - 1;
+            if y[i].is_nan() {
+                y[i + 1]
+            } else {
+                y[i]
+            }
+        })
+        .collect()
 }

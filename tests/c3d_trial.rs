@@ -1,0 +1,349 @@
+//! C3D force plates on the command line, end to end on the real trial: the bundled
+//! treadmill trial's raw forces (`subject01_walk1_grf.mot`, 600 Hz, both feet measured
+//! separately) re-encoded here as a C3D file with two TYPE-2 plates (plate 1 the right
+//! foot, plate 2 the left, turned 180° about the vertical, ORIGIN offsets, POINT:UNITS
+//! mm, moments in N·mm, shuffled channels, float storage) by the inverse plate equations,
+//! then tracked with `--forces trial.c3d --plate r=1 --plate l=2` and compared with the
+//! same track of the `.mot`.
+//!
+//! The `.mot`'s time column is printed to 4 decimals (0, 0.0017, 0.0033, …), while a C3D's
+//! samples are at k/600 s exactly; the exact comparison (1e-6) is therefore against a copy
+//! of the `.mot` with its instants written as k/600 in full (`retimed`), and the
+//! comparison with the original file has the tolerance its rounded instants explain.
+
+use footfall::data::{read_storage, Storage};
+use footfall::workflows::trial::{load_trial, LoadedTrial, TrialFiles};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+const BELT_SPEED: &str = "1.1322";
+const RATE: f64 = 600.0;
+/// Analog samples per 60 Hz point frame.
+const PER_FRAME: usize = 10;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn raw(name: &str) -> PathBuf {
+    root().join("data/raw/opensim_subject01").join(name)
+}
+
+fn ik() -> PathBuf {
+    raw("subject01_walk1_ik.mot")
+}
+
+fn grf() -> PathBuf {
+    raw("subject01_walk1_grf.mot")
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().expect("UTF-8 path")
+}
+
+/// A lab frame of the C3D file: the OpenSim ground vector (x forward, y up, z right) in
+/// the lab's (X, Y, Z), and the `--lab-axes` that undo it.
+#[derive(Clone, Copy)]
+enum Lab {
+    /// X = x, Y = −z, Z = y: walking along +X, Z up (the default `+x,+z`).
+    Default,
+    /// X = −z, Y = −x, Z = y: walking along −Y (`-y,+z`).
+    AlongMinusY,
+}
+
+impl Lab {
+    fn from_opensim(self, v: [f64; 3]) -> [f64; 3] {
+        match self {
+            Lab::Default => [v[0], -v[2], v[1]],
+            Lab::AlongMinusY => [-v[2], -v[0], v[1]],
+        }
+    }
+}
+
+/// One TYPE-2 plate: rows of `axes` are the plate's x, y, z in the lab (z down).
+struct Plate {
+    centre_mm: [f64; 3],
+    axes: [[f64; 3]; 3],
+    half_mm: [f64; 2],
+    /// `FORCE_PLATFORM:ORIGIN` (mm, plate frame): measurement origin → surface centre.
+    origin_mm: [f64; 3],
+    /// Analog channels (1-based) of Fx Fy Fz Mx My Mz.
+    channels: [usize; 6],
+}
+
+impl Plate {
+    fn to_plate(&self, v: [f64; 3]) -> [f64; 3] {
+        std::array::from_fn(|i| (0..3).map(|d| self.axes[i][d] * v[d]).sum())
+    }
+    fn to_lab(&self, v: [f64; 3]) -> [f64; 3] {
+        std::array::from_fn(|d| (0..3).map(|i| self.axes[i][d] * v[i]).sum())
+    }
+    /// Fx Fy Fz (N), Mx My Mz (N·mm) the plate measures for the ground reaction `g` (N,
+    /// lab, on the foot) at the CoP `cop` (mm, lab, on the surface) with free moment `tau`
+    /// (N·mm, on the foot about the upward normal).
+    fn channels(&self, g: [f64; 3], cop: [f64; 3], tau: f64) -> [f64; 6] {
+        let f = self.to_plate([-g[0], -g[1], -g[2]]);
+        let rel = self.to_plate(std::array::from_fn(|d| cop[d] - self.centre_mm[d]));
+        let p: [f64; 3] = std::array::from_fn(|i| self.origin_mm[i] + rel[i]);
+        [
+            f[0],
+            f[1],
+            f[2],
+            p[1] * f[2] - p[2] * f[1],
+            p[2] * f[0] - p[0] * f[2],
+            p[0] * f[1] - p[1] * f[0] + tau,
+        ]
+    }
+}
+
+/// The two plates in `lab`: plate 1 under the right foot, plate 2 under the left turned
+/// by 180° about the vertical, both with their surface at the `.mot`'s CoP height.
+fn plates(lab: Lab, height_m: f64) -> [Plate; 2] {
+    let unit = |v: [f64; 3]| lab.from_opensim(v);
+    let (fwd, up, right) = (
+        unit([1.0, 0.0, 0.0]),
+        unit([0.0, 1.0, 0.0]),
+        unit([0.0, 0.0, 1.0]),
+    );
+    let neg = |v: [f64; 3]| v.map(|x| -x);
+    let mm = |v: [f64; 3]| lab.from_opensim(v).map(|x| x * 1e3);
+    [
+        Plate {
+            centre_mm: mm([0.6, height_m, 0.15]),
+            // x forward, y right, z down
+            axes: [fwd, right, neg(up)],
+            half_mm: [500.0, 250.0],
+            origin_mm: [1.0, -2.0, -38.0],
+            channels: [1, 2, 3, 4, 5, 6],
+        },
+        Plate {
+            centre_mm: mm([0.6, height_m, -0.15]),
+            // turned by 180°: x backward, y left, z down
+            axes: [neg(fwd), neg(right), neg(up)],
+            half_mm: [500.0, 250.0],
+            origin_mm: [-0.5, 1.5, -41.0],
+            channels: [8, 7, 9, 12, 10, 11],
+        },
+    ]
+}
+
+/// The ground reaction of foot prefix `pre` at sample `k`: force (N), CoP (m), vertical
+/// free moment (N·m), in OpenSim ground coordinates.
+fn foot(g: &Storage, pre: &str, k: usize) -> ([f64; 3], [f64; 3], f64) {
+    let c = |n: &str| g.column(&format!("{pre}{n}")).unwrap()[k];
+    (
+        [
+            c("ground_force_vx"),
+            c("ground_force_vy"),
+            c("ground_force_vz"),
+        ],
+        [
+            c("ground_force_px"),
+            c("ground_force_py"),
+            c("ground_force_pz"),
+        ],
+        g.column(&format!(
+            "{}ground_torque_y",
+            if pre.is_empty() { "" } else { "l_" }
+        ))
+        .unwrap()[k],
+    )
+}
+
+/// Write the raw forces as a two-plate C3D file in `lab` (the first whole 60 Hz frames of
+/// the 600 Hz samples; first frame 1, so sample k is at k/600 s).
+fn write_c3d(path: &Path, lab: Lab) {
+    use c3dio::{AnalogOffset, C3d, ForcePlatform, ForcePlatformType};
+    let g = read_storage(&grf()).unwrap();
+    let height = g.column("ground_force_py").unwrap()[0];
+    let plates = plates(lab, height);
+    let frames = g.len() / PER_FRAME;
+    let n = frames * PER_FRAME;
+    let mut c = C3d::new();
+    for grp in [
+        "POINT",
+        "ANALOG",
+        "FORCE_PLATFORM",
+        "EVENT",
+        "EVENT_CONTEXT",
+        "MANUFACTURER",
+        "SEG",
+    ] {
+        c.parameters.insert_group(grp, String::new());
+    }
+    c.points.units = ['m', 'm', ' ', ' '];
+    c.points.frame_rate = (RATE / PER_FRAME as f64) as f32;
+    c.points.first_frame = 1;
+    c.points.last_frame = frames as u16;
+    c.points.scale_factor = 1.0;
+    let a = &mut c.analog;
+    a.rate = RATE as f32;
+    a.samples_per_channel_per_frame = PER_FRAME as u16;
+    a.samples_per_frame = (PER_FRAME * 12) as u16;
+    a.gen_scale = 1.0;
+    // dyadic scales and whole offsets: exact in the float channels
+    a.scales = vec![0.5; 12];
+    a.offset = AnalogOffset::Signed(vec![0, 2, -1, 0, 3, 0, 0, -4, 0, 1, 0, 0]);
+    a.bits = 16;
+    let mut labels = vec![String::new(); 12];
+    let mut units = vec![String::new(); 12];
+    for (p, plate) in plates.iter().enumerate() {
+        for (j, &ch) in plate.channels.iter().enumerate() {
+            labels[ch - 1] = format!("{}{}", ["Fx", "Fy", "Fz", "Mx", "My", "Mz"][j], p + 1);
+            units[ch - 1] = if j < 3 { "N" } else { "Nmm" }.into();
+        }
+    }
+    a.labels = labels;
+    a.descriptions = vec!["subject01_walk1".into(); 12];
+    a.units = units;
+    for k in 0..n {
+        let mut row = vec![0.0; 12];
+        for (plate, pre) in plates.iter().zip(["", "l_"]) {
+            let (f, cop, tau) = foot(&g, pre, k);
+            let v = plate.channels(
+                lab.from_opensim(f),
+                lab.from_opensim(cop).map(|x| x * 1e3),
+                tau * 1e3,
+            );
+            for (j, &ch) in plate.channels.iter().enumerate() {
+                row[ch - 1] = v[j];
+            }
+        }
+        a.analog.push_row(row);
+    }
+    for plate in &plates {
+        let mut fp = ForcePlatform::default();
+        fp.plate_type = ForcePlatformType::Type2;
+        let quadrant = [[1.0, 1.0], [-1.0, 1.0], [-1.0, -1.0], [1.0, -1.0]];
+        for (i, q) in quadrant.iter().enumerate() {
+            let off = plate.to_lab([q[0] * plate.half_mm[0], q[1] * plate.half_mm[1], 0.0]);
+            fp.corners[i] = std::array::from_fn(|d| (plate.centre_mm[d] + off[d]) as f32);
+        }
+        for d in 0..3 {
+            fp.origin[d] = plate.origin_mm[d] as f32;
+        }
+        let mut ch = [0u8; 8];
+        for (j, &v) in plate.channels.iter().enumerate() {
+            ch[j] = v as u8;
+        }
+        fp.channels = ch;
+        c.forces.force_platforms.push(fp);
+    }
+    c.write_path(path.to_path_buf()).expect("write C3D");
+}
+
+/// The raw `.mot` with its instants written as k/600 s in full (the file prints them to 4
+/// decimals); checked to be within that rounding of the printed ones.
+fn write_retimed(path: &Path) {
+    let text = std::fs::read_to_string(grf()).unwrap();
+    let (head, body) = text.split_once("endheader").unwrap();
+    // the rest of the `endheader` line (tabs), then the column names
+    let mut lines = body.split_once('\n').unwrap().1.lines();
+    let mut out = format!("{head}endheader\n{}\n", lines.next().unwrap());
+    for (k, l) in lines.filter(|l| !l.trim().is_empty()).enumerate() {
+        let (t, rest) = l.split_once('\t').unwrap();
+        let exact = k as f64 / RATE;
+        let printed: f64 = t.trim().parse().unwrap();
+        assert!(
+            (printed - exact).abs() <= 5.1e-5,
+            "row {k}: {printed} is not {exact}"
+        );
+        out.push_str(&format!("{exact:.15}\t{rest}\n"));
+    }
+    std::fs::write(path, out).unwrap();
+}
+
+fn trial(forces: &Path, plates: &[&str], axes: Option<&str>) -> anyhow::Result<LoadedTrial> {
+    load_trial(&TrialFiles {
+        data: Some(ik()),
+        forces: Some(forces.to_path_buf()),
+        plates: plates.iter().map(|p| p.to_string()).collect(),
+        lab_axes: axes.map(str::to_string),
+        belt_speed: Some(1.1322),
+        overground: false,
+    })
+}
+
+fn max_abs(a: &[f64]) -> f64 {
+    a.iter()
+        .filter(|x| x.is_finite())
+        .fold(0.0, |m, x| m.max(x.abs()))
+}
+
+/// Largest difference of two channels relative to the channel's largest value; NaN must
+/// be at the same instants.
+fn rel_diff(a: &[f64], b: &[f64], what: &str) -> f64 {
+    assert_eq!(a.len(), b.len(), "{what}");
+    let scale = max_abs(b).max(1e-12);
+    a.iter().zip(b).enumerate().fold(0.0, |m, (k, (x, y))| {
+        assert_eq!(x.is_nan(), y.is_nan(), "{what} at {k}: {x} vs {y}");
+        if x.is_nan() {
+            m
+        } else {
+            m.max((x - y).abs() / scale)
+        }
+    })
+}
+
+#[test]
+fn the_c3d_plates_give_the_mot_trials_forces_through_the_library() {
+    let dir = tempfile::tempdir().unwrap();
+    let (c3d, minus_y, mot) = (
+        dir.path().join("walk1.c3d"),
+        dir.path().join("walk1_y.c3d"),
+        dir.path().join("retimed.mot"),
+    );
+    write_c3d(&c3d, Lab::Default);
+    write_c3d(&minus_y, Lab::AlongMinusY);
+    write_retimed(&mot);
+    let want = trial(&mot, &[], None).unwrap().data;
+    let orig = trial(&grf(), &[], None).unwrap().data;
+    for (file, axes) in [(&c3d, None), (&minus_y, Some("-y,+z"))] {
+        let got = trial(file, &["r=1", "l=2"], axes).unwrap();
+        let note = &got.notes[0];
+        assert!(
+            note.contains("right foot plate 1, left foot plate 2"),
+            "{note}"
+        );
+        assert!(
+            note.contains(axes.unwrap_or("+x,+z")) && note.contains("t = 0 s"),
+            "{note}"
+        );
+        let got = got.data;
+        assert_eq!(got.time, want.time);
+        assert_eq!(got.q, want.q);
+        let mut worst = 0.0f64;
+        for s in 0..2 {
+            let (a, b) = (&got.feet[s], &want.feet[s]);
+            worst = worst
+                .max(rel_diff(&a.fx, &b.fx, "fx"))
+                .max(rel_diff(&a.fy, &b.fy, "fy"))
+                .max(rel_diff(&a.cop_x, &b.cop_x, "cop_x"));
+        }
+        // float channels: 7 significant digits of the forces and N·mm moments
+        assert!(
+            worst < 1e-6,
+            "{}: relative difference {worst:e}",
+            file.display()
+        );
+        let (h, hw) = (
+            got.force_plate_height.unwrap(),
+            want.force_plate_height.unwrap(),
+        );
+        assert!((h - hw).abs() < 1e-9, "plate height {h} vs {hw}");
+        // the original .mot: its instants rounded to 0.05 ms move the forces by up to
+        // |dF/dt|·5e-5 s
+        let mut worst_orig = 0.0f64;
+        for s in 0..2 {
+            let (a, b) = (&got.feet[s], &orig.feet[s]);
+            worst_orig = worst_orig
+                .max(rel_diff(&a.fx, &b.fx, "fx"))
+                .max(rel_diff(&a.fy, &b.fy, "fy"));
+        }
+        assert!(worst_orig < 1e-2, "vs the printed instants: {worst_orig:e}");
+        eprintln!(
+            "{}: {worst:e} (retimed), {worst_orig:e} (original .mot)",
+            file.display()
+        );
+    }
+}
