@@ -41,7 +41,7 @@ pub struct TrialArgs {
     pub plates: Vec<String>,
     /// Lab axes of a C3D `--forces` file: the walking direction and up, `FORWARD,UP`, each
     /// one of +x, -x, +y, -y, +z, -z (default `+x,+z`, the usual C3D lab).
-    #[arg(long, value_name = "FORWARD,UP")]
+    #[arg(long, value_name = "FORWARD,UP", allow_hyphen_values = true)]
     pub lab_axes: Option<String>,
     /// Treadmill belt speed (m/s): moves the trial to the overground frame (an OpenSim
     /// pair has no meta file; a treadmill trial without a belt speed is refused unless
