@@ -470,3 +470,111 @@ fn track_with_c3d_plates_starts_where_the_mot_does() {
     let o = footfall(&["report", s(&a), "--out", s(&dir.path().join("report"))]);
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
 }
+
+/// The message of a refused trial, checked to name every item of `words`.
+fn refused(r: anyhow::Result<LoadedTrial>, words: &[&str]) -> String {
+    let e = match r {
+        Ok(_) => panic!("accepted"),
+        Err(e) => format!("{e:#}"),
+    };
+    for w in words {
+        assert!(e.contains(w), "'{w}' not in: {e}");
+    }
+    e
+}
+
+#[test]
+fn plates_and_lab_axes_are_checked_naming_the_file_and_what_is_valid() {
+    let dir = tempfile::tempdir().unwrap();
+    let c3d = dir.path().join("walk1.c3d");
+    write_c3d(&c3d, Lab::Default);
+    let name = "walk1.c3d";
+    let listed =
+        "plate 1 centred at (0.600, -0.150, -0.007) m, plate 2 centred at (0.600, 0.150, -0.007) m";
+    // without --plate: the file's plates and an example
+    refused(
+        trial(&c3d, &[], None),
+        &["--forces", name, "--plate r=1 --plate l=2", listed],
+    );
+    // a plate number not in the file
+    refused(
+        trial(&c3d, &["r=1", "l=3"], None),
+        &["--plate l=3", name, "no plate 3", listed],
+    );
+    refused(
+        trial(&c3d, &["r=one", "l=2"], None),
+        &["--plate r=one", "'one' is not a plate number", listed],
+    );
+    refused(
+        trial(&c3d, &["x=1", "l=2"], None),
+        &["--plate x=1", "neither r nor l"],
+    );
+    // a foot with no plate
+    refused(
+        trial(&c3d, &["r=1"], None),
+        &[
+            "--plate",
+            "left (l) foot has no plate",
+            name,
+            "--plate l=N",
+            listed,
+        ],
+    );
+    refused(
+        trial(&c3d, &["r=1", "l=1"], None),
+        &["--plate l=1", "plate 1 is given twice"],
+    );
+    // malformed --lab-axes
+    for (axes, says) in [
+        ("+x+z", "expected FORWARD,UP"),
+        (
+            "+x,up",
+            "'up' is not a lab axis; valid: +x, -x, +y, -y, +z, -z",
+        ),
+        ("+z,-z", "the same lab axis"),
+    ] {
+        refused(
+            trial(&c3d, &["r=1", "l=2"], Some(axes)),
+            &[&format!("--lab-axes {axes}"), says],
+        );
+    }
+    // axes that turn the vertical force upside down: refused by the trial's conventions,
+    // naming the C3D file, the plates and the axes
+    refused(
+        trial(&c3d, &["r=1", "l=2"], Some("+x,-z")),
+        &[name, "grf_y_r", "plates r=1, l=2", "negative", "--lab-axes +x,-z"],
+    );
+    // --lab-axes belongs to a C3D file
+    refused(
+        trial(&grf(), &[], Some("+x,+z")),
+        &["--lab-axes +x,+z", "C3D"],
+    );
+    // a sagittal CSV holds its forces
+    let csv = root().join("data/opensim_subject01_sagittal.csv");
+    refused(
+        load_trial(&TrialFiles {
+            data: Some(csv),
+            forces: Some(c3d.clone()),
+            ..Default::default()
+        }),
+        &["--forces", name, "holds its own forces"],
+    );
+    // and on the command line: exit 1, an `error:` line, no run folder
+    let out = dir.path().join("never");
+    let ik = ik();
+    let o = footfall(&[
+        "track",
+        "--data",
+        s(&ik),
+        "--forces",
+        s(&c3d),
+        "--belt-speed",
+        BELT_SPEED,
+        "--out",
+        s(&out),
+    ]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(1), "{err}");
+    assert!(err.starts_with("error: ") && err.contains(listed), "{err}");
+    assert!(!out.exists());
+}
