@@ -542,7 +542,13 @@ fn plates_and_lab_axes_are_checked_naming_the_file_and_what_is_valid() {
     // naming the C3D file, the plates and the axes
     refused(
         trial(&c3d, &["r=1", "l=2"], Some("+x,-z")),
-        &[name, "grf_y_r", "plates r=1, l=2", "negative", "--lab-axes +x,-z"],
+        &[
+            name,
+            "grf_y_r",
+            "plates r=1, l=2",
+            "negative",
+            "--lab-axes +x,-z",
+        ],
     );
     // --lab-axes belongs to a C3D file
     refused(
@@ -577,4 +583,49 @@ fn plates_and_lab_axes_are_checked_naming_the_file_and_what_is_valid() {
     assert_eq!(o.status.code(), Some(1), "{err}");
     assert!(err.starts_with("error: ") && err.contains(listed), "{err}");
     assert!(!out.exists());
+}
+
+#[test]
+fn fit_foot_reads_the_c3d_plates() {
+    let dir = tempfile::tempdir().unwrap();
+    let (c3d, mot) = (dir.path().join("walk1.c3d"), dir.path().join("retimed.mot"));
+    write_c3d(&c3d, Lab::Default);
+    write_retimed(&mot);
+    let ik = ik();
+    let fit = |name: &str, forces: &Path, extra: &[&str]| {
+        let out = dir.path().join(name);
+        let mut args = vec![
+            "fit-foot",
+            "--data",
+            s(&ik),
+            "--forces",
+            s(forces),
+            "--belt-speed",
+            BELT_SPEED,
+            "--max-iter",
+            "5",
+            "--quiet",
+            "--out",
+            s(&out),
+        ];
+        args.extend_from_slice(extra);
+        let o = footfall(&args);
+        assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+        json(&out.join("summary.json"))
+    };
+    let a = fit("c3d", &c3d, &["--plate", "r=1", "--plate", "l=2"]);
+    let b = fit("mot", &mot, &[]);
+    assert_eq!(a["forces"].as_str(), Some(s(&c3d)));
+    assert_eq!(a["plates"], serde_json::json!(["r=1", "l=2"]));
+    assert!(a["stances"].as_u64().unwrap() >= 4, "{a}");
+    assert_eq!(
+        (&a["stances"], &a["samples"]),
+        (&b["stances"], &b["samples"])
+    );
+    let (ca, cb) = (
+        a["cost_initial"].as_f64().unwrap(),
+        b["cost_initial"].as_f64().unwrap(),
+    );
+    eprintln!("fit-foot initial cost {ca} (C3D) vs {cb} (retimed .mot)");
+    assert!((ca - cb).abs() < 1e-6 * cb, "eq. 13 cost {ca} vs {cb}");
 }
