@@ -629,3 +629,44 @@ fn fit_foot_reads_the_c3d_plates() {
     eprintln!("fit-foot initial cost {ca} (C3D) vs {cb} (retimed .mot)");
     assert!((ca - cb).abs() < 1e-6 * cb, "eq. 13 cost {ca} vs {cb}");
 }
+
+#[test]
+fn an_instant_next_to_an_unloaded_sample_keeps_the_loaded_samples_cop() {
+    use footfall::data::c3d::{feet_from_plates, AxisMap, C3dForces, PlateForces};
+    use footfall::model::Side;
+    // one plate, 3 samples at 1 kHz: unloaded (CoP undefined), 100 N at x = 0.2 m, 300 N
+    // at x = 0.4 m
+    let plate = PlateForces {
+        plate: 1,
+        plate_type: 2,
+        time: vec![0.0, 0.001, 0.002],
+        force: vec![[0.0; 3], [10.0, 0.0, 100.0], [30.0, 0.0, 300.0]],
+        cop: vec![[f64::NAN; 3], [0.2, 0.0, 0.0], [0.4, 0.0, 0.0]],
+        free_moment: vec![f64::NAN, 0.0, 0.0],
+        centre: [0.0; 3],
+        up: [0.0, 0.0, 1.0],
+    };
+    let forces = C3dForces {
+        path: "in-memory.c3d".into(),
+        analog_rate: 1000.0,
+        cop_threshold: 20.0,
+        plates: vec![plate],
+    };
+    let time = [0.0001, 0.0009, 0.0015];
+    let [r, _] = feet_from_plates(&forces, &[(Side::Right, 1)], AxisMap::default(), &time).unwrap();
+    // 0.1 ms: 10 N, below the threshold; 0.9 ms: 90 N between the unloaded sample and the
+    // 0.2 m one: 0.2 m (not NaN); 1.5 ms: between two loaded samples, linear: 0.3 m
+    assert!(
+        (r.fy[0] - 10.0).abs() < 1e-9 && r.cop_x[0].is_nan(),
+        "{r:?}"
+    );
+    assert!(
+        (r.fy[1] - 90.0).abs() < 1e-9 && (r.cop_x[1] - 0.2).abs() < 1e-12,
+        "{r:?}"
+    );
+    assert!(
+        (r.fy[2] - 200.0).abs() < 1e-9 && (r.cop_x[2] - 0.3).abs() < 1e-12,
+        "{r:?}"
+    );
+    assert!((r.fx[1] - 9.0).abs() < 1e-9, "{r:?}");
+}

@@ -649,7 +649,8 @@ impl PlateForces {
 /// `[(Side::Right, 1), (Side::Left, 2)]`. A foot on several plates gets their summed
 /// force and the force-weighted CoP $\sum_i F_{y,i} c_i / \sum_i F_{y,i}$ over its loaded
 /// plates. Forces are resampled by linear interpolation (as [`super::GaitData::from_storage`]
-/// does); CoP is NaN where the foot's vertical force is below `forces.cop_threshold`. A foot
+/// does), a plate's CoP too, except that between a loaded and an unloaded sample the loaded
+/// one's CoP is taken; CoP is NaN where the foot's vertical force is below `forces.cop_threshold`. A foot
 /// with no plate is NaN throughout (not measured).
 ///
 /// Errors: a plate number not in the file, a plate assigned twice, `time` not finite and
