@@ -52,7 +52,7 @@ enum Lab {
 }
 
 impl Lab {
-    fn from_opensim(self, v: [f64; 3]) -> [f64; 3] {
+    fn of_opensim(self, v: [f64; 3]) -> [f64; 3] {
         match self {
             Lab::Default => [v[0], -v[2], v[1]],
             Lab::AlongMinusY => [-v[2], -v[0], v[1]],
@@ -99,14 +99,14 @@ impl Plate {
 /// The two plates in `lab`: plate 1 under the right foot, plate 2 under the left turned
 /// by 180° about the vertical, both with their surface at the `.mot`'s CoP height.
 fn plates(lab: Lab, height_m: f64) -> [Plate; 2] {
-    let unit = |v: [f64; 3]| lab.from_opensim(v);
+    let unit = |v: [f64; 3]| lab.of_opensim(v);
     let (fwd, up, right) = (
         unit([1.0, 0.0, 0.0]),
         unit([0.0, 1.0, 0.0]),
         unit([0.0, 0.0, 1.0]),
     );
     let neg = |v: [f64; 3]| v.map(|x| -x);
-    let mm = |v: [f64; 3]| lab.from_opensim(v).map(|x| x * 1e3);
+    let mm = |v: [f64; 3]| lab.of_opensim(v).map(|x| x * 1e3);
     [
         Plate {
             centre_mm: mm([0.6, height_m, 0.15]),
@@ -201,8 +201,8 @@ fn write_c3d(path: &Path, lab: Lab) {
         for (plate, pre) in plates.iter().zip(["", "l_"]) {
             let (f, cop, tau) = foot(&g, pre, k);
             let v = plate.channels(
-                lab.from_opensim(f),
-                lab.from_opensim(cop).map(|x| x * 1e3),
+                lab.of_opensim(f),
+                lab.of_opensim(cop).map(|x| x * 1e3),
                 tau * 1e3,
             );
             for (j, &ch) in plate.channels.iter().enumerate() {
@@ -212,8 +212,10 @@ fn write_c3d(path: &Path, lab: Lab) {
         a.analog.push_row(row);
     }
     for plate in &plates {
-        let mut fp = ForcePlatform::default();
-        fp.plate_type = ForcePlatformType::Type2;
+        let mut fp = ForcePlatform {
+            plate_type: ForcePlatformType::Type2,
+            ..Default::default()
+        };
         let quadrant = [[1.0, 1.0], [-1.0, 1.0], [-1.0, -1.0], [1.0, -1.0]];
         for (i, q) in quadrant.iter().enumerate() {
             let off = plate.to_lab([q[0] * plate.half_mm[0], q[1] * plate.half_mm[1], 0.0]);
