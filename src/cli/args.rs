@@ -26,15 +26,24 @@ pub struct TrialArgs {
     /// bundled OpenSim subject01 trial, moved overground).
     #[arg(long)]
     pub data: Option<PathBuf>,
-    /// OpenSim external loads (`.mot`/`.sto`) of an OpenSim `--data`: ground_force_vx,
-    /// ground_force_vy, ground_force_px of each foot, per prefix (see `--plate`).
-    #[arg(long, value_name = "GRF.mot")]
+    /// Forces of an OpenSim `--data`: OpenSim external loads (`.mot`/`.sto`:
+    /// ground_force_vx, ground_force_vy, ground_force_px of each foot, per prefix, see
+    /// `--plate`), or a C3D file's force plates (`.c3d`, types 2 and 4, with `--plate` and
+    /// `--lab-axes`; its first frame at t = 0 unless the file says otherwise, on the
+    /// kinematics' clock).
+    #[arg(long, value_name = "GRF.mot|TRIAL.c3d")]
     pub forces: Option<PathBuf>,
-    /// Which force columns belong to which foot: `r=PREFIX` or `l=PREFIX` (repeatable),
-    /// e.g. `--plate r=1_ --plate l=2_`, `r=` for the unprefixed ground_force_*. Default:
-    /// `""` or `r_` is the right foot, `l_` the left (the choice is printed).
-    #[arg(long = "plate", value_name = "FOOT=PREFIX")]
+    /// Which forces belong to which foot (repeatable). OpenSim loads: `r=PREFIX` or
+    /// `l=PREFIX`, e.g. `--plate r=1_ --plate l=2_`, `r=` for the unprefixed
+    /// ground_force_*; default: `""` or `r_` is the right foot, `l_` the left (the choice
+    /// is printed). C3D: the 1-based plate number(s) of each foot, e.g. `--plate r=1
+    /// --plate l=2` (a foot may take several plates: `--plate r=1 --plate r=3`); required.
+    #[arg(long = "plate", value_name = "FOOT=PREFIX|FOOT=N")]
     pub plates: Vec<String>,
+    /// Lab axes of a C3D `--forces` file: the walking direction and up, `FORWARD,UP`, each
+    /// one of +x, -x, +y, -y, +z, -z (default `+x,+z`, the usual C3D lab).
+    #[arg(long, value_name = "FORWARD,UP", allow_hyphen_values = true)]
+    pub lab_axes: Option<String>,
     /// Treadmill belt speed (m/s): moves the trial to the overground frame (an OpenSim
     /// pair has no meta file; a treadmill trial without a belt speed is refused unless
     /// `--overground`).

@@ -38,6 +38,7 @@ impl From<Args> for FitFootRequest {
             overground: a.trial.overground,
             forces: a.trial.forces,
             plates: a.trial.plates,
+            lab_axes: a.trial.lab_axes,
             belt_speed: a.trial.belt_speed,
             out: a.out,
             overwrite: a.overwrite,

@@ -93,6 +93,7 @@ impl From<&PredictOptions> for PredictionOptions {
             overground: o.trial.overground,
             forces: o.trial.forces.clone(),
             plates: o.trial.plates.clone(),
+            lab_axes: o.trial.lab_axes.clone(),
             belt_speed: o.trial.belt_speed,
             step_length: o.step_length,
             speed: o.speed,

@@ -217,6 +217,7 @@ fn run_inner(args: Args, progress: &CliProgress) -> anyhow::Result<()> {
             overground: args.trial.overground,
             forces: args.trial.forces.clone(),
             plates: args.trial.plates.clone(),
+            lab_axes: args.trial.lab_axes.clone(),
             belt_speed: args.trial.belt_speed,
             kinematics_cutoff: args.kinematics_cutoff,
             integrator_tol: args.integrator_tol,

@@ -649,7 +649,8 @@ impl PlateForces {
 /// `[(Side::Right, 1), (Side::Left, 2)]`. A foot on several plates gets their summed
 /// force and the force-weighted CoP $\sum_i F_{y,i} c_i / \sum_i F_{y,i}$ over its loaded
 /// plates. Forces are resampled by linear interpolation (as [`super::GaitData::from_storage`]
-/// does); CoP is NaN where the foot's vertical force is below `forces.cop_threshold`. A foot
+/// does), a plate's CoP too, except that between a loaded and an unloaded sample the loaded
+/// one's CoP is taken; CoP is NaN where the foot's vertical force is below `forces.cop_threshold`. A foot
 /// with no plate is NaN throughout (not measured).
 ///
 /// Errors: a plate number not in the file, a plate assigned twice, `time` not finite and
@@ -724,8 +725,8 @@ pub fn feet_from_plates(
             }
             let rx = interp_linear(time, &p.time, &p.fx);
             let ry = interp_linear(time, &p.time, &p.fy);
-            // The CoP only where this plate is loaded at both neighbouring samples.
-            let rc = interp_linear(time, &p.time, &p.cop_x);
+            // The CoP between a loaded and an unloaded sample is the loaded one's.
+            let rc = interp_defined(time, &p.time, &p.cop_x);
             for k in 0..n {
                 fx[k] += rx[k];
                 fy[k] += ry[k];
@@ -747,4 +748,25 @@ pub fn feet_from_plates(
         feet[s] = FootData { fx, fy, cop_x: cop };
     }
     Ok(feet)
+}
+
+/// [`interp_linear`] of a channel that is NaN where undefined (the CoP of an unloaded
+/// plate): between a defined and an undefined sample the defined one is taken, so that an
+/// instant just inside a loaded stretch keeps its CoP; NaN between two undefined ones.
+fn interp_defined(xn: &[f64], x: &[f64], y: &[f64]) -> Vec<f64> {
+    let lin = interp_linear(xn, x, y);
+    xn.iter()
+        .zip(lin)
+        .map(|(&t, v)| {
+            if !v.is_nan() || t <= x[0] || t >= x[x.len() - 1] {
+                return v;
+            }
+            let i = x.partition_point(|&u| u <= t) - 1;
+            if y[i].is_nan() {
+                y[i + 1]
+            } else {
+                y[i]
+            }
+        })
+        .collect()
 }

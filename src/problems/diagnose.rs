@@ -46,6 +46,10 @@ pub struct TrackingRunSetup {
     /// empty: detected).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub plates: Vec<String>,
+    /// Lab axes `FORWARD,UP` of a C3D `forces` file (`--lab-axes`; `None`: the default
+    /// `+x,+z`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub lab_axes: Option<String>,
     /// Treadmill belt speed (m/s) moving the trial overground (`--belt-speed`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub belt_speed: Option<f64>,

@@ -23,6 +23,8 @@ pub struct FitFootRequest {
     pub forces: Option<PathBuf>,
     /// Force-column prefix of each foot, `r=PREFIX` / `l=PREFIX` (`--plate`; empty: detected).
     pub plates: Vec<String>,
+    /// Lab axes `FORWARD,UP` of a C3D `forces` file (`--lab-axes`; `None`: `+x,+z`).
+    pub lab_axes: Option<String>,
     /// Treadmill belt speed (m/s) moving the trial overground (`--belt-speed`).
     pub belt_speed: Option<f64>,
     /// Output folder.
@@ -44,6 +46,7 @@ pub fn run(args: &FitFootRequest, progress: &dyn Progress) -> anyhow::Result<()>
         data: args.data.clone(),
         forces: args.forces.clone(),
         plates: args.plates.clone(),
+        lab_axes: args.lab_axes.clone(),
         belt_speed: args.belt_speed,
         overground: args.overground,
     })?;
@@ -129,6 +132,7 @@ pub fn run(args: &FitFootRequest, progress: &dyn Progress) -> anyhow::Result<()>
         "data": data.source,
         "forces": args.forces,
         "plates": args.plates,
+        "lab_axes": args.lab_axes,
         "belt_speed_m_s": data.belt_speed,
         "stances": stances.len(),
         "samples": n,

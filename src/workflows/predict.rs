@@ -35,6 +35,8 @@ pub struct PredictionOptions {
     pub forces: Option<PathBuf>,
     /// Force-column prefix of each foot, `r=PREFIX` / `l=PREFIX` (`--plate`; empty: detected).
     pub plates: Vec<String>,
+    /// Lab axes `FORWARD,UP` of a C3D `forces` file (`--lab-axes`; `None`: `+x,+z`).
+    pub lab_axes: Option<String>,
     /// Treadmill belt speed (m/s) moving the trial overground (`--belt-speed`).
     pub belt_speed: Option<f64>,
     /// Step length (m; None: the subject's).
@@ -71,6 +73,7 @@ impl Default for PredictionOptions {
             overground: false,
             forces: None,
             plates: vec![],
+            lab_axes: None,
             belt_speed: None,
             step_length: None,
             speed: None,
@@ -122,6 +125,7 @@ pub fn predict(
         data: o.data.clone(),
         forces: o.forces.clone(),
         plates: o.plates.clone(),
+        lab_axes: o.lab_axes.clone(),
         belt_speed: o.belt_speed,
         overground: o.overground,
     })?;

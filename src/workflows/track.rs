@@ -441,6 +441,7 @@ impl TrackRequest {
                 overground: false,
                 forces: None,
                 plates: vec![],
+                lab_axes: None,
                 belt_speed: None,
                 kinematics_cutoff: None,
                 integrator_tol: 1e-8,

@@ -15,6 +15,9 @@ use crate::data::{
 use anyhow::bail;
 use std::path::{Path, PathBuf};
 
+mod c3d;
+pub use c3d::{lab_axes, DEFAULT_LAB_AXES};
+
 /// Where a trial comes from and what its files do not say (the command line's `--data`,
 /// `--forces`, `--plate`, `--belt-speed` and `--overground`).
 #[derive(Debug, Clone, Default, PartialEq)]
@@ -22,13 +25,17 @@ pub struct TrialFiles {
     /// Sagittal CSV, or OpenSim inverse kinematics (`.mot`/`.sto`); `None`: the bundled
     /// trial.
     pub data: Option<PathBuf>,
-    /// OpenSim external loads (`.mot`/`.sto`), required with an OpenSim `data` and refused
-    /// with a CSV (which holds its forces).
+    /// OpenSim external loads (`.mot`/`.sto`) or a C3D file's force plates (`.c3d`),
+    /// required with an OpenSim `data` and refused with a CSV (which holds its forces).
     pub forces: Option<PathBuf>,
-    /// Force-column prefix of each foot, `r=PREFIX` / `l=PREFIX` (e.g. `r=1_`, `l=2_`,
-    /// `r=` for the unprefixed `ground_force_*`); a foot not named is detected
-    /// (`""` or `r_` right, `l_` left).
+    /// With OpenSim loads: force-column prefix of each foot, `r=PREFIX` / `l=PREFIX` (e.g.
+    /// `r=1_`, `l=2_`, `r=` for the unprefixed `ground_force_*`); a foot not named is
+    /// detected (`""` or `r_` right, `l_` left). With a C3D file: the 1-based plate
+    /// number(s) of each foot, `r=1`, `l=2` (required; a foot may take several plates).
     pub plates: Vec<String>,
+    /// Lab axes of a C3D `forces` file, `FORWARD,UP` (e.g. `+x,+z`, the default when
+    /// `None`); refused with other forces.
+    pub lab_axes: Option<String>,
     /// Treadmill belt speed (m/s): the trial is moved to the overground frame with it. With
     /// a CSV it may stand in for a meta file that gives none.
     pub belt_speed: Option<f64>,
@@ -44,6 +51,8 @@ pub enum TrialFormat {
     Csv,
     /// An OpenSim storage (`.mot`, `.sto`).
     Storage,
+    /// A C3D file (`.c3d`): force plates, accepted as `--forces` only.
+    C3d,
 }
 
 /// The format of a trial file by its extension (case-insensitive).
@@ -54,10 +63,16 @@ pub fn trial_format(path: &Path, option: &str) -> anyhow::Result<TrialFormat> {
     match ext.as_deref() {
         Some("csv") => Ok(TrialFormat::Csv),
         Some("mot") | Some("sto") => Ok(TrialFormat::Storage),
+        Some("c3d") if option == "--forces" => Ok(TrialFormat::C3d),
         other => bail!(
-            "{}: {option}: cannot tell the format from the extension {}: give a sagittal CSV (.csv) or an OpenSim storage (.mot or .sto)",
+            "{}: {option}: cannot tell the format from the extension {}: give {}",
             path.display(),
-            other.map_or("(none)".to_string(), |e| format!("'.{e}'"))
+            other.map_or("(none)".to_string(), |e| format!("'.{e}'")),
+            if option == "--forces" {
+                "an OpenSim storage (.mot or .sto) or a C3D file with force plates (.c3d)"
+            } else {
+                "a sagittal CSV (.csv) or an OpenSim storage (.mot or .sto)"
+            }
         ),
     }
 }
@@ -89,8 +104,12 @@ pub fn load_trial(t: &TrialFiles) -> anyhow::Result<LoadedTrial> {
         }
     }
     let Some(path) = t.data.as_deref() else {
-        if t.forces.is_some() || !t.plates.is_empty() || t.belt_speed.is_some() {
-            bail!("--forces, --plate and --belt-speed describe an OpenSim trial given with --data IK.mot (without --data the bundled trial is read, whose meta file gives all of it)");
+        if t.forces.is_some()
+            || !t.plates.is_empty()
+            || t.belt_speed.is_some()
+            || t.lab_axes.is_some()
+        {
+            bail!("--forces, --plate, --lab-axes and --belt-speed describe an OpenSim trial given with --data IK.mot (without --data the bundled trial is read, whose meta file gives all of it)");
         }
         // the compiled-in copy, wherever footfall is started
         let root = crate::bundled::root().map_err(anyhow::Error::msg)?;
@@ -101,16 +120,23 @@ pub fn load_trial(t: &TrialFiles) -> anyhow::Result<LoadedTrial> {
             notes: vec![],
         });
     };
+    if let Some(a) = &t.lab_axes {
+        let c3d = t.forces.as_deref().map(|f| trial_format(f, "--forces"));
+        if !matches!(c3d, Some(Ok(TrialFormat::C3d))) {
+            bail!("--lab-axes {a}: the lab axes are those of a C3D force-plate file given with --forces trial.c3d; OpenSim loads and a sagittal CSV are already in the model's frame");
+        }
+    }
     match trial_format(path, "--data")? {
         TrialFormat::Csv => load_csv(path, t),
         TrialFormat::Storage => load_opensim(path, t),
+        TrialFormat::C3d => unreachable!("trial_format accepts .c3d for --forces only"),
     }
 }
 
 fn load_csv(path: &Path, t: &TrialFiles) -> anyhow::Result<LoadedTrial> {
     if let Some(f) = &t.forces {
         bail!(
-            "--forces {}: a sagittal CSV ({}) holds its own forces (grf_x_r, grf_y_r, cop_x_r, …); --forces goes with an OpenSim --data IK.mot",
+            "--forces {}: a sagittal CSV ({}) holds its own forces (grf_x_r, grf_y_r, cop_x_r, …); --forces (OpenSim loads or a C3D file) goes with an OpenSim --data IK.mot",
             f.display(),
             path.display()
         );
@@ -255,24 +281,17 @@ fn load_opensim(ik_path: &Path, t: &TrialFiles) -> anyhow::Result<LoadedTrial> {
             ik_path.display()
         );
     };
-    if trial_format(grf_path, "--forces")? != TrialFormat::Storage {
-        bail!(
-            "--forces {}: expected an OpenSim external-loads storage (.mot or .sto); a CSV trial is given whole with --data",
+    match trial_format(grf_path, "--forces")? {
+        TrialFormat::Storage => {}
+        TrialFormat::C3d => return c3d::load(ik_path, grf_path, t),
+        TrialFormat::Csv => bail!(
+            "--forces {}: expected an OpenSim external-loads storage (.mot or .sto) or a C3D file (.c3d); a CSV trial is given whole with --data",
             grf_path.display()
-        );
+        ),
     }
     let ik = read_storage(ik_path)?;
     let grf = read_storage(grf_path)?;
-    if !ik.angle_unit_stated {
-        return Err(DataError::Units {
-            path: ik.path.clone(),
-            row: None,
-            column: "inDegrees".into(),
-            text: String::new(),
-            reason: "the header states neither 'inDegrees=yes|no' nor 'Angles are in degrees|radians': add the line 'inDegrees=yes' (or 'inDegrees=no' for radians) above 'endheader'".into(),
-        }
-        .into());
-    }
+    require_angle_unit(&ik)?;
     let (prefixes, note) = foot_prefixes(&grf, &t.plates)?;
     let map = opensim_map(&ik, &prefixes);
     let mut data = GaitData::from_storage(&ik, Some(&grf), &map)?;
@@ -286,6 +305,20 @@ fn load_opensim(ik_path: &Path, t: &TrialFiles) -> anyhow::Result<LoadedTrial> {
         data,
         notes: vec![note],
     })
+}
+
+/// An OpenSim kinematics file must say its angle unit.
+fn require_angle_unit(ik: &Storage) -> Result<(), DataError> {
+    if !ik.angle_unit_stated {
+        return Err(DataError::Units {
+            path: ik.path.clone(),
+            row: None,
+            column: "inDegrees".into(),
+            text: String::new(),
+            reason: "the header states neither 'inDegrees=yes|no' nor 'Angles are in degrees|radians': add the line 'inDegrees=yes' (or 'inDegrees=no' for radians) above 'endheader'".into(),
+        });
+    }
+    Ok(())
 }
 
 /// Smallest span (rad, 5.7°) of the widest-moving leg joint of a walk longer than
@@ -377,6 +410,7 @@ impl From<&crate::problems::diagnose::TrackingRunSetup> for TrialFiles {
             data: run.data.clone(),
             forces: run.forces.clone(),
             plates: run.plates.clone(),
+            lab_axes: run.lab_axes.clone(),
             belt_speed: run.belt_speed,
             overground: run.overground,
         }
