@@ -443,7 +443,12 @@ fn track_with_c3d_plates_starts_where_the_mot_does() {
     let plates = ["--plate", "r=1", "--plate", "l=2", "--lab-axes", "-y,+z"];
     let a = track(dir.path(), "c3d", &c3d, &plates);
     let setup = json(&a.join("setup.json"));
-    assert_eq!(setup["forces"].as_str(), Some(s(&c3d)));
+    // the run folder holds a copy of the C3D, which setup.json names
+    assert_eq!(setup["forces"].as_str(), Some("inputs/data/walk1.c3d"));
+    assert_eq!(
+        std::fs::read(a.join("inputs/data/walk1.c3d")).unwrap(),
+        std::fs::read(&c3d).unwrap()
+    );
     assert_eq!(setup["plates"], serde_json::json!(["r=1", "l=2"]));
     assert_eq!(setup["lab_axes"].as_str(), Some("-y,+z"));
     let b = track(dir.path(), "retimed", &mot, &[]);
@@ -454,13 +459,14 @@ fn track_with_c3d_plates_starts_where_the_mot_does() {
         "starting cost {ja} (C3D) vs {jb} (.mot)"
     );
     assert!(worst < 1e-6, "targets differ by {worst:e} relative");
-    // the original .mot, its instants printed to 0.1 ms: forces 5.7e-4 apart (see above);
-    // measured: starting cost 4.5e-5, targets 1.0e-3 (relative)
+    // the original .mot, its instants printed to 0.1 ms: forces 5.7e-4 apart (see above),
+    // and tracked at those rounded instants (forces at their own rate); measured: starting
+    // cost 1.7e-4, targets 6.4e-4 (relative)
     let c = track(dir.path(), "mot", &grf(), &[]);
     let (_, jc, worst) = compare_runs(&a, &c);
     eprintln!("starting cost {ja} (C3D) vs {jc} (original .mot), targets {worst:e}");
     assert!(
-        (ja - jc).abs() < 1e-4 * jc,
+        (ja - jc).abs() < 5e-4 * jc,
         "starting cost {ja} (C3D) vs {jc} (.mot)"
     );
     assert!(

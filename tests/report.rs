@@ -603,7 +603,10 @@ fn sto_round_trip() {
 
     // A header that disagrees with the data, and a short row, are refused with the line.
     let bad = text.replace("nRows=5", "nRows=6");
-    assert!(matches!(parse_storage(&bad, path), Err(DataError::Format { .. })));
+    assert!(matches!(
+        parse_storage(&bad, path),
+        Err(DataError::Format { .. })
+    ));
     let short = format!("{}1.0\t2.0\n", text);
     let e = parse_storage(&short, path).unwrap_err().to_string();
     assert!(e.contains("line 13"), "{e}");

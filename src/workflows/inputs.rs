@@ -115,9 +115,7 @@ pub fn copy_inputs(
     if let Some(meta) = crate::data::sibling_meta_path(&csv) {
         copy(folder, "data", &meta, None)?;
     }
-    let forces = forces
-        .map(|f| copy(folder, "data", f, None))
-        .transpose()?;
+    let forces = forces.map(|f| copy(folder, "data", f, None)).transpose()?;
     Ok(RunInputs {
         model,
         foot,

@@ -205,7 +205,11 @@ pub fn read_solution(path: &Path) -> anyhow::Result<GaitSolution> {
 ///
 /// A `.mot`/`.sto` path needs its forces: read it with [`trial::load_trial`].
 pub fn load_data(path: Option<&Path>, overground: bool) -> anyhow::Result<GaitData> {
-    Ok(trial::load_trial(&trial::TrialFiles::csv(path.map(Path::to_path_buf), overground))?.data)
+    Ok(trial::load_trial(&trial::TrialFiles::csv(
+        path.map(Path::to_path_buf),
+        overground,
+    ))?
+    .data)
 }
 
 /// The error of a written gait run (`track`, `predict`) whose solve `res` did not

@@ -8,9 +8,9 @@ use footfall::data::{read_sagittal_csv, read_storage, GaitData, StorageMap};
 use footfall::integrate::{ControlledOde, IntegratorSettings};
 use footfall::model::spec::{FootSpec, ModelSpec};
 use footfall::model::GaitModel;
-use footfall::problems::GaitOde;
 use footfall::phases::PhaseSequence;
 use footfall::problems::benchmarks::Benchmark;
+use footfall::problems::GaitOde;
 use footfall::report::diff::RunSummary;
 use std::path::{Path, PathBuf};
 

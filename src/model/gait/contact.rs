@@ -356,7 +356,11 @@ impl GaitModel {
             }
         }
         for v in &rep.volumetric {
-            let s = if self.contacts[v.contact].side == Side::Right { 0 } else { 1 };
+            let s = if self.contacts[v.contact].side == Side::Right {
+                0
+            } else {
+                1
+            };
             out[s].fx += v.force[0];
             out[s].fy += v.force[1];
             moment[s] += v.force[1] * v.cop_x;
@@ -393,7 +397,11 @@ impl GaitModel {
         let z = S::c(0.0);
         let mut out = [(z, z, z); 2];
         for (c, f) in self.volumetric_forces(&k, ground_h, n) {
-            let s = if self.contacts[c].side == Side::Right { 0 } else { 1 };
+            let s = if self.contacts[c].side == Side::Right {
+                0
+            } else {
+                1
+            };
             out[s].0 += f.tangential;
             out[s].1 += f.normal;
             out[s].2 += f.normal * f.cop_x;

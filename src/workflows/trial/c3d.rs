@@ -115,6 +115,16 @@ pub(super) fn load(ik_path: &Path, c3d_path: &Path, t: &TrialFiles) -> anyhow::R
         ),
         e => e,
     })?;
+    // the forces at their own instants too, over the kinematic span (one sample beyond
+    // either end, for interpolation), as `from_storage` keeps an OpenSim force record
+    if let Some(plate) = forces.plates.first() {
+        let (t0, t1) = (data.time[0], data.time[data.time.len() - 1]);
+        let k0 = plate.time.partition_point(|&t| t < t0).saturating_sub(1);
+        let k1 = (plate.time.partition_point(|&t| t <= t1) + 1).min(plate.time.len());
+        let time = plate.time[k0..k1].to_vec();
+        let feet = feet_from_plates(&forces, &assign, map_axes, &time)?;
+        data.forces = Some(crate::data::ForceSamples { time, feet });
+    }
     // The surface height: the mean up-coordinate of the loaded CoP samples of the feet's
     // plates (as `from_storage` pools the loaded ground_force_py of both feet).
     let heights: Vec<f64> = assign
