@@ -548,3 +548,52 @@ fn sinking_whole_keeps_finite_derivatives() {
     assert!((below.0.re - above.0.re).abs() < 1e-11);
     assert!((below.0.eps - 2.0).abs() < 1e-9 && (above.0.eps - 2.0).abs() < 1e-9);
 }
+
+/// The tracking problem of a foot whose primitives are all volumetric: one continuous
+/// phase spans the measured half cycle (no contact changes to match), and both feet's
+/// measured forces are targets at every node, the swing foot's (zero) included.
+#[test]
+fn a_compliant_foot_tracks_one_phase_over_the_half_cycle_with_both_feet_loaded() {
+    use footfall::data::GaitData;
+    use footfall::model::GaitModel;
+    use footfall::phases::{Phase, PhaseSequence};
+    use footfall::problems::track::TrackingSetup;
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let data = GaitData::bundled(root).unwrap();
+    let model = GaitModel::load(
+        &root.join("models/opensim_subject01.json"),
+        &root.join("models/feet/volumetric_ellipse.json"),
+    )
+    .unwrap();
+    let p = root.join("phases/volumetric_ellipse_walk.json");
+    let seq = PhaseSequence::load(&p).unwrap();
+    let sets = seq.resolve(&model, &p).unwrap();
+    assert!(sets.iter().all(|s| s.rows.is_empty()), "no constraint rows");
+    let setup = TrackingSetup::new(&model, &seq, &sets, &data).unwrap();
+    let (t0, t1) = setup.window;
+    let Phase::Continuous { duration, .. } = &setup.seq.phases[0] else {
+        panic!("one continuous phase")
+    };
+    assert!((duration.value() - (t1 - t0)).abs() < 1e-12);
+    // the same half cycle as the rigid ellipse's (left to right heel strike)
+    let rigid = GaitModel::load(
+        &root.join("models/opensim_subject01.json"),
+        &root.join("models/feet/ellipse.json"),
+    )
+    .unwrap();
+    let rp = root.join("phases/ellipse_walk.json");
+    let rseq = PhaseSequence::load(&rp).unwrap();
+    let rsets = rseq.resolve(&rigid, &rp).unwrap();
+    let r = TrackingSetup::new(&rigid, &rseq, &rsets, &data).unwrap();
+    assert_eq!(setup.window, r.window);
+    let targets = &setup.targets[0];
+    assert_eq!(targets.len(), 26);
+    let mut swing = 0;
+    for t in targets {
+        let (fx, fy) = (t.feet[0].unwrap(), t.feet[1].unwrap());
+        assert!(fx.1.is_finite() && fy.1.is_finite());
+        swing += usize::from(fx.1.abs() < 1.0 || fy.1.abs() < 1.0);
+    }
+    // the right foot swings through much of the half cycle: its target is zero there
+    assert!(swing >= 10, "{swing} nodes with an unloaded foot");
+}
