@@ -16,32 +16,10 @@ pub enum DiffError {
     /// The run folder has no `summary.json`.
     #[error("{0}: not found (a run folder written by `track` or `predict` has one)")]
     NoSummary(PathBuf),
-    /// The summary could not be read.
-    #[error("{path}: {source}")]
-    Read {
-        /// The summary file.
-        path: PathBuf,
-        /// Cause.
-        source: std::io::Error,
-    },
-    /// The summary is not JSON.
-    #[error("{path}: not valid JSON: {source}")]
-    Json {
-        /// The summary file.
-        path: PathBuf,
-        /// Cause (with line and column).
-        source: serde_json::Error,
-    },
-    /// A field is missing or has the wrong type or value.
-    #[error("{path}: field `{field}`: {message}")]
-    Field {
-        /// The summary file.
-        path: PathBuf,
-        /// JSON path of the field, e.g. `errors[2].stats.mean`.
-        field: String,
-        /// What is wrong.
-        message: String,
-    },
+    /// The summary could not be read, is not JSON, or a field is missing or wrong (the
+    /// file and the field's JSON path named).
+    #[error(transparent)]
+    File(#[from] RunFileError),
 }
 
 pub use crate::report::run_summary::{PhaseErrors, SummaryStats};
@@ -106,30 +84,12 @@ fn locate(run: &Path) -> Result<(PathBuf, String), DiffError> {
     }
 }
 
-impl From<RunFileError> for DiffError {
-    fn from(e: RunFileError) -> Self {
-        match e {
-            RunFileError::Read { path, source } => DiffError::Read { path, source },
-            RunFileError::Json { path, source } => DiffError::Json { path, source },
-            RunFileError::Field {
-                path,
-                field,
-                message,
-            } => DiffError::Field {
-                path,
-                field,
-                message,
-            },
-        }
-    }
-}
-
 impl RunSummary {
     /// Read the summary of the run `run`: a run folder written by `track` or `predict`
     /// (its `summary.json`), or a summary file. The run's name is its folder's name.
     pub fn read(run: &Path) -> Result<Self, DiffError> {
         let (path, name) = locate(run)?;
-        let text = std::fs::read_to_string(&path).map_err(|source| DiffError::Read {
+        let text = std::fs::read_to_string(&path).map_err(|source| RunFileError::Read {
             path: path.clone(),
             source,
         })?;
