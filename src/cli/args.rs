@@ -55,6 +55,19 @@ pub struct TrialArgs {
     pub overground: bool,
 }
 
+impl From<TrialArgs> for footfall::workflows::trial::TrialFiles {
+    fn from(a: TrialArgs) -> Self {
+        Self {
+            data: a.data,
+            forces: a.forces,
+            plates: a.plates,
+            lab_axes: a.lab_axes,
+            belt_speed: a.belt_speed,
+            overground: a.overground,
+        }
+    }
+}
+
 /// The check-point switch shared by `track`, `predict` and `compare`.
 #[derive(Debug, Clone, Default, clap::Args)]
 pub struct CheckPointArgs {

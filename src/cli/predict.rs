@@ -89,12 +89,7 @@ impl From<&PredictOptions> for PredictionOptions {
         PredictionOptions {
             check_points: o.check_points.enabled(),
             model: o.model.clone(),
-            data: o.trial.data.clone(),
-            overground: o.trial.overground,
-            forces: o.trial.forces.clone(),
-            plates: o.trial.plates.clone(),
-            lab_axes: o.trial.lab_axes.clone(),
-            belt_speed: o.trial.belt_speed,
+            trial: o.trial.clone().into(),
             step_length: o.step_length,
             speed: o.speed,
             impulse_weight: o.impulse_weight,

@@ -15,18 +15,8 @@ use std::path::PathBuf;
 pub struct FitFootRequest {
     /// The model and foot files.
     pub model: super::ModelFiles,
-    /// Sagittal CSV (default: the bundled trial).
-    pub data: Option<PathBuf>,
-    /// Take a trial whose meta file gives no belt speed as overground, as it is.
-    pub overground: bool,
-    /// OpenSim external loads going with an OpenSim `data` (`--forces`).
-    pub forces: Option<PathBuf>,
-    /// Force-column prefix of each foot, `r=PREFIX` / `l=PREFIX` (`--plate`; empty: detected).
-    pub plates: Vec<String>,
-    /// Lab axes `FORWARD,UP` of a C3D `forces` file (`--lab-axes`; `None`: `+x,+z`).
-    pub lab_axes: Option<String>,
-    /// Treadmill belt speed (m/s) moving the trial overground (`--belt-speed`).
-    pub belt_speed: Option<f64>,
+    /// The trial (default: the bundled one).
+    pub trial: super::trial::TrialFiles,
     /// Output folder.
     pub out: PathBuf,
     /// Replace the output folder if it exists.
@@ -42,14 +32,7 @@ pub fn run(args: &FitFootRequest, progress: &dyn Progress) -> anyhow::Result<()>
     let foot_path = super::foot_path(&args.model.foot);
     let model = GaitModel::load(&args.model.model, &foot_path)?;
     let foot = FootSpec::load(&foot_path)?;
-    let trial = super::trial::load_trial(&super::trial::TrialFiles {
-        data: args.data.clone(),
-        forces: args.forces.clone(),
-        plates: args.plates.clone(),
-        lab_axes: args.lab_axes.clone(),
-        belt_speed: args.belt_speed,
-        overground: args.overground,
-    })?;
+    let trial = super::trial::load_trial(&args.trial)?;
     for n in &trial.notes {
         progress.note(n);
     }
@@ -130,9 +113,9 @@ pub fn run(args: &FitFootRequest, progress: &dyn Progress) -> anyhow::Result<()>
         "command": "fit-foot",
         "foot": foot.name,
         "data": data.source,
-        "forces": args.forces,
-        "plates": args.plates,
-        "lab_axes": args.lab_axes,
+        "forces": args.trial.forces,
+        "plates": args.trial.plates,
+        "lab_axes": args.trial.lab_axes,
         "belt_speed_m_s": data.belt_speed,
         "stances": stances.len(),
         "samples": n,

@@ -27,18 +27,8 @@ pub struct PredictionOptions {
     pub check_points: bool,
     /// Model file.
     pub model: PathBuf,
-    /// Sagittal CSV (None: the bundled trial).
-    pub data: Option<PathBuf>,
-    /// Take a trial whose meta file gives no belt speed as overground.
-    pub overground: bool,
-    /// OpenSim external loads going with an OpenSim `data` (`--forces`).
-    pub forces: Option<PathBuf>,
-    /// Force-column prefix of each foot, `r=PREFIX` / `l=PREFIX` (`--plate`; empty: detected).
-    pub plates: Vec<String>,
-    /// Lab axes `FORWARD,UP` of a C3D `forces` file (`--lab-axes`; `None`: `+x,+z`).
-    pub lab_axes: Option<String>,
-    /// Treadmill belt speed (m/s) moving the trial overground (`--belt-speed`).
-    pub belt_speed: Option<f64>,
+    /// The trial (default: the bundled one).
+    pub trial: super::trial::TrialFiles,
     /// Step length (m; None: the subject's).
     pub step_length: Option<f64>,
     /// Average forward speed (m/s; None: the subject's).
@@ -69,12 +59,7 @@ impl Default for PredictionOptions {
         Self {
             check_points: true,
             model: PathBuf::from("models/opensim_subject01.json"),
-            data: None,
-            overground: false,
-            forces: None,
-            plates: vec![],
-            lab_axes: None,
-            belt_speed: None,
+            trial: super::trial::TrialFiles::default(),
             step_length: None,
             speed: None,
             impulse_weight: SEED_IMPULSE_WEIGHT,
@@ -121,14 +106,7 @@ pub fn predict(
         .unwrap_or_else(|| super::default_phases(foot));
     let seq = PhaseSequence::load(&phases)?;
     let sets = seq.resolve(&model, &phases)?;
-    let trial = super::trial::load_trial(&super::trial::TrialFiles {
-        data: o.data.clone(),
-        forces: o.forces.clone(),
-        plates: o.plates.clone(),
-        lab_axes: o.lab_axes.clone(),
-        belt_speed: o.belt_speed,
-        overground: o.overground,
-    })?;
+    let trial = super::trial::load_trial(&o.trial)?;
     for n in &trial.notes {
         progress.note(n);
     }
@@ -248,8 +226,8 @@ pub fn predict(
         &o.model,
         foot,
         &phases,
-        o.data.as_deref(),
-        o.forces.as_deref(),
+        o.trial.data.as_deref(),
+        o.trial.forces.as_deref(),
     )?;
     let out = super::run_folder::write(
         GaitRun {
