@@ -30,12 +30,15 @@ pub const FILES: &[(&str, &[u8])] = bundle!(
     "models/feet/ellipse.json",
     "models/feet/heel_circle_forefoot_ellipse.json",
     "models/feet/peer_ellipse.json",
+    "models/feet/volumetric_ellipse.json",
     "phases/double_circle_walk.json",
     "phases/ellipse_walk.json",
     "phases/heel_circle_forefoot_ellipse_walk.json",
     "phases/sim_controls_cocontraction.csv",
     "phases/sim_double_circle_step.json",
     "phases/sim_ellipse_step.json",
+    "phases/sim_volumetric_ellipse_step.json",
+    "phases/volumetric_ellipse_walk.json",
     "data/opensim_subject01_meta.json",
     "data/opensim_subject01_model.json",
     "data/opensim_subject01_sagittal.csv",
@@ -140,6 +143,25 @@ mod tests {
             let repo = std::fs::read(Path::new(env!("CARGO_MANIFEST_DIR")).join(name)).unwrap();
             assert_eq!(&repo[..], *bytes, "{name}");
             assert_eq!(std::fs::read(root.join(name)).unwrap(), repo, "{name}");
+        }
+    }
+
+    /// Every file of `models/`, `models/feet/` and `phases/` ships with the binary, so that
+    /// a shipped foot or phase file never works only inside the repository.
+    #[test]
+    fn every_shipped_model_foot_and_phase_file_is_bundled() {
+        let repo = Path::new(env!("CARGO_MANIFEST_DIR"));
+        for dir in ["models", "models/feet", "phases"] {
+            for entry in std::fs::read_dir(repo.join(dir)).unwrap() {
+                let path = entry.unwrap().path();
+                if path.is_file() {
+                    let name = format!("{dir}/{}", path.file_name().unwrap().to_string_lossy());
+                    assert!(
+                        FILES.iter().any(|(n, _)| *n == name),
+                        "{name} is not in bundled::FILES"
+                    );
+                }
+            }
         }
     }
 
