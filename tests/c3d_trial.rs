@@ -11,35 +11,17 @@
 //! of the `.mot` with its instants written as k/600 in full (`retimed`), and the
 //! comparison with the original file has the tolerance its rounded instants explain.
 
+mod common;
+use common::{csv_columns, footfall, grf, ik, json, root, s, stderr};
+
 use footfall::data::{read_storage, Storage};
 use footfall::workflows::trial::{load_trial, LoadedTrial, TrialFiles};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 const BELT_SPEED: &str = "1.1322";
 const RATE: f64 = 600.0;
 /// Analog samples per 60 Hz point frame.
 const PER_FRAME: usize = 10;
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn raw(name: &str) -> PathBuf {
-    root().join("data/raw/opensim_subject01").join(name)
-}
-
-fn ik() -> PathBuf {
-    raw("subject01_walk1_ik.mot")
-}
-
-fn grf() -> PathBuf {
-    raw("subject01_walk1_grf.mot")
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("UTF-8 path")
-}
 
 /// A lab frame of the C3D file: the OpenSim ground vector (x forward, y up, z right) in
 /// the lab's (X, Y, Z), and the `--lab-axes` that undo it.
@@ -348,41 +330,6 @@ fn the_c3d_plates_give_the_mot_trials_forces_through_the_library() {
             file.display()
         );
     }
-}
-
-/// Run `footfall ARGS` in the crate root.
-fn footfall(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_footfall"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .expect("run the footfall binary")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn json(path: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(path).expect("read JSON")).expect("JSON")
-}
-
-/// The columns of a CSV written by a run: header names and numbers (NaN for empty cells).
-fn csv_columns(path: &Path) -> Vec<(String, Vec<f64>)> {
-    let text = std::fs::read_to_string(path).expect("read CSV");
-    let mut lines = text.lines();
-    let mut cols: Vec<(String, Vec<f64>)> = lines
-        .next()
-        .expect("header")
-        .split(',')
-        .map(|n| (n.to_string(), vec![]))
-        .collect();
-    for l in lines {
-        for (c, f) in cols.iter_mut().zip(l.split(',')) {
-            c.1.push(f.parse().unwrap_or(f64::NAN));
-        }
-    }
-    cols
 }
 
 /// `track --max-iter 0` of the IK with `forces`: its folder.

@@ -4,29 +4,11 @@
 //! staging folder) behind; an interrupted solve exits with 130 (tests/cli_exit_codes.rs
 //! has the other codes).
 
-use std::path::{Path, PathBuf};
+mod common;
+use common::{footfall, root, s, stderr};
+
+use std::path::Path;
 use std::process::{Command, Output};
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-/// Run `footfall ARGS` in the crate root.
-fn footfall(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_footfall"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .expect("run the footfall binary")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("UTF-8 temp path")
-}
 
 /// Everything in `dir`, hidden entries included, sorted.
 fn entries(dir: &Path) -> Vec<String> {

@@ -6,75 +6,21 @@
 //! radians, a flipped vertical force, a treadmill trial without a belt speed) is refused
 //! with a message that names the file, the column and what would be valid.
 
+mod common;
+use common::{csv_columns, footfall, grf, ik, json, raw, root, s, stderr};
+
 use footfall::data::{
     parse_storage, read_sagittal_csv, read_storage, storage_text, OPENSIM_COORDINATES,
 };
 use footfall::workflows::trial::{load_trial, TrialFiles};
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
 
 /// The belt speed of the bundled treadmill trial (its meta file's `belt_speed_m_s`).
 const BELT_SPEED: &str = "1.1322";
 
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn raw(name: &str) -> PathBuf {
-    root().join("data/raw/opensim_subject01").join(name)
-}
-
-fn ik() -> PathBuf {
-    raw("subject01_walk1_ik.mot")
-}
-
-fn grf() -> PathBuf {
-    raw("subject01_walk1_grf.mot")
-}
-
 /// The 2-D kinematics the bundled CSV was converted from (`data/convert_opensim_subject01.py`).
 fn states() -> PathBuf {
     raw("walk_gait1018_state_reference.mot")
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("UTF-8 path")
-}
-
-/// Run `footfall ARGS` in the crate root.
-fn footfall(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_footfall"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .expect("run the footfall binary")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-fn json(path: &Path) -> serde_json::Value {
-    serde_json::from_str(&std::fs::read_to_string(path).expect("read JSON")).expect("JSON")
-}
-
-/// The columns of a CSV written by a run: header names and numbers (NaN for empty cells).
-fn csv_columns(path: &Path) -> Vec<(String, Vec<f64>)> {
-    let text = std::fs::read_to_string(path).expect("read CSV");
-    let mut lines = text.lines();
-    let names: Vec<String> = lines
-        .next()
-        .expect("header")
-        .split(',')
-        .map(String::from)
-        .collect();
-    let mut cols: Vec<(String, Vec<f64>)> = names.into_iter().map(|n| (n, vec![])).collect();
-    for l in lines {
-        for (c, f) in cols.iter_mut().zip(l.split(',')) {
-            c.1.push(f.parse().unwrap_or(f64::NAN));
-        }
-    }
-    cols
 }
 
 fn column<'a>(cols: &'a [(String, Vec<f64>)], name: &str) -> &'a [f64] {

@@ -4,6 +4,9 @@
 //! half-written; a solve killed with SIGKILL resumes (`--resume`) to the same optimum,
 //! following the same iterates bit for bit.
 
+mod common;
+use common::stderr;
+
 use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
@@ -38,10 +41,6 @@ fn simulate(cwd: &Path, out: &str, extra: &[&str]) -> Output {
         .current_dir(cwd)
         .output()
         .expect("run footfall")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
 /// Everything in `dir`, hidden entries included, sorted.

@@ -6,6 +6,9 @@
 //! another folder. One cheap run (started at a converged solution, one iteration) serves
 //! every check.
 
+mod common;
+use common::stderr;
+
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -20,10 +23,6 @@ fn footfall(dir: &Path, args: &[&str]) -> Output {
         .current_dir(dir)
         .output()
         .expect("run the footfall binary")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
 fn json(path: &Path) -> serde_json::Value {

@@ -5,7 +5,7 @@
 //! with `--strict` (exit 1, no output folder).
 
 mod common;
-use common::root;
+use common::{root, stderr};
 use footfall::controls::ControlTable;
 use footfall::model::{ConstraintSet, GaitModel, RowKind};
 use footfall::phases::{Duration, Phase, PhaseSequence};
@@ -234,10 +234,6 @@ fn footfall(args: &[&str]) -> Output {
         .current_dir(root())
         .output()
         .expect("run footfall")
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
 fn summary(out: &Path) -> serde_json::Value {

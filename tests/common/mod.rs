@@ -251,3 +251,60 @@ pub fn bundled_tracking_of(
             .unwrap();
     (m, sets, setup)
 }
+
+/// Run `footfall ARGS` in the crate root.
+pub fn footfall(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_footfall"))
+        .args(args)
+        .current_dir(root())
+        .output()
+        .expect("run the footfall binary")
+}
+
+/// A process's standard error as text.
+pub fn stderr(o: &std::process::Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// A JSON file, read.
+pub fn json(path: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(path).expect("read JSON")).expect("JSON")
+}
+
+/// The columns of a CSV written by a run: header names and numbers (NaN for empty cells).
+pub fn csv_columns(path: &Path) -> Vec<(String, Vec<f64>)> {
+    let text = std::fs::read_to_string(path).expect("read CSV");
+    let mut lines = text.lines();
+    let mut cols: Vec<(String, Vec<f64>)> = lines
+        .next()
+        .expect("header")
+        .split(',')
+        .map(|n| (n.to_string(), vec![]))
+        .collect();
+    for l in lines {
+        for (c, f) in cols.iter_mut().zip(l.split(',')) {
+            c.1.push(f.parse().unwrap_or(f64::NAN));
+        }
+    }
+    cols
+}
+
+/// A path as the `&str` a command line takes.
+pub fn s(p: &Path) -> &str {
+    p.to_str().expect("UTF-8 path")
+}
+
+/// A raw file of the bundled OpenSim trial (`data/raw/opensim_subject01/`).
+pub fn raw(name: &str) -> PathBuf {
+    root().join("data/raw/opensim_subject01").join(name)
+}
+
+/// The bundled trial's 3-D inverse kinematics (60 Hz).
+pub fn ik() -> PathBuf {
+    raw("subject01_walk1_ik.mot")
+}
+
+/// The bundled trial's ground reaction forces (600 Hz).
+pub fn grf() -> PathBuf {
+    raw("subject01_walk1_grf.mot")
+}
