@@ -242,20 +242,9 @@ pub fn fix_durations(
     let cont: Vec<usize> = seq.continuous_indices();
     if model.contacts.iter().all(|c| c.law.is_some()) {
         // compliant feet only: no contact changes to match; the continuous phases share
-        // the window in proportion to their initial durations
-        let total: f64 = cont
-            .iter()
-            .map(|&i| match &seq.phases[i] {
-                Phase::Continuous { duration, .. } => duration.value(),
-                Phase::Impact { .. } => 0.0,
-            })
-            .sum();
+        // the window
         let mut out = seq.clone();
-        for &i in &cont {
-            if let Phase::Continuous { duration, .. } = &mut out.phases[i] {
-                *duration = Duration::Fixed((t1 - t0) * duration.value() / total);
-            }
-        }
+        share_span(&mut out, seq, &cont, t1 - t0);
         return Ok(out);
     }
     let measured = events.contact_phases(t0, t1);
@@ -285,21 +274,24 @@ pub fn fix_durations(
     }
     let mut out = seq.clone();
     for ((_, idx), mp) in groups.iter().zip(&measured) {
-        let init: Vec<f64> = idx
-            .iter()
-            .map(|&i| match &seq.phases[i] {
-                Phase::Continuous { duration, .. } => duration.value(),
-                Phase::Impact { .. } => 0.0,
-            })
-            .collect();
-        let total: f64 = init.iter().sum();
-        for (&i, d0) in idx.iter().zip(init) {
-            if let Phase::Continuous { duration, .. } = &mut out.phases[i] {
-                *duration = Duration::Fixed(mp.duration() * d0 / total);
-            }
-        }
+        share_span(&mut out, seq, idx, mp.duration());
     }
     Ok(out)
+}
+
+/// Fix the durations of the continuous phases `idx` (in `out`, a copy of `seq`) so that
+/// they share `span` (s) in proportion to their initial durations in `seq`.
+fn share_span(out: &mut PhaseSequence, seq: &PhaseSequence, idx: &[usize], span: f64) {
+    let initial = |i: usize| match &seq.phases[i] {
+        Phase::Continuous { duration, .. } => duration.value(),
+        Phase::Impact { .. } => 0.0,
+    };
+    let total: f64 = idx.iter().map(|&i| initial(i)).sum();
+    for &i in idx {
+        if let Phase::Continuous { duration, .. } = &mut out.phases[i] {
+            *duration = Duration::Fixed(span * initial(i) / total);
+        }
+    }
 }
 
 /// Everything the tracking OCP needs, built from data.
