@@ -75,6 +75,10 @@ impl GaitModel {
         n: V2<S>,
     ) -> Vec<(usize, GroundForce<S>)> {
         let mut out = Vec::new();
+        // every dynamics evaluation comes here: nothing to set up for rigid feet
+        if !self.has_volumetric_contacts() {
+            return out;
+        }
         // the ground's frame: tangent t (forward along the ground), normal n
         let t = [n[1], -n[0]];
         let ground_angle = (-n[0]).atan2(n[1]);
