@@ -391,9 +391,9 @@ fn track_with_c3d_plates_starts_where_the_mot_does() {
     let a = track(dir.path(), "c3d", &c3d, &plates);
     let setup = json(&a.join("setup.json"));
     // the run folder holds a copy of the C3D, which setup.json names
-    assert_eq!(setup["forces"].as_str(), Some("inputs/data/walk1.c3d"));
+    assert_eq!(setup["forces"].as_str(), Some("inputs/forces/walk1.c3d"));
     assert_eq!(
-        std::fs::read(a.join("inputs/data/walk1.c3d")).unwrap(),
+        std::fs::read(a.join("inputs/forces/walk1.c3d")).unwrap(),
         std::fs::read(&c3d).unwrap()
     );
     assert_eq!(setup["plates"], serde_json::json!(["r=1", "l=2"]));

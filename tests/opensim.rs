@@ -87,10 +87,10 @@ fn track_reads_the_raw_opensim_pair_and_writes_opensim_coordinate_names() {
     let setup = json(&out.join("setup.json"));
     assert_eq!(
         setup["forces"].as_str(),
-        Some("inputs/data/subject01_walk1_grf.mot")
+        Some("inputs/forces/subject01_walk1_grf.mot")
     );
     assert_eq!(
-        std::fs::read(out.join("inputs/data/subject01_walk1_grf.mot")).unwrap(),
+        std::fs::read(out.join("inputs/forces/subject01_walk1_grf.mot")).unwrap(),
         std::fs::read(grf()).unwrap()
     );
     assert_eq!(setup["belt_speed"].as_f64(), Some(1.1322));
@@ -580,4 +580,42 @@ fn a_treadmill_pair_needs_a_belt_speed_or_overground() {
     // moved by belt_speed · t
     let k = v.time.len() - 1;
     assert!((v.q[0][k] - d.q[0][k] - 1.1322 * v.time[k]).abs() < 1e-12);
+}
+
+/// A kinematics file and a forces file of the same name (from two folders) both keep
+/// their copy in the run folder: the forces have a folder of their own.
+#[test]
+fn kinematics_and_forces_of_one_name_are_both_copied_into_the_run() {
+    let dir = tempfile::tempdir().unwrap();
+    let (a, b) = (dir.path().join("ik"), dir.path().join("grf"));
+    std::fs::create_dir_all(&a).unwrap();
+    std::fs::create_dir_all(&b).unwrap();
+    std::fs::copy(ik(), a.join("walk.mot")).unwrap();
+    std::fs::copy(grf(), b.join("walk.mot")).unwrap();
+    let out = dir.path().join("run");
+    let o = footfall(&[
+        "track",
+        "--data",
+        s(&a.join("walk.mot")),
+        "--forces",
+        s(&b.join("walk.mot")),
+        "--belt-speed",
+        BELT_SPEED,
+        "--max-iter",
+        "0",
+        "--no-check-points",
+        "--quiet",
+        "--out",
+        s(&out),
+    ]);
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    let setup = json(&out.join("setup.json"));
+    assert_eq!(setup["data"].as_str(), Some("inputs/data/walk.mot"));
+    assert_eq!(setup["forces"].as_str(), Some("inputs/forces/walk.mot"));
+    let read = |p: &str| std::fs::read(out.join(p)).unwrap();
+    assert_eq!(read("inputs/data/walk.mot"), std::fs::read(ik()).unwrap());
+    assert_eq!(
+        read("inputs/forces/walk.mot"),
+        std::fs::read(grf()).unwrap()
+    );
 }

@@ -1,6 +1,7 @@
 //! The inputs of a run, copied into its folder: `inputs/model/` (the model file and the
-//! OpenSim model it names), `inputs/foot/`, `inputs/phases/` and `inputs/data/` (the
-//! trial and its meta file; the bundled trial when the run used it). `setup.json` names
+//! OpenSim model it names), `inputs/foot/`, `inputs/phases/`, `inputs/data/` (the
+//! trial and its meta file; the bundled trial when the run used it) and `inputs/forces/`
+//! (the forces file of a trial given as kinematics and forces). `setup.json` names
 //! these copies relative to the run folder, so `report`, `diagnose`, `synth` and `diff`
 //! rebuild the run's problem from any folder, also after the run folder was moved or
 //! copied to another machine.
@@ -93,7 +94,8 @@ pub fn copy_model_inputs(
 }
 
 /// Copy a run's model, foot, phase file ([`copy_model_inputs`]) and trial (`None`: the
-/// bundled trial; its meta file beside it; and its forces file, if given apart) into
+/// bundled trial; its meta file beside it; and its forces file, if given apart, in
+/// `inputs/forces/`) into
 /// `folder`'s `inputs/`.
 pub fn copy_inputs(
     folder: &RunFolder,
@@ -115,7 +117,10 @@ pub fn copy_inputs(
     if let Some(meta) = crate::data::sibling_meta_path(&csv) {
         copy(folder, "data", &meta, None)?;
     }
-    let forces = forces.map(|f| copy(folder, "data", f, None)).transpose()?;
+    // a folder of its own: kinematics and forces files may share a name
+    let forces = forces
+        .map(|f| copy(folder, "forces", f, None))
+        .transpose()?;
     Ok(RunInputs {
         model,
         foot,
