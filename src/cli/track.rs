@@ -66,7 +66,8 @@ pub struct Args {
     /// Add an effect and identify its parameters: `NAME[:key=value,…]`, e.g.
     /// `ground_slope`, `passive_joint_stiffness:joint=knee`, `cop_offset:offset=0.01,free=`
     /// (repeatable; names: ground_slope, trunk_mass, passive_joint_stiffness,
-    /// force_plate_time_offset, cop_offset, heel_pad_compliance).
+    /// force_plate_time_offset, cop_offset, heel_pad_compliance, volumetric_contact — the
+    /// last frees a volumetric foot's stiffness (N/mm²), damping (s/m) and mu_dynamic).
     #[arg(long = "effect", value_name = "NAME[:key=value,…]")]
     effects: Vec<String>,
     /// Track the pelvis position (x, y) too, weighted 1/(0.1 m) as angles are by

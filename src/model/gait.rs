@@ -104,6 +104,9 @@ pub struct GaitModel {
     effect_offsets: Vec<usize>,
     /// Per contact: the effect that makes its normal contact compliant, if any.
     compliant: Vec<Option<usize>>,
+    /// Per contact: the effect whose parameters replace its volumetric law, and the
+    /// primitive's slot among that effect's (`volumetric_contact`), if any.
+    volumetric_params: Vec<Option<(usize, usize)>>,
     params: Vec<ParamSpec>,
     free: Vec<usize>,
 }
@@ -241,10 +244,21 @@ impl GaitModel {
         let coords: Vec<String> = COORDINATES.iter().map(|s| s.to_string()).collect();
         let bodies: Vec<String> = tree.bodies().iter().map(|b| b.name.clone()).collect();
         let primitives: Vec<String> = foot.primitives.iter().map(|p| p.name.clone()).collect();
+        let laws: Vec<_> = foot
+            .primitives
+            .iter()
+            .map(|p| match p.contact {
+                spec::ContactLaw::Rigid => None,
+                spec::ContactLaw::Volumetric(law) => Some(law),
+            })
+            .collect();
+        let foot_file = foot_path.display().to_string();
         let ctx = super::effects::BuildContext {
             coordinates: &coords,
             bodies: &bodies,
             primitives: &primitives,
+            laws: &laws,
+            foot: &foot_file,
         };
         let mut effects = Vec::new();
         for (i, e) in spec.effects.iter().enumerate() {
@@ -283,6 +297,16 @@ impl GaitModel {
                 })
             })
             .collect();
+        let volumetric_params = contacts
+            .iter()
+            .map(|c| {
+                let (_, name) = c.name.split_once('.')?;
+                effects.iter().enumerate().find_map(|(e, eff)| {
+                    let slot = eff.volumetric_primitives().iter().position(|p| p == name)?;
+                    Some((e, slot))
+                })
+            })
+            .collect();
         let model = Self {
             name: spec.name.clone(),
             tree,
@@ -295,6 +319,7 @@ impl GaitModel {
             residuals: None,
             effect_offsets,
             compliant,
+            volumetric_params,
             params,
             free,
         };

@@ -15,12 +15,14 @@
 
 mod kinds;
 mod spec;
+mod volumetric;
 
 pub use kinds::{
     CopOffset, ForcePlateTimeOffset, GroundSlope, HeelPadCompliance, PassiveJointStiffness,
     TrunkMass,
 };
 pub use spec::{catalog, BuildContext, EffectSpec};
+pub use volumetric::{VolumetricContact, VolumetricStart};
 
 use super::ad::{AdChunk, AdNested};
 use super::multibody::{Inertia, V2};
@@ -115,6 +117,12 @@ pub trait Effect: std::fmt::Debug + Send + Sync {
     fn normal_force<S: Scalar>(&self, _p: &[S], _depth: S, _rate: S) -> S {
         S::c(0.0)
     }
+    /// Names of the volumetric primitives (on both feet) whose law this effect's
+    /// parameters replace: primitive `i` takes parameters `3i..3i+3`, its area stiffness
+    /// (N/mm²), damping (s/m) and dynamic friction coefficient (default: none).
+    fn volumetric_primitives(&self) -> &[String] {
+        &[]
+    }
 }
 
 /// Object-safe form of [`Effect`], implemented for every effect. The methods are
@@ -138,6 +146,7 @@ pub trait DynEffect: std::fmt::Debug + Send + Sync {
     fn is_measurement(&self) -> bool;
     fn shifts_force_clock(&self) -> bool;
     fn compliant_primitive(&self) -> Option<&str>;
+    fn volumetric_primitives(&self) -> &[String];
     fn normal_force_f64(&self, p: &[f64], depth: f64, rate: f64) -> f64;
     fn normal_force_dual(&self, p: &[Dual64], depth: Dual64, rate: Dual64) -> Dual64;
     fn normal_force_chunk(&self, p: &[AdChunk], depth: AdChunk, rate: AdChunk) -> AdChunk;
@@ -195,6 +204,9 @@ impl<E: Effect> DynEffect for E {
     }
     fn compliant_primitive(&self) -> Option<&str> {
         Effect::compliant_primitive(self)
+    }
+    fn volumetric_primitives(&self) -> &[String] {
+        Effect::volumetric_primitives(self)
     }
     fn normal_force_f64(&self, p: &[f64], depth: f64, rate: f64) -> f64 {
         self.normal_force(p, depth, rate)

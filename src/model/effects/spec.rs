@@ -5,7 +5,9 @@ use super::kinds::{
     CopOffset, ForcePlateTimeOffset, GroundSlope, HeelPadCompliance, PassiveJointStiffness,
     TrunkMass,
 };
+use super::volumetric::{VolumetricContact, VolumetricStart};
 use super::DynEffect;
+use crate::model::volumetric::VolumetricLaw;
 use serde::{Deserialize, Serialize};
 
 /// What an effect needs to know about the model it is built for.
@@ -17,6 +19,10 @@ pub struct BuildContext<'a> {
     pub bodies: &'a [String],
     /// Names of the foot's contact primitives (without the side prefix).
     pub primitives: &'a [String],
+    /// Each primitive's volumetric law (`None`: rigid), parallel to `primitives`.
+    pub laws: &'a [Option<VolumetricLaw>],
+    /// The foot file, for errors.
+    pub foot: &'a str,
 }
 
 /// An effect as written in a model JSON file (`{"type": "ground_slope", "angle": 0.02}`).
@@ -97,6 +103,23 @@ pub enum EffectSpec {
         #[serde(default)]
         free: Vec<String>,
     },
+    /// [`VolumetricContact`]: the law of every volumetric primitive of the foot.
+    VolumetricContact {
+        /// Area stiffness (N/mm², 1 N/mm² = 10⁶ N/m²; default: each primitive's own from
+        /// the foot file).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        stiffness: Option<f64>,
+        /// Damping (s/m; default: the foot file's).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        damping: Option<f64>,
+        /// Dynamic friction coefficient (default: the foot file's; the static one keeps
+        /// the file's margin above it).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        mu_dynamic: Option<f64>,
+        /// Any of `stiffness`, `damping`, `mu_dynamic`.
+        #[serde(default)]
+        free: Vec<String>,
+    },
 }
 
 fn heel() -> String {
@@ -116,13 +139,14 @@ fn both() -> String {
 }
 
 /// The names that may appear on the command line: `--effect NAME[:key=value,…]`.
-pub const EFFECT_KINDS: [&str; 6] = [
+pub const EFFECT_KINDS: [&str; 7] = [
     "ground_slope",
     "trunk_mass",
     "passive_joint_stiffness",
     "force_plate_time_offset",
     "cop_offset",
     "heel_pad_compliance",
+    "volumetric_contact",
 ];
 
 impl EffectSpec {
@@ -135,6 +159,7 @@ impl EffectSpec {
             EffectSpec::ForcePlateTimeOffset { .. } => "force_plate_time_offset",
             EffectSpec::CopOffset { .. } => "cop_offset",
             EffectSpec::HeelPadCompliance { .. } => "heel_pad_compliance",
+            EffectSpec::VolumetricContact { .. } => "volumetric_contact",
         }
     }
 
@@ -152,11 +177,13 @@ impl EffectSpec {
             EffectSpec::ForcePlateTimeOffset { .. } => "force-plate time offset".into(),
             EffectSpec::CopOffset { .. } => "CoP offset".into(),
             EffectSpec::HeelPadCompliance { .. } => "heel-pad compliance".into(),
+            EffectSpec::VolumetricContact { .. } => "volumetric contact law".into(),
         }
     }
 
-    /// Names of the parameters that `free` may list, with each one's value and bounds.
-    fn parameter_values(&self) -> Vec<(&'static str, f64, (f64, f64))> {
+    /// Names of the parameters that `free` may list, with each one's value (`None`: taken
+    /// from the model when built) and bounds.
+    fn parameter_values(&self) -> Vec<(&'static str, Option<f64>, (f64, f64))> {
         let pi = std::f64::consts::PI;
         match self {
             EffectSpec::PassiveJointStiffness {
@@ -167,35 +194,53 @@ impl EffectSpec {
                 vec![
                     (
                         "stiffness",
-                        *stiffness,
+                        Some(*stiffness),
                         PassiveJointStiffness::STIFFNESS_BOUNDS,
                     ),
-                    ("rest_angle", *rest_angle, (-pi, pi)),
+                    ("rest_angle", Some(*rest_angle), (-pi, pi)),
                 ]
             }
-            EffectSpec::GroundSlope { angle, .. } => vec![("angle", *angle, GroundSlope::BOUNDS)],
+            EffectSpec::GroundSlope { angle, .. } => {
+                vec![("angle", Some(*angle), GroundSlope::BOUNDS)]
+            }
             EffectSpec::TrunkMass {
                 added_mass,
                 com_offset,
                 ..
             } => {
                 vec![
-                    ("added_mass", *added_mass, TrunkMass::MASS_BOUNDS),
-                    ("com_offset", *com_offset, TrunkMass::OFFSET_BOUNDS),
+                    ("added_mass", Some(*added_mass), TrunkMass::MASS_BOUNDS),
+                    ("com_offset", Some(*com_offset), TrunkMass::OFFSET_BOUNDS),
                 ]
             }
             EffectSpec::ForcePlateTimeOffset { offset, .. } => {
-                vec![("offset", *offset, ForcePlateTimeOffset::BOUNDS)]
+                vec![("offset", Some(*offset), ForcePlateTimeOffset::BOUNDS)]
             }
-            EffectSpec::CopOffset { offset, .. } => vec![("offset", *offset, CopOffset::BOUNDS)],
+            EffectSpec::CopOffset { offset, .. } => {
+                vec![("offset", Some(*offset), CopOffset::BOUNDS)]
+            }
             EffectSpec::HeelPadCompliance {
                 stiffness, damping, ..
             } => {
                 vec![
-                    ("stiffness", *stiffness, HeelPadCompliance::STIFFNESS_BOUNDS),
-                    ("damping", *damping, HeelPadCompliance::DAMPING_BOUNDS),
+                    (
+                        "stiffness",
+                        Some(*stiffness),
+                        HeelPadCompliance::STIFFNESS_BOUNDS,
+                    ),
+                    ("damping", Some(*damping), HeelPadCompliance::DAMPING_BOUNDS),
                 ]
             }
+            EffectSpec::VolumetricContact {
+                stiffness,
+                damping,
+                mu_dynamic,
+                ..
+            } => vec![
+                ("stiffness", *stiffness, VolumetricContact::STIFFNESS_BOUNDS),
+                ("damping", *damping, VolumetricContact::DAMPING_BOUNDS),
+                ("mu_dynamic", *mu_dynamic, VolumetricContact::MU_BOUNDS),
+            ],
         }
     }
 
@@ -206,7 +251,8 @@ impl EffectSpec {
             | EffectSpec::TrunkMass { free, .. }
             | EffectSpec::ForcePlateTimeOffset { free, .. }
             | EffectSpec::CopOffset { free, .. }
-            | EffectSpec::HeelPadCompliance { free, .. } => free,
+            | EffectSpec::HeelPadCompliance { free, .. }
+            | EffectSpec::VolumetricContact { free, .. } => free,
         }
     }
 
@@ -217,7 +263,8 @@ impl EffectSpec {
             | EffectSpec::TrunkMass { free, .. }
             | EffectSpec::ForcePlateTimeOffset { free, .. }
             | EffectSpec::CopOffset { free, .. }
-            | EffectSpec::HeelPadCompliance { free, .. } => free,
+            | EffectSpec::HeelPadCompliance { free, .. }
+            | EffectSpec::VolumetricContact { free, .. } => free,
         }
     }
 
@@ -302,6 +349,7 @@ impl EffectSpec {
         }
         let params = self.parameter_values();
         for &(name, value, (lo, hi)) in &params {
+            let Some(value) = value else { continue };
             if !(value.is_finite() && value >= lo && value <= hi) {
                 return Err((
                     name,
@@ -406,6 +454,60 @@ impl EffectSpec {
                     *damping,
                     self.is_free("stiffness"),
                     self.is_free("damping"),
+                ))]
+            }
+            EffectSpec::VolumetricContact {
+                stiffness,
+                damping,
+                mu_dynamic,
+                ..
+            } => {
+                let starts: Vec<(String, VolumetricStart)> = ctx
+                    .primitives
+                    .iter()
+                    .zip(ctx.laws)
+                    .filter_map(|(name, law)| {
+                        let law = law.as_ref()?;
+                        Some((
+                            name.clone(),
+                            VolumetricStart {
+                                stiffness: stiffness.map_or(law.stiffness, |k| {
+                                    k * VolumetricContact::STIFFNESS_UNIT
+                                }),
+                                damping: damping.unwrap_or(law.damping),
+                                mu_dynamic: mu_dynamic.unwrap_or(law.mu_dynamic),
+                            },
+                        ))
+                    })
+                    .collect();
+                if starts.is_empty() {
+                    return Err(format!(
+                        "volumetric_contact: the foot {} has no volumetric primitive (its primitives {} are rigid), so there is no contact law to free; use a volumetric foot, e.g. --foot models/feet/volumetric_ellipse.json, or give a primitive \"contact\": {{\"type\": \"volumetric\", …}} in the foot file",
+                        ctx.foot,
+                        ctx.primitives.join(", ")
+                    ));
+                }
+                // a value outside the bounds from the foot file (the effect's own values
+                // are checked above)
+                for (name, s) in &starts {
+                    let k = s.stiffness / VolumetricContact::STIFFNESS_UNIT;
+                    for (field, v, (lo, hi)) in [
+                        ("stiffness", k, VolumetricContact::STIFFNESS_BOUNDS),
+                        ("damping", s.damping, VolumetricContact::DAMPING_BOUNDS),
+                        ("mu_dynamic", s.mu_dynamic, VolumetricContact::MU_BOUNDS),
+                    ] {
+                        if !(lo..=hi).contains(&v) {
+                            return Err(format!("volumetric_contact: primitive '{name}' of the foot {} has {field} {v} (in the effect's units), outside the bounds [{lo}, {hi}] an identification may use; give a start value with {field}=…", ctx.foot));
+                        }
+                    }
+                }
+                vec![Box::new(VolumetricContact::new(
+                    &starts,
+                    [
+                        self.is_free("stiffness"),
+                        self.is_free("damping"),
+                        self.is_free("mu_dynamic"),
+                    ],
                 ))]
             }
         })

