@@ -370,6 +370,11 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
     {
         candidates.push(pad.clone());
     }
+    // the volumetric contact law is a candidate on feet with volumetric primitives, its
+    // null value the foot file's law ("is the law the one the forces ask for?")
+    if args.candidates.is_empty() && base.model.has_volumetric_contacts() {
+        candidates.push(EffectSpec::parse_cli("volumetric_contact").map_err(|e| anyhow!(e))?);
+    }
     for c in &candidates {
         if setup.effects.iter().any(|e| e.overlaps(c)) {
             skipped.push(format!("{}: already in the model", c.label()));
