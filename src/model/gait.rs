@@ -21,6 +21,7 @@ use super::actuators::{Joint as MtgJoint, JointActuatorSet};
 use super::anthropometry::{self, build_bodies, estimated_stature, segments_from_de_leva};
 use super::effects::{DynEffect, MeasurementAdjust, ModelAdjust, ModelScalar, ParamSpec};
 use super::error::ModelError;
+use super::geometry::{Shape, ShapeScalars};
 use super::multibody::{Inertia, Tree, V2};
 use super::spec::{self, ActuatorSpec, BodySpec, ContactSettings, FootSpec, ModelSpec};
 use super::Scalar;
@@ -107,6 +108,9 @@ pub struct GaitModel {
     /// Per contact: the effect whose parameters replace its volumetric law, and the
     /// primitive's slot among that effect's (`volumetric_contact`), if any.
     volumetric_params: Vec<Option<(usize, usize)>>,
+    /// Per contact: the effect whose parameters replace its geometry, and the offset of
+    /// the primitive's among that effect's (`foot_geometry`), if any.
+    geometry_params: Vec<Option<(usize, usize)>>,
     params: Vec<ParamSpec>,
     free: Vec<usize>,
 }
@@ -253,11 +257,13 @@ impl GaitModel {
             })
             .collect();
         let foot_file = foot_path.display().to_string();
+        let shapes: Vec<Shape> = foot.primitives.iter().map(|p| p.shape.clone()).collect();
         let ctx = super::effects::BuildContext {
             coordinates: &coords,
             bodies: &bodies,
             primitives: &primitives,
             laws: &laws,
+            shapes: &shapes,
             foot: &foot_file,
         };
         let mut effects = Vec::new();
@@ -307,6 +313,16 @@ impl GaitModel {
                 })
             })
             .collect();
+        let geometry_params = contacts
+            .iter()
+            .map(|c| {
+                let (_, name) = c.name.split_once('.')?;
+                effects.iter().enumerate().find_map(|(e, eff)| {
+                    let &(_, offset) = eff.geometry_primitives().iter().find(|p| p.0 == name)?;
+                    Some((e, offset))
+                })
+            })
+            .collect();
         let model = Self {
             name: spec.name.clone(),
             tree,
@@ -320,6 +336,7 @@ impl GaitModel {
             effect_offsets,
             compliant,
             volumetric_params,
+            geometry_params,
             params,
             free,
         };
@@ -495,6 +512,30 @@ impl GaitModel {
             p[i] = theta[k];
         }
         p
+    }
+
+    /// The shape of contact `c` under the effect parameters `p` (all of them): the foot
+    /// file's, or a `foot_geometry` effect's.
+    fn shape_of<S: Scalar>(&self, c: usize, p: &[S]) -> ShapeScalars<S> {
+        let contact = &self.contacts[c];
+        let Some((e, offset)) = self.geometry_params[c] else {
+            return contact.shape.scalars();
+        };
+        let q = &self.effect_params(p, e)[offset..];
+        match contact.shape {
+            Shape::Point { .. } => ShapeScalars::Point {
+                position: [q[0], q[1]],
+            },
+            Shape::Circle { .. } => ShapeScalars::Circle {
+                centre: [q[0], q[1]],
+                radius: q[2],
+            },
+            Shape::Ellipse { .. } => ShapeScalars::Ellipse {
+                centre: [q[0], q[1]],
+                semi_axes: [q[2], q[3]],
+                angle: q[4],
+            },
+        }
     }
 
     fn effect_params<'a, S>(&self, p: &'a [S], e: usize) -> &'a [S] {

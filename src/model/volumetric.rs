@@ -199,6 +199,17 @@ pub fn penetration<S: Scalar>(
     (a, b): (f64, f64),
     ground_y: S,
 ) -> Option<Penetration<S>> {
+    penetration_with(centre, alpha, (S::c(a), S::c(b)), ground_y)
+}
+
+/// [`penetration`] with semi-axes in the generic scalar (free parameters of an
+/// identification).
+pub fn penetration_with<S: Scalar>(
+    centre: V2<S>,
+    alpha: S,
+    (a, b): (S, S),
+    ground_y: S,
+) -> Option<Penetration<S>> {
     let (sin, cos) = (alpha.sin(), alpha.cos());
     let (a2, b2) = (a * a, b * b);
     let myy = sin * sin * a2 + cos * cos * b2;
@@ -211,7 +222,7 @@ pub fn penetration<S: Scalar>(
     let s = depth / h;
     if s.value() >= 2.0 {
         return Some(Penetration {
-            area: S::c(std::f64::consts::PI * a * b),
+            area: a * b * std::f64::consts::PI,
             centroid: centre,
             depth,
         });
@@ -258,7 +269,7 @@ impl VolumetricLaw {
             self.scalars(),
             centre,
             alpha,
-            semi_axes,
+            (S::c(semi_axes.0), S::c(semi_axes.1)),
             centre_velocity,
             omega,
             ground_y,
@@ -266,19 +277,20 @@ impl VolumetricLaw {
     }
 
     /// [`force`](Self::force) with the stiffness, damping and dynamic friction coefficient
-    /// `params` in place of the law's (free parameters of an identification).
+    /// `params` in place of the law's and the semi-axes in the generic scalar (free
+    /// parameters of an identification).
     #[allow(clippy::too_many_arguments)]
     pub fn force_with<S: Scalar>(
         &self,
         params: LawScalars<S>,
         centre: V2<S>,
         alpha: S,
-        semi_axes: (f64, f64),
+        semi_axes: (S, S),
         centre_velocity: V2<S>,
         omega: S,
         ground_y: S,
     ) -> Option<ContactForce<S>> {
-        let p = penetration(centre, alpha, semi_axes, ground_y)?;
+        let p = penetration_with(centre, alpha, semi_axes, ground_y)?;
         let r = [p.centroid[0] - centre[0], p.centroid[1] - centre[1]];
         // velocity of the body's material point at the centroid
         let v = [

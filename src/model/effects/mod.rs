@@ -13,10 +13,12 @@
 //! or `--effect NAME` on the command line; [`EffectSpec`] lists the known kinds and
 //! [`catalog`] the candidates `footfall diagnose` tries.
 
+mod geometry;
 mod kinds;
 mod spec;
 mod volumetric;
 
+pub use geometry::FootGeometry;
 pub use kinds::{
     CopOffset, ForcePlateTimeOffset, GroundSlope, HeelPadCompliance, PassiveJointStiffness,
     TrunkMass,
@@ -123,6 +125,12 @@ pub trait Effect: std::fmt::Debug + Send + Sync {
     fn volumetric_primitives(&self) -> &[String] {
         &[]
     }
+    /// The primitives (on both feet) whose geometry this effect's parameters replace, each
+    /// with the offset of its parameters: centre x, y (m), then a circle's radius or an
+    /// ellipse's semi-axes a, b (m) and angle (rad), a point nothing more (default: none).
+    fn geometry_primitives(&self) -> &[(String, usize)] {
+        &[]
+    }
 }
 
 /// Object-safe form of [`Effect`], implemented for every effect. The methods are
@@ -147,6 +155,7 @@ pub trait DynEffect: std::fmt::Debug + Send + Sync {
     fn shifts_force_clock(&self) -> bool;
     fn compliant_primitive(&self) -> Option<&str>;
     fn volumetric_primitives(&self) -> &[String];
+    fn geometry_primitives(&self) -> &[(String, usize)];
     fn normal_force_f64(&self, p: &[f64], depth: f64, rate: f64) -> f64;
     fn normal_force_dual(&self, p: &[Dual64], depth: Dual64, rate: Dual64) -> Dual64;
     fn normal_force_chunk(&self, p: &[AdChunk], depth: AdChunk, rate: AdChunk) -> AdChunk;
@@ -207,6 +216,9 @@ impl<E: Effect> DynEffect for E {
     }
     fn volumetric_primitives(&self) -> &[String] {
         Effect::volumetric_primitives(self)
+    }
+    fn geometry_primitives(&self) -> &[(String, usize)] {
+        Effect::geometry_primitives(self)
     }
     fn normal_force_f64(&self, p: &[f64], depth: f64, rate: f64) -> f64 {
         self.normal_force(p, depth, rate)

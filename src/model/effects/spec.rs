@@ -1,12 +1,14 @@
 //! Effects as written in a model JSON file or on the command line, and the catalog of
 //! candidate effects `footfall diagnose` tries.
 
+use super::geometry::FootGeometry;
 use super::kinds::{
     CopOffset, ForcePlateTimeOffset, GroundSlope, HeelPadCompliance, PassiveJointStiffness,
     TrunkMass,
 };
 use super::volumetric::{VolumetricContact, VolumetricStart};
 use super::DynEffect;
+use crate::model::geometry::Shape;
 use crate::model::volumetric::VolumetricLaw;
 use serde::{Deserialize, Serialize};
 
@@ -21,6 +23,8 @@ pub struct BuildContext<'a> {
     pub primitives: &'a [String],
     /// Each primitive's volumetric law (`None`: rigid), parallel to `primitives`.
     pub laws: &'a [Option<VolumetricLaw>],
+    /// Each primitive's shape, parallel to `primitives`.
+    pub shapes: &'a [Shape],
     /// The foot file, for errors.
     pub foot: &'a str,
 }
@@ -120,6 +124,14 @@ pub enum EffectSpec {
         #[serde(default)]
         free: Vec<String>,
     },
+    /// [`FootGeometry`]: the shape of every primitive of the foot, starting from the foot
+    /// file's.
+    FootGeometry {
+        /// Any of `centre` (x and y of every primitive), `size` (radii and semi-axes),
+        /// `angle` (ellipses' orientation).
+        #[serde(default)]
+        free: Vec<String>,
+    },
 }
 
 fn heel() -> String {
@@ -139,7 +151,7 @@ fn both() -> String {
 }
 
 /// The names that may appear on the command line: `--effect NAME[:key=value,…]`.
-pub const EFFECT_KINDS: [&str; 7] = [
+pub const EFFECT_KINDS: [&str; 8] = [
     "ground_slope",
     "trunk_mass",
     "passive_joint_stiffness",
@@ -147,6 +159,7 @@ pub const EFFECT_KINDS: [&str; 7] = [
     "cop_offset",
     "heel_pad_compliance",
     "volumetric_contact",
+    "foot_geometry",
 ];
 
 impl EffectSpec {
@@ -160,6 +173,7 @@ impl EffectSpec {
             EffectSpec::CopOffset { .. } => "cop_offset",
             EffectSpec::HeelPadCompliance { .. } => "heel_pad_compliance",
             EffectSpec::VolumetricContact { .. } => "volumetric_contact",
+            EffectSpec::FootGeometry { .. } => "foot_geometry",
         }
     }
 
@@ -178,6 +192,7 @@ impl EffectSpec {
             EffectSpec::CopOffset { .. } => "CoP offset".into(),
             EffectSpec::HeelPadCompliance { .. } => "heel-pad compliance".into(),
             EffectSpec::VolumetricContact { .. } => "volumetric contact law".into(),
+            EffectSpec::FootGeometry { .. } => "foot geometry".into(),
         }
     }
 
@@ -241,6 +256,12 @@ impl EffectSpec {
                 ("damping", *damping, VolumetricContact::DAMPING_BOUNDS),
                 ("mu_dynamic", *mu_dynamic, VolumetricContact::MU_BOUNDS),
             ],
+            // bounds relative to the foot file's shape (checked when built)
+            EffectSpec::FootGeometry { .. } => vec![
+                ("centre", None, (f64::NEG_INFINITY, f64::INFINITY)),
+                ("size", None, (0.0, f64::INFINITY)),
+                ("angle", None, (f64::NEG_INFINITY, f64::INFINITY)),
+            ],
         }
     }
 
@@ -252,7 +273,8 @@ impl EffectSpec {
             | EffectSpec::ForcePlateTimeOffset { free, .. }
             | EffectSpec::CopOffset { free, .. }
             | EffectSpec::HeelPadCompliance { free, .. }
-            | EffectSpec::VolumetricContact { free, .. } => free,
+            | EffectSpec::VolumetricContact { free, .. }
+            | EffectSpec::FootGeometry { free } => free,
         }
     }
 
@@ -264,7 +286,8 @@ impl EffectSpec {
             | EffectSpec::ForcePlateTimeOffset { free, .. }
             | EffectSpec::CopOffset { free, .. }
             | EffectSpec::HeelPadCompliance { free, .. }
-            | EffectSpec::VolumetricContact { free, .. } => free,
+            | EffectSpec::VolumetricContact { free, .. }
+            | EffectSpec::FootGeometry { free } => free,
         }
     }
 
@@ -507,6 +530,22 @@ impl EffectSpec {
                         self.is_free("stiffness"),
                         self.is_free("damping"),
                         self.is_free("mu_dynamic"),
+                    ],
+                ))]
+            }
+            EffectSpec::FootGeometry { .. } => {
+                let shapes: Vec<(String, Shape)> = ctx
+                    .primitives
+                    .iter()
+                    .cloned()
+                    .zip(ctx.shapes.iter().cloned())
+                    .collect();
+                vec![Box::new(FootGeometry::new(
+                    &shapes,
+                    [
+                        self.is_free("centre"),
+                        self.is_free("size"),
+                        self.is_free("angle"),
                     ],
                 ))]
             }

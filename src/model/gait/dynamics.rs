@@ -184,7 +184,7 @@ impl GaitModel {
                 let (pt, bias) = match geo.iter().find(|g| g.0 == row.contact) {
                     Some(&(_, pt, bias)) => (pt, bias),
                     None => {
-                        let (pt, d, d1) = self.contact_geometry(&k, contact, n);
+                        let (pt, d, d1) = self.contact_geometry(&k, row.contact, n, &p);
                         let (_, acc) = self.tree.point_motion(&k, contact.body, pt);
                         let w = k.omega[contact.body];
                         let bias = add(acc, scale(add(perp(d1), d), w * w));
@@ -327,7 +327,7 @@ impl GaitModel {
         cholesky(&mut m, nq, 1e-14).map_err(|e| DynamicsError::MassMatrix { pivot: e.pivot })?;
         // a compliant normal contact takes no impulse: its pad is compressed from here on
         let (rigid, idx) = self.rigid_rows(set_after);
-        let g = self.constraint_jacobian(&k, &rigid, n);
+        let g = self.constraint_jacobian(&k, &rigid, n, &p);
         let nc = rigid.rows.len();
         let mut qd_plus = qd_minus.to_vec();
         let mut impulses = vec![S::c(0.0); set_after.rows.len()];

@@ -4,6 +4,7 @@
 
 use super::GaitModel;
 use crate::model::effects::VolumetricContact;
+use crate::model::geometry::ShapeScalars;
 use crate::model::multibody::{dot, Kinematics, V2};
 use crate::model::volumetric::{ContactForce, LawScalars};
 use crate::model::Scalar;
@@ -101,21 +102,17 @@ impl GaitModel {
                 }
                 None => law.scalars(),
             };
-            let (centre_local, angle, semi_axes) = match c.shape {
-                crate::model::geometry::Shape::Circle { centre, radius } => {
-                    (centre, 0.0, (radius, radius))
-                }
-                crate::model::geometry::Shape::Ellipse {
+            let (centre_local, angle, semi_axes) = match self.shape_of(ci, p) {
+                ShapeScalars::Circle { centre, radius } => (centre, S::c(0.0), (radius, radius)),
+                ShapeScalars::Ellipse {
                     centre,
                     angle,
                     semi_axes,
                 } => (centre, angle, (semi_axes[0], semi_axes[1])),
                 // refused when the foot file is read
-                crate::model::geometry::Shape::Point { .. } => continue,
+                ShapeScalars::Point { .. } => continue,
             };
-            let centre = self
-                .tree
-                .point(k, c.body, [S::c(centre_local[0]), S::c(centre_local[1])]);
+            let centre = self.tree.point(k, c.body, centre_local);
             let (velocity, _) = self.tree.point_motion(k, c.body, centre);
             let alpha = k.angle[c.body] + angle - ground_angle;
             let Some(ContactForce {
