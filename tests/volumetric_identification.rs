@@ -182,13 +182,15 @@ fn file_law(path: &Path) -> (f64, f64, f64) {
 /// Done-means 2 of issue 26, the volumetric half: data from a volumetric foot whose law is
 /// not the shipped file's (1.5 × its stiffness, 0.6 × its damping), tracked with the
 /// shipped foot and `--effect volumetric_contact`, gives the hidden stiffness and damping
-/// back within 20 %. It starts from the fit with the law held at the file's values (the
-/// run a user has before freeing the law; tests/data/hidden/volumetric_contact/nominal).
+/// back within 20 %. It starts from the truth's motion (`truth_solution.json`) with the
+/// law at the file's values, a point the wrong law makes infeasible (the shooting
+/// intervals no longer join): the solver has to move the law to the hidden one to make the
+/// walk continuous again and fit the forces.
 #[test]
 fn freeing_the_law_recovers_the_hidden_stiffness_and_damping() {
     use footfall::sqp::{HessianMode, SqpStatus};
     use footfall::workflows::track::{tracking_sqp_settings, TrackRequest, TrackingProblem};
-    use footfall::workflows::Quiet;
+    use footfall::workflows::Printed;
     let dir = root().join("tests/data/hidden/volumetric_contact");
     let truth = file_law(&dir.join("hidden_foot.json"));
     let shipped = file_law(&root().join(FOOT));
@@ -204,14 +206,14 @@ fn freeing_the_law_recovers_the_hidden_stiffness_and_damping() {
     )
     .unwrap();
     prob.refine = false;
-    let nominal: footfall::problems::evaluation::GaitSolution =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("nominal/solution.json")).unwrap())
+    let start: footfall::problems::evaluation::GaitSolution =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("truth_solution.json")).unwrap())
             .unwrap();
-    prob.setup.start_from(&nominal).unwrap();
+    prob.setup.start_from(&start).unwrap();
     assert_eq!(prob.model.theta0(), vec![shipped.0, shipped.1, shipped.2]);
     let t = std::time::Instant::now();
     let settings = tracking_sqp_settings(1e-4, 40, None, HessianMode::Exact, 1e-3);
-    let (res, sol) = prob.solve(&settings, &Quiet).unwrap();
+    let (res, sol) = prob.solve(&settings, &Printed { quiet: false }).unwrap();
     let j0 = res.history[0].objective;
     eprintln!(
         "{} iterations, {:.0} s, J {j0:.6} → {:.6}, KKT {:.1e}, {}; stiffness {:.4} N/mm² (truth {:.4}), damping {:.4} s/m (truth {:.4}), μ_d {:.4} (truth {:.4})",
@@ -240,9 +242,9 @@ fn freeing_the_law_recovers_the_hidden_stiffness_and_damping() {
     }
 }
 
-/// `diagnose` on the fit with the shipped law (the synthetic trial's `nominal` start, one
-/// more SQP iteration to make a run folder of it) ranks the volumetric contact law first
-/// among other model and measurement candidates, and significant.
+/// `diagnose` on a run with the shipped law (one SQP iteration from the truth's motion,
+/// to make a run folder) ranks the volumetric contact law first among other model and
+/// measurement candidates, and significant.
 #[test]
 fn diagnose_ranks_the_contact_law_first_on_the_fit_with_the_wrong_law() {
     use footfall::runfolder::RunFolder;
@@ -250,12 +252,12 @@ fn diagnose_ranks_the_contact_law_first_on_the_fit_with_the_wrong_law() {
     use footfall::workflows::{self, track::tracking_sqp_settings, Quiet};
     let dir = root().join("tests/data/hidden/volumetric_contact");
     let tmp = tempfile::tempdir().unwrap();
-    let run = tmp.path().join("nominal");
+    let run = tmp.path().join("shipped_law");
     let mut req = workflows::track::TrackRequest::new(root().join(FOOT).to_str().unwrap());
     req.run.model = root().join(MODEL);
     req.run.phases = root().join(PHASES);
     req.run.data = Some(dir.join("synthetic.csv"));
-    req.init = Some(dir.join("nominal/solution.json"));
+    req.init = Some(dir.join("truth_solution.json"));
     req.check_points = false;
     req.sqp = tracking_sqp_settings(1e-4, 1, None, HessianMode::Exact, 1e-3);
     workflows::track::track(&req, RunFolder::create(&run, false).unwrap(), &Quiet).unwrap();
@@ -311,10 +313,8 @@ fn hidden_foot() -> String {
 /// 1. the truth: the bundled trial tracked with the hidden foot ([`hidden_foot`], kept as
 ///    `hidden_foot.json`), 40 SQP iterations — a truth need only be a walk of that
 ///    model (feasible: continuous and periodic), not the optimum of the bundled trial;
-/// 2. `synth` from it: 100 Hz, the default noise (0.5°, 2 mm, 5 N, 5 mm), seed 1;
-/// 3. the start of the recovery test, `nominal/solution.json`: the synthetic trial tracked
-///    with the shipped foot (the law not free), 40 iterations — the fit a user has before
-///    freeing the law.
+///    Its solution is kept as `truth_solution.json`;
+/// 2. `synth` from it: 100 Hz, the default noise (0.5°, 2 mm, 5 N, 5 mm), seed 1.
 #[test]
 #[ignore = "regenerates test data (minutes): cargo test --test volumetric_identification -- --ignored"]
 fn make_volumetric_contact_trial() {
@@ -323,7 +323,7 @@ fn make_volumetric_contact_trial() {
     use footfall::workflows::{self, track::tracking_sqp_settings, Printed};
     std::env::set_current_dir(root()).unwrap();
     let dest = root().join("tests/data/hidden/volumetric_contact");
-    std::fs::create_dir_all(dest.join("nominal")).unwrap();
+    std::fs::create_dir_all(&dest).unwrap();
     let foot = dest.join("hidden_foot.json");
     std::fs::write(&foot, hidden_foot()).unwrap();
     let tmp = tempfile::tempdir().unwrap();
@@ -360,23 +360,9 @@ fn make_volumetric_contact_trial() {
     for f in ["synthetic.csv", "synthetic_meta.json", "truth.json"] {
         std::fs::copy(out.join(f), dest.join(f)).unwrap();
     }
-    let nominal = tmp.path().join("nominal");
-    let mut req = workflows::track::TrackRequest::new(FOOT);
-    req.run.phases = PathBuf::from(PHASES);
-    req.run.data = Some(dest.join("synthetic.csv"));
-    req.check_points = false;
-    req.sqp = tracking_sqp_settings(1e-4, 40, None, HessianMode::Exact, 1e-3);
-    let t = std::time::Instant::now();
-    workflows::track::track(&req, RunFolder::create(&nominal, false).unwrap(), &progress).unwrap();
-    eprintln!("nominal: {:.0} s", t.elapsed().as_secs_f64());
     std::fs::copy(
-        nominal.join("solution.json"),
-        dest.join("nominal/solution.json"),
+        truth.join("solution.json"),
+        dest.join("truth_solution.json"),
     )
     .unwrap();
-    std::fs::copy(
-        nominal.join("summary.json"),
-        dest.join("nominal/summary.json"),
-    )
-    .ok();
 }
