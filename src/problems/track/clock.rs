@@ -54,9 +54,13 @@ fn plate_of(t: f64, plate: &[Vec<f64>; 2]) -> Option<usize> {
     (0..2).find(|&s| plate[s].iter().any(|&e| e == t))
 }
 
+/// Why one-sided and sample targets keep the events of a plate whose clock is offset.
+pub(super) const FIXED_EVENTS: &str = "warning: a force-plate clock offset in the model moves the contact events taken from that plate's force threshold only with interpolated node targets (the default); with one-sided or sample targets, cut at fixed phase boundaries, the events stay where the measured forces put them";
+
 /// The coefficients of every instant of the tracked window `(t0, t1)` of `seq` (its
 /// durations already fixed to `events`) in the plates' clock offsets; `kinematics` are
-/// the coordinate splines.
+/// the coordinate splines; with the warning [`FIXED_EVENTS`] when the model's clock
+/// effects would move them but the targets cannot follow.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn plate_clock(
     model: &GaitModel,
@@ -67,7 +71,7 @@ pub(super) fn plate_clock(
     (t0, t1): (f64, f64),
     kinematics: Vec<CubicSpline>,
     interpolated: bool,
-) -> PlateClock {
+) -> (PlateClock, Option<&'static str>) {
     // the events each plate's force threshold gives (none when the data bring their own)
     let plate: [Vec<f64>; 2] = match (&data.events, detect_events(data, DEFAULT_EVENT_FRACTION)) {
         (None, Ok(d)) => [0, 1].map(|s| {
@@ -150,13 +154,16 @@ pub(super) fn plate_clock(
             at[s] += durations[j][s];
         }
     }
-    PlateClock {
+    let clock = PlateClock {
         start,
         durations,
         nodes,
         kinematics: Arc::new(kinematics),
         interpolated,
-    }
+    };
+    let warning =
+        (model.shifts_force_clock() && clock.moves() && !interpolated).then_some(FIXED_EVENTS);
+    (clock, warning)
 }
 
 /// The constraint row `d − c · δ(θ)` of a phase whose duration `d` moves with the plates'
@@ -185,9 +192,12 @@ impl GenericFunction for DurationClock<'_> {
 
 impl super::TrackingSetup {
     /// Whether the model's clock offsets move this window's instants (a plate clock
-    /// effect, and events taken from that plate's force threshold).
+    /// effect, events taken from that plate's force threshold, and interpolated node
+    /// targets: one-sided and sample targets are cut at fixed phase boundaries, and with
+    /// them the events stay where the measured forces put them, as a warning in
+    /// [`notes`](Self::notes) says).
     pub fn clock_moves(&self, model: &GaitModel) -> bool {
-        model.shifts_force_clock() && self.clock.moves()
+        model.shifts_force_clock() && self.clock.moves() && self.clock.interpolated
     }
 
     /// The residual of node `k` of continuous phase `j` (`target` its target): as
@@ -225,8 +235,7 @@ impl super::TrackingSetup {
 
     /// Make the durations that move with the plates' clocks free in `ocp`, each held by
     /// an equality row at its measured value plus its coefficients times the offsets
-    /// ([`DurationClock`]), started where the model's initial offsets put them. Refused
-    /// for targets that cannot follow a moving node (one-sided or sample targets).
+    /// ([`DurationClock`]), started where the model's initial offsets put them.
     pub(super) fn free_moving_durations<'c>(
         &self,
         model: &'c GaitModel,
@@ -234,9 +243,6 @@ impl super::TrackingSetup {
     ) -> Result<(), String> {
         if !self.clock_moves(model) {
             return Ok(());
-        }
-        if !self.clock.interpolated {
-            return Err("a force plate's clock offset moves the contact events taken from that plate's force threshold, and one-sided or sample targets are cut at fixed phase boundaries; track with interpolated targets (the default), or give the events with the data (the meta file's events_s)".into());
         }
         let d0 = model.measurement_adjust(&model.theta0()).force_time_offset;
         for (j, &c) in self.clock.durations.iter().enumerate() {

@@ -692,7 +692,7 @@ impl TrackingSetup {
             Vec::new()
         };
         let interpolated = sides == TargetSides::Interpolated;
-        let clock = clock::plate_clock(
+        let (clock, warning) = clock::plate_clock(
             model,
             &seq,
             sets,
@@ -702,6 +702,7 @@ impl TrackingSetup {
             splines,
             interpolated,
         );
+        notes.extend(warning.map(String::from));
         Ok(Self {
             seq,
             window: (t0, t1),
