@@ -7,10 +7,11 @@
 //! and the model then shifts along the walkway instead), so its trial and the untouched
 //! reference it is compared with are both tracked with `--track-pelvis-position`.
 //!
-//! A clock offset is judged relative to the untouched trial: re-fitted with the same
-//! effect, the untouched measurement itself reads a few milliseconds (its force-threshold
-//! events against a rigid-contact model's contact changes), and the hidden offset is what
-//! the edit added to that.
+//! A clock or CoP offset is judged relative to the untouched trial: re-fitted with the
+//! same effect, the untouched measurement itself reads a few milliseconds (its
+//! force-threshold events against a rigid-contact model's contact changes) or
+//! millimetres (the ellipse's CoP against the real foot's), and the hidden offset is what
+//! the edit added to that. The gain and the body mass are judged as identified.
 //!
 //! Each trial's track starts from the untouched trial's solution (same problem, fewer
 //! iterations than from the data); its re-fit from the trial's own solution.
@@ -238,7 +239,7 @@ fn right_cop_25_mm_forward_with_the_pelvis_position_tracked() {
         "cop_offset.right.offset",
         0.025,
         true,
-        false,
+        true,
     );
 }
 
