@@ -19,7 +19,9 @@ pub use volumetric::VolumetricReport;
 
 use super::actuators::{Joint as MtgJoint, JointActuatorSet};
 use super::anthropometry::{self, build_bodies, estimated_stature, segments_from_de_leva};
-use super::effects::{DynEffect, MeasurementAdjust, ModelAdjust, ModelScalar, ParamSpec};
+use super::effects::{
+    ActuatorAdjust, DynEffect, MeasurementAdjust, ModelAdjust, ModelScalar, ParamSpec,
+};
 use super::error::ModelError;
 use super::geometry::{Shape, ShapeScalars};
 use super::multibody::{Inertia, Tree, V2};
@@ -272,6 +274,18 @@ impl GaitModel {
                 e.build(&ctx)
                     .map_err(|r| ModelError::invalid(model_path, format!("effects[{i}]"), r))?,
             );
+        }
+        if !matches!(actuation, Actuation::Mtg(_)) {
+            if let Some(i) = effects.iter().position(|e| e.is_actuator()) {
+                return Err(ModelError::invalid(
+                    model_path,
+                    format!("effects[{i}]"),
+                    format!(
+                        "'{}' changes the muscle-torque generators, and this model is driven by joint torques; use a model with \"actuators\": {{\"type\": \"muscle_torque_generators\", …}}",
+                        effects[i].kind()
+                    ),
+                ));
+            }
         }
         let mut params = Vec::new();
         let mut effect_offsets = Vec::new();
@@ -547,14 +561,33 @@ impl GaitModel {
     /// offsets without any).
     pub fn measurement_adjust<S: ModelScalar>(&self, theta: &[S]) -> MeasurementAdjust<S> {
         let p = self.full_params(theta);
-        let mut m = MeasurementAdjust {
-            force_time_offset: S::c(0.0),
-            cop_offset: S::c(0.0),
-        };
+        let mut m = MeasurementAdjust::identity();
         for e in 0..self.effects.len() {
             S::measurement(self.effects[e].as_ref(), self.effect_params(&p, e), &mut m);
         }
         m
+    }
+
+    /// The factors the actuator effects put on the muscle-torque generators' strength,
+    /// damping and activation time constants (all one without any), from the full
+    /// parameter vector `p`.
+    pub(crate) fn actuator_adjust<S: ModelScalar>(&self, p: &[S]) -> ActuatorAdjust<S> {
+        let mut a = ActuatorAdjust::identity();
+        for e in 0..self.effects.len() {
+            S::actuators(self.effects[e].as_ref(), self.effect_params(p, e), &mut a);
+        }
+        a
+    }
+
+    /// [`actuator_adjust`](Self::actuator_adjust) at free parameters `theta`.
+    pub fn actuator_factors<S: ModelScalar>(&self, theta: &[S]) -> ActuatorAdjust<S> {
+        self.actuator_adjust(&self.full_params(theta))
+    }
+
+    /// Whether a free parameter changes the activation time constants (the excitations
+    /// then enter ȧ with a parameter-dependent coefficient).
+    pub fn scales_activation_time(&self) -> bool {
+        self.effects.iter().any(|e| e.scales_activation_time())
     }
 
     /// Whether any effect changes how the model is compared with the data.

@@ -2,6 +2,8 @@
 //! candidate effects `footfall diagnose` tries.
 
 use super::geometry::FootGeometry;
+use super::actuator_properties::{ActivationTimeConstants, MtgDampingScale, MtgStrengthScale};
+use super::instruments::{BodyMassError, ForcePlateGain};
 use super::kinds::{
     CopOffset, ForcePlateTimeOffset, GroundSlope, HeelPadCompliance, PassiveJointStiffness,
     TrunkMass,
@@ -74,21 +76,75 @@ pub enum EffectSpec {
         #[serde(default)]
         free: Vec<String>,
     },
-    /// [`ForcePlateTimeOffset`].
+    /// [`ForcePlateTimeOffset`]: one foot's plate or both.
     ForcePlateTimeOffset {
-        /// Clock offset of the force plates (s).
+        /// `both` (default: one shared offset), `right` or `left` (that foot's plate).
+        #[serde(default = "both")]
+        side: String,
+        /// Clock offset of the force plate(s) (s; positive: the plate reports late).
         #[serde(default)]
         offset: f64,
         /// `offset` to identify it.
         #[serde(default)]
         free: Vec<String>,
     },
-    /// [`CopOffset`].
+    /// [`CopOffset`]: one foot's plate or both.
     CopOffset {
-        /// Offset of the measured centre of pressure (m).
+        /// `both` (default), `right` or `left`.
+        #[serde(default = "both")]
+        side: String,
+        /// Offset of the measured centre of pressure (m; reported minus true).
         #[serde(default)]
         offset: f64,
         /// `offset` to identify it.
+        #[serde(default)]
+        free: Vec<String>,
+    },
+    /// [`ForcePlateGain`]: one foot's plate or both.
+    ForcePlateGain {
+        /// `both` (default), `right` or `left`.
+        #[serde(default = "both")]
+        side: String,
+        /// Reported over true force, minus one (0.06: the plate reads 6 % high).
+        #[serde(default)]
+        error: f64,
+        /// `error` to identify it.
+        #[serde(default)]
+        free: Vec<String>,
+    },
+    /// [`BodyMassError`].
+    BodyMassError {
+        /// The subject's mass over the model's, minus one.
+        #[serde(default)]
+        relative: f64,
+        /// `relative` to identify it.
+        #[serde(default)]
+        free: Vec<String>,
+    },
+    /// [`MtgDampingScale`]: η × (1 + change).
+    MtgDamping {
+        /// Relative change of the damping factor η.
+        #[serde(default)]
+        change: f64,
+        /// `change` to identify it.
+        #[serde(default)]
+        free: Vec<String>,
+    },
+    /// [`MtgStrengthScale`]: τ₀ × (1 + change).
+    MtgStrength {
+        /// Relative change of every MTG's maximum isometric torque.
+        #[serde(default)]
+        change: f64,
+        /// `change` to identify it.
+        #[serde(default)]
+        free: Vec<String>,
+    },
+    /// [`ActivationTimeConstants`]: τ_A, τ_D × (1 + change).
+    ActivationTimeConstants {
+        /// Relative change of the activation and deactivation time constants.
+        #[serde(default)]
+        change: f64,
+        /// `change` to identify it.
         #[serde(default)]
         free: Vec<String>,
     },
@@ -151,16 +207,39 @@ fn both() -> String {
 }
 
 /// The names that may appear on the command line: `--effect NAME[:key=value,…]`.
-pub const EFFECT_KINDS: [&str; 8] = [
+pub const EFFECT_KINDS: [&str; 13] = [
     "ground_slope",
     "trunk_mass",
     "passive_joint_stiffness",
     "force_plate_time_offset",
     "cop_offset",
     "heel_pad_compliance",
+    "force_plate_gain",
+    "body_mass_error",
+    "mtg_damping",
+    "mtg_strength",
+    "activation_time_constants",
     "volumetric_contact",
     "foot_geometry",
 ];
+
+/// A measurement effect's foot: `None` for `both`, `Some(0)` right, `Some(1)` left.
+fn side_index(side: &str) -> Option<usize> {
+    match side {
+        "right" => Some(0),
+        "left" => Some(1),
+        _ => None,
+    }
+}
+
+/// ` (right)`, ` (left)` or nothing for `both`.
+fn side_suffix(side: &str) -> String {
+    if side == "both" {
+        String::new()
+    } else {
+        format!(" ({side})")
+    }
+}
 
 impl EffectSpec {
     /// Kind name as in JSON.
@@ -172,6 +251,11 @@ impl EffectSpec {
             EffectSpec::ForcePlateTimeOffset { .. } => "force_plate_time_offset",
             EffectSpec::CopOffset { .. } => "cop_offset",
             EffectSpec::HeelPadCompliance { .. } => "heel_pad_compliance",
+            EffectSpec::ForcePlateGain { .. } => "force_plate_gain",
+            EffectSpec::BodyMassError { .. } => "body_mass_error",
+            EffectSpec::MtgDamping { .. } => "mtg_damping",
+            EffectSpec::MtgStrength { .. } => "mtg_strength",
+            EffectSpec::ActivationTimeConstants { .. } => "activation_time_constants",
             EffectSpec::VolumetricContact { .. } => "volumetric_contact",
             EffectSpec::FootGeometry { .. } => "foot_geometry",
         }
@@ -188,9 +272,20 @@ impl EffectSpec {
             }
             EffectSpec::GroundSlope { .. } => "ground slope".into(),
             EffectSpec::TrunkMass { .. } => "trunk mass and COM offset".into(),
-            EffectSpec::ForcePlateTimeOffset { .. } => "force-plate time offset".into(),
-            EffectSpec::CopOffset { .. } => "CoP offset".into(),
+            EffectSpec::ForcePlateTimeOffset { side, .. } => {
+                format!("force-plate time offset{}", side_suffix(side))
+            }
+            EffectSpec::CopOffset { side, .. } => format!("CoP offset{}", side_suffix(side)),
             EffectSpec::HeelPadCompliance { .. } => "heel-pad compliance".into(),
+            EffectSpec::ForcePlateGain { side, .. } => {
+                format!("force-plate gain{}", side_suffix(side))
+            }
+            EffectSpec::BodyMassError { .. } => "body-mass error".into(),
+            EffectSpec::MtgDamping { .. } => "MTG damping (η)".into(),
+            EffectSpec::MtgStrength { .. } => "MTG strength".into(),
+            EffectSpec::ActivationTimeConstants { .. } => {
+                "activation/deactivation time constants".into()
+            }
             EffectSpec::VolumetricContact { .. } => "volumetric contact law".into(),
             EffectSpec::FootGeometry { .. } => "foot geometry".into(),
         }
@@ -234,6 +329,21 @@ impl EffectSpec {
             EffectSpec::CopOffset { offset, .. } => {
                 vec![("offset", Some(*offset), CopOffset::BOUNDS)]
             }
+            EffectSpec::ForcePlateGain { error, .. } => {
+                vec![("error", Some(*error), ForcePlateGain::BOUNDS)]
+            }
+            EffectSpec::BodyMassError { relative, .. } => {
+                vec![("relative", Some(*relative), BodyMassError::BOUNDS)]
+            }
+            EffectSpec::MtgDamping { change, .. } => {
+                vec![("change", Some(*change), MtgDampingScale::BOUNDS)]
+            }
+            EffectSpec::MtgStrength { change, .. } => {
+                vec![("change", Some(*change), MtgStrengthScale::BOUNDS)]
+            }
+            EffectSpec::ActivationTimeConstants { change, .. } => {
+                vec![("change", Some(*change), ActivationTimeConstants::BOUNDS)]
+            }
             EffectSpec::HeelPadCompliance {
                 stiffness, damping, ..
             } => {
@@ -273,6 +383,11 @@ impl EffectSpec {
             | EffectSpec::ForcePlateTimeOffset { free, .. }
             | EffectSpec::CopOffset { free, .. }
             | EffectSpec::HeelPadCompliance { free, .. }
+            | EffectSpec::ForcePlateGain { free, .. }
+            | EffectSpec::BodyMassError { free, .. }
+            | EffectSpec::MtgDamping { free, .. }
+            | EffectSpec::MtgStrength { free, .. }
+            | EffectSpec::ActivationTimeConstants { free, .. }
             | EffectSpec::VolumetricContact { free, .. }
             | EffectSpec::FootGeometry { free } => free,
         }
@@ -286,6 +401,11 @@ impl EffectSpec {
             | EffectSpec::ForcePlateTimeOffset { free, .. }
             | EffectSpec::CopOffset { free, .. }
             | EffectSpec::HeelPadCompliance { free, .. }
+            | EffectSpec::ForcePlateGain { free, .. }
+            | EffectSpec::BodyMassError { free, .. }
+            | EffectSpec::MtgDamping { free, .. }
+            | EffectSpec::MtgStrength { free, .. }
+            | EffectSpec::ActivationTimeConstants { free, .. }
             | EffectSpec::VolumetricContact { free, .. }
             | EffectSpec::FootGeometry { free } => free,
         }
@@ -368,6 +488,17 @@ impl EffectSpec {
             }
             if !["both", "right", "left"].contains(&side.as_str()) {
                 return Err(("side", format!("'{side}' is not one of both, right, left")));
+            }
+        }
+        if let EffectSpec::ForcePlateTimeOffset { side, .. }
+        | EffectSpec::CopOffset { side, .. }
+        | EffectSpec::ForcePlateGain { side, .. } = self
+        {
+            if !["both", "right", "left"].contains(&side.as_str()) {
+                return Err((
+                    "side",
+                    format!("'{side}' is not one of both, right, left (the foot whose force plate it is)"),
+                ));
             }
         }
         let params = self.parameter_values();
@@ -453,14 +584,50 @@ impl EffectSpec {
                     self.is_free("com_offset"),
                 ))]
             }
-            EffectSpec::ForcePlateTimeOffset { offset, .. } => {
-                vec![Box::new(ForcePlateTimeOffset::new(
+            EffectSpec::ForcePlateTimeOffset { side, offset, .. } => {
+                vec![Box::new(ForcePlateTimeOffset::on(
+                    side_index(side),
                     *offset,
                     self.is_free("offset"),
                 ))]
             }
-            EffectSpec::CopOffset { offset, .. } => {
-                vec![Box::new(CopOffset::new(*offset, self.is_free("offset")))]
+            EffectSpec::CopOffset { side, offset, .. } => {
+                vec![Box::new(CopOffset::on(
+                    side_index(side),
+                    *offset,
+                    self.is_free("offset"),
+                ))]
+            }
+            EffectSpec::ForcePlateGain { side, error, .. } => {
+                vec![Box::new(ForcePlateGain::on(
+                    side_index(side),
+                    *error,
+                    self.is_free("error"),
+                ))]
+            }
+            EffectSpec::BodyMassError { relative, .. } => {
+                vec![Box::new(BodyMassError::new(
+                    *relative,
+                    self.is_free("relative"),
+                ))]
+            }
+            EffectSpec::MtgDamping { change, .. } => {
+                vec![Box::new(MtgDampingScale::new(
+                    *change,
+                    self.is_free("change"),
+                ))]
+            }
+            EffectSpec::MtgStrength { change, .. } => {
+                vec![Box::new(MtgStrengthScale::new(
+                    *change,
+                    self.is_free("change"),
+                ))]
+            }
+            EffectSpec::ActivationTimeConstants { change, .. } => {
+                vec![Box::new(ActivationTimeConstants::new(
+                    *change,
+                    self.is_free("change"),
+                ))]
             }
             EffectSpec::HeelPadCompliance {
                 primitive,
@@ -564,6 +731,14 @@ impl EffectSpec {
                     joint: b, side: sb, ..
                 },
             ) => a == b && (sa == sb || sa == "both" || sb == "both"),
+            (
+                EffectSpec::ForcePlateTimeOffset { side: sa, .. }
+                | EffectSpec::CopOffset { side: sa, .. }
+                | EffectSpec::ForcePlateGain { side: sa, .. },
+                EffectSpec::ForcePlateTimeOffset { side: sb, .. }
+                | EffectSpec::CopOffset { side: sb, .. }
+                | EffectSpec::ForcePlateGain { side: sb, .. },
+            ) => self.kind() == other.kind() && (sa == sb || sa == "both" || sb == "both"),
             _ => self.kind() == other.kind(),
         }
     }
@@ -571,8 +746,11 @@ impl EffectSpec {
 
 /// The candidate effects `footfall diagnose` tries, each at its null value (no effect)
 /// with its identifiable parameters free: ground slope, trunk mass and COM offset, passive
-/// stiffness of hip, knee and ankle (both legs, rest angle 0), force-plate time offset and
-/// CoP offset.
+/// stiffness of hip, knee and ankle (both legs, rest angle 0); the instruments, each
+/// force plate its own (clock offset and CoP offset of both plates together and of each
+/// foot's plate, gain of each foot's plate) and the body mass; and the muscle-torque
+/// generators' damping, strength and activation time constants (a torque-driven model
+/// refuses these, and `diagnose` lists them as not applicable).
 pub fn catalog() -> Vec<EffectSpec> {
     let mut out = vec![
         EffectSpec::GroundSlope {
@@ -594,12 +772,39 @@ pub fn catalog() -> Vec<EffectSpec> {
             free: vec![],
         });
     }
-    out.push(EffectSpec::ForcePlateTimeOffset {
-        offset: 0.0,
+    for side in ["both", "right", "left"] {
+        out.push(EffectSpec::ForcePlateTimeOffset {
+            side: side.into(),
+            offset: 0.0,
+            free: vec![],
+        });
+        out.push(EffectSpec::CopOffset {
+            side: side.into(),
+            offset: 0.0,
+            free: vec![],
+        });
+    }
+    for side in ["right", "left"] {
+        out.push(EffectSpec::ForcePlateGain {
+            side: side.into(),
+            error: 0.0,
+            free: vec![],
+        });
+    }
+    out.push(EffectSpec::BodyMassError {
+        relative: 0.0,
         free: vec![],
     });
-    out.push(EffectSpec::CopOffset {
-        offset: 0.0,
+    out.push(EffectSpec::MtgDamping {
+        change: 0.0,
+        free: vec![],
+    });
+    out.push(EffectSpec::MtgStrength {
+        change: 0.0,
+        free: vec![],
+    });
+    out.push(EffectSpec::ActivationTimeConstants {
+        change: 0.0,
         free: vec![],
     });
     for e in &mut out {

@@ -46,8 +46,17 @@ impl GaitModel {
         let mut act = vec![0.0; nq];
         match &self.actuation {
             Actuation::Mtg(set) => {
+                let f = self.actuator_adjust(&p);
                 for (k, &(c, joint)) in LEG_JOINTS.iter().enumerate() {
-                    act[c] += set.joint_torque(joint, a[2 * k], a[2 * k + 1], q[c], qd[c]);
+                    act[c] += set.joint_torque_scaled(
+                        joint,
+                        a[2 * k],
+                        a[2 * k + 1],
+                        q[c],
+                        qd[c],
+                        f.strength,
+                        f.damping,
+                    );
                 }
             }
             Actuation::Torques {
@@ -96,8 +105,17 @@ impl GaitModel {
         let mut tau = vec![S::c(0.0); self.nq()];
         match &self.actuation {
             Actuation::Mtg(set) => {
+                let f = self.actuator_adjust(p);
                 for (k, &(c, joint)) in LEG_JOINTS.iter().enumerate() {
-                    tau[c] += set.joint_torque(joint, a[2 * k], a[2 * k + 1], q[c], qd[c]);
+                    tau[c] += set.joint_torque_scaled(
+                        joint,
+                        a[2 * k],
+                        a[2 * k + 1],
+                        q[c],
+                        qd[c],
+                        f.strength,
+                        f.damping,
+                    );
                 }
             }
             Actuation::Torques {
@@ -299,8 +317,9 @@ impl GaitModel {
         xdot[..nq].copy_from_slice(qd);
         xdot[nq..2 * nq].copy_from_slice(&qdd);
         if let Actuation::Mtg(set) = &self.actuation {
+            let time = self.actuator_adjust(&p).time;
             for i in 0..self.na() {
-                xdot[2 * nq + i] = set.activation.rate(u[i], a[i]);
+                xdot[2 * nq + i] = set.activation.rate(u[i], a[i]) / time;
             }
         }
         Ok(())
