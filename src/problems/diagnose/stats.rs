@@ -32,7 +32,7 @@ pub struct Identifiability {
     pub parameters: Vec<String>,
     /// Reduced Hessian inverse `H⁻¹` of the cost w.r.t. the parameters (the other
     /// variables optimised out under the linearised constraints), row-major `k × k`,
-    /// in (parameter unit)² per cost unit.
+    /// in (parameter unit)² per cost unit (empty when it could not be computed).
     pub reduced_inverse_hessian: Vec<Vec<f64>>,
     /// Standard deviation of each parameter, `√(2 φ s² (H⁻¹)ⱼⱼ)` with `s² = J/N` and `φ`
     /// the variance inflation of correlated residuals (parameter units; `None` where the
@@ -51,6 +51,23 @@ pub struct Identifiability {
     pub reason: Option<String>,
 }
 
+impl Identifiability {
+    /// A candidate whose information could not be computed or is nil (`why`): not
+    /// testable.
+    pub fn unknown(parameters: Vec<String>, span: Vec<f64>, why: String) -> Self {
+        let k = parameters.len();
+        Identifiability {
+            parameters,
+            reduced_inverse_hessian: Vec::new(),
+            sd: vec![None; k],
+            span,
+            min_correlation_eigenvalue: 0.0,
+            testable: false,
+            reason: Some(why),
+        }
+    }
+}
+
 /// The reduced Hessian inverse of the cost of `tr` at `w` w.r.t. the variables `cols`,
 /// from the Gauss–Newton QP's response to gradient shifts (`(H⁻¹)_{·j}` is minus the
 /// step's change per unit shift of `∂f/∂w_j`, while the active set stays). The QP is
@@ -67,24 +84,47 @@ pub fn reduced_inverse_hessian(
     let base = m.step(None)?;
     let k = cols.len();
     let mut c = vec![vec![0.0; k]; k];
+    let objective = m.objective().abs().max(1e-12);
     for (j, &col) in cols.iter().enumerate() {
         let span = (w_ub[col] - w_lb[col]).min(1e6);
         let target = 1e-3 * span;
-        let mut eps = 1.0;
+        // first guess: a curvature that moves the cost by J over the span
+        let mut eps = target * objective / (span * span);
         let mut column = vec![0.0; k];
-        for _ in 0..6 {
+        let mut probed = false;
+        let mut failures = 0;
+        let mut tries = 0;
+        while tries < 8 {
+            tries += 1;
             let mut shift = vec![0.0; tr.n()];
             shift[col] = eps;
-            let s = m.step(Some(&shift))?;
+            let s = match m.step(Some(&shift)) {
+                Ok(s) => s,
+                // a QP the shift made ill-posed: probe more gently
+                Err(e) => {
+                    failures += 1;
+                    if failures > 3 {
+                        return Err(format!("probing the information of column {col}: {e}"));
+                    }
+                    eps *= 1e-2;
+                    continue;
+                }
+            };
             for (i, &ci) in cols.iter().enumerate() {
                 column[i] = (base.d[ci] - s.d[ci]) / eps;
             }
+            probed = true;
             let h = column[j];
             let ratio = (h * eps).abs() / target;
             if h <= 0.0 || (0.1..=10.0).contains(&ratio) {
                 break;
             }
             eps = target / h;
+        }
+        if !probed {
+            return Err(format!(
+                "probing the information of column {col}: no QP solved"
+            ));
         }
         for i in 0..k {
             c[i][j] = column[i];
@@ -175,13 +215,28 @@ pub fn candidate_identifiability(
     let cols: Vec<usize> = (range.end - k..range.end).collect();
     let (w_lb, w_ub, _, _) = crate::sqp::Nlp::bounds(tr);
     let span = cols.iter().map(|&c| w_ub[c] - w_lb[c]).collect();
-    let c = reduced_inverse_hessian(tr, w, &cols)?;
-    Ok(identifiability(names, c, span, s2, phi))
+    Ok(match reduced_inverse_hessian(tr, w, &cols) {
+        Ok(c) => identifiability(names, c, span, s2, phi),
+        // an unbounded probe: nothing in the cost resists a change of the parameter
+        Err(e) if e.contains("DualInfeasible") => Identifiability::unknown(
+            names,
+            span,
+            format!("the cost has no curvature in it: the probing QP is unbounded along it ({e})"),
+        ),
+        Err(e) => Identifiability::unknown(
+            names,
+            span,
+            format!("its information could not be computed ({e})"),
+        ),
+    })
 }
 
 /// `θᵀ H θ` for parameters `theta` (the reduced curvature along them) from the reduced
 /// Hessian inverse `c` (`None` when `c` is singular).
 pub fn curvature_along(c: &[Vec<f64>], theta: &[f64]) -> Option<f64> {
+    if c.len() != theta.len() || theta.is_empty() {
+        return None;
+    }
     let h = invert(c)?;
     let q: f64 = (0..theta.len())
         .map(|i| {
