@@ -12,10 +12,19 @@
 //! Significance: with `N` data residuals whose mean square at the solution is `s² =
 //! J/N`, the decrease in units of `s²` is approximately χ² with `k` degrees of freedom
 //! (`k` = the candidate's free parameters) when the candidate explains only noise (the
-//! extra-sum-of-squares test). The candidate is significant above the χ²ₖ 0.1 % point.
-//! Residuals of neighbouring nodes are not independent and the regularisation terms are
-//! counted in `J`, so the test is an approximation; it errs towards "nothing found"
-//! because `J` includes the misfit the candidate would remove.
+//! extra-sum-of-squares test) — if the residuals were independent. They are not (real
+//! residuals are smooth in time), so the decrease is divided by the variance inflation
+//! `φ = N/N_eff` of the channels it comes from ([`stats::variance_inflation`]) before it
+//! is compared with the χ²ₖ 0.1 % point.
+//!
+//! Identifiability comes first: a candidate whose reduced Fisher information (the
+//! Hessian of the cost w.r.t. its parameters with everything else optimised out) is
+//! rank deficient, or whose standard deviations exceed a quarter of their bound span, is
+//! "not testable with this run's cost" — its score (often exactly 0, as the free
+//! variables absorb it) says nothing about its absence ([`stats::identifiability`]).
+//! A significant candidate is "found" only if, fitted here and applied with its values
+//! fixed to another half cycle of the trial, it lowers that cost beyond its noise band
+//! ([`HeldOut`], [`stats::held_out_band`]).
 
 pub mod stats;
 
@@ -215,8 +224,9 @@ pub struct HeldOut {
     pub change: f64,
     /// `change` as a fraction of `objective`.
     pub change_fraction: f64,
-    /// Noise band of `change` ([`stats::held_out_band`]): two standard deviations of the
-    /// change a candidate fitted on noise makes.
+    /// Upper edge of the noise band of `change` ([`stats::held_out_band`]): two standard
+    /// deviations above the mean change a candidate fitted on noise makes (which is
+    /// negative).
     pub band: f64,
     /// Whether `change` exceeds `band`.
     pub beyond_noise: bool,

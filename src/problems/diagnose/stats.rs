@@ -248,10 +248,13 @@ pub fn curvature_along(c: &[Vec<f64>], theta: &[f64]) -> Option<f64> {
     (q.is_finite() && q >= 0.0).then_some(q)
 }
 
-/// The noise band of a held-out cost change: two standard deviations of the change a
-/// candidate fitted elsewhere makes on noise alone, `2 √(2 φ s² θᵀHθ)` (module docs).
+/// The noise band of a held-out cost change: a candidate fitted on noise alone and
+/// applied with its values `θ` fixed to independent data changes that cost by
+/// `Δ ~ N(−½ θᵀHθ, 2 φ s² θᵀHθ)` (module docs; it makes the fit worse on average). The
+/// band's upper edge, `−½ q + 2 √(2 φ s² q)` with `q = θᵀHθ`, is what a held-out
+/// decrease must exceed: below it, noise alone would explain it (one-sided, about 2.3 %).
 pub fn held_out_band(q: f64, s2: f64, phi: f64) -> f64 {
-    2.0 * (2.0 * phi * s2 * q).sqrt()
+    -0.5 * q + 2.0 * (2.0 * phi * s2 * q).sqrt()
 }
 
 /// Effective sample size of a residual series `x` (NaN entries split it into segments,
@@ -497,6 +500,6 @@ mod tests {
         // H⁻¹ = diag(0.5, 0.25): θᵀHθ = 2·1 + 4·4 = 18
         let q = curvature_along(&[vec![0.5, 0.0], vec![0.0, 0.25]], &[1.0, 2.0]).unwrap();
         assert!((q - 18.0).abs() < 1e-12);
-        assert!((held_out_band(18.0, 0.5, 2.0) - 2.0 * 36f64.sqrt()).abs() < 1e-12);
+        assert!((held_out_band(18.0, 0.5, 2.0) - (-9.0 + 2.0 * 36f64.sqrt())).abs() < 1e-12);
     }
 }

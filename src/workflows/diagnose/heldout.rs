@@ -164,7 +164,8 @@ pub(super) fn validate(base: &HeldOutBase, t: &ScoreTest) -> anyhow::Result<Held
         change,
         change_fraction: change / base.objective,
         band,
-        beyond_noise: change > band && change > 0.0,
+        // a candidate without curvature here (q = 0) has no band: it must lower the cost
+        beyond_noise: change > band.max(0.0) && q > 0.0,
     })
 }
 

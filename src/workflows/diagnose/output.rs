@@ -52,7 +52,7 @@ fn parameters_cell(t: &ScoreTest) -> String {
 fn held_out_cell(t: &ScoreTest) -> String {
     match &t.held_out {
         Some(h) => format!(
-            "{:.3e} ({:+.1} % of J) vs ±{:.3e}",
+            "{:.3e} ({:+.1} % of J) vs {:.3e}",
             h.change,
             100.0 * h.change_fraction,
             h.band
