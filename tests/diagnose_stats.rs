@@ -68,6 +68,26 @@ fn diagnose(run: &Path, candidates: &[&str], make_testable: bool) -> Value {
     )))
 }
 
+/// One line per candidate, for the record.
+fn print_ranking(d: &Value) {
+    for t in d["ranking"].as_array().unwrap() {
+        eprintln!(
+            "  {:<28} testable {:<5} statistic {:>8.2} (independent {:>8.2}, φ {:.2}) values {} sd {} held-out {} → {}",
+            t["label"].as_str().unwrap(),
+            t["testable"],
+            t["statistic"].as_f64().unwrap(),
+            t["statistic_independent"].as_f64().unwrap(),
+            t["inflation"].as_f64().unwrap(),
+            t["step_values"],
+            t["identifiability"]["sd"],
+            t["held_out"]
+                .as_object()
+                .map_or("—".into(), |h| format!("{:.4e} vs {:.4e}", h["change"].as_f64().unwrap(), h["band"].as_f64().unwrap())),
+            t["verdict"].as_str().unwrap()
+        );
+    }
+}
+
 fn entry<'a>(d: &'a Value, kind: &str) -> &'a Value {
     d["ranking"]
         .as_array()
@@ -130,6 +150,7 @@ fn a_cop_offset_is_untestable_under_the_seed_cost_and_found_when_made_testable()
     let dir = tempfile::tempdir().unwrap();
     let run = seed_run(dir.path());
     let d = diagnose(&run, &["cop_offset", "force_plate_time_offset"], true);
+    print_ranking(&d);
     check_every_candidate(&d);
     let cop = entry(&d, "cop_offset");
     assert_eq!(cop["testable"], false, "{cop:#}");
@@ -188,6 +209,7 @@ fn a_cop_offset_is_untestable_under_the_seed_cost_and_found_when_made_testable()
         "{}-diagnose/summary.json",
         testable.display()
     )));
+    print_ranking(&d2);
     check_every_candidate(&d2);
     let cop = entry(&d2, "cop_offset");
     eprintln!("with the pelvis tracked: {cop:#}");

@@ -202,7 +202,7 @@ pub struct ScoreTest {
     /// where the trial has no other half cycle: see `held_out`).
     pub found: bool,
     /// One of `not testable with this run's cost`, `not significant`, `not confirmed on
-    /// the held-out half cycle`, `found`, `significant, not validated (…)`.
+    /// the held-out half cycle`, `found`, `significant, not validated`.
     pub verdict: String,
 }
 
@@ -450,10 +450,9 @@ impl ScoreTest {
             match &self.held_out {
                 Some(h) if h.beyond_noise => (true, "found".into()),
                 Some(_) => (false, "not confirmed on the held-out half cycle".into()),
-                None => (
-                    true,
-                    "significant, not validated (no held-out half cycle)".into(),
-                ),
+                // no other half cycle, validation off, or a candidate tested by a full
+                // re-fit (no reduced curvature to set its band): the diagnosis says why
+                None => (true, "significant, not validated".into()),
             }
         };
         self.found = found;

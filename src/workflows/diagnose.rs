@@ -510,6 +510,10 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
                         if hb.converged { "" } else { ", NOT converged" }
                     );
                     for t in tests.iter_mut().filter(|t| t.significant) {
+                        if t.refit {
+                            held_out_note += &format!(" {} is not validated: it was tested by a full re-fit, which gives no reduced curvature to set its noise band.", t.label);
+                            continue;
+                        }
                         match heldout::validate(&hb, t) {
                             Ok(h) => {
                                 note!(progress,
