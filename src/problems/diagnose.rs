@@ -14,8 +14,9 @@
 //! (`k` = the candidate's free parameters) when the candidate explains only noise (the
 //! extra-sum-of-squares test) — if the residuals were independent. They are not (real
 //! residuals are smooth in time), so the decrease is divided by the variance inflation
-//! `φ = N/N_eff` of the channels it comes from ([`stats::variance_inflation`]) before it
-//! is compared with the χ²ₖ 0.1 % point.
+//! `φ = N/N_eff` of the channels it comes from, measured on the residuals left after the
+//! candidate's re-fit ([`stats::variance_inflation`]), before it is compared with the
+//! χ²ₖ 0.1 % point.
 //!
 //! Identifiability comes first: a candidate whose reduced Fisher information (the
 //! Hessian of the cost w.r.t. its parameters with everything else optimised out) is

@@ -109,7 +109,30 @@ fn test_candidate(
                     .map_or(0.0, |c| if c.2 > 0.0 { (c.2 - c.3) / c.2 } else { 0.0 })
             })
             .collect();
-        let series: Vec<Vec<f64>> = baseline.series.iter().map(|s| s.1.clone()).collect();
+        // the autocorrelation of the noise is that of the residuals under the
+        // alternative (after the candidate's re-fit), as an F-test's variance is the
+        // larger model's: at the plain model's solution a missing effect's systematic
+        // misfit is itself a smooth, correlated residual
+        let after = channel_series(
+            tr,
+            &w1,
+            &cycle.continuous,
+            prob.setup.window.0,
+            &prob.model,
+            &prob.sets,
+            &prob.data,
+        )
+        .map_err(|e| anyhow!(e))?;
+        let series: Vec<Vec<f64>> = baseline
+            .series
+            .iter()
+            .map(|(name, before)| {
+                after
+                    .iter()
+                    .find(|a| &a.0 == name)
+                    .map_or_else(|| before.clone(), |a| a.1.clone())
+            })
+            .collect();
         let (_, phi) = variance_inflation(&series, &weights);
         t.set_inflation(phi);
         let s2 = baseline.objective / rows.max(1) as f64;

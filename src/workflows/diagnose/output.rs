@@ -163,7 +163,7 @@ pub(super) fn write(
         })
         .collect();
     let inflation = format!(
-        "Correlated residuals: per channel, the variance inflation φ = N/N_eff (N_eff = N/(1 + 2 Σ ρ_k), ρ_k the error's autocorrelation at the nodes, summed up to the first lag ≤ 0): {}; each candidate's statistic is divided by the mean φ of the channels its truncated re-fit improves, weighted by their relative improvement.",
+        "Correlated residuals: per channel, the variance inflation φ = N/N_eff (N_eff = N/(1 + 2 Σ ρ_k), ρ_k the error's autocorrelation at the nodes, summed up to the first lag ≤ 0): {}; these are the plain model's; each candidate's statistic is divided by the φ of the residuals left after its truncated re-fit (as an F-test takes the larger model's variance), averaged over the channels that re-fit improves, weighted by their relative improvement.",
         o.resid
             .series
             .iter()
