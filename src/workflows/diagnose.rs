@@ -514,15 +514,19 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
     let (mut tests, evidence): (Vec<ScoreTest>, Vec<Evidence>) = tests.into_iter().unzip();
 
     // held-out validation of the significant ones
-    let mut held_out_note = String::new();
-    if tests.iter().any(|t| t.significant) {
+    let mut held_out_note: String = tests
+        .iter()
+        .filter(|t| t.significant && t.refit)
+        .map(|t| format!(" {} is not validated on a held-out half cycle: it was tested by a full re-fit, which gives no reduced curvature to set its noise band.", t.label))
+        .collect();
+    if tests.iter().any(|t| t.significant && !t.refit) {
         if !args.held_out {
-            held_out_note = "Held-out validation was not asked for (--no-held-out): significant candidates are not validated.".into();
+            held_out_note += " Held-out validation was not asked for (--no-held-out): significant candidates are not validated.";
         } else {
             match heldout::held_out_base(args, &setup, base.setup.window, progress)? {
                 Ok(hb) => {
-                    held_out_note = format!(
-                        "Held-out: each significant candidate, with the values fitted on this run's half cycle ({:.3}–{:.3} s), applied to half cycle {} ({:.3}–{:.3} s; the plain model tracked there: J = {:.6}, {} iterations{}) with the other variables re-fitted; it is found if it lowers that cost beyond its noise band (2 sd, inflated by φ, above the mean change a fit to noise makes, which is a rise).",
+                    held_out_note += &format!(
+                        " Held-out: each significant candidate, with the values fitted on this run's half cycle ({:.3}–{:.3} s), applied to half cycle {} ({:.3}–{:.3} s; the plain model tracked there: J = {:.6}, {} iterations{}) with the other variables re-fitted; it is found if it lowers that cost beyond its noise band (2 sd, inflated by φ, above the mean change a fit to noise makes, which is a rise).",
                         base.setup.window.0,
                         base.setup.window.1,
                         hb.stride,
@@ -534,7 +538,6 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
                     );
                     for t in tests.iter_mut().filter(|t| t.significant) {
                         if t.refit {
-                            held_out_note += &format!(" {} is not validated: it was tested by a full re-fit, which gives no reduced curvature to set its noise band.", t.label);
                             continue;
                         }
                         match heldout::validate(&hb, t) {
@@ -555,7 +558,7 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
                     }
                 }
                 Err(why) => {
-                    held_out_note = format!("No held-out half cycle in this trial ({why}): significant candidates are not validated.");
+                    held_out_note += &format!(" No held-out half cycle in this trial ({why}): significant candidates are not validated.");
                 }
             }
         }
