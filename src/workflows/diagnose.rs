@@ -3,9 +3,10 @@
 //! Fisher information), its score test at the run's solution (a full re-fit for the
 //! heel pad, which has no null value) with the statistic corrected for correlated
 //! residuals; the significant ones are validated on another half cycle of the trial
-//! ([`heldout`]) and the top found ones re-fitted for real (each written as a track run
+//! (`diagnose/heldout.rs`) and the top found ones re-fitted for real (each written as a track run
 //! folder, so `diff` and a second `diagnose` can start from it). `--make-testable`
 //! re-tracks the run with the pelvis position tracked and diagnoses that run too.
+
 use super::track::{read_run_setup, tracking_sqp_settings, TrackedRun, TrackingProblem};
 #[allow(unused_imports)]
 use super::{note, warn_note, Progress};
