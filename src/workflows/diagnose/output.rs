@@ -124,7 +124,7 @@ pub(super) fn write(
     let found = tests.iter().filter(|t| t.found).count();
     let verdict = verdict(o);
     let ranking = Table {
-        title: "Candidate effects: testability, in-sample score statistic (predicted cost decrease / residual mean square, divided by the variance inflation φ of correlated residuals), held-out change, verdict".into(),
+        title: "Candidate effects ranked: testability, in-sample score statistic (predicted cost decrease / residual mean square, divided by the variance inflation φ of correlated residuals), held-out change, verdict".into(),
         headers: ["rank", "effect", "testable", "parameters (truncated re-fit, ± sd)", "expected decrease", "% of J", "statistic", "φ", "χ² 0.1 % point", "held-out change vs noise band", "verdict"].map(String::from).to_vec(),
         rows: tests
             .iter()
