@@ -196,6 +196,8 @@ fn diagnose(run: &Path, verify: usize, candidates: &[&str]) -> Value {
         overwrite: false,
         tol: 1e-5,
         max_iter: 200,
+        make_testable: false,
+        held_out: true,
     };
     timed("diagnose", run, || {
         footfall::workflows::diagnose::run(&req, &Quiet)
