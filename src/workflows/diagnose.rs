@@ -141,10 +141,10 @@ fn test_candidate(
         let s2 = baseline.objective / rows.max(1) as f64;
         let id = candidate_identifiability(tr, &w, names, s2, phi).map_err(|e| anyhow!(e))?;
         t.set_identifiability(id, Some(hint));
-        Ok((
-            t,
-            GaitSolution::from_nlp(tr, &w1, &cycle.continuous, prob.setup.window.0),
-        ))
+        let mut solution = GaitSolution::from_nlp(tr, &w1, &cycle.continuous, prob.setup.window.0);
+        // a plate's clock offset candidate moves the window's start with the events it gave
+        prob.setup.place(&prob.model, &mut solution);
+        Ok((t, solution))
     })
 }
 
