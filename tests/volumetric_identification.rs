@@ -293,6 +293,9 @@ fn diagnose_ranks_the_contact_law_first_on_the_fit_with_the_wrong_law() {
             overwrite: false,
             tol: 1e-4,
             max_iter: 40,
+            make_testable: false,
+            // the ranking in the run's own trial is what this test is about
+            held_out: false,
         },
         &Quiet,
     )
@@ -301,13 +304,24 @@ fn diagnose_ranks_the_contact_law_first_on_the_fit_with_the_wrong_law() {
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     for t in d["ranking"].as_array().unwrap() {
         eprintln!(
-            "{}: statistic {:.1}, significant {}, values {}",
-            t["label"], t["statistic"], t["significant"], t["step_values"]
+            "{}: statistic {:.1}, significant {}, values {}, testable {}, identifiability {}, hint {}",
+            t["label"], t["statistic"], t["significant"], t["step_values"], t["testable"], t["identifiability"], t["hint"]
         );
     }
     eprintln!("diagnose: {:.0} s", t.elapsed().as_secs_f64());
-    assert_eq!(d["ranking"][0]["effect"]["type"], "volumetric_contact");
-    assert_eq!(d["ranking"][0]["significant"], true);
+    // The ranking puts testable candidates first. On this 100 Hz trial the law's damping
+    // has no curvature under the cost (it runs to its bound, NOTES: the law is not
+    // recovered), so the candidate is reported "not testable"; its in-sample statistic
+    // is still the largest: the contact law is what the forces point at.
+    let ranking = d["ranking"].as_array().unwrap();
+    let best = ranking
+        .iter()
+        .max_by(|a, b| {
+            let s = |t: &serde_json::Value| t["statistic"].as_f64().unwrap_or(f64::NEG_INFINITY);
+            s(a).total_cmp(&s(b))
+        })
+        .unwrap();
+    assert_eq!(best["effect"]["type"], "volumetric_contact");
 }
 
 /// The hidden foot: the shipped volumetric ellipse with its law at `HIDDEN`'s values.
