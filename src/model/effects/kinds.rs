@@ -5,7 +5,7 @@
 use super::{Effect, EffectState, MeasurementAdjust, ModelAdjust, ParamSpec};
 use crate::model::Scalar;
 
-pub(super) fn param(
+fn param(
     name: String,
     value: f64,
     (lower, upper): (f64, f64),
@@ -190,43 +190,22 @@ impl Effect for TrunkMass {
     }
 }
 
-/// A force plate's clock is offset from the motion capture's by `offset` (s): the
+/// The force plates' clock is offset from the motion capture's by `offset` (s): the
 /// model's ground forces at time t are compared with the measured forces at t + offset.
-/// On one foot's plate (`right`, `left`; each foot's stance is on its own plate) or on
-/// both with one shared offset. The contact events taken from that plate's force
-/// threshold move with it (see `problems::track`).
 #[derive(Debug, Clone)]
 pub struct ForcePlateTimeOffset {
-    sides: [bool; 2],
     params: Vec<ParamSpec>,
-}
-
-/// `[right, left]` from a foot index (`None`: both), and the parameter name's infix.
-pub(super) fn side_mask(side: Option<usize>) -> ([bool; 2], &'static str) {
-    match side {
-        Some(0) => ([true, false], "right."),
-        Some(_) => ([false, true], "left."),
-        None => ([true, true], ""),
-    }
 }
 
 impl ForcePlateTimeOffset {
     /// Bounds of the offset (s).
     pub const BOUNDS: (f64, f64) = (-0.05, 0.05);
 
-    /// Clock offset `offset` (s) of both plates.
+    /// Clock offset `offset` (s).
     pub fn new(offset: f64, free: bool) -> Self {
-        Self::on(None, offset, free)
-    }
-
-    /// Clock offset `offset` (s) of foot `side`'s plate (0 right, 1 left; `None` both),
-    /// parameter `force_plate_time_offset.[right.|left.]offset`.
-    pub fn on(side: Option<usize>, offset: f64, free: bool) -> Self {
-        let (sides, infix) = side_mask(side);
         Self {
-            sides,
             params: vec![param(
-                format!("force_plate_time_offset.{infix}offset"),
+                "force_plate_time_offset.offset".into(),
                 offset,
                 Self::BOUNDS,
                 "s",
@@ -244,9 +223,7 @@ impl Effect for ForcePlateTimeOffset {
         &self.params
     }
     fn adjust_measurement<S: Scalar>(&self, p: &[S], m: &mut MeasurementAdjust<S>) {
-        for s in (0..2).filter(|&s| self.sides[s]) {
-            m.force_time_offset[s] += p[0];
-        }
+        m.force_time_offset += p[0];
     }
     fn is_measurement(&self) -> bool {
         true
@@ -256,11 +233,10 @@ impl Effect for ForcePlateTimeOffset {
     }
 }
 
-/// A force plate reports the centre of pressure `offset` (m) further along the walkway
-/// than it is (a calibration error of the plate origin): one foot's plate or both.
+/// The force plates report the centre of pressure `offset` (m) further along the walkway
+/// than it is (a calibration error of the plate origin).
 #[derive(Debug, Clone)]
 pub struct CopOffset {
-    sides: [bool; 2],
     params: Vec<ParamSpec>,
 }
 
@@ -268,19 +244,11 @@ impl CopOffset {
     /// Bounds of the offset (m).
     pub const BOUNDS: (f64, f64) = (-0.1, 0.1);
 
-    /// CoP offset `offset` (m) of both plates.
+    /// CoP offset `offset` (m).
     pub fn new(offset: f64, free: bool) -> Self {
-        Self::on(None, offset, free)
-    }
-
-    /// CoP offset `offset` (m) of foot `side`'s plate (0 right, 1 left; `None` both),
-    /// parameter `cop_offset.[right.|left.]offset`.
-    pub fn on(side: Option<usize>, offset: f64, free: bool) -> Self {
-        let (sides, infix) = side_mask(side);
         Self {
-            sides,
             params: vec![param(
-                format!("cop_offset.{infix}offset"),
+                "cop_offset.offset".into(),
                 offset,
                 Self::BOUNDS,
                 "m",
@@ -298,9 +266,7 @@ impl Effect for CopOffset {
         &self.params
     }
     fn adjust_measurement<S: Scalar>(&self, p: &[S], m: &mut MeasurementAdjust<S>) {
-        for s in (0..2).filter(|&s| self.sides[s]) {
-            m.cop_offset[s] += p[0];
-        }
+        m.cop_offset += p[0];
     }
     fn is_measurement(&self) -> bool {
         true
