@@ -5,7 +5,7 @@
 //! has the other codes).
 
 mod common;
-use common::{footfall, root, s, stderr};
+use common::{footfall, json, root, s, stderr};
 
 use std::path::Path;
 use std::process::{Command, Output};
@@ -622,42 +622,30 @@ fn a_pad_fit_from_its_once_stalled_iterate_converges_to_the_same_parameters() {
     let tmp = tempfile::tempdir().unwrap();
     let trial = root().join("tests/data/hidden/heel_pad_compliance_seed3");
     let out = tmp.path().join("run");
-    let o = Command::new(env!("CARGO_BIN_EXE_footfall"))
-        .current_dir(root())
-        .args([
-            "track",
-            "--data",
-            s(&trial.join("synthetic.csv")),
-            "--init",
-            s(&trial.join("stalled_refit")),
-            "--foot",
-            "double-circle",
-            "--sample-targets",
-        ])
-        .args([
-            "--noise-weights",
-            "angle=0.5,position=2,force=5,cop=5",
-            "--effect",
-            "heel_pad_compliance",
-            "--hessian",
-            "gauss-newton",
-            "--out",
-            s(&out),
-        ])
-        .output()
-        .unwrap();
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert!(o.status.success(), "{err}");
-    let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let o = footfall(&[
+        "track",
+        "--data",
+        s(&trial.join("synthetic.csv")),
+        "--init",
+        s(&trial.join("stalled_refit")),
+        "--foot",
+        "double-circle",
+        "--sample-targets",
+        "--noise-weights",
+        "angle=0.5,position=2,force=5,cop=5",
+        "--effect",
+        "heel_pad_compliance",
+        "--hessian",
+        "gauss-newton",
+        "--out",
+        s(&out),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let summary = json(&out.join("summary.json"));
     assert_eq!(summary["status"], "converged", "{summary}");
     assert!(summary["kkt"].as_f64().unwrap() < 1e-5);
-    let setup: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("setup.json")).unwrap()).unwrap();
-    let start: serde_json::Value = serde_json::from_str(
-        &std::fs::read_to_string(trial.join("stalled_refit/setup.json")).unwrap(),
-    )
-    .unwrap();
+    let setup = json(&out.join("setup.json"));
+    let start = json(&trial.join("stalled_refit/setup.json"));
     for (a, b) in setup["parameters"]
         .as_array()
         .unwrap()
