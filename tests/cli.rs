@@ -1022,10 +1022,19 @@ fn one_sided_targets_match_the_generating_model_at_its_solution() {
             .unwrap(),
     );
     let rows = d["data_residuals"].as_f64().unwrap();
-    let statistic = (j - j_refit).max(0.0) / (j / rows);
+    // as if the residuals were independent, and divided by their variance inflation
+    let independent = (j - j_refit).max(0.0) / (j / rows);
+    assert!(
+        (t["statistic_independent"].as_f64().unwrap() - independent).abs()
+            <= 1e-9 * independent.max(1.0),
+        "{t} against (J {j} − re-fit {j_refit}) / (J / {rows})"
+    );
+    let phi = t["inflation"].as_f64().unwrap();
+    assert!(phi >= 1.0, "{t}");
+    let statistic = independent / phi;
     assert!(
         (t["statistic"].as_f64().unwrap() - statistic).abs() <= 1e-9 * statistic.max(1.0),
-        "{t} against (J {j} − re-fit {j_refit}) / (J / {rows})"
+        "{t}"
     );
     assert_eq!(
         t["significant"].as_bool(),

@@ -199,15 +199,16 @@ fn sample_target_breakdown_adds_up_with_a_force_plate_clock_offset() {
     let (f0, _, n0, shifted0) = objective(&plain, None);
     assert_eq!((n0, shifted0), (setup.samples.len(), 0));
     let (f, b, n, shifted) = objective(&m, Some(0.012));
-    let with_loads = setup
+    // each foot's loads are read on its own plate's clock
+    let with_loads: usize = setup
         .samples
         .iter()
-        .filter(|s| s.target.feet.iter().any(Option::is_some))
-        .count();
+        .map(|s| s.target.feet.iter().filter(|f| f.is_some()).count())
+        .sum();
     assert_eq!(
         (n, shifted),
         (setup.samples.len() + with_loads, with_loads),
-        "a term for the angles and one for the loads of every loaded sample"
+        "a term for the angles and one for the loads of every loaded foot of every sample"
     );
     assert!(
         (b.total() - f).abs() < 1e-6 * f,

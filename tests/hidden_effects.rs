@@ -185,8 +185,8 @@ fn baseline(name: &str, dir: &Path, how: Setup) -> PathBuf {
 }
 
 /// `diagnose` the run (the catalog and, on a foot with a heel circle, the pad; or only
-/// `candidates`).
-fn diagnose(run: &Path, verify: usize, candidates: &[&str]) -> Value {
+/// `candidates`), with held-out validation on another half cycle when `held_out`.
+fn diagnose(run: &Path, verify: usize, candidates: &[&str], held_out: bool) -> Value {
     let out = PathBuf::from(format!("{}-diagnose", run.display()));
     let req = DiagnoseRequest {
         run: run.to_path_buf(),
@@ -196,6 +196,8 @@ fn diagnose(run: &Path, verify: usize, candidates: &[&str]) -> Value {
         overwrite: false,
         tol: 1e-5,
         max_iter: 200,
+        make_testable: false,
+        held_out,
     };
     timed("diagnose", run, || {
         footfall::workflows::diagnose::run(&req, &Quiet)
@@ -210,6 +212,14 @@ fn diagnose(run: &Path, verify: usize, candidates: &[&str]) -> Value {
 }
 
 type Floor = (Vec<(String, f64)>, Value, Vec<((String, String), f64)>);
+
+/// The trials whose diagnosis also validates the found candidate on a held-out half
+/// cycle (the plain model tracked there from the data, about a minute in the test
+/// profile); `tests/diagnose_stats.rs` checks it on the CoP-offset trial. The other
+/// trials skip that track to keep the test command within the CI's time: their
+/// candidates are "significant, not validated", and rank, significance and the
+/// identified values are checked as before.
+const HELD_OUT_CHECKED: [&str; 1] = ["force_plate_time_offset"];
 
 /// The catalog's candidates by name, without the heel pad: on the 1 kHz trial without a
 /// hidden effect the pad's re-fit takes longer than the CI has room for (about 8
@@ -246,6 +256,9 @@ fn floor(how: Setup) -> &'static Floor {
             } else {
                 &[]
             },
+            // nothing should be significant here; anything that is must also pass the
+            // held-out half cycle
+            true,
         );
         (channel_means(&run), d, phase_means(&run))
     })
@@ -349,13 +362,21 @@ fn single_effect(name: &str, how: Setup, floor_factor: f64) {
     let shows = above_floor(&run, how)
         .unwrap_or_else(|| panic!("{name}: the hidden effect does not show above the noise floor"));
     eprintln!("{name} above the floor: {shows}");
-    let d = diagnose(&run, 1, &[]);
+    let held_out = HELD_OUT_CHECKED.contains(&name);
+    let d = diagnose(&run, 1, &[], held_out);
     assert_eq!(
         d["ranking"][0]["effect"]["type"], kind,
         "{name}: ranked first is {}",
         d["ranking"][0]["label"]
     );
     assert_eq!(d["ranking"][0]["significant"], true);
+    if held_out {
+        assert_eq!(
+            d["ranking"][0]["verdict"], "found",
+            "{name}: not confirmed on the held-out half cycle: {}",
+            d["ranking"][0]["held_out"]
+        );
+    }
     let v = &d["verified"][0];
     assert_eq!(v["effect"]["type"], kind);
     assert_eq!(v["converged"], true);
@@ -381,7 +402,7 @@ fn single_effect(name: &str, how: Setup, floor_factor: f64) {
         // beside the pad the rigid run also finds a clock offset and the trunk significant
         // (a rigid heel's force rises earlier than a padded one's); with the pad added,
         // a second diagnosis finds nothing
-        let second = diagnose(&root().join(&refit), 1, &[]);
+        let second = diagnose(&root().join(&refit), 1, &[], false);
         assert_eq!(
             second["significant"], 0,
             "after the pad's re-fit: {}",
@@ -500,13 +521,13 @@ fn two_hidden_effects_are_found_one_after_the_other() {
     let name = "ground_slope+force_plate_time_offset";
     let dir = tempfile::tempdir().unwrap();
     let run = baseline(name, dir.path(), Setup::Seed);
-    let first = diagnose(&run, 1, &[]);
+    let first = diagnose(&run, 1, &[], false);
     let a = first["verified"][0]["effect"]["type"]
         .as_str()
         .expect("a first effect")
         .to_string();
     let refit = root().join(first["verified"][0]["folder"].as_str().unwrap());
-    let second = diagnose(&refit, 1, &[]);
+    let second = diagnose(&refit, 1, &[], false);
     let b = second["verified"][0]["effect"]["type"]
         .as_str()
         .expect("a second effect")

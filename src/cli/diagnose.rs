@@ -29,6 +29,14 @@ pub struct Args {
     /// Iteration limit of the re-fits.
     #[arg(long, default_value_t = 200, value_parser = super::validate::iterations)]
     max_iter: usize,
+    /// Re-track the run with what makes its untestable candidates testable (the pelvis
+    /// position tracked, into `<RUN>+pelvis-position`) and diagnose that run too.
+    #[arg(long)]
+    make_testable: bool,
+    /// Skip the held-out validation of significant candidates (it tracks another half
+    /// cycle of the trial once); they are then reported as not validated.
+    #[arg(long)]
+    no_held_out: bool,
 }
 
 impl From<Args> for DiagnoseRequest {
@@ -41,6 +49,8 @@ impl From<Args> for DiagnoseRequest {
             overwrite: a.overwrite,
             tol: a.tol,
             max_iter: a.max_iter,
+            make_testable: a.make_testable,
+            held_out: !a.no_held_out,
         }
     }
 }

@@ -52,7 +52,9 @@ pub struct Args {
     overwrite: bool,
     /// Hide an effect in the data, `NAME:key=value,…` with the parameter values (e.g.
     /// `ground_slope:angle=0.03`; repeatable). Measurement effects (force-plate time
-    /// offset, CoP offset) are applied to the samples; a model effect first re-fits the
+    /// offset, CoP offset, of both plates: `side=both`) are applied to the samples; one
+    /// plate's clock, CoP or gain is refused (tools/make-real-hidden-trials makes such
+    /// trials from measured data); a model effect first re-fits the
     /// `--from` track run's data with the effect in the model (held at the given values),
     /// so the truth is a solution of the model with the effect.
     #[arg(long = "hidden-effect", value_name = "NAME:key=value,…")]

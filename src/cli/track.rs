@@ -64,9 +64,14 @@ pub struct Args {
     #[arg(long, default_value_t = DEFAULT_TRANSIENT_THRESHOLD_N, value_parser = super::validate::positive)]
     transient_threshold: f64,
     /// Add an effect and identify its parameters: `NAME[:key=value,…]`, e.g.
-    /// `ground_slope`, `passive_joint_stiffness:joint=knee`, `cop_offset:offset=0.01,free=`
-    /// (repeatable; names: ground_slope, trunk_mass, passive_joint_stiffness,
-    /// force_plate_time_offset, cop_offset, heel_pad_compliance).
+    /// `ground_slope`, `passive_joint_stiffness:joint=knee`, `cop_offset:offset=0.01,free=`,
+    /// `force_plate_time_offset:side=right` (one foot's plate; its clock also moves the
+    /// contact events of its force threshold) (repeatable; names: ground_slope,
+    /// trunk_mass, passive_joint_stiffness, force_plate_time_offset, cop_offset,
+    /// force_plate_gain, body_mass_error, heel_pad_compliance, mtg_damping, mtg_strength,
+    /// activation_time_constants, volumetric_contact — a volumetric foot's stiffness
+    /// (N/mm²), damping (s/m) and mu_dynamic — and foot_geometry — the primitives' centres,
+    /// sizes and angles).
     #[arg(long = "effect", value_name = "NAME[:key=value,…]")]
     effects: Vec<String>,
     /// Track the pelvis position (x, y) too, weighted 1/(0.1 m) as angles are by

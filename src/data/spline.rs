@@ -154,6 +154,15 @@ impl CubicSpline {
         c[1] + x * (2.0 * c[2] + x * 3.0 * c[3])
     }
 
+    /// $s'(t)$ at a dual number (as [`eval_generic`](Self::eval_generic)): exact
+    /// derivatives with respect to `t` (a node's instant moved by a clock offset).
+    pub fn derivative_generic<S: crate::model::Scalar>(&self, t: S) -> S {
+        let (i, _) = self.piece(t.value());
+        let c = &self.coef[i];
+        let x = t - self.t[i];
+        x * (x * (3.0 * c[3]) + 2.0 * c[2]) + c[1]
+    }
+
     /// $s''(t)$ (continuous; piecewise linear).
     pub fn second_derivative(&self, t: f64) -> f64 {
         let (i, x) = self.piece(t);

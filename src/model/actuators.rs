@@ -597,4 +597,24 @@ impl JointActuatorSet {
         mtg_torque(f, a_flexor, theta, omega) + mtg_torque(e, a_extensor, theta, omega)
             - omega * damping_coefficient(f, e, self.eta)
     }
+
+    /// [`joint_torque`](Self::joint_torque) with every τ₀ scaled by `strength` and η by
+    /// `damping` (the actuator effects' factors; β ∝ η τ₀ scales by both):
+    /// `strength (τᶠ + τᵉ − damping β ω)`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn joint_torque_scaled<S: Scalar>(
+        &self,
+        joint: Joint,
+        a_flexor: S,
+        a_extensor: S,
+        theta: S,
+        omega: S,
+        strength: S,
+        damping: S,
+    ) -> S {
+        let (f, e) = self.pair(joint);
+        (mtg_torque(f, a_flexor, theta, omega) + mtg_torque(e, a_extensor, theta, omega)
+            - omega * damping * damping_coefficient(f, e, self.eta))
+            * strength
+    }
 }

@@ -19,8 +19,11 @@ pub use volumetric::VolumetricReport;
 
 use super::actuators::{Joint as MtgJoint, JointActuatorSet};
 use super::anthropometry::{self, build_bodies, estimated_stature, segments_from_de_leva};
-use super::effects::{DynEffect, MeasurementAdjust, ModelAdjust, ModelScalar, ParamSpec};
+use super::effects::{
+    ActuatorAdjust, DynEffect, MeasurementAdjust, ModelAdjust, ModelScalar, ParamSpec,
+};
 use super::error::ModelError;
+use super::geometry::{Shape, ShapeScalars};
 use super::multibody::{Inertia, Tree, V2};
 use super::spec::{self, ActuatorSpec, BodySpec, ContactSettings, FootSpec, ModelSpec};
 use super::Scalar;
@@ -104,6 +107,12 @@ pub struct GaitModel {
     effect_offsets: Vec<usize>,
     /// Per contact: the effect that makes its normal contact compliant, if any.
     compliant: Vec<Option<usize>>,
+    /// Per contact: the effect whose parameters replace its volumetric law, and the
+    /// primitive's slot among that effect's (`volumetric_contact`), if any.
+    volumetric_params: Vec<Option<(usize, usize)>>,
+    /// Per contact: the effect whose parameters replace its geometry, and the offset of
+    /// the primitive's among that effect's (`foot_geometry`), if any.
+    geometry_params: Vec<Option<(usize, usize)>>,
     params: Vec<ParamSpec>,
     free: Vec<usize>,
 }
@@ -241,10 +250,23 @@ impl GaitModel {
         let coords: Vec<String> = COORDINATES.iter().map(|s| s.to_string()).collect();
         let bodies: Vec<String> = tree.bodies().iter().map(|b| b.name.clone()).collect();
         let primitives: Vec<String> = foot.primitives.iter().map(|p| p.name.clone()).collect();
+        let laws: Vec<_> = foot
+            .primitives
+            .iter()
+            .map(|p| match p.contact {
+                spec::ContactLaw::Rigid => None,
+                spec::ContactLaw::Volumetric(law) => Some(law),
+            })
+            .collect();
+        let foot_file = foot_path.display().to_string();
+        let shapes: Vec<Shape> = foot.primitives.iter().map(|p| p.shape.clone()).collect();
         let ctx = super::effects::BuildContext {
             coordinates: &coords,
             bodies: &bodies,
             primitives: &primitives,
+            laws: &laws,
+            shapes: &shapes,
+            foot: &foot_file,
         };
         let mut effects = Vec::new();
         for (i, e) in spec.effects.iter().enumerate() {
@@ -252,6 +274,18 @@ impl GaitModel {
                 e.build(&ctx)
                     .map_err(|r| ModelError::invalid(model_path, format!("effects[{i}]"), r))?,
             );
+        }
+        if !matches!(actuation, Actuation::Mtg(_)) {
+            if let Some(i) = effects.iter().position(|e| e.is_actuator()) {
+                return Err(ModelError::invalid(
+                    model_path,
+                    format!("effects[{i}]"),
+                    format!(
+                        "'{}' changes the muscle-torque generators, and this model is driven by joint torques; use a model with \"actuators\": {{\"type\": \"muscle_torque_generators\", …}}",
+                        effects[i].kind()
+                    ),
+                ));
+            }
         }
         let mut params = Vec::new();
         let mut effect_offsets = Vec::new();
@@ -283,6 +317,26 @@ impl GaitModel {
                 })
             })
             .collect();
+        let volumetric_params = contacts
+            .iter()
+            .map(|c| {
+                let (_, name) = c.name.split_once('.')?;
+                effects.iter().enumerate().find_map(|(e, eff)| {
+                    let slot = eff.volumetric_primitives().iter().position(|p| p == name)?;
+                    Some((e, slot))
+                })
+            })
+            .collect();
+        let geometry_params = contacts
+            .iter()
+            .map(|c| {
+                let (_, name) = c.name.split_once('.')?;
+                effects.iter().enumerate().find_map(|(e, eff)| {
+                    let &(_, offset) = eff.geometry_primitives().iter().find(|p| p.0 == name)?;
+                    Some((e, offset))
+                })
+            })
+            .collect();
         let model = Self {
             name: spec.name.clone(),
             tree,
@@ -295,6 +349,8 @@ impl GaitModel {
             residuals: None,
             effect_offsets,
             compliant,
+            volumetric_params,
+            geometry_params,
             params,
             free,
         };
@@ -472,6 +528,30 @@ impl GaitModel {
         p
     }
 
+    /// The shape of contact `c` under the effect parameters `p` (all of them): the foot
+    /// file's, or a `foot_geometry` effect's.
+    fn shape_of<S: Scalar>(&self, c: usize, p: &[S]) -> ShapeScalars<S> {
+        let contact = &self.contacts[c];
+        let Some((e, offset)) = self.geometry_params[c] else {
+            return contact.shape.scalars();
+        };
+        let q = &self.effect_params(p, e)[offset..];
+        match contact.shape {
+            Shape::Point { .. } => ShapeScalars::Point {
+                position: [q[0], q[1]],
+            },
+            Shape::Circle { .. } => ShapeScalars::Circle {
+                centre: [q[0], q[1]],
+                radius: q[2],
+            },
+            Shape::Ellipse { .. } => ShapeScalars::Ellipse {
+                centre: [q[0], q[1]],
+                semi_axes: [q[2], q[3]],
+                angle: q[4],
+            },
+        }
+    }
+
     fn effect_params<'a, S>(&self, p: &'a [S], e: usize) -> &'a [S] {
         let start = self.effect_offsets[e];
         &p[start..start + self.effects[e].parameters().len()]
@@ -481,14 +561,33 @@ impl GaitModel {
     /// offsets without any).
     pub fn measurement_adjust<S: ModelScalar>(&self, theta: &[S]) -> MeasurementAdjust<S> {
         let p = self.full_params(theta);
-        let mut m = MeasurementAdjust {
-            force_time_offset: S::c(0.0),
-            cop_offset: S::c(0.0),
-        };
+        let mut m = MeasurementAdjust::identity();
         for e in 0..self.effects.len() {
             S::measurement(self.effects[e].as_ref(), self.effect_params(&p, e), &mut m);
         }
         m
+    }
+
+    /// The factors the actuator effects put on the muscle-torque generators' strength,
+    /// damping and activation time constants (all one without any), from the full
+    /// parameter vector `p`.
+    pub(crate) fn actuator_adjust<S: ModelScalar>(&self, p: &[S]) -> ActuatorAdjust<S> {
+        let mut a = ActuatorAdjust::identity();
+        for e in 0..self.effects.len() {
+            S::actuators(self.effects[e].as_ref(), self.effect_params(p, e), &mut a);
+        }
+        a
+    }
+
+    /// [`actuator_adjust`](Self::actuator_adjust) at free parameters `theta`.
+    pub fn actuator_factors<S: ModelScalar>(&self, theta: &[S]) -> ActuatorAdjust<S> {
+        self.actuator_adjust(&self.full_params(theta))
+    }
+
+    /// Whether a free parameter changes the activation time constants (the excitations
+    /// then enter ȧ with a parameter-dependent coefficient).
+    pub fn scales_activation_time(&self) -> bool {
+        self.effects.iter().any(|e| e.scales_activation_time())
     }
 
     /// Whether any effect changes how the model is compared with the data.

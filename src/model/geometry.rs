@@ -130,10 +130,100 @@ impl Shape {
     /// World offset from the reference point to the contact point, for body world angle
     /// `psi` and ground normal `n` (unit, world).
     pub fn contact_offset<S: Scalar>(&self, psi: S, n: V2<S>) -> V2<S> {
+        self.scalars::<S>().contact_offset(psi, n)
+    }
+
+    /// The shape's numbers as constants of scalar type `S`.
+    pub fn scalars<S: Scalar>(&self) -> ShapeScalars<S> {
+        let c = |v: [f64; 2]| [S::c(v[0]), S::c(v[1])];
         match *self {
-            Shape::Point { .. } => [S::c(0.0), S::c(0.0)],
-            Shape::Circle { radius, .. } => [-n[0] * radius, -n[1] * radius],
+            Shape::Point { position } => ShapeScalars::Point {
+                position: c(position),
+            },
+            Shape::Circle { centre, radius } => ShapeScalars::Circle {
+                centre: c(centre),
+                radius: S::c(radius),
+            },
             Shape::Ellipse {
+                centre,
+                angle,
+                semi_axes,
+            } => ShapeScalars::Ellipse {
+                centre: c(centre),
+                angle: S::c(angle),
+                semi_axes: c(semi_axes),
+            },
+        }
+    }
+}
+
+/// A [`Shape`] in a generic scalar: its centre, sizes and orientation may be free
+/// parameters of an identification (the `foot_geometry` effect), with exact derivatives.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum ShapeScalars<S> {
+    /// A circle: centre (body frame, m) and radius (m).
+    Circle {
+        /// Centre in the body frame.
+        centre: V2<S>,
+        /// Radius.
+        radius: S,
+    },
+    /// An ellipse: centre (body frame, m), orientation (rad) and semi-axes (m).
+    Ellipse {
+        /// Centre in the body frame.
+        centre: V2<S>,
+        /// Orientation of the first semi-axis relative to the body x axis.
+        angle: S,
+        /// Semi-axes.
+        semi_axes: V2<S>,
+    },
+    /// A point (body frame, m).
+    Point {
+        /// Position in the body frame.
+        position: V2<S>,
+    },
+}
+
+impl<S: Scalar> ShapeScalars<S> {
+    /// Reference point (centre) in the body frame.
+    pub fn centre(&self) -> V2<S> {
+        match *self {
+            ShapeScalars::Circle { centre, .. } | ShapeScalars::Ellipse { centre, .. } => centre,
+            ShapeScalars::Point { position } => position,
+        }
+    }
+
+    /// The same shape in another scalar type `T` built from `S` (e.g. a dual number over
+    /// `S` for derivatives in the body angle).
+    pub fn map<T: Scalar>(&self, f: impl Fn(S) -> T) -> ShapeScalars<T> {
+        let v = |p: V2<S>| [f(p[0]), f(p[1])];
+        match *self {
+            ShapeScalars::Circle { centre, radius } => ShapeScalars::Circle {
+                centre: v(centre),
+                radius: f(radius),
+            },
+            ShapeScalars::Ellipse {
+                centre,
+                angle,
+                semi_axes,
+            } => ShapeScalars::Ellipse {
+                centre: v(centre),
+                angle: f(angle),
+                semi_axes: v(semi_axes),
+            },
+            ShapeScalars::Point { position } => ShapeScalars::Point {
+                position: v(position),
+            },
+        }
+    }
+
+    /// World offset from the reference point to the contact point, for body world angle
+    /// `psi` and ground normal `n` (unit, world).
+    pub fn contact_offset(&self, psi: S, n: V2<S>) -> V2<S> {
+        match *self {
+            ShapeScalars::Point { .. } => [S::c(0.0), S::c(0.0)],
+            ShapeScalars::Circle { radius, .. } => [-n[0] * radius, -n[1] * radius],
+            ShapeScalars::Ellipse {
                 angle, semi_axes, ..
             } => {
                 let (a, b) = (semi_axes[0], semi_axes[1]);
@@ -141,7 +231,8 @@ impl Shape {
                 let (s, c) = (ang.sin(), ang.cos());
                 // normal in the ellipse frame: Rᵀ n
                 let ne = [c * n[0] + s * n[1], -s * n[0] + c * n[1]];
-                let phi0 = cached_lowest_polar_angle(a, b, [ne[0].value(), ne[1].value()]);
+                let phi0 =
+                    cached_lowest_polar_angle(a.value(), b.value(), [ne[0].value(), ne[1].value()]);
                 let mut phi = S::c(phi0);
                 for _ in 0..3 {
                     let (_, h1, h2) = ellipse_height_derivatives(a, b, ne, phi);
@@ -155,17 +246,17 @@ impl Shape {
 }
 
 /// Point on the ellipse at polar angle `phi` and its first two derivatives in `phi`.
-fn ellipse_point<S: Scalar>(a: f64, b: f64, phi: S) -> (V2<S>, V2<S>, V2<S>) {
+fn ellipse_point<S: Scalar>(a: S, b: S, phi: S) -> (V2<S>, V2<S>, V2<S>) {
     let (s, c) = (phi.sin(), phi.cos());
     let d = s * s * (a * a) + c * c * (b * b);
     let two_phi = phi * 2.0;
     let d1 = two_phi.sin() * (a * a - b * b);
-    let d2 = two_phi.cos() * (2.0 * (a * a - b * b));
+    let d2 = two_phi.cos() * ((a * a - b * b) * 2.0);
     let ab = a * b;
     let inv_sqrt = d.sqrt().recip();
     let r = inv_sqrt * ab;
     let d32 = inv_sqrt / d; // D^{-3/2}
-    let r1 = -(d32 * d1) * (0.5 * ab);
+    let r1 = -(d32 * d1) * (ab * 0.5);
     let r2 = (d32 / d * d1 * d1 * 0.75 - d32 * d2 * 0.5) * ab;
     let p = [r * c, r * s];
     let p1 = [r1 * c - r * s, r1 * s + r * c];
@@ -174,7 +265,7 @@ fn ellipse_point<S: Scalar>(a: f64, b: f64, phi: S) -> (V2<S>, V2<S>, V2<S>) {
 }
 
 /// Height `h = ne·p(φ)` along the ellipse-frame normal and its derivatives in `φ`.
-fn ellipse_height_derivatives<S: Scalar>(a: f64, b: f64, ne: V2<S>, phi: S) -> (S, S, S) {
+fn ellipse_height_derivatives<S: Scalar>(a: S, b: S, ne: V2<S>, phi: S) -> (S, S, S) {
     let (p, p1, p2) = ellipse_point(a, b, phi);
     (
         ne[0] * p[0] + ne[1] * p[1],

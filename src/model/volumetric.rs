@@ -97,10 +97,39 @@ impl VolumetricLaw {
     /// The friction coefficient at signed slip velocity `v` (m/s, + forward): odd in `v`,
     /// smooth, $\approx \mu_s$ at $|v| = v_t$ and $\to \mu_d$ for $|v| \gg v_t$.
     pub fn friction_coefficient<S: Scalar>(&self, v: S) -> S {
+        self.friction_coefficient_with(v, S::c(self.mu_dynamic))
+    }
+
+    /// [`friction_coefficient`](Self::friction_coefficient) with the dynamic coefficient
+    /// `mu_dynamic` in place of the law's; the static peak keeps the law's margin
+    /// $\mu_s - \mu_d$ above it.
+    pub fn friction_coefficient_with<S: Scalar>(&self, v: S, mu_dynamic: S) -> S {
         let r = v / self.transition_velocity;
         let d = r * r * 0.25 + 0.75;
-        (r * 4.0).tanh() * self.mu_dynamic + r / (d * d) * (self.mu_static - self.mu_dynamic)
+        (r * 4.0).tanh() * mu_dynamic + r / (d * d) * (self.mu_static - self.mu_dynamic)
     }
+
+    /// The law's identifiable parameters as constants of scalar type `S`.
+    pub fn scalars<S: Scalar>(&self) -> LawScalars<S> {
+        LawScalars {
+            stiffness: S::c(self.stiffness),
+            damping: S::c(self.damping),
+            mu_dynamic: S::c(self.mu_dynamic),
+        }
+    }
+}
+
+/// The parameters of a [`VolumetricLaw`] that an identification may free
+/// (`volumetric_contact` effect), in a generic scalar so that their sensitivities come
+/// from the same automatic differentiation as the rest of the dynamics.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LawScalars<S> {
+    /// Area stiffness (N/m²).
+    pub stiffness: S,
+    /// Damping (s/m).
+    pub damping: S,
+    /// Dynamic friction coefficient (the static one keeps the law's margin above it).
+    pub mu_dynamic: S,
 }
 
 /// The part of a primitive below the ground line.
@@ -170,6 +199,17 @@ pub fn penetration<S: Scalar>(
     (a, b): (f64, f64),
     ground_y: S,
 ) -> Option<Penetration<S>> {
+    penetration_with(centre, alpha, (S::c(a), S::c(b)), ground_y)
+}
+
+/// [`penetration`] with semi-axes in the generic scalar (free parameters of an
+/// identification).
+pub fn penetration_with<S: Scalar>(
+    centre: V2<S>,
+    alpha: S,
+    (a, b): (S, S),
+    ground_y: S,
+) -> Option<Penetration<S>> {
     let (sin, cos) = (alpha.sin(), alpha.cos());
     let (a2, b2) = (a * a, b * b);
     let myy = sin * sin * a2 + cos * cos * b2;
@@ -182,7 +222,7 @@ pub fn penetration<S: Scalar>(
     let s = depth / h;
     if s.value() >= 2.0 {
         return Some(Penetration {
-            area: S::c(std::f64::consts::PI * a * b),
+            area: a * b * std::f64::consts::PI,
             centroid: centre,
             depth,
         });
@@ -225,15 +265,40 @@ impl VolumetricLaw {
         omega: S,
         ground_y: S,
     ) -> Option<ContactForce<S>> {
-        let p = penetration(centre, alpha, semi_axes, ground_y)?;
+        self.force_with(
+            self.scalars(),
+            centre,
+            alpha,
+            (S::c(semi_axes.0), S::c(semi_axes.1)),
+            centre_velocity,
+            omega,
+            ground_y,
+        )
+    }
+
+    /// [`force`](Self::force) with the stiffness, damping and dynamic friction coefficient
+    /// `params` in place of the law's and the semi-axes in the generic scalar (free
+    /// parameters of an identification).
+    #[allow(clippy::too_many_arguments)]
+    pub fn force_with<S: Scalar>(
+        &self,
+        params: LawScalars<S>,
+        centre: V2<S>,
+        alpha: S,
+        semi_axes: (S, S),
+        centre_velocity: V2<S>,
+        omega: S,
+        ground_y: S,
+    ) -> Option<ContactForce<S>> {
+        let p = penetration_with(centre, alpha, semi_axes, ground_y)?;
         let r = [p.centroid[0] - centre[0], p.centroid[1] - centre[1]];
         // velocity of the body's material point at the centroid
         let v = [
             centre_velocity[0] - omega * r[1],
             centre_velocity[1] + omega * r[0],
         ];
-        let normal = p.area * self.stiffness * (-v[1] * self.damping + 1.0);
-        let mu = self.friction_coefficient(v[0]);
+        let normal = p.area * params.stiffness * (-v[1] * params.damping + 1.0);
+        let mu = self.friction_coefficient_with(v[0], params.mu_dynamic);
         let tangential = -normal * mu;
         // F_t / F_n = −μ: no division by a normal force that vanishes at first contact
         let cop_x = p.centroid[0] + (p.centroid[1] - ground_y) * mu;

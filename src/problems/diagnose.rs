@@ -12,10 +12,22 @@
 //! Significance: with `N` data residuals whose mean square at the solution is `s² =
 //! J/N`, the decrease in units of `s²` is approximately χ² with `k` degrees of freedom
 //! (`k` = the candidate's free parameters) when the candidate explains only noise (the
-//! extra-sum-of-squares test). The candidate is significant above the χ²ₖ 0.1 % point.
-//! Residuals of neighbouring nodes are not independent and the regularisation terms are
-//! counted in `J`, so the test is an approximation; it errs towards "nothing found"
-//! because `J` includes the misfit the candidate would remove.
+//! extra-sum-of-squares test) — if the residuals were independent. They are not (real
+//! residuals are smooth in time), so the decrease is divided by the variance inflation
+//! `φ = N/N_eff` of the channels it comes from, measured on the residuals left after the
+//! candidate's re-fit ([`stats::variance_inflation`]), before it is compared with the
+//! χ²ₖ 0.1 % point.
+//!
+//! Identifiability comes first: a candidate whose reduced Fisher information (the
+//! Hessian of the cost w.r.t. its parameters with everything else optimised out) is
+//! rank deficient, or whose standard deviations exceed a quarter of their bound span, is
+//! "not testable with this run's cost" — its score (often exactly 0, as the free
+//! variables absorb it) says nothing about its absence ([`stats::identifiability`]).
+//! A significant candidate is "found" only if, fitted here and applied with its values
+//! fixed to another half cycle of the trial, it lowers that cost beyond its noise band
+//! ([`HeldOut`], [`stats::held_out_band`]).
+
+pub mod stats;
 
 use crate::model::effects::EffectSpec;
 use crate::ocp::{Block, Transcription};
@@ -168,6 +180,57 @@ pub struct ScoreTest {
     /// Mean error per Table 3 channel at the solution and after the steps:
     /// `(channel, unit, before, after)` — the expected change channel by channel.
     pub expected_channels: Vec<(String, String, f64, f64)>,
+    /// The statistic as if the residuals were independent (`decrease / (J/N)`); the
+    /// `statistic` divides this by `inflation`.
+    pub statistic_independent: f64,
+    /// Variance inflation `φ = N/N_eff` of the correlated residuals the decrease comes
+    /// from ([`stats::variance_inflation`]; 1 = independent).
+    pub inflation: f64,
+    /// Whether the candidate's parameters are identifiable under the run's cost
+    /// (`None`: not checked, e.g. a re-fit test).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub identifiability: Option<stats::Identifiability>,
+    /// Whether it can be tested with this run's cost at all; an untestable candidate is
+    /// never significant, and its statistic says nothing about the effect's absence.
+    pub testable: bool,
+    /// What would make an untestable candidate testable.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub hint: Option<String>,
+    /// The held-out validation of a significant candidate (`None`: not run).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub held_out: Option<HeldOut>,
+    /// Significant in-sample and validated on the held-out half cycle (or significant
+    /// where the trial has no other half cycle: see `held_out`).
+    pub found: bool,
+    /// One of `not testable with this run's cost`, `not significant`, `not confirmed on
+    /// the held-out half cycle`, `found`, `significant, not validated`.
+    pub verdict: String,
+}
+
+/// A candidate fitted on the run's half cycle, applied with its parameters fixed to
+/// another half cycle of the trial and the other variables re-optimised there.
+#[derive(Debug, Clone, Serialize)]
+pub struct HeldOut {
+    /// Which half cycle (`--stride`) was held out.
+    pub stride: usize,
+    /// Its time span (s).
+    pub window: (f64, f64),
+    /// The parameter values fitted on the run's half cycle.
+    pub values: Vec<f64>,
+    /// The held-out cost of the plain model (its own tracking solution).
+    pub objective: f64,
+    /// Fall of the held-out cost with the candidate at `values` (cost units; negative:
+    /// it got worse), after a truncated re-fit of the other variables and less that of
+    /// the plain model.
+    pub change: f64,
+    /// `change` as a fraction of `objective`.
+    pub change_fraction: f64,
+    /// Upper edge of the noise band of `change` ([`stats::held_out_band`]): two standard
+    /// deviations above the mean change a candidate fitted on noise makes (which is
+    /// negative).
+    pub band: f64,
+    /// Whether `change` exceeds `band`.
+    pub beyond_noise: bool,
 }
 
 /// Mean error per Table 3 channel of the tracking solution in `w` against `data`.
@@ -350,8 +413,83 @@ impl ScoreTest {
             expected_channels: Vec::new(),
             steps: 0,
             refit: false,
+            statistic_independent: statistic,
+            inflation: 1.0,
+            identifiability: None,
+            testable: true,
+            hint: None,
+            held_out: None,
+            found: false,
+            verdict: String::new(),
         }
     }
+
+    /// Divide the statistic by the variance inflation `phi` of correlated residuals
+    /// (≥ 1) and judge it again.
+    pub fn set_inflation(&mut self, phi: f64) {
+        self.inflation = phi.max(1.0);
+        self.statistic = self.statistic_independent / self.inflation;
+        self.significant = self.testable && self.statistic > self.threshold;
+    }
+
+    /// Record whether the candidate is identifiable; an untestable one is not
+    /// significant whatever its statistic.
+    pub fn set_identifiability(&mut self, id: stats::Identifiability, hint: Option<String>) {
+        self.testable = id.testable;
+        self.identifiability = Some(id);
+        self.hint = if self.testable { None } else { hint };
+        self.significant = self.testable && self.statistic > self.threshold;
+    }
+
+    /// Settle `found` and `verdict` from the tests so far.
+    pub fn settle(&mut self) {
+        let (found, verdict) = if !self.testable {
+            (false, "not testable with this run's cost".to_string())
+        } else if !self.significant {
+            (false, "not significant".into())
+        } else {
+            match &self.held_out {
+                Some(h) if h.beyond_noise => (true, "found".into()),
+                Some(_) => (false, "not confirmed on the held-out half cycle".into()),
+                // no other half cycle, validation off, or a candidate tested by a full
+                // re-fit (no reduced curvature to set its band): the diagnosis says why
+                None => (true, "significant, not validated".into()),
+            }
+        };
+        self.found = found;
+        self.verdict = verdict;
+    }
+}
+
+/// The signed error series of each Table 3 channel of the solution in `w` against
+/// `data` at the nodes, the right leg's then the left's with a NaN between (so the two
+/// legs are separate segments for [`stats::effective_sample_size`]).
+pub fn channel_series(
+    tr: &Transcription,
+    w: &[f64],
+    continuous: &[usize],
+    t0: f64,
+    model: &crate::model::GaitModel,
+    sets: &[crate::model::ConstraintSet],
+    data: &crate::data::GaitData,
+) -> Result<Vec<(String, Vec<f64>)>, String> {
+    use super::evaluation::{Comparison, GaitSolution};
+    let sol = GaitSolution::from_nlp(tr, w, continuous, t0);
+    let nodes = sol.node_samples(model, sets).map_err(|e| e.to_string())?;
+    let cmp =
+        Comparison::through_model(&nodes, data, model, &sol.theta).map_err(|e| e.to_string())?;
+    let n = cmp.len();
+    Ok(cmp
+        .table_channels()
+        .into_iter()
+        .map(|c| {
+            let mut e = c.errors;
+            if e.len() == 2 * n {
+                e.insert(n, f64::NAN);
+            }
+            (c.name, e)
+        })
+        .collect())
 }
 
 /// Approximate standard deviations of the free parameters θ at a least-squares solution

@@ -444,7 +444,11 @@ pub const LOAD_NAMES: [&str; 3] = ["grf_x", "grf_y", "cop_x"];
 impl Comparison {
     /// Hold `samples` of the model against `data`.
     pub fn new(samples: &[Sample], data: &GaitData) -> Result<Self, DataError> {
-        Self::with_offsets(samples, data, 0.0, 0.0)
+        Self::with_offsets(
+            samples,
+            data,
+            &crate::model::effects::MeasurementAdjust::identity(),
+        )
     }
 
     /// Hold `samples` of the model against `data` through the measurement effects of
@@ -457,16 +461,16 @@ impl Comparison {
         theta: &[f64],
     ) -> Result<Self, DataError> {
         let adj = model.measurement_adjust::<f64>(theta);
-        Self::with_offsets(samples, data, adj.force_time_offset, adj.cop_offset)
+        Self::with_offsets(samples, data, &adj)
     }
 
-    /// As [`new`](Self::new) with the force plates read at t + `force_time_offset` (s)
-    /// and `cop_offset` (m) taken off their CoP.
+    /// As [`new`](Self::new) with each foot's force plate read at t + its clock offset
+    /// (s), its CoP offset (m) taken off its CoP and its forces divided by its gain
+    /// (`offsets`, per foot).
     pub fn with_offsets(
         samples: &[Sample],
         data: &GaitData,
-        force_time_offset: f64,
-        cop_offset: f64,
+        offsets: &crate::model::effects::MeasurementAdjust<f64>,
     ) -> Result<Self, DataError> {
         let splines: Vec<CubicSpline> = COORDINATES
             .iter()
@@ -505,18 +509,23 @@ impl Comparison {
                     .collect(),
             ]
         };
-        let plate_times: Vec<f64> = times.iter().map(|t| t + force_time_offset).collect();
         // the forces at their own instants; NaN (not measured) propagates to the
         // neighbouring samples and leaves those entries out of the error tables
         let (force_time, force_feet) = data.force_record();
         let data_side = |k: usize| -> [Vec<f64>; 3] {
             let f = &force_feet[k];
+            let plate_times: Vec<f64> = times
+                .iter()
+                .map(|t| t + offsets.force_time_offset[k])
+                .collect();
+            let gain = offsets.force_gain[k];
+            let scaled = |v: Vec<f64>| v.into_iter().map(|x| x / gain).collect();
             [
-                interp_linear(&plate_times, force_time, &f.fx),
-                interp_linear(&plate_times, force_time, &f.fy),
+                scaled(interp_linear(&plate_times, force_time, &f.fx)),
+                scaled(interp_linear(&plate_times, force_time, &f.fy)),
                 interp_linear(&plate_times, force_time, &f.cop_x)
                     .into_iter()
-                    .map(|c| c - cop_offset)
+                    .map(|c| c - offsets.cop_offset[k])
                     .collect(),
             ]
         };

@@ -190,7 +190,16 @@ pub fn synthesize(
     let noisy = add_noise(&clean, &settings.noise);
     let mut clean = clean;
     hide_unloaded_cop(&mut clean);
-    let events = exact_events(model, sets, solution, &clean);
+    // a foot of volumetric primitives has no contact changes in its phase graph: its
+    // events are where its clean normal force crosses the seed's event threshold (5 % of
+    // the peak), as a lab would find them on noise-free forces
+    let events = if sets.iter().all(|s| s.rows.is_empty()) && model.has_volumetric_contacts() {
+        crate::data::detect_events(&clean, crate::data::DEFAULT_EVENT_FRACTION).map_err(|e| {
+            SimulationError::Input(format!("gait events of the synthetic trial: {e}"))
+        })?
+    } else {
+        exact_events(model, sets, solution, &clean)
+    };
     let mut noisy = noisy;
     noisy.events = Some(events.clone());
     clean.events = Some(events.clone());

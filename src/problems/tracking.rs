@@ -192,6 +192,19 @@ pub struct ChannelNoise {
     pub cop_m: f64,
 }
 
+/// How a node's instant moves with the force plates' clock offsets when the phase
+/// boundaries come from their force thresholds: the node is at
+/// `time + coeff · (δ_right, δ_left)` on the motion capture's clock (δ the plates' clock
+/// offsets of [`MeasurementAdjust`](crate::model::effects::MeasurementAdjust)), where
+/// its angle targets are read from `kinematics`.
+#[derive(Debug, Clone)]
+pub struct NodeClock {
+    /// The node time's derivative with respect to each plate's clock offset.
+    pub coeff: [f64; 2],
+    /// Splines of the measured coordinates, in the model's order.
+    pub kinematics: Arc<Vec<CubicSpline>>,
+}
+
 /// The residual of one node.
 pub struct TrackingResidual<'a> {
     model: &'a GaitModel,
@@ -203,15 +216,19 @@ pub struct TrackingResidual<'a> {
     /// The loads are compared with the target's own values (the CoP offset still
     /// applied), never with the measured loads at a moved time.
     as_measured: bool,
+    /// The node's instant moves with the plates' clock offsets.
+    clock: Option<NodeClock>,
     dim: usize,
 }
 
-/// The shift (s) of a sample term's instant whose loads are read on the force plates'
+/// The shift (s) of a sample term's instant whose loads are read on one force plate's
 /// clock: the sample taken at t is compared with the model at `t − force_time_offset(θ)`,
 /// a function of θ ([`SampleTerm::shift`](crate::ocp::SampleTerm)).
 pub struct ForceClockShift<'a> {
     /// The model whose measurement effects give the offset.
     pub model: &'a GaitModel,
+    /// The foot whose plate's clock it is (0 right, 1 left).
+    pub side: usize,
 }
 
 impl GenericFunction for ForceClockShift<'_> {
@@ -219,7 +236,7 @@ impl GenericFunction for ForceClockShift<'_> {
         1
     }
     fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), String> {
-        out[0] = -self.model.measurement_adjust(z).force_time_offset;
+        out[0] = -self.model.measurement_adjust(z).force_time_offset[self.side];
         Ok(())
     }
     fn is_linear(&self) -> bool {
@@ -272,8 +289,19 @@ impl<'a> TrackingResidual<'a> {
             measured,
             regularised: true,
             as_measured: false,
+            clock: None,
             dim,
         }
+    }
+
+    /// The same residual at a node whose instant moves with the plates' clock offsets
+    /// (its angle and velocity targets then read from `clock.kinematics` at the moved
+    /// instant, its loads from the measured ones there plus each plate's offset).
+    pub fn with_clock(mut self, clock: NodeClock) -> Self {
+        if clock.coeff != [0.0, 0.0] {
+            self.clock = Some(clock);
+        }
+        self
     }
 
     /// The same residual with the loads compared with the target's own values (the CoP
@@ -351,16 +379,32 @@ impl<'a> TrackingResidual<'a> {
         out: &mut [S],
     ) -> Result<(), String> {
         let (nq, w) = (self.model.nq(), &self.weights);
+        // the node's instant on the motion capture's clock, moved with the plates' clocks
+        let moved = self.clock.as_ref().map(|c| {
+            let adj = self.model.measurement_adjust(th);
+            let t = adj.force_time_offset[0] * c.coeff[0]
+                + adj.force_time_offset[1] * c.coeff[1]
+                + self.target.time;
+            (c, t)
+        });
         let mut o = 0;
         for i in 0..nq {
             if let Some(r) = self.target.q.get(i).copied().flatten() {
                 if w.angle[i] > 0.0 {
+                    let r = match &moved {
+                        Some((c, t)) => c.kinematics[i].eval_generic(*t),
+                        None => S::c(r),
+                    };
                     out[o] = (x[i] - r) * w.angle[i].sqrt();
                     o += 1;
                 }
             }
             if let Some(r) = self.target.qd.get(i).copied().flatten() {
                 if w.velocity[i] > 0.0 {
+                    let r = match &moved {
+                        Some((c, t)) => c.kinematics[i].derivative_generic(*t),
+                        None => S::c(r),
+                    };
                     out[o] = (x[nq + i] - r) * w.velocity[i].sqrt();
                     o += 1;
                 }
@@ -375,24 +419,29 @@ impl<'a> TrackingResidual<'a> {
                 .measured
                 .as_ref()
                 .map(|m| (m, self.model.measurement_adjust(th)));
+            let node_time = moved.as_ref().map_or(S::c(self.target.time), |(_, t)| *t);
             for (s, tgt) in self.target.feet.iter().enumerate() {
                 let Some((fx, fy, cop)) = *tgt else { continue };
                 // targets at the node time, or through the measurement effects
-                let (tfx, tfy, tcop, cop_offset) = match &adjust {
-                    Some((_, adj)) if self.as_measured => {
-                        (S::c(fx), S::c(fy), cop.map(S::c), adj.cop_offset)
-                    }
+                let (tfx, tfy, tcop, cop_offset, gain) = match &adjust {
+                    Some((_, adj)) if self.as_measured => (
+                        S::c(fx),
+                        S::c(fy),
+                        cop.map(S::c),
+                        adj.cop_offset[s],
+                        adj.force_gain[s],
+                    ),
                     Some((m, adj)) => {
-                        let t = adj.force_time_offset + self.target.time;
+                        let t = adj.force_time_offset[s] + node_time;
                         let (a, b) = m.forces(s, t);
                         let c = cop.map(|c0| m.cop(s, t).unwrap_or(S::c(c0)));
-                        (a, b, c, adj.cop_offset)
+                        (a, b, c, adj.cop_offset[s], adj.force_gain[s])
                     }
-                    None => (S::c(fx), S::c(fy), cop.map(S::c), S::c(0.0)),
+                    None => (S::c(fx), S::c(fy), cop.map(S::c), S::c(0.0), S::c(1.0)),
                 };
                 let sc = w.force.sqrt() / w.force_scale;
-                out[o] = (loads[s].0 - tfx) * sc;
-                out[o + 1] = (loads[s].1 - tfy) * sc;
+                out[o] = (loads[s].0 * gain - tfx) * sc;
+                out[o + 1] = (loads[s].1 * gain - tfy) * sc;
                 o += 2;
                 if let Some(xc) = tcop {
                     out[o] = (loads[s].2 + loads[s].1 * (cop_offset - xc))
@@ -430,9 +479,10 @@ impl GenericFunction for TrackingResidual<'_> {
         let (u, th) = rest.split_at(self.model.nu());
         self.residual(x, u, th, out)
     }
-    /// Only the ground-force and CoP rows are nonlinear.
+    /// Only the ground-force and CoP rows are nonlinear, and the angle rows of a node
+    /// that moves with the plates' clocks.
     fn is_linear(&self) -> bool {
-        self.target.feet.iter().all(Option::is_none)
+        self.clock.is_none() && self.target.feet.iter().all(Option::is_none)
     }
     /// The controls enter only through the ground loads, that is through the dynamics.
     fn curved_inputs(&self) -> Option<(Vec<usize>, usize)> {

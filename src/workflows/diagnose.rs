@@ -1,21 +1,26 @@
 //! `footfall diagnose RUN`: which effect of the catalog is the model of a tracking run
-//! missing? Score tests of every candidate at the run's solution (a full re-fit for the
-//! heel pad, which has no null value), then a real re-fit of the top significant ones
-//! (each written as a track run folder, so `diff` and a second `diagnose` can start from
-//! it).
+//! missing? For every candidate: is it testable with the run's cost at all (reduced
+//! Fisher information), its score test at the run's solution (a full re-fit for the
+//! heel pad, which has no null value) with the statistic corrected for correlated
+//! residuals; the significant ones are validated on another half cycle of the trial
+//! (`diagnose/heldout.rs`) and the top found ones re-fitted for real (each written as a track run
+//! folder, so `diff` and a second `diagnose` can start from it). `--make-testable`
+//! re-tracks the run with the pelvis position tracked and diagnoses that run too.
 
 use super::track::{read_run_setup, tracking_sqp_settings, TrackedRun, TrackingProblem};
 #[allow(unused_imports)]
 use super::{note, warn_note, Progress};
 use crate::model::effects::{catalog, EffectSpec};
+use crate::problems::diagnose::stats::{candidate_identifiability, variance_inflation};
 use crate::problems::diagnose::{
-    channel_means, gauss_newton_decrease, refit_test, score_test, IdentifiedParameter, ScoreTest,
-    TrackingRunSetup,
+    channel_means, channel_series, gauss_newton_decrease, refit_test, score_test,
+    IdentifiedParameter, ScoreTest, TrackingRunSetup,
 };
+
+mod heldout;
+mod output;
 use crate::problems::evaluation::GaitSolution;
-use crate::report::diff::{fmt_value, RunDiff, RunSummary};
-use crate::report::html::{Report, Section, Summary, Tone};
-use crate::report::table::Table;
+use crate::report::diff::{RunDiff, RunSummary};
 use crate::runfolder::RunFolder;
 use crate::sqp::HessianMode;
 use anyhow::anyhow;
@@ -38,6 +43,12 @@ pub struct DiagnoseRequest {
     pub tol: f64,
     /// Iteration limit of the re-fits.
     pub max_iter: usize,
+    /// Re-track the run with the change that makes its untestable candidates testable
+    /// (the pelvis position tracked) and diagnose that run too (`--make-testable`).
+    pub make_testable: bool,
+    /// Validate significant candidates on another half cycle of the trial (default on;
+    /// off: they are reported "significant, not validated").
+    pub held_out: bool,
 }
 
 /// The decrease of a truncated re-fit of a problem started at the run's solution (the
@@ -60,17 +71,18 @@ fn test_candidate(
     prob: &TrackingProblem,
     effect: &EffectSpec,
     k: usize,
-    baseline: f64,
-    rows: usize,
+    baseline: &Residuals,
+    hint: String,
 ) -> anyhow::Result<(ScoreTest, GaitSolution)> {
+    let rows = baseline.rows;
     prob.with_transcription(|tr, cycle, w| {
         let free = prob.model.free_parameters();
         let names: Vec<String> = free[free.len() - k..]
             .iter()
             .map(|&i| prob.model.parameters()[i].name.clone())
             .collect();
-        let (mut t, w1) =
-            score_test(effect, names, tr, &w, baseline, rows).map_err(|e| anyhow!(e))?;
+        let (mut t, w1) = score_test(effect, names.clone(), tr, &w, baseline.decrease, rows)
+            .map_err(|e| anyhow!(e))?;
         let means = |w: &[f64]| {
             channel_means(
                 tr,
@@ -89,11 +101,62 @@ fn test_candidate(
             .zip(after)
             .map(|((c, u, b), (_, _, a))| (c, u, b, a))
             .collect();
-        Ok((
-            t,
-            GaitSolution::from_nlp(tr, &w1, &cycle.continuous, prob.setup.window.0),
-        ))
+        // the decrease's variance is inflated as that of the channels it comes from
+        let weights: Vec<f64> = baseline
+            .series
+            .iter()
+            .map(|(name, _)| {
+                t.expected_channels
+                    .iter()
+                    .find(|c| &c.0 == name)
+                    .map_or(0.0, |c| if c.2 > 0.0 { (c.2 - c.3) / c.2 } else { 0.0 })
+            })
+            .collect();
+        // the autocorrelation of the noise is that of the residuals under the
+        // alternative (after the candidate's re-fit), as an F-test's variance is the
+        // larger model's: at the plain model's solution a missing effect's systematic
+        // misfit is itself a smooth, correlated residual
+        let after = channel_series(
+            tr,
+            &w1,
+            &cycle.continuous,
+            prob.setup.window.0,
+            &prob.model,
+            &prob.sets,
+            &prob.data,
+        )
+        .map_err(|e| anyhow!(e))?;
+        let series: Vec<Vec<f64>> = baseline
+            .series
+            .iter()
+            .map(|(name, before)| {
+                after
+                    .iter()
+                    .find(|a| &a.0 == name)
+                    .map_or_else(|| before.clone(), |a| a.1.clone())
+            })
+            .collect();
+        let (_, phi) = variance_inflation(&series, &weights);
+        t.set_inflation(phi);
+        let s2 = baseline.objective / rows.max(1) as f64;
+        let id = candidate_identifiability(tr, &w, names, s2, phi).map_err(|e| anyhow!(e))?;
+        t.set_identifiability(id, Some(hint));
+        let mut solution = GaitSolution::from_nlp(tr, &w1, &cycle.continuous, prob.setup.window.0);
+        // a plate's clock offset candidate moves the window's start with the events it gave
+        prob.setup.place(&prob.model, &mut solution);
+        Ok((t, solution))
     })
+}
+
+/// The run's residuals: cost, count, the truncated re-fit's leftover decrease and the
+/// Table 3 channels' error series at the nodes (for their autocorrelation).
+struct Residuals {
+    objective: f64,
+    decrease: f64,
+    rows: usize,
+    series: Vec<(String, Vec<f64>)>,
+    /// Each channel's variance inflation `N/N_eff`.
+    inflation: Vec<Option<f64>>,
 }
 
 /// A verified candidate: its re-fit run and what changed.
@@ -258,15 +321,22 @@ fn print_progress(progress: &dyn Progress, t: &ScoreTest, converged: bool, secon
         ("expected decrease", "steps")
     };
     note!(progress,
-        "  {:<32} {what} {:>10.3e} ({:>5.1} % of J, {} {steps}{}), statistic {:>9.1} vs {:.1}{}  [{seconds:.1} s]",
+        "  {:<32} {what} {:>10.3e} ({:>5.1} % of J, {} {steps}{}), statistic {:>9.1} (φ {:.1}) vs {:.1}{}  [{seconds:.1} s]",
         t.label,
         t.predicted_decrease,
         100.0 * t.predicted_fraction,
         t.steps,
         if converged { "" } else { ", not converged" },
         t.statistic,
+        t.inflation,
         t.threshold,
-        if t.significant { "  significant" } else { "" },
+        if !t.testable {
+            format!("  NOT TESTABLE: {}", t.identifiability.as_ref().and_then(|i| i.reason.clone()).unwrap_or_default())
+        } else if t.significant {
+            "  significant".into()
+        } else {
+            String::new()
+        },
     );
 }
 
@@ -349,11 +419,33 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
         .start_from(&solution)
         .map_err(|e| anyhow!("{}: {e}", args.run.display()))?;
     let (objective, base_decrease, rows) = decrease_at_solution(&base)?;
+    let series = base.with_transcription(|tr, cycle, w| {
+        channel_series(
+            tr,
+            &w,
+            &cycle.continuous,
+            base.setup.window.0,
+            &base.model,
+            &base.sets,
+            &base.data,
+        )
+        .map_err(|e| anyhow!(e))
+    })?;
+    let values: Vec<Vec<f64>> = series.iter().map(|s| s.1.clone()).collect();
+    let (inflation, phi_all) = variance_inflation(&values, &[]);
+    let resid = Residuals {
+        objective,
+        decrease: base_decrease,
+        rows,
+        series,
+        inflation,
+    };
     {
         note!(progress,
-            "diagnosing {}: J = {objective:.6} over {rows} data residuals (mean square {:.3e}); Gauss–Newton decrease left at the solution {base_decrease:.2e}",
+            "diagnosing {}: J = {objective:.6} over {rows} data residuals (mean square {:.3e}); Gauss–Newton decrease left at the solution {base_decrease:.2e}; variance inflation of the correlated residuals {phi_all:.1} ({})",
             args.run.display(),
-            objective / rows as f64
+            objective / rows as f64,
+            resid.series.iter().zip(&resid.inflation).map(|(s, p)| format!("{} {}", s.0, p.map_or("—".into(), |p| format!("{p:.1}")))).collect::<Vec<_>>().join(", ")
         );
     }
     let mut tests = Vec::new();
@@ -369,6 +461,11 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
             .any(|c| c.name.ends_with(".heel"))
     {
         candidates.push(pad.clone());
+    }
+    // the volumetric contact law is a candidate on feet with volumetric primitives, its
+    // null value the foot file's law ("is the law the one the forces ask for?")
+    if args.candidates.is_empty() && base.model.has_volumetric_contacts() {
+        candidates.push(EffectSpec::parse_cli("volumetric_contact").map_err(|e| anyhow!(e))?);
     }
     for c in &candidates {
         if setup.effects.iter().any(|e| e.overlaps(c)) {
@@ -391,7 +488,8 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
                 objective,
                 rows,
             };
-            let (t, run, diff) = test_by_refit(&args, &setup, c, &baseline, progress)?;
+            let (mut t, run, diff) = test_by_refit(args, &setup, c, &baseline, progress)?;
+            t.set_inflation(phi_all);
             {
                 print_progress(progress, &t, run.converged, t0.elapsed().as_secs_f64());
             }
@@ -408,20 +506,80 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
         let k = prob.model.ntheta() - base.model.ntheta();
         prob.setup.start_from(&solution).map_err(|e| anyhow!(e))?;
         let t0 = std::time::Instant::now();
-        let (t, start) = test_candidate(&prob, c, k, base_decrease, rows)?;
+        let (t, start) = test_candidate(&prob, c, k, &resid, heldout::hint(c, &setup))?;
         {
             print_progress(progress, &t, true, t0.elapsed().as_secs_f64());
         }
         tests.push((t, Evidence::Start(start)));
     }
-    tests.sort_by(|a, b| b.0.statistic.total_cmp(&a.0.statistic));
-    let (tests, evidence): (Vec<ScoreTest>, Vec<Evidence>) = tests.into_iter().unzip();
+    // testable candidates first, by their statistic; the untestable after them (their
+    // statistic says nothing)
+    tests.sort_by(|a, b| {
+        b.0.testable
+            .cmp(&a.0.testable)
+            .then(b.0.statistic.total_cmp(&a.0.statistic))
+    });
+    let (mut tests, evidence): (Vec<ScoreTest>, Vec<Evidence>) = tests.into_iter().unzip();
+
+    // held-out validation of the significant ones
+    let mut held_out_note: String = tests
+        .iter()
+        .filter(|t| t.significant && t.refit)
+        .map(|t| format!(" {} is not validated on a held-out half cycle: it was tested by a full re-fit, which gives no reduced curvature to set its noise band.", t.label))
+        .collect();
+    if tests.iter().any(|t| t.significant && !t.refit) {
+        if !args.held_out {
+            held_out_note += " Held-out validation was not asked for (--no-held-out): significant candidates are not validated.";
+        } else {
+            match heldout::held_out_base(args, &setup, base.setup.window, progress)? {
+                Ok(hb) => {
+                    held_out_note += &format!(
+                        " Held-out: each significant candidate, with the values fitted on this run's half cycle ({:.3}–{:.3} s), applied to half cycle {} ({:.3}–{:.3} s; the plain model tracked there: J = {:.6}, {} iterations{}) with the other variables re-fitted; it is found if it lowers that cost beyond its noise band (2 sd, inflated by φ, above the mean change a fit to noise makes, which is a rise).",
+                        base.setup.window.0,
+                        base.setup.window.1,
+                        hb.stride,
+                        hb.window.0,
+                        hb.window.1,
+                        hb.objective,
+                        hb.iterations,
+                        if hb.converged { "" } else { ", NOT converged" }
+                    );
+                    for t in tests.iter_mut().filter(|t| t.significant) {
+                        if t.refit {
+                            continue;
+                        }
+                        match heldout::validate(&hb, t) {
+                            Ok(h) => {
+                                note!(progress,
+                                    "  held-out {:<32} change {:>10.3e} ({:>5.1} % of J), noise band {:.3e}{}",
+                                    t.label, h.change, 100.0 * h.change_fraction, h.band,
+                                    if h.beyond_noise { "  confirmed" } else { "  not confirmed" });
+                                t.held_out = Some(h);
+                            }
+                            Err(e) => {
+                                held_out_note += &format!(
+                                    " {}: the held-out validation failed ({e:#}).",
+                                    t.label
+                                );
+                            }
+                        }
+                    }
+                }
+                Err(why) => {
+                    held_out_note += &format!(" No held-out half cycle in this trial ({why}): significant candidates are not validated.");
+                }
+            }
+        }
+    }
+    for t in &mut tests {
+        t.settle();
+    }
 
     let mut verified = Vec::new();
     for (t, e) in tests
         .iter()
         .zip(&evidence)
-        .filter(|(t, _)| t.significant)
+        .filter(|(t, _)| t.found)
         .take(args.verify)
     {
         let v = match e {
@@ -430,227 +588,48 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
             // from where the candidate's truncated re-fit got to (fewer SQP iterations
             // than from the run's solution)
             Evidence::Start(start) => {
-                let run = refit(&args, &setup, &t.effect, start, progress)?;
+                let run = refit(args, &setup, &t.effect, start, progress)?;
                 Verified::new(t, &run, diff_with(&before, &run)?, objective)
             }
         };
         verified.push(v);
     }
 
-    // --- output
-    let significant = tests.iter().filter(|t| t.significant).count();
-    let mut verdict = if significant == 0 {
-        "No candidate explains more than the noise: every predicted decrease is below its χ² 0.1 % point. No effect is suggested.".to_string()
-    } else {
-        format!("{significant} of {} candidates explain more than the noise; the most likely missing effect is {}.", tests.len(), tests[0].label)
-    };
-    // the score tests compare against the plain model's optimum; say so when the run
-    // stopped short of it
-    if before.status.as_deref().is_some_and(|s| s != "converged") {
-        let reason = before
-            .stop_reason
-            .as_deref()
-            .or(before.status.as_deref())
-            .unwrap_or_default();
-        verdict += &format!(
-            " Caution: the run did not converge ({reason}), and the score tests assume the plain model's optimum; re-track it to convergence before trusting this ranking."
-        );
-    }
-    let ranking = Table {
-        title: "Candidate effects ranked by the score statistic (predicted cost decrease / residual mean square)".into(),
-        headers: ["rank", "effect", "parameters (truncated re-fit)", "expected decrease", "% of J", "statistic", "χ² 0.1 % point", "significant"].map(String::from).to_vec(),
-        rows: tests
+    // --make-testable: re-track with the pelvis position and diagnose that run too
+    let mut testable_run = None;
+    if args.make_testable {
+        let pelvis = tests
             .iter()
-            .enumerate()
-            .map(|(i, t)| {
-                vec![
-                    (i + 1).to_string(),
-                    t.label.clone(),
-                    t.parameters.iter().zip(&t.step_values).map(|(n, v)| format!("{} = {v:.4}", n.rsplit('.').next().unwrap_or(n))).collect::<Vec<_>>().join(", "),
-                    format!("{:.3e}", t.predicted_decrease),
-                    format!("{:.1}", 100.0 * t.predicted_fraction),
-                    format!("{:.1}", t.statistic),
-                    format!("{:.1}", t.threshold),
-                    if t.significant { "yes".into() } else { "no".into() },
-                ]
-            })
-            .collect(),
-    };
-    // channels by name: a re-fit's come from its run summary, a score test's from the
-    // problem
-    let channels: Vec<(String, String)> = tests.first().map_or(vec![], |t| {
-        t.expected_channels
-            .iter()
-            .map(|c| (c.0.clone(), c.1.clone()))
-            .collect()
-    });
-    let expected = Table {
-        title: "Expected mean error per channel after the truncated re-fit with each candidate (a full re-fit for the heel pad; before → after)".into(),
-        headers: std::iter::once("effect".to_string()).chain(channels.iter().map(|(c, u)| format!("{c} ({u})"))).collect(),
-        rows: tests
-            .iter()
-            .map(|t| {
-                std::iter::once(t.label.clone())
-                    .chain(channels.iter().map(|(name, _)| t.expected_channels.iter().find(|c| &c.0 == name).map_or("—".into(), |c| format!("{} → {}", fmt_value(c.2), fmt_value(c.3)))))
-                    .collect()
-            })
-            .collect(),
-    };
-    let refits: Vec<String> = tests
-        .iter()
-        .zip(&evidence)
-        .filter_map(|(t, e)| match e {
-            Evidence::Refit(run, _) => Some(format!(
-                "{} was tested by a full re-fit ({}, {}), as it has no null value for a score test",
-                t.label,
-                run.output.path.display(),
-                if run.converged {
-                    "converged"
-                } else {
-                    "did NOT converge"
-                }
-            )),
-            Evidence::Start(_) => None,
-        })
-        .collect();
-    let mut md = format!(
-        "# Diagnosis of {}\n\n{verdict}\n\n{}\n\n{}\n",
-        args.run.display(),
-        ranking.to_markdown(),
-        expected.to_markdown()
-    );
-    for r in &refits {
-        md += &format!("\n{r}.\n");
-    }
-    let paragraphs = std::iter::once(verdict.clone())
-        .chain(refits.iter().map(|r| format!("{r}.")))
-        .collect();
-    let mut sections = vec![Section {
-        heading: "Ranking".into(),
-        paragraphs,
-        tables: vec![ranking.clone(), expected],
-        svgs: vec![],
-    }];
-    for v in &verified {
-        let params = v
-            .parameters
-            .iter()
-            .map(|(n, val, sd, u)| {
-                format!(
-                    "{n} = {val:.5}{} {u}",
-                    sd.map_or(String::new(), |s| format!(" ± {s:.2e}"))
-                )
-            })
-            .collect::<Vec<_>>()
-            .join("; ");
-        let text = format!(
-            "Re-fit with {} ({}): J {:.6} → {:.6} ({:.1} % lower; expected {:.1} %), {}. Identified: {params}. {}.",
-            v.test.label,
-            v.folder.display(),
-            v.objective_before,
-            v.objective_after,
-            100.0 * (v.objective_before - v.objective_after) / v.objective_before,
-            100.0 * v.test.predicted_fraction,
-            if v.converged { "converged" } else { "did NOT converge" },
-            v.sentence
-        );
-        // the curves before and after, side by side, in a report of their own
-        let side_by_side = format!("before_after_{}.html", v.test.effect.kind());
-        let text = match [&args.run, &v.folder]
-            .iter()
-            .map(|p| crate::report::runs::RunCurves::read(p))
-            .collect::<Result<Vec<_>, _>>()
-        {
-            Ok(runs) => {
-                folder.write(
-                    &side_by_side,
-                    crate::report::runs::side_by_side(&runs)
-                        .to_html()
-                        .as_bytes(),
-                )?;
-                format!("{text} The curves before and after, side by side: {side_by_side}.")
-            }
-            Err(e) => format!("{text} (No side-by-side curves: {e}.)"),
-        };
-        md += &format!(
-            "\n## {}\n\n{text}\n\n{}\n",
-            v.test.label,
-            v.diff.table().to_markdown()
-        );
-        sections.push(Section {
-            heading: format!("Verified: {}", v.test.label),
-            paragraphs: vec![text],
-            tables: vec![v.diff.table()],
-            svgs: vec![v.diff.chart().to_svg()],
-        });
-    }
-    if !skipped.is_empty() {
-        md += &format!("\nNot tested: {}\n", skipped.join("; "));
-    }
-    let summary = serde_json::json!({
-        "command": "diagnose",
-        "run": args.run,
-        "objective": objective,
-        "data_residuals": rows,
-        "baseline_decrease": base_decrease,
-        "ranking": tests,
-        "significant": significant,
-        "verdict": verdict,
-        "verified": verified.iter().map(|v| serde_json::json!({
-            "effect": v.test.effect,
-            "label": v.test.label,
-            "folder": v.folder,
-            "converged": v.converged,
-            "objective_before": v.objective_before,
-            "objective_after": v.objective_after,
-            "predicted_fraction": v.test.predicted_fraction,
-            "verified_fraction": (v.objective_before - v.objective_after) / v.objective_before,
-            "parameters": v.parameters.iter().map(|(n, val, sd, u)| {
-                let mut p = serde_json::json!({"name": n, "value": val, "unit": u});
-                if let Some(sd) = sd {
-                    p["sd"] = (*sd).into();
-                }
-                p
-            }).collect::<Vec<_>>(),
-            "sentence": v.sentence,
-        })).collect::<Vec<_>>(),
-        "skipped": skipped,
-    });
-    folder.write("diagnose.md", md.as_bytes())?;
-    folder.write(
-        "summary.json",
-        serde_json::to_string_pretty(&summary)?.as_bytes(),
-    )?;
-    let summary_box = Summary {
-        status: if significant == 0 {
-            "nothing significant".into()
+            .any(|t| !t.testable && t.effect.kind().contains("cop"));
+        if pelvis && !setup.track_pelvis_position {
+            let retracked = heldout::retrack_with_pelvis(args, &setup, &solution, progress)?;
+            let path = retracked.output.path.clone();
+            let sub = DiagnoseRequest {
+                run: path.clone(),
+                out: None,
+                make_testable: false,
+                ..args.clone()
+            };
+            run(&sub, progress)?;
+            testable_run = Some(path);
         } else {
-            format!("{} significant", significant)
-        },
-        tone: if significant == 0 {
-            Tone::Good
-        } else {
-            Tone::Warning
-        },
-        stop_reason: verdict.clone(),
-        iterations: None,
-        time_s: None,
-        extra: vec![
-            ("tracking cost J".into(), format!("{objective:.6}")),
-            ("data residuals".into(), rows.to_string()),
-        ],
+            held_out_note += " --make-testable: no untestable candidate here that tracking the pelvis position would make testable; the others need sample targets or a second trial.";
+        }
+    }
+
+    let ctx = output::Outcome {
+        args,
+        before: &before,
+        objective,
+        rows,
+        resid: &resid,
+        phi: phi_all,
+        tests: &tests,
+        evidence: &evidence,
+        verified: &verified,
+        skipped: &skipped,
+        held_out_note: held_out_note.trim().to_string(),
+        testable_run,
     };
-    let report = Report {
-        title: format!("footfall diagnose — {}", args.run.display()),
-        summary: summary_box,
-        sections,
-    };
-    folder.write("report.html", report.to_html().as_bytes())?;
-    let path = folder.commit()?;
-    note!(
-        progress,
-        "\n{md}\nreport: {}",
-        path.join("report.html").display()
-    );
-    Ok(())
+    output::write(&ctx, folder, progress)
 }

@@ -73,10 +73,20 @@ pub fn run(args: &SynthRequest, progress: &dyn Progress) -> anyhow::Result<()> {
     let mut model_effects = Vec::new();
     for e in &hidden {
         match e {
-            EffectSpec::ForcePlateTimeOffset { offset, .. } => {
+            EffectSpec::ForcePlateTimeOffset { side, offset, .. } if side == "both" => {
                 offsets.force_time_offset_s = *offset
             }
-            EffectSpec::CopOffset { offset, .. } => offsets.cop_offset_m = *offset,
+            EffectSpec::CopOffset { side, offset, .. } if side == "both" => {
+                offsets.cop_offset_m = *offset
+            }
+            EffectSpec::ForcePlateTimeOffset { .. }
+            | EffectSpec::CopOffset { .. }
+            | EffectSpec::ForcePlateGain { .. } => {
+                return Err(anyhow!(
+                    "--hidden-effect: {} is an instrument of one force plate; synth hides the model's effects and the clock and CoP offsets of both plates (side=both). Trials with one plate's clock, CoP or gain changed are made from measured data by tools/make-real-hidden-trials",
+                    e.label()
+                ))
+            }
             other => model_effects.push(other.clone()),
         }
     }

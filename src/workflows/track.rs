@@ -287,8 +287,9 @@ impl TrackingProblem {
     ) -> anyhow::Result<(crate::sqp::SqpResult, GaitSolution)> {
         self.with_transcription(|tr, cycle, w0| {
             self.solve_staged(tr, cycle, &w0, settings, progress, |tr, res| {
-                let sol =
+                let mut sol =
                     GaitSolution::from_nlp(tr, &res.w, &cycle.continuous, self.setup.window.0);
+                self.setup.place(&self.model, &mut sol);
                 Ok((res, sol))
             })
         })
@@ -622,7 +623,9 @@ impl TrackingProblem {
             provenance,
             check_sites,
         } = how;
-        let solution = GaitSolution::from_nlp(tr, &res.w, &cycle.continuous, setup.window.0);
+        let mut solution = GaitSolution::from_nlp(tr, &res.w, &cycle.continuous, setup.window.0);
+        // a plate's clock offset moves the window's start with the events it gave
+        setup.place(model, &mut solution);
         let converged = res.status == SqpStatus::Converged;
         let data_rows = setup.data_rows(model, sets, &cycle.continuous);
         let sd = if model.ntheta() > 0 && converged {

@@ -5,7 +5,7 @@
 use super::{Effect, EffectState, MeasurementAdjust, ModelAdjust, ParamSpec};
 use crate::model::Scalar;
 
-fn param(
+pub(super) fn param(
     name: String,
     value: f64,
     (lower, upper): (f64, f64),
@@ -190,22 +190,43 @@ impl Effect for TrunkMass {
     }
 }
 
-/// The force plates' clock is offset from the motion capture's by `offset` (s): the
+/// A force plate's clock is offset from the motion capture's by `offset` (s): the
 /// model's ground forces at time t are compared with the measured forces at t + offset.
+/// On one foot's plate (`right`, `left`; each foot's stance is on its own plate) or on
+/// both with one shared offset. The contact events taken from that plate's force
+/// threshold move with it (see `problems::track`).
 #[derive(Debug, Clone)]
 pub struct ForcePlateTimeOffset {
+    sides: [bool; 2],
     params: Vec<ParamSpec>,
+}
+
+/// `[right, left]` from a foot index (`None`: both), and the parameter name's infix.
+pub(super) fn side_mask(side: Option<usize>) -> ([bool; 2], &'static str) {
+    match side {
+        Some(0) => ([true, false], "right."),
+        Some(_) => ([false, true], "left."),
+        None => ([true, true], ""),
+    }
 }
 
 impl ForcePlateTimeOffset {
     /// Bounds of the offset (s).
     pub const BOUNDS: (f64, f64) = (-0.05, 0.05);
 
-    /// Clock offset `offset` (s).
+    /// Clock offset `offset` (s) of both plates.
     pub fn new(offset: f64, free: bool) -> Self {
+        Self::on(None, offset, free)
+    }
+
+    /// Clock offset `offset` (s) of foot `side`'s plate (0 right, 1 left; `None` both),
+    /// parameter `force_plate_time_offset.[right.|left.]offset`.
+    pub fn on(side: Option<usize>, offset: f64, free: bool) -> Self {
+        let (sides, infix) = side_mask(side);
         Self {
+            sides,
             params: vec![param(
-                "force_plate_time_offset.offset".into(),
+                format!("force_plate_time_offset.{infix}offset"),
                 offset,
                 Self::BOUNDS,
                 "s",
@@ -223,7 +244,9 @@ impl Effect for ForcePlateTimeOffset {
         &self.params
     }
     fn adjust_measurement<S: Scalar>(&self, p: &[S], m: &mut MeasurementAdjust<S>) {
-        m.force_time_offset += p[0];
+        for s in (0..2).filter(|&s| self.sides[s]) {
+            m.force_time_offset[s] += p[0];
+        }
     }
     fn is_measurement(&self) -> bool {
         true
@@ -233,10 +256,11 @@ impl Effect for ForcePlateTimeOffset {
     }
 }
 
-/// The force plates report the centre of pressure `offset` (m) further along the walkway
-/// than it is (a calibration error of the plate origin).
+/// A force plate reports the centre of pressure `offset` (m) further along the walkway
+/// than it is (a calibration error of the plate origin): one foot's plate or both.
 #[derive(Debug, Clone)]
 pub struct CopOffset {
+    sides: [bool; 2],
     params: Vec<ParamSpec>,
 }
 
@@ -244,11 +268,19 @@ impl CopOffset {
     /// Bounds of the offset (m).
     pub const BOUNDS: (f64, f64) = (-0.1, 0.1);
 
-    /// CoP offset `offset` (m).
+    /// CoP offset `offset` (m) of both plates.
     pub fn new(offset: f64, free: bool) -> Self {
+        Self::on(None, offset, free)
+    }
+
+    /// CoP offset `offset` (m) of foot `side`'s plate (0 right, 1 left; `None` both),
+    /// parameter `cop_offset.[right.|left.]offset`.
+    pub fn on(side: Option<usize>, offset: f64, free: bool) -> Self {
+        let (sides, infix) = side_mask(side);
         Self {
+            sides,
             params: vec![param(
-                "cop_offset.offset".into(),
+                format!("cop_offset.{infix}offset"),
                 offset,
                 Self::BOUNDS,
                 "m",
@@ -266,7 +298,9 @@ impl Effect for CopOffset {
         &self.params
     }
     fn adjust_measurement<S: Scalar>(&self, p: &[S], m: &mut MeasurementAdjust<S>) {
-        m.cop_offset += p[0];
+        for s in (0..2).filter(|&s| self.sides[s]) {
+            m.cop_offset[s] += p[0];
+        }
     }
     fn is_measurement(&self) -> bool {
         true

@@ -5,22 +5,33 @@
 //! rest of the model. The blanket implementation of [`DynEffect`] makes every [`Effect`]
 //! usable as a trait object; [`ModelScalar`] routes generic model code to it.
 //!
-//! Two kinds of hooks exist: *model* hooks change the dynamics (inertia, gravity, ground,
-//! generalised forces, a compliant contact) and *measurement* hooks change how the model is compared with the
-//! data (a clock offset of the force plates, an offset of their centre of pressure).
+//! Three kinds of hooks exist: *model* hooks change the dynamics (inertia, gravity, ground,
+//! generalised forces, a compliant contact), *actuator* hooks change the muscle-torque
+//! generators (strength, damping, activation time constants), and *measurement* hooks
+//! change how the model is compared with the data, per force plate (a plate's clock
+//! offset, which also moves the contact events taken from its force threshold, an
+//! offset of its centre of pressure, its gain).
 //!
 //! A user adds an effect with one entry in the model JSON (`"effects": [{"type": …}]`)
 //! or `--effect NAME` on the command line; [`EffectSpec`] lists the known kinds and
 //! [`catalog`] the candidates `footfall diagnose` tries.
 
+mod geometry;
+mod actuator_properties;
+mod instruments;
 mod kinds;
 mod spec;
+mod volumetric;
 
+pub use geometry::FootGeometry;
+pub use actuator_properties::{ActivationTimeConstants, MtgDampingScale, MtgStrengthScale};
+pub use instruments::{BodyMassError, ForcePlateGain};
 pub use kinds::{
     CopOffset, ForcePlateTimeOffset, GroundSlope, HeelPadCompliance, PassiveJointStiffness,
     TrunkMass,
 };
 pub use spec::{catalog, BuildContext, EffectSpec};
+pub use volumetric::{VolumetricContact, VolumetricStart};
 
 use super::ad::{AdChunk, AdNested};
 use super::multibody::{Inertia, V2};
@@ -58,17 +69,57 @@ pub struct ModelAdjust<'a, S> {
     pub ground_normal: &'a mut V2<S>,
 }
 
-/// How the measurements relate to the model, changed by measurement effects. With no
-/// such effect both are zero: the model is compared with the data at the same instant
-/// and position.
+/// How the measurements relate to the model, changed by measurement effects, per foot
+/// (`[right, left]`: each foot's stance is on its own force plate, so each foot's loads
+/// are one instrument). With no such effect the offsets are zero and the gains one: the
+/// model is compared with the data at the same instant, position and scale.
 #[derive(Debug, Clone, Copy)]
 pub struct MeasurementAdjust<S> {
-    /// The model's ground forces and CoP at time `t` are compared with the measured ones at
-    /// `t + force_time_offset` (s; positive when the force-plate clock runs behind the
-    /// motion capture's).
-    pub force_time_offset: S,
-    /// The measured CoP is the model's plus this (m, along the walkway).
-    pub cop_offset: S,
+    /// The model's ground forces and CoP of foot `s` at time `t` are compared with the
+    /// measured ones at `t + force_time_offset[s]` (s; positive when that plate's clock
+    /// runs behind the motion capture's). The force-threshold events of that plate move
+    /// with it (see `problems::track`).
+    pub force_time_offset: [S; 2],
+    /// The measured CoP of foot `s` is the model's plus this (m, along the walkway).
+    pub cop_offset: [S; 2],
+    /// The measured forces of foot `s` are the model's times this (reported over true;
+    /// the CoP, a ratio of moment and force, is unchanged).
+    pub force_gain: [S; 2],
+}
+
+impl<S: Scalar> MeasurementAdjust<S> {
+    /// No measurement effect: zero offsets, unit gains.
+    pub fn identity() -> Self {
+        Self {
+            force_time_offset: [S::c(0.0), S::c(0.0)],
+            cop_offset: [S::c(0.0), S::c(0.0)],
+            force_gain: [S::c(1.0), S::c(1.0)],
+        }
+    }
+}
+
+/// Actuator properties changed by actuator effects, as factors of the model's own
+/// (all one without such an effect). Only muscle-torque generators have them.
+#[derive(Debug, Clone, Copy)]
+pub struct ActuatorAdjust<S> {
+    /// Factor on every MTG's maximum isometric torque τ₀ (and so, by seed eq. 12, on the
+    /// passive damping β, which is proportional to τ₀).
+    pub strength: S,
+    /// Factor on the damping factor η of seed eq. 12 (β ∝ η).
+    pub damping: S,
+    /// Factor on the activation and deactivation time constants τ_A, τ_D (seed eq. 10).
+    pub time: S,
+}
+
+impl<S: Scalar> ActuatorAdjust<S> {
+    /// No actuator effect: every factor one.
+    pub fn identity() -> Self {
+        Self {
+            strength: S::c(1.0),
+            damping: S::c(1.0),
+            time: S::c(1.0),
+        }
+    }
 }
 
 /// Read-only state seen by an effect's generalised forces.
@@ -92,6 +143,18 @@ pub trait Effect: std::fmt::Debug + Send + Sync {
     fn generalized_forces<S: Scalar>(&self, _p: &[S], _x: EffectState<'_, S>, _tau: &mut [S]) {}
     /// Change how the measurements are compared with the model (default: nothing).
     fn adjust_measurement<S: Scalar>(&self, _p: &[S], _m: &mut MeasurementAdjust<S>) {}
+    /// Change the muscle-torque generators' properties (default: nothing).
+    fn adjust_actuators<S: Scalar>(&self, _p: &[S], _a: &mut ActuatorAdjust<S>) {}
+    /// Whether the effect has an actuator hook (a model without muscle-torque generators
+    /// refuses it).
+    fn is_actuator(&self) -> bool {
+        false
+    }
+    /// Whether the effect changes the activation time constants: the excitations then
+    /// enter `ȧ = (e − a)/τ(θ)` with a parameter-dependent coefficient.
+    fn scales_activation_time(&self) -> bool {
+        false
+    }
     /// Whether the effect has a measurement hook (the tracking residual then evaluates
     /// its targets through it).
     fn is_measurement(&self) -> bool {
@@ -115,6 +178,18 @@ pub trait Effect: std::fmt::Debug + Send + Sync {
     fn normal_force<S: Scalar>(&self, _p: &[S], _depth: S, _rate: S) -> S {
         S::c(0.0)
     }
+    /// Names of the volumetric primitives (on both feet) whose law this effect's
+    /// parameters replace: primitive `i` takes parameters `3i..3i+3`, its area stiffness
+    /// (N/mm²), damping (s/m) and dynamic friction coefficient (default: none).
+    fn volumetric_primitives(&self) -> &[String] {
+        &[]
+    }
+    /// The primitives (on both feet) whose geometry this effect's parameters replace, each
+    /// with the offset of its parameters: centre x, y (m), then a circle's radius or an
+    /// ellipse's semi-axes a, b (m) and angle (rad), a point nothing more (default: none).
+    fn geometry_primitives(&self) -> &[(String, usize)] {
+        &[]
+    }
 }
 
 /// Object-safe form of [`Effect`], implemented for every effect. The methods are
@@ -135,9 +210,17 @@ pub trait DynEffect: std::fmt::Debug + Send + Sync {
     fn measurement_dual(&self, p: &[Dual64], m: &mut MeasurementAdjust<Dual64>);
     fn measurement_chunk(&self, p: &[AdChunk], m: &mut MeasurementAdjust<AdChunk>);
     fn measurement_nested(&self, p: &[AdNested], m: &mut MeasurementAdjust<AdNested>);
+    fn actuators_f64(&self, p: &[f64], a: &mut ActuatorAdjust<f64>);
+    fn actuators_dual(&self, p: &[Dual64], a: &mut ActuatorAdjust<Dual64>);
+    fn actuators_chunk(&self, p: &[AdChunk], a: &mut ActuatorAdjust<AdChunk>);
+    fn actuators_nested(&self, p: &[AdNested], a: &mut ActuatorAdjust<AdNested>);
+    fn is_actuator(&self) -> bool;
+    fn scales_activation_time(&self) -> bool;
     fn is_measurement(&self) -> bool;
     fn shifts_force_clock(&self) -> bool;
     fn compliant_primitive(&self) -> Option<&str>;
+    fn volumetric_primitives(&self) -> &[String];
+    fn geometry_primitives(&self) -> &[(String, usize)];
     fn normal_force_f64(&self, p: &[f64], depth: f64, rate: f64) -> f64;
     fn normal_force_dual(&self, p: &[Dual64], depth: Dual64, rate: Dual64) -> Dual64;
     fn normal_force_chunk(&self, p: &[AdChunk], depth: AdChunk, rate: AdChunk) -> AdChunk;
@@ -187,6 +270,24 @@ impl<E: Effect> DynEffect for E {
     fn measurement_nested(&self, p: &[AdNested], m: &mut MeasurementAdjust<AdNested>) {
         self.adjust_measurement(p, m)
     }
+    fn actuators_f64(&self, p: &[f64], a: &mut ActuatorAdjust<f64>) {
+        self.adjust_actuators(p, a)
+    }
+    fn actuators_dual(&self, p: &[Dual64], a: &mut ActuatorAdjust<Dual64>) {
+        self.adjust_actuators(p, a)
+    }
+    fn actuators_chunk(&self, p: &[AdChunk], a: &mut ActuatorAdjust<AdChunk>) {
+        self.adjust_actuators(p, a)
+    }
+    fn actuators_nested(&self, p: &[AdNested], a: &mut ActuatorAdjust<AdNested>) {
+        self.adjust_actuators(p, a)
+    }
+    fn is_actuator(&self) -> bool {
+        Effect::is_actuator(self)
+    }
+    fn scales_activation_time(&self) -> bool {
+        Effect::scales_activation_time(self)
+    }
     fn is_measurement(&self) -> bool {
         Effect::is_measurement(self)
     }
@@ -195,6 +296,12 @@ impl<E: Effect> DynEffect for E {
     }
     fn compliant_primitive(&self) -> Option<&str> {
         Effect::compliant_primitive(self)
+    }
+    fn volumetric_primitives(&self) -> &[String] {
+        Effect::volumetric_primitives(self)
+    }
+    fn geometry_primitives(&self) -> &[(String, usize)] {
+        Effect::geometry_primitives(self)
     }
     fn normal_force_f64(&self, p: &[f64], depth: f64, rate: f64) -> f64 {
         self.normal_force(p, depth, rate)
@@ -221,10 +328,12 @@ pub trait ModelScalar: Scalar {
     fn measurement(e: &dyn DynEffect, p: &[Self], m: &mut MeasurementAdjust<Self>);
     /// Route to the effect's compliant normal force for this scalar type.
     fn normal_force(e: &dyn DynEffect, p: &[Self], depth: Self, rate: Self) -> Self;
+    /// Route to the effect's actuator adjustment for this scalar type.
+    fn actuators(e: &dyn DynEffect, p: &[Self], a: &mut ActuatorAdjust<Self>);
 }
 
 macro_rules! model_scalar {
-    ($t:ty, $adj:ident, $frc:ident, $mea:ident, $nf:ident) => {
+    ($t:ty, $adj:ident, $frc:ident, $mea:ident, $nf:ident, $act:ident) => {
         impl ModelScalar for $t {
             fn adjust(e: &dyn DynEffect, p: &[Self], m: &mut ModelAdjust<'_, Self>) {
                 e.$adj(p, m)
@@ -238,6 +347,9 @@ macro_rules! model_scalar {
             fn normal_force(e: &dyn DynEffect, p: &[Self], depth: Self, rate: Self) -> Self {
                 e.$nf(p, depth, rate)
             }
+            fn actuators(e: &dyn DynEffect, p: &[Self], a: &mut ActuatorAdjust<Self>) {
+                e.$act(p, a)
+            }
         }
     };
 }
@@ -246,26 +358,30 @@ model_scalar!(
     adjust_f64,
     forces_f64,
     measurement_f64,
-    normal_force_f64
+    normal_force_f64,
+    actuators_f64
 );
 model_scalar!(
     Dual64,
     adjust_dual,
     forces_dual,
     measurement_dual,
-    normal_force_dual
+    normal_force_dual,
+    actuators_dual
 );
 model_scalar!(
     AdChunk,
     adjust_chunk,
     forces_chunk,
     measurement_chunk,
-    normal_force_chunk
+    normal_force_chunk,
+    actuators_chunk
 );
 model_scalar!(
     AdNested,
     adjust_nested,
     forces_nested,
     measurement_nested,
-    normal_force_nested
+    normal_force_nested,
+    actuators_nested
 );

@@ -7,7 +7,7 @@ use crate::model::effects::ModelScalar;
 use crate::model::error::DynamicsError;
 use crate::model::geometry::Shape;
 use crate::model::linalg::{cholesky, cholesky_solve};
-use crate::model::multibody::{add, dot, lift, Kinematics, V2};
+use crate::model::multibody::{add, dot, Kinematics, V2};
 use crate::model::Scalar;
 use num_dual::Dual;
 
@@ -145,13 +145,16 @@ impl GaitModel {
     pub(super) fn contact_geometry<S: Scalar>(
         &self,
         k: &Kinematics<S>,
-        c: &Contact,
+        ci: usize,
         n: V2<S>,
+        p: &[S],
     ) -> (V2<S>, V2<S>, V2<S>) {
-        let centre = self.tree.point(k, c.body, lift(c.shape.centre()));
+        let c = &self.contacts[ci];
+        let shape = self.shape_of(ci, p);
+        let centre = self.tree.point(k, c.body, shape.centre());
         let psi = Dual::new(k.angle[c.body], S::c(1.0));
         let nd = [Dual::from_re(n[0]), Dual::from_re(n[1])];
-        let dd = c.shape.contact_offset(psi, nd);
+        let dd = shape.map(Dual::from_re).contact_offset(psi, nd);
         let d = [dd[0].re, dd[1].re];
         let d1 = [dd[0].eps, dd[1].eps];
         (add(centre, d), d, d1)
@@ -187,6 +190,7 @@ impl GaitModel {
         k: &Kinematics<S>,
         set: &ConstraintSet,
         n: V2<S>,
+        p: &[S],
     ) -> Vec<S> {
         let nq = self.nq();
         let t = [n[1], -n[0]];
@@ -194,7 +198,7 @@ impl GaitModel {
         let mut jp = vec![S::c(0.0); 2 * nq];
         for (r, row) in set.rows.iter().enumerate() {
             let contact = &self.contacts[row.contact];
-            let (pt, _, _) = self.contact_geometry(k, contact, n);
+            let (pt, _, _) = self.contact_geometry(k, row.contact, n, p);
             self.tree.point_jacobian(k, contact.body, pt, &mut jp);
             let e = if row.kind == RowKind::Normal { n } else { t };
             for j in 0..nq {
@@ -291,7 +295,7 @@ impl GaitModel {
         let p = self.full_params(theta);
         let (_, _, _, n) = self.adjusted(&p);
         let k = self.tree.kinematics(q, &vec![0.0; self.nq()]);
-        self.constraint_jacobian(&k, set, n)
+        self.constraint_jacobian(&k, set, n, &p)
     }
 
     /// World contact point and normal gap φ (m) of contact `c` at `q`.
@@ -316,7 +320,7 @@ impl GaitModel {
         let p = self.full_params(theta);
         let (_, _, h, n) = self.adjusted(&p);
         let k = self.tree.kinematics(q, &vec![S::c(0.0); self.nq()]);
-        let (pt, _, _) = self.contact_geometry(&k, &self.contacts[c], n);
+        let (pt, _, _) = self.contact_geometry(&k, c, n, &p);
         (pt, dot(n, pt) - h)
     }
 
@@ -334,7 +338,7 @@ impl GaitModel {
         let p = self.full_params(theta);
         let (_, _, _, n) = self.adjusted(&p);
         let k = self.tree.kinematics(&x[..nq], &vec![S::c(0.0); nq]);
-        let g = self.constraint_jacobian(&k, set, n);
+        let g = self.constraint_jacobian(&k, set, n, &p);
         (0..set.rows.len())
             .map(|r| (0..nq).map(|l| g[r * nq + l] * x[nq + l]).sum())
             .collect()
@@ -396,7 +400,7 @@ impl GaitModel {
         let k = self.tree.kinematics(&x[..nq], &x[nq..2 * nq]);
         let z = S::c(0.0);
         let mut out = [(z, z, z); 2];
-        for (c, f) in self.volumetric_forces(&k, ground_h, n) {
+        for (c, f) in self.volumetric_forces(&k, ground_h, n, &p) {
             let s = if self.contacts[c].side == Side::Right {
                 0
             } else {
@@ -412,7 +416,7 @@ impl GaitModel {
             match row.kind {
                 RowKind::Tangential => out[s].0 += lam[r],
                 RowKind::Normal => {
-                    let (pt, _, _) = self.contact_geometry(&k, c, n);
+                    let (pt, _, _) = self.contact_geometry(&k, row.contact, n, &p);
                     out[s].1 += lam[r];
                     out[s].2 += lam[r] * pt[0];
                 }

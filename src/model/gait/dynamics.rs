@@ -46,8 +46,17 @@ impl GaitModel {
         let mut act = vec![0.0; nq];
         match &self.actuation {
             Actuation::Mtg(set) => {
+                let f = self.actuator_adjust(&p);
                 for (k, &(c, joint)) in LEG_JOINTS.iter().enumerate() {
-                    act[c] += set.joint_torque(joint, a[2 * k], a[2 * k + 1], q[c], qd[c]);
+                    act[c] += set.joint_torque_scaled(
+                        joint,
+                        a[2 * k],
+                        a[2 * k + 1],
+                        q[c],
+                        qd[c],
+                        f.strength,
+                        f.damping,
+                    );
                 }
             }
             Actuation::Torques {
@@ -96,8 +105,17 @@ impl GaitModel {
         let mut tau = vec![S::c(0.0); self.nq()];
         match &self.actuation {
             Actuation::Mtg(set) => {
+                let f = self.actuator_adjust(p);
                 for (k, &(c, joint)) in LEG_JOINTS.iter().enumerate() {
-                    tau[c] += set.joint_torque(joint, a[2 * k], a[2 * k + 1], q[c], qd[c]);
+                    tau[c] += set.joint_torque_scaled(
+                        joint,
+                        a[2 * k],
+                        a[2 * k + 1],
+                        q[c],
+                        qd[c],
+                        f.strength,
+                        f.damping,
+                    );
                 }
             }
             Actuation::Torques {
@@ -150,7 +168,7 @@ impl GaitModel {
         let mut tau = self.generalized_forces(q, qd, a, u, &p);
         // volumetric primitives: a ground force in every phase, applied at the centroid of
         // the penetrated area
-        let volumetric = self.volumetric_forces(&k, ground_h, n);
+        let volumetric = self.volumetric_forces(&k, ground_h, n, &p);
         if !volumetric.is_empty() {
             let mut jp = vec![S::c(0.0); 2 * nq];
             for (c, f) in &volumetric {
@@ -184,7 +202,7 @@ impl GaitModel {
                 let (pt, bias) = match geo.iter().find(|g| g.0 == row.contact) {
                     Some(&(_, pt, bias)) => (pt, bias),
                     None => {
-                        let (pt, d, d1) = self.contact_geometry(&k, contact, n);
+                        let (pt, d, d1) = self.contact_geometry(&k, row.contact, n, &p);
                         let (_, acc) = self.tree.point_motion(&k, contact.body, pt);
                         let w = k.omega[contact.body];
                         let bias = add(acc, scale(add(perp(d1), d), w * w));
@@ -299,8 +317,9 @@ impl GaitModel {
         xdot[..nq].copy_from_slice(qd);
         xdot[nq..2 * nq].copy_from_slice(&qdd);
         if let Actuation::Mtg(set) = &self.actuation {
+            let time = self.actuator_adjust(&p).time;
             for i in 0..self.na() {
-                xdot[2 * nq + i] = set.activation.rate(u[i], a[i]);
+                xdot[2 * nq + i] = set.activation.rate(u[i], a[i]) / time;
             }
         }
         Ok(())
@@ -327,7 +346,7 @@ impl GaitModel {
         cholesky(&mut m, nq, 1e-14).map_err(|e| DynamicsError::MassMatrix { pivot: e.pivot })?;
         // a compliant normal contact takes no impulse: its pad is compressed from here on
         let (rigid, idx) = self.rigid_rows(set_after);
-        let g = self.constraint_jacobian(&k, &rigid, n);
+        let g = self.constraint_jacobian(&k, &rigid, n, &p);
         let nc = rigid.rows.len();
         let mut qd_plus = qd_minus.to_vec();
         let mut impulses = vec![S::c(0.0); set_after.rows.len()];

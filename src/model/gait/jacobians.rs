@@ -9,7 +9,8 @@ impl GaitModel {
     /// The inputs of `(x, u, θ)` that can appear in a second derivative of the dynamics
     /// or of anything computed from them (contact forces, ground loads), and how many of
     /// them lead as a group the dynamics are jointly affine in. All inputs can, except
-    /// the excitations of muscle-torque generators without residual actuators: those
+    /// the excitations of muscle-torque generators without residual actuators and without
+    /// a free factor on the activation time constants: those
     /// enter only `ȧ = (e − a)/τ`, affinely with constant coefficients, so every second
     /// derivative involving them is exactly zero. The activations and the controls that
     /// remain (joint torques, residual actuators, excitations beside residuals) lead: the
@@ -18,8 +19,10 @@ impl GaitModel {
     /// for a fixed contact set, and ȧ is linear in (e, a).
     pub fn curved_inputs(&self) -> (Vec<usize>, usize) {
         let (nq, nx, nu, nt) = (self.nq(), self.nx(), self.nu(), self.ntheta());
-        let controls_affine =
-            matches!(self.actuation, Actuation::Mtg(_)) && self.residuals.is_none();
+        // a free factor on the activation time constants multiplies the excitations in ȧ
+        let controls_affine = matches!(self.actuation, Actuation::Mtg(_))
+            && self.residuals.is_none()
+            && !self.scales_activation_time();
         let mut order: Vec<usize> = (2 * nq..nx).collect();
         if !controls_affine {
             order.extend(nx..nx + nu);
@@ -68,10 +71,12 @@ impl GaitModel {
                 let fu = &mut jac[nx * nx..nx * (nx + nu)];
                 fu.iter_mut().for_each(|v| *v = 0.0);
                 let a0 = 2 * self.nq();
+                // the activation time constants' factor (an effect's) divides the rate
+                let time = self.actuator_factors(theta).time;
                 for i in 0..nu {
                     let e = num_dual::Dual64::new(u[i], 1.0);
                     let a = num_dual::Dual64::from(x[a0 + i]);
-                    fu[i * nx + a0 + i] = mtg.activation.rate(e, a).eps;
+                    fu[i * nx + a0 + i] = mtg.activation.rate(e, a).eps / time;
                 }
                 Ok(())
             }

@@ -3,8 +3,10 @@
 //! foot as generalised forces.
 
 use super::GaitModel;
+use crate::model::effects::VolumetricContact;
+use crate::model::geometry::ShapeScalars;
 use crate::model::multibody::{dot, Kinematics, V2};
-use crate::model::volumetric::ContactForce;
+use crate::model::volumetric::{ContactForce, LawScalars};
 use crate::model::Scalar;
 
 /// The ground force on one volumetric primitive, in the ground's frame and the world's.
@@ -67,12 +69,15 @@ impl GaitModel {
 
     /// The ground force of every volumetric primitive that touches the ground at
     /// kinematics `k` (positions and velocities), against the ground at height `ground_h`
-    /// along its unit normal `n`: `(contact index, force)`.
+    /// along its unit normal `n`, with the effect parameters `p` (all of them, fixed and
+    /// free: a `volumetric_contact` effect's replace the foot file's law): `(contact
+    /// index, force)`.
     pub(crate) fn volumetric_forces<S: Scalar>(
         &self,
         k: &Kinematics<S>,
         ground_h: S,
         n: V2<S>,
+        p: &[S],
     ) -> Vec<(usize, GroundForce<S>)> {
         let mut out = Vec::new();
         // every dynamics evaluation comes here: nothing to set up for rigid feet
@@ -86,21 +91,28 @@ impl GaitModel {
         let to_world = |v: V2<S>| [t[0] * v[0] + n[0] * v[1], t[1] * v[0] + n[1] * v[1]];
         for (ci, c) in self.contacts.iter().enumerate() {
             let Some(law) = &c.law else { continue };
-            let (centre_local, angle, semi_axes) = match c.shape {
-                crate::model::geometry::Shape::Circle { centre, radius } => {
-                    (centre, 0.0, (radius, radius))
+            let params: LawScalars<S> = match self.volumetric_params[ci] {
+                Some((e, slot)) => {
+                    let q = &self.effect_params(p, e)[3 * slot..3 * slot + 3];
+                    LawScalars {
+                        stiffness: q[0] * VolumetricContact::STIFFNESS_UNIT,
+                        damping: q[1],
+                        mu_dynamic: q[2],
+                    }
                 }
-                crate::model::geometry::Shape::Ellipse {
+                None => law.scalars(),
+            };
+            let (centre_local, angle, semi_axes) = match self.shape_of(ci, p) {
+                ShapeScalars::Circle { centre, radius } => (centre, S::c(0.0), (radius, radius)),
+                ShapeScalars::Ellipse {
                     centre,
                     angle,
                     semi_axes,
                 } => (centre, angle, (semi_axes[0], semi_axes[1])),
                 // refused when the foot file is read
-                crate::model::geometry::Shape::Point { .. } => continue,
+                ShapeScalars::Point { .. } => continue,
             };
-            let centre = self
-                .tree
-                .point(k, c.body, [S::c(centre_local[0]), S::c(centre_local[1])]);
+            let centre = self.tree.point(k, c.body, centre_local);
             let (velocity, _) = self.tree.point_motion(k, c.body, centre);
             let alpha = k.angle[c.body] + angle - ground_angle;
             let Some(ContactForce {
@@ -108,7 +120,8 @@ impl GaitModel {
                 point,
                 cop_x,
                 penetration,
-            }) = law.force(
+            }) = law.force_with(
+                params,
                 to_ground(centre),
                 alpha,
                 semi_axes,

@@ -35,7 +35,7 @@ impl TrackingSetup {
                 if k == n && !last {
                     continue;
                 }
-                let r = self.residual(model, &sets[continuous[j]], target.clone(), true);
+                let r = self.node_residual(model, &sets[continuous[j]], (j, k), target.clone());
                 let ku = if linear { k } else { k.min(n - 1) };
                 let z: Vec<f64> = ph.x[k]
                     .iter()
@@ -57,7 +57,7 @@ impl TrackingSetup {
         if !self.samples.is_empty() {
             // each residual's instant: (interval, τ, time), the loads' moved by the force
             // plates' clock offset as the OCP's shifted sample terms are
-            let shift = -model
+            let offsets = model
                 .measurement_adjust::<f64>(&solution.theta)
                 .force_time_offset;
             let mut parts = Vec::new();
@@ -65,8 +65,9 @@ impl TrackingSetup {
                 let ph = &solution.phases[st.phase];
                 let (n, h) = (ph.intervals(), ph.duration / ph.intervals() as f64);
                 for (r, shifted) in self.sample_residuals(model, sets, continuous, st) {
-                    let (k, tau, time) = if shifted {
-                        let (k, tau, _) = shifted_instant(st.interval, st.tau, shift, h, n);
+                    let (k, tau, time) = if let Some(side) = shifted {
+                        let (k, tau, _) =
+                            shifted_instant(st.interval, st.tau, -offsets[side], h, n);
                         // a phase's end is sampled before its impact
                         (
                             k,

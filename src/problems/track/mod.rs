@@ -317,6 +317,8 @@ pub struct TrackingSetup {
     /// Where the events came from and what the data lack in the window (lines for the
     /// run's log; those starting `warning:` are warnings).
     pub notes: Vec<String>,
+    /// How the window's instants move with the force plates' clock offsets.
+    pub clock: PlateClock,
 }
 
 /// One foot's measured forces as splines over the measured stretch that overlaps the
@@ -689,6 +691,18 @@ impl TrackingSetup {
         } else {
             Vec::new()
         };
+        let interpolated = sides == TargetSides::Interpolated;
+        let (clock, warning) = clock::plate_clock(
+            model,
+            &seq,
+            sets,
+            data,
+            &events,
+            (t0, t1),
+            splines,
+            interpolated,
+        );
+        notes.extend(warning.map(String::from));
         Ok(Self {
             seq,
             window: (t0, t1),
@@ -700,6 +714,7 @@ impl TrackingSetup {
             measured,
             samples,
             notes,
+            clock,
         })
     }
 
@@ -769,8 +784,11 @@ impl TrackingSetup {
 }
 
 mod breakdown;
+mod clock;
 mod residual;
 mod window;
+
+pub use clock::{DurationClock, PlateClock};
 
 pub use window::{
     choose_window, combined_events, half_cycles, kinematic_events, missing_forces, KinematicEvents,

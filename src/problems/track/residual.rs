@@ -56,36 +56,45 @@ impl TrackingSetup {
         n
     }
 
-    /// The data-only residuals of a sample target, each with whether its instant is
-    /// moved by the force plates' clock offset: one residual; or, when an effect of the
-    /// model shifts that clock and the sample has loads, the angles at the sample's
-    /// instant and the loads, at their measured values, at the instant the offset moves
-    /// them to ([`ForceClockShift`]).
+    /// The data-only residuals of a sample target, each with the foot whose plate's clock
+    /// offset moves its instant (`None`: fixed): one residual; or, when an effect of the
+    /// model shifts the plates' clocks and the sample has loads, the angles at the
+    /// sample's instant and each loaded foot's loads, at their measured values, at the
+    /// instant that foot's plate offset moves them to ([`ForceClockShift`]).
     pub(super) fn sample_residuals<'m>(
         &self,
         model: &'m GaitModel,
         sets: &[ConstraintSet],
         continuous: &[usize],
         s: &SampleTarget,
-    ) -> Vec<(TrackingResidual<'m>, bool)> {
+    ) -> Vec<(TrackingResidual<'m>, Option<usize>)> {
         let residual = |target: NodeTarget| {
             self.residual(model, &sets[continuous[s.phase]], target, true)
                 .data_only()
         };
         if !model.shifts_force_clock() || s.target.feet.iter().all(Option::is_none) {
-            return vec![(residual(s.target.clone()), false)];
+            return vec![(residual(s.target.clone()), None)];
         }
         let angles = residual(NodeTarget {
             feet: [None, None],
             ..s.target.clone()
         });
-        let loads = residual(NodeTarget {
-            q: vec![None; s.target.q.len()],
-            ..s.target.clone()
-        })
-        .at_measured_values();
-        [(angles, false), (loads, true)]
-            .into_iter()
+        let mut out = vec![(angles, None)];
+        for side in 0..2 {
+            if s.target.feet[side].is_none() {
+                continue;
+            }
+            let mut feet = [None, None];
+            feet[side] = s.target.feet[side];
+            let loads = residual(NodeTarget {
+                q: vec![None; s.target.q.len()],
+                feet,
+                ..s.target.clone()
+            })
+            .at_measured_values();
+            out.push((loads, Some(side)));
+        }
+        out.into_iter()
             .filter(|(r, _)| crate::problems::GenericFunction::dim(r) > 0)
             .collect()
     }
@@ -99,6 +108,7 @@ impl TrackingSetup {
         integrator: crate::integrate::IntegratorSettings,
     ) -> Result<Ocp<'c>, String> {
         let mut ocp = cycle.ocp(&self.guess, integrator)?;
+        self.free_moving_durations(model, &mut ocp)?;
         let linear = ocp
             .phases
             .iter()
@@ -113,7 +123,7 @@ impl TrackingSetup {
                     continue;
                 }
                 let ku = if linear { k } else { k.min(n - 1) };
-                let r = self.residual(model, set, target.clone(), true);
+                let r = self.node_residual(model, set, (j, k), target.clone());
                 ocp.least_squares.push(Term {
                     name: "tracking".into(),
                     args: vec![
@@ -127,8 +137,8 @@ impl TrackingSetup {
         }
         for s in &self.samples {
             for (r, shifted) in self.sample_residuals(model, sets, &cycle.continuous, s) {
-                let shift = shifted.then(|| {
-                    Arc::new(crate::problems::AdTerm(ForceClockShift { model }))
+                let shift = shifted.map(|side| {
+                    Arc::new(crate::problems::AdTerm(ForceClockShift { model, side }))
                         as Arc<dyn NodeFunction + 'c>
                 });
                 ocp.samples.push(SampleTerm {

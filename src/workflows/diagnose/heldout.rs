@@ -1,0 +1,222 @@
+//! Held-out validation of `diagnose`'s significant candidates, and the re-track that
+//! makes untestable candidates testable (`--make-testable`).
+//!
+//! A candidate significant on the run's half cycle is fitted there (its truncated
+//! re-fit's values); those values, fixed, are then applied to another half cycle of the
+//! same trial (the next one, or the one before: the other leg's, mirrored, counts) that
+//! the fit did not see. There the plain model is tracked once; each candidate's change
+//! of that cost, after a truncated re-fit of the other variables, must exceed its noise
+//! band ([`crate::problems::diagnose::stats::held_out_band`]) for the candidate to be
+//! "found".
+
+use super::super::track::{tracking_sqp_settings, TrackedRun, TrackingProblem};
+#[allow(unused_imports)]
+use super::super::{note, Progress};
+use super::{sibling, DiagnoseRequest};
+use crate::model::effects::EffectSpec;
+use crate::problems::diagnose::stats::{curvature_along, held_out_band};
+use crate::problems::diagnose::{
+    truncated_refit, HeldOut, ScoreTest, TrackingRunSetup, MAX_STEPS, REL_STOP,
+};
+use crate::problems::evaluation::GaitSolution;
+use crate::runfolder::RunFolder;
+use crate::sqp::HessianMode;
+use anyhow::anyhow;
+
+/// The plain model tracked on a held-out half cycle.
+pub(super) struct HeldOutBase {
+    /// The run's setup with the held-out half cycle (`stride`).
+    setup: TrackingRunSetup,
+    /// Which half cycle.
+    pub stride: usize,
+    /// Its span (s).
+    pub window: (f64, f64),
+    /// The plain model's solution there.
+    solution: GaitSolution,
+    /// Its cost.
+    pub objective: f64,
+    /// The truncated re-fit's decrease left at that solution (subtracted from each
+    /// candidate's, as in the score test).
+    leftover: f64,
+    /// Residual mean square `J/N` there.
+    pub s2: f64,
+    /// SQP iterations of its solve and whether it converged.
+    pub iterations: usize,
+    pub converged: bool,
+}
+
+/// The half cycles tried as held-out, in order: the next one, then the ones before.
+fn strides(run: &TrackingRunSetup) -> Vec<usize> {
+    let own = run.stride.unwrap_or(1);
+    let mut s = vec![own + 1];
+    s.extend((1..own).rev());
+    s.push(own + 2);
+    s
+}
+
+/// Track the plain model on the first half cycle of the trial other than the run's
+/// (`run_window`) that the trial holds; `None` (with why) when there is none.
+pub(super) fn held_out_base(
+    args: &DiagnoseRequest,
+    run: &TrackingRunSetup,
+    run_window: (f64, f64),
+    progress: &dyn Progress,
+) -> anyhow::Result<Result<HeldOutBase, String>> {
+    let mut why = Vec::new();
+    for stride in strides(run) {
+        let setup = TrackingRunSetup {
+            stride: Some(stride),
+            window: None,
+            check_points: vec![],
+            ..run.clone()
+        };
+        let prob = match TrackingProblem::build(&setup, &[]) {
+            Ok(p) => p,
+            Err(e) => {
+                why.push(format!("half cycle {stride}: {e:#}"));
+                continue;
+            }
+        };
+        let window = prob.setup.window;
+        if (window.0 - run_window.0).abs() < 1e-6 {
+            why.push(format!("half cycle {stride} is the run's own"));
+            continue;
+        }
+        {
+            note!(
+                progress,
+                "held-out half cycle {stride} ({:.3}–{:.3} s): tracking the plain model there",
+                window.0,
+                window.1
+            );
+        }
+        let hessian = if setup.sample_targets {
+            HessianMode::GaussNewton
+        } else {
+            HessianMode::Exact
+        };
+        let settings = tracking_sqp_settings(args.tol, args.max_iter, None, hessian, 1e-3);
+        let (res, solution) = prob.solve(&settings, &super::super::Quiet)?;
+        let mut at = TrackingProblem::build(&setup, &[])?;
+        at.setup.start_from(&solution).map_err(|e| anyhow!(e))?;
+        let (objective, leftover, rows) = super::decrease_at_solution(&at)?;
+        {
+            note!(
+                progress,
+                "  held-out J = {objective:.6} ({} iterations{}), Gauss–Newton decrease left {leftover:.2e}",
+                res.history.len().saturating_sub(1),
+                if res.status == crate::sqp::SqpStatus::Converged { "" } else { ", not converged" }
+            );
+        }
+        return Ok(Ok(HeldOutBase {
+            stride,
+            window,
+            objective,
+            leftover,
+            s2: objective / rows.max(1) as f64,
+            iterations: res.history.len().saturating_sub(1),
+            converged: res.status == crate::sqp::SqpStatus::Converged,
+            solution,
+            setup,
+        }));
+    }
+    Ok(Err(why.join("; ")))
+}
+
+/// `effect` with its parameters `names` (qualified, `kind.name`) fixed at `values`.
+pub(super) fn fixed_at(
+    effect: &EffectSpec,
+    names: &[String],
+    values: &[f64],
+) -> anyhow::Result<EffectSpec> {
+    let mut v = serde_json::to_value(effect.fixed())?;
+    for (n, x) in names.iter().zip(values) {
+        let key = n.rsplit('.').next().unwrap_or(n);
+        v[key] = (*x).into();
+    }
+    serde_json::from_value(v).map_err(|e| anyhow!("{}: fixing its parameters: {e}", effect.label()))
+}
+
+/// Apply candidate `t` (fitted on the run's half cycle) to the held-out half cycle.
+pub(super) fn validate(base: &HeldOutBase, t: &ScoreTest) -> anyhow::Result<HeldOut> {
+    let spec = fixed_at(&t.effect, &t.parameters, &t.step_values)?;
+    let mut prob = TrackingProblem::build(&base.setup, std::slice::from_ref(&spec))?;
+    prob.setup
+        .start_from(&base.solution)
+        .map_err(|e| anyhow!(e))?;
+    let after = prob.with_transcription(|tr, _, w| {
+        let (j, dec, _, _) =
+            truncated_refit(tr, &w, MAX_STEPS, REL_STOP).map_err(|e| anyhow!(e))?;
+        Ok(j - dec)
+    })?;
+    let change = base.objective - base.leftover - after;
+    let q = t
+        .identifiability
+        .as_ref()
+        .and_then(|id| curvature_along(&id.reduced_inverse_hessian, &t.step_values))
+        .unwrap_or(0.0);
+    let band = held_out_band(q, base.s2, t.inflation);
+    Ok(HeldOut {
+        stride: base.stride,
+        window: base.window,
+        values: t.step_values.clone(),
+        objective: base.objective,
+        change,
+        change_fraction: change / base.objective,
+        band,
+        // a candidate without curvature here (q = 0) has no band: it must lower the cost
+        beyond_noise: change > band.max(0.0) && q > 0.0,
+    })
+}
+
+/// Whether re-tracking with the pelvis position makes candidate `effect` testable: the
+/// CoP offset moves the measured CoP, which the free pelvis position follows unless it
+/// is tracked.
+pub(super) fn hint(effect: &EffectSpec, run: &TrackingRunSetup) -> String {
+    if effect.kind().contains("cop") && !run.track_pelvis_position {
+        "the free pelvis position absorbs it: track the pelvis position too (`footfall track --track-pelvis-position`, or `diagnose --make-testable`, which re-tracks the run so)".into()
+    } else if !run.sample_targets {
+        "the other variables (most likely the actuators) absorb it under this cost: compare every sample at its own instant (`footfall track --sample-targets`), or fit it on a second trial of the same subject".into()
+    } else {
+        "the other variables (most likely the actuators) absorb it under this cost: fit it on a second trial of the same subject, or fix what trades off with it".into()
+    }
+}
+
+/// Re-track the run with the pelvis position tracked, from its solution, into
+/// `<RUN>+pelvis-position` (`--make-testable`).
+pub(super) fn retrack_with_pelvis(
+    args: &DiagnoseRequest,
+    run: &TrackingRunSetup,
+    solution: &GaitSolution,
+    progress: &dyn Progress,
+) -> anyhow::Result<TrackedRun> {
+    let setup = TrackingRunSetup {
+        track_pelvis_position: true,
+        ..run.clone()
+    };
+    let dir = sibling(&args.run, "+pelvis-position");
+    {
+        note!(
+            progress,
+            "--make-testable: re-tracking with the pelvis position tracked → {}",
+            dir.display()
+        );
+    }
+    let mut prob = TrackingProblem::build(&setup, &[])?;
+    prob.start_at(solution)?;
+    let hessian = if setup.sample_targets {
+        HessianMode::GaussNewton
+    } else {
+        HessianMode::Exact
+    };
+    let settings = tracking_sqp_settings(args.tol, args.max_iter, None, hessian, 1e-3);
+    let rf = RunFolder::create(&dir, args.overwrite)?;
+    prob.solve_and_write(
+        &setup,
+        &[],
+        &settings,
+        rf,
+        super::super::run_folder::DEFAULT_TRANSIENT_THRESHOLD_N,
+        progress,
+    )
+}

@@ -1,0 +1,376 @@
+//! What `diagnose` writes: `diagnose.md`, `summary.json` and `report.html`, each with
+//! every candidate's testability, in-sample statistic, held-out change and verdict.
+
+#[allow(unused_imports)]
+use super::super::{note, Progress};
+use super::{DiagnoseRequest, Evidence, Residuals, Verified};
+use crate::problems::diagnose::ScoreTest;
+use crate::report::diff::{fmt_value, RunSummary};
+use crate::report::html::{Report, Section, Summary, Tone};
+use crate::report::table::Table;
+use crate::runfolder::RunFolder;
+use std::path::PathBuf;
+
+/// Everything a diagnosis found.
+pub(super) struct Outcome<'a> {
+    pub args: &'a DiagnoseRequest,
+    pub before: &'a RunSummary,
+    pub objective: f64,
+    pub rows: usize,
+    pub resid: &'a Residuals,
+    /// Variance inflation over all channels alike.
+    pub phi: f64,
+    pub tests: &'a [ScoreTest],
+    pub evidence: &'a [Evidence],
+    pub verified: &'a [Verified],
+    pub skipped: &'a [String],
+    /// How the held-out validation went (empty when none was needed).
+    pub held_out_note: String,
+    /// The run re-tracked by `--make-testable` (diagnosed into `<it>-diagnose`).
+    pub testable_run: Option<PathBuf>,
+}
+
+/// "value ± sd" of each of a candidate's parameters after its truncated re-fit.
+fn parameters_cell(t: &ScoreTest) -> String {
+    t.parameters
+        .iter()
+        .zip(&t.step_values)
+        .enumerate()
+        .map(|(i, (n, v))| {
+            let sd = t
+                .identifiability
+                .as_ref()
+                .and_then(|id| id.sd.get(i).copied().flatten())
+                .map_or(String::new(), |s| format!(" ± {s:.2e}"));
+            format!("{} = {v:.4}{sd}", n.rsplit('.').next().unwrap_or(n))
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// The held-out cell: "change (% of J) vs band" or why there is none.
+fn held_out_cell(t: &ScoreTest) -> String {
+    match &t.held_out {
+        Some(h) => format!(
+            "{:.3e} ({:+.1} % of J) vs {:.3e}",
+            h.change,
+            100.0 * h.change_fraction,
+            h.band
+        ),
+        None if t.significant => "not run".into(),
+        None => "—".into(),
+    }
+}
+
+/// The verdict sentence of the whole diagnosis.
+fn verdict(o: &Outcome<'_>) -> String {
+    let tests = o.tests;
+    let found: Vec<&ScoreTest> = tests.iter().filter(|t| t.found).collect();
+    let significant = tests.iter().filter(|t| t.significant).count();
+    let untestable: Vec<&ScoreTest> = tests.iter().filter(|t| !t.testable).collect();
+    let mut v = if found.is_empty() {
+        if significant == 0 {
+            "No testable candidate explains more than the noise: every statistic (corrected for correlated residuals) is below its χ² 0.1 % point. No effect is suggested.".to_string()
+        } else {
+            format!("{significant} candidate(s) are significant in-sample, but none lowers the error of the held-out half cycle beyond its noise band: no effect is found.")
+        }
+    } else {
+        format!(
+            "{} of {} candidates found (significant in-sample{}); the most likely missing effect is {}.",
+            found.len(),
+            tests.len(),
+            if found.iter().all(|t| t.held_out.is_some()) {
+                " and confirmed on the held-out half cycle"
+            } else {
+                ""
+            },
+            found[0].label
+        )
+    };
+    if !untestable.is_empty() {
+        v += &format!(
+            " Not testable with this run's cost (neither absent nor present as far as this run can tell): {}.",
+            untestable
+                .iter()
+                .map(|t| format!("{} — {}", t.label, t.hint.as_deref().unwrap_or("")))
+                .collect::<Vec<_>>()
+                .join("; ")
+        );
+    }
+    // the score tests compare against the plain model's optimum; say so when the run
+    // stopped short of it
+    if o.before.status.as_deref().is_some_and(|s| s != "converged") {
+        let reason = o
+            .before
+            .stop_reason
+            .as_deref()
+            .or(o.before.status.as_deref())
+            .unwrap_or_default();
+        v += &format!(
+            " Caution: the run did not converge ({reason}), and the score tests assume the plain model's optimum; re-track it to convergence before trusting this ranking."
+        );
+    }
+    v
+}
+
+/// Write the diagnosis into `folder` and commit it.
+pub(super) fn write(
+    o: &Outcome<'_>,
+    folder: RunFolder,
+    progress: &dyn Progress,
+) -> anyhow::Result<()> {
+    let (args, tests, objective, rows) = (o.args, o.tests, o.objective, o.rows);
+    let significant = tests.iter().filter(|t| t.significant).count();
+    let found = tests.iter().filter(|t| t.found).count();
+    let verdict = verdict(o);
+    let ranking = Table {
+        title: "Candidate effects ranked: testability, in-sample score statistic (predicted cost decrease / residual mean square, divided by the variance inflation φ of correlated residuals), held-out change, verdict".into(),
+        headers: ["rank", "effect", "testable", "parameters (truncated re-fit, ± sd)", "expected decrease", "% of J", "statistic", "φ", "χ² 0.1 % point", "held-out change vs noise band", "verdict"].map(String::from).to_vec(),
+        rows: tests
+            .iter()
+            .enumerate()
+            .map(|(i, t)| {
+                vec![
+                    (i + 1).to_string(),
+                    t.label.clone(),
+                    if t.testable { "yes".into() } else { "NO".into() },
+                    parameters_cell(t),
+                    format!("{:.3e}", t.predicted_decrease),
+                    format!("{:.1}", 100.0 * t.predicted_fraction),
+                    // an untestable candidate's statistic is no evidence of absence
+                    if t.testable { format!("{:.1}", t.statistic) } else { "n/a".into() },
+                    format!("{:.1}", t.inflation),
+                    format!("{:.1}", t.threshold),
+                    held_out_cell(t),
+                    t.verdict.clone(),
+                ]
+            })
+            .collect(),
+    };
+    let untestable: Vec<String> = tests
+        .iter()
+        .filter(|t| !t.testable)
+        .map(|t| {
+            format!(
+                "{} is not testable with this run's cost: {}. To make it testable: {}.",
+                t.label,
+                t.identifiability
+                    .as_ref()
+                    .and_then(|i| i.reason.clone())
+                    .unwrap_or_default(),
+                t.hint.as_deref().unwrap_or("")
+            )
+        })
+        .collect();
+    let inflation = format!(
+        "Correlated residuals: per channel, the variance inflation φ = N/N_eff (N_eff = N/(1 + 2 Σ ρ_k), ρ_k the error's autocorrelation at the nodes, summed up to the first lag ≤ 0): {}; these are the plain model's; each candidate's statistic is divided by the φ of the residuals left after its truncated re-fit (as an F-test takes the larger model's variance), averaged over the channels that re-fit improves, weighted by their relative improvement.",
+        o.resid
+            .series
+            .iter()
+            .zip(&o.resid.inflation)
+            .map(|(s, p)| format!("{} {}", s.0, p.map_or("—".into(), |p| format!("{p:.1}"))))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
+    // channels by name: a re-fit's come from its run summary, a score test's from the
+    // problem
+    let channels: Vec<(String, String)> = tests.first().map_or(vec![], |t| {
+        t.expected_channels
+            .iter()
+            .map(|c| (c.0.clone(), c.1.clone()))
+            .collect()
+    });
+    let expected = Table {
+        title: "Expected mean error per channel after the truncated re-fit with each candidate (a full re-fit for the heel pad; before → after)".into(),
+        headers: std::iter::once("effect".to_string()).chain(channels.iter().map(|(c, u)| format!("{c} ({u})"))).collect(),
+        rows: tests
+            .iter()
+            .map(|t| {
+                std::iter::once(t.label.clone())
+                    .chain(channels.iter().map(|(name, _)| t.expected_channels.iter().find(|c| &c.0 == name).map_or("—".into(), |c| format!("{} → {}", fmt_value(c.2), fmt_value(c.3)))))
+                    .collect()
+            })
+            .collect(),
+    };
+    let refits: Vec<String> = tests
+        .iter()
+        .zip(o.evidence)
+        .filter_map(|(t, e)| match e {
+            Evidence::Refit(run, _) => Some(format!(
+                "{} was tested by a full re-fit ({}, {}), as it has no null value for a score test",
+                t.label,
+                run.output.path.display(),
+                if run.converged {
+                    "converged"
+                } else {
+                    "did NOT converge"
+                }
+            )),
+            Evidence::Start(_) => None,
+        })
+        .collect();
+    let mut paragraphs = vec![verdict.clone()];
+    if !o.held_out_note.is_empty() {
+        paragraphs.push(o.held_out_note.clone());
+    }
+    paragraphs.push(inflation.clone());
+    paragraphs.extend(untestable.iter().cloned());
+    if let Some(p) = &o.testable_run {
+        paragraphs.push(format!(
+            "--make-testable: the run re-tracked with the pelvis position tracked is {}; its diagnosis is {}-diagnose.",
+            p.display(),
+            p.display()
+        ));
+    }
+    paragraphs.extend(refits.iter().map(|r| format!("{r}.")));
+    let mut md = format!(
+        "# Diagnosis of {}\n\n{}\n\n{}\n\n{}\n",
+        args.run.display(),
+        paragraphs.join("\n\n"),
+        ranking.to_markdown(),
+        expected.to_markdown()
+    );
+    let mut sections = vec![Section {
+        heading: "Ranking".into(),
+        paragraphs,
+        tables: vec![ranking.clone(), expected],
+        svgs: vec![],
+    }];
+    for v in o.verified {
+        let params = v
+            .parameters
+            .iter()
+            .map(|(n, val, sd, u)| {
+                format!(
+                    "{n} = {val:.5}{} {u}",
+                    sd.map_or(String::new(), |s| format!(" ± {s:.2e}"))
+                )
+            })
+            .collect::<Vec<_>>()
+            .join("; ");
+        let text = format!(
+            "Re-fit with {} ({}): J {:.6} → {:.6} ({:.1} % lower; expected {:.1} %), {}. Identified: {params}. {}.",
+            v.test.label,
+            v.folder.display(),
+            v.objective_before,
+            v.objective_after,
+            100.0 * (v.objective_before - v.objective_after) / v.objective_before,
+            100.0 * v.test.predicted_fraction,
+            if v.converged { "converged" } else { "did NOT converge" },
+            v.sentence
+        );
+        // the curves before and after, side by side, in a report of their own
+        let side_by_side = format!("before_after_{}.html", v.test.effect.kind());
+        let text = match [&args.run, &v.folder]
+            .iter()
+            .map(|p| crate::report::runs::RunCurves::read(p))
+            .collect::<Result<Vec<_>, _>>()
+        {
+            Ok(runs) => {
+                folder.write(
+                    &side_by_side,
+                    crate::report::runs::side_by_side(&runs)
+                        .to_html()
+                        .as_bytes(),
+                )?;
+                format!("{text} The curves before and after, side by side: {side_by_side}.")
+            }
+            Err(e) => format!("{text} (No side-by-side curves: {e}.)"),
+        };
+        md += &format!(
+            "\n## {}\n\n{text}\n\n{}\n",
+            v.test.label,
+            v.diff.table().to_markdown()
+        );
+        sections.push(Section {
+            heading: format!("Verified: {}", v.test.label),
+            paragraphs: vec![text],
+            tables: vec![v.diff.table()],
+            svgs: vec![v.diff.chart().to_svg()],
+        });
+    }
+    if !o.skipped.is_empty() {
+        md += &format!("\nNot tested: {}\n", o.skipped.join("; "));
+    }
+    let summary = serde_json::json!({
+        "command": "diagnose",
+        "run": args.run,
+        "objective": objective,
+        "data_residuals": rows,
+        "baseline_decrease": o.resid.decrease,
+        "variance_inflation": {
+            "all_channels": o.phi,
+            "channels": o.resid.series.iter().zip(&o.resid.inflation).map(|(s, p)| serde_json::json!({"channel": s.0, "inflation": p})).collect::<Vec<_>>(),
+        },
+        "ranking": tests,
+        "significant": significant,
+        "found": found,
+        "untestable": tests.iter().filter(|t| !t.testable).count(),
+        "held_out_note": o.held_out_note,
+        "testable_run": o.testable_run,
+        "verdict": verdict,
+        "verified": o.verified.iter().map(|v| serde_json::json!({
+            "effect": v.test.effect,
+            "label": v.test.label,
+            "folder": v.folder,
+            "converged": v.converged,
+            "objective_before": v.objective_before,
+            "objective_after": v.objective_after,
+            "predicted_fraction": v.test.predicted_fraction,
+            "verified_fraction": (v.objective_before - v.objective_after) / v.objective_before,
+            "parameters": v.parameters.iter().map(|(n, val, sd, u)| {
+                let mut p = serde_json::json!({"name": n, "value": val, "unit": u});
+                if let Some(sd) = sd {
+                    p["sd"] = (*sd).into();
+                }
+                p
+            }).collect::<Vec<_>>(),
+            "sentence": v.sentence,
+        })).collect::<Vec<_>>(),
+        "skipped": o.skipped,
+    });
+    folder.write("diagnose.md", md.as_bytes())?;
+    folder.write(
+        "summary.json",
+        serde_json::to_string_pretty(&summary)?.as_bytes(),
+    )?;
+    let summary_box = Summary {
+        status: if found > 0 {
+            format!("{found} found")
+        } else if significant > 0 {
+            format!("{significant} significant in-sample, none confirmed")
+        } else {
+            "nothing significant".into()
+        },
+        tone: if found == 0 {
+            Tone::Good
+        } else {
+            Tone::Warning
+        },
+        stop_reason: verdict.clone(),
+        iterations: None,
+        time_s: None,
+        extra: vec![
+            ("tracking cost J".into(), format!("{objective:.6}")),
+            ("data residuals".into(), rows.to_string()),
+            ("variance inflation φ".into(), format!("{:.1}", o.phi)),
+            (
+                "untestable candidates".into(),
+                tests.iter().filter(|t| !t.testable).count().to_string(),
+            ),
+        ],
+    };
+    let report = Report {
+        title: format!("footfall diagnose — {}", args.run.display()),
+        summary: summary_box,
+        sections,
+    };
+    folder.write("report.html", report.to_html().as_bytes())?;
+    let path = folder.commit()?;
+    note!(
+        progress,
+        "\n{md}\nreport: {}",
+        path.join("report.html").display()
+    );
+    Ok(())
+}

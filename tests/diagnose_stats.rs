@@ -1,0 +1,225 @@
+//! `diagnose`'s statistics on a trial with a hidden CoP offset (issue 23): under the
+//! seed's cost the pelvis position is free and absorbs the offset, so the candidate must
+//! be reported "not testable with this run's cost" (never scored 0 as if absent), with
+//! the hint that makes it testable; the report (`summary.json`, `diagnose.md`,
+//! `report.html`) shows for every candidate its testability, in-sample statistic (with
+//! the variance inflation of correlated residuals), held-out figures and verdict; and
+//! `--make-testable` re-tracks with the pelvis position tracked, where the offset is
+//! found, validated on another half cycle, and identified near its truth (2 cm).
+
+use footfall::runfolder::RunFolder;
+use footfall::workflows::diagnose::DiagnoseRequest;
+use footfall::workflows::track::{track, TrackRequest};
+use footfall::workflows::Quiet;
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn read_json(p: &Path) -> Value {
+    serde_json::from_str(
+        &std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display())),
+    )
+    .unwrap()
+}
+
+/// Track the hidden CoP-offset trial with the seed's cost (pelvis position free), from
+/// the kept pelvis-tracked solution, into `dir/cop_offset`.
+fn seed_run(dir: &Path) -> PathBuf {
+    let trial = root().join("tests/data/hidden/cop_offset");
+    let out = dir.join("cop_offset");
+    let mut req = TrackRequest::new("ellipse");
+    req.check_points = false;
+    req.run.data = Some(trial.join("synthetic.csv"));
+    req.init = Some(trial.join("tracked_pelvis"));
+    req.run.kinematics_cutoff = Some(10.0);
+    let t = std::time::Instant::now();
+    let run = track(&req, RunFolder::create(&out, false).unwrap(), &Quiet).unwrap();
+    eprintln!(
+        "track: {:.1} s, {} iterations, J {:.6}",
+        t.elapsed().as_secs_f64(),
+        run.result.history.len().saturating_sub(1),
+        run.result.objective
+    );
+    assert!(run.converged, "{}", run.result.status);
+    out
+}
+
+fn diagnose(run: &Path, candidates: &[&str], make_testable: bool) -> Value {
+    let req = DiagnoseRequest {
+        run: run.to_path_buf(),
+        verify: 0,
+        candidates: candidates.iter().map(|c| c.to_string()).collect(),
+        out: None,
+        overwrite: false,
+        tol: 1e-5,
+        max_iter: 200,
+        make_testable,
+        held_out: true,
+    };
+    let t = std::time::Instant::now();
+    footfall::workflows::diagnose::run(&req, &Quiet).unwrap();
+    eprintln!("diagnose: {:.1} s", t.elapsed().as_secs_f64());
+    read_json(&PathBuf::from(format!(
+        "{}-diagnose/summary.json",
+        run.display()
+    )))
+}
+
+/// One line per candidate, for the record.
+fn print_ranking(d: &Value) {
+    for t in d["ranking"].as_array().unwrap() {
+        eprintln!(
+            "  {:<28} testable {:<5} statistic {:>8.2} (independent {:>8.2}, φ {:.2}) values {} sd {} held-out {} → {}",
+            t["label"].as_str().unwrap(),
+            t["testable"],
+            t["statistic"].as_f64().unwrap(),
+            t["statistic_independent"].as_f64().unwrap(),
+            t["inflation"].as_f64().unwrap(),
+            t["step_values"],
+            t["identifiability"]["sd"],
+            t["held_out"]
+                .as_object()
+                .map_or("—".into(), |h| format!("{:.4e} vs {:.4e}", h["change"].as_f64().unwrap(), h["band"].as_f64().unwrap())),
+            t["verdict"].as_str().unwrap()
+        );
+    }
+}
+
+fn entry<'a>(d: &'a Value, kind: &str) -> &'a Value {
+    d["ranking"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|t| t["effect"]["type"] == kind)
+        .unwrap_or_else(|| panic!("{kind} not in the ranking"))
+}
+
+/// Every candidate carries testability, the in-sample statistic with its inflation and
+/// threshold, a verdict, and held-out figures exactly when it was significant.
+fn check_every_candidate(d: &Value) {
+    let ranking = d["ranking"].as_array().unwrap();
+    assert!(!ranking.is_empty());
+    for t in ranking {
+        let label = &t["label"];
+        let testable = t["testable"].as_bool().unwrap();
+        let stat = t["statistic"].as_f64().unwrap();
+        let raw = t["statistic_independent"].as_f64().unwrap();
+        let phi = t["inflation"].as_f64().unwrap();
+        assert!(
+            phi >= 1.0 && (stat * phi - raw).abs() <= 1e-9 * raw.max(1.0),
+            "{label}"
+        );
+        assert!(t["threshold"].as_f64().unwrap() > 0.0);
+        let id = &t["identifiability"];
+        assert_eq!(id["testable"].as_bool(), Some(testable), "{label}");
+        let verdict = t["verdict"].as_str().unwrap();
+        let significant = t["significant"].as_bool().unwrap();
+        assert!(
+            !significant || testable,
+            "{label}: untestable yet significant"
+        );
+        assert_eq!(
+            t["held_out"].is_object(),
+            significant,
+            "{label}: held-out figures"
+        );
+        if let Some(h) = t["held_out"].as_object() {
+            for k in ["change", "band", "objective", "beyond_noise", "stride"] {
+                assert!(h.contains_key(k), "{label}: held_out.{k}");
+            }
+            assert_eq!(t["found"], h["beyond_noise"], "{label}");
+        }
+        let want = if !testable {
+            "not testable with this run's cost"
+        } else if !significant {
+            "not significant"
+        } else if t["found"] == true {
+            "found"
+        } else {
+            "not confirmed on the held-out half cycle"
+        };
+        assert_eq!(verdict, want, "{label}");
+    }
+}
+
+#[test]
+fn a_cop_offset_is_untestable_under_the_seed_cost_and_found_when_made_testable() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = seed_run(dir.path());
+    let d = diagnose(&run, &["cop_offset", "force_plate_time_offset"], true);
+    print_ranking(&d);
+    check_every_candidate(&d);
+    let cop = entry(&d, "cop_offset");
+    assert_eq!(cop["testable"], false, "{cop:#}");
+    assert_eq!(cop["significant"], false);
+    assert_eq!(cop["found"], false);
+    assert!(
+        cop["hint"]
+            .as_str()
+            .unwrap()
+            .contains("--track-pelvis-position"),
+        "{}",
+        cop["hint"]
+    );
+    // its sd, where there is one, is far beyond a quarter of the bound span
+    let id = &cop["identifiability"];
+    if let Some(sd) = id["sd"][0].as_f64() {
+        assert!(sd > 0.25 * id["span"][0].as_f64().unwrap(), "{id:#}");
+    }
+    assert!(d["untestable"].as_u64().unwrap() >= 1);
+    assert!(d["verdict"].as_str().unwrap().contains("Not testable"));
+    // the channels' variance inflation
+    let channels = d["variance_inflation"]["channels"].as_array().unwrap();
+    assert_eq!(channels.len(), 7);
+    for c in channels {
+        assert!(c["inflation"].as_f64().is_none_or(|p| p >= 1.0), "{c}");
+    }
+    // the human report shows the same, and no 0.0 stands for an untestable candidate
+    let out = PathBuf::from(format!("{}-diagnose", run.display()));
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    for s in [
+        "testable",
+        "held-out change",
+        "not testable with this run&#39;s cost",
+        "n/a",
+        "φ",
+    ] {
+        assert!(
+            html.contains(s) || html.contains(&s.replace("&#39;", "'")),
+            "report.html lacks {s}"
+        );
+    }
+    let md = std::fs::read_to_string(out.join("diagnose.md")).unwrap();
+    let cop_row = md
+        .lines()
+        .find(|l| l.contains("| CoP offset"))
+        .expect("CoP offset row");
+    assert!(
+        cop_row.contains("| NO ") && cop_row.contains("n/a"),
+        "{cop_row}"
+    );
+
+    // --make-testable: the run re-tracked with the pelvis position, diagnosed again
+    let testable = PathBuf::from(d["testable_run"].as_str().expect("testable_run"));
+    assert!(read_json(&testable.join("setup.json"))["track_pelvis_position"] == true);
+    let d2 = read_json(&PathBuf::from(format!(
+        "{}-diagnose/summary.json",
+        testable.display()
+    )));
+    print_ranking(&d2);
+    check_every_candidate(&d2);
+    let cop = entry(&d2, "cop_offset");
+    eprintln!("with the pelvis tracked: {cop:#}");
+    assert_eq!(cop["testable"], true);
+    assert_eq!(cop["found"], true, "{cop:#}");
+    assert_eq!(d2["ranking"][0]["effect"]["type"], "cop_offset");
+    let offset = cop["step_values"][0].as_f64().unwrap();
+    let sd = cop["identifiability"]["sd"][0].as_f64().unwrap();
+    assert!(
+        (offset - 0.02).abs() < (0.2 * 0.02f64).max(2.0 * sd),
+        "offset {offset} ± {sd}, truth 0.02"
+    );
+}
