@@ -18,6 +18,7 @@
 
 mod geometry;
 mod actuator_properties;
+mod catalog;
 mod instruments;
 mod kinds;
 mod spec;
@@ -30,7 +31,8 @@ pub use kinds::{
     CopOffset, ForcePlateTimeOffset, GroundSlope, HeelPadCompliance, PassiveJointStiffness,
     TrunkMass,
 };
-pub use spec::{catalog, BuildContext, EffectSpec};
+pub use catalog::catalog;
+pub use spec::{BuildContext, EffectSpec};
 pub use volumetric::{VolumetricContact, VolumetricStart};
 
 use super::ad::{AdChunk, AdNested};
