@@ -271,6 +271,12 @@ pub fn gauss_newton_decrease(tr: &Transcription, w: &[f64]) -> Result<(f64, f64)
     Ok((j, dec))
 }
 
+/// The point the truncated re-fit from `w` reaches ([`truncated_refit`] with the
+/// diagnosis's step limit and stopping rule) and the cost there.
+pub fn refit_point(tr: &Transcription, w: &[f64]) -> Result<(f64, Vec<f64>), String> {
+    truncated_refit(tr, w, MAX_STEPS, REL_STOP).map(|(j, dec, w1, _)| (j - dec, w1))
+}
+
 /// A truncated re-fit from `w`: Gauss–Newton steps (each one QP on the linearised
 /// constraints, backtracked on the cost) until a step adds less than `rel_stop` of the
 /// decrease so far, or `max_steps`. The first step is the score test proper; the next
@@ -421,6 +427,16 @@ impl ScoreTest {
             held_out: None,
             found: false,
             verdict: String::new(),
+        }
+    }
+
+    /// Measure the decrease in units of the residual mean square `mean_square` (the
+    /// largest model's, as an F-test's denominator) instead of the run's own, keeping the
+    /// variance inflation, and judge it again.
+    pub fn set_mean_square(&mut self, mean_square: f64) {
+        if mean_square > 0.0 && mean_square.is_finite() {
+            self.statistic_independent = self.predicted_decrease / mean_square;
+            self.set_inflation(self.inflation);
         }
     }
 

@@ -13,7 +13,7 @@ use super::{note, warn_note, Progress};
 use crate::model::effects::{catalog, EffectSpec};
 use crate::problems::diagnose::stats::{candidate_identifiability, variance_inflation};
 use crate::problems::diagnose::{
-    channel_means, channel_series, gauss_newton_decrease, refit_test, score_test,
+    channel_means, channel_series, gauss_newton_decrease, refit_point, refit_test, score_test,
     IdentifiedParameter, ScoreTest, TrackingRunSetup,
 };
 
@@ -72,6 +72,7 @@ fn test_candidate(
     effect: &EffectSpec,
     k: usize,
     baseline: &Residuals,
+    noise: Option<&FullModel>,
     hint: String,
 ) -> anyhow::Result<(ScoreTest, GaitSolution)> {
     let rows = baseline.rows;
@@ -112,20 +113,25 @@ fn test_candidate(
                     .map_or(0.0, |c| if c.2 > 0.0 { (c.2 - c.3) / c.2 } else { 0.0 })
             })
             .collect();
-        // the autocorrelation of the noise is that of the residuals under the
-        // alternative (after the candidate's re-fit), as an F-test's variance is the
-        // larger model's: at the plain model's solution a missing effect's systematic
-        // misfit is itself a smooth, correlated residual
-        let after = channel_series(
-            tr,
-            &w1,
-            &cycle.continuous,
-            prob.setup.window.0,
-            &prob.model,
-            &prob.sets,
-            &prob.data,
-        )
-        .map_err(|e| anyhow!(e))?;
+        // the autocorrelation of the noise is that of the residuals under the largest
+        // model (every candidate at once, [`full_model_series`]), as an F-test's variance
+        // is the larger model's: at the plain model's solution a missing effect's
+        // systematic misfit is itself a smooth, correlated residual, and so is a second
+        // missing effect's after this candidate's re-fit; without that model, the
+        // residuals after this candidate's own re-fit
+        let after = match noise {
+            Some(full) => full.series.clone(),
+            None => channel_series(
+                tr,
+                &w1,
+                &cycle.continuous,
+                prob.setup.window.0,
+                &prob.model,
+                &prob.sets,
+                &prob.data,
+            )
+            .map_err(|e| anyhow!(e))?,
+        };
         let series: Vec<Vec<f64>> = baseline
             .series
             .iter()
@@ -138,7 +144,10 @@ fn test_candidate(
             .collect();
         let (_, phi) = variance_inflation(&series, &weights);
         t.set_inflation(phi);
-        let s2 = baseline.objective / rows.max(1) as f64;
+        // and so is the residual mean square
+        let objective = noise.map_or(baseline.objective, |f| f.objective.min(baseline.objective));
+        let s2 = objective / rows.max(1) as f64;
+        t.set_mean_square(s2);
         let id = candidate_identifiability(tr, &w, names, s2, phi).map_err(|e| anyhow!(e))?;
         t.set_identifiability(id, Some(hint));
         let mut solution = GaitSolution::from_nlp(tr, &w1, &cycle.continuous, prob.setup.window.0);
@@ -146,6 +155,82 @@ fn test_candidate(
         prob.setup.place(&prob.model, &mut solution);
         Ok((t, solution))
     })
+}
+
+/// Whether `c` is an instrument effect of both plates together (one clock, CoP offset or
+/// gain for both feet), which the largest model replaces by one per plate.
+fn both_plates(c: &EffectSpec) -> bool {
+    matches!(
+        c,
+        EffectSpec::ForcePlateTimeOffset { side, .. }
+            | EffectSpec::CopOffset { side, .. }
+            | EffectSpec::ForcePlateGain { side, .. } if side == "both"
+    )
+}
+
+/// The Table 3 channels' residual series at the nodes after a truncated re-fit of the
+/// largest model the diagnosis considers: every score-tested candidate at once, each
+/// kind once (each plate's instruments on their own rather than both plates together),
+/// started from the run's solution. Its residuals are the diagnosis's estimate of the
+/// noise: its mean square and autocorrelation are what every candidate's decrease is
+/// measured against. `None` when fewer than two candidates are scored (each candidate's
+/// own re-fit is then that model).
+fn full_model_series(
+    setup: &TrackingRunSetup,
+    solution: &GaitSolution,
+    candidates: &[EffectSpec],
+) -> anyhow::Result<Option<FullModel>> {
+    let mut order: Vec<&EffectSpec> = candidates
+        .iter()
+        .filter(|c| !matches!(c.kind(), "heel_pad_compliance" | "volumetric_contact"))
+        .filter(|c| !setup.effects.iter().any(|e| e.overlaps(c)))
+        .collect();
+    order.sort_by_key(|c| both_plates(c));
+    let mut chosen: Vec<EffectSpec> = Vec::new();
+    for c in order {
+        if chosen.iter().any(|x| x.overlaps(c)) {
+            continue;
+        }
+        // a candidate the model refuses (e.g. an actuator property of a torque model)
+        // is not part of it
+        if TrackingProblem::build(setup, std::slice::from_ref(c)).is_ok() {
+            chosen.push(c.clone());
+        }
+    }
+    if chosen.len() < 2 {
+        return Ok(None);
+    }
+    let mut prob = TrackingProblem::build(setup, &chosen)?;
+    prob.setup.start_from(solution).map_err(|e| anyhow!(e))?;
+    let (objective, series) = prob.with_transcription(|tr, cycle, w| {
+        let (j1, w1) = refit_point(tr, &w).map_err(|e| anyhow!(e))?;
+        let series = channel_series(
+            tr,
+            &w1,
+            &cycle.continuous,
+            prob.setup.window.0,
+            &prob.model,
+            &prob.sets,
+            &prob.data,
+        )
+        .map_err(|e| anyhow!(e))?;
+        Ok((j1, series))
+    })?;
+    Ok(Some(FullModel {
+        effects: chosen.iter().map(|c| c.label()).collect(),
+        objective,
+        series,
+    }))
+}
+
+/// The largest model's truncated re-fit: the diagnosis's estimate of the noise.
+pub(super) struct FullModel {
+    /// Its effects' labels.
+    pub effects: Vec<String>,
+    /// Its cost after the re-fit.
+    pub objective: f64,
+    /// The Table 3 channels' residual series at the nodes.
+    pub series: Vec<(String, Vec<f64>)>,
 }
 
 /// The run's residuals: cost, count, the truncated re-fit's leftover decrease and the
@@ -467,6 +552,24 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
     if args.candidates.is_empty() && base.model.has_volumetric_contacts() {
         candidates.push(EffectSpec::parse_cli("volumetric_contact").map_err(|e| anyhow!(e))?);
     }
+    let full = match full_model_series(&setup, &solution, &candidates) {
+        Ok(Some(full)) => {
+            note!(progress,
+                "the largest model ({} candidates at once: {}) lowers J from {objective:.6} to {:.6}; its residuals are the noise every statistic is measured against",
+                full.effects.len(),
+                full.effects.join(", "),
+                full.objective
+            );
+            Some(full)
+        }
+        Ok(None) => None,
+        Err(e) => {
+            warn_note!(progress,
+                "the largest model (every candidate at once) could not be re-fitted ({e:#}); each candidate's statistic is corrected with the residuals after its own re-fit"
+            );
+            None
+        }
+    };
     for c in &candidates {
         if setup.effects.iter().any(|e| e.overlaps(c)) {
             skipped.push(format!("{}: already in the model", c.label()));
@@ -506,7 +609,14 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
         let k = prob.model.ntheta() - base.model.ntheta();
         prob.setup.start_from(&solution).map_err(|e| anyhow!(e))?;
         let t0 = std::time::Instant::now();
-        let (t, start) = test_candidate(&prob, c, k, &resid, heldout::hint(c, &setup))?;
+        let (t, start) = test_candidate(
+            &prob,
+            c,
+            k,
+            &resid,
+            full.as_ref(),
+            heldout::hint(c, &setup),
+        )?;
         {
             print_progress(progress, &t, true, t0.elapsed().as_secs_f64());
         }
@@ -624,6 +734,7 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
         rows,
         resid: &resid,
         phi: phi_all,
+        noise: full.as_ref(),
         tests: &tests,
         evidence: &evidence,
         verified: &verified,

@@ -4,6 +4,7 @@
 #[allow(unused_imports)]
 use super::super::{note, Progress};
 use super::{DiagnoseRequest, Evidence, Residuals, Verified};
+use crate::problems::diagnose::stats::variance_inflation;
 use crate::problems::diagnose::ScoreTest;
 use crate::report::diff::{fmt_value, RunSummary};
 use crate::report::html::{Report, Section, Summary, Tone};
@@ -20,6 +21,9 @@ pub(super) struct Outcome<'a> {
     pub resid: &'a Residuals,
     /// Variance inflation over all channels alike.
     pub phi: f64,
+    /// The largest model, whose residuals are the noise (when more than one candidate
+    /// was scored).
+    pub noise: Option<&'a super::FullModel>,
     pub tests: &'a [ScoreTest],
     pub evidence: &'a [Evidence],
     pub verified: &'a [Verified],
@@ -28,6 +32,13 @@ pub(super) struct Outcome<'a> {
     pub held_out_note: String,
     /// The run re-tracked by `--make-testable` (diagnosed into `<it>-diagnose`).
     pub testable_run: Option<PathBuf>,
+}
+
+/// Each channel's variance inflation in the largest model's residuals.
+fn noise_inflation(full: &super::FullModel) -> Vec<(String, Option<f64>)> {
+    let values: Vec<Vec<f64>> = full.series.iter().map(|s| s.1.clone()).collect();
+    let (phis, _) = variance_inflation(&values, &[]);
+    full.series.iter().map(|s| s.0.clone()).zip(phis).collect()
 }
 
 /// "value ± sd" of each of a candidate's parameters after its truncated re-fit.
@@ -124,7 +135,7 @@ pub(super) fn write(
     let found = tests.iter().filter(|t| t.found).count();
     let verdict = verdict(o);
     let ranking = Table {
-        title: "Candidate effects ranked: testability, in-sample score statistic (predicted cost decrease / residual mean square, divided by the variance inflation φ of correlated residuals), held-out change, verdict".into(),
+        title: "Candidate effects ranked: testability, in-sample score statistic (predicted cost decrease / the largest model's residual mean square, divided by the variance inflation φ of correlated residuals), held-out change, verdict".into(),
         headers: ["rank", "effect", "testable", "parameters (truncated re-fit, ± sd)", "expected decrease", "% of J", "statistic", "φ", "χ² 0.1 % point", "held-out change vs noise band", "verdict"].map(String::from).to_vec(),
         rows: tests
             .iter()
@@ -163,7 +174,7 @@ pub(super) fn write(
         })
         .collect();
     let inflation = format!(
-        "Correlated residuals: per channel, the variance inflation φ = N/N_eff (N_eff = N/(1 + 2 Σ ρ_k), ρ_k the error's autocorrelation at the nodes, summed up to the first lag ≤ 0): {}; these are the plain model's; each candidate's statistic is divided by the φ of the residuals left after its truncated re-fit (as an F-test takes the larger model's variance), averaged over the channels that re-fit improves, weighted by their relative improvement.",
+        "Correlated residuals: per channel, the variance inflation φ = N/N_eff (N_eff = N/(1 + 2 Σ ρ_k), ρ_k the error's autocorrelation at the nodes, summed up to the first lag ≤ 0): {}; these are the plain model's; each candidate's statistic is divided by the φ of the residuals left after the truncated re-fit of the largest model (every scored candidate at once, each plate's instruments on their own; as an F-test takes the larger model's variance), averaged over the channels the candidate's re-fit improves, weighted by their relative improvement.",
         o.resid
             .series
             .iter()
@@ -171,7 +182,20 @@ pub(super) fn write(
             .map(|(s, p)| format!("{} {}", s.0, p.map_or("—".into(), |p| format!("{p:.1}"))))
             .collect::<Vec<_>>()
             .join(", ")
-    );
+    ) + &match o.noise {
+        Some(full) => format!(
+            " The largest model ({}) lowers J from {:.6} to {:.6}; its residuals' φ per channel: {}; every statistic's residual mean square is its J/N.",
+            full.effects.join(", "),
+            o.objective,
+            full.objective,
+            noise_inflation(full)
+                .iter()
+                .map(|(c, p)| format!("{c} {}", p.map_or("—".into(), |p| format!("{p:.1}"))))
+                .collect::<Vec<_>>()
+                .join(", ")
+        ),
+        None => " Each candidate's own re-fit is the largest model; the residual mean square is the run's J/N.".into(),
+    };
     // channels by name: a re-fit's come from its run summary, a score test's from the
     // problem
     let channels: Vec<(String, String)> = tests.first().map_or(vec![], |t| {
@@ -302,6 +326,11 @@ pub(super) fn write(
             "all_channels": o.phi,
             "channels": o.resid.series.iter().zip(&o.resid.inflation).map(|(s, p)| serde_json::json!({"channel": s.0, "inflation": p})).collect::<Vec<_>>(),
         },
+        "noise_model": o.noise.map(|full| serde_json::json!({
+            "effects": full.effects,
+            "objective": full.objective,
+            "inflation": noise_inflation(full).iter().map(|(c, p)| serde_json::json!({"channel": c, "inflation": p})).collect::<Vec<_>>(),
+        })),
         "ranking": tests,
         "significant": significant,
         "found": found,
