@@ -31,7 +31,7 @@ pub mod stats;
 
 use crate::model::effects::EffectSpec;
 use crate::ocp::{Block, Transcription};
-use crate::sqp::linearised::GaussNewtonModel;
+use crate::sqp::linearised::{GaussNewtonModel, GaussNewtonStep};
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
@@ -289,18 +289,31 @@ pub fn truncated_refit(
     max_steps: usize,
     rel_stop: f64,
 ) -> Result<(f64, f64, Vec<f64>, usize), String> {
-    let cost = |w: &[f64]| crate::sqp::Nlp::evaluate(tr, w, false).map(|e| e.f);
     let first = GaussNewtonModel::new(tr, w, 1e-12)?;
+    let step = first.step(None);
+    truncated_refit_from(tr, &first, step, max_steps, rel_stop)
+}
+
+/// [`truncated_refit`] from the Gauss–Newton model `first` at the start and its first
+/// step (or the error computing it), computed once by a caller that also asks the model
+/// other questions (the identifiability probes start from the same model and step).
+pub fn truncated_refit_from(
+    tr: &Transcription,
+    first: &GaussNewtonModel<'_>,
+    first_step: Result<GaussNewtonStep, String>,
+    max_steps: usize,
+    rel_stop: f64,
+) -> Result<(f64, f64, Vec<f64>, usize), String> {
+    let cost = |w: &[f64]| crate::sqp::Nlp::evaluate(tr, w, false).map(|e| e.f);
     let j0 = first.objective();
     let mut w = first.point().to_vec();
-    let mut model = Some(first);
+    let mut pending = Some(first_step);
     let (mut f, mut total, mut steps) = (j0, 0.0, 0);
     while steps < max_steps {
-        let m = match model.take() {
-            Some(m) => m,
-            None => GaussNewtonModel::new(tr, &w, 1e-12)?,
+        let s = match pending.take() {
+            Some(s) => s?,
+            None => GaussNewtonModel::new(tr, &w, 1e-12)?.step(None)?,
         };
-        let s = m.step(None)?;
         if !(s.predicted_decrease > 0.0) {
             break;
         }
@@ -342,8 +355,25 @@ pub fn score_test(
     baseline_decrease: f64,
     data_rows: usize,
 ) -> Result<(ScoreTest, Vec<f64>), String> {
+    let first = GaussNewtonModel::new(tr, w, 1e-12)?;
+    let step = first.step(None);
+    score_test_from(effect, parameters, tr, &first, step, baseline_decrease, data_rows)
+}
+
+/// [`score_test`] from the Gauss–Newton model at the run's solution and its first step,
+/// computed once for the score test and the identifiability probes.
+pub fn score_test_from(
+    effect: &EffectSpec,
+    parameters: Vec<String>,
+    tr: &Transcription,
+    first: &GaussNewtonModel<'_>,
+    first_step: Result<GaussNewtonStep, String>,
+    baseline_decrease: f64,
+    data_rows: usize,
+) -> Result<(ScoreTest, Vec<f64>), String> {
     let k = parameters.len();
-    let (objective, decrease, w1, steps) = truncated_refit(tr, w, MAX_STEPS, REL_STOP)?;
+    let (objective, decrease, w1, steps) =
+        truncated_refit_from(tr, first, first_step, MAX_STEPS, REL_STOP)?;
     let theta = theta_of(tr, &w1);
     let values = theta[theta.len() - k..].to_vec();
     let test = ScoreTest {

@@ -11,9 +11,9 @@ use super::track::{read_run_setup, tracking_sqp_settings, TrackedRun, TrackingPr
 #[allow(unused_imports)]
 use super::{note, warn_note, Progress};
 use crate::model::effects::{catalog, EffectSpec};
-use crate::problems::diagnose::stats::{candidate_identifiability, variance_inflation};
+use crate::problems::diagnose::stats::{candidate_identifiability_at, variance_inflation};
 use crate::problems::diagnose::{
-    channel_means, channel_series, gauss_newton_decrease, refit_point, refit_test, score_test,
+    channel_means, channel_series, gauss_newton_decrease, refit_point, refit_test, score_test_from,
     IdentifiedParameter, ScoreTest, TrackingRunSetup,
 };
 
@@ -22,6 +22,7 @@ mod output;
 use crate::problems::evaluation::GaitSolution;
 use crate::report::diff::{RunDiff, RunSummary};
 use crate::runfolder::RunFolder;
+use crate::sqp::linearised::GaussNewtonModel;
 use crate::sqp::HessianMode;
 use anyhow::anyhow;
 use std::path::{Path, PathBuf};
@@ -82,8 +83,20 @@ fn test_candidate(
             .iter()
             .map(|&i| prob.model.parameters()[i].name.clone())
             .collect();
-        let (mut t, w1) = score_test(effect, names.clone(), tr, &w, baseline.decrease, rows)
-            .map_err(|e| anyhow!(e))?;
+        // the Gauss–Newton model at the solution and its first step, shared by the score
+        // test (its truncated re-fit's first step) and the identifiability probes
+        let first = GaussNewtonModel::new(tr, &w, 1e-12).map_err(|e| anyhow!(e))?;
+        let first_step = first.step(None);
+        let (mut t, w1) = score_test_from(
+            effect,
+            names.clone(),
+            tr,
+            &first,
+            first_step.clone(),
+            baseline.decrease,
+            rows,
+        )
+        .map_err(|e| anyhow!(e))?;
         let means = |w: &[f64]| {
             channel_means(
                 tr,
@@ -148,13 +161,28 @@ fn test_candidate(
         let objective = noise.map_or(baseline.objective, |f| f.objective.min(baseline.objective));
         let s2 = objective / rows.max(1) as f64;
         t.set_mean_square(s2);
-        let id = candidate_identifiability(tr, &w, names, s2, phi).map_err(|e| anyhow!(e))?;
+        let id =
+            candidate_identifiability_at(tr, Ok(&first), first_step.as_ref(), names, s2, phi)
+                .map_err(|e| anyhow!(e))?;
         t.set_identifiability(id, Some(hint));
         let mut solution = GaitSolution::from_nlp(tr, &w1, &cycle.continuous, prob.setup.window.0);
         // a plate's clock offset candidate moves the window's start with the events it gave
         prob.setup.place(&prob.model, &mut solution);
         Ok((t, solution))
     })
+}
+
+/// `prob` for the Gauss–Newton linearisations of the score tests (the baseline, each
+/// candidate and the largest model): the sensitivities are left out of CVODES's local
+/// error test, so the steps follow the states' error only (an interval then takes about
+/// two thirds of the steps and time, `docs/engine-investigation.md`). The costs that
+/// decide a step are the states' (unchanged); the sensitivities only shape the
+/// Gauss–Newton model, whose step is then checked on the cost. Full re-fits (the heel
+/// pad's, the verifying ones) keep the run's settings: an SQP's convergence test needs
+/// the sensitivities' error controlled.
+fn linearisation(mut prob: TrackingProblem) -> TrackingProblem {
+    prob.integrator.sens_error_control = false;
+    prob
 }
 
 /// Whether `c` is an instrument effect of both plates together (one clock, CoP offset or
@@ -200,7 +228,7 @@ fn full_model_series(
     if chosen.len() < 2 {
         return Ok(None);
     }
-    let mut prob = TrackingProblem::build(setup, &chosen)?;
+    let mut prob = linearisation(TrackingProblem::build(setup, &chosen)?);
     prob.setup.start_from(solution).map_err(|e| anyhow!(e))?;
     let (objective, series) = prob.with_transcription(|tr, cycle, w| {
         let (j1, w1) = refit_point(tr, &w).map_err(|e| anyhow!(e))?;
@@ -499,7 +527,7 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
             .collect::<Result<_, _>>()?
     };
     // the baseline: the run's own problem at its solution
-    let mut base = TrackingProblem::build(&setup, &[])?;
+    let mut base = linearisation(TrackingProblem::build(&setup, &[])?);
     base.setup
         .start_from(&solution)
         .map_err(|e| anyhow!("{}: {e}", args.run.display()))?;
@@ -600,7 +628,7 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
             continue;
         }
         let mut prob = match TrackingProblem::build(&setup, std::slice::from_ref(c)) {
-            Ok(p) => p,
+            Ok(p) => linearisation(p),
             Err(e) => {
                 skipped.push(format!("{}: {e:#}", c.label()));
                 continue;

@@ -12,7 +12,7 @@
 //! inflation ([`variance_inflation`]).
 
 use crate::ocp::{Block, Transcription};
-use crate::sqp::linearised::GaussNewtonModel;
+use crate::sqp::linearised::{GaussNewtonModel, GaussNewtonStep};
 use serde::Serialize;
 
 /// A candidate is identifiable only if each parameter's standard deviation is below this
@@ -79,9 +79,20 @@ pub fn reduced_inverse_hessian(
     w: &[f64],
     cols: &[usize],
 ) -> Result<Vec<Vec<f64>>, String> {
-    let (w_lb, w_ub, _, _) = crate::sqp::Nlp::bounds(tr);
     let m = GaussNewtonModel::new(tr, w, 1e-12)?;
     let base = m.step(None)?;
+    reduced_inverse_hessian_at(tr, &m, &base, cols)
+}
+
+/// [`reduced_inverse_hessian`] from the Gauss–Newton model `m` at the point and its
+/// unshifted step `base` (computed once with the score test's first step).
+pub fn reduced_inverse_hessian_at(
+    tr: &Transcription,
+    m: &GaussNewtonModel<'_>,
+    base: &GaussNewtonStep,
+    cols: &[usize],
+) -> Result<Vec<Vec<f64>>, String> {
+    let (w_lb, w_ub, _, _) = crate::sqp::Nlp::bounds(tr);
     let k = cols.len();
     let mut c = vec![vec![0.0; k]; k];
     let objective = m.objective().abs().max(1e-12);
@@ -210,12 +221,38 @@ pub fn candidate_identifiability(
     s2: f64,
     phi: f64,
 ) -> Result<Identifiability, String> {
+    let m = GaussNewtonModel::new(tr, w, 1e-12);
+    let (m, base) = match m {
+        Ok(m) => {
+            let base = m.step(None);
+            (Ok(m), base)
+        }
+        Err(e) => (Err(e.clone()), Err(e)),
+    };
+    candidate_identifiability_at(tr, m.as_ref().map_err(|e| e.clone()), base.as_ref(), names, s2, phi)
+}
+
+/// [`candidate_identifiability`] from the Gauss–Newton model at the run's solution and its
+/// unshifted step (or the errors computing them), computed once for the score test and
+/// the probes.
+pub fn candidate_identifiability_at(
+    tr: &Transcription,
+    m: Result<&GaussNewtonModel<'_>, String>,
+    base: Result<&GaussNewtonStep, &String>,
+    names: Vec<String>,
+    s2: f64,
+    phi: f64,
+) -> Result<Identifiability, String> {
     let range = tr.range(Block::Params);
     let k = names.len();
     let cols: Vec<usize> = (range.end - k..range.end).collect();
     let (w_lb, w_ub, _, _) = crate::sqp::Nlp::bounds(tr);
     let span = cols.iter().map(|&c| w_ub[c] - w_lb[c]).collect();
-    Ok(match reduced_inverse_hessian(tr, w, &cols) {
+    let probed = m.and_then(|m| {
+        let base = base.map_err(|e| e.clone())?;
+        reduced_inverse_hessian_at(tr, m, base, &cols)
+    });
+    Ok(match probed {
         Ok(c) => identifiability(names, c, span, s2, phi),
         // an unbounded probe: nothing in the cost resists a change of the parameter
         Err(e) if e.contains("DualInfeasible") => Identifiability::unknown(
