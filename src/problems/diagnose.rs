@@ -357,7 +357,15 @@ pub fn score_test(
 ) -> Result<(ScoreTest, Vec<f64>), String> {
     let first = GaussNewtonModel::new(tr, w, 1e-12)?;
     let step = first.step(None);
-    score_test_from(effect, parameters, tr, &first, step, baseline_decrease, data_rows)
+    score_test_from(
+        effect,
+        parameters,
+        tr,
+        &first,
+        step,
+        baseline_decrease,
+        data_rows,
+    )
 }
 
 /// [`score_test`] from the Gauss–Newton model at the run's solution and its first step,

@@ -19,6 +19,7 @@ use crate::problems::diagnose::{
 
 mod heldout;
 mod output;
+use crate::ocp::Transcription;
 use crate::problems::evaluation::GaitSolution;
 use crate::report::diff::{RunDiff, RunSummary};
 use crate::runfolder::RunFolder;
@@ -134,16 +135,7 @@ fn test_candidate(
         // residuals after this candidate's own re-fit
         let after = match noise {
             Some(full) => full.series.clone(),
-            None => channel_series(
-                tr,
-                &w1,
-                &cycle.continuous,
-                prob.setup.window.0,
-                &prob.model,
-                &prob.sets,
-                &prob.data,
-            )
-            .map_err(|e| anyhow!(e))?,
+            None => residual_series(&prob, tr, &cycle.continuous, &w1)?,
         };
         let series: Vec<Vec<f64>> = baseline
             .series
@@ -161,9 +153,8 @@ fn test_candidate(
         let objective = noise.map_or(baseline.objective, |f| f.objective.min(baseline.objective));
         let s2 = objective / rows.max(1) as f64;
         t.set_mean_square(s2);
-        let id =
-            candidate_identifiability_at(tr, Ok(&first), first_step.as_ref(), names, s2, phi)
-                .map_err(|e| anyhow!(e))?;
+        let id = candidate_identifiability_at(tr, Ok(&first), first_step.as_ref(), names, s2, phi)
+            .map_err(|e| anyhow!(e))?;
         t.set_identifiability(id, Some(hint));
         let mut solution = GaitSolution::from_nlp(tr, &w1, &cycle.continuous, prob.setup.window.0);
         // a plate's clock offset candidate moves the window's start with the events it gave
@@ -183,6 +174,26 @@ fn test_candidate(
 fn linearisation(mut prob: TrackingProblem) -> TrackingProblem {
     prob.integrator.sens_error_control = false;
     prob
+}
+
+/// The Table 3 channels' residual series at the nodes of `prob` at the point `w` of its
+/// transcription `tr` (for their autocorrelation).
+fn residual_series(
+    prob: &TrackingProblem,
+    tr: &Transcription,
+    continuous: &[usize],
+    w: &[f64],
+) -> anyhow::Result<Vec<(String, Vec<f64>)>> {
+    channel_series(
+        tr,
+        w,
+        continuous,
+        prob.setup.window.0,
+        &prob.model,
+        &prob.sets,
+        &prob.data,
+    )
+    .map_err(|e| anyhow!(e))
 }
 
 /// Whether `c` is an instrument effect of both plates together (one clock, CoP offset or
@@ -232,16 +243,7 @@ fn full_model_series(
     prob.setup.start_from(solution).map_err(|e| anyhow!(e))?;
     let (objective, series) = prob.with_transcription(|tr, cycle, w| {
         let (j1, w1) = refit_point(tr, &w).map_err(|e| anyhow!(e))?;
-        let series = channel_series(
-            tr,
-            &w1,
-            &cycle.continuous,
-            prob.setup.window.0,
-            &prob.model,
-            &prob.sets,
-            &prob.data,
-        )
-        .map_err(|e| anyhow!(e))?;
+        let series = residual_series(&prob, tr, &cycle.continuous, &w1)?;
         Ok((j1, series))
     })?;
     Ok(Some(FullModel {
@@ -532,18 +534,8 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
         .start_from(&solution)
         .map_err(|e| anyhow!("{}: {e}", args.run.display()))?;
     let (objective, base_decrease, rows) = decrease_at_solution(&base)?;
-    let series = base.with_transcription(|tr, cycle, w| {
-        channel_series(
-            tr,
-            &w,
-            &cycle.continuous,
-            base.setup.window.0,
-            &base.model,
-            &base.sets,
-            &base.data,
-        )
-        .map_err(|e| anyhow!(e))
-    })?;
+    let series =
+        base.with_transcription(|tr, cycle, w| residual_series(&base, tr, &cycle.continuous, &w))?;
     let values: Vec<Vec<f64>> = series.iter().map(|s| s.1.clone()).collect();
     let (inflation, phi_all) = variance_inflation(&values, &[]);
     let resid = Residuals {
@@ -637,14 +629,8 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
         let k = prob.model.ntheta() - base.model.ntheta();
         prob.setup.start_from(&solution).map_err(|e| anyhow!(e))?;
         let t0 = std::time::Instant::now();
-        let (t, start) = test_candidate(
-            &prob,
-            c,
-            k,
-            &resid,
-            full.as_ref(),
-            heldout::hint(c, &setup),
-        )?;
+        let (t, start) =
+            test_candidate(&prob, c, k, &resid, full.as_ref(), heldout::hint(c, &setup))?;
         {
             print_progress(progress, &t, true, t0.elapsed().as_secs_f64());
         }

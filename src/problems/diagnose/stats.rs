@@ -229,7 +229,14 @@ pub fn candidate_identifiability(
         }
         Err(e) => (Err(e.clone()), Err(e)),
     };
-    candidate_identifiability_at(tr, m.as_ref().map_err(|e| e.clone()), base.as_ref(), names, s2, phi)
+    candidate_identifiability_at(
+        tr,
+        m.as_ref().map_err(|e| e.clone()),
+        base.as_ref(),
+        names,
+        s2,
+        phi,
+    )
 }
 
 /// [`candidate_identifiability`] from the Gauss–Newton model at the run's solution and its
