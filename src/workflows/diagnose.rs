@@ -153,7 +153,7 @@ fn test_candidate(
         let objective = noise.map_or(baseline.objective, |f| f.objective.min(baseline.objective));
         let s2 = objective / rows.max(1) as f64;
         t.set_mean_square(s2);
-        let id = candidate_identifiability_at(tr, Ok(&first), first_step.as_ref(), names, s2, phi)
+        let id = candidate_identifiability_at(tr, &first, first_step.as_ref(), names, s2, phi)
             .map_err(|e| anyhow!(e))?;
         t.set_identifiability(id, Some(hint));
         let mut solution = GaitSolution::from_nlp(tr, &w1, &cycle.continuous, prob.setup.window.0);
@@ -208,8 +208,9 @@ fn both_plates(c: &EffectSpec) -> bool {
 }
 
 /// The Table 3 channels' residual series at the nodes after a truncated re-fit of the
-/// largest model the diagnosis considers: every score-tested candidate at once, each
-/// kind once (each plate's instruments on their own rather than both plates together),
+/// largest model the diagnosis considers: every score-tested candidate at once
+/// (`candidates`: those the run's model accepts and does not already hold), each kind
+/// once (each plate's instruments on their own rather than both plates together),
 /// started from the run's solution. Its residuals are the diagnosis's estimate of the
 /// noise: its mean square and autocorrelation are what every candidate's decrease is
 /// measured against. `None` when fewer than two candidates are scored (each candidate's
@@ -217,22 +218,18 @@ fn both_plates(c: &EffectSpec) -> bool {
 fn full_model_series(
     setup: &TrackingRunSetup,
     solution: &GaitSolution,
-    candidates: &[EffectSpec],
+    candidates: &[&EffectSpec],
 ) -> anyhow::Result<Option<FullModel>> {
+    // the volumetric contact law is score-tested but left out of the largest model
     let mut order: Vec<&EffectSpec> = candidates
         .iter()
-        .filter(|c| !matches!(c.kind(), "heel_pad_compliance" | "volumetric_contact"))
-        .filter(|c| !setup.effects.iter().any(|e| e.overlaps(c)))
+        .copied()
+        .filter(|c| c.kind() != "volumetric_contact")
         .collect();
     order.sort_by_key(|c| both_plates(c));
     let mut chosen: Vec<EffectSpec> = Vec::new();
     for c in order {
-        if chosen.iter().any(|x| x.overlaps(c)) {
-            continue;
-        }
-        // a candidate the model refuses (e.g. an actuator property of a torque model)
-        // is not part of it
-        if TrackingProblem::build(setup, std::slice::from_ref(c)).is_ok() {
+        if !chosen.iter().any(|x| x.overlaps(c)) {
             chosen.push(c.clone());
         }
     }
@@ -572,7 +569,23 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
     if args.candidates.is_empty() && base.model.has_volumetric_contacts() {
         candidates.push(EffectSpec::parse_cli("volumetric_contact").map_err(|e| anyhow!(e))?);
     }
-    let full = match full_model_series(&setup, &solution, &candidates) {
+    // each score-tested candidate's problem, built once (the model, phases and trial read
+    // from their files): the largest model is made of those the model accepts, and each
+    // is then score-tested
+    let problems: Vec<Option<anyhow::Result<TrackingProblem>>> = candidates
+        .iter()
+        .map(|c| {
+            (c.kind() != pad.kind() && !setup.effects.iter().any(|e| e.overlaps(c)))
+                .then(|| TrackingProblem::build(&setup, std::slice::from_ref(c)))
+        })
+        .collect();
+    let accepted: Vec<&EffectSpec> = candidates
+        .iter()
+        .zip(&problems)
+        .filter(|(_, p)| matches!(p, Some(Ok(_))))
+        .map(|(c, _)| c)
+        .collect();
+    let full = match full_model_series(&setup, &solution, &accepted) {
         Ok(Some(full)) => {
             note!(progress,
                 "the largest model ({} candidates at once: {}) lowers J from {objective:.6} to {:.6}; its residuals are the noise every statistic is measured against",
@@ -590,7 +603,7 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
             None
         }
     };
-    for c in &candidates {
+    for (c, built) in candidates.iter().zip(problems) {
         if setup.effects.iter().any(|e| e.overlaps(c)) {
             skipped.push(format!("{}: already in the model", c.label()));
             continue;
@@ -619,7 +632,9 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
             tests.push((t, Evidence::Refit(Box::new(run), diff)));
             continue;
         }
-        let mut prob = match TrackingProblem::build(&setup, std::slice::from_ref(c)) {
+        // built above for every candidate that gets here (neither in the model nor the pad)
+        let Some(built) = built else { continue };
+        let mut prob = match built {
             Ok(p) => linearisation(p),
             Err(e) => {
                 skipped.push(format!("{}: {e:#}", c.label()));

@@ -213,38 +213,12 @@ pub fn identifiability(
     }
 }
 
-/// Identifiability of the last `k` parameters of θ in `tr` at `w` ([`identifiability`]).
-pub fn candidate_identifiability(
-    tr: &Transcription,
-    w: &[f64],
-    names: Vec<String>,
-    s2: f64,
-    phi: f64,
-) -> Result<Identifiability, String> {
-    let m = GaussNewtonModel::new(tr, w, 1e-12);
-    let (m, base) = match m {
-        Ok(m) => {
-            let base = m.step(None);
-            (Ok(m), base)
-        }
-        Err(e) => (Err(e.clone()), Err(e)),
-    };
-    candidate_identifiability_at(
-        tr,
-        m.as_ref().map_err(|e| e.clone()),
-        base.as_ref(),
-        names,
-        s2,
-        phi,
-    )
-}
-
-/// [`candidate_identifiability`] from the Gauss–Newton model at the run's solution and its
-/// unshifted step (or the errors computing them), computed once for the score test and
-/// the probes.
+/// Identifiability of the last `k` parameters of θ in `tr` ([`identifiability`]), from
+/// the Gauss–Newton model `m` at the run's solution and its unshifted step `base` (or the
+/// error computing it), computed once for the score test and the probes.
 pub fn candidate_identifiability_at(
     tr: &Transcription,
-    m: Result<&GaussNewtonModel<'_>, String>,
+    m: &GaussNewtonModel<'_>,
     base: Result<&GaussNewtonStep, &String>,
     names: Vec<String>,
     s2: f64,
@@ -255,10 +229,9 @@ pub fn candidate_identifiability_at(
     let cols: Vec<usize> = (range.end - k..range.end).collect();
     let (w_lb, w_ub, _, _) = crate::sqp::Nlp::bounds(tr);
     let span = cols.iter().map(|&c| w_ub[c] - w_lb[c]).collect();
-    let probed = m.and_then(|m| {
-        let base = base.map_err(|e| e.clone())?;
-        reduced_inverse_hessian_at(tr, m, base, &cols)
-    });
+    let probed = base
+        .map_err(|e| e.clone())
+        .and_then(|base| reduced_inverse_hessian_at(tr, m, base, &cols));
     Ok(match probed {
         Ok(c) => identifiability(names, c, span, s2, phi),
         // an unbounded probe: nothing in the cost resists a change of the parameter
