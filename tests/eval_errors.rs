@@ -318,3 +318,95 @@ fn the_transcription_tells_an_integrator_failure_from_a_specification_error() {
         s => panic!("expected an evaluation failure, got {s:?}"),
     }
 }
+
+/// f(w) = (w₀ − 1)² with the constraint w₁ = 0, whose gradient carries an error of the
+/// size of its "integrator tolerance" (as sensitivities integrated at that tolerance
+/// do): `tol · cos(10⁵ w₀ + 1)`. The values are exact.
+struct NoisyGradient {
+    base: f64,
+    tol: std::cell::Cell<f64>,
+}
+
+impl Nlp for NoisyGradient {
+    fn n(&self) -> usize {
+        2
+    }
+    fn m(&self) -> usize {
+        1
+    }
+    fn bounds(&self) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
+        (vec![-10.0; 2], vec![10.0; 2], vec![0.0], vec![0.0])
+    }
+    fn jacobian_pattern(&self) -> (Vec<usize>, Vec<usize>) {
+        (vec![0], vec![1])
+    }
+    fn gauss_newton_pattern(&self) -> (Vec<usize>, Vec<usize>) {
+        (vec![0, 1], vec![0, 1])
+    }
+    fn hessian_blocks(&self) -> Vec<Vec<usize>> {
+        vec![vec![0], vec![1]]
+    }
+    fn evaluate(&self, w: &[f64], derivs: bool) -> Result<NlpEval, EvalError> {
+        let mut ev = NlpEval {
+            f: (w[0] - 1.0).powi(2),
+            c: vec![w[1]],
+            ..Default::default()
+        };
+        if derivs {
+            let noise = self.tol.get() * (1e5 * w[0] + 1.0).cos();
+            ev.grad = vec![2.0 * (w[0] - 1.0) + noise, 0.0];
+            ev.jac = vec![1.0];
+            ev.gn = vec![2.0, 1.0];
+        }
+        Ok(ev)
+    }
+    fn row_name(&self, _i: usize) -> String {
+        "w1".into()
+    }
+    fn integration_tolerance(&self) -> Option<f64> {
+        Some(self.tol.get())
+    }
+    fn set_integration_tolerance(&self, rtol: f64) {
+        self.tol.set(rtol.min(self.base));
+    }
+}
+
+/// The inexact SQP: at a fixed tolerance of 1e-4 the gradient's error keeps the KKT
+/// residual near 1e-4 and the solve cannot certify 1e-10; with the tolerance following
+/// the residual (`inexact_integration`), it tightens, step by step, and converges.
+#[test]
+fn the_integrator_tolerance_follows_the_kkt_residual_until_the_solve_converges() {
+    let solve = |inexact: f64| {
+        let nlp = NoisyGradient {
+            base: 1e-4,
+            tol: std::cell::Cell::new(1e-4),
+        };
+        let settings = SqpSettings {
+            inexact_integration: inexact,
+            ..settings()
+        };
+        (
+            sqp::solve(&nlp, &[0.0, 0.0], &settings, &mut Silent),
+            nlp.tol.get(),
+        )
+    };
+    let (fixed, tol) = solve(0.0);
+    assert_ne!(fixed.status, SqpStatus::Converged, "{fixed:?}");
+    assert!(fixed.kkt > 1e-7, "{}", fixed.kkt);
+    assert_eq!(tol, 1e-4);
+    let (res, tol) = solve(1e-2);
+    assert_eq!(res.status, SqpStatus::Converged, "{res:?}");
+    assert!(
+        res.kkt <= 1e-10 && (res.w[0] - 1.0).abs() < 1e-10,
+        "{res:?}"
+    );
+    // tightened as the residual fell, never loosened, and recorded with each iteration
+    let tols: Vec<f64> = res
+        .history
+        .iter()
+        .map(|r| r.integration_tol.expect("recorded"))
+        .collect();
+    assert!(tols.windows(2).all(|p| p[1] <= p[0]), "{tols:?}");
+    assert!(tols[0] == 1e-4 && tol < 1e-8, "{tols:?}");
+    assert_eq!(*tols.last().unwrap(), tol);
+}

@@ -575,7 +575,63 @@ fn per_plate_effects_parse_and_join_the_catalog() {
     }
     // the actuator properties change what the effort regularisation charges: not default
     // candidates (they made ghosts on the synthetic trials), asked for with --candidate
-    for absent in ["MTG damping (η)", "MTG strength", "activation/deactivation time constants"] {
-        assert!(!labels.iter().any(|l| l == absent), "{absent} in {labels:?}");
+    for absent in [
+        "MTG damping (η)",
+        "MTG strength",
+        "activation/deactivation time constants",
+    ] {
+        assert!(
+            !labels.iter().any(|l| l == absent),
+            "{absent} in {labels:?}"
+        );
     }
+}
+
+/// The measured CoP through a clock offset is continuous in time across the edge of the
+/// loaded samples (NaN where the foot is unloaded): inside, linear interpolation; next to
+/// and beyond the edge, the nearest loaded sample's value. Before, a node moved past the
+/// edge fell back to its own fixed target, a jump the re-fit of a plate's clock stopped on.
+#[test]
+fn the_measured_cop_stays_continuous_across_the_edge_of_the_loaded_samples() {
+    let time: Vec<f64> = (0..10).map(|k| k as f64 * 0.01).collect();
+    // loaded on samples 2–5 (CoP 0.10, 0.12, 0.14, 0.16 m), unloaded elsewhere
+    let cop: Vec<f64> = (0..10)
+        .map(|k| {
+            if (2..=5).contains(&k) {
+                0.10 + 0.02 * (k - 2) as f64
+            } else {
+                f64::NAN
+            }
+        })
+        .collect();
+    let flat = CubicSpline::new(&time, &[0.0; 10]).unwrap();
+    let m = MeasuredLoads {
+        fx: [flat.clone(), flat.clone()],
+        fy: [flat.clone(), flat],
+        time,
+        cop_x: [cop.clone(), cop],
+    };
+    let at = |t: f64| m.cop::<f64>(0, t);
+    assert!((at(0.035).unwrap() - 0.13).abs() < 1e-12);
+    // on a fine sweep through both edges the value never jumps by more than the
+    // interpolation's own slope allows (2 cm per 10 ms)
+    let mut last = at(0.0).unwrap();
+    assert_eq!(last, 0.10);
+    for k in 1..900 {
+        let t = k as f64 * 1e-4;
+        let v = at(t).expect("defined next to loaded samples");
+        assert!(
+            (v - last).abs() <= 0.02 * 1e-4 / 0.01 + 1e-12,
+            "jump at t = {t}: {last} → {v}"
+        );
+        last = v;
+    }
+    assert_eq!(at(0.09).unwrap(), 0.16);
+    // outside the samples, or with no loaded sample at all: undefined
+    assert!(at(0.2).is_none());
+    let none = MeasuredLoads {
+        cop_x: [vec![f64::NAN; 10], vec![f64::NAN; 10]],
+        ..m
+    };
+    assert!(none.cop::<f64>(1, 0.03).is_none());
 }

@@ -33,8 +33,11 @@ impl MeasuredLoads {
         (self.fx[s].eval_generic(t), self.fy[s].eval_generic(t))
     }
 
-    /// CoP of foot `s` at time `t`, linearly interpolated; `None` where a neighbouring
-    /// sample is undefined or `t` is outside the samples.
+    /// CoP of foot `s` at time `t`, linearly interpolated; next to an undefined sample (the
+    /// foot unloaded) the value of the nearest defined sample, so that the target stays
+    /// continuous in `t` as a clock offset moves a node across the edge of the loaded
+    /// samples (it jumped to the node's own target there); `None` where no sample is
+    /// defined or `t` is outside the samples.
     pub fn cop<S: ModelScalar>(&self, s: usize, t: S) -> Option<S> {
         let tv = t.value();
         let n = self.time.len();
@@ -43,10 +46,27 @@ impl MeasuredLoads {
         }
         let i = (self.time.partition_point(|&v| v <= tv).max(1) - 1).min(n - 2);
         let (y0, y1) = (self.cop_x[s][i], self.cop_x[s][i + 1]);
-        if !(y0.is_finite() && y1.is_finite()) {
-            return None;
+        match (y0.is_finite(), y1.is_finite()) {
+            (true, true) => {
+                Some((t - self.time[i]) * ((y1 - y0) / (self.time[i + 1] - self.time[i])) + y0)
+            }
+            _ => {
+                let left = (0..=i).rev().find(|&j| self.cop_x[s][j].is_finite());
+                let right = (i + 1..n).find(|&j| self.cop_x[s][j].is_finite());
+                let nearest = match (left, right) {
+                    (Some(l), Some(r)) => {
+                        if tv - self.time[l] <= self.time[r] - tv {
+                            l
+                        } else {
+                            r
+                        }
+                    }
+                    (Some(j), None) | (None, Some(j)) => j,
+                    (None, None) => return None,
+                };
+                Some(S::c(self.cop_x[s][nearest]))
+            }
         }
-        Some((t - self.time[i]) * ((y1 - y0) / (self.time[i + 1] - self.time[i])) + y0)
     }
 }
 

@@ -12,7 +12,7 @@ use super::{IterationRecord, SqpTimings};
 use serde::{Deserialize, Serialize};
 
 /// Format version of [`SqpCheckpoint`].
-pub const CHECKPOINT_VERSION: u32 = 1;
+pub const CHECKPOINT_VERSION: u32 = 2;
 
 /// `f64`s stored as bit patterns.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -39,6 +39,9 @@ pub struct ExactRecord {
     pub figures: [u64; 5],
     /// QP solver iterations.
     pub qp_iterations: u32,
+    /// The integrator tolerance after the iteration, as a bit pattern.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub integration_tol: Option<u64>,
 }
 
 impl From<&IterationRecord> for ExactRecord {
@@ -47,6 +50,7 @@ impl From<&IterationRecord> for ExactRecord {
             iter: r.iter,
             figures: [r.objective, r.infeasibility, r.kkt, r.step, r.seconds].map(f64::to_bits),
             qp_iterations: r.qp_iterations,
+            integration_tol: r.integration_tol.map(f64::to_bits),
         }
     }
 }
@@ -62,6 +66,7 @@ impl From<&ExactRecord> for IterationRecord {
             step,
             seconds,
             qp_iterations: r.qp_iterations,
+            integration_tol: r.integration_tol.map(f64::from_bits),
         }
     }
 }
@@ -83,7 +88,8 @@ pub struct SqpCheckpoint {
     pub lambda: ExactVec,
     /// Bound multipliers of the last QP.
     pub nu: ExactVec,
-    /// lam_est, test_rho_scale, shift, theta_max, last_step, elapsed seconds.
+    /// lam_est, test_rho_scale, shift, theta_max, last_step, elapsed seconds and the
+    /// integrator tolerance in force (NaN: the NLP does not integrate).
     pub scalars: ExactVec,
     /// Filter entries (infeasibility, objective), flattened.
     pub filter: ExactVec,
@@ -143,7 +149,7 @@ impl SqpCheckpoint {
                 "vector lengths differ from the problem size",
             ));
         }
-        if self.scalars.0.len() != 6 || self.filter.0.len() % 2 != 0 {
+        if self.scalars.0.len() != 7 || self.filter.0.len() % 2 != 0 {
             return Err(CheckpointError::Damaged(
                 "scalars or filter of the wrong length",
             ));

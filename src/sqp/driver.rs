@@ -158,6 +158,11 @@ pub(super) fn run(
         settings,
         resume.map_or_else(SqpTimings::default, |cp| cp.timings),
     );
+    if let Some(tol) = resume.and_then(|cp| cp.scalars.values().get(6).copied()) {
+        if tol.is_finite() {
+            nlp.set_integration_tolerance(tol);
+        }
+    }
     let lambda0 = resume.map_or_else(|| vec![0.0; m], |cp| cp.lambda.values());
     let (ev, hess) = match eval.derivs(&w, &lambda0) {
         Ok(r) => r,
@@ -238,6 +243,9 @@ pub(super) fn run(
             nu: &sol.nu,
             infeasibility: infeas,
         });
+        // --- inexact SQP: integrate more precisely as the optimum nears
+        let tightened = !kkt::converged(kkt, settings.tol_kkt, elastic)
+            && tighten_integration(nlp, settings, kkt);
         let rec = IterationRecord {
             iter,
             objective: st.ev.f,
@@ -246,6 +254,7 @@ pub(super) fn run(
             step: last_step,
             seconds: start.elapsed().as_secs_f64(),
             qp_iterations: sol.iterations,
+            integration_tol: nlp.integration_tolerance(),
         };
         let go_on = observer.iteration(&rec);
         history.push(rec);
@@ -274,9 +283,14 @@ pub(super) fn run(
             status = SqpStatus::Infeasible;
             break;
         }
+        // the line search compares trial points with the current point evaluated alike
+        let plain = match tightened.then(|| eval.plain(&st.w)) {
+            Some(Ok(p)) => (p.f, violations(&p.c, &s.c_lb, &s.c_ub).iter().sum::<f64>()),
+            _ => st.plain,
+        };
         // --- filter line search; derivatives and curvature are computed once, at the
         // accepted point
-        let (f0, theta0) = st.plain;
+        let (f0, theta0) = plain;
         // derivatives where the plain evaluation succeeded can still fail (the
         // sensitivities' integration, a non-finite curvature): a recoverable failure there
         // rejects the point, and the search is repeated with at most half its step
@@ -286,7 +300,7 @@ pub(super) fn run(
                 &s,
                 settings,
                 &mut filter,
-                &st,
+                (&st, plain),
                 &sol.d,
                 max_step,
                 &|w| eval.plain(w),
@@ -364,6 +378,7 @@ pub(super) fn run(
                     filter.theta_max,
                     last_step,
                     start.elapsed().as_secs_f64(),
+                    nlp.integration_tolerance().unwrap_or(f64::NAN),
                 ]),
                 filter: ExactVec::new(
                     &filter
@@ -405,6 +420,25 @@ pub(super) fn run(
         w: st.w,
         lambda,
         nu,
+    }
+}
+
+/// The tightest integrator tolerance the inexact SQP asks for.
+const TIGHTEST_INTEGRATION_TOL: f64 = 1e-12;
+
+/// Tighten the NLP's integrator tolerance to `inexact_integration · kkt` when that is
+/// less than half the current one (so that it changes in few, clear steps); whether it
+/// changed.
+fn tighten_integration(nlp: &dyn Nlp, settings: &SqpSettings, kkt: f64) -> bool {
+    let Some(current) = nlp.integration_tolerance() else {
+        return false;
+    };
+    let want = (settings.inexact_integration * kkt).max(TIGHTEST_INTEGRATION_TOL);
+    if settings.inexact_integration > 0.0 && want.is_finite() && want < 0.5 * current {
+        nlp.set_integration_tolerance(want);
+        true
+    } else {
+        false
     }
 }
 

@@ -128,7 +128,8 @@ fn keep_fatal(slot: &mut Option<EvalError>, e: EvalError) {
     }
 }
 
-/// Search along `d` from `st` (whose `plain` figures are the reference): `eval` is the
+/// Search along `d` from `st`, whose plain evaluation's objective and l1 violation are
+/// `plain` (the reference; `st.plain` unless the integration changed since): `eval` is the
 /// plain evaluation of a trial point, `soc` the second-order correction step for
 /// corrected constraint values `c(w + d) − J d` (`None` if its QP fails). Starts the
 /// filter at the first call; the caller augments it once the point is taken.
@@ -137,18 +138,18 @@ pub(super) fn search(
     s: &Structure,
     settings: &SqpSettings,
     filter: &mut Filter,
-    st: &State,
+    (st, plain): (&State, (f64, f64)),
     d: &[f64],
     max_step: f64,
     eval: &dyn Fn(&[f64]) -> Result<NlpEval, EvalError>,
     soc: &dyn Fn(&[f64]) -> Option<Vec<f64>>,
 ) -> Search {
     let (n, m) = (s.n, s.m);
-    let theta0 = st.plain.1;
+    let theta0 = plain.1;
     filter.start(theta0);
     let filter: &Filter = filter;
     let r = Reference {
-        f0: st.plain.0,
+        f0: plain.0,
         theta0,
         grad_d: st.ev.grad.iter().zip(d).map(|(a, b)| a * b).sum(),
         eta: settings.line_search_armijo,
@@ -299,7 +300,16 @@ mod tests {
             evals.set(evals.get() + 1);
             Ok(eval_at(f, m, w[0]))
         };
-        let out = search(&s, &settings(), filter, &st, &[d], 1.0, &eval, soc);
+        let out = search(
+            &s,
+            &settings(),
+            filter,
+            (&st, st.plain),
+            &[d],
+            1.0,
+            &eval,
+            soc,
+        );
         (out, evals.get())
     }
 
@@ -410,7 +420,7 @@ mod tests {
                 &s,
                 &settings(),
                 &mut Filter::new(),
-                &st,
+                (&st, st.plain),
                 &[1.0],
                 1.0,
                 &|w| {

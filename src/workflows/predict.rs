@@ -170,13 +170,21 @@ pub fn predict(
         t0: tracking.window.0,
         enabled: o.check_points,
         max_iter: sqp_settings.max_iter,
+        tol_kkt: sqp_settings.tol_kkt,
     };
     // a failed line search of the exact Hessian goes on once from that iterate with block
     // BFGS. Near a stationary point the inertia correction can shift the QP's Hessian by
     // far more than its curvature, and the QP's step and multipliers with it: the CI's
     // double-circle prediction stalled at KKT 3.7e-3 with steps of 1e-5, its integrator at
     // 1e-10 or 1e-12, where block BFGS certifies the same point at KKT 2.4e-7 at once
-    let solve_staged = |tr: &Transcription, w: &[f64]| -> anyhow::Result<SqpResult> {
+    let solve_staged = |tr: &Transcription,
+                        w: &[f64],
+                        round_tol: Option<f64>|
+     -> anyhow::Result<SqpResult> {
+        let sqp_settings = SqpSettings {
+            tol_kkt: round_tol.map_or(sqp_settings.tol_kkt, |t| t.max(sqp_settings.tol_kkt)),
+            ..sqp_settings.clone()
+        };
         let first = super::solve_interruptibly(tr, w, &sqp_settings, progress)?;
         if first.status != SqpStatus::LineSearchFailure
             || sqp_settings.hessian != HessianMode::Exact
@@ -199,8 +207,13 @@ pub fn predict(
         let second = super::solve_interruptibly(tr, &first.w, &rest, progress)?;
         Ok(super::track::merge_stages(first, second))
     };
-    let (sites, res) =
-        refinement.solve(&build, &[], &w0, &mut |tr, w| solve_staged(tr, w), progress)?;
+    let (sites, res) = refinement.solve(
+        &build,
+        &[],
+        &w0,
+        &mut |tr, w, t| solve_staged(tr, w, t),
+        progress,
+    )?;
     let mut ocp = build()?;
     ocp.checks = cycle.checks_at(&sites);
     let tr = Transcription::new(&ocp).context("transcribing the prediction problem")?;

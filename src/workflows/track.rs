@@ -566,14 +566,19 @@ impl TrackingProblem {
             t0: self.setup.window.0,
             enabled: self.refine,
             max_iter: settings.max_iter,
+            tol_kkt: settings.tol_kkt,
         };
         let build = || {
             self.setup
                 .ocp(&cycle, &self.model, &self.sets, self.integrator.clone())
                 .map_err(|e| anyhow!(e))
         };
-        let mut solve = |tr: &Transcription, w: &[f64]| {
-            self.solve_staged(tr, &cycle, w, settings, progress, |_, res| Ok(res))
+        let mut solve = |tr: &Transcription, w: &[f64], round_tol: Option<f64>| {
+            let settings = SqpSettings {
+                tol_kkt: round_tol.map_or(settings.tol_kkt, |t| t.max(settings.tol_kkt)),
+                ..settings.clone()
+            };
+            self.solve_staged(tr, &cycle, w, &settings, progress, |_, res| Ok(res))
         };
         let (sites, res) =
             refinement.solve(&build, &self.check_sites, &w0, &mut solve, progress)?;

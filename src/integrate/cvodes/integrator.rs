@@ -228,6 +228,40 @@ impl Integrator {
         &self.settings
     }
 
+    /// Change the state tolerances (`rtol`, `atol`) and the sensitivities' own tolerance
+    /// (`sens_tol`, when the integrator was created with one) for the following calls; the
+    /// other settings stay. An inexact SQP tightens them as it nears an optimum.
+    pub fn set_tolerances(
+        &mut self,
+        rtol: f64,
+        atol: f64,
+        sens_tol: Option<f64>,
+    ) -> Result<(), IntegratorError> {
+        let settings = IntegratorSettings {
+            rtol,
+            atol,
+            sens_tol: sens_tol.filter(|_| self.settings.sens_tol.is_some()),
+            ..self.settings.clone()
+        };
+        settings.validate()?;
+        // SAFETY: `mem` is initialised (and its sensitivities, with `ns` of them) by `new`.
+        unsafe {
+            check_setup(
+                "CVodeSStolerances",
+                sys::CVodeSStolerances(self.mem, rtol, atol),
+            )?;
+            if let Some(t) = settings.sens_tol {
+                let mut abs = vec![t; self.ns as usize];
+                check_setup(
+                    "CVodeSensSStolerances",
+                    sys::CVodeSensSStolerances(self.mem, t, abs.as_mut_ptr()),
+                )?;
+            }
+        }
+        self.settings = settings;
+        Ok(())
+    }
+
     /// Counters of the last call (with sensitivities).
     pub fn stats_snapshot(&self) -> IntegrationStats {
         self.stats(true)

@@ -16,22 +16,22 @@
 //! or `--effect NAME` on the command line; [`EffectSpec`] lists the known kinds and
 //! [`catalog`] the candidates `footfall diagnose` tries.
 
-mod geometry;
 mod actuator_properties;
 mod catalog;
+mod geometry;
 mod instruments;
 mod kinds;
 mod spec;
 mod volumetric;
 
-pub use geometry::FootGeometry;
 pub use actuator_properties::{ActivationTimeConstants, MtgDampingScale, MtgStrengthScale};
+pub use catalog::catalog;
+pub use geometry::FootGeometry;
 pub use instruments::{BodyMassError, ForcePlateGain};
 pub use kinds::{
     CopOffset, ForcePlateTimeOffset, GroundSlope, HeelPadCompliance, PassiveJointStiffness,
     TrunkMass,
 };
-pub use catalog::catalog;
 pub use spec::{BuildContext, EffectSpec};
 pub use volumetric::{VolumetricContact, VolumetricStart};
 

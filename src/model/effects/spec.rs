@@ -1,8 +1,8 @@
 //! Effects as written in a model JSON file or on the command line: what each kind's
 //! parameters are, how they are checked and parsed, and how they build the model's effects.
 
-use super::geometry::FootGeometry;
 use super::actuator_properties::{ActivationTimeConstants, MtgDampingScale, MtgStrengthScale};
+use super::geometry::FootGeometry;
 use super::instruments::{BodyMassError, ForcePlateGain};
 use super::kinds::{
     CopOffset, ForcePlateTimeOffset, GroundSlope, HeelPadCompliance, PassiveJointStiffness,

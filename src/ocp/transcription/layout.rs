@@ -7,6 +7,7 @@ use super::{
 };
 use crate::integrate::{ControlShape, IntegrationStats};
 use crate::ocp::problem::{Block, Ocp};
+use std::sync::atomic::AtomicU64;
 use std::sync::Mutex;
 
 impl<'o, 'a> Transcription<'o, 'a> {
@@ -94,6 +95,7 @@ impl<'o, 'a> Transcription<'o, 'a> {
             shifted: Vec::new(),
             first_interval: Vec::new(),
             totals: Mutex::new(IntegrationStats::default()),
+            tolerance_scale: AtomicU64::new(1f64.to_bits()),
         };
         // sample terms, grouped by interval and τ
         let mut samples: Vec<Vec<Instants>> = ocp

@@ -26,6 +26,7 @@ use super::problem::{Block, Ocp};
 use crate::integrate::{IntegrationStats, Integrator, IntegratorError};
 use crate::sqp::EvalError;
 use std::ops::Range;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Mutex;
 
 /// Failure of an NLP evaluation.
@@ -187,6 +188,10 @@ pub struct Transcription<'o, 'a> {
     first_interval: Vec<usize>,
     /// Integrator counters summed over every evaluation so far.
     totals: Mutex<IntegrationStats>,
+    /// The factor (≤ 1, as f64 bits) on the problem's integrator tolerances that the next
+    /// evaluations use: an inexact SQP tightens it near an optimum
+    /// ([`Nlp::set_integration_tolerance`](crate::sqp::Nlp::set_integration_tolerance)).
+    tolerance_scale: AtomicU64,
 }
 
 impl<'o, 'a> Transcription<'o, 'a> {
@@ -195,6 +200,25 @@ impl<'o, 'a> Transcription<'o, 'a> {
     /// a solve's integration time went.
     pub fn integration_totals(&self) -> IntegrationStats {
         self.totals.lock().map(|t| *t).unwrap_or_default()
+    }
+
+    /// The integrator tolerance (relative, of the states) the next evaluations use.
+    pub fn integration_tolerance(&self) -> f64 {
+        self.ocp.integrator.rtol * self.tolerance_scale()
+    }
+
+    /// Make the next evaluations integrate at relative tolerance `rtol` (the absolute and
+    /// the sensitivities' tolerances scaled alike), at most the problem's own.
+    pub fn set_integration_tolerance(&self, rtol: f64) {
+        let scale = (rtol / self.ocp.integrator.rtol).min(1.0);
+        if scale.is_finite() && scale > 0.0 {
+            self.tolerance_scale
+                .store(scale.to_bits(), Ordering::Relaxed);
+        }
+    }
+
+    fn tolerance_scale(&self) -> f64 {
+        f64::from_bits(self.tolerance_scale.load(Ordering::Relaxed))
     }
 
     /// Variable index range of a block.

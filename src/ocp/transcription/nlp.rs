@@ -34,6 +34,12 @@ impl crate::sqp::Nlp for Transcription<'_, '_> {
             gn: ev.gauss_newton,
         })
     }
+    fn integration_tolerance(&self) -> Option<f64> {
+        Some(Transcription::integration_tolerance(self))
+    }
+    fn set_integration_tolerance(&self, rtol: f64) {
+        Transcription::set_integration_tolerance(self, rtol);
+    }
     fn elastic_weights(&self) -> Vec<f64> {
         let dynamics = self
             .ocp

@@ -165,6 +165,17 @@ impl<'o, 'a> Transcription<'o, 'a> {
             Some(i) => i,
             None => Integrator::new(nx, np, self.ocp.integrator.clone()).map_err(err)?,
         };
+        let base = &self.ocp.integrator;
+        let scale = self.tolerance_scale();
+        if integ.settings().rtol != base.rtol * scale {
+            integ
+                .set_tolerances(
+                    base.rtol * scale,
+                    base.atol * scale,
+                    base.sens_tol.map(|t| t * scale),
+                )
+                .map_err(err)?;
+        }
         let mut x1 = vec![0.0; nx];
         let mut s = Vec::new();
         let mut hess = None;
