@@ -10,6 +10,34 @@ use footfall::sqp::{self, EvalError, HessianMode, Nlp, NlpEval, Silent, SqpSetti
 use std::cell::RefCell;
 use std::sync::Arc;
 
+/// What the test NLPs here share: w = (w₀, w₁) within ±`bound`, one constraint row
+/// "w1": w₁ = 0, and a diagonal Gauss–Newton pattern, one Hessian block per variable.
+macro_rules! two_variables_on_a_line {
+    ($bound:expr) => {
+        fn n(&self) -> usize {
+            2
+        }
+        fn m(&self) -> usize {
+            1
+        }
+        fn bounds(&self) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
+            (vec![-$bound; 2], vec![$bound; 2], vec![0.0], vec![0.0])
+        }
+        fn jacobian_pattern(&self) -> (Vec<usize>, Vec<usize>) {
+            (vec![0], vec![1])
+        }
+        fn gauss_newton_pattern(&self) -> (Vec<usize>, Vec<usize>) {
+            (vec![0, 1], vec![0, 1])
+        }
+        fn hessian_blocks(&self) -> Vec<Vec<usize>> {
+            vec![vec![0], vec![1]]
+        }
+        fn row_name(&self, _i: usize) -> String {
+            "w1".into()
+        }
+    };
+}
+
 /// f(w) = (w₀ − 1)² with the constraint w₁ = 0, whose Gauss–Newton Hessian is a quarter
 /// of the true one: from w₀ = 0 the full step lands at w₀ = 4, beyond the domain w₀ ≤ 3,
 /// and half of it at w₀ = 2 does not decrease f; a quarter reaches the optimum.
@@ -19,24 +47,7 @@ struct OutsideTheDomain {
 }
 
 impl Nlp for OutsideTheDomain {
-    fn n(&self) -> usize {
-        2
-    }
-    fn m(&self) -> usize {
-        1
-    }
-    fn bounds(&self) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
-        (vec![-10.0; 2], vec![10.0; 2], vec![0.0], vec![0.0])
-    }
-    fn jacobian_pattern(&self) -> (Vec<usize>, Vec<usize>) {
-        (vec![0], vec![1])
-    }
-    fn gauss_newton_pattern(&self) -> (Vec<usize>, Vec<usize>) {
-        (vec![0, 1], vec![0, 1])
-    }
-    fn hessian_blocks(&self) -> Vec<Vec<usize>> {
-        vec![vec![0], vec![1]]
-    }
+    two_variables_on_a_line!(10.0);
     fn evaluate(&self, w: &[f64], derivs: bool) -> Result<NlpEval, EvalError> {
         let outside = w[0] > 3.0;
         self.evaluated.borrow_mut().push((w[0], outside));
@@ -64,9 +75,6 @@ impl Nlp for OutsideTheDomain {
             ev.gn = vec![0.5, 1.0];
         }
         Ok(ev)
-    }
-    fn row_name(&self, _i: usize) -> String {
-        "w1".into()
     }
 }
 
@@ -134,24 +142,7 @@ struct DerivativesFailOnAnIsland {
 }
 
 impl Nlp for DerivativesFailOnAnIsland {
-    fn n(&self) -> usize {
-        2
-    }
-    fn m(&self) -> usize {
-        1
-    }
-    fn bounds(&self) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
-        (vec![-20.0; 2], vec![20.0; 2], vec![0.0], vec![0.0])
-    }
-    fn jacobian_pattern(&self) -> (Vec<usize>, Vec<usize>) {
-        (vec![0], vec![1])
-    }
-    fn gauss_newton_pattern(&self) -> (Vec<usize>, Vec<usize>) {
-        (vec![0, 1], vec![0, 1])
-    }
-    fn hessian_blocks(&self) -> Vec<Vec<usize>> {
-        vec![vec![0], vec![1]]
-    }
+    two_variables_on_a_line!(20.0);
     fn evaluate(&self, w: &[f64], derivs: bool) -> Result<NlpEval, EvalError> {
         let mut ev = NlpEval {
             f: (w[0] - 10.0).powi(2),
@@ -172,9 +163,6 @@ impl Nlp for DerivativesFailOnAnIsland {
             ev.gn = vec![4.0, 1.0];
         }
         Ok(ev)
-    }
-    fn row_name(&self, _i: usize) -> String {
-        "w1".into()
     }
 }
 
@@ -328,24 +316,7 @@ struct NoisyGradient {
 }
 
 impl Nlp for NoisyGradient {
-    fn n(&self) -> usize {
-        2
-    }
-    fn m(&self) -> usize {
-        1
-    }
-    fn bounds(&self) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
-        (vec![-10.0; 2], vec![10.0; 2], vec![0.0], vec![0.0])
-    }
-    fn jacobian_pattern(&self) -> (Vec<usize>, Vec<usize>) {
-        (vec![0], vec![1])
-    }
-    fn gauss_newton_pattern(&self) -> (Vec<usize>, Vec<usize>) {
-        (vec![0, 1], vec![0, 1])
-    }
-    fn hessian_blocks(&self) -> Vec<Vec<usize>> {
-        vec![vec![0], vec![1]]
-    }
+    two_variables_on_a_line!(10.0);
     fn evaluate(&self, w: &[f64], derivs: bool) -> Result<NlpEval, EvalError> {
         let mut ev = NlpEval {
             f: (w[0] - 1.0).powi(2),
@@ -359,9 +330,6 @@ impl Nlp for NoisyGradient {
             ev.gn = vec![2.0, 1.0];
         }
         Ok(ev)
-    }
-    fn row_name(&self, _i: usize) -> String {
-        "w1".into()
     }
     fn integration_tolerance(&self) -> Option<f64> {
         Some(self.tol.get())

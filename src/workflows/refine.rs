@@ -55,16 +55,16 @@ pub struct Refinement<'c, 'm> {
 impl<'m> Refinement<'_, 'm> {
     /// Solve with `solve` (on the problem `build` makes, with the check points so far, from
     /// the last solution), starting with the check points at `initial` and adding more
-    /// while the re-integration breaks a contact constraint. `solve`'s last argument is a
-    /// looser KKT tolerance ([`ROUND_TOL`]) for a round that may be followed by another,
-    /// `None` for the run's own. Returns the check sites and the result of the last solve,
-    /// its history following the earlier rounds'.
+    /// while the re-integration breaks a contact constraint. `solve`'s last argument is the
+    /// KKT tolerance of the round: [`ROUND_TOL`] (or the run's, if looser) for a round that
+    /// may be followed by another, the run's own otherwise. Returns the check sites and the
+    /// result of the last solve, its history following the earlier rounds'.
     pub fn solve<'o>(
         &self,
         build: &dyn Fn() -> anyhow::Result<Ocp<'o>>,
         initial: &[(usize, usize, f64)],
         w0: &[f64],
-        solve: &mut dyn FnMut(&Transcription, &[f64], Option<f64>) -> anyhow::Result<SqpResult>,
+        solve: &mut dyn FnMut(&Transcription, &[f64], f64) -> anyhow::Result<SqpResult>,
         progress: &dyn Progress,
     ) -> anyhow::Result<(CheckSites, SqpResult)>
     where
@@ -81,17 +81,21 @@ impl<'m> Refinement<'_, 'm> {
             let tr = Transcription::new(&ocp)
                 .context("transcribing the problem with its check points")?;
             let loose = self.enabled && !finishing && round < MAX_ROUNDS;
-            let res = solve(&tr, &w, loose.then_some(ROUND_TOL))?;
+            let tol = if loose {
+                ROUND_TOL.max(self.tol_kkt)
+            } else {
+                self.tol_kkt
+            };
+            let res = solve(&tr, &w, tol)?;
             let converged = res.status == SqpStatus::Converged;
             let next = res.w.clone();
-            let all = match merged {
+            let mut all = match merged {
                 None => res,
                 Some(first) => super::track::merge_stages(first, res),
             };
             let used = all.history.len().saturating_sub(1);
             // whether the solution is still short of the run's own tolerance
             let short = loose && converged && !(all.kkt <= self.tol_kkt);
-            let mut all = all;
             if short && used >= self.max_iter {
                 // converged only to the round's tolerance, with no iterations left
                 all.status = SqpStatus::MaxIterations;

@@ -573,9 +573,9 @@ impl TrackingProblem {
                 .ocp(&cycle, &self.model, &self.sets, self.integrator.clone())
                 .map_err(|e| anyhow!(e))
         };
-        let mut solve = |tr: &Transcription, w: &[f64], round_tol: Option<f64>| {
+        let mut solve = |tr: &Transcription, w: &[f64], tol_kkt: f64| {
             let settings = SqpSettings {
-                tol_kkt: round_tol.map_or(settings.tol_kkt, |t| t.max(settings.tol_kkt)),
+                tol_kkt,
                 ..settings.clone()
             };
             self.solve_staged(tr, &cycle, w, &settings, progress, |_, res| Ok(res))
