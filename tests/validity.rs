@@ -359,3 +359,28 @@ fn check_points_repair_a_synthetic_trial_in_rounds() {
         "normal force down to {low} N, cone excess {cone} N"
     );
 }
+
+/// `--max-iter` limits the whole solve, not each round of check points: from the kept
+/// tracking solution of the bundled trial the first round stops at once, the second
+/// (with two check points) reaches the rounds' KKT tolerance in 7 iterations and the
+/// finishing round gets the one iteration left (each round used to get the full limit:
+/// 7 + 3 iterations here).
+#[test]
+fn the_iteration_limit_holds_across_the_rounds_of_check_points() {
+    use footfall::runfolder::RunFolder;
+    use footfall::sqp::SqpStatus;
+    use footfall::workflows::track::{track, TrackRequest};
+    use footfall::workflows::Collected;
+    let tmp = tempfile::tempdir().unwrap();
+    let mut req = TrackRequest::new("ellipse");
+    req.init = Some(common::root().join("tests/data/hidden/base"));
+    req.sqp.max_iter = 8;
+    let progress = Collected::default();
+    let folder = RunFolder::create(&tmp.path().join("limited"), false).unwrap();
+    let run = track(&req, folder, &progress).unwrap();
+    let lines = progress.lines.lock().unwrap().join("\n");
+    assert!(lines.contains("adding"), "no second round: {lines}");
+    let iterations = run.result.history.len() - 1;
+    assert!(iterations <= 8, "{iterations} iterations under a limit of 8: {lines}");
+    assert_eq!(run.result.status, SqpStatus::MaxIterations, "{lines}");
+}

@@ -177,9 +177,14 @@ pub fn predict(
     // far more than its curvature, and the QP's step and multipliers with it: the CI's
     // double-circle prediction stalled at KKT 3.7e-3 with steps of 1e-5, its integrator at
     // 1e-10 or 1e-12, where block BFGS certifies the same point at KKT 2.4e-7 at once
-    let solve_staged = |tr: &Transcription, w: &[f64], tol_kkt: f64| -> anyhow::Result<SqpResult> {
+    let solve_staged = |tr: &Transcription,
+                        w: &[f64],
+                        tol_kkt: f64,
+                        max_iter: usize|
+     -> anyhow::Result<SqpResult> {
         let sqp_settings = SqpSettings {
             tol_kkt,
+            max_iter,
             ..sqp_settings.clone()
         };
         let first = super::solve_interruptibly(tr, w, &sqp_settings, progress)?;
@@ -208,7 +213,7 @@ pub fn predict(
         &build,
         &[],
         &w0,
-        &mut |tr, w, t| solve_staged(tr, w, t),
+        &mut |tr, w, t, n| solve_staged(tr, w, t, n),
         progress,
     )?;
     let mut ocp = build()?;

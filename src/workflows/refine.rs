@@ -57,14 +57,16 @@ impl<'m> Refinement<'_, 'm> {
     /// the last solution), starting with the check points at `initial` and adding more
     /// while the re-integration breaks a contact constraint. `solve`'s last argument is the
     /// KKT tolerance of the round: [`ROUND_TOL`] (or the run's, if looser) for a round that
-    /// may be followed by another, the run's own otherwise. Returns the check sites and the
-    /// result of the last solve, its history following the earlier rounds'.
+    /// may be followed by another, the run's own otherwise; its last, the iterations the
+    /// round may make (what the earlier rounds left of [`Refinement::max_iter`]). Returns
+    /// the check sites and the result of the last solve, its history following the
+    /// earlier rounds'.
     pub fn solve<'o>(
         &self,
         build: &dyn Fn() -> anyhow::Result<Ocp<'o>>,
         initial: &[(usize, usize, f64)],
         w0: &[f64],
-        solve: &mut dyn FnMut(&Transcription, &[f64], f64) -> anyhow::Result<SqpResult>,
+        solve: &mut dyn FnMut(&Transcription, &[f64], f64, usize) -> anyhow::Result<SqpResult>,
         progress: &dyn Progress,
     ) -> anyhow::Result<(CheckSites, SqpResult)>
     where
@@ -86,7 +88,11 @@ impl<'m> Refinement<'_, 'm> {
             } else {
                 self.tol_kkt
             };
-            let res = solve(&tr, &w, tol)?;
+            // the iteration limit is the whole solve's, not each round's
+            let done = merged
+                .as_ref()
+                .map_or(0, |m| m.history.len().saturating_sub(1));
+            let res = solve(&tr, &w, tol, self.max_iter.saturating_sub(done))?;
             let converged = res.status == SqpStatus::Converged;
             let next = res.w.clone();
             let mut all = match merged {

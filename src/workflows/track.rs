@@ -573,9 +573,10 @@ impl TrackingProblem {
                 .ocp(&cycle, &self.model, &self.sets, self.integrator.clone())
                 .map_err(|e| anyhow!(e))
         };
-        let mut solve = |tr: &Transcription, w: &[f64], tol_kkt: f64| {
+        let mut solve = |tr: &Transcription, w: &[f64], tol_kkt: f64, max_iter: usize| {
             let settings = SqpSettings {
                 tol_kkt,
+                max_iter,
                 ..settings.clone()
             };
             self.solve_staged(tr, &cycle, w, &settings, progress, |_, res| Ok(res))
