@@ -58,6 +58,7 @@ fn diagnose(run: &Path, candidates: &[&str], make_testable: bool) -> Value {
         max_iter: 200,
         make_testable,
         held_out: true,
+        profile_clocks: Vec::new(),
     };
     let t = std::time::Instant::now();
     footfall::workflows::diagnose::run(&req, &Quiet).unwrap();
@@ -222,4 +223,82 @@ fn a_cop_offset_is_untestable_under_the_seed_cost_and_found_when_made_testable()
         (offset - 0.02).abs() < (0.2 * 0.02f64).max(2.0 * sd),
         "offset {offset} ± {sd}, truth 0.02"
     );
+}
+
+/// `--profile-clocks` on the synthetic trial whose plates run 15 ms late: their clock is
+/// held at +20 ms (one point: a point opposite the truth, −20 ms, fits worse, J 0.523
+/// against 0.304, but takes 37 iterations), and the profile is reported for that
+/// candidate. The point lies below the run; the free re-fit from it identifies the truth
+/// within 20 %, and its test, when chosen (it lowers J more than the score test's
+/// truncated re-fit), is judged against the χ²₁ point at 0.1 % / 2 (the best of two
+/// starts: the point and zero).
+#[test]
+fn a_plate_clock_is_profiled_beyond_the_score_tests_reach() {
+    use footfall::problems::diagnose::chi2_1_upper;
+    let dir = tempfile::tempdir().unwrap();
+    let trial = root().join("tests/data/hidden/force_plate_time_offset");
+    let run = dir.path().join("clock");
+    let mut req = TrackRequest::new("ellipse");
+    req.check_points = false;
+    req.run.data = Some(trial.join("synthetic.csv"));
+    req.init = Some(trial.join("tracked_seed"));
+    req.run.kinematics_cutoff = Some(10.0);
+    track(&req, RunFolder::create(&run, false).unwrap(), &Quiet).unwrap();
+    let req = DiagnoseRequest {
+        run: run.clone(),
+        verify: 0,
+        candidates: vec!["force_plate_time_offset".into()],
+        out: None,
+        overwrite: false,
+        tol: 1e-5,
+        max_iter: 200,
+        make_testable: false,
+        held_out: false,
+        profile_clocks: vec![0.02],
+    };
+    let t = std::time::Instant::now();
+    footfall::workflows::diagnose::run(&req, &Quiet).unwrap();
+    eprintln!(
+        "diagnose with a profile: {:.1} s",
+        t.elapsed().as_secs_f64()
+    );
+    let out = PathBuf::from(format!("{}-diagnose", run.display()));
+    let s = read_json(&out.join("summary.json"));
+    let c = &s["ranking"][0];
+    let p = &c["profile"];
+    eprintln!("{}", serde_json::to_string_pretty(c).unwrap());
+    let points = p["points"].as_array().expect("a profile");
+    assert_eq!(points.len(), 1);
+    let j: Vec<f64> = points
+        .iter()
+        .map(|q| q["objective"].as_f64().expect("a finite cost"))
+        .collect();
+    assert_eq!(p["family"], 2);
+    let run_j = s["objective"].as_f64().unwrap();
+    assert!(
+        j[0] < run_j,
+        "+20 ms (J {}) not below the run (J {run_j})",
+        j[0]
+    );
+    assert_eq!(p["start"].as_f64(), Some(0.02));
+    let (offset, refit_j) = (
+        p["refit"][0].as_f64().unwrap(),
+        p["refit"][1].as_f64().unwrap(),
+    );
+    assert!(
+        refit_j <= j[0] + 1e-6,
+        "the free re-fit {refit_j} above its start {}",
+        j[0]
+    );
+    assert!(
+        (offset - 0.015).abs() < 0.2 * 0.015,
+        "identified {offset} s against 0.015 s"
+    );
+    if p["chosen"] == true {
+        assert!((c["threshold"].as_f64().unwrap() - chi2_1_upper(1e-3 / 2.0)).abs() < 1e-9);
+        assert!((c["predicted_decrease"].as_f64().unwrap() - (run_j - refit_j)).abs() < 1e-9);
+        assert_eq!(c["refit"], true);
+    }
+    let md = std::fs::read_to_string(out.join("diagnose.md")).unwrap();
+    assert!(md.contains("Profile of force-plate time offset"), "{md}");
 }

@@ -198,6 +198,7 @@ fn diagnose(run: &Path, verify: usize, candidates: &[&str], held_out: bool) -> V
         max_iter: 200,
         make_testable: false,
         held_out,
+        profile_clocks: Vec::new(),
     };
     timed("diagnose", run, || {
         footfall::workflows::diagnose::run(&req, &Quiet)

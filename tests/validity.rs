@@ -381,6 +381,9 @@ fn the_iteration_limit_holds_across_the_rounds_of_check_points() {
     let lines = progress.lines.lock().unwrap().join("\n");
     assert!(lines.contains("adding"), "no second round: {lines}");
     let iterations = run.result.history.len() - 1;
-    assert!(iterations <= 8, "{iterations} iterations under a limit of 8: {lines}");
+    assert!(
+        iterations <= 8,
+        "{iterations} iterations under a limit of 8: {lines}"
+    );
     assert_eq!(run.result.status, SqpStatus::MaxIterations, "{lines}");
 }

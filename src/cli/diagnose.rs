@@ -37,6 +37,12 @@ pub struct Args {
     /// cycle of the trial once); they are then reported as not validated.
     #[arg(long)]
     no_held_out: bool,
+    /// Profile the cost over each force plate's clock offset: re-fit the run with it held
+    /// at −40, −20, +20 and +40 ms and re-fit freely from the lowest point (a clock error
+    /// of two frames or more is beyond the score test's reach; about half a minute per
+    /// point and plate on this machine).
+    #[arg(long)]
+    profile_clocks: bool,
 }
 
 impl From<Args> for DiagnoseRequest {
@@ -51,6 +57,11 @@ impl From<Args> for DiagnoseRequest {
             max_iter: a.max_iter,
             make_testable: a.make_testable,
             held_out: !a.no_held_out,
+            profile_clocks: if a.profile_clocks {
+                footfall::workflows::diagnose::profile::CLOCK_PROFILE.to_vec()
+            } else {
+                Vec::new()
+            },
         }
     }
 }

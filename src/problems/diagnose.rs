@@ -149,6 +149,42 @@ pub fn chi2_999(k: usize) -> f64 {
     kf * (1.0 - 2.0 / (9.0 * kf) + z * (2.0 / (9.0 * kf)).sqrt()).powi(3)
 }
 
+/// The upper `alpha` point of the χ² distribution with one degree of freedom: the `x`
+/// with `P(χ²₁ > x) = erfc(√(x/2)) = alpha` (bisection; `alpha` in (0, 1)).
+pub fn chi2_1_upper(alpha: f64) -> f64 {
+    let (mut lo, mut hi) = (0.0f64, 200.0f64);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if erfc((0.5 * mid).sqrt()) > alpha {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// The complementary error function (Numerical Recipes' Chebyshev fit, relative error
+/// below 1.2e-7 everywhere).
+fn erfc(x: f64) -> f64 {
+    let z = x.abs();
+    let t = 1.0 / (1.0 + 0.5 * z);
+    let poly = -z * z - 1.265_512_23
+        + t * (1.000_023_68
+            + t * (0.374_091_96
+                + t * (0.096_784_18
+                    + t * (-0.186_288_06
+                        + t * (0.278_868_07
+                            + t * (-1.135_203_98
+                                + t * (1.488_515_87 + t * (-0.822_152_23 + t * 0.170_872_77))))))));
+    let r = t * poly.exp();
+    if x >= 0.0 {
+        r
+    } else {
+        2.0 - r
+    }
+}
+
 /// Result of a score test of one candidate.
 #[derive(Debug, Clone, Serialize)]
 pub struct ScoreTest {
@@ -205,6 +241,47 @@ pub struct ScoreTest {
     /// One of `not testable with this run's cost`, `not significant`, `not confirmed on
     /// the held-out half cycle`, `found`, `significant, not validated`.
     pub verdict: String,
+    /// The profile of the cost over a plate's clock offset (`diagnose --profile-clocks`),
+    /// when one was made for this candidate.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub profile: Option<ClockProfile>,
+}
+
+/// One point of a [`ClockProfile`]: the run re-fitted with the plate's clock offset held
+/// at `offset`.
+#[derive(Debug, Clone, Serialize)]
+pub struct ProfilePoint {
+    /// The offset held fixed (s).
+    pub offset: f64,
+    /// The cost of that re-fit (`None`: it failed).
+    pub objective: Option<f64>,
+    /// Its solver status (or the failure).
+    pub status: String,
+    /// Its SQP iterations.
+    pub iterations: usize,
+    /// Its wall time (s).
+    pub seconds: f64,
+}
+
+/// The cost profiled over one force plate's clock offset. The score test is local: J is
+/// not convex in a clock offset of more than about a frame of the kinematics (the
+/// impact transients move across samples), and a truncated re-fit from zero stops in the
+/// nearest dip. The profile re-fits the run with the offset held at points a fixed step
+/// apart and starts a free re-fit from the lowest; its decrease is judged against the χ²₁
+/// point at 0.1 % divided by the number of starts (a Bonferroni correction for picking
+/// the best of them, `family`).
+#[derive(Debug, Clone, Serialize)]
+pub struct ClockProfile {
+    /// The profile's points (the run itself, at zero, is not among them).
+    pub points: Vec<ProfilePoint>,
+    /// The offset the free re-fit started from (`None`: no point was below the run's cost).
+    pub start: Option<f64>,
+    /// The free re-fit's offset and cost.
+    pub refit: Option<(f64, f64)>,
+    /// How many starts the best is chosen from (the points and zero).
+    pub family: usize,
+    /// Whether the profile's re-fit replaced the local score test (it lowered J more).
+    pub chosen: bool,
 }
 
 /// A candidate fitted on the run's half cycle, applied with its parameters fixed to
@@ -465,6 +542,7 @@ impl ScoreTest {
             held_out: None,
             found: false,
             verdict: String::new(),
+            profile: None,
         }
     }
 
@@ -589,4 +667,26 @@ pub fn parameter_sd(
         out.push(inv.filter(|v| *v > 0.0).map(|v| (2.0 * s2 * v).sqrt()));
     }
     Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The χ²₁ upper points against a published table (Abramowitz & Stegun, table 26.8):
+    /// 3.841 at 5 %, 6.635 at 1 %, 10.828 at 0.1 % (the same as [`chi2_999`]'s), 15.137
+    /// at 0.01 %.
+    #[test]
+    fn chi2_1_upper_points_match_the_table() {
+        for (alpha, x) in [
+            (0.05, 3.841),
+            (0.01, 6.635),
+            (0.001, 10.828),
+            (1e-4, 15.137),
+        ] {
+            let got = chi2_1_upper(alpha);
+            assert!((got - x).abs() < 2e-3, "α = {alpha}: {got} against {x}");
+        }
+        assert!((chi2_1_upper(0.001) - chi2_999(1)).abs() < 2e-3);
+    }
 }

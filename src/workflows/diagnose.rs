@@ -19,6 +19,7 @@ use crate::problems::diagnose::{
 
 mod heldout;
 mod output;
+pub mod profile;
 use crate::ocp::Transcription;
 use crate::problems::evaluation::GaitSolution;
 use crate::report::diff::{RunDiff, RunSummary};
@@ -51,6 +52,10 @@ pub struct DiagnoseRequest {
     /// Validate significant candidates on another half cycle of the trial (default on;
     /// off: they are reported "significant, not validated").
     pub held_out: bool,
+    /// The offsets (s) at which each force plate's clock is held to profile the cost over
+    /// it (empty: no profile; `--profile-clocks` gives [`profile::CLOCK_PROFILE`]): re-fits
+    /// beyond the score test's reach, about half a minute to a minute each on this machine.
+    pub profile_clocks: Vec<f64>,
 }
 
 /// The decrease of a truncated re-fit of a problem started at the run's solution (the
@@ -262,7 +267,7 @@ pub(super) struct FullModel {
 
 /// The run's residuals: cost, count, the truncated re-fit's leftover decrease and the
 /// Table 3 channels' error series at the nodes (for their autocorrelation).
-struct Residuals {
+pub(super) struct Residuals {
     objective: f64,
     decrease: f64,
     rows: usize,
@@ -335,6 +340,18 @@ fn refit(
     progress: &dyn Progress,
 ) -> anyhow::Result<TrackedRun> {
     let dir = sibling(&args.run, &format!("+{}", effect.kind()));
+    refit_into(args, setup, effect, start, dir, progress)
+}
+
+/// [`refit`] into the run folder `dir`.
+fn refit_into(
+    args: &DiagnoseRequest,
+    setup: &TrackingRunSetup,
+    effect: &EffectSpec,
+    start: &GaitSolution,
+    dir: PathBuf,
+    progress: &dyn Progress,
+) -> anyhow::Result<TrackedRun> {
     {
         note!(
             progress,
@@ -368,7 +385,7 @@ fn refit(
 }
 
 /// The run being diagnosed: its solution, summary, cost and data residual count.
-struct Baseline<'a> {
+pub(super) struct Baseline<'a> {
     solution: &'a GaitSolution,
     summary: &'a RunSummary,
     objective: f64,
@@ -644,10 +661,40 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
         let k = prob.model.ntheta() - base.model.ntheta();
         prob.setup.start_from(&solution).map_err(|e| anyhow!(e))?;
         let t0 = std::time::Instant::now();
-        let (t, start) =
+        let (mut t, start) =
             test_candidate(&prob, c, k, &resid, full.as_ref(), heldout::hint(c, &setup))?;
         {
             print_progress(progress, &t, true, t0.elapsed().as_secs_f64());
+        }
+        if !args.profile_clocks.is_empty() && profile::plate(c).is_some() {
+            let baseline = Baseline {
+                solution: &solution,
+                summary: &before,
+                objective,
+                rows,
+            };
+            let t1 = std::time::Instant::now();
+            let (mut prof, refitted) = profile::profile_clock(
+                args,
+                &setup,
+                c,
+                &baseline,
+                &resid,
+                &t,
+                full.as_ref(),
+                progress,
+            )?;
+            // the profile's re-fit is the candidate's test when it lowers J more
+            if let Some((mut tp, run, diff)) = refitted {
+                if tp.predicted_decrease > t.predicted_decrease {
+                    prof.chosen = true;
+                    tp.profile = Some(prof);
+                    print_progress(progress, &tp, run.converged, t1.elapsed().as_secs_f64());
+                    tests.push((tp, Evidence::Refit(Box::new(run), diff)));
+                    continue;
+                }
+            }
+            t.profile = Some(prof);
         }
         tests.push((t, Evidence::Start(start)));
     }

@@ -125,6 +125,44 @@ fn verdict(o: &Outcome<'_>) -> String {
 }
 
 /// Write the diagnosis into `folder` and commit it.
+/// What the profile of a plate's clock (`--profile-clocks`) found, in a sentence or two.
+fn profile_paragraph(t: &ScoreTest) -> Option<String> {
+    let p = t.profile.as_ref()?;
+    let points = p
+        .points
+        .iter()
+        .map(|q| {
+            format!(
+                "{:+.0} ms: {}",
+                1e3 * q.offset,
+                q.objective
+                    .map_or_else(|| q.status.clone(), |j| format!("J = {j:.4}"))
+            )
+        })
+        .collect::<Vec<_>>()
+        .join(", ");
+    let outcome = match (p.start, p.refit) {
+        (Some(start), Some((value, j))) => format!(
+            " The free re-fit from {:+.0} ms reached {:+.1} ms, J = {j:.4}; {}",
+            1e3 * start,
+            1e3 * value,
+            if p.chosen {
+                format!(
+                    "it lowers J more than the score test's truncated re-fit from zero, so it is this candidate's test, against the χ²₁ point at 0.1 %/{} = {:.1} (the best of {} starts)",
+                    p.family, t.threshold, p.family
+                )
+            } else {
+                "the score test's truncated re-fit from zero lowers J more, and stays the candidate's test".into()
+            }
+        ),
+        _ => " No point lies below the run's cost: the score test stands.".into(),
+    };
+    Some(format!(
+        "Profile of {} (the run re-fitted with the offset held fixed; {points}).{outcome}.",
+        t.label
+    ))
+}
+
 pub(super) fn write(
     o: &Outcome<'_>,
     folder: RunFolder,
@@ -220,6 +258,7 @@ pub(super) fn write(
         .iter()
         .zip(o.evidence)
         .filter_map(|(t, e)| match e {
+            Evidence::Refit(_, _) if t.profile.is_some() => None,
             Evidence::Refit(run, _) => Some(format!(
                 "{} was tested by a full re-fit ({}, {}), as it has no null value for a score test",
                 t.label,
@@ -247,6 +286,7 @@ pub(super) fn write(
         ));
     }
     paragraphs.extend(refits.iter().map(|r| format!("{r}.")));
+    paragraphs.extend(tests.iter().filter_map(profile_paragraph));
     let mut md = format!(
         "# Diagnosis of {}\n\n{}\n\n{}\n\n{}\n",
         args.run.display(),

@@ -1,0 +1,224 @@
+//! `diagnose --profile-clocks`: the cost profiled over each force plate's clock offset.
+//!
+//! A score test is local. J is not convex in a clock offset of more than about a frame of
+//! the kinematics, because the impact transients move across samples: on the real trial
+//! whose right plate was delayed by 25 ms (`tests/data/real_hidden/real_clock_r+25ms`) the
+//! truncated re-fit from zero stops at −4 ms, while re-fits with the offset held at
+//! +20 ms lower J from 8.756 to 7.577 (`docs/instruments.md`). The profile re-fits the run
+//! with the offset held at [`CLOCK_PROFILE`] and starts a free re-fit from the lowest
+//! point; that re-fit is the candidate's test when it lowers J more than the score test's.
+
+use super::{diff_with, refit_into, sibling, Baseline, DiagnoseRequest, FullModel, Residuals};
+use crate::model::effects::EffectSpec;
+use crate::problems::diagnose::stats::variance_inflation;
+use crate::problems::diagnose::{
+    chi2_1_upper, refit_test, ClockProfile, ProfilePoint, ScoreTest, TrackingRunSetup,
+};
+use crate::report::diff::RunDiff;
+use crate::sqp::HessianMode;
+use crate::workflows::track::{tracking_sqp_settings, TrackedRun, TrackingProblem};
+use crate::workflows::{note, Progress, Quiet};
+
+/// The offsets (s) each plate's clock is held at: steps of 20 ms (two frames of 100 Hz
+/// motion capture, where the score test's reach of about one frame either side ends)
+/// across the offset's bounds (±50 ms). Chosen before any real trial was profiled, from
+/// the frame rate and the bounds alone.
+pub const CLOCK_PROFILE: [f64; 4] = [-0.04, -0.02, 0.02, 0.04];
+
+/// KKT tolerance of a profile point's re-fit: its cost decides only where the free
+/// re-fit starts (at 1e-3 the right-clock trial's +20 ms point reached J = 7.5772468,
+/// the same to 8 digits as at 1e-5, in 20 iterations and 28 s instead of 28 and 74 s).
+const POINT_TOL: f64 = 1e-3;
+
+/// Iteration limit of a profile point's re-fit. A point far from the data's offset
+/// converges slowly (the right-clock trial's −20 ms point: 133 iterations, 217 s, to
+/// J = 10.14 against the run's 8.76), and its cost after this many iterations bounds its
+/// minimum from above, which is all the profile needs of it.
+const POINT_MAX_ITER: usize = 40;
+
+/// The plate (`right`, `left`, or `both` for one clock shared by both plates) of a clock
+/// candidate; `None` for any other candidate.
+pub(super) fn plate(c: &EffectSpec) -> Option<&str> {
+    match c {
+        EffectSpec::ForcePlateTimeOffset { side, .. } => Some(side),
+        _ => None,
+    }
+}
+
+fn clock(side: &str, offset: f64, free: bool) -> EffectSpec {
+    EffectSpec::ForcePlateTimeOffset {
+        side: side.to_string(),
+        offset,
+        free: if free { vec!["offset".into()] } else { vec![] },
+    }
+}
+
+/// What the profile of candidate `c` (a plate's clock) found: the profile, and when a
+/// point lay below the run's cost, the test made of the free re-fit from it with that
+/// re-fit and its per-channel errors against the run. `local` is the candidate's score
+/// test (its testability and hint carry over), `noise` the largest model.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn profile_clock(
+    args: &DiagnoseRequest,
+    setup: &TrackingRunSetup,
+    c: &EffectSpec,
+    base: &Baseline<'_>,
+    resid: &Residuals,
+    local: &ScoreTest,
+    noise: Option<&FullModel>,
+    progress: &dyn Progress,
+) -> anyhow::Result<(ClockProfile, Option<(ScoreTest, TrackedRun, RunDiff)>)> {
+    let side = plate(c).unwrap_or("both");
+    let whose = if side == "both" {
+        "both plates'".to_string()
+    } else {
+        format!("the {side} plate's")
+    };
+    let hessian = if setup.sample_targets {
+        HessianMode::GaussNewton
+    } else {
+        HessianMode::Exact
+    };
+    let settings = tracking_sqp_settings(
+        POINT_TOL,
+        POINT_MAX_ITER.min(args.max_iter),
+        None,
+        hessian,
+        1e-3,
+    );
+    let mut points = Vec::new();
+    let mut best: Option<(f64, f64, crate::problems::evaluation::GaitSolution)> = None;
+    for &offset in &args.profile_clocks {
+        let t0 = std::time::Instant::now();
+        let solved =
+            TrackingProblem::build(setup, &[clock(side, offset, false)]).and_then(|mut p| {
+                p.setup
+                    .start_from(base.solution)
+                    .map_err(|e| anyhow::anyhow!(e))?;
+                p.solve(&settings, &Quiet)
+            });
+        let seconds = t0.elapsed().as_secs_f64();
+        let point = match solved {
+            Ok((res, sol)) => {
+                let j = res.objective;
+                if j.is_finite() && best.as_ref().is_none_or(|b| j < b.1) {
+                    best = Some((offset, j, sol));
+                }
+                ProfilePoint {
+                    offset,
+                    objective: j.is_finite().then_some(j),
+                    status: res.status.to_string(),
+                    iterations: res.history.len().saturating_sub(1),
+                    seconds,
+                }
+            }
+            Err(e) => ProfilePoint {
+                offset,
+                objective: None,
+                status: format!("failed: {e:#}"),
+                iterations: 0,
+                seconds,
+            },
+        };
+        note!(
+            progress,
+            "  profile of {whose} clock: held at {:+.0} ms, J = {} ({}, {} iterations) [{:.1} s]",
+            1e3 * offset,
+            point.objective.map_or("—".into(), |j| format!("{j:.6}")),
+            point.status,
+            point.iterations,
+            seconds
+        );
+        points.push(point);
+    }
+    let family = args.profile_clocks.len() + 1;
+    let mut profile = ClockProfile {
+        points,
+        start: None,
+        refit: None,
+        family,
+        chosen: false,
+    };
+    let Some((start, j_start, solution)) = best.filter(|b| b.1 < base.objective) else {
+        return Ok((profile, None));
+    };
+    profile.start = Some(start);
+    note!(
+        progress,
+        "  the profile of {whose} clock is lowest at {:+.0} ms (J = {j_start:.6} against the run's {:.6}): a free re-fit from there",
+        1e3 * start,
+        base.objective
+    );
+    let free = clock(side, start, true);
+    let dir = sibling(
+        &args.run,
+        &format!("+force_plate_time_offset_{side}_profile"),
+    );
+    let run = refit_into(args, setup, &free, &solution, dir, progress)?;
+    let name = local.parameters.first().cloned().unwrap_or_default();
+    let value = run
+        .record
+        .parameters
+        .iter()
+        .find(|p| p.name == name)
+        .map_or(start, |p| p.value);
+    profile.refit = Some((value, run.result.objective));
+    let mut t = refit_test(
+        c,
+        vec![name],
+        vec![value],
+        base.objective,
+        run.result.objective,
+        base.rows,
+        run.result.history.len().saturating_sub(1),
+    );
+    t.threshold = chi2_1_upper(1e-3 / family as f64);
+    let diff = diff_with(base.summary, &run)?;
+    t.expected_channels = diff
+        .channels
+        .iter()
+        .filter_map(|ch| {
+            Some((
+                ch.channel.clone(),
+                ch.unit.clone(),
+                ch.a.as_ref()?.mean,
+                ch.b.as_ref()?.mean,
+            ))
+        })
+        .collect();
+    // the statistic as the score tests': the largest model's residual mean square, and
+    // its residuals' inflation weighted by the channels this re-fit improves
+    let weights: Vec<f64> = resid
+        .series
+        .iter()
+        .map(|(name, _)| {
+            t.expected_channels
+                .iter()
+                .find(|ch| &ch.0 == name)
+                .map_or(0.0, |ch| {
+                    if ch.2 > 0.0 {
+                        ((ch.2 - ch.3) / ch.2).max(0.0)
+                    } else {
+                        0.0
+                    }
+                })
+        })
+        .collect();
+    let series: Vec<Vec<f64>> = resid
+        .series
+        .iter()
+        .map(|(name, own)| {
+            noise
+                .and_then(|f| f.series.iter().find(|s| &s.0 == name))
+                .map_or_else(|| own.clone(), |s| s.1.clone())
+        })
+        .collect();
+    let (_, phi) = variance_inflation(&series, &weights);
+    t.testable = local.testable;
+    t.identifiability = local.identifiability.clone();
+    t.hint = local.hint.clone();
+    t.set_inflation(phi);
+    let objective = noise.map_or(base.objective, |f| f.objective.min(base.objective));
+    t.set_mean_square(objective / base.rows.max(1) as f64);
+    Ok((profile, Some((t, run, diff))))
+}
