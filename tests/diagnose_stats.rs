@@ -59,6 +59,7 @@ fn diagnose(run: &Path, candidates: &[&str], make_testable: bool) -> Value {
         make_testable,
         held_out: true,
         profile_clocks: Vec::new(),
+        reference: None,
     };
     let t = std::time::Instant::now();
     footfall::workflows::diagnose::run(&req, &Quiet).unwrap();
@@ -255,6 +256,7 @@ fn a_plate_clock_is_profiled_beyond_the_score_tests_reach() {
         make_testable: false,
         held_out: false,
         profile_clocks: vec![0.02],
+        reference: None,
     };
     let t = std::time::Instant::now();
     footfall::workflows::diagnose::run(&req, &Quiet).unwrap();
@@ -301,4 +303,70 @@ fn a_plate_clock_is_profiled_beyond_the_score_tests_reach() {
     }
     let md = std::fs::read_to_string(out.join("diagnose.md")).unwrap();
     assert!(md.contains("Profile of force-plate time offset"), "{md}");
+}
+
+/// `--reference`: the trial whose plates run 15 ms late, read against the trial without
+/// a hidden effect (the same model, noise level and candidates). The clock's difference
+/// is the truth within 20 % or 2 sd and differs significantly; the ground slope, hidden
+/// in neither, does not.
+#[test]
+fn a_clock_offset_is_read_against_a_reference_trial() {
+    let dir = tempfile::tempdir().unwrap();
+    let tracked = |name: &str| {
+        let trial = root().join("tests/data/hidden").join(name);
+        let run = dir.path().join(name);
+        let mut req = TrackRequest::new("ellipse");
+        req.check_points = false;
+        req.run.data = Some(trial.join("synthetic.csv"));
+        req.init = Some(trial.join("tracked_seed"));
+        req.run.kinematics_cutoff = Some(10.0);
+        track(&req, RunFolder::create(&run, false).unwrap(), &Quiet).unwrap();
+        run
+    };
+    let diagnose = |run: &Path, reference: Option<PathBuf>| {
+        let req = DiagnoseRequest {
+            run: run.to_path_buf(),
+            verify: 0,
+            candidates: vec!["force_plate_time_offset".into(), "ground_slope".into()],
+            out: None,
+            overwrite: false,
+            tol: 1e-5,
+            max_iter: 200,
+            make_testable: false,
+            held_out: false,
+            profile_clocks: Vec::new(),
+            reference,
+        };
+        footfall::workflows::diagnose::run(&req, &Quiet).unwrap();
+        read_json(&PathBuf::from(format!(
+            "{}-diagnose/summary.json",
+            run.display()
+        )))
+    };
+    let reference = tracked("none");
+    diagnose(&reference, None);
+    let s = diagnose(&tracked("force_plate_time_offset"), Some(reference));
+    let c = &s["reference"];
+    eprintln!("{}", serde_json::to_string_pretty(c).unwrap());
+    let d = c["differences"].as_array().unwrap();
+    assert_eq!(d.len(), 2, "{c}");
+    let clock = d
+        .iter()
+        .find(|x| x["label"] == "force-plate time offset")
+        .expect("the clock compared");
+    let (diff, sd) = (
+        clock["difference"].as_f64().unwrap(),
+        clock["sd"].as_f64().unwrap(),
+    );
+    assert!(
+        (diff - 0.015).abs() <= (0.2 * 0.015f64).max(2.0 * sd),
+        "difference {diff} ± {sd} s against 0.015 s"
+    );
+    assert_eq!(clock["significant"], true, "{clock}");
+    let slope = d.iter().find(|x| x["label"] == "ground slope").unwrap();
+    assert_eq!(slope["significant"], false, "{slope}");
+    assert!(
+        (c["threshold"].as_f64().unwrap() - footfall::problems::diagnose::chi2_1_upper(5e-4)).abs()
+            < 1e-9
+    );
 }

@@ -199,6 +199,7 @@ fn diagnose(run: &Path, verify: usize, candidates: &[&str], held_out: bool) -> V
         make_testable: false,
         held_out,
         profile_clocks: Vec::new(),
+        reference: None,
     };
     timed("diagnose", run, || {
         footfall::workflows::diagnose::run(&req, &Quiet)

@@ -297,6 +297,7 @@ fn diagnose_ranks_the_contact_law_first_on_the_fit_with_the_wrong_law() {
             // the ranking in the run's own trial is what this test is about
             held_out: false,
             profile_clocks: Vec::new(),
+            reference: None,
         },
         &Quiet,
     )

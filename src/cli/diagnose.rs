@@ -43,6 +43,11 @@ pub struct Args {
     /// point and plate on this machine).
     #[arg(long)]
     profile_clocks: bool,
+    /// A reference trial's run (or its diagnosis folder), diagnosed the same way (same
+    /// model, foot, candidates and options): every candidate's reading is also given
+    /// less the reference's, which cancels the model's own bias.
+    #[arg(long)]
+    reference: Option<PathBuf>,
 }
 
 impl From<Args> for DiagnoseRequest {
@@ -62,6 +67,7 @@ impl From<Args> for DiagnoseRequest {
             } else {
                 Vec::new()
             },
+            reference: a.reference,
         }
     }
 }

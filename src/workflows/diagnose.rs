@@ -20,6 +20,7 @@ use crate::problems::diagnose::{
 mod heldout;
 mod output;
 pub mod profile;
+pub mod reference;
 use crate::ocp::Transcription;
 use crate::problems::evaluation::GaitSolution;
 use crate::report::diff::{RunDiff, RunSummary};
@@ -56,6 +57,10 @@ pub struct DiagnoseRequest {
     /// it (empty: no profile; `--profile-clocks` gives [`profile::CLOCK_PROFILE`]): re-fits
     /// beyond the score test's reach, about half a minute to a minute each on this machine.
     pub profile_clocks: Vec<f64>,
+    /// A reference trial's run (or its diagnosis folder), diagnosed the same way: every
+    /// candidate's reading is also given against the reference's
+    /// ([`reference::compare`]), which cancels the model's own bias (`--reference`).
+    pub reference: Option<PathBuf>,
 }
 
 /// The decrease of a truncated re-fit of a problem started at the run's solution (the
@@ -766,6 +771,19 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
     for t in &mut tests {
         t.settle();
     }
+    let comparison = match &args.reference {
+        Some(r) => {
+            let c = reference::compare(&tests, r)?;
+            if let Some(d) = c.differences.first() {
+                note!(progress,
+                    "against the reference {}: the largest change is {} {}: {:+.4e} ({:+.4e} against {:+.4e}), {:.1} sd{}",
+                    c.reference.display(), d.label, d.parameter, d.difference, d.reading, d.reference, d.z,
+                    if d.significant { ", significant" } else { "" });
+            }
+            Some(c)
+        }
+        None => None,
+    };
 
     let mut verified = Vec::new();
     for (t, e) in tests
@@ -800,6 +818,8 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
                 run: path.clone(),
                 out: None,
                 make_testable: false,
+                // the reference was diagnosed under the run's own cost, not this one's
+                reference: None,
                 ..args.clone()
             };
             run(&sub, progress)?;
@@ -823,6 +843,7 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
         skipped: &skipped,
         held_out_note: held_out_note.trim().to_string(),
         testable_run,
+        comparison: comparison.as_ref(),
     };
     output::write(&ctx, folder, progress)
 }

@@ -32,6 +32,8 @@ pub(super) struct Outcome<'a> {
     pub held_out_note: String,
     /// The run re-tracked by `--make-testable` (diagnosed into `<it>-diagnose`).
     pub testable_run: Option<PathBuf>,
+    /// The readings against a reference trial's (`--reference`).
+    pub comparison: Option<&'a super::reference::Comparison>,
 }
 
 /// Each channel's variance inflation in the largest model's residuals.
@@ -125,6 +127,66 @@ fn verdict(o: &Outcome<'_>) -> String {
 }
 
 /// Write the diagnosis into `folder` and commit it.
+/// The readings against a reference trial's: a paragraph and the table.
+fn comparison_section(c: &super::reference::Comparison) -> (String, Table) {
+    let significant: Vec<String> = c
+        .differences
+        .iter()
+        .filter(|d| d.significant)
+        .map(|d| format!("{} ({:+.3e}, {:.1} sd)", d.label, d.difference, d.z))
+        .collect();
+    let mut text = format!(
+        "Each candidate's reading less the reference's ({}, diagnosed the same way): the model's own bias, in both trials, cancels; an instrument error of this trial does not. The difference's sd is the two readings' (each inflated by its φ) in quadrature; (Δ/sd)² is judged against the χ²₁ point at 0.1 % / {} parameters compared = {:.1}. {}",
+        c.reference.display(),
+        c.differences.len(),
+        c.threshold,
+        if significant.is_empty() {
+            "No reading differs significantly from the reference's.".to_string()
+        } else {
+            format!("Differs significantly from the reference: {}.", significant.join(", "))
+        }
+    );
+    if !c.not_compared.is_empty() {
+        text += &format!(" Not compared: {}.", c.not_compared.join("; "));
+    }
+    let table = Table {
+        title: "Readings against the reference trial (the largest |Δ|/sd first)".into(),
+        headers: [
+            "effect",
+            "parameter",
+            "this run",
+            "reference",
+            "difference",
+            "sd",
+            "difference / sd",
+            "verdict",
+        ]
+        .map(String::from)
+        .to_vec(),
+        rows: c
+            .differences
+            .iter()
+            .map(|d| {
+                vec![
+                    d.label.clone(),
+                    d.parameter.clone(),
+                    format!("{:.4e}", d.reading),
+                    format!("{:.4e}", d.reference),
+                    format!("{:+.4e}", d.difference),
+                    format!("{:.2e}", d.sd),
+                    format!("{:+.1}", d.z),
+                    if d.significant {
+                        "differs".into()
+                    } else {
+                        "same within noise".into()
+                    },
+                ]
+            })
+            .collect(),
+    };
+    (text, table)
+}
+
 /// What the profile of a plate's clock (`--profile-clocks`) found, in a sentence or two.
 fn profile_paragraph(t: &ScoreTest) -> Option<String> {
     let p = t.profile.as_ref()?;
@@ -300,6 +362,19 @@ pub(super) fn write(
         tables: vec![ranking.clone(), expected],
         svgs: vec![],
     }];
+    if let Some(c) = o.comparison {
+        let (text, table) = comparison_section(c);
+        md += &format!(
+            "\n## Against the reference trial\n\n{text}\n\n{}\n",
+            table.to_markdown()
+        );
+        sections.push(Section {
+            heading: "Against the reference trial".into(),
+            paragraphs: vec![text],
+            tables: vec![table],
+            svgs: vec![],
+        });
+    }
     for v in o.verified {
         let params = v
             .parameters
@@ -377,6 +452,7 @@ pub(super) fn write(
         "untestable": tests.iter().filter(|t| !t.testable).count(),
         "held_out_note": o.held_out_note,
         "testable_run": o.testable_run,
+        "reference": o.comparison,
         "verdict": verdict,
         "verified": o.verified.iter().map(|v| serde_json::json!({
             "effect": v.test.effect,

@@ -53,6 +53,10 @@ fn clock(side: &str, offset: f64, free: bool) -> EffectSpec {
     }
 }
 
+/// The test made of a profile's free re-fit, the re-fit and its per-channel errors
+/// against the run.
+pub(super) type ProfileTest = (ScoreTest, TrackedRun, RunDiff);
+
 /// What the profile of candidate `c` (a plate's clock) found: the profile, and when a
 /// point lay below the run's cost, the test made of the free re-fit from it with that
 /// re-fit and its per-channel errors against the run. `local` is the candidate's score
@@ -67,7 +71,7 @@ pub(super) fn profile_clock(
     local: &ScoreTest,
     noise: Option<&FullModel>,
     progress: &dyn Progress,
-) -> anyhow::Result<(ClockProfile, Option<(ScoreTest, TrackedRun, RunDiff)>)> {
+) -> anyhow::Result<(ClockProfile, Option<ProfileTest>)> {
     let side = plate(c).unwrap_or("both");
     let whose = if side == "both" {
         "both plates'".to_string()

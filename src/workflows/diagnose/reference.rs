@@ -1,0 +1,224 @@
+//! `diagnose --reference REF`: every candidate's reading against a reference trial's.
+//!
+//! On real data the model's own misfit moves the readings: the rigid ellipse reads the
+//! right plate's clock +16.9 ms late on the untouched bundled trial, where the plates
+//! are synchronised (`docs/instruments.md`, stop 40). That bias belongs to the model and
+//! the subject and is in every trial of both; an instrument error of one trial is not.
+//! The difference of a candidate's reading between this trial and a reference trial
+//! diagnosed the same way (same model, foot, candidates and options) cancels the bias:
+//! `Δ = θ − θ_ref` with `sd(Δ) = √(sd² + sd_ref²)`, each sd the candidate's reduced
+//! Fisher information's (inflated by the variance inflation φ of correlated residuals),
+//! judged as `(Δ/sd)²` against the χ²₁ point at 0.1 % divided by the number of
+//! parameters compared (Bonferroni). Only readings of the same estimator are compared
+//! (both truncated re-fits from the null, or both a clock profile's free re-fit): on the
+//! real left-clock trial the shared clock's truncated reading (−6.3 ms) against the
+//! untouched trial's profile reading (+17.7 ms, another dip of J) differed by 6.9 sd,
+//! although its profile re-fit read +15.8 ms there.
+
+use crate::problems::diagnose::{chi2_1_upper, ScoreTest};
+use anyhow::{anyhow, Context};
+use serde::Serialize;
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+
+/// One parameter's reading against the reference's.
+#[derive(Debug, Clone, Serialize)]
+pub struct Difference {
+    /// The candidate's label.
+    pub label: String,
+    /// The parameter's name.
+    pub parameter: String,
+    /// Its reading in this run (the candidate's test: truncated re-fit, or a profile's
+    /// free re-fit).
+    pub reading: f64,
+    /// Its reading in the reference run.
+    pub reference: f64,
+    /// `reading − reference`.
+    pub difference: f64,
+    /// Standard deviation of the difference (the two sds in quadrature).
+    pub sd: f64,
+    /// `difference / sd`.
+    pub z: f64,
+    /// Whether `z²` exceeds the threshold.
+    pub significant: bool,
+}
+
+/// This run's readings against the reference's.
+#[derive(Debug, Clone, Serialize)]
+pub struct Comparison {
+    /// The reference's diagnosis folder.
+    pub reference: PathBuf,
+    /// The threshold on `z²`: the χ²₁ point at 0.1 % / the number of parameters compared.
+    pub threshold: f64,
+    /// Every compared parameter, the largest |z| first.
+    pub differences: Vec<Difference>,
+    /// Candidates not compared, and why.
+    pub not_compared: Vec<String>,
+}
+
+/// The diagnosis folder of `reference`: the folder itself when it holds a diagnosis's
+/// `summary.json`, else `<reference>-diagnose`.
+fn diagnosis_folder(reference: &Path) -> PathBuf {
+    let is_diagnosis = |p: &Path| {
+        std::fs::read_to_string(p.join("summary.json"))
+            .ok()
+            .and_then(|s| serde_json::from_str::<Value>(&s).ok())
+            .is_some_and(|v| v["command"] == "diagnose")
+    };
+    if is_diagnosis(reference) {
+        return reference.to_path_buf();
+    }
+    let name = reference
+        .file_name()
+        .map(|s| s.to_string_lossy().to_string())
+        .unwrap_or_default();
+    reference.with_file_name(format!("{name}-diagnose"))
+}
+
+/// The readings and standard deviations of every testable candidate of a diagnosis's
+/// `summary.json`: `(label, parameters, values, sds, estimator)`.
+type Readings = Vec<(
+    String,
+    Vec<String>,
+    Vec<f64>,
+    Vec<Option<f64>>,
+    &'static str,
+)>;
+
+/// Which estimator a test's reading comes from.
+fn estimator(refit: bool, profiled: bool) -> &'static str {
+    match (profiled, refit) {
+        (true, _) => "a clock profile's free re-fit",
+        (false, true) => "a full re-fit",
+        (false, false) => "the truncated re-fit from the null",
+    }
+}
+
+fn readings_of(summary: &Value, file: &Path) -> anyhow::Result<Readings> {
+    let ranking = summary["ranking"].as_array().ok_or_else(|| {
+        anyhow!(
+            "{}: no `ranking` array: not the summary of a `footfall diagnose`",
+            file.display()
+        )
+    })?;
+    let strings = |v: &Value| -> Vec<String> {
+        v.as_array()
+            .map(|a| {
+                a.iter()
+                    .filter_map(|x| x.as_str().map(String::from))
+                    .collect()
+            })
+            .unwrap_or_default()
+    };
+    Ok(ranking
+        .iter()
+        .filter(|t| t["testable"] == true)
+        .map(|t| {
+            let values = t["step_values"]
+                .as_array()
+                .map(|a| a.iter().filter_map(Value::as_f64).collect())
+                .unwrap_or_default();
+            let sds = t["identifiability"]["sd"]
+                .as_array()
+                .map(|a| a.iter().map(Value::as_f64).collect())
+                .unwrap_or_default();
+            (
+                t["label"].as_str().unwrap_or_default().to_string(),
+                strings(&t["parameters"]),
+                values,
+                sds,
+                estimator(t["refit"] == true, t["profile"]["chosen"] == true),
+            )
+        })
+        .collect())
+}
+
+/// Compare `tests` (this run's settled tests) with the diagnosis of `reference`.
+pub(super) fn compare(tests: &[ScoreTest], reference: &Path) -> anyhow::Result<Comparison> {
+    let folder = diagnosis_folder(reference);
+    let file = folder.join("summary.json");
+    let text = std::fs::read_to_string(&file).with_context(|| {
+        format!(
+            "--reference {}: no diagnosis found at {} (diagnose the reference run first, with the same candidates and options: `footfall diagnose {}`)",
+            reference.display(),
+            file.display(),
+            reference.display()
+        )
+    })?;
+    let summary: Value = serde_json::from_str(&text)
+        .with_context(|| format!("--reference: {}: not valid JSON", file.display()))?;
+    let theirs = readings_of(&summary, &file)?;
+    let mut pairs = Vec::new();
+    let mut not_compared = Vec::new();
+    for t in tests {
+        let ours = t.identifiability.as_ref().map(|i| &i.sd);
+        let Some(sds) = ours.filter(|_| t.testable) else {
+            not_compared.push(format!("{}: not testable in this run", t.label));
+            continue;
+        };
+        let Some((_, names, values, ref_sds, how)) = theirs
+            .iter()
+            .find(|r| r.0 == t.label && r.1 == t.parameters)
+        else {
+            not_compared.push(format!(
+                "{}: not among the reference's testable candidates",
+                t.label
+            ));
+            continue;
+        };
+        let mine = estimator(t.refit, t.profile.as_ref().is_some_and(|p| p.chosen));
+        if mine != *how {
+            not_compared.push(format!(
+                "{}: read by {mine} here and by {how} in the reference (readings of different estimators, possibly of different dips of J)",
+                t.label
+            ));
+            continue;
+        }
+        for (j, name) in names.iter().enumerate() {
+            match (
+                t.step_values.get(j),
+                sds.get(j).copied().flatten(),
+                values.get(j),
+                ref_sds.get(j).copied().flatten(),
+            ) {
+                (Some(&a), Some(sa), Some(&b), Some(sb)) if (sa * sa + sb * sb) > 0.0 => pairs
+                    .push((
+                        t.label.clone(),
+                        name.clone(),
+                        a,
+                        b,
+                        (sa * sa + sb * sb).sqrt(),
+                    )),
+                _ => not_compared.push(format!(
+                    "{}: {name} has no finite standard deviation in both runs",
+                    t.label
+                )),
+            }
+        }
+    }
+    let threshold = chi2_1_upper(1e-3 / pairs.len().max(1) as f64);
+    let mut differences: Vec<Difference> = pairs
+        .into_iter()
+        .map(|(label, parameter, reading, reference, sd)| {
+            let difference = reading - reference;
+            let z = difference / sd;
+            Difference {
+                label,
+                parameter,
+                reading,
+                reference,
+                difference,
+                sd,
+                z,
+                significant: z * z > threshold,
+            }
+        })
+        .collect();
+    differences.sort_by(|a, b| b.z.abs().total_cmp(&a.z.abs()));
+    Ok(Comparison {
+        reference: folder,
+        threshold,
+        differences,
+        not_compared,
+    })
+}
