@@ -226,6 +226,20 @@ fn a_cop_offset_is_untestable_under_the_seed_cost_and_found_when_made_testable()
     );
 }
 
+/// Track the synthetic trial `name` (tests/data/hidden) with the seed's cost from its
+/// kept solution, into `dir/name`.
+fn seed_cost_run(dir: &Path, name: &str) -> PathBuf {
+    let trial = root().join("tests/data/hidden").join(name);
+    let run = dir.join(name);
+    let mut req = TrackRequest::new("ellipse");
+    req.check_points = false;
+    req.run.data = Some(trial.join("synthetic.csv"));
+    req.init = Some(trial.join("tracked_seed"));
+    req.run.kinematics_cutoff = Some(10.0);
+    track(&req, RunFolder::create(&run, false).unwrap(), &Quiet).unwrap();
+    run
+}
+
 /// `--profile-clocks` on the synthetic trial whose plates run 15 ms late: their clock is
 /// held at +20 ms (one point: a point opposite the truth, −20 ms, fits worse, J 0.523
 /// against 0.304, but takes 37 iterations), and the profile is reported for that
@@ -237,14 +251,7 @@ fn a_cop_offset_is_untestable_under_the_seed_cost_and_found_when_made_testable()
 fn a_plate_clock_is_profiled_beyond_the_score_tests_reach() {
     use footfall::problems::diagnose::chi2_1_upper;
     let dir = tempfile::tempdir().unwrap();
-    let trial = root().join("tests/data/hidden/force_plate_time_offset");
-    let run = dir.path().join("clock");
-    let mut req = TrackRequest::new("ellipse");
-    req.check_points = false;
-    req.run.data = Some(trial.join("synthetic.csv"));
-    req.init = Some(trial.join("tracked_seed"));
-    req.run.kinematics_cutoff = Some(10.0);
-    track(&req, RunFolder::create(&run, false).unwrap(), &Quiet).unwrap();
+    let run = seed_cost_run(dir.path(), "force_plate_time_offset");
     let req = DiagnoseRequest {
         run: run.clone(),
         verify: 0,
@@ -312,17 +319,7 @@ fn a_plate_clock_is_profiled_beyond_the_score_tests_reach() {
 #[test]
 fn a_clock_offset_is_read_against_a_reference_trial() {
     let dir = tempfile::tempdir().unwrap();
-    let tracked = |name: &str| {
-        let trial = root().join("tests/data/hidden").join(name);
-        let run = dir.path().join(name);
-        let mut req = TrackRequest::new("ellipse");
-        req.check_points = false;
-        req.run.data = Some(trial.join("synthetic.csv"));
-        req.init = Some(trial.join("tracked_seed"));
-        req.run.kinematics_cutoff = Some(10.0);
-        track(&req, RunFolder::create(&run, false).unwrap(), &Quiet).unwrap();
-        run
-    };
+    let tracked = |name: &str| seed_cost_run(dir.path(), name);
     let diagnose = |run: &Path, reference: Option<PathBuf>| {
         let req = DiagnoseRequest {
             run: run.to_path_buf(),

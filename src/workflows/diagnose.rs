@@ -431,8 +431,14 @@ fn test_by_refit(
         run.result.history.len().saturating_sub(1),
     );
     let diff = diff_with(before, &run)?;
-    t.expected_channels = diff
-        .channels
+    t.expected_channels = channel_changes(&diff);
+    Ok((t, run, diff))
+}
+
+/// Each channel's mean error before and after a re-fit, from its diff against the run:
+/// `(channel, unit, before, after)`, as a test's `expected_channels`.
+fn channel_changes(diff: &RunDiff) -> Vec<(String, String, f64, f64)> {
+    diff.channels
         .iter()
         .filter_map(|c| {
             Some((
@@ -442,8 +448,7 @@ fn test_by_refit(
                 c.b.as_ref()?.mean,
             ))
         })
-        .collect();
-    Ok((t, run, diff))
+        .collect()
 }
 
 /// One progress line per tested candidate: its (predicted or re-fit) decrease, the steps

@@ -8,7 +8,10 @@
 //! with the offset held at [`CLOCK_PROFILE`] and starts a free re-fit from the lowest
 //! point; that re-fit is the candidate's test when it lowers J more than the score test's.
 
-use super::{diff_with, refit_into, sibling, Baseline, DiagnoseRequest, FullModel, Residuals};
+use super::{
+    channel_changes, diff_with, refit_into, sibling, Baseline, DiagnoseRequest, FullModel,
+    Residuals,
+};
 use crate::model::effects::EffectSpec;
 use crate::problems::diagnose::stats::variance_inflation;
 use crate::problems::diagnose::{
@@ -178,18 +181,7 @@ pub(super) fn profile_clock(
     );
     t.threshold = chi2_1_upper(1e-3 / family as f64);
     let diff = diff_with(base.summary, &run)?;
-    t.expected_channels = diff
-        .channels
-        .iter()
-        .filter_map(|ch| {
-            Some((
-                ch.channel.clone(),
-                ch.unit.clone(),
-                ch.a.as_ref()?.mean,
-                ch.b.as_ref()?.mean,
-            ))
-        })
-        .collect();
+    t.expected_channels = channel_changes(&diff);
     // the statistic as the score tests': the largest model's residual mean square, and
     // its residuals' inflation weighted by the channels this re-fit improves
     let weights: Vec<f64> = resid
