@@ -126,17 +126,6 @@ fn test_candidate(
             .zip(after)
             .map(|((c, u, b), (_, _, a))| (c, u, b, a))
             .collect();
-        // the decrease's variance is inflated as that of the channels it comes from
-        let weights: Vec<f64> = baseline
-            .series
-            .iter()
-            .map(|(name, _)| {
-                t.expected_channels
-                    .iter()
-                    .find(|c| &c.0 == name)
-                    .map_or(0.0, |c| if c.2 > 0.0 { (c.2 - c.3) / c.2 } else { 0.0 })
-            })
-            .collect();
         // the autocorrelation of the noise is that of the residuals under the largest
         // model (every candidate at once, [`full_model_series`]), as an F-test's variance
         // is the larger model's: at the plain model's solution a missing effect's
@@ -147,21 +136,10 @@ fn test_candidate(
             Some(full) => full.series.clone(),
             None => residual_series(&prob, tr, &cycle.continuous, &w1)?,
         };
-        let series: Vec<Vec<f64>> = baseline
-            .series
-            .iter()
-            .map(|(name, before)| {
-                after
-                    .iter()
-                    .find(|a| &a.0 == name)
-                    .map_or_else(|| before.clone(), |a| a.1.clone())
-            })
-            .collect();
-        let (_, phi) = variance_inflation(&series, &weights);
+        let phi = baseline.inflation_after(&after, &t.expected_channels);
         t.set_inflation(phi);
         // and so is the residual mean square
-        let objective = noise.map_or(baseline.objective, |f| f.objective.min(baseline.objective));
-        let s2 = objective / rows.max(1) as f64;
+        let s2 = baseline.mean_square(noise);
         t.set_mean_square(s2);
         let id = candidate_identifiability_at(tr, &first, first_step.as_ref(), names, s2, phi)
             .map_err(|e| anyhow!(e))?;
@@ -279,6 +257,51 @@ pub(super) struct Residuals {
     series: Vec<(String, Vec<f64>)>,
     /// Each channel's variance inflation `N/N_eff`.
     inflation: Vec<Option<f64>>,
+}
+
+impl Residuals {
+    /// The variance inflation φ a candidate's decrease is judged with: that of the
+    /// residual series `after` (by channel; the run's own where `after` lacks one),
+    /// averaged over the channels weighted by how much the candidate improves each
+    /// (`expected`: `(channel, unit, before, after)` mean errors), as the decrease's
+    /// variance is that of the channels it comes from.
+    fn inflation_after(
+        &self,
+        after: &[(String, Vec<f64>)],
+        expected: &[(String, String, f64, f64)],
+    ) -> f64 {
+        let weights: Vec<f64> = self
+            .series
+            .iter()
+            .map(|(name, _)| {
+                expected.iter().find(|c| &c.0 == name).map_or(0.0, |c| {
+                    if c.2 > 0.0 {
+                        (c.2 - c.3) / c.2
+                    } else {
+                        0.0
+                    }
+                })
+            })
+            .collect();
+        let series: Vec<Vec<f64>> = self
+            .series
+            .iter()
+            .map(|(name, own)| {
+                after
+                    .iter()
+                    .find(|a| &a.0 == name)
+                    .map_or_else(|| own.clone(), |a| a.1.clone())
+            })
+            .collect();
+        variance_inflation(&series, &weights).1
+    }
+
+    /// The residual mean square every statistic is measured in: the largest model's
+    /// (`noise`; an F-test's denominator), or the run's own without it.
+    fn mean_square(&self, noise: Option<&FullModel>) -> f64 {
+        let objective = noise.map_or(self.objective, |f| f.objective.min(self.objective));
+        objective / self.rows.max(1) as f64
+    }
 }
 
 /// A verified candidate: its re-fit run and what changed.
@@ -630,6 +653,13 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
             None
         }
     };
+    // the run every candidate's re-fit (the pad's, a clock profile's) is measured against
+    let baseline = Baseline {
+        solution: &solution,
+        summary: &before,
+        objective,
+        rows,
+    };
     for (c, built) in candidates.iter().zip(problems) {
         if setup.effects.iter().any(|e| e.overlaps(c)) {
             skipped.push(format!("{}: already in the model", c.label()));
@@ -645,12 +675,6 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
                 continue;
             }
             let t0 = std::time::Instant::now();
-            let baseline = Baseline {
-                solution: &solution,
-                summary: &before,
-                objective,
-                rows,
-            };
             let (mut t, run, diff) = test_by_refit(args, &setup, c, &baseline, progress)?;
             t.set_inflation(phi_all);
             {
@@ -677,12 +701,6 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
             print_progress(progress, &t, true, t0.elapsed().as_secs_f64());
         }
         if !args.profile_clocks.is_empty() && profile::plate(c).is_some() {
-            let baseline = Baseline {
-                solution: &solution,
-                summary: &before,
-                objective,
-                rows,
-            };
             let t1 = std::time::Instant::now();
             let (mut prof, refitted) = profile::profile_clock(
                 args,

@@ -13,7 +13,6 @@ use super::{
     Residuals,
 };
 use crate::model::effects::EffectSpec;
-use crate::problems::diagnose::stats::variance_inflation;
 use crate::problems::diagnose::{
     chi2_1_upper, refit_test, ClockProfile, ProfilePoint, ScoreTest, TrackingRunSetup,
 };
@@ -182,39 +181,14 @@ pub(super) fn profile_clock(
     t.threshold = chi2_1_upper(1e-3 / family as f64);
     let diff = diff_with(base.summary, &run)?;
     t.expected_channels = channel_changes(&diff);
-    // the statistic as the score tests': the largest model's residual mean square, and
-    // its residuals' inflation weighted by the channels this re-fit improves
-    let weights: Vec<f64> = resid
-        .series
-        .iter()
-        .map(|(name, _)| {
-            t.expected_channels
-                .iter()
-                .find(|ch| &ch.0 == name)
-                .map_or(0.0, |ch| {
-                    if ch.2 > 0.0 {
-                        ((ch.2 - ch.3) / ch.2).max(0.0)
-                    } else {
-                        0.0
-                    }
-                })
-        })
-        .collect();
-    let series: Vec<Vec<f64>> = resid
-        .series
-        .iter()
-        .map(|(name, own)| {
-            noise
-                .and_then(|f| f.series.iter().find(|s| &s.0 == name))
-                .map_or_else(|| own.clone(), |s| s.1.clone())
-        })
-        .collect();
-    let (_, phi) = variance_inflation(&series, &weights);
+    // the statistic as the score tests': the largest model's residuals' inflation,
+    // weighted by the channels this re-fit improves, and its residual mean square
+    let noise_series = noise.map_or(&[][..], |f| &f.series[..]);
+    let phi = resid.inflation_after(noise_series, &t.expected_channels);
     t.testable = local.testable;
     t.identifiability = local.identifiability.clone();
     t.hint = local.hint.clone();
     t.set_inflation(phi);
-    let objective = noise.map_or(base.objective, |f| f.objective.min(base.objective));
-    t.set_mean_square(objective / base.rows.max(1) as f64);
+    t.set_mean_square(resid.mean_square(noise));
     Ok((profile, Some((t, run, diff))))
 }
