@@ -1,8 +1,10 @@
 //! The Gauss–Newton model at a point: on a linear least-squares problem with a linear
 //! equality constraint one step reaches the constrained optimum, the predicted decrease
 //! is the true one, and a gradient shift probes the reduced inverse Hessian (checked
-//! against the null-space formula Z (ZᵀHZ)⁻¹ Zᵀ).
+//! against the null-space formula Z (ZᵀHZ)⁻¹ Zᵀ), also for a variable whose step runs
+//! to its bound.
 
+use footfall::problems::diagnose::stats::reduced_inverse_hessian;
 use footfall::sqp::linearised::GaussNewtonModel;
 use footfall::sqp::{Nlp, NlpEval};
 use nalgebra::{DMatrix, DVector};
@@ -10,6 +12,8 @@ use nalgebra::{DMatrix, DVector};
 struct LinearLs {
     a: DMatrix<f64>,
     b: DVector<f64>,
+    /// Variable bounds (lower, upper).
+    w_bounds: (Vec<f64>, Vec<f64>),
 }
 
 impl Nlp for LinearLs {
@@ -20,7 +24,12 @@ impl Nlp for LinearLs {
         1
     }
     fn bounds(&self) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
-        (vec![-10.0; 3], vec![10.0; 3], vec![1.0], vec![1.0])
+        (
+            self.w_bounds.0.clone(),
+            self.w_bounds.1.clone(),
+            vec![1.0],
+            vec![1.0],
+        )
     }
     fn jacobian_pattern(&self) -> (Vec<usize>, Vec<usize>) {
         (vec![0, 0, 0], vec![0, 1, 2])
@@ -60,17 +69,29 @@ impl Nlp for LinearLs {
     }
 }
 
-#[test]
-fn one_gauss_newton_step_solves_a_linear_least_squares_problem_and_predicts_its_decrease() {
+fn problem() -> (DMatrix<f64>, DVector<f64>) {
     let a = DMatrix::from_row_slice(
         4,
         3,
         &[1.0, 0.5, 0.0, 0.2, 2.0, 0.3, 0.0, 0.4, 1.5, 1.0, 1.0, 1.0],
     );
     let b = DVector::from_column_slice(&[1.0, -0.5, 2.0, 0.7]);
+    (a, b)
+}
+
+/// Z (ZᵀHZ)⁻¹ Zᵀ, Z spanning {d: Σd = 0}: the inverse Hessian reduced to the constraint.
+fn reduced_inverse(h: &DMatrix<f64>) -> DMatrix<f64> {
+    let z = DMatrix::from_row_slice(3, 2, &[1.0, 0.0, -1.0, 1.0, 0.0, -1.0]);
+    &z * (z.transpose() * h * &z).try_inverse().unwrap() * z.transpose()
+}
+
+#[test]
+fn one_gauss_newton_step_solves_a_linear_least_squares_problem_and_predicts_its_decrease() {
+    let (a, b) = problem();
     let nlp = LinearLs {
         a: a.clone(),
         b: b.clone(),
+        w_bounds: (vec![-10.0; 3], vec![10.0; 3]),
     };
     // brute force: the KKT system [H 1; 1ᵀ 0][x; λ] = [2Aᵀb; 1]
     let h = 2.0 * a.transpose() * &a;
@@ -103,9 +124,8 @@ fn one_gauss_newton_step_solves_a_linear_least_squares_problem_and_predicts_its_
         "{} vs {truth}",
         step.predicted_decrease
     );
-    // reduced inverse Hessian from a gradient shift vs Z (ZᵀHZ)⁻¹ Zᵀ, Z spanning {d: Σd = 0}
-    let z = DMatrix::from_row_slice(3, 2, &[1.0, 0.0, -1.0, 1.0, 0.0, -1.0]);
-    let reduced = &z * (z.transpose() * &h * &z).try_inverse().unwrap() * z.transpose();
+    // reduced inverse Hessian from a gradient shift vs Z (ZᵀHZ)⁻¹ Zᵀ
+    let reduced = reduced_inverse(&h);
     let eps = 1e-3;
     for j in 0..3 {
         let mut shift = vec![0.0; 3];
@@ -120,4 +140,61 @@ fn one_gauss_newton_step_solves_a_linear_least_squares_problem_and_predicts_its_
             );
         }
     }
+}
+
+/// The information of a parameter is the cost's curvature along it, whatever range it is
+/// allowed: when the step runs to the parameter's bound, a gradient shift moves nothing
+/// (the naive probe reads an inverse curvature of zero: a perfectly known parameter),
+/// while `reduced_inverse_hessian` lifts the bound and reads the null-space formula's.
+#[test]
+fn a_parameter_whose_step_runs_to_its_bound_keeps_its_reduced_curvature() {
+    let (a, b) = problem();
+    let h = 2.0 * a.transpose() * &a;
+    let reduced = reduced_inverse(&h);
+    let w0 = [0.2, 0.3, 0.5];
+    let free = LinearLs {
+        a: a.clone(),
+        b: b.clone(),
+        w_bounds: (vec![-10.0; 3], vec![10.0; 3]),
+    };
+    let x2 = w0[2]
+        + GaussNewtonModel::new(&free, &w0, 0.0)
+            .unwrap()
+            .step(None)
+            .unwrap()
+            .d[2];
+    // bound the last variable between its start and halfway to its optimum
+    let (lo, hi) = if x2 > w0[2] {
+        (w0[2] - 0.1, 0.5 * (w0[2] + x2))
+    } else {
+        (0.5 * (w0[2] + x2), w0[2] + 0.1)
+    };
+    let nlp = LinearLs {
+        a,
+        b,
+        w_bounds: (vec![-10.0, -10.0, lo], vec![10.0, 10.0, hi]),
+    };
+    let model = GaussNewtonModel::new(&nlp, &w0, 0.0).unwrap();
+    let base = model.step(None).unwrap();
+    let at = w0[2] + base.d[2];
+    assert!(
+        (at - lo).abs() < 1e-7 || (at - hi).abs() < 1e-7,
+        "the step runs to the bound: {at} in [{lo}, {hi}]"
+    );
+    let eps = 1e-3;
+    let mut shift = vec![0.0; 3];
+    shift[2] = eps;
+    let naive = -(model.step(Some(&shift)).unwrap().d[2] - base.d[2]) / eps;
+    assert!(
+        naive.abs() < 1e-4 * reduced[(2, 2)],
+        "pinned at the bound, the naive probe reads {naive} (truth {})",
+        reduced[(2, 2)]
+    );
+    let c = reduced_inverse_hessian(&nlp, &w0, &[2]).unwrap();
+    assert!(
+        (c[0][0] - reduced[(2, 2)]).abs() < 1e-5 * reduced[(2, 2)],
+        "{} vs {}",
+        c[0][0],
+        reduced[(2, 2)]
+    );
 }

@@ -196,6 +196,11 @@ pub struct ScoreTest {
     pub parameters: Vec<String>,
     /// Their values after the Gauss–Newton step.
     pub step_values: Vec<f64>,
+    /// The parameters whose value lies at a bound of its admissible range: a limit the
+    /// data pushed against, not a reading (the real trials' left CoP offset runs to its
+    /// 0.1 m bound with or without a calibration error: the rigid foot's CoP misfit).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub at_bound: Vec<String>,
     /// Fall of the tracking cost over the truncated re-fit (cost units), less that of
     /// the problem without the candidate.
     pub predicted_decrease: f64,
@@ -238,8 +243,9 @@ pub struct ScoreTest {
     /// Significant in-sample and validated on the held-out half cycle (or significant
     /// where the trial has no other half cycle: see `held_out`).
     pub found: bool,
-    /// One of `not testable with this run's cost`, `not significant`, `not confirmed on
-    /// the held-out half cycle`, `found`, `significant, not validated`.
+    /// One of `not testable with this run's cost`, `not significant`, `significant at
+    /// its bound, not a reading`, `not confirmed on the held-out half cycle`, `found`,
+    /// `significant, not validated`.
     pub verdict: String,
     /// The profile of the cost over a plate's clock offset (`diagnose --profile-clocks`),
     /// when one was made for this candidate.
@@ -461,8 +467,10 @@ pub fn score_test_from(
         truncated_refit_from(tr, first, first_step, MAX_STEPS, REL_STOP)?;
     let theta = theta_of(tr, &w1);
     let values = theta[theta.len() - k..].to_vec();
+    let at_bound = parameters_at_bound(tr, &parameters, &values);
     let test = ScoreTest {
         steps,
+        at_bound,
         ..ScoreTest::from_decrease(
             effect,
             parameters,
@@ -473,6 +481,25 @@ pub fn score_test_from(
         )
     };
     Ok((test, w1))
+}
+
+/// Which of `names`, the last parameters of θ in `tr` with `values`, lie within 1e-6 of
+/// their bound span of a bound.
+fn parameters_at_bound(tr: &Transcription, names: &[String], values: &[f64]) -> Vec<String> {
+    let (w_lb, w_ub, _, _) = crate::sqp::Nlp::bounds(tr);
+    let end = tr.range(Block::Params).end;
+    let first = end - names.len();
+    names
+        .iter()
+        .zip(values)
+        .enumerate()
+        .filter(|&(j, (_, &v))| {
+            let (lo, hi) = (w_lb[first + j], w_ub[first + j]);
+            let span = hi - lo;
+            span.is_finite() && (v - lo <= 1e-6 * span || hi - v <= 1e-6 * span)
+        })
+        .map(|(_, (n, _))| n.clone())
+        .collect()
 }
 
 /// The test of a candidate without a null value (the heel pad, whose limit of infinite
@@ -526,6 +553,7 @@ impl ScoreTest {
             effect: effect.clone(),
             parameters,
             step_values: values,
+            at_bound: Vec::new(),
             predicted_decrease: decrease,
             predicted_fraction: decrease / objective,
             statistic,
@@ -579,6 +607,10 @@ impl ScoreTest {
             (false, "not testable with this run's cost".to_string())
         } else if !self.significant {
             (false, "not significant".into())
+        } else if !self.at_bound.is_empty() {
+            // the data want more than the admissible range: a misfit of the model, which
+            // the candidate only leans against, more likely than this effect
+            (false, "significant at its bound, not a reading".into())
         } else {
             match &self.held_out {
                 Some(h) if h.beyond_noise => (true, "found".into()),

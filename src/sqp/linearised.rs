@@ -80,14 +80,31 @@ impl<'a> GaussNewtonModel<'a> {
     /// any). The shift probes the inverse of the reduced Hessian: with `ε e_j` the step
     /// changes by `−ε (H⁻¹)_{·j}` while the active set stays.
     pub fn step(&self, gradient_shift: Option<&[f64]>) -> Result<GaussNewtonStep, String> {
+        self.step_with(gradient_shift, &[])
+    }
+
+    /// [`step`](Self::step) with the bounds of the variables `unbounded` lifted: the
+    /// curvature of the cost along a parameter is a property of the data, not of the
+    /// range it is allowed, and a probe of it must not be stopped by a bound the step
+    /// reaches (the response to a gradient shift is then nil and the parameter looks
+    /// perfectly known).
+    pub fn step_with(
+        &self,
+        gradient_shift: Option<&[f64]>,
+        unbounded: &[usize],
+    ) -> Result<GaussNewtonStep, String> {
         let n = self.nlp.n();
         let g: Vec<f64> = match gradient_shift {
             Some(s) => self.ev.grad.iter().zip(s).map(|(a, b)| a + b).collect(),
             None => self.ev.grad.clone(),
         };
         let (w_lb, w_ub, c_lb, c_ub) = &self.bounds;
-        let d_lb: Vec<f64> = (0..n).map(|i| w_lb[i] - self.w[i]).collect();
-        let d_ub: Vec<f64> = (0..n).map(|i| w_ub[i] - self.w[i]).collect();
+        let mut d_lb: Vec<f64> = (0..n).map(|i| w_lb[i] - self.w[i]).collect();
+        let mut d_ub: Vec<f64> = (0..n).map(|i| w_ub[i] - self.w[i]).collect();
+        for &i in unbounded {
+            d_lb[i] = f64::NEG_INFINITY;
+            d_ub[i] = f64::INFINITY;
+        }
         let weights = vec![1.0; self.nlp.m()];
         let sol = qp::solve(&QpData {
             h: &self.h,

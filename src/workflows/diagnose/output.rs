@@ -50,11 +50,14 @@ fn parameters_cell(t: &ScoreTest) -> String {
         .zip(&t.step_values)
         .enumerate()
         .map(|(i, (n, v))| {
-            let sd = t
-                .identifiability
-                .as_ref()
-                .and_then(|id| id.sd.get(i).copied().flatten())
-                .map_or(String::new(), |s| format!(" ± {s:.2e}"));
+            let sd = if t.at_bound.contains(n) {
+                " (at its bound)".to_string()
+            } else {
+                t.identifiability
+                    .as_ref()
+                    .and_then(|id| id.sd.get(i).copied().flatten())
+                    .map_or(String::new(), |s| format!(" ± {s:.2e}"))
+            };
             format!("{} = {v:.4}{sd}", n.rsplit('.').next().unwrap_or(n))
         })
         .collect::<Vec<_>>()

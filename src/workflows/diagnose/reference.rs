@@ -13,7 +13,8 @@
 //! (both truncated re-fits from the null, or both a clock profile's free re-fit): on the
 //! real left-clock trial the shared clock's truncated reading (−6.3 ms) against the
 //! untouched trial's profile reading (+17.7 ms, another dip of J) differed by 6.9 sd,
-//! although its profile re-fit read +15.8 ms there.
+//! although its profile re-fit read +15.8 ms there. A reading at a bound of its range,
+//! in either run, is a limit the data pushed against and is not compared.
 
 use crate::problems::diagnose::{chi2_1_upper, ScoreTest};
 use anyhow::{anyhow, Context};
@@ -75,15 +76,16 @@ fn diagnosis_folder(reference: &Path) -> PathBuf {
     reference.with_file_name(format!("{name}-diagnose"))
 }
 
-/// The readings and standard deviations of every testable candidate of a diagnosis's
-/// `summary.json`: `(label, parameters, values, sds, estimator)`.
-type Readings = Vec<(
-    String,
-    Vec<String>,
-    Vec<f64>,
-    Vec<Option<f64>>,
-    &'static str,
-)>;
+/// The reading of one testable candidate in a diagnosis's `summary.json`.
+struct Reading {
+    label: String,
+    parameters: Vec<String>,
+    values: Vec<f64>,
+    sds: Vec<Option<f64>>,
+    /// The parameters read at a bound of their range.
+    at_bound: Vec<String>,
+    estimator: &'static str,
+}
 
 /// Which estimator a test's reading comes from.
 fn estimator(refit: bool, profiled: bool) -> &'static str {
@@ -94,7 +96,7 @@ fn estimator(refit: bool, profiled: bool) -> &'static str {
     }
 }
 
-fn readings_of(summary: &Value, file: &Path) -> anyhow::Result<Readings> {
+fn readings_of(summary: &Value, file: &Path) -> anyhow::Result<Vec<Reading>> {
     let ranking = summary["ranking"].as_array().ok_or_else(|| {
         anyhow!(
             "{}: no `ranking` array: not the summary of a `footfall diagnose`",
@@ -122,13 +124,14 @@ fn readings_of(summary: &Value, file: &Path) -> anyhow::Result<Readings> {
                 .as_array()
                 .map(|a| a.iter().map(Value::as_f64).collect())
                 .unwrap_or_default();
-            (
-                t["label"].as_str().unwrap_or_default().to_string(),
-                strings(&t["parameters"]),
+            Reading {
+                label: t["label"].as_str().unwrap_or_default().to_string(),
+                parameters: strings(&t["parameters"]),
                 values,
                 sds,
-                estimator(t["refit"] == true, t["profile"]["chosen"] == true),
-            )
+                at_bound: strings(&t["at_bound"]),
+                estimator: estimator(t["refit"] == true, t["profile"]["chosen"] == true),
+            }
         })
         .collect())
 }
@@ -156,9 +159,9 @@ pub(super) fn compare(tests: &[ScoreTest], reference: &Path) -> anyhow::Result<C
             not_compared.push(format!("{}: not testable in this run", t.label));
             continue;
         };
-        let Some((_, names, values, ref_sds, how)) = theirs
+        let Some(theirs) = theirs
             .iter()
-            .find(|r| r.0 == t.label && r.1 == t.parameters)
+            .find(|r| r.label == t.label && r.parameters == t.parameters)
         else {
             not_compared.push(format!(
                 "{}: not among the reference's testable candidates",
@@ -167,19 +170,29 @@ pub(super) fn compare(tests: &[ScoreTest], reference: &Path) -> anyhow::Result<C
             continue;
         };
         let mine = estimator(t.refit, t.profile.as_ref().is_some_and(|p| p.chosen));
-        if mine != *how {
+        let how = theirs.estimator;
+        if mine != how {
             not_compared.push(format!(
                 "{}: read by {mine} here and by {how} in the reference (readings of different estimators, possibly of different dips of J)",
                 t.label
             ));
             continue;
         }
-        for (j, name) in names.iter().enumerate() {
+        for (j, name) in theirs.parameters.iter().enumerate() {
+            let bound_here = t.at_bound.contains(name);
+            if bound_here || theirs.at_bound.contains(name) {
+                not_compared.push(format!(
+                    "{}: {name} is at its bound {} (a limit the data pushed against, not a reading)",
+                    t.label,
+                    if bound_here { "here" } else { "in the reference" }
+                ));
+                continue;
+            }
             match (
                 t.step_values.get(j),
                 sds.get(j).copied().flatten(),
-                values.get(j),
-                ref_sds.get(j).copied().flatten(),
+                theirs.values.get(j),
+                theirs.sds.get(j).copied().flatten(),
             ) {
                 (Some(&a), Some(sa), Some(&b), Some(sb)) if (sa * sa + sb * sb) > 0.0 => pairs
                     .push((
@@ -221,4 +234,69 @@ pub(super) fn compare(tests: &[ScoreTest], reference: &Path) -> anyhow::Result<C
         differences,
         not_compared,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::effects::EffectSpec;
+    use crate::problems::diagnose::{refit_test, stats::identifiability};
+
+    /// A re-fit test of the ground slope read at `angle` with standard deviation `sd`.
+    fn slope_read_at(angle: f64, sd: f64) -> ScoreTest {
+        let effect = EffectSpec::GroundSlope {
+            angle: 0.0,
+            free: vec!["angle".into()],
+        };
+        let name = "ground_slope.angle".to_string();
+        let mut t = refit_test(&effect, vec![name.clone()], vec![angle], 2.0, 1.0, 100, 3);
+        // sd² = 2 φ s² c with φ = 1, s² = 0.5: c = sd²
+        t.set_identifiability(
+            identifiability(vec![name], vec![vec![sd * sd]], vec![0.2], 0.5, 1.0),
+            None,
+        );
+        t
+    }
+
+    fn reference_with(dir: &Path, angle: f64, sd: f64, at_bound: bool) {
+        let summary = serde_json::json!({
+            "command": "diagnose",
+            "ranking": [{
+                "label": "ground slope",
+                "parameters": ["ground_slope.angle"],
+                "step_values": [angle],
+                "identifiability": {"sd": [sd]},
+                "testable": true,
+                "refit": true,
+                "at_bound": if at_bound { vec!["ground_slope.angle"] } else { vec![] },
+            }],
+        });
+        std::fs::write(dir.join("summary.json"), summary.to_string()).unwrap();
+    }
+
+    /// The difference of two readings in sds in quadrature, against the χ²₁ 0.1 % point
+    /// for one parameter (10.83); a reading at its bound in the reference is set aside.
+    #[test]
+    fn readings_differ_in_quadrature_sds_unless_one_is_at_its_bound() {
+        let dir = tempfile::tempdir().unwrap();
+        reference_with(dir.path(), 0.01, 0.003, false);
+        let ours = [slope_read_at(0.03, 0.004)];
+        let c = compare(&ours, dir.path()).unwrap();
+        assert_eq!(c.differences.len(), 1, "{:?}", c.not_compared);
+        let d = &c.differences[0];
+        assert!((d.difference - 0.02).abs() < 1e-12);
+        assert!((d.sd - 0.005).abs() < 1e-12, "3-4-5: {}", d.sd);
+        assert!((d.z - 4.0).abs() < 1e-9);
+        assert!((c.threshold - 10.828).abs() < 2e-3);
+        assert!(d.significant, "z² = 16 > 10.83");
+
+        reference_with(dir.path(), 0.1, 0.003, true);
+        let c = compare(&ours, dir.path()).unwrap();
+        assert!(c.differences.is_empty());
+        assert!(
+            c.not_compared[0].contains("at its bound in the reference"),
+            "{:?}",
+            c.not_compared
+        );
+    }
 }
