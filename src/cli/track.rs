@@ -123,6 +123,12 @@ pub struct Args {
     /// Track the N-th half cycle of the trial (1 = the first).
     #[arg(long, value_name = "N", value_parser = clap::value_parser!(u64).range(1..))]
     stride: Option<u64>,
+    /// Swap the trial's legs: track a half cycle from a right heel strike to the next
+    /// left one (`--stride` counts those), the model's right leg following the subject's
+    /// left. The planar model's legs are identical; `diagnose` validates on such a half
+    /// cycle when the trial has no other of its own.
+    #[arg(long)]
+    mirror: bool,
     /// Start from the solution of a track run (its folder or solution.json) of the same
     /// phase graph instead of the data; effect parameters it identified start at its
     /// values, unless an `--effect` holds them fixed at its own.
@@ -235,6 +241,7 @@ fn run_inner(args: Args, progress: &CliProgress) -> anyhow::Result<()> {
             sample_targets: args.sample_targets,
             window: args.window,
             stride: args.stride.map(|n| n as usize),
+            mirror: args.mirror,
             noise_weights: args
                 .noise_weights
                 .as_deref()

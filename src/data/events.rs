@@ -180,6 +180,13 @@ pub fn gait_cycle(events: &Events, side: Side) -> Result<(f64, f64), DataError> 
 }
 
 impl Events {
+    /// The events with the legs swapped ([`GaitData::swap_sides`](super::GaitData::swap_sides)).
+    pub fn swap_sides(&mut self) {
+        self.heel_strike.swap(0, 1);
+        self.toe_off.swap(0, 1);
+        self.loaded_at_start.swap(0, 1);
+    }
+
     /// All complete cycles of `side`, heel strike to the next heel strike (s).
     pub fn gait_cycles(&self, side: Side) -> Vec<(f64, f64)> {
         self.heel_strike[side_index(side)]

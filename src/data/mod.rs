@@ -551,6 +551,38 @@ impl GaitData {
         data.to_overground(v)
     }
 
+    /// The trial with its legs swapped: the right leg's angles, forces, CoP, events and
+    /// source become the left's and the left's the right's (extra channels named `…_r` /
+    /// `…_l` too). The planar model's legs are identical, so a half cycle from a right
+    /// heel strike to the next left one is, swapped, a half cycle that a phase graph from
+    /// a left heel strike to a right one tracks: the other leg's half cycle, mirrored.
+    pub fn swap_sides(&mut self) {
+        for k in 3..6 {
+            self.q.swap(k, k + 3);
+        }
+        self.feet.swap(0, 1);
+        if let Some(f) = &mut self.forces {
+            f.feet.swap(0, 1);
+        }
+        self.sides.swap(0, 1);
+        if let Some(e) = &mut self.events {
+            e.swap_sides();
+        }
+        self.extra = std::mem::take(&mut self.extra)
+            .into_iter()
+            .map(|(k, v)| {
+                let other = if let Some(stem) = k.strip_suffix("_r") {
+                    format!("{stem}_l")
+                } else if let Some(stem) = k.strip_suffix("_l") {
+                    format!("{stem}_r")
+                } else {
+                    k
+                };
+                (other, v)
+            })
+            .collect();
+    }
+
     /// Fill a [`SideSource::Missing`] side from the measured one by the half-cycle shift
     /// of a Fourier series (seed 000 §3.3, [`half_cycle_shift`], five harmonics):
     /// $x_{other}(t) = \hat x(t + T_c/2)$ for hip, knee, ankle, $F_x$ and $F_y$.

@@ -97,6 +97,13 @@ pub struct TrackingRunSetup {
     /// Track the n-th half cycle of the trial (1-based, `--stride N`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub stride: Option<usize>,
+    /// Track the trial with its legs swapped (`--mirror`, [`GaitData::swap_sides`]):
+    /// the half cycles are then those from a right heel strike to the next left one,
+    /// and the model's right leg follows the subject's left.
+    ///
+    /// [`GaitData::swap_sides`]: crate::data::GaitData::swap_sides
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub mirror: bool,
     /// Channels weighted by their noise (`--noise-weights`; `None`: the seed's weights).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub noise_weights: Option<crate::problems::tracking::ChannelNoise>,
@@ -296,6 +303,9 @@ pub struct ClockProfile {
 pub struct HeldOut {
     /// Which half cycle (`--stride`) was held out.
     pub stride: usize,
+    /// Whether it is the other leg's half cycle, the legs swapped (`--mirror`).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub mirrored: bool,
     /// Its time span (s).
     pub window: (f64, f64),
     /// The parameter values fitted on the run's half cycle.

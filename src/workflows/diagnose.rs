@@ -754,10 +754,10 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
             match heldout::held_out_base(args, &setup, base.setup.window, progress)? {
                 Ok(hb) => {
                     held_out_note += &format!(
-                        " Held-out: each significant candidate, with the values fitted on this run's half cycle ({:.3}–{:.3} s), applied to half cycle {} ({:.3}–{:.3} s; the plain model tracked there: J = {:.6}, {} iterations{}) with the other variables re-fitted; it is found if it lowers that cost beyond its noise band (2 sd, inflated by φ, above the mean change a fit to noise makes, which is a rise).",
+                        " Held-out: each significant candidate, with the values fitted on this run's half cycle ({:.3}–{:.3} s), applied to {} ({:.3}–{:.3} s; the plain model tracked there: J = {:.6}, {} iterations{}) with the other variables re-fitted; it is found if it lowers that cost beyond its noise band (2 sd, inflated by φ, above the mean change a fit to noise makes, which is a rise).",
                         base.setup.window.0,
                         base.setup.window.1,
-                        hb.stride,
+                        heldout::half_cycle_name(hb.stride, hb.mirrored),
                         hb.window.0,
                         hb.window.1,
                         hb.objective,

@@ -90,6 +90,9 @@ impl TrackingProblem {
         let trial = super::trial::load_trial(&run.into())?;
         let trial_notes = trial.notes;
         let mut data = trial.data;
+        if run.mirror {
+            data.swap_sides();
+        }
         let sides = if run.one_sided_targets {
             TargetSides::OneSided {
                 cutoff_hz: run.kinematics_cutoff,
@@ -454,6 +457,7 @@ impl TrackRequest {
                 sample_targets: false,
                 window: None,
                 stride: None,
+                mirror: false,
                 noise_weights: None,
                 velocity_weight: None,
                 check_points: vec![],
@@ -544,10 +548,15 @@ impl TrackingProblem {
         let w0 = self.with_transcription(|tr, _, w0| {
             {
                 note!(progress,
-                    "tracking {:.3}–{:.3} s of {} with the {} foot ({} variables, {} constraints, {:?})",
+                    "tracking {:.3}–{:.3} s of {}{} with the {} foot ({} variables, {} constraints, {:?})",
                     self.setup.window.0,
                     self.setup.window.1,
                     self.data.name,
+                    if base.mirror {
+                        " (legs swapped: the model's right leg follows the subject's left)"
+                    } else {
+                        ""
+                    },
                     self.model.foot_name,
                     tr.n(),
                     tr.m(),

@@ -3,8 +3,11 @@
 //!
 //! A candidate significant on the run's half cycle is fitted there (its truncated
 //! re-fit's values); those values, fixed, are then applied to another half cycle of the
-//! same trial (the next one, or the one before: the other leg's, mirrored, counts) that
-//! the fit did not see. There the plain model is tracked once; each candidate's change
+//! same trial that the fit did not see: the next one, or one before, or else the other
+//! leg's half cycle with the legs swapped (`mirror`; a side-bound candidate, e.g. the
+//! right plate's clock, then applies to the swapped side, whose data it was fitted on).
+//! The bundled trial holds one half cycle from a left heel strike to a right one
+//! (1.252–1.858 s) and two the other way round (0.624–1.252, 1.858–2.467 s). There the plain model is tracked once; each candidate's change
 //! of that cost, after a truncated re-fit of the other variables, must exceed its noise
 //! band ([`crate::problems::diagnose::stats::held_out_band`]) for the candidate to be
 //! "found".
@@ -29,6 +32,8 @@ pub(super) struct HeldOutBase {
     setup: TrackingRunSetup,
     /// Which half cycle.
     pub stride: usize,
+    /// Whether it is the other leg's (legs swapped against the run's).
+    pub mirrored: bool,
     /// Its span (s).
     pub window: (f64, f64),
     /// The plain model's solution there.
@@ -45,12 +50,15 @@ pub(super) struct HeldOutBase {
     pub converged: bool,
 }
 
-/// The half cycles tried as held-out, in order: the next one, then the ones before.
-fn strides(run: &TrackingRunSetup) -> Vec<usize> {
+/// The half cycles tried as held-out, in order, as (stride, legs swapped against the
+/// run's): the next one, the ones before, then the other leg's (the first three), then
+/// the one after next.
+fn strides(run: &TrackingRunSetup) -> Vec<(usize, bool)> {
     let own = run.stride.unwrap_or(1);
-    let mut s = vec![own + 1];
-    s.extend((1..own).rev());
-    s.push(own + 2);
+    let mut s = vec![(own + 1, false)];
+    s.extend((1..own).rev().map(|k| (k, false)));
+    s.extend((1..=3).map(|k| (k, true)));
+    s.push((own + 2, false));
     s
 }
 
@@ -63,29 +71,31 @@ pub(super) fn held_out_base(
     progress: &dyn Progress,
 ) -> anyhow::Result<Result<HeldOutBase, String>> {
     let mut why = Vec::new();
-    for stride in strides(run) {
+    for (stride, mirrored) in strides(run) {
         let setup = TrackingRunSetup {
             stride: Some(stride),
+            mirror: run.mirror != mirrored,
             window: None,
             check_points: vec![],
             ..run.clone()
         };
+        let name = half_cycle_name(stride, mirrored);
         let prob = match TrackingProblem::build(&setup, &[]) {
             Ok(p) => p,
             Err(e) => {
-                why.push(format!("half cycle {stride}: {e:#}"));
+                why.push(format!("{name}: {e:#}"));
                 continue;
             }
         };
         let window = prob.setup.window;
-        if (window.0 - run_window.0).abs() < 1e-6 {
-            why.push(format!("half cycle {stride} is the run's own"));
+        if !mirrored && (window.0 - run_window.0).abs() < 1e-6 {
+            why.push(format!("{name} is the run's own"));
             continue;
         }
         {
             note!(
                 progress,
-                "held-out half cycle {stride} ({:.3}–{:.3} s): tracking the plain model there",
+                "held-out {name} ({:.3}–{:.3} s): tracking the plain model there",
                 window.0,
                 window.1
             );
@@ -110,6 +120,7 @@ pub(super) fn held_out_base(
         }
         return Ok(Ok(HeldOutBase {
             stride,
+            mirrored,
             window,
             objective,
             leftover,
@@ -123,23 +134,46 @@ pub(super) fn held_out_base(
     Ok(Err(why.join("; ")))
 }
 
-/// `effect` with its parameters `names` (qualified, `kind.name`) fixed at `values`.
+/// How a held-out half cycle is named: `half cycle 2`, or `half cycle 1 of the other
+/// leg (mirrored)`.
+pub(super) fn half_cycle_name(stride: usize, mirrored: bool) -> String {
+    if mirrored {
+        format!("half cycle {stride} of the other leg (mirrored)")
+    } else {
+        format!("half cycle {stride}")
+    }
+}
+
+/// `effect` with its parameters `names` (qualified, `kind.name`) fixed at `values`; on
+/// the other leg's half cycle (`mirrored`) a one-sided effect moves to the other side,
+/// where the data it was fitted on now are.
 pub(super) fn fixed_at(
     effect: &EffectSpec,
     names: &[String],
     values: &[f64],
+    mirrored: bool,
 ) -> anyhow::Result<EffectSpec> {
     let mut v = serde_json::to_value(effect.fixed())?;
     for (n, x) in names.iter().zip(values) {
         let key = n.rsplit('.').next().unwrap_or(n);
         v[key] = (*x).into();
     }
+    if mirrored {
+        let other = match v["side"].as_str() {
+            Some("right") => Some("left"),
+            Some("left") => Some("right"),
+            _ => None,
+        };
+        if let Some(o) = other {
+            v["side"] = o.into();
+        }
+    }
     serde_json::from_value(v).map_err(|e| anyhow!("{}: fixing its parameters: {e}", effect.label()))
 }
 
 /// Apply candidate `t` (fitted on the run's half cycle) to the held-out half cycle.
 pub(super) fn validate(base: &HeldOutBase, t: &ScoreTest) -> anyhow::Result<HeldOut> {
-    let spec = fixed_at(&t.effect, &t.parameters, &t.step_values)?;
+    let spec = fixed_at(&t.effect, &t.parameters, &t.step_values, base.mirrored)?;
     let mut prob = TrackingProblem::build(&base.setup, std::slice::from_ref(&spec))?;
     prob.setup
         .start_from(&base.solution)
@@ -158,6 +192,7 @@ pub(super) fn validate(base: &HeldOutBase, t: &ScoreTest) -> anyhow::Result<Held
     let band = held_out_band(q, base.s2, t.inflation);
     Ok(HeldOut {
         stride: base.stride,
+        mirrored: base.mirrored,
         window: base.window,
         values: t.step_values.clone(),
         objective: base.objective,
