@@ -7,7 +7,8 @@
 //! leg's half cycle with the legs swapped (`mirror`; a side-bound candidate, e.g. the
 //! right plate's clock, then applies to the swapped side, whose data it was fitted on).
 //! The bundled trial holds one half cycle from a left heel strike to a right one
-//! (1.252–1.858 s) and two the other way round (0.624–1.252, 1.858–2.467 s). There the plain model is tracked once; each candidate's change
+//! (1.252–1.858 s) and two the other way round (0.624–1.252, 1.858–2.467 s). There the
+//! plain model is tracked once; each candidate's change
 //! of that cost, after a truncated re-fit of the other variables, must exceed its noise
 //! band ([`crate::problems::diagnose::stats::held_out_band`]) for the candidate to be
 //! "found".
