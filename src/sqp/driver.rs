@@ -241,6 +241,9 @@ pub(super) fn run(
             c_ub: &s.c_ub,
             lambda: &sol.lambda,
             nu: &sol.nu,
+            w: &st.w,
+            w_lb: &s.w_lb,
+            w_ub: &s.w_ub,
             infeasibility: infeas,
         });
         // --- inexact SQP: integrate more precisely as the optimum nears

@@ -21,6 +21,10 @@ pub(super) struct KktPoint<'a> {
     pub(super) lambda: &'a [f64],
     /// Bound multipliers ν.
     pub(super) nu: &'a [f64],
+    /// The point and its bounds (empty: the bounds are not looked at).
+    pub(super) w: &'a [f64],
+    pub(super) w_lb: &'a [f64],
+    pub(super) w_ub: &'a [f64],
     /// Largest constraint violation.
     pub(super) infeasibility: f64,
 }
@@ -29,18 +33,44 @@ pub(super) struct KktPoint<'a> {
 /// `‖∇f + Jᵀλ + ν‖∞ / s_d` (IPOPT's scaling, `s_d = max(1, ‖(λ, ν)‖₁ / ((m + n) 100))`),
 /// the constraint violation and the scaled complementarity of the inequality rows
 /// (`|λ_i|` times the distance to the bound its sign says is active).
+///
+/// A variable at one of its bounds (within [`AT_BOUND`] of it) may take the bound
+/// multiplier that cancels `∇f + Jᵀλ` there, when its sign fits that bound, instead of
+/// the QP's: the QP's interior point leaves such a variable a slack of ~1e-8, and the
+/// QP's multiplier then balances the step's curvature `h_vv d_v` (the exact mode gives a
+/// held variable a diagonal of the Hessian's size), which is not the NLP's stationarity
+/// at the point. The bundled track's tail rose so, 4.7e-6 → 8.5e-6, on an excitation at
+/// its lower bound 0 (`docs/engine-investigation.md`, stop 41). The component's residual
+/// is the smaller of the two choices; the other's complementarity, `|ν_v|` times the
+/// distance to the bound, is below `AT_BOUND · |ν_v|`.
 pub(super) fn residual(p: &KktPoint<'_>) -> f64 {
     let (n, m) = (p.grad.len(), p.c.len());
-    let mut stat = p.grad.to_vec();
+    let mut reduced = p.grad.to_vec();
     for k in 0..p.jac_rows.len() {
-        stat[p.jac_cols[k]] += p.jac[k] * p.lambda[p.jac_rows[k]];
+        reduced[p.jac_cols[k]] += p.jac[k] * p.lambda[p.jac_rows[k]];
     }
-    for (s, v) in stat.iter_mut().zip(p.nu) {
-        *s += v;
-    }
+    let stat: Vec<f64> = reduced
+        .iter()
+        .zip(p.nu)
+        .enumerate()
+        .map(|(i, (&g, &v))| {
+            let with_qp = (g + v).abs();
+            if p.w.is_empty() {
+                return with_qp;
+            }
+            let near = |bound: f64| (p.w[i] - bound).abs() <= AT_BOUND * bound.abs().max(1.0);
+            // ∇f + Jᵀλ + ν = 0 with ν ≤ 0 at a lower bound, ν ≥ 0 at an upper one
+            let cancelled = (g >= 0.0 && near(p.w_lb[i])) || (g <= 0.0 && near(p.w_ub[i]));
+            if cancelled {
+                with_qp.min((g * (p.w[i] - if g >= 0.0 { p.w_lb[i] } else { p.w_ub[i] })).abs())
+            } else {
+                with_qp
+            }
+        })
+        .collect();
     let mult_l1: f64 = p.lambda.iter().chain(p.nu).map(|v| v.abs()).sum();
     let sd = (mult_l1 / ((m + n) as f64 * 100.0)).max(1.0);
-    let stat_inf = stat.iter().map(|v| v.abs()).fold(0.0, f64::max) / sd;
+    let stat_inf = stat.iter().copied().fold(0.0, f64::max) / sd;
     let compl = (0..m)
         .map(|i| {
             let (c, l, u) = (p.c[i], p.c_lb[i], p.c_ub[i]);
@@ -55,6 +85,10 @@ pub(super) fn residual(p: &KktPoint<'_>) -> f64 {
         .fold(0.0, f64::max);
     stat_inf.max(p.infeasibility).max(compl / sd)
 }
+
+/// How close to a bound (relative to `max(1, |bound|)`) a variable counts as at it for
+/// [`residual`]'s choice of its bound multiplier.
+pub(super) const AT_BOUND: f64 = 1e-8;
 
 /// Converged: the residual is within the tolerance and the step came from a consistent
 /// QP (an elastic QP's multipliers belong to the penalty problem, not the NLP).
@@ -105,6 +139,9 @@ mod tests {
             c_ub: &[1.0, 1.0],
             lambda,
             nu,
+            w: &[],
+            w_lb: &[],
+            w_ub: &[],
             infeasibility,
         }
     }
@@ -148,6 +185,43 @@ mod tests {
             "{} vs {want}",
             residual(&p)
         );
+    }
+
+    /// min x² + y² s.t. x + y = 1 with y ≥ 0.6 (row 1 relaxed away): the optimum is
+    /// (0.4, 0.6), λ = −0.8, where ∇f + Jᵀλ = (0, 0.4) is cancelled by ν_y = −0.4. A QP
+    /// whose interior point left y a slack answers ν_y = −0.39 (stationarity 0.01); at
+    /// y = 0.6 + 1e-12 (at the bound) the cancelling multiplier is taken instead, with a
+    /// complementarity of 0.4e-12; at y = 0.6 + 1e-4 (not at it) the QP's stands, and a
+    /// gradient pointing away from the bound is never cancelled.
+    #[test]
+    fn a_variable_at_its_bound_takes_the_multiplier_that_cancels_its_gradient() {
+        let (lb, ub) = ([-10.0, 0.6], [10.0, 10.0]);
+        let (c_lb, c_ub) = ([1.0, f64::NEG_INFINITY], [1.0, f64::INFINITY]);
+        let at = |y: f64, lambda: f64, nu_y: f64| {
+            let w = [1.0 - y, y];
+            let (l, nu) = ([lambda, 0.0], [0.0, nu_y]);
+            let mut s = Default::default();
+            let p = point(w, &l, &nu, &mut s);
+            residual(&KktPoint {
+                w: &w,
+                w_lb: &lb,
+                w_ub: &ub,
+                c_lb: &c_lb,
+                c_ub: &c_ub,
+                infeasibility: 0.0,
+                ..p
+            })
+        };
+        // at the bound: the QP's −0.39 would leave 0.01
+        let r = at(0.6 + 1e-12, -0.8, -0.39);
+        assert!(r < 1e-11, "{r}");
+        // 1e-4 away: the QP's multiplier stands (x's component 2·0.5999 − 0.8 ≈ −2e-4)
+        let r = at(0.6 + 1e-4, -0.8, -0.39);
+        assert!((r - 0.01).abs() < 1e-3, "{r}");
+        // a gradient that pulls y off its lower bound is not cancelled: with λ = −1.5,
+        // ∇f + Jᵀλ = (0.8 − 1.5, 1.2 − 1.5) = (−0.7, −0.3); y's −0.3 points up, away
+        let r = at(0.6, -1.5, 0.0);
+        assert!((r - 0.7).abs() < 1e-12, "{r}");
     }
 
     #[test]
