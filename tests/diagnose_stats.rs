@@ -47,8 +47,10 @@ fn seed_run(dir: &Path) -> PathBuf {
     out
 }
 
-fn diagnose(run: &Path, candidates: &[&str], make_testable: bool) -> Value {
-    let req = DiagnoseRequest {
+/// A diagnosis of `run` by `candidates`, with no verifying re-fit, held-out validation,
+/// clock profile or reference: each test switches on what it checks.
+fn request(run: &Path, candidates: &[&str]) -> DiagnoseRequest {
+    DiagnoseRequest {
         run: run.to_path_buf(),
         verify: 0,
         candidates: candidates.iter().map(|c| c.to_string()).collect(),
@@ -56,18 +58,31 @@ fn diagnose(run: &Path, candidates: &[&str], make_testable: bool) -> Value {
         overwrite: false,
         tol: 1e-5,
         max_iter: 200,
-        make_testable,
-        held_out: true,
+        make_testable: false,
+        held_out: false,
         profile_clocks: Vec::new(),
         reference: None,
-    };
+    }
+}
+
+/// Run `req` and read its `summary.json`.
+fn diagnose_with(req: &DiagnoseRequest) -> Value {
     let t = std::time::Instant::now();
-    footfall::workflows::diagnose::run(&req, &Quiet).unwrap();
+    footfall::workflows::diagnose::run(req, &Quiet).unwrap();
     eprintln!("diagnose: {:.1} s", t.elapsed().as_secs_f64());
     read_json(&PathBuf::from(format!(
         "{}-diagnose/summary.json",
-        run.display()
+        req.run.display()
     )))
+}
+
+/// `run` diagnosed by `candidates` with held-out validation.
+fn diagnose(run: &Path, candidates: &[&str], make_testable: bool) -> Value {
+    diagnose_with(&DiagnoseRequest {
+        make_testable,
+        held_out: true,
+        ..request(run, candidates)
+    })
 }
 
 /// One line per candidate, for the record.
@@ -252,27 +267,10 @@ fn a_plate_clock_is_profiled_beyond_the_score_tests_reach() {
     use footfall::problems::diagnose::chi2_1_upper;
     let dir = tempfile::tempdir().unwrap();
     let run = seed_cost_run(dir.path(), "force_plate_time_offset");
-    let req = DiagnoseRequest {
-        run: run.clone(),
-        verify: 0,
-        candidates: vec!["force_plate_time_offset".into()],
-        out: None,
-        overwrite: false,
-        tol: 1e-5,
-        max_iter: 200,
-        make_testable: false,
-        held_out: false,
+    let s = diagnose_with(&DiagnoseRequest {
         profile_clocks: vec![0.02],
-        reference: None,
-    };
-    let t = std::time::Instant::now();
-    footfall::workflows::diagnose::run(&req, &Quiet).unwrap();
-    eprintln!(
-        "diagnose with a profile: {:.1} s",
-        t.elapsed().as_secs_f64()
-    );
-    let out = PathBuf::from(format!("{}-diagnose", run.display()));
-    let s = read_json(&out.join("summary.json"));
+        ..request(&run, &["force_plate_time_offset"])
+    });
     let c = &s["ranking"][0];
     let p = &c["profile"];
     eprintln!("{}", serde_json::to_string_pretty(c).unwrap());
@@ -308,6 +306,7 @@ fn a_plate_clock_is_profiled_beyond_the_score_tests_reach() {
         assert!((c["predicted_decrease"].as_f64().unwrap() - (run_j - refit_j)).abs() < 1e-9);
         assert_eq!(c["refit"], true);
     }
+    let out = PathBuf::from(format!("{}-diagnose", run.display()));
     let md = std::fs::read_to_string(out.join("diagnose.md")).unwrap();
     assert!(md.contains("Profile of force-plate time offset"), "{md}");
 }
@@ -321,24 +320,10 @@ fn a_clock_offset_is_read_against_a_reference_trial() {
     let dir = tempfile::tempdir().unwrap();
     let tracked = |name: &str| seed_cost_run(dir.path(), name);
     let diagnose = |run: &Path, reference: Option<PathBuf>| {
-        let req = DiagnoseRequest {
-            run: run.to_path_buf(),
-            verify: 0,
-            candidates: vec!["force_plate_time_offset".into(), "ground_slope".into()],
-            out: None,
-            overwrite: false,
-            tol: 1e-5,
-            max_iter: 200,
-            make_testable: false,
-            held_out: false,
-            profile_clocks: Vec::new(),
+        diagnose_with(&DiagnoseRequest {
             reference,
-        };
-        footfall::workflows::diagnose::run(&req, &Quiet).unwrap();
-        read_json(&PathBuf::from(format!(
-            "{}-diagnose/summary.json",
-            run.display()
-        )))
+            ..request(run, &["force_plate_time_offset", "ground_slope"])
+        })
     };
     let reference = tracked("none");
     diagnose(&reference, None);

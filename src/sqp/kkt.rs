@@ -59,12 +59,14 @@ pub(super) fn residual(p: &KktPoint<'_>) -> f64 {
                 return with_qp;
             }
             let near = |bound: f64| (p.w[i] - bound).abs() <= AT_BOUND * bound.abs().max(1.0);
-            // ∇f + Jᵀλ + ν = 0 with ν ≤ 0 at a lower bound, ν ≥ 0 at an upper one
-            let cancelled = (g >= 0.0 && near(p.w_lb[i])) || (g <= 0.0 && near(p.w_ub[i]));
-            if cancelled {
-                with_qp.min((g * (p.w[i] - if g >= 0.0 { p.w_lb[i] } else { p.w_ub[i] })).abs())
-            } else {
-                with_qp
+            // ∇f + Jᵀλ + ν = 0 with ν ≤ 0 at a lower bound, ν ≥ 0 at an upper one: the
+            // bound the gradient presses the variable against, if it is there
+            let pressed = [(g >= 0.0, p.w_lb[i]), (g <= 0.0, p.w_ub[i])]
+                .into_iter()
+                .find(|&(fits, bound)| fits && near(bound));
+            match pressed {
+                Some((_, bound)) => with_qp.min((g * (p.w[i] - bound)).abs()),
+                None => with_qp,
             }
         })
         .collect();

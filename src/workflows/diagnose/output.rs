@@ -129,7 +129,6 @@ fn verdict(o: &Outcome<'_>) -> String {
     v
 }
 
-/// Write the diagnosis into `folder` and commit it.
 /// The readings against a reference trial's: a paragraph and the table.
 fn comparison_section(c: &super::reference::Comparison) -> (String, Table) {
     let significant: Vec<String> = c
@@ -228,6 +227,7 @@ fn profile_paragraph(t: &ScoreTest) -> Option<String> {
     ))
 }
 
+/// Write the diagnosis into `folder` and commit it.
 pub(super) fn write(
     o: &Outcome<'_>,
     folder: RunFolder,
