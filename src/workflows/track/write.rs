@@ -1,0 +1,281 @@
+//! Writing a solved tracking run: its run folder (tables, plots, report), `setup.json`
+//! with the effects and the identified parameters and their uncertainty.
+
+use super::*;
+
+impl TrackingProblem {
+    /// Solve the problem and write its run folder (`setup.json` records the effects and
+    /// the identified parameters with their uncertainty). `base` describes the run
+    /// without `extra` effects.
+    pub fn solve_and_write(
+        &self,
+        base: &TrackingRunSetup,
+        extra: &[EffectSpec],
+        settings: &SqpSettings,
+        folder: RunFolder,
+        transient_threshold: f64,
+        progress: &dyn Progress,
+    ) -> anyhow::Result<TrackedRun> {
+        let w0 = self.with_transcription(|tr, _, w0| {
+            {
+                note!(progress,
+                    "tracking {:.3}–{:.3} s of {}{} with the {} foot ({} variables, {} constraints, {:?})",
+                    self.setup.window.0,
+                    self.setup.window.1,
+                    self.data.name,
+                    if base.mirror {
+                        " (legs swapped: the model's right leg follows the subject's left)"
+                    } else {
+                        ""
+                    },
+                    self.model.foot_name,
+                    tr.n(),
+                    tr.m(),
+                    settings.hessian
+                );
+            }
+            Ok(w0)
+        })?;
+        let cycle =
+            GaitCycle::new(&self.model, &self.setup.seq, &self.sets).map_err(|e| anyhow!(e))?;
+        let refinement = crate::workflows::refine::Refinement {
+            cycle: &cycle,
+            model: &self.model,
+            sets: &self.sets,
+            integrator: self.integrator.clone(),
+            t0: self.setup.window.0,
+            enabled: self.refine,
+            max_iter: settings.max_iter,
+            tol_kkt: settings.tol_kkt,
+        };
+        let build = || {
+            self.setup
+                .ocp(&cycle, &self.model, &self.sets, self.integrator.clone())
+                .map_err(|e| anyhow!(e))
+        };
+        let mut solve = |tr: &Transcription, w: &[f64], tol_kkt: f64, max_iter: usize| {
+            let settings = SqpSettings {
+                tol_kkt,
+                max_iter,
+                ..settings.clone()
+            };
+            self.solve_staged(tr, &cycle, w, &settings, progress, |_, res| Ok(res))
+        };
+        let (sites, res) =
+            refinement.solve(&build, &self.check_sites, &w0, &mut solve, progress)?;
+        let mut ocp = build()?;
+        ocp.checks = cycle.checks_at(&sites);
+        let tr = Transcription::new(&ocp).context("transcribing the tracking problem")?;
+        self.write_run(
+            &tr,
+            &cycle,
+            res,
+            RunWriting {
+                base,
+                extra,
+                folder,
+                transient_threshold,
+                progress,
+                provenance: None,
+                check_sites: &sites,
+            },
+        )
+    }
+
+    /// Write the run folder of the solver result `res` of this problem's transcription
+    /// `tr` (solved by `track`, or re-evaluated by `report`).
+    pub fn write_run(
+        &self,
+        tr: &Transcription,
+        cycle: &GaitCycle,
+        res: crate::sqp::SqpResult,
+        how: RunWriting,
+    ) -> anyhow::Result<TrackedRun> {
+        let TrackingProblem {
+            model,
+            sets,
+            data,
+            setup,
+            phases,
+            integrator,
+            ..
+        } = self;
+        let RunWriting {
+            base,
+            extra,
+            folder,
+            transient_threshold,
+            progress,
+            provenance,
+            check_sites,
+        } = how;
+        let mut solution = GaitSolution::from_nlp(tr, &res.w, &cycle.continuous, setup.window.0);
+        // a plate's clock offset moves the window's start with the events it gave
+        setup.place(model, &mut solution);
+        let converged = res.status == SqpStatus::Converged;
+        let data_rows = setup.data_rows(model, sets, &cycle.continuous);
+        let sd = if model.ntheta() > 0 && converged {
+            parameter_sd(tr, &res.w, data_rows).unwrap_or_else(|e| {
+                warn_note!(progress, "warning: no parameter uncertainty: {e}");
+                vec![None; model.ntheta()]
+            })
+        } else {
+            vec![None; model.ntheta()]
+        };
+        let record = self.record(base, extra, &solution.theta, &sd, check_sites);
+        // the run folder holds its inputs; setup.json names them relative to it
+        let inputs = crate::workflows::inputs::copy_inputs(
+            &folder,
+            &record.model,
+            &record.foot,
+            &record.phases,
+            record.data.as_deref(),
+            record.forces.as_deref(),
+        )?;
+        let stored = TrackingRunSetup {
+            model: inputs.model.clone(),
+            foot: inputs.foot.to_string_lossy().into_owned(),
+            phases: inputs.phases.clone(),
+            data: Some(inputs.data.clone()),
+            forces: inputs.forces.clone(),
+            ..record.clone()
+        };
+        let mut extra_json = serde_json::Map::new();
+        extra_json.insert("setup".into(), serde_json::to_value(&stored)?);
+        extra_json.insert("data_residuals".into(), data_rows.into());
+        extra_json.insert(
+            "integration".into(),
+            serde_json::to_value(self.integration.get())?,
+        );
+        let mut extra_sections = Vec::new();
+        let mut extra_summary = Vec::new();
+        if let Some(p) = &provenance {
+            extra_summary.push(("report".into(), p.clone()));
+        }
+        let breakdown =
+            match setup.cost_breakdown(model, sets, &cycle.continuous, &solution, integrator) {
+                Ok(b) => {
+                    extra_json.insert("cost_breakdown".into(), serde_json::to_value(&b)?);
+                    extra_sections.push(crate::report::tracking::where_it_fails(&b, &solution));
+                    Some(b)
+                }
+                Err(e) => {
+                    warn_note!(progress, "warning: no cost breakdown: {e}");
+                    None
+                }
+            };
+        let residuals = crate::report::tracking::residual_report(model, &solution);
+        if let Some((section, stats)) = &residuals {
+            extra_sections.push(section.clone());
+            extra_json.insert("residual_actuators".into(), stats.clone());
+        }
+        if !record.parameters.is_empty() {
+            extra_sections.push(crate::report::html::Section {
+                heading: "Effects".into(),
+                paragraphs: vec!["Effect parameters of the model; identified ones with an approximate standard deviation from the Gauss–Newton Hessian reduced to the constraints, s² = J/(N − p).".into()],
+                tables: vec![crate::report::tracking::parameter_table(&record.parameters)],
+                svgs: vec![],
+            });
+        }
+        let out = crate::workflows::run_folder::write(
+            GaitRun {
+                command: "track",
+                title: format!(
+                    "footfall tracking — {} foot, {}",
+                    model.foot_name, data.name
+                ),
+                data,
+                model,
+                sets,
+                phases_path: phases,
+                inputs: Some(&inputs),
+                events: &self.setup.events,
+                sequence: &self.setup.seq,
+                control_bounds: (&self.setup.guess.u_lb, &self.setup.guess.u_ub),
+                result: &res,
+                solution: &solution,
+                integrator: integrator.clone(),
+                extra_summary,
+                extra_json,
+                extra_sections,
+                extra_files: vec![(
+                    "setup.json".into(),
+                    serde_json::to_string_pretty(&stored)?.into_bytes(),
+                )],
+                transient_threshold_n: transient_threshold,
+                friction: cycle.friction(),
+                check_points: check_sites.len(),
+            },
+            folder,
+        )?;
+        {
+            if !record.parameters.is_empty() {
+                note!(
+                    progress,
+                    "{}",
+                    crate::report::tracking::parameter_table(&record.parameters).to_markdown()
+                );
+            }
+            note!(progress, "{}", out.solve_summary(&res));
+            if let Some(f) = &out.fine {
+                note!(progress,
+                    "1 ms re-integration: peak normal force {:.1} N (right), {:.1} N (left); largest Baumgarte force {:.1e} N; largest drift {:.2e} m",
+                    f.peak_normal_force_n[0], f.peak_normal_force_n[1], f.max_baumgarte_force_n, f.max_position_drift_m
+                );
+            }
+            note!(
+                progress,
+                "report: {}",
+                out.path.join("report.html").display()
+            );
+        }
+        Ok(TrackedRun {
+            converged,
+            result: res,
+            output: out,
+            record,
+            breakdown,
+            residuals: residuals.map(|r| r.0),
+            state_names: model.state_names(),
+            solution,
+        })
+    }
+}
+
+/// How [`TrackingProblem::write_run`] writes a run.
+pub struct RunWriting<'a> {
+    /// The run without `extra` effects.
+    pub base: &'a TrackingRunSetup,
+    /// Effects added to `base`.
+    pub extra: &'a [EffectSpec],
+    /// Where to write.
+    pub folder: RunFolder,
+    /// Report ground-force excursions above the measurement larger than this (N).
+    pub transient_threshold: f64,
+    /// Print nothing.
+    pub progress: &'a dyn Progress,
+    /// Where the figures come from, when not from a solve just made.
+    pub provenance: Option<String>,
+    /// The problem's check points (recorded in `setup.json`).
+    pub check_sites: &'a [(usize, usize, f64)],
+}
+
+/// A solved and written tracking run.
+pub struct TrackedRun {
+    /// Whether the solver converged.
+    pub converged: bool,
+    /// The solver's result.
+    pub result: crate::sqp::SqpResult,
+    /// What the run folder holds.
+    pub output: crate::workflows::run_folder::GaitRunOutput,
+    /// The run's description.
+    pub record: TrackingRunSetup,
+    /// Where the cost comes from (None when it could not be evaluated).
+    pub breakdown: Option<crate::problems::track::CostBreakdown>,
+    /// The residual actuators' section, for a model that has them.
+    pub residuals: Option<crate::report::html::Section>,
+    /// The solution: states and controls at the shooting nodes, free parameters.
+    pub solution: GaitSolution,
+    /// Names of the states (`q`, `q̇`, activations), in the solution's order.
+    pub state_names: Vec<String>,
+}
