@@ -4,16 +4,17 @@
 //!
 //! # The layers
 //!
-//! Top to bottom; a module uses only modules below it (the binary's `cli` sits on top,
-//! parsing arguments into the workflows' request structs, printing their progress and
-//! mapping their errors to exit codes).
+//! Top to bottom; a module uses only modules below it, and any module may use the bottom
+//! row (the binary's `cli` sits on top, parsing arguments into the workflows' request
+//! structs, printing their progress and mapping their errors to exit codes). The `use
+//! crate::…` lines of each module show it.
 //!
 //! | layer | owns | may use |
 //! |---|---|---|
 //! | [`workflows`] | track, predict, compare, synth, diagnose, report as library calls: a request in, a result out, progress through an observer; run folders written by one writer | everything below |
-//! | [`report`] | tables, SVG plots, the HTML report, comparisons of runs | problems, simulate, phases, data, model |
+//! | [`report`] | tables, SVG plots, the HTML report, comparisons of runs | problems, simulate, phases, sqp, data, model |
 //! | [`problems`] | tracking, prediction, foot fitting, diagnosis statistics, validity, the benchmark problems: costs and constraints built from data | ocp, sqp, integrate, simulate, phases, data, controls, model |
-//! | [`simulate`], [`phases`] | forward simulation through a phase sequence; phase sequences in JSON | integrate, controls, model |
+//! | [`simulate`], [`phases`] | forward simulation through a phase sequence; phase sequences in JSON | phases (simulate), integrate, controls, model |
 //! | [`ocp`] | the phase graph as a multiple-shooting NLP: variables, constraints, sparsity, parallel interval evaluation | integrate, sqp |
 //! | [`sqp`] | SQP iterations, Hessian approximations, filter line search, KKT test, typed evaluation errors | — |
 //! | [`integrate`] | the safe wrapper over CVODES (the only module with `unsafe`): integrators, forward sensitivities, dense output | — |

@@ -193,7 +193,7 @@ fn erfc(x: f64) -> f64 {
 }
 
 /// Result of a score test of one candidate.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct ScoreTest {
     /// The candidate (null value, parameters free).
     pub effect: EffectSpec,
@@ -262,7 +262,7 @@ pub struct ScoreTest {
 
 /// One point of a [`ClockProfile`]: the run re-fitted with the plate's clock offset held
 /// at `offset`.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct ProfilePoint {
     /// The offset held fixed (s).
     pub offset: f64,
@@ -283,7 +283,7 @@ pub struct ProfilePoint {
 /// apart and starts a free re-fit from the lowest; its decrease is judged against the χ²₁
 /// point at 0.1 % divided by the number of starts (a Bonferroni correction for picking
 /// the best of them, `family`).
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct ClockProfile {
     /// The profile's points (the run itself, at zero, is not among them).
     pub points: Vec<ProfilePoint>,
@@ -299,7 +299,7 @@ pub struct ClockProfile {
 
 /// A candidate fitted on the run's half cycle, applied with its parameters fixed to
 /// another half cycle of the trial and the other variables re-optimised there.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct HeldOut {
     /// Which half cycle (`--stride`) was held out.
     pub stride: usize,

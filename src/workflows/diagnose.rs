@@ -22,6 +22,7 @@ mod output;
 pub mod profile;
 pub mod reference;
 mod refit;
+pub mod summary;
 use crate::ocp::Transcription;
 use crate::problems::evaluation::GaitSolution;
 use crate::report::diff::RunSummary;

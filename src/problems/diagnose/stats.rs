@@ -14,7 +14,7 @@
 use crate::ocp::{Block, Transcription};
 use crate::sqp::linearised::{GaussNewtonModel, GaussNewtonStep};
 use crate::sqp::Nlp;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 /// A candidate is identifiable only if each parameter's standard deviation is below this
 /// fraction of its bound span: an sd of a quarter of the span means the data cannot
@@ -27,7 +27,7 @@ pub const MAX_RELATIVE_SD: f64 = 0.25;
 pub const MIN_CORRELATION_EIGENVALUE: f64 = 1e-6;
 
 /// Whether a candidate's parameters are identifiable under the run's cost.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct Identifiability {
     /// Parameter names.
     pub parameters: Vec<String>,

@@ -3,6 +3,10 @@
 
 #[allow(unused_imports)]
 use super::super::{note, Progress};
+use super::summary::{
+    self, ChannelInflation, DiagnosisSummary, NoiseModel, VarianceInflation, VerifiedParameter,
+    VerifiedRecord,
+};
 use super::{DiagnoseRequest, Evidence, Residuals, Verified};
 use crate::problems::diagnose::stats::variance_inflation;
 use crate::problems::diagnose::ScoreTest;
@@ -434,49 +438,68 @@ pub(super) fn write(
     if !o.skipped.is_empty() {
         md += &format!("\nNot tested: {}\n", o.skipped.join("; "));
     }
-    let summary = serde_json::json!({
-        "command": "diagnose",
-        "run": args.run,
-        "objective": objective,
-        "data_residuals": rows,
-        "baseline_decrease": o.resid.decrease,
-        "variance_inflation": {
-            "all_channels": o.phi,
-            "channels": o.resid.series.iter().zip(&o.resid.inflation).map(|(s, p)| serde_json::json!({"channel": s.0, "inflation": p})).collect::<Vec<_>>(),
+    let summary = DiagnosisSummary {
+        command: summary::COMMAND.into(),
+        run: args.run.clone(),
+        objective,
+        data_residuals: rows,
+        baseline_decrease: o.resid.decrease,
+        variance_inflation: VarianceInflation {
+            all_channels: o.phi,
+            channels: o
+                .resid
+                .series
+                .iter()
+                .zip(&o.resid.inflation)
+                .map(|(s, p)| ChannelInflation {
+                    channel: s.0.clone(),
+                    inflation: *p,
+                })
+                .collect(),
         },
-        "noise_model": o.noise.map(|full| serde_json::json!({
-            "effects": full.effects,
-            "objective": full.objective,
-            "inflation": noise_inflation(full).iter().map(|(c, p)| serde_json::json!({"channel": c, "inflation": p})).collect::<Vec<_>>(),
-        })),
-        "ranking": tests,
-        "significant": significant,
-        "found": found,
-        "untestable": tests.iter().filter(|t| !t.testable).count(),
-        "held_out_note": o.held_out_note,
-        "testable_run": o.testable_run,
-        "reference": o.comparison,
-        "verdict": verdict,
-        "verified": o.verified.iter().map(|v| serde_json::json!({
-            "effect": v.test.effect,
-            "label": v.test.label,
-            "folder": v.folder,
-            "converged": v.converged,
-            "objective_before": v.objective_before,
-            "objective_after": v.objective_after,
-            "predicted_fraction": v.test.predicted_fraction,
-            "verified_fraction": (v.objective_before - v.objective_after) / v.objective_before,
-            "parameters": v.parameters.iter().map(|(n, val, sd, u)| {
-                let mut p = serde_json::json!({"name": n, "value": val, "unit": u});
-                if let Some(sd) = sd {
-                    p["sd"] = (*sd).into();
-                }
-                p
-            }).collect::<Vec<_>>(),
-            "sentence": v.sentence,
-        })).collect::<Vec<_>>(),
-        "skipped": o.skipped,
-    });
+        noise_model: o.noise.map(|full| NoiseModel {
+            effects: full.effects.clone(),
+            objective: full.objective,
+            inflation: noise_inflation(full)
+                .into_iter()
+                .map(|(channel, inflation)| ChannelInflation { channel, inflation })
+                .collect(),
+        }),
+        ranking: tests.to_vec(),
+        significant,
+        found,
+        untestable: tests.iter().filter(|t| !t.testable).count(),
+        held_out_note: o.held_out_note.clone(),
+        testable_run: o.testable_run.clone(),
+        reference: o.comparison.cloned(),
+        verdict: verdict.clone(),
+        verified: o
+            .verified
+            .iter()
+            .map(|v| VerifiedRecord {
+                effect: v.test.effect.clone(),
+                label: v.test.label.clone(),
+                folder: v.folder.clone(),
+                converged: v.converged,
+                objective_before: v.objective_before,
+                objective_after: v.objective_after,
+                predicted_fraction: v.test.predicted_fraction,
+                verified_fraction: (v.objective_before - v.objective_after) / v.objective_before,
+                parameters: v
+                    .parameters
+                    .iter()
+                    .map(|(name, value, sd, unit)| VerifiedParameter {
+                        name: name.clone(),
+                        value: *value,
+                        unit: unit.clone(),
+                        sd: *sd,
+                    })
+                    .collect(),
+                sentence: v.sentence.clone(),
+            })
+            .collect(),
+        skipped: o.skipped.to_vec(),
+    };
     folder.write("diagnose.md", md.as_bytes())?;
     folder.write(
         "summary.json",

@@ -16,14 +16,15 @@
 //! although its profile re-fit read +15.8 ms there. A reading at a bound of its range,
 //! in either run, is a limit the data pushed against and is not compared.
 
+use super::summary::{self, DiagnosisSummary};
 use crate::problems::diagnose::{chi2_1_upper, ScoreTest};
-use anyhow::{anyhow, Context};
-use serde::Serialize;
-use serde_json::Value;
+use crate::runfolder::read_json;
+use anyhow::{anyhow, bail};
+use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
 /// One parameter's reading against the reference's.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Difference {
     /// The candidate's label.
     pub label: String,
@@ -45,7 +46,7 @@ pub struct Difference {
 }
 
 /// This run's readings against the reference's.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Comparison {
     /// The reference's diagnosis folder.
     pub reference: PathBuf,
@@ -60,11 +61,13 @@ pub struct Comparison {
 /// The diagnosis folder of `reference`: the folder itself when it holds a diagnosis's
 /// `summary.json`, else `<reference>-diagnose`.
 fn diagnosis_folder(reference: &Path) -> PathBuf {
+    /// The one field that tells a diagnosis's summary from a run's.
+    #[derive(Deserialize)]
+    struct Command {
+        command: String,
+    }
     let is_diagnosis = |p: &Path| {
-        std::fs::read_to_string(p.join("summary.json"))
-            .ok()
-            .and_then(|s| serde_json::from_str::<Value>(&s).ok())
-            .is_some_and(|v| v["command"] == "diagnose")
+        read_json::<Command>(&p.join("summary.json")).is_ok_and(|c| c.command == summary::COMMAND)
     };
     if is_diagnosis(reference) {
         return reference.to_path_buf();
@@ -76,86 +79,44 @@ fn diagnosis_folder(reference: &Path) -> PathBuf {
     reference.with_file_name(format!("{name}-diagnose"))
 }
 
-/// The reading of one testable candidate in a diagnosis's `summary.json`.
-struct Reading {
-    label: String,
-    parameters: Vec<String>,
-    values: Vec<f64>,
-    sds: Vec<Option<f64>>,
-    /// The parameters read at a bound of their range.
-    at_bound: Vec<String>,
-    estimator: &'static str,
-}
-
 /// Which estimator a test's reading comes from.
-fn estimator(refit: bool, profiled: bool) -> &'static str {
-    match (profiled, refit) {
+fn estimator(t: &ScoreTest) -> &'static str {
+    match (t.profile.as_ref().is_some_and(|p| p.chosen), t.refit) {
         (true, _) => "a clock profile's free re-fit",
         (false, true) => "a full re-fit",
         (false, false) => "the truncated re-fit from the null",
     }
 }
 
-fn readings_of(summary: &Value, file: &Path) -> anyhow::Result<Vec<Reading>> {
-    let ranking = summary["ranking"].as_array().ok_or_else(|| {
-        anyhow!(
-            "{}: no `ranking` array: not the summary of a `footfall diagnose`",
-            file.display()
-        )
-    })?;
-    let strings = |v: &Value| -> Vec<String> {
-        v.as_array()
-            .map(|a| {
-                a.iter()
-                    .filter_map(|x| x.as_str().map(String::from))
-                    .collect()
-            })
-            .unwrap_or_default()
-    };
-    Ok(ranking
-        .iter()
-        .filter(|t| t["testable"] == true)
-        .map(|t| {
-            let values = t["step_values"]
-                .as_array()
-                .map(|a| a.iter().filter_map(Value::as_f64).collect())
-                .unwrap_or_default();
-            let sds = t["identifiability"]["sd"]
-                .as_array()
-                .map(|a| a.iter().map(Value::as_f64).collect())
-                .unwrap_or_default();
-            Reading {
-                label: t["label"].as_str().unwrap_or_default().to_string(),
-                parameters: strings(&t["parameters"]),
-                values,
-                sds,
-                at_bound: strings(&t["at_bound"]),
-                estimator: estimator(t["refit"] == true, t["profile"]["chosen"] == true),
-            }
-        })
-        .collect())
+/// The standard deviations of a test's parameters (empty when not computed).
+fn sds(t: &ScoreTest) -> &[Option<f64>] {
+    t.identifiability.as_ref().map_or(&[], |i| i.sd.as_slice())
 }
 
 /// Compare `tests` (this run's settled tests) with the diagnosis of `reference`.
 pub(super) fn compare(tests: &[ScoreTest], reference: &Path) -> anyhow::Result<Comparison> {
     let folder = diagnosis_folder(reference);
     let file = folder.join("summary.json");
-    let text = std::fs::read_to_string(&file).with_context(|| {
-        format!(
+    if !file.exists() {
+        bail!(
             "--reference {}: no diagnosis found at {} (diagnose the reference run first, with the same candidates and options: `footfall diagnose {}`)",
             reference.display(),
             file.display(),
             reference.display()
-        )
-    })?;
-    let summary: Value = serde_json::from_str(&text)
-        .with_context(|| format!("--reference: {}: not valid JSON", file.display()))?;
-    let theirs = readings_of(&summary, &file)?;
+        );
+    }
+    let summary = DiagnosisSummary::read(&folder)
+        .map_err(|e| anyhow!("--reference {}: {e}", reference.display()))?;
+    let theirs: Vec<&ScoreTest> = summary.ranking.iter().filter(|t| t.testable).collect();
     let mut pairs = Vec::new();
     let mut not_compared = Vec::new();
     for t in tests {
-        let ours = t.identifiability.as_ref().map(|i| &i.sd);
-        let Some(sds) = ours.filter(|_| t.testable) else {
+        let Some(our_sds) = t
+            .identifiability
+            .as_ref()
+            .map(|i| &i.sd)
+            .filter(|_| t.testable)
+        else {
             not_compared.push(format!("{}: not testable in this run", t.label));
             continue;
         };
@@ -169,8 +130,8 @@ pub(super) fn compare(tests: &[ScoreTest], reference: &Path) -> anyhow::Result<C
             ));
             continue;
         };
-        let mine = estimator(t.refit, t.profile.as_ref().is_some_and(|p| p.chosen));
-        let how = theirs.estimator;
+        let mine = estimator(t);
+        let how = estimator(theirs);
         if mine != how {
             not_compared.push(format!(
                 "{}: read by {mine} here and by {how} in the reference (readings of different estimators, possibly of different dips of J)",
@@ -190,9 +151,9 @@ pub(super) fn compare(tests: &[ScoreTest], reference: &Path) -> anyhow::Result<C
             }
             match (
                 t.step_values.get(j),
-                sds.get(j).copied().flatten(),
-                theirs.values.get(j),
-                theirs.sds.get(j).copied().flatten(),
+                our_sds.get(j).copied().flatten(),
+                theirs.step_values.get(j),
+                sds(theirs).get(j).copied().flatten(),
             ) {
                 (Some(&a), Some(sa), Some(&b), Some(sb)) if (sa * sa + sb * sb) > 0.0 => pairs
                     .push((
@@ -259,19 +220,16 @@ mod tests {
     }
 
     fn reference_with(dir: &Path, angle: f64, sd: f64, at_bound: bool) {
-        let summary = serde_json::json!({
-            "command": "diagnose",
-            "ranking": [{
-                "label": "ground slope",
-                "parameters": ["ground_slope.angle"],
-                "step_values": [angle],
-                "identifiability": {"sd": [sd]},
-                "testable": true,
-                "refit": true,
-                "at_bound": if at_bound { vec!["ground_slope.angle"] } else { vec![] },
-            }],
-        });
-        std::fs::write(dir.join("summary.json"), summary.to_string()).unwrap();
+        let mut t = slope_read_at(angle, sd);
+        if at_bound {
+            t.at_bound = t.parameters.clone();
+        }
+        let summary = DiagnosisSummary::of_ranking(vec![t]);
+        std::fs::write(
+            dir.join("summary.json"),
+            serde_json::to_string(&summary).unwrap(),
+        )
+        .unwrap();
     }
 
     /// The difference of two readings in sds in quadrature, against the χ²₁ 0.1 % point
