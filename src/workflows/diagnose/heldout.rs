@@ -23,7 +23,6 @@ use crate::problems::diagnose::{
     truncated_refit, HeldOut, ScoreTest, TrackingRunSetup, MAX_STEPS, REL_STOP,
 };
 use crate::problems::evaluation::GaitSolution;
-use crate::runfolder::RunFolder;
 use crate::sqp::HessianMode;
 use anyhow::anyhow;
 
@@ -238,21 +237,5 @@ pub(super) fn retrack_with_pelvis(
             dir.display()
         );
     }
-    let mut prob = TrackingProblem::build(&setup, &[])?;
-    prob.start_at(solution)?;
-    let hessian = if setup.sample_targets {
-        HessianMode::GaussNewton
-    } else {
-        HessianMode::Exact
-    };
-    let settings = tracking_sqp_settings(args.tol, args.max_iter, None, hessian, 1e-3);
-    let rf = RunFolder::create(&dir, args.overwrite)?;
-    prob.solve_and_write(
-        &setup,
-        &[],
-        &settings,
-        rf,
-        super::super::run_folder::DEFAULT_TRANSIENT_THRESHOLD_N,
-        progress,
-    )
+    super::refit::solve_into(args, &setup, &[], solution, dir, progress)
 }

@@ -97,7 +97,27 @@ pub(super) fn refit_into(
             dir.display()
         );
     }
-    let mut prob = TrackingProblem::build(setup, std::slice::from_ref(effect))?;
+    solve_into(
+        args,
+        setup,
+        std::slice::from_ref(effect),
+        start,
+        dir,
+        progress,
+    )
+}
+
+/// Track `setup` with `effects` added, from `start`, into the run folder `dir` (a
+/// candidate's re-fit, or `--make-testable`'s re-track with no effect added).
+pub(super) fn solve_into(
+    args: &DiagnoseRequest,
+    setup: &TrackingRunSetup,
+    effects: &[EffectSpec],
+    start: &GaitSolution,
+    dir: PathBuf,
+    progress: &dyn Progress,
+) -> anyhow::Result<TrackedRun> {
+    let mut prob = TrackingProblem::build(setup, effects)?;
     prob.start_at(start)
         .map_err(|e| anyhow!("{}: {e:#}", args.run.display()))?;
     // sample terms enter the objective's curvature as Gauss–Newton only; with the exact
@@ -113,7 +133,7 @@ pub(super) fn refit_into(
     let rf = RunFolder::create(&dir, args.overwrite)?;
     prob.solve_and_write(
         setup,
-        std::slice::from_ref(effect),
+        effects,
         &settings,
         rf,
         crate::workflows::run_folder::DEFAULT_TRANSIENT_THRESHOLD_N,
