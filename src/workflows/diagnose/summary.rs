@@ -82,7 +82,7 @@ pub struct VerifiedRecord {
 }
 
 /// A diagnosis's `summary.json`.
-#[derive(Debug, Clone, Serialize, Deserialize)]
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
 pub struct DiagnosisSummary {
     /// Always [`COMMAND`].
     pub command: String,
@@ -170,22 +170,8 @@ impl DiagnosisSummary {
     pub fn of_ranking(ranking: Vec<ScoreTest>) -> Self {
         DiagnosisSummary {
             command: COMMAND.into(),
-            run: PathBuf::new(),
-            objective: 0.0,
-            data_residuals: 0,
-            baseline_decrease: 0.0,
-            variance_inflation: VarianceInflation::default(),
-            noise_model: None,
             ranking,
-            significant: 0,
-            found: 0,
-            untestable: 0,
-            held_out_note: String::new(),
-            testable_run: None,
-            reference: None,
-            verdict: String::new(),
-            verified: Vec::new(),
-            skipped: Vec::new(),
+            ..Default::default()
         }
     }
 }
