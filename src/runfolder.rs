@@ -8,7 +8,9 @@
 //! removed only after the new one is in place. Staging folders of processes that died
 //! (`kill -9`, a power cut) are removed by the next run with the same output folder.
 //! Staging folders of this process are registered, so that a Ctrl-C handler can remove
-//! them before exiting ([`remove_unfinished`]).
+//! them before exiting ([`remove_unfinished_and_exit`]). Every write into a staging folder
+//! holds the same lock as that removal, so a second Ctrl-C during the writing of a run
+//! cannot leave a staging folder that a write made again after the removal.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -90,21 +92,18 @@ pub fn remove_unfinished_and_exit(code: i32) -> ! {
     std::process::exit(code)
 }
 
-/// Remove every staging folder this process has created and not committed (they are
-/// forgotten, and their [`RunFolder`]s will fail to commit).
-pub fn remove_unfinished() {
-    for p in unfinished().drain(..) {
-        let _ = std::fs::remove_dir_all(&p);
-    }
-}
-
 /// Prefix of the files that let a killed run be resumed (its command and the solver's
 /// checkpoints): they live in the staging folder and are removed when the run commits.
 pub const RESUME_PREFIX: &str = ".resume-";
 
 /// Write `dir/name` whole or not at all: written under a temporary name, then renamed.
 /// `name` may name a file in a subfolder (`inputs/model/x.json`); the subfolders are made.
+///
+/// The write holds the lock of [`remove_unfinished_and_exit`]: it either completes before
+/// an interrupt removes the staging folders, or never starts (the handler keeps the lock
+/// until the process exits), so it cannot make a removed folder again.
 pub fn write_atomic(dir: &Path, name: &str, bytes: &[u8]) -> Result<(), RunFolderError> {
+    let _no_removal_meanwhile = unfinished();
     let p = dir.join(name);
     let (sub, file) = match (p.parent(), p.file_name()) {
         (Some(sub), Some(file)) => (sub.to_path_buf(), file.to_string_lossy().into_owned()),
@@ -220,6 +219,9 @@ impl RunFolder {
             check_replaceable(target)?;
         }
         let (name, parent) = name_and_parent(target);
+        let mut list = unfinished();
+        // under the lock: a nested run folder's parent is a staging folder, which an
+        // interrupt may be removing
         std::fs::create_dir_all(&parent).map_err(io(&parent))?;
         for (stale, _) in stale_staging(target) {
             std::fs::remove_dir_all(&stale).map_err(io(&stale))?;
@@ -228,11 +230,9 @@ impl RunFolder {
         if staging.exists() {
             std::fs::remove_dir_all(&staging).map_err(io(&staging))?;
         }
-        {
-            let mut list = unfinished();
-            std::fs::create_dir_all(&staging).map_err(io(&staging))?;
-            list.push(staging.clone());
-        }
+        std::fs::create_dir_all(&staging).map_err(io(&staging))?;
+        list.push(staging.clone());
+        drop(list);
         let folder = Self {
             target: target.to_path_buf(),
             staging,
@@ -266,7 +266,7 @@ impl RunFolder {
     pub fn commit(mut self) -> Result<PathBuf, RunFolderError> {
         let mut list = unfinished();
         let Some(pos) = list.iter().position(|p| p == &self.staging) else {
-            // removed by remove_unfinished (an interrupt): nothing to commit
+            // removed by remove_unfinished_and_exit (an interrupt): nothing to commit
             return Err(io(&self.staging)(std::io::Error::new(
                 std::io::ErrorKind::Interrupted,
                 "the run was interrupted",
@@ -477,6 +477,30 @@ pub fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, RunFi
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An interrupt's removal holds the lock until the process exits: a write that comes
+    /// meanwhile waits instead of making the removed staging folder again.
+    #[test]
+    fn a_write_waits_while_the_staging_folders_are_being_removed() {
+        let tmp = tempfile::tempdir().unwrap();
+        let staging = tmp.path().join(".run.partial-1");
+        let removal = unfinished();
+        let writer = {
+            let staging = staging.clone();
+            std::thread::spawn(move || write_atomic(&staging, "inputs/model.json", b"{}"))
+        };
+        std::thread::sleep(std::time::Duration::from_millis(100));
+        assert!(
+            !staging.exists(),
+            "the write made the folder under the removal"
+        );
+        drop(removal);
+        writer.join().unwrap().unwrap();
+        assert_eq!(
+            std::fs::read(staging.join("inputs/model.json")).unwrap(),
+            b"{}"
+        );
+    }
 
     #[test]
     fn a_dead_process_staging_folder_is_stale_and_a_live_one_is_not() {
