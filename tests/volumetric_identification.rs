@@ -428,3 +428,181 @@ fn the_hidden_law_held_fixed_fits_the_trial() {
         res.status
     );
 }
+
+/// `∇²(μᵀf)` of the volumetric dynamics over (x, u, θ) by nested AD (the integrand of the
+/// exact-Hessian SQP's interval curvature), against central differences of the exact AD
+/// Jacobian, at a state where a foot presses into the ground and slides, as
+/// `tests/derivatives.rs` checks the rigid feet. Measured: 5.0e-9 of the largest entry
+/// (3.1e7). The volumetric track's wrong curvature (docs/engine-investigation.md, stop 43)
+/// is therefore not the model's second derivatives.
+#[test]
+fn volumetric_dynamics_second_derivatives_match_finite_differences() {
+    use footfall::integrate::ControlledOde;
+    use footfall::problems::gait_ode::GaitOde;
+    let m = model_with("volumetric_contact");
+    let (set, x, u) = pressing_state(&m);
+    let ode = GaitOde {
+        model: &m,
+        set: &set,
+    };
+    let (nx, nu) = (m.nx(), m.nu());
+    let th = vec![1.3, 0.7, 0.45];
+    let nw = nx + nu + th.len();
+    let mu: Vec<f64> = (0..nx)
+        .map(|i| ((i * 7919) % 13) as f64 / 6.5 - 1.0)
+        .collect();
+    let mut h = vec![0.0; nw * nw];
+    assert!(ode.weighted_hessian(&x, &u, &th, &mu, &mut h).unwrap());
+    let grad = |z: &[f64]| {
+        let mut xdot = vec![0.0; nx];
+        let mut jac = vec![0.0; nx * nw];
+        m.dynamics_jacobian(
+            &set,
+            &z[..nx],
+            &z[nx..nx + nu],
+            &z[nx + nu..],
+            &mut xdot,
+            &mut jac,
+        )
+        .unwrap();
+        (0..nw)
+            .map(|c| (0..nx).map(|i| mu[i] * jac[i + c * nx]).sum::<f64>())
+            .collect::<Vec<f64>>()
+    };
+    let z: Vec<f64> = x.iter().chain(&u).chain(&th).copied().collect();
+    let scale = h.iter().map(|v| v.abs()).fold(1.0, f64::max);
+    let mut worst = (0.0f64, 0, 0);
+    for c in 0..nw {
+        let e = 1e-6 * z[c].abs().max(1.0);
+        let (mut a, mut b) = (z.clone(), z.clone());
+        a[c] += e;
+        b[c] -= e;
+        let (ga, gb) = (grad(&a), grad(&b));
+        for r in 0..nw {
+            let d = ((ga[r] - gb[r]) / (2.0 * e) - h[r + c * nw]).abs() / scale;
+            if d > worst.0 {
+                worst = (d, r, c);
+            }
+        }
+    }
+    eprintln!("volumetric ∇²(μᵀf) vs FD of the exact Jacobian: {worst:?} (scale {scale:.2e})");
+    assert!(
+        worst.0 < 1e-6,
+        "Hessian differs from FD: {worst:?} (scale {scale:.2e})"
+    );
+}
+
+/// The interval curvature ∇²_z λᵀx(1) of a 10 ms shooting interval of the volumetric foot
+/// (the second-order adjoint identity from the forward sensitivities, 4-point
+/// Gauss–Legendre quadrature), against central differences of the exact gradient Sᵀλ:
+/// pressed into the ground and sliding, and touching down within the interval. For the
+/// rigid feet and the benchmarks the two agree to 1e-5 of the largest entry
+/// (tests/ocp_engine.rs, tests/gait_hessian.rs).
+///
+/// **Fails today** (measured at stop 43, docs/engine-investigation.md; 71 s in the test
+/// profile): the largest entry is off by about 1000× (the pelvis height's curvature
+/// −1.8e5 against −247 by differences), at 5 and 40 ms as at 10 ms, while the model's
+/// second derivatives are right (the test above). The likely cause, not yet shown by a
+/// fix: the identity's adjoint weights `μ(τ)ᵀ = λᵀΨ(1)Ψ(τ)⁻¹` need the inverse of the
+/// state transition matrix, and the contact's damping gives ∂f/∂x an eigenvalue of about
+/// −2.7e5 1/s (printed), so over even a few milliseconds Ψ(τ) is singular to working
+/// precision. On the bundled track this
+/// curvature puts −100 along a direction where the Lagrangian's measured curvature is
+/// +0.18, so the inertia correction shifts every QP by δ = 26–730 and the steps stall.
+/// The remedy is an adjoint that needs no inverse (transition matrices chained forward
+/// over segments between the quadrature nodes, or a backward adjoint integration).
+#[test]
+#[ignore = "fails: the interval curvature of the volumetric foot inverts a state transition matrix that its stiff contact makes singular; see docs/engine-investigation.md (stop 43)"]
+fn volumetric_interval_curvature_matches_finite_differences_of_sensitivities() {
+    use footfall::integrate::{
+        ControlShape, ControlledOde, Integrator, IntegratorSettings, ShootingInterval,
+    };
+    use footfall::problems::gait_ode::GaitOde;
+    let m = model_with("volumetric_contact");
+    let (set, pressed, u) = pressing_state(&m);
+    let mut touching = pressed.clone();
+    touching[1] += 0.013;
+    touching[m.nx() / 2 + 1] = -0.3;
+    let theta = vec![1.0, 1.0, 1.0];
+    let tight = IntegratorSettings {
+        rtol: 1e-12,
+        atol: 1e-12,
+        ..Default::default()
+    };
+    let ode = GaitOde {
+        model: &m,
+        set: &set,
+    };
+    // the fastest mode: the contact's damping on the foot, time constant of a few µs
+    for (name, x) in [
+        ("pressed and sliding", &pressed),
+        ("touching down", &touching),
+    ] {
+        let nx = m.nx();
+        let (mut xd, mut fx) = (vec![0.0; nx], vec![0.0; nx * nx]);
+        let (mut fu, mut ft) = (vec![0.0; nx * m.nu()], vec![0.0; nx * theta.len()]);
+        ode.f_jac(x, &u, &theta, &mut xd, &mut fx, &mut fu, &mut ft)
+            .unwrap();
+        let fx = nalgebra::DMatrix::from_column_slice(nx, nx, &fx);
+        let fastest = fx
+            .complex_eigenvalues()
+            .iter()
+            .map(|c| c.re)
+            .fold(0.0, f64::min);
+        eprintln!("{name}: fastest eigenvalue of ∂f/∂x {fastest:.3e} 1/s");
+    }
+    let mut worst_case = 0.0f64;
+    for (name, x0) in [
+        ("pressed and sliding", &pressed),
+        ("touching down", &touching),
+    ] {
+        let iv = ShootingInterval::new(&ode as &dyn ControlledOde, ControlShape::Constant);
+        let (nx, np) = (ode.nx(), iv.np());
+        let nz = nx + np;
+        let mut p = Vec::new();
+        iv.pack_params(&u, None, 0.01, &theta, &mut p).unwrap();
+        let lambda: Vec<f64> = (0..nx).map(|i| 0.5 - 0.037 * i as f64).collect();
+        let mut integ = Integrator::new(nx, np, tight.clone()).unwrap();
+        let (mut x1, mut s1, mut hs) = (vec![0.0; nx], vec![0.0; nx * nz], vec![0.0; nz * nz]);
+        assert!(iv
+            .integrate_with_hessian(&mut integ, x0, &p, &lambda, &mut x1, &mut s1, &mut hs)
+            .unwrap());
+        let mut grad = |z: &[f64]| {
+            let (mut x, mut s) = (vec![0.0; nx], vec![0.0; nx * nz]);
+            integ
+                .integrate_with_sensitivities(&iv, 0.0, 1.0, &z[..nx], &z[nx..], &mut x, &mut s)
+                .unwrap();
+            (0..nz)
+                .map(|c| (0..nx).map(|i| lambda[i] * s[i + c * nx]).sum::<f64>())
+                .collect::<Vec<f64>>()
+        };
+        let z0: Vec<f64> = x0.iter().chain(&p).copied().collect();
+        let scale = hs.iter().map(|v| v.abs()).fold(1e-3, f64::max);
+        let mut worst = 0.0f64;
+        let mut at = (0, 0, 0.0, 0.0);
+        for c in 0..nz {
+            let e = 1e-6
+                * z0[c]
+                    .abs()
+                    .max(if c == nx + iv.p_duration() { 0.01 } else { 1.0 });
+            let (mut zp, mut zm) = (z0.clone(), z0.clone());
+            zp[c] += e;
+            zm[c] -= e;
+            let (gp, gm) = (grad(&zp), grad(&zm));
+            for r in 0..nz {
+                let fd = (gp[r] - gm[r]) / (2.0 * e);
+                let d = (fd - hs[r + c * nz]).abs() / scale;
+                if d > worst {
+                    worst = d;
+                    at = (r, c, fd, hs[r + c * nz]);
+                }
+            }
+        }
+        eprintln!("{name}: interval Hessian vs FD relative error {worst:.2e} (scale {scale:.2e}) at (row, column, FD, Hessian) {at:?}, nx {nx}, np {np}");
+        worst_case = worst_case.max(worst);
+    }
+    assert!(
+        worst_case < 1e-5,
+        "interval Hessian differs from FD by {worst_case:e}"
+    );
+}
