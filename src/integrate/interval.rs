@@ -50,6 +50,15 @@ pub trait ControlledOde: Sync {
     ) -> Result<bool, OdeError> {
         Ok(false)
     }
+
+    /// Whether the dynamics can be so stiff that a shooting interval's state transition
+    /// matrix Ψ(τ) becomes singular to working precision (a compliant contact's damping:
+    /// eigenvalues of ∂f/∂x near −1e5 1/s). The interval curvature then chains the
+    /// segments' transition matrices between its quadrature nodes instead of inverting
+    /// Ψ(τ) (default: false, the single pass).
+    fn stiff_transition(&self) -> bool {
+        false
+    }
 }
 
 /// How the control varies over one shooting interval.
@@ -301,6 +310,29 @@ const GAUSS4: [(f64, f64); 4] = [
     (0.930_568_155_797_026_3, 0.173_927_422_568_726_93),
 ];
 
+/// The Gauss–Legendre nodes and weights of `[0, t_end]`.
+fn quadrature_nodes(t_end: f64) -> impl Iterator<Item = (f64, f64)> {
+    GAUSS4.iter().map(move |&(g, w)| (t_end * g, t_end * w))
+}
+
+/// `μ(t_q) = Ψ(t_end, t_q)ᵀ w_end` from the segments' transition matrices `psis` (the
+/// segment ending at `times[k]` is `psis[k]`), for `q ≤ q_end`: products, no inverse.
+fn adjoint_weights(
+    psis: &[Vec<f64>],
+    nx: usize,
+    q: usize,
+    q_end: usize,
+    w_end: &[f64],
+) -> Vec<f64> {
+    let mut r = w_end.to_vec();
+    for psi in psis[q + 1..=q_end].iter().rev() {
+        r = (0..nx)
+            .map(|c| (0..nx).map(|i| psi[i + c * nx] * r[i]).sum())
+            .collect();
+    }
+    r
+}
+
 impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
     /// End state, sensitivities and the exact curvature of `λᵀ x(1)` with respect to
     /// `z = (x0, p)` ((nx+np)², column-major), by the second-order adjoint identity
@@ -397,16 +429,14 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
         let nx = m.nx();
         let np = self.np();
         let nz = nx + np;
-        let nodes = &GAUSS4;
-        // one pass to the quadrature nodes (of [0, 1] and of every [0, τ_i]), the outputs
-        // and the end, in time order
-        let mut times: Vec<f64> = nodes
-            .iter()
-            .map(|g| g.0)
+        // the quadrature nodes (of [0, 1] and of every [0, τ_i]), the outputs and the
+        // end, in time order
+        let mut times: Vec<f64> = quadrature_nodes(1.0)
+            .map(|(t, _)| t)
             .chain(
                 interior
                     .iter()
-                    .flat_map(|&ti| nodes.iter().map(move |g| ti * g.0)),
+                    .flat_map(|&ti| quadrature_nodes(ti).map(|(t, _)| t)),
             )
             .chain(outputs.iter().copied())
             .chain([1.0])
@@ -415,8 +445,15 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
         times.dedup();
         let at = |t: f64| times.partition_point(|&v| v < t);
         let (mut xs, mut ss) = (Vec::new(), Vec::new());
-        integ
-            .integrate_with_sensitivities_dense(self, 0.0, 1.0, x0, p, &times, &mut xs, &mut ss)?;
+        // the segments' own transition matrices Ψ(t_k, t_{k−1}), for a stiff model
+        let mut segments: Option<Vec<Vec<f64>>> = None;
+        if m.stiff_transition() {
+            segments = Some(self.chained_pass(integ, x0, p, &times, &mut xs, &mut ss)?);
+        } else {
+            integ.integrate_with_sensitivities_dense(
+                self, 0.0, 1.0, x0, p, &times, &mut xs, &mut ss,
+            )?;
+        }
         let sz = nx * nz;
         let end = times.len() - 1;
         x1.copy_from_slice(&xs[end * nx..(end + 1) * nx]);
@@ -436,11 +473,78 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
         for (t_end, w_end) in spans {
             let q_end = at(t_end);
             let s_end = &ss[q_end * sz..(q_end + 1) * sz];
-            if !self.add_span_curvature(p, &xs, &ss, &times, t_end, &w_end, s_end, hess)? {
+            // μ(τ)ᵀ = w_endᵀΨ(t_end, τ) at the span's nodes, from the chained segments
+            let chained: Option<Vec<Vec<f64>>> = segments.as_ref().map(|psis| {
+                quadrature_nodes(t_end)
+                    .map(|(tau, _)| adjoint_weights(psis, nx, at(tau), q_end, &w_end))
+                    .collect()
+            });
+            if !self.add_span_curvature(
+                p,
+                &xs,
+                &ss,
+                &times,
+                t_end,
+                &w_end,
+                s_end,
+                chained.as_deref(),
+                hess,
+            )? {
                 return Ok(false);
             }
         }
         Ok(true)
+    }
+
+    /// States and sensitivities at `times` (strictly increasing, ending at 1) by one
+    /// integration per segment `[t_{k−1}, t_k]` from the sensitivities `[I | 0]`, composed
+    /// as `S(t_k) = Ψ_k S(t_{k−1}) + [0 | P_k]`; returns the segments' Ψ_k (nx × nx,
+    /// column-major). No transition matrix is ever inverted.
+    fn chained_pass(
+        &self,
+        integ: &mut super::Integrator,
+        x0: &[f64],
+        p: &[f64],
+        times: &[f64],
+        xs: &mut Vec<f64>,
+        ss: &mut Vec<f64>,
+    ) -> Result<Vec<Vec<f64>>, IntegratorError> {
+        let nx = self.model.nx();
+        let nz = nx + self.np();
+        let mut x = x0.to_vec();
+        let mut s = vec![0.0; nx * nz];
+        for i in 0..nx {
+            s[i + i * nx] = 1.0;
+        }
+        let (mut x1, mut seg) = (vec![0.0; nx], vec![0.0; nx * nz]);
+        let mut psis = Vec::with_capacity(times.len());
+        let mut t0 = 0.0;
+        for &t1 in times {
+            integ.integrate_with_sensitivities(self, t0, t1, &x, p, &mut x1, &mut seg)?;
+            let mut next = vec![0.0; nx * nz];
+            for c in 0..nz {
+                for k in 0..nx {
+                    let skc = s[k + c * nx];
+                    if skc != 0.0 {
+                        for r in 0..nx {
+                            next[r + c * nx] += seg[r + k * nx] * skc;
+                        }
+                    }
+                }
+                if c >= nx {
+                    for r in 0..nx {
+                        next[r + c * nx] += seg[r + c * nx];
+                    }
+                }
+            }
+            psis.push(seg[..nx * nx].to_vec());
+            x.copy_from_slice(&x1);
+            s = next;
+            xs.extend_from_slice(&x);
+            ss.extend_from_slice(&s);
+            t0 = t1;
+        }
+        Ok(psis)
     }
 
     /// Add `∇²_z w_endᵀ x(t_end)` to `hess` by Gauss–Legendre quadrature over `[0, t_end]`
@@ -456,6 +560,7 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
         t_end: f64,
         w_end: &[f64],
         s_end: &[f64],
+        chained: Option<&[Vec<f64>]>,
         hess: &mut [f64],
     ) -> Result<bool, IntegratorError> {
         let m = self.model;
@@ -475,20 +580,24 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
         let mut h = vec![0.0; nw * nw];
         let mut xdot = vec![0.0; nx];
         let (mut fx, mut fu, mut ft) = (vec![0.0; nx * nx], vec![0.0; nx * nu], vec![0.0; nx * nt]);
-        for &(g, wg) in GAUSS4.iter() {
-            let (tau, wq) = (t_end * g, t_end * wg);
+        for (node, (tau, wq)) in quadrature_nodes(t_end).enumerate() {
             let q = at(tau);
             let x = &xs[q * nx..(q + 1) * nx];
             let s = &ss[q * sz..(q + 1) * sz];
-            // μ(τ)ᵀ = λᵀΨ(1)Ψ(τ)⁻¹: solve Ψ(τ)ᵀ μ = (λᵀΨ(1))ᵀ
-            let psi = nalgebra::DMatrix::from_column_slice(nx, nx, &s[..nx * nx]);
-            let rhs = nalgebra::DVector::from_column_slice(&lam_psi1);
-            let mu = psi
-                .transpose()
-                .lu()
-                .solve(&rhs)
-                .ok_or(IntegratorError::NonFinite { t: tau })?;
-            let mu: Vec<f64> = mu.iter().copied().collect();
+            let mu: Vec<f64> = match chained {
+                Some(mus) => mus[node].clone(),
+                None => {
+                    // μ(τ)ᵀ = λᵀΨ(1)Ψ(τ)⁻¹: solve Ψ(τ)ᵀ μ = (λᵀΨ(1))ᵀ
+                    let psi = nalgebra::DMatrix::from_column_slice(nx, nx, &s[..nx * nx]);
+                    let rhs = nalgebra::DVector::from_column_slice(&lam_psi1);
+                    let mu = psi
+                        .transpose()
+                        .lu()
+                        .solve(&rhs)
+                        .ok_or(IntegratorError::NonFinite { t: tau })?;
+                    mu.iter().copied().collect()
+                }
+            };
             let u0 = &p[self.p_u0()];
             match self.p_u1() {
                 Some(r) => {

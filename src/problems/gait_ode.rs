@@ -43,6 +43,9 @@ impl ControlledOde for GaitOde<'_> {
         }
         Ok(())
     }
+    fn stiff_transition(&self) -> bool {
+        self.model.has_volumetric_contacts()
+    }
     fn weighted_hessian(
         &self,
         x: &[f64],
