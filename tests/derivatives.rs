@@ -251,35 +251,8 @@ fn dynamics_second_derivatives_match_finite_differences() {
         let mu: Vec<f64> = (0..nx).map(|_| rng.uniform(-1.0, 1.0)).collect();
         let mut h = vec![0.0; nw * nw];
         assert!(ode.weighted_hessian(&x, &u, &th, &mu, &mut h).unwrap());
-        let grad = |z: &[f64]| {
-            let mut xdot = vec![0.0; nx];
-            let mut jac = vec![0.0; nx * nw];
-            m.dynamics_jacobian(
-                &set,
-                &z[..nx],
-                &z[nx..nx + nu],
-                &z[nx + nu..],
-                &mut xdot,
-                &mut jac,
-            )
-            .unwrap();
-            (0..nw)
-                .map(|c| (0..nx).map(|i| mu[i] * jac[i + c * nx]).sum::<f64>())
-                .collect::<Vec<f64>>()
-        };
         let z: Vec<f64> = x.iter().chain(&u).chain(&th).copied().collect();
-        let scale = h.iter().map(|v| v.abs()).fold(1.0, f64::max);
-        let mut worst = 0.0f64;
-        for c in 0..nw {
-            let e = 1e-5 * z[c].abs().max(1.0);
-            let (mut a, mut b) = (z.clone(), z.clone());
-            a[c] += e;
-            b[c] -= e;
-            let (ga, gb) = (grad(&a), grad(&b));
-            for r in 0..nw {
-                worst = worst.max(((ga[r] - gb[r]) / (2.0 * e) - h[r + c * nw]).abs() / scale);
-            }
-        }
+        let (worst, scale) = weighted_hessian_fd_error(&m, &set, &z, &mu, &h, 1e-5);
         eprintln!("{foot}: ∇²(μᵀf) vs FD of the exact Jacobian: {worst:.2e} (scale {scale:.2e})");
         assert!(worst < 1e-6, "{foot}: Hessian differs from FD by {worst:e}");
     }

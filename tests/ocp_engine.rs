@@ -9,6 +9,8 @@ use footfall::sqp::{self, HessianMode, Silent, SqpResult, SqpSettings, SqpStatus
 use std::path::PathBuf;
 use std::sync::Arc;
 
+mod common;
+
 fn solve_problem(file: &str, hessian: HessianMode, threads: usize) -> Option<SqpResult> {
     let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
         .join("problems")
@@ -280,22 +282,8 @@ fn interval_hessian_matches_finite_differences_of_sensitivities() {
                     .collect::<Vec<f64>>()
             };
             let z0: Vec<f64> = x0.iter().chain(&p).copied().collect();
-            let scale = hs.iter().map(|v| v.abs()).fold(1e-3, f64::max);
-            let mut worst = 0.0f64;
-            for c in 0..nz {
-                let e = 1e-5
-                    * z0[c]
-                        .abs()
-                        .max(if c == nx + iv.p_duration() { 0.01 } else { 1.0 });
-                let mut zp = z0.clone();
-                zp[c] += e;
-                let mut zm = z0.clone();
-                zm[c] -= e;
-                let (gp, gm) = (grad(&zp), grad(&zm));
-                for r in 0..nz {
-                    worst = worst.max(((gp[r] - gm[r]) / (2.0 * e) - hs[r + c * nz]).abs() / scale);
-                }
-            }
+            let (worst, scale, _) =
+                common::interval_hessian_fd_error(&z0, &hs, nx + iv.p_duration(), 1e-5, &mut grad);
             eprintln!("nx {nx} {shape:?}: interval Hessian vs FD relative error {worst:.2e} (scale {scale:.2e})");
             assert!(
                 worst < 1e-5,

@@ -308,3 +308,80 @@ pub fn ik() -> PathBuf {
 pub fn grf() -> PathBuf {
     raw("subject01_walk1_grf.mot")
 }
+
+/// The largest difference between `h` (∇²(μᵀf) over z = (x, u, θ), column-major, from
+/// [`ControlledOde::weighted_hessian`](footfall::integrate::ControlledOde::weighted_hessian))
+/// and central differences of the model's exact AD Jacobian weighted by `mu`, relative
+/// to the largest entry of `h`; with that entry.
+pub fn weighted_hessian_fd_error(
+    m: &GaitModel,
+    set: &footfall::model::ConstraintSet,
+    z: &[f64],
+    mu: &[f64],
+    h: &[f64],
+    step: f64,
+) -> (f64, f64) {
+    let (nx, nu) = (m.nx(), m.nu());
+    let nw = z.len();
+    let grad = |z: &[f64]| {
+        let mut xdot = vec![0.0; nx];
+        let mut jac = vec![0.0; nx * nw];
+        m.dynamics_jacobian(
+            set,
+            &z[..nx],
+            &z[nx..nx + nu],
+            &z[nx + nu..],
+            &mut xdot,
+            &mut jac,
+        )
+        .unwrap();
+        (0..nw)
+            .map(|c| (0..nx).map(|i| mu[i] * jac[i + c * nx]).sum::<f64>())
+            .collect::<Vec<f64>>()
+    };
+    let scale = h.iter().map(|v| v.abs()).fold(1.0, f64::max);
+    let mut worst = 0.0f64;
+    for c in 0..nw {
+        let e = step * z[c].abs().max(1.0);
+        let (mut a, mut b) = (z.to_vec(), z.to_vec());
+        a[c] += e;
+        b[c] -= e;
+        let (ga, gb) = (grad(&a), grad(&b));
+        for r in 0..nw {
+            worst = worst.max(((ga[r] - gb[r]) / (2.0 * e) - h[r + c * nw]).abs() / scale);
+        }
+    }
+    (worst, scale)
+}
+
+/// The largest difference between an interval curvature `hs` (∇²_z λᵀx(1), z = (x0, p),
+/// column-major) and central differences of the exact gradient `Sᵀλ` from `grad`, relative
+/// to the largest entry of `hs` (at least 1e-3); with that entry and where it is
+/// (row, column, difference quotient, curvature). `step` is relative to max(|z_c|, 1),
+/// or to max(|z_c|, 0.01) for the duration column `t_col`.
+pub fn interval_hessian_fd_error(
+    z0: &[f64],
+    hs: &[f64],
+    t_col: usize,
+    step: f64,
+    grad: &mut dyn FnMut(&[f64]) -> Vec<f64>,
+) -> (f64, f64, (usize, usize, f64, f64)) {
+    let nz = z0.len();
+    let scale = hs.iter().map(|v| v.abs()).fold(1e-3, f64::max);
+    let mut worst = (0.0f64, (0, 0, 0.0, 0.0));
+    for c in 0..nz {
+        let e = step * z0[c].abs().max(if c == t_col { 0.01 } else { 1.0 });
+        let (mut zp, mut zm) = (z0.to_vec(), z0.to_vec());
+        zp[c] += e;
+        zm[c] -= e;
+        let (gp, gm) = (grad(&zp), grad(&zm));
+        for r in 0..nz {
+            let fd = (gp[r] - gm[r]) / (2.0 * e);
+            let d = (fd - hs[r + c * nz]).abs() / scale;
+            if d > worst.0 {
+                worst = (d, (r, c, fd, hs[r + c * nz]));
+            }
+        }
+    }
+    (worst.0, scale, worst.1)
+}
