@@ -233,7 +233,7 @@ fn biped_term_hessians_match_finite_differences() {
 /// and the cart-pole, constant and linear controls.
 #[test]
 fn interval_hessian_matches_finite_differences_of_sensitivities() {
-    use footfall::integrate::{Integrator, ShootingInterval};
+    use footfall::integrate::ShootingInterval;
     use footfall::problems::benchmarks::{CartPole, FiveLinkBiped};
     let tight = IntegratorSettings {
         rtol: 1e-12,
@@ -254,8 +254,7 @@ fn interval_hessian_matches_finite_differences_of_sensitivities() {
     for (ode, x0, u, h) in cases {
         for shape in [ControlShape::Constant, ControlShape::Linear] {
             let iv = ShootingInterval::new(ode, shape);
-            let (nx, np) = (ode.nx(), iv.np());
-            let nz = nx + np;
+            let nx = ode.nx();
             let u1: Vec<f64> = u.iter().map(|v| 0.7 * v + 1.0).collect();
             let mut p = Vec::new();
             iv.pack_params(
@@ -267,23 +266,8 @@ fn interval_hessian_matches_finite_differences_of_sensitivities() {
             )
             .unwrap();
             let lambda: Vec<f64> = (0..nx).map(|i| 0.5 - 0.13 * i as f64).collect();
-            let mut integ = Integrator::new(nx, np, tight.clone()).unwrap();
-            let (mut x1, mut s1, mut hs) = (vec![0.0; nx], vec![0.0; nx * nz], vec![0.0; nz * nz]);
-            assert!(iv
-                .integrate_with_hessian(&mut integ, &x0, &p, &lambda, &mut x1, &mut s1, &mut hs)
-                .unwrap());
-            let mut grad = |z: &[f64]| {
-                let (mut x, mut s) = (vec![0.0; nx], vec![0.0; nx * nz]);
-                integ
-                    .integrate_with_sensitivities(&iv, 0.0, 1.0, &z[..nx], &z[nx..], &mut x, &mut s)
-                    .unwrap();
-                (0..nz)
-                    .map(|c| (0..nx).map(|i| lambda[i] * s[i + c * nx]).sum::<f64>())
-                    .collect::<Vec<f64>>()
-            };
-            let z0: Vec<f64> = x0.iter().chain(&p).copied().collect();
             let (worst, scale, _) =
-                common::interval_hessian_fd_error(&z0, &hs, nx + iv.p_duration(), 1e-5, &mut grad);
+                common::interval_curvature_fd_error(&iv, &x0, &p, &lambda, tight.clone(), 1e-5);
             eprintln!("nx {nx} {shape:?}: interval Hessian vs FD relative error {worst:.2e} (scale {scale:.2e})");
             assert!(
                 worst < 1e-5,

@@ -480,14 +480,12 @@ fn volumetric_dynamics_second_derivatives_match_finite_differences() {
 /// matrices instead (`ControlledOde::stiff_transition`): the error is 3.7e-2 (touching
 /// down) to 6.3e-2 (pressed and sliding) of the largest entry, against 1.0 before. What
 /// remains is the fast mode's boundary layers at the interval's ends, which Gauss nodes
-/// miss (a composite rule of 4 × 4 nodes gave 3.1e-2 and 7.2e-2, no better). 177 s in the
+/// miss (a composite rule of 4 × 4 nodes gave 3.1e-2 and 7.2e-2, no better). 66–80 s in the
 /// test profile.
 #[test]
 #[ignore = "fails: the volumetric interval curvature is within 3–7 % of differences, not 1e-5 (the stiff contact mode's boundary layers); see docs/engine-investigation.md (stop 43)"]
 fn volumetric_interval_curvature_matches_finite_differences_of_sensitivities() {
-    use footfall::integrate::{
-        ControlShape, ControlledOde, Integrator, IntegratorSettings, ShootingInterval,
-    };
+    use footfall::integrate::{ControlShape, ControlledOde, IntegratorSettings, ShootingInterval};
     use footfall::problems::gait_ode::GaitOde;
     let m = model_with("volumetric_contact");
     let (set, pressed, u) = pressing_state(&m);
@@ -529,27 +527,11 @@ fn volumetric_interval_curvature_matches_finite_differences_of_sensitivities() {
     ] {
         let iv = ShootingInterval::new(&ode as &dyn ControlledOde, ControlShape::Constant);
         let (nx, np) = (ode.nx(), iv.np());
-        let nz = nx + np;
         let mut p = Vec::new();
         iv.pack_params(&u, None, 0.01, &theta, &mut p).unwrap();
         let lambda: Vec<f64> = (0..nx).map(|i| 0.5 - 0.037 * i as f64).collect();
-        let mut integ = Integrator::new(nx, np, tight.clone()).unwrap();
-        let (mut x1, mut s1, mut hs) = (vec![0.0; nx], vec![0.0; nx * nz], vec![0.0; nz * nz]);
-        assert!(iv
-            .integrate_with_hessian(&mut integ, x0, &p, &lambda, &mut x1, &mut s1, &mut hs)
-            .unwrap());
-        let mut grad = |z: &[f64]| {
-            let (mut x, mut s) = (vec![0.0; nx], vec![0.0; nx * nz]);
-            integ
-                .integrate_with_sensitivities(&iv, 0.0, 1.0, &z[..nx], &z[nx..], &mut x, &mut s)
-                .unwrap();
-            (0..nz)
-                .map(|c| (0..nx).map(|i| lambda[i] * s[i + c * nx]).sum::<f64>())
-                .collect::<Vec<f64>>()
-        };
-        let z0: Vec<f64> = x0.iter().chain(&p).copied().collect();
         let (worst, scale, at) =
-            common::interval_hessian_fd_error(&z0, &hs, nx + iv.p_duration(), 1e-6, &mut grad);
+            common::interval_curvature_fd_error(&iv, x0, &p, &lambda, tight.clone(), 1e-6);
         eprintln!("{name}: interval Hessian vs FD relative error {worst:.2e} (scale {scale:.2e}) at (row, column, FD, Hessian) {at:?}, nx {nx}, np {np}");
         worst_case = worst_case.max(worst);
     }

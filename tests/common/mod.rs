@@ -354,24 +354,42 @@ pub fn weighted_hessian_fd_error(
     (worst, scale)
 }
 
-/// The largest difference between an interval curvature `hs` (∇²_z λᵀx(1), z = (x0, p),
-/// column-major) and central differences of the exact gradient `Sᵀλ` from `grad`, relative
-/// to the largest entry of `hs` (at least 1e-3); with that entry and where it is
-/// (row, column, difference quotient, curvature). `step` is relative to max(|z_c|, 1),
-/// or to max(|z_c|, 0.01) for the duration column `t_col`.
-pub fn interval_hessian_fd_error(
-    z0: &[f64],
-    hs: &[f64],
-    t_col: usize,
+/// The interval curvature ∇²_z λᵀx(1) of `iv` from `x0` with parameters `p` (z = (x0, p),
+/// integrated at `settings`) against central differences of the exact gradient `Sᵀλ`:
+/// the largest difference relative to the largest curvature entry (at least 1e-3), that
+/// entry, and where the difference is (row, column, difference quotient, curvature).
+/// `step` is relative to max(|z_c|, 1), or to max(|z_c|, 0.01) for the duration column.
+pub fn interval_curvature_fd_error(
+    iv: &footfall::integrate::ShootingInterval<'_, dyn footfall::integrate::ControlledOde + '_>,
+    x0: &[f64],
+    p: &[f64],
+    lambda: &[f64],
+    settings: footfall::integrate::IntegratorSettings,
     step: f64,
-    grad: &mut dyn FnMut(&[f64]) -> Vec<f64>,
 ) -> (f64, f64, (usize, usize, f64, f64)) {
-    let nz = z0.len();
+    let (nx, np) = (x0.len(), p.len());
+    let nz = nx + np;
+    let mut integ = footfall::integrate::Integrator::new(nx, np, settings).unwrap();
+    let (mut x1, mut s1, mut hs) = (vec![0.0; nx], vec![0.0; nx * nz], vec![0.0; nz * nz]);
+    assert!(iv
+        .integrate_with_hessian(&mut integ, x0, p, lambda, &mut x1, &mut s1, &mut hs)
+        .unwrap());
+    let mut grad = |z: &[f64]| {
+        let (mut x, mut s) = (vec![0.0; nx], vec![0.0; nx * nz]);
+        integ
+            .integrate_with_sensitivities(iv, 0.0, 1.0, &z[..nx], &z[nx..], &mut x, &mut s)
+            .unwrap();
+        (0..nz)
+            .map(|c| (0..nx).map(|i| lambda[i] * s[i + c * nx]).sum::<f64>())
+            .collect::<Vec<f64>>()
+    };
+    let z0: Vec<f64> = x0.iter().chain(p).copied().collect();
+    let t_col = nx + iv.p_duration();
     let scale = hs.iter().map(|v| v.abs()).fold(1e-3, f64::max);
     let mut worst = (0.0f64, (0, 0, 0.0, 0.0));
     for c in 0..nz {
         let e = step * z0[c].abs().max(if c == t_col { 0.01 } else { 1.0 });
-        let (mut zp, mut zm) = (z0.to_vec(), z0.to_vec());
+        let (mut zp, mut zm) = (z0.clone(), z0.clone());
         zp[c] += e;
         zm[c] -= e;
         let (gp, gm) = (grad(&zp), grad(&zm));
