@@ -315,6 +315,14 @@ fn quadrature_nodes(t_end: f64) -> impl Iterator<Item = (f64, f64)> {
     GAUSS4.iter().map(move |&(g, w)| (t_end * g, t_end * w))
 }
 
+/// How a span's adjoint weights μ(τ) at its quadrature nodes are found.
+enum SpanAdjoint {
+    /// From `wᵀΨ(t_end)`, by solving with Ψ(τ) at each node (the single pass).
+    Inverse(Vec<f64>),
+    /// Given, one per node (the chained segments of a stiff model).
+    Given(Vec<Vec<f64>>),
+}
+
 /// `μ(t_q) = Ψ(t_end, t_q)ᵀ w_end` from the segments' transition matrices `psis` (the
 /// segment ending at `times[k]` is `psis[k]`), for `q ≤ q_end`: products, no inverse.
 fn adjoint_weights(
@@ -472,24 +480,24 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
         }
         for (t_end, w_end) in spans {
             let q_end = at(t_end);
-            let s_end = &ss[q_end * sz..(q_end + 1) * sz];
-            // μ(τ)ᵀ = w_endᵀΨ(t_end, τ) at the span's nodes, from the chained segments
-            let chained: Option<Vec<Vec<f64>>> = segments.as_ref().map(|psis| {
-                quadrature_nodes(t_end)
-                    .map(|(tau, _)| adjoint_weights(psis, nx, at(tau), q_end, &w_end))
-                    .collect()
-            });
-            if !self.add_span_curvature(
-                p,
-                &xs,
-                &ss,
-                &times,
-                t_end,
-                &w_end,
-                s_end,
-                chained.as_deref(),
-                hess,
-            )? {
+            let adjoint = match &segments {
+                // μ(τ)ᵀ = w_endᵀΨ(t_end, τ) at the span's nodes, from the chained segments
+                Some(psis) => SpanAdjoint::Given(
+                    quadrature_nodes(t_end)
+                        .map(|(tau, _)| adjoint_weights(psis, nx, at(tau), q_end, &w_end))
+                        .collect(),
+                ),
+                // w_endᵀΨ(t_end)
+                None => {
+                    let s_end = &ss[q_end * sz..(q_end + 1) * sz];
+                    SpanAdjoint::Inverse(
+                        (0..nx)
+                            .map(|j| (0..nx).map(|i| w_end[i] * s_end[i + j * nx]).sum())
+                            .collect(),
+                    )
+                }
+            };
+            if !self.add_span_curvature(p, &xs, &ss, &times, t_end, &adjoint, hess)? {
                 return Ok(false);
             }
         }
@@ -548,9 +556,10 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
     }
 
     /// Add `∇²_z w_endᵀ x(t_end)` to `hess` by Gauss–Legendre quadrature over `[0, t_end]`
-    /// from the states and sensitivities `xs`, `ss` at `times`; `s_end` = S(t_end).
-    #[allow(clippy::too_many_arguments)]
+    /// from the states and sensitivities `xs`, `ss` at `times`, with the span's adjoint
+    /// weights found as `adjoint` says.
     /// Returns `Ok(false)` when the model has no second derivatives.
+    #[allow(clippy::too_many_arguments)]
     fn add_span_curvature(
         &self,
         p: &[f64],
@@ -558,9 +567,7 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
         ss: &[f64],
         times: &[f64],
         t_end: f64,
-        w_end: &[f64],
-        s_end: &[f64],
-        chained: Option<&[Vec<f64>]>,
+        adjoint: &SpanAdjoint,
         hess: &mut [f64],
     ) -> Result<bool, IntegratorError> {
         let m = self.model;
@@ -570,10 +577,6 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
         let nw = nx + nu + nt;
         let sz = nx * nz;
         let at = |t: f64| times.partition_point(|&v| v < t);
-        // wᵀΨ(t_end)
-        let lam_psi1: Vec<f64> = (0..nx)
-            .map(|j| (0..nx).map(|i| w_end[i] * s_end[i + j * nx]).sum())
-            .collect();
         let dur = p[self.p_duration()];
         let theta = &p[self.p_theta()];
         let mut u = vec![0.0; nu];
@@ -584,12 +587,12 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
             let q = at(tau);
             let x = &xs[q * nx..(q + 1) * nx];
             let s = &ss[q * sz..(q + 1) * sz];
-            let mu: Vec<f64> = match chained {
-                Some(mus) => mus[node].clone(),
-                None => {
+            let mu: Vec<f64> = match adjoint {
+                SpanAdjoint::Given(mus) => mus[node].clone(),
+                SpanAdjoint::Inverse(lam_psi1) => {
                     // μ(τ)ᵀ = λᵀΨ(1)Ψ(τ)⁻¹: solve Ψ(τ)ᵀ μ = (λᵀΨ(1))ᵀ
                     let psi = nalgebra::DMatrix::from_column_slice(nx, nx, &s[..nx * nx]);
-                    let rhs = nalgebra::DVector::from_column_slice(&lam_psi1);
+                    let rhs = nalgebra::DVector::from_column_slice(lam_psi1);
                     let mu = psi
                         .transpose()
                         .lu()
