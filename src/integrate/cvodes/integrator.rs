@@ -131,6 +131,13 @@ impl Integrator {
             if this.y.is_null() {
                 return Err(null_error("N_VNew_Serial"));
             }
+            // Fused vector kernels: CVODES then updates all sensitivity vectors in one
+            // pass per operation instead of one `N_VLinearSum` per vector (the work and
+            // its vectors are cloned from `y`, so they inherit the setting).
+            check_setup(
+                "N_VEnableFusedOps_Serial",
+                sys::N_VEnableFusedOps_Serial(this.y, 1),
+            )?;
             sys::N_VConst(0.0, this.y);
             check_setup(
                 "CVodeInit",
