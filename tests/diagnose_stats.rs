@@ -166,9 +166,30 @@ fn check_every_candidate(d: &Value) {
 fn a_cop_offset_is_untestable_under_the_seed_cost_and_found_when_made_testable() {
     let dir = tempfile::tempdir().unwrap();
     let run = seed_run(dir.path());
-    let d = diagnose(&run, &["cop_offset", "force_plate_time_offset"], true);
+    let d = diagnose(
+        &run,
+        &[
+            "cop_offset",
+            "force_plate_time_offset",
+            "heel_pad_compliance",
+        ],
+        true,
+    );
     print_ranking(&d);
     check_every_candidate(&d);
+    // the ellipse has no heel circle for a pad: named with the reason, the rest scored
+    let pad: Vec<&str> = d["skipped"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter_map(|s| s.as_str())
+        .filter(|s| s.starts_with("heel-pad compliance:"))
+        .collect();
+    assert!(
+        pad.len() == 1 && pad[0].contains("no primitive 'heel'"),
+        "{}",
+        d["skipped"]
+    );
     let cop = entry(&d, "cop_offset");
     assert_eq!(cop["testable"], false, "{cop:#}");
     assert_eq!(cop["significant"], false);

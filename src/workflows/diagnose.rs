@@ -473,6 +473,12 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
             continue;
         }
         if c.kind() == pad.kind() {
+            // a foot without a heel circle has no place for the pad: the candidate is
+            // named with the model's reason, and the other candidates' scores stand
+            if let Err(e) = TrackingProblem::build(&setup, std::slice::from_ref(c)) {
+                skipped.push(format!("{}: {e:#}", c.label()));
+                continue;
+            }
             if !(setup.one_sided_targets || setup.sample_targets) {
                 skipped.push(format!(
                     "{}: {}",
