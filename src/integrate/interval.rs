@@ -310,15 +310,57 @@ const GAUSS4: [(f64, f64); 4] = [
     (0.930_568_155_797_026_3, 0.173_927_422_568_726_93),
 ];
 
-/// The Gauss–Legendre nodes and weights of `[0, t_end]`.
-fn quadrature_nodes(t_end: f64) -> impl Iterator<Item = (f64, f64)> {
-    GAUSS4.iter().map(move |&(g, w)| (t_end * g, t_end * w))
+/// Gauss–Legendre rules of 1 to 3 points on [0, 1] (nodes, weights).
+const GAUSS1: [(f64, f64); 1] = [(0.5, 1.0)];
+const GAUSS2: [(f64, f64); 2] = [
+    (0.211_324_865_405_187_1, 0.5),
+    (0.788_675_134_594_812_9, 0.5),
+];
+const GAUSS3: [(f64, f64); 3] = [
+    (0.112_701_665_379_258_3, 5.0 / 18.0),
+    (0.5, 8.0 / 18.0),
+    (0.887_298_334_620_741_7, 5.0 / 18.0),
+];
+
+/// Quadrature nodes of `[0, 1]` split at the interior instants `interior` (where the
+/// adjoint of the curvature identity jumps): `(τ, weight, end of τ's piece)`, a
+/// Gauss–Legendre rule on each piece with 4 points on a piece of at least half the
+/// interval, 3 from a quarter, 2 from a tenth, 1 below (a sample every millisecond of a
+/// 20 ms interval: 21 one-point pieces instead of 21 four-point spans). Without
+/// interior instants: the 4-point rule on [0, 1].
+fn piece_nodes(interior: &[f64]) -> Vec<(f64, f64, f64)> {
+    let mut breaks: Vec<f64> = interior
+        .iter()
+        .copied()
+        .filter(|&t| t > 0.0 && t < 1.0)
+        .collect();
+    breaks.sort_by(f64::total_cmp);
+    breaks.dedup();
+    breaks.push(1.0);
+    let mut out = Vec::new();
+    let mut a = 0.0;
+    for b in breaks {
+        let len = b - a;
+        let rule: &[(f64, f64)] = if len >= 0.5 {
+            &GAUSS4
+        } else if len >= 0.25 {
+            &GAUSS3
+        } else if len >= 0.1 {
+            &GAUSS2
+        } else {
+            &GAUSS1
+        };
+        out.extend(rule.iter().map(|&(g, w)| (a + len * g, len * w, b)));
+        a = b;
+    }
+    out
 }
 
-/// How a span's adjoint weights μ(τ) at its quadrature nodes are found.
+/// How the adjoint weights μ(τ) at the quadrature nodes are found.
 enum SpanAdjoint {
-    /// From `wᵀΨ(t_end)`, by solving with Ψ(τ) at each node (the single pass).
-    Inverse(Vec<f64>),
+    /// From `c = Σ Ψ(t_end)ᵀw_end` of each piece (by its end), by solving with Ψ(τ) at
+    /// each node (the single pass).
+    Inverse(Vec<(f64, Vec<f64>)>),
     /// Given, one per node (the chained segments of a stiff model).
     Given(Vec<Vec<f64>>),
 }
@@ -407,16 +449,21 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
             xs_out,
             ss_out,
             &[],
+            &[],
             &mut |_, _| Ok(Vec::new()),
         )
     }
 
     /// As [`integrate_with_hessian_and_outputs`](Self::integrate_with_hessian_and_outputs),
     /// with the curvature of `w_iᵀ x(τ_i)` added for every interior instant `τ_i` of
-    /// `interior` (each one of `outputs`): the same identity over `[0, τ_i]` with
-    /// `μ_i(τ)ᵀ = w_iᵀΨ(τ_i)Ψ(τ)⁻¹`, 4 Gauss–Legendre nodes on that span in the same pass.
-    /// `weights(i, x(τ_i))` gives `w_i` (nx) once the state there is known (e.g. the
-    /// multipliers of a constraint on `x(τ_i)` times its gradient).
+    /// `interior` (increasing, each one of `outputs`): the same identity over `[0, τ_i]`
+    /// with `μ_i(τ)ᵀ = w_iᵀΨ(τ_i)Ψ(τ)⁻¹`, in the same pass. Where `own_span[i]`, on 4
+    /// Gauss–Legendre nodes of that span of its own (a check point); otherwise folded into
+    /// the interval's own rule, which is then split at those instants into pieces on which
+    /// the summed adjoint is smooth ([`piece_nodes`]; the samples of a high-rate trial:
+    /// one node per millisecond instead of four per sample). `weights(i, x(τ_i))` gives
+    /// `w_i` (nx) once the state there is known (e.g. the multipliers of a constraint on
+    /// `x(τ_i)` times its gradient).
     #[allow(clippy::too_many_arguments)]
     pub fn integrate_with_hessian_interior(
         &self,
@@ -431,21 +478,36 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
         xs_out: &mut Vec<f64>,
         ss_out: &mut Vec<f64>,
         interior: &[f64],
+        own_span: &[bool],
         weights: &mut dyn FnMut(usize, &[f64]) -> Result<Vec<f64>, IntegratorError>,
     ) -> Result<bool, IntegratorError> {
         let m = self.model;
         let nx = m.nx();
         let np = self.np();
         let nz = nx + np;
-        // the quadrature nodes (of [0, 1] and of every [0, τ_i]), the outputs and the
-        // end, in time order
-        let mut times: Vec<f64> = quadrature_nodes(1.0)
-            .map(|(t, _)| t)
-            .chain(
-                interior
+        // the quadrature nodes of the pieces between the interior instants, the outputs
+        // and the end, in time order
+        let own = |i: usize| own_span.get(i).copied().unwrap_or(false);
+        let folded: Vec<f64> = (0..interior.len())
+            .filter(|&i| !own(i))
+            .map(|i| interior[i])
+            .collect();
+        let nodes = piece_nodes(&folded);
+        // the spans of their own: 4 nodes on [0, τ_i], all in the piece ending at τ_i
+        let own_nodes: Vec<Vec<(f64, f64, f64)>> = (0..interior.len())
+            .filter(|&i| own(i))
+            .map(|i| {
+                let t_end = interior[i];
+                GAUSS4
                     .iter()
-                    .flat_map(|&ti| quadrature_nodes(ti).map(|(t, _)| t)),
-            )
+                    .map(|&(g, w)| (t_end * g, t_end * w, t_end))
+                    .collect()
+            })
+            .collect();
+        let mut times: Vec<f64> = nodes
+            .iter()
+            .chain(own_nodes.iter().flatten())
+            .map(|n| n.0)
             .chain(outputs.iter().copied())
             .chain([1.0])
             .collect();
@@ -474,34 +536,83 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
         hess.iter_mut().for_each(|v| *v = 0.0);
         // (end instant, weights on the state there): λ at 1, then each w_i at τ_i
         let mut spans: Vec<(f64, Vec<f64>)> = vec![(1.0, lambda.to_vec())];
+        let mut own_spans: Vec<(f64, Vec<f64>)> = Vec::new();
         for (i, &ti) in interior.iter().enumerate() {
             let q = at(ti);
-            spans.push((ti, weights(i, &xs[q * nx..(q + 1) * nx])?));
+            let w = weights(i, &xs[q * nx..(q + 1) * nx])?;
+            if own(i) {
+                own_spans.push((ti, w));
+            } else {
+                spans.push((ti, w));
+            }
         }
-        for (t_end, w_end) in spans {
-            let q_end = at(t_end);
-            let adjoint = match &segments {
-                // μ(τ)ᵀ = w_endᵀΨ(t_end, τ) at the span's nodes, from the chained segments
-                Some(psis) => SpanAdjoint::Given(
-                    quadrature_nodes(t_end)
-                        .map(|(tau, _)| adjoint_weights(psis, nx, at(tau), q_end, &w_end))
-                        .collect(),
-                ),
-                // w_endᵀΨ(t_end)
-                None => {
-                    let s_end = &ss[q_end * sz..(q_end + 1) * sz];
-                    SpanAdjoint::Inverse(
-                        (0..nx)
-                            .map(|j| (0..nx).map(|i| w_end[i] * s_end[i + j * nx]).sum())
-                            .collect(),
-                    )
-                }
-            };
-            if !self.add_span_curvature(p, &xs, &ss, &times, t_end, &adjoint, hess)? {
+        if !self.add_spans_curvature(p, &xs, &ss, &times, &segments, &nodes, &spans, hess)? {
+            return Ok(false);
+        }
+        for (span, nodes) in own_spans.iter().zip(&own_nodes) {
+            let spans = std::slice::from_ref(span);
+            if !self.add_spans_curvature(p, &xs, &ss, &times, &segments, nodes, spans, hess)? {
                 return Ok(false);
             }
         }
         Ok(true)
+    }
+
+    /// Add the curvature of `Σ w_endᵀ x(t_end)` over `spans` by the quadrature `nodes`
+    /// (`(τ, weight, end of τ's piece)`): on the piece ending at b, μ(τ) sums the
+    /// adjoints of the spans `[0, t_end]` with `t_end ≥ b`.
+    #[allow(clippy::too_many_arguments)]
+    fn add_spans_curvature(
+        &self,
+        p: &[f64],
+        xs: &[f64],
+        ss: &[f64],
+        times: &[f64],
+        segments: &Option<Vec<Vec<f64>>>,
+        nodes: &[(f64, f64, f64)],
+        spans: &[(f64, Vec<f64>)],
+        hess: &mut [f64],
+    ) -> Result<bool, IntegratorError> {
+        let nx = self.model.nx();
+        let sz = nx * (nx + self.np());
+        let at = |t: f64| times.partition_point(|&v| v < t);
+        // μ(τ)ᵀ = Σ w_endᵀΨ(t_end, τ)
+        let adjoint = match segments {
+            // from the chained segments, node by node
+            Some(psis) => SpanAdjoint::Given(
+                nodes
+                    .iter()
+                    .map(|&(tau, _, b)| {
+                        let mut mu = vec![0.0; nx];
+                        for (t_end, w_end) in spans.iter().filter(|sp| sp.0 >= b) {
+                            let m = adjoint_weights(psis, nx, at(tau), at(*t_end), w_end);
+                            mu.iter_mut().zip(&m).for_each(|(a, v)| *a += v);
+                        }
+                        mu
+                    })
+                    .collect(),
+            ),
+            // Σ w_endᵀΨ(t_end), per piece end
+            None => {
+                let mut per_end: Vec<(f64, Vec<f64>)> = Vec::new();
+                for &(_, _, b) in nodes {
+                    if per_end.last().is_some_and(|e| e.0 == b) {
+                        continue;
+                    }
+                    let mut c = vec![0.0; nx];
+                    for (t_end, w_end) in spans.iter().filter(|sp| sp.0 >= b) {
+                        let q_end = at(*t_end);
+                        let s_end = &ss[q_end * sz..(q_end + 1) * sz];
+                        for (j, cj) in c.iter_mut().enumerate() {
+                            *cj += (0..nx).map(|i| w_end[i] * s_end[i + j * nx]).sum::<f64>();
+                        }
+                    }
+                    per_end.push((b, c));
+                }
+                SpanAdjoint::Inverse(per_end)
+            }
+        };
+        self.add_node_curvature(p, xs, ss, times, nodes, &adjoint, hess)
     }
 
     /// States and sensitivities at `times` (strictly increasing, ending at 1) by one
@@ -560,13 +671,13 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
     /// weights found as `adjoint` says.
     /// Returns `Ok(false)` when the model has no second derivatives.
     #[allow(clippy::too_many_arguments)]
-    fn add_span_curvature(
+    fn add_node_curvature(
         &self,
         p: &[f64],
         xs: &[f64],
         ss: &[f64],
         times: &[f64],
-        t_end: f64,
+        nodes: &[(f64, f64, f64)],
         adjoint: &SpanAdjoint,
         hess: &mut [f64],
     ) -> Result<bool, IntegratorError> {
@@ -583,16 +694,22 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
         let mut h = vec![0.0; nw * nw];
         let mut xdot = vec![0.0; nx];
         let (mut fx, mut fu, mut ft) = (vec![0.0; nx * nx], vec![0.0; nx * nu], vec![0.0; nx * nt]);
-        for (node, (tau, wq)) in quadrature_nodes(t_end).enumerate() {
+        for (node, &(tau, wq, piece_end)) in nodes.iter().enumerate() {
             let q = at(tau);
             let x = &xs[q * nx..(q + 1) * nx];
             let s = &ss[q * sz..(q + 1) * sz];
             let mu: Vec<f64> = match adjoint {
                 SpanAdjoint::Given(mus) => mus[node].clone(),
-                SpanAdjoint::Inverse(lam_psi1) => {
-                    // μ(τ)ᵀ = λᵀΨ(1)Ψ(τ)⁻¹: solve Ψ(τ)ᵀ μ = (λᵀΨ(1))ᵀ
+                SpanAdjoint::Inverse(per_end) => {
+                    // μ(τ)ᵀ = cᵀΨ(τ)⁻¹ with c = Σ Ψ(t_end)ᵀw_end of the piece: solve
+                    // Ψ(τ)ᵀ μ = c
+                    let c = &per_end
+                        .iter()
+                        .find(|e| e.0 == piece_end)
+                        .expect("every piece end has its weights")
+                        .1;
                     let psi = nalgebra::DMatrix::from_column_slice(nx, nx, &s[..nx * nx]);
-                    let rhs = nalgebra::DVector::from_column_slice(lam_psi1);
+                    let rhs = nalgebra::DVector::from_column_slice(c);
                     let mu = psi
                         .transpose()
                         .lu()

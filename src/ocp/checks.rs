@@ -232,37 +232,54 @@ pub(super) fn add_direct_curvature(
         let mut g = vec![0.0; nw * nw];
         cp.f.weighted_hessian(&z, weights, &mut g)
             .map_err(|e| format!("check point '{}': {e}", cp.name))?;
-        // D (nw × ncols): the state rows are S(τ), the control and θ rows direct
         let s = &ss[q * nx * ncols..(q + 1) * nx * ncols];
-        let mut dm = vec![0.0; nw * ncols];
-        for c in 0..ncols {
-            dm[c * nw..c * nw + nx].copy_from_slice(&s[c * nx..(c + 1) * nx]);
-        }
-        for k in 0..nu {
-            match interval.p_u1() {
-                Some(r1) => {
-                    dm[nx + k + (nx + interval.p_u0().start + k) * nw] = 1.0 - tau;
-                    dm[nx + k + (nx + r1.start + k) * nw] = tau;
-                }
-                None => dm[nx + k + (nx + interval.p_u0().start + k) * nw] = 1.0,
-            }
-        }
-        for (k, c) in interval.p_theta().enumerate() {
-            dm[nx + nu + k + (nx + c) * nw] = 1.0;
-        }
-        let gd: Vec<f64> = (0..ncols)
-            .flat_map(|c| {
-                let (g, dm) = (&g, &dm);
-                (0..nw).map(move |r| (0..nw).map(|k| g[r + k * nw] * dm[k + c * nw]).sum::<f64>())
-            })
-            .collect();
-        for a in 0..ncols {
-            for b in 0..ncols {
-                hess[a + b * ncols] += (0..nw)
-                    .map(|r| dm[r + a * nw] * gd[r + b * nw])
-                    .sum::<f64>();
-            }
-        }
+        add_instant_curvature(&interval, (nx, nu, nt), tau, s, &g, hess);
     }
     Ok(())
+}
+
+/// Add `Dᵀ g D` to an interval's Hessian `hess` ((nx+np)², column-major, over the
+/// interval's own columns `(x0, u0, [u1], h, θ)`), where `g` ((nx+nu+nθ)², column-major) is
+/// the curvature of a function of `(x(τ), u(τ), θ)` and `D = ∂(x(τ), u(τ), θ)/∂(x0, p)`:
+/// the state rows are the sensitivities `s` (nx × (nx+np)) at τ, the control and θ rows
+/// direct.
+pub(super) fn add_instant_curvature<O: crate::integrate::ControlledOde + ?Sized>(
+    interval: &ShootingInterval<'_, O>,
+    (nx, nu, nt): (usize, usize, usize),
+    tau: f64,
+    s: &[f64],
+    g: &[f64],
+    hess: &mut [f64],
+) {
+    let ncols = nx + interval.np();
+    let nw = nx + nu + nt;
+    let mut dm = vec![0.0; nw * ncols];
+    for c in 0..ncols {
+        dm[c * nw..c * nw + nx].copy_from_slice(&s[c * nx..(c + 1) * nx]);
+    }
+    for k in 0..nu {
+        match interval.p_u1() {
+            Some(r1) => {
+                dm[nx + k + (nx + interval.p_u0().start + k) * nw] = 1.0 - tau;
+                dm[nx + k + (nx + r1.start + k) * nw] = tau;
+            }
+            None => dm[nx + k + (nx + interval.p_u0().start + k) * nw] = 1.0,
+        }
+    }
+    for (k, c) in interval.p_theta().enumerate() {
+        dm[nx + nu + k + (nx + c) * nw] = 1.0;
+    }
+    let gd: Vec<f64> = (0..ncols)
+        .flat_map(|c| {
+            let dm = &dm;
+            (0..nw).map(move |r| (0..nw).map(|k| g[r + k * nw] * dm[k + c * nw]).sum::<f64>())
+        })
+        .collect();
+    for a in 0..ncols {
+        for b in 0..ncols {
+            hess[a + b * ncols] += (0..nw)
+                .map(|r| dm[r + a * nw] * gd[r + b * nw])
+                .sum::<f64>();
+        }
+    }
 }

@@ -55,6 +55,11 @@ impl ControlledOde for WithQuadrature<'_> {
     fn ntheta(&self) -> usize {
         self.ode.ntheta()
     }
+    /// The model's: the quadrature states add no stiffness (their rows of ∂f/∂x are
+    /// zero), but the model's own stiff transition needs the chained pass all the same.
+    fn stiff_transition(&self) -> bool {
+        self.ode.stiff_transition()
+    }
     fn f(&self, x: &[f64], u: &[f64], theta: &[f64], xdot: &mut [f64]) -> Result<(), OdeError> {
         let n = self.ode.nx();
         self.ode.f(&x[..n], u, theta, &mut xdot[..n])?;
