@@ -38,6 +38,45 @@ fn term_hessian_error(f: &dyn NodeFunction, z: &[f64], wts: &[f64]) -> f64 {
     worst
 }
 
+/// Largest |H d − FD| of the assembled Hessian of the Lagrangian (Gauss–Newton plus the
+/// curvature triplets, upper triangle) applied to `d`, against central differences (step
+/// `e`) of `grad_l`, relative to the differences' largest entry; and that entry.
+fn hessian_error(
+    gn: (&[usize], &[usize], &[f64]),
+    curvature: (&[usize], &[usize], &[f64]),
+    w0: &[f64],
+    d: &[f64],
+    e: f64,
+    grad_l: impl Fn(&[f64]) -> Vec<f64>,
+) -> (f64, f64) {
+    let mut hd = vec![0.0; w0.len()];
+    for (rows, cols, vals) in [gn, curvature] {
+        for k in 0..rows.len() {
+            let (r, c, v) = (rows[k], cols[k], vals[k]);
+            hd[r] += v * d[c];
+            if r != c {
+                hd[c] += v * d[r];
+            }
+        }
+    }
+    let wp: Vec<f64> = w0.iter().zip(d).map(|(w, d)| w + e * d).collect();
+    let wm: Vec<f64> = w0.iter().zip(d).map(|(w, d)| w - e * d).collect();
+    let (gp, gm) = (grad_l(&wp), grad_l(&wm));
+    let fd: Vec<f64> = gp
+        .iter()
+        .zip(&gm)
+        .map(|(a, b)| (a - b) / (2.0 * e))
+        .collect();
+    let scale = fd.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    let worst = hd
+        .iter()
+        .zip(&fd)
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max)
+        / scale;
+    (worst, scale)
+}
+
 #[test]
 fn gait_term_hessians_match_finite_differences() {
     for (foot, phases) in [
@@ -120,36 +159,8 @@ fn tracking_lagrangian_hessian_matches_finite_differences() {
     };
     for trial in 0..2 {
         let d: Vec<f64> = (0..tr.n()).map(|_| rng.uniform(-1.0, 1.0)).collect();
-        // H d from the upper-triangle triplets
-        let mut hd = vec![0.0; tr.n()];
-        let mut apply = |r: usize, c: usize, v: f64| {
-            hd[r] += v * d[c];
-            if r != c {
-                hd[c] += v * d[r];
-            }
-        };
-        for k in 0..gr.len() {
-            apply(gr[k], gc[k], ev.gn[k]);
-        }
-        for k in 0..hr.len() {
-            apply(hr[k], hc[k], hv[k]);
-        }
-        let e = 1e-5;
-        let wp: Vec<f64> = w0.iter().zip(&d).map(|(w, d)| w + e * d).collect();
-        let wm: Vec<f64> = w0.iter().zip(&d).map(|(w, d)| w - e * d).collect();
-        let (gp, gm) = (grad_l(&wp), grad_l(&wm));
-        let fd: Vec<f64> = gp
-            .iter()
-            .zip(&gm)
-            .map(|(a, b)| (a - b) / (2.0 * e))
-            .collect();
-        let scale = fd.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let worst = hd
-            .iter()
-            .zip(&fd)
-            .map(|(a, b)| (a - b).abs())
-            .fold(0.0, f64::max)
-            / scale;
+        let (worst, scale) =
+            hessian_error((gr, gc, &ev.gn), (&hr, &hc, &hv), &w0, &d, 1e-5, grad_l);
         eprintln!("direction {trial}: |Hd − FD| / |FD|∞ = {worst:.2e} (|FD|∞ = {scale:.3e})");
         // the interval curvature is a 4-point Gauss–Legendre quadrature of the
         // second-order adjoint identity; with these draws its error is largest in the
@@ -216,35 +227,8 @@ fn sample_target_hessian_matches_finite_differences_with_a_heel_pad() {
             ("the pad's stiffness", stiffness, 1e-2),
             ("a random direction", random, 2e-4),
         ] {
-            let mut hd = vec![0.0; n];
-            let mut apply = |r: usize, c: usize, v: f64| {
-                hd[r] += v * d[c];
-                if r != c {
-                    hd[c] += v * d[r];
-                }
-            };
-            for k in 0..gr.len() {
-                apply(gr[k], gc[k], ev.gn[k]);
-            }
-            for k in 0..hr.len() {
-                apply(hr[k], hc[k], hv[k]);
-            }
-            let e = 1e-5;
-            let wp: Vec<f64> = w0.iter().zip(&d).map(|(w, d)| w + e * d).collect();
-            let wm: Vec<f64> = w0.iter().zip(&d).map(|(w, d)| w - e * d).collect();
-            let (gp, gm) = (grad(&wp), grad(&wm));
-            let fd: Vec<f64> = gp
-                .iter()
-                .zip(&gm)
-                .map(|(a, b)| (a - b) / (2.0 * e))
-                .collect();
-            let scale = fd.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-            let worst = hd
-                .iter()
-                .zip(&fd)
-                .map(|(a, b)| (a - b).abs())
-                .fold(0.0, f64::max)
-                / scale;
+            let (worst, scale) =
+                hessian_error((gr, gc, &ev.gn), (&hr, &hc, &hv), &w0, &d, 1e-5, grad);
             eprintln!("{what}: |Hd − FD| / |FD|∞ = {worst:.2e} (|FD|∞ = {scale:.3e})");
             assert!(
                 worst < tol,

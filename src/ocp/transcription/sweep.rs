@@ -309,36 +309,25 @@ impl<'o, 'a> Transcription<'o, 'a> {
         )?;
         let sums = if !iv.sample_block {
             None
-        } else if iv.checks.is_empty() {
-            Some(self.sample_sums(
-                iv,
-                list,
-                moves,
-                &p,
-                &xs,
-                derivs.then_some(&ss[..]),
-                hess.as_deref_mut(),
-            )?)
         } else {
             // the samples' own rows of the merged instants
-            let (xs, ss) = checks::rows_at(
-                list.iter().map(|e| e.0),
-                &taus,
-                nx,
-                nx * (nx + np),
-                &xs,
-                &ss,
-                derivs,
-            );
-            Some(self.sample_sums(
-                iv,
-                list,
-                moves,
-                &p,
-                &xs,
-                derivs.then_some(&ss[..]),
-                hess.as_deref_mut(),
-            )?)
+            let rows;
+            let (xs, ss) = if iv.checks.is_empty() {
+                (&xs[..], &ss[..])
+            } else {
+                rows = checks::rows_at(
+                    list.iter().map(|e| e.0),
+                    &taus,
+                    nx,
+                    nx * (nx + np),
+                    &xs,
+                    &ss,
+                    derivs,
+                );
+                (&rows.0[..], &rows.1[..])
+            };
+            let ss = derivs.then_some(ss);
+            Some(self.sample_sums(iv, list, moves, &p, xs, ss, hess.as_deref_mut())?)
         };
         Ok((x1, s, stats, hess, sums, checks))
     }
@@ -379,14 +368,14 @@ impl<'o, 'a> Transcription<'o, 'a> {
     /// instant moves with θ (gradient in `moves`) adds `(∂r/∂x ẋ + ∂r/∂u u̇) ∂t/∂θ`.
     ///
     /// With `hess` (the interval's curvature block, when the exact Hessian is wanted) the
-    /// residuals' own curvature `2 Σ r_i ∇²r_i` through `(x(τ), u(τ), θ)` is added to it,
-    /// the direct part `Dᵀ (2 Σ r_i ∇²_{(x,u,θ)} r_i) D`; without it the exact Hessian of
-    /// a sample-target problem is Gauss–Newton in its data terms, and a weakly determined
-    /// parameter whose force depends on the state (the heel pad's stiffness times its
-    /// compression) converges linearly (rate 0.91 per iteration on the heel-pad re-fit of
-    /// tests/hidden_effects.rs). Left out, as in Gauss–Newton: the residuals' weight on the
-    /// state's own second-order sensitivity, and the curvature of an instant that moves
-    /// with θ.
+    /// direct part of the residuals' own curvature, `Dᵀ (2 Σ r_i ∇²_{(x,u,θ)} r_i) D`, is
+    /// added to it; their weight on the state's second-order sensitivity comes from
+    /// [`sample_state_weights`](Self::sample_state_weights) in the integration pass.
+    /// Without both the exact Hessian of a sample-target problem is Gauss–Newton in its
+    /// data terms, and a weakly determined parameter whose force depends on the state (the
+    /// heel pad's stiffness times its compression) converges linearly (rate 0.91 per
+    /// iteration on the heel-pad re-fit of tests/hidden_effects.rs). Left out, as in
+    /// Gauss–Newton: the curvature of an instant that moves with θ (a plate's clock).
     #[allow(clippy::too_many_arguments)]
     fn sample_sums(
         &self,
