@@ -216,21 +216,17 @@ impl<'o, 'a> Transcription<'o, 'a> {
                 .collect();
             let mut check_weights = |i: usize, x: &[f64]| {
                 let tau = interior[i];
-                let mut w = if iv.checks.iter().any(|c| c.0 == tau) {
-                    checks::state_weights(self.ocp, iv.phase, &iv.checks, tau, &p, x, lam).map_err(
-                        |reason| IntegratorError::BadSettings {
-                            field: "check point",
-                            reason,
-                        },
-                    )?
-                } else {
-                    vec![0.0; nx]
-                };
+                // zero where no check point is at τ
+                let mut w = checks::state_weights(self.ocp, iv.phase, &iv.checks, tau, &p, x, lam)
+                    .map_err(|reason| IntegratorError::BadSettings {
+                        field: "check point",
+                        reason,
+                    })?;
                 if let Some((_, terms)) = sample_taus.iter().find(|e| e.0 == tau) {
                     self.sample_state_weights(&interval, terms, tau, &p, x, &mut w)
-                        .map_err(|reason| IntegratorError::BadSettings {
+                        .map_err(|e| IntegratorError::BadSettings {
                             field: "sample term",
-                            reason,
+                            reason: e.to_string(),
                         })?;
                 }
                 Ok(w)
@@ -342,23 +338,42 @@ impl<'o, 'a> Transcription<'o, 'a> {
         p: &[f64],
         x: &[f64],
         w: &mut [f64],
-    ) -> Result<(), String> {
+    ) -> Result<(), TranscriptionError> {
         let nx = x.len();
         let z = checks::instant_args(interval, x, p, tau);
-        let nz = z.len();
         for &si in terms {
-            let term = &self.ocp.samples[si];
-            let d = term.f.dim();
-            let mut r = vec![0.0; d];
-            let mut jz = vec![0.0; d * nz];
-            term.f
-                .eval(&z, &mut r, Some(&mut jz))
-                .map_err(|e| format!("sample term '{}': {e}", term.name))?;
+            let (r, jz) = self.eval_sample(si, &z, true)?;
+            let d = r.len();
             for (k, wk) in w.iter_mut().enumerate().take(nx) {
                 *wk += (0..d).map(|i| 2.0 * r[i] * jz[i + k * d]).sum::<f64>();
             }
         }
         Ok(())
+    }
+
+    /// Sample term `si` at `z = (x(τ), u(τ), θ)`: its residuals and, with `jac`, their
+    /// Jacobian (d × nz, column-major; empty without).
+    fn eval_sample(
+        &self,
+        si: usize,
+        z: &[f64],
+        jac: bool,
+    ) -> Result<(Vec<f64>, Vec<f64>), TranscriptionError> {
+        let term = &self.ocp.samples[si];
+        let d = term.f.dim();
+        let mut r = vec![0.0; d];
+        let mut jz = if jac {
+            vec![0.0; d * z.len()]
+        } else {
+            Vec::new()
+        };
+        term.f
+            .eval(z, &mut r, jac.then_some(&mut jz[..]))
+            .map_err(|reason| TranscriptionError::Term {
+                term: term.name.clone(),
+                reason,
+            })?;
+        Ok((r, jz))
     }
 
     /// The sample terms `list` of interval `iv` at its integrated states `xs` (nx per τ,
@@ -411,15 +426,8 @@ impl<'o, 'a> Transcription<'o, 'a> {
             let u = &z[nx..nx + nu];
             for &si in terms {
                 let term = &self.ocp.samples[si];
-                let d = term.f.dim();
-                let mut r = vec![0.0; d];
-                let mut jz = vec![0.0; d * nz];
-                term.f
-                    .eval(&z, &mut r, ss.is_some().then_some(&mut jz[..]))
-                    .map_err(|reason| TranscriptionError::Term {
-                        term: term.name.clone(),
-                        reason,
-                    })?;
+                let (r, jz) = self.eval_sample(si, &z, ss.is_some())?;
+                let d = r.len();
                 out.f += r.iter().map(|v| v * v).sum::<f64>();
                 let Some(ss) = ss else { continue };
                 let s = &ss[q * nx * ncols..(q + 1) * nx * ncols];
