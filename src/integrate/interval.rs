@@ -9,6 +9,7 @@
 //! over $\tau$ from 0 to 1 with sensitivities gives $\partial x(1) / \partial (x_0, p)$, i.e.
 //! the defect Jacobians of the shooting transcription in one pass.
 
+use super::quadrature::{piece_nodes, GAUSS4};
 use std::ops::Range;
 
 use super::cvodes::IntegratorError;
@@ -298,62 +299,6 @@ impl<O: ControlledOde + ?Sized> Ode for ShootingInterval<'_, O> {
         }
         Ok(())
     }
-}
-
-/// Gauss–Legendre nodes and weights on [0, 1], 4 points (exact for polynomials of
-/// degree 7; on 17.5–50 ms intervals the interval Hessians agree with finite differences
-/// of the exact gradient to the differences' own accuracy, ~1e-8, tests/ocp_engine.rs).
-const GAUSS4: [(f64, f64); 4] = [
-    (0.069_431_844_202_973_71, 0.173_927_422_568_726_93),
-    (0.330_009_478_207_571_87, 0.326_072_577_431_273_07),
-    (0.669_990_521_792_428_1, 0.326_072_577_431_273_07),
-    (0.930_568_155_797_026_3, 0.173_927_422_568_726_93),
-];
-
-/// Gauss–Legendre rules of 1 to 3 points on [0, 1] (nodes, weights).
-const GAUSS1: [(f64, f64); 1] = [(0.5, 1.0)];
-const GAUSS2: [(f64, f64); 2] = [
-    (0.211_324_865_405_187_1, 0.5),
-    (0.788_675_134_594_812_9, 0.5),
-];
-const GAUSS3: [(f64, f64); 3] = [
-    (0.112_701_665_379_258_3, 5.0 / 18.0),
-    (0.5, 8.0 / 18.0),
-    (0.887_298_334_620_741_7, 5.0 / 18.0),
-];
-
-/// Quadrature nodes of `[0, 1]` split at the interior instants `interior` (where the
-/// adjoint of the curvature identity jumps): `(τ, weight, end of τ's piece)`, a
-/// Gauss–Legendre rule on each piece with 4 points on a piece of at least half the
-/// interval, 3 from a quarter, 2 from a tenth, 1 below (a sample every millisecond of a
-/// 20 ms interval: 21 one-point pieces instead of 21 four-point spans). Without
-/// interior instants: the 4-point rule on [0, 1].
-fn piece_nodes(interior: &[f64]) -> Vec<(f64, f64, f64)> {
-    let mut breaks: Vec<f64> = interior
-        .iter()
-        .copied()
-        .filter(|&t| t > 0.0 && t < 1.0)
-        .collect();
-    breaks.sort_by(f64::total_cmp);
-    breaks.dedup();
-    breaks.push(1.0);
-    let mut out = Vec::new();
-    let mut a = 0.0;
-    for b in breaks {
-        let len = b - a;
-        let rule: &[(f64, f64)] = if len >= 0.5 {
-            &GAUSS4
-        } else if len >= 0.25 {
-            &GAUSS3
-        } else if len >= 0.1 {
-            &GAUSS2
-        } else {
-            &GAUSS1
-        };
-        out.extend(rule.iter().map(|&(g, w)| (a + len * g, len * w, b)));
-        a = b;
-    }
-    out
 }
 
 /// How the adjoint weights μ(τ) at the quadrature nodes are found.

@@ -14,6 +14,7 @@
 
 mod cvodes;
 mod interval;
+mod quadrature;
 
 pub use cvodes::{IntegrationStats, Integrator, IntegratorError, IntegratorSettings, Method};
 pub use interval::{ControlShape, ControlledOde, ShootingInterval};
