@@ -4,7 +4,7 @@
 
 /// Gauss–Legendre nodes and weights on [0, 1], 4 points (exact for polynomials of
 /// degree 7; on 17.5–50 ms intervals the interval Hessians agree with finite differences
-/// of the exact gradient to the differences' own accuracy, ~1e-8, tests/suite/ocp_engine.rs).
+/// of the exact gradient to the differences' own accuracy, ~1e-8, tests/ocp_engine.rs).
 pub(super) const GAUSS4: [(f64, f64); 4] = [
     (0.069_431_844_202_973_71, 0.173_927_422_568_726_93),
     (0.330_009_478_207_571_87, 0.326_072_577_431_273_07),

@@ -44,36 +44,9 @@ impl GaitModel {
         let (q, qd, a) = (&x[..nq], &x[nq..2 * nq], &x[2 * nq..]);
         let p = self.full_params(theta);
         let mut act = vec![0.0; nq];
-        match &self.actuation {
-            Actuation::Mtg(set) => {
-                let f = self.actuator_adjust(&p);
-                for (k, &(c, joint)) in LEG_JOINTS.iter().enumerate() {
-                    act[c] += set.joint_torque_scaled(
-                        joint,
-                        a[2 * k],
-                        a[2 * k + 1],
-                        q[c],
-                        qd[c],
-                        f.strength,
-                        f.damping,
-                    );
-                }
-            }
-            Actuation::Torques {
-                reference_torque, ..
-            } => {
-                for (k, &(c, _)) in LEG_JOINTS.iter().enumerate() {
-                    act[c] += u[k] * *reference_torque;
-                }
-            }
-        }
+        self.add_actuator_forces(q, qd, a, u, &p, &mut act);
         let mut residual = vec![0.0; nq];
-        if let Some(scales) = &self.residuals {
-            let base = self.nu_actuators();
-            for (i, &sc) in scales.iter().enumerate() {
-                residual[i] = u[base + i] * sc;
-            }
-        }
+        self.add_residual_forces(u, &mut residual);
         let effects = (0..self.effects.len())
             .map(|e| {
                 let mut tau = vec![0.0; nq];
@@ -93,16 +66,18 @@ impl GaitModel {
         }
     }
 
-    /// Generalised joint forces of the actuators (and passive damping) and effects.
-    fn generalized_forces<S: ModelScalar>(
+    /// Add the actuators' generalised forces to `tau`: the muscle-torque generators with
+    /// their passive damping (scaled by the actuator effects in `p`), or the joint torques
+    /// `u · reference torque` (N·m per coordinate).
+    fn add_actuator_forces<S: ModelScalar>(
         &self,
         q: &[S],
         qd: &[S],
         a: &[S],
         u: &[S],
         p: &[S],
-    ) -> Vec<S> {
-        let mut tau = vec![S::c(0.0); self.nq()];
+        tau: &mut [S],
+    ) {
         match &self.actuation {
             Actuation::Mtg(set) => {
                 let f = self.actuator_adjust(p);
@@ -126,12 +101,30 @@ impl GaitModel {
                 }
             }
         }
+    }
+
+    /// Add the residual actuators' forces (their controls times their scales) to `tau`.
+    fn add_residual_forces<S: ModelScalar>(&self, u: &[S], tau: &mut [S]) {
         if let Some(scales) = &self.residuals {
             let base = self.nu_actuators();
             for (i, &sc) in scales.iter().enumerate() {
                 tau[i] += u[base + i] * sc;
             }
         }
+    }
+
+    /// Generalised joint forces of the actuators (and passive damping) and effects.
+    fn generalized_forces<S: ModelScalar>(
+        &self,
+        q: &[S],
+        qd: &[S],
+        a: &[S],
+        u: &[S],
+        p: &[S],
+    ) -> Vec<S> {
+        let mut tau = vec![S::c(0.0); self.nq()];
+        self.add_actuator_forces(q, qd, a, u, p, &mut tau);
+        self.add_residual_forces(u, &mut tau);
         for e in 0..self.effects.len() {
             S::forces(
                 self.effects[e].as_ref(),

@@ -389,7 +389,7 @@ impl<'o, 'a> Transcription<'o, 'a> {
     /// Without both the exact Hessian of a sample-target problem is Gauss–Newton in its
     /// data terms, and a weakly determined parameter whose force depends on the state (the
     /// heel pad's stiffness times its compression) converges linearly (rate 0.91 per
-    /// iteration on the heel-pad re-fit of tests/suite/hidden_effects.rs). Left out, as in
+    /// iteration on the heel-pad re-fit of tests/hidden_effects.rs). Left out, as in
     /// Gauss–Newton: the curvature of an instant that moves with θ (a plate's clock).
     #[allow(clippy::too_many_arguments)]
     fn sample_sums(

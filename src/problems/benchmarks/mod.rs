@@ -13,7 +13,7 @@
 //! derivative rule of the linear solve, ∂q̈ = M⁻¹(∂r − ∂M q̈), which gives the same
 //! Jacobian as AD through the Cholesky factorisation at about 0.6× the cost of the best
 //! plain-AD variant (3 passes of 5 lanes) and a quarter of one 15-lane pass (see
-//! `tests/suite/benchmark_models.rs`, `timing_of_f_and_f_jac`).
+//! `tests/benchmark_models.rs`, `timing_of_f_and_f_jac`).
 //!
 //! # Cart-pole ([`CartPole`])
 //!

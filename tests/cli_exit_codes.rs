@@ -1,0 +1,319 @@
+//! Exit codes of the `footfall` binary (README, "Exit codes"): option values outside
+//! their range are usage errors (2, clap's), bad files are bad input (1), a solve stopped
+//! by its iteration limit exits 3 and an infeasible one 4, both with the run folder
+//! written. Success (0) is in tests/cli_solve.rs, interruption (130) in tests/cli.rs.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+fn footfall(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_footfall"))
+        .args(args)
+        .current_dir(root())
+        .output()
+        .expect("run footfall")
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().expect("UTF-8 temp path")
+}
+
+/// Exit code `code`, one `error:` report naming every item of `names`, no panic.
+fn assert_exit(o: &Output, code: i32, names: &[&str]) -> String {
+    let err = String::from_utf8_lossy(&o.stderr).into_owned();
+    assert_eq!(o.status.code(), Some(code), "stderr: {err}");
+    assert!(err.starts_with("error: "), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    for n in names {
+        assert!(err.contains(n), "stderr does not name {n:?}: {err}");
+    }
+    err
+}
+
+#[test]
+fn out_of_range_option_values_are_usage_errors_naming_the_option() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("run");
+    let finite_positive = "expected a finite number > 0";
+    let cases: &[(&[&str], &str, &str)] = &[
+        (&["track", "--tol", "NaN"], "'--tol <TOL>'", finite_positive),
+        (&["track", "--tol=-1"], "'--tol <TOL>'", finite_positive),
+        (
+            &["track", "--max-time=-5"],
+            "'--max-time <MAX_TIME>'",
+            finite_positive,
+        ),
+        (
+            &["track", "--integrator-tol", "0"],
+            "'--integrator-tol <INTEGRATOR_TOL>'",
+            finite_positive,
+        ),
+        (
+            &["track", "--sensitivity-tol", "inf"],
+            "'--sensitivity-tol <SENSITIVITY_TOL>'",
+            finite_positive,
+        ),
+        (
+            &["track", "--exact-below", "NaN"],
+            "'--exact-below <EXACT_BELOW>'",
+            "≥ 0 (or inf)",
+        ),
+        (
+            &["track", "--max-iter", "1000000"],
+            "'--max-iter <MAX_ITER>'",
+            "from 0 to 100000",
+        ),
+        (
+            &["track", "--regularisation=-1e-3"],
+            "'--regularisation <REGULARISATION>'",
+            "finite number ≥ 0",
+        ),
+        (
+            &["track", "--transient-threshold", "0"],
+            "'--transient-threshold <TRANSIENT_THRESHOLD>'",
+            finite_positive,
+        ),
+        (
+            &["track", "--kinematics-cutoff", "NaN"],
+            "'--kinematics-cutoff <KINEMATICS_CUTOFF>'",
+            finite_positive,
+        ),
+        (
+            &["track", "--window", "1.6,0.5"],
+            "'--window <T0,T1>'",
+            "must be before",
+        ),
+        (
+            &["track", "--window", "0.5"],
+            "'--window <T0,T1>'",
+            "expected T0,T1",
+        ),
+        (&["track", "--stride", "0"], "'--stride <N>'", "not in 1.."),
+        (
+            &[
+                "solve",
+                "--problem",
+                "problems/cartpole_swingup.json",
+                "--tol",
+                "NaN",
+            ],
+            "'--tol <TOL>'",
+            finite_positive,
+        ),
+        (
+            &[
+                "solve",
+                "--problem",
+                "problems/cartpole_swingup.json",
+                "--max-time",
+                "0",
+            ],
+            "'--max-time <MAX_TIME>'",
+            finite_positive,
+        ),
+        (
+            &["predict", "--impulse-weight=-1"],
+            "'--impulse-weight <IMPULSE_WEIGHT>'",
+            "finite number ≥ 0",
+        ),
+        (
+            &["predict", "--ankle-velocity-limit", "0"],
+            "'--ankle-velocity-limit <ANKLE_VELOCITY_LIMIT>'",
+            finite_positive,
+        ),
+        (
+            &["compare", "--expect-ratio", "inf"],
+            "'--expect-ratio <EXPECT_RATIO>'",
+            finite_positive,
+        ),
+        (
+            &[
+                "simulate",
+                "--phase-set",
+                "phases/sim_ellipse_step.json",
+                "--dt",
+                "0",
+            ],
+            "'--dt <DT>'",
+            finite_positive,
+        ),
+        (
+            &["fit-foot", "--tol", "NaN"],
+            "'--tol <TOL>'",
+            finite_positive,
+        ),
+        (
+            &["diagnose", "runs/x", "--max-iter=-1"],
+            "'--max-iter <MAX_ITER>'",
+            "from 0 to 100000",
+        ),
+        (
+            &["synth", "--from", "runs/x", "--noise-force-n=-5"],
+            "'--noise-force-n <NOISE_FORCE_N>'",
+            "finite number ≥ 0",
+        ),
+        (
+            &["synth", "--from", "runs/x", "--rate", "0"],
+            "'--rate <RATE>'",
+            finite_positive,
+        ),
+        (
+            &["diff", "a", "b", "--threshold-pct", "NaN"],
+            "'--threshold-pct <THRESHOLD_PCT>'",
+            "finite number ≥ 0",
+        ),
+        (
+            &["report", "runs/x", "--transient-threshold=-1"],
+            "'--transient-threshold <TRANSIENT_THRESHOLD>'",
+            finite_positive,
+        ),
+    ];
+    for (args, option, valid) in cases {
+        let mut a = args.to_vec();
+        a.extend(["--out", s(&out), "--quiet"]);
+        assert_exit(&footfall(&a), 2, &[option, valid]);
+    }
+    assert!(!out.exists());
+}
+
+#[test]
+fn an_absurd_phase_file_is_bad_input() {
+    let tmp = tempfile::tempdir().unwrap();
+    let p = tmp.path().join("p.json");
+    let text = std::fs::read_to_string(root().join("phases/sim_ellipse_step.json")).unwrap();
+    std::fs::write(
+        &p,
+        text.replacen(
+            "\"type\": \"continuous\",",
+            "\"type\": \"continuous\", \"intervals\": 1000000,",
+            1,
+        ),
+    )
+    .unwrap();
+    let out = tmp.path().join("run");
+    let o = footfall(&[
+        "simulate",
+        "--phase-set",
+        s(&p),
+        "--out",
+        s(&out),
+        "--quiet",
+    ]);
+    assert_exit(
+        &o,
+        1,
+        &[
+            "p.json",
+            "phases[0] ('single_stance_r').intervals",
+            "1 to 10000",
+            "got 1000000",
+        ],
+    );
+    assert!(!out.exists());
+}
+
+#[test]
+fn an_absurd_gravity_is_bad_input_naming_the_field() {
+    let tmp = tempfile::tempdir().unwrap();
+    let m = tmp.path().join("model.json");
+    let text = std::fs::read_to_string(root().join("models/gait9dof.json")).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    v["gravity"] = 1e308.into();
+    std::fs::write(&m, v.to_string()).unwrap();
+    let out = tmp.path().join("run");
+    let o = footfall(&[
+        "simulate",
+        "--model",
+        s(&m),
+        "--phase-set",
+        "phases/sim_ellipse_step.json",
+        "--out",
+        s(&out),
+        "--quiet",
+    ]);
+    let err = assert_exit(
+        &o,
+        1,
+        &[
+            "model.json",
+            "field 'gravity'",
+            "1e308 m/s²",
+            "(0, 100] m/s²",
+        ],
+    );
+    assert!(err.len() < 300, "{err}");
+    assert!(!out.exists());
+}
+
+#[test]
+fn an_iteration_limit_exits_3_with_the_run_written() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("limited");
+    let o = footfall(&[
+        "solve",
+        "--problem",
+        "problems/cartpole_swingup.json",
+        "--max-iter",
+        "1",
+        "--out",
+        s(&out),
+        "--quiet",
+    ]);
+    assert_exit(&o, 3, &["iteration limit reached", "results written to"]);
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["status"], "max_iterations");
+}
+
+#[test]
+fn an_infeasible_problem_exits_4_with_the_run_written() {
+    // the cart-pole cannot swing up with |u| ≤ 1 mN: the solver finds a stationary point
+    // of the constraint violation (9 iterations on 10 intervals)
+    let tmp = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string(root().join("problems/cartpole_swingup.json")).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    v["bounds"]["u_lb"] = serde_json::json!([-0.001]);
+    v["bounds"]["u_ub"] = serde_json::json!([0.001]);
+    v["discretization"]["N"] = 10.into();
+    let p = tmp.path().join("weak.json");
+    std::fs::write(&p, v.to_string()).unwrap();
+    let out = tmp.path().join("weak");
+    let o = footfall(&["solve", "--problem", s(&p), "--out", s(&out), "--quiet"]);
+    assert_exit(&o, 4, &["infeasible"]);
+    let summary: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["status"], "infeasible");
+}
+
+#[test]
+fn help_lists_the_exit_codes() {
+    let o = footfall(&["--help"]);
+    assert!(o.status.success());
+    let help = String::from_utf8_lossy(&o.stdout);
+    for line in [
+        "Exit codes:",
+        "  1    bad input",
+        "  2    usage error",
+        "  3    solved but not converged",
+        "  4    infeasible",
+        "  5    converged but physically invalid",
+        "  130  interrupted",
+    ] {
+        assert!(help.contains(line), "{line:?} missing: {help}");
+    }
+}
+
+#[test]
+fn a_window_without_a_half_cycle_is_bad_input_listing_the_half_cycles() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("run");
+    let o = footfall(&["track", "--window", "0.0,0.4", "--out", s(&out), "--quiet"]);
+    let err = assert_exit(&o, 1, &["no half cycle", "0–0.4 s", "1: "]);
+    assert!(!out.join("summary.json").exists(), "{err}");
+    let o = footfall(&["track", "--stride", "9", "--out", s(&out), "--quiet"]);
+    assert_exit(&o, 1, &["stride 9 does not exist", "half cycle(s)"]);
+}

@@ -1,0 +1,229 @@
+//! The cost breakdown of a tracking solution adds up to the objective the NLP evaluates,
+//! and its worst windows do not overlap.
+
+mod common;
+use common::*;
+use footfall::integrate::IntegratorSettings;
+use footfall::ocp::Transcription;
+use footfall::problems::evaluation::GaitSolution;
+use footfall::problems::gait::GaitCycle;
+use footfall::sqp::Nlp;
+
+#[test]
+fn cost_breakdown_adds_up_to_the_objective() {
+    let (m, sets, setup) = bundled_tracking("ellipse.json", "phases/ellipse_walk.json");
+    let cycle = GaitCycle::new(&m, &setup.seq, &sets).unwrap();
+    let ocp = setup
+        .ocp(&cycle, &m, &sets, IntegratorSettings::default())
+        .unwrap();
+    let tr = Transcription::new(&ocp).unwrap();
+    let (_, _, w) = tr.variable_bounds_and_guess();
+    let f = Nlp::evaluate(&tr, &w, false).unwrap().f;
+    let sol = GaitSolution::from_nlp(&tr, &w, &cycle.continuous, setup.window.0);
+    let b = setup
+        .cost_breakdown(
+            &m,
+            &sets,
+            &cycle.continuous,
+            &sol,
+            &IntegratorSettings::default(),
+        )
+        .unwrap();
+    assert!(
+        (b.total() - f).abs() < 1e-9 * f,
+        "breakdown {} vs objective {f}",
+        b.total()
+    );
+    for c in [
+        "hip_r",
+        "knee_l",
+        "velocities",
+        "normal GRF",
+        "CoP",
+        "excitations",
+        "activations",
+    ] {
+        assert!(
+            b.channels.iter().any(|x| x == c),
+            "{c} missing: {:?}",
+            b.channels
+        );
+    }
+    assert_eq!(
+        b.phases.len(),
+        2,
+        "the ellipse graph's two continuous phases"
+    );
+    let rows = setup.data_rows(&m, &sets, &cycle.continuous);
+    assert_eq!(
+        b.nodes.len(),
+        sol.phases.iter().map(|p| p.intervals()).sum::<usize>() + 1
+    );
+    assert!(rows > b.nodes.len() * 14, "{rows} data residuals");
+    let win = b.worst_windows(5, 3);
+    assert_eq!(win.len(), 3);
+    for i in 0..3 {
+        for j in 0..i {
+            assert!(
+                win[i].1 < win[j].0 || win[j].1 < win[i].0,
+                "windows overlap: {win:?}"
+            );
+        }
+    }
+    assert!(win[0].2 >= win[1].2 && win[1].2 >= win[2].2);
+}
+
+/// With sample targets the breakdown integrates the intervals to the samples itself (in
+/// physical time, as the report does) and still adds up to the objective the NLP
+/// evaluates through its interval sensitivities; there is one entry per sample, and
+/// neither velocities nor node data.
+#[test]
+fn sample_target_breakdown_adds_up_to_the_objective() {
+    let (m, sets, setup) = bundled_tracking_with(
+        "double_circle.json",
+        "phases/double_circle_walk.json",
+        footfall::problems::track::TargetSides::Samples,
+    );
+    let cycle = GaitCycle::new(&m, &setup.seq, &sets).unwrap();
+    let tight = IntegratorSettings {
+        rtol: 1e-10,
+        atol: 1e-10,
+        ..Default::default()
+    };
+    let ocp = setup.ocp(&cycle, &m, &sets, tight.clone()).unwrap();
+    assert_eq!(ocp.samples.len(), setup.samples.len());
+    let tr = Transcription::new(&ocp).unwrap();
+    let (_, _, w) = tr.variable_bounds_and_guess();
+    let f = Nlp::evaluate(&tr, &w, false).unwrap().f;
+    let sol = GaitSolution::from_nlp(&tr, &w, &cycle.continuous, setup.window.0);
+    let b = setup
+        .cost_breakdown(&m, &sets, &cycle.continuous, &sol, &tight)
+        .unwrap();
+    assert!(
+        (b.total() - f).abs() < 1e-6 * f,
+        "breakdown {} vs objective {f}",
+        b.total()
+    );
+    assert!(
+        !b.channels.iter().any(|c| c == "velocities"),
+        "{:?}",
+        b.channels
+    );
+    for c in [
+        "hip_r",
+        "knee_l",
+        "normal GRF",
+        "CoP",
+        "excitations",
+        "activations",
+    ] {
+        assert!(
+            b.channels.iter().any(|x| x == c),
+            "{c} missing: {:?}",
+            b.channels
+        );
+    }
+    // every sample strictly inside the window, none on a phase boundary, in time order
+    let data = footfall::data::GaitData::bundled(&root()).unwrap();
+    let (t0, t1) = setup.window;
+    let inside = data
+        .time
+        .iter()
+        .filter(|&&t| t > t0 + 1e-9 && t < t1 - 1e-9)
+        .count();
+    assert!(
+        setup.samples.len() <= inside && setup.samples.len() + sol.phases.len() >= inside,
+        "{} samples of {inside}",
+        setup.samples.len()
+    );
+    assert_eq!(b.nodes.len(), setup.samples.len());
+    assert!(b.nodes.windows(2).all(|w| w[0].time < w[1].time));
+    // the data rows are the samples' angles (7 tracked coordinates) and loads
+    let rows = setup.data_rows(&m, &sets, &cycle.continuous);
+    assert!(
+        rows > 7 * setup.samples.len() && rows < 13 * setup.samples.len(),
+        "{rows} data residuals for {} samples",
+        setup.samples.len()
+    );
+}
+
+/// With a force-plate clock offset in the model the sample targets' loads are compared
+/// at the instant the offset moves them to (their own sample terms), not at the measured
+/// loads interpolated to a moved time: the breakdown, which samples the solution there
+/// itself, adds up to the NLP's objective at a nonzero offset, and the objective moves
+/// with the offset.
+#[test]
+fn sample_target_breakdown_adds_up_with_a_force_plate_clock_offset() {
+    use footfall::model::effects::EffectSpec;
+    use footfall::model::spec::{FootSpec, ModelSpec};
+    let (plain, sets, setup) = bundled_tracking_with(
+        "double_circle.json",
+        "phases/double_circle_walk.json",
+        footfall::problems::track::TargetSides::Samples,
+    );
+    let (mp, fp) = (
+        root().join("models/opensim_subject01.json"),
+        root().join("models/feet/double_circle.json"),
+    );
+    let mut spec = ModelSpec::load(&mp).unwrap();
+    spec.effects = vec![EffectSpec::parse_cli("force_plate_time_offset:offset=0.012").unwrap()];
+    let m = footfall::model::GaitModel::from_specs(&spec, &mp, &FootSpec::load(&fp).unwrap(), &fp)
+        .unwrap();
+    assert!(m.shifts_force_clock() && !plain.shifts_force_clock());
+    let tight = IntegratorSettings {
+        rtol: 1e-10,
+        atol: 1e-10,
+        ..Default::default()
+    };
+    let objective = |m: &footfall::model::GaitModel, offset: Option<f64>| {
+        let cycle = GaitCycle::new(m, &setup.seq, &sets).unwrap();
+        let ocp = setup.ocp(&cycle, m, &sets, tight.clone()).unwrap();
+        let tr = Transcription::new(&ocp).unwrap();
+        let (_, _, mut w) = tr.variable_bounds_and_guess();
+        if let Some(v) = offset {
+            let at = tr.range(footfall::ocp::Block::Params).start;
+            w[at] = v;
+        }
+        let f = Nlp::evaluate(&tr, &w, false).unwrap().f;
+        let sol = GaitSolution::from_nlp(&tr, &w, &cycle.continuous, setup.window.0);
+        let b = setup
+            .cost_breakdown(m, &sets, &cycle.continuous, &sol, &tight)
+            .unwrap();
+        (
+            f,
+            b,
+            ocp.samples.len(),
+            ocp.samples.iter().filter(|s| s.shift.is_some()).count(),
+        )
+    };
+    let (f0, _, n0, shifted0) = objective(&plain, None);
+    assert_eq!((n0, shifted0), (setup.samples.len(), 0));
+    let (f, b, n, shifted) = objective(&m, Some(0.012));
+    // each foot's loads are read on its own plate's clock
+    let with_loads: usize = setup
+        .samples
+        .iter()
+        .map(|s| s.target.feet.iter().filter(|f| f.is_some()).count())
+        .sum();
+    assert_eq!(
+        (n, shifted),
+        (setup.samples.len() + with_loads, with_loads),
+        "a term for the angles and one for the loads of every loaded foot of every sample"
+    );
+    assert!(
+        (b.total() - f).abs() < 1e-6 * f,
+        "breakdown {} vs objective {f}",
+        b.total()
+    );
+    assert_eq!(b.nodes.len(), setup.samples.len());
+    // the same model with the offset at zero compares the same instants as the plain one
+    let (z, _, _, _) = objective(&m, Some(0.0));
+    assert!(
+        (z - f0).abs() < 1e-9 * f0,
+        "zero offset {z} against the plain model's {f0}"
+    );
+    assert!(
+        (f - f0).abs() > 1e-3 * f0,
+        "a 12 ms offset leaves the objective at {f} (plain {f0})"
+    );
+}

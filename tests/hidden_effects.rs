@@ -1,0 +1,578 @@
+//! Data with a hidden effect, end to end through the library's workflows
+//! ([`footfall::workflows`]): `track` the synthetic trial with the plain model, `diagnose` it, and check that the hidden effect ranks
+//! first, that its re-fit brings every channel's error to the noise floor and that the
+//! identified parameter is the truth.
+//!
+//! The trials (tests/data/hidden/, made by tools/make-hidden-effect-data) are `synth`
+//! runs driven by the ellipse tracking solution of the bundled trial (the heel pad's and
+//! its floor's by the double-circle one) with the default
+//! noise (0.5°, 2 mm, 5 N, 5 mm at 100 Hz; the heel pad's at a force plate's 1 kHz).
+//! The *noise floor* of a channel is the mean
+//! error the exact model reaches on the same kind of trial with no hidden effect (the
+//! trial `none`): the seed's cost, with its u² and a² regularisation and spline
+//! velocity targets, does not fit noisy data down to the raw noise level (its forces
+//! stay about 2.5× the mean absolute noise, tests/tracking_recovery.rs).
+
+mod common;
+
+use footfall::problems::tracking::ChannelNoise;
+use footfall::runfolder::RunFolder;
+use footfall::workflows::diagnose::DiagnoseRequest;
+use footfall::workflows::track::{track, TrackRequest};
+use footfall::workflows::Quiet;
+use serde_json::Value;
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Prints how long a step took (the hidden-effect tests are most of CI's time).
+fn timed<R>(what: &str, name: &Path, f: impl FnOnce() -> R) -> R {
+    let start = std::time::Instant::now();
+    let r = f();
+    eprintln!(
+        "{what} {}: {:.1} s",
+        name.display(),
+        start.elapsed().as_secs_f64()
+    );
+    r
+}
+
+fn read_json(p: &Path) -> Value {
+    serde_json::from_str(
+        &std::fs::read_to_string(p).unwrap_or_else(|e| panic!("{}: {e}", p.display())),
+    )
+    .unwrap()
+}
+
+/// Mean error per channel of a run's summary.
+fn channel_means(run: &Path) -> Vec<(String, f64)> {
+    read_json(&run.join("summary.json"))["errors"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|c| {
+            (
+                c["channel"].as_str().unwrap().to_string(),
+                c["stats"]["mean"].as_f64().unwrap(),
+            )
+        })
+        .collect()
+}
+
+/// Mean error per channel and phase of a run's summary: `((channel, phase), mean)`.
+fn phase_means(run: &Path) -> Vec<((String, String), f64)> {
+    let mut out = Vec::new();
+    for c in read_json(&run.join("summary.json"))["errors_by_phase"]
+        .as_array()
+        .unwrap()
+    {
+        for p in c["phases"].as_array().unwrap() {
+            out.push((
+                (
+                    c["channel"].as_str().unwrap().to_string(),
+                    p["phase"].as_str().unwrap().to_string(),
+                ),
+                p["stats"]["mean"].as_f64().unwrap(),
+            ));
+        }
+    }
+    out
+}
+
+/// How a trial is tracked: the seed's cost with the ellipse foot, the same with the
+/// pelvis position tracked, the cost for identifying effort-costly parameters (the pelvis
+/// position tracked, no velocity targets, the u², a² regularisation at 1e-4 instead of
+/// the seed's 1e-3), or the double-circle foot (whose heel circle the heel pad needs)
+/// with every sample compared at its own instant (`--sample-targets`, unfiltered) and
+/// every channel weighted by the inverse variance of the trials' documented noise
+/// (`--noise-weights`, synth's default noise), on 100 Hz trials or on 1 kHz ones, the
+/// rate of force plates (`ForcePlateRate`; KKT tolerance 1e-4: the objective sums ten
+/// times the residuals, and the rigid fits' line searches stop for want of decrease at
+/// KKT 3–6e-5).
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Setup {
+    Seed,
+    Pelvis,
+    Identify,
+    Samples,
+    ForcePlateRate,
+}
+
+impl Setup {
+    fn index(self) -> usize {
+        self as usize
+    }
+    /// Name of its baselines' folders in tests/data/hidden/<trial>/.
+    fn slug(self) -> &'static str {
+        match self {
+            Setup::Seed => "seed",
+            Setup::Pelvis => "pelvis",
+            Setup::Identify => "identify",
+            Setup::Samples => "samples",
+            Setup::ForcePlateRate => "samples_1k",
+        }
+    }
+    /// The trial without a hidden effect (the noise floor's).
+    fn none(self) -> &'static str {
+        match self {
+            Setup::Samples => "double_circle_none",
+            Setup::ForcePlateRate => "double_circle_none_1k",
+            _ => "none",
+        }
+    }
+}
+
+/// Track trial `name` with the plain model. It starts from the trial's kept solution
+/// (tests/data/hidden/<trial>/tracked_<setup>, written by
+/// tools/make-hidden-effect-baselines from the bundled trial's solution of the same
+/// foot): `track` re-evaluates it and iterates only if it is not a KKT point of the
+/// current problem, which saves about a minute of iterations per trial.
+fn baseline(name: &str, dir: &Path, how: Setup) -> PathBuf {
+    let trial = root().join("tests/data/hidden").join(name);
+    let out = dir.join(name);
+    let foot = match how {
+        Setup::Samples | Setup::ForcePlateRate => "double-circle",
+        _ => "ellipse",
+    };
+    let mut req = TrackRequest::new(foot);
+    // as the kept solutions were made: the contact constraints at the nodes only (the
+    // ellipse's let the ground pull a foot between two nodes after heel strike, as the
+    // bundled trial's does); the diagnosis compares fits of one problem
+    req.check_points = false;
+    req.run.data = Some(trial.join("synthetic.csv"));
+    req.init = Some(trial.join(format!("tracked_{}", how.slug())));
+    if !matches!(how, Setup::Samples | Setup::ForcePlateRate) {
+        req.run.kinematics_cutoff = Some(10.0);
+    }
+    let noise = ChannelNoise {
+        angle_rad: 0.5f64.to_radians(),
+        position_m: 2e-3,
+        force_n: 5.0,
+        cop_m: 5e-3,
+    };
+    match how {
+        Setup::Seed => {}
+        Setup::Pelvis => req.run.track_pelvis_position = true,
+        Setup::Identify => {
+            req.run.track_pelvis_position = true;
+            req.run.regularisation = Some(1e-4);
+            req.run.velocity_weight = Some(0.0);
+        }
+        Setup::Samples => {
+            req.run.sample_targets = true;
+            req.run.noise_weights = Some(noise);
+        }
+        Setup::ForcePlateRate => {
+            req.run.sample_targets = true;
+            req.run.noise_weights = Some(noise);
+            req.sqp.tol_kkt = 1e-4;
+        }
+    }
+    timed("track", &out, || {
+        let folder = RunFolder::create(&out, false).unwrap();
+        let run = track(&req, folder, &Quiet).unwrap_or_else(|e| panic!("track {name}: {e:#}"));
+        assert!(
+            run.converged,
+            "track {name}: {} ({})",
+            run.result.status,
+            run.output.path.display()
+        );
+    });
+    out
+}
+
+/// `diagnose` the run (the catalog and, on a foot with a heel circle, the pad; or only
+/// `candidates`), with held-out validation on another half cycle when `held_out`.
+fn diagnose(run: &Path, verify: usize, candidates: &[&str], held_out: bool) -> Value {
+    let out = PathBuf::from(format!("{}-diagnose", run.display()));
+    let req = DiagnoseRequest {
+        run: run.to_path_buf(),
+        verify,
+        candidates: candidates.iter().map(|c| c.to_string()).collect(),
+        out: None,
+        overwrite: false,
+        tol: 1e-5,
+        max_iter: 200,
+        make_testable: false,
+        held_out,
+        profile_clocks: Vec::new(),
+        reference: None,
+    };
+    timed("diagnose", run, || {
+        footfall::workflows::diagnose::run(&req, &Quiet)
+            .unwrap_or_else(|e| panic!("diagnose {}: {e:#}", run.display()))
+    });
+    let summary = read_json(&out.join("summary.json"));
+    eprintln!(
+        "{}",
+        std::fs::read_to_string(out.join("diagnose.md")).unwrap()
+    );
+    summary
+}
+
+type Floor = (Vec<(String, f64)>, Value, Vec<((String, String), f64)>);
+
+/// The trials whose diagnosis also validates the found candidate on a held-out half
+/// cycle (the plain model tracked there from the data, about a minute in the test
+/// profile); `tests/diagnose_stats.rs` checks it on the CoP-offset trial. The other
+/// trials skip that track to keep the test command within the CI's time: their
+/// candidates are "significant, not validated", and rank, significance and the
+/// identified values are checked as before.
+const HELD_OUT_CHECKED: [&str; 1] = ["force_plate_time_offset"];
+
+/// The catalog's candidates by name, without the heel pad: on the 1 kHz trial without a
+/// hidden effect the pad's re-fit takes longer than the CI has room for (about 8
+/// minutes; it ends above the rigid fit, as on the 100 Hz trial, where it runs).
+const SCORED_CANDIDATES: [&str; 7] = [
+    "ground_slope",
+    "trunk_mass",
+    "passive_joint_stiffness:joint=hip",
+    "passive_joint_stiffness:joint=knee",
+    "passive_joint_stiffness:joint=ankle",
+    "force_plate_time_offset",
+    "cop_offset",
+];
+
+/// The noise floor (mean error per channel on the trial without a hidden effect), the
+/// diagnosis of that trial and the floor phase by phase, computed once for all tests
+/// (per setup).
+fn floor(how: Setup) -> &'static Floor {
+    static FLOOR: [OnceLock<Floor>; 5] = [
+        OnceLock::new(),
+        OnceLock::new(),
+        OnceLock::new(),
+        OnceLock::new(),
+        OnceLock::new(),
+    ];
+    FLOOR[how.index()].get_or_init(|| {
+        let dir = tempfile::tempdir().unwrap().keep();
+        let run = baseline(how.none(), &dir, how);
+        let d = diagnose(
+            &run,
+            1,
+            if how == Setup::ForcePlateRate {
+                &SCORED_CANDIDATES
+            } else {
+                &[]
+            },
+            // nothing should be significant here; anything that is must also pass the
+            // held-out half cycle
+            true,
+        );
+        (channel_means(&run), d, phase_means(&run))
+    })
+}
+
+/// The hidden values of trial `name`: `(field, value)` of every hidden effect.
+fn hidden_values(name: &str) -> Vec<(String, String, f64)> {
+    let truth = read_json(
+        &root()
+            .join("tests/data/hidden")
+            .join(name)
+            .join("truth.json"),
+    );
+    let mut out = Vec::new();
+    for e in truth["hidden_effects"].as_array().unwrap() {
+        let kind = e["type"].as_str().unwrap().to_string();
+        for (k, v) in e.as_object().unwrap() {
+            if let Some(x) = v.as_f64() {
+                if x != 0.0 {
+                    out.push((kind.clone(), k.clone(), x));
+                }
+            }
+        }
+    }
+    out
+}
+
+/// Every channel's mean error within `factor` × the floor.
+fn within_floor(run: &Path, factor: f64, how: Setup) -> Result<(), String> {
+    let (floor, _, _) = floor(how);
+    let mut bad = Vec::new();
+    for ((c, e), (_, f)) in channel_means(run).iter().zip(floor) {
+        if *e > factor * f {
+            bad.push(format!("{c}: {e:.3} > {factor} × {f:.3}"));
+        }
+    }
+    if bad.is_empty() {
+        Ok(())
+    } else {
+        Err(bad.join("; "))
+    }
+}
+
+/// Identified values of the verified re-fit against the hidden ones: within 20 %.
+fn check_parameters(verified: &Value, hidden: &[(String, String, f64)]) {
+    for p in verified["parameters"].as_array().unwrap() {
+        let name = p["name"].as_str().unwrap();
+        let kind = name.split('.').next().unwrap();
+        let field = name.rsplit('.').next().unwrap();
+        let value = p["value"].as_f64().unwrap();
+        let (_, _, truth) = hidden
+            .iter()
+            .find(|h| h.0 == kind && h.1 == field)
+            .unwrap_or_else(|| panic!("{name} was not hidden"));
+        let rel = (value - truth).abs() / truth.abs();
+        eprintln!(
+            "{name}: identified {value:.5} ± {}, truth {truth}, {:.1} % off",
+            p["sd"],
+            100.0 * rel
+        );
+        assert!(
+            rel < 0.2,
+            "{name}: identified {value}, truth {truth} ({:.1} % off)",
+            100.0 * rel
+        );
+    }
+}
+
+/// Whether a run's error shows above the noise floor: some channel's mean error above
+/// 1.5× the floor, over the whole window or in one phase (an effect confined to part of
+/// the cycle, as the heel pad's to heel contact, is diluted in the window's mean).
+fn above_floor(run: &Path, how: Setup) -> Option<String> {
+    let (floor, _, by_phase) = floor(how);
+    let whole = channel_means(run)
+        .into_iter()
+        .zip(floor)
+        .find(|((_, e), (_, f))| *e > 1.5 * f)
+        .map(|((c, e), (_, f))| format!("{c}: {e:.3} against {f:.3}"));
+    let phase = || {
+        phase_means(run)
+            .into_iter()
+            .zip(by_phase)
+            .inspect(|(a, b)| assert_eq!(a.0, b.0))
+            .find(|((_, e), (_, f))| *e > 1.5 * f)
+            .map(|(((c, p), e), (_, f))| format!("{c} in phase {p}: {e:.3} against {f:.3}"))
+    };
+    whole.or_else(phase)
+}
+
+/// One hidden effect: baseline above the floor, ranked first, re-fit at the floor with
+/// the truth identified.
+fn single_effect(name: &str, how: Setup, floor_factor: f64) {
+    let hidden = hidden_values(name);
+    let kind = hidden[0].0.as_str();
+    assert!(
+        hidden.iter().all(|h| h.0 == kind),
+        "{name}: more than one hidden effect"
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let run = baseline(name, dir.path(), how);
+    let shows = above_floor(&run, how)
+        .unwrap_or_else(|| panic!("{name}: the hidden effect does not show above the noise floor"));
+    eprintln!("{name} above the floor: {shows}");
+    let held_out = HELD_OUT_CHECKED.contains(&name);
+    let d = diagnose(&run, 1, &[], held_out);
+    assert_eq!(
+        d["ranking"][0]["effect"]["type"], kind,
+        "{name}: ranked first is {}",
+        d["ranking"][0]["label"]
+    );
+    assert_eq!(d["ranking"][0]["significant"], true);
+    if held_out {
+        assert_eq!(
+            d["ranking"][0]["verdict"], "found",
+            "{name}: not confirmed on the held-out half cycle: {}",
+            d["ranking"][0]["held_out"]
+        );
+    }
+    let v = &d["verified"][0];
+    assert_eq!(v["effect"]["type"], kind);
+    assert_eq!(v["converged"], true);
+    check_parameters(v, &hidden);
+    let refit = PathBuf::from(v["folder"].as_str().unwrap());
+    for ((c, before), (_, after)) in channel_means(&run)
+        .iter()
+        .zip(channel_means(&root().join(&refit)))
+    {
+        eprintln!(
+            "{c}: {before:.3} → {after:.3} (floor ×{:.2})",
+            after
+                / floor(how)
+                    .0
+                    .iter()
+                    .find(|f| f.0 == *c)
+                    .map_or(f64::NAN, |f| f.1)
+        );
+    }
+    within_floor(&root().join(&refit), floor_factor, how)
+        .unwrap_or_else(|e| panic!("{name}: after the re-fit {e}"));
+    if name == "heel_pad_compliance_1k" {
+        // beside the pad the rigid run also finds a clock offset and the trunk significant
+        // (a rigid heel's force rises earlier than a padded one's); with the pad added,
+        // a second diagnosis finds nothing
+        let second = diagnose(&root().join(&refit), 1, &[], false);
+        assert_eq!(
+            second["significant"], 0,
+            "after the pad's re-fit: {}",
+            second["verdict"]
+        );
+    }
+    if name == "ground_slope" {
+        // the diagnosis report renders with its ranking, the before/after table and plot
+        let url = format!("file://{}-diagnose/report.html", run.display());
+        let dom = String::from_utf8(common::chromium(
+            &["--dump-dom".into(), url],
+            std::time::Duration::from_secs(90),
+        ))
+        .unwrap();
+        for text in [
+            "Candidate effects ranked",
+            "Verified: ground slope",
+            "Mean tracking error per channel",
+            "foot orientation",
+        ] {
+            assert!(
+                dom.contains(text),
+                "'{text}' not in the rendered diagnosis report"
+            );
+        }
+        assert!(dom.matches("<svg").count() >= 1, "the before/after plot");
+        // and the curves before and after, side by side, in their own report
+        let page = PathBuf::from(format!(
+            "{}-diagnose/before_after_ground_slope.html",
+            run.display()
+        ));
+        let html =
+            std::fs::read_to_string(&page).unwrap_or_else(|e| panic!("{}: {e}", page.display()));
+        let before = run.file_name().unwrap().to_string_lossy().to_string();
+        let after = refit.file_name().unwrap().to_string_lossy().to_string();
+        for plot in ["knee angle", "ankle angular velocity", "normal GRF"] {
+            let at = html
+                .find(&format!("aria-label=\"{plot}\""))
+                .unwrap_or_else(|| panic!("no {plot} plot in {}", page.display()));
+            let svg = &html[at..at + html[at..].find("</svg>").unwrap()];
+            // a run whose verdict is not "converged" is labelled with it (these baselines
+            // are tracked without check points: "converged, physically invalid")
+            for name in [&before, &after] {
+                assert!(
+                    svg.contains(&format!(">{name}</text>")) || svg.contains(&format!(">{name} (")),
+                    "{plot}: no curve of {name}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn without_a_hidden_effect_nothing_is_significant() {
+    for how in [
+        Setup::Seed,
+        Setup::Pelvis,
+        Setup::Identify,
+        Setup::Samples,
+        Setup::ForcePlateRate,
+    ] {
+        let (floor, d, _) = floor(how);
+        eprintln!("noise floor ({how:?}): {floor:?}");
+        assert_eq!(
+            d["significant"], 0,
+            "an effect was invented: {}",
+            d["verdict"]
+        );
+        assert!(d["verified"].as_array().unwrap().is_empty());
+    }
+}
+
+#[test]
+fn hidden_ground_slope_is_found_and_identified() {
+    single_effect("ground_slope", Setup::Seed, 1.5);
+}
+
+/// The trunk mass and COM offset, tracked with the cost for identification
+/// (`Setup::Identify`). With the seed's cost they are found (ranked first) but the COM
+/// offset comes out at 0.0166 ± 0.0041 m against 0.03 m (−45 %) and the ankle at 1.68×
+/// the floor: the seed's u², a² regularisation (1e-3) and its velocity targets (derivatives
+/// of the filtered angles, not measurements) prefer the lighter, more upright trunk, which
+/// needs less effort (README, "Which effect is missing"). With the pelvis position tracked,
+/// no velocity targets and the regularisation at 1e-4 the COM offset is identified. At
+/// 1e-5 the fit follows the noise (mean force errors of 2.2 and 3.9 N against the noise's
+/// mean absolute 4.0 N), J/N underestimates the noise and `diagnose` invents a force-plate
+/// clock offset on the trial without a hidden effect (statistic 25.6 against 10.8); at
+/// 1e-4 it invents nothing (`without_a_hidden_effect_nothing_is_significant`).
+#[test]
+fn hidden_trunk_mass_is_found_and_identified() {
+    single_effect("trunk_mass", Setup::Identify, 1.5);
+}
+
+#[test]
+fn hidden_knee_stiffness_is_found_and_identified() {
+    single_effect("passive_joint_stiffness", Setup::Seed, 1.5);
+}
+
+#[test]
+fn hidden_force_plate_time_offset_is_found_and_identified() {
+    single_effect("force_plate_time_offset", Setup::Seed, 1.5);
+}
+
+/// A CoP offset of the force plates is a shift of the measured CoP along the walkway;
+/// with the seed's cost, which leaves the pelvis position untracked, the model shifts
+/// along with it at no cost (the offset is unobservable), so the pelvis position is
+/// tracked here.
+#[test]
+fn hidden_cop_offset_is_found_and_identified_when_the_pelvis_position_is_tracked() {
+    single_effect("cop_offset", Setup::Pelvis, 1.5);
+}
+
+/// Two hidden effects: diagnose, add the top one, diagnose the re-fit, add the next.
+#[test]
+fn two_hidden_effects_are_found_one_after_the_other() {
+    let name = "ground_slope+force_plate_time_offset";
+    let dir = tempfile::tempdir().unwrap();
+    let run = baseline(name, dir.path(), Setup::Seed);
+    let first = diagnose(&run, 1, &[], false);
+    let a = first["verified"][0]["effect"]["type"]
+        .as_str()
+        .expect("a first effect")
+        .to_string();
+    let refit = root().join(first["verified"][0]["folder"].as_str().unwrap());
+    let second = diagnose(&refit, 1, &[], false);
+    let b = second["verified"][0]["effect"]["type"]
+        .as_str()
+        .expect("a second effect")
+        .to_string();
+    let mut found = [a, b];
+    found.sort();
+    assert_eq!(found, ["force_plate_time_offset", "ground_slope"]);
+    check_parameters(&second["verified"][0], &hidden_values(name));
+    let last = root().join(second["verified"][0]["folder"].as_str().unwrap());
+    // the second re-fit keeps the first effect free, so both are identified in its setup
+    let setup = read_json(&last.join("setup.json"));
+    let hidden = hidden_values(name);
+    for p in setup["parameters"].as_array().unwrap() {
+        let v = serde_json::json!({"parameters": [p]});
+        check_parameters(&v, &hidden);
+    }
+    // every channel improves on the baseline; the slope's shortfall (see the trunk test)
+    // leaves the ankle at 0.73° against the floor's 0.46° (1.6×), so the floor is held
+    // at 2× here
+    for ((c, before), (_, after)) in channel_means(&run).iter().zip(channel_means(&last)) {
+        assert!(after <= *before * 1.05, "{c}: {before:.3} → {after:.3}");
+    }
+    within_floor(&last, 2.0, Setup::Seed).unwrap();
+}
+
+/// A compliant heel pad (150 N/mm, 3 N·s/mm) hidden in 1 kHz data of the double-circle
+/// foot (a force plate's rate; the bundled trial's plates ran at 600 Hz), tracked with
+/// every sample compared at its own instant and the channels weighted by their noise
+/// (`Setup::ForcePlateRate`). The pad has no null value, so `diagnose` tests it by a
+/// re-fit: it ranks first (statistic 1325 against 13.8), the re-fit brings every channel
+/// to 1.5× the floor and identifies both parameters within 20 % (160.2 ± 6.9 N/mm,
+/// 2.85 ± 0.10 N·s/mm). The rigid run's diagnosis also finds a clock offset (43.4) and
+/// the trunk (19.6) significant, shadows of the missing pad: diagnosing the re-fit with
+/// the pad finds nothing (largest statistic 3.4).
+///
+/// At 100 Hz (`Setup::Samples`) the trial holds five samples of the heel's 55 ms of
+/// contact before the forefoot lands, and the damping came out −27, −17 and −27 % on
+/// three noise draws, about two of its standard deviations low (`docs/heel-pad.md`,
+/// sections 6–7). The 1 kHz test needs the force-plate clock offset to move the model
+/// rather than interpolate the measured forces: interpolating white noise smooths it,
+/// and on the 1 kHz trial without a hidden effect `diagnose` then found an offset of
+/// 0.2–0.5 ms significant (statistic 72.1; now 0.4, `without_a_hidden_effect_…`).
+#[test]
+fn hidden_heel_pad_is_found_and_identified() {
+    single_effect("heel_pad_compliance_1k", Setup::ForcePlateRate, 1.5);
+}
