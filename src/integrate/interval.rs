@@ -9,10 +9,10 @@
 //! over $\tau$ from 0 to 1 with sensitivities gives $\partial x(1) / \partial (x_0, p)$, i.e.
 //! the defect Jacobians of the shooting transcription in one pass.
 
-use super::quadrature::{piece_nodes, GAUSS4};
 use std::ops::Range;
 
 use super::cvodes::IntegratorError;
+use super::quadrature::{piece_nodes, GAUSS4};
 use super::{Ode, OdeError};
 
 /// A time-invariant controlled model ẋ = f(x, u, θ) with exact Jacobians.

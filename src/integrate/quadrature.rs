@@ -27,8 +27,8 @@ const GAUSS3: [(f64, f64); 3] = [
 /// Quadrature nodes of `[0, 1]` split at the interior instants `interior` (where the
 /// adjoint of the curvature identity jumps): `(τ, weight, end of τ's piece)`, a
 /// Gauss–Legendre rule on each piece with 4 points on a piece of at least half the
-/// interval, 3 from a quarter, 2 from a tenth, 1 below (a sample every millisecond of a
-/// 20 ms interval: 21 one-point pieces instead of 21 four-point spans). Without
+/// interval, 3 from a quarter, 2 from a tenth, 1 below (a sample every millisecond inside
+/// a 20 ms interval: 20 one-point pieces instead of 19 four-point spans). Without
 /// interior instants: the 4-point rule on [0, 1].
 pub(super) fn piece_nodes(interior: &[f64]) -> Vec<(f64, f64, f64)> {
     let mut breaks: Vec<f64> = interior
