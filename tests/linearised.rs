@@ -2,7 +2,8 @@
 //! equality constraint one step reaches the constrained optimum, the predicted decrease
 //! is the true one, and a gradient shift probes the reduced inverse Hessian (checked
 //! against the null-space formula Z (ZᵀHZ)⁻¹ Zᵀ), also for a variable whose step runs
-//! to its bound.
+//! to its bound; the reduced inverse from the equality-constrained QPs of the active
+//! constraints against the same formula, with a variable held at its bound.
 
 use footfall::problems::diagnose::stats::reduced_inverse_hessian;
 use footfall::sqp::linearised::GaussNewtonModel;
@@ -196,5 +197,76 @@ fn a_parameter_whose_step_runs_to_its_bound_keeps_its_reduced_curvature() {
         "{} vs {}",
         c[0][0],
         reduced[(2, 2)]
+    );
+}
+
+/// The reduced inverse from the QPs on the active constraints as equalities equals
+/// Z (ZᵀHZ)⁻¹ Zᵀ: on the free problem with Z spanning {Σd = 0}; with the first variable's
+/// step run to its bound, with Z spanning {Σd = 0, d₀ = 0} = span{(0, 1, −1)}, since
+/// that bound is active (its multiplier nonzero) and held.
+#[test]
+fn the_reduced_inverse_is_the_null_space_formula_of_the_active_constraints() {
+    let (a, b) = problem();
+    let h = 2.0 * a.transpose() * &a;
+    let w0 = [0.2, 0.3, 0.5];
+    let free = LinearLs {
+        a: a.clone(),
+        b: b.clone(),
+        w_bounds: (vec![-10.0; 3], vec![10.0; 3]),
+    };
+    let model = GaussNewtonModel::new(&free, &w0, 0.0).unwrap();
+    let step = model.step(None).unwrap();
+    let c = model.reduced_inverse(&step, &[0, 1, 2]).unwrap();
+    let truth = reduced_inverse(&h);
+    for i in 0..3 {
+        for j in 0..3 {
+            assert!(
+                (c[i][j] - truth[(i, j)]).abs() < 1e-10 * truth.abs().max(),
+                "({i},{j}): {} vs {}",
+                c[i][j],
+                truth[(i, j)]
+            );
+        }
+    }
+    // hold the first variable: bound it between its start and halfway to its optimum
+    let x0 = w0[0] + step.d[0];
+    let (lo, hi) = if x0 > w0[0] {
+        (w0[0] - 0.1, 0.5 * (w0[0] + x0))
+    } else {
+        (0.5 * (w0[0] + x0), w0[0] + 0.1)
+    };
+    let bounded = LinearLs {
+        a,
+        b,
+        w_bounds: (vec![lo, -10.0, -10.0], vec![hi, 10.0, 10.0]),
+    };
+    let model = GaussNewtonModel::new(&bounded, &w0, 0.0).unwrap();
+    let step = model.step(None).unwrap();
+    let at = w0[0] + step.d[0];
+    assert!(
+        (at - lo).abs() < 1e-7 || (at - hi).abs() < 1e-7,
+        "{at} in [{lo}, {hi}]"
+    );
+    let c = model.reduced_inverse(&step, &[1, 2]).unwrap();
+    let z = DVector::from_column_slice(&[0.0, 1.0, -1.0]);
+    let curvature = (z.transpose() * &h * &z)[(0, 0)];
+    let held = &z * z.transpose() / curvature;
+    for (i, &ri) in [1, 2].iter().enumerate() {
+        for (j, &cj) in [1, 2].iter().enumerate() {
+            assert!(
+                (c[i][j] - held[(ri, cj)]).abs() < 1e-10 * held.abs().max(),
+                "held ({ri},{cj}): {} vs {}",
+                c[i][j],
+                held[(ri, cj)]
+            );
+        }
+    }
+    // the bound of a variable asked for is not held: the free formula again
+    let c = model.reduced_inverse(&step, &[0]).unwrap();
+    assert!(
+        (c[0][0] - truth[(0, 0)]).abs() < 1e-10 * truth.abs().max(),
+        "{} vs {}",
+        c[0][0],
+        truth[(0, 0)]
     );
 }

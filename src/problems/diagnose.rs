@@ -669,8 +669,9 @@ pub fn channel_series(
 /// Approximate standard deviations of the free parameters θ at a least-squares solution
 /// `w`: `sd_j = √(2 s² (H⁻¹)_jj)` with `H` the Gauss–Newton Hessian reduced to the
 /// linearised constraints and `s² = J/(N − p)` (`N` data residuals, `p` = number of θ).
-/// `(H⁻¹)_jj` comes from the step's response to a gradient shift in θ_j. A parameter at
-/// a bound gets `None`.
+/// `(H⁻¹)_jj` comes from the Gauss–Newton step's equality-constrained QP on its active
+/// constraints ([`GaussNewtonModel::reduced_inverse`]). A parameter at a bound gets
+/// `None`.
 pub fn parameter_sd(
     tr: &Transcription,
     w: &[f64],
@@ -682,7 +683,37 @@ pub fn parameter_sd(
     let base = m.step(None)?;
     let p = range.len();
     let s2 = m.objective() / (data_rows.saturating_sub(p)).max(1) as f64;
+    let cols: Vec<usize> = range.clone().collect();
+    // the equality-constrained QPs of the step's active set; should one fail, the full
+    // QP's response to a shifted gradient, probed parameter by parameter
+    let Ok(inv) = m.reduced_inverse(&base, &cols) else {
+        return probed_sd(tr, &m, &base, range, s2);
+    };
     let mut out = Vec::with_capacity(p);
+    for (j, &col) in cols.iter().enumerate() {
+        let span = w_ub[col] - w_lb[col];
+        if w[col] - w_lb[col] < 1e-9 * span || w_ub[col] - w[col] < 1e-9 * span {
+            out.push(None);
+            continue;
+        }
+        let v = inv[j][j];
+        out.push((v > 0.0).then(|| (2.0 * s2 * v).sqrt()));
+    }
+    Ok(out)
+}
+
+/// [`parameter_sd`] from probes: `(H⁻¹)_jj` as the step's response to a gradient shift in
+/// θ_j, aimed at about 1e-3 of the parameter's range.
+fn probed_sd(
+    tr: &Transcription,
+    m: &GaussNewtonModel<'_>,
+    base: &GaussNewtonStep,
+    range: std::ops::Range<usize>,
+    s2: f64,
+) -> Result<Vec<Option<f64>>, String> {
+    let (w_lb, w_ub, _, _) = crate::sqp::Nlp::bounds(tr);
+    let w = m.point();
+    let mut out = Vec::with_capacity(range.len());
     for col in range {
         let span = w_ub[col] - w_lb[col];
         if w[col] - w_lb[col] < 1e-9 * span || w_ub[col] - w[col] < 1e-9 * span {

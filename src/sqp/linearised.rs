@@ -4,7 +4,9 @@
 //!
 //! Both come from the QP of one Gauss–Newton SQP step,
 //! $\min_d\ g^T d + \tfrac12 d^T H d$ s.t. the linearised constraints and bounds, with
-//! $H = 2 J_r^T J_r$ for $f = \|r\|^2$.
+//! $H = 2 J_r^T J_r$ for $f = \|r\|^2$: the step itself, and the inverse of $H$ reduced
+//! to the constraints active at the step, from equality-constrained QPs on those
+//! constraints.
 
 use super::qp::{self, QpData, Triplets};
 use super::{Nlp, NlpEval};
@@ -16,6 +18,10 @@ pub struct GaussNewtonStep {
     pub d: Vec<f64>,
     /// Decrease of the quadratic model, $-(g^T d + \tfrac12 d^T H d)$.
     pub predicted_decrease: f64,
+    /// The QP's constraint multipliers (one per NLP constraint).
+    pub lambda: Vec<f64>,
+    /// The QP's bound multipliers (one per variable).
+    pub nu: Vec<f64>,
 }
 
 /// The Gauss–Newton model at `w` (evaluated once, with derivatives).
@@ -131,6 +137,95 @@ impl<'a> GaussNewtonModel<'a> {
         Ok(GaussNewtonStep {
             predicted_decrease: -(gd + 0.5 * dhd),
             d: sol.d,
+            lambda: sol.lambda,
+            nu: sol.nu,
         })
+    }
+
+    /// Rows and columns `cols` of the inverse of H reduced to the constraints active at
+    /// `step` (a step of this model): `Z (ZᵀHZ)⁻¹ Zᵀ` for Z spanning the directions that
+    /// keep the linearised equality rows, the inequality rows and the variable bounds
+    /// active there, except the bounds of `cols` themselves (a parameter's information is
+    /// the cost's curvature along it, not the range it is allowed). Column j is the step's
+    /// response to a unit decrease of `∂f/∂w_j` while the active set stays, which is what
+    /// a probe with a shifted gradient measures; here it is the step of the QP with the
+    /// gradient `e_j` and only those constraints, as equalities: with no inequality the
+    /// response is linear in the gradient, at any size, and one solve per column replaces
+    /// the probes' search for a shift that keeps the active set.
+    pub fn reduced_inverse(
+        &self,
+        step: &GaussNewtonStep,
+        cols: &[usize],
+    ) -> Result<Vec<Vec<f64>>, String> {
+        let n = self.nlp.n();
+        let (w_lb, w_ub, c_lb, c_ub) = &self.bounds;
+        if step.d.len() != n || step.nu.len() != n || step.lambda.len() != c_lb.len() {
+            return Err("the step is not one of this model".into());
+        }
+        let mut free = vec![false; n];
+        for &c in cols {
+            if c >= n {
+                return Err(format!("column {c} is not a variable (n = {n})"));
+            }
+            free[c] = true;
+        }
+        // a multiplier counts as nonzero above 1e-8 of the largest: the interior-point
+        // QP leaves ~tolerance-sized multipliers on inactive rows
+        let scale = step
+            .lambda
+            .iter()
+            .chain(&step.nu)
+            .fold(1.0f64, |m, v| m.max(v.abs()));
+        let held = |value: f64, lb: f64, ub: f64, multiplier: f64| {
+            let near = |b: f64| b.is_finite() && (value - b).abs() <= 1e-7 * (1.0 + b.abs());
+            lb == ub || (multiplier.abs() > 1e-8 * scale && (near(lb) || near(ub)))
+        };
+        // the linearised constraint values at the step
+        let mut lin = self.ev.c.clone();
+        for ((&r, &c), &v) in self.jac.rows.iter().zip(&self.jac.cols).zip(&self.jac.vals) {
+            lin[r] += v * step.d[c];
+        }
+        // the active rows as equalities, the others dropped; the variables the active
+        // bounds hold fixed: an equality-constrained QP, linear in its gradient
+        let m = c_lb.len();
+        let mut a_lb = vec![f64::NEG_INFINITY; m];
+        let mut a_ub = vec![f64::INFINITY; m];
+        for i in 0..m {
+            if held(lin[i], c_lb[i], c_ub[i], step.lambda[i]) {
+                (a_lb[i], a_ub[i]) = (0.0, 0.0);
+            }
+        }
+        let mut d_lb = vec![f64::NEG_INFINITY; n];
+        let mut d_ub = vec![f64::INFINITY; n];
+        for j in 0..n {
+            let at = self.w[j] + step.d[j];
+            if !free[j] && held(at, w_lb[j], w_ub[j], step.nu[j]) {
+                (d_lb[j], d_ub[j]) = (0.0, 0.0);
+            }
+        }
+        let zeros = vec![0.0; m];
+        let weights = vec![1.0; m];
+        let mut out = vec![vec![0.0; cols.len()]; cols.len()];
+        for (j, &col) in cols.iter().enumerate() {
+            let mut g = vec![0.0; n];
+            g[col] = 1.0;
+            let sol = qp::solve(&QpData {
+                h: &self.h,
+                g: &g,
+                jac: &self.jac,
+                c: &zeros,
+                c_lb: &a_lb,
+                c_ub: &a_ub,
+                d_lb: &d_lb,
+                d_ub: &d_ub,
+                elastic: None,
+                elastic_weights: &weights,
+            })
+            .map_err(|e| e.to_string())?;
+            for (i, &ci) in cols.iter().enumerate() {
+                out[i][j] = -sol.d[ci];
+            }
+        }
+        Ok(out)
     }
 }

@@ -69,15 +69,17 @@ impl Identifiability {
     }
 }
 
-/// The reduced Hessian inverse of the cost of `tr` at `w` w.r.t. the variables `cols`,
-/// from the Gauss–Newton QP's response to gradient shifts (`(H⁻¹)_{·j}` is minus the
-/// step's change per unit shift of `∂f/∂w_j`, while the active set stays). The bounds of
-/// `cols` are lifted in the probes: a step that ran to a parameter's bound would not
-/// respond to the shift, and the parameter would look perfectly known (the real left
-/// CoP offset of stop 41 read "0.1000 ± 8e-5" at its 0.1 m bound). The QP is
-/// regularised as the score test's (`1e-12` of the largest curvature), so a direction
-/// the cost does not see gets an inverse of ~1e12 / max curvature instead of breaking
-/// the QP. Each probe aims its response at 1e-3 of the variable's bound span.
+/// The reduced Hessian inverse of the cost of `tr` at `w` w.r.t. the variables `cols`:
+/// rows and columns `cols` of `Z (ZᵀHZ)⁻¹ Zᵀ` for the Gauss–Newton Hessian H and the
+/// constraints active at the Gauss–Newton step ([`GaussNewtonModel::reduced_inverse`]),
+/// i.e. the step's response to a unit shift of `∂f/∂w_j` while the active set stays
+/// (before stop 47 measured by probing the full QP with shifted gradients, 1–8 solves per
+/// column, which remains the fallback).
+/// The bounds of `cols` are not held: a step that ran to a parameter's bound would not
+/// respond, and the parameter would look perfectly known (the real left CoP offset of
+/// stop 41 read "0.1000 ± 8e-5" at its 0.1 m bound). H is regularised as the score
+/// test's (`1e-12` of the largest curvature), so a direction the cost does not see gets
+/// an inverse of ~1e12 / max curvature instead of a singular matrix.
 pub fn reduced_inverse_hessian(
     tr: &dyn Nlp,
     w: &[f64],
@@ -88,8 +90,8 @@ pub fn reduced_inverse_hessian(
     reduced_inverse_hessian_at(tr, &m, &base, cols)
 }
 
-/// [`reduced_inverse_hessian`] from the Gauss–Newton model `m` at the point and its
-/// unshifted step `base` (computed once with the score test's first step).
+/// [`reduced_inverse_hessian`] from the Gauss–Newton model `m` at the point and its step
+/// `base` (computed once with the score test's first step).
 pub fn reduced_inverse_hessian_at(
     tr: &dyn Nlp,
     m: &GaussNewtonModel<'_>,
@@ -97,9 +99,8 @@ pub fn reduced_inverse_hessian_at(
     cols: &[usize],
 ) -> Result<Vec<Vec<f64>>, String> {
     let (w_lb, w_ub, _, _) = tr.bounds();
-    let k = cols.len();
-    // the unshifted step again without the parameters' bounds, unless it stays clear of
-    // them (by more than the probes' reach: the same step either way)
+    // the active set of the step without the parameters' bounds, unless the step stays
+    // clear of them (the same step either way)
     let near_bound = cols.iter().any(|&col| {
         let span = (w_ub[col] - w_lb[col]).min(1e6);
         let to = m.point()[col] + base.d[col];
@@ -112,6 +113,35 @@ pub fn reduced_inverse_hessian_at(
     } else {
         base
     };
+    // the equality-constrained QPs of the step's active set; should one fail, the full
+    // QP's response to shifted gradients, probed column by column
+    let k = cols.len();
+    let mut c = match m.reduced_inverse(base, cols) {
+        Ok(c) => c,
+        Err(_) => probe_reduced_inverse(tr, m, base, cols)?,
+    };
+    for i in 0..k {
+        for j in 0..i {
+            let v = 0.5 * (c[i][j] + c[j][i]);
+            c[i][j] = v;
+            c[j][i] = v;
+        }
+    }
+    Ok(c)
+}
+
+/// The reduced Hessian inverse from the Gauss–Newton QP's response to gradient shifts:
+/// `(H⁻¹)_{·j}` is minus the step's change per unit shift of `∂f/∂w_j` while the active
+/// set stays, with the bounds of `cols` lifted. Each probe aims its response at 1e-3 of
+/// the variable's bound span.
+fn probe_reduced_inverse(
+    tr: &dyn Nlp,
+    m: &GaussNewtonModel<'_>,
+    base: &GaussNewtonStep,
+    cols: &[usize],
+) -> Result<Vec<Vec<f64>>, String> {
+    let (w_lb, w_ub, _, _) = tr.bounds();
+    let k = cols.len();
     let mut c = vec![vec![0.0; k]; k];
     let objective = m.objective().abs().max(1e-12);
     for (j, &col) in cols.iter().enumerate() {
@@ -157,14 +187,6 @@ pub fn reduced_inverse_hessian_at(
         }
         for i in 0..k {
             c[i][j] = column[i];
-        }
-    }
-    // symmetrise (the probes are separate QP solves)
-    for i in 0..k {
-        for j in 0..i {
-            let v = 0.5 * (c[i][j] + c[j][i]);
-            c[i][j] = v;
-            c[j][i] = v;
         }
     }
     Ok(c)
