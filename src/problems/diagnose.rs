@@ -677,69 +677,66 @@ pub fn parameter_sd(
     w: &[f64],
     data_rows: usize,
 ) -> Result<Vec<Option<f64>>, String> {
-    let range = tr.range(Block::Params);
+    let cols: Vec<usize> = tr.range(Block::Params).collect();
     let (w_lb, w_ub, _, _) = crate::sqp::Nlp::bounds(tr);
     let m = GaussNewtonModel::new(tr, w, 0.0)?;
     let base = m.step(None)?;
-    let p = range.len();
+    let p = cols.len();
     let s2 = m.objective() / (data_rows.saturating_sub(p)).max(1) as f64;
-    let cols: Vec<usize> = range.clone().collect();
-    // the equality-constrained QPs of the step's active set; should one fail, the full
-    // QP's response to a shifted gradient, probed parameter by parameter
-    let Ok(inv) = m.reduced_inverse(&base, &cols) else {
-        return probed_sd(tr, &m, &base, range, s2);
-    };
-    let mut out = Vec::with_capacity(p);
-    for (j, &col) in cols.iter().enumerate() {
+    let at_bound = |col: usize| {
         let span = w_ub[col] - w_lb[col];
-        if w[col] - w_lb[col] < 1e-9 * span || w_ub[col] - w[col] < 1e-9 * span {
-            out.push(None);
-            continue;
-        }
-        let v = inv[j][j];
-        out.push((v > 0.0).then(|| (2.0 * s2 * v).sqrt()));
-    }
-    Ok(out)
+        w[col] - w_lb[col] < 1e-9 * span || w_ub[col] - w[col] < 1e-9 * span
+    };
+    // (H⁻¹)_jj from the equality-constrained QPs of the step's active set; should one
+    // fail, from the full QP's response to a shifted gradient, parameter by parameter
+    let diagonal: Vec<Option<f64>> = match m.reduced_inverse(&base, &cols) {
+        Ok(inv) => (0..p).map(|j| Some(inv[j][j])).collect(),
+        Err(_) => cols
+            .iter()
+            .map(|&col| {
+                if at_bound(col) {
+                    Ok(None)
+                } else {
+                    probed_inverse_diagonal(tr, &m, &base, col).map(Some)
+                }
+            })
+            .collect::<Result<_, String>>()?,
+    };
+    Ok(cols
+        .iter()
+        .zip(diagonal)
+        .map(|(&col, v)| {
+            v.filter(|&v| v > 0.0 && !at_bound(col))
+                .map(|v| (2.0 * s2 * v).sqrt())
+        })
+        .collect())
 }
 
-/// [`parameter_sd`] from probes: `(H⁻¹)_jj` as the step's response to a gradient shift in
-/// θ_j, aimed at about 1e-3 of the parameter's range.
-fn probed_sd(
+/// `(H⁻¹)_jj` of variable `col` as the Gauss–Newton step's response to a gradient shift
+/// in it, the shift aimed at a response of about 1e-3 of the variable's range (QP
+/// accuracy limits small steps; large ones change the active set).
+fn probed_inverse_diagonal(
     tr: &Transcription,
     m: &GaussNewtonModel<'_>,
     base: &GaussNewtonStep,
-    range: std::ops::Range<usize>,
-    s2: f64,
-) -> Result<Vec<Option<f64>>, String> {
+    col: usize,
+) -> Result<f64, String> {
     let (w_lb, w_ub, _, _) = crate::sqp::Nlp::bounds(tr);
-    let w = m.point();
-    let mut out = Vec::with_capacity(range.len());
-    for col in range {
-        let span = w_ub[col] - w_lb[col];
-        if w[col] - w_lb[col] < 1e-9 * span || w_ub[col] - w[col] < 1e-9 * span {
-            out.push(None);
-            continue;
+    let target = 1e-3 * (w_ub[col] - w_lb[col]);
+    let mut eps = 1.0;
+    let mut inv = f64::NAN;
+    for _ in 0..4 {
+        let mut shift = vec![0.0; tr.n()];
+        shift[col] = eps;
+        let dtheta = base.d[col] - m.step(Some(&shift))?.d[col];
+        inv = dtheta / eps;
+        let ratio = dtheta.abs() / target;
+        if inv <= 0.0 || (0.1..=10.0).contains(&ratio) {
+            break;
         }
-        // aim the probe's step at about 1e-3 of the parameter's range (QP accuracy
-        // limits small steps; large ones change the active set)
-        let target = 1e-3 * span;
-        let mut eps = 1.0;
-        let mut inv = None;
-        for _ in 0..4 {
-            let mut shift = vec![0.0; tr.n()];
-            shift[col] = eps;
-            let dtheta = base.d[col] - m.step(Some(&shift))?.d[col];
-            let h = dtheta / eps;
-            inv = Some(h);
-            let ratio = dtheta.abs() / target;
-            if h <= 0.0 || (0.1..=10.0).contains(&ratio) {
-                break;
-            }
-            eps = target / h;
-        }
-        out.push(inv.filter(|v| *v > 0.0).map(|v| (2.0 * s2 * v).sqrt()));
+        eps = target / inv;
     }
-    Ok(out)
+    Ok(inv)
 }
 
 #[cfg(test)]
