@@ -697,7 +697,7 @@ pub fn parameter_sd(
                 if at_bound(col) {
                     Ok(None)
                 } else {
-                    probed_inverse_diagonal(tr, &m, &base, col).map(Some)
+                    probed_inverse_diagonal(tr.n(), &m, &base, col, w_ub[col] - w_lb[col]).map(Some)
                 }
             })
             .collect::<Result<_, String>>()?,
@@ -712,21 +712,21 @@ pub fn parameter_sd(
         .collect())
 }
 
-/// `(H⁻¹)_jj` of variable `col` as the Gauss–Newton step's response to a gradient shift
-/// in it, the shift aimed at a response of about 1e-3 of the variable's range (QP
-/// accuracy limits small steps; large ones change the active set).
+/// `(H⁻¹)_jj` of variable `col` (of `n`, bound span `span`) as the Gauss–Newton step's
+/// response to a gradient shift in it, the shift aimed at a response of about 1e-3 of the
+/// span (QP accuracy limits small steps; large ones change the active set).
 fn probed_inverse_diagonal(
-    tr: &Transcription,
+    n: usize,
     m: &GaussNewtonModel<'_>,
     base: &GaussNewtonStep,
     col: usize,
+    span: f64,
 ) -> Result<f64, String> {
-    let (w_lb, w_ub, _, _) = crate::sqp::Nlp::bounds(tr);
-    let target = 1e-3 * (w_ub[col] - w_lb[col]);
+    let target = 1e-3 * span;
     let mut eps = 1.0;
     let mut inv = f64::NAN;
     for _ in 0..4 {
-        let mut shift = vec![0.0; tr.n()];
+        let mut shift = vec![0.0; n];
         shift[col] = eps;
         let dtheta = base.d[col] - m.step(Some(&shift))?.d[col];
         inv = dtheta / eps;
