@@ -23,7 +23,6 @@ use crate::problems::diagnose::{
     truncated_refit, HeldOut, ScoreTest, TrackingRunSetup, MAX_STEPS, REL_STOP,
 };
 use crate::problems::evaluation::GaitSolution;
-use crate::sqp::HessianMode;
 use anyhow::anyhow;
 
 /// The plain model tracked on a held-out half cycle.
@@ -100,12 +99,13 @@ pub(super) fn held_out_base(
                 window.1
             );
         }
-        let hessian = if setup.sample_targets {
-            HessianMode::GaussNewton
-        } else {
-            HessianMode::Exact
-        };
-        let settings = tracking_sqp_settings(args.tol, args.max_iter, None, hessian, 1e-3);
+        let settings = tracking_sqp_settings(
+            args.tol,
+            args.max_iter,
+            None,
+            super::refit::solve_hessian(&prob),
+            1e-3,
+        );
         let (res, solution) = prob.solve(&settings, &super::super::Quiet)?;
         let mut at = TrackingProblem::build(&setup, &[])?;
         at.setup.start_from(&solution).map_err(|e| anyhow!(e))?;

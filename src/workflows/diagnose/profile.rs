@@ -17,7 +17,6 @@ use crate::problems::diagnose::{
     chi2_1_upper, refit_test, ClockProfile, ProfilePoint, ScoreTest, TrackingRunSetup,
 };
 use crate::report::diff::RunDiff;
-use crate::sqp::HessianMode;
 use crate::workflows::track::{tracking_sqp_settings, TrackedRun, TrackingProblem};
 use crate::workflows::{note, Progress, Quiet};
 
@@ -80,18 +79,15 @@ pub(super) fn profile_clock(
     } else {
         format!("the {side} plate's")
     };
-    let hessian = if setup.sample_targets {
-        HessianMode::GaussNewton
-    } else {
-        HessianMode::Exact
+    let settings = |p: &TrackingProblem| {
+        tracking_sqp_settings(
+            POINT_TOL,
+            POINT_MAX_ITER.min(args.max_iter),
+            None,
+            super::refit::solve_hessian(p),
+            1e-3,
+        )
     };
-    let settings = tracking_sqp_settings(
-        POINT_TOL,
-        POINT_MAX_ITER.min(args.max_iter),
-        None,
-        hessian,
-        1e-3,
-    );
     let mut points = Vec::new();
     let mut best: Option<(f64, f64, crate::problems::evaluation::GaitSolution)> = None;
     for &offset in &args.profile_clocks {
@@ -101,7 +97,7 @@ pub(super) fn profile_clock(
                 p.setup
                     .start_from(base.solution)
                     .map_err(|e| anyhow::anyhow!(e))?;
-                p.solve(&settings, &Quiet)
+                p.solve(&settings(&p), &Quiet)
             });
         let seconds = t0.elapsed().as_secs_f64();
         let point = match solved {

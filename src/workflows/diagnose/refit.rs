@@ -120,16 +120,7 @@ pub(super) fn solve_into(
     let mut prob = TrackingProblem::build(setup, effects)?;
     prob.start_at(start)
         .map_err(|e| anyhow!("{}: {e:#}", args.run.display()))?;
-    // sample terms enter the objective's curvature as Gauss–Newton only; with the exact
-    // curvature of the constraints beside it the 100 Hz pad trial's re-fit stalled (KKT
-    // 1e-3 to 0.2 from iteration 23 to 90), where Gauss–Newton converged in 36
-    // (docs/heel-pad.md, section 6)
-    let hessian = if setup.sample_targets {
-        HessianMode::GaussNewton
-    } else {
-        HessianMode::Exact
-    };
-    let settings = tracking_sqp_settings(args.tol, args.max_iter, None, hessian, 1e-3);
+    let settings = tracking_sqp_settings(args.tol, args.max_iter, None, solve_hessian(&prob), 1e-3);
     let rf = RunFolder::create(&dir, args.overwrite)?;
     prob.solve_and_write(
         setup,
@@ -139,6 +130,35 @@ pub(super) fn solve_into(
         crate::workflows::run_folder::DEFAULT_TRANSIENT_THRESHOLD_N,
         progress,
     )
+}
+
+/// Sample targets per shooting interval above which the diagnosis's own solves use the
+/// Gauss–Newton Hessian ([`solve_hessian`]).
+pub(super) const GAUSS_NEWTON_SAMPLES_PER_INTERVAL: f64 = 3.0;
+
+/// The Hessian of the diagnosis's own solves (re-fits, held-out half cycles, clock
+/// profiles). The exact Hessian converges in fewer iterations, but with sample targets its
+/// curvature is integrated piece by piece between an interval's samples, so an iteration
+/// costs more the more samples an interval holds; Gauss–Newton's costs the same. Measured
+/// on the double-circle heel pad's re-fit (release build, `diagnose --candidate
+/// heel_pad_compliance`): on the 100 Hz trial without a hidden effect (about one sample per
+/// interval) exact takes 22 iterations (47 s) against Gauss–Newton's 49 (67 s), to the same
+/// J and pad to six digits; on the 1 kHz pad trial (about ten) exact takes 17 (116 s)
+/// against 18 (51 s; both with another job beside). So exact, unless the samples outnumber
+/// the intervals [`GAUSS_NEWTON_SAMPLES_PER_INTERVAL`] times.
+pub(super) fn solve_hessian(prob: &TrackingProblem) -> HessianMode {
+    let intervals: usize = prob
+        .setup
+        .node_times
+        .iter()
+        .map(|t| t.len().saturating_sub(1))
+        .sum();
+    let per_interval = prob.setup.samples.len() as f64 / intervals.max(1) as f64;
+    if per_interval > GAUSS_NEWTON_SAMPLES_PER_INTERVAL {
+        HessianMode::GaussNewton
+    } else {
+        HessianMode::Exact
+    }
 }
 
 /// Test of the heel pad by a full re-fit ([`refit_test`]); its channel errors before and
