@@ -224,10 +224,46 @@ fn trial_aligned_with_the_truth(dir: &Path, tmp: &Path) -> PathBuf {
 /// reads 0.413 ± 0.083 s/m (−24 %, 1.5 sd) and the stiffness 1.460 ± 0.041 (−2.7 %).
 /// That shortfall is a bias of the effort terms, not the noise: four noise seeds average
 /// −19 %, a noise-free trial gives −20 %, and −2.5 % with a tenth of the regularisation
-/// weight (docs/foot-identification.md, stop 48).
+/// weight (docs/foot-identification.md, stop 48). At 1 kHz and that weight both come back
+/// within 20 %: the ignored test below. At 100 Hz the weight does not help the damping
+/// (−37 % ± 35 % at 1e-4): there the noise limits it.
 /// Out of phase (synth's events) the same fit ended at 1.145 N/mm² and damping 0.
 #[test]
 fn freeing_the_law_recovers_the_hidden_stiffness_and_damping() {
+    let dir = root().join("tests/data/hidden/volumetric_contact");
+    let tmp = tempfile::tempdir().unwrap();
+    let data = trial_aligned_with_the_truth(&dir, tmp.path());
+    let fit = fit_the_law(&data, None, tmp.path());
+    let truth = fit.truth;
+    assert!(
+        (fit.stiffness.0 / truth.0 - 1.0).abs() < 0.2,
+        "stiffness: identified {:?}, hidden {}",
+        fit.stiffness,
+        truth.0
+    );
+    let (c, c_sd) = fit.damping;
+    let c_sd = c_sd.expect("the damping is read inside its bounds, with an sd");
+    assert!(
+        (c - truth.1).abs() < 2.0 * c_sd,
+        "damping: identified {c} ± {c_sd}, hidden {}",
+        truth.1
+    );
+}
+
+/// The law identified by [`fit_the_law`]: `(value, sd)` of each, and the hidden law
+/// `(stiffness N/mm², damping s/m, μ_d)`.
+struct LawFit {
+    stiffness: (f64, Option<f64>),
+    damping: (f64, Option<f64>),
+    truth: (f64, f64, f64),
+}
+
+/// The recovery fit of the synthetic trial `data` (heel strikes aligned with the truth):
+/// the shipped foot with stiffness and damping free, the pelvis position tracked, sample
+/// targets, from the truth's motion with the foot file's law, KKT 1e-3, at the u², a²
+/// regularisation weight `regularisation` (the seed's 1e-3 when `None`). Asserts that it
+/// converged and lowered J.
+fn fit_the_law(data: &Path, regularisation: Option<f64>, tmp: &Path) -> LawFit {
     use footfall::runfolder::RunFolder;
     use footfall::sqp::HessianMode;
     use footfall::workflows::{self, track::tracking_sqp_settings, Printed};
@@ -235,22 +271,22 @@ fn freeing_the_law_recovers_the_hidden_stiffness_and_damping() {
     let truth = file_law(&dir.join("hidden_foot.json"));
     let shipped = file_law(&root().join(FOOT));
     assert!((truth.0 / shipped.0 - 1.5).abs() < 1e-12 && (truth.1 / shipped.1 - 0.6).abs() < 1e-12);
-    let tmp = tempfile::tempdir().unwrap();
     let mut req = workflows::track::TrackRequest::new(root().join(FOOT).to_str().unwrap());
     req.run.model = root().join(MODEL);
     req.run.phases = root().join(PHASES);
-    req.run.data = Some(trial_aligned_with_the_truth(&dir, tmp.path()));
+    req.run.data = Some(data.to_path_buf());
     // the depth the foot sinks to shows in the pelvis height, untracked by default
     req.run.track_pelvis_position = true;
     // every sample at its own instant: node targets interpolated from the samples smooth
     // the force's rise, and a soft law fits them better than the true one
     req.run.sample_targets = true;
+    req.run.regularisation = regularisation;
     req.effects = vec![EffectSpec::parse_cli("volumetric_contact:free=stiffness+damping").unwrap()];
     req.init = Some(dir.join("truth_solution.json"));
     req.check_points = false;
     // KKT 1e-3: reached in 6 iterations; the 5 more to 1e-4 move J in the 10th digit
     req.sqp = tracking_sqp_settings(1e-3, 40, None, HessianMode::Exact, 1e-3);
-    let run = tmp.path().join("run");
+    let run = tmp.join("run");
     let t = std::time::Instant::now();
     workflows::track::track(
         &req,
@@ -281,17 +317,67 @@ fn freeing_the_law_recovers_the_hidden_stiffness_and_damping() {
         s["objective"].as_f64().unwrap() < j0,
         "freeing the law lowers J"
     );
-    assert!(
-        (k / truth.0 - 1.0).abs() < 0.2,
-        "stiffness: identified {k}, hidden {}",
-        truth.0
-    );
-    let c_sd = c_sd.expect("the damping is read inside its bounds, with an sd");
-    assert!(
-        (c - truth.1).abs() < 2.0 * c_sd,
-        "damping: identified {c} ± {c_sd}, hidden {}",
-        truth.1
-    );
+    LawFit {
+        stiffness: (k, k_sd),
+        damping: (c, c_sd),
+        truth,
+    }
+}
+
+/// Done-means 2 of issue 26 at a force plate's rate: the same truth, `synth` at 1 kHz
+/// (default noise, seed 1), heel strikes aligned, fitted as above at the identification
+/// cost's regularisation weight, 1e-4 (`tests/hidden_effects.rs`, `Setup::Identify`: the
+/// weight for effort-costly parameters, chosen on the trunk trial as the smallest decade
+/// at which `diagnose` invents nothing on the trial without a hidden effect). Stiffness and
+/// damping within 20 %. Measured (release build, docs/foot-identification.md, stop 49):
+/// 8 iterations, stiffness 1.4845 ± 0.035 N/mm² (−1.0 %), damping 0.514 ± 0.068 s/m
+/// (−4.8 %); over four noise seeds the damping reads −4.8, +7.9, −3.1 and −17.0 %. At the
+/// seed's 1e-3 the same fits average −18.8 % (the effort terms' bias), and at 100 Hz even
+/// 1e-4 leaves the damping −37 % ± 35 % (two samples of its ~20 ms effect). Ignored: the
+/// 1 kHz fit takes 4–8 minutes, more than the CI has room for:
+/// `cargo test --release --test volumetric_identification -- --ignored at_a_force_plates_rate`.
+#[test]
+#[ignore = "minutes: cargo test --release --test volumetric_identification -- --ignored at_a_force_plates_rate"]
+fn at_a_force_plates_rate_and_the_identification_weight_the_law_is_recovered_within_20_percent() {
+    use footfall::workflows::{self, Printed};
+    let dir = root().join("tests/data/hidden/volumetric_contact");
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("synth");
+    workflows::synth::run(
+        &workflows::synth::SynthRequest {
+            from: dir.join("truth_solution.json"),
+            model: Some(root().join(MODEL)),
+            foot: Some(dir.join("hidden_foot.json").to_str().unwrap().to_string()),
+            phases: Some(root().join(PHASES)),
+            rate: 1000.0,
+            half_cycles: 5.0,
+            noise_angle_deg: 0.5,
+            noise_position_mm: 2.0,
+            noise_force_n: 5.0,
+            noise_cop_mm: 5.0,
+            seed: 1,
+            out: out.clone(),
+            overwrite: false,
+            hidden_effects: vec![],
+        },
+        &Printed { quiet: true },
+    )
+    .unwrap();
+    let aligned = tmp.path().join("aligned");
+    std::fs::create_dir_all(&aligned).unwrap();
+    let data = trial_aligned_with_the_truth(&out, &aligned);
+    let fit = fit_the_law(&data, Some(1e-4), tmp.path());
+    let truth = fit.truth;
+    for (what, (value, _), hidden) in [
+        ("stiffness", fit.stiffness, truth.0),
+        ("damping", fit.damping, truth.1),
+    ] {
+        assert!(
+            (value / hidden - 1.0).abs() < 0.2,
+            "{what}: identified {value}, hidden {hidden} ({:+.1} %)",
+            100.0 * (value / hidden - 1.0)
+        );
+    }
 }
 
 /// `diagnose` on a run with the shipped law (one SQP iteration from the truth's motion,
