@@ -302,22 +302,7 @@ fn make_foot_geometry_trial() {
     workflows::track::track(&req, RunFolder::create(&truth, false).unwrap(), &progress).unwrap();
     let out = tmp.path().join("synth");
     workflows::synth::run(
-        &workflows::synth::SynthRequest {
-            from: truth.clone(),
-            model: None,
-            foot: None,
-            phases: None,
-            rate: 100.0,
-            half_cycles: 5.0,
-            noise_angle_deg: 0.5,
-            noise_position_mm: 2.0,
-            noise_force_n: 5.0,
-            noise_cop_mm: 5.0,
-            seed: 1,
-            out: out.clone(),
-            overwrite: false,
-            hidden_effects: vec![],
-        },
+        &workflows::synth::SynthRequest::new(truth.clone(), out.clone()),
         &progress,
     )
     .unwrap();

@@ -345,20 +345,11 @@ fn at_a_force_plates_rate_and_the_identification_weight_the_law_is_recovered_wit
     let out = tmp.path().join("synth");
     workflows::synth::run(
         &workflows::synth::SynthRequest {
-            from: dir.join("truth_solution.json"),
             model: Some(root().join(MODEL)),
             foot: Some(dir.join("hidden_foot.json").to_str().unwrap().to_string()),
             phases: Some(root().join(PHASES)),
             rate: 1000.0,
-            half_cycles: 5.0,
-            noise_angle_deg: 0.5,
-            noise_position_mm: 2.0,
-            noise_force_n: 5.0,
-            noise_cop_mm: 5.0,
-            seed: 1,
-            out: out.clone(),
-            overwrite: false,
-            hidden_effects: vec![],
+            ..workflows::synth::SynthRequest::new(dir.join("truth_solution.json"), out.clone())
         },
         &Printed { quiet: true },
     )
@@ -496,22 +487,7 @@ fn make_volumetric_contact_trial() {
     eprintln!("truth: {:.0} s", t.elapsed().as_secs_f64());
     let out = tmp.path().join("synth");
     workflows::synth::run(
-        &workflows::synth::SynthRequest {
-            from: truth.clone(),
-            model: None,
-            foot: None,
-            phases: None,
-            rate: 100.0,
-            half_cycles: 5.0,
-            noise_angle_deg: 0.5,
-            noise_position_mm: 2.0,
-            noise_force_n: 5.0,
-            noise_cop_mm: 5.0,
-            seed: 1,
-            out: out.clone(),
-            overwrite: false,
-            hidden_effects: vec![],
-        },
+        &workflows::synth::SynthRequest::new(truth.clone(), out.clone()),
         &progress,
     )
     .unwrap();

@@ -52,6 +52,30 @@ pub struct SynthRequest {
     pub hidden_effects: Vec<String>,
 }
 
+impl SynthRequest {
+    /// A request with `footfall synth`'s defaults: 100 Hz, five half cycles, the default
+    /// noise (0.5°, 2 mm, 5 N, 5 mm) from seed 1, the model, foot and phases of `from`,
+    /// no hidden effect, an output folder that must not exist yet.
+    pub fn new(from: PathBuf, out: PathBuf) -> Self {
+        SynthRequest {
+            from,
+            model: None,
+            foot: None,
+            phases: None,
+            rate: 100.0,
+            half_cycles: 5.0,
+            noise_angle_deg: 0.5,
+            noise_position_mm: 2.0,
+            noise_force_n: 5.0,
+            noise_cop_mm: 5.0,
+            seed: 1,
+            out,
+            overwrite: false,
+            hidden_effects: Vec::new(),
+        }
+    }
+}
+
 /// Run `synth` as `args` describes, reporting to `progress`.
 pub fn run(args: &SynthRequest, progress: &dyn Progress) -> anyhow::Result<()> {
     if !(args.half_cycles.is_finite() && args.half_cycles >= 2.5) {
