@@ -339,7 +339,7 @@ fn fit_the_law(data: &Path, regularisation: Option<f64>, tmp: &Path) -> LawFit {
 #[test]
 #[ignore = "minutes: cargo test --release --test volumetric_identification -- --ignored at_a_force_plates_rate"]
 fn at_a_force_plates_rate_and_the_identification_weight_the_law_is_recovered_within_20_percent() {
-    use footfall::workflows::{self, Printed};
+    use footfall::workflows;
     let dir = root().join("tests/data/hidden/volumetric_contact");
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("synth");
@@ -351,7 +351,7 @@ fn at_a_force_plates_rate_and_the_identification_weight_the_law_is_recovered_wit
             rate: 1000.0,
             ..workflows::synth::SynthRequest::new(dir.join("truth_solution.json"), out.clone())
         },
-        &Printed { quiet: true },
+        &workflows::Quiet,
     )
     .unwrap();
     let aligned = tmp.path().join("aligned");

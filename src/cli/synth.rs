@@ -24,25 +24,25 @@ pub struct Args {
     #[arg(long)]
     phases: Option<PathBuf>,
     /// Sampling rate (Hz).
-    #[arg(long, default_value_t = 100.0, value_parser = super::validate::positive)]
+    #[arg(long, default_value_t = SynthRequest::DEFAULT_RATE_HZ, value_parser = super::validate::positive)]
     rate: f64,
     /// Length of the trial in half cycles of the solution.
-    #[arg(long, default_value_t = 5.0)]
+    #[arg(long, default_value_t = SynthRequest::DEFAULT_HALF_CYCLES)]
     half_cycles: f64,
     /// Noise standard deviation of the joint and pelvis angles (degrees).
-    #[arg(long, default_value_t = 0.5, value_parser = super::validate::non_negative)]
+    #[arg(long, default_value_t = SynthRequest::DEFAULT_NOISE_ANGLE_DEG, value_parser = super::validate::non_negative)]
     noise_angle_deg: f64,
     /// Noise standard deviation of the pelvis position (mm).
-    #[arg(long, default_value_t = 2.0, value_parser = super::validate::non_negative)]
+    #[arg(long, default_value_t = SynthRequest::DEFAULT_NOISE_POSITION_MM, value_parser = super::validate::non_negative)]
     noise_position_mm: f64,
     /// Noise standard deviation of the ground forces (N).
-    #[arg(long, default_value_t = 5.0, value_parser = super::validate::non_negative)]
+    #[arg(long, default_value_t = SynthRequest::DEFAULT_NOISE_FORCE_N, value_parser = super::validate::non_negative)]
     noise_force_n: f64,
     /// Noise standard deviation of the centre of pressure (mm).
-    #[arg(long, default_value_t = 5.0, value_parser = super::validate::non_negative)]
+    #[arg(long, default_value_t = SynthRequest::DEFAULT_NOISE_COP_MM, value_parser = super::validate::non_negative)]
     noise_cop_mm: f64,
     /// Seed of the noise generator.
-    #[arg(long, default_value_t = 1)]
+    #[arg(long, default_value_t = SynthRequest::DEFAULT_SEED)]
     seed: u64,
     /// Output folder: `synthetic.csv`, `synthetic_meta.json`, `truth.json`.
     #[arg(long, default_value = "runs/synth")]

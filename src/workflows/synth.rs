@@ -53,22 +53,37 @@ pub struct SynthRequest {
 }
 
 impl SynthRequest {
-    /// A request with `footfall synth`'s defaults: 100 Hz, five half cycles, the default
-    /// noise (0.5°, 2 mm, 5 N, 5 mm) from seed 1, the model, foot and phases of `from`,
-    /// no hidden effect, an output folder that must not exist yet.
+    /// `footfall synth`'s default sampling rate (Hz).
+    pub const DEFAULT_RATE_HZ: f64 = 100.0;
+    /// Its default length (half cycles of the solution).
+    pub const DEFAULT_HALF_CYCLES: f64 = 5.0;
+    /// Its default noise standard deviation of the angles (degrees).
+    pub const DEFAULT_NOISE_ANGLE_DEG: f64 = 0.5;
+    /// Its default noise standard deviation of the pelvis position (mm).
+    pub const DEFAULT_NOISE_POSITION_MM: f64 = 2.0;
+    /// Its default noise standard deviation of the ground forces (N).
+    pub const DEFAULT_NOISE_FORCE_N: f64 = 5.0;
+    /// Its default noise standard deviation of the centre of pressure (mm).
+    pub const DEFAULT_NOISE_COP_MM: f64 = 5.0;
+    /// Its default seed of the noise generator.
+    pub const DEFAULT_SEED: u64 = 1;
+
+    /// A request with `footfall synth`'s defaults (the constants above, which its
+    /// arguments default to): the model, foot and phases of `from`, no hidden effect, an
+    /// output folder that must not exist yet.
     pub fn new(from: PathBuf, out: PathBuf) -> Self {
         SynthRequest {
             from,
             model: None,
             foot: None,
             phases: None,
-            rate: 100.0,
-            half_cycles: 5.0,
-            noise_angle_deg: 0.5,
-            noise_position_mm: 2.0,
-            noise_force_n: 5.0,
-            noise_cop_mm: 5.0,
-            seed: 1,
+            rate: Self::DEFAULT_RATE_HZ,
+            half_cycles: Self::DEFAULT_HALF_CYCLES,
+            noise_angle_deg: Self::DEFAULT_NOISE_ANGLE_DEG,
+            noise_position_mm: Self::DEFAULT_NOISE_POSITION_MM,
+            noise_force_n: Self::DEFAULT_NOISE_FORCE_N,
+            noise_cop_mm: Self::DEFAULT_NOISE_COP_MM,
+            seed: Self::DEFAULT_SEED,
             out,
             overwrite: false,
             hidden_effects: Vec::new(),
