@@ -3,9 +3,11 @@
 //! is the true one, and a gradient shift probes the reduced inverse Hessian (checked
 //! against the null-space formula Z (ZᵀHZ)⁻¹ Zᵀ), also for a variable whose step runs
 //! to its bound; the reduced inverse from the equality-constrained QPs of the active
-//! constraints against the same formula, with a variable held at its bound.
+//! constraints against the same formula, with a variable held at its bound. The
+//! truncated re-fit's stopping rules on a one-parameter nonlinear least-squares problem.
 
 use footfall::problems::diagnose::stats::reduced_inverse_hessian;
+use footfall::problems::diagnose::truncated_refit_from;
 use footfall::sqp::linearised::GaussNewtonModel;
 use footfall::sqp::{Nlp, NlpEval};
 use nalgebra::{DMatrix, DVector};
@@ -269,4 +271,81 @@ fn the_reduced_inverse_is_the_null_space_formula_of_the_active_constraints() {
         c[0][0],
         truth[(0, 0)]
     );
+}
+
+/// One parameter w, residual r(w) = eʷ − 2 (f = r², minimum at w = ln 2), with one
+/// constraint row c = w that no step reaches.
+struct Exponential;
+
+impl Nlp for Exponential {
+    fn n(&self) -> usize {
+        1
+    }
+    fn m(&self) -> usize {
+        1
+    }
+    fn bounds(&self) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
+        (vec![-10.0], vec![10.0], vec![-100.0], vec![100.0])
+    }
+    fn jacobian_pattern(&self) -> (Vec<usize>, Vec<usize>) {
+        (vec![0], vec![0])
+    }
+    fn gauss_newton_pattern(&self) -> (Vec<usize>, Vec<usize>) {
+        (vec![0], vec![0])
+    }
+    fn hessian_blocks(&self) -> Vec<Vec<usize>> {
+        vec![vec![0]]
+    }
+    fn evaluate(&self, w: &[f64], derivs: bool) -> Result<NlpEval, footfall::sqp::EvalError> {
+        let (r, dr) = (w[0].exp() - 2.0, w[0].exp());
+        let mut ev = NlpEval {
+            f: r * r,
+            c: vec![w[0]],
+            ..Default::default()
+        };
+        if derivs {
+            ev.grad = vec![2.0 * r * dr];
+            ev.jac = vec![1.0];
+            ev.gn = vec![2.0 * dr * dr];
+        }
+        Ok(ev)
+    }
+    fn row_name(&self, _i: usize) -> String {
+        "w".into()
+    }
+}
+
+/// From w = 0 the Gauss–Newton steps w ← w − r/r′ lower f = 1 by about 0.484, 0.508 and
+/// 0.0077 (Newton's iteration on eʷ = 2, worked by hand): the relative rule (a step
+/// adding under 5 % of the decrease so far) ends the re-fit after the third; an absolute
+/// floor above the first step's decrease ends it after the first, with the decrease and
+/// point of that step.
+#[test]
+fn the_truncated_re_fit_stops_on_a_small_relative_or_absolute_step() {
+    let nlp = Exponential;
+    let newton = |w: f64| w - (w.exp() - 2.0) / w.exp();
+    let f = |w: f64| (w.exp() - 2.0f64).powi(2);
+    let (w1, w2, w3) = (
+        newton(0.0),
+        newton(newton(0.0)),
+        newton(newton(newton(0.0))),
+    );
+    let run = |abs_stop: f64| {
+        let first = GaussNewtonModel::new(&nlp, &[0.0], 0.0).unwrap();
+        let step = first.step(None);
+        truncated_refit_from(&nlp, &first, step, 5, 0.05, abs_stop).unwrap()
+    };
+    let (j0, dec, w, steps) = run(0.0);
+    assert_eq!(j0, 1.0);
+    assert_eq!(steps, 3, "relative rule: dec {dec}, w {w:?}");
+    assert!((w[0] - w3).abs() < 1e-7, "{} vs {w3}", w[0]);
+    assert!((dec - (1.0 - f(w3))).abs() < 1e-7, "{dec}");
+    // the steps' decreases as worked by hand
+    assert!((1.0 - f(w1) - 0.484).abs() < 1e-3 && (f(w1) - f(w2) - 0.508).abs() < 1e-3);
+    assert!(f(w2) - f(w3) < 0.05 * (1.0 - f(w3)));
+    let (_, dec, w, steps) = run(0.49);
+    assert_eq!(steps, 1, "absolute rule: dec {dec}");
+    assert!((w[0] - w1).abs() < 1e-7 && (dec - (1.0 - f(w1))).abs() < 1e-7);
+    // a floor below every step's decrease changes nothing
+    assert_eq!(run(1e-3).3, 3);
 }

@@ -357,6 +357,12 @@ pub fn theta_of(tr: &Transcription, w: &[f64]) -> Vec<f64> {
 pub const MAX_STEPS: usize = 5;
 /// A candidate's steps stop when one adds less than this fraction of its decrease.
 pub const REL_STOP: f64 = 0.05;
+/// A candidate's steps also stop when one adds less than this fraction of the
+/// significance threshold to its statistic (in units of the residual mean square before
+/// the variance inflation, which only shrinks it): such a step cannot change the verdict.
+/// The clock-offset candidates on trials without a clock error took all [`MAX_STEPS`]
+/// steps to gain a statistic of 0.1 against 10.8.
+pub const STEP_STOP_OF_THRESHOLD: f64 = 0.01;
 
 /// Cost decrease of the truncated re-fit from `w` ([`truncated_refit`]) and the cost.
 pub fn gauss_newton_decrease(tr: &Transcription, w: &[f64]) -> Result<(f64, f64), String> {
@@ -384,20 +390,22 @@ pub fn truncated_refit(
 ) -> Result<(f64, f64, Vec<f64>, usize), String> {
     let first = GaussNewtonModel::new(tr, w, 1e-12)?;
     let step = first.step(None);
-    truncated_refit_from(tr, &first, step, max_steps, rel_stop)
+    truncated_refit_from(tr, &first, step, max_steps, rel_stop, 0.0)
 }
 
 /// [`truncated_refit`] from the Gauss–Newton model `first` at the start and its first
 /// step (or the error computing it), computed once by a caller that also asks the model
-/// other questions (the identifiability probes start from the same model and step).
+/// other questions (the identifiability probes start from the same model and step). The
+/// steps also stop after one that lowers the cost by less than `abs_stop`.
 pub fn truncated_refit_from(
-    tr: &Transcription,
+    tr: &dyn crate::sqp::Nlp,
     first: &GaussNewtonModel<'_>,
     first_step: Result<GaussNewtonStep, String>,
     max_steps: usize,
     rel_stop: f64,
+    abs_stop: f64,
 ) -> Result<(f64, f64, Vec<f64>, usize), String> {
-    let cost = |w: &[f64]| crate::sqp::Nlp::evaluate(tr, w, false).map(|e| e.f);
+    let cost = |w: &[f64]| tr.evaluate(w, false).map(|e| e.f);
     let j0 = first.objective();
     let mut w = first.point().to_vec();
     let mut pending = Some(first_step);
@@ -428,7 +436,7 @@ pub fn truncated_refit_from(
         w = trial;
         f = ft;
         steps += 1;
-        if dec < rel_stop * total {
+        if dec < rel_stop * total || dec < abs_stop {
             break;
         }
     }
@@ -458,11 +466,15 @@ pub fn score_test(
         step,
         baseline_decrease,
         data_rows,
+        None,
     )
 }
 
 /// [`score_test`] from the Gauss–Newton model at the run's solution and its first step,
-/// computed once for the score test and the identifiability probes.
+/// computed once for the score test and the identifiability probes. With the residual
+/// mean square the statistic will be measured in (`mean_square`), the steps stop after
+/// one that adds less than [`STEP_STOP_OF_THRESHOLD`] of the threshold to it.
+#[allow(clippy::too_many_arguments)]
 pub fn score_test_from(
     effect: &EffectSpec,
     parameters: Vec<String>,
@@ -471,10 +483,14 @@ pub fn score_test_from(
     first_step: Result<GaussNewtonStep, String>,
     baseline_decrease: f64,
     data_rows: usize,
+    mean_square: Option<f64>,
 ) -> Result<(ScoreTest, Vec<f64>), String> {
     let k = parameters.len();
+    let abs_stop = mean_square
+        .filter(|s2| s2.is_finite() && *s2 > 0.0)
+        .map_or(0.0, |s2| STEP_STOP_OF_THRESHOLD * chi2_999(k) * s2);
     let (objective, decrease, w1, steps) =
-        truncated_refit_from(tr, first, first_step, MAX_STEPS, REL_STOP)?;
+        truncated_refit_from(tr, first, first_step, MAX_STEPS, REL_STOP, abs_stop)?;
     let theta = theta_of(tr, &w1);
     let values = theta[theta.len() - k..].to_vec();
     let at_bound = parameters_at_bound(tr, &parameters, &values);

@@ -29,6 +29,7 @@ use crate::report::diff::RunSummary;
 use crate::runfolder::RunFolder;
 use crate::sqp::linearised::GaussNewtonModel;
 use anyhow::anyhow;
+use rayon::prelude::*;
 use refit::{channel_changes, diff_with, refit, refit_into, test_by_refit, Evidence, Verified};
 use std::path::{Path, PathBuf};
 
@@ -100,6 +101,8 @@ fn test_candidate(
         // test (its truncated re-fit's first step) and the identifiability probes
         let first = GaussNewtonModel::new(tr, &w, 1e-12).map_err(|e| anyhow!(e))?;
         let first_step = first.step(None);
+        // the residual mean square every statistic is measured in
+        let s2 = baseline.mean_square(noise);
         let (mut t, w1) = score_test_from(
             effect,
             names.clone(),
@@ -108,6 +111,7 @@ fn test_candidate(
             first_step.clone(),
             baseline.decrease,
             rows,
+            Some(s2),
         )
         .map_err(|e| anyhow!(e))?;
         let means = |w: &[f64]| {
@@ -141,7 +145,6 @@ fn test_candidate(
         let phi = baseline.inflation_after(&after, &t.expected_channels);
         t.set_inflation(phi);
         // and so is the residual mean square
-        let s2 = baseline.mean_square(noise);
         t.set_mean_square(s2);
         let id = candidate_identifiability_at(tr, &first, first_step.as_ref(), names, s2, phi)
             .map_err(|e| anyhow!(e))?;
@@ -314,6 +317,14 @@ pub(super) struct Baseline<'a> {
     rows: usize,
 }
 
+/// A score-tested candidate (one without a null value is tested by a re-fit instead):
+/// its problem's build error (the model refuses it), or its test, the point its
+/// truncated re-fit reached and the seconds it took.
+enum Scored {
+    Unbuilt(anyhow::Error),
+    Tested(anyhow::Result<(ScoreTest, GaitSolution, f64)>),
+}
+
 /// One progress line per tested candidate: its (predicted or re-fit) decrease, the steps
 /// or iterations it took, its statistic against the threshold.
 fn print_progress(progress: &dyn Progress, t: &ScoreTest, converged: bool, seconds: f64) {
@@ -467,7 +478,42 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
         objective,
         rows,
     };
-    for (c, built) in candidates.iter().zip(problems) {
+    // the score tests: each candidate's is independent of the others' (its own problem,
+    // started at the run's solution), so they run at once, as many as rayon has threads;
+    // each one's figures are the same whichever thread runs it and when, and they are
+    // reported in the candidates' order
+    let scored_count = problems.iter().filter(|p| p.is_some()).count();
+    if scored_count > 1 {
+        note!(progress, "score-testing {scored_count} candidates");
+    }
+    let scored: Vec<Option<Scored>> = candidates
+        .par_iter()
+        .zip(problems.into_par_iter())
+        .map(|(c, built)| {
+            if setup.effects.iter().any(|e| e.overlaps(c)) || c.kind() == pad.kind() {
+                return None;
+            }
+            Some(match built? {
+                Err(e) => Scored::Unbuilt(e),
+                Ok(p) => Scored::Tested((|| {
+                    let mut prob = linearisation(p);
+                    let k = prob.model.ntheta() - base.model.ntheta();
+                    prob.setup.start_from(&solution).map_err(|e| anyhow!(e))?;
+                    let t0 = std::time::Instant::now();
+                    let (t, start) = test_candidate(
+                        &prob,
+                        c,
+                        k,
+                        &resid,
+                        full.as_ref(),
+                        heldout::hint(c, &setup),
+                    )?;
+                    Ok((t, start, t0.elapsed().as_secs_f64()))
+                })()),
+            })
+        })
+        .collect();
+    for (c, scored) in candidates.iter().zip(scored) {
         if setup.effects.iter().any(|e| e.overlaps(c)) {
             skipped.push(format!("{}: already in the model", c.label()));
             continue;
@@ -496,23 +542,16 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
             tests.push((t, Evidence::Refit(Box::new(run), diff)));
             continue;
         }
-        // built above for every candidate that gets here (neither in the model nor the pad)
-        let Some(built) = built else { continue };
-        let mut prob = match built {
-            Ok(p) => linearisation(p),
-            Err(e) => {
+        // scored above for every candidate that gets here (neither in the model nor the pad)
+        let Some(scored) = scored else { continue };
+        let (mut t, start, seconds) = match scored {
+            Scored::Unbuilt(e) => {
                 skipped.push(format!("{}: {e:#}", c.label()));
                 continue;
             }
+            Scored::Tested(result) => result?,
         };
-        let k = prob.model.ntheta() - base.model.ntheta();
-        prob.setup.start_from(&solution).map_err(|e| anyhow!(e))?;
-        let t0 = std::time::Instant::now();
-        let (mut t, start) =
-            test_candidate(&prob, c, k, &resid, full.as_ref(), heldout::hint(c, &setup))?;
-        {
-            print_progress(progress, &t, true, t0.elapsed().as_secs_f64());
-        }
+        print_progress(progress, &t, true, seconds);
         if !args.profile_clocks.is_empty() && profile::plate(c).is_some() {
             let t1 = std::time::Instant::now();
             let (mut prof, refitted) = profile::profile_clock(
