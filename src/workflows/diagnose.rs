@@ -322,7 +322,7 @@ pub(super) struct Baseline<'a> {
 /// truncated re-fit reached and the seconds it took.
 enum Scored {
     Unbuilt(anyhow::Error),
-    Tested(anyhow::Result<(ScoreTest, GaitSolution, f64)>),
+    Tested(anyhow::Result<Box<(ScoreTest, GaitSolution, f64)>>),
 }
 
 /// One progress line per tested candidate: its (predicted or re-fit) decrease, the steps
@@ -508,7 +508,7 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
                         full.as_ref(),
                         heldout::hint(c, &setup),
                     )?;
-                    Ok((t, start, t0.elapsed().as_secs_f64()))
+                    Ok(Box::new((t, start, t0.elapsed().as_secs_f64())))
                 })()),
             })
         })
@@ -549,7 +549,7 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
                 skipped.push(format!("{}: {e:#}", c.label()));
                 continue;
             }
-            Scored::Tested(result) => result?,
+            Scored::Tested(result) => *result?,
         };
         print_progress(progress, &t, true, seconds);
         if !args.profile_clocks.is_empty() && profile::plate(c).is_some() {
