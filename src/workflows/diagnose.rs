@@ -490,9 +490,8 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
         .par_iter()
         .zip(problems.into_par_iter())
         .map(|(c, built)| {
-            if setup.effects.iter().any(|e| e.overlaps(c)) || c.kind() == pad.kind() {
-                return None;
-            }
+            // none for the candidates already in the model and the pad (built above only
+            // for the others)
             Some(match built? {
                 Err(e) => Scored::Unbuilt(e),
                 Ok(p) => Scored::Tested((|| {
