@@ -112,7 +112,7 @@ impl<'a> GaussNewtonModel<'a> {
             d_ub[i] = f64::INFINITY;
         }
         let weights = vec![1.0; self.nlp.m()];
-        let sol = qp::solve(&QpData {
+        let sol = qp::solve_near_solution(&QpData {
             h: &self.h,
             g: &g,
             jac: &self.jac,
@@ -209,7 +209,7 @@ impl<'a> GaussNewtonModel<'a> {
         for (j, &col) in cols.iter().enumerate() {
             let mut g = vec![0.0; n];
             g[col] = 1.0;
-            let sol = qp::solve(&QpData {
+            let sol = qp::solve_near_solution(&QpData {
                 h: &self.h,
                 g: &g,
                 jac: &self.jac,

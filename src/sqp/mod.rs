@@ -19,6 +19,7 @@
 //! mode and the rescue of a failed QP), `line_search` (the filter and the second-order
 //! correction), `kkt` (the convergence test), `evaluator` (timed NLP and QP calls).
 
+mod active_set;
 pub mod checkpoint;
 mod driver;
 mod eval_error;

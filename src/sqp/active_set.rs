@@ -1,0 +1,288 @@
+//! The QP subproblem solved on a guessed active set: one sparse LDLᵀ instead of an
+//! interior-point solve.
+//!
+//! Near a solution, and in every question asked at one (a score test's Gauss–Newton
+//! steps, the identifiability probes), the bounds and inequality rows that hold at the
+//! step are those that hold at the point. The QP restricted to them is an
+//! equality-constrained QP: one factorisation of its KKT matrix
+//! $\begin{pmatrix} H & A^T \\ A & 0 \end{pmatrix}$, where Clarabel factorises a larger
+//! one 10–25 times. The guess is corrected for a few rounds, in the manner of a
+//! primal-dual active-set method (a violated bound or row joins the set, an active one
+//! whose multiplier has the wrong sign leaves it), and the result is accepted only when
+//! the QP's KKT conditions hold: primal feasibility, multipliers of the right sign, and
+//! the reduced Hessian positive definite on the active set (the factorisation's
+//! inertia). It is then the QP's solution (its only one when H is convex), to the
+//! precision of the factorisation with iterative refinement. Otherwise the caller solves
+//! the QP with Clarabel, so a wrong guess costs time, never a different answer.
+
+use super::qp::{CscPattern, QpData, QpSolution};
+use clarabel::qdldl::{QDLDLFactorisation, QDLDLSettings};
+
+/// How a bound pair holds in the guess.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Held {
+    /// Inactive.
+    Free,
+    /// At its lower bound.
+    Lower,
+    /// At its upper bound.
+    Upper,
+    /// An equality (lower and upper bound are one value).
+    Fixed,
+}
+
+/// Rounds of corrections to the guessed active set before the interior-point solver
+/// takes over.
+const ROUNDS: usize = 4;
+/// A bound or row counts as holding at the point when its distance to the bound is at
+/// most this (relative to 1 + |bound|): the interior-point solver stops within about
+/// 1e-10 of a bound it reaches.
+const AT_BOUND: f64 = 1e-8;
+/// Primal feasibility of the inactive bounds and rows (relative to 1 + |bound|).
+const FEASIBLE: f64 = 1e-9;
+/// A multiplier has the wrong sign beyond this fraction of the largest one.
+const SIGN: f64 = 1e-9;
+/// Static regularisation of the KKT matrix (relative to its largest entry), removed by
+/// iterative refinement against the unregularised matrix.
+const REGULARISATION: f64 = 1e-10;
+/// Iterative refinement steps at most, and the residual it must reach (relative to the
+/// right-hand side and the products making up the matrix–vector product).
+const REFINEMENTS: usize = 10;
+const RESIDUAL: f64 = 1e-12;
+/// A refinement that stops converging is accepted at this residual (relative as
+/// [`RESIDUAL`]): Clarabel's own tolerances are 1e-10 on scaled residuals.
+const STALLED: f64 = 1e-9;
+
+/// One held bound or row of the equality-constrained QP.
+#[derive(Debug, Clone, Copy)]
+enum Row {
+    /// Constraint row `i` of the QP's Jacobian.
+    Constraint(usize),
+    /// Variable `j`'s bound.
+    Variable(usize),
+}
+
+/// The QP `q` (not in elastic mode) on a guessed active set, or `None` when the guess
+/// does not settle on a KKT point within [`ROUNDS`] (the caller then solves it with the
+/// interior-point solver). `jrows` holds the entries of each constraint row.
+pub(super) fn solve(q: &QpData<'_>, jrows: &[Vec<(usize, f64)>]) -> Option<QpSolution> {
+    if q.elastic.is_some() {
+        return None;
+    }
+    let (n, m) = (q.g.len(), q.c.len());
+    let lo = |i: usize| q.c_lb[i] - q.c[i];
+    let hi = |i: usize| q.c_ub[i] - q.c[i];
+    let near = |distance: f64, bound: f64| distance.abs() <= AT_BOUND * (1.0 + bound.abs());
+    let guess = |lower: f64, upper: f64, l: f64, u: f64| {
+        if lower == upper {
+            Held::Fixed
+        } else if upper.is_finite() && near(upper, u) {
+            Held::Upper
+        } else if lower.is_finite() && near(lower, l) {
+            Held::Lower
+        } else {
+            Held::Free
+        }
+    };
+    let mut rows: Vec<Held> = (0..m)
+        .map(|i| {
+            if q.c_lb[i] == q.c_ub[i] {
+                Held::Fixed
+            } else {
+                guess(lo(i), hi(i), q.c_lb[i], q.c_ub[i])
+            }
+        })
+        .collect();
+    let mut vars: Vec<Held> = (0..n)
+        .map(|j| guess(q.d_lb[j], q.d_ub[j], q.d_lb[j], q.d_ub[j]))
+        .collect();
+    // the Hessian's upper triangle, as Clarabel reads it
+    let h: Vec<(usize, usize, f64)> = (0..q.h.vals.len())
+        .filter(|&k| q.h.rows[k] <= q.h.cols[k])
+        .map(|k| (q.h.rows[k], q.h.cols[k], q.h.vals[k]))
+        .collect();
+    let scale = h
+        .iter()
+        .map(|t| t.2.abs())
+        .chain(q.jac.vals.iter().map(|v| v.abs()))
+        .fold(1.0f64, f64::max);
+    for _ in 0..ROUNDS {
+        let held: Vec<(Row, f64)> = (0..m)
+            .filter_map(|i| match rows[i] {
+                Held::Free => None,
+                Held::Upper => Some((Row::Constraint(i), hi(i))),
+                Held::Lower | Held::Fixed => Some((Row::Constraint(i), lo(i))),
+            })
+            .chain((0..n).filter_map(|j| match vars[j] {
+                Held::Free => None,
+                Held::Upper => Some((Row::Variable(j), q.d_ub[j])),
+                Held::Lower | Held::Fixed => Some((Row::Variable(j), q.d_lb[j])),
+            }))
+            .collect();
+        let x = solve_equality_qp(q, jrows, &h, &held, scale)?;
+        let (d, y) = x.split_at(n);
+        // the step on the rows, for the feasibility of the inactive ones
+        let jd: Vec<f64> = jrows
+            .iter()
+            .map(|r| r.iter().map(|&(j, v)| v * d[j]).sum())
+            .collect();
+        let largest = y.iter().fold(1.0f64, |a, v| a.max(v.abs()));
+        let mut changed = false;
+        let mut update = |state: &mut Held, value: f64, lower: f64, upper: f64, y: Option<f64>| {
+            let next = match (*state, y) {
+                (Held::Upper, Some(y)) if y < -SIGN * largest => Held::Free,
+                (Held::Lower, Some(y)) if y > SIGN * largest => Held::Free,
+                (Held::Free, _) if value > upper + FEASIBLE * (1.0 + upper.abs()) => Held::Upper,
+                (Held::Free, _) if value < lower - FEASIBLE * (1.0 + lower.abs()) => Held::Lower,
+                (s, _) => s,
+            };
+            changed |= next != *state;
+            *state = next;
+        };
+        let mut multiplier = held.iter().zip(y);
+        let mut next_held = multiplier.next();
+        for i in 0..m {
+            let y = match next_held {
+                Some((&(Row::Constraint(k), _), &y)) if k == i => {
+                    next_held = multiplier.next();
+                    Some(y)
+                }
+                _ => None,
+            };
+            update(&mut rows[i], jd[i], lo(i), hi(i), y);
+        }
+        for j in 0..n {
+            let y = match next_held {
+                Some((&(Row::Variable(k), _), &y)) if k == j => {
+                    next_held = multiplier.next();
+                    Some(y)
+                }
+                _ => None,
+            };
+            update(&mut vars[j], d[j], q.d_lb[j], q.d_ub[j], y);
+        }
+        if changed {
+            continue;
+        }
+        let mut lambda = vec![0.0; m];
+        let mut nu = vec![0.0; n];
+        for (&(row, _), &y) in held.iter().zip(y) {
+            match row {
+                Row::Constraint(i) => lambda[i] = y,
+                Row::Variable(j) => nu[j] = y,
+            }
+        }
+        // within FEASIBLE of its bounds: clamp, so that the point stays in the box
+        let d = (0..n).map(|j| d[j].max(q.d_lb[j]).min(q.d_ub[j])).collect();
+        return Some(QpSolution {
+            d,
+            lambda,
+            nu,
+            elastic_violation: 0.0,
+            iterations: 0,
+        });
+    }
+    None
+}
+
+/// The solution `(d, y)` of `H d + Aᵀ y = −g`, `A d = b` for the held rows `held`
+/// (`(row, b)`), or `None` when the reduced Hessian is not positive definite on them or
+/// the refinement does not reach [`RESIDUAL`].
+fn solve_equality_qp(
+    q: &QpData<'_>,
+    jrows: &[Vec<(usize, f64)>],
+    h: &[(usize, usize, f64)],
+    held: &[(Row, f64)],
+    scale: f64,
+) -> Option<Vec<f64>> {
+    let n = q.g.len();
+    let size = n + held.len();
+    let delta = REGULARISATION * scale;
+    // the upper triangle of the regularised KKT matrix, as triplets
+    let (mut r, mut c, mut v) = (Vec::new(), Vec::new(), Vec::new());
+    let mut push = |i: usize, j: usize, x: f64| {
+        r.push(i);
+        c.push(j);
+        v.push(x);
+    };
+    for &(i, j, x) in h {
+        push(i, j, x);
+    }
+    for j in 0..n {
+        push(j, j, delta);
+    }
+    let entries = |row: Row| -> Vec<(usize, f64)> {
+        match row {
+            Row::Constraint(i) => jrows[i].clone(),
+            Row::Variable(j) => vec![(j, 1.0)],
+        }
+    };
+    let a: Vec<Vec<(usize, f64)>> = held.iter().map(|&(row, _)| entries(row)).collect();
+    for (k, row) in a.iter().enumerate() {
+        for &(j, x) in row {
+            push(j, n + k, x);
+        }
+        push(n + k, n + k, -delta);
+    }
+    let pattern = CscPattern::new(size, size, &r, &c);
+    let mut nz = vec![0.0; pattern.nnz()];
+    pattern.accumulate(&mut nz, &v, 1.0);
+    let settings = QDLDLSettings {
+        regularize_enable: false,
+        ..Default::default()
+    };
+    let mut factor = QDLDLFactorisation::new(&pattern.matrix(nz), Some(settings)).ok()?;
+    // n positive pivots (Sylvester's law of inertia, whatever the order): the Hessian is
+    // positive definite on the null space of the held rows, and the point is a strict
+    // local minimum of the QP on them
+    if factor.positive_inertia() != n || !factor.D.iter().all(|d| d.is_finite() && *d != 0.0) {
+        return None;
+    }
+    let mut rhs: Vec<f64> = q.g.iter().map(|g| -g).collect();
+    rhs.extend(held.iter().map(|&(_, b)| b));
+    // the unregularised product K x, and the size of its terms (for the tolerance)
+    let product = |x: &[f64]| -> (Vec<f64>, f64) {
+        let mut y = vec![0.0; size];
+        let mut terms = 0.0f64;
+        for &(i, j, v) in h {
+            y[i] += v * x[j];
+            terms = terms.max((v * x[j]).abs());
+            if i != j {
+                y[j] += v * x[i];
+                terms = terms.max((v * x[i]).abs());
+            }
+        }
+        for (k, row) in a.iter().enumerate() {
+            for &(j, v) in row {
+                y[j] += v * x[n + k];
+                y[n + k] += v * x[j];
+                terms = terms.max((v * x[n + k]).abs()).max((v * x[j]).abs());
+            }
+        }
+        (y, terms)
+    };
+    let mut x = rhs.clone();
+    factor.solve(&mut x);
+    let size_of = |v: &[f64]| v.iter().fold(0.0f64, |a, b| a.max(b.abs()));
+    let mut last = f64::INFINITY;
+    for _ in 0..=REFINEMENTS {
+        if !x.iter().all(|v| v.is_finite()) {
+            return None;
+        }
+        let (kx, terms) = product(&x);
+        let mut res: Vec<f64> = rhs.iter().zip(&kx).map(|(b, k)| b - k).collect();
+        let (size, scale) = (size_of(&res), 1.0 + size_of(&rhs) + terms);
+        // refined to the round-off, or stalled (rows held twice, e.g. a bound on a
+        // variable an equality row also fixes, whose right-hand sides differ by the
+        // point's constraint error) within what the interior-point solver would leave
+        if size <= RESIDUAL * scale || (size > 0.5 * last && size <= STALLED * scale) {
+            return Some(x);
+        }
+        last = size;
+        factor.solve(&mut res);
+        for (xi, ri) in x.iter_mut().zip(&res) {
+            *xi += ri;
+        }
+    }
+    None
+}
