@@ -17,7 +17,8 @@
 //!
 //! One home per concept: `driver` (the iteration), `step` (the QP subproblem, elastic
 //! mode and the rescue of a failed QP), `line_search` (the filter and the second-order
-//! correction), `kkt` (the convergence test), `evaluator` (timed NLP and QP calls).
+//! correction), `kkt` (the convergence test), `evaluator` (timed NLP and QP calls),
+//! `active_set` (a QP asked at a solution, solved on its guessed active set).
 
 mod active_set;
 pub mod checkpoint;
