@@ -192,7 +192,7 @@ pub fn solve(q: &QpData<'_>) -> Result<QpSolution, QpError> {
 
 /// Solve a QP subproblem asked at a solution (a Gauss–Newton model's steps and probes):
 /// first on the active set guessed from the bounds and rows that hold at the point (one
-/// sparse LDLᵀ, [`active_set`](super::active_set)), which settles on the QP's KKT point
+/// sparse LDLᵀ, `sqp::active_set`), which settles on the QP's KKT point
 /// in a few corrections when the point is a solution of a nearby problem; else with
 /// Clarabel, as [`solve`]. Not used inside the SQP's iterations: there the guess rarely
 /// holds (the CI's predictions took Clarabel's path at every QP, 2 % slower).
