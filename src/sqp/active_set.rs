@@ -73,8 +73,9 @@ pub(super) fn solve(q: &QpData<'_>, jrows: &[Vec<(usize, f64)>]) -> Option<QpSol
     let lo = |i: usize| q.c_lb[i] - q.c[i];
     let hi = |i: usize| q.c_ub[i] - q.c[i];
     let near = |distance: f64, bound: f64| distance.abs() <= AT_BOUND * (1.0 + bound.abs());
+    // `lower`, `upper`: the distances to the bounds `l`, `u`
     let guess = |lower: f64, upper: f64, l: f64, u: f64| {
-        if lower == upper {
+        if l == u {
             Held::Fixed
         } else if upper.is_finite() && near(upper, u) {
             Held::Upper
@@ -85,13 +86,7 @@ pub(super) fn solve(q: &QpData<'_>, jrows: &[Vec<(usize, f64)>]) -> Option<QpSol
         }
     };
     let mut rows: Vec<Held> = (0..m)
-        .map(|i| {
-            if q.c_lb[i] == q.c_ub[i] {
-                Held::Fixed
-            } else {
-                guess(lo(i), hi(i), q.c_lb[i], q.c_ub[i])
-            }
-        })
+        .map(|i| guess(lo(i), hi(i), q.c_lb[i], q.c_ub[i]))
         .collect();
     let mut vars: Vec<Held> = (0..n)
         .map(|j| guess(q.d_lb[j], q.d_ub[j], q.d_lb[j], q.d_ub[j]))
@@ -126,44 +121,7 @@ pub(super) fn solve(q: &QpData<'_>, jrows: &[Vec<(usize, f64)>]) -> Option<QpSol
             .iter()
             .map(|r| r.iter().map(|&(j, v)| v * d[j]).sum())
             .collect();
-        let largest = y.iter().fold(1.0f64, |a, v| a.max(v.abs()));
-        let mut changed = false;
-        let mut update = |state: &mut Held, value: f64, lower: f64, upper: f64, y: Option<f64>| {
-            let next = match (*state, y) {
-                (Held::Upper, Some(y)) if y < -SIGN * largest => Held::Free,
-                (Held::Lower, Some(y)) if y > SIGN * largest => Held::Free,
-                (Held::Free, _) if value > upper + FEASIBLE * (1.0 + upper.abs()) => Held::Upper,
-                (Held::Free, _) if value < lower - FEASIBLE * (1.0 + lower.abs()) => Held::Lower,
-                (s, _) => s,
-            };
-            changed |= next != *state;
-            *state = next;
-        };
-        let mut multiplier = held.iter().zip(y);
-        let mut next_held = multiplier.next();
-        for i in 0..m {
-            let y = match next_held {
-                Some((&(Row::Constraint(k), _), &y)) if k == i => {
-                    next_held = multiplier.next();
-                    Some(y)
-                }
-                _ => None,
-            };
-            update(&mut rows[i], jd[i], lo(i), hi(i), y);
-        }
-        for j in 0..n {
-            let y = match next_held {
-                Some((&(Row::Variable(k), _), &y)) if k == j => {
-                    next_held = multiplier.next();
-                    Some(y)
-                }
-                _ => None,
-            };
-            update(&mut vars[j], d[j], q.d_lb[j], q.d_ub[j], y);
-        }
-        if changed {
-            continue;
-        }
+        // the multipliers by row and by variable (0 where nothing is held)
         let mut lambda = vec![0.0; m];
         let mut nu = vec![0.0; n];
         for (&(row, _), &y) in held.iter().zip(y) {
@@ -171,6 +129,28 @@ pub(super) fn solve(q: &QpData<'_>, jrows: &[Vec<(usize, f64)>]) -> Option<QpSol
                 Row::Constraint(i) => lambda[i] = y,
                 Row::Variable(j) => nu[j] = y,
             }
+        }
+        let largest = y.iter().fold(1.0f64, |a, v| a.max(v.abs()));
+        let mut changed = false;
+        let mut update = |state: &mut Held, value: f64, lower: f64, upper: f64, y: f64| {
+            let next = match *state {
+                Held::Upper if y < -SIGN * largest => Held::Free,
+                Held::Lower if y > SIGN * largest => Held::Free,
+                Held::Free if value > upper + FEASIBLE * (1.0 + upper.abs()) => Held::Upper,
+                Held::Free if value < lower - FEASIBLE * (1.0 + lower.abs()) => Held::Lower,
+                s => s,
+            };
+            changed |= next != *state;
+            *state = next;
+        };
+        for i in 0..m {
+            update(&mut rows[i], jd[i], lo(i), hi(i), lambda[i]);
+        }
+        for j in 0..n {
+            update(&mut vars[j], d[j], q.d_lb[j], q.d_ub[j], nu[j]);
+        }
+        if changed {
+            continue;
         }
         // within FEASIBLE of its bounds: clamp, so that the point stays in the box
         let d = (0..n).map(|j| d[j].max(q.d_lb[j]).min(q.d_ub[j])).collect();
