@@ -126,6 +126,11 @@ fn out_of_range_option_values_are_usage_errors_naming_the_option() {
             finite_positive,
         ),
         (
+            &["predict", "--max-violation-growth=-2"],
+            "'--max-violation-growth <MAX_VIOLATION_GROWTH>'",
+            "number ≥ 0 (or inf)",
+        ),
+        (
             &["compare", "--expect-ratio", "inf"],
             "'--expect-ratio <EXPECT_RATIO>'",
             finite_positive,

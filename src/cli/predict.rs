@@ -46,6 +46,12 @@ pub struct PredictOptions {
     /// has no curvature in positions, velocities and excitations).
     #[arg(long, default_value_t = f64::INFINITY, value_parser = super::validate::threshold)]
     pub exact_below: f64,
+    /// Largest violation a line search accepts, as a multiple of the violation where the
+    /// solve starts (l1 norms, at least 1): a step that lowers the effort but leaves the
+    /// linearised constraints far behind is shortened instead (`inf`: the filter's loose
+    /// cap of 10⁴, as tracking uses).
+    #[arg(long, default_value_t = 10.0, value_parser = super::validate::threshold)]
+    pub max_violation_growth: f64,
     /// Iteration limit.
     #[arg(long, default_value_t = 300, value_parser = super::validate::iterations)]
     pub max_iter: usize,
@@ -98,6 +104,10 @@ impl From<&PredictOptions> for PredictionOptions {
             tol: o.tol,
             integrator_tol: o.integrator_tol,
             exact_below: o.exact_below,
+            violation_growth: o
+                .max_violation_growth
+                .is_finite()
+                .then_some(o.max_violation_growth),
             max_iter: o.max_iter,
             max_time: o.max_time,
             transient_threshold: o.transient_threshold,

@@ -54,10 +54,15 @@ impl Filter {
         }
     }
 
-    /// At the first line search: θ_max = max(10⁴, 1.2 θ₀), the filter's first entry.
-    fn start(&mut self, theta0: f64) {
+    /// At the first line search: θ_max = max(10⁴, 1.2 θ₀), or max(1, k·θ₀) with the
+    /// violation growth cap `k` ([`SqpSettings::violation_growth`]); the filter's first
+    /// entry.
+    fn start(&mut self, theta0: f64, growth: Option<f64>) {
         if self.entries.is_empty() {
-            self.theta_max = (1e4f64).max(1.2 * theta0);
+            self.theta_max = match growth {
+                Some(k) => (1.0f64).max(k * theta0),
+                None => (1e4f64).max(1.2 * theta0),
+            };
             self.entries.push((self.theta_max, f64::NEG_INFINITY));
         }
     }
@@ -146,7 +151,7 @@ pub(super) fn search(
 ) -> Search {
     let (n, m) = (s.n, s.m);
     let theta0 = plain.1;
-    filter.start(theta0);
+    filter.start(theta0, settings.violation_growth);
     let filter: &Filter = filter;
     let r = Reference {
         f0: plain.0,
@@ -444,6 +449,53 @@ mod tests {
         assert!(matches!(run(true), Search::Fatal(EvalError::Fatal(_))));
     }
 
+    /// With the violation growth cap k = 10, a search from θ₀ = 0.05 (x = 0.95, row
+    /// x − 1 = 0) along d = 3 with f = −10x falling steeply refuses the full step
+    /// (θ = 2.95 above θ_max = max(1, 10·0.05) = 1) and the half step (θ = 1.45), and takes
+    /// α = 1/4 (θ = 0.7, f from −9.5 to −17). Without the cap θ_max = 10⁴ and the full
+    /// step is taken.
+    #[test]
+    fn the_violation_growth_cap_shortens_a_step_that_leaves_the_linearisation() {
+        fn falling(x: f64) -> f64 {
+            -10.0 * x
+        }
+        let s = structure(1);
+        let st = state(falling, -10.0, 1, 0.95);
+        let eval = |w: &[f64]| Ok(eval_at(falling, 1, w[0]));
+        let no_soc = |_: &[f64]| None;
+        for (growth, step, theta_max) in [(Some(10.0), 0.25, 1.0), (None, 1.0, 1e4)] {
+            let settings = SqpSettings {
+                violation_growth: growth,
+                ..settings()
+            };
+            let mut filter = Filter::new();
+            let out = search(
+                &s,
+                &settings,
+                &mut filter,
+                (&st, st.plain),
+                &[3.0],
+                1.0,
+                &eval,
+                &no_soc,
+            );
+            let Search::Accepted(t) = out else {
+                panic!("{growth:?}: {out:?}")
+            };
+            assert_eq!(t.step, step, "{growth:?}");
+            assert!(
+                (t.w[0] - (0.95 + 3.0 * step)).abs() < 1e-15,
+                "{growth:?}: {:?}",
+                t.w
+            );
+            assert_eq!(filter.theta_max, theta_max, "{growth:?}");
+        }
+        // far from feasibility the cap is k·θ₀
+        let mut filter = Filter::new();
+        filter.start(500.0, Some(10.0));
+        assert_eq!(filter.theta_max, 5000.0);
+    }
+
     /// A point the filter dominates is rejected even if it reduces the violation.
     #[test]
     fn the_filter_rejects_dominated_points() {
@@ -454,7 +506,7 @@ mod tests {
             eta: 1e-4,
         };
         let mut filter = Filter::new();
-        filter.start(1.0);
+        filter.start(1.0, None);
         assert_eq!(filter.acceptable(&r, 0.0, 0.5, 1.0), Some(true));
         filter.augment(0.4, 0.0);
         // the entry (0.4·(1 − 10⁻⁵), −0.4·10⁻⁵) dominates (0.5, 0), not (0.5, −10⁻³)

@@ -188,6 +188,16 @@ pub struct SqpSettings {
     /// between 1e-5 and 4e-4 for the last 14; 8 iterations at 1e-10, quadratically to
     /// 3.4e-7). Loose integration stays where the residual is large (default: 1e-5).
     pub inexact_integration: f64,
+    /// Cap on the violation a line search accepts, as a multiple of the violation where the
+    /// solve starts: θ_max = max(1, k·θ₀) (l1 norms) instead of max(10⁴, 1.2·θ₀) (None,
+    /// the default). From a point near feasibility the loose cap lets a full step that
+    /// lowers the objective leave the region where the linearised constraints hold: a
+    /// prediction of the volumetric foot from its tracking solution (θ₀ = 0.11) took a
+    /// first step to J = 0.048 and a violation of 12.9, lifted both feet off the ground
+    /// (where the compliant contact has no force and no gradient) and ended infeasible;
+    /// with k = 10 it backtracks and converges (docs/foot-identification.md, stop 53).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub violation_growth: Option<f64>,
     /// Fault injection for tests: the QP solves (numbered from 0 over the whole solve,
     /// elastic and second-order-correction QPs included) that fail as if Clarabel had
     /// stopped with a numerical error, so that the recovery path can be shown to work.
@@ -210,6 +220,7 @@ impl Default for SqpSettings {
             exact_hessian_below: f64::INFINITY,
             exact_convexification: ExactConvexification::Augmented,
             inexact_integration: 1e-5,
+            violation_growth: None,
             inject_qp_failures: Vec::new(),
         }
     }

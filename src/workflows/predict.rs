@@ -18,6 +18,12 @@ use crate::sqp::{ExactConvexification, HessianMode, SqpResult, SqpSettings, SqpS
 use anyhow::{anyhow, Context};
 use std::path::{Path, PathBuf};
 
+/// The prediction's default cap on the violation a line search accepts, as a multiple of
+/// the violation where the solve starts ([`SqpSettings::violation_growth`]). A prediction
+/// usually starts from a tracking solution, near feasibility, where the effort can fall
+/// a long way along steps the linearised constraints do not describe.
+pub const PREDICTION_VIOLATION_GROWTH: f64 = 10.0;
+
 /// How to predict: the model, data, targets and solver settings of a prediction (the
 /// `predict` and `compare` commands fill it from their arguments).
 #[derive(Debug, Clone)]
@@ -45,6 +51,9 @@ pub struct PredictionOptions {
     pub integrator_tol: f64,
     /// With the exact Hessian: Gauss–Newton steps until the violation is below this.
     pub exact_below: f64,
+    /// Cap on the violation a line search accepts, as a multiple of the start's
+    /// ([`SqpSettings::violation_growth`]; default 10).
+    pub violation_growth: Option<f64>,
     /// Iteration limit.
     pub max_iter: usize,
     /// Wall-time limit per solve (s).
@@ -68,6 +77,7 @@ impl Default for PredictionOptions {
             tol: 1e-5,
             integrator_tol: 1e-8,
             exact_below: f64::INFINITY,
+            violation_growth: Some(PREDICTION_VIOLATION_GROWTH),
             max_iter: 300,
             max_time: None,
             transient_threshold: DEFAULT_TRANSIENT_THRESHOLD_N,
@@ -145,6 +155,7 @@ pub fn predict(
         max_time: o.max_time,
         hessian,
         exact_hessian_below: o.exact_below,
+        violation_growth: o.violation_growth,
         exact_convexification: ExactConvexification::InertiaCorrection,
         ..Default::default()
     };
