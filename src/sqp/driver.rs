@@ -103,10 +103,13 @@ pub(super) struct State {
     pub(super) plain: (f64, f64),
 }
 
-/// Solve `nlp` from `w0`, or continue the solve `resume` checkpointed.
+/// Solve `nlp` from `w0` (with the constraint multipliers `lambda0` in the first
+/// Hessian, if given and of the right length; zero otherwise), or continue the solve
+/// `resume` checkpointed.
 pub(super) fn run(
     nlp: &dyn Nlp,
     w0: &[f64],
+    lambda0: Option<&[f64]>,
     settings: &SqpSettings,
     observer: &mut dyn Observer,
     resume: Option<&SqpCheckpoint>,
@@ -163,7 +166,11 @@ pub(super) fn run(
             nlp.set_integration_tolerance(tol);
         }
     }
-    let lambda0 = resume.map_or_else(|| vec![0.0; m], |cp| cp.lambda.values());
+    let lambda0 = match (resume, lambda0) {
+        (Some(cp), _) => cp.lambda.values(),
+        (None, Some(l)) if l.len() == m && l.iter().all(|v| v.is_finite()) => l.to_vec(),
+        (None, _) => vec![0.0; m],
+    };
     let (ev, hess) = match eval.derivs(&w, &lambda0) {
         Ok(r) => r,
         Err(e) => return fail(SqpStatus::EvaluationFailure(e.chain()), w),

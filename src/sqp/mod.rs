@@ -402,7 +402,21 @@ pub fn solve(
     settings: &SqpSettings,
     observer: &mut dyn Observer,
 ) -> SqpResult {
-    driver::run(nlp, w0, settings, observer, None)
+    driver::run(nlp, w0, None, settings, observer, None)
+}
+
+/// [`solve`] with the constraint multipliers `lambda0` (one per constraint row) in the
+/// first iteration's Hessian of the Lagrangian instead of zero: the same problem solved
+/// again from its own solution (a tighter tolerance) starts with its curvature, not the
+/// objective's alone. Multipliers of the wrong length are ignored.
+pub fn solve_warm(
+    nlp: &dyn Nlp,
+    w0: &[f64],
+    lambda0: &[f64],
+    settings: &SqpSettings,
+    observer: &mut dyn Observer,
+) -> SqpResult {
+    driver::run(nlp, w0, Some(lambda0), settings, observer, None)
 }
 
 /// Continue a solve of `nlp` from a checkpoint its observer received: with the same
@@ -415,5 +429,5 @@ pub fn solve_resumed(
     settings: &SqpSettings,
     observer: &mut dyn Observer,
 ) -> SqpResult {
-    driver::run(nlp, &from.w.values(), settings, observer, Some(from))
+    driver::run(nlp, &from.w.values(), None, settings, observer, Some(from))
 }

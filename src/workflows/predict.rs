@@ -189,7 +189,7 @@ pub fn predict(
     // double-circle prediction stalled at KKT 3.7e-3 with steps of 1e-5, its integrator at
     // 1e-10 or 1e-12, where block BFGS certifies the same point at KKT 2.4e-7 at once
     let solve_staged = |tr: &Transcription,
-                        w: &[f64],
+                        (w, lambda0): (&[f64], Option<&[f64]>),
                         tol_kkt: f64,
                         max_iter: usize|
      -> anyhow::Result<SqpResult> {
@@ -198,7 +198,7 @@ pub fn predict(
             max_iter,
             ..sqp_settings.clone()
         };
-        let first = super::solve_interruptibly(tr, w, &sqp_settings, progress)?;
+        let first = super::solve_interruptibly_warm(tr, w, lambda0, &sqp_settings, progress)?;
         if first.status != SqpStatus::LineSearchFailure
             || sqp_settings.hessian != HessianMode::Exact
         {
@@ -224,7 +224,7 @@ pub fn predict(
         &build,
         &[],
         &w0,
-        &mut |tr, w, t, n| solve_staged(tr, w, t, n),
+        &mut |tr, start, t, n| solve_staged(tr, start, t, n),
         progress,
     )?;
     let mut ocp = build()?;

@@ -58,7 +58,10 @@ impl<'m> Refinement<'_, 'm> {
     /// while the re-integration breaks a contact constraint. `solve`'s last argument is the
     /// KKT tolerance of the round: [`ROUND_TOL`] (or the run's, if looser) for a round that
     /// may be followed by another, the run's own otherwise; its last, the iterations the
-    /// round may make (what the earlier rounds left of [`Refinement::max_iter`]). Returns
+    /// round may make (what the earlier rounds left of [`Refinement::max_iter`]); its
+    /// second, for a round that only finishes the last one's problem at the run's
+    /// tolerance, that round's constraint multipliers (the caller may start from them
+    /// instead of zero). Returns
     /// the check sites and the result of the last solve, its history following the
     /// earlier rounds'.
     pub fn solve<'o>(
@@ -66,7 +69,12 @@ impl<'m> Refinement<'_, 'm> {
         build: &dyn Fn() -> anyhow::Result<Ocp<'o>>,
         initial: &[(usize, usize, f64)],
         w0: &[f64],
-        solve: &mut dyn FnMut(&Transcription, &[f64], f64, usize) -> anyhow::Result<SqpResult>,
+        solve: &mut dyn FnMut(
+            &Transcription,
+            (&[f64], Option<&[f64]>),
+            f64,
+            usize,
+        ) -> anyhow::Result<SqpResult>,
         progress: &dyn Progress,
     ) -> anyhow::Result<(CheckSites, SqpResult)>
     where
@@ -74,6 +82,8 @@ impl<'m> Refinement<'_, 'm> {
     {
         let mut sites: CheckSites = initial.to_vec();
         let mut w = w0.to_vec();
+        // the multipliers of the round a finishing round continues
+        let mut lambda: Option<Vec<f64>> = None;
         let mut merged: Option<SqpResult> = None;
         // whether the last round was solved to ROUND_TOL only
         let mut finishing = false;
@@ -92,9 +102,16 @@ impl<'m> Refinement<'_, 'm> {
             let done = merged
                 .as_ref()
                 .map_or(0, |m| m.history.len().saturating_sub(1));
-            let res = solve(&tr, &w, tol, self.max_iter.saturating_sub(done))?;
+            let warm = if finishing { lambda.take() } else { None };
+            let res = solve(
+                &tr,
+                (&w, warm.as_deref()),
+                tol,
+                self.max_iter.saturating_sub(done),
+            )?;
             let converged = res.status == SqpStatus::Converged;
             let next = res.w.clone();
+            let last_lambda = res.lambda.clone();
             let mut all = match merged {
                 None => res,
                 Some(first) => super::track::merge_stages(first, res),
@@ -134,6 +151,7 @@ impl<'m> Refinement<'_, 'm> {
                 // valid at the round's tolerance: finish at the run's, and check again
                 finishing = true;
                 w = next;
+                lambda = Some(last_lambda);
                 continue;
             }
             finishing = false;

@@ -146,6 +146,18 @@ pub fn solve_interruptibly(
     settings: &SqpSettings,
     progress: &dyn Progress,
 ) -> anyhow::Result<SqpResult> {
+    solve_interruptibly_warm(nlp, w0, None, settings, progress)
+}
+
+/// [`solve_interruptibly`] with the constraint multipliers `lambda0` in the first
+/// Hessian ([`crate::sqp::solve_warm`]).
+pub fn solve_interruptibly_warm(
+    nlp: &dyn Nlp,
+    w0: &[f64],
+    lambda0: Option<&[f64]>,
+    settings: &SqpSettings,
+    progress: &dyn Progress,
+) -> anyhow::Result<SqpResult> {
     let index = SOLVES.fetch_add(1, Ordering::SeqCst);
     let (resume, checkpoints) = {
         let mut s = session();
@@ -174,7 +186,10 @@ pub fn solve_interruptibly(
             }
             crate::sqp::solve_resumed(nlp, cp, settings, &mut observer)
         }
-        None => crate::sqp::solve(nlp, w0, settings, &mut observer),
+        None => match lambda0 {
+            Some(l) => crate::sqp::solve_warm(nlp, w0, l, settings, &mut observer),
+            None => crate::sqp::solve(nlp, w0, settings, &mut observer),
+        },
     };
     SOLVING.store(false, Ordering::SeqCst);
     Ok(res)

@@ -53,7 +53,11 @@ impl TrackingProblem {
                 .ocp(&cycle, &self.model, &self.sets, self.integrator.clone())
                 .map_err(|e| anyhow!(e))
         };
-        let mut solve = |tr: &Transcription, w: &[f64], tol_kkt: f64, max_iter: usize| {
+        // a finishing round's multipliers are not used: tracking restarts from zero
+        let mut solve = |tr: &Transcription,
+                         (w, _): (&[f64], Option<&[f64]>),
+                         tol_kkt: f64,
+                         max_iter: usize| {
             let settings = SqpSettings {
                 tol_kkt,
                 max_iter,

@@ -1,0 +1,116 @@
+//! A solve started with the constraint multipliers of the problem it continues
+//! (`sqp::solve_warm`, used by `predict` when a round of check points only has to be
+//! finished at the run's tolerance) starts with the curvature of the Lagrangian, not the
+//! objective's alone.
+//!
+//! The problem: minimise −x − y on the circle x² + y² = 2, whose solution is (1, 1) with
+//! the multiplier λ = ½. The objective is linear, so its Hessian is zero; the Lagrangian's
+//! is 2λ·I = I. Started on the circle a little away from the solution, the exact SQP with
+//! λ = ½ takes Newton steps on the circle and is done in a few iterations; with λ = 0 its
+//! first QP sees no curvature along the circle, and it needs more.
+
+use footfall::sqp::{
+    self, EvalError, ExactConvexification, HessianMode, Nlp, NlpEval, Silent, SqpSettings,
+    SqpStatus,
+};
+
+struct OnACircle;
+
+impl Nlp for OnACircle {
+    fn n(&self) -> usize {
+        2
+    }
+    fn m(&self) -> usize {
+        1
+    }
+    fn bounds(&self) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
+        (vec![-10.0; 2], vec![10.0; 2], vec![0.0], vec![0.0])
+    }
+    fn jacobian_pattern(&self) -> (Vec<usize>, Vec<usize>) {
+        (vec![0, 0], vec![0, 1])
+    }
+    fn gauss_newton_pattern(&self) -> (Vec<usize>, Vec<usize>) {
+        (Vec::new(), Vec::new())
+    }
+    fn hessian_blocks(&self) -> Vec<Vec<usize>> {
+        vec![vec![0, 1]]
+    }
+    fn row_name(&self, _i: usize) -> String {
+        "circle".into()
+    }
+    fn evaluate(&self, w: &[f64], derivs: bool) -> Result<NlpEval, EvalError> {
+        let mut ev = NlpEval {
+            f: -w[0] - w[1],
+            c: vec![w[0] * w[0] + w[1] * w[1] - 2.0],
+            ..Default::default()
+        };
+        if derivs {
+            ev.grad = vec![-1.0, -1.0];
+            ev.jac = vec![2.0 * w[0], 2.0 * w[1]];
+        }
+        Ok(ev)
+    }
+    fn rows_with_exact_hessian(&self) -> Vec<bool> {
+        vec![true]
+    }
+    fn exact_hessian(
+        &self,
+        _w: &[f64],
+        lambda: &[f64],
+    ) -> Result<(Vec<usize>, Vec<usize>, Vec<f64>), EvalError> {
+        Ok((vec![0, 1], vec![0, 1], vec![2.0 * lambda[0]; 2]))
+    }
+}
+
+fn settings() -> SqpSettings {
+    SqpSettings {
+        tol_kkt: 1e-10,
+        max_iter: 60,
+        hessian: HessianMode::Exact,
+        exact_convexification: ExactConvexification::InertiaCorrection,
+        ..Default::default()
+    }
+}
+
+#[test]
+fn the_multipliers_of_the_problem_a_solve_continues_give_it_newton_steps() {
+    let angle = std::f64::consts::FRAC_PI_4 + 0.05;
+    let w0 = [2f64.sqrt() * angle.cos(), 2f64.sqrt() * angle.sin()];
+    let warm = sqp::solve_warm(&OnACircle, &w0, &[0.5], &settings(), &mut Silent);
+    let cold = sqp::solve(&OnACircle, &w0, &settings(), &mut Silent);
+    for (what, res) in [("warm", &warm), ("cold", &cold)] {
+        assert_eq!(res.status, SqpStatus::Converged, "{what}: {res:?}");
+        assert!(
+            (res.w[0] - 1.0).abs() < 1e-8 && (res.w[1] - 1.0).abs() < 1e-8,
+            "{what}: {:?}",
+            res.w
+        );
+        assert!(
+            (res.lambda[0] - 0.5).abs() < 1e-8,
+            "{what}: λ = {:?}",
+            res.lambda
+        );
+    }
+    let iterations = |r: &sqp::SqpResult| r.history.len() - 1;
+    // Newton on the circle: the error squares at each step (0.05 → 1e-3 → 1e-6 → 1e-12)
+    assert!(
+        iterations(&warm) <= 4,
+        "warm: {} iterations",
+        iterations(&warm)
+    );
+    assert!(
+        iterations(&warm) < iterations(&cold),
+        "warm {} against cold {} iterations",
+        iterations(&warm),
+        iterations(&cold)
+    );
+    eprintln!(
+        "warm: {} iterations, cold: {}",
+        iterations(&warm),
+        iterations(&cold)
+    );
+    // multipliers of the wrong length are ignored: the same as the cold solve
+    let ignored = sqp::solve_warm(&OnACircle, &w0, &[0.5, 0.5], &settings(), &mut Silent);
+    assert_eq!(ignored.w, cold.w);
+    assert_eq!(iterations(&ignored), iterations(&cold));
+}
