@@ -195,7 +195,8 @@ pub struct SqpSettings {
     /// prediction of the volumetric foot from its tracking solution (θ₀ = 0.11) took a
     /// first step to J = 0.048 and a violation of 12.9, lifted both feet off the ground
     /// (where the compliant contact has no force and no gradient) and ended infeasible;
-    /// with k = 10 it backtracks and converges (docs/foot-identification.md, stop 53).
+    /// with k = 10 it backtracks and reaches a feasible point valid on the 1 ms grid
+    /// (docs/foot-identification.md, stop 53).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub violation_growth: Option<f64>,
     /// Fault injection for tests: the QP solves (numbered from 0 over the whole solve,
