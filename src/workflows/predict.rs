@@ -189,7 +189,7 @@ pub fn predict(
     // double-circle prediction stalled at KKT 3.7e-3 with steps of 1e-5, its integrator at
     // 1e-10 or 1e-12, where block BFGS certifies the same point at KKT 2.4e-7 at once
     let solve_staged = |tr: &Transcription,
-                        (w, lambda0): (&[f64], Option<&[f64]>),
+                        (w, lambda0): super::refine::RoundStart<'_>,
                         tol_kkt: f64,
                         max_iter: usize|
      -> anyhow::Result<SqpResult> {

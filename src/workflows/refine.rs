@@ -32,6 +32,10 @@ pub const ROUND_TOL: f64 = 1e-3;
 /// Where check points hold the contact constraints: (continuous phase, interval, τ).
 pub type CheckSites = Vec<(usize, usize, f64)>;
 
+/// Where a round starts: the point and, for a round that only finishes the last one's
+/// problem, that round's constraint multipliers.
+pub type RoundStart<'a> = (&'a [f64], Option<&'a [f64]>);
+
 /// What the problem needs for its check points and the validity grid.
 pub struct Refinement<'c, 'm> {
     /// The walking cycle.
@@ -71,7 +75,7 @@ impl<'m> Refinement<'_, 'm> {
         w0: &[f64],
         solve: &mut dyn FnMut(
             &Transcription,
-            (&[f64], Option<&[f64]>),
+            RoundStart<'_>,
             f64,
             usize,
         ) -> anyhow::Result<SqpResult>,
@@ -82,8 +86,6 @@ impl<'m> Refinement<'_, 'm> {
     {
         let mut sites: CheckSites = initial.to_vec();
         let mut w = w0.to_vec();
-        // the multipliers of the round a finishing round continues
-        let mut lambda: Option<Vec<f64>> = None;
         let mut merged: Option<SqpResult> = None;
         // whether the last round was solved to ROUND_TOL only
         let mut finishing = false;
@@ -102,16 +104,15 @@ impl<'m> Refinement<'_, 'm> {
             let done = merged
                 .as_ref()
                 .map_or(0, |m| m.history.len().saturating_sub(1));
-            let warm = if finishing { lambda.take() } else { None };
-            let res = solve(
-                &tr,
-                (&w, warm.as_deref()),
-                tol,
-                self.max_iter.saturating_sub(done),
-            )?;
+            // a finishing round continues the last round's problem: its multipliers (the
+            // merged result's are the last solve's)
+            let warm = merged
+                .as_ref()
+                .filter(|_| finishing)
+                .map(|m| m.lambda.as_slice());
+            let res = solve(&tr, (&w, warm), tol, self.max_iter.saturating_sub(done))?;
             let converged = res.status == SqpStatus::Converged;
             let next = res.w.clone();
-            let last_lambda = res.lambda.clone();
             let mut all = match merged {
                 None => res,
                 Some(first) => super::track::merge_stages(first, res),
@@ -151,7 +152,6 @@ impl<'m> Refinement<'_, 'm> {
                 // valid at the round's tolerance: finish at the run's, and check again
                 finishing = true;
                 w = next;
-                lambda = Some(last_lambda);
                 continue;
             }
             finishing = false;

@@ -55,7 +55,7 @@ impl TrackingProblem {
         };
         // a finishing round's multipliers are not used: tracking restarts from zero
         let mut solve = |tr: &Transcription,
-                         (w, _): (&[f64], Option<&[f64]>),
+                         (w, _): crate::workflows::refine::RoundStart<'_>,
                          tol_kkt: f64,
                          max_iter: usize| {
             let settings = SqpSettings {
