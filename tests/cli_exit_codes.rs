@@ -322,3 +322,25 @@ fn a_window_without_a_half_cycle_is_bad_input_listing_the_half_cycles() {
     let o = footfall(&["track", "--stride", "9", "--out", s(&out), "--quiet"]);
     assert_exit(&o, 1, &["stride 9 does not exist", "half cycle(s)"]);
 }
+
+#[test]
+fn compare_contact_checks_every_foot_before_solving_anything() {
+    // the rigid run would solve first; the missing volumetric foot is found before it, and
+    // nothing is written
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("cmp");
+    let missing = tmp.path().join("no_such_foot.json");
+    let o = footfall(&[
+        "compare-contact",
+        "--volumetric-foot",
+        s(&missing),
+        "--out",
+        s(&out),
+    ]);
+    assert_exit(&o, 1, &["no_such_foot.json", "volumetric"]);
+    assert!(
+        !out.exists(),
+        "a refused comparison wrote {}",
+        out.display()
+    );
+}

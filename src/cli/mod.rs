@@ -8,6 +8,7 @@
 
 mod args;
 mod compare;
+mod compare_contact;
 mod diagnose;
 mod diff;
 mod fit_foot;
@@ -61,6 +62,9 @@ enum Command {
     Predict(predict::Args),
     /// Run the same prediction for two or more feet and compare their ground forces.
     Compare(compare::Args),
+    /// Track one trial with a rigid foot, its geometry identified, a volumetric foot and its
+    /// contact law identified, side by side (RMSE next to seed 000's Table 7).
+    CompareContact(compare_contact::Args),
     /// Generate a measurement set from a model solution, with noise and the truth kept apart.
     Synth(synth::Args),
     /// Which physical effect is the model of a track run missing? Score tests, then a re-fit.
@@ -166,6 +170,7 @@ pub fn main() -> ExitCode {
         Command::FitFoot(args) => fit_foot::run(args, cli.quiet),
         Command::Predict(args) => predict::run(args, &progress),
         Command::Compare(args) => compare::run(args, cli.quiet),
+        Command::CompareContact(args) => compare_contact::run(args, cli.quiet),
         Command::Synth(args) => synth::run(args, cli.quiet),
         Command::Diagnose(args) => diagnose::run(args, cli.quiet),
         Command::Diff(args) => diff::run(args, cli.quiet),

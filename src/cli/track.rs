@@ -51,9 +51,11 @@ pub struct Args {
     /// computed from them: tighten it if a fit stalls just above `--tol`.
     #[arg(long, value_parser = super::validate::positive)]
     sensitivity_tol: Option<f64>,
-    /// With `--hessian exact`: Gauss–Newton steps until the constraint violation is below this.
-    #[arg(long, default_value_t = 1e-3, value_parser = super::validate::threshold)]
-    exact_below: f64,
+    /// With `--hessian exact`: Gauss–Newton steps until the constraint violation is below
+    /// this (default: 1e-3; for a foot with volumetric contacts the exact Hessian from the
+    /// first step).
+    #[arg(long, value_parser = super::validate::threshold)]
+    exact_below: Option<f64>,
     /// Iteration limit.
     #[arg(long, default_value_t = 200, value_parser = super::validate::iterations)]
     max_iter: usize,
@@ -259,8 +261,9 @@ fn run_inner(args: Args, progress: &CliProgress) -> anyhow::Result<()> {
             args.max_iter,
             args.max_time,
             args.hessian.into(),
-            args.exact_below,
+            args.exact_below.unwrap_or(1e-3),
         ),
+        volumetric_exact: args.exact_below.is_none(),
         transient_threshold: args.transient_threshold,
     };
     let folder = session::create_checkpointed_run_folder(&args.out, args.overwrite)?;

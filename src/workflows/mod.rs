@@ -9,6 +9,7 @@
 //! anything else (bad input, I/O).
 
 pub mod compare;
+pub mod compare_contact;
 pub mod diagnose;
 pub mod diff;
 pub mod fit_foot;

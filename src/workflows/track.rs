@@ -430,6 +430,11 @@ pub struct TrackRequest {
     pub check_points: bool,
     /// The solver's settings.
     pub sqp: SqpSettings,
+    /// Use the exact Hessian from the first step when the foot has volumetric contacts,
+    /// whatever `sqp.exact_hessian_below` says: the Gauss–Newton steps before it leave a
+    /// volumetric track cycling at a violation of 1e-3 to 1e-2, above the switch, for
+    /// good (docs/foot-identification.md, stop 54).
+    pub volumetric_exact: bool,
     /// Report ground-force excursions above the measurement larger than this (N).
     pub transient_threshold: f64,
 }
@@ -471,6 +476,7 @@ impl TrackRequest {
             init: None,
             check_points: true,
             sqp: tracking_sqp_settings(1e-5, 200, None, HessianMode::Exact, 1e-3),
+            volumetric_exact: true,
             transient_threshold: super::run_folder::DEFAULT_TRANSIENT_THRESHOLD_N,
         }
     }
@@ -525,10 +531,19 @@ pub fn track(
             .map_err(|e| anyhow!("--init {}: {e}", p.display()))?;
     }
     base.parameters.clear();
+    let mut sqp = req.sqp.clone();
+    if req.volumetric_exact
+        && prob.model.has_volumetric_contacts()
+        && sqp.hessian == HessianMode::Exact
+        && sqp.exact_hessian_below.is_finite()
+    {
+        progress.note("volumetric contact: the exact Hessian from the first step (Gauss–Newton steps cycle on it; `--exact-below` to choose)");
+        sqp.exact_hessian_below = f64::INFINITY;
+    }
     prob.solve_and_write(
         &base,
         &req.effects,
-        &req.sqp,
+        &sqp,
         folder,
         req.transient_threshold,
         progress,

@@ -1,0 +1,121 @@
+//! `footfall compare-contact`: the arguments of the rigid-against-compliant comparison
+//! ([`footfall::workflows::compare_contact`]).
+
+use super::{CliProgress, Failure};
+use footfall::workflows::compare_contact::{
+    compare_contact, first_unconverged, CompareContactRequest,
+};
+use footfall::workflows::run_folder::DEFAULT_TRANSIENT_THRESHOLD_N;
+use footfall::workflows::track::{tracking_sqp_settings, TrackRequest};
+use footfall::workflows::{default_phases, Unsolved};
+use std::path::PathBuf;
+
+/// Arguments of `footfall compare-contact`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Model file (JSON).
+    #[arg(long, default_value = "models/opensim_subject01.json")]
+    model: PathBuf,
+    #[command(flatten)]
+    trial: super::TrialArgs,
+    /// The rigid foot: `ellipse`, `double-circle` or a foot file (JSON).
+    #[arg(long, default_value = "ellipse")]
+    rigid_foot: String,
+    /// The rigid foot's phase graph (default: the seed's graph for the bundled feet).
+    #[arg(long)]
+    rigid_phases: Option<PathBuf>,
+    /// The volumetric foot file (JSON).
+    #[arg(long, default_value = "models/feet/volumetric_ellipse.json")]
+    volumetric_foot: String,
+    /// The volumetric foot's phase graph.
+    #[arg(long, default_value = "phases/volumetric_ellipse_walk.json")]
+    volumetric_phases: PathBuf,
+    /// Track the pelvis position (x, y) too, in every run.
+    #[arg(long)]
+    track_pelvis_position: bool,
+    /// Relative and absolute CVODES tolerance of the shooting intervals (the volumetric
+    /// contact's stiff dynamics need 1e-10).
+    #[arg(long, default_value_t = 1e-10, value_parser = super::validate::positive)]
+    integrator_tol: f64,
+    /// KKT tolerance.
+    #[arg(long, default_value_t = 1e-5, value_parser = super::validate::positive)]
+    tol: f64,
+    /// Gauss–Newton steps until the constraint violation is below this (default: 1e-3
+    /// for the rigid foot; the exact Hessian from the first step for the volumetric foot).
+    #[arg(long, value_parser = super::validate::threshold)]
+    exact_below: Option<f64>,
+    /// Iteration limit of each run.
+    #[arg(long, default_value_t = 200, value_parser = super::validate::iterations)]
+    max_iter: usize,
+    /// Wall-time limit of each run (s).
+    #[arg(long, value_parser = super::validate::positive)]
+    max_time: Option<f64>,
+    #[command(flatten)]
+    check_points: super::CheckPointArgs,
+    /// Report ground-force excursions above the measurement larger than this (N).
+    #[arg(long, default_value_t = DEFAULT_TRANSIENT_THRESHOLD_N, value_parser = super::validate::positive)]
+    transient_threshold: f64,
+    /// Output folder (one track run folder per run inside).
+    #[arg(long, default_value = "runs/compare-contact")]
+    out: PathBuf,
+    /// Replace the output folder if it exists.
+    #[arg(long)]
+    overwrite: bool,
+}
+
+impl From<Args> for CompareContactRequest {
+    fn from(a: Args) -> Self {
+        let mut run = TrackRequest::new(&a.rigid_foot).run;
+        run.model = a.model;
+        run.data = a.trial.data;
+        run.forces = a.trial.forces;
+        run.plates = a.trial.plates;
+        run.lab_axes = a.trial.lab_axes;
+        run.belt_speed = a.trial.belt_speed;
+        run.overground = a.trial.overground;
+        run.integrator_tol = a.integrator_tol;
+        run.track_pelvis_position = a.track_pelvis_position;
+        CompareContactRequest {
+            run,
+            rigid_phases: a
+                .rigid_phases
+                .unwrap_or_else(|| default_phases(&a.rigid_foot)),
+            rigid_foot: a.rigid_foot,
+            volumetric_foot: a.volumetric_foot,
+            volumetric_phases: a.volumetric_phases,
+            check_points: a.check_points.enabled(),
+            sqp: tracking_sqp_settings(
+                a.tol,
+                a.max_iter,
+                a.max_time,
+                footfall::sqp::HessianMode::Exact,
+                a.exact_below.unwrap_or(1e-3),
+            ),
+            volumetric_exact: a.exact_below.is_none(),
+            transient_threshold: a.transient_threshold,
+            out: a.out,
+            overwrite: a.overwrite,
+        }
+    }
+}
+
+pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
+    let progress = CliProgress { quiet };
+    let cmp = compare_contact(&args.into(), &progress).map_err(Failure::classify)?;
+    match first_unconverged(&cmp) {
+        Some(r) => Err(Failure::classify(
+            Unsolved {
+                status: r.sqp_status.clone(),
+                at_start: r.iterations == 0,
+                message: format!(
+                    "not every run converged ({}: {}; results in {})",
+                    r.name,
+                    r.status,
+                    cmp.path.display()
+                ),
+            }
+            .into(),
+        )),
+        None => Ok(()),
+    }
+}
