@@ -69,7 +69,8 @@ pub struct Args {
     /// Foot: `ellipse`, `double-circle` or a foot file.
     #[arg(long, default_value = "ellipse")]
     foot: String,
-    /// Phase graph (default: the seed's graph for the bundled feet).
+    /// Phase graph (default: the seed's graph for the bundled feet; for a foot file whose
+    /// primitives are all volumetric, phases/volumetric_ellipse_walk.json).
     #[arg(long)]
     phases: Option<PathBuf>,
     /// Start from this solution: a run folder (its `solution.json`) or a solution file,

@@ -16,7 +16,8 @@ use std::path::PathBuf;
 pub struct Args {
     #[command(flatten)]
     model: super::ModelArgs,
-    /// Phase graph (default: the seed's graph for the bundled feet).
+    /// Phase graph (default: the seed's graph for the bundled feet; for a foot file whose
+    /// primitives are all volumetric, phases/volumetric_ellipse_walk.json).
     #[arg(long)]
     phases: Option<PathBuf>,
     #[command(flatten)]

@@ -171,12 +171,33 @@ pub fn foot_path(arg: &str) -> PathBuf {
     }
 }
 
-/// The default phase file of a foot argument.
+/// The default phase file of a foot argument: the seed's graphs for the bundled feet, the
+/// single continuous phase of `phases/volumetric_ellipse_walk.json` for a foot file whose
+/// primitives are all volumetric (no contact constraints, so it fits any such foot), else
+/// the ellipse's graph.
 pub fn default_phases(foot: &str) -> PathBuf {
     match foot {
         "double-circle" | "double_circle" => PathBuf::from("phases/double_circle_walk.json"),
+        "ellipse" => PathBuf::from("phases/ellipse_walk.json"),
+        file if all_volumetric(Path::new(file)) => {
+            PathBuf::from("phases/volumetric_ellipse_walk.json")
+        }
         _ => PathBuf::from("phases/ellipse_walk.json"),
     }
+}
+
+/// Whether the foot file `path` has primitives and every one says `"contact": {"type":
+/// "volumetric", …}` (false for a file that cannot be read; loading it reports why).
+fn all_volumetric(path: &Path) -> bool {
+    let Ok(text) = std::fs::read_to_string(crate::bundled::resolve(path)) else {
+        return false;
+    };
+    let Ok(v) = serde_json::from_str::<serde_json::Value>(&text) else {
+        return false;
+    };
+    v["primitives"]
+        .as_array()
+        .is_some_and(|ps| !ps.is_empty() && ps.iter().all(|p| p["contact"]["type"] == "volumetric"))
 }
 
 /// A solution from a run folder (`solution.json` inside) or a solution file.
@@ -282,5 +303,34 @@ impl Unsolved {
             ),
         }
         .into())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_all_volumetric_foot_defaults_to_the_continuous_phase_graph() {
+        let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+        let vol = root.join("models/feet/volumetric_ellipse.json");
+        assert_eq!(
+            default_phases(vol.to_str().unwrap()),
+            PathBuf::from("phases/volumetric_ellipse_walk.json")
+        );
+        let rigid = root.join("models/feet/ellipse.json");
+        assert_eq!(
+            default_phases(rigid.to_str().unwrap()),
+            PathBuf::from("phases/ellipse_walk.json")
+        );
+        assert_eq!(
+            default_phases("double-circle"),
+            PathBuf::from("phases/double_circle_walk.json")
+        );
+        // a file that cannot be read keeps the ellipse's graph (loading the foot says why)
+        assert_eq!(
+            default_phases("no/such/foot.json"),
+            PathBuf::from("phases/ellipse_walk.json")
+        );
     }
 }
