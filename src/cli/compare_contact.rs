@@ -41,7 +41,7 @@ pub struct Args {
     #[arg(long, default_value_t = 1e-5, value_parser = super::validate::positive)]
     tol: f64,
     /// Gauss–Newton steps until the constraint violation is below this (default: 1e-3
-    /// for the rigid foot; the exact Hessian from the first step for the volumetric foot).
+    /// for the rigid foot, 0.1 for the volumetric one).
     #[arg(long, value_parser = super::validate::threshold)]
     exact_below: Option<f64>,
     /// Iteration limit of each run.
@@ -91,7 +91,10 @@ impl From<Args> for CompareContactRequest {
                 footfall::sqp::HessianMode::Exact,
                 a.exact_below.unwrap_or(1e-3),
             ),
-            volumetric_exact: a.exact_below.is_none(),
+            volumetric_exact_below: a
+                .exact_below
+                .is_none()
+                .then_some(footfall::workflows::track::VOLUMETRIC_EXACT_BELOW),
             transient_threshold: a.transient_threshold,
             out: a.out,
             overwrite: a.overwrite,

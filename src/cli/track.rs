@@ -53,8 +53,7 @@ pub struct Args {
     #[arg(long, value_parser = super::validate::positive)]
     sensitivity_tol: Option<f64>,
     /// With `--hessian exact`: Gauss–Newton steps until the constraint violation is below
-    /// this (default: 1e-3; for a foot with volumetric contacts the exact Hessian from the
-    /// first step).
+    /// this (default: 1e-3; 0.1 for a foot with volumetric contacts).
     #[arg(long, value_parser = super::validate::threshold)]
     exact_below: Option<f64>,
     /// Iteration limit.
@@ -264,7 +263,10 @@ fn run_inner(args: Args, progress: &CliProgress) -> anyhow::Result<()> {
             args.hessian.into(),
             args.exact_below.unwrap_or(1e-3),
         ),
-        volumetric_exact: args.exact_below.is_none(),
+        volumetric_exact_below: args
+            .exact_below
+            .is_none()
+            .then_some(footfall::workflows::track::VOLUMETRIC_EXACT_BELOW),
         transient_threshold: args.transient_threshold,
     };
     let folder = session::create_checkpointed_run_folder(&args.out, args.overwrite)?;

@@ -42,9 +42,9 @@ pub struct CompareContactRequest {
     pub check_points: bool,
     /// The solver's settings for every run.
     pub sqp: SqpSettings,
-    /// The volumetric runs use the exact Hessian from the first step
-    /// ([`TrackRequest::volumetric_exact`]).
-    pub volumetric_exact: bool,
+    /// The volumetric runs' switch to the exact Hessian
+    /// ([`TrackRequest::volumetric_exact_below`]).
+    pub volumetric_exact_below: Option<f64>,
     /// Report ground-force excursions above the measurement larger than this (N).
     pub transient_threshold: f64,
     /// Output folder (one track run folder per run inside).
@@ -249,7 +249,7 @@ pub fn compare_contact(
             init: plan.init.map(|i| dirs[i].clone()),
             check_points: req.check_points,
             sqp: req.sqp.clone(),
-            volumetric_exact: req.volumetric_exact,
+            volumetric_exact_below: req.volumetric_exact_below,
             transient_threshold: req.transient_threshold,
         };
         let sub = RunFolder::create(&folder.staging_path().join(plan.name), false)?;

@@ -20,6 +20,10 @@ use std::path::PathBuf;
 mod write;
 pub use write::{RunWriting, TrackedRun};
 
+/// The constraint violation below which a track with volumetric contacts uses the exact
+/// Hessian ([`TrackRequest::volumetric_exact_below`]).
+pub const VOLUMETRIC_EXACT_BELOW: f64 = 0.1;
+
 /// CVODES tolerance of the states of problems with a compliant heel pad or residual
 /// actuators: at 1e-8 integration noise stalls the line search (a pad near KKT 2e-4; the
 /// bundled trial with residual actuators at KKT 3.2e-5 after 103 iterations, where 1e-10
@@ -430,11 +434,13 @@ pub struct TrackRequest {
     pub check_points: bool,
     /// The solver's settings.
     pub sqp: SqpSettings,
-    /// Use the exact Hessian from the first step when the foot has volumetric contacts,
-    /// whatever `sqp.exact_hessian_below` says: the Gauss–Newton steps before it leave a
-    /// volumetric track cycling at a violation of 1e-3 to 1e-2, above the switch, for
-    /// good (docs/foot-identification.md, stop 54).
-    pub volumetric_exact: bool,
+    /// When the foot has volumetric contacts and the Hessian is exact: the constraint
+    /// violation below which the exact Hessian is used, instead of
+    /// `sqp.exact_hessian_below` (None: that one). Gauss–Newton steps left a volumetric
+    /// track cycling at a violation of 1e-3 to 1e-2, above the usual 1e-3, for good; the
+    /// exact Hessian from the data's start (violation ~10) ran into a QP failure or a far
+    /// worse local minimum (docs/engine-investigation.md, stop 54).
+    pub volumetric_exact_below: Option<f64>,
     /// Report ground-force excursions above the measurement larger than this (N).
     pub transient_threshold: f64,
 }
@@ -476,7 +482,7 @@ impl TrackRequest {
             init: None,
             check_points: true,
             sqp: tracking_sqp_settings(1e-5, 200, None, HessianMode::Exact, 1e-3),
-            volumetric_exact: true,
+            volumetric_exact_below: Some(VOLUMETRIC_EXACT_BELOW),
             transient_threshold: super::run_folder::DEFAULT_TRANSIENT_THRESHOLD_N,
         }
     }
@@ -532,13 +538,14 @@ pub fn track(
     }
     base.parameters.clear();
     let mut sqp = req.sqp.clone();
-    if req.volumetric_exact
-        && prob.model.has_volumetric_contacts()
-        && sqp.hessian == HessianMode::Exact
-        && sqp.exact_hessian_below.is_finite()
-    {
-        progress.note("volumetric contact: the exact Hessian from the first step (Gauss–Newton steps cycle on it; `--exact-below` to choose)");
-        sqp.exact_hessian_below = f64::INFINITY;
+    if let Some(below) = req.volumetric_exact_below {
+        if prob.model.has_volumetric_contacts()
+            && sqp.hessian == HessianMode::Exact
+            && below != sqp.exact_hessian_below
+        {
+            progress.note(&format!("volumetric contact: the exact Hessian once the constraint violation is below {below:e} (Gauss–Newton steps cycle above 1e-3 on it; `--exact-below` to choose)"));
+            sqp.exact_hessian_below = below;
+        }
     }
     prob.solve_and_write(
         &base,
