@@ -68,6 +68,46 @@ impl From<TrialArgs> for footfall::workflows::trial::TrialFiles {
     }
 }
 
+/// The tracking solver's stopping rules and Hessian switch, shared by `track` and
+/// `compare-contact` (the latter applies them to each of its runs).
+#[derive(Debug, Clone, clap::Args)]
+pub struct TrackSolverArgs {
+    /// KKT tolerance.
+    #[arg(long, default_value_t = 1e-5, value_parser = super::validate::positive)]
+    pub tol: f64,
+    /// With `--hessian exact`: Gauss–Newton steps until the constraint violation is below
+    /// this (default: 1e-3; 0.1 for a foot with volumetric contacts).
+    #[arg(long, value_parser = super::validate::threshold)]
+    pub exact_below: Option<f64>,
+    /// Iteration limit (`compare-contact`: of each run).
+    #[arg(long, default_value_t = 200, value_parser = super::validate::iterations)]
+    pub max_iter: usize,
+    /// Wall-time limit (s; `compare-contact`: of each run).
+    #[arg(long, value_parser = super::validate::positive)]
+    pub max_time: Option<f64>,
+}
+
+impl TrackSolverArgs {
+    /// The tracking solver's settings with `hessian`.
+    pub fn settings(&self, hessian: footfall::sqp::HessianMode) -> footfall::sqp::SqpSettings {
+        footfall::workflows::track::tracking_sqp_settings(
+            self.tol,
+            self.max_iter,
+            self.max_time,
+            hessian,
+            self.exact_below.unwrap_or(1e-3),
+        )
+    }
+
+    /// The switch of a foot with volumetric contacts: footfall's, unless `--exact-below`
+    /// was given.
+    pub fn volumetric_exact_below(&self) -> Option<f64> {
+        self.exact_below
+            .is_none()
+            .then_some(footfall::workflows::track::VOLUMETRIC_EXACT_BELOW)
+    }
+}
+
 /// The check-point switch shared by `track`, `predict` and `compare`.
 #[derive(Debug, Clone, Default, clap::Args)]
 pub struct CheckPointArgs {

@@ -6,7 +6,7 @@ use footfall::workflows::compare_contact::{
     compare_contact, first_unconverged, CompareContactRequest,
 };
 use footfall::workflows::run_folder::DEFAULT_TRANSIENT_THRESHOLD_N;
-use footfall::workflows::track::{tracking_sqp_settings, TrackRequest};
+use footfall::workflows::track::TrackRequest;
 use footfall::workflows::{default_phases, Unsolved};
 use std::path::PathBuf;
 
@@ -37,19 +37,8 @@ pub struct Args {
     /// contact's stiff dynamics need 1e-10).
     #[arg(long, default_value_t = 1e-10, value_parser = super::validate::positive)]
     integrator_tol: f64,
-    /// KKT tolerance.
-    #[arg(long, default_value_t = 1e-5, value_parser = super::validate::positive)]
-    tol: f64,
-    /// Gauss–Newton steps until the constraint violation is below this (default: 1e-3
-    /// for the rigid foot, 0.1 for the volumetric one).
-    #[arg(long, value_parser = super::validate::threshold)]
-    exact_below: Option<f64>,
-    /// Iteration limit of each run.
-    #[arg(long, default_value_t = 200, value_parser = super::validate::iterations)]
-    max_iter: usize,
-    /// Wall-time limit of each run (s).
-    #[arg(long, value_parser = super::validate::positive)]
-    max_time: Option<f64>,
+    #[command(flatten)]
+    solver: super::TrackSolverArgs,
     #[command(flatten)]
     check_points: super::CheckPointArgs,
     /// Report ground-force excursions above the measurement larger than this (N).
@@ -84,17 +73,8 @@ impl From<Args> for CompareContactRequest {
             volumetric_foot: a.volumetric_foot,
             volumetric_phases: a.volumetric_phases,
             check_points: a.check_points.enabled(),
-            sqp: tracking_sqp_settings(
-                a.tol,
-                a.max_iter,
-                a.max_time,
-                footfall::sqp::HessianMode::Exact,
-                a.exact_below.unwrap_or(1e-3),
-            ),
-            volumetric_exact_below: a
-                .exact_below
-                .is_none()
-                .then_some(footfall::workflows::track::VOLUMETRIC_EXACT_BELOW),
+            sqp: a.solver.settings(footfall::sqp::HessianMode::Exact),
+            volumetric_exact_below: a.solver.volumetric_exact_below(),
             transient_threshold: a.transient_threshold,
             out: a.out,
             overwrite: a.overwrite,

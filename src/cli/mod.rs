@@ -20,7 +20,9 @@ mod synth;
 mod track;
 mod validate;
 
-pub use args::{CheckPointArgs, CliProgress, HessianArg, MethodArg, ModelArgs, TrialArgs};
+pub use args::{
+    CheckPointArgs, CliProgress, HessianArg, MethodArg, ModelArgs, TrackSolverArgs, TrialArgs,
+};
 use clap::{Parser, Subcommand};
 use footfall::sqp::SqpStatus;
 use std::process::ExitCode;

@@ -7,7 +7,7 @@ use footfall::model::effects::EffectSpec;
 use footfall::problems::diagnose::TrackingRunSetup;
 use footfall::problems::tracking::ChannelNoise;
 use footfall::workflows::run_folder::DEFAULT_TRANSIENT_THRESHOLD_N;
-use footfall::workflows::track::{track, tracking_sqp_settings, TrackRequest};
+use footfall::workflows::track::{track, TrackRequest};
 use footfall::workflows::{default_phases, session};
 use std::path::PathBuf;
 
@@ -41,9 +41,6 @@ pub struct Args {
     /// Hessian: exact (converges), or gauss-newton (the seed's; stalls near KKT 3e-5).
     #[arg(long, value_enum, default_value = "exact")]
     hessian: super::HessianArg,
-    /// KKT tolerance.
-    #[arg(long, default_value_t = 1e-5, value_parser = super::validate::positive)]
-    tol: f64,
     /// Relative and absolute CVODES tolerance of the shooting intervals.
     #[arg(long, default_value_t = 1e-8, value_parser = super::validate::positive)]
     integrator_tol: f64,
@@ -52,16 +49,8 @@ pub struct Args {
     /// computed from them: tighten it if a fit stalls just above `--tol`.
     #[arg(long, value_parser = super::validate::positive)]
     sensitivity_tol: Option<f64>,
-    /// With `--hessian exact`: Gauss–Newton steps until the constraint violation is below
-    /// this (default: 1e-3; 0.1 for a foot with volumetric contacts).
-    #[arg(long, value_parser = super::validate::threshold)]
-    exact_below: Option<f64>,
-    /// Iteration limit.
-    #[arg(long, default_value_t = 200, value_parser = super::validate::iterations)]
-    max_iter: usize,
-    /// Wall-time limit (s).
-    #[arg(long, value_parser = super::validate::positive)]
-    max_time: Option<f64>,
+    #[command(flatten)]
+    solver: super::TrackSolverArgs,
     /// Report ground-force excursions above the measurement larger than this (N).
     #[arg(long, default_value_t = DEFAULT_TRANSIENT_THRESHOLD_N, value_parser = super::validate::positive)]
     transient_threshold: f64,
@@ -256,17 +245,8 @@ fn run_inner(args: Args, progress: &CliProgress) -> anyhow::Result<()> {
         effects,
         init: args.init.clone(),
         check_points: args.check_points.enabled(),
-        sqp: tracking_sqp_settings(
-            args.tol,
-            args.max_iter,
-            args.max_time,
-            args.hessian.into(),
-            args.exact_below.unwrap_or(1e-3),
-        ),
-        volumetric_exact_below: args
-            .exact_below
-            .is_none()
-            .then_some(footfall::workflows::track::VOLUMETRIC_EXACT_BELOW),
+        sqp: args.solver.settings(args.hessian.into()),
+        volumetric_exact_below: args.solver.volumetric_exact_below(),
         transient_threshold: args.transient_threshold,
     };
     let folder = session::create_checkpointed_run_folder(&args.out, args.overwrite)?;
