@@ -295,6 +295,21 @@ pub fn compare_contact(
         Tone::Warning
     };
     report.summary.time_s = Some(runs.iter().map(|r| r.seconds).sum());
+    // the side-by-side summary names each run's summary file where it was staged; say
+    // how each ended instead
+    report.summary.extra = runs
+        .iter()
+        .map(|r| {
+            (
+                r.name.clone(),
+                format!(
+                    "{}; J {:.4}, {} iterations, {:.0} s",
+                    r.status, r.objective, r.iterations, r.seconds
+                ),
+            )
+        })
+        .collect();
+    let parameters = parameter_table(&runs);
     report.sections.insert(
         0,
         Section {
@@ -303,7 +318,7 @@ pub fn compare_contact(
                 "The same trial and tracking problem with four feet: the rigid foot ({}), the same with its geometry identified (`foot_geometry`, started from the rigid run), the volumetric foot with its file's contact law ({}) and the same with its law identified (`volumetric_contact`, started from the volumetric run). RMSE on the 1 ms grid over the tracked half cycle, each foot's forces against its own measurement; seed 000 reports its RMSE over a gait cycle (Table 7, optimal control). The push-off CoP error: |model − measured| CoP of the trailing foot while both measured normal forces exceed {LOADED_N} N. Each run's own folder, with its report, is the sub-folder of its name.",
                 req.rigid_foot, req.volumetric_foot
             )],
-            tables: vec![table.clone()],
+            tables: vec![table.clone(), parameters.clone()],
             svgs: vec![],
         },
     );
@@ -319,7 +334,10 @@ pub fn compare_contact(
         "summary.json",
         serde_json::to_string_pretty(&summary)?.as_bytes(),
     )?;
-    folder.write("contact.md", table.to_markdown().as_bytes())?;
+    folder.write(
+        "contact.md",
+        format!("{}\n{}", table.to_markdown(), parameters.to_markdown()).as_bytes(),
+    )?;
     if let Some(t3) = report.sections.get(1).and_then(|s| s.tables.first()) {
         folder.write("table3.md", t3.to_markdown().as_bytes())?;
     }
@@ -413,28 +431,37 @@ fn contact_table(runs: &[RunOutcome]) -> Table {
             },
             "—".into(),
         ),
-        row(
-            "identified",
-            &|r| {
-                if r.parameters.is_empty() {
-                    return "—".into();
-                }
-                r.parameters
-                    .iter()
-                    .map(|(name, v, sd, unit)| match sd {
-                        Some(sd) => format!("{name} {v:.4} ± {sd:.4} {unit}"),
-                        None => format!("{name} {v:.4} {unit} (no sd)"),
-                    })
-                    .collect::<Vec<_>>()
-                    .join("; ")
-            },
-            "—".into(),
-        ),
     ];
     Table {
         title: "Rigid against compliant: solver, ground-force RMSE (1 ms grid) and push-off CoP"
             .into(),
         headers,
+        rows,
+    }
+}
+
+/// The identified parameters of every run, one row each: run, parameter, value, sd, unit
+/// (`—` where the run has none: a parameter at its bound, or a run that did not converge).
+fn parameter_table(runs: &[RunOutcome]) -> Table {
+    let rows = runs
+        .iter()
+        .flat_map(|r| {
+            r.parameters.iter().map(move |(name, v, sd, unit)| {
+                vec![
+                    r.name.clone(),
+                    name.clone(),
+                    format!("{v:.4}"),
+                    sd.map_or("—".into(), |sd| format!("{sd:.4}")),
+                    unit.clone(),
+                ]
+            })
+        })
+        .collect();
+    Table {
+        title: "Identified parameters".into(),
+        headers: ["run", "parameter", "value", "sd", "unit"]
+            .map(String::from)
+            .to_vec(),
         rows,
     }
 }
@@ -507,6 +534,36 @@ mod tests {
     fn a_run_without_force_columns_has_no_figures() {
         let f = ContactFigures::from_columns(&run(5, &[("model_hip_r", &|_| 0.0)]));
         assert_eq!(f, ContactFigures::default());
+    }
+
+    #[test]
+    fn each_identified_parameter_gets_a_row_and_a_missing_sd_is_said() {
+        let outcome = |name: &str, parameters| RunOutcome {
+            name: name.into(),
+            status: "converged".into(),
+            sqp_status: SqpStatus::Converged,
+            converged: true,
+            physically_valid: Some(true),
+            iterations: 1,
+            seconds: 1.0,
+            objective: 1.0,
+            kkt: 1e-6,
+            parameters,
+            figures: ContactFigures::default(),
+        };
+        let t = parameter_table(&[
+            outcome("rigid", vec![]),
+            outcome(
+                "geometry",
+                vec![
+                    ("a".into(), 0.2, Some(0.005), "m".into()),
+                    ("b".into(), 0.05, None, "m".into()),
+                ],
+            ),
+        ]);
+        assert_eq!(t.rows.len(), 2);
+        assert_eq!(t.rows[0], ["geometry", "a", "0.2000", "0.0050", "m"]);
+        assert_eq!(t.rows[1][3], "—");
     }
 
     #[test]
