@@ -240,6 +240,7 @@ pub fn compare_contact(
         .collect::<anyhow::Result<_>>()?;
     let folder = RunFolder::create(&req.out, req.overwrite)?;
     let mut dirs: Vec<PathBuf> = Vec::new();
+    let mut curves: Vec<RunCurves> = Vec::new();
     let mut runs = Vec::new();
     for (plan, (run, effects)) in PLANS.iter().zip(setups) {
         note!(progress, "── {} ──", plan.name);
@@ -256,7 +257,9 @@ pub fn compare_contact(
         let done = track(&track_req, sub, progress)
             .with_context(|| format!("compare-contact, run {}", plan.name))?;
         dirs.push(done.output.path.clone());
-        let curves = RunCurves::read(&done.output.path)?;
+        let run_curves = RunCurves::read(&done.output.path)?;
+        let figures = ContactFigures::of(&run_curves);
+        curves.push(run_curves);
         runs.push(RunOutcome {
             name: plan.name.to_string(),
             status: done.result.status.to_string(),
@@ -274,22 +277,19 @@ pub fn compare_contact(
                 .filter(|p| p.free)
                 .map(|p| (p.name.clone(), p.value, p.sd, p.unit.clone()))
                 .collect(),
-            figures: ContactFigures::of(&curves),
+            figures,
         });
     }
     let table = contact_table(&runs);
-    let curves: Vec<RunCurves> = dirs
-        .iter()
-        .map(|d| RunCurves::read(d))
-        .collect::<Result<_, _>>()?;
     let mut report = side_by_side(&curves);
     report.title = format!("footfall compare-contact — {}", req.run.model.display());
-    report.summary.status = if runs.iter().all(|r| r.converged) {
+    let all_converged = runs.iter().all(|r| r.converged);
+    report.summary.status = if all_converged {
         "all converged".into()
     } else {
         "not all converged".into()
     };
-    report.summary.tone = if runs.iter().all(|r| r.converged) {
+    report.summary.tone = if all_converged {
         Tone::Good
     } else {
         Tone::Warning
