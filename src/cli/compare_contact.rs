@@ -33,6 +33,12 @@ pub struct Args {
     /// Track the pelvis position (x, y) too, in every run.
     #[arg(long)]
     track_pelvis_position: bool,
+    /// Compare every sample in the tracked window with the model at its own instant
+    /// instead of node targets from splines (as `track --sample-targets`), in every run.
+    /// The volumetric law's identification on the bundled trial converges with it and
+    /// the pelvis position tracked (docs/foot-identification.md, stop 55).
+    #[arg(long)]
+    sample_targets: bool,
     /// Relative and absolute CVODES tolerance of the shooting intervals (the volumetric
     /// contact's stiff dynamics need 1e-10).
     #[arg(long, default_value_t = 1e-10, value_parser = super::validate::positive)]
@@ -64,6 +70,7 @@ impl From<Args> for CompareContactRequest {
         run.overground = a.trial.overground;
         run.integrator_tol = a.integrator_tol;
         run.track_pelvis_position = a.track_pelvis_position;
+        run.sample_targets = a.sample_targets;
         CompareContactRequest {
             run,
             rigid_phases: a
@@ -100,5 +107,33 @@ pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
             .into(),
         )),
         None => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        args: Args,
+    }
+
+    fn request(argv: &[&str]) -> CompareContactRequest {
+        let argv = std::iter::once("compare-contact").chain(argv.iter().copied());
+        Cli::try_parse_from(argv).unwrap().args.into()
+    }
+
+    /// The cost's options reach every run's setup: node targets and the pelvis untracked
+    /// unless asked.
+    #[test]
+    fn the_target_options_reach_the_runs_setup() {
+        let plain = request(&[]);
+        assert!(!plain.run.sample_targets && !plain.run.track_pelvis_position);
+        let asked = request(&["--sample-targets", "--track-pelvis-position"]);
+        assert!(asked.run.sample_targets && asked.run.track_pelvis_position);
+        assert_eq!(asked.run.integrator_tol, 1e-10);
     }
 }

@@ -315,8 +315,11 @@ pub fn compare_contact(
         Section {
             heading: "Rigid against compliant".into(),
             paragraphs: vec![format!(
-                "The same trial and tracking problem with four feet: the rigid foot ({}), the same with its geometry identified (`foot_geometry`, started from the rigid run), the volumetric foot with its file's contact law ({}) and the same with its law identified (`volumetric_contact`, started from the volumetric run). RMSE on the 1 ms grid over the tracked half cycle, each foot's forces against its own measurement; seed 000 reports its RMSE over a gait cycle (Table 7, optimal control). The push-off CoP error: |model − measured| CoP of the trailing foot while both measured normal forces exceed {LOADED_N} N. Each run's own folder, with its report, is the sub-folder of its name.",
-                req.rigid_foot, req.volumetric_foot
+                "The same trial and tracking problem with four feet: the rigid foot ({}), the same with its geometry identified (`foot_geometry`, started from the rigid run), the volumetric foot with its file's contact law ({}) and the same with its law identified (`volumetric_contact`, started from the volumetric run). RMSE on the 1 ms grid over the tracked half cycle, each foot's forces against its own measurement; seed 000 reports its RMSE over a gait cycle (Table 7, optimal control). The push-off CoP error: |model − measured| CoP of the trailing foot while both measured normal forces exceed {LOADED_N} N. Each run's own folder, with its report, is the sub-folder of its name. Every run's cost: {}, the pelvis position {}.",
+                req.rigid_foot,
+                req.volumetric_foot,
+                targets_said(&req.run),
+                if req.run.track_pelvis_position { "tracked" } else { "untracked" },
             )],
             tables: vec![table.clone(), parameters.clone()],
             svgs: vec![],
@@ -327,6 +330,8 @@ pub fn compare_contact(
         "model": req.run.model,
         "rigid_foot": req.rigid_foot,
         "volumetric_foot": req.volumetric_foot,
+        "targets": targets_said(&req.run),
+        "pelvis_position_tracked": req.run.track_pelvis_position,
         "seed000_grf_rmse_n": {"tangential": SEED000_GRF_RMSE[0], "normal": SEED000_GRF_RMSE[1]},
         "runs": runs,
     });
@@ -349,6 +354,17 @@ pub fn compare_contact(
 }
 
 /// The comparison's table: one column per run and one for seed 000.
+/// How the runs' cost compares model and measurement, in words.
+fn targets_said(run: &TrackingRunSetup) -> &'static str {
+    if run.sample_targets {
+        "every sample at its own instant (sample targets)"
+    } else if run.one_sided_targets {
+        "node targets from each phase's own samples"
+    } else {
+        "node targets from splines"
+    }
+}
+
 fn contact_table(runs: &[RunOutcome]) -> Table {
     let mut headers = vec![String::new()];
     headers.extend(runs.iter().map(|r| r.name.clone()));
