@@ -353,7 +353,6 @@ pub fn compare_contact(
     Ok(ContactComparison { path, runs, table })
 }
 
-/// The comparison's table: one column per run and one for seed 000.
 /// How the runs' cost compares model and measurement, in words.
 fn targets_said(run: &TrackingRunSetup) -> &'static str {
     if run.sample_targets {
@@ -365,6 +364,7 @@ fn targets_said(run: &TrackingRunSetup) -> &'static str {
     }
 }
 
+/// The comparison's table: one column per run and one for seed 000.
 fn contact_table(runs: &[RunOutcome]) -> Table {
     let mut headers = vec![String::new()];
     headers.extend(runs.iter().map(|r| r.name.clone()));
