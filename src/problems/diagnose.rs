@@ -126,6 +126,21 @@ impl TrackingRunSetup {
     pub fn read(path: &std::path::Path) -> Result<Self, crate::runfolder::RunFileError> {
         crate::runfolder::read_json(path)
     }
+
+    /// How the run's node targets are read from the samples; one-sided targets win
+    /// should both flags be set (the CLI refuses both).
+    pub fn target_sides(&self) -> super::track::TargetSides {
+        use super::track::TargetSides;
+        if self.one_sided_targets {
+            TargetSides::OneSided {
+                cutoff_hz: self.kinematics_cutoff,
+            }
+        } else if self.sample_targets {
+            TargetSides::Samples
+        } else {
+            TargetSides::Interpolated
+        }
+    }
 }
 
 /// An effect parameter at a solution.

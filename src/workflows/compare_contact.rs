@@ -8,6 +8,7 @@ use super::track::{track, TrackRequest, TrackingProblem};
 use super::{note, Progress};
 use crate::model::effects::EffectSpec;
 use crate::problems::diagnose::TrackingRunSetup;
+use crate::problems::track::TargetSides;
 use crate::report::html::{Section, Tone};
 use crate::report::runs::{side_by_side, RunCurves};
 use crate::report::table::Table;
@@ -355,12 +356,10 @@ pub fn compare_contact(
 
 /// How the runs' cost compares model and measurement, in words.
 fn targets_said(run: &TrackingRunSetup) -> &'static str {
-    if run.sample_targets {
-        "every sample at its own instant (sample targets)"
-    } else if run.one_sided_targets {
-        "node targets from each phase's own samples"
-    } else {
-        "node targets from splines"
+    match run.target_sides() {
+        TargetSides::Samples => "every sample at its own instant (sample targets)",
+        TargetSides::OneSided { .. } => "node targets from each phase's own samples",
+        TargetSides::Interpolated => "node targets from splines",
     }
 }
 
@@ -580,6 +579,22 @@ mod tests {
         assert_eq!(t.rows.len(), 2);
         assert_eq!(t.rows[0], ["geometry", "a", "0.2000", "0.0050", "m"]);
         assert_eq!(t.rows[1][3], "—");
+    }
+
+    /// The report names the targets the tracks used: the same precedence as `track`'s
+    /// (one-sided targets before sample targets, should a library caller set both).
+    #[test]
+    fn the_targets_said_are_the_ones_the_tracks_use() {
+        let mut run = crate::workflows::track::TrackRequest::new("ellipse").run;
+        assert_eq!(targets_said(&run), "node targets from splines");
+        run.sample_targets = true;
+        assert!(targets_said(&run).contains("sample targets"));
+        run.one_sided_targets = true;
+        assert!(matches!(run.target_sides(), TargetSides::OneSided { .. }));
+        assert_eq!(
+            targets_said(&run),
+            "node targets from each phase's own samples"
+        );
     }
 
     #[test]

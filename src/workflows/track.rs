@@ -11,7 +11,7 @@ use crate::phases::PhaseSequence;
 use crate::problems::diagnose::{parameter_sd, IdentifiedParameter, TrackingRunSetup};
 use crate::problems::evaluation::GaitSolution;
 use crate::problems::gait::GaitCycle;
-use crate::problems::track::{TargetSides, TrackingSetup, WindowChoice};
+use crate::problems::track::{TrackingSetup, WindowChoice};
 use crate::runfolder::RunFolder;
 use crate::sqp::{ExactConvexification, HessianMode, SqpSettings, SqpStatus};
 use anyhow::{anyhow, Context};
@@ -100,15 +100,7 @@ impl TrackingProblem {
         if run.mirror {
             data.swap_sides();
         }
-        let sides = if run.one_sided_targets {
-            TargetSides::OneSided {
-                cutoff_hz: run.kinematics_cutoff,
-            }
-        } else if run.sample_targets {
-            TargetSides::Samples
-        } else {
-            TargetSides::Interpolated
-        };
+        let sides = run.target_sides();
         if let Some(fc) = run.kinematics_cutoff {
             // one-sided targets filter segment by segment (the same sampling and cutoff checks)
             if run.one_sided_targets {
