@@ -71,6 +71,45 @@ fn every_primitive_gets_its_centre_size_and_angle_within_bounds_of_the_files() {
     );
 }
 
+/// The report draws the foot the run identified: the body drawing's primitives are the
+/// shapes the free parameters give (the file's at the file's values, a 10 % longer
+/// ellipse turned by 0.1 rad and moved 1 cm forward at those), for both feet.
+#[test]
+fn the_body_drawing_shows_the_identified_shape() {
+    use footfall::model::geometry::Shape;
+    use footfall::report::body::{Outline, Pose};
+    let m = model("models/feet/ellipse.json", "foot_geometry");
+    let file: Vec<f64> = m.parameters().iter().map(|p| p.value).collect();
+    let (x, a, angle) = (file[0] + 0.01, 1.1 * file[2], file[4] + 0.1);
+    let theta = [x, file[1], a, file[3], angle];
+    let q = vec![0.0; m.nq()];
+    for (values, want) in [
+        (file.clone(), [file[0], file[2], file[4]]),
+        (theta.to_vec(), [x, a, angle]),
+    ] {
+        let pose = Pose::of_model(&m, &q, &values);
+        assert_eq!(pose.outlines.len(), m.contacts.len());
+        for (i, (_, outline)) in pose.outlines.iter().enumerate() {
+            let Shape::Ellipse {
+                centre,
+                angle,
+                semi_axes,
+            } = m.contact_shape(i, &values)
+            else {
+                panic!("the ellipse foot's primitive is an ellipse");
+            };
+            assert_eq!([centre[0], semi_axes[0], angle], want);
+            let Outline::Ellipse {
+                semi_axes: drawn, ..
+            } = outline
+            else {
+                panic!("an ellipse is drawn as one");
+            };
+            assert_eq!(*drawn, semi_axes);
+        }
+    }
+}
+
 /// The initial state of a simulation phase file, projected onto its first phase's set.
 fn state(m: &GaitModel, phases: &str, lower: f64) -> (ConstraintSet, Vec<f64>, Vec<f64>) {
     let seq = PhaseSequence::load(&root().join(phases)).unwrap();

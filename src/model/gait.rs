@@ -528,6 +528,25 @@ impl GaitModel {
         p
     }
 
+    /// The shape of contact `c` with the free parameters at `theta`: the foot file's, or,
+    /// under a `foot_geometry` effect, the one those parameters give (what a drawing of
+    /// the fitted foot shows).
+    pub fn contact_shape(&self, c: usize, theta: &[f64]) -> Shape {
+        match self.shape_of(c, &self.full_params(theta)) {
+            ShapeScalars::Point { position } => Shape::Point { position },
+            ShapeScalars::Circle { centre, radius } => Shape::Circle { centre, radius },
+            ShapeScalars::Ellipse {
+                centre,
+                angle,
+                semi_axes,
+            } => Shape::Ellipse {
+                centre,
+                angle,
+                semi_axes,
+            },
+        }
+    }
+
     /// The shape of contact `c` under the effect parameters `p` (all of them): the foot
     /// file's, or a `foot_geometry` effect's.
     fn shape_of<S: Scalar>(&self, c: usize, p: &[S]) -> ShapeScalars<S> {

@@ -56,8 +56,9 @@ pub struct Pose {
 }
 
 impl Pose {
-    /// The model's pose at generalised positions `q` (m, rad).
-    pub fn of_model(model: &GaitModel, q: &[f64]) -> Self {
+    /// The model's pose at generalised positions `q` (m, rad), its contact primitives the
+    /// shapes the free parameters `theta` give (an identified foot geometry).
+    pub fn of_model(model: &GaitModel, q: &[f64], theta: &[f64]) -> Self {
         let tree = model.tree();
         let k = tree.kinematics(q, &vec![0.0; q.len()]);
         let body = |name: &str| tree.body_index(name);
@@ -81,8 +82,14 @@ impl Pose {
                 .collect();
             let mut leg: Vec<[f64; 2]> = ids.iter().map(|&b| origin(b)).collect();
             if let Some(&foot) = ids.last() {
-                for c in model.contacts.iter().filter(|c| c.body == foot) {
-                    leg.push(tree.point(&k, foot, c.shape.centre()));
+                for (i, _) in model
+                    .contacts
+                    .iter()
+                    .enumerate()
+                    .filter(|(_, c)| c.body == foot)
+                {
+                    let shape = model.contact_shape(i, theta);
+                    leg.push(tree.point(&k, foot, shape.centre()));
                     leg.push(origin(foot));
                 }
             }
@@ -91,10 +98,12 @@ impl Pose {
         let outlines = model
             .contacts
             .iter()
-            .map(|c| {
+            .enumerate()
+            .map(|(i, c)| {
                 let side = usize::from(c.name.starts_with("l."));
-                let centre = tree.point(&k, c.body, c.shape.centre());
-                let o = match c.shape {
+                let shape = model.contact_shape(i, theta);
+                let centre = tree.point(&k, c.body, shape.centre());
+                let o = match shape {
                     Shape::Ellipse {
                         angle, semi_axes, ..
                     } => Outline::Ellipse {

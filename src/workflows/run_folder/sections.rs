@@ -159,8 +159,8 @@ pub(super) fn body_animation(
         frames.push(BodyFrame {
             t: s.t,
             percent: cycle.percent(lead, s.t),
-            model: Pose::of_model(model, &q),
-            measured: Pose::of_model(model, &qd),
+            model: Pose::of_model(model, &q, &sol.theta),
+            measured: Pose::of_model(model, &qd, &sol.theta),
             cop_model: [0, 1].map(|f| opt(line.model_feet[f][2][k])),
             cop_measured: [0, 1].map(|f| opt(line.data_feet[f][2][k])),
             grf_model: [0, 1].map(|f| [line.model_feet[f][0][k], line.model_feet[f][1][k]]),
