@@ -288,7 +288,7 @@ fn fit_the_law(data: &Path, regularisation: Option<f64>, tmp: &Path) -> LawFit {
     req.sqp = tracking_sqp_settings(1e-3, 40, None, HessianMode::Exact, 1e-3);
     // Gauss–Newton steps to 1e-3 as before: from the truth's motion they reach the optimum
     // in 11 iterations, the exact Hessian from the first step in 17, at the same law
-    req.volumetric_exact_below = None;
+    req.volumetric_switch = None;
     let run = tmp.join("run");
     let t = std::time::Instant::now();
     workflows::track::track(
@@ -397,7 +397,7 @@ fn diagnose_ranks_the_contact_law_first_on_the_fit_with_the_wrong_law() {
     req.check_points = false;
     req.sqp = tracking_sqp_settings(1e-4, 1, None, HessianMode::Exact, 1e-3);
     // the run diagnosed is the one Gauss–Newton step from the truth's motion it always was
-    req.volumetric_exact_below = None;
+    req.volumetric_switch = None;
     workflows::track::track(&req, RunFolder::create(&run, false).unwrap(), &Quiet).unwrap();
     let t = std::time::Instant::now();
     let out = tmp.path().join("diagnose");

@@ -76,7 +76,9 @@ pub struct TrackSolverArgs {
     #[arg(long, default_value_t = 1e-5, value_parser = super::validate::positive)]
     pub tol: f64,
     /// With `--hessian exact`: Gauss–Newton steps until the constraint violation is below
-    /// this (default: 1e-3; 0.1 for a foot with volumetric contacts).
+    /// this (default: 1e-3; a foot with volumetric contacts also switches below 0.1 once
+    /// five Gauss–Newton iterations have not lowered the objective by 0.1 %; given, the
+    /// switch is this one alone).
     #[arg(long, value_parser = super::validate::threshold)]
     pub exact_below: Option<f64>,
     /// Iteration limit (`compare-contact`: of each run).
@@ -101,10 +103,10 @@ impl TrackSolverArgs {
 
     /// The switch of a foot with volumetric contacts: footfall's, unless `--exact-below`
     /// was given.
-    pub fn volumetric_exact_below(&self) -> Option<f64> {
+    pub fn volumetric_switch(&self) -> Option<footfall::sqp::StallSwitch> {
         self.exact_below
             .is_none()
-            .then_some(footfall::workflows::track::VOLUMETRIC_EXACT_BELOW)
+            .then_some(footfall::workflows::track::VOLUMETRIC_SWITCH)
     }
 }
 

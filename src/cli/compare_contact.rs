@@ -81,7 +81,7 @@ impl From<Args> for CompareContactRequest {
             volumetric_phases: a.volumetric_phases,
             check_points: a.check_points.enabled(),
             sqp: a.solver.settings(footfall::sqp::HessianMode::Exact),
-            volumetric_exact_below: a.solver.volumetric_exact_below(),
+            volumetric_switch: a.solver.volumetric_switch(),
             transient_threshold: a.transient_threshold,
             out: a.out,
             overwrite: a.overwrite,

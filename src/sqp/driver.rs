@@ -220,7 +220,7 @@ pub(super) fn run(
             &s,
             &st,
             (&lambda, &nu),
-            infeas,
+            step::curvature_in_use(settings, infeas, &history),
             (&bfgs, &zero_blocks),
             &mut mem,
         ) {

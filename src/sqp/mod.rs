@@ -133,6 +133,46 @@ pub enum HessianMode {
     GaussNewtonBfgs,
 }
 
+/// When the exact mode's Gauss–Newton steps count as stalled
+/// ([`SqpSettings::exact_hessian_on_stall`]): over `iterations` consecutive iterations, all
+/// at a violation of at most `below`, the objective never fell below the lowest one of the
+/// points before them with such a violation by more than `relative_decrease` of it. Once
+/// stalled, the curvature stays in use.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StallSwitch {
+    /// Largest constraint violation of the stalled iterations.
+    pub below: f64,
+    /// How many iterations without progress make a stall.
+    pub iterations: usize,
+    /// Progress: a decrease of the objective by more than this fraction of it.
+    pub relative_decrease: f64,
+}
+
+impl StallSwitch {
+    /// The first iteration (an index into `history`) after which the Gauss–Newton steps
+    /// had stalled, if they had.
+    pub fn stalled_at(&self, history: &[IterationRecord]) -> Option<usize> {
+        let k = self.iterations.max(1);
+        (k..history.len()).find(|&i| {
+            let window = &history[i - k + 1..=i];
+            // the best objective before the window among the points this feasible (a
+            // cycle that dips and rises sets no new best)
+            let best = history[..=i - k]
+                .iter()
+                .filter(|r| r.infeasibility <= self.below)
+                .map(|r| r.objective)
+                .reduce(f64::min);
+            best.is_some_and(|best| {
+                window.iter().all(|r| {
+                    r.infeasibility <= self.below
+                        && r.objective >= best - self.relative_decrease * best.abs()
+                })
+            })
+        })
+    }
+}
+
 /// How [`HessianMode::Exact`] turns the indefinite Hessian of the Lagrangian into a
 /// QP Clarabel can solve.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
@@ -174,6 +214,15 @@ pub struct SqpSettings {
     /// Exact mode: use the constraint curvature only when the largest constraint violation
     /// is at most this (Gauss–Newton steps before; default: infinity, always).
     pub exact_hessian_below: f64,
+    /// Exact mode: use the constraint curvature also above `exact_hessian_below`, from the
+    /// iteration on where the Gauss–Newton steps stalled (None, the default: never). A
+    /// volumetric foot's identification started at another problem's solution (violation
+    /// 8e-9) crawled with the curvature from its first step (J 0.3151 → 0.2434 in 56
+    /// iterations, far from converged), while its Gauss–Newton steps reached J 0.2165 in 14
+    /// and then cycled at violations of 2e-3 to 1e-2, above any fixed switch
+    /// (docs/foot-identification.md, stop 56).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub exact_hessian_on_stall: Option<StallSwitch>,
     /// How the exact mode keeps its QPs convex (default: augmented).
     pub exact_convexification: ExactConvexification,
     /// Use the exact curvature of constraint terms that provide it (convexified per
@@ -219,6 +268,7 @@ impl Default for SqpSettings {
             bfgs_update: hessian::BfgsUpdate::SkipNonconvex,
             exact_term_hessians: false,
             exact_hessian_below: f64::INFINITY,
+            exact_hessian_on_stall: None,
             exact_convexification: ExactConvexification::Augmented,
             inexact_integration: 1e-5,
             violation_growth: None,

@@ -11,7 +11,7 @@ use super::driver::{State, Structure};
 use super::evaluator::Evaluator;
 use super::hessian::{self, BlockBfgs};
 use super::qp::{QpData, QpError, QpSolution, Triplets};
-use super::{ExactConvexification, HessianMode, Nlp, SqpSettings, SqpStatus};
+use super::{ExactConvexification, HessianMode, IterationRecord, Nlp, SqpSettings, SqpStatus};
 
 /// What the step computation carries from one iteration to the next (and in
 /// checkpoints).
@@ -85,8 +85,23 @@ pub(super) struct Step {
     pub(super) elastic: bool,
 }
 
-/// Build the QP at `st` with multipliers `lambda`, `nu` of the last QP; `infeas` is the
-/// largest constraint violation at `st`. `zero_blocks` is the Hessian's block structure
+/// Whether the exact mode uses the constraint curvature at an iterate of largest violation
+/// `infeas` after the iterations `history`: far from feasibility the multipliers (and so
+/// the curvature) are unreliable, so only below `exact_hessian_below`, or once the
+/// Gauss–Newton steps have stalled ([`SqpSettings::exact_hessian_on_stall`]).
+pub(super) fn curvature_in_use(
+    settings: &SqpSettings,
+    infeas: f64,
+    history: &[IterationRecord],
+) -> bool {
+    infeas <= settings.exact_hessian_below
+        || settings
+            .exact_hessian_on_stall
+            .is_some_and(|rule| rule.stalled_at(history).is_some())
+}
+
+/// Build the QP at `st` with multipliers `lambda`, `nu` of the last QP; `curvature`: whether
+/// the exact mode uses the constraint curvature at `st` ([`curvature_in_use`]). `zero_blocks` is the Hessian's block structure
 /// with zero matrices (convexification block by block). An error is the solve's status.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn subproblem<'a>(
@@ -95,7 +110,7 @@ pub(super) fn subproblem<'a>(
     s: &'a Structure,
     st: &'a State,
     (lambda, nu): (&[f64], &[f64]),
-    infeas: f64,
+    curvature: bool,
     (bfgs, zero_blocks): (&BlockBfgs, &BlockBfgs),
     mem: &mut StepMemory,
 ) -> Result<Subproblem<'a>, SqpStatus> {
@@ -118,9 +133,7 @@ pub(super) fn subproblem<'a>(
                 cols: s.gn_cols.clone(),
                 vals: st.ev.gn.clone(),
             };
-            // far from feasibility the multipliers (and so the curvature) are unreliable:
-            // use the curvature only once the violation is below `exact_hessian_below`
-            let use_curvature = infeas <= settings.exact_hessian_below && st.hess.is_some();
+            let use_curvature = curvature && st.hess.is_some();
             if let (Some(hx), true) = (&st.hess, use_curvature) {
                 ex.rows.extend_from_slice(&hx.rows);
                 ex.cols.extend_from_slice(&hx.cols);
@@ -398,7 +411,7 @@ fn row_gram(rows: &[Vec<(usize, f64)>]) -> Triplets {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sqp::{EvalError, NlpEval};
+    use crate::sqp::{EvalError, NlpEval, StallSwitch};
 
     /// An NLP the step never evaluates (the subproblems below are built by hand).
     struct Unused;
@@ -609,7 +622,7 @@ mod tests {
             s,
             st,
             (&lambda, &nu),
-            0.5,
+            curvature_in_use(settings, 0.5, &[]),
             (blocks, blocks),
             &mut StepMemory::default(),
         ) else {
@@ -660,5 +673,88 @@ mod tests {
         let d = run([2.0, -1.0], 0.0);
         assert!(d > 1.0, "{d}");
         assert!(run([2.0, -1.0], 30.0) >= 10.0);
+    }
+
+    /// A history of `(objective, violation)` per iteration.
+    fn history(points: &[(f64, f64)]) -> Vec<IterationRecord> {
+        points
+            .iter()
+            .enumerate()
+            .map(|(iter, &(objective, infeasibility))| IterationRecord {
+                iter,
+                objective,
+                infeasibility,
+                kkt: 1.0,
+                step: 1.0,
+                seconds: 0.0,
+                qp_iterations: 0,
+                integration_tol: None,
+            })
+            .collect()
+    }
+
+    /// The stall switch: steady progress never trips it; a cycle that dips and rises
+    /// without a new best (by more than 0.1 %) trips it after three iterations; a violation
+    /// above its bound in the window, or a lower objective at an infeasible point before
+    /// the window, does not count; once tripped, the curvature stays in use above the
+    /// violation switch.
+    #[test]
+    fn the_curvature_comes_in_when_the_steps_stall_below_the_violation() {
+        let rule = StallSwitch {
+            below: 0.1,
+            iterations: 3,
+            relative_decrease: 1e-3,
+        };
+        let steady: Vec<(f64, f64)> = (0..10).map(|i| (1.0 - 0.01 * i as f64, 1e-2)).collect();
+        assert_eq!(rule.stalled_at(&history(&steady)), None);
+        // the best feasible point is 0.5 at iteration 1; iterations 2–4 never beat it by
+        // 0.1 % (0.4996 is within), though 3 is below its predecessor 2
+        let cycle = [
+            (0.6, 1e-2),
+            (0.5, 1e-2),
+            (0.52, 5e-3),
+            (0.4996, 8e-3),
+            (0.51, 1e-2),
+        ];
+        assert_eq!(rule.stalled_at(&history(&cycle)), Some(4));
+        assert_eq!(rule.stalled_at(&history(&cycle[..4])), None);
+        // a new best beyond the tolerance in the window: progress
+        let mut better = cycle;
+        better[3].0 = 0.49;
+        assert_eq!(rule.stalled_at(&history(&better)), None);
+        // a window point above the violation bound: not a stall of these steps
+        let mut far = cycle;
+        far[3].1 = 0.2;
+        assert_eq!(rule.stalled_at(&history(&far)), None);
+        // a lower objective at an infeasible point (violation 5) is no best to beat: the
+        // windows are measured from the feasible points before them, and go down from them
+        let infeasible_low = [
+            (0.3, 5.0),
+            (0.6, 1e-2),
+            (0.55, 1e-2),
+            (0.5, 1e-2),
+            (0.45, 1e-2),
+        ];
+        assert_eq!(rule.stalled_at(&history(&infeasible_low)), None);
+        // and with no feasible point before the window there is nothing to stall against
+        let flat_from_far = [(0.3, 5.0), (0.5, 1e-2), (0.5, 1e-2), (0.5, 1e-2)];
+        assert_eq!(rule.stalled_at(&history(&flat_from_far)), None);
+
+        let mut settings = SqpSettings {
+            hessian: HessianMode::Exact,
+            exact_hessian_below: 1e-3,
+            ..SqpSettings::default()
+        };
+        let h = history(&cycle);
+        assert!(
+            !curvature_in_use(&settings, 1e-2, &h),
+            "no rule: the violation decides"
+        );
+        assert!(curvature_in_use(&settings, 1e-4, &h));
+        settings.exact_hessian_on_stall = Some(rule);
+        assert!(curvature_in_use(&settings, 1e-2, &h));
+        // sticky: still in use at a violation above the rule's bound after the stall
+        assert!(curvature_in_use(&settings, 0.5, &h));
+        assert!(!curvature_in_use(&settings, 1e-2, &h[..4]));
     }
 }

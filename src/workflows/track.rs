@@ -13,16 +13,21 @@ use crate::problems::evaluation::GaitSolution;
 use crate::problems::gait::GaitCycle;
 use crate::problems::track::{TrackingSetup, WindowChoice};
 use crate::runfolder::RunFolder;
-use crate::sqp::{ExactConvexification, HessianMode, SqpSettings, SqpStatus};
+use crate::sqp::{ExactConvexification, HessianMode, SqpSettings, SqpStatus, StallSwitch};
 use anyhow::{anyhow, Context};
 use std::path::PathBuf;
 
 mod write;
 pub use write::{RunWriting, TrackedRun};
 
-/// The constraint violation below which a track with volumetric contacts uses the exact
-/// Hessian ([`TrackRequest::volumetric_exact_below`]).
-pub const VOLUMETRIC_EXACT_BELOW: f64 = 0.1;
+/// When a track with volumetric contacts uses the exact Hessian above the usual violation
+/// ([`TrackRequest::volumetric_switch`]): once five Gauss–Newton iterations below a
+/// violation of 0.1 have not lowered the best objective by 0.1 %.
+pub const VOLUMETRIC_SWITCH: StallSwitch = StallSwitch {
+    below: 0.1,
+    iterations: 5,
+    relative_decrease: 1e-3,
+};
 
 /// CVODES tolerance of the states of problems with a compliant heel pad or residual
 /// actuators: at 1e-8 integration noise stalls the line search (a pad near KKT 2e-4; the
@@ -426,13 +431,14 @@ pub struct TrackRequest {
     pub check_points: bool,
     /// The solver's settings.
     pub sqp: SqpSettings,
-    /// When the foot has volumetric contacts and the Hessian is exact: the constraint
-    /// violation below which the exact Hessian is used, instead of
-    /// `sqp.exact_hessian_below` (None: that one). Gauss–Newton steps left a volumetric
-    /// track cycling at a violation of 1e-3 to 1e-2, above the usual 1e-3, for good; the
-    /// exact Hessian from the data's start (violation ~10) ran into a QP failure or a far
-    /// worse local minimum (docs/engine-investigation.md, stop 54).
-    pub volumetric_exact_below: Option<f64>,
+    /// When the foot has volumetric contacts and the Hessian is exact: the stall of the
+    /// Gauss–Newton steps after which the exact Hessian is used above
+    /// `sqp.exact_hessian_below` too (None: only below it). Gauss–Newton steps left a
+    /// volumetric track cycling at a violation of 1e-3 to 1e-2, above the usual 1e-3, for
+    /// good; the exact Hessian from the data's start (violation ~10) ran into a QP failure
+    /// or a far worse local minimum (docs/engine-investigation.md, stop 54), and from
+    /// another law's solution it crawled (docs/foot-identification.md, stop 56).
+    pub volumetric_switch: Option<StallSwitch>,
     /// Report ground-force excursions above the measurement larger than this (N).
     pub transient_threshold: f64,
 }
@@ -474,7 +480,7 @@ impl TrackRequest {
             init: None,
             check_points: true,
             sqp: tracking_sqp_settings(1e-5, 200, None, HessianMode::Exact, 1e-3),
-            volumetric_exact_below: Some(VOLUMETRIC_EXACT_BELOW),
+            volumetric_switch: Some(VOLUMETRIC_SWITCH),
             transient_threshold: super::run_folder::DEFAULT_TRANSIENT_THRESHOLD_N,
         }
     }
@@ -530,13 +536,13 @@ pub fn track(
     }
     base.parameters.clear();
     let mut sqp = req.sqp.clone();
-    if let Some(below) = req.volumetric_exact_below {
+    if let Some(rule) = req.volumetric_switch {
         if prob.model.has_volumetric_contacts()
             && sqp.hessian == HessianMode::Exact
-            && below != sqp.exact_hessian_below
+            && sqp.exact_hessian_on_stall.is_none()
         {
-            progress.note(&format!("volumetric contact: the exact Hessian once the constraint violation is below {below:e} (Gauss–Newton steps cycle above 1e-3 on it; `--exact-below` to choose)"));
-            sqp.exact_hessian_below = below;
+            progress.note(&format!("volumetric contact: the exact Hessian below a constraint violation of {:e}, or below {:e} once {} Gauss–Newton iterations have not lowered the objective by {} % (they can cycle above 1e-3 on it; `--exact-below` to choose a fixed switch)", sqp.exact_hessian_below, rule.below, rule.iterations, 100.0 * rule.relative_decrease));
+            sqp.exact_hessian_on_stall = Some(rule);
         }
     }
     prob.solve_and_write(
