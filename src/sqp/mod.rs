@@ -156,8 +156,8 @@ impl StallSwitch {
         let k = self.iterations.max(1);
         (k..history.len()).find(|&i| {
             let window = &history[i - k + 1..=i];
-            // the best objective before the window among the points this feasible (a
-            // cycle that dips and rises sets no new best)
+            // the best objective before the window among the points with a violation
+            // within the bound (a cycle that dips and rises sets no new best)
             let best = history[..=i - k]
                 .iter()
                 .filter(|r| r.infeasibility <= self.below)

@@ -101,8 +101,9 @@ pub(super) fn curvature_in_use(
 }
 
 /// Build the QP at `st` with multipliers `lambda`, `nu` of the last QP; `curvature`: whether
-/// the exact mode uses the constraint curvature at `st` ([`curvature_in_use`]). `zero_blocks` is the Hessian's block structure
-/// with zero matrices (convexification block by block). An error is the solve's status.
+/// the exact mode uses the constraint curvature at `st` ([`curvature_in_use`]).
+/// `zero_blocks` is the Hessian's block structure with zero matrices (convexification
+/// block by block). An error is the solve's status.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn subproblem<'a>(
     nlp: &dyn Nlp,
