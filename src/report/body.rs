@@ -63,6 +63,9 @@ impl Pose {
         let k = tree.kinematics(q, &vec![0.0; q.len()]);
         let body = |name: &str| tree.body_index(name);
         let origin = |b: usize| k.origin[b];
+        let shapes: Vec<Shape> = (0..model.contacts.len())
+            .map(|i| model.contact_shape(i, theta))
+            .collect();
         let mut lines = Vec::new();
         if let Some(h) = body("hat") {
             // the trunk from the hip joint through the HAT frame's origin to twice its
@@ -82,15 +85,11 @@ impl Pose {
                 .collect();
             let mut leg: Vec<[f64; 2]> = ids.iter().map(|&b| origin(b)).collect();
             if let Some(&foot) = ids.last() {
-                for (i, _) in model
-                    .contacts
-                    .iter()
-                    .enumerate()
-                    .filter(|(_, c)| c.body == foot)
-                {
-                    let shape = model.contact_shape(i, theta);
-                    leg.push(tree.point(&k, foot, shape.centre()));
-                    leg.push(origin(foot));
+                for (c, shape) in model.contacts.iter().zip(&shapes) {
+                    if c.body == foot {
+                        leg.push(tree.point(&k, foot, shape.centre()));
+                        leg.push(origin(foot));
+                    }
                 }
             }
             lines.push(leg);
@@ -98,10 +97,9 @@ impl Pose {
         let outlines = model
             .contacts
             .iter()
-            .enumerate()
-            .map(|(i, c)| {
+            .zip(shapes)
+            .map(|(c, shape)| {
                 let side = usize::from(c.name.starts_with("l."));
-                let shape = model.contact_shape(i, theta);
                 let centre = tree.point(&k, c.body, shape.centre());
                 let o = match shape {
                     Shape::Ellipse {
