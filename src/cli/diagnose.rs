@@ -15,6 +15,8 @@ pub struct Args {
     #[arg(long, default_value_t = 1)]
     verify: usize,
     /// Only these candidates (effect names or `NAME:key=value,…`; default: the catalog).
+    /// `catalog` stands for the default set, so `--candidate catalog --candidate
+    /// foot_geometry` adds the foot's shape to it.
     #[arg(long = "candidate")]
     candidates: Vec<String>,
     /// Output folder (default: `<RUN>-diagnose`); re-fits go to `<RUN>+<effect>`.

@@ -33,6 +33,10 @@ use rayon::prelude::*;
 use refit::{channel_changes, diff_with, refit, refit_into, test_by_refit, Evidence, Verified};
 use std::path::{Path, PathBuf};
 
+/// The `--candidate` name that stands for the default candidates: the catalog, the heel
+/// pad on a foot with a heel circle and the contact law on a volumetric foot.
+pub const CATALOG: &str = "catalog";
+
 /// What `diagnose` does: the arguments of `footfall diagnose`.
 #[derive(Debug, Clone)]
 pub struct DiagnoseRequest {
@@ -41,6 +45,8 @@ pub struct DiagnoseRequest {
     /// Re-fit this many of the top significant candidates to verify them.
     pub verify: usize,
     /// Only these candidates (effect names or `NAME:key=value,…`; default: the catalog).
+    /// [`CATALOG`] among them stands for the default set, so that others can be added to
+    /// it (`catalog`, `foot_geometry`).
     pub candidates: Vec<String>,
     /// Output folder (default: `<RUN>-diagnose`); re-fits go to `<RUN>+<effect>`.
     pub out: Option<PathBuf>,
@@ -385,14 +391,16 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
         .clone()
         .unwrap_or_else(|| sibling(&args.run, "-diagnose"));
     let folder = RunFolder::create(&out, args.overwrite)?;
-    let mut candidates: Vec<EffectSpec> = if args.candidates.is_empty() {
-        catalog()
-    } else {
-        args.candidates
-            .iter()
-            .map(|c| EffectSpec::parse_cli(c).map_err(|e| anyhow!("--candidate: {e}")))
-            .collect::<Result<_, _>>()?
-    };
+    // the default set (the catalog, and the heel pad or the contact law where the foot
+    // has them) when no candidate is named or `catalog` is among them
+    let with_catalog = args.candidates.is_empty() || args.candidates.iter().any(|c| c == CATALOG);
+    let mut candidates: Vec<EffectSpec> = if with_catalog { catalog() } else { Vec::new() };
+    for c in args.candidates.iter().filter(|c| *c != CATALOG) {
+        let spec = EffectSpec::parse_cli(c).map_err(|e| anyhow!("--candidate: {e}"))?;
+        if !candidates.contains(&spec) {
+            candidates.push(spec);
+        }
+    }
     // the baseline: the run's own problem at its solution
     let mut base = linearisation(TrackingProblem::build(&setup, &[])?);
     base.setup
@@ -423,7 +431,8 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
     // the heel pad, not in the catalog, is a candidate on feet with a heel circle: tested
     // by a re-fit on runs with sample or one-sided targets, named as not scored on others
     let pad = EffectSpec::parse_cli("heel_pad_compliance").map_err(|e| anyhow!(e))?;
-    if args.candidates.is_empty()
+    if with_catalog
+        && !candidates.contains(&pad)
         && base
             .model
             .contacts
@@ -434,8 +443,11 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
     }
     // the volumetric contact law is a candidate on feet with volumetric primitives, its
     // null value the foot file's law ("is the law the one the forces ask for?")
-    if args.candidates.is_empty() && base.model.has_volumetric_contacts() {
-        candidates.push(EffectSpec::parse_cli("volumetric_contact").map_err(|e| anyhow!(e))?);
+    if with_catalog && base.model.has_volumetric_contacts() {
+        let law = EffectSpec::parse_cli("volumetric_contact").map_err(|e| anyhow!(e))?;
+        if !candidates.contains(&law) {
+            candidates.push(law);
+        }
     }
     // each score-tested candidate's problem, built once (the model, phases and trial read
     // from their files): the largest model is made of those the model accepts, and each
