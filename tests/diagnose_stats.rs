@@ -51,17 +51,10 @@ fn seed_run(dir: &Path) -> PathBuf {
 /// clock profile or reference: each test switches on what it checks.
 fn request(run: &Path, candidates: &[&str]) -> DiagnoseRequest {
     DiagnoseRequest {
-        run: run.to_path_buf(),
         verify: 0,
         candidates: candidates.iter().map(|c| c.to_string()).collect(),
-        out: None,
-        overwrite: false,
-        tol: 1e-5,
-        max_iter: 200,
-        make_testable: false,
         held_out: false,
-        profile_clocks: Vec::new(),
-        reference: None,
+        ..DiagnoseRequest::new(run.to_path_buf())
     }
 }
 

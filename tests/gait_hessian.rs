@@ -189,19 +189,14 @@ fn tracking_lagrangian_hessian_matches_finite_differences() {
 #[test]
 fn sample_target_hessian_matches_finite_differences_with_a_heel_pad() {
     use footfall::model::effects::EffectSpec;
-    use footfall::problems::tracking::ChannelNoise;
+    use footfall::workflows::synth::SynthRequest;
     use footfall::workflows::track::{TrackRequest, TrackingProblem};
     let trial = root().join("tests/data/hidden/double_circle_none");
     let mut req = TrackRequest::new("double-circle");
     req.run.model = root().join("models/opensim_subject01.json");
     req.run.data = Some(trial.join("synthetic.csv"));
     req.run.sample_targets = true;
-    req.run.noise_weights = Some(ChannelNoise {
-        angle_rad: 0.5f64.to_radians(),
-        position_m: 2e-3,
-        force_n: 5.0,
-        cop_m: 5e-3,
-    });
+    req.run.noise_weights = Some(SynthRequest::default_noise());
     let pad = EffectSpec::parse_cli("heel_pad_compliance").unwrap();
     let mut prob = TrackingProblem::build(&req.run, &[pad]).unwrap();
     let start = footfall::workflows::read_solution(&trial.join("tracked_samples")).unwrap();

@@ -15,9 +15,9 @@
 
 mod common;
 
-use footfall::problems::tracking::ChannelNoise;
 use footfall::runfolder::RunFolder;
 use footfall::workflows::diagnose::DiagnoseRequest;
+use footfall::workflows::synth::SynthRequest;
 use footfall::workflows::track::{track, TrackRequest};
 use footfall::workflows::Quiet;
 use serde_json::Value;
@@ -147,12 +147,8 @@ fn baseline(name: &str, dir: &Path, how: Setup) -> PathBuf {
     if !matches!(how, Setup::Samples | Setup::ForcePlateRate) {
         req.run.kinematics_cutoff = Some(10.0);
     }
-    let noise = ChannelNoise {
-        angle_rad: 0.5f64.to_radians(),
-        position_m: 2e-3,
-        force_n: 5.0,
-        cop_m: 5e-3,
-    };
+    // synth's noise, as the trials were made
+    let noise = SynthRequest::default_noise();
     match how {
         Setup::Seed => {}
         Setup::Pelvis => req.run.track_pelvis_position = true,
@@ -189,17 +185,10 @@ fn baseline(name: &str, dir: &Path, how: Setup) -> PathBuf {
 fn diagnose(run: &Path, verify: usize, candidates: &[&str], held_out: bool) -> Value {
     let out = PathBuf::from(format!("{}-diagnose", run.display()));
     let req = DiagnoseRequest {
-        run: run.to_path_buf(),
         verify,
         candidates: candidates.iter().map(|c| c.to_string()).collect(),
-        out: None,
-        overwrite: false,
-        tol: 1e-5,
-        max_iter: 200,
-        make_testable: false,
         held_out,
-        profile_clocks: Vec::new(),
-        reference: None,
+        ..DiagnoseRequest::new(run.to_path_buf())
     };
     timed("diagnose", run, || {
         footfall::workflows::diagnose::run(&req, &Quiet)

@@ -417,7 +417,6 @@ fn diagnose_ranks_the_contact_law_first_on_the_fit_with_the_wrong_law() {
     let out = tmp.path().join("diagnose");
     workflows::diagnose::run(
         &workflows::diagnose::DiagnoseRequest {
-            run: run.clone(),
             verify: 0,
             candidates: [
                 "volumetric_contact",
@@ -429,14 +428,11 @@ fn diagnose_ranks_the_contact_law_first_on_the_fit_with_the_wrong_law() {
             .map(String::from)
             .to_vec(),
             out: Some(out.clone()),
-            overwrite: false,
             tol: 1e-4,
             max_iter: 40,
-            make_testable: false,
             // the ranking in the run's own trial is what this test is about
             held_out: false,
-            profile_clocks: Vec::new(),
-            reference: None,
+            ..workflows::diagnose::DiagnoseRequest::new(run.clone())
         },
         &Quiet,
     )
@@ -492,7 +488,6 @@ enum RigidCost {
 /// from `init` (the model's own start when `None`) at `cost`, into the run folder `out`.
 /// Asserts that it converged.
 fn rigid_track(data: &Path, init: Option<&Path>, cost: RigidCost, out: &Path) {
-    use footfall::problems::tracking::ChannelNoise;
     use footfall::runfolder::RunFolder;
     use footfall::workflows::{self, Quiet};
     let mut req = workflows::track::TrackRequest::new("ellipse");
@@ -504,12 +499,7 @@ fn rigid_track(data: &Path, init: Option<&Path>, cost: RigidCost, out: &Path) {
         RigidCost::Diagnosed => {
             req.run.sample_targets = true;
             req.run.track_pelvis_position = true;
-            req.run.noise_weights = Some(ChannelNoise {
-                angle_rad: 0.5f64.to_radians(),
-                position_m: 2e-3,
-                force_n: 5.0,
-                cop_m: 5e-3,
-            });
+            req.run.noise_weights = Some(workflows::synth::SynthRequest::default_noise());
         }
     }
     req.init = init.map(Path::to_path_buf);
@@ -535,17 +525,11 @@ fn diagnose_ranking(run: &Path, candidates: &[&str], out: &Path) -> serde_json::
     let t = std::time::Instant::now();
     workflows::diagnose::run(
         &workflows::diagnose::DiagnoseRequest {
-            run: run.to_path_buf(),
             verify: 0,
             candidates: candidates.iter().map(|c| c.to_string()).collect(),
             out: Some(out.to_path_buf()),
-            overwrite: false,
-            tol: 1e-5,
-            max_iter: 200,
-            make_testable: false,
             held_out: false,
-            profile_clocks: Vec::new(),
-            reference: None,
+            ..workflows::diagnose::DiagnoseRequest::new(run.to_path_buf())
         },
         &Quiet,
     )

@@ -78,3 +78,27 @@ pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
     footfall::workflows::diagnose::run(&args.into(), &CliProgress { quiet })
         .map_err(Failure::classify)
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Parser)]
+    struct Cli {
+        #[command(flatten)]
+        args: Args,
+    }
+
+    /// `footfall diagnose RUN` asks for what the library's `DiagnoseRequest::new` holds,
+    /// so tests that call the library diagnose as a user's plain command does.
+    #[test]
+    fn the_plain_command_is_the_librarys_default_request() {
+        let cli: DiagnoseRequest = Cli::try_parse_from(["diagnose", "runs/track"])
+            .unwrap()
+            .args
+            .into();
+        let library = DiagnoseRequest::new(PathBuf::from("runs/track"));
+        assert_eq!(format!("{cli:?}"), format!("{library:?}"));
+    }
+}

@@ -72,6 +72,28 @@ pub struct DiagnoseRequest {
     pub reference: Option<PathBuf>,
 }
 
+impl DiagnoseRequest {
+    /// A request with `footfall diagnose`'s defaults for the track run `run`: the default
+    /// candidates, one verifying re-fit, held-out validation, re-fits to KKT 1e-5 within
+    /// 200 iterations, the output beside the run (`<RUN>-diagnose`, not replaced); no
+    /// re-track, clock profile or reference.
+    pub fn new(run: PathBuf) -> Self {
+        DiagnoseRequest {
+            run,
+            verify: 1,
+            candidates: Vec::new(),
+            out: None,
+            overwrite: false,
+            tol: 1e-5,
+            max_iter: 200,
+            make_testable: false,
+            held_out: true,
+            profile_clocks: Vec::new(),
+            reference: None,
+        }
+    }
+}
+
 /// The decrease of a truncated re-fit of a problem started at the run's solution (the
 /// baseline every candidate is measured against), its cost and its data residual count.
 fn decrease_at_solution(prob: &TrackingProblem) -> anyhow::Result<(f64, f64, usize)> {

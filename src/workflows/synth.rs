@@ -68,6 +68,18 @@ impl SynthRequest {
     /// Its default seed of the noise generator.
     pub const DEFAULT_SEED: u64 = 1;
 
+    /// The default noise as tracking weights (`track --noise-weights`): weighting every
+    /// channel by the inverse variance of the noise synth added makes a synthetic
+    /// trial's cost its maximum-likelihood one.
+    pub fn default_noise() -> crate::problems::tracking::ChannelNoise {
+        crate::problems::tracking::ChannelNoise {
+            angle_rad: Self::DEFAULT_NOISE_ANGLE_DEG.to_radians(),
+            position_m: Self::DEFAULT_NOISE_POSITION_MM * 1e-3,
+            force_n: Self::DEFAULT_NOISE_FORCE_N,
+            cop_m: Self::DEFAULT_NOISE_COP_MM * 1e-3,
+        }
+    }
+
     /// A request with `footfall synth`'s defaults (the constants above, which its
     /// arguments default to): the model, foot and phases of `from`, no hidden effect, an
     /// output folder that must not exist yet.
