@@ -405,6 +405,9 @@ const UNSCORABLE_PAD: &str = "not scored — it has no null value (the rigid hee
 
 /// Run `diagnose` as `args` describes, reporting to `progress`.
 pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()> {
+    if let Some(r) = &args.reference {
+        reference::read_reference(r)?;
+    }
     let setup = read_run_setup(&args.run)?;
     let solution = super::read_solution(&args.run)?;
     let before = RunSummary::read(&args.run)?;

@@ -93,8 +93,10 @@ fn sds(t: &ScoreTest) -> &[Option<f64>] {
     t.identifiability.as_ref().map_or(&[], |i| i.sd.as_slice())
 }
 
-/// Compare `tests` (this run's settled tests) with the diagnosis of `reference`.
-pub(super) fn compare(tests: &[ScoreTest], reference: &Path) -> anyhow::Result<Comparison> {
+/// The diagnosis of `reference` (a run or its diagnosis folder) and its folder, or an
+/// error naming what to run first. `diagnose` reads it before any work, so that a missing
+/// or unreadable reference is named at once, not after the candidates' tests.
+pub(super) fn read_reference(reference: &Path) -> anyhow::Result<(PathBuf, DiagnosisSummary)> {
     let folder = diagnosis_folder(reference);
     let file = folder.join("summary.json");
     if !file.exists() {
@@ -107,6 +109,12 @@ pub(super) fn compare(tests: &[ScoreTest], reference: &Path) -> anyhow::Result<C
     }
     let summary = DiagnosisSummary::read(&folder)
         .map_err(|e| anyhow!("--reference {}: {e}", reference.display()))?;
+    Ok((folder, summary))
+}
+
+/// Compare `tests` (this run's settled tests) with the diagnosis of `reference`.
+pub(super) fn compare(tests: &[ScoreTest], reference: &Path) -> anyhow::Result<Comparison> {
+    let (folder, summary) = read_reference(reference)?;
     let theirs: Vec<&ScoreTest> = summary.ranking.iter().filter(|t| t.testable).collect();
     let mut pairs = Vec::new();
     let mut not_compared = Vec::new();
@@ -256,5 +264,30 @@ mod tests {
             "{:?}",
             c.not_compared
         );
+    }
+
+    /// A reference that has not been diagnosed is named before any work: `diagnose`
+    /// stops on it even before it reads the run, and writes no output folder.
+    #[test]
+    fn a_reference_without_a_diagnosis_stops_the_diagnosis_at_once() {
+        let dir = tempfile::tempdir().unwrap();
+        let reference = dir.path().join("reference_run");
+        std::fs::create_dir(&reference).unwrap();
+        let out = dir.path().join("out");
+        let req = super::super::DiagnoseRequest {
+            reference: Some(reference.clone()),
+            out: Some(out.clone()),
+            ..super::super::DiagnoseRequest::new(dir.path().join("no_such_run"))
+        };
+        let e = super::super::run(&req, &crate::workflows::Quiet)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.starts_with("--reference")
+                && e.contains("no diagnosis found")
+                && e.contains("footfall diagnose"),
+            "{e}"
+        );
+        assert!(!out.exists());
     }
 }
