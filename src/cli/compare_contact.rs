@@ -113,17 +113,12 @@ pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use clap::Parser;
-
-    #[derive(Parser)]
-    struct Cli {
-        #[command(flatten)]
-        args: Args,
-    }
 
     fn request(argv: &[&str]) -> CompareContactRequest {
-        let argv = std::iter::once("compare-contact").chain(argv.iter().copied());
-        Cli::try_parse_from(argv).unwrap().args.into()
+        let argv: Vec<&str> = std::iter::once("compare-contact")
+            .chain(argv.iter().copied())
+            .collect();
+        super::super::parse_args::<Args>(&argv).into()
     }
 
     /// The cost's options reach every run's setup: node targets and the pelvis untracked

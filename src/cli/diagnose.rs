@@ -82,22 +82,13 @@ pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use clap::Parser;
-
-    #[derive(Parser)]
-    struct Cli {
-        #[command(flatten)]
-        args: Args,
-    }
 
     /// `footfall diagnose RUN` asks for what the library's `DiagnoseRequest::new` holds,
     /// so tests that call the library diagnose as a user's plain command does.
     #[test]
     fn the_plain_command_is_the_librarys_default_request() {
-        let cli: DiagnoseRequest = Cli::try_parse_from(["diagnose", "runs/track"])
-            .unwrap()
-            .args
-            .into();
+        let cli: DiagnoseRequest =
+            super::super::parse_args::<Args>(&["diagnose", "runs/track"]).into();
         let library = DiagnoseRequest::new(PathBuf::from("runs/track"));
         assert_eq!(format!("{cli:?}"), format!("{library:?}"));
     }

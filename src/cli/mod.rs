@@ -203,6 +203,18 @@ fn render_chain(e: &anyhow::Error) -> String {
     out
 }
 
+/// One subcommand's arguments `A` parsed from `argv` (its name first), as `footfall`
+/// would parse them: for the subcommands' unit tests.
+#[cfg(test)]
+pub(crate) fn parse_args<A: clap::Args>(argv: &[&str]) -> A {
+    #[derive(Parser)]
+    struct Only<A: clap::Args> {
+        #[command(flatten)]
+        args: A,
+    }
+    Only::<A>::try_parse_from(argv).unwrap().args
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
