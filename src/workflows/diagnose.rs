@@ -405,9 +405,11 @@ const UNSCORABLE_PAD: &str = "not scored — it has no null value (the rigid hee
 
 /// Run `diagnose` as `args` describes, reporting to `progress`.
 pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()> {
-    if let Some(r) = &args.reference {
-        reference::read_reference(r)?;
-    }
+    let reference = args
+        .reference
+        .as_deref()
+        .map(reference::read_reference)
+        .transpose()?;
     let setup = read_run_setup(&args.run)?;
     let solution = super::read_solution(&args.run)?;
     let before = RunSummary::read(&args.run)?;
@@ -682,9 +684,9 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
     for t in &mut tests {
         t.settle();
     }
-    let comparison = match &args.reference {
+    let comparison = match &reference {
         Some(r) => {
-            let c = reference::compare(&tests, r)?;
+            let c = reference::compare(&tests, r);
             if let Some(d) = c.differences.first() {
                 note!(progress,
                     "against the reference {}: the largest change is {} {}: {:+.4e} ({:+.4e} against {:+.4e}), {:.1} sd{}",

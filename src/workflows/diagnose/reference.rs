@@ -93,10 +93,18 @@ fn sds(t: &ScoreTest) -> &[Option<f64>] {
     t.identifiability.as_ref().map_or(&[], |i| i.sd.as_slice())
 }
 
-/// The diagnosis of `reference` (a run or its diagnosis folder) and its folder, or an
-/// error naming what to run first. `diagnose` reads it before any work, so that a missing
-/// or unreadable reference is named at once, not after the candidates' tests.
-pub(super) fn read_reference(reference: &Path) -> anyhow::Result<(PathBuf, DiagnosisSummary)> {
+/// A reference trial's diagnosis, read once before any work and compared with at the end.
+pub(super) struct Reference {
+    /// Its diagnosis folder.
+    folder: PathBuf,
+    /// Its diagnosis.
+    summary: DiagnosisSummary,
+}
+
+/// The diagnosis of `reference` (a run or its diagnosis folder), or an error naming what
+/// to run first. `diagnose` reads it before any work, so that a missing or unreadable
+/// reference is named at once, not after the candidates' tests.
+pub(super) fn read_reference(reference: &Path) -> anyhow::Result<Reference> {
     let folder = diagnosis_folder(reference);
     let file = folder.join("summary.json");
     if !file.exists() {
@@ -109,12 +117,12 @@ pub(super) fn read_reference(reference: &Path) -> anyhow::Result<(PathBuf, Diagn
     }
     let summary = DiagnosisSummary::read(&folder)
         .map_err(|e| anyhow!("--reference {}: {e}", reference.display()))?;
-    Ok((folder, summary))
+    Ok(Reference { folder, summary })
 }
 
 /// Compare `tests` (this run's settled tests) with the diagnosis of `reference`.
-pub(super) fn compare(tests: &[ScoreTest], reference: &Path) -> anyhow::Result<Comparison> {
-    let (folder, summary) = read_reference(reference)?;
+pub(super) fn compare(tests: &[ScoreTest], reference: &Reference) -> Comparison {
+    let Reference { folder, summary } = reference;
     let theirs: Vec<&ScoreTest> = summary.ranking.iter().filter(|t| t.testable).collect();
     let mut pairs = Vec::new();
     let mut not_compared = Vec::new();
@@ -197,12 +205,12 @@ pub(super) fn compare(tests: &[ScoreTest], reference: &Path) -> anyhow::Result<C
         })
         .collect();
     differences.sort_by(|a, b| b.z.abs().total_cmp(&a.z.abs()));
-    Ok(Comparison {
-        reference: folder,
+    Comparison {
+        reference: folder.clone(),
         threshold,
         differences,
         not_compared,
-    })
+    }
 }
 
 #[cfg(test)]
@@ -247,7 +255,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         reference_with(dir.path(), 0.01, 0.003, false);
         let ours = [slope_read_at(0.03, 0.004)];
-        let c = compare(&ours, dir.path()).unwrap();
+        let c = compare(&ours, &read_reference(dir.path()).unwrap());
         assert_eq!(c.differences.len(), 1, "{:?}", c.not_compared);
         let d = &c.differences[0];
         assert!((d.difference - 0.02).abs() < 1e-12);
@@ -257,7 +265,7 @@ mod tests {
         assert!(d.significant, "z² = 16 > 10.83");
 
         reference_with(dir.path(), 0.1, 0.003, true);
-        let c = compare(&ours, dir.path()).unwrap();
+        let c = compare(&ours, &read_reference(dir.path()).unwrap());
         assert!(c.differences.is_empty());
         assert!(
             c.not_compared[0].contains("at its bound in the reference"),
