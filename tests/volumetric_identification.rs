@@ -292,7 +292,7 @@ fn fit_the_law(
     req.sqp = tracking_sqp_settings(1e-3, 40, None, hessian, 1e-3);
     // Gauss–Newton steps to 1e-3 as before: from the truth's motion they reach the optimum
     // in 11 iterations, the exact Hessian from the first step in 17, at the same law
-    req.volumetric_switch = None;
+    req.sqp.exact_hessian_on_stall = None;
     let run = tmp.join("run");
     let t = std::time::Instant::now();
     workflows::track::track(
@@ -411,7 +411,7 @@ fn diagnose_ranks_the_contact_law_first_on_the_fit_with_the_wrong_law() {
     req.check_points = false;
     req.sqp = tracking_sqp_settings(1e-4, 1, None, HessianMode::Exact, 1e-3);
     // the run diagnosed is the one Gauss–Newton step from the truth's motion it always was
-    req.volumetric_switch = None;
+    req.sqp.exact_hessian_on_stall = None;
     workflows::track::track(&req, RunFolder::create(&run, false).unwrap(), &Quiet).unwrap();
     let t = std::time::Instant::now();
     let out = tmp.path().join("diagnose");

@@ -76,9 +76,8 @@ pub struct TrackSolverArgs {
     #[arg(long, default_value_t = 1e-5, value_parser = super::validate::positive)]
     pub tol: f64,
     /// With `--hessian exact`: Gauss–Newton steps until the constraint violation is below
-    /// this (default: 1e-3; a foot with volumetric contacts also switches below 0.1 once
-    /// five Gauss–Newton iterations have not lowered the objective by 0.1 %; given, the
-    /// switch is this one alone).
+    /// this (default: 1e-3, and below 0.1 once five Gauss–Newton iterations have not
+    /// lowered the objective by 0.1 %; given, the switch is this one alone).
     #[arg(long, value_parser = super::validate::threshold)]
     pub exact_below: Option<f64>,
     /// Iteration limit (`compare-contact`: of each run).
@@ -92,21 +91,17 @@ pub struct TrackSolverArgs {
 impl TrackSolverArgs {
     /// The tracking solver's settings with `hessian`.
     pub fn settings(&self, hessian: footfall::sqp::HessianMode) -> footfall::sqp::SqpSettings {
-        footfall::workflows::track::tracking_sqp_settings(
+        let mut settings = footfall::workflows::track::tracking_sqp_settings(
             self.tol,
             self.max_iter,
             self.max_time,
             hessian,
             self.exact_below.unwrap_or(1e-3),
-        )
-    }
-
-    /// The switch of a foot with volumetric contacts: footfall's, unless `--exact-below`
-    /// was given.
-    pub fn volumetric_switch(&self) -> Option<footfall::sqp::StallSwitch> {
-        self.exact_below
-            .is_none()
-            .then_some(footfall::workflows::track::VOLUMETRIC_SWITCH)
+        );
+        if self.exact_below.is_some() {
+            settings.exact_hessian_on_stall = None;
+        }
+        settings
     }
 }
 

@@ -81,7 +81,6 @@ impl From<Args> for CompareContactRequest {
             volumetric_phases: a.volumetric_phases,
             check_points: a.check_points.enabled(),
             sqp: a.solver.settings(footfall::sqp::HessianMode::Exact),
-            volumetric_switch: a.solver.volumetric_switch(),
             transient_threshold: a.transient_threshold,
             out: a.out,
             overwrite: a.overwrite,
@@ -130,5 +129,20 @@ mod tests {
         let asked = request(&["--sample-targets", "--track-pelvis-position"]);
         assert!(asked.run.sample_targets && asked.run.track_pelvis_position);
         assert_eq!(asked.run.integrator_tol, 1e-10);
+    }
+
+    /// The exact Hessian comes in below a violation of 1e-3, or below 0.1 once the
+    /// Gauss–Newton steps stall; `--exact-below` gives a fixed switch alone.
+    #[test]
+    fn exact_below_replaces_the_switch_on_stalled_steps() {
+        let default = request(&[]).sqp;
+        assert_eq!(default.exact_hessian_below, 1e-3);
+        assert_eq!(
+            default.exact_hessian_on_stall,
+            Some(footfall::workflows::track::STALL_SWITCH)
+        );
+        let fixed = request(&["--exact-below", "0.1"]).sqp;
+        assert_eq!(fixed.exact_hessian_below, 0.1);
+        assert_eq!(fixed.exact_hessian_on_stall, None);
     }
 }

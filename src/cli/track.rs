@@ -246,7 +246,6 @@ fn run_inner(args: Args, progress: &CliProgress) -> anyhow::Result<()> {
         init: args.init.clone(),
         check_points: args.check_points.enabled(),
         sqp: args.solver.settings(args.hessian.into()),
-        volumetric_switch: args.solver.volumetric_switch(),
         transient_threshold: args.transient_threshold,
     };
     let folder = session::create_checkpointed_run_folder(&args.out, args.overwrite)?;

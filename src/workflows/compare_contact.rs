@@ -13,7 +13,7 @@ use crate::report::html::{Section, Tone};
 use crate::report::runs::{side_by_side, RunCurves};
 use crate::report::table::Table;
 use crate::runfolder::RunFolder;
-use crate::sqp::{SqpSettings, SqpStatus, StallSwitch};
+use crate::sqp::{SqpSettings, SqpStatus};
 use anyhow::Context;
 use std::path::PathBuf;
 
@@ -43,9 +43,6 @@ pub struct CompareContactRequest {
     pub check_points: bool,
     /// The solver's settings for every run.
     pub sqp: SqpSettings,
-    /// The volumetric runs' switch to the exact Hessian
-    /// ([`TrackRequest::volumetric_switch`]).
-    pub volumetric_switch: Option<StallSwitch>,
     /// Report ground-force excursions above the measurement larger than this (N).
     pub transient_threshold: f64,
     /// Output folder (one track run folder per run inside).
@@ -251,7 +248,6 @@ pub fn compare_contact(
             init: plan.init.map(|i| dirs[i].clone()),
             check_points: req.check_points,
             sqp: req.sqp.clone(),
-            volumetric_switch: req.volumetric_switch,
             transient_threshold: req.transient_threshold,
         };
         let sub = RunFolder::create(&folder.staging_path().join(plan.name), false)?;

@@ -20,10 +20,15 @@ use std::path::PathBuf;
 mod write;
 pub use write::{RunWriting, TrackedRun};
 
-/// When a track with volumetric contacts uses the exact Hessian above the usual violation
-/// ([`TrackRequest::volumetric_switch`]): once five Gauss–Newton iterations below a
-/// violation of 0.1 have not lowered the best objective by 0.1 %.
-pub const VOLUMETRIC_SWITCH: StallSwitch = StallSwitch {
+/// When a tracking solve with the exact Hessian uses it above the usual violation
+/// ([`tracking_sqp_settings`]): once five Gauss–Newton iterations below a violation of 0.1
+/// have not lowered the best objective by 0.1 %. Gauss–Newton steps can cycle above the
+/// usual 1e-3 for good: a volumetric track at violations of 1e-3 to 1e-2
+/// (docs/engine-investigation.md, stop 54), a rigid one between two points for 35
+/// iterations (the real right-clock trial, docs/engine-investigation.md, stop 59). The
+/// exact Hessian from the data's start (violation ~10) ran into a QP failure or a far
+/// worse local minimum (stop 54), so it is not the default from the first step.
+pub const STALL_SWITCH: StallSwitch = StallSwitch {
     below: 0.1,
     iterations: 5,
     relative_decrease: 1e-3,
@@ -227,8 +232,9 @@ impl TrackingProblem {
     }
 }
 
-/// The tracking solver's settings (exact Hessian once nearly feasible, as `track`'s
-/// defaults).
+/// The tracking solver's settings (as `track`'s defaults): with `HessianMode::Exact`, the
+/// exact Hessian below a violation of `exact_below`, or below 0.1 once the Gauss–Newton
+/// steps have stalled ([`STALL_SWITCH`]; clear `exact_hessian_on_stall` for a fixed switch).
 pub fn tracking_sqp_settings(
     tol: f64,
     max_iter: usize,
@@ -243,6 +249,7 @@ pub fn tracking_sqp_settings(
         hessian,
         exact_hessian_below: exact_below,
         exact_convexification: ExactConvexification::InertiaCorrection,
+        exact_hessian_on_stall: (hessian == HessianMode::Exact).then_some(STALL_SWITCH),
         ..Default::default()
     }
 }
@@ -429,16 +436,8 @@ pub struct TrackRequest {
     /// Add check points where the 1 ms re-integration breaks a contact constraint, and
     /// solve again.
     pub check_points: bool,
-    /// The solver's settings.
+    /// The solver's settings ([`tracking_sqp_settings`]).
     pub sqp: SqpSettings,
-    /// When the foot has volumetric contacts and the Hessian is exact: the stall of the
-    /// Gauss–Newton steps after which the exact Hessian is used above
-    /// `sqp.exact_hessian_below` too (None: only below it). Gauss–Newton steps left a
-    /// volumetric track cycling at a violation of 1e-3 to 1e-2, above the usual 1e-3, for
-    /// good; the exact Hessian from the data's start (violation ~10) ran into a QP failure
-    /// or a far worse local minimum (docs/engine-investigation.md, stop 54), and from
-    /// another law's solution it crawled (docs/foot-identification.md, stop 56).
-    pub volumetric_switch: Option<StallSwitch>,
     /// Report ground-force excursions above the measurement larger than this (N).
     pub transient_threshold: f64,
 }
@@ -480,7 +479,6 @@ impl TrackRequest {
             init: None,
             check_points: true,
             sqp: tracking_sqp_settings(1e-5, 200, None, HessianMode::Exact, 1e-3),
-            volumetric_switch: Some(VOLUMETRIC_SWITCH),
             transient_threshold: super::run_folder::DEFAULT_TRANSIENT_THRESHOLD_N,
         }
     }
@@ -535,20 +533,10 @@ pub fn track(
             .map_err(|e| anyhow!("--init {}: {e}", p.display()))?;
     }
     base.parameters.clear();
-    let mut sqp = req.sqp.clone();
-    if let Some(rule) = req.volumetric_switch {
-        if prob.model.has_volumetric_contacts()
-            && sqp.hessian == HessianMode::Exact
-            && sqp.exact_hessian_on_stall.is_none()
-        {
-            progress.note(&format!("volumetric contact: the exact Hessian below a constraint violation of {:e}, or below {:e} once {} Gauss–Newton iterations have not lowered the objective by {} % (they can cycle above 1e-3 on it; `--exact-below` to choose a fixed switch)", sqp.exact_hessian_below, rule.below, rule.iterations, 100.0 * rule.relative_decrease));
-            sqp.exact_hessian_on_stall = Some(rule);
-        }
-    }
     prob.solve_and_write(
         &base,
         &req.effects,
-        &sqp,
+        &req.sqp,
         folder,
         req.transient_threshold,
         progress,
