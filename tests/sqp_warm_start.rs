@@ -114,3 +114,51 @@ fn the_multipliers_of_the_problem_a_solve_continues_give_it_newton_steps() {
     assert_eq!(ignored.w, cold.w);
     assert_eq!(iterations(&ignored), iterations(&cold));
 }
+
+/// Collects what the solve tells its observer.
+#[derive(Default)]
+struct Told(Vec<String>);
+
+impl sqp::Observer for Told {
+    fn iteration(&mut self, _rec: &sqp::IterationRecord) -> bool {
+        true
+    }
+    fn note(&mut self, text: &str) {
+        self.0.push(text.to_string());
+    }
+}
+
+/// When the exact Hessian comes in because the Gauss–Newton steps stalled, above the
+/// violation that would bring it in anyway, the solve says so once; a solve without the
+/// switch says nothing. The rule here trips after any one iteration (a decrease of 1000 %
+/// is never reached) at any violation, so the step from iteration 2 (the first with an
+/// iteration before it) uses the curvature; it never comes in by violation.
+#[test]
+fn the_solve_tells_when_stalled_steps_bring_in_the_exact_hessian() {
+    let w0 = [1.2, 1.0];
+    let stalling = SqpSettings {
+        exact_hessian_below: 0.0,
+        exact_hessian_on_stall: Some(sqp::StallSwitch {
+            below: f64::INFINITY,
+            iterations: 1,
+            relative_decrease: 10.0,
+        }),
+        ..settings()
+    };
+    let mut told = Told::default();
+    let res = sqp::solve(&OnACircle, &w0, &stalling, &mut told);
+    assert_eq!(res.status, SqpStatus::Converged, "{res:?}");
+    assert_eq!(told.0.len(), 1, "{:?}", told.0);
+    assert!(
+        told.0[0].starts_with("the steps from iteration 2 on use the exact Hessian"),
+        "{}",
+        told.0[0]
+    );
+    let mut quiet = Told::default();
+    let fixed = SqpSettings {
+        exact_hessian_below: 0.0,
+        ..settings()
+    };
+    sqp::solve(&OnACircle, &w0, &fixed, &mut quiet);
+    assert!(quiet.0.is_empty(), "{:?}", quiet.0);
+}

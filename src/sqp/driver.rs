@@ -191,6 +191,8 @@ pub(super) fn run(
     let mut kkt = f64::INFINITY;
     let mut last_step = 0.0;
     let mut first_iter = 0;
+    // whether the observer has been told that the Gauss–Newton steps stalled
+    let mut stall_told = false;
     if let Some(cp) = resume {
         nu = cp.nu.values();
         let sc = cp.scalars.values();
@@ -214,13 +216,28 @@ pub(super) fn run(
         // --- QP subproblem at the current point
         let viol = violations(&st.ev.c, &s.c_lb, &s.c_ub);
         let infeas = viol.iter().copied().fold(0.0, f64::max);
+        let curvature = step::curvature_in_use(settings, infeas, &history);
+        // the curvature in use only because the Gauss–Newton steps stalled, not told yet
+        let stalled = settings
+            .exact_hessian_on_stall
+            .filter(|_| !stall_told && curvature && infeas > settings.exact_hessian_below);
+        if let Some(rule) = stalled {
+            stall_told = true;
+            observer.note(&format!(
+                "the steps from iteration {} on use the exact Hessian: the last {} iterations, at a violation of at most {:e}, lowered the objective by less than {} %",
+                iter,
+                rule.iterations,
+                rule.below,
+                100.0 * rule.relative_decrease
+            ));
+        }
         let sub = match step::subproblem(
             nlp,
             settings,
             &s,
             &st,
             (&lambda, &nu),
-            step::curvature_in_use(settings, infeas, &history),
+            curvature,
             (&bfgs, &zero_blocks),
             &mut mem,
         ) {

@@ -409,6 +409,9 @@ pub trait Observer {
     /// Called after every accepted step with the state a solve can continue from
     /// ([`solve_resumed`]), e.g. to write it to disk.
     fn checkpoint(&mut self, _state: &SqpCheckpoint) {}
+    /// A turn in the solve worth telling the user (e.g. that the Gauss–Newton steps
+    /// stalled and the exact Hessian took over), before the iteration it affects.
+    fn note(&mut self, _text: &str) {}
 }
 
 /// An observer that prints one line per iteration to stderr.

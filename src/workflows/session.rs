@@ -117,6 +117,9 @@ impl Observer for Interruptible<'_> {
     fn wants_checkpoints(&self) -> bool {
         self.checkpoints.is_some()
     }
+    fn note(&mut self, text: &str) {
+        self.progress.note(text);
+    }
     fn checkpoint(&mut self, state: &SqpCheckpoint) {
         let Some((dir, name)) = &self.checkpoints else {
             return;
