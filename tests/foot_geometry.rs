@@ -294,7 +294,7 @@ fn freeing_the_size_recovers_a_longer_ellipse() {
     .unwrap();
     prob.setup.start_from(&start).unwrap();
     let t = std::time::Instant::now();
-    let settings = tracking_sqp_settings(1e-4, 40, None, HessianMode::Exact, 1e-3);
+    let settings = tracking_sqp_settings(1e-4, 40, None, HessianMode::Exact, None);
     let (res, sol) = prob.solve(&settings, &Printed { quiet: false }).unwrap();
     eprintln!(
         "{} iterations, {:.0} s, J {:.6} → {:.6}, KKT {:.1e}, {}; a {:.5} m (file {file:.5}, hidden {truth:.5}), b {:.5} m",
@@ -337,7 +337,7 @@ fn make_foot_geometry_trial() {
     req.run.phases = PathBuf::from("phases/ellipse_walk.json");
     req.init = Some(root().join("tests/data/hidden/base/solution.json"));
     req.check_points = false;
-    req.sqp = tracking_sqp_settings(1e-4, 40, None, HessianMode::Exact, 1e-3);
+    req.sqp = tracking_sqp_settings(1e-4, 40, None, HessianMode::Exact, None);
     workflows::track::track(&req, RunFolder::create(&truth, false).unwrap(), &progress).unwrap();
     let out = tmp.path().join("synth");
     workflows::synth::run(

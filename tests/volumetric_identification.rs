@@ -289,10 +289,10 @@ fn fit_the_law(
     req.init = Some(dir.join("truth_solution.json"));
     req.check_points = false;
     // KKT 1e-3: reached in 6 iterations; the 5 more to 1e-4 move J in the 10th digit
-    req.sqp = tracking_sqp_settings(1e-3, 40, None, hessian, 1e-3);
-    // Gauss–Newton steps to 1e-3 as before: from the truth's motion they reach the optimum
-    // in 11 iterations, the exact Hessian from the first step in 17, at the same law
-    req.sqp.exact_hessian_on_stall = None;
+    // a fixed switch at 1e-3, without the switch on stalls: Gauss–Newton steps to 1e-3 as
+    // before; from the truth's motion they reach the optimum in 11 iterations, the exact
+    // Hessian from the first step in 17, at the same law
+    req.sqp = tracking_sqp_settings(1e-3, 40, None, hessian, Some(1e-3));
     let run = tmp.join("run");
     let t = std::time::Instant::now();
     workflows::track::track(
@@ -409,9 +409,9 @@ fn diagnose_ranks_the_contact_law_first_on_the_fit_with_the_wrong_law() {
     req.run.track_pelvis_position = true;
     req.run.sample_targets = true;
     req.check_points = false;
-    req.sqp = tracking_sqp_settings(1e-4, 1, None, HessianMode::Exact, 1e-3);
-    // the run diagnosed is the one Gauss–Newton step from the truth's motion it always was
-    req.sqp.exact_hessian_on_stall = None;
+    // a fixed switch at 1e-3: the run diagnosed is the one Gauss–Newton step from the
+    // truth's motion it always was
+    req.sqp = tracking_sqp_settings(1e-4, 1, None, HessianMode::Exact, Some(1e-3));
     workflows::track::track(&req, RunFolder::create(&run, false).unwrap(), &Quiet).unwrap();
     let t = std::time::Instant::now();
     let out = tmp.path().join("diagnose");
@@ -692,7 +692,7 @@ fn make_volumetric_contact_trial() {
     let mut req = workflows::track::TrackRequest::new(foot.to_str().unwrap());
     req.run.phases = PathBuf::from(PHASES);
     req.check_points = false;
-    req.sqp = tracking_sqp_settings(1e-4, 40, None, HessianMode::Exact, 1e-3);
+    req.sqp = tracking_sqp_settings(1e-4, 40, None, HessianMode::Exact, None);
     let t = std::time::Instant::now();
     workflows::track::track(&req, RunFolder::create(&truth, false).unwrap(), &progress).unwrap();
     eprintln!("truth: {:.0} s", t.elapsed().as_secs_f64());
@@ -733,7 +733,7 @@ fn the_hidden_law_held_fixed_fits_the_trial() {
         serde_json::from_str(&std::fs::read_to_string(dir.join("truth_solution.json")).unwrap())
             .unwrap();
     prob.setup.start_from(&start).unwrap();
-    let settings = tracking_sqp_settings(1e-4, 40, None, HessianMode::Exact, 1e-3);
+    let settings = tracking_sqp_settings(1e-4, 40, None, HessianMode::Exact, None);
     let (res, _) = prob.solve(&settings, &Printed { quiet: false }).unwrap();
     eprintln!(
         "hidden law fixed: {} iterations, J {:.6}, infeasibility {:.1e}, KKT {:.1e}, {}",

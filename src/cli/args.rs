@@ -91,17 +91,13 @@ pub struct TrackSolverArgs {
 impl TrackSolverArgs {
     /// The tracking solver's settings with `hessian`.
     pub fn settings(&self, hessian: footfall::sqp::HessianMode) -> footfall::sqp::SqpSettings {
-        let mut settings = footfall::workflows::track::tracking_sqp_settings(
+        footfall::workflows::track::tracking_sqp_settings(
             self.tol,
             self.max_iter,
             self.max_time,
             hessian,
-            self.exact_below.unwrap_or(1e-3),
-        );
-        if self.exact_below.is_some() {
-            settings.exact_hessian_on_stall = None;
-        }
-        settings
+            self.exact_below,
+        )
     }
 }
 

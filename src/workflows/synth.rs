@@ -189,7 +189,7 @@ pub fn run(args: &SynthRequest, progress: &dyn Progress) -> anyhow::Result<()> {
             200,
             None,
             crate::sqp::HessianMode::Exact,
-            1e-3,
+            None,
         );
         let (res, sol) = prob.solve(&settings, progress)?;
         if res.status != crate::sqp::SqpStatus::Converged {

@@ -232,24 +232,30 @@ impl TrackingProblem {
     }
 }
 
-/// The tracking solver's settings (as `track`'s defaults): with `HessianMode::Exact`, the
-/// exact Hessian below a violation of `exact_below`, or below 0.1 once the Gauss–Newton
-/// steps have stalled ([`STALL_SWITCH`]; clear `exact_hessian_on_stall` for a fixed switch).
+/// Violation below which a tracking solve with `HessianMode::Exact` always uses the exact
+/// Hessian (`track`'s default; `--exact-below` replaces it).
+pub const EXACT_BELOW: f64 = 1e-3;
+
+/// The tracking solver's settings (as `track`'s defaults). With `HessianMode::Exact` and
+/// `exact_below` `None`, the exact Hessian below a violation of [`EXACT_BELOW`], or below
+/// 0.1 once the Gauss–Newton steps have stalled ([`STALL_SWITCH`]); with `Some(v)`, below
+/// `v` alone (a fixed switch, as `--exact-below v`).
 pub fn tracking_sqp_settings(
     tol: f64,
     max_iter: usize,
     max_time: Option<f64>,
     hessian: HessianMode,
-    exact_below: f64,
+    exact_below: Option<f64>,
 ) -> SqpSettings {
     SqpSettings {
         tol_kkt: tol,
         max_iter,
         max_time,
         hessian,
-        exact_hessian_below: exact_below,
+        exact_hessian_below: exact_below.unwrap_or(EXACT_BELOW),
         exact_convexification: ExactConvexification::InertiaCorrection,
-        exact_hessian_on_stall: (hessian == HessianMode::Exact).then_some(STALL_SWITCH),
+        exact_hessian_on_stall: (hessian == HessianMode::Exact && exact_below.is_none())
+            .then_some(STALL_SWITCH),
         ..Default::default()
     }
 }
@@ -478,7 +484,7 @@ impl TrackRequest {
             effects: vec![],
             init: None,
             check_points: true,
-            sqp: tracking_sqp_settings(1e-5, 200, None, HessianMode::Exact, 1e-3),
+            sqp: tracking_sqp_settings(1e-5, 200, None, HessianMode::Exact, None),
             transient_threshold: super::run_folder::DEFAULT_TRANSIENT_THRESHOLD_N,
         }
     }

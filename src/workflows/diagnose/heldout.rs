@@ -104,7 +104,7 @@ pub(super) fn held_out_base(
             args.max_iter,
             None,
             super::refit::solve_hessian(&prob),
-            1e-3,
+            None,
         );
         let (res, solution) = prob.solve(&settings, &super::super::Quiet)?;
         let mut at = TrackingProblem::build(&setup, &[])?;

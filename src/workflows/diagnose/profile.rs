@@ -85,7 +85,7 @@ pub(super) fn profile_clock(
             POINT_MAX_ITER.min(args.max_iter),
             None,
             super::refit::solve_hessian(p),
-            1e-3,
+            None,
         )
     };
     let mut points = Vec::new();

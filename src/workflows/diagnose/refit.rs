@@ -120,7 +120,7 @@ pub(super) fn solve_into(
     let mut prob = TrackingProblem::build(setup, effects)?;
     prob.start_at(start)
         .map_err(|e| anyhow!("{}: {e:#}", args.run.display()))?;
-    let settings = tracking_sqp_settings(args.tol, args.max_iter, None, solve_hessian(&prob), 1e-3);
+    let settings = tracking_sqp_settings(args.tol, args.max_iter, None, solve_hessian(&prob), None);
     let rf = RunFolder::create(&dir, args.overwrite)?;
     prob.solve_and_write(
         setup,
