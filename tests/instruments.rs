@@ -364,14 +364,14 @@ fn a_plates_clock_offset_moves_the_events_of_its_threshold() {
             let z = [0.3, 0.01, -0.02];
             assert!(jacobian_error(r.term.f.as_ref(), &z, 0..3) < 1e-10);
         }
-        // sample targets keep the measured events, and say so
+        // sample targets keep the events where the free offsets start (zero), and say so
         let samples = setup_of(&m, &trial(name), TargetSides::Samples).unwrap();
         assert!(!samples.clock_moves(&m));
         assert!(
             samples
                 .notes
                 .iter()
-                .any(|n| n.contains("stay where the measured forces")),
+                .any(|n| n.contains("stay where the offset's start value puts them")),
             "{:?}",
             samples.notes
         );
@@ -393,6 +393,75 @@ fn a_plates_clock_offset_moves_the_events_of_its_threshold() {
     given.events = Some(ev);
     let s = setup_of(&m, &given, TargetSides::Interpolated).unwrap();
     assert!(!s.clock.moves(), "meta-file events do not move");
+}
+
+/// With sample targets (cut at fixed phase boundaries) a plate's clock offset moves the
+/// events of its threshold by its value as the model starts it: held at the truth on the
+/// real trial whose right plate reports 25 ms late, the window and the durations are the
+/// untouched trial's (to the 6 ms to which the threshold crossings follow a moved clock),
+/// as `diagnose --profile-clocks` needs at its points; a free offset moves them by its
+/// start value and warns that they stay there. Interpolated targets move the events
+/// with the offset itself (the OCP's duration rows), so their setup keeps the measured
+/// ones.
+#[test]
+fn sample_targets_move_a_plates_events_by_its_held_clock_offset() {
+    let clock = |offset: f64, free: bool| {
+        let free: Vec<&str> = if free { vec!["offset"] } else { vec![] };
+        model_with_effects(
+            "opensim_subject01.json",
+            "ellipse.json",
+            serde_json::json!([{ "type": "force_plate_time_offset", "side": "right",
+                                 "offset": offset, "free": free }]),
+        )
+    };
+    let plain = model("opensim_subject01.json", "ellipse.json");
+    let bundled = GaitData::bundled(&root()).unwrap();
+    let untouched = setup_of(&plain, &bundled, TargetSides::Samples).unwrap();
+    let late = trial("real_clock_r+25ms");
+    let measured = setup_of(&plain, &late, TargetSides::Samples).unwrap();
+    let off = |a: &TrackingSetup, b: &TrackingSetup| {
+        let d = durations(a)
+            .iter()
+            .zip(durations(b))
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max);
+        (
+            d,
+            (a.window.0 - b.window.0).abs(),
+            (a.window.1 - b.window.1).abs(),
+        )
+    };
+    // the late plate's events, unmoved, are off by about the offset
+    let (d, _, end) = off(&measured, &untouched);
+    assert!(d > 0.015 && end > 0.015, "{d} {end}");
+    for free in [false, true] {
+        let m = clock(0.025, free);
+        let s = setup_of(&m, &late, TargetSides::Samples).unwrap();
+        let (d, start, end) = off(&s, &untouched);
+        assert!(
+            d < 6e-3 && start < 6e-3 && end < 6e-3,
+            "free {free}: durations {d}, start {start}, end {end} s off the untouched trial's"
+        );
+        let said = if free {
+            "warning: the contact events of the right plate's force threshold are moved by -25.0 ms, its free clock offset's start value"
+        } else {
+            "the contact events of the right plate's force threshold are moved by -25.0 ms, its held clock offset"
+        };
+        assert!(s.notes.iter().any(|n| n.starts_with(said)), "{:?}", s.notes);
+        // interpolated targets keep the measured events (the OCP moves them)
+        let i = setup_of(&m, &late, TargetSides::Interpolated).unwrap();
+        let mi = setup_of(&plain, &late, TargetSides::Interpolated).unwrap();
+        assert_eq!(durations(&i), durations(&mi));
+        assert_eq!(i.window, mi.window);
+    }
+    // a held offset of zero moves nothing and warns of nothing
+    let s = setup_of(&clock(0.0, false), &late, TargetSides::Samples).unwrap();
+    assert_eq!(durations(&s), durations(&measured));
+    assert!(
+        !s.notes.iter().any(|n| n.contains("clock offset")),
+        "{:?}",
+        s.notes
+    );
 }
 
 /// A body-mass error scales every segment's mass and inertia: the generalised gravity

@@ -55,7 +55,54 @@ fn plate_of(t: f64, plate: &[Vec<f64>; 2]) -> Option<usize> {
 }
 
 /// Why one-sided and sample targets keep the events of a plate whose clock is offset.
-pub(super) const FIXED_EVENTS: &str = "warning: a force-plate clock offset in the model moves the contact events taken from that plate's force threshold only with interpolated node targets (the default); with one-sided or sample targets, cut at fixed phase boundaries, the events stay where the measured forces put them";
+pub(super) const FIXED_EVENTS: &str = "warning: a free force-plate clock offset in the model moves the contact events taken from that plate's force threshold only with interpolated node targets (the default); with one-sided or sample targets, cut at fixed phase boundaries, the events stay where the offset's start value puts them while it moves";
+
+/// Whether a plate's clock offset is a free parameter of `model`.
+fn free_clock(model: &GaitModel) -> bool {
+    model
+        .parameters()
+        .iter()
+        .any(|p| p.free && p.name.starts_with("force_plate_time_offset"))
+}
+
+/// The offsets (s; right, left) by which, with one-sided or sample targets (cut at fixed
+/// phase boundaries), the events of each plate's force threshold are moved to the motion
+/// capture's clock (`t − δ`, as its loads are read at `t + δ`): each plate's clock offset
+/// as the model starts it. A held offset (`diagnose --profile-clocks`' points, or
+/// `--effect force_plate_time_offset:offset=0.02,free=`) so moves everything derived from
+/// its plate; a free one moves the events by its start value only ([`FIXED_EVENTS`]).
+/// Zero with interpolated node targets, which move the events with the offset itself
+/// ([`PlateClock`]), and for events given with the data, which belong to no plate. With
+/// the lines for the run's log.
+pub(super) fn start_offsets(
+    model: &GaitModel,
+    data: &GaitData,
+    interpolated: bool,
+) -> ([f64; 2], Vec<String>) {
+    if interpolated || data.events.is_some() || !model.shifts_force_clock() {
+        return ([0.0; 2], Vec::new());
+    }
+    let delta = model.measurement_adjust(&model.theta0()).force_time_offset;
+    let free = free_clock(model);
+    let notes = (0..2)
+        .filter(|&s| delta[s] != 0.0)
+        .map(|s| {
+            let side = ["right", "left"][s];
+            if free {
+                format!(
+                    "warning: the contact events of the {side} plate's force threshold are moved by {:+.1} ms, its free clock offset's start value, and stay there while the offset moves (one-sided and sample targets are cut at fixed phase boundaries)",
+                    -1e3 * delta[s]
+                )
+            } else {
+                format!(
+                    "the contact events of the {side} plate's force threshold are moved by {:+.1} ms, its held clock offset",
+                    -1e3 * delta[s]
+                )
+            }
+        })
+        .collect();
+    (delta, notes)
+}
 
 /// The coefficients of every instant of the tracked window `(t0, t1)` of `seq` (its
 /// durations already fixed to `events`) in the plates' clock offsets; `kinematics` are
@@ -161,8 +208,7 @@ pub(super) fn plate_clock(
         kinematics: Arc::new(kinematics),
         interpolated,
     };
-    let warning =
-        (model.shifts_force_clock() && clock.moves() && !interpolated).then_some(FIXED_EVENTS);
+    let warning = (free_clock(model) && clock.moves() && !interpolated).then_some(FIXED_EVENTS);
     (clock, warning)
 }
 

@@ -417,7 +417,10 @@ impl TrackingSetup {
         sides: TargetSides,
         choice: WindowChoice,
     ) -> Result<Self, String> {
-        let (events, notes) = combined_events(model, data)?;
+        let (offsets, moved) =
+            clock::start_offsets(model, data, sides == TargetSides::Interpolated);
+        let (events, mut notes) = window::combined_events_on_clocks(model, data, offsets)?;
+        notes.extend(moved);
         Self::build(model, seq, sets, data, events, sides, choice, notes)
     }
 

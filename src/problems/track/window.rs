@@ -134,10 +134,26 @@ pub fn combined_events(
     model: &GaitModel,
     data: &GaitData,
 ) -> Result<(Events, Vec<String>), String> {
+    combined_events_on_clocks(model, data, [0.0; 2])
+}
+
+/// As [`combined_events`], with the events of each plate's force threshold moved to the
+/// motion capture's clock by that plate's clock offset `offsets[s]` (s, positive when the
+/// plate runs late: `t − δ`) before the kinematic events are calibrated against them.
+pub(super) fn combined_events_on_clocks(
+    model: &GaitModel,
+    data: &GaitData,
+    offsets: [f64; 2],
+) -> Result<(Events, Vec<String>), String> {
     if let Some(e) = &data.events {
         return Ok((e.clone(), Vec::new()));
     }
     let mut ev = detect_events(data, DEFAULT_EVENT_FRACTION).map_err(|e| e.to_string())?;
+    for (s, &d) in offsets.iter().enumerate().filter(|(_, &d)| d != 0.0) {
+        for e in ev.heel_strike[s].iter_mut().chain(ev.toe_off[s].iter_mut()) {
+            *e -= d;
+        }
+    }
     let (_, feet) = data.force_record();
     let partial: Vec<usize> = (0..2)
         .filter(|&s| feet[s].fy.iter().any(|v| v.is_nan()))
