@@ -310,6 +310,12 @@ pub struct ClockProfile {
     pub family: usize,
     /// Whether the profile's re-fit replaced the local score test (it lowered J more).
     pub chosen: bool,
+    /// Whether the re-fit held the offset at the vertex of the parabola through the
+    /// lowest point and its neighbours instead of freeing it (one-sided or sample targets,
+    /// whose events a free offset cannot move); `refit` is then that vertex and its cost,
+    /// and the reading's sd comes from the parabola's curvature.
+    #[serde(default)]
+    pub refined: bool,
 }
 
 /// A candidate fitted on the run's half cycle, applied with its parameters fixed to

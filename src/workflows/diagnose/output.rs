@@ -211,9 +211,16 @@ fn profile_paragraph(t: &ScoreTest) -> Option<String> {
         .join(", ");
     let outcome = match (p.start, p.refit) {
         (Some(start), Some((value, j))) => format!(
-            " The free re-fit from {:+.0} ms reached {:+.1} ms, J = {j:.4}; {}",
-            1e3 * start,
-            1e3 * value,
+            "{}; {}",
+            if p.refined {
+                format!(" With one-sided or sample targets a free offset cannot move its plate's events, so the profile is refined instead: the parabola through the lowest point ({:+.0} ms) and its neighbours has its vertex at {:+.1} ms, where the re-fit held there reaches J = {j:.4}", 1e3 * start, 1e3 * value)
+            } else {
+                format!(
+                    " The free re-fit from {:+.0} ms reached {:+.1} ms, J = {j:.4}",
+                    1e3 * start,
+                    1e3 * value
+                )
+            },
             if p.chosen {
                 format!(
                     "it lowers J more than the score test's truncated re-fit from zero, so it is this candidate's test, against the χ²₁ point at 0.1 %/{} = {:.1} (the best of {} starts)",

@@ -12,7 +12,8 @@ use super::{
     channel_changes, diff_with, refit_into, sibling, Baseline, DiagnoseRequest, FullModel,
     Residuals,
 };
-use crate::model::effects::EffectSpec;
+use crate::model::effects::{EffectSpec, ForcePlateTimeOffset};
+use crate::problems::diagnose::stats::{Identifiability, MAX_RELATIVE_SD};
 use crate::problems::diagnose::{
     chi2_1_upper, refit_test, ClockProfile, ProfilePoint, ScoreTest, TrackingRunSetup,
 };
@@ -140,34 +141,73 @@ pub(super) fn profile_clock(
         refit: None,
         family,
         chosen: false,
+        refined: false,
     };
     let Some((start, j_start, solution)) = best.filter(|b| b.1 < base.objective) else {
         return Ok((profile, None));
     };
     profile.start = Some(start);
-    note!(
-        progress,
-        "  the profile of {whose} clock is lowest at {:+.0} ms (J = {j_start:.6} against the run's {:.6}): a free re-fit from there",
-        1e3 * start,
-        base.objective
-    );
-    let free = clock(side, start, true);
     let dir = sibling(
         &args.run,
         &format!("+force_plate_time_offset_{side}_profile"),
     );
-    let run = refit_into(args, setup, &free, &solution, dir, progress)?;
     let name = local.parameters.first().cloned().unwrap_or_default();
-    let value = run
-        .record
-        .parameters
-        .iter()
-        .find(|p| p.name == name)
-        .map_or(start, |p| p.value);
+    // with one-sided or sample targets a free offset cannot move its plate's events (they
+    // stay where its start value puts them), so its re-fit would read the loads' offset
+    // against events held elsewhere: the profile is refined by a held re-fit instead
+    let refine = setup.sample_targets || setup.one_sided_targets;
+    let (run, value, curvature) = if refine {
+        let mut known: Vec<(f64, f64)> = profile
+            .points
+            .iter()
+            .filter_map(|q| Some((q.offset, q.objective?)))
+            .collect();
+        known.push((0.0, base.objective));
+        let (at, curvature) = vertex(&known, ForcePlateTimeOffset::BOUNDS);
+        note!(
+            progress,
+            "  the profile of {whose} clock is lowest at {:+.0} ms (J = {j_start:.6} against the run's {:.6}); its parabola's vertex at {:+.1} ms: a re-fit held there (with sample or one-sided targets a free offset cannot move its plate's events)",
+            1e3 * start,
+            base.objective,
+            1e3 * at
+        );
+        let run = refit_into(
+            args,
+            setup,
+            &clock(side, at, false),
+            &solution,
+            dir,
+            progress,
+        )?;
+        (run, at, curvature)
+    } else {
+        note!(
+            progress,
+            "  the profile of {whose} clock is lowest at {:+.0} ms (J = {j_start:.6} against the run's {:.6}): a free re-fit from there",
+            1e3 * start,
+            base.objective
+        );
+        let run = refit_into(
+            args,
+            setup,
+            &clock(side, start, true),
+            &solution,
+            dir,
+            progress,
+        )?;
+        let value = run
+            .record
+            .parameters
+            .iter()
+            .find(|p| p.name == name)
+            .map_or(start, |p| p.value);
+        (run, value, None)
+    };
+    profile.refined = refine;
     profile.refit = Some((value, run.result.objective));
     let mut t = refit_test(
         c,
-        vec![name],
+        vec![name.clone()],
         vec![value],
         base.objective,
         run.result.objective,
@@ -185,6 +225,85 @@ pub(super) fn profile_clock(
     t.identifiability = local.identifiability.clone();
     t.hint = local.hint.clone();
     t.set_inflation(phi);
-    t.set_mean_square(resid.mean_square(noise));
+    let mean_square = resid.mean_square(noise);
+    t.set_mean_square(mean_square);
+    if refine {
+        // the reading's sd from the profile's curvature: J ≈ J* + a (δ − δ*)², one sd
+        // where the statistic rises by one, a (δ − δ*)² = φ s²
+        let span = ForcePlateTimeOffset::BOUNDS.1 - ForcePlateTimeOffset::BOUNDS.0;
+        let sd = curvature
+            .filter(|a| *a > 0.0)
+            .map(|a| (t.inflation * mean_square / a).sqrt())
+            .filter(|sd| sd.is_finite());
+        let testable = sd.is_some_and(|sd| sd < MAX_RELATIVE_SD * span);
+        let id = Identifiability {
+            parameters: vec![name],
+            reduced_inverse_hessian: curvature
+                .filter(|a| *a > 0.0)
+                .map_or_else(Vec::new, |a| vec![vec![0.5 / a]]),
+            sd: vec![sd],
+            span: vec![span],
+            min_correlation_eigenvalue: 1.0,
+            testable,
+            reason: (!testable).then(|| {
+                "the profile's curvature at its lowest point is too flat to read the offset"
+                    .to_string()
+            }),
+        };
+        t.set_identifiability(id, local.hint.clone());
+    }
     Ok((profile, Some((t, run, diff))))
+}
+
+/// The vertex of the parabola through the lowest of the profile's `points` (offset,
+/// cost; the run at zero among them) and its two neighbours in offset (its two nearest
+/// on one side at an end of the profile), kept within half a step beyond those three and
+/// within `bounds`; with the parabola's curvature `a` of `J ≈ J* + a (δ − δ*)²` (`None`
+/// with fewer than three points). A parabola open downwards gives the lowest point.
+fn vertex(points: &[(f64, f64)], bounds: (f64, f64)) -> (f64, Option<f64>) {
+    let mut p = points.to_vec();
+    p.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let Some(low) = (0..p.len()).min_by(|&i, &j| p[i].1.total_cmp(&p[j].1)) else {
+        return (0.0, None);
+    };
+    if p.len() < 3 {
+        return (p[low].0, None);
+    }
+    let i = low.clamp(1, p.len() - 2);
+    let [(x0, y0), (x1, y1), (x2, y2)] = [p[i - 1], p[i], p[i + 1]];
+    let (s01, s12) = ((y1 - y0) / (x1 - x0), (y2 - y1) / (x2 - x1));
+    let a = (s12 - s01) / (x2 - x0);
+    if !(a > 0.0 && a.is_finite()) {
+        return (p[low].0, None);
+    }
+    let b = s01 - a * (x0 + x1);
+    let lo = (x0 - 0.5 * (x1 - x0)).max(bounds.0);
+    let hi = (x2 + 0.5 * (x2 - x1)).min(bounds.1);
+    ((-b / (2.0 * a)).clamp(lo, hi), Some(a))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::vertex;
+
+    /// The vertex and curvature of a parabola sampled at the profile's points, at an end
+    /// of them too, and the lowest point where the three around it bend downwards.
+    #[test]
+    fn the_vertex_of_three_profile_points() {
+        let j = |d: f64| 1.5 + 300.0 * (d - 0.013) * (d - 0.013);
+        let at = |xs: &[f64]| xs.iter().map(|&x| (x, j(x))).collect::<Vec<_>>();
+        let (v, a) = vertex(&at(&[-0.04, -0.02, 0.0, 0.02, 0.04]), (-0.05, 0.05));
+        assert!((v - 0.013).abs() < 1e-12 && (a.unwrap() - 300.0).abs() < 1e-9);
+        // lowest at the end: the two nearest on one side, kept within half a step
+        let far = |d: f64| 1.5 + 300.0 * (d - 0.09) * (d - 0.09);
+        let pts: Vec<_> = [-0.04, -0.02, 0.0, 0.02, 0.04]
+            .iter()
+            .map(|&x| (x, far(x)))
+            .collect();
+        let (v, _) = vertex(&pts, (-0.05, 0.05));
+        assert!((v - 0.05).abs() < 1e-12, "{v}");
+        // bent downwards (at an end): the lowest point
+        let pts = [(0.02, 0.99), (-0.02, 1.2), (0.04, 0.5), (0.0, 1.0)];
+        assert_eq!(vertex(&pts, (-0.05, 0.05)), (0.04, None));
+    }
 }
