@@ -215,6 +215,13 @@ pub(super) fn profile_clock(
         run.result.history.len().saturating_sub(1),
     );
     t.threshold = chi2_1_upper(1e-3 / family as f64);
+    // an offset held or ending at its bound is a limit the data pushed against, not a
+    // reading (the real right-clock trial at the identification cost: the rigid model's
+    // own +25 ms and the edit's +25 ms put the vertex beyond +50 ms)
+    let (lo, hi) = ForcePlateTimeOffset::BOUNDS;
+    if value <= lo + 1e-9 || value >= hi - 1e-9 {
+        t.at_bound = vec![name.clone()];
+    }
     let diff = diff_with(base.summary, &run)?;
     t.expected_channels = channel_changes(&diff);
     // the statistic as the score tests': the largest model's residuals' inflation,
