@@ -156,7 +156,7 @@ pub(super) fn profile_clock(
     // stay where its start value puts them), so its re-fit would read the loads' offset
     // against events held elsewhere: the profile is refined by a held re-fit instead
     let refine = setup.sample_targets || setup.one_sided_targets;
-    let (run, value, curvature) = if refine {
+    let (effect, curvature) = if refine {
         let mut known: Vec<(f64, f64)> = profile
             .points
             .iter()
@@ -171,15 +171,7 @@ pub(super) fn profile_clock(
             base.objective,
             1e3 * at
         );
-        let run = refit_into(
-            args,
-            setup,
-            &clock(side, at, false),
-            &solution,
-            dir,
-            progress,
-        )?;
-        (run, at, curvature)
+        (clock(side, at, false), curvature)
     } else {
         note!(
             progress,
@@ -187,22 +179,17 @@ pub(super) fn profile_clock(
             1e3 * start,
             base.objective
         );
-        let run = refit_into(
-            args,
-            setup,
-            &clock(side, start, true),
-            &solution,
-            dir,
-            progress,
-        )?;
-        let value = run
-            .record
-            .parameters
-            .iter()
-            .find(|p| p.name == name)
-            .map_or(start, |p| p.value);
-        (run, value, None)
+        (clock(side, start, true), None)
     };
+    let run = refit_into(args, setup, &effect, &solution, dir, progress)?;
+    // the held vertex, or where the free offset ended
+    let value = run
+        .record
+        .parameters
+        .iter()
+        .find(|p| p.name == name)
+        .map(|p| p.value)
+        .ok_or_else(|| anyhow::anyhow!("the profile's re-fit does not record {name}"))?;
     profile.refined = refine;
     profile.refit = Some((value, run.result.objective));
     let mut t = refit_test(
