@@ -13,7 +13,7 @@ use super::{
     Residuals,
 };
 use crate::model::effects::{EffectSpec, ForcePlateTimeOffset};
-use crate::problems::diagnose::stats::{Identifiability, MAX_RELATIVE_SD};
+use crate::problems::diagnose::stats::{identifiability, Identifiability};
 use crate::problems::diagnose::{
     chi2_1_upper, refit_test, ClockProfile, ProfilePoint, ScoreTest, TrackingRunSetup,
 };
@@ -222,27 +222,23 @@ pub(super) fn profile_clock(
     let mean_square = resid.mean_square(noise);
     t.set_mean_square(mean_square);
     if refine {
-        // the reading's sd from the profile's curvature: J ≈ J* + a (δ − δ*)², one sd
-        // where the statistic rises by one, a (δ − δ*)² = φ s²
-        let span = ForcePlateTimeOffset::BOUNDS.1 - ForcePlateTimeOffset::BOUNDS.0;
-        let sd = curvature
-            .filter(|a| *a > 0.0)
-            .map(|a| (t.inflation * mean_square / a).sqrt())
-            .filter(|sd| sd.is_finite());
-        let testable = sd.is_some_and(|sd| sd < MAX_RELATIVE_SD * span);
-        let id = Identifiability {
-            parameters: vec![name],
-            reduced_inverse_hessian: curvature
-                .filter(|a| *a > 0.0)
-                .map_or_else(Vec::new, |a| vec![vec![0.5 / a]]),
-            sd: vec![sd],
-            span: vec![span],
-            min_correlation_eigenvalue: 1.0,
-            testable,
-            reason: (!testable).then(|| {
-                "the profile's curvature at its lowest point is too flat to read the offset"
-                    .to_string()
-            }),
+        // the reading's sd from the profile's curvature: J ≈ J* + a (δ − δ*)², so the
+        // reduced Hessian inverse is 1/(2a), and one sd is where the statistic rises by
+        // one, a (δ − δ*)² = φ s²
+        let span = vec![ForcePlateTimeOffset::BOUNDS.1 - ForcePlateTimeOffset::BOUNDS.0];
+        let id = match curvature {
+            Some(a) => identifiability(
+                vec![name],
+                vec![vec![0.5 / a]],
+                span,
+                mean_square,
+                t.inflation,
+            ),
+            None => Identifiability::unknown(
+                vec![name],
+                span,
+                "the profile has fewer than three points or bends downwards at its lowest: no curvature to read the offset from".into(),
+            ),
         };
         t.set_identifiability(id, local.hint.clone());
     }
