@@ -632,12 +632,16 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
     let (mut tests, evidence): (Vec<ScoreTest>, Vec<Evidence>) = tests.into_iter().unzip();
 
     // held-out validation of the significant ones
+    // a clock read from its refined profile has the parabola's curvature for its band;
+    // other full re-fits (the heel pad, a free profile re-fit) have none
+    let held_clock = |t: &ScoreTest| t.refit && t.profile.as_ref().is_some_and(|p| p.refined);
+    let validated = |t: &ScoreTest| t.significant && t.at_bound.is_empty() && (!t.refit || held_clock(t));
     let mut held_out_note: String = tests
         .iter()
-        .filter(|t| t.significant && t.refit)
+        .filter(|t| t.significant && t.refit && !held_clock(t))
         .map(|t| format!(" {} is not validated on a held-out half cycle: it was tested by a full re-fit, which gives no reduced curvature to set its noise band.", t.label))
         .collect();
-    if tests.iter().any(|t| t.significant && !t.refit) {
+    if tests.iter().any(|t| validated(t)) {
         if !args.held_out {
             held_out_note += " Held-out validation was not asked for (--no-held-out): significant candidates are not validated.";
         } else {
@@ -654,11 +658,21 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
                         hb.iterations,
                         if hb.converged { "" } else { ", NOT converged" }
                     );
-                    for t in tests.iter_mut().filter(|t| t.significant) {
-                        if t.refit {
-                            continue;
-                        }
-                        match heldout::validate(&hb, t) {
+                    if tests.iter().any(|t| validated(t) && held_clock(t)) {
+                        held_out_note += " A plate's clock read from its profile is held there at the profile's vertex and the half cycle solved again in full (the offset moves that plate's events); its band comes from the profile's curvature.";
+                    }
+                    for t in tests.iter_mut().filter(|t| validated(t)) {
+                        let checked = if held_clock(t) {
+                            heldout::validate_held_clock(args, &hb, t).map(|(h, converged)| {
+                                if !converged {
+                                    held_out_note += &format!(" {}: its held-out solve did not converge; its change is that of the last iterate.", t.label);
+                                }
+                                h
+                            })
+                        } else {
+                            heldout::validate(&hb, t)
+                        };
+                        match checked {
                             Ok(h) => {
                                 note!(progress,
                                     "  held-out {:<32} change {:>10.3e} ({:>5.1} % of J), noise band {:.3e}{}",

@@ -297,11 +297,11 @@ impl super::TrackingSetup {
             }
             let ph = &mut ocp.phases[j];
             let measured = ph.duration.value;
-            // room for the offsets' bounds (±50 ms each) and more
+            // room for the offsets' bounds (±100 ms each, so ±200 ms between two plates)
             ph.duration = crate::ocp::PhaseDuration {
                 value: measured + PlateClock::shift(c, d0),
-                lb: (measured - 0.15).max(0.2 * measured),
-                ub: measured + 0.15,
+                lb: (measured - 0.25).max(0.2 * measured),
+                ub: measured + 0.25,
             };
             ocp.constraints.push(crate::ocp::Constraint {
                 term: crate::ocp::Term {

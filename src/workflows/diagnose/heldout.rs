@@ -171,7 +171,8 @@ pub(super) fn fixed_at(
     serde_json::from_value(v).map_err(|e| anyhow!("{}: fixing its parameters: {e}", effect.label()))
 }
 
-/// Apply candidate `t` (fitted on the run's half cycle) to the held-out half cycle.
+/// Apply candidate `t` (fitted on the run's half cycle) to the held-out half cycle,
+/// the other variables re-fitted by a truncated re-fit (as the score test's).
 pub(super) fn validate(base: &HeldOutBase, t: &ScoreTest) -> anyhow::Result<HeldOut> {
     let spec = fixed_at(&t.effect, &t.parameters, &t.step_values, base.mirrored)?;
     let mut prob = TrackingProblem::build(&base.setup, std::slice::from_ref(&spec))?;
@@ -183,14 +184,45 @@ pub(super) fn validate(base: &HeldOutBase, t: &ScoreTest) -> anyhow::Result<Held
             truncated_refit(tr, &w, MAX_STEPS, REL_STOP).map_err(|e| anyhow!(e))?;
         Ok(j - dec)
     })?;
-    let change = base.objective - base.leftover - after;
-    let q = t
-        .identifiability
-        .as_ref()
-        .and_then(|id| curvature_along(&id.reduced_inverse_hessian, &t.step_values))
-        .unwrap_or(0.0);
-    let band = held_out_band(q, base.s2, t.inflation);
-    Ok(HeldOut {
+    Ok(judged(base, t, base.objective - base.leftover - after))
+}
+
+/// Apply a plate's clock read from its profile (`t`, a re-fit held at the profile's
+/// vertex) to the held-out half cycle, held there too, and solve that half cycle in
+/// full. A truncated re-fit would not do: the held offset moves the plate's events (with
+/// sample or one-sided targets), so the phases no longer sit where the plain model's
+/// solution put them, and a few Gauss–Newton steps from there understate the change.
+/// Returns the validation and whether the solve converged.
+pub(super) fn validate_held_clock(
+    args: &DiagnoseRequest,
+    base: &HeldOutBase,
+    t: &ScoreTest,
+) -> anyhow::Result<(HeldOut, bool)> {
+    let spec = fixed_at(&t.effect, &t.parameters, &t.step_values, base.mirrored)?;
+    let mut prob = TrackingProblem::build(&base.setup, std::slice::from_ref(&spec))?;
+    prob.start_at(&base.solution)?;
+    let settings = tracking_sqp_settings(
+        args.tol,
+        args.max_iter,
+        None,
+        super::refit::solve_hessian(&prob),
+        None,
+    );
+    let (res, _) = prob.solve(&settings, &super::super::Quiet)?;
+    if !res.objective.is_finite() {
+        return Err(anyhow!("the held-out solve ended without a finite cost ({})", res.status));
+    }
+    let converged = res.status == crate::sqp::SqpStatus::Converged;
+    Ok((judged(base, t, base.objective - res.objective), converged))
+}
+
+/// The held-out validation of candidate `t` whose values lowered the held-out cost by
+/// `change` (negative: it rose), judged against its noise band. The band's curvature is
+/// the run's reduced curvature along the fitted values (the score test's, or a clock
+/// profile's parabola).
+fn judged(base: &HeldOutBase, t: &ScoreTest, change: f64) -> HeldOut {
+    let (q, band) = band(t, base.s2);
+    HeldOut {
         stride: base.stride,
         mirrored: base.mirrored,
         window: base.window,
@@ -201,7 +233,18 @@ pub(super) fn validate(base: &HeldOutBase, t: &ScoreTest) -> anyhow::Result<Held
         band,
         // a candidate without curvature here (q = 0) has no band: it must lower the cost
         beyond_noise: change > band.max(0.0) && q > 0.0,
-    })
+    }
+}
+
+/// `q = θᵀHθ` along candidate `t`'s fitted values θ (0 without a reduced curvature) and
+/// the upper edge of its held-out noise band at the held-out residual mean square `s2`.
+fn band(t: &ScoreTest, s2: f64) -> (f64, f64) {
+    let q = t
+        .identifiability
+        .as_ref()
+        .and_then(|id| curvature_along(&id.reduced_inverse_hessian, &t.step_values))
+        .unwrap_or(0.0);
+    (q, held_out_band(q, s2, t.inflation))
 }
 
 /// Whether re-tracking with the pelvis position makes candidate `effect` testable: the
@@ -238,4 +281,41 @@ pub(super) fn retrack_with_pelvis(
         );
     }
     super::refit::solve_into(args, &setup, &[], solution, dir, progress)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::band;
+    use crate::model::effects::EffectSpec;
+    use crate::problems::diagnose::refit_test;
+    use crate::problems::diagnose::stats::identifiability;
+
+    /// A clock read from its profile's parabola `J ≈ J* + a (δ − δ*)²` and applied to
+    /// held-out data with the same offset lowers that cost by about `a δ*²`. That clears
+    /// the held-out band exactly when the reading lies more than 2 sd from zero, the sd
+    /// being the one the profile reports (`√(φ s²/a)`): the band and the profile's sd
+    /// are one noise model.
+    #[test]
+    fn a_profile_reading_clears_its_held_out_band_beyond_two_sd() {
+        let (a, s2, phi): (f64, f64, f64) = (600.6, 0.3994 / 456.0, 5.2);
+        let name = "force_plate_time_offset.right.offset".to_string();
+        let clock = EffectSpec::ForcePlateTimeOffset {
+            side: "right".into(),
+            offset: 0.0,
+            free: vec!["offset".into()],
+        };
+        let sd = (phi * s2 / a).sqrt();
+        for k in [0.5, 1.5, 1.95, 2.05, 3.0, 6.0] {
+            let v = k * sd;
+            let mut t = refit_test(&clock, vec![name.clone()], vec![v], 1.7, 1.6, 456, 9);
+            t.set_inflation(phi);
+            let id = identifiability(vec![name.clone()], vec![vec![0.5 / a]], vec![0.1], s2, phi);
+            assert!((id.sd[0].unwrap() - sd).abs() < 1e-12 * sd, "{:?} against {sd}", id.sd);
+            t.set_identifiability(id, None);
+            let (q, edge) = band(&t, s2);
+            assert!((q - 2.0 * a * v * v).abs() < 1e-9 * q, "q {q}");
+            let true_change = a * v * v;
+            assert_eq!(true_change > edge, k > 2.0, "k {k}: change {true_change}, band {edge}");
+        }
+    }
 }

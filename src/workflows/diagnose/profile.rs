@@ -7,6 +7,11 @@
 //! +20 ms lower J from 8.756 to 7.577 (`docs/instruments.md`). The profile re-fits the run
 //! with the offset held at [`CLOCK_PROFILE`] and starts a free re-fit from the lowest
 //! point; that re-fit is the candidate's test when it lowers J more than the score test's.
+//! With sample or one-sided targets (a free offset cannot move its plate's events there)
+//! the profile walks outwards while its outermost point is lowest, and the re-fit holds
+//! the offset at the vertex of the parabola through the lowest point and its neighbours;
+//! that reading is validated on a held-out half cycle like a score test's
+//! (`heldout::validate_held_clock`).
 
 use super::{
     channel_changes, diff_with, refit_into, sibling, Baseline, DiagnoseRequest, FullModel,
@@ -21,10 +26,12 @@ use crate::report::diff::RunDiff;
 use crate::workflows::track::{tracking_sqp_settings, TrackedRun, TrackingProblem};
 use crate::workflows::{note, Progress, Quiet};
 
-/// The offsets (s) each plate's clock is held at: steps of 20 ms (two frames of 100 Hz
-/// motion capture, where the score test's reach of about one frame either side ends)
-/// across the offset's bounds (±50 ms). Chosen before any real trial was profiled, from
-/// the frame rate and the bounds alone.
+/// The offsets (s) each plate's clock is held at first: steps of 20 ms (two frames of
+/// 100 Hz motion capture, where the score test's reach of about one frame either side
+/// ends) across the offset's first bounds (±50 ms). Chosen before any real trial was
+/// profiled, from the frame rate and those bounds alone. A refined profile (sample or
+/// one-sided targets) walks on by the same step while its outermost point is its lowest,
+/// up to ±80 ms within today's ±100 ms bounds ([`ForcePlateTimeOffset::BOUNDS`]).
 pub const CLOCK_PROFILE: [f64; 4] = [-0.04, -0.02, 0.02, 0.04];
 
 /// KKT tolerance of a profile point's re-fit: its cost decides only where the free
@@ -89,9 +96,32 @@ pub(super) fn profile_clock(
             None,
         )
     };
-    let mut points = Vec::new();
+    // with one-sided or sample targets a free offset cannot move its plate's events (they
+    // stay where its start value puts them), so its re-fit would read the loads' offset
+    // against events held elsewhere: the profile is refined by a held re-fit instead,
+    // and walks outwards while its lowest point is its outermost
+    let refine = setup.sample_targets || setup.one_sided_targets;
+    let mut points: Vec<ProfilePoint> = Vec::new();
     let mut best: Option<(f64, f64, crate::problems::evaluation::GaitSolution)> = None;
-    for &offset in &args.profile_clocks {
+    let mut offsets: Vec<f64> = args.profile_clocks.clone();
+    let mut next = 0;
+    loop {
+        if next == offsets.len() {
+            let known = known_points(&points, base.objective);
+            match extension(&known, ForcePlateTimeOffset::BOUNDS).filter(|_| refine) {
+                Some(o) => {
+                    note!(
+                        progress,
+                        "  the profile of {whose} clock still falls at its outermost point: extended to {:+.0} ms",
+                        1e3 * o
+                    );
+                    offsets.push(o);
+                }
+                None => break,
+            }
+        }
+        let offset = offsets[next];
+        next += 1;
         let t0 = std::time::Instant::now();
         let solved =
             TrackingProblem::build(setup, &[clock(side, offset, false)]).and_then(|mut p| {
@@ -134,7 +164,7 @@ pub(super) fn profile_clock(
         );
         points.push(point);
     }
-    let family = args.profile_clocks.len() + 1;
+    let family = points.len() + 1;
     let mut profile = ClockProfile {
         points,
         start: None,
@@ -152,17 +182,8 @@ pub(super) fn profile_clock(
         &format!("+force_plate_time_offset_{side}_profile"),
     );
     let name = local.parameters.first().cloned().unwrap_or_default();
-    // with one-sided or sample targets a free offset cannot move its plate's events (they
-    // stay where its start value puts them), so its re-fit would read the loads' offset
-    // against events held elsewhere: the profile is refined by a held re-fit instead
-    let refine = setup.sample_targets || setup.one_sided_targets;
     let (effect, curvature) = if refine {
-        let mut known: Vec<(f64, f64)> = profile
-            .points
-            .iter()
-            .filter_map(|q| Some((q.offset, q.objective?)))
-            .collect();
-        known.push((0.0, base.objective));
+        let known = known_points(&profile.points, base.objective);
         let (at, curvature) = vertex(&known, ForcePlateTimeOffset::BOUNDS);
         note!(
             progress,
@@ -245,6 +266,44 @@ pub(super) fn profile_clock(
     Ok((profile, Some((t, run, diff))))
 }
 
+/// The profile's points with a cost, (offset, cost), and the run's own at zero.
+fn known_points(points: &[ProfilePoint], run_objective: f64) -> Vec<(f64, f64)> {
+    let mut known: Vec<(f64, f64)> = points
+        .iter()
+        .filter_map(|q| Some((q.offset, q.objective?)))
+        .collect();
+    known.push((0.0, run_objective));
+    known
+}
+
+/// Where a refined profile goes next: when its lowest point (the run's at zero among
+/// `points`) is its outermost on one side, one more step outwards, the step being the
+/// spacing of its two outermost points on that side, while the vertex it may lead to
+/// (up to half a step beyond) stays within `bounds`. `None` when the lowest point is
+/// inside the profile or the bounds leave no room.
+fn extension(points: &[(f64, f64)], bounds: (f64, f64)) -> Option<f64> {
+    let mut p = points.to_vec();
+    p.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let low = (0..p.len()).min_by(|&i, &j| p[i].1.total_cmp(&p[j].1))?;
+    let n = p.len();
+    if n < 2 {
+        return None;
+    }
+    let next = if low == n - 1 && p[low].0 > 0.0 {
+        let step = p[n - 1].0 - p[n - 2].0;
+        Some((p[n - 1].0 + step, step))
+    } else if low == 0 && p[0].0 < 0.0 {
+        let step = p[1].0 - p[0].0;
+        Some((p[0].0 - step, step))
+    } else {
+        None
+    };
+    next.filter(|&(x, step)| {
+        step > 0.0 && x - 0.5 * step >= bounds.0 - 1e-12 && x + 0.5 * step <= bounds.1 + 1e-12
+    })
+    .map(|(x, _)| x)
+}
+
 /// The vertex of the parabola through the lowest of the profile's `points` (offset,
 /// cost; the run at zero among them) and its two neighbours in offset (its two nearest
 /// on one side at an end of the profile), kept within half a step beyond those three and
@@ -274,7 +333,7 @@ fn vertex(points: &[(f64, f64)], bounds: (f64, f64)) -> (f64, Option<f64>) {
 
 #[cfg(test)]
 mod tests {
-    use super::vertex;
+    use super::{extension, vertex};
 
     /// The vertex and curvature of a parabola sampled at the profile's points, at an end
     /// of them too, and the lowest point where the three around it bend downwards.
@@ -295,5 +354,50 @@ mod tests {
         // bent downwards (at an end): the lowest point
         let pts = [(0.02, 0.99), (-0.02, 1.2), (0.04, 0.5), (0.0, 1.0)];
         assert_eq!(vertex(&pts, (-0.05, 0.05)), (0.04, None));
+    }
+
+    /// A refined profile walks outwards while its outermost point is its lowest, by the
+    /// spacing of its outer points, until the bounds leave no room for the vertex; a
+    /// minimum inside it, or at zero, stops it. Walked on a parabola with its minimum at
+    /// +57 ms, it ends with +80 ms, and the vertex read from it is the minimum.
+    #[test]
+    fn a_profile_extends_while_its_outermost_point_is_lowest() {
+        let bounds = (-0.1, 0.1);
+        let j = |d: f64| 1.3 + 500.0 * (d - 0.057) * (d - 0.057);
+        let mut pts: Vec<(f64, f64)> =
+            [-0.04, -0.02, 0.0, 0.02, 0.04].iter().map(|&x| (x, j(x))).collect();
+        let mut added = Vec::new();
+        while let Some(x) = extension(&pts, bounds) {
+            added.push(x);
+            pts.push((x, j(x)));
+            assert!(added.len() < 10, "{added:?}");
+        }
+        assert_eq!(added.len(), 2, "{added:?}");
+        assert!((added[0] - 0.06).abs() < 1e-12 && (added[1] - 0.08).abs() < 1e-12);
+        let (v, a) = vertex(&pts, bounds);
+        assert!((v - 0.057).abs() < 1e-9 && (a.unwrap() - 500.0).abs() < 1e-6, "{v} {a:?}");
+        // the other side, and no room beyond ±90 ms
+        let low = |d: f64| 1.3 + 500.0 * (d + 0.2) * (d + 0.2);
+        let mut pts: Vec<(f64, f64)> =
+            [-0.04, -0.02, 0.0, 0.02, 0.04].iter().map(|&x| (x, low(x))).collect();
+        let mut added = Vec::new();
+        while let Some(x) = extension(&pts, bounds) {
+            added.push(x);
+            pts.push((x, low(x)));
+        }
+        assert_eq!(added.len(), 2, "{added:?}");
+        assert!((added[1] + 0.08).abs() < 1e-12);
+        // a minimum inside the profile, or at zero: no extension
+        let inside = |d: f64| 1.3 + 500.0 * (d - 0.025) * (d - 0.025);
+        let pts: Vec<(f64, f64)> =
+            [-0.04, -0.02, 0.0, 0.02, 0.04].iter().map(|&x| (x, inside(x))).collect();
+        assert_eq!(extension(&pts, bounds), None);
+        let at_zero: Vec<(f64, f64)> =
+            [-0.04, 0.0, 0.04].iter().map(|&x| (x, 1.0 + x * x)).collect();
+        assert_eq!(extension(&at_zero, bounds), None);
+        // the old ±50 ms bounds leave no room beyond +40 ms
+        let pts: Vec<(f64, f64)> =
+            [-0.04, -0.02, 0.0, 0.02, 0.04].iter().map(|&x| (x, j(x))).collect();
+        assert_eq!(extension(&pts, (-0.05, 0.05)), None);
     }
 }
