@@ -320,7 +320,7 @@ pub struct ClockProfile {
 
 /// A candidate fitted on the run's half cycle, applied with its parameters fixed to
 /// another half cycle of the trial and the other variables re-optimised there.
-#[derive(Debug, Clone, Serialize, Deserialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct HeldOut {
     /// Which half cycle (`--stride`) was held out.
     pub stride: usize,
@@ -335,7 +335,8 @@ pub struct HeldOut {
     pub objective: f64,
     /// Fall of the held-out cost with the candidate at `values` (cost units; negative:
     /// it got worse), after a truncated re-fit of the other variables and less that of
-    /// the plain model.
+    /// the plain model (a plate's clock read from its refined profile: after a full
+    /// solve with the clock held, its events moved).
     pub change: f64,
     /// `change` as a fraction of `objective`.
     pub change_fraction: f64,

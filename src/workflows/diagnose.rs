@@ -635,12 +635,15 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
     // a clock read from its refined profile has the parabola's curvature for its band;
     // other full re-fits (the heel pad, a free profile re-fit) have none
     let held_clock = |t: &ScoreTest| t.refit && t.profile.as_ref().is_some_and(|p| p.refined);
-    let validated = |t: &ScoreTest| t.significant && t.at_bound.is_empty() && (!t.refit || held_clock(t));
+    let validated =
+        |t: &ScoreTest| t.significant && t.at_bound.is_empty() && (!t.refit || held_clock(t));
     let mut held_out_note: String = tests
         .iter()
         .filter(|t| t.significant && t.refit && !held_clock(t))
         .map(|t| format!(" {} is not validated on a held-out half cycle: it was tested by a full re-fit, which gives no reduced curvature to set its noise band.", t.label))
         .collect();
+    let mut held_base: Option<heldout::HeldOutBase> = None;
+    let mut no_held_out = false;
     if tests.iter().any(|t| validated(t)) {
         if !args.held_out {
             held_out_note += " Held-out validation was not asked for (--no-held-out): significant candidates are not validated.";
@@ -662,17 +665,7 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
                         held_out_note += " A plate's clock read from its profile is held there at the profile's vertex and the half cycle solved again in full (the offset moves that plate's events); its band comes from the profile's curvature.";
                     }
                     for t in tests.iter_mut().filter(|t| validated(t)) {
-                        let checked = if held_clock(t) {
-                            heldout::validate_held_clock(args, &hb, t).map(|(h, converged)| {
-                                if !converged {
-                                    held_out_note += &format!(" {}: its held-out solve did not converge; its change is that of the last iterate.", t.label);
-                                }
-                                h
-                            })
-                        } else {
-                            heldout::validate(&hb, t)
-                        };
-                        match checked {
+                        match heldout::check(args, &hb, t, &mut held_out_note) {
                             Ok(h) => {
                                 note!(progress,
                                     "  held-out {:<32} change {:>10.3e} ({:>5.1} % of J), noise band {:.3e}{}",
@@ -688,9 +681,11 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
                             }
                         }
                     }
+                    held_base = Some(hb);
                 }
                 Err(why) => {
                     held_out_note += &format!(" No held-out half cycle in this trial ({why}): significant candidates are not validated.");
+                    no_held_out = true;
                 }
             }
         }
@@ -700,7 +695,61 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
     }
     let comparison = match &reference {
         Some(r) => {
-            let c = reference::compare(&tests, r);
+            let mut c = reference::compare(&tests, r);
+            // a significant difference is validated as a reading is: applied, as it is,
+            // to this trial's held-out half cycle
+            if args.held_out && !no_held_out && c.differences.iter().any(|d| d.significant) {
+                if held_base.is_none() {
+                    match heldout::held_out_base(args, &setup, base.setup.window, progress)? {
+                        Ok(hb) => held_base = Some(hb),
+                        Err(why) => held_out_note += &format!(" No held-out half cycle in this trial ({why}): the differences from the reference are not validated."),
+                    }
+                }
+                if let Some(hb) = &held_base {
+                    held_out_note += &format!(
+                        " A candidate whose reading differs significantly from the reference's is applied to {} with the difference as its value, the same way.",
+                        heldout::half_cycle_name(hb.stride, hb.mirrored)
+                    );
+                    let differing: Vec<String> = c
+                        .differences
+                        .iter()
+                        .filter(|d| d.significant)
+                        .map(|d| d.label.clone())
+                        .collect();
+                    for t in tests.iter().filter(|t| differing.contains(&t.label)) {
+                        let probe = ScoreTest {
+                            step_values: t
+                                .parameters
+                                .iter()
+                                .map(|n| {
+                                    c.differences
+                                        .iter()
+                                        .find(|d| d.label == t.label && &d.parameter == n)
+                                        .map_or(0.0, |d| d.difference)
+                                })
+                                .collect(),
+                            ..t.clone()
+                        };
+                        match heldout::check(args, hb, &probe, &mut held_out_note) {
+                            Ok(h) => {
+                                note!(progress,
+                                    "  held-out {:<32} its difference from the reference: change {:>10.3e} ({:>5.1} % of J), noise band {:.3e}{}",
+                                    t.label, h.change, 100.0 * h.change_fraction, h.band,
+                                    if h.beyond_noise { "  confirmed" } else { "  not confirmed" });
+                                for d in c.differences.iter_mut().filter(|d| d.label == t.label) {
+                                    d.held_out = Some(h.clone());
+                                }
+                            }
+                            Err(e) => {
+                                held_out_note += &format!(
+                                    " {}: the held-out validation of its difference from the reference failed ({e:#}).",
+                                    t.label
+                                );
+                            }
+                        }
+                    }
+                }
+            }
             if let Some(d) = c.differences.first() {
                 note!(progress,
                     "against the reference {}: the largest change is {} {}: {:+.4e} ({:+.4e} against {:+.4e}), {:.1} sd{}",

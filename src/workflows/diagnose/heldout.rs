@@ -173,7 +173,7 @@ pub(super) fn fixed_at(
 
 /// Apply candidate `t` (fitted on the run's half cycle) to the held-out half cycle,
 /// the other variables re-fitted by a truncated re-fit (as the score test's).
-pub(super) fn validate(base: &HeldOutBase, t: &ScoreTest) -> anyhow::Result<HeldOut> {
+fn validate(base: &HeldOutBase, t: &ScoreTest) -> anyhow::Result<HeldOut> {
     let spec = fixed_at(&t.effect, &t.parameters, &t.step_values, base.mirrored)?;
     let mut prob = TrackingProblem::build(&base.setup, std::slice::from_ref(&spec))?;
     prob.setup
@@ -193,7 +193,7 @@ pub(super) fn validate(base: &HeldOutBase, t: &ScoreTest) -> anyhow::Result<Held
 /// sample or one-sided targets), so the phases no longer sit where the plain model's
 /// solution put them, and a few Gauss–Newton steps from there understate the change.
 /// Returns the validation and whether the solve converged.
-pub(super) fn validate_held_clock(
+fn validate_held_clock(
     args: &DiagnoseRequest,
     base: &HeldOutBase,
     t: &ScoreTest,
@@ -210,10 +210,37 @@ pub(super) fn validate_held_clock(
     );
     let (res, _) = prob.solve(&settings, &super::super::Quiet)?;
     if !res.objective.is_finite() {
-        return Err(anyhow!("the held-out solve ended without a finite cost ({})", res.status));
+        return Err(anyhow!(
+            "the held-out solve ended without a finite cost ({})",
+            res.status
+        ));
     }
     let converged = res.status == crate::sqp::SqpStatus::Converged;
     Ok((judged(base, t, base.objective - res.objective), converged))
+}
+
+/// Validate candidate `t` (at its `step_values`) on the held-out half cycle: a clock read
+/// from its refined profile by a full solve with it held ([`validate_held_clock`]), any
+/// other by a truncated re-fit ([`validate`]). A held-out solve that did not converge is
+/// said in `note`.
+pub(super) fn check(
+    args: &DiagnoseRequest,
+    base: &HeldOutBase,
+    t: &ScoreTest,
+    note: &mut String,
+) -> anyhow::Result<HeldOut> {
+    if t.refit && t.profile.as_ref().is_some_and(|p| p.refined) {
+        let (h, converged) = validate_held_clock(args, base, t)?;
+        if !converged {
+            *note += &format!(
+                " {}: its held-out solve did not converge; its change is that of the last iterate.",
+                t.label
+            );
+        }
+        Ok(h)
+    } else {
+        validate(base, t)
+    }
 }
 
 /// The held-out validation of candidate `t` whose values lowered the held-out cost by
@@ -310,12 +337,20 @@ mod tests {
             let mut t = refit_test(&clock, vec![name.clone()], vec![v], 1.7, 1.6, 456, 9);
             t.set_inflation(phi);
             let id = identifiability(vec![name.clone()], vec![vec![0.5 / a]], vec![0.1], s2, phi);
-            assert!((id.sd[0].unwrap() - sd).abs() < 1e-12 * sd, "{:?} against {sd}", id.sd);
+            assert!(
+                (id.sd[0].unwrap() - sd).abs() < 1e-12 * sd,
+                "{:?} against {sd}",
+                id.sd
+            );
             t.set_identifiability(id, None);
             let (q, edge) = band(&t, s2);
             assert!((q - 2.0 * a * v * v).abs() < 1e-9 * q, "q {q}");
             let true_change = a * v * v;
-            assert_eq!(true_change > edge, k > 2.0, "k {k}: change {true_change}, band {edge}");
+            assert_eq!(
+                true_change > edge,
+                k > 2.0,
+                "k {k}: change {true_change}, band {edge}"
+            );
         }
     }
 }

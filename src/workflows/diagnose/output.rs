@@ -149,7 +149,7 @@ fn comparison_section(c: &super::reference::Comparison) -> (String, Table) {
         if significant.is_empty() {
             "No reading differs significantly from the reference's.".to_string()
         } else {
-            format!("Differs significantly from the reference: {}.", significant.join(", "))
+            format!("Differs significantly from the reference: {}. A significant difference is applied, as the candidate's value, to this trial's held-out half cycle and is confirmed there as a candidate is.", significant.join(", "))
         }
     );
     if !c.not_compared.is_empty() {
@@ -165,6 +165,7 @@ fn comparison_section(c: &super::reference::Comparison) -> (String, Table) {
             "difference",
             "sd",
             "difference / sd",
+            "held-out change vs noise band",
             "verdict",
         ]
         .map(String::from)
@@ -181,10 +182,21 @@ fn comparison_section(c: &super::reference::Comparison) -> (String, Table) {
                     format!("{:+.4e}", d.difference),
                     format!("{:.2e}", d.sd),
                     format!("{:+.1}", d.z),
-                    if d.significant {
-                        "differs".into()
-                    } else {
-                        "same within noise".into()
+                    d.held_out.as_ref().map_or("—".into(), |h| {
+                        format!(
+                            "{:.3e} ({:.1} % of J) vs {:.3e}",
+                            h.change,
+                            100.0 * h.change_fraction,
+                            h.band
+                        )
+                    }),
+                    match (&d.held_out, d.significant) {
+                        (_, false) => "same within noise".into(),
+                        (Some(h), true) if h.beyond_noise => "differs, confirmed held-out".into(),
+                        (Some(_), true) => {
+                            "differs, not confirmed on the held-out half cycle".into()
+                        }
+                        (None, true) => "differs, not validated".into(),
                     },
                 ]
             })

@@ -364,8 +364,10 @@ mod tests {
     fn a_profile_extends_while_its_outermost_point_is_lowest() {
         let bounds = (-0.1, 0.1);
         let j = |d: f64| 1.3 + 500.0 * (d - 0.057) * (d - 0.057);
-        let mut pts: Vec<(f64, f64)> =
-            [-0.04, -0.02, 0.0, 0.02, 0.04].iter().map(|&x| (x, j(x))).collect();
+        let mut pts: Vec<(f64, f64)> = [-0.04, -0.02, 0.0, 0.02, 0.04]
+            .iter()
+            .map(|&x| (x, j(x)))
+            .collect();
         let mut added = Vec::new();
         while let Some(x) = extension(&pts, bounds) {
             added.push(x);
@@ -375,11 +377,16 @@ mod tests {
         assert_eq!(added.len(), 2, "{added:?}");
         assert!((added[0] - 0.06).abs() < 1e-12 && (added[1] - 0.08).abs() < 1e-12);
         let (v, a) = vertex(&pts, bounds);
-        assert!((v - 0.057).abs() < 1e-9 && (a.unwrap() - 500.0).abs() < 1e-6, "{v} {a:?}");
+        assert!(
+            (v - 0.057).abs() < 1e-9 && (a.unwrap() - 500.0).abs() < 1e-6,
+            "{v} {a:?}"
+        );
         // the other side, and no room beyond ±90 ms
         let low = |d: f64| 1.3 + 500.0 * (d + 0.2) * (d + 0.2);
-        let mut pts: Vec<(f64, f64)> =
-            [-0.04, -0.02, 0.0, 0.02, 0.04].iter().map(|&x| (x, low(x))).collect();
+        let mut pts: Vec<(f64, f64)> = [-0.04, -0.02, 0.0, 0.02, 0.04]
+            .iter()
+            .map(|&x| (x, low(x)))
+            .collect();
         let mut added = Vec::new();
         while let Some(x) = extension(&pts, bounds) {
             added.push(x);
@@ -389,15 +396,21 @@ mod tests {
         assert!((added[1] + 0.08).abs() < 1e-12);
         // a minimum inside the profile, or at zero: no extension
         let inside = |d: f64| 1.3 + 500.0 * (d - 0.025) * (d - 0.025);
-        let pts: Vec<(f64, f64)> =
-            [-0.04, -0.02, 0.0, 0.02, 0.04].iter().map(|&x| (x, inside(x))).collect();
+        let pts: Vec<(f64, f64)> = [-0.04, -0.02, 0.0, 0.02, 0.04]
+            .iter()
+            .map(|&x| (x, inside(x)))
+            .collect();
         assert_eq!(extension(&pts, bounds), None);
-        let at_zero: Vec<(f64, f64)> =
-            [-0.04, 0.0, 0.04].iter().map(|&x| (x, 1.0 + x * x)).collect();
+        let at_zero: Vec<(f64, f64)> = [-0.04, 0.0, 0.04]
+            .iter()
+            .map(|&x| (x, 1.0 + x * x))
+            .collect();
         assert_eq!(extension(&at_zero, bounds), None);
         // the old ±50 ms bounds leave no room beyond +40 ms
-        let pts: Vec<(f64, f64)> =
-            [-0.04, -0.02, 0.0, 0.02, 0.04].iter().map(|&x| (x, j(x))).collect();
+        let pts: Vec<(f64, f64)> = [-0.04, -0.02, 0.0, 0.02, 0.04]
+            .iter()
+            .map(|&x| (x, j(x)))
+            .collect();
         assert_eq!(extension(&pts, (-0.05, 0.05)), None);
     }
 }

@@ -17,7 +17,7 @@
 //! in either run, is a limit the data pushed against and is not compared.
 
 use super::summary::{self, DiagnosisSummary};
-use crate::problems::diagnose::{chi2_1_upper, ScoreTest};
+use crate::problems::diagnose::{chi2_1_upper, HeldOut, ScoreTest};
 use crate::runfolder::read_json;
 use anyhow::{anyhow, bail};
 use serde::{Deserialize, Serialize};
@@ -43,6 +43,10 @@ pub struct Difference {
     pub z: f64,
     /// Whether `z²` exceeds the threshold.
     pub significant: bool,
+    /// A significant difference applied, as the candidate's value, to this trial's
+    /// held-out half cycle (`None`: not significant, or not validated).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub held_out: Option<HeldOut>,
 }
 
 /// This run's readings against the reference's.
@@ -201,6 +205,7 @@ pub(super) fn compare(tests: &[ScoreTest], reference: &Reference) -> Comparison 
                 sd,
                 z,
                 significant: z * z > threshold,
+                held_out: None,
             }
         })
         .collect();
