@@ -327,14 +327,16 @@ fn a_plate_clock_is_profiled_beyond_the_score_tests_reach() {
 
 /// `--reference`: the trial whose plates run 15 ms late, read against the trial without
 /// a hidden effect (the same model, noise level and candidates). The clock's difference
-/// is the truth within 20 % or 2 sd and differs significantly; the ground slope, hidden
-/// in neither, does not.
+/// is the truth within 20 % or 2 sd and differs significantly, and applied to the
+/// trial's held-out half cycle it lowers that cost beyond its noise band; the ground
+/// slope, hidden in neither, does not differ and is not validated.
 #[test]
 fn a_clock_offset_is_read_against_a_reference_trial() {
     let dir = tempfile::tempdir().unwrap();
     let tracked = |name: &str| seed_cost_run(dir.path(), name);
     let diagnose = |run: &Path, reference: Option<PathBuf>| {
         diagnose_with(&DiagnoseRequest {
+            held_out: reference.is_some(),
             reference,
             ..request(run, &["force_plate_time_offset", "ground_slope"])
         })
@@ -359,8 +361,13 @@ fn a_clock_offset_is_read_against_a_reference_trial() {
         "difference {diff} ± {sd} s against 0.015 s"
     );
     assert_eq!(clock["significant"], true, "{clock}");
+    let held_out = &clock["held_out"];
+    assert_eq!(held_out["values"][0].as_f64(), Some(diff), "{clock}");
+    assert_eq!(held_out["beyond_noise"], true, "{clock}");
+    assert!(held_out["change"].as_f64().unwrap() > held_out["band"].as_f64().unwrap());
     let slope = d.iter().find(|x| x["label"] == "ground slope").unwrap();
     assert_eq!(slope["significant"], false, "{slope}");
+    assert!(slope.get("held_out").is_none(), "{slope}");
     assert!(
         (c["threshold"].as_f64().unwrap() - footfall::problems::diagnose::chi2_1_upper(5e-4)).abs()
             < 1e-9
