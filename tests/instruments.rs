@@ -464,6 +464,36 @@ fn sample_targets_move_a_plates_events_by_its_held_clock_offset() {
     );
 }
 
+/// A held clock offset moves its plate's events but not which half cycle is tracked. On
+/// the real right-clock trial the left plate's clock held at −66 ms moves the left heel
+/// strikes 66 ms later, which turns an early one (before the data's first 0.05 s) into
+/// the start of a half cycle at 0.070 s; chosen on the moved events, that half cycle
+/// would have been tracked instead of the trial's own (1.252 s), and a clock profile
+/// would have compared costs of different half cycles (stop 61). The tracked half cycle
+/// is the trial's own, its start moved by the offset.
+#[test]
+fn a_held_clock_offset_keeps_the_half_cycle_tracked() {
+    let late = trial("real_clock_r+25ms");
+    let plain = model("opensim_subject01.json", "ellipse.json");
+    let own = setup_of(&plain, &late, TargetSides::Samples)
+        .unwrap()
+        .window;
+    for offset in [-0.066, -0.04, 0.04] {
+        let m = model_with_effects(
+            "opensim_subject01.json",
+            "ellipse.json",
+            serde_json::json!([{ "type": "force_plate_time_offset", "side": "left",
+                                 "offset": offset, "free": [] }]),
+        );
+        let w = setup_of(&m, &late, TargetSides::Samples).unwrap().window;
+        assert!(
+            (w.0 - (own.0 - offset)).abs() < 5e-3 && (w.1 - own.1).abs() < 5e-3,
+            "left clock held at {offset} s: tracked {w:?} against the trial's {own:?} moved to start at {:.3}",
+            own.0 - offset
+        );
+    }
+}
+
 /// A body-mass error scales every segment's mass and inertia: the generalised gravity
 /// force and the mass matrix scale by 1 + ε exactly.
 #[test]

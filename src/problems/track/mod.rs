@@ -421,6 +421,11 @@ impl TrackingSetup {
             clock::start_offsets(model, data, sides == TargetSides::Interpolated);
         let (events, mut notes) = window::combined_events_on_clocks(model, data, offsets)?;
         notes.extend(moved);
+        let choice = if offsets == [0.0; 2] {
+            choice
+        } else {
+            window::same_half_cycle(model, data, &events, offsets, choice)?
+        };
         Self::build(model, seq, sets, data, events, sides, choice, notes)
     }
 

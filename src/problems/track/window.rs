@@ -223,6 +223,42 @@ pub(super) fn combined_events_on_clocks(
     Ok((ev, notes))
 }
 
+/// The half cycle `choice` selects on the plates' own clocks, found again among the
+/// half cycles of `moved` (the events with each plate's clock offset `offsets` applied,
+/// [`combined_events_on_clocks`]): the one whose start lies nearest that half cycle's
+/// start moved by the left plate's offset (a half cycle starts at a left heel strike).
+/// Choosing on the moved events instead would let a held offset change which half cycle
+/// is tracked: on the real right-clock trial the left plate's clock held at −66 ms made
+/// a half cycle at 0.070 s the first one whose forces are known, and the profile compared
+/// costs of different half cycles.
+pub(super) fn same_half_cycle(
+    model: &GaitModel,
+    data: &GaitData,
+    moved: &Events,
+    offsets: [f64; 2],
+    choice: WindowChoice,
+) -> Result<WindowChoice, String> {
+    let (plain, _) = combined_events_on_clocks(model, data, [0.0; 2])?;
+    let ((t0, t1), _) = choose_window(data, &plain, choice)?;
+    let target = t0 - offsets[1];
+    let all = half_cycles(moved);
+    all.iter()
+        .enumerate()
+        .min_by(|a, b| (a.1 .0 - target).abs().total_cmp(&(b.1 .0 - target).abs()))
+        .filter(|(_, w)| (w.0 - target).abs() < SAME_EVENT_S)
+        .map(|(i, _)| WindowChoice::Stride(i + 1))
+        .ok_or_else(|| {
+            format!(
+                "the half cycle {t0:.3}–{t1:.3} s has no counterpart once the plates' clocks are moved by {:+.1} ms (right) and {:+.1} ms (left): its left heel strike would be near {target:.3} s, and the half cycles are then {:?}",
+                1e3 * offsets[0],
+                1e3 * offsets[1],
+                all.iter()
+                    .map(|&(a, b)| ((a * 1e3).round() / 1e3, (b * 1e3).round() / 1e3))
+                    .collect::<Vec<_>>()
+            )
+        })
+}
+
 /// Every half cycle of `events` (a left heel strike at least 0.05 s into the data
 /// followed by the next right heel strike), in time order.
 pub fn half_cycles(events: &Events) -> Vec<(f64, f64)> {
