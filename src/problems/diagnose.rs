@@ -316,6 +316,9 @@ pub struct ClockProfile {
     /// and the reading's sd comes from the parabola's curvature.
     #[serde(default)]
     pub refined: bool,
+    /// Why the profile's re-fit failed, when it did (the candidate keeps its score test).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub refit_error: Option<String>,
 }
 
 /// A candidate fitted on the run's half cycle, applied with its parameters fixed to

@@ -222,6 +222,11 @@ fn profile_paragraph(t: &ScoreTest) -> Option<String> {
         .collect::<Vec<_>>()
         .join(", ");
     let outcome = match (p.start, p.refit) {
+        (Some(start), None) if p.refit_error.is_some() => format!(
+            " The profile is lowest at {:+.0} ms, but its re-fit failed ({}): the score test stands",
+            1e3 * start,
+            p.refit_error.as_deref().unwrap_or_default()
+        ),
         (Some(start), Some((value, j))) => format!(
             "{}; {}",
             if p.refined {

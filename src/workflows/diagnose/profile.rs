@@ -172,6 +172,7 @@ pub(super) fn profile_clock(
         family,
         chosen: false,
         refined: false,
+        refit_error: None,
     };
     let Some((start, j_start, solution)) = best.filter(|b| b.1 < base.objective) else {
         return Ok((profile, None));
@@ -202,7 +203,19 @@ pub(super) fn profile_clock(
         );
         (clock(side, start, true), None)
     };
-    let run = refit_into(args, setup, &effect, &solution, dir, progress)?;
+    // a failed re-fit costs this candidate its profile test, not the whole diagnosis
+    let run = match refit_into(args, setup, &effect, &solution, dir, progress) {
+        Ok(run) => run,
+        Err(e) => {
+            note!(
+                progress,
+                "  the profile's re-fit of {whose} clock failed ({e:#}): the candidate keeps its score test"
+            );
+            profile.refined = refine;
+            profile.refit_error = Some(format!("{e:#}"));
+            return Ok((profile, None));
+        }
+    };
     // the held vertex, or where the free offset ended
     let value = run
         .record
