@@ -13,7 +13,7 @@
 //! band ([`crate::problems::diagnose::stats::held_out_band`]) for the candidate to be
 //! "found".
 
-use super::super::track::{tracking_sqp_settings, TrackedRun, TrackingProblem};
+use super::super::track::{TrackedRun, TrackingProblem};
 #[allow(unused_imports)]
 use super::super::{note, Progress};
 use super::{sibling, DiagnoseRequest};
@@ -99,13 +99,7 @@ pub(super) fn held_out_base(
                 window.1
             );
         }
-        let settings = tracking_sqp_settings(
-            args.tol,
-            args.max_iter,
-            None,
-            super::refit::solve_hessian(&prob),
-            None,
-        );
+        let settings = super::refit::full_solve_settings(args, &prob);
         let (res, solution) = prob.solve(&settings, &super::super::Quiet)?;
         let mut at = TrackingProblem::build(&setup, &[])?;
         at.setup.start_from(&solution).map_err(|e| anyhow!(e))?;
@@ -201,13 +195,7 @@ fn validate_held_clock(
     let spec = fixed_at(&t.effect, &t.parameters, &t.step_values, base.mirrored)?;
     let mut prob = TrackingProblem::build(&base.setup, std::slice::from_ref(&spec))?;
     prob.start_at(&base.solution)?;
-    let settings = tracking_sqp_settings(
-        args.tol,
-        args.max_iter,
-        None,
-        super::refit::solve_hessian(&prob),
-        None,
-    );
+    let settings = super::refit::full_solve_settings(args, &prob);
     let (res, _) = prob.solve(&settings, &super::super::Quiet)?;
     if !res.objective.is_finite() {
         return Err(anyhow!(

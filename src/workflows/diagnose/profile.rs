@@ -376,17 +376,22 @@ mod tests {
     #[test]
     fn a_profile_extends_while_its_outermost_point_is_lowest() {
         let bounds = (-0.1, 0.1);
+        // the offsets a profile from ±20 and ±40 ms adds on the cost `f`, and its points
+        let walk = |f: &dyn Fn(f64) -> f64| {
+            let mut pts: Vec<(f64, f64)> = [-0.04, -0.02, 0.0, 0.02, 0.04]
+                .iter()
+                .map(|&x| (x, f(x)))
+                .collect();
+            let mut added = Vec::new();
+            while let Some(x) = extension(&pts, bounds) {
+                added.push(x);
+                pts.push((x, f(x)));
+                assert!(added.len() < 10, "{added:?}");
+            }
+            (added, pts)
+        };
         let j = |d: f64| 1.3 + 500.0 * (d - 0.057) * (d - 0.057);
-        let mut pts: Vec<(f64, f64)> = [-0.04, -0.02, 0.0, 0.02, 0.04]
-            .iter()
-            .map(|&x| (x, j(x)))
-            .collect();
-        let mut added = Vec::new();
-        while let Some(x) = extension(&pts, bounds) {
-            added.push(x);
-            pts.push((x, j(x)));
-            assert!(added.len() < 10, "{added:?}");
-        }
+        let (added, pts) = walk(&j);
         assert_eq!(added.len(), 2, "{added:?}");
         assert!((added[0] - 0.06).abs() < 1e-12 && (added[1] - 0.08).abs() < 1e-12);
         let (v, a) = vertex(&pts, bounds);
@@ -395,25 +400,12 @@ mod tests {
             "{v} {a:?}"
         );
         // the other side, and no room beyond ±90 ms
-        let low = |d: f64| 1.3 + 500.0 * (d + 0.2) * (d + 0.2);
-        let mut pts: Vec<(f64, f64)> = [-0.04, -0.02, 0.0, 0.02, 0.04]
-            .iter()
-            .map(|&x| (x, low(x)))
-            .collect();
-        let mut added = Vec::new();
-        while let Some(x) = extension(&pts, bounds) {
-            added.push(x);
-            pts.push((x, low(x)));
-        }
+        let (added, _) = walk(&|d: f64| 1.3 + 500.0 * (d + 0.2) * (d + 0.2));
         assert_eq!(added.len(), 2, "{added:?}");
         assert!((added[1] + 0.08).abs() < 1e-12);
         // a minimum inside the profile, or at zero: no extension
-        let inside = |d: f64| 1.3 + 500.0 * (d - 0.025) * (d - 0.025);
-        let pts: Vec<(f64, f64)> = [-0.04, -0.02, 0.0, 0.02, 0.04]
-            .iter()
-            .map(|&x| (x, inside(x)))
-            .collect();
-        assert_eq!(extension(&pts, bounds), None);
+        let (added, _) = walk(&|d: f64| 1.3 + 500.0 * (d - 0.025) * (d - 0.025));
+        assert!(added.is_empty(), "{added:?}");
         let at_zero: Vec<(f64, f64)> = [-0.04, 0.0, 0.04]
             .iter()
             .map(|&x| (x, 1.0 + x * x))

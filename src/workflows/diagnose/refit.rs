@@ -120,7 +120,7 @@ pub(super) fn solve_into(
     let mut prob = TrackingProblem::build(setup, effects)?;
     prob.start_at(start)
         .map_err(|e| anyhow!("{}: {e:#}", args.run.display()))?;
-    let settings = tracking_sqp_settings(args.tol, args.max_iter, None, solve_hessian(&prob), None);
+    let settings = full_solve_settings(args, &prob);
     let rf = RunFolder::create(&dir, args.overwrite)?;
     prob.solve_and_write(
         setup,
@@ -135,6 +135,15 @@ pub(super) fn solve_into(
 /// Sample targets per shooting interval above which the diagnosis's own solves use the
 /// Gauss–Newton Hessian ([`solve_hessian`]).
 pub(super) const GAUSS_NEWTON_SAMPLES_PER_INTERVAL: f64 = 3.0;
+
+/// The settings of a full solve of `prob` in a diagnosis: its tolerance and iteration
+/// limit, the Hessian [`solve_hessian`] picks, and the default switch to the exact one.
+pub(super) fn full_solve_settings(
+    args: &DiagnoseRequest,
+    prob: &TrackingProblem,
+) -> crate::sqp::SqpSettings {
+    tracking_sqp_settings(args.tol, args.max_iter, None, solve_hessian(prob), None)
+}
 
 /// The Hessian of the diagnosis's own solves (re-fits, held-out half cycles, clock
 /// profiles). The exact Hessian converges in fewer iterations, but with sample targets its
