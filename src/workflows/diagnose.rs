@@ -632,9 +632,7 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
     let (mut tests, evidence): (Vec<ScoreTest>, Vec<Evidence>) = tests.into_iter().unzip();
 
     // held-out validation of the significant ones
-    // a clock read from its refined profile has the parabola's curvature for its band;
-    // other full re-fits (the heel pad, a free profile re-fit) have none
-    let held_clock = |t: &ScoreTest| t.refit && t.profile.as_ref().is_some_and(|p| p.refined);
+    let held_clock = heldout::held_clock;
     let validated =
         |t: &ScoreTest| t.significant && t.at_bound.is_empty() && (!t.refit || held_clock(t));
     let mut held_out_note: String = tests
@@ -642,13 +640,18 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
         .filter(|t| t.significant && t.refit && !held_clock(t))
         .map(|t| format!(" {} is not validated on a held-out half cycle: it was tested by a full re-fit, which gives no reduced curvature to set its noise band.", t.label))
         .collect();
-    let mut held_base: Option<heldout::HeldOutBase> = None;
-    let mut no_held_out = false;
+    // the held-out half cycle's plain track, once (`None`: not tracked yet)
+    let mut held_base: Option<Result<heldout::HeldOutBase, String>> = None;
     if tests.iter().any(|t| validated(t)) {
         if !args.held_out {
             held_out_note += " Held-out validation was not asked for (--no-held-out): significant candidates are not validated.";
         } else {
-            match heldout::held_out_base(args, &setup, base.setup.window, progress)? {
+            match held_base.insert(heldout::held_out_base(
+                args,
+                &setup,
+                base.setup.window,
+                progress,
+            )?) {
                 Ok(hb) => {
                     held_out_note += &format!(
                         " Held-out: each significant candidate, with the values fitted on this run's half cycle ({:.3}–{:.3} s), applied to {} ({:.3}–{:.3} s; the plain model tracked there: J = {:.6}, {} iterations{}) with the other variables re-fitted; it is found if it lowers that cost beyond its noise band (2 sd, inflated by φ, above the mean change a fit to noise makes, which is a rise).",
@@ -665,7 +668,7 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
                         held_out_note += " A plate's clock read from its profile is held there at the profile's vertex and the half cycle solved again in full (the offset moves that plate's events); its band comes from the profile's curvature.";
                     }
                     for t in tests.iter_mut().filter(|t| validated(t)) {
-                        match heldout::check(args, &hb, t, &mut held_out_note) {
+                        match heldout::check(args, hb, t, &mut held_out_note) {
                             Ok(h) => {
                                 note!(progress,
                                     "  held-out {:<32} change {:>10.3e} ({:>5.1} % of J), noise band {:.3e}{}",
@@ -681,11 +684,9 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
                             }
                         }
                     }
-                    held_base = Some(hb);
                 }
                 Err(why) => {
                     held_out_note += &format!(" No held-out half cycle in this trial ({why}): significant candidates are not validated.");
-                    no_held_out = true;
                 }
             }
         }
@@ -698,14 +699,16 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
             let mut c = reference::compare(&tests, r);
             // a significant difference is validated as a reading is: applied, as it is,
             // to this trial's held-out half cycle
-            if args.held_out && !no_held_out && c.differences.iter().any(|d| d.significant) {
+            if args.held_out && c.differences.iter().any(|d| d.significant) {
                 if held_base.is_none() {
-                    match heldout::held_out_base(args, &setup, base.setup.window, progress)? {
-                        Ok(hb) => held_base = Some(hb),
-                        Err(why) => held_out_note += &format!(" No held-out half cycle in this trial ({why}): the differences from the reference are not validated."),
+                    let tracked =
+                        heldout::held_out_base(args, &setup, base.setup.window, progress)?;
+                    if let Err(why) = &tracked {
+                        held_out_note += &format!(" No held-out half cycle in this trial ({why}): the differences from the reference are not validated.");
                     }
+                    held_base = Some(tracked);
                 }
-                if let Some(hb) = &held_base {
+                if let Some(Ok(hb)) = &held_base {
                     held_out_note += &format!(
                         " A candidate whose reading differs significantly from the reference's is applied to {} with the difference as its value, the same way.",
                         heldout::half_cycle_name(hb.stride, hb.mirrored)

@@ -207,6 +207,14 @@ fn validate_held_clock(
     Ok((judged(base, t, base.objective - res.objective), converged))
 }
 
+/// Whether test `t` is a plate's clock read from its refined profile (a re-fit held at
+/// the vertex): validated by a full solve with the clock held, its band from the
+/// parabola's curvature. Other full re-fits (the heel pad, a free profile re-fit) have no
+/// reduced curvature and are not validated.
+pub(super) fn held_clock(t: &ScoreTest) -> bool {
+    t.refit && t.profile.as_ref().is_some_and(|p| p.refined)
+}
+
 /// Validate candidate `t` (at its `step_values`) on the held-out half cycle: a clock read
 /// from its refined profile by a full solve with it held ([`validate_held_clock`]), any
 /// other by a truncated re-fit ([`validate`]). A held-out solve that did not converge is
@@ -217,7 +225,7 @@ pub(super) fn check(
     t: &ScoreTest,
     note: &mut String,
 ) -> anyhow::Result<HeldOut> {
-    if t.refit && t.profile.as_ref().is_some_and(|p| p.refined) {
+    if held_clock(t) {
         let (h, converged) = validate_held_clock(args, base, t)?;
         if !converged {
             *note += &format!(

@@ -221,13 +221,12 @@ fn profile_paragraph(t: &ScoreTest) -> Option<String> {
         })
         .collect::<Vec<_>>()
         .join(", ");
-    let outcome = match (p.start, p.refit) {
-        (Some(start), None) if p.refit_error.is_some() => format!(
-            " The profile is lowest at {:+.0} ms, but its re-fit failed ({}): the score test stands",
-            1e3 * start,
-            p.refit_error.as_deref().unwrap_or_default()
+    let outcome = match (p.start, p.refit, p.refit_error.as_deref()) {
+        (Some(start), None, Some(error)) => format!(
+            " The profile is lowest at {:+.0} ms, but its re-fit failed ({error}): the score test stands",
+            1e3 * start
         ),
-        (Some(start), Some((value, j))) => format!(
+        (Some(start), Some((value, j)), _) => format!(
             "{}; {}",
             if p.refined {
                 format!(" With one-sided or sample targets a free offset cannot move its plate's events, so the profile is refined instead: the parabola through the lowest point ({:+.0} ms) and its neighbours has its vertex at {:+.1} ms, where the re-fit held there reaches J = {j:.4}", 1e3 * start, 1e3 * value)
