@@ -347,8 +347,21 @@ pub struct HeldOut {
     /// deviations above the mean change a candidate fitted on noise makes (which is
     /// negative).
     pub band: f64,
-    /// Whether `change` exceeds `band`.
+    /// Whether `change` exceeds `band` (with `reference_change`: whether `change −
+    /// reference_change` does).
     pub beyond_noise: bool,
+    /// For a difference from a reference trial: the change the same values make on the
+    /// reference's own held-out half cycle (the same half cycle, tracked the same way).
+    /// The difference is judged by `change − reference_change`, in which the model's
+    /// bias on that half cycle cancels, against the paired band
+    /// ([`stats::paired_held_out_band`]) at `reference_curvature`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference_change: Option<f64>,
+    /// For a difference from a reference trial: the held-out cost's curvature along the
+    /// values, `q = θᵀHθ`, from the reference's changes at `θ` and `−θ` on that half
+    /// cycle (`−(Δ_ref(θ) + Δ_ref(−θ))`); the paired band's.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reference_curvature: Option<f64>,
 }
 
 /// Mean error per Table 3 channel of the tracking solution in `w` against `data`.

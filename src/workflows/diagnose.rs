@@ -697,8 +697,10 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
     let comparison = match &reference {
         Some(r) => {
             let mut c = reference::compare(&tests, r);
-            // a significant difference is validated as a reading is: applied, as it is,
-            // to this trial's held-out half cycle
+            // a significant difference is validated on a held-out half cycle: applied,
+            // as the candidate's value, to that half cycle of this trial and of the
+            // reference, and judged by this trial's change less the reference's, in
+            // which the model's bias on that half cycle cancels
             if args.held_out && c.differences.iter().any(|d| d.significant) {
                 if held_base.is_none() {
                     let tracked =
@@ -709,10 +711,21 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
                     held_base = Some(tracked);
                 }
                 if let Some(Ok(hb)) = &held_base {
-                    held_out_note += &format!(
-                        " A candidate whose reading differs significantly from the reference's is applied to {} with the difference as its value, the same way.",
-                        heldout::half_cycle_name(hb.stride, hb.mirrored)
-                    );
+                    let name = heldout::half_cycle_name(hb.stride, hb.mirrored);
+                    let their_base = match r.run_folder() {
+                        None => Err("its track run folder was not found".to_string()),
+                        Some(run) => read_run_setup(&run)
+                            .and_then(|s| heldout::held_out_base_like(args, &s, hb, progress))
+                            .map_err(|e| format!("{}: {e:#}", run.display())),
+                    };
+                    match &their_base {
+                        Ok(_) => held_out_note += &format!(
+                            " A candidate whose reading differs significantly from the reference's is applied, with the difference as its value, to {name} of this trial and of the reference (each tracked there with the plain model first), the same way; it is confirmed if this trial's change less the reference's exceeds the paired band (two sd of the difference of two changes, at the curvature of the reference's cost there, from its changes at the difference and at its opposite). The model's bias on that half cycle is in both changes and cancels."
+                        ),
+                        Err(why) => held_out_note += &format!(
+                            " A candidate whose reading differs significantly from the reference's is applied to {name} with the difference as its value, the same way. The reference's {name} could not be tracked ({why}), so each difference is judged by this trial's change alone, which the model's bias on that half cycle moves."
+                        ),
+                    }
                     let differing: Vec<String> = c
                         .differences
                         .iter()
@@ -733,11 +746,27 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
                                 .collect(),
                             ..t.clone()
                         };
-                        match heldout::check(args, hb, &probe, &mut held_out_note) {
+                        let validated = heldout::check(args, hb, &probe, &mut held_out_note)
+                            .and_then(|own| match &their_base {
+                                Ok(rb) => {
+                                    let mut at = |p: &ScoreTest| {
+                                        heldout::check(args, rb, p, &mut held_out_note).map_err(
+                                            |e| e.context("on the reference's held-out half cycle"),
+                                        )
+                                    };
+                                    let theirs = at(&probe)?;
+                                    let opposite = at(&heldout::opposite(&probe))?;
+                                    Ok(heldout::paired(hb.s2, &probe, own, &theirs, &opposite))
+                                }
+                                Err(_) => Ok(own),
+                            });
+                        match validated {
                             Ok(h) => {
                                 note!(progress,
-                                    "  held-out {:<32} its difference from the reference: change {:>10.3e} ({:>5.1} % of J), noise band {:.3e}{}",
-                                    t.label, h.change, 100.0 * h.change_fraction, h.band,
+                                    "  held-out {:<32} its difference from the reference: change {:>10.3e} ({:>5.1} % of J){}, noise band {:.3e}{}",
+                                    t.label, h.change, 100.0 * h.change_fraction,
+                                    h.reference_change.map_or(String::new(), |rc| format!(", the reference's {rc:.3e}")),
+                                    h.band,
                                     if h.beyond_noise { "  confirmed" } else { "  not confirmed" });
                                 for d in c.differences.iter_mut().filter(|d| d.label == t.label) {
                                     d.held_out = Some(h.clone());

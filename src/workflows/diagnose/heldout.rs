@@ -18,7 +18,7 @@ use super::super::track::{TrackedRun, TrackingProblem};
 use super::super::{note, Progress};
 use super::{sibling, DiagnoseRequest};
 use crate::model::effects::EffectSpec;
-use crate::problems::diagnose::stats::{curvature_along, held_out_band};
+use crate::problems::diagnose::stats::{curvature_along, held_out_band, paired_held_out_band};
 use crate::problems::diagnose::{
     truncated_refit, HeldOut, ScoreTest, TrackingRunSetup, MAX_STEPS, REL_STOP,
 };
@@ -71,61 +71,98 @@ pub(super) fn held_out_base(
 ) -> anyhow::Result<Result<HeldOutBase, String>> {
     let mut why = Vec::new();
     for (stride, mirrored) in strides(run) {
-        let setup = TrackingRunSetup {
-            stride: Some(stride),
-            mirror: run.mirror != mirrored,
-            window: None,
-            check_points: vec![],
-            ..run.clone()
-        };
         let name = half_cycle_name(stride, mirrored);
-        let prob = match TrackingProblem::build(&setup, &[]) {
+        let (setup, prob) = match half_cycle(run, stride, mirrored) {
             Ok(p) => p,
             Err(e) => {
                 why.push(format!("{name}: {e:#}"));
                 continue;
             }
         };
-        let window = prob.setup.window;
-        if !mirrored && (window.0 - run_window.0).abs() < 1e-6 {
+        if !mirrored && (prob.setup.window.0 - run_window.0).abs() < 1e-6 {
             why.push(format!("{name} is the run's own"));
             continue;
         }
-        {
-            note!(
-                progress,
-                "held-out {name} ({:.3}–{:.3} s): tracking the plain model there",
-                window.0,
-                window.1
-            );
-        }
-        let settings = super::refit::full_solve_settings(args, &prob);
-        let (res, solution) = prob.solve(&settings, &super::super::Quiet)?;
-        let mut at = TrackingProblem::build(&setup, &[])?;
-        at.setup.start_from(&solution).map_err(|e| anyhow!(e))?;
-        let (objective, leftover, rows) = super::decrease_at_solution(&at)?;
-        {
-            note!(
-                progress,
-                "  held-out J = {objective:.6} ({} iterations{}), Gauss–Newton decrease left {leftover:.2e}",
-                res.history.len().saturating_sub(1),
-                if res.status == crate::sqp::SqpStatus::Converged { "" } else { ", not converged" }
-            );
-        }
-        return Ok(Ok(HeldOutBase {
-            stride,
-            mirrored,
-            window,
-            objective,
-            leftover,
-            s2: objective / rows.max(1) as f64,
-            iterations: res.history.len().saturating_sub(1),
-            converged: res.status == crate::sqp::SqpStatus::Converged,
-            solution,
-            setup,
-        }));
+        return track_base(args, setup, prob, stride, mirrored, progress).map(Ok);
     }
     Ok(Err(why.join("; ")))
+}
+
+/// Track the plain model of another run (`run`, a reference trial's) on the half cycle
+/// `like` was: the same stride, the legs swapped or not against that run's own.
+pub(super) fn held_out_base_like(
+    args: &DiagnoseRequest,
+    run: &TrackingRunSetup,
+    like: &HeldOutBase,
+    progress: &dyn Progress,
+) -> anyhow::Result<HeldOutBase> {
+    let (setup, prob) = half_cycle(run, like.stride, like.mirrored)?;
+    track_base(args, setup, prob, like.stride, like.mirrored, progress)
+}
+
+/// The setup and the plain problem of `run`'s half cycle `stride` (legs swapped against
+/// the run's own when `mirrored`).
+fn half_cycle(
+    run: &TrackingRunSetup,
+    stride: usize,
+    mirrored: bool,
+) -> anyhow::Result<(TrackingRunSetup, TrackingProblem)> {
+    let setup = TrackingRunSetup {
+        stride: Some(stride),
+        mirror: run.mirror != mirrored,
+        window: None,
+        check_points: vec![],
+        ..run.clone()
+    };
+    let prob = TrackingProblem::build(&setup, &[])?;
+    Ok((setup, prob))
+}
+
+/// Solve the plain problem `prob` of half cycle `stride` in full, and its Gauss–Newton
+/// decrease left at the solution.
+fn track_base(
+    args: &DiagnoseRequest,
+    setup: TrackingRunSetup,
+    prob: TrackingProblem,
+    stride: usize,
+    mirrored: bool,
+    progress: &dyn Progress,
+) -> anyhow::Result<HeldOutBase> {
+    let window = prob.setup.window;
+    {
+        note!(
+            progress,
+            "held-out {} ({:.3}–{:.3} s): tracking the plain model there",
+            half_cycle_name(stride, mirrored),
+            window.0,
+            window.1
+        );
+    }
+    let settings = super::refit::full_solve_settings(args, &prob);
+    let (res, solution) = prob.solve(&settings, &super::super::Quiet)?;
+    let mut at = TrackingProblem::build(&setup, &[])?;
+    at.setup.start_from(&solution).map_err(|e| anyhow!(e))?;
+    let (objective, leftover, rows) = super::decrease_at_solution(&at)?;
+    {
+        note!(
+            progress,
+            "  held-out J = {objective:.6} ({} iterations{}), Gauss–Newton decrease left {leftover:.2e}",
+            res.history.len().saturating_sub(1),
+            if res.status == crate::sqp::SqpStatus::Converged { "" } else { ", not converged" }
+        );
+    }
+    Ok(HeldOutBase {
+        stride,
+        mirrored,
+        window,
+        objective,
+        leftover,
+        s2: objective / rows.max(1) as f64,
+        iterations: res.history.len().saturating_sub(1),
+        converged: res.status == crate::sqp::SqpStatus::Converged,
+        solution,
+        setup,
+    })
 }
 
 /// How a held-out half cycle is named: `half cycle 2`, or `half cycle 1 of the other
@@ -256,6 +293,56 @@ fn judged(base: &HeldOutBase, t: &ScoreTest, change: f64) -> HeldOut {
         band,
         // a candidate without curvature here (q = 0) has no band: it must lower the cost
         beyond_noise: change > band.max(0.0) && q > 0.0,
+        reference_change: None,
+        reference_curvature: None,
+    }
+}
+
+/// A difference from a reference trial (`t`, its values `θ` the difference), validated
+/// on this trial's held-out half cycle (`own`, from [`check`]) and on the same half cycle
+/// of the reference at `θ` (`theirs`) and at `−θ` (`theirs_opposite`). It is judged by
+/// `own.change − theirs.change` against the paired band ([`paired_held_out_band`]). The
+/// model's bias is a property of the half cycle: on the bundled trial the rigid ellipse
+/// wants the push-off plate's forces late and the heel-strike plate's early, and the
+/// right plate is the push-off plate in the tracked half cycle and the heel-strike plate
+/// in the held-out one (`docs/instruments.md`, stop 62). So the difference applied from
+/// zero is judged against that half cycle's bias. In the two trials' changes the bias is
+/// the same and cancels. The band's curvature is the held-out half cycle's own,
+/// `q = −(Δ_ref(θ) + Δ_ref(−θ))` (a second difference of the reference's cost, which
+/// does not see this trial's held-out data). The run's curvature can differ from it by a
+/// factor of two: on the synthetic clock trial of `tests/diagnose_stats.rs` the held-out
+/// change was half the run's `a θ²`. Without curvature there (`q ≤ 0`) nothing is
+/// confirmed. `s2` is the residual mean square `J/N` on this trial's held-out half cycle.
+pub(super) fn paired(
+    s2: f64,
+    t: &ScoreTest,
+    own: HeldOut,
+    theirs: &HeldOut,
+    theirs_opposite: &HeldOut,
+) -> HeldOut {
+    let q = -(theirs.change + theirs_opposite.change);
+    // without curvature there is no band (0 here, kept finite for summary.json), and
+    // nothing is confirmed
+    let band = if q > 0.0 {
+        paired_held_out_band(q, s2, t.inflation)
+    } else {
+        0.0
+    };
+    HeldOut {
+        band,
+        beyond_noise: q > 0.0 && own.change - theirs.change > band,
+        reference_change: Some(theirs.change),
+        reference_curvature: Some(q),
+        ..own
+    }
+}
+
+/// `t` with its values negated: the reference's held-out cost at `−θ`, for the
+/// curvature of [`paired`].
+pub(super) fn opposite(t: &ScoreTest) -> ScoreTest {
+    ScoreTest {
+        step_values: t.step_values.iter().map(|v| -v).collect(),
+        ..t.clone()
     }
 }
 
@@ -308,10 +395,11 @@ pub(super) fn retrack_with_pelvis(
 
 #[cfg(test)]
 mod tests {
-    use super::band;
+    use super::{band, paired};
     use crate::model::effects::EffectSpec;
     use crate::problems::diagnose::refit_test;
     use crate::problems::diagnose::stats::identifiability;
+    use crate::problems::diagnose::HeldOut;
 
     /// A clock read from its profile's parabola `J ≈ J* + a (δ − δ*)²` and applied to
     /// held-out data with the same offset lowers that cost by about `a δ*²`. That clears
@@ -348,5 +436,83 @@ mod tests {
                 "k {k}: change {true_change}, band {edge}"
             );
         }
+    }
+
+    /// A difference `v` between a trial's clock reading and a reference's, both biased
+    /// by the model on the held-out half cycle (its cost there `a₂ (x − r)²` in the
+    /// reference, `a₂ (x − r − v)²` in the trial): applied from zero, it changes the
+    /// trial's cost by `a₂ (2 r v + v²)` and the reference's by `a₂ (2 r v − v²)`, and
+    /// at `−v` the reference's by `−a₂ (2 r v + v²)`. The paired change `2 a₂ v²` does not
+    /// depend on the bias `r`; the curvature `q = 2 a₂ v²` comes from the reference's two
+    /// changes, whatever the run's curvature `a`. It clears the paired band exactly when
+    /// `v` lies more than 2 sd of the difference (`√2` times each reading's sd at the
+    /// held-out curvature) from zero. Judged on the trial's change alone, a bias against
+    /// the difference hides it.
+    #[test]
+    fn a_paired_held_out_change_cancels_the_half_cycles_bias() {
+        let (a, s2, phi): (f64, f64, f64) = (600.6, 0.3994 / 456.0, 5.2);
+        let name = "force_plate_time_offset.right.offset".to_string();
+        let clock = EffectSpec::ForcePlateTimeOffset {
+            side: "right".into(),
+            offset: 0.0,
+            free: vec!["offset".into()],
+        };
+        let held = |change: f64| HeldOut {
+            stride: 1,
+            mirrored: true,
+            window: (0.6, 1.2),
+            values: vec![],
+            objective: 1.6,
+            change,
+            change_fraction: change / 1.6,
+            band: 0.0,
+            beyond_noise: false,
+            reference_change: None,
+            reference_curvature: None,
+        };
+        for a2 in [a, 0.5 * a] {
+            let sd = (phi * s2 / a2).sqrt();
+            for r in [-0.045, -0.01, 0.0, 0.03] {
+                for k in [0.5, 1.5, 1.95, 2.05, 3.0, 6.0] {
+                    let v = k * 2f64.sqrt() * sd;
+                    let mut t = refit_test(&clock, vec![name.clone()], vec![v], 1.7, 1.6, 456, 9);
+                    t.set_inflation(phi);
+                    let id = identifiability(
+                        vec![name.clone()],
+                        vec![vec![0.5 / a]],
+                        vec![0.1],
+                        s2,
+                        phi,
+                    );
+                    t.set_identifiability(id, None);
+                    let own = held(a2 * (2.0 * r * v + v * v));
+                    let theirs = held(a2 * (2.0 * r * v - v * v));
+                    let opposite = held(-a2 * (2.0 * r * v + v * v));
+                    let h = paired(s2, &t, own, &theirs, &opposite);
+                    assert_eq!(h.reference_change, Some(theirs.change));
+                    let q = h.reference_curvature.unwrap();
+                    assert!((q - 2.0 * a2 * v * v).abs() < 1e-12 * q.max(1e-12), "q {q}");
+                    assert!(((h.change - theirs.change) - q).abs() < 1e-12);
+                    assert_eq!(
+                        h.beyond_noise,
+                        k > 2.0,
+                        "a₂ {a2}, bias {r}, k {k}: paired change {}, band {}",
+                        h.change - theirs.change,
+                        h.band
+                    );
+                }
+            }
+        }
+        // a reference whose held-out cost does not curve along the difference confirms
+        // nothing
+        let mut t = refit_test(&clock, vec![name.clone()], vec![0.02], 1.7, 1.6, 456, 9);
+        t.set_inflation(phi);
+        let flat = paired(s2, &t, held(0.5), &held(0.0), &held(0.0));
+        assert!(!flat.beyond_noise && flat.band == 0.0);
+        let sd = (phi * s2 / a).sqrt();
+        // the rigid ellipse's held-out bias on the bundled trial is of this size: judged
+        // alone, the trial's change of a difference 6 sd from zero is a rise
+        let v = 6.0 * 2f64.sqrt() * sd;
+        assert!(a * (2.0 * -0.045 * v + v * v) < 0.0);
     }
 }

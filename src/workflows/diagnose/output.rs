@@ -149,7 +149,7 @@ fn comparison_section(c: &super::reference::Comparison) -> (String, Table) {
         if significant.is_empty() {
             "No reading differs significantly from the reference's.".to_string()
         } else {
-            format!("Differs significantly from the reference: {}. A significant difference is applied, as the candidate's value, to this trial's held-out half cycle and is confirmed there as a candidate is.", significant.join(", "))
+            format!("Differs significantly from the reference: {}. A significant difference is applied, as the candidate's value, to the held-out half cycle of this trial and of the reference; it is confirmed when this trial's change there less the reference's exceeds the paired noise band (the held-out note says how, and whether the reference's half cycle could be tracked).", significant.join(", "))
         }
     );
     if !c.not_compared.is_empty() {
@@ -182,13 +182,27 @@ fn comparison_section(c: &super::reference::Comparison) -> (String, Table) {
                     format!("{:+.4e}", d.difference),
                     format!("{:.2e}", d.sd),
                     format!("{:+.1}", d.z),
-                    d.held_out.as_ref().map_or("—".into(), |h| {
-                        format!(
+                    d.held_out.as_ref().map_or("—".into(), |h| match h.reference_change {
+                        // the trial's change less the reference's, against the paired band
+                        Some(_) if !h.reference_curvature.is_some_and(|q| q > 0.0) => format!(
+                            "{:.3e} ({:.1} % of J); the reference's cost there does not curve along the difference",
+                            h.change,
+                            100.0 * h.change_fraction
+                        ),
+                        Some(rc) => format!(
+                            "{:.3e} ({:.1} % of J) − the reference's {:.3e} = {:.3e} vs {:.3e}",
+                            h.change,
+                            100.0 * h.change_fraction,
+                            rc,
+                            h.change - rc,
+                            h.band
+                        ),
+                        None => format!(
                             "{:.3e} ({:.1} % of J) vs {:.3e}",
                             h.change,
                             100.0 * h.change_fraction,
                             h.band
-                        )
+                        ),
                     }),
                     match (&d.held_out, d.significant) {
                         (_, false) => "same within noise".into(),

@@ -99,10 +99,29 @@ fn sds(t: &ScoreTest) -> &[Option<f64>] {
 
 /// A reference trial's diagnosis, read once before any work and compared with at the end.
 pub(super) struct Reference {
+    /// `--reference` as given (the run or its diagnosis folder).
+    given: PathBuf,
     /// Its diagnosis folder.
     folder: PathBuf,
     /// Its diagnosis.
     summary: DiagnosisSummary,
+}
+
+impl Reference {
+    /// The reference's track run folder, for tracking its held-out half cycle:
+    /// `--reference` itself when that is the run, else the run its diagnosis names (as
+    /// it was given then, or by that name beside the diagnosis folder). `None` when none
+    /// of these holds a run.
+    pub(super) fn run_folder(&self) -> Option<PathBuf> {
+        let named = &self.summary.run;
+        let beside = named
+            .file_name()
+            .and_then(|n| self.folder.parent().map(|p| p.join(n)));
+        [Some(self.given.clone()), Some(named.clone()), beside]
+            .into_iter()
+            .flatten()
+            .find(|p| *p != self.folder && p.join("setup.json").is_file())
+    }
 }
 
 /// The diagnosis of `reference` (a run or its diagnosis folder), or an error naming what
@@ -121,12 +140,18 @@ pub(super) fn read_reference(reference: &Path) -> anyhow::Result<Reference> {
     }
     let summary = DiagnosisSummary::read(&folder)
         .map_err(|e| anyhow!("--reference {}: {e}", reference.display()))?;
-    Ok(Reference { folder, summary })
+    Ok(Reference {
+        given: reference.to_path_buf(),
+        folder,
+        summary,
+    })
 }
 
 /// Compare `tests` (this run's settled tests) with the diagnosis of `reference`.
 pub(super) fn compare(tests: &[ScoreTest], reference: &Reference) -> Comparison {
-    let Reference { folder, summary } = reference;
+    let Reference {
+        folder, summary, ..
+    } = reference;
     let theirs: Vec<&ScoreTest> = summary.ranking.iter().filter(|t| t.testable).collect();
     let mut pairs = Vec::new();
     let mut not_compared = Vec::new();
