@@ -401,6 +401,23 @@ mod tests {
     use crate::problems::diagnose::stats::identifiability;
     use crate::problems::diagnose::HeldOut;
 
+    /// A right-plate clock read with the curvature `a` of a profile of the bundled
+    /// trial's size, at residual mean square `s2` and variance inflation `phi`.
+    const A: f64 = 600.6;
+    const S2: f64 = 0.3994 / 456.0;
+    const PHI: f64 = 5.2;
+
+    fn right_clock() -> (String, EffectSpec) {
+        (
+            "force_plate_time_offset.right.offset".to_string(),
+            EffectSpec::ForcePlateTimeOffset {
+                side: "right".into(),
+                offset: 0.0,
+                free: vec!["offset".into()],
+            },
+        )
+    }
+
     /// A clock read from its profile's parabola `J ≈ J* + a (δ − δ*)²` and applied to
     /// held-out data with the same offset lowers that cost by about `a δ*²`. That clears
     /// the held-out band exactly when the reading lies more than 2 sd from zero, the sd
@@ -408,13 +425,8 @@ mod tests {
     /// are one noise model.
     #[test]
     fn a_profile_reading_clears_its_held_out_band_beyond_two_sd() {
-        let (a, s2, phi): (f64, f64, f64) = (600.6, 0.3994 / 456.0, 5.2);
-        let name = "force_plate_time_offset.right.offset".to_string();
-        let clock = EffectSpec::ForcePlateTimeOffset {
-            side: "right".into(),
-            offset: 0.0,
-            free: vec!["offset".into()],
-        };
+        let (a, s2, phi) = (A, S2, PHI);
+        let (name, clock) = right_clock();
         let sd = (phi * s2 / a).sqrt();
         for k in [0.5, 1.5, 1.95, 2.05, 3.0, 6.0] {
             let v = k * sd;
@@ -450,13 +462,8 @@ mod tests {
     /// the difference hides it.
     #[test]
     fn a_paired_held_out_change_cancels_the_half_cycles_bias() {
-        let (a, s2, phi): (f64, f64, f64) = (600.6, 0.3994 / 456.0, 5.2);
-        let name = "force_plate_time_offset.right.offset".to_string();
-        let clock = EffectSpec::ForcePlateTimeOffset {
-            side: "right".into(),
-            offset: 0.0,
-            free: vec!["offset".into()],
-        };
+        let (a, s2, phi) = (A, S2, PHI);
+        let (name, clock) = right_clock();
         let held = |change: f64| HeldOut {
             stride: 1,
             mirrored: true,

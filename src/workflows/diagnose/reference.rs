@@ -304,6 +304,29 @@ mod tests {
         );
     }
 
+    /// The reference's run folder, for its held-out half cycle: `--reference` itself when
+    /// that is the run; from its diagnosis folder, the run the diagnosis names or a folder
+    /// of that name beside the diagnosis (one made from another working directory);
+    /// none when no such folder holds a run.
+    #[test]
+    fn the_reference_run_is_found_from_the_run_or_its_diagnosis() {
+        let dir = tempfile::tempdir().unwrap();
+        let run = dir.path().join("U");
+        let diagnosis = dir.path().join("U-diagnose");
+        std::fs::create_dir(&diagnosis).unwrap();
+        reference_with(&diagnosis, 0.0, 0.003, false);
+        let from_diagnosis = || {
+            let mut r = read_reference(&diagnosis).unwrap();
+            r.summary.run = PathBuf::from("elsewhere").join("U");
+            r
+        };
+        assert_eq!(from_diagnosis().run_folder(), None);
+        std::fs::create_dir(&run).unwrap();
+        std::fs::write(run.join("setup.json"), "{}").unwrap();
+        assert_eq!(from_diagnosis().run_folder(), Some(run.clone()));
+        assert_eq!(read_reference(&run).unwrap().run_folder(), Some(run));
+    }
+
     /// A reference that has not been diagnosed is named before any work: `diagnose`
     /// stops on it even before it reads the run, and writes no output folder.
     #[test]
