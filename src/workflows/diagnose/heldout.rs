@@ -11,7 +11,8 @@
 //! plain model is tracked once; each candidate's change
 //! of that cost, after a truncated re-fit of the other variables, must exceed its noise
 //! band ([`crate::problems::diagnose::stats::held_out_band`]) for the candidate to be
-//! "found".
+//! "found". A difference from a reference trial (`--reference`) is judged on the same
+//! half cycle of both trials, by the trial's change less the reference's ([`paired`]).
 
 use super::super::track::{TrackedRun, TrackingProblem};
 #[allow(unused_imports)]
