@@ -246,18 +246,22 @@ pub(super) fn multiply(n: usize, inverse: &[f64], b: &[f64], x: &mut [f64]) {
 mod tests {
     use super::{factor, invert, multiply, substitute};
 
+    /// Uniform numbers in [−0.5, 0.5) from a linear congruential generator.
+    fn uniform(mut seed: u64) -> impl FnMut() -> f64 {
+        move || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        }
+    }
+
     /// The LU solve against nalgebra's on matrices that need pivoting, and a singular
     /// matrix reported by the column of its zero pivot.
     #[test]
     fn dense_lu_solves_like_nalgebra_and_reports_a_zero_pivot() {
         let n = 30;
-        let mut seed = 12345u64;
-        let mut rand = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut rand = uniform(12345u64);
         for trial in 0..5 {
             // small diagonal: every column needs a row exchange somewhere
             let a =
@@ -290,13 +294,7 @@ mod tests {
     #[test]
     fn the_inverse_solves_as_the_substitution_does() {
         let n = 30;
-        let mut seed = 987654321u64;
-        let mut rand = || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut rand = uniform(987654321u64);
         for (trial, (gamma, diagonal, tol)) in [
             (1e-4, 1.0, 1e-14),
             (1e-2, 1.0, 1e-13),
