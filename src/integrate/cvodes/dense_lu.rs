@@ -5,14 +5,6 @@
 //! gait model with 55 columns. SUNDIALS's own dense solver (`SUNDlsMat_denseGETRS`)
 //! spent a third of the interval's time there; this one factors with partial pivoting
 //! into one contiguous column-major block and substitutes over contiguous columns.
-//!
-//! A factorisation serves many solves (about 450 per setup with 55 sensitivity columns),
-//! and a forward and back substitution is a chain of short dependent updates. Once one
-//! factorisation has served as many solves as the system has unknowns, the solver forms
-//! the explicit inverse (one substitution per column) and answers the rest with a
-//! product, about 2.6 times faster at n = 30. The Newton corrector's convergence test,
-//! not the linear solve, sets the answer's accuracy; integrations without sensitivities
-//! (about seven solves per setup) never reach the switch.
 #![allow(unsafe_code)]
 
 use std::ffi::c_int;
@@ -27,13 +19,6 @@ struct Content {
     pivots: Vec<usize>,
     /// 0, or the 1-based column of a zero pivot found by the last setup.
     last_flag: i64,
-    /// Solves answered since the last setup.
-    solves: usize,
-    /// The inverse of the last setup's matrix, column-major, once `solves` passed `n`
-    /// (empty before).
-    inverse: Vec<f64>,
-    /// A copy of the right-hand side when CVODES solves in place.
-    rhs: Vec<f64>,
 }
 
 /// A new solver for `n × n` dense matrices; null if SUNDIALS cannot allocate it.
@@ -51,9 +36,6 @@ pub(super) unsafe fn new(n: usize, ctx: sys::SUNContext) -> sys::SUNLinearSolver
         lu: vec![0.0; n * n],
         pivots: vec![0; n],
         last_flag: 0,
-        solves: 0,
-        inverse: Vec::with_capacity(n * n),
-        rhs: vec![0.0; n],
     });
     // SAFETY: `s` and its ops were just allocated by SUNDIALS and are ours to fill.
     unsafe {
@@ -98,8 +80,6 @@ unsafe extern "C" fn setup(s: sys::SUNLinearSolver, a: sys::SUNMatrix) -> c_int 
         )
     };
     c.lu.copy_from_slice(data);
-    c.solves = 0;
-    c.inverse.clear();
     c.last_flag = factor(c.n, &mut c.lu, &mut c.pivots);
     if c.last_flag == 0 {
         0
@@ -108,8 +88,7 @@ unsafe extern "C" fn setup(s: sys::SUNLinearSolver, a: sys::SUNMatrix) -> c_int 
     }
 }
 
-/// x = A⁻¹ b from the factors of the last setup, or from its inverse once the factors
-/// have served `n` solves.
+/// x = A⁻¹ b from the factors of the last setup.
 unsafe extern "C" fn solve(
     s: sys::SUNLinearSolver,
     _a: sys::SUNMatrix,
@@ -124,19 +103,10 @@ unsafe extern "C" fn solve(
         let n = c.n;
         let bp = sys::N_VGetArrayPointer(b);
         let xp = sys::N_VGetArrayPointer(x);
-        c.solves += 1;
-        if c.inverse.is_empty() && c.solves > n {
-            invert(n, &c.lu, &c.pivots, &mut c.inverse);
+        if bp != xp {
+            std::ptr::copy_nonoverlapping(bp, xp, n);
         }
-        if c.inverse.is_empty() {
-            if bp != xp {
-                std::ptr::copy_nonoverlapping(bp, xp, n);
-            }
-            substitute(n, &c.lu, &c.pivots, std::slice::from_raw_parts_mut(xp, n));
-        } else {
-            c.rhs.copy_from_slice(std::slice::from_raw_parts(bp, n));
-            multiply(n, &c.inverse, &c.rhs, std::slice::from_raw_parts_mut(xp, n));
-        }
+        substitute(n, &c.lu, &c.pivots, std::slice::from_raw_parts_mut(xp, n));
     }
     0
 }
@@ -219,49 +189,22 @@ pub(super) fn substitute(n: usize, lu: &[f64], pivots: &[usize], x: &mut [f64]) 
     }
 }
 
-/// The inverse (column-major, `n × n`, written into the empty `inverse`) from the
-/// factors of [`factor`]: one substitution per unit vector.
-pub(super) fn invert(n: usize, lu: &[f64], pivots: &[usize], inverse: &mut Vec<f64>) {
-    inverse.clear();
-    inverse.resize(n * n, 0.0);
-    for (j, col) in inverse.chunks_exact_mut(n).enumerate() {
-        col[j] = 1.0;
-        substitute(n, lu, pivots, col);
-    }
-}
-
-/// `x = A⁻¹ b` with the column-major inverse: a sum of its columns.
-pub(super) fn multiply(n: usize, inverse: &[f64], b: &[f64], x: &mut [f64]) {
-    x.fill(0.0);
-    for (col, &bj) in inverse.chunks_exact(n).zip(b) {
-        if bj != 0.0 {
-            for (v, a) in x.iter_mut().zip(col) {
-                *v += a * bj;
-            }
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
-    use super::{factor, invert, multiply, substitute};
-
-    /// Uniform numbers in [−0.5, 0.5) from a linear congruential generator.
-    fn uniform(mut seed: u64) -> impl FnMut() -> f64 {
-        move || {
-            seed = seed
-                .wrapping_mul(6364136223846793005)
-                .wrapping_add(1442695040888963407);
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        }
-    }
+    use super::{factor, substitute};
 
     /// The LU solve against nalgebra's on matrices that need pivoting, and a singular
     /// matrix reported by the column of its zero pivot.
     #[test]
     fn dense_lu_solves_like_nalgebra_and_reports_a_zero_pivot() {
         let n = 30;
-        let mut rand = uniform(12345u64);
+        let mut seed = 12345u64;
+        let mut rand = || {
+            seed = seed
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
         for trial in 0..5 {
             // small diagonal: every column needs a row exchange somewhere
             let a =
@@ -287,44 +230,5 @@ mod tests {
         a[(2, 2)] = 0.0;
         let mut lu = a.as_slice().to_vec();
         assert_eq!(factor(4, &mut lu, &mut [0; 4]), 3);
-    }
-
-    /// The inverse's product against nalgebra's LU solve, on Newton matrices `I − γJ` of
-    /// CVODES's form and on matrices that need pivoting; and it is the inverse: `A A⁻¹ = I`.
-    #[test]
-    fn the_inverse_solves_as_the_substitution_does() {
-        let n = 30;
-        let mut rand = uniform(987654321u64);
-        for (trial, (gamma, diagonal, tol)) in [
-            (1e-4, 1.0, 1e-14),
-            (1e-2, 1.0, 1e-13),
-            (1.0, 0.0, 1e-10),
-            (1.0, 1e-3, 1e-10),
-        ]
-        .into_iter()
-        .enumerate()
-        {
-            let a = nalgebra::DMatrix::from_fn(n, n, |i, j| {
-                let identity = if i == j { diagonal } else { 0.0 };
-                identity - gamma * 40.0 * rand()
-            });
-            let mut lu: Vec<f64> = a.as_slice().to_vec();
-            let mut piv = vec![0; n];
-            assert_eq!(factor(n, &mut lu, &mut piv), 0);
-            let mut inverse = Vec::new();
-            invert(n, &lu, &piv, &mut inverse);
-            let product = &a * nalgebra::DMatrix::from_column_slice(n, n, &inverse);
-            let off = (product - nalgebra::DMatrix::<f64>::identity(n, n)).amax();
-            assert!(off < tol, "trial {trial}: A A⁻¹ − I = {off}");
-            let decomposition = a.clone().lu();
-            for _ in 0..5 {
-                let b = nalgebra::DVector::from_fn(n, |_, _| rand());
-                let mut x = vec![f64::NAN; n];
-                multiply(n, &inverse, b.as_slice(), &mut x);
-                let want = decomposition.solve(&b).unwrap();
-                let err = (nalgebra::DVector::from_vec(x) - &want).amax() / want.amax();
-                assert!(err < tol, "trial {trial}: relative error {err}");
-            }
-        }
     }
 }
