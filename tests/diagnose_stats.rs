@@ -69,11 +69,21 @@ fn diagnose_with(req: &DiagnoseRequest) -> Value {
     )))
 }
 
-/// `run` diagnosed by `candidates` with held-out validation.
-fn diagnose(run: &Path, candidates: &[&str], make_testable: bool) -> Value {
+/// `run` diagnosed by `candidates` with held-out validation, its solves (the held-out
+/// track, `--make-testable`'s re-track) started from the kept solutions in
+/// tests/data/hidden/`starts` (written by tools/make-diagnosis-starts; each solve
+/// re-evaluates its start and iterates on only if it is not a KKT point of the current
+/// problem).
+fn diagnose(run: &Path, candidates: &[&str], make_testable: bool, starts: &str) -> Value {
+    let kept = root().join("tests/data/hidden").join(starts);
     diagnose_with(&DiagnoseRequest {
         make_testable,
         held_out: true,
+        starts: if kept.is_dir() {
+            vec![kept]
+        } else {
+            Vec::new()
+        },
         ..request(run, candidates)
     })
 }
@@ -167,6 +177,7 @@ fn a_cop_offset_is_untestable_under_the_seed_cost_and_found_when_made_testable()
             "heel_pad_compliance",
         ],
         true,
+        "cop_offset/starts_seed",
     );
     print_ranking(&d);
     check_every_candidate(&d);
@@ -450,7 +461,7 @@ fn the_real_trials_mtg_damping_is_found_and_confirmed_on_the_other_legs_half_cyc
         tracked.result.objective
     );
     assert!(tracked.converged, "{}", tracked.result.status);
-    let d = diagnose(&run, &["mtg_damping"], false);
+    let d = diagnose(&run, &["mtg_damping"], false, "base_starts");
     print_ranking(&d);
     let t = &d["ranking"][0];
     assert_eq!(t["effect"]["type"], "mtg_damping");

@@ -180,14 +180,41 @@ fn baseline(name: &str, dir: &Path, how: Setup) -> PathBuf {
     out
 }
 
+/// The kept solutions of trial `name`'s diagnoses under `how`
+/// (tests/data/hidden/<trial>/starts_<setup>, written by tools/make-diagnosis-starts):
+/// `diagnose` starts its own solves (the verifying re-fits, the heel pad's test by a
+/// re-fit, the held-out half cycle's track) from them. Each solve re-evaluates its start
+/// and iterates on only if it is not a KKT point of the current problem, so the tests
+/// check what the solves converge to and skip the 5–25 iterations of each (without the
+/// folder, they start where the diagnosis has got to, as a user's would).
+fn starts(name: &str, how: Setup) -> Vec<PathBuf> {
+    let dir = root()
+        .join("tests/data/hidden")
+        .join(name)
+        .join(format!("starts_{}", how.slug()));
+    if dir.is_dir() {
+        vec![dir]
+    } else {
+        Vec::new()
+    }
+}
+
 /// `diagnose` the run (the catalog and, on a foot with a heel circle, the pad; or only
-/// `candidates`), with held-out validation on another half cycle when `held_out`.
-fn diagnose(run: &Path, verify: usize, candidates: &[&str], held_out: bool) -> Value {
+/// `candidates`), with held-out validation on another half cycle when `held_out`, its
+/// solves started from `starts`.
+fn diagnose(
+    run: &Path,
+    verify: usize,
+    candidates: &[&str],
+    held_out: bool,
+    starts: Vec<PathBuf>,
+) -> Value {
     let out = PathBuf::from(format!("{}-diagnose", run.display()));
     let req = DiagnoseRequest {
         verify,
         candidates: candidates.iter().map(|c| c.to_string()).collect(),
         held_out,
+        starts,
         ..DiagnoseRequest::new(run.to_path_buf())
     };
     timed("diagnose", run, || {
@@ -250,6 +277,7 @@ fn floor(how: Setup) -> &'static Floor {
             // nothing should be significant here; anything that is must also pass the
             // held-out half cycle
             true,
+            starts(how.none(), how),
         );
         (channel_means(&run), d, phase_means(&run))
     })
@@ -354,7 +382,7 @@ fn single_effect(name: &str, how: Setup, floor_factor: f64) {
         .unwrap_or_else(|| panic!("{name}: the hidden effect does not show above the noise floor"));
     eprintln!("{name} above the floor: {shows}");
     let held_out = HELD_OUT_CHECKED.contains(&name);
-    let d = diagnose(&run, 1, &[], held_out);
+    let d = diagnose(&run, 1, &[], held_out, starts(name, how));
     assert_eq!(
         d["ranking"][0]["effect"]["type"], kind,
         "{name}: ranked first is {}",
@@ -393,7 +421,7 @@ fn single_effect(name: &str, how: Setup, floor_factor: f64) {
         // beside the pad the rigid run also finds a clock offset and the trunk significant
         // (a rigid heel's force rises earlier than a padded one's); with the pad added,
         // a second diagnosis finds nothing
-        let second = diagnose(&root().join(&refit), 1, &[], false);
+        let second = diagnose(&root().join(&refit), 1, &[], false, starts(name, how));
         assert_eq!(
             second["significant"], 0,
             "after the pad's re-fit: {}",
@@ -512,13 +540,13 @@ fn two_hidden_effects_are_found_one_after_the_other() {
     let name = "ground_slope+force_plate_time_offset";
     let dir = tempfile::tempdir().unwrap();
     let run = baseline(name, dir.path(), Setup::Seed);
-    let first = diagnose(&run, 1, &[], false);
+    let first = diagnose(&run, 1, &[], false, starts(name, Setup::Seed));
     let a = first["verified"][0]["effect"]["type"]
         .as_str()
         .expect("a first effect")
         .to_string();
     let refit = root().join(first["verified"][0]["folder"].as_str().unwrap());
-    let second = diagnose(&refit, 1, &[], false);
+    let second = diagnose(&refit, 1, &[], false, starts(name, Setup::Seed));
     let b = second["verified"][0]["effect"]["type"]
         .as_str()
         .expect("a second effect")

@@ -50,6 +50,13 @@ pub struct Args {
     /// less the reference's, which cancels the model's own bias.
     #[arg(long)]
     reference: Option<PathBuf>,
+    /// Start the diagnosis's own solves from kept solutions of the same problems
+    /// (repeatable): an earlier re-fit's run folder (`<RUN>+<effect>`) starts the re-fit
+    /// with the same effects, an earlier diagnosis folder (`<RUN>-diagnose`) gives its
+    /// held-out track (`held_out`) and any run folders inside it. Each solve still
+    /// iterates to the KKT tolerance from there; only its path is shortened.
+    #[arg(long = "start", value_name = "DIR")]
+    starts: Vec<PathBuf>,
 }
 
 impl From<Args> for DiagnoseRequest {
@@ -70,6 +77,7 @@ impl From<Args> for DiagnoseRequest {
                 Vec::new()
             },
             reference: a.reference,
+            starts: a.starts,
         }
     }
 }

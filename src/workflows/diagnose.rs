@@ -22,6 +22,7 @@ mod output;
 pub mod profile;
 pub mod reference;
 mod refit;
+mod starts;
 pub mod summary;
 use crate::ocp::Transcription;
 use crate::problems::evaluation::GaitSolution;
@@ -70,13 +71,19 @@ pub struct DiagnoseRequest {
     /// candidate's reading is also given against the reference's
     /// ([`reference::compare`]), which cancels the model's own bias (`--reference`).
     pub reference: Option<PathBuf>,
+    /// Kept solutions to start the diagnosis's own solves from (`--start`): run folders
+    /// with `setup.json` and `solution.json` (an earlier re-fit `<RUN>+<effect>`), or
+    /// folders of them (an earlier `<RUN>-diagnose`, whose `held_out` is its held-out
+    /// track); each starts the solve of the same problem, which still iterates to the KKT
+    /// tolerance from there.
+    pub starts: Vec<PathBuf>,
 }
 
 impl DiagnoseRequest {
     /// A request with `footfall diagnose`'s defaults for the track run `run`: the default
     /// candidates, one verifying re-fit, held-out validation, re-fits to KKT 1e-5 within
     /// 200 iterations, the output beside the run (`<RUN>-diagnose`, not replaced); no
-    /// re-track, clock profile or reference.
+    /// re-track, clock profile, reference or kept starts.
     pub fn new(run: PathBuf) -> Self {
         DiagnoseRequest {
             run,
@@ -90,6 +97,7 @@ impl DiagnoseRequest {
             held_out: true,
             profile_clocks: Vec::new(),
             reference: None,
+            starts: Vec::new(),
         }
     }
 }
@@ -410,6 +418,8 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
         .as_deref()
         .map(reference::read_reference)
         .transpose()?;
+    // a bad --start is named before any work
+    starts::kept_solutions(&args.starts)?;
     let setup = read_run_setup(&args.run)?;
     let solution = super::read_solution(&args.run)?;
     let before = RunSummary::read(&args.run)?;
@@ -852,6 +862,7 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
         held_out_note: held_out_note.trim().to_string(),
         testable_run,
         comparison: comparison.as_ref(),
+        held_out: held_base.as_ref().and_then(|b| b.as_ref().ok()),
     };
     output::write(&ctx, folder, progress)
 }

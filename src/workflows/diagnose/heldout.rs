@@ -16,7 +16,7 @@
 
 use super::super::track::{TrackedRun, TrackingProblem};
 #[allow(unused_imports)]
-use super::super::{note, Progress};
+use super::super::{note, warn_note, Progress};
 use super::{sibling, DiagnoseRequest};
 use crate::model::effects::EffectSpec;
 use crate::problems::diagnose::stats::{curvature_along, held_out_band, paired_held_out_band};
@@ -139,6 +139,27 @@ fn track_base(
             window.1
         );
     }
+    let mut prob = prob;
+    // a kept track of this half cycle (`--start`, an earlier diagnosis's `held_out`)
+    // starts the solve instead of the data, when it fits
+    if let Some((dir, kept)) = super::starts::find(args, &setup)? {
+        match prob.start_at(&kept) {
+            Ok(()) => {
+                note!(
+                    progress,
+                    "  starting from the kept solution {}",
+                    dir.display()
+                );
+            }
+            Err(e) => {
+                warn_note!(progress,
+                    "  the kept solution {} does not fit this half cycle ({e:#}); starting from the data",
+                    dir.display()
+                );
+                prob = TrackingProblem::build(&setup, &[])?;
+            }
+        }
+    }
     let settings = super::refit::full_solve_settings(args, &prob);
     let (res, solution) = prob.solve(&settings, &super::super::Quiet)?;
     let mut at = TrackingProblem::build(&setup, &[])?;
@@ -164,6 +185,20 @@ fn track_base(
         solution,
         setup,
     })
+}
+
+impl HeldOutBase {
+    /// Keep the plain model's track of the half cycle in `dir` (`setup.json`,
+    /// `solution.json`), so that a later diagnosis of the run can start from it
+    /// (`--start`).
+    pub(super) fn write_into(&self, dir: &std::path::Path) -> anyhow::Result<()> {
+        std::fs::create_dir_all(dir).map_err(|e| anyhow!("{}: {e}", dir.display()))?;
+        let setup = serde_json::to_string_pretty(&self.setup)?;
+        let solution = serde_json::to_string_pretty(&self.solution)?;
+        crate::runfolder::write_atomic(dir, "setup.json", setup.as_bytes())?;
+        crate::runfolder::write_atomic(dir, "solution.json", solution.as_bytes())?;
+        Ok(())
+    }
 }
 
 /// How a held-out half cycle is named: `half cycle 2`, or `half cycle 1 of the other

@@ -38,6 +38,9 @@ pub(super) struct Outcome<'a> {
     pub testable_run: Option<PathBuf>,
     /// The readings against a reference trial's (`--reference`).
     pub comparison: Option<&'a super::reference::Comparison>,
+    /// The plain model's track of the held-out half cycle, kept in `held_out/` (a start
+    /// for a later diagnosis of the run, `--start`).
+    pub held_out: Option<&'a super::heldout::HeldOutBase>,
 }
 
 /// Each channel's variance inflation in the largest model's residuals.
@@ -538,6 +541,9 @@ pub(super) fn write(
         skipped: o.skipped.to_vec(),
     };
     folder.write("diagnose.md", md.as_bytes())?;
+    if let Some(hb) = o.held_out {
+        hb.write_into(&folder.staging_path().join("held_out"))?;
+    }
     folder.write(
         "summary.json",
         serde_json::to_string_pretty(&summary)?.as_bytes(),
