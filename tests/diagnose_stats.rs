@@ -26,14 +26,16 @@ fn read_json(p: &Path) -> Value {
 }
 
 /// Track the hidden CoP-offset trial with the seed's cost (pelvis position free), from
-/// the kept pelvis-tracked solution, into `dir/cop_offset`.
+/// its kept solution (tools/make-hidden-effect-baselines; `track` re-evaluates it and
+/// iterates on only if it is not a KKT point of the current problem), into
+/// `dir/cop_offset`.
 fn seed_run(dir: &Path) -> PathBuf {
     let trial = root().join("tests/data/hidden/cop_offset");
     let out = dir.join("cop_offset");
     let mut req = TrackRequest::new("ellipse");
     req.check_points = false;
     req.run.data = Some(trial.join("synthetic.csv"));
-    req.init = Some(trial.join("tracked_pelvis"));
+    req.init = Some(trial.join("tracked_seed"));
     req.run.kinematics_cutoff = Some(10.0);
     let t = std::time::Instant::now();
     let run = track(&req, RunFolder::create(&out, false).unwrap(), &Quiet).unwrap();
