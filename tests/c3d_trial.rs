@@ -11,7 +11,7 @@
 //! of the `.mot` with its instants written as k/600 in full (`retimed`), and the
 //! comparison with the original file has the tolerance its rounded instants explain.
 
-mod common;
+use crate::common;
 use common::{csv_columns, footfall, grf, ik, json, root, s, stderr};
 
 use footfall::data::{read_storage, Storage};

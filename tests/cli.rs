@@ -4,7 +4,7 @@
 //! staging folder) behind; an interrupted solve exits with 130 (tests/cli_exit_codes.rs
 //! has the other codes).
 
-mod common;
+use crate::common;
 use common::{footfall, json, root, s, stderr};
 
 use std::path::Path;

@@ -1,7 +1,7 @@
 //! Conservation and constraint behaviour over time: energy in free flight, and rolling
 //! contact with and without Baumgarte stabilisation.
 
-mod common;
+use crate::common;
 use common::*;
 use footfall::controls::ControlTable;
 use footfall::integrate::IntegratorSettings;

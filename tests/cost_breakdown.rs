@@ -1,7 +1,7 @@
 //! The cost breakdown of a tracking solution adds up to the objective the NLP evaluates,
 //! and its worst windows do not overlap.
 
-mod common;
+use crate::common;
 use common::*;
 use footfall::integrate::IntegratorSettings;
 use footfall::ocp::Transcription;

@@ -2,7 +2,7 @@
 //! CVODES forward sensitivities of a shooting interval (initial state, piecewise-linear
 //! controls, duration and a free effect parameter) for both feet and every constraint set.
 
-mod common;
+use crate::common;
 use common::*;
 use footfall::integrate::{ControlShape, Integrator, IntegratorSettings, Ode, ShootingInterval};
 use footfall::model::GaitModel;

@@ -1,7 +1,7 @@
 //! The effect catalog: each effect's physics against closed-form truth, the command-line
 //! form, and the catalog `diagnose` draws from.
 
-mod common;
+use crate::common;
 use common::*;
 use footfall::model::effects::{catalog, EffectSpec};
 

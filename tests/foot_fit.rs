@@ -1,7 +1,7 @@
 //! Foot fitting: rolling without slipping against the analytic rolling circle, length
 //! fixed, and the fit on the bundled trial lowering eq. 13 for both seed feet.
 
-mod common;
+use crate::common;
 use common::*;
 use footfall::data::GaitData;
 use footfall::model::spec::FootSpec;

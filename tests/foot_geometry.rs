@@ -320,7 +320,7 @@ fn freeing_the_size_recovers_a_longer_ellipse() {
 /// walk of that model, not the optimum of the bundled trial; then `synth` from it (100 Hz,
 /// the default noise, seed 1).
 #[test]
-#[ignore = "regenerates test data (minutes): cargo test --test foot_geometry -- --ignored"]
+#[ignore = "regenerates test data (minutes): cargo test --test suite -- --ignored foot_geometry::"]
 fn make_foot_geometry_trial() {
     use footfall::runfolder::RunFolder;
     use footfall::sqp::HessianMode;

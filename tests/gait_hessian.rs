@@ -2,7 +2,7 @@
 //! against central differences of its exact Jacobian, and the assembled Hessian of the
 //! Lagrangian of the whole transcription against central differences of its gradient.
 
-mod common;
+use crate::common;
 use common::*;
 use footfall::integrate::IntegratorSettings;
 use footfall::ocp::{NodeFunction, Transcription};

@@ -2,7 +2,7 @@
 //! their constraint functions have exact Jacobians; invalid graphs are refused with a
 //! message naming the phase.
 
-mod common;
+use crate::common;
 use common::*;
 use footfall::integrate::IntegratorSettings;
 use footfall::model::GaitModel;

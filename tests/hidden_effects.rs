@@ -13,7 +13,7 @@
 //! velocity targets, does not fit noisy data down to the raw noise level (its forces
 //! stay about 2.5× the mean absolute noise, tests/tracking_recovery.rs).
 
-mod common;
+use crate::common;
 
 use footfall::runfolder::RunFolder;
 use footfall::workflows::diagnose::DiagnoseRequest;

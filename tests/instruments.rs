@@ -4,7 +4,7 @@
 //! derivatives checked against central differences; and a plate's clock offset moving
 //! the contact events that plate's force threshold gave (issue 23, item 2).
 
-mod common;
+use crate::common;
 use common::*;
 use footfall::data::{read_sagittal_csv, CubicSpline, GaitData};
 use footfall::model::effects::{catalog, EffectSpec};

@@ -2,7 +2,7 @@
 //! (an independent symbolic implementation), symmetry and definiteness of M, brute-force
 //! geometry, and the defining properties of the plastic impact map.
 
-mod common;
+use crate::common;
 use common::*;
 use footfall::model::geometry::{ellipse_lowest_polar_angle, Shape};
 use footfall::model::{GaitModel, RowKind};

@@ -9,7 +9,7 @@ use footfall::sqp::{self, HessianMode, Silent, SqpResult, SqpSettings, SqpStatus
 use std::path::PathBuf;
 use std::sync::Arc;
 
-mod common;
+use crate::common;
 
 fn solve_problem(file: &str, hessian: HessianMode, threads: usize) -> Option<SqpResult> {
     let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))

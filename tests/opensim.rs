@@ -6,7 +6,7 @@
 //! radians, a flipped vertical force, a treadmill trial without a belt speed) is refused
 //! with a message that names the file, the column and what would be valid.
 
-mod common;
+use crate::common;
 use common::{csv_columns, footfall, grf, ik, json, raw, root, s, stderr};
 
 use footfall::data::{

@@ -6,7 +6,7 @@
 //! library (`workflows::track`), its events off the plates from the kinematics, and its
 //! Table 3 must come close to that of the same half cycle of the full-coverage trial.
 
-mod common;
+use crate::common;
 
 use footfall::data::{
     detect_events, read_sagittal_csv, read_storage, GaitData, DEFAULT_EVENT_FRACTION,

@@ -4,7 +4,7 @@
 //! half-written; a solve killed with SIGKILL resumes (`--resume`) to the same optimum,
 //! following the same iterates bit for bit.
 
-mod common;
+use crate::common;
 use common::stderr;
 
 use std::io::{BufRead, BufReader};

@@ -7,7 +7,7 @@
 //! rather than passes silently, when it is missing. Set `FOOTFALL_REPORT_OUT=DIR` to keep
 //! the rendered `report.html` and `report.png` in DIR for a look.
 
-mod common;
+use crate::common;
 
 use footfall::data::{parse_storage, DataError};
 use footfall::report::csv::TimeSeries;

@@ -9,7 +9,7 @@
 //! its double-circle twin for the comparison.
 //! Set `FOOTFALL_REPORT_OUT=DIR` to keep the screenshots.
 
-mod common;
+use crate::common;
 
 use common::chromium;
 use footfall::runfolder::RunFolder;

@@ -6,7 +6,7 @@
 //! another folder. One cheap run (started at a converged solution, one iteration) serves
 //! every check.
 
-mod common;
+use crate::common;
 use common::stderr;
 
 use std::path::{Path, PathBuf};

@@ -4,7 +4,7 @@
 //! is a typed warning of the library, printed by `footfall simulate` (exit 0) or refused
 //! with `--strict` (exit 1, no output folder).
 
-mod common;
+use crate::common;
 use common::{root, stderr};
 use footfall::controls::ControlTable;
 use footfall::model::{ConstraintSet, GaitModel, RowKind};

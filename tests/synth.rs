@@ -2,7 +2,7 @@
 //! seeded, unloaded feet exactly zero, CoP undefined below the threshold), exact events,
 //! and a round trip through the sagittal CSV writer and reader.
 
-mod common;
+use crate::common;
 
 use footfall::data::{read_sagittal_csv, write_sagittal_csv, GaitData};
 use footfall::integrate::IntegratorSettings;

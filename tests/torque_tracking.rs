@@ -8,7 +8,7 @@
 //! zero, the landing row), so the QP's multipliers on them grew by 10³ per iteration until
 //! Clarabel failed.
 
-mod common;
+use crate::common;
 
 use common::bundled_tracking_of;
 use footfall::integrate::IntegratorSettings;

@@ -2,7 +2,7 @@
 //! graph, defined only in `models/feet/` and `phases/` — is fitted by `fit-foot` and then
 //! tracked end to end by `track --foot FILE --phases FILE` from the command line.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

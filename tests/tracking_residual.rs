@@ -1,7 +1,7 @@
 //! Tracking residuals: zero at the model's own motion and forces, exact Jacobians, and
 //! generic foot loads equal to the reported ground reaction forces and CoP.
 
-mod common;
+use crate::common;
 use common::*;
 use footfall::model::gait::ContactReport;
 use footfall::ocp::NodeFunction;

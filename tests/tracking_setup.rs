@@ -1,7 +1,7 @@
 //! The tracking problem built from the bundled trial: durations from the measured contact
 //! sequence, a guess on the contact manifold, and a transcription that evaluates.
 
-mod common;
+use crate::common;
 use common::*;
 use footfall::data::GaitData;
 use footfall::integrate::IntegratorSettings;

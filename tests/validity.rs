@@ -5,7 +5,7 @@
 //! with check points (the default) and no iteration left the run is flagged (verdict, report, exit
 //! code 5), and with iterations the solve removes it.
 
-mod common;
+use crate::common;
 
 use footfall::model::{ContactReport, FootLoad, RowKind};
 use footfall::phases::PhaseSequence;

@@ -13,7 +13,7 @@ use footfall::model::GaitModel;
 use footfall::phases::PhaseSequence;
 use std::path::{Path, PathBuf};
 
-mod common;
+use crate::common;
 
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
@@ -627,7 +627,7 @@ fn diagnose_ranks_the_foot_geometry_first_on_the_rigid_fit_of_the_compliant_tria
 /// hidden effect at the diagnosed cost from its kept pelvis-tracked fit. Each last fit's
 /// `setup.json` and `solution.json` are kept.
 #[test]
-#[ignore = "regenerates test data (minutes): cargo test --test volumetric_identification -- --ignored make_rigid"]
+#[ignore = "regenerates test data (minutes): cargo test --test suite -- --ignored suite:: volumetric_identification::make_rigid"]
 fn make_rigid_fits_for_the_diagnosis() {
     let dir = root().join("tests/data/hidden/volumetric_contact");
     let tmp = tempfile::tempdir().unwrap();
@@ -676,7 +676,7 @@ fn hidden_foot() -> String {
 ///    Its solution is kept as `truth_solution.json`;
 /// 2. `synth` from it: 100 Hz, the default noise (0.5°, 2 mm, 5 N, 5 mm), seed 1.
 #[test]
-#[ignore = "regenerates test data (minutes): cargo test --test volumetric_identification -- --ignored"]
+#[ignore = "regenerates test data (minutes): cargo test --test suite -- --ignored volumetric_identification::"]
 fn make_volumetric_contact_trial() {
     use footfall::runfolder::RunFolder;
     use footfall::sqp::HessianMode;
