@@ -11,8 +11,8 @@ use super::callbacks::{
     jac_callback, null_error, nv_slice, nv_slice_mut, rhs_callback, sens_rhs_callback, CallCtx,
     CallGuard, Shared,
 };
-use super::dense_lu;
 use super::settings::{IntegrationStats, IntegratorError, IntegratorSettings};
+use super::{dense_lu, vector_ops};
 use crate::integrate::Ode;
 
 /// A reusable CVODES instance for ODEs with `nx` states and `np` parameters.
@@ -138,6 +138,9 @@ impl Integrator {
                 "N_VEnableFusedOps_Serial",
                 sys::N_VEnableFusedOps_Serial(this.y, 1),
             )?;
+            // and footfall's optimised kernels in place of the serial library's
+            // (vector_ops.rs), inherited by the clones the same way
+            vector_ops::install(this.y);
             sys::N_VConst(0.0, this.y);
             check_setup(
                 "CVodeInit",

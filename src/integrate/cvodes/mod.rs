@@ -15,13 +15,14 @@
 //! One home per concept: `settings` (options, counters, errors), `callbacks` (the C
 //! callbacks and the block they share with CVODES), `integrator` (creation, the end-point
 //! calls, teardown), `dense` (output at interior times, events), `dense_lu` (the Newton
-//! systems' linear solver).
+//! systems' linear solver), `vector_ops` (the serial vector kernels CVODES runs on).
 
 mod callbacks;
 mod dense;
 mod dense_lu;
 mod integrator;
 mod settings;
+mod vector_ops;
 
 pub(crate) use callbacks::check_dim;
 pub use integrator::Integrator;
