@@ -1,6 +1,6 @@
 //! Muscle-torque generators (seed eq. 9–12) and de Leva (1996) segment parameters.
 //!
-//! Run with `cargo test --test suite actuators:: -- --nocapture` to see the parameter tables
+//! Run with `cargo test --test quick actuators:: -- --nocapture` to see the parameter tables
 //! (peak torques, ω_max, damping coefficients, seed-subject segments).
 
 use footfall::model::actuators::{

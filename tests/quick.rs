@@ -1,0 +1,44 @@
+//! footfall's integration tests that take seconds: parsers, the model's
+//! physics and derivatives piece by piece, the QP and SQP pieces, the report's files.
+//! The tests that run whole solves are in `suite.rs`.
+//!
+//! Two test crates, not one, because they compile side by side after the library, one
+//! core each (footfall's crates are built in one codegen unit, Cargo.toml): as one crate
+//! the tests compiled in 343 s on one core of the slowest two-core machines while the
+//! other core had nothing to do. This one runs first and its tests are short, so the
+//! harness leaves a core idle only for seconds at its end. Run one module with a filter:
+//! `cargo test --test quick fuzz::`.
+
+mod common;
+
+mod actuators;
+mod benchmark_models;
+mod c3d;
+mod cli_exit_codes;
+mod cli_solve;
+mod contact_dynamics;
+mod cost_breakdown;
+mod data;
+mod diff;
+mod effects;
+mod eval_errors;
+mod filter;
+mod foot_fit;
+mod fuzz;
+mod gait_ocp;
+mod integrate;
+mod layers;
+mod linearised;
+mod model_physics;
+mod ocp_engine;
+mod ocp_lq;
+mod ocp_samples;
+mod qp_active_set;
+mod real_hidden_trials;
+mod report;
+mod simulate_sanity;
+mod sqp_convexity;
+mod sqp_warm_start;
+mod tracking_setup;
+mod transient;
+mod volumetric;
