@@ -14,6 +14,7 @@ mod common;
 mod bad_input;
 mod c3d_trial;
 mod cli;
+mod compliant_instruments;
 mod derivatives;
 mod diagnose_stats;
 mod foot_geometry;

@@ -16,7 +16,7 @@
 
 use super::super::track::{TrackedRun, TrackingProblem};
 #[allow(unused_imports)]
-use super::super::{note, warn_note, Progress};
+use super::super::{note, Progress};
 use super::{sibling, DiagnoseRequest};
 use crate::model::effects::EffectSpec;
 use crate::problems::diagnose::stats::{curvature_along, held_out_band, paired_held_out_band};
@@ -142,24 +142,14 @@ fn track_base(
     let mut prob = prob;
     // a kept track of this half cycle (`--start`, an earlier diagnosis's `held_out`)
     // starts the solve instead of the data, when it fits
-    if let Some((dir, kept)) = super::starts::find(args, &setup)? {
-        match prob.start_at(&kept) {
-            Ok(()) => {
-                note!(
-                    progress,
-                    "  starting from the kept solution {}",
-                    dir.display()
-                );
-            }
-            Err(e) => {
-                warn_note!(progress,
-                    "  the kept solution {} does not fit this half cycle ({e:#}); starting from the data",
-                    dir.display()
-                );
-                prob = TrackingProblem::build(&setup, &[])?;
-            }
-        }
-    }
+    super::starts::start_from_kept(
+        args,
+        &setup,
+        &mut prob,
+        || TrackingProblem::build(&setup, &[]),
+        "starting from the data",
+        progress,
+    )?;
     let settings = super::refit::full_solve_settings(args, &prob);
     let (res, solution) = prob.solve(&settings, &super::super::Quiet)?;
     let mut at = TrackingProblem::build(&setup, &[])?;

@@ -2,7 +2,7 @@
 //! folder, the heel pad's test by a full re-fit (it has no null value) and what a re-fit
 //! changed, channel by channel, in one sentence.
 
-use super::{note, sibling, warn_note, Baseline, DiagnoseRequest, Progress};
+use super::{note, sibling, Baseline, DiagnoseRequest, Progress};
 use crate::model::effects::EffectSpec;
 use crate::problems::diagnose::{refit_test, IdentifiedParameter, ScoreTest, TrackingRunSetup};
 use crate::problems::evaluation::GaitSolution;
@@ -123,27 +123,14 @@ pub(super) fn solve_into(
         effects: setup.effects.iter().chain(effects).cloned().collect(),
         ..setup.clone()
     };
-    let kept = super::starts::find(args, &want)?;
-    let mut started = false;
-    if let Some((dir, kept)) = &kept {
-        match prob.start_at(kept) {
-            Ok(()) => {
-                note!(
-                    progress,
-                    "  starting from the kept solution {}",
-                    dir.display()
-                );
-                started = true;
-            }
-            Err(e) => {
-                warn_note!(progress,
-                    "  the kept solution {} does not fit this problem ({e:#}); starting where the diagnosis got to",
-                    dir.display()
-                );
-                prob = TrackingProblem::build(setup, effects)?;
-            }
-        }
-    }
+    let started = super::starts::start_from_kept(
+        args,
+        &want,
+        &mut prob,
+        || TrackingProblem::build(setup, effects),
+        "starting where the diagnosis got to",
+        progress,
+    )?;
     if !started {
         prob.start_at(start)
             .map_err(|e| anyhow!("{}: {e:#}", args.run.display()))?;

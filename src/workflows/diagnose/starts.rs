@@ -17,6 +17,8 @@
 //! cost's options (`KEY_FIELDS`); input paths are not compared, so give starts of the
 //! same trial.
 
+use super::super::track::TrackingProblem;
+use super::super::{note, warn_note, Progress};
 use super::DiagnoseRequest;
 use crate::problems::diagnose::TrackingRunSetup;
 use crate::problems::evaluation::GaitSolution;
@@ -97,7 +99,7 @@ pub(super) fn kept_solutions(starts: &[PathBuf]) -> anyhow::Result<Vec<PathBuf>>
 
 /// The first kept solution among `args.starts` of the problem `want` (the run's setup
 /// with the solve's effects added and its half cycle), with its folder.
-pub(super) fn find(
+fn find(
     args: &DiagnoseRequest,
     want: &TrackingRunSetup,
 ) -> anyhow::Result<Option<(PathBuf, GaitSolution)>> {
@@ -115,6 +117,43 @@ pub(super) fn find(
         }
     }
     Ok(None)
+}
+
+/// Start `prob`, the problem `want`, from its kept solution among `args.starts` when there
+/// is one and it fits. A kept solution that does not fit (its variables are another
+/// problem's) is named in a warning and `prob` is made afresh by `rebuild`, to be started
+/// where the caller says (`otherwise`, e.g. "starting from the data"). Whether `prob`
+/// now starts at a kept solution.
+pub(super) fn start_from_kept(
+    args: &DiagnoseRequest,
+    want: &TrackingRunSetup,
+    prob: &mut TrackingProblem,
+    rebuild: impl FnOnce() -> anyhow::Result<TrackingProblem>,
+    otherwise: &str,
+    progress: &dyn Progress,
+) -> anyhow::Result<bool> {
+    let Some((dir, kept)) = find(args, want)? else {
+        return Ok(false);
+    };
+    match prob.start_at(&kept) {
+        Ok(()) => {
+            note!(
+                progress,
+                "  starting from the kept solution {}",
+                dir.display()
+            );
+            Ok(true)
+        }
+        Err(e) => {
+            warn_note!(
+                progress,
+                "  the kept solution {} does not fit this problem ({e:#}); {otherwise}",
+                dir.display()
+            );
+            *prob = rebuild()?;
+            Ok(false)
+        }
+    }
 }
 
 #[cfg(test)]
