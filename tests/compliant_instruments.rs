@@ -76,6 +76,11 @@ fn tracked(trial: &str) -> PathBuf {
     out
 }
 
+/// Where `diagnose` writes the diagnosis of `run`.
+fn diagnosis_folder(run: &Path) -> PathBuf {
+    PathBuf::from(format!("{}-diagnose", run.display()))
+}
+
 /// `run` diagnosed with the catalog, no re-fit and no held-out half cycle, against
 /// `reference` (a diagnosis folder) when given; its `summary.json`.
 fn diagnosed(run: &Path, reference: Option<PathBuf>) -> Value {
@@ -87,7 +92,7 @@ fn diagnosed(run: &Path, reference: Option<PathBuf>) -> Value {
     };
     let t = std::time::Instant::now();
     footfall::workflows::diagnose::run(&req, &Quiet).unwrap();
-    let folder = PathBuf::from(format!("{}-diagnose", run.display()));
+    let folder = diagnosis_folder(run);
     eprintln!("diagnose {}: {:.0} s", run.display(), t.elapsed().as_secs_f64());
     eprintln!(
         "{}",
@@ -102,7 +107,7 @@ fn reference() -> PathBuf {
     REF.get_or_init(|| {
         let run = tracked("untouched");
         diagnosed(&run, None);
-        PathBuf::from(format!("{}-diagnose", run.display()))
+        diagnosis_folder(&run)
     })
     .clone()
 }
@@ -147,7 +152,7 @@ fn first_against_the_untouched_trial(
         "{parameter}: {diff} ± {sd} against the truth {truth}"
     );
     assert_eq!(first["significant"], significant, "{first}");
-    // the true effect's in-sample test is testable, and the reading is the trial's own
+    // the true effect is testable in-sample too (its reading was compared, not skipped)
     let own = ranked(&d, label);
     assert_eq!(own["testable"], true, "{own}");
 }
