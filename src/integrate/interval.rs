@@ -12,7 +12,7 @@
 use std::ops::Range;
 
 use super::cvodes::IntegratorError;
-use super::quadrature::{piece_nodes, GAUSS4};
+use super::quadrature::{piece_nodes, span_nodes, STIFF_SPLIT};
 use super::{Ode, OdeError};
 
 /// A time-invariant controlled model ẋ = f(x, u, θ) with exact Jacobians.
@@ -56,7 +56,8 @@ pub trait ControlledOde: Sync {
     /// matrix Ψ(τ) becomes singular to working precision (a compliant contact's damping:
     /// eigenvalues of ∂f/∂x near −1e5 1/s). The interval curvature then chains the
     /// segments' transition matrices between its quadrature nodes instead of inverting
-    /// Ψ(τ) (default: false, the single pass).
+    /// Ψ(τ), and takes twice the nodes, since its integrand changes within milliseconds
+    /// at the contacts' onsets (default: false, the single pass).
     fn stiff_transition(&self) -> bool {
         false
     }
@@ -335,7 +336,8 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
     ///   \nabla^2_{(x,p)}\big(\mu^T F\big)\begin{bmatrix}S\\P\end{bmatrix} d\tau,\qquad
     ///   \mu(\tau)^T = \lambda^T\Psi(1)\Psi(\tau)^{-1},$$
     /// with $S = \partial x/\partial z$ and $\Psi = \partial x/\partial x_0$ from the forward
-    /// sensitivities at 4 Gauss–Legendre nodes (CVODES dense output), $P = [0\;|\;I]$ and
+    /// sensitivities at 4 Gauss–Legendre nodes (CVODES dense output; a stiff model's
+    /// interval in parts of 4 nodes each, `integrate/quadrature.rs`), $P = [0\;|\;I]$ and
     /// $F = T f(x, u(\tau), \theta)$. Second derivatives of $f$ come from the model
     /// ([`ControlledOde::weighted_hessian`]); no finite differences.
     /// Returns `Ok(false)` when the model has no second derivatives.
@@ -437,17 +439,14 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
             .filter(|&i| !own(i))
             .map(|i| interior[i])
             .collect();
-        let nodes = piece_nodes(&folded);
-        // the spans of their own: 4 nodes on [0, τ_i], all in the piece ending at τ_i
+        // a stiff model's contact transients need finer pieces (STIFF_SPLIT)
+        let split = if m.stiff_transition() { STIFF_SPLIT } else { 1 };
+        let nodes = piece_nodes(&folded, split);
+        // the spans of their own: 4 nodes on [0, τ_i] (on each of its parts), all in the
+        // piece ending at τ_i
         let own_nodes: Vec<Vec<(f64, f64, f64)>> = (0..interior.len())
             .filter(|&i| own(i))
-            .map(|i| {
-                let t_end = interior[i];
-                GAUSS4
-                    .iter()
-                    .map(|&(g, w)| (t_end * g, t_end * w, t_end))
-                    .collect()
-            })
+            .map(|i| span_nodes(interior[i], split))
             .collect();
         let mut times: Vec<f64> = nodes
             .iter()

@@ -1,6 +1,7 @@
 //! Gauss–Legendre quadrature on [0, 1] for the interval curvature identity: the fixed
 //! 4-point rule, and the same interval split into pieces at interior instants (sample
-//! targets), each piece with a rule sized to its length.
+//! targets), each piece with a rule sized to its length; for a stiff model every piece
+//! is divided further ([`STIFF_SPLIT`]).
 
 /// Gauss–Legendre nodes and weights on [0, 1], 4 points (exact for polynomials of
 /// degree 7; on 17.5–50 ms intervals the interval Hessians agree with finite differences
@@ -11,6 +12,18 @@ pub(super) const GAUSS4: [(f64, f64); 4] = [
     (0.669_990_521_792_428_1, 0.326_072_577_431_273_07),
     (0.930_568_155_797_026_3, 0.173_927_422_568_726_93),
 ];
+
+/// Into how many equal parts each piece of a stiff model's interval is divided, each with
+/// the piece's rule. The compliant foot's integrand (the contact force's curvature along
+/// the state's sensitivities) changes within a few milliseconds at heel strike and
+/// toe-off. Measured at the kept solution of the bundled trial's compliant
+/// identification track (tests/gait_hessian.rs): the assembled Hessian against
+/// differences of the gradient, worst block of a random direction, 0.67 of the block's
+/// largest entry undivided (the first interval, at heel strike), 0.20 in two parts, 4e-3
+/// in four. With the undivided rule the SQP's KKT residual fell by 7 % per iteration near
+/// the optimum, steps alternating in sign (the Hessian too flat along the pelvis height);
+/// in two parts the same track converged (docs/engine-investigation.md, stop 69).
+pub(super) const STIFF_SPLIT: usize = 2;
 
 /// Gauss–Legendre rules of 1 to 3 points on [0, 1] (nodes, weights).
 const GAUSS1: [(f64, f64); 1] = [(0.5, 1.0)];
@@ -29,8 +42,10 @@ const GAUSS3: [(f64, f64); 3] = [
 /// Gauss–Legendre rule on each piece with 4 points on a piece of at least half the
 /// interval, 3 from a quarter, 2 from a tenth, 1 below (a sample every millisecond inside
 /// a 20 ms interval: 20 one-point pieces instead of 19 four-point spans). Without
-/// interior instants: the 4-point rule on [0, 1].
-pub(super) fn piece_nodes(interior: &[f64]) -> Vec<(f64, f64, f64)> {
+/// interior instants: the 4-point rule on [0, 1]. With `split` > 1 each piece's rule is
+/// applied on that many equal parts of it (a stiff model, [`STIFF_SPLIT`]); the nodes
+/// still name their piece's end, where the adjoint jumps.
+pub(super) fn piece_nodes(interior: &[f64], split: usize) -> Vec<(f64, f64, f64)> {
     let mut breaks: Vec<f64> = interior
         .iter()
         .copied()
@@ -52,10 +67,28 @@ pub(super) fn piece_nodes(interior: &[f64]) -> Vec<(f64, f64, f64)> {
         } else {
             &GAUSS1
         };
-        out.extend(rule.iter().map(|&(g, w)| (a + len * g, len * w, b)));
+        push_split(&mut out, rule, a, b, split);
         a = b;
     }
     out
+}
+
+/// The 4-point rule on `split` equal parts of `[0, end]`, every node naming `end` as its
+/// piece's end (a check point's own span).
+pub(super) fn span_nodes(end: f64, split: usize) -> Vec<(f64, f64, f64)> {
+    let mut out = Vec::new();
+    push_split(&mut out, &GAUSS4, 0.0, end, split);
+    out
+}
+
+/// Append `rule` on each of `split` equal parts of `[a, b]`, as `(τ, weight, b)`.
+fn push_split(out: &mut Vec<(f64, f64, f64)>, rule: &[(f64, f64)], a: f64, b: f64, split: usize) {
+    let parts = split.max(1);
+    let len = (b - a) / parts as f64;
+    for k in 0..parts {
+        let start = a + len * k as f64;
+        out.extend(rule.iter().map(|&(g, w)| (start + len * g, len * w, b)));
+    }
 }
 
 #[cfg(test)]
@@ -86,8 +119,8 @@ mod tests {
         // one-point pieces integrate linear functions exactly: use instants that leave
         // only pieces of at least a tenth (two points and up) for the cubic
         let cases: [&[f64]; 4] = [&[], &[0.5], &[0.3, 0.3, 0.8, 1.0, 0.0], &[0.15, 0.45, 0.7]];
-        for interior in cases {
-            let nodes = piece_nodes(interior);
+        for (interior, split) in cases.iter().flat_map(|c| [(*c, 1), (*c, 2), (*c, 3)]) {
+            let nodes = piece_nodes(interior, split);
             let total: f64 = nodes.iter().map(|n| n.1).sum();
             assert!(
                 (total - 1.0).abs() < 1e-15,
@@ -102,16 +135,44 @@ mod tests {
                 "{interior:?}: ∫ = {cubic}"
             );
             // every node lies inside its piece, and the pieces end at the instants
+            // every node lies inside its piece, and the pieces end at the instants
             for &(t, _, end) in &nodes {
                 assert!(
-                    t < end && end <= 1.0,
-                    "{interior:?}: node {t} in a piece ending at {end}"
+                    0.0 < t && t < end && end <= 1.0,
+                    "{interior:?}, split {split}: node {t} in a piece ending at {end}"
                 );
             }
+            // each piece's nodes are `split` copies of its rule, in time order
+            assert!(
+                nodes.windows(2).all(|p| p[0].0 < p[1].0),
+                "{interior:?}: order"
+            );
+            assert_eq!(nodes.len() % split, 0);
         }
-        assert_eq!(piece_nodes(&[]).len(), 4);
+        assert_eq!(piece_nodes(&[], 1).len(), 4);
+        assert_eq!(piece_nodes(&[], 2).len(), 8);
         // a sample every millisecond of a 20 ms interval: 20 one-point pieces
         let ms: Vec<f64> = (1..20).map(|k| f64::from(k) / 20.0).collect();
-        assert_eq!(piece_nodes(&ms).len(), 20);
+        assert_eq!(piece_nodes(&ms, 1).len(), 20);
+    }
+
+    /// A check point's own span: the 4-point rule on `split` parts of [0, end] integrates
+    /// τ⁷ exactly on each part, so a degree-7 polynomial over the span exactly.
+    #[test]
+    fn span_nodes_integrate_a_degree_7_polynomial_over_the_span() {
+        for split in 1..=3 {
+            let end = 0.6;
+            let nodes = span_nodes(end, split);
+            assert_eq!(nodes.len(), 4 * split);
+            let integral: f64 = nodes.iter().map(|&(t, w, _)| w * t.powi(7)).sum();
+            let exact = end.powi(8) / 8.0;
+            assert!(
+                (integral - exact).abs() < 1e-15,
+                "split {split}: {integral} vs {exact}"
+            );
+            assert!(nodes
+                .iter()
+                .all(|&(t, _, e)| e == end && 0.0 < t && t < end));
+        }
     }
 }

@@ -42,6 +42,12 @@ pub struct ExactRecord {
     /// The integrator tolerance after the iteration, as a bit pattern.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub integration_tol: Option<u64>,
+    /// The exact Hessian's shift, as a bit pattern.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hessian_shift: Option<u64>,
+    /// Which QP gave the step.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub qp_route: Option<super::QpRoute>,
 }
 
 impl From<&IterationRecord> for ExactRecord {
@@ -51,6 +57,8 @@ impl From<&IterationRecord> for ExactRecord {
             figures: [r.objective, r.infeasibility, r.kkt, r.step, r.seconds].map(f64::to_bits),
             qp_iterations: r.qp_iterations,
             integration_tol: r.integration_tol.map(f64::to_bits),
+            hessian_shift: r.hessian_shift.map(f64::to_bits),
+            qp_route: r.qp_route,
         }
     }
 }
@@ -67,6 +75,8 @@ impl From<&ExactRecord> for IterationRecord {
             seconds,
             qp_iterations: r.qp_iterations,
             integration_tol: r.integration_tol.map(f64::from_bits),
+            hessian_shift: r.hessian_shift.map(f64::from_bits),
+            qp_route: r.qp_route,
         }
     }
 }

@@ -247,8 +247,8 @@ pub(super) fn run(
                 break;
             }
         };
-        let (sol, elastic) = match step::solve(&eval, &sub, &mut mem) {
-            Ok(step) => (step.sol, step.elastic),
+        let (sol, elastic, route) = match step::solve(&eval, &sub, &mut mem) {
+            Ok(step) => (step.sol, step.elastic, step.route),
             Err(e) => {
                 status = e;
                 break;
@@ -282,6 +282,9 @@ pub(super) fn run(
             seconds: start.elapsed().as_secs_f64(),
             qp_iterations: sol.iterations,
             integration_tol: nlp.integration_tolerance(),
+            hessian_shift: (curvature && settings.hessian == HessianMode::Exact)
+                .then_some(mem.shift),
+            qp_route: Some(route),
         };
         let go_on = observer.iteration(&rec);
         history.push(rec);

@@ -336,6 +336,44 @@ pub struct IterationRecord {
     /// (None: the NLP does not integrate).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub integration_tol: Option<f64>,
+    /// The shift δ added to the exact Hessian's diagonal to make the QP convex (inertia
+    /// correction; None when the step did not use the exact curvature). A δ that stays
+    /// above zero near the optimum turns Newton's quadratic convergence into a linear one.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub hessian_shift: Option<f64>,
+    /// Which QP gave the step (None for records from before this field).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub qp_route: Option<QpRoute>,
+}
+
+/// Which quadratic program gave an SQP step: the subproblem as built, or one of the
+/// fall-backs when that could not be solved. Every fall-back but the elastic QP on an
+/// inconsistent linearisation changes the curvature, so a solve that keeps using one
+/// converges linearly at best.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum QpRoute {
+    /// The subproblem's own QP.
+    Direct,
+    /// The exact-Hessian QP failed; its Hessian projected block by block onto the PSD cone.
+    Convexified,
+    /// The elastic QP (constraints relaxed with a penalty), with the convexified Hessian
+    /// in the exact mode.
+    Elastic,
+    /// A proximal shift of the Hessian after the elastic QP failed too.
+    Proximal,
+}
+
+impl QpRoute {
+    /// A short word for logs.
+    pub fn word(self) -> &'static str {
+        match self {
+            QpRoute::Direct => "qp",
+            QpRoute::Convexified => "convex",
+            QpRoute::Elastic => "elastic",
+            QpRoute::Proximal => "proximal",
+        }
+    }
 }
 
 /// A violated constraint at the final point.
@@ -421,13 +459,17 @@ impl Observer for StderrLog {
     fn iteration(&mut self, r: &IterationRecord) -> bool {
         if r.iter == 0 {
             eprintln!(
-                "{:>5} {:>16} {:>10} {:>10} {:>8} {:>8}",
-                "iter", "objective", "infeas", "kkt", "step", "seconds"
+                "{:>5} {:>16} {:>10} {:>10} {:>8} {:>8} {:>8} {:>8}",
+                "iter", "objective", "infeas", "kkt", "step", "seconds", "shift", "qp"
             );
         }
+        let shift = r
+            .hessian_shift
+            .map_or("-".to_string(), |d| format!("{d:.1e}"));
+        let route = r.qp_route.map_or("-", QpRoute::word);
         eprintln!(
-            "{:>5} {:>16.9e} {:>10.3e} {:>10.3e} {:>8.2e} {:>8.2}",
-            r.iter, r.objective, r.infeasibility, r.kkt, r.step, r.seconds
+            "{:>5} {:>16.9e} {:>10.3e} {:>10.3e} {:>8.2e} {:>8.2} {:>8} {:>8}",
+            r.iter, r.objective, r.infeasibility, r.kkt, r.step, r.seconds, shift, route
         );
         true
     }

@@ -11,7 +11,9 @@ use super::driver::{State, Structure};
 use super::evaluator::Evaluator;
 use super::hessian::{self, BlockBfgs};
 use super::qp::{QpData, QpError, QpSolution, Triplets};
-use super::{ExactConvexification, HessianMode, IterationRecord, Nlp, SqpSettings, SqpStatus};
+use super::{
+    ExactConvexification, HessianMode, IterationRecord, Nlp, QpRoute, SqpSettings, SqpStatus,
+};
 
 /// What the step computation carries from one iteration to the next (and in
 /// checkpoints).
@@ -83,6 +85,8 @@ pub(super) struct Step {
     pub(super) sol: QpSolution,
     /// Whether it came from the elastic QP.
     pub(super) elastic: bool,
+    /// Which QP gave it.
+    pub(super) route: QpRoute,
 }
 
 /// Whether the exact mode uses the constraint curvature at an iterate of largest violation
@@ -232,8 +236,10 @@ pub(super) fn solve(
 ) -> Result<Step, SqpStatus> {
     let rho = (10.0 * mem.lam_est).clamp(1e3, 1e8);
     let mut aug_rho = sub.aug_rho;
+    let mut route = QpRoute::Direct;
     let mut first = eval.qp(&sub.data(None));
     if let (Err(QpError::Failed(_)), Some(hc)) = (&first, sub.h_elastic.as_ref()) {
+        route = QpRoute::Convexified;
         // exact mode: the QP was not solved with the exact curvature; test convexity
         // with a larger ρ from now on and solve this one with the block-convexified Hessian
         mem.test_rho_scale *= 10.0;
@@ -247,9 +253,15 @@ pub(super) fn solve(
         Ok(s) => (s, false),
         // inconsistent linearisation (or a stalled, nearly inconsistent one): elastic mode
         Err(QpError::Infeasible | QpError::Failed(_)) => match eval.qp(&sub.data(Some(rho))) {
-            Ok(s) => (s, true),
+            Ok(s) => {
+                route = QpRoute::Elastic;
+                (s, true)
+            }
             Err(e) => match rescue(eval, sub) {
-                Some(s) => (s, false),
+                Some(s) => {
+                    route = QpRoute::Proximal;
+                    (s, false)
+                }
                 None => return Err(SqpStatus::QpFailure(e.to_string())),
             },
         },
@@ -263,7 +275,11 @@ pub(super) fn solve(
     if !elastic {
         mem.lam_est = sol.lambda.iter().map(|v| v.abs()).fold(1.0, f64::max);
     }
-    Ok(Step { sol, elastic })
+    Ok(Step {
+        sol,
+        elastic,
+        route,
+    })
 }
 
 /// The interior-point solver lost accuracy on this QP: a proximal shift δI (growing,
@@ -690,6 +706,8 @@ mod tests {
                 seconds: 0.0,
                 qp_iterations: 0,
                 integration_tol: None,
+                hessian_shift: None,
+                qp_route: None,
             })
             .collect()
     }
