@@ -30,7 +30,7 @@ use crate::common;
 use common::*;
 use footfall::runfolder::RunFolder;
 use footfall::workflows::diagnose::DiagnoseRequest;
-use footfall::workflows::track::{track, TrackRequest};
+use footfall::workflows::track::track;
 use footfall::workflows::Quiet;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -46,12 +46,7 @@ fn scratch() -> &'static Path {
 /// solution, into the scratch folder.
 fn tracked(trial: &str) -> PathBuf {
     let out = scratch().join(trial);
-    let foot = root().join("models/feet/volumetric_ellipse.json");
-    let mut req = TrackRequest::new(foot.to_str().unwrap());
-    req.run.model = root().join("models/opensim_subject01_seed_damping.json");
-    req.run.phases = root().join("phases/volumetric_ellipse_walk.json");
-    req.run.sample_targets = true;
-    req.run.track_pelvis_position = true;
+    let mut req = compliant_identification_request();
     req.run.integrator_tol = 1e-10;
     if trial != "untouched" {
         req.run.data = Some(

@@ -247,13 +247,8 @@ fn sample_target_hessian_matches_finite_differences_with_a_heel_pad() {
 #[test]
 fn compliant_heel_strike_curvature_matches_finite_differences() {
     use footfall::ocp::Block;
-    use footfall::workflows::track::{TrackRequest, TrackingProblem};
-    let foot = root().join("models/feet/volumetric_ellipse.json");
-    let mut req = TrackRequest::new(foot.to_str().unwrap());
-    req.run.model = root().join("models/opensim_subject01_seed_damping.json");
-    req.run.phases = root().join("phases/volumetric_ellipse_walk.json");
-    req.run.sample_targets = true;
-    req.run.track_pelvis_position = true;
+    use footfall::workflows::track::TrackingProblem;
+    let req = compliant_identification_request();
     let mut prob = TrackingProblem::build(&req.run, &[]).unwrap();
     let start =
         footfall::workflows::read_solution(&root().join("tests/data/real_compliant/untouched"))

@@ -215,6 +215,20 @@ pub fn bundled_tracking(
     )
 }
 
+/// The compliant foot's identification track of the bundled trial, as
+/// `tools/make-compliant-real-tracks` runs it: the volumetric ellipse with its file's law,
+/// the seed's MTG damping, sample targets and the pelvis position tracked (the integrator
+/// and the solver at their defaults).
+pub fn compliant_identification_request() -> footfall::workflows::track::TrackRequest {
+    let foot = root().join("models/feet/volumetric_ellipse.json");
+    let mut req = footfall::workflows::track::TrackRequest::new(foot.to_str().unwrap());
+    req.run.model = root().join("models/opensim_subject01_seed_damping.json");
+    req.run.phases = root().join("phases/volumetric_ellipse_walk.json");
+    req.run.sample_targets = true;
+    req.run.track_pelvis_position = true;
+    req
+}
+
 /// As [`bundled_tracking`], with the targets read as `sides` says.
 #[allow(dead_code)]
 pub fn bundled_tracking_with(
