@@ -135,7 +135,6 @@ mod tests {
                 "{interior:?}: ∫ = {cubic}"
             );
             // every node lies inside its piece, and the pieces end at the instants
-            // every node lies inside its piece, and the pieces end at the instants
             for &(t, _, end) in &nodes {
                 assert!(
                     0.0 < t && t < end && end <= 1.0,

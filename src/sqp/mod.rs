@@ -337,8 +337,9 @@ pub struct IterationRecord {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub integration_tol: Option<f64>,
     /// The shift δ added to the exact Hessian's diagonal to make the QP convex (inertia
-    /// correction; None when the step did not use the exact curvature). A δ that stays
-    /// above zero near the optimum turns Newton's quadratic convergence into a linear one.
+    /// correction; 0 under the augmented convexification, which adds ρJₑᵀJₑ instead;
+    /// None when the step did not use the exact curvature). A δ that stays above zero near
+    /// the optimum turns Newton's quadratic convergence into a linear one.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub hessian_shift: Option<f64>,
     /// Which QP gave the step (None for records from before this field).
