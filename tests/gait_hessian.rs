@@ -38,17 +38,17 @@ fn term_hessian_error(f: &dyn NodeFunction, z: &[f64], wts: &[f64]) -> f64 {
     worst
 }
 
-/// Largest |H d − FD| of the assembled Hessian of the Lagrangian (Gauss–Newton plus the
-/// curvature triplets, upper triangle) applied to `d`, against central differences (step
-/// `e`) of `grad_l`, relative to the differences' largest entry; and that entry.
-fn hessian_error(
+/// The assembled Hessian of the Lagrangian (Gauss–Newton plus the curvature triplets,
+/// upper triangle) applied to `d`, and central differences (step `e`) of `grad_l` along
+/// `d`: `(H d, FD)`.
+fn hessian_and_differences(
     gn: (&[usize], &[usize], &[f64]),
     curvature: (&[usize], &[usize], &[f64]),
     w0: &[f64],
     d: &[f64],
     e: f64,
     grad_l: impl Fn(&[f64]) -> Vec<f64>,
-) -> (f64, f64) {
+) -> (Vec<f64>, Vec<f64>) {
     let mut hd = vec![0.0; w0.len()];
     for (rows, cols, vals) in [gn, curvature] {
         for k in 0..rows.len() {
@@ -67,6 +67,20 @@ fn hessian_error(
         .zip(&gm)
         .map(|(a, b)| (a - b) / (2.0 * e))
         .collect();
+    (hd, fd)
+}
+
+/// Largest |H d − FD| ([`hessian_and_differences`]) relative to the differences' largest
+/// entry; and that entry.
+fn hessian_error(
+    gn: (&[usize], &[usize], &[f64]),
+    curvature: (&[usize], &[usize], &[f64]),
+    w0: &[f64],
+    d: &[f64],
+    e: f64,
+    grad_l: impl Fn(&[f64]) -> Vec<f64>,
+) -> (f64, f64) {
+    let (hd, fd) = hessian_and_differences(gn, curvature, w0, d, e, grad_l);
     let scale = fd.iter().fold(0.0f64, |m, v| m.max(v.abs()));
     let worst = hd
         .iter()
@@ -265,16 +279,6 @@ fn compliant_heel_strike_curvature_matches_finite_differences() {
         let (ev, (hr, hc, hv)) = Nlp::evaluate_with_hessian(tr, &w0, &lambda).unwrap();
         let (gr, gc) = tr.gauss_newton_pattern();
         let (jr, jc) = tr.jacobian_pattern();
-        let mut hd = vec![0.0; n];
-        for (rows, cols, vals) in [(gr, gc, &ev.gn[..]), (&hr[..], &hc[..], &hv[..])] {
-            for k in 0..rows.len() {
-                let (r, c, v) = (rows[k], cols[k], vals[k]);
-                hd[r] += v * d[c];
-                if r != c {
-                    hd[c] += v * d[r];
-                }
-            }
-        }
         let grad_l = |w: &[f64]| {
             let e = Nlp::evaluate(tr, w, true).unwrap();
             let mut g = e.grad.clone();
@@ -283,11 +287,8 @@ fn compliant_heel_strike_curvature_matches_finite_differences() {
             }
             g
         };
-        let e = 1e-6;
-        let wp: Vec<f64> = w0.iter().zip(&d).map(|(w, d)| w + e * d).collect();
-        let wm: Vec<f64> = w0.iter().zip(&d).map(|(w, d)| w - e * d).collect();
-        let (gp, gm) = (grad_l(&wp), grad_l(&wm));
-        let fd: Vec<f64> = gp.iter().zip(&gm).map(|(a, b)| (a - b) / (2.0 * e)).collect();
+        let (hd, fd) =
+            hessian_and_differences((gr, gc, &ev.gn), (&hr, &hc, &hv), &w0, &d, 1e-6, grad_l);
         let scale = fd.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         let intervals = tr.ocp().phases[0].intervals;
         let mut worst = (0.0f64, 0);
