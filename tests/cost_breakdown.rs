@@ -227,3 +227,89 @@ fn sample_target_breakdown_adds_up_with_a_force_plate_clock_offset() {
         "a 12 ms offset leaves the objective at {f} (plain {f0})"
     );
 }
+
+/// With sample targets a held clock offset of the left plate, whose heel strike starts the
+/// tracked half cycle, moves the window's start with that plate's events: held at −20 and
+/// −40 ms the bundled trial's window starts 20 and 40 ms later and holds fewer samples,
+/// so each J sums over different data. `diagnose --profile-clocks` compares its points
+/// over the samples all of them hold (`common_samples`): found by their instants across
+/// the setups, they are the latest-starting window's, and each solution's cost there is
+/// its own breakdown's over those instants.
+#[test]
+fn held_left_clocks_move_the_window_and_the_profile_compares_the_common_samples() {
+    use footfall::problems::diagnose::common_samples::{common_sample_costs, SampleCosts};
+    let (_, _, plain) = bundled_tracking_with(
+        "double_circle.json",
+        "phases/double_circle_walk.json",
+        footfall::problems::track::TargetSides::Samples,
+    );
+    let data = footfall::data::GaitData::bundled(&root()).unwrap();
+    let p = path("phases/double_circle_walk.json");
+    let seq = footfall::phases::PhaseSequence::load(&p).unwrap();
+    let integrator = IntegratorSettings::default();
+    let offsets = [0.0, -0.02, -0.04];
+    let mut windows = Vec::new();
+    let mut costs: Vec<SampleCosts> = Vec::new();
+    for offset in offsets {
+        let m = model_with_effects(
+            "opensim_subject01.json",
+            "double_circle.json",
+            serde_json::json!([{ "type": "force_plate_time_offset", "side": "left",
+                                 "offset": offset, "free": [] }]),
+        );
+        let sets = seq.resolve(&m, &p).unwrap();
+        let setup = footfall::problems::track::TrackingSetup::new_with_sides(
+            &m,
+            &seq,
+            &sets,
+            &data,
+            footfall::problems::track::TargetSides::Samples,
+        )
+        .unwrap();
+        let cycle = GaitCycle::new(&m, &setup.seq, &sets).unwrap();
+        let ocp = setup.ocp(&cycle, &m, &sets, integrator.clone()).unwrap();
+        let tr = Transcription::new(&ocp).unwrap();
+        let (_, _, w) = tr.variable_bounds_and_guess();
+        let sol = GaitSolution::from_nlp(&tr, &w, &cycle.continuous, setup.window.0);
+        let b = setup
+            .cost_breakdown(&m, &sets, &cycle.continuous, &sol, &integrator)
+            .unwrap();
+        windows.push(setup.window);
+        costs.push(b.nodes.iter().map(|n| (n.time, n.data)).collect());
+    }
+    for (k, offset) in offsets.iter().enumerate() {
+        assert!(
+            (windows[k].0 - (plain.window.0 - offset)).abs() < 5e-3
+                && (windows[k].1 - plain.window.1).abs() < 5e-3,
+            "held at {offset} s: window {:?} against {:?}",
+            windows[k],
+            plain.window
+        );
+    }
+    let n: Vec<usize> = costs.iter().map(Vec::len).collect();
+    assert!(n[0] > n[1] && n[1] > n[2], "samples per window {n:?}");
+    let views: Vec<&[(f64, f64)]> = costs.iter().map(|c| &c[..]).collect();
+    let common = common_sample_costs(&views);
+    assert_eq!(common.samples, n[2]);
+    let span = common.span.unwrap();
+    assert!(span.0 > windows[2].0 && span.1 < windows[2].1, "{span:?}");
+    for (k, c) in costs.iter().enumerate() {
+        let own: f64 = c
+            .iter()
+            .filter(|s| s.0 >= span.0 - 1e-7 && s.0 <= span.1 + 1e-7)
+            .map(|s| s.1)
+            .sum();
+        assert!(
+            (common.costs[k] - own).abs() <= 1e-12 * own,
+            "held at {} s: {} over the common samples against {own}",
+            offsets[k],
+            common.costs[k]
+        );
+        let all: f64 = c.iter().map(|s| s.1).sum();
+        assert!(
+            k == 2 || common.costs[k] < all,
+            "{k}: {} of {all}",
+            common.costs[k]
+        );
+    }
+}

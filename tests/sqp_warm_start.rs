@@ -11,7 +11,7 @@
 
 use footfall::sqp::{
     self, EvalError, ExactConvexification, HessianMode, Nlp, NlpEval, Silent, SqpSettings,
-    SqpStatus,
+    SqpStatus, WarmStart,
 };
 
 struct OnACircle;
@@ -76,7 +76,13 @@ fn settings() -> SqpSettings {
 fn the_multipliers_of_the_problem_a_solve_continues_give_it_newton_steps() {
     let angle = std::f64::consts::FRAC_PI_4 + 0.05;
     let w0 = [2f64.sqrt() * angle.cos(), 2f64.sqrt() * angle.sin()];
-    let warm = sqp::solve_warm(&OnACircle, &w0, &[0.5], &settings(), &mut Silent);
+    let warm = sqp::solve_warm(
+        &OnACircle,
+        &w0,
+        WarmStart::constraints(&[0.5]),
+        &settings(),
+        &mut Silent,
+    );
     let cold = sqp::solve(&OnACircle, &w0, &settings(), &mut Silent);
     for (what, res) in [("warm", &warm), ("cold", &cold)] {
         assert_eq!(res.status, SqpStatus::Converged, "{what}: {res:?}");
@@ -110,7 +116,13 @@ fn the_multipliers_of_the_problem_a_solve_continues_give_it_newton_steps() {
         iterations(&cold)
     );
     // multipliers of the wrong length are ignored: the same as the cold solve
-    let ignored = sqp::solve_warm(&OnACircle, &w0, &[0.5, 0.5], &settings(), &mut Silent);
+    let ignored = sqp::solve_warm(
+        &OnACircle,
+        &w0,
+        WarmStart::constraints(&[0.5, 0.5]),
+        &settings(),
+        &mut Silent,
+    );
     assert_eq!(ignored.w, cold.w);
     assert_eq!(iterations(&ignored), iterations(&cold));
 }
@@ -161,4 +173,138 @@ fn the_solve_tells_when_stalled_steps_bring_in_the_exact_hessian() {
     };
     sqp::solve(&OnACircle, &w0, &fixed, &mut quiet);
     assert!(quiet.0.is_empty(), "{:?}", quiet.0);
+}
+
+/// Maximise x² on the parabola y = x² with x ≤ 1: minimise −y subject to y − x² = 0,
+/// x ∈ [−1, 1]. The solution is (1, 1) with λ = 1 and x held at its upper bound. The
+/// Lagrangian −y + λ(y − x²) curves by −2λ along x, so the only direction the parabola
+/// leaves free, (1, 2x), is negatively curved: only the bound makes the point a minimum.
+struct OnAParabola;
+
+impl Nlp for OnAParabola {
+    fn n(&self) -> usize {
+        2
+    }
+    fn m(&self) -> usize {
+        1
+    }
+    fn bounds(&self) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
+        (vec![-1.0, -10.0], vec![1.0, 10.0], vec![0.0], vec![0.0])
+    }
+    fn jacobian_pattern(&self) -> (Vec<usize>, Vec<usize>) {
+        (vec![0, 0], vec![0, 1])
+    }
+    fn gauss_newton_pattern(&self) -> (Vec<usize>, Vec<usize>) {
+        (Vec::new(), Vec::new())
+    }
+    fn hessian_blocks(&self) -> Vec<Vec<usize>> {
+        vec![vec![0, 1]]
+    }
+    fn row_name(&self, _i: usize) -> String {
+        "parabola".into()
+    }
+    fn evaluate(&self, w: &[f64], derivs: bool) -> Result<NlpEval, EvalError> {
+        let mut ev = NlpEval {
+            f: -w[1],
+            c: vec![w[1] - w[0] * w[0]],
+            ..Default::default()
+        };
+        if derivs {
+            ev.grad = vec![0.0, -1.0];
+            ev.jac = vec![-2.0 * w[0], 1.0];
+        }
+        Ok(ev)
+    }
+    fn rows_with_exact_hessian(&self) -> Vec<bool> {
+        vec![true]
+    }
+    fn exact_hessian(
+        &self,
+        _w: &[f64],
+        lambda: &[f64],
+    ) -> Result<(Vec<usize>, Vec<usize>, Vec<f64>), EvalError> {
+        Ok((vec![0], vec![0], vec![-2.0 * lambda[0]]))
+    }
+}
+
+/// A solve that goes on from another's multipliers (the tracking solve's second stage at
+/// a tighter integrator tolerance) also takes its bound multipliers: the variable the
+/// first solve held at its bound is held by the first iteration's inertia correction too,
+/// which then needs no shift (its smallest, 2e-12). With the constraint multipliers alone the bound's variable
+/// counts as free, the Lagrangian is not convex along the parabola, and the first QP's
+/// Hessian is shifted.
+#[test]
+fn the_bound_multipliers_of_the_problem_a_solve_continues_hold_its_bounds() {
+    let first = sqp::solve(&OnAParabola, &[0.9, 0.5], &settings(), &mut Silent);
+    assert_eq!(first.status, SqpStatus::Converged, "{first:?}");
+    assert!(
+        (first.w[0] - 1.0).abs() < 1e-9 && (first.w[1] - 1.0).abs() < 1e-8,
+        "{:?}",
+        first.w
+    );
+    assert!(
+        (first.lambda[0] - 1.0).abs() < 1e-8,
+        "λ = {:?}",
+        first.lambda
+    );
+    assert!(first.nu[0] != 0.0, "ν = {:?}", first.nu);
+    // the constraint violated, x at its bound: what a tighter integrator would leave
+    let w0 = [1.0, 0.9];
+    let shifts = |r: &sqp::SqpResult| -> Vec<Option<f64>> {
+        r.history.iter().map(|h| h.hessian_shift).collect()
+    };
+    let both = sqp::solve_warm(
+        &OnAParabola,
+        &w0,
+        WarmStart {
+            lambda: &first.lambda,
+            nu: &first.nu,
+        },
+        &settings(),
+        &mut Silent,
+    );
+    let lambda_only = sqp::solve_warm(
+        &OnAParabola,
+        &w0,
+        WarmStart::constraints(&first.lambda),
+        &settings(),
+        &mut Silent,
+    );
+    for (what, res) in [("λ and ν", &both), ("λ alone", &lambda_only)] {
+        assert_eq!(res.status, SqpStatus::Converged, "{what}: {res:?}");
+        assert!((res.w[1] - 1.0).abs() < 1e-8, "{what}: {:?}", res.w);
+    }
+    eprintln!(
+        "shifts with λ and ν: {:?}; with λ alone: {:?}",
+        shifts(&both),
+        shifts(&lambda_only)
+    );
+    // at most the test's smallest shift (1e-12 of the Hessian's largest entry, here 2),
+    // against one of the Lagrangian's curvature's size
+    assert!(
+        both.history[0].hessian_shift.is_some_and(|d| d < 1e-10),
+        "{:?}",
+        shifts(&both)
+    );
+    assert!(
+        lambda_only.history[0]
+            .hessian_shift
+            .is_some_and(|d| d > 0.5),
+        "{:?}",
+        shifts(&lambda_only)
+    );
+    assert!(both.history.len() <= lambda_only.history.len());
+    // bound multipliers of the wrong length are ignored: the same as λ alone
+    let ignored = sqp::solve_warm(
+        &OnAParabola,
+        &w0,
+        WarmStart {
+            lambda: &first.lambda,
+            nu: &[1.0],
+        },
+        &settings(),
+        &mut Silent,
+    );
+    assert_eq!(ignored.w, lambda_only.w);
+    assert_eq!(ignored.history.len(), lambda_only.history.len());
 }

@@ -27,6 +27,7 @@
 //! fixed to another half cycle of the trial, it lowers that cost beyond its noise band
 //! ([`HeldOut`], [`stats::held_out_band`]).
 
+pub mod common_samples;
 pub mod stats;
 
 use crate::model::effects::EffectSpec;
@@ -289,6 +290,26 @@ pub struct ProfilePoint {
     pub iterations: usize,
     /// Its wall time (s).
     pub seconds: f64,
+    /// With sample targets, its data cost over the samples every point, the run and the
+    /// re-fit compare ([`ClockProfile::compared`]): what the points are compared by.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub compared: Option<f64>,
+}
+
+/// The samples a profile with sample targets compares its points over: a held offset
+/// moves its plate's contact events and with them the window's start or end, so each
+/// point compares a different set of samples
+/// ([`common_samples`](crate::problems::diagnose::common_samples)).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct ComparedSamples {
+    /// How many samples every point, the run and the re-fit compare.
+    pub samples: usize,
+    /// Their first and last instants (s).
+    pub span: (f64, f64),
+    /// The run's data cost over them.
+    pub run: f64,
+    /// The re-fit's.
+    pub refit: Option<f64>,
 }
 
 /// The cost profiled over one force plate's clock offset. The score test is local: J is
@@ -319,6 +340,11 @@ pub struct ClockProfile {
     /// Why the profile's re-fit failed, when it did (the candidate keeps its score test).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub refit_error: Option<String>,
+    /// With sample targets, the samples the points are compared over, and the run's and
+    /// re-fit's costs there: the lowest point, the parabola and the re-fit's decrease are
+    /// read from these costs, not from J.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub compared: Option<ComparedSamples>,
 }
 
 /// A candidate fitted on the run's half cycle, applied with its parameters fixed to

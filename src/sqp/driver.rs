@@ -103,13 +103,12 @@ pub(super) struct State {
     pub(super) plain: (f64, f64),
 }
 
-/// Solve `nlp` from `w0` (with the constraint multipliers `lambda0` in the first
-/// Hessian, if given and of the right length; zero otherwise), or continue the solve
-/// `resume` checkpointed.
+/// Solve `nlp` from `w0` (with the multipliers `warm`, where given and of the right
+/// lengths; zero otherwise), or continue the solve `resume` checkpointed.
 pub(super) fn run(
     nlp: &dyn Nlp,
     w0: &[f64],
-    lambda0: Option<&[f64]>,
+    warm: Option<super::WarmStart<'_>>,
     settings: &SqpSettings,
     observer: &mut dyn Observer,
     resume: Option<&SqpCheckpoint>,
@@ -166,9 +165,11 @@ pub(super) fn run(
             nlp.set_integration_tolerance(tol);
         }
     }
-    let lambda0 = match (resume, lambda0) {
+    // a warm start's multipliers, where they fit this problem
+    let fits = |v: &[f64], len: usize| v.len() == len && v.iter().all(|x| x.is_finite());
+    let lambda0 = match (resume, warm) {
         (Some(cp), _) => cp.lambda.values(),
-        (None, Some(l)) if l.len() == m && l.iter().all(|v| v.is_finite()) => l.to_vec(),
+        (None, Some(ws)) if fits(ws.lambda, m) => ws.lambda.to_vec(),
         (None, _) => vec![0.0; m],
     };
     let (ev, hess) = match eval.derivs(&w, &lambda0) {
@@ -184,7 +185,10 @@ pub(super) fn run(
     zero_blocks.scale(0.0);
     let mut mem = StepMemory::default();
     let mut lambda = lambda0;
-    let mut nu = vec![0.0; n];
+    let mut nu = match warm {
+        Some(ws) if fits(ws.nu, n) => ws.nu.to_vec(),
+        _ => vec![0.0; n],
+    };
     let mut filter = Filter::new();
     let mut history = Vec::new();
     let mut status = SqpStatus::MaxIterations;

@@ -502,18 +502,38 @@ pub fn solve(
     driver::run(nlp, w0, None, settings, observer, None)
 }
 
-/// [`solve`] with the constraint multipliers `lambda0` (one per constraint row) in the
-/// first iteration's Hessian of the Lagrangian instead of zero: the same problem solved
-/// again from its own solution (a tighter tolerance) starts with its curvature, not the
-/// objective's alone. Multipliers of the wrong length are ignored.
+/// Multipliers a solve of a problem starts from, e.g. those of the same problem solved
+/// just before at a looser integrator tolerance. Either slice is ignored when its length
+/// is not the problem's (or a value is not finite), and that part starts at zero.
+#[derive(Clone, Copy, Debug)]
+pub struct WarmStart<'a> {
+    /// Constraint multipliers, one per constraint row: the first iteration's Hessian of
+    /// the Lagrangian gets the constraints' curvature, not the objective's alone.
+    pub lambda: &'a [f64],
+    /// Bound multipliers, one per variable: a variable with a nonzero one that sits at
+    /// its bound is held there by the first iteration's inertia correction, as by every
+    /// later one, instead of counting as a free direction.
+    pub nu: &'a [f64],
+}
+
+impl<'a> WarmStart<'a> {
+    /// Constraint multipliers alone (the bound multipliers start at zero).
+    pub fn constraints(lambda: &'a [f64]) -> Self {
+        Self { lambda, nu: &[] }
+    }
+}
+
+/// [`solve`] from the multipliers `warm`: the same problem solved again from its own
+/// solution (a tighter tolerance) starts with its curvature and its active bounds, not
+/// the objective's curvature alone.
 pub fn solve_warm(
     nlp: &dyn Nlp,
     w0: &[f64],
-    lambda0: &[f64],
+    warm: WarmStart<'_>,
     settings: &SqpSettings,
     observer: &mut dyn Observer,
 ) -> SqpResult {
-    driver::run(nlp, w0, Some(lambda0), settings, observer, None)
+    driver::run(nlp, w0, Some(warm), settings, observer, None)
 }
 
 /// Continue a solve of `nlp` from a checkpoint its observer received: with the same

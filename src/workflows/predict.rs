@@ -198,7 +198,15 @@ pub fn predict(
             max_iter,
             ..sqp_settings.clone()
         };
-        let first = super::solve_interruptibly_warm(tr, w, lambda0, &sqp_settings, progress)?;
+        let first = super::solve_interruptibly_warm(
+            tr,
+            w,
+            // the constraints' multipliers only (the bounds' too would move every
+            // prediction's iterates; not re-checked yet)
+            lambda0.map(|ws| crate::sqp::WarmStart::constraints(ws.lambda)),
+            &sqp_settings,
+            progress,
+        )?;
         if first.status != SqpStatus::LineSearchFailure
             || sqp_settings.hessian != HessianMode::Exact
         {

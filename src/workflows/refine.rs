@@ -33,8 +33,8 @@ pub const ROUND_TOL: f64 = 1e-3;
 pub type CheckSites = Vec<(usize, usize, f64)>;
 
 /// Where a round starts: the point and, for a round that only finishes the last one's
-/// problem, that round's constraint multipliers.
-pub type RoundStart<'a> = (&'a [f64], Option<&'a [f64]>);
+/// problem, that round's multipliers (constraints' and bounds').
+pub type RoundStart<'a> = (&'a [f64], Option<crate::sqp::WarmStart<'a>>);
 
 /// What the problem needs for its check points and the validity grid.
 pub struct Refinement<'c, 'm> {
@@ -64,8 +64,8 @@ impl<'m> Refinement<'_, 'm> {
     /// may be followed by another, the run's own otherwise; its last, the iterations the
     /// round may make (what the earlier rounds left of [`Refinement::max_iter`]); its
     /// second, for a round that only finishes the last one's problem at the run's
-    /// tolerance, that round's constraint multipliers (the caller may start from them
-    /// instead of zero). Returns
+    /// tolerance, that round's multipliers (the caller may start from them instead of
+    /// zero). Returns
     /// the check sites and the result of the last solve, its history following the
     /// earlier rounds'.
     pub fn solve<'o>(
@@ -109,7 +109,10 @@ impl<'m> Refinement<'_, 'm> {
             let warm = merged
                 .as_ref()
                 .filter(|_| finishing)
-                .map(|m| m.lambda.as_slice());
+                .map(|m| crate::sqp::WarmStart {
+                    lambda: &m.lambda,
+                    nu: &m.nu,
+                });
             let res = solve(&tr, (&w, warm), tol, self.max_iter.saturating_sub(done))?;
             let converged = res.status == SqpStatus::Converged;
             let next = res.w.clone();

@@ -152,12 +152,11 @@ pub fn solve_interruptibly(
     solve_interruptibly_warm(nlp, w0, None, settings, progress)
 }
 
-/// [`solve_interruptibly`] with the constraint multipliers `lambda0` in the first
-/// Hessian ([`crate::sqp::solve_warm`]).
+/// [`solve_interruptibly`] from the multipliers `warm` ([`crate::sqp::solve_warm`]).
 pub fn solve_interruptibly_warm(
     nlp: &dyn Nlp,
     w0: &[f64],
-    lambda0: Option<&[f64]>,
+    warm: Option<crate::sqp::WarmStart<'_>>,
     settings: &SqpSettings,
     progress: &dyn Progress,
 ) -> anyhow::Result<SqpResult> {
@@ -189,8 +188,8 @@ pub fn solve_interruptibly_warm(
             }
             crate::sqp::solve_resumed(nlp, cp, settings, &mut observer)
         }
-        None => match lambda0 {
-            Some(l) => crate::sqp::solve_warm(nlp, w0, l, settings, &mut observer),
+        None => match warm {
+            Some(ws) => crate::sqp::solve_warm(nlp, w0, ws, settings, &mut observer),
             None => crate::sqp::solve(nlp, w0, settings, &mut observer),
         },
     };

@@ -298,6 +298,31 @@ impl TrackingProblem {
         f(&tr, &cycle, w0)
     }
 
+    /// The data cost of `solution` per compared sample (its data instant, s, and cost), for
+    /// comparing solutions whose windows hold different samples
+    /// ([`crate::problems::diagnose::common_samples`]); empty without sample targets.
+    pub fn sample_costs(
+        &self,
+        solution: &GaitSolution,
+    ) -> anyhow::Result<crate::problems::diagnose::common_samples::SampleCosts> {
+        if self.setup.samples.is_empty() {
+            return Ok(Vec::new());
+        }
+        let cycle =
+            GaitCycle::new(&self.model, &self.setup.seq, &self.sets).map_err(|e| anyhow!(e))?;
+        let b = self
+            .setup
+            .cost_breakdown(
+                &self.model,
+                &self.sets,
+                &cycle.continuous,
+                solution,
+                &self.integrator,
+            )
+            .map_err(|e| anyhow!("the samples' costs: {e}"))?;
+        Ok(b.nodes.iter().map(|n| (n.time, n.data)).collect())
+    }
+
     /// Solve the problem (interruptibly, with `progress`) and read its
     /// solution.
     pub fn solve(
@@ -306,7 +331,7 @@ impl TrackingProblem {
         progress: &dyn Progress,
     ) -> anyhow::Result<(crate::sqp::SqpResult, GaitSolution)> {
         self.with_transcription(|tr, cycle, w0| {
-            self.solve_staged(tr, cycle, &w0, settings, progress, |tr, res| {
+            self.solve_staged(tr, cycle, (&w0, None), settings, progress, |tr, res| {
                 let mut sol =
                     GaitSolution::from_nlp(tr, &res.w, &cycle.continuous, self.setup.window.0);
                 self.setup.place(&self.model, &mut sol);
@@ -315,9 +340,9 @@ impl TrackingProblem {
         })
     }
 
-    /// Solve on `tr` from `w0` and hand the result, with the transcription it was last
-    /// iterated on, to `finish`. When the line search fails, the solve goes on once from
-    /// that iterate with more precise integration, because near an optimum the
+    /// Solve on `tr` from `w0` (and the multipliers `warm`, if given) and hand the result,
+    /// with the transcription it was last iterated on, to `finish`. When the line search fails, the solve goes on once from
+    /// that iterate and its multipliers with more precise integration, because near an optimum the
     /// integrator's error is what stops it:
     /// - sensitivities looser than the states (a heel pad): at the states' tolerance. The
     ///   KKT residual is computed from them, so the looser ones can leave an optimum
@@ -331,12 +356,12 @@ impl TrackingProblem {
         &self,
         tr: &Transcription,
         cycle: &GaitCycle,
-        w0: &[f64],
+        (w0, warm): super::refine::RoundStart<'_>,
         settings: &SqpSettings,
         progress: &dyn Progress,
         finish: impl FnOnce(&Transcription, crate::sqp::SqpResult) -> anyhow::Result<R>,
     ) -> anyhow::Result<R> {
-        let first = super::solve_interruptibly(tr, w0, settings, progress);
+        let first = super::solve_interruptibly_warm(tr, w0, warm, settings, progress);
         self.count_integration(tr);
         let first = first?;
         if first.status != crate::sqp::SqpStatus::LineSearchFailure {
@@ -380,7 +405,14 @@ impl TrackingProblem {
             max_time: settings.max_time.map(|t| (t - first.seconds).max(0.0)),
             ..settings.clone()
         };
-        let second = super::solve_interruptibly(&tr2, &first.w, &rest, progress);
+        // from the first stage's multipliers: the same problem, integrated more precisely,
+        // keeps its constraints' curvature and the bounds it held (as a finishing round of
+        // check points does, `track/write.rs`)
+        let warm = crate::sqp::WarmStart {
+            lambda: &first.lambda,
+            nu: &first.nu,
+        };
+        let second = super::solve_interruptibly_warm(&tr2, &first.w, Some(warm), &rest, progress);
         self.count_integration(&tr2);
         finish(&tr2, merge_stages(first, second?))
     }

@@ -19,6 +19,7 @@ use super::super::track::{TrackedRun, TrackingProblem};
 use super::super::{note, Progress};
 use super::{sibling, DiagnoseRequest};
 use crate::model::effects::EffectSpec;
+use crate::problems::diagnose::common_samples::common_sample_costs;
 use crate::problems::diagnose::stats::{curvature_along, held_out_band, paired_held_out_band};
 use crate::problems::diagnose::{
     truncated_refit, HeldOut, ScoreTest, TrackingRunSetup, MAX_STEPS, REL_STOP,
@@ -259,7 +260,7 @@ fn validate_held_clock(
     let mut prob = TrackingProblem::build(&base.setup, std::slice::from_ref(&spec))?;
     prob.start_at(&base.solution)?;
     let settings = super::refit::full_solve_settings(args, &prob);
-    let (res, _) = prob.solve(&settings, &super::super::Quiet)?;
+    let (res, sol) = prob.solve(&settings, &super::super::Quiet)?;
     if !res.objective.is_finite() {
         return Err(anyhow!(
             "the held-out solve ended without a finite cost ({})",
@@ -267,7 +268,18 @@ fn validate_held_clock(
         ));
     }
     let converged = res.status == crate::sqp::SqpStatus::Converged;
-    Ok((judged(base, t, base.objective - res.objective), converged))
+    // with sample targets the held offset moves the half cycle's start or end with its
+    // plate's events: the change is read over the samples both solutions compare
+    // (`common_samples`), as the profile's points are
+    let change = if base.setup.sample_targets {
+        let plain = TrackingProblem::build(&base.setup, &[])?.sample_costs(&base.solution)?;
+        let held = prob.sample_costs(&sol)?;
+        let common = common_sample_costs(&[&plain, &held]);
+        common.costs[0] - common.costs[1]
+    } else {
+        base.objective - res.objective
+    };
+    Ok((judged(base, t, change), converged))
 }
 
 /// Whether test `t` is a plate's clock read from its refined profile (a re-fit held at

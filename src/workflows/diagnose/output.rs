@@ -232,12 +232,26 @@ fn profile_paragraph(t: &ScoreTest) -> Option<String> {
             format!(
                 "{:+.0} ms: {}",
                 1e3 * q.offset,
-                q.objective
-                    .map_or_else(|| q.status.clone(), |j| format!("J = {j:.4}"))
+                match (q.objective, q.compared) {
+                    (Some(j), Some(c)) => format!("J = {j:.4}, {c:.4} over the common samples"),
+                    (Some(j), None) => format!("J = {j:.4}"),
+                    (None, _) => q.status.clone(),
+                }
             )
         })
         .collect::<Vec<_>>()
         .join(", ");
+    // with sample targets a held offset moves the window with its plate's events
+    let common = p.compared.as_ref().map_or(String::new(), |c| {
+        format!(
+            " The points hold different samples (a held offset moves the window's start or end with its plate's events), so they are compared by their data cost over the {} samples that each point, the run and the re-fit compare ({:.3}–{:.3} s): the run's {:.4}{}.",
+            c.samples,
+            c.span.0,
+            c.span.1,
+            c.run,
+            c.refit.map_or(String::new(), |r| format!(", the re-fit's {r:.4}"))
+        )
+    });
     let outcome = match (p.start, p.refit, p.refit_error.as_deref()) {
         (Some(start), None, Some(error)) => format!(
             " The profile is lowest at {:+.0} ms, but its re-fit failed ({error}): the score test stands",
@@ -256,17 +270,17 @@ fn profile_paragraph(t: &ScoreTest) -> Option<String> {
             },
             if p.chosen {
                 format!(
-                    "it lowers J more than the score test's truncated re-fit from zero, so it is this candidate's test, against the χ²₁ point at 0.1 %/{} = {:.1} (the best of {} starts)",
+                    "it lowers the cost more than the score test's truncated re-fit from zero, so it is this candidate's test, against the χ²₁ point at 0.1 %/{} = {:.1} (the best of {} starts)",
                     p.family, t.threshold, p.family
                 )
             } else {
-                "the score test's truncated re-fit from zero lowers J more, and stays the candidate's test".into()
+                "the score test's truncated re-fit from zero lowers the cost more, and stays the candidate's test".into()
             }
         ),
         _ => " No point lies below the run's cost: the score test stands.".into(),
     };
     Some(format!(
-        "Profile of {} (the run re-fitted with the offset held fixed; {points}).{outcome}.",
+        "Profile of {} (the run re-fitted with the offset held fixed; {points}).{common}{outcome}.",
         t.label
     ))
 }

@@ -18,10 +18,13 @@ use super::{
     Residuals,
 };
 use crate::model::effects::{EffectSpec, ForcePlateTimeOffset};
+use crate::problems::diagnose::common_samples::{common_sample_costs, CommonSamples, SampleCosts};
 use crate::problems::diagnose::stats::{identifiability, Identifiability};
 use crate::problems::diagnose::{
-    chi2_1_upper, refit_test, ClockProfile, ProfilePoint, ScoreTest, TrackingRunSetup,
+    chi2_1_upper, refit_test, ClockProfile, ComparedSamples, ProfilePoint, ScoreTest,
+    TrackingRunSetup,
 };
+use crate::problems::evaluation::GaitSolution;
 use crate::report::diff::RunDiff;
 use crate::workflows::track::{tracking_sqp_settings, TrackedRun, TrackingProblem};
 use crate::workflows::{note, Progress, Quiet};
@@ -101,13 +104,44 @@ pub(super) fn profile_clock(
     // against events held elsewhere: the profile is refined by a held re-fit instead,
     // and walks outwards while its lowest point is its outermost
     let refine = setup.sample_targets || setup.one_sided_targets;
+    // with sample targets the held offset moves the window's start or end with its
+    // plate's events, so the points compare different samples: they are compared by
+    // their data cost over the samples all of them and the run compare
+    let base_costs = if setup.sample_targets {
+        match TrackingProblem::build(setup, &[]).and_then(|p| p.sample_costs(base.solution)) {
+            Ok(costs) => Some(costs),
+            Err(e) => {
+                note!(
+                    progress,
+                    "  the profile of {whose} clock was not made: the run's cost per sample could not be evaluated ({e:#}); the candidate keeps its score test"
+                );
+                return Ok((
+                    ClockProfile {
+                        points: Vec::new(),
+                        start: None,
+                        refit: None,
+                        family: 1,
+                        chosen: false,
+                        refined: refine,
+                        refit_error: Some(format!("the run's cost per sample: {e:#}")),
+                        compared: None,
+                    },
+                    None,
+                ));
+            }
+        }
+    } else {
+        None
+    };
     let mut points: Vec<ProfilePoint> = Vec::new();
-    let mut best: Option<(f64, f64, crate::problems::evaluation::GaitSolution)> = None;
+    // each point's solution and, with sample targets, its cost per sample
+    let mut solved_points: Vec<Option<(GaitSolution, SampleCosts)>> = Vec::new();
     let mut offsets: Vec<f64> = args.profile_clocks.clone();
     let mut next = 0;
     loop {
         if next == offsets.len() {
-            let known = known_points(&points, base.objective);
+            let run_cost = compared_run(&mut points, &solved_points, base_costs.as_ref(), base);
+            let known = known_points(&points, run_cost, base_costs.is_some());
             match extension(&known, ForcePlateTimeOffset::BOUNDS).filter(|_| refine) {
                 Some(o) => {
                     note!(
@@ -128,30 +162,40 @@ pub(super) fn profile_clock(
                 p.setup
                     .start_from(base.solution)
                     .map_err(|e| anyhow::anyhow!(e))?;
-                p.solve(&settings(&p), &Quiet)
+                let (res, sol) = p.solve(&settings(&p), &Quiet)?;
+                let costs = match base_costs {
+                    Some(_) if res.objective.is_finite() => p.sample_costs(&sol)?,
+                    _ => Vec::new(),
+                };
+                Ok((res, sol, costs))
             });
         let seconds = t0.elapsed().as_secs_f64();
-        let point = match solved {
-            Ok((res, sol)) => {
+        let (point, kept) = match solved {
+            Ok((res, sol, costs)) => {
                 let j = res.objective;
-                if j.is_finite() && best.as_ref().is_none_or(|b| j < b.1) {
-                    best = Some((offset, j, sol));
-                }
+                (
+                    ProfilePoint {
+                        offset,
+                        objective: j.is_finite().then_some(j),
+                        status: res.status.to_string(),
+                        iterations: res.history.len().saturating_sub(1),
+                        seconds,
+                        compared: None,
+                    },
+                    j.is_finite().then_some((sol, costs)),
+                )
+            }
+            Err(e) => (
                 ProfilePoint {
                     offset,
-                    objective: j.is_finite().then_some(j),
-                    status: res.status.to_string(),
-                    iterations: res.history.len().saturating_sub(1),
+                    objective: None,
+                    status: format!("failed: {e:#}"),
+                    iterations: 0,
                     seconds,
-                }
-            }
-            Err(e) => ProfilePoint {
-                offset,
-                objective: None,
-                status: format!("failed: {e:#}"),
-                iterations: 0,
-                seconds,
-            },
+                    compared: None,
+                },
+                None,
+            ),
         };
         note!(
             progress,
@@ -163,6 +207,26 @@ pub(super) fn profile_clock(
             seconds
         );
         points.push(point);
+        solved_points.push(kept);
+    }
+    let run_cost = compared_run(&mut points, &solved_points, base_costs.as_ref(), base);
+    if let Some(common) = base_costs
+        .as_ref()
+        .map(|b| compare(&mut points, &solved_points, b, None))
+    {
+        note!(
+            progress,
+            "  the profile of {whose} clock compares its points over the {} samples (J's data part) that each of them and the run compare, {:.3}–{:.3} s (a held offset moves the window with its plate's events): the run's {:.6}; {}",
+            common.samples,
+            common.span.map_or(f64::NAN, |s| s.0),
+            common.span.map_or(f64::NAN, |s| s.1),
+            run_cost,
+            points
+                .iter()
+                .filter_map(|q| Some(format!("{:+.0} ms: {:.6}", 1e3 * q.offset, q.compared?)))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
     }
     let family = points.len() + 1;
     let mut profile = ClockProfile {
@@ -173,8 +237,20 @@ pub(super) fn profile_clock(
         chosen: false,
         refined: false,
         refit_error: None,
+        compared: None,
     };
-    let Some((start, j_start, solution)) = best.filter(|b| b.1 < base.objective) else {
+    // the lowest point, when it lies below the run
+    let lowest = profile
+        .points
+        .iter()
+        .enumerate()
+        .filter_map(|(i, q)| Some((i, q.offset, point_value(q, base_costs.is_some())?)))
+        .min_by(|a, b| a.2.total_cmp(&b.2))
+        .filter(|b| b.2 < run_cost);
+    let Some((index, start, j_start)) = lowest else {
+        return Ok((profile, None));
+    };
+    let Some(solution) = solved_points[index].as_ref().map(|s| s.0.clone()) else {
         return Ok((profile, None));
     };
     profile.start = Some(start);
@@ -184,13 +260,13 @@ pub(super) fn profile_clock(
     );
     let name = local.parameters.first().cloned().unwrap_or_default();
     let (effect, curvature) = if refine {
-        let known = known_points(&profile.points, base.objective);
+        let known = known_points(&profile.points, run_cost, base_costs.is_some());
         let (at, curvature) = vertex(&known, ForcePlateTimeOffset::BOUNDS);
         note!(
             progress,
-            "  the profile of {whose} clock is lowest at {:+.0} ms (J = {j_start:.6} against the run's {:.6}); its parabola's vertex at {:+.1} ms: a re-fit held there (with sample or one-sided targets a free offset cannot move its plate's events)",
+            "  the profile of {whose} clock is lowest at {:+.0} ms ({} {j_start:.6} against the run's {run_cost:.6}); its parabola's vertex at {:+.1} ms: a re-fit held there (with sample or one-sided targets a free offset cannot move its plate's events)",
             1e3 * start,
-            base.objective,
+            if base_costs.is_some() { "over the common samples" } else { "J =" },
             1e3 * at
         );
         (clock(side, at, false), curvature)
@@ -226,12 +302,40 @@ pub(super) fn profile_clock(
         .ok_or_else(|| anyhow::anyhow!("the profile's re-fit does not record {name}"))?;
     profile.refined = refine;
     profile.refit = Some((value, run.result.objective));
+    // with sample targets the re-fit's decrease is read over the samples it, the run and
+    // every point compare, as the points were
+    let (before, after) = match &base_costs {
+        Some(b) => {
+            let refit_costs: SampleCosts = match &run.breakdown {
+                Some(bd) => bd.nodes.iter().map(|n| (n.time, n.data)).collect(),
+                None => TrackingProblem::build(setup, std::slice::from_ref(&effect))
+                    .and_then(|p| p.sample_costs(&run.solution))?,
+            };
+            let common = compare(&mut profile.points, &solved_points, b, Some(&refit_costs));
+            let Some(span) = common.span else {
+                profile.refit_error = Some(
+                    "the re-fit, the run and the profile's points compare no sample in common"
+                        .into(),
+                );
+                return Ok((profile, None));
+            };
+            let (run_c, refit_c) = (common.costs[0], common.costs[common.costs.len() - 1]);
+            profile.compared = Some(ComparedSamples {
+                samples: common.samples,
+                span,
+                run: run_c,
+                refit: Some(refit_c),
+            });
+            (run_c, refit_c)
+        }
+        None => (base.objective, run.result.objective),
+    };
     let mut t = refit_test(
         c,
         vec![name.clone()],
         vec![value],
-        base.objective,
-        run.result.objective,
+        before,
+        after,
         base.rows,
         run.result.history.len().saturating_sub(1),
     );
@@ -280,13 +384,61 @@ pub(super) fn profile_clock(
 }
 
 /// The profile's points with a cost, (offset, cost), and the run's own at zero.
-fn known_points(points: &[ProfilePoint], run_objective: f64) -> Vec<(f64, f64)> {
+fn known_points(points: &[ProfilePoint], run_value: f64, by_samples: bool) -> Vec<(f64, f64)> {
     let mut known: Vec<(f64, f64)> = points
         .iter()
-        .filter_map(|q| Some((q.offset, q.objective?)))
+        .filter_map(|q| Some((q.offset, point_value(q, by_samples)?)))
         .collect();
-    known.push((0.0, run_objective));
+    known.push((0.0, run_value));
     known
+}
+
+/// What a profile point is compared by: with sample targets (`by_samples`) its data cost
+/// over the samples all compare, else its cost J.
+fn point_value(q: &ProfilePoint, by_samples: bool) -> Option<f64> {
+    if by_samples {
+        q.compared
+    } else {
+        q.objective
+    }
+}
+
+/// Set every solved point's `compared` cost over the samples that it, every other solved
+/// point, the run (`base_costs`) and `extra` (the re-fit's) compare. The returned costs
+/// are the run's first and `extra`'s last.
+fn compare(
+    points: &mut [ProfilePoint],
+    solved: &[Option<(GaitSolution, SampleCosts)>],
+    base_costs: &SampleCosts,
+    extra: Option<&SampleCosts>,
+) -> CommonSamples {
+    let which: Vec<usize> = (0..points.len()).filter(|&i| solved[i].is_some()).collect();
+    let mut all: Vec<&[(f64, f64)]> = vec![base_costs];
+    all.extend(
+        which
+            .iter()
+            .filter_map(|&i| solved[i].as_ref().map(|s| &s.1[..])),
+    );
+    all.extend(extra.map(|e| &e[..]));
+    let common = common_sample_costs(&all);
+    for (k, &i) in which.iter().enumerate() {
+        points[i].compared = Some(common.costs[k + 1]);
+    }
+    common
+}
+
+/// What the run (at zero) is compared by: with sample targets its data cost over the
+/// samples it and every solved point compare (which sets the points'), else its J.
+fn compared_run(
+    points: &mut [ProfilePoint],
+    solved: &[Option<(GaitSolution, SampleCosts)>],
+    base_costs: Option<&SampleCosts>,
+    base: &Baseline<'_>,
+) -> f64 {
+    match base_costs {
+        Some(b) => compare(points, solved, b, None).costs[0],
+        None => base.objective,
+    }
 }
 
 /// Where a refined profile goes next: when its lowest point (the run's at zero among

@@ -53,9 +53,12 @@ impl TrackingProblem {
                 .ocp(&cycle, &self.model, &self.sets, self.integrator.clone())
                 .map_err(|e| anyhow!(e))
         };
-        // a finishing round's multipliers are not used: tracking restarts from zero
+        // a finishing round starts from the last round's multipliers (constraints' and
+        // bounds'): from zero, the compliant foot's finishing rounds began with an inertia
+        // shift of 0.16 that took them 9 iterations to shed (docs/engine-investigation.md,
+        // stop 70)
         let mut solve = |tr: &Transcription,
-                         (w, _): crate::workflows::refine::RoundStart<'_>,
+                         (w, warm): crate::workflows::refine::RoundStart<'_>,
                          tol_kkt: f64,
                          max_iter: usize| {
             let settings = SqpSettings {
@@ -63,7 +66,7 @@ impl TrackingProblem {
                 max_iter,
                 ..settings.clone()
             };
-            self.solve_staged(tr, &cycle, w, &settings, progress, |_, res| Ok(res))
+            self.solve_staged(tr, &cycle, (w, warm), &settings, progress, |_, res| Ok(res))
         };
         let (sites, res) =
             refinement.solve(&build, &self.check_sites, &w0, &mut solve, progress)?;
