@@ -1,7 +1,7 @@
-//! A solve started with the constraint multipliers of the problem it continues
-//! (`sqp::solve_warm`, used by `predict` when a round of check points only has to be
-//! finished at the run's tolerance) starts with the curvature of the Lagrangian, not the
-//! objective's alone.
+//! A solve started with the multipliers of the problem it continues (`sqp::solve_warm`,
+//! used when a round of check points only has to be finished at the run's tolerance)
+//! starts with the curvature of the Lagrangian, not the objective's alone, and holds the
+//! bounds the problem held.
 //!
 //! The problem: minimise −x − y on the circle x² + y² = 2, whose solution is (1, 1) with
 //! the multiplier λ = ½. The objective is linear, so its Hessian is zero; the Lagrangian's
@@ -14,9 +14,20 @@ use footfall::sqp::{
     SqpStatus, WarmStart,
 };
 
-struct OnACircle;
+/// A linear objective on a curve of two variables, one equality row.
+#[derive(Clone, Copy)]
+enum OnA {
+    /// Minimise −x − y on the circle x² + y² = 2 (the module's problem).
+    Circle,
+    /// Maximise x² on the parabola y = x² with x ≤ 1: minimise −y subject to y − x² = 0,
+    /// x ∈ [−1, 1]. The solution is (1, 1) with λ = 1 and x held at its upper bound. The
+    /// Lagrangian −y + λ(y − x²) curves by −2λ along x, so the only direction the
+    /// parabola leaves free, (1, 2x), is negatively curved: only the bound makes the
+    /// point a minimum.
+    Parabola,
+}
 
-impl Nlp for OnACircle {
+impl Nlp for OnA {
     fn n(&self) -> usize {
         2
     }
@@ -24,7 +35,10 @@ impl Nlp for OnACircle {
         1
     }
     fn bounds(&self) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
-        (vec![-10.0; 2], vec![10.0; 2], vec![0.0], vec![0.0])
+        match self {
+            OnA::Circle => (vec![-10.0; 2], vec![10.0; 2], vec![0.0], vec![0.0]),
+            OnA::Parabola => (vec![-1.0, -10.0], vec![1.0, 10.0], vec![0.0], vec![0.0]),
+        }
     }
     fn jacobian_pattern(&self) -> (Vec<usize>, Vec<usize>) {
         (vec![0, 0], vec![0, 1])
@@ -36,17 +50,30 @@ impl Nlp for OnACircle {
         vec![vec![0, 1]]
     }
     fn row_name(&self, _i: usize) -> String {
-        "circle".into()
+        "curve".into()
     }
     fn evaluate(&self, w: &[f64], derivs: bool) -> Result<NlpEval, EvalError> {
+        let (f, c, grad, jac) = match self {
+            OnA::Circle => (
+                -w[0] - w[1],
+                w[0] * w[0] + w[1] * w[1] - 2.0,
+                vec![-1.0, -1.0],
+                vec![2.0 * w[0], 2.0 * w[1]],
+            ),
+            OnA::Parabola => (
+                -w[1],
+                w[1] - w[0] * w[0],
+                vec![0.0, -1.0],
+                vec![-2.0 * w[0], 1.0],
+            ),
+        };
         let mut ev = NlpEval {
-            f: -w[0] - w[1],
-            c: vec![w[0] * w[0] + w[1] * w[1] - 2.0],
+            f,
+            c: vec![c],
             ..Default::default()
         };
         if derivs {
-            ev.grad = vec![-1.0, -1.0];
-            ev.jac = vec![2.0 * w[0], 2.0 * w[1]];
+            (ev.grad, ev.jac) = (grad, jac);
         }
         Ok(ev)
     }
@@ -58,7 +85,10 @@ impl Nlp for OnACircle {
         _w: &[f64],
         lambda: &[f64],
     ) -> Result<(Vec<usize>, Vec<usize>, Vec<f64>), EvalError> {
-        Ok((vec![0, 1], vec![0, 1], vec![2.0 * lambda[0]; 2]))
+        Ok(match self {
+            OnA::Circle => (vec![0, 1], vec![0, 1], vec![2.0 * lambda[0]; 2]),
+            OnA::Parabola => (vec![0], vec![0], vec![-2.0 * lambda[0]]),
+        })
     }
 }
 
@@ -77,13 +107,13 @@ fn the_multipliers_of_the_problem_a_solve_continues_give_it_newton_steps() {
     let angle = std::f64::consts::FRAC_PI_4 + 0.05;
     let w0 = [2f64.sqrt() * angle.cos(), 2f64.sqrt() * angle.sin()];
     let warm = sqp::solve_warm(
-        &OnACircle,
+        &OnA::Circle,
         &w0,
         WarmStart::constraints(&[0.5]),
         &settings(),
         &mut Silent,
     );
-    let cold = sqp::solve(&OnACircle, &w0, &settings(), &mut Silent);
+    let cold = sqp::solve(&OnA::Circle, &w0, &settings(), &mut Silent);
     for (what, res) in [("warm", &warm), ("cold", &cold)] {
         assert_eq!(res.status, SqpStatus::Converged, "{what}: {res:?}");
         assert!(
@@ -117,7 +147,7 @@ fn the_multipliers_of_the_problem_a_solve_continues_give_it_newton_steps() {
     );
     // multipliers of the wrong length are ignored: the same as the cold solve
     let ignored = sqp::solve_warm(
-        &OnACircle,
+        &OnA::Circle,
         &w0,
         WarmStart::constraints(&[0.5, 0.5]),
         &settings(),
@@ -158,7 +188,7 @@ fn the_solve_tells_when_stalled_steps_bring_in_the_exact_hessian() {
         ..settings()
     };
     let mut told = Told::default();
-    let res = sqp::solve(&OnACircle, &w0, &stalling, &mut told);
+    let res = sqp::solve(&OnA::Circle, &w0, &stalling, &mut told);
     assert_eq!(res.status, SqpStatus::Converged, "{res:?}");
     assert_eq!(told.0.len(), 1, "{:?}", told.0);
     assert!(
@@ -171,71 +201,19 @@ fn the_solve_tells_when_stalled_steps_bring_in_the_exact_hessian() {
         exact_hessian_below: 0.0,
         ..settings()
     };
-    sqp::solve(&OnACircle, &w0, &fixed, &mut quiet);
+    sqp::solve(&OnA::Circle, &w0, &fixed, &mut quiet);
     assert!(quiet.0.is_empty(), "{:?}", quiet.0);
 }
 
-/// Maximise x² on the parabola y = x² with x ≤ 1: minimise −y subject to y − x² = 0,
-/// x ∈ [−1, 1]. The solution is (1, 1) with λ = 1 and x held at its upper bound. The
-/// Lagrangian −y + λ(y − x²) curves by −2λ along x, so the only direction the parabola
-/// leaves free, (1, 2x), is negatively curved: only the bound makes the point a minimum.
-struct OnAParabola;
-
-impl Nlp for OnAParabola {
-    fn n(&self) -> usize {
-        2
-    }
-    fn m(&self) -> usize {
-        1
-    }
-    fn bounds(&self) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
-        (vec![-1.0, -10.0], vec![1.0, 10.0], vec![0.0], vec![0.0])
-    }
-    fn jacobian_pattern(&self) -> (Vec<usize>, Vec<usize>) {
-        (vec![0, 0], vec![0, 1])
-    }
-    fn gauss_newton_pattern(&self) -> (Vec<usize>, Vec<usize>) {
-        (Vec::new(), Vec::new())
-    }
-    fn hessian_blocks(&self) -> Vec<Vec<usize>> {
-        vec![vec![0, 1]]
-    }
-    fn row_name(&self, _i: usize) -> String {
-        "parabola".into()
-    }
-    fn evaluate(&self, w: &[f64], derivs: bool) -> Result<NlpEval, EvalError> {
-        let mut ev = NlpEval {
-            f: -w[1],
-            c: vec![w[1] - w[0] * w[0]],
-            ..Default::default()
-        };
-        if derivs {
-            ev.grad = vec![0.0, -1.0];
-            ev.jac = vec![-2.0 * w[0], 1.0];
-        }
-        Ok(ev)
-    }
-    fn rows_with_exact_hessian(&self) -> Vec<bool> {
-        vec![true]
-    }
-    fn exact_hessian(
-        &self,
-        _w: &[f64],
-        lambda: &[f64],
-    ) -> Result<(Vec<usize>, Vec<usize>, Vec<f64>), EvalError> {
-        Ok((vec![0], vec![0], vec![-2.0 * lambda[0]]))
-    }
-}
-
-/// A solve that goes on from another's multipliers (the tracking solve's second stage at
-/// a tighter integrator tolerance) also takes its bound multipliers: the variable the
-/// first solve held at its bound is held by the first iteration's inertia correction too,
-/// which then needs no shift (its smallest, 2e-12). With the constraint multipliers alone the bound's variable
-/// counts as free, the Lagrangian is not convex along the parabola, and the first QP's
-/// Hessian is shifted.
+/// A solve that goes on from another's multipliers (a tracking round that finishes the
+/// last one's problem, or the second stage at a tighter integrator tolerance) also takes
+/// its bound multipliers: the variable the first solve held at its bound is held by the
+/// first iteration's inertia correction too, which then needs no shift (its smallest,
+/// 2e-12). With the constraint multipliers alone the bound's variable counts as free, the
+/// Lagrangian is not convex along the parabola, and the first QP's Hessian is shifted.
 #[test]
 fn the_bound_multipliers_of_the_problem_a_solve_continues_hold_its_bounds() {
-    let first = sqp::solve(&OnAParabola, &[0.9, 0.5], &settings(), &mut Silent);
+    let first = sqp::solve(&OnA::Parabola, &[0.9, 0.5], &settings(), &mut Silent);
     assert_eq!(first.status, SqpStatus::Converged, "{first:?}");
     assert!(
         (first.w[0] - 1.0).abs() < 1e-9 && (first.w[1] - 1.0).abs() < 1e-8,
@@ -254,7 +232,7 @@ fn the_bound_multipliers_of_the_problem_a_solve_continues_hold_its_bounds() {
         r.history.iter().map(|h| h.hessian_shift).collect()
     };
     let both = sqp::solve_warm(
-        &OnAParabola,
+        &OnA::Parabola,
         &w0,
         WarmStart {
             lambda: &first.lambda,
@@ -264,7 +242,7 @@ fn the_bound_multipliers_of_the_problem_a_solve_continues_hold_its_bounds() {
         &mut Silent,
     );
     let lambda_only = sqp::solve_warm(
-        &OnAParabola,
+        &OnA::Parabola,
         &w0,
         WarmStart::constraints(&first.lambda),
         &settings(),
@@ -296,7 +274,7 @@ fn the_bound_multipliers_of_the_problem_a_solve_continues_hold_its_bounds() {
     assert!(both.history.len() <= lambda_only.history.len());
     // bound multipliers of the wrong length are ignored: the same as λ alone
     let ignored = sqp::solve_warm(
-        &OnAParabola,
+        &OnA::Parabola,
         &w0,
         WarmStart {
             lambda: &first.lambda,
