@@ -209,11 +209,11 @@ pub(super) fn profile_clock(
         points.push(point);
         solved_points.push(kept);
     }
-    let run_cost = compared_run(&mut points, &solved_points, base_costs.as_ref(), base);
-    if let Some(common) = base_costs
+    let common = base_costs
         .as_ref()
-        .map(|b| compare(&mut points, &solved_points, b, None))
-    {
+        .map(|b| compare(&mut points, &solved_points, b, None));
+    let run_cost = common.as_ref().map_or(base.objective, |c| c.costs[0]);
+    if let Some(common) = &common {
         note!(
             progress,
             "  the profile of {whose} clock compares its points over the {} samples (J's data part) that each of them and the run compare, {:.3}–{:.3} s (a held offset moves the window with its plate's events): the run's {:.6}; {}",
