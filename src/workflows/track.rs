@@ -341,9 +341,10 @@ impl TrackingProblem {
     }
 
     /// Solve on `tr` from `w0` (and the multipliers `warm`, if given) and hand the result,
-    /// with the transcription it was last iterated on, to `finish`. When the line search fails, the solve goes on once from
-    /// that iterate and its multipliers with more precise integration, because near an optimum the
-    /// integrator's error is what stops it:
+    /// with the transcription it was last iterated on, to `finish`. When the line search
+    /// fails, the solve goes on once from that iterate and its multipliers with more
+    /// precise integration, because near an optimum the integrator's error is what stops
+    /// it:
     /// - sensitivities looser than the states (a heel pad): at the states' tolerance. The
     ///   KKT residual is computed from them, so the looser ones can leave an optimum
     ///   uncertified (a padded 100 Hz trial's re-fit stopped at KKT 2.4e-5 with them at

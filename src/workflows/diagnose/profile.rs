@@ -11,7 +11,11 @@
 //! the profile walks outwards while its outermost point is lowest, and the re-fit holds
 //! the offset at the vertex of the parabola through the lowest point and its neighbours;
 //! that reading is validated on a held-out half cycle like a score test's
-//! (`heldout::validate_held_clock`).
+//! (`heldout::validate_held_clock`). With sample targets the held offset also moves the
+//! window's start or end, so the points hold different samples: they, the run and the
+//! re-fit are compared by their data cost over the samples all of them hold
+//! ([`common_samples`](crate::problems::diagnose::common_samples)), and that decrease,
+//! over fewer samples than the score test's, is what the two tests are chosen by.
 
 use super::{
     channel_changes, diff_with, refit_into, sibling, Baseline, DiagnoseRequest, FullModel,
