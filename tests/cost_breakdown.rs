@@ -275,7 +275,7 @@ fn held_left_clocks_move_the_window_and_the_profile_compares_the_common_samples(
             .cost_breakdown(&m, &sets, &cycle.continuous, &sol, &integrator)
             .unwrap();
         windows.push(setup.window);
-        costs.push(b.nodes.iter().map(|n| (n.time, n.data)).collect());
+        costs.push(b.sample_costs());
     }
     for (k, offset) in offsets.iter().enumerate() {
         assert!(

@@ -320,7 +320,7 @@ impl TrackingProblem {
                 &self.integrator,
             )
             .map_err(|e| anyhow!("the samples' costs: {e}"))?;
-        Ok(b.nodes.iter().map(|n| (n.time, n.data)).collect())
+        Ok(b.sample_costs())
     }
 
     /// Solve the problem (interruptibly, with `progress`) and read its

@@ -219,6 +219,13 @@ pub struct NodeCost {
 }
 
 impl CostBreakdown {
+    /// Each entry's (time in s, data cost): with sample targets one per sample at its data
+    /// instant, what [`common_sample_costs`](crate::problems::diagnose::common_samples::common_sample_costs)
+    /// compares.
+    pub fn sample_costs(&self) -> crate::problems::diagnose::common_samples::SampleCosts {
+        self.nodes.iter().map(|n| (n.time, n.data)).collect()
+    }
+
     /// Total cost.
     pub fn total(&self) -> f64 {
         self.cost.iter().flatten().sum()

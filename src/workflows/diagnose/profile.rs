@@ -311,7 +311,7 @@ pub(super) fn profile_clock(
     let (before, after) = match &base_costs {
         Some(b) => {
             let refit_costs: SampleCosts = match &run.breakdown {
-                Some(bd) => bd.nodes.iter().map(|n| (n.time, n.data)).collect(),
+                Some(bd) => bd.sample_costs(),
                 None => TrackingProblem::build(setup, std::slice::from_ref(&effect))
                     .and_then(|p| p.sample_costs(&run.solution))?,
             };
