@@ -473,10 +473,39 @@ fn sample_targets_use_each_channel_at_its_own_instants() {
     assert!(kin.iter().all(|x| d.time.contains(&x.target.time)));
     assert!(frc.iter().all(|x| x.target.q.iter().all(Option::is_none)));
     assert!(frc.iter().all(|x| f.time.contains(&x.target.time)));
+    // per second, the 600 Hz forces weigh what they would at the kinematics' 60 Hz
+    assert!(
+        frc.iter().all(|x| (x.load_weight - 0.1).abs() < 1e-4),
+        "load weight {}",
+        frc[0].load_weight
+    );
     println!(
         "{} angle samples at 60 Hz, {} force samples at 600 Hz in {t0:.3}–{t1:.3} s",
         kin.len(),
         frc.len()
+    );
+    // and the residual count the mean square divides by counts them by that weight
+    let cycle = footfall::problems::gait::GaitCycle::new(&m, &s.seq, &sets).unwrap();
+    let force_samples = frc.len() as f64;
+    let mut s = s;
+    let mut rows = |w: f64| {
+        for x in &mut s.samples {
+            if x.target.q.iter().all(Option::is_none) {
+                x.load_weight = w;
+            }
+        }
+        s.data_rows(&m, &sets, &cycle.continuous) as f64
+    };
+    let (tenth, half, full) = (rows(0.1), rows(0.5), rows(1.0));
+    // (fx, fy and, loaded, the CoP of each loaded foot)
+    let force_rows = (full - half) / 0.5;
+    assert!(
+        force_rows >= 2.0 * force_samples - 1.0,
+        "{force_rows} force rows of {force_samples} samples"
+    );
+    assert!(
+        ((full - tenth) - 0.9 * force_rows).abs() <= 2.0,
+        "{tenth} rows at weight 0.1, {full} at 1"
     );
 }
 

@@ -3,7 +3,9 @@
 //! checked against the raw 600 Hz force record read by the library's own storage reader
 //! (independently of the script): the kinematics are the bundled trial's, the edited
 //! plate's forces are the raw ones moved in time, offset or scaled, the other plate's are
-//! untouched, and a moved clock moves the force-threshold events with it.
+//! untouched, and a moved clock moves the force-threshold events with it. The same trials
+//! with their forces at the raw 600 Hz (`tests/data/real_hidden_600hz/`, beside the
+//! untouched trial in that form) are the raw record edited sample for sample.
 
 use footfall::data::{detect_events, read_sagittal_csv, read_storage, GaitData};
 use serde_json::Value;
@@ -169,6 +171,84 @@ fn a_moved_clock_is_the_raw_record_moved_and_moves_the_events() {
     }
 }
 
+/// A trial of `tests/data/real_hidden_600hz` (forces at the raw record's rate).
+fn trial_600(name: &str) -> (GaitData, Value) {
+    let dir = root().join("tests/data/real_hidden_600hz").join(name);
+    let data = read_sagittal_csv(&dir.join("trial.csv")).unwrap();
+    let truth: Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("truth.json")).unwrap()).unwrap();
+    (data, truth)
+}
+
+/// Agreement of two values printed to 7 significant digits, NaN with NaN.
+fn same_printed(a: f64, b: f64) -> bool {
+    (a.is_nan() && b.is_nan()) || (a - b).abs() <= 2e-6 * a.abs().max(b.abs()) + 1e-9
+}
+
+#[test]
+fn the_600_hz_trials_are_the_raw_record_edited_sample_for_sample() {
+    let b = bundled();
+    let (u, _) = trial_600("untouched");
+    assert_eq!(u.time, b.time);
+    assert_eq!(u.q, b.q, "kinematics copied");
+    let rec = u.forces.as_ref().expect("forces at their own rate");
+    assert_eq!(rec.time.len(), 1501, "0–2.5 s at 600 Hz");
+    // (the kinematic rows keep the bundled CSV's times, printed to 7 digits)
+    for (n, &t) in rec.time.iter().enumerate() {
+        assert!((t - n as f64 / 600.0).abs() < 1e-6, "instant {n}: {t}");
+    }
+    // the untouched record is the raw one, sample for sample
+    for side in 0..2 {
+        let (_, [fx, fy, px]) = raw(side);
+        let f = &rec.feet[side];
+        for n in 0..rec.time.len() {
+            assert!(same_printed(f.fx[n], fx[n]), "fx {side} {n}");
+            assert!(same_printed(f.fy[n], fy[n]), "fy {side} {n}");
+            if fy[n] >= 20.0 {
+                assert!(same_printed(f.cop_x[n], px[n]), "cop {side} {n}");
+            } else {
+                assert!(f.cop_x[n].is_nan(), "no CoP below 20 N: {side} {n}");
+            }
+        }
+    }
+    for name in [
+        "real_clock_r+25ms",
+        "real_clock_l-20ms",
+        "real_cop_r+25mm",
+        "real_gain_l+6pct",
+        "real_mass+5pct",
+    ] {
+        let (d, truth) = trial_600(name);
+        assert_eq!(d.q, b.q, "{name}: kinematics copied");
+        assert_eq!(truth, trial(name).1, "{name}: the same truth at both rates");
+        let r = d.forces.as_ref().unwrap();
+        assert_eq!(r.time, rec.time, "{name}");
+        for (side, key) in [(0, "r"), (1, "l")] {
+            let shift = truth["clock_offset_s"][key].as_f64().unwrap_or(0.0) * 600.0;
+            let shift = shift.round() as i64;
+            let gain = truth["gain"][key].as_f64().unwrap_or(1.0);
+            let cop = truth["cop_offset_m"][key].as_f64().unwrap_or(0.0);
+            let (f, g) = (&r.feet[side], &rec.feet[side]);
+            for n in 0..r.time.len() as i64 {
+                let m = n - shift;
+                let i = n as usize;
+                if m < 0 || m >= r.time.len() as i64 {
+                    continue;
+                }
+                let m = m as usize;
+                assert!(same_printed(f.fx[i], gain * g.fx[m]), "{name} fx {side} {n}");
+                assert!(same_printed(f.fy[i], gain * g.fy[m]), "{name} fy {side} {n}");
+                if f.cop_x[i].is_finite() || g.cop_x[m].is_finite() {
+                    assert!(
+                        (f.cop_x[i] - g.cop_x[m] - cop).abs() < 1e-6,
+                        "{name} CoP {side} {n}"
+                    );
+                }
+            }
+        }
+    }
+}
+
 #[test]
 fn the_script_still_makes_the_committed_trials() {
     // regenerate into a copy of the needed tree and compare byte for byte (the script
@@ -204,22 +284,24 @@ fn the_script_still_makes_the_committed_trials() {
         "{}",
         String::from_utf8_lossy(&run.stderr)
     );
-    let made = tmp.path().join("tests/data/real_hidden");
-    let committed = root().join("tests/data/real_hidden");
     let mut files = 0;
-    for entry in std::fs::read_dir(&committed).unwrap() {
-        let dir = entry.unwrap().path();
-        for f in ["trial.csv", "trial_meta.json", "truth.json"] {
-            let name = dir.file_name().unwrap();
-            let a = std::fs::read(dir.join(f)).unwrap();
-            let b = std::fs::read(made.join(name).join(f)).unwrap();
-            assert!(
-                a == b,
-                "{}/{f} differs from the script's",
-                Path::new(name).display()
-            );
-            files += 1;
+    for set in ["tests/data/real_hidden", "tests/data/real_hidden_600hz"] {
+        let (made, committed) = (tmp.path().join(set), root().join(set));
+        for entry in std::fs::read_dir(&committed).unwrap() {
+            let dir = entry.unwrap().path();
+            for f in ["trial.csv", "trial_meta.json", "truth.json"] {
+                let name = dir.file_name().unwrap();
+                let a = std::fs::read(dir.join(f)).unwrap();
+                let b = std::fs::read(made.join(name).join(f)).unwrap();
+                assert!(
+                    a == b,
+                    "{set}/{}/{f} differs from the script's",
+                    Path::new(name).display()
+                );
+                files += 1;
+            }
         }
     }
-    assert_eq!(files, 15);
+    // five edited trials at 60 Hz; the same and the untouched one at 600 Hz
+    assert_eq!(files, 33);
 }

@@ -79,6 +79,11 @@ pub struct SampleTarget {
     pub tau: f64,
     /// The sample (its time, angles and loads; no velocities).
     pub target: NodeTarget,
+    /// Factor on the weights of this sample's force and CoP rows: the force record's
+    /// sample period over the kinematics' (the mean steps of their instants inside the
+    /// tracked span; 1 when the forces are sampled with the kinematics). Forces at 600 Hz beside kinematics at 60 Hz then count per second as
+    /// they would at 60 Hz, so a faster plate does not outweigh the angles.
+    pub load_weight: f64,
 }
 
 /// A sample's loads moved by the force plates' clock offset to the end of their phase are
@@ -131,7 +136,8 @@ fn segment_splines(
 /// first starting at `t0`), located in its shooting interval, with the angles and the
 /// loads of the feet its phase loads (the CoP where the normal force reaches the data's
 /// CoP threshold); samples on a phase boundary are left out. Forces sampled apart from
-/// the kinematics ([`GaitData::forces`]) give their own samples at their own instants;
+/// the kinematics ([`GaitData::forces`]) give their own samples at their own instants,
+/// weighted by their sample period over the kinematics' ([`SampleTarget::load_weight`]);
 /// unmeasured (`NaN`) forces and CoP give no terms.
 fn sample_targets(
     model: &GaitModel,
@@ -147,6 +153,25 @@ fn sample_targets(
     let nq = angles.len();
     // each channel at its own instants: (time, kinematic row, force row)
     let (force_time, force_feet) = data.force_record();
+    // the force record's sample period over the kinematics', each the mean step of its
+    // instants inside the tracked span (robust to times printed to few digits)
+    let span = seq.phases.iter().fold(0.0, |d, p| match p {
+        Phase::Continuous { duration, .. } => d + duration.value(),
+        Phase::Impact { .. } => d,
+    });
+    let step = |t: &[f64]| {
+        let inside: Vec<f64> = t
+            .iter()
+            .copied()
+            .filter(|&x| x >= t0 && x <= t0 + span)
+            .collect();
+        (inside.len() >= 2)
+            .then(|| (inside[inside.len() - 1] - inside[0]) / (inside.len() - 1) as f64)
+    };
+    let load_weight = match (data.forces.is_some(), step(force_time), step(&data.time)) {
+        (true, Some(f), Some(k)) => f / k,
+        _ => 1.0,
+    };
     let instants: Vec<(f64, Option<usize>, Option<usize>)> = if data.forces.is_some() {
         let mut v: Vec<_> = (0..data.time.len())
             .map(|n| (data.time[n], Some(n), None))
@@ -220,6 +245,7 @@ fn sample_targets(
                 interval: k,
                 tau,
                 target,
+                load_weight,
             });
         }
         a = b;

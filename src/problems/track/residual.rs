@@ -27,8 +27,12 @@ impl TrackingSetup {
         )
     }
 
-    /// Number of data residuals (angles, velocities, forces and CoP at the nodes; not the
-    /// regularisation of excitations and activations).
+    /// Number of data residuals (angles, velocities, forces and CoP at the nodes or
+    /// samples; not the regularisation of excitations and activations): the count the
+    /// residual mean square `J / N` divides by. A force sample weighted by its sample
+    /// period ([`SampleTarget::load_weight`](super::SampleTarget::load_weight)) counts
+    /// by that weight, so that forces recorded ten times faster, each weighing a tenth,
+    /// neither lower the mean square nor add information the weights do not give them.
     pub fn data_rows(
         &self,
         model: &GaitModel,
@@ -46,14 +50,21 @@ impl TrackingSetup {
                 n += crate::problems::GenericFunction::dim(&r) - model.nu() - model.na();
             }
         }
+        let mut weighted = 0.0;
         for s in &self.samples {
-            n += self
+            let rows = self
                 .sample_residuals(model, sets, continuous, s)
                 .iter()
                 .map(|(r, _)| crate::problems::GenericFunction::dim(r))
                 .sum::<usize>();
+            // loads only (forces at their own instants) or weighed as the angles
+            if s.target.q.iter().all(Option::is_none) {
+                weighted += rows as f64 * s.load_weight;
+            } else {
+                n += rows;
+            }
         }
-        n
+        n + weighted.round() as usize
     }
 
     /// The data-only residuals of a sample target, each with the foot whose plate's clock
@@ -68,9 +79,18 @@ impl TrackingSetup {
         continuous: &[usize],
         s: &SampleTarget,
     ) -> Vec<(TrackingResidual<'m>, Option<usize>)> {
+        let mut weights = self.weights.clone();
+        weights.force *= s.load_weight;
+        weights.cop *= s.load_weight;
         let residual = |target: NodeTarget| {
-            self.residual(model, &sets[continuous[s.phase]], target, true)
-                .data_only()
+            TrackingResidual::new(
+                model,
+                sets[continuous[s.phase]].clone(),
+                target,
+                weights.clone(),
+                Some(self.measured.clone()),
+            )
+            .data_only()
         };
         if !model.shifts_force_clock() || s.target.feet.iter().all(Option::is_none) {
             return vec![(residual(s.target.clone()), None)];
