@@ -236,8 +236,14 @@ fn the_600_hz_trials_are_the_raw_record_edited_sample_for_sample() {
                     continue;
                 }
                 let m = m as usize;
-                assert!(same_printed(f.fx[i], gain * g.fx[m]), "{name} fx {side} {n}");
-                assert!(same_printed(f.fy[i], gain * g.fy[m]), "{name} fy {side} {n}");
+                assert!(
+                    same_printed(f.fx[i], gain * g.fx[m]),
+                    "{name} fx {side} {n}"
+                );
+                assert!(
+                    same_printed(f.fy[i], gain * g.fy[m]),
+                    "{name} fy {side} {n}"
+                );
                 if f.cop_x[i].is_finite() || g.cop_x[m].is_finite() {
                     assert!(
                         (f.cop_x[i] - g.cop_x[m] - cop).abs() < 1e-6,
