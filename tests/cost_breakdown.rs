@@ -286,26 +286,41 @@ fn held_left_clocks_move_the_window_and_the_profile_compares_the_common_samples(
             plain.window
         );
     }
-    let n: Vec<usize> = costs.iter().map(Vec::len).collect();
-    assert!(n[0] > n[1] && n[1] > n[2], "samples per window {n:?}");
-    let views: Vec<&[(f64, f64)]> = costs.iter().map(|c| &c[..]).collect();
+    // the angles compared: fewer in each later-starting window (the left loads of the
+    // instants before it are moved into it and still compared)
+    let n: Vec<usize> = costs
+        .iter()
+        .map(|c| c.iter().filter(|s| s.1 & 1 == 1).count())
+        .collect();
+    assert!(n[0] > n[1] && n[1] > n[2], "angle samples per window {n:?}");
+    let views: Vec<&[(f64, u8, f64)]> = costs.iter().map(|c| &c[..]).collect();
     let common = common_sample_costs(&views);
-    assert_eq!(common.samples, n[2]);
+    // the same sample: the same instant, comparing the same parts, in every solution
+    let shared = |s: &(f64, u8, f64)| {
+        costs
+            .iter()
+            .all(|c| c.iter().any(|o| (o.0 - s.0).abs() < 1e-7 && o.1 == s.1))
+    };
+    assert_eq!(
+        common.samples,
+        costs[0].iter().filter(|s| shared(s)).count()
+    );
+    assert!(
+        common.samples >= n[2] - 2,
+        "{} common samples",
+        common.samples
+    );
     let span = common.span.unwrap();
     assert!(span.0 > windows[2].0 && span.1 < windows[2].1, "{span:?}");
     for (k, c) in costs.iter().enumerate() {
-        let own: f64 = c
-            .iter()
-            .filter(|s| s.0 >= span.0 - 1e-7 && s.0 <= span.1 + 1e-7)
-            .map(|s| s.1)
-            .sum();
+        let own: f64 = c.iter().filter(|s| shared(s)).map(|s| s.2).sum();
         assert!(
             (common.costs[k] - own).abs() <= 1e-12 * own,
             "held at {} s: {} over the common samples against {own}",
             offsets[k],
             common.costs[k]
         );
-        let all: f64 = c.iter().map(|s| s.1).sum();
+        let all: f64 = c.iter().map(|s| s.2).sum();
         assert!(
             k == 2 || common.costs[k] < all,
             "{k}: {} of {all}",
@@ -317,11 +332,11 @@ fn held_left_clocks_move_the_window_and_the_profile_compares_the_common_samples(
 /// A plate's clock edited into the raw record (`tools/make-real-hidden-trials`): with the
 /// forces at the plates' 600 Hz, the left-clock trial (20 ms early) held at its true
 /// offset tracks the untouched trial's half cycle and compares what the untouched trial
-/// compares, sample for sample, but for the left loads moved past their phase's end,
-/// which are held there: at the same point (the data's own start) the two objectives
-/// agree to 0.9 % (after tracking, `docs/instruments.md` "Stop 71": 0.08 %). At 60 Hz
-/// the moved clock reads the raw forces at other instants than the untouched trial does,
-/// and the objectives differ 18 times more.
+/// compares, sample for sample: each left load where its moved instant falls (not held at
+/// its timestamp's phase's end), its CoP moved with the treadmill belt. At the data's own
+/// start the two objectives agree to 4e-7 (at a tracked solution, `docs/instruments.md`
+/// "Stop 71": 7.5e-7). At 60 Hz the moved clock reads the raw forces at other instants
+/// than the untouched trial does, and the objectives differ by 16 %.
 #[test]
 fn a_clock_edited_at_the_plates_rate_is_the_untouched_trial_held_at_its_offset() {
     let p = path("phases/ellipse_walk.json");
@@ -373,6 +388,6 @@ fn a_clock_edited_at_the_plates_rate_is_the_untouched_trial_held_at_its_offset()
         gap(f, f0),
         gap(g, g0)
     );
-    assert!(gap(f, f0) < 0.02, "at 600 Hz: {:.1e}", gap(f, f0));
-    assert!(gap(g, g0) > 10.0 * gap(f, f0));
+    assert!(gap(f, f0) < 1e-5, "at 600 Hz: {:.1e}", gap(f, f0));
+    assert!(gap(g, g0) > 0.05, "at 60 Hz: {:.1e}", gap(g, g0));
 }

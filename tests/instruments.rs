@@ -111,6 +111,7 @@ fn per_plate_effects_touch_only_their_foot_and_have_exact_parameter_derivatives(
                 .map(|&t| cop(1) + dcop + 0.1 * (t - t_node))
                 .collect(),
         ],
+        belt_speed: 0.0,
     });
     let nq = m.nq();
     let target = NodeTarget {
@@ -207,6 +208,7 @@ fn a_moving_node_reads_its_targets_at_the_moved_instant_with_exact_derivatives()
             time.iter().map(|&t| 0.3 + 0.2 * t).collect(),
             vec![f64::NAN; time.len()],
         ],
+        belt_speed: 0.0,
     });
     let mut w = TrackingWeights::seed(nq, 800.0, 0.305);
     w.excitation = 0.0;
@@ -709,6 +711,7 @@ fn the_measured_cop_stays_continuous_across_the_edge_of_the_loaded_samples() {
         fy: [flat.clone(), flat],
         time,
         cop_x: [cop.clone(), cop],
+        belt_speed: 0.0,
     };
     let at = |t: f64| m.cop::<f64>(0, t);
     assert!((at(0.035).unwrap() - 0.13).abs() < 1e-12);

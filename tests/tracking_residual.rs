@@ -154,6 +154,7 @@ fn measurement_effects_shift_the_targets_with_exact_parameter_derivatives() {
         fy: [spl(fy), zero],
         time: time.clone(),
         cop_x: [cop_series, vec![f64::NAN; time.len()]],
+        belt_speed: 0.0,
     });
     let nq = m.nq();
     let target = NodeTarget {
@@ -294,4 +295,75 @@ fn residual_use_reports_rms_peak_and_saturation() {
         "{hip:?}"
     );
     assert!(uses[1].rms == 0.0 && uses[1].at_bound_fraction == 0.0);
+}
+
+/// A CoP sample compared at the instant a plate's clock offset moves it to (a sample
+/// target, [`TrackingResidual::at_measured_values`]) on a treadmill trial moved
+/// overground: its overground CoP holds the belt's displacement at its own instant, so
+/// compared δ earlier it is `v·δ` further back. Without the correction a left plate 20 ms
+/// early on the bundled trial's 1.13 m/s belt held at its true offset compared its CoP
+/// 23 mm off (`docs/instruments.md`, "Stop 71").
+#[test]
+fn a_moved_cop_sample_moves_with_the_treadmill_belt() {
+    use footfall::data::CubicSpline;
+    use footfall::problems::tracking::MeasuredLoads;
+    use std::sync::Arc;
+    let effects = serde_json::json!([{ "type": "force_plate_time_offset", "free": ["offset"] }]);
+    let m = model_with_effects("opensim_subject01.json", "ellipse.json", effects);
+    let set = m.constraint_set("s", &[("r.sole", true)]).unwrap();
+    let x = state(&m, &set);
+    let u = vec![0.3; m.nu()];
+    let (fx, fy, mom) = m.foot_loads_generic::<f64>(&set, &x, &u, &[0.0]).unwrap()[0];
+    let time: Vec<f64> = (0..20).map(|k| k as f64 * 0.05).collect();
+    let flat = |v: f64| CubicSpline::new(&time, &vec![v; time.len()]).unwrap();
+    let measured = |belt_speed: f64| {
+        Arc::new(MeasuredLoads {
+            fx: [flat(fx), flat(0.0)],
+            fy: [flat(fy), flat(0.0)],
+            time: time.clone(),
+            cop_x: [vec![mom / fy; time.len()], vec![f64::NAN; time.len()]],
+            belt_speed,
+        })
+    };
+    let nq = m.nq();
+    let target = |cop: f64| NodeTarget {
+        time: 0.5,
+        q: vec![None; nq],
+        qd: vec![None; nq],
+        feet: [Some((fx, fy, Some(cop))), None],
+    };
+    let w = TrackingWeights::seed(nq, 800.0, 0.305);
+    let residual = |cop: f64, belt: f64| {
+        AdTerm(
+            TrackingResidual::new(
+                &m,
+                set.clone(),
+                target(cop),
+                w.clone(),
+                Some(measured(belt)),
+            )
+            .data_only()
+            .at_measured_values(),
+        )
+    };
+    let eval = |r: &AdTerm<TrackingResidual>, theta: f64| {
+        let z: Vec<f64> = x.iter().chain(&u).copied().chain([theta]).collect();
+        let mut v = vec![0.0; r.dim()];
+        r.eval(&z, &mut v, None).unwrap();
+        v
+    };
+    let (v, delta, cop) = (1.1322, -0.020, mom / fy + 0.01);
+    // the model's own loads with the CoP 1 cm off: the CoP row alone is nonzero
+    let plain = eval(&residual(cop, 0.0), delta);
+    assert!(plain[2].abs() > 1e-3 && plain[..2].iter().all(|r| r.abs() < 1e-12));
+    // on the belt, compared δ earlier: as the CoP v·δ further back on a still floor
+    let moved = eval(&residual(cop, v), delta);
+    let still = eval(&residual(cop - v * delta, 0.0), delta);
+    assert!(
+        rel_diff(&moved, &still, 1e-12) < 1e-12,
+        "{moved:?} against {still:?}"
+    );
+    assert!((moved[2] - plain[2]).abs() > 0.1 * plain[2].abs());
+    // with no offset the belt changes nothing
+    assert_eq!(eval(&residual(cop, v), 0.0), eval(&residual(cop, 0.0), 0.0));
 }

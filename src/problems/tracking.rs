@@ -25,6 +25,11 @@ pub struct MeasuredLoads {
     pub time: Vec<f64>,
     /// Measured CoP x (m; NaN where the foot is unloaded), right and left.
     pub cop_x: [Vec<f64>; 2],
+    /// The treadmill belt speed (m/s) whose displacement the overground CoP holds (at
+    /// each sample's own instant, [`crate::data::GaitData::to_overground`]); 0 for a
+    /// trial walked overground. A CoP sample compared at an instant a plate's clock
+    /// offset moves it to then moves with the belt by the same time.
+    pub belt_speed: f64,
 }
 
 impl MeasuredLoads {
@@ -243,12 +248,16 @@ pub struct TrackingResidual<'a> {
 
 /// The shift (s) of a sample term's instant whose loads are read on one force plate's
 /// clock: the sample taken at t is compared with the model at `t − force_time_offset(θ)`,
-/// a function of θ ([`SampleTerm::shift`](crate::ocp::SampleTerm)).
+/// a function of θ ([`SampleTerm::shift`](crate::ocp::SampleTerm)), its term already
+/// placed at `t − placed`, so shifted by `placed − force_time_offset(θ)`.
 pub struct ForceClockShift<'a> {
     /// The model whose measurement effects give the offset.
     pub model: &'a GaitModel,
     /// The foot whose plate's clock it is (0 right, 1 left).
     pub side: usize,
+    /// The offset (s) the term's place already applies: a held offset, or a free one's
+    /// start value.
+    pub placed: f64,
 }
 
 impl GenericFunction for ForceClockShift<'_> {
@@ -256,7 +265,8 @@ impl GenericFunction for ForceClockShift<'_> {
         1
     }
     fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), String> {
-        out[0] = -self.model.measurement_adjust(z).force_time_offset[self.side];
+        out[0] =
+            S::from(self.placed) - self.model.measurement_adjust(z).force_time_offset[self.side];
         Ok(())
     }
     fn is_linear(&self) -> bool {
@@ -444,10 +454,12 @@ impl<'a> TrackingResidual<'a> {
                 let Some((fx, fy, cop)) = *tgt else { continue };
                 // targets at the node time, or through the measurement effects
                 let (tfx, tfy, tcop, cop_offset, gain) = match &adjust {
-                    Some((_, adj)) if self.as_measured => (
+                    // the sample's own values; its overground CoP at the instant the
+                    // plate's clock moves it to (t − δ): the belt moved by −δ·v more
+                    Some((m, adj)) if self.as_measured => (
                         S::c(fx),
                         S::c(fy),
-                        cop.map(S::c),
+                        cop.map(|c| S::c(c) - adj.force_time_offset[s] * m.belt_speed),
                         adj.cop_offset[s],
                         adj.force_gain[s],
                     ),

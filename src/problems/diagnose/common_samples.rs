@@ -12,10 +12,11 @@
 //! whichever offset shortens the window. Summed over the samples every solution compares,
 //! the costs are comparable again.
 
-/// A solution's data cost per compared sample: (the sample's data instant in s, its
-/// squared weighted data residuals summed), as [`crate::problems::track::CostBreakdown`]
-/// gives them for sample targets.
-pub type SampleCosts = Vec<(f64, f64)>;
+/// A solution's data cost per compared sample: (the sample's data instant in s, what it
+/// compares ([`crate::problems::track::sample_parts`]), its squared weighted data
+/// residuals summed), as [`crate::problems::track::CostBreakdown`] gives them for sample
+/// targets. Samples are the same when their instants and their parts are.
+pub type SampleCosts = Vec<(f64, u8, f64)>;
 
 /// Two samples whose instants differ by less than this (s) are the same sample: the
 /// instants are the data's own, and samples are at least a millisecond apart.
@@ -34,8 +35,8 @@ pub struct CommonSamples {
 
 /// The data costs of `solutions` (each one's [`SampleCosts`]) summed over the samples
 /// that every one of them compares.
-pub fn common_sample_costs(solutions: &[&[(f64, f64)]]) -> CommonSamples {
-    let sorted: Vec<Vec<(f64, f64)>> = solutions
+pub fn common_sample_costs(solutions: &[&[(f64, u8, f64)]]) -> CommonSamples {
+    let sorted: Vec<Vec<(f64, u8, f64)>> = solutions
         .iter()
         .map(|s| {
             let mut v = s.to_vec();
@@ -43,19 +44,21 @@ pub fn common_sample_costs(solutions: &[&[(f64, f64)]]) -> CommonSamples {
             v
         })
         .collect();
-    let cost_at = |s: &[(f64, f64)], t: f64| -> Option<f64> {
+    let cost_at = |s: &[(f64, u8, f64)], t: f64, parts: u8| -> Option<f64> {
         let i = s.partition_point(|p| p.0 < t - SAME_INSTANT_S);
-        s.get(i)
-            .filter(|p| (p.0 - t).abs() < SAME_INSTANT_S)
-            .map(|p| p.1)
+        s[i..]
+            .iter()
+            .take_while(|p| p.0 < t + SAME_INSTANT_S)
+            .find(|p| p.1 == parts)
+            .map(|p| p.2)
     };
     let mut costs = vec![0.0; sorted.len()];
     let (mut samples, mut span) = (0, None::<(f64, f64)>);
     if let Some(first) = sorted.first() {
-        for &(t, _) in first {
+        for &(t, parts, _) in first {
             let Some(each) = sorted
                 .iter()
-                .map(|s| cost_at(s, t))
+                .map(|s| cost_at(s, t, parts))
                 .collect::<Option<Vec<f64>>>()
             else {
                 continue;
@@ -84,12 +87,14 @@ mod tests {
     /// instants that differ by rounding alone are the same sample.
     #[test]
     fn costs_are_summed_over_the_samples_every_solution_compares() {
-        let run: Vec<(f64, f64)> = (0..6).map(|i| (0.01 * i as f64, 1.0 + i as f64)).collect();
-        let later: Vec<(f64, f64)> = (1..6)
-            .rev()
-            .map(|i| (0.01 * i as f64 + 1e-12, 10.0 * i as f64))
+        let run: Vec<(f64, u8, f64)> = (0..6)
+            .map(|i| (0.01 * i as f64, 7, 1.0 + i as f64))
             .collect();
-        let earlier: Vec<(f64, f64)> = (0..5).map(|i| (0.01 * i as f64, 100.0)).collect();
+        let later: Vec<(f64, u8, f64)> = (1..6)
+            .rev()
+            .map(|i| (0.01 * i as f64 + 1e-12, 7, 10.0 * i as f64))
+            .collect();
+        let earlier: Vec<(f64, u8, f64)> = (0..5).map(|i| (0.01 * i as f64, 7, 100.0)).collect();
         let c = common_sample_costs(&[&run, &later, &earlier]);
         assert_eq!(c.samples, 4);
         let (a, b) = c.span.unwrap();
@@ -107,5 +112,13 @@ mod tests {
         let apart = common_sample_costs(&[&run[..2], &run[3..]]);
         assert_eq!((apart.samples, apart.span), (0, None));
         assert_eq!(apart.costs, vec![0.0, 0.0]);
+        // an instant that compares other parts (a foot's loads moved out by a held clock)
+        // is not the same sample; two samples at one instant are told apart by their parts
+        let mut moved = run.clone();
+        moved[2].1 = 1;
+        moved.push((0.03, 2, 1000.0));
+        let c = common_sample_costs(&[&run, &moved]);
+        assert_eq!(c.samples, 5);
+        assert_eq!(c.costs, vec![21.0 - 3.0, 21.0 - 3.0]);
     }
 }

@@ -50,6 +50,7 @@ impl TrackingSetup {
                         phase: ph.name.clone(),
                         data,
                         largest,
+                        parts: 0,
                     });
                 }
             }
@@ -62,12 +63,16 @@ impl TrackingSetup {
                 .force_time_offset;
             let mut parts = Vec::new();
             for (i, st) in self.samples.iter().enumerate() {
-                let ph = &solution.phases[st.phase];
-                let (n, h) = (ph.intervals(), ph.duration / ph.intervals() as f64);
                 for (r, shifted) in self.sample_residuals(model, sets, continuous, st) {
+                    let (phase, interval, tau) = match shifted {
+                        Some(side) => st.loads_at[side],
+                        None => (st.phase, st.interval, st.tau),
+                    };
+                    let ph = &solution.phases[phase];
+                    let (n, h) = (ph.intervals(), ph.duration / ph.intervals() as f64);
                     let (k, tau, time) = if let Some(side) = shifted {
-                        let (k, tau, _) =
-                            shifted_instant(st.interval, st.tau, -offsets[side], h, n);
+                        let shift = st.load_offset[side] - offsets[side];
+                        let (k, tau, _) = shifted_instant(interval, tau, shift, h, n);
                         // a phase's end is sampled before its impact
                         (
                             k,
@@ -78,19 +83,18 @@ impl TrackingSetup {
                     } else {
                         (st.interval, st.tau, st.target.time)
                     };
-                    parts.push((i, r, k, tau, time));
+                    parts.push((i, phase, r, k, tau, time));
                 }
             }
-            let mut times: Vec<f64> = parts.iter().map(|p| p.4).collect();
+            let mut times: Vec<f64> = parts.iter().map(|p| p.5).collect();
             times.sort_by(f64::total_cmp);
             times.dedup();
             let states = solution
                 .sample_at(model, sets, &times, integrator)
                 .map_err(|e| format!("integrating to the samples: {e}"))?;
             let mut data_by_sample = vec![(0.0, String::new(), 0.0); self.samples.len()];
-            for (i, r, k, tau, time) in &parts {
-                let st = &self.samples[*i];
-                let ph = &solution.phases[st.phase];
+            for (i, phase, r, k, tau, time) in &parts {
+                let ph = &solution.phases[*phase];
                 let at = &states[times.partition_point(|t| t < time)];
                 let u: Vec<f64> = match ph.controls {
                     crate::integrate::ControlShape::Linear => ph.u[*k]
@@ -107,7 +111,7 @@ impl TrackingSetup {
                         .copied()
                         .collect();
                 let (data, largest, largest_cost) =
-                    add_costs(r, &z, st.phase, &mut channels, &mut cost, &mut rows)?;
+                    add_costs(r, &z, *phase, &mut channels, &mut cost, &mut rows)?;
                 // the parts' channels are disjoint: the sample's largest is the parts' largest
                 let entry = &mut data_by_sample[*i];
                 entry.0 += data;
@@ -121,6 +125,7 @@ impl TrackingSetup {
                     phase: solution.phases[st.phase].name.clone(),
                     data,
                     largest,
+                    parts: sample_parts(&st.target),
                 });
             }
             nodes.sort_by(|a, b| a.time.total_cmp(&b.time));
@@ -216,14 +221,31 @@ pub struct NodeCost {
     pub data: f64,
     /// The channel contributing most.
     pub largest: String,
+    /// What a sample compares ([`sample_parts`]); 0 for a node.
+    #[serde(skip)]
+    pub parts: u8,
+}
+
+/// What a sample target compares, as bits: 1 its angles, 2 the right foot's loads, 4 the
+/// left's. A held plate clock moves a foot's loads in or out of the window (or of the
+/// phases that load that foot), so the same instant can compare other parts in another
+/// solution; such samples are not the same sample.
+pub fn sample_parts(target: &crate::problems::tracking::NodeTarget) -> u8 {
+    u8::from(target.q.iter().any(Option::is_some))
+        | (u8::from(target.feet[0].is_some()) << 1)
+        | (u8::from(target.feet[1].is_some()) << 2)
 }
 
 impl CostBreakdown {
-    /// Each entry's (time in s, data cost): with sample targets one per sample at its data
-    /// instant, what [`common_sample_costs`](crate::problems::diagnose::common_samples::common_sample_costs)
+    /// Each entry's (time in s, [`sample_parts`], data cost): with sample targets one per
+    /// sample at its data instant, what
+    /// [`common_sample_costs`](crate::problems::diagnose::common_samples::common_sample_costs)
     /// compares.
     pub fn sample_costs(&self) -> crate::problems::diagnose::common_samples::SampleCosts {
-        self.nodes.iter().map(|n| (n.time, n.data)).collect()
+        self.nodes
+            .iter()
+            .map(|n| (n.time, n.parts, n.data))
+            .collect()
     }
 
     /// Total cost.

@@ -84,6 +84,15 @@ pub struct SampleTarget {
     /// tracked span; 1 when the forces are sampled with the kinematics). Forces at 600 Hz beside kinematics at 60 Hz then count per second as
     /// they would at 60 Hz, so a faster plate does not outweigh the angles.
     pub load_weight: f64,
+    /// Where each foot's loads are compared: (continuous phase, interval, τ) of the
+    /// sample's instant moved by that foot's plate clock offset as the model starts it
+    /// ([`Self::load_offset`]); the sample's own place where the offset is zero.
+    pub loads_at: [(usize, usize, f64); 2],
+    /// The plate clock offsets (s; right, left) the loads' places already apply: a held
+    /// offset in full (so the model's loads are compared where the measured ones belong,
+    /// in the phase that holds that instant, as the events were moved alike), a free
+    /// one by its start value; the OCP shifts the loads by the offset's change from it.
+    pub load_offset: [f64; 2],
 }
 
 /// A sample's loads moved by the force plates' clock offset to the end of their phase are
@@ -138,13 +147,18 @@ fn segment_splines(
 /// CoP threshold); samples on a phase boundary are left out. Forces sampled apart from
 /// the kinematics ([`GaitData::forces`]) give their own samples at their own instants,
 /// weighted by their sample period over the kinematics' ([`SampleTarget::load_weight`]);
-/// unmeasured (`NaN`) forces and CoP give no terms.
+/// unmeasured (`NaN`) forces and CoP give no terms. Each foot's loads are placed at the
+/// instant its plate's clock offset `load_offset` (s; right, left: a held offset, or a
+/// free one's start value) moves them to, in the phase that holds that instant, as the
+/// events were moved: a plate 20 ms early held at −20 ms compares its loads where the
+/// untouched trial compares them (not held at their timestamp's phase's end).
 fn sample_targets(
     model: &GaitModel,
     seq: &PhaseSequence,
     sets: &[ConstraintSet],
     data: &GaitData,
     t0: f64,
+    load_offset: [f64; 2],
 ) -> Result<Vec<SampleTarget>, String> {
     let angles: Vec<&[f64]> = COORDINATES
         .iter()
@@ -184,7 +198,9 @@ fn sample_targets(
             .map(|n| (data.time[n], Some(n), Some(n)))
             .collect()
     };
-    let mut out = Vec::new();
+    // each continuous phase: (OCP phase, start, end, interval length, intervals, the
+    // feet it loads)
+    let mut phases = Vec::new();
     let (mut a, mut j) = (t0, 0);
     for (i, ph) in seq.phases.iter().enumerate() {
         let Phase::Continuous {
@@ -197,59 +213,90 @@ fn sample_targets(
         };
         let b = a + duration.value();
         let h = duration.value() / *intervals as f64;
-        let feet = loaded_feet(model, &sets[i]);
-        for &(t, kin, frc) in &instants {
+        phases.push((j, a, b, h, *intervals, loaded_feet(model, &sets[i])));
+        a = b;
+        j += 1;
+    }
+    // where an instant falls: (phase, interval, τ, the feet that phase loads); none on a
+    // phase boundary or outside the window
+    let place = |t: f64| {
+        phases.iter().find_map(|&(j, a, b, h, intervals, feet)| {
             if !(t > a + SAMPLE_EDGE && t < b - SAMPLE_EDGE) {
-                continue;
+                return None;
             }
             let s = (t - a) / h;
-            let mut k = (s.floor() as usize).min(*intervals - 1);
+            let mut k = (s.floor() as usize).min(intervals - 1);
             let mut tau = (s - k as f64).min(1.0);
             if tau < 1e-12 {
                 // on an inner node: the end of the interval before it
                 k -= 1;
                 tau = 1.0;
             }
-            // the loads of the feet the phase loads, where measured (a NaN force is
-            // not measured: no force terms; a NaN CoP of a loaded foot: no CoP term)
-            let load = |f: usize| {
-                let n = frc?;
-                let fd = &force_feet[f];
-                (feet[f] && fd.fx[n].is_finite() && fd.fy[n].is_finite()).then(|| {
-                    (
-                        fd.fx[n],
-                        fd.fy[n],
-                        (fd.fy[n] >= data.cop_threshold && fd.cop_x[n].is_finite())
-                            .then_some(fd.cop_x[n]),
-                    )
-                })
-            };
-            let q = match kin {
-                Some(n) => angles
-                    .iter()
-                    .map(|c| c[n].is_finite().then_some(c[n]))
-                    .collect(),
-                None => vec![None; nq],
-            };
-            let target = NodeTarget {
-                time: t,
-                q,
-                qd: vec![None; nq],
-                feet: [load(0), load(1)],
-            };
-            if target.q.iter().all(Option::is_none) && target.feet.iter().all(Option::is_none) {
-                continue;
-            }
-            out.push(SampleTarget {
-                phase: j,
-                interval: k,
-                tau,
-                target,
-                load_weight,
-            });
+            Some((j, k, tau, feet))
+        })
+    };
+    let mut out = Vec::new();
+    for &(t, kin, frc) in &instants {
+        // the angles at the sample's instant, each foot's loads at the instant its
+        // plate's held clock moves them to (the events were moved alike)
+        let angles_at = kin.and_then(|_| place(t));
+        let loads_at: [_; 2] = std::array::from_fn(|f| {
+            frc.and_then(|_| place(t - load_offset[f]))
+                .filter(|p| p.3[f])
+        });
+        // the loads of the feet their phase loads, where measured (a NaN force is not
+        // measured: no force terms; a NaN CoP of a loaded foot: no CoP term)
+        let load = |f: usize| {
+            let n = frc?;
+            loads_at[f]?;
+            let fd = &force_feet[f];
+            (fd.fx[n].is_finite() && fd.fy[n].is_finite()).then(|| {
+                (
+                    fd.fx[n],
+                    fd.fy[n],
+                    (fd.fy[n] >= data.cop_threshold && fd.cop_x[n].is_finite())
+                        .then_some(fd.cop_x[n]),
+                )
+            })
+        };
+        let q = match (kin, angles_at) {
+            (Some(n), Some(_)) => angles
+                .iter()
+                .map(|c| c[n].is_finite().then_some(c[n]))
+                .collect(),
+            _ => vec![None; nq],
+        };
+        let target = NodeTarget {
+            time: t,
+            q,
+            qd: vec![None; nq],
+            feet: [load(0), load(1)],
+        };
+        let has_angles = target.q.iter().any(Option::is_some);
+        if !has_angles && target.feet.iter().all(Option::is_none) {
+            continue;
         }
-        a = b;
-        j += 1;
+        // the sample's own place: its angles', or else its first loaded foot's
+        let own = if has_angles {
+            angles_at
+        } else {
+            (0..2)
+                .find(|&f| target.feet[f].is_some())
+                .and_then(|f| loads_at[f])
+        };
+        let Some((j, k, tau, _)) = own else {
+            continue;
+        };
+        let loads = std::array::from_fn(|f| loads_at[f].map_or((j, k, tau), |p| (p.0, p.1, p.2)));
+        out.push(SampleTarget {
+            phase: j,
+            interval: k,
+            tau,
+            target,
+            load_weight,
+            loads_at: loads,
+            load_offset,
+        });
     }
     Ok(out)
 }
@@ -719,9 +766,15 @@ impl TrackingSetup {
             fy,
             time: force_time.to_vec(),
             cop_x: [force_feet[0].cop_x.clone(), force_feet[1].cop_x.clone()],
+            belt_speed: if data.overground {
+                data.belt_speed.unwrap_or(0.0)
+            } else {
+                0.0
+            },
         });
         let samples = if sides == TargetSides::Samples {
-            sample_targets(model, &seq, sets, data, t0)?
+            let offsets = clock::start_offsets(model, data, false).0;
+            sample_targets(model, &seq, sets, data, t0, offsets)?
         } else {
             Vec::new()
         };
@@ -829,4 +882,4 @@ pub use window::{
     WindowChoice,
 };
 
-pub use breakdown::{CostBreakdown, NodeCost};
+pub use breakdown::{sample_parts, CostBreakdown, NodeCost};

@@ -82,10 +82,11 @@ impl TrackingSetup {
         let mut weights = self.weights.clone();
         weights.force *= s.load_weight;
         weights.cop *= s.load_weight;
-        let residual = |target: NodeTarget| {
+        // the residual in `phase`'s contact set
+        let residual = |target: NodeTarget, phase: usize| {
             TrackingResidual::new(
                 model,
-                sets[continuous[s.phase]].clone(),
+                sets[continuous[phase]].clone(),
                 target,
                 weights.clone(),
                 Some(self.measured.clone()),
@@ -93,12 +94,15 @@ impl TrackingSetup {
             .data_only()
         };
         if !model.shifts_force_clock() || s.target.feet.iter().all(Option::is_none) {
-            return vec![(residual(s.target.clone()), None)];
+            return vec![(residual(s.target.clone(), s.phase), None)];
         }
-        let angles = residual(NodeTarget {
-            feet: [None, None],
-            ..s.target.clone()
-        });
+        let angles = residual(
+            NodeTarget {
+                feet: [None, None],
+                ..s.target.clone()
+            },
+            s.phase,
+        );
         let mut out = vec![(angles, None)];
         for side in 0..2 {
             if s.target.feet[side].is_none() {
@@ -106,11 +110,14 @@ impl TrackingSetup {
             }
             let mut feet = [None, None];
             feet[side] = s.target.feet[side];
-            let loads = residual(NodeTarget {
-                q: vec![None; s.target.q.len()],
-                feet,
-                ..s.target.clone()
-            })
+            let loads = residual(
+                NodeTarget {
+                    q: vec![None; s.target.q.len()],
+                    feet,
+                    ..s.target.clone()
+                },
+                s.loads_at[side].0,
+            )
             .at_measured_values();
             out.push((loads, Some(side)));
         }
@@ -158,14 +165,21 @@ impl TrackingSetup {
         for s in &self.samples {
             for (r, shifted) in self.sample_residuals(model, sets, &cycle.continuous, s) {
                 let shift = shifted.map(|side| {
-                    Arc::new(crate::problems::AdTerm(ForceClockShift { model, side }))
-                        as Arc<dyn NodeFunction + 'c>
+                    Arc::new(crate::problems::AdTerm(ForceClockShift {
+                        model,
+                        side,
+                        placed: s.load_offset[side],
+                    })) as Arc<dyn NodeFunction + 'c>
                 });
+                let (phase, interval, tau) = match shifted {
+                    Some(side) => s.loads_at[side],
+                    None => (s.phase, s.interval, s.tau),
+                };
                 ocp.samples.push(SampleTerm {
                     name: "tracking sample".into(),
-                    phase: s.phase,
-                    interval: s.interval,
-                    tau: s.tau,
+                    phase,
+                    interval,
+                    tau,
                     f: Arc::new(crate::problems::AdTerm(r)),
                     shift,
                 });

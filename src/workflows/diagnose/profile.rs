@@ -417,7 +417,7 @@ fn compare(
     extra: Option<&SampleCosts>,
 ) -> CommonSamples {
     let which: Vec<usize> = (0..points.len()).filter(|&i| solved[i].is_some()).collect();
-    let mut all: Vec<&[(f64, f64)]> = vec![base_costs];
+    let mut all: Vec<&[(f64, u8, f64)]> = vec![base_costs];
     all.extend(
         which
             .iter()
