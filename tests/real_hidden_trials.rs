@@ -11,6 +11,15 @@ use footfall::data::{detect_events, read_sagittal_csv, read_storage, GaitData};
 use serde_json::Value;
 use std::path::{Path, PathBuf};
 
+/// The edited trials, in `tests/data/real_hidden` and `tests/data/real_hidden_600hz`.
+const TRIALS: [&str; 5] = [
+    "real_clock_r+25ms",
+    "real_clock_l-20ms",
+    "real_cop_r+25mm",
+    "real_gain_l+6pct",
+    "real_mass+5pct",
+];
+
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
@@ -80,13 +89,7 @@ fn same_foot(a: &GaitData, b: &GaitData, side: usize, gain: f64, cop_offset: f64
 #[test]
 fn every_trial_keeps_the_kinematics_and_says_what_it_changed() {
     let b = bundled();
-    for name in [
-        "real_clock_r+25ms",
-        "real_clock_l-20ms",
-        "real_cop_r+25mm",
-        "real_gain_l+6pct",
-        "real_mass+5pct",
-    ] {
+    for name in TRIALS {
         let (d, truth) = trial(name);
         assert_eq!(d.time, b.time, "{name}");
         assert_eq!(d.q, b.q, "{name}: kinematics copied");
@@ -211,13 +214,7 @@ fn the_600_hz_trials_are_the_raw_record_edited_sample_for_sample() {
             }
         }
     }
-    for name in [
-        "real_clock_r+25ms",
-        "real_clock_l-20ms",
-        "real_cop_r+25mm",
-        "real_gain_l+6pct",
-        "real_mass+5pct",
-    ] {
+    for name in TRIALS {
         let (d, truth) = trial_600(name);
         assert_eq!(d.q, b.q, "{name}: kinematics copied");
         assert_eq!(truth, trial(name).1, "{name}: the same truth at both rates");
