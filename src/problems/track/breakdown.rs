@@ -64,10 +64,7 @@ impl TrackingSetup {
             let mut parts = Vec::new();
             for (i, st) in self.samples.iter().enumerate() {
                 for (r, shifted) in self.sample_residuals(model, sets, continuous, st) {
-                    let (phase, interval, tau) = match shifted {
-                        Some(side) => st.loads_at[side],
-                        None => (st.phase, st.interval, st.tau),
-                    };
+                    let (phase, interval, tau) = st.place_of(shifted);
                     let ph = &solution.phases[phase];
                     let (n, h) = (ph.intervals(), ph.duration / ph.intervals() as f64);
                     let (k, tau, time) = if let Some(side) = shifted {

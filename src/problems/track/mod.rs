@@ -81,8 +81,9 @@ pub struct SampleTarget {
     pub target: NodeTarget,
     /// Factor on the weights of this sample's force and CoP rows: the force record's
     /// sample period over the kinematics' (the mean steps of their instants inside the
-    /// tracked span; 1 when the forces are sampled with the kinematics). Forces at 600 Hz beside kinematics at 60 Hz then count per second as
-    /// they would at 60 Hz, so a faster plate does not outweigh the angles.
+    /// tracked span; 1 when the forces are sampled with the kinematics). Forces at 600 Hz
+    /// beside kinematics at 60 Hz then count per second as they would at 60 Hz, so a
+    /// faster plate does not outweigh the angles.
     pub load_weight: f64,
     /// Where each foot's loads are compared: (continuous phase, interval, τ) of the
     /// sample's instant moved by that foot's plate clock offset as the model starts it
@@ -93,6 +94,18 @@ pub struct SampleTarget {
     /// in the phase that holds that instant, as the events were moved alike), a free
     /// one by its start value; the OCP shifts the loads by the offset's change from it.
     pub load_offset: [f64; 2],
+}
+
+impl SampleTarget {
+    /// Where a residual part of this sample is compared: (continuous phase, interval, τ)
+    /// of the loads of foot `side` ([`Self::loads_at`]), or the sample's own place for its
+    /// angles (`None`).
+    pub fn place_of(&self, side: Option<usize>) -> (usize, usize, f64) {
+        match side {
+            Some(side) => self.loads_at[side],
+            None => (self.phase, self.interval, self.tau),
+        }
+    }
 }
 
 /// A sample's loads moved by the force plates' clock offset to the end of their phase are
@@ -167,25 +180,6 @@ fn sample_targets(
     let nq = angles.len();
     // each channel at its own instants: (time, kinematic row, force row)
     let (force_time, force_feet) = data.force_record();
-    // the force record's sample period over the kinematics', each the mean step of its
-    // instants inside the tracked span (robust to times printed to few digits)
-    let span = seq.phases.iter().fold(0.0, |d, p| match p {
-        Phase::Continuous { duration, .. } => d + duration.value(),
-        Phase::Impact { .. } => d,
-    });
-    let step = |t: &[f64]| {
-        let inside: Vec<f64> = t
-            .iter()
-            .copied()
-            .filter(|&x| x >= t0 && x <= t0 + span)
-            .collect();
-        (inside.len() >= 2)
-            .then(|| (inside[inside.len() - 1] - inside[0]) / (inside.len() - 1) as f64)
-    };
-    let load_weight = match (data.forces.is_some(), step(force_time), step(&data.time)) {
-        (true, Some(f), Some(k)) => f / k,
-        _ => 1.0,
-    };
     let instants: Vec<(f64, Option<usize>, Option<usize>)> = if data.forces.is_some() {
         let mut v: Vec<_> = (0..data.time.len())
             .map(|n| (data.time[n], Some(n), None))
@@ -217,6 +211,17 @@ fn sample_targets(
         a = b;
         j += 1;
     }
+    // the force record's sample period over the kinematics', each the mean step of its
+    // instants inside the tracked span [t0, a] (robust to times printed to few digits)
+    let step = |t: &[f64]| {
+        let inside: Vec<f64> = t.iter().copied().filter(|&x| x >= t0 && x <= a).collect();
+        (inside.len() >= 2)
+            .then(|| (inside[inside.len() - 1] - inside[0]) / (inside.len() - 1) as f64)
+    };
+    let load_weight = match (data.forces.is_some(), step(force_time), step(&data.time)) {
+        (true, Some(f), Some(k)) => f / k,
+        _ => 1.0,
+    };
     // where an instant falls: (phase, interval, τ, the feet that phase loads); none on a
     // phase boundary or outside the window
     let place = |t: f64| {

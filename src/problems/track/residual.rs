@@ -5,7 +5,7 @@ use super::{SampleTarget, TrackingSetup};
 use crate::model::{ConstraintSet, GaitModel};
 use crate::ocp::{Block, NodeFunction, Ocp, SampleTerm, Term};
 use crate::problems::gait::GaitCycle;
-use crate::problems::tracking::{ForceClockShift, NodeTarget, TrackingResidual};
+use crate::problems::tracking::{ForceClockShift, NodeTarget, TrackingResidual, TrackingWeights};
 use std::sync::Arc;
 
 impl TrackingSetup {
@@ -18,11 +18,23 @@ impl TrackingSetup {
         target: NodeTarget,
         with_loads: bool,
     ) -> TrackingResidual<'m> {
+        self.residual_weighted(model, set, target, self.weights.clone(), with_loads)
+    }
+
+    /// As [`residual`](Self::residual), with `weights` instead of the setup's.
+    fn residual_weighted<'m>(
+        &self,
+        model: &'m GaitModel,
+        set: &ConstraintSet,
+        target: NodeTarget,
+        weights: TrackingWeights,
+        with_loads: bool,
+    ) -> TrackingResidual<'m> {
         TrackingResidual::new(
             model,
             set.clone(),
             target,
-            self.weights.clone(),
+            weights,
             with_loads.then(|| self.measured.clone()),
         )
     }
@@ -84,12 +96,12 @@ impl TrackingSetup {
         weights.cop *= s.load_weight;
         // the residual in `phase`'s contact set
         let residual = |target: NodeTarget, phase: usize| {
-            TrackingResidual::new(
+            self.residual_weighted(
                 model,
-                sets[continuous[phase]].clone(),
+                &sets[continuous[phase]],
                 target,
                 weights.clone(),
-                Some(self.measured.clone()),
+                true,
             )
             .data_only()
         };
@@ -171,10 +183,7 @@ impl TrackingSetup {
                         placed: s.load_offset[side],
                     })) as Arc<dyn NodeFunction + 'c>
                 });
-                let (phase, interval, tau) = match shifted {
-                    Some(side) => s.loads_at[side],
-                    None => (s.phase, s.interval, s.tau),
-                };
+                let (phase, interval, tau) = s.place_of(shifted);
                 ocp.samples.push(SampleTerm {
                     name: "tracking sample".into(),
                     phase,
