@@ -29,6 +29,7 @@ mod qp_recovery;
 mod real_hidden_refit;
 mod reliability;
 mod report_gait;
+mod rigid_clocks_600hz;
 mod run_anywhere;
 mod synth;
 mod torque_tracking;

@@ -345,6 +345,22 @@ pub struct ClockProfile {
     /// read from these costs, not from J.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub compared: Option<ComparedSamples>,
+    /// A refined profile's own reading, whether or not its re-fit became the candidate's
+    /// test: the vertex of its parabola (the run at zero among its points), so that
+    /// `diagnose --reference` can compare one trial's profile with another's even where
+    /// one of them did not lie below its run (`None`: not refined, or failed).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub vertex: Option<ProfileVertex>,
+}
+
+/// Where a refined clock profile's parabola is lowest, and how sharply it bends.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct ProfileVertex {
+    /// The vertex's offset (s).
+    pub offset: f64,
+    /// Its standard deviation (s) from the parabola's curvature, as the profile's re-fit
+    /// reads it (`None`: fewer than three points, or bent downwards at its lowest).
+    pub sd: Option<f64>,
 }
 
 /// A candidate fitted on the run's half cycle, applied with its parameters fixed to

@@ -155,6 +155,18 @@ fn comparison_section(c: &super::reference::Comparison) -> (String, Table) {
             format!("Differs significantly from the reference: {}. A significant difference is applied, as the candidate's value, to the held-out half cycle of this trial and of the reference; it is confirmed when this trial's change there less the reference's exceeds the paired noise band (the held-out note says how, and whether the reference's half cycle could be tracked).", significant.join(", "))
         }
     );
+    let by_profiles: Vec<&str> = c
+        .differences
+        .iter()
+        .filter(|d| d.by_profiles)
+        .map(|d| d.label.as_str())
+        .collect();
+    if !by_profiles.is_empty() {
+        text += &format!(
+            " Read by the two clock profiles' vertices (the profile's re-fit was the test in one run only; each reading is the vertex of the parabola through its profile's lowest point, the run's cost among its points, with its sd from the curvature): {}.",
+            by_profiles.join(", ")
+        );
+    }
     if !c.not_compared.is_empty() {
         text += &format!(" Not compared: {}.", c.not_compared.join("; "));
     }
@@ -180,8 +192,16 @@ fn comparison_section(c: &super::reference::Comparison) -> (String, Table) {
                 vec![
                     d.label.clone(),
                     d.parameter.clone(),
-                    format!("{:.4e}", d.reading),
-                    format!("{:.4e}", d.reference),
+                    format!(
+                        "{:.4e}{}",
+                        d.reading,
+                        if d.by_profiles { " (profile vertex)" } else { "" }
+                    ),
+                    format!(
+                        "{:.4e}{}",
+                        d.reference,
+                        if d.by_profiles { " (profile vertex)" } else { "" }
+                    ),
                     format!("{:+.4e}", d.difference),
                     format!("{:.2e}", d.sd),
                     format!("{:+.1}", d.z),
@@ -277,7 +297,17 @@ fn profile_paragraph(t: &ScoreTest) -> Option<String> {
                 "the score test's truncated re-fit from zero lowers the cost more, and stays the candidate's test".into()
             }
         ),
-        _ => " No point lies below the run's cost: the score test stands.".into(),
+        _ => format!(
+            " No point lies below the run's cost: the score test stands{}",
+            match p.vertex {
+                Some(v) if !p.chosen => format!(
+                    "; the parabola through the lowest point (the run's) and its neighbours has its vertex at {:+.1} ms{}, the profile's own reading, which `--reference` compares with another trial's profile",
+                    1e3 * v.offset,
+                    v.sd.map_or(String::new(), |sd| format!(" ± {:.1}", 1e3 * sd))
+                ),
+                _ => String::new(),
+            }
+        ),
     };
     Some(format!(
         "Profile of {} (the run re-fitted with the offset held fixed; {points}).{common}{outcome}.",

@@ -25,8 +25,8 @@ use crate::model::effects::{EffectSpec, ForcePlateTimeOffset};
 use crate::problems::diagnose::common_samples::{common_sample_costs, CommonSamples, SampleCosts};
 use crate::problems::diagnose::stats::{identifiability, Identifiability};
 use crate::problems::diagnose::{
-    chi2_1_upper, refit_test, ClockProfile, ComparedSamples, ProfilePoint, ScoreTest,
-    TrackingRunSetup,
+    chi2_1_upper, refit_test, ClockProfile, ComparedSamples, ProfilePoint, ProfileVertex,
+    ScoreTest, TrackingRunSetup,
 };
 use crate::problems::evaluation::GaitSolution;
 use crate::report::diff::RunDiff;
@@ -129,6 +129,7 @@ pub(super) fn profile_clock(
                         refined: refine,
                         refit_error: Some(format!("the run's cost per sample: {e:#}")),
                         compared: None,
+                        vertex: None,
                     },
                     None,
                 ));
@@ -242,7 +243,21 @@ pub(super) fn profile_clock(
         refined: false,
         refit_error: None,
         compared: None,
+        vertex: None,
     };
+    let name = local.parameters.first().cloned().unwrap_or_default();
+    // a refined profile's reading, kept even when its re-fit does not become the
+    // candidate's test or no point lies below the run: the vertex of the parabola through
+    // the lowest point (the run's among them) and its sd, with the score test's inflation
+    if refine {
+        let known = known_points(&profile.points, run_cost, base_costs.is_some());
+        profile.vertex = Some(vertex_reading(
+            &known,
+            &name,
+            resid.mean_square(noise),
+            local.inflation,
+        ));
+    }
     // the lowest point, when it lies below the run
     let lowest = profile
         .points
@@ -262,7 +277,6 @@ pub(super) fn profile_clock(
         &args.run,
         &format!("+force_plate_time_offset_{side}_profile"),
     );
-    let name = local.parameters.first().cloned().unwrap_or_default();
     let (effect, curvature) = if refine {
         let known = known_points(&profile.points, run_cost, base_costs.is_some());
         let (at, curvature) = vertex(&known, ForcePlateTimeOffset::BOUNDS);
@@ -383,8 +397,36 @@ pub(super) fn profile_clock(
             ),
         };
         t.set_identifiability(id, local.hint.clone());
+        // the re-fit's own reading: the held vertex with the sd of its test
+        profile.vertex = Some(ProfileVertex {
+            offset: value,
+            sd: t
+                .identifiability
+                .as_ref()
+                .and_then(|i| i.sd.first().copied().flatten()),
+        });
     }
     Ok((profile, Some((t, run, diff))))
+}
+
+/// A refined profile's reading from its `known` points (the run's among them): the
+/// vertex of its parabola and the sd a re-fit held there reads for parameter `name`
+/// (reduced Hessian inverse 1/(2a) from the curvature `a`, residual mean square `s2`,
+/// inflation `phi`).
+fn vertex_reading(known: &[(f64, f64)], name: &str, s2: f64, phi: f64) -> ProfileVertex {
+    let bounds = ForcePlateTimeOffset::BOUNDS;
+    let (offset, curvature) = vertex(known, bounds);
+    let sd = curvature.and_then(|a| {
+        identifiability(
+            vec![name.to_string()],
+            vec![vec![0.5 / a]],
+            vec![bounds.1 - bounds.0],
+            s2,
+            phi,
+        )
+        .sd[0]
+    });
+    ProfileVertex { offset, sd }
 }
 
 /// The profile's points with a cost, (offset, cost), and the run's own at zero.

@@ -13,11 +13,18 @@
 //! (both truncated re-fits from the null, or both a clock profile's free re-fit): on the
 //! real left-clock trial the shared clock's truncated reading (−6.3 ms) against the
 //! untouched trial's profile reading (+17.7 ms, another dip of J) differed by 6.9 sd,
-//! although its profile re-fit read +15.8 ms there. A reading at a bound of its range,
-//! in either run, is a limit the data pushed against and is not compared.
+//! although its profile re-fit read +15.8 ms there. A plate's clock whose refined profile
+//! (sample or one-sided targets) became the test in one run only is compared by the two
+//! profiles' own readings, each the vertex of its parabola with the run's cost among its
+//! points: the same estimator in both. On the 600 Hz left-clock trial the profile read
+//! −29.4 ms while the untouched trial's profile lay nowhere below its run, so that its
+//! test stayed the score test's and the two could not be compared (stop 71). A reading
+//! at a bound of its range, in either run, is a limit the data pushed against and is not
+//! compared.
 
 use super::summary::{self, DiagnosisSummary};
-use crate::problems::diagnose::{chi2_1_upper, HeldOut, ScoreTest};
+use crate::model::effects::ForcePlateTimeOffset;
+use crate::problems::diagnose::{chi2_1_upper, HeldOut, ProfileVertex, ScoreTest};
 use crate::runfolder::read_json;
 use anyhow::{anyhow, bail};
 use serde::{Deserialize, Serialize};
@@ -43,6 +50,10 @@ pub struct Difference {
     pub z: f64,
     /// Whether `z²` exceeds the threshold.
     pub significant: bool,
+    /// Whether the two readings are the two clock profiles' vertices (the profile's re-fit
+    /// was the test in one run only), not the two tests' readings.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub by_profiles: bool,
     /// A significant difference applied, as the candidate's value, to this trial's
     /// held-out half cycle (`None`: not significant, or not validated).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -90,6 +101,12 @@ fn estimator(t: &ScoreTest) -> &'static str {
         (false, true) => "a full re-fit",
         (false, false) => "the truncated re-fit from the null",
     }
+}
+
+/// A refined clock profile's own reading of a test, whether or not the profile's re-fit
+/// became the test.
+fn profile_reading(t: &ScoreTest) -> Option<ProfileVertex> {
+    t.profile.as_ref()?.vertex
 }
 
 /// The standard deviations of a test's parameters (empty when not computed).
@@ -178,6 +195,32 @@ pub(super) fn compare(tests: &[ScoreTest], reference: &Reference) -> Comparison 
         let mine = estimator(t);
         let how = estimator(theirs);
         if mine != how {
+            // a clock profiled in both runs: the two profiles' vertices
+            if let (Some(a), Some(b)) = (profile_reading(t), profile_reading(theirs)) {
+                let name = t.parameters.first().cloned().unwrap_or_default();
+                let (lo, hi) = ForcePlateTimeOffset::BOUNDS;
+                let at_bound = |v: &ProfileVertex| v.offset <= lo + 1e-9 || v.offset >= hi - 1e-9;
+                match (a.sd, b.sd) {
+                    _ if at_bound(&a) || at_bound(&b) => not_compared.push(format!(
+                        "{}: its profile's vertex is at its bound {} (a limit the data pushed against, not a reading)",
+                        t.label,
+                        if at_bound(&a) { "here" } else { "in the reference" }
+                    )),
+                    (Some(sa), Some(sb)) if sa * sa + sb * sb > 0.0 => pairs.push((
+                        t.label.clone(),
+                        name,
+                        a.offset,
+                        b.offset,
+                        (sa * sa + sb * sb).sqrt(),
+                        true,
+                    )),
+                    _ => not_compared.push(format!(
+                        "{}: read by {mine} here and by {how} in the reference, and the profiles' vertices have no finite standard deviation in both runs",
+                        t.label
+                    )),
+                }
+                continue;
+            }
             not_compared.push(format!(
                 "{}: read by {mine} here and by {how} in the reference (readings of different estimators, possibly of different dips of J)",
                 t.label
@@ -207,6 +250,7 @@ pub(super) fn compare(tests: &[ScoreTest], reference: &Reference) -> Comparison 
                         a,
                         b,
                         (sa * sa + sb * sb).sqrt(),
+                        false,
                     )),
                 _ => not_compared.push(format!(
                     "{}: {name} has no finite standard deviation in both runs",
@@ -218,7 +262,7 @@ pub(super) fn compare(tests: &[ScoreTest], reference: &Reference) -> Comparison 
     let threshold = chi2_1_upper(1e-3 / pairs.len().max(1) as f64);
     let mut differences: Vec<Difference> = pairs
         .into_iter()
-        .map(|(label, parameter, reading, reference, sd)| {
+        .map(|(label, parameter, reading, reference, sd, by_profiles)| {
             let difference = reading - reference;
             let z = difference / sd;
             Difference {
@@ -230,6 +274,7 @@ pub(super) fn compare(tests: &[ScoreTest], reference: &Reference) -> Comparison 
                 sd,
                 z,
                 significant: z * z > threshold,
+                by_profiles,
                 held_out: None,
             }
         })
@@ -302,6 +347,90 @@ mod tests {
             "{:?}",
             c.not_compared
         );
+    }
+
+    /// A left clock read by `estimator`: its profile's re-fit (`chosen`) or the score
+    /// test, with the profile's vertex at `vertex` (ms) and sd 5.8 ms, or no profile.
+    fn left_clock(reading: f64, chosen: bool, vertex: Option<f64>) -> ScoreTest {
+        let effect = EffectSpec::ForcePlateTimeOffset {
+            side: "left".into(),
+            offset: 0.0,
+            free: vec!["offset".into()],
+        };
+        let name = "force_plate_time_offset_left.offset".to_string();
+        let mut t = refit_test(&effect, vec![name.clone()], vec![reading], 2.0, 1.5, 460, 3);
+        t.refit = chosen;
+        t.set_identifiability(
+            identifiability(vec![name], vec![vec![0.004 * 0.004]], vec![0.2], 0.5, 1.0),
+            None,
+        );
+        t.profile = vertex.map(|v| crate::problems::diagnose::ClockProfile {
+            points: Vec::new(),
+            start: None,
+            refit: None,
+            family: 5,
+            chosen,
+            refined: chosen,
+            refit_error: None,
+            compared: None,
+            vertex: Some(ProfileVertex {
+                offset: 1e-3 * v,
+                sd: Some(0.0058),
+            }),
+        });
+        t
+    }
+
+    /// A clock whose profile's re-fit is the test in one run and not in the other (its
+    /// profile nowhere below its run) is compared by the two profiles' vertices, with
+    /// their sds; without a profile in the reference it is not compared (different
+    /// estimators). The figures are the 600 Hz left-clock trial's (−29.4 ms) and the
+    /// untouched trial's profile vertex that the exact 20 ms shift of its profile implies
+    /// (−9.4 ms), stop 71.
+    #[test]
+    fn a_clock_profiled_in_both_runs_is_compared_by_the_profiles_vertices() {
+        let dir = tempfile::tempdir().unwrap();
+        let write = |t: ScoreTest| {
+            let summary = DiagnosisSummary::of_ranking(vec![t]);
+            std::fs::write(
+                dir.path().join("summary.json"),
+                serde_json::to_string(&summary).unwrap(),
+            )
+            .unwrap();
+        };
+        let ours = [left_clock(-0.0294, true, Some(-29.4))];
+        write(left_clock(-0.007, false, Some(-9.4)));
+        let c = compare(&ours, &read_reference(dir.path()).unwrap());
+        assert_eq!(c.differences.len(), 1, "{:?}", c.not_compared);
+        let d = &c.differences[0];
+        assert!(d.by_profiles);
+        assert!((d.difference + 0.020).abs() < 1e-12, "{}", d.difference);
+        assert!((d.sd - 0.0058 * 2f64.sqrt()).abs() < 1e-12, "{}", d.sd);
+        // the score test's reading and sd are not used
+        assert!((d.reference + 0.0094).abs() < 1e-12);
+
+        // no profile in the reference: different estimators, not compared
+        write(left_clock(-0.007, false, None));
+        let c = compare(&ours, &read_reference(dir.path()).unwrap());
+        assert!(c.differences.is_empty());
+        assert!(
+            c.not_compared[0].contains("different estimators"),
+            "{:?}",
+            c.not_compared
+        );
+
+        // a vertex at the bound is a limit, not a reading
+        write(left_clock(-0.007, false, Some(-100.0)));
+        let c = compare(&ours, &read_reference(dir.path()).unwrap());
+        assert!(c.differences.is_empty());
+        assert!(c.not_compared[0].contains("at its bound in the reference"));
+
+        // both read by their score tests: compared as they are, not by the vertices
+        write(left_clock(-0.007, false, Some(-9.4)));
+        let ours = [left_clock(-0.012, false, Some(-15.0))];
+        let c = compare(&ours, &read_reference(dir.path()).unwrap());
+        let d = &c.differences[0];
+        assert!(!d.by_profiles && (d.difference + 0.005).abs() < 1e-12);
     }
 
     /// The reference's run folder, for its held-out half cycle: `--reference` itself when
