@@ -85,31 +85,54 @@ fn held_out_cell(t: &ScoreTest) -> String {
     }
 }
 
+/// The diagnosis' first sentence: what was found, and whether a held-out half cycle
+/// confirmed it. A significant candidate that no held-out half cycle tested (validation
+/// off, none to hold out) counts as found in the summary's tally, but is never called
+/// found or "the most likely missing effect" here without saying it was not validated.
+fn found_sentence(tests: &[ScoreTest]) -> String {
+    let found: Vec<&ScoreTest> = tests.iter().filter(|t| t.found).collect();
+    let significant = tests.iter().filter(|t| t.significant).count();
+    if found.is_empty() {
+        return if significant == 0 {
+            "No testable candidate explains more than the noise: every statistic (corrected for correlated residuals) is below its χ² 0.1 % point. No effect is suggested.".to_string()
+        } else {
+            format!("{significant} candidate(s) are significant in-sample, but none is found: each fails to lower the error of the held-out half cycle beyond its noise band or reads a value at its bound (the verdicts say which).")
+        };
+    }
+    let confirmed = found.iter().filter(|t| t.held_out.is_some()).count();
+    let unvalidated = found.len() - confirmed;
+    let first = found[0].label.as_str();
+    if unvalidated == 0 {
+        format!(
+            "{} of {} candidates found (significant in-sample and confirmed on the held-out half cycle); the most likely missing effect is {first}.",
+            found.len(),
+            tests.len()
+        )
+    } else if confirmed == 0 {
+        format!(
+            "{} of {} candidates are significant in-sample, none validated on a held-out half cycle (the verdicts say why): the first by the decrease it explains is {first}, which a held-out half cycle would have to confirm.",
+            found.len(),
+            tests.len()
+        )
+    } else {
+        format!(
+            "{} of {} candidates found: {confirmed} confirmed on the held-out half cycle, {unvalidated} significant in-sample but not validated; the most likely missing effect is {first}{}.",
+            found.len(),
+            tests.len(),
+            if found[0].held_out.is_some() {
+                ""
+            } else {
+                " (not validated)"
+            }
+        )
+    }
+}
+
 /// The verdict sentence of the whole diagnosis.
 fn verdict(o: &Outcome<'_>) -> String {
     let tests = o.tests;
-    let found: Vec<&ScoreTest> = tests.iter().filter(|t| t.found).collect();
-    let significant = tests.iter().filter(|t| t.significant).count();
     let untestable: Vec<&ScoreTest> = tests.iter().filter(|t| !t.testable).collect();
-    let mut v = if found.is_empty() {
-        if significant == 0 {
-            "No testable candidate explains more than the noise: every statistic (corrected for correlated residuals) is below its χ² 0.1 % point. No effect is suggested.".to_string()
-        } else {
-            format!("{significant} candidate(s) are significant in-sample, but none lowers the error of the held-out half cycle beyond its noise band: no effect is found.")
-        }
-    } else {
-        format!(
-            "{} of {} candidates found (significant in-sample{}); the most likely missing effect is {}.",
-            found.len(),
-            tests.len(),
-            if found.iter().all(|t| t.held_out.is_some()) {
-                " and confirmed on the held-out half cycle"
-            } else {
-                ""
-            },
-            found[0].label
-        )
-    };
+    let mut v = found_sentence(tests);
     if !untestable.is_empty() {
         v += &format!(
             " Not testable with this run's cost (neither absent nor present as far as this run can tell): {}.",
@@ -631,4 +654,78 @@ pub(super) fn write(
         path.join("report.html").display()
     );
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::effects::EffectSpec;
+    use crate::problems::diagnose::{refit_test, HeldOut};
+
+    /// A significant slope candidate (statistic 20 against 10.8), held out with
+    /// `held_out`: `Some(true)` beyond its band, `Some(false)` within it, `None` not run.
+    fn slope(held_out: Option<bool>) -> ScoreTest {
+        let effect = EffectSpec::GroundSlope {
+            angle: 0.0,
+            free: vec!["angle".into()],
+        };
+        let mut t = refit_test(
+            &effect,
+            vec!["ground_slope.angle".into()],
+            vec![0.01],
+            2.0,
+            1.0,
+            20,
+            3,
+        );
+        t.testable = true;
+        t.statistic = 20.0;
+        t.threshold = 10.8;
+        t.significant = true;
+        t.held_out = held_out.map(|beyond| HeldOut {
+            stride: 1,
+            mirrored: false,
+            window: (0.0, 0.5),
+            values: vec![0.01],
+            objective: 1.0,
+            change: if beyond { 0.1 } else { -0.1 },
+            change_fraction: 0.1,
+            band: 0.05,
+            beyond_noise: beyond,
+            reference_change: None,
+            reference_curvature: None,
+        });
+        t.settle();
+        t
+    }
+
+    /// Only a candidate a held-out half cycle confirmed is called found without a
+    /// qualifier; one that none tested is "significant in-sample, none validated".
+    #[test]
+    fn the_headline_says_whether_a_held_out_half_cycle_confirmed_what_is_found() {
+        let confirmed = found_sentence(&[slope(Some(true))]);
+        assert!(
+            confirmed.starts_with("1 of 1 candidates found (significant in-sample and confirmed"),
+            "{confirmed}"
+        );
+        let unvalidated = found_sentence(&[slope(None), slope(None)]);
+        assert!(
+            unvalidated.starts_with("2 of 2 candidates are significant in-sample, none validated"),
+            "{unvalidated}"
+        );
+        assert!(
+            !unvalidated.contains("most likely missing effect"),
+            "{unvalidated}"
+        );
+        let mixed = found_sentence(&[slope(None), slope(Some(true))]);
+        assert!(
+            mixed.contains(
+                "1 confirmed on the held-out half cycle, 1 significant in-sample but not validated"
+            ),
+            "{mixed}"
+        );
+        assert!(mixed.ends_with("(not validated)."), "{mixed}");
+        let rejected = found_sentence(&[slope(Some(false))]);
+        assert!(rejected.contains("none is found"), "{rejected}");
+    }
 }
