@@ -340,6 +340,11 @@ pub struct ClockProfile {
     /// Why the profile's re-fit failed, when it did (the candidate keeps its score test).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub refit_error: Option<String>,
+    /// Where the profile's re-fit stopped short of its KKT tolerance (its status, KKT
+    /// residual and iterations; `None`: it converged, or there was none). Its cost then
+    /// bounds the held minimum from above, so the decrease it gives is a lower bound.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub refit_unconverged: Option<String>,
     /// With sample targets, the samples the points are compared over, and the run's and
     /// re-fit's costs there: the lowest point, the parabola and the re-fit's decrease are
     /// read from these costs, not from J.

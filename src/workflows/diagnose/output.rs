@@ -301,7 +301,7 @@ fn profile_paragraph(t: &ScoreTest) -> Option<String> {
             1e3 * start
         ),
         (Some(start), Some((value, j)), _) => format!(
-            "{}; {}",
+            "{}{}; {}",
             if p.refined {
                 format!(" With one-sided or sample targets a free offset cannot move its plate's events, so the profile is refined instead: the parabola through the lowest point ({:+.0} ms) and its neighbours has its vertex at {:+.1} ms, where the re-fit held there reaches J = {j:.4}", 1e3 * start, 1e3 * value)
             } else {
@@ -311,6 +311,9 @@ fn profile_paragraph(t: &ScoreTest) -> Option<String> {
                     1e3 * value
                 )
             },
+            p.refit_unconverged.as_deref().map_or(String::new(), |why| format!(
+                " (the re-fit stopped short of its tolerance: {why}; its cost bounds the held minimum from above, so its decrease is a lower bound)"
+            )),
             if p.chosen {
                 format!(
                     "it lowers the cost more than the score test's truncated re-fit from zero, so it is this candidate's test, against the χ²₁ point at 0.1 %/{} = {:.1} (the best of {} starts)",
@@ -727,5 +730,33 @@ mod tests {
         assert!(mixed.ends_with("(not validated)."), "{mixed}");
         let rejected = found_sentence(&[slope(Some(false))]);
         assert!(rejected.contains("none is found"), "{rejected}");
+    }
+
+    /// A profile whose re-fit stopped at its iteration limit says so, and that its
+    /// decrease is then a lower bound; a converged one does not.
+    #[test]
+    fn a_profile_says_when_its_refit_stopped_short_of_its_tolerance() {
+        let mut t = slope(None);
+        let mut p = crate::problems::diagnose::ClockProfile {
+            points: Vec::new(),
+            start: Some(-0.02),
+            refit: Some((-0.013, 0.3204)),
+            family: 5,
+            chosen: true,
+            refined: true,
+            refit_error: None,
+            refit_unconverged: Some(
+                "iteration limit reached, KKT 1.7e-3 after 200 iterations".into(),
+            ),
+            compared: None,
+            vertex: None,
+        };
+        t.profile = Some(p.clone());
+        let text = profile_paragraph(&t).unwrap();
+        assert!(text.contains("stopped short of its tolerance: iteration limit reached, KKT 1.7e-3 after 200 iterations"), "{text}");
+        assert!(text.contains("its decrease is a lower bound"), "{text}");
+        p.refit_unconverged = None;
+        t.profile = Some(p);
+        assert!(!profile_paragraph(&t).unwrap().contains("stopped short"));
     }
 }

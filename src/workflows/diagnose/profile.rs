@@ -128,6 +128,7 @@ pub(super) fn profile_clock(
                         chosen: false,
                         refined: refine,
                         refit_error: Some(format!("the run's cost per sample: {e:#}")),
+                        refit_unconverged: None,
                         compared: None,
                         vertex: None,
                     },
@@ -242,6 +243,7 @@ pub(super) fn profile_clock(
         chosen: false,
         refined: false,
         refit_error: None,
+        refit_unconverged: None,
         compared: None,
         vertex: None,
     };
@@ -320,6 +322,14 @@ pub(super) fn profile_clock(
         .ok_or_else(|| anyhow::anyhow!("the profile's re-fit does not record {name}"))?;
     profile.refined = refine;
     profile.refit = Some((value, run.result.objective));
+    if !run.converged {
+        profile.refit_unconverged = Some(format!(
+            "{}, KKT {:.1e} after {} iterations",
+            run.result.status,
+            run.result.kkt,
+            run.result.history.len().saturating_sub(1)
+        ));
+    }
     // with sample targets the re-fit's decrease is read over the samples it, the run and
     // every point compare, as the points were
     let (before, after) = match &base_costs {

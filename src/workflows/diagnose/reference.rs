@@ -372,6 +372,7 @@ mod tests {
             chosen,
             refined: chosen,
             refit_error: None,
+            refit_unconverged: None,
             compared: None,
             vertex: Some(ProfileVertex {
                 offset: 1e-3 * v,
