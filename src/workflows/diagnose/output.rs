@@ -212,19 +212,12 @@ fn comparison_section(c: &super::reference::Comparison) -> (String, Table) {
             .differences
             .iter()
             .map(|d| {
+                let by = if d.by_profiles { " (profile vertex)" } else { "" };
                 vec![
                     d.label.clone(),
                     d.parameter.clone(),
-                    format!(
-                        "{:.4e}{}",
-                        d.reading,
-                        if d.by_profiles { " (profile vertex)" } else { "" }
-                    ),
-                    format!(
-                        "{:.4e}{}",
-                        d.reference,
-                        if d.by_profiles { " (profile vertex)" } else { "" }
-                    ),
+                    format!("{:.4e}{by}", d.reading),
+                    format!("{:.4e}{by}", d.reference),
                     format!("{:+.4e}", d.difference),
                     format!("{:.2e}", d.sd),
                     format!("{:+.1}", d.z),

@@ -248,17 +248,27 @@ pub(super) fn profile_clock(
         vertex: None,
     };
     let name = local.parameters.first().cloned().unwrap_or_default();
-    // a refined profile's reading, kept even when its re-fit does not become the
-    // candidate's test or no point lies below the run: the vertex of the parabola through
-    // the lowest point (the run's among them) and its sd, with the score test's inflation
-    if refine {
-        let known = known_points(&profile.points, run_cost, base_costs.is_some());
-        profile.vertex = Some(vertex_reading(
-            &known,
-            &name,
-            resid.mean_square(noise),
-            local.inflation,
-        ));
+    // a refined profile's parabola through the lowest point (the run's among them): its
+    // vertex and curvature, read once for the profile's own reading and its re-fit
+    let parabola = refine.then(|| {
+        vertex(
+            &known_points(&profile.points, run_cost, base_costs.is_some()),
+            ForcePlateTimeOffset::BOUNDS,
+        )
+    });
+    // the profile's reading, kept even when its re-fit does not become the candidate's
+    // test or no point lies below the run, its sd with the score test's inflation
+    if let Some((offset, curvature)) = parabola {
+        profile.vertex = Some(ProfileVertex {
+            offset,
+            sd: curvature_identifiability(
+                &name,
+                curvature,
+                resid.mean_square(noise),
+                local.inflation,
+            )
+            .sd[0],
+        });
     }
     // the lowest point, when it lies below the run
     let lowest = profile
@@ -279,9 +289,7 @@ pub(super) fn profile_clock(
         &args.run,
         &format!("+force_plate_time_offset_{side}_profile"),
     );
-    let (effect, curvature) = if refine {
-        let known = known_points(&profile.points, run_cost, base_costs.is_some());
-        let (at, curvature) = vertex(&known, ForcePlateTimeOffset::BOUNDS);
+    let (effect, curvature) = if let Some((at, curvature)) = parabola {
         note!(
             progress,
             "  the profile of {whose} clock is lowest at {:+.0} ms ({} {j_start:.6} against the run's {run_cost:.6}); its parabola's vertex at {:+.1} ms: a re-fit held there (with sample or one-sided targets a free offset cannot move its plate's events)",
@@ -371,8 +379,7 @@ pub(super) fn profile_clock(
     // an offset held or ending at its bound is a limit the data pushed against, not a
     // reading (the real right-clock trial at the identification cost: the rigid model's
     // own +25 ms and the edit's +25 ms put the vertex beyond +50 ms)
-    let (lo, hi) = ForcePlateTimeOffset::BOUNDS;
-    if value <= lo + 1e-9 || value >= hi - 1e-9 {
+    if at_bound(value) {
         t.at_bound = vec![name.clone()];
     }
     let diff = diff_with(base.summary, &run)?;
@@ -388,24 +395,7 @@ pub(super) fn profile_clock(
     let mean_square = resid.mean_square(noise);
     t.set_mean_square(mean_square);
     if refine {
-        // the reading's sd from the profile's curvature: J ≈ J* + a (δ − δ*)², so the
-        // reduced Hessian inverse is 1/(2a), and one sd is where the statistic rises by
-        // one, a (δ − δ*)² = φ s²
-        let span = vec![ForcePlateTimeOffset::BOUNDS.1 - ForcePlateTimeOffset::BOUNDS.0];
-        let id = match curvature {
-            Some(a) => identifiability(
-                vec![name],
-                vec![vec![0.5 / a]],
-                span,
-                mean_square,
-                t.inflation,
-            ),
-            None => Identifiability::unknown(
-                vec![name],
-                span,
-                "the profile has fewer than three points or bends downwards at its lowest: no curvature to read the offset from".into(),
-            ),
-        };
+        let id = curvature_identifiability(&name, curvature, mean_square, t.inflation);
         t.set_identifiability(id, local.hint.clone());
         // the re-fit's own reading: the held vertex with the sd of its test
         profile.vertex = Some(ProfileVertex {
@@ -419,24 +409,32 @@ pub(super) fn profile_clock(
     Ok((profile, Some((t, run, diff))))
 }
 
-/// A refined profile's reading from its `known` points (the run's among them): the
-/// vertex of its parabola and the sd a re-fit held there reads for parameter `name`
-/// (reduced Hessian inverse 1/(2a) from the curvature `a`, residual mean square `s2`,
-/// inflation `phi`).
-fn vertex_reading(known: &[(f64, f64)], name: &str, s2: f64, phi: f64) -> ProfileVertex {
-    let bounds = ForcePlateTimeOffset::BOUNDS;
-    let (offset, curvature) = vertex(known, bounds);
-    let sd = curvature.and_then(|a| {
-        identifiability(
+/// Whether a clock offset (s) held or read is at a bound of its range: a limit the data
+/// pushed against, not a reading.
+pub(super) fn at_bound(offset: f64) -> bool {
+    let (lo, hi) = ForcePlateTimeOffset::BOUNDS;
+    offset <= lo + 1e-9 || offset >= hi - 1e-9
+}
+
+/// The identifiability of the offset `name` read from a profile's `curvature` `a`: J ≈
+/// J* + a (δ − δ*)², so the reduced Hessian inverse is 1/(2a), and one sd is where the
+/// statistic rises by one, a (δ − δ*)² = φ s² (residual mean square `s2`, inflation
+/// `phi`); unknown without a curvature.
+fn curvature_identifiability(
+    name: &str,
+    curvature: Option<f64>,
+    s2: f64,
+    phi: f64,
+) -> Identifiability {
+    let span = vec![ForcePlateTimeOffset::BOUNDS.1 - ForcePlateTimeOffset::BOUNDS.0];
+    match curvature {
+        Some(a) => identifiability(vec![name.to_string()], vec![vec![0.5 / a]], span, s2, phi),
+        None => Identifiability::unknown(
             vec![name.to_string()],
-            vec![vec![0.5 / a]],
-            vec![bounds.1 - bounds.0],
-            s2,
-            phi,
-        )
-        .sd[0]
-    });
-    ProfileVertex { offset, sd }
+            span,
+            "the profile has fewer than three points or bends downwards at its lowest: no curvature to read the offset from".into(),
+        ),
+    }
 }
 
 /// The profile's points with a cost, (offset, cost), and the run's own at zero.

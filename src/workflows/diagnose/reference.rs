@@ -22,8 +22,8 @@
 //! at a bound of its range, in either run, is a limit the data pushed against and is not
 //! compared.
 
+use super::profile::at_bound;
 use super::summary::{self, DiagnosisSummary};
-use crate::model::effects::ForcePlateTimeOffset;
 use crate::problems::diagnose::{chi2_1_upper, HeldOut, ProfileVertex, ScoreTest};
 use crate::runfolder::read_json;
 use anyhow::{anyhow, bail};
@@ -198,13 +198,11 @@ pub(super) fn compare(tests: &[ScoreTest], reference: &Reference) -> Comparison 
             // a clock profiled in both runs: the two profiles' vertices
             if let (Some(a), Some(b)) = (profile_reading(t), profile_reading(theirs)) {
                 let name = t.parameters.first().cloned().unwrap_or_default();
-                let (lo, hi) = ForcePlateTimeOffset::BOUNDS;
-                let at_bound = |v: &ProfileVertex| v.offset <= lo + 1e-9 || v.offset >= hi - 1e-9;
                 match (a.sd, b.sd) {
-                    _ if at_bound(&a) || at_bound(&b) => not_compared.push(format!(
+                    _ if at_bound(a.offset) || at_bound(b.offset) => not_compared.push(format!(
                         "{}: its profile's vertex is at its bound {} (a limit the data pushed against, not a reading)",
                         t.label,
-                        if at_bound(&a) { "here" } else { "in the reference" }
+                        if at_bound(a.offset) { "here" } else { "in the reference" }
                     )),
                     (Some(sa), Some(sb)) if sa * sa + sb * sb > 0.0 => pairs.push((
                         t.label.clone(),
