@@ -366,6 +366,13 @@ pub struct ProfileVertex {
     /// Its standard deviation (s) from the parabola's curvature, as the profile's re-fit
     /// reads it (`None`: fewer than three points, or bent downwards at its lowest).
     pub sd: Option<f64>,
+    /// The parabola `c + b δ + a δ²` the vertex is read from, as `(a, b)`: its curvature
+    /// (cost per s²) and its slope at zero offset (cost per s), in the costs the profile
+    /// compares its points by. The three clock profiles' parabolas are the sections of
+    /// one quadratic in both plates' offsets (`diagnose::plate_clocks`). `None`: fewer
+    /// than three points (or a summary written before stop 73).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub parabola: Option<(f64, f64)>,
 }
 
 /// A candidate fitted on the run's half cycle, applied with its parameters fixed to

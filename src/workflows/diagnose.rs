@@ -19,6 +19,7 @@ use crate::problems::diagnose::{
 
 mod heldout;
 mod output;
+pub mod plate_clocks;
 pub mod profile;
 pub mod reference;
 mod refit;

@@ -190,6 +190,12 @@ fn comparison_section(c: &super::reference::Comparison) -> (String, Table) {
             by_profiles.join(", ")
         );
     }
+    if c.differences.iter().any(|d| d.jointly) {
+        text += &format!(
+            " The plates' clocks are compared through {}: both offsets at the minimum of the quadratic whose sections are each run's three clock profiles (right, left, shared), with their sds from its curvature. A one-plate clock holds the other plate's at zero, so it takes the plates' relative timing either way; the joint reading lets the kinematics settle which plate it is.",
+            super::plate_clocks::LABEL
+        );
+    }
     if !c.not_compared.is_empty() {
         text += &format!(" Not compared: {}.", c.not_compared.join("; "));
     }
@@ -212,7 +218,13 @@ fn comparison_section(c: &super::reference::Comparison) -> (String, Table) {
             .differences
             .iter()
             .map(|d| {
-                let by = if d.by_profiles { " (profile vertex)" } else { "" };
+                let by = if d.by_profiles {
+                    " (profile vertex)"
+                } else if d.jointly {
+                    " (joint)"
+                } else {
+                    ""
+                };
                 vec![
                     d.label.clone(),
                     d.parameter.clone(),
@@ -256,6 +268,37 @@ fn comparison_section(c: &super::reference::Comparison) -> (String, Table) {
             .collect(),
     };
     (text, table)
+}
+
+/// Both plates' clocks read jointly from the three clock profiles, in a sentence or two
+/// (`None`: the three were not all profiled).
+fn plate_clocks_paragraph(tests: &[ScoreTest]) -> Option<String> {
+    Some(match super::plate_clocks::read(tests)? {
+        Err(why) => format!(
+            "Each plate's clock, read jointly from the three clock profiles: no reading ({why})."
+        ),
+        Ok(j) => {
+            let [sr, sl] = j.sd();
+            let (rel, rel_sd) = j.relative();
+            format!(
+                "Each plate's clock, read jointly from the three clock profiles (the minimum of the quadratic whose sections they are): right {:+.1} ± {:.1} ms, left {:+.1} ± {:.1} ms (correlation {:+.2}); the left plate against the right {:+.1} ± {:.1} ms, which the forces decide, while the shared part is what the kinematics settle. The quadratic lies {:.3e} below the run there; the shared profile's slope at zero differs from the two plates' sum by {:.0} % of the largest{}. A one-plate clock's reading holds the other plate's at zero, so it takes the relative timing either way.",
+                1e3 * j.offsets[0],
+                1e3 * sr,
+                1e3 * j.offsets[1],
+                1e3 * sl,
+                j.correlation(),
+                1e3 * rel,
+                1e3 * rel_sd,
+                j.decrease,
+                100.0 * j.slope_mismatch.abs(),
+                if j.at_bound {
+                    "; an offset lies at its bound: a limit, not a reading"
+                } else {
+                    ""
+                }
+            )
+        }
+    })
 }
 
 /// What the profile of a plate's clock (`--profile-clocks`) found, in a sentence or two.
@@ -459,6 +502,7 @@ pub(super) fn write(
     }
     paragraphs.extend(refits.iter().map(|r| format!("{r}.")));
     paragraphs.extend(tests.iter().filter_map(profile_paragraph));
+    paragraphs.extend(plate_clocks_paragraph(tests));
     let mut md = format!(
         "# Diagnosis of {}\n\n{}\n\n{}\n\n{}\n",
         args.run.display(),
@@ -575,6 +619,7 @@ pub(super) fn write(
         held_out_note: o.held_out_note.clone(),
         testable_run: o.testable_run.clone(),
         reference: o.comparison.cloned(),
+        plate_clocks: super::plate_clocks::read(tests),
         verdict: verdict.clone(),
         verified: o
             .verified

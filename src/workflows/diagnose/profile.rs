@@ -250,16 +250,14 @@ pub(super) fn profile_clock(
     let name = local.parameters.first().cloned().unwrap_or_default();
     // a refined profile's parabola through the lowest point (the run's among them): its
     // vertex and curvature, read once for the profile's own reading and its re-fit
-    let parabola = refine.then(|| {
-        vertex(
-            &known_points(&profile.points, run_cost, base_costs.is_some()),
-            ForcePlateTimeOffset::BOUNDS,
-        )
-    });
+    let known = known_points(&profile.points, run_cost, base_costs.is_some());
+    let coefficients = parabola(&known).map(|p| (p.a, p.b));
+    let parabola = refine.then(|| vertex(&known, ForcePlateTimeOffset::BOUNDS));
     // the profile's reading, kept even when its re-fit does not become the candidate's
     // test or no point lies below the run, its sd with the score test's inflation
     if let Some((offset, curvature)) = parabola {
         profile.vertex = Some(ProfileVertex {
+            parabola: coefficients,
             offset,
             sd: curvature_identifiability(
                 &name,
@@ -399,6 +397,7 @@ pub(super) fn profile_clock(
         t.set_identifiability(id, local.hint.clone());
         // the re-fit's own reading: the held vertex with the sd of its test
         profile.vertex = Some(ProfileVertex {
+            parabola: coefficients,
             offset: value,
             sd: t
                 .identifiability
@@ -438,7 +437,11 @@ fn curvature_identifiability(
 }
 
 /// The profile's points with a cost, (offset, cost), and the run's own at zero.
-fn known_points(points: &[ProfilePoint], run_value: f64, by_samples: bool) -> Vec<(f64, f64)> {
+pub(super) fn known_points(
+    points: &[ProfilePoint],
+    run_value: f64,
+    by_samples: bool,
+) -> Vec<(f64, f64)> {
     let mut known: Vec<(f64, f64)> = points
         .iter()
         .filter_map(|q| Some((q.offset, point_value(q, by_samples)?)))
@@ -529,25 +532,55 @@ fn extension(points: &[(f64, f64)], bounds: (f64, f64)) -> Option<f64> {
 /// within `bounds`; with the parabola's curvature `a` of `J ≈ J* + a (δ − δ*)²` (`None`
 /// with fewer than three points). A parabola open downwards gives the lowest point.
 fn vertex(points: &[(f64, f64)], bounds: (f64, f64)) -> (f64, Option<f64>) {
+    let Some(p) = parabola(points) else {
+        let low = points.iter().min_by(|a, b| a.1.total_cmp(&b.1));
+        return (low.map_or(0.0, |l| l.0), None);
+    };
+    if !(p.a > 0.0 && p.a.is_finite()) {
+        return (p.lowest, None);
+    }
+    let lo = (p.span.0 - 0.5 * p.steps.0).max(bounds.0);
+    let hi = (p.span.1 + 0.5 * p.steps.1).min(bounds.1);
+    ((-p.b / (2.0 * p.a)).clamp(lo, hi), Some(p.a))
+}
+
+/// The parabola `a δ² + b δ + c` through the lowest of a profile's `points` (offset,
+/// cost) and its two neighbours in offset (its two nearest on one side at an end).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct Parabola {
+    pub a: f64,
+    pub b: f64,
+    pub c: f64,
+    /// The lowest point's offset.
+    pub lowest: f64,
+    /// The three points' first and last offsets.
+    pub span: (f64, f64),
+    /// The spacings of the first two and the last two of them.
+    pub steps: (f64, f64),
+}
+
+/// The [`Parabola`] through the lowest of `points` and its neighbours (`None` with
+/// fewer than three points).
+pub(super) fn parabola(points: &[(f64, f64)]) -> Option<Parabola> {
     let mut p = points.to_vec();
     p.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let Some(low) = (0..p.len()).min_by(|&i, &j| p[i].1.total_cmp(&p[j].1)) else {
-        return (0.0, None);
-    };
+    let low = (0..p.len()).min_by(|&i, &j| p[i].1.total_cmp(&p[j].1))?;
     if p.len() < 3 {
-        return (p[low].0, None);
+        return None;
     }
     let i = low.clamp(1, p.len() - 2);
     let [(x0, y0), (x1, y1), (x2, y2)] = [p[i - 1], p[i], p[i + 1]];
     let (s01, s12) = ((y1 - y0) / (x1 - x0), (y2 - y1) / (x2 - x1));
     let a = (s12 - s01) / (x2 - x0);
-    if !(a > 0.0 && a.is_finite()) {
-        return (p[low].0, None);
-    }
     let b = s01 - a * (x0 + x1);
-    let lo = (x0 - 0.5 * (x1 - x0)).max(bounds.0);
-    let hi = (x2 + 0.5 * (x2 - x1)).min(bounds.1);
-    ((-b / (2.0 * a)).clamp(lo, hi), Some(a))
+    Some(Parabola {
+        a,
+        b,
+        c: y0 - a * x0 * x0 - b * x0,
+        lowest: p[low].0,
+        span: (x0, x2),
+        steps: (x1 - x0, x2 - x1),
+    })
 }
 
 #[cfg(test)]

@@ -20,8 +20,13 @@
 //! −29.4 ms while the untouched trial's profile lay nowhere below its run, so that its
 //! test stayed the score test's and the two could not be compared (stop 71). A reading
 //! at a bound of its range, in either run, is a limit the data pushed against and is not
-//! compared.
+//! compared. When both runs profiled all three clocks (right, left, shared), the plates'
+//! clocks are compared through their joint reading ([`plate_clocks`]) instead of one by
+//! one: a one-plate clock holds the other plate's at zero and so takes the plates'
+//! relative timing either way (stop 72: a left plate 20 ms early read −20.6 ms on the left
+//! clock and +24.9 ms on the right clock, which was not edited).
 
+use super::plate_clocks::{self, PlateClocks};
 use super::profile::at_bound;
 use super::summary::{self, DiagnosisSummary};
 use crate::problems::diagnose::{chi2_1_upper, HeldOut, ProfileVertex, ScoreTest};
@@ -54,6 +59,11 @@ pub struct Difference {
     /// was the test in one run only), not the two tests' readings.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub by_profiles: bool,
+    /// Whether the two readings are both plates' clocks read jointly from each run's three
+    /// clock profiles ([`plate_clocks`](super::plate_clocks)), which then replace the three
+    /// clock candidates' own readings.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub jointly: bool,
     /// A significant difference applied, as the candidate's value, to this trial's
     /// held-out half cycle (`None`: not significant, or not validated).
     #[serde(default, skip_serializing_if = "Option::is_none")]
@@ -164,6 +174,17 @@ pub(super) fn read_reference(reference: &Path) -> anyhow::Result<Reference> {
     })
 }
 
+/// One parameter's two readings, before they are judged.
+struct Pair {
+    label: String,
+    parameter: String,
+    reading: f64,
+    reference: f64,
+    sd: f64,
+    by_profiles: bool,
+    jointly: bool,
+}
+
 /// Compare `tests` (this run's settled tests) with the diagnosis of `reference`.
 pub(super) fn compare(tests: &[ScoreTest], reference: &Reference) -> Comparison {
     let Reference {
@@ -172,7 +193,55 @@ pub(super) fn compare(tests: &[ScoreTest], reference: &Reference) -> Comparison 
     let theirs: Vec<&ScoreTest> = summary.ranking.iter().filter(|t| t.testable).collect();
     let mut pairs = Vec::new();
     let mut not_compared = Vec::new();
+    // both plates' clocks read jointly in both runs replace the three clock candidates:
+    // each of those holds the other plate's clock at zero, so takes the plates' relative
+    // timing either way (`plate_clocks`)
+    let joint = match (
+        plate_clocks::read(tests),
+        plate_clocks::read(theirs.iter().copied()),
+    ) {
+        (Some(Ok(a)), Some(Ok(b))) if !a.at_bound && !b.at_bound => Some((a, b)),
+        (Some(a), Some(b)) => {
+            let why = |r: &Result<PlateClocks, String>| match r {
+                Ok(j) if j.at_bound => Some("a plate's offset is at its bound".to_string()),
+                Ok(_) => None,
+                Err(e) => Some(e.clone()),
+            };
+            not_compared.push(format!(
+                "{}: {} (the three clock candidates are compared one by one)",
+                plate_clocks::LABEL,
+                [(why(&a), "here"), (why(&b), "in the reference")]
+                    .into_iter()
+                    .filter_map(|(w, r)| Some(format!("{} {r}", w?)))
+                    .collect::<Vec<_>>()
+                    .join("; ")
+            ));
+            None
+        }
+        _ => None,
+    };
+    if let Some((a, b)) = &joint {
+        for (i, name) in plate_clocks::PARAMETERS.iter().enumerate() {
+            pairs.push(Pair {
+                label: plate_clocks::LABEL.to_string(),
+                parameter: name.to_string(),
+                reading: a.offsets[i],
+                reference: b.offsets[i],
+                sd: (a.covariance[i][i] + b.covariance[i][i]).sqrt(),
+                by_profiles: false,
+                jointly: true,
+            });
+        }
+    }
     for t in tests {
+        if joint.is_some() && plate_clocks::is_clock(t) {
+            not_compared.push(format!(
+                "{}: compared through {} (it holds the other plate's clock at zero)",
+                t.label,
+                plate_clocks::LABEL
+            ));
+            continue;
+        }
         let Some(our_sds) = t
             .identifiability
             .as_ref()
@@ -204,14 +273,15 @@ pub(super) fn compare(tests: &[ScoreTest], reference: &Reference) -> Comparison 
                         t.label,
                         if at_bound(a.offset) { "here" } else { "in the reference" }
                     )),
-                    (Some(sa), Some(sb)) if sa * sa + sb * sb > 0.0 => pairs.push((
-                        t.label.clone(),
-                        name,
-                        a.offset,
-                        b.offset,
-                        (sa * sa + sb * sb).sqrt(),
-                        true,
-                    )),
+                    (Some(sa), Some(sb)) if sa * sa + sb * sb > 0.0 => pairs.push(Pair {
+                        label: t.label.clone(),
+                        parameter: name,
+                        reading: a.offset,
+                        reference: b.offset,
+                        sd: (sa * sa + sb * sb).sqrt(),
+                        by_profiles: true,
+                        jointly: false,
+                    }),
                     _ => not_compared.push(format!(
                         "{}: read by {mine} here and by {how} in the reference, and the profiles' vertices have no finite standard deviation in both runs",
                         t.label
@@ -242,14 +312,15 @@ pub(super) fn compare(tests: &[ScoreTest], reference: &Reference) -> Comparison 
                 sds(theirs).get(j).copied().flatten(),
             ) {
                 (Some(&a), Some(sa), Some(&b), Some(sb)) if (sa * sa + sb * sb) > 0.0 => pairs
-                    .push((
-                        t.label.clone(),
-                        name.clone(),
-                        a,
-                        b,
-                        (sa * sa + sb * sb).sqrt(),
-                        false,
-                    )),
+                    .push(Pair {
+                        label: t.label.clone(),
+                        parameter: name.clone(),
+                        reading: a,
+                        reference: b,
+                        sd: (sa * sa + sb * sb).sqrt(),
+                        by_profiles: false,
+                        jointly: false,
+                    }),
                 _ => not_compared.push(format!(
                     "{}: {name} has no finite standard deviation in both runs",
                     t.label
@@ -260,19 +331,20 @@ pub(super) fn compare(tests: &[ScoreTest], reference: &Reference) -> Comparison 
     let threshold = chi2_1_upper(1e-3 / pairs.len().max(1) as f64);
     let mut differences: Vec<Difference> = pairs
         .into_iter()
-        .map(|(label, parameter, reading, reference, sd, by_profiles)| {
-            let difference = reading - reference;
-            let z = difference / sd;
+        .map(|p| {
+            let difference = p.reading - p.reference;
+            let z = difference / p.sd;
             Difference {
-                label,
-                parameter,
-                reading,
-                reference,
+                label: p.label,
+                parameter: p.parameter,
+                reading: p.reading,
+                reference: p.reference,
                 difference,
-                sd,
+                sd: p.sd,
                 z,
                 significant: z * z > threshold,
-                by_profiles,
+                by_profiles: p.by_profiles,
+                jointly: p.jointly,
                 held_out: None,
             }
         })
@@ -375,6 +447,7 @@ mod tests {
             vertex: Some(ProfileVertex {
                 offset: 1e-3 * v,
                 sd: Some(0.0058),
+                parabola: None,
             }),
         });
         t
@@ -430,6 +503,128 @@ mod tests {
         let c = compare(&ours, &read_reference(dir.path()).unwrap());
         let d = &c.differences[0];
         assert!(!d.by_profiles && (d.difference + 0.005).abs() < 1e-12);
+    }
+
+    /// The clock candidate of plate `side` profiled on the quadratic cost `f(r, l)` (its
+    /// section along the plate's direction at the profile's offsets), its sd with noise
+    /// scale 1.3e-4.
+    fn profiled_clock(side: &str, f: &dyn Fn(f64, f64) -> f64) -> ScoreTest {
+        let dir = match side {
+            "right" => (1.0, 0.0),
+            "left" => (0.0, 1.0),
+            _ => (1.0, 1.0),
+        };
+        let pts: Vec<(f64, f64)> = [-0.04, -0.02, 0.0, 0.02, 0.04]
+            .iter()
+            .map(|&t| (t, f(t * dir.0, t * dir.1)))
+            .collect();
+        let p = super::super::profile::parabola(&pts).unwrap();
+        let offset = -p.b / (2.0 * p.a);
+        let sd = (1.3e-4 / p.a).sqrt();
+        let mut t = left_clock(offset, false, None);
+        t.effect = EffectSpec::ForcePlateTimeOffset {
+            side: side.into(),
+            offset: 0.0,
+            free: vec!["offset".into()],
+        };
+        t.label = t.effect.label();
+        t.set_identifiability(
+            identifiability(
+                t.parameters.clone(),
+                vec![vec![sd * sd]],
+                vec![0.2],
+                0.5,
+                1.0,
+            ),
+            None,
+        );
+        t.profile = Some(crate::problems::diagnose::ClockProfile {
+            points: Vec::new(),
+            start: None,
+            refit: None,
+            family: 5,
+            chosen: false,
+            refined: true,
+            refit_error: None,
+            refit_unconverged: None,
+            compared: None,
+            vertex: Some(ProfileVertex {
+                offset,
+                sd: Some(sd),
+                parabola: Some((p.a, p.b)),
+            }),
+        });
+        t
+    }
+
+    /// With the three clocks profiled in both runs, the plates' clocks are compared
+    /// through their joint reading, which puts a left plate 20 ms early on the left plate
+    /// alone, where the one-plate readings (here compared one by one when the reference
+    /// has no shared clock) blame the right plate too. The cost: steeper across the
+    /// plates' relative timing than along their shared one, the model's own bias a shared
+    /// +24 ms (the compliant foot's at 600 Hz, stop 72).
+    #[test]
+    fn the_plates_clocks_are_compared_jointly_when_all_three_are_profiled() {
+        let bowl = |r0: f64, l0: f64| {
+            move |r: f64, l: f64| {
+                let (dr, dl) = (r - r0, l - l0);
+                0.3 + 0.5 * (2400.0 * dr * dr - 2.0 * 1600.0 * dr * dl + 2000.0 * dl * dl)
+            }
+        };
+        let (theirs, ours) = (bowl(0.024, 0.024), bowl(0.024, 0.004));
+        let runs = |f: &dyn Fn(f64, f64) -> f64| {
+            ["right", "left", "both"]
+                .map(|s| profiled_clock(s, f))
+                .to_vec()
+        };
+        let dir = tempfile::tempdir().unwrap();
+        let write = |ranking: Vec<ScoreTest>| {
+            std::fs::write(
+                dir.path().join("summary.json"),
+                serde_json::to_string(&DiagnosisSummary::of_ranking(ranking)).unwrap(),
+            )
+            .unwrap();
+        };
+        write(runs(&theirs));
+        let c = compare(&runs(&ours), &read_reference(dir.path()).unwrap());
+        assert_eq!(c.differences.len(), 2, "{:?}", c.not_compared);
+        assert!(c
+            .differences
+            .iter()
+            .all(|d| d.jointly && d.label == plate_clocks::LABEL));
+        let d = &c.differences[0];
+        assert_eq!(
+            d.parameter,
+            plate_clocks::PARAMETERS[1],
+            "the left plate first"
+        );
+        assert!((d.difference + 0.020).abs() < 1e-12, "{d:?}");
+        assert!(
+            c.differences[1].difference.abs() < 1e-12,
+            "{:?}",
+            c.differences[1]
+        );
+        assert_eq!(
+            c.not_compared
+                .iter()
+                .filter(|n| n.contains("compared through"))
+                .count(),
+            3,
+            "{:?}",
+            c.not_compared
+        );
+
+        // without the shared clock in the reference, one by one: the right plate's own
+        // reading moves too (the left edit taken as relative timing)
+        write(runs(&theirs)[..2].to_vec());
+        let c = compare(&runs(&ours), &read_reference(dir.path()).unwrap());
+        assert!(c.differences.iter().all(|d| !d.jointly));
+        let right = c
+            .differences
+            .iter()
+            .find(|d| d.label.contains("right"))
+            .unwrap();
+        assert!(right.difference.abs() > 0.005, "{right:?}");
     }
 
     /// The reference's run folder, for its held-out half cycle: `--reference` itself when

@@ -4,6 +4,7 @@
 //! kind ([`crate::runfolder::read_json`]); the fields a reader needs (`command`,
 //! `ranking`) are required, the rest default when absent.
 
+use super::plate_clocks::PlateClocks;
 use super::reference::Comparison;
 use crate::problems::diagnose::ScoreTest;
 use crate::runfolder::{read_json, RunFileError};
@@ -125,6 +126,10 @@ pub struct DiagnosisSummary {
     /// The readings against a reference trial's (`--reference`).
     #[serde(default)]
     pub reference: Option<Comparison>,
+    /// Both plates' clocks read jointly from the three clock profiles, when all three were
+    /// profiled (`Err`: why there is no reading).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub plate_clocks: Option<Result<PlateClocks, String>>,
     /// The verdict in a sentence.
     #[serde(default)]
     pub verdict: String,
