@@ -43,6 +43,10 @@ pub struct PlateClocks {
     /// How much lower the quadratic is at its minimum than at zero offsets (in the costs
     /// the profiles compare their points by).
     pub decrease: f64,
+    /// The noise scale `k = φ s²` (the same costs): the largest of the three profiles'
+    /// `sd² a`. `decrease / k` is the reading's statistic, as a profile's is its
+    /// decrease over `φ s²`, against the χ²₂ point.
+    pub noise_scale: f64,
     /// The shared clock's profile slope at zero less the sum of the two plates' (as a
     /// fraction of the largest of the three): how far the three sections are from one
     /// quadratic (0: exactly one).
@@ -125,6 +129,7 @@ impl PlateClocks {
             offsets: x,
             covariance,
             decrease: 0.5 * (g[0] * -x[0] + g[1] * -x[1]),
+            noise_scale: k,
             slope_mismatch: if scale > 0.0 {
                 (bb - br - bl) / scale
             } else {
@@ -217,6 +222,7 @@ mod tests {
         assert!(j.slope_mismatch.abs() < 1e-9);
         let d0 = f(0.0, 0.0) - f(r0, l0);
         assert!((j.decrease - d0).abs() < 1e-9 * d0);
+        assert_eq!(j.noise_scale, k);
         let (rel, rel_sd) = j.relative();
         assert!((rel - (l0 - r0)).abs() < 1e-12);
         assert!(rel_sd < j.sd()[0].min(j.sd()[1]));
