@@ -46,6 +46,7 @@ pub struct PlateClocks {
     /// The noise scale `k = φ s²` (the same costs): the largest of the three profiles'
     /// `sd² a`. `decrease / k` is the reading's statistic, as a profile's is its
     /// decrease over `φ s²`, against the χ²₂ point.
+    #[serde(default)]
     pub noise_scale: f64,
     /// The shared clock's profile slope at zero less the sum of the two plates' (as a
     /// fraction of the largest of the three): how far the three sections are from one
