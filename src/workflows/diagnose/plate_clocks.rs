@@ -33,6 +33,10 @@ pub const PARAMETERS: [&str; 2] = [
     "force_plate_time_offset.left.offset",
 ];
 
+/// The name of the plates' relative timing, the left plate's offset less the right's:
+/// the part of the joint reading the forces decide ([`PlateClocks::relative`]).
+pub const RELATIVE: &str = "force_plate_time_offset.left_minus_right";
+
 /// Both plates' clock offsets read jointly from the three clock profiles.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct PlateClocks {

@@ -220,14 +220,37 @@ pub(super) fn compare(tests: &[ScoreTest], reference: &Reference) -> Comparison 
         }
         _ => None,
     };
+    // each plate's offset and their relative timing: three compared parameters in place
+    // of the three clock candidates' three
     if let Some((a, b)) = &joint {
-        for (i, name) in plate_clocks::PARAMETERS.iter().enumerate() {
+        let (ra, rb) = (a.relative(), b.relative());
+        let readings = [
+            (
+                plate_clocks::PARAMETERS[0],
+                a.offsets[0],
+                b.offsets[0],
+                a.covariance[0][0] + b.covariance[0][0],
+            ),
+            (
+                plate_clocks::PARAMETERS[1],
+                a.offsets[1],
+                b.offsets[1],
+                a.covariance[1][1] + b.covariance[1][1],
+            ),
+            (
+                plate_clocks::RELATIVE,
+                ra.0,
+                rb.0,
+                ra.1 * ra.1 + rb.1 * rb.1,
+            ),
+        ];
+        for (name, reading, reference, variance) in readings {
             pairs.push(Pair {
                 label: plate_clocks::LABEL.to_string(),
                 parameter: name.to_string(),
-                reading: a.offsets[i],
-                reference: b.offsets[i],
-                sd: (a.covariance[i][i] + b.covariance[i][i]).sqrt(),
+                reading,
+                reference,
+                sd: variance.sqrt(),
                 by_profiles: false,
                 jointly: true,
             });
@@ -587,23 +610,21 @@ mod tests {
         };
         write(runs(&theirs));
         let c = compare(&runs(&ours), &read_reference(dir.path()).unwrap());
-        assert_eq!(c.differences.len(), 2, "{:?}", c.not_compared);
+        assert_eq!(c.differences.len(), 3, "{:?}", c.not_compared);
         assert!(c
             .differences
             .iter()
             .all(|d| d.jointly && d.label == plate_clocks::LABEL));
-        let d = &c.differences[0];
-        assert_eq!(
-            d.parameter,
-            plate_clocks::PARAMETERS[1],
-            "the left plate first"
-        );
-        assert!((d.difference + 0.020).abs() < 1e-12, "{d:?}");
-        assert!(
-            c.differences[1].difference.abs() < 1e-12,
-            "{:?}",
-            c.differences[1]
-        );
+        let by = |name: &str| c.differences.iter().find(|d| d.parameter == name).unwrap();
+        let left = by(plate_clocks::PARAMETERS[1]);
+        assert!((left.difference + 0.020).abs() < 1e-12, "{left:?}");
+        assert!(by(plate_clocks::PARAMETERS[0]).difference.abs() < 1e-12);
+        // the relative timing moves by the edit too, and is better determined than either
+        // plate's offset (the forces decide it)
+        let relative = by(plate_clocks::RELATIVE);
+        assert!((relative.difference + 0.020).abs() < 1e-12, "{relative:?}");
+        assert!(relative.sd < left.sd, "{relative:?} {left:?}");
+        assert_eq!(c.differences[0].parameter, plate_clocks::RELATIVE);
         assert_eq!(
             c.not_compared
                 .iter()
