@@ -159,6 +159,40 @@ fn verdict(o: &Outcome<'_>) -> String {
     v
 }
 
+/// Which plate's clock differs from the reference's, by the joint reading of both
+/// plates' clocks (`None`: not read jointly in both runs).
+fn joint_clock_sentence(c: &super::reference::Comparison) -> Option<String> {
+    use super::plate_clocks::{PARAMETERS, RELATIVE};
+    let by = |name: &str| {
+        c.differences
+            .iter()
+            .find(|d| d.jointly && d.parameter == name)
+    };
+    let (r, l, rel) = (by(PARAMETERS[0])?, by(PARAMETERS[1])?, by(RELATIVE)?);
+    let read = |d: &super::reference::Difference| {
+        format!(
+            "{:+.1} ± {:.1} ms ({:+.1} sd)",
+            1e3 * d.difference,
+            1e3 * d.sd,
+            d.z
+        )
+    };
+    let which = match (r.significant, l.significant, rel.significant) {
+        (true, false, _) => "it is the right plate's clock",
+        (false, true, _) => "it is the left plate's clock",
+        (true, true, _) => "both plates' clocks differ",
+        (false, false, true) => "the plates' relative timing differs, but which plate moved is not settled: neither plate's own offset differs beyond noise",
+        (false, false, false) => "neither the plates' relative timing nor either plate's offset differs beyond noise",
+    };
+    Some(format!(
+        " Both plates' clocks read jointly ({}: each run's three clock profiles as sections of one quadratic in both offsets, its minimum and curvature): the left plate against the right {}, the right plate {}, the left plate {}; {which}. A one-plate clock's difference holds the other plate's clock at zero, so it takes the plates' relative timing as its own plate's either way.",
+        super::plate_clocks::LABEL,
+        read(rel),
+        read(r),
+        read(l),
+    ))
+}
+
 /// The readings against a reference trial's: a paragraph and the table.
 fn comparison_section(c: &super::reference::Comparison) -> (String, Table) {
     let significant: Vec<String> = c
@@ -190,12 +224,7 @@ fn comparison_section(c: &super::reference::Comparison) -> (String, Table) {
             by_profiles.join(", ")
         );
     }
-    if c.differences.iter().any(|d| d.jointly) {
-        text += &format!(
-            " The plates' clocks are compared through {}: both offsets at the minimum of the quadratic whose sections are each run's three clock profiles (right, left, shared), with their sds from its curvature. A one-plate clock holds the other plate's at zero, so it takes the plates' relative timing either way; the joint reading lets the kinematics settle which plate it is.",
-            super::plate_clocks::LABEL
-        );
-    }
+    text += &joint_clock_sentence(c).unwrap_or_default();
     if !c.not_compared.is_empty() {
         text += &format!(" Not compared: {}.", c.not_compared.join("; "));
     }

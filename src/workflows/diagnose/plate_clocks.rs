@@ -166,11 +166,6 @@ pub fn read<'a>(
     Some(PlateClocks::from_profiles(r?, l?, b?))
 }
 
-/// Whether `t` is one of the three clock candidates a joint reading replaces.
-pub fn is_clock(t: &ScoreTest) -> bool {
-    matches!(t.effect, EffectSpec::ForcePlateTimeOffset { .. })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
