@@ -182,7 +182,7 @@ fn joint_clock_sentence(c: &super::reference::Comparison) -> Option<String> {
         (false, true, _) => "it is the left plate's clock",
         (true, true, _) => "both plates' clocks differ",
         (false, false, true) => "the plates' relative timing differs, but which plate moved is not settled: neither plate's own offset differs beyond noise",
-        (false, false, false) => "neither the plates' relative timing nor either plate's offset differs beyond noise",
+        (false, false, false) => "with both plates' clocks free, neither plate's offset nor their relative timing differs beyond noise, so which plate moved is not settled",
     };
     Some(format!(
         " Both plates' clocks read jointly ({}: each run's three clock profiles as sections of one quadratic in both offsets, its minimum and curvature): the left plate against the right {}, the right plate {}, the left plate {}; {which}. A one-plate clock's difference holds the other plate's clock at zero, so it takes the plates' relative timing as its own plate's either way.",
@@ -191,6 +191,35 @@ fn joint_clock_sentence(c: &super::reference::Comparison) -> Option<String> {
         read(r),
         read(l),
     ))
+}
+
+/// What the joint reading of both plates' clocks says of a one-plate clock's significant
+/// difference `d` (empty for any other row, or without a joint reading): that the joint
+/// reading does not settle which plate it is, or puts it on the other plate.
+fn one_plate_caveat(c: &super::reference::Comparison, d: &super::reference::Difference) -> String {
+    use super::plate_clocks::PARAMETERS;
+    let Some(own) = PARAMETERS.iter().position(|p| *p == d.parameter) else {
+        return String::new();
+    };
+    if d.jointly || !d.significant {
+        return String::new();
+    }
+    let joint = |i: usize| {
+        c.differences
+            .iter()
+            .find(|j| j.jointly && j.parameter == PARAMETERS[i])
+    };
+    let (Some(mine), Some(other)) = (joint(own), joint(1 - own)) else {
+        return String::new();
+    };
+    let other_plate = ["right", "left"][1 - own];
+    match (mine.significant, other.significant) {
+        (true, _) => String::new(),
+        (false, true) => format!("; the joint reading puts it on the {other_plate} plate"),
+        (false, false) => {
+            "; as the plates' relative timing: the joint reading does not settle which plate".into()
+        }
+    }
 }
 
 /// The readings against a reference trial's: a paragraph and the table.
@@ -285,13 +314,13 @@ fn comparison_section(c: &super::reference::Comparison) -> (String, Table) {
                         ),
                     }),
                     match (&d.held_out, d.significant) {
-                        (_, false) => "same within noise".into(),
-                        (Some(h), true) if h.beyond_noise => "differs, confirmed held-out".into(),
-                        (Some(_), true) => {
-                            "differs, not confirmed on the held-out half cycle".into()
-                        }
-                        (None, true) => "differs, not validated".into(),
-                    },
+                        (_, false) => "same within noise",
+                        (Some(h), true) if h.beyond_noise => "differs, confirmed held-out",
+                        (Some(_), true) => "differs, not confirmed on the held-out half cycle",
+                        (None, true) => "differs, not validated",
+                    }
+                    .to_string()
+                        + &one_plate_caveat(c, d),
                 ]
             })
             .collect(),
@@ -826,5 +855,85 @@ mod tests {
         p.refit_unconverged = None;
         t.profile = Some(p);
         assert!(!profile_paragraph(&t).unwrap().contains("stopped short"));
+    }
+
+    /// A compared parameter's difference, significant when `|z|` exceeds 4.
+    fn difference(
+        label: &str,
+        parameter: &str,
+        difference: f64,
+        sd: f64,
+        jointly: bool,
+    ) -> super::super::reference::Difference {
+        super::super::reference::Difference {
+            label: label.into(),
+            parameter: parameter.into(),
+            reading: difference,
+            reference: 0.0,
+            difference,
+            sd,
+            z: difference / sd,
+            significant: (difference / sd).abs() > 4.0,
+            by_profiles: false,
+            jointly,
+            held_out: None,
+        }
+    }
+
+    /// A one-plate clock that differs significantly is qualified by the joint reading of
+    /// both plates' clocks: as the plates' relative timing when the joint reading does not
+    /// settle which plate (the compliant left-clock trial at stop 73, its one-plate right
+    /// clock spurious), or put on the other plate when it does; the paragraph says which.
+    #[test]
+    fn a_one_plate_clock_is_qualified_by_the_joint_reading() {
+        use super::super::plate_clocks::{LABEL, PARAMETERS, RELATIVE};
+        let comparison = |left_sd: f64| super::super::reference::Comparison {
+            reference: "UV-diagnose".into(),
+            threshold: 16.0,
+            differences: vec![
+                difference(
+                    "force-plate time offset (right)",
+                    PARAMETERS[0],
+                    0.0249,
+                    0.0054,
+                    false,
+                ),
+                difference(
+                    "force-plate time offset (left)",
+                    PARAMETERS[1],
+                    -0.0206,
+                    0.0045,
+                    false,
+                ),
+                difference(LABEL, RELATIVE, -0.0199, 0.0053, true),
+                difference(LABEL, PARAMETERS[1], -0.0213, left_sd, true),
+                difference(LABEL, PARAMETERS[0], -0.0014, 0.0123, true),
+            ],
+            not_compared: Vec::new(),
+        };
+        let verdict = |c: &super::super::reference::Comparison, row: usize| {
+            comparison_section(c).1.rows[row].last().unwrap().clone()
+        };
+        let unsettled = comparison(0.0120);
+        assert!(
+            verdict(&unsettled, 0).contains("does not settle which plate"),
+            "{}",
+            verdict(&unsettled, 0)
+        );
+        assert!(verdict(&unsettled, 1).contains("does not settle which plate"));
+        assert_eq!(verdict(&unsettled, 2), "same within noise");
+        let text = comparison_section(&unsettled).0;
+        assert!(text.contains("which plate moved is not settled"), "{text}");
+        // a joint left reading beyond noise puts the right clock's difference on the left
+        let settled = comparison(0.0040);
+        assert!(
+            verdict(&settled, 0).ends_with("the joint reading puts it on the left plate"),
+            "{}",
+            verdict(&settled, 0)
+        );
+        assert_eq!(verdict(&settled, 1), "differs, not validated");
+        assert!(comparison_section(&settled)
+            .0
+            .contains("it is the left plate's clock"));
     }
 }
