@@ -85,13 +85,13 @@ fn tracked(foot: Foot, dir: &Path, trial: &str) -> PathBuf {
     out
 }
 
-/// `run` diagnosed with the left clock alone and its profile, against `reference` when
-/// given; the left clock's ranking entry and the whole summary.
-fn left_clock(run: &Path, reference: Option<PathBuf>) -> (Value, Value) {
+/// `run` diagnosed with `candidates` (none: the catalog) and the clock profiles, no
+/// re-fit and no held-out half cycle, against `reference` when given; its summary.
+fn diagnosed(run: &Path, candidates: &[&str], reference: Option<PathBuf>) -> Value {
     let req = DiagnoseRequest {
         verify: 0,
         held_out: false,
-        candidates: vec!["force_plate_time_offset:side=left".into()],
+        candidates: candidates.iter().map(|c| c.to_string()).collect(),
         profile_clocks: footfall::workflows::diagnose::profile::CLOCK_PROFILE.to_vec(),
         reference,
         ..DiagnoseRequest::new(run.to_path_buf())
@@ -105,7 +105,13 @@ fn left_clock(run: &Path, reference: Option<PathBuf>) -> (Value, Value) {
         t.elapsed().as_secs_f64(),
         std::fs::read_to_string(folder.join("diagnose.md")).unwrap()
     );
-    let s = json(&folder.join("summary.json"));
+    json(&folder.join("summary.json"))
+}
+
+/// `run` diagnosed with the left clock alone, against `reference` when given; the left
+/// clock's ranking entry and the whole summary.
+fn left_clock(run: &Path, reference: Option<PathBuf>) -> (Value, Value) {
+    let s = diagnosed(run, &["force_plate_time_offset:side=left"], reference);
     (s["ranking"][0].clone(), s)
 }
 
@@ -176,28 +182,6 @@ fn the_left_clock_20_ms_early_is_read_against_the_untouched_trial_by_the_complia
     left_clock_against_the_untouched_trial(Foot::Compliant, 0.012, true);
 }
 
-/// `run` diagnosed with every candidate (the catalog) and the clock profiles, against
-/// `reference` when given; its summary.
-fn every_candidate(run: &Path, reference: Option<PathBuf>) -> Value {
-    let req = DiagnoseRequest {
-        verify: 0,
-        held_out: false,
-        profile_clocks: footfall::workflows::diagnose::profile::CLOCK_PROFILE.to_vec(),
-        reference,
-        ..DiagnoseRequest::new(run.to_path_buf())
-    };
-    let t = std::time::Instant::now();
-    footfall::workflows::diagnose::run(&req, &Quiet).unwrap();
-    let folder = PathBuf::from(format!("{}-diagnose", run.display()));
-    eprintln!(
-        "diagnose {}: {:.0} s\n{}",
-        run.display(),
-        t.elapsed().as_secs_f64(),
-        std::fs::read_to_string(folder.join("diagnose.md")).unwrap()
-    );
-    json(&folder.join("summary.json"))
-}
-
 /// The compliant foot, every candidate: both plates' clocks read jointly from the three
 /// clock profiles (`diagnose::plate_clocks`) against the untouched trial. The truth is
 /// the left plate −20 ms and the right plate unchanged, so the plates' relative timing
@@ -209,7 +193,7 @@ fn every_candidate(run: &Path, reference: Option<PathBuf>) -> Value {
 fn both_plates_clocks_are_read_jointly_against_the_untouched_trial_by_the_compliant_profiles() {
     let dir = tempfile::tempdir().unwrap();
     let untouched = tracked(Foot::Compliant, dir.path(), "untouched");
-    let theirs = every_candidate(&untouched, None);
+    let theirs = diagnosed(&untouched, &[], None);
     assert!(
         theirs["plate_clocks"]["Ok"].is_object(),
         "{}",
@@ -217,7 +201,7 @@ fn both_plates_clocks_are_read_jointly_against_the_untouched_trial_by_the_compli
     );
     let edited = tracked(Foot::Compliant, dir.path(), "real_clock_l-20ms");
     let reference = PathBuf::from(format!("{}-diagnose", untouched.display()));
-    let s = every_candidate(&edited, Some(reference));
+    let s = diagnosed(&edited, &[], Some(reference));
     let c = &s["reference"];
     eprintln!("{}", serde_json::to_string_pretty(c).unwrap());
     let joint = |name: &str| {
