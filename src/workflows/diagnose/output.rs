@@ -163,12 +163,11 @@ fn verdict(o: &Outcome<'_>) -> String {
 /// plates' clocks (`None`: not read jointly in both runs).
 fn joint_clock_sentence(c: &super::reference::Comparison) -> Option<String> {
     use super::plate_clocks::{PARAMETERS, RELATIVE};
-    let by = |name: &str| {
-        c.differences
-            .iter()
-            .find(|d| d.jointly && d.parameter == name)
-    };
-    let (r, l, rel) = (by(PARAMETERS[0])?, by(PARAMETERS[1])?, by(RELATIVE)?);
+    let (r, l, rel) = (
+        c.joint(PARAMETERS[0])?,
+        c.joint(PARAMETERS[1])?,
+        c.joint(RELATIVE)?,
+    );
     let read = |d: &super::reference::Difference| {
         format!(
             "{:+.1} ± {:.1} ms ({:+.1} sd)",
@@ -204,12 +203,7 @@ fn one_plate_caveat(c: &super::reference::Comparison, d: &super::reference::Diff
     if d.jointly || !d.significant {
         return String::new();
     }
-    let joint = |i: usize| {
-        c.differences
-            .iter()
-            .find(|j| j.jointly && j.parameter == PARAMETERS[i])
-    };
-    let (Some(mine), Some(other)) = (joint(own), joint(1 - own)) else {
+    let (Some(mine), Some(other)) = (c.joint(PARAMETERS[own]), c.joint(PARAMETERS[1 - own])) else {
         return String::new();
     };
     let other_plate = ["right", "left"][1 - own];
@@ -328,10 +322,13 @@ fn comparison_section(c: &super::reference::Comparison) -> (String, Table) {
     (text, table)
 }
 
-/// Both plates' clocks read jointly from the three clock profiles, in a sentence or two
-/// (`None`: the three were not all profiled).
-fn plate_clocks_paragraph(tests: &[ScoreTest]) -> Option<String> {
-    Some(match super::plate_clocks::read(tests)? {
+/// Both plates' clocks read jointly from the three clock profiles
+/// ([`plate_clocks::read`](super::plate_clocks::read)), in a sentence or two (`None`: the
+/// three were not all profiled).
+fn plate_clocks_paragraph(
+    joint: Option<&Result<super::plate_clocks::PlateClocks, String>>,
+) -> Option<String> {
+    Some(match joint? {
         Err(why) => format!(
             "Each plate's clock, read jointly from the three clock profiles: no reading ({why})."
         ),
@@ -339,7 +336,7 @@ fn plate_clocks_paragraph(tests: &[ScoreTest]) -> Option<String> {
             let [sr, sl] = j.sd();
             let (rel, rel_sd) = j.relative();
             format!(
-                "Each plate's clock, read jointly from the three clock profiles (the minimum of the quadratic whose sections they are): right {:+.1} ± {:.1} ms, left {:+.1} ± {:.1} ms (correlation {:+.2}); the left plate against the right {:+.1} ± {:.1} ms, which the forces decide, while the shared part is what the kinematics settle. The quadratic lies {:.3e} below the run there (a statistic of {:.1} against the χ²₂ 0.1 % point 13.8, from the profiles' points alone, not a re-fit); the shared profile's slope at zero differs from the two plates' sum by {:.0} % of the largest{}. A one-plate clock's reading holds the other plate's at zero, so it takes the relative timing either way.",
+                "Each plate's clock, read jointly from the three clock profiles (the minimum of the quadratic whose sections they are): right {:+.1} ± {:.1} ms, left {:+.1} ± {:.1} ms (correlation {:+.2}); the left plate against the right {:+.1} ± {:.1} ms, which the forces decide, while the shared part is what the kinematics settle. The quadratic lies {:.3e} below the run there (a statistic of {:.1} against the χ²₂ 0.1 % point {:.1}, from the profiles' points alone, not a re-fit); the shared profile's slope at zero differs from the two plates' sum by {:.0} % of the largest{}. A one-plate clock's reading holds the other plate's at zero, so it takes the relative timing either way.",
                 1e3 * j.offsets[0],
                 1e3 * sr,
                 1e3 * j.offsets[1],
@@ -349,6 +346,7 @@ fn plate_clocks_paragraph(tests: &[ScoreTest]) -> Option<String> {
                 1e3 * rel_sd,
                 j.decrease,
                 j.decrease / j.noise_scale,
+                crate::problems::diagnose::chi2_999(2),
                 100.0 * j.slope_mismatch.abs(),
                 if j.at_bound {
                     "; an offset lies at its bound: a limit, not a reading"
@@ -446,6 +444,7 @@ pub(super) fn write(
     let significant = tests.iter().filter(|t| t.significant).count();
     let found = tests.iter().filter(|t| t.found).count();
     let verdict = verdict(o);
+    let joint = super::plate_clocks::read(tests);
     let ranking = Table {
         title: "Candidate effects ranked: testability, in-sample score statistic (predicted cost decrease / the largest model's residual mean square, divided by the variance inflation φ of correlated residuals), held-out change, verdict".into(),
         headers: ["rank", "effect", "testable", "parameters (truncated re-fit, ± sd)", "expected decrease", "% of J", "statistic", "φ", "χ² 0.1 % point", "held-out change vs noise band", "verdict"].map(String::from).to_vec(),
@@ -561,7 +560,7 @@ pub(super) fn write(
     }
     paragraphs.extend(refits.iter().map(|r| format!("{r}.")));
     paragraphs.extend(tests.iter().filter_map(profile_paragraph));
-    paragraphs.extend(plate_clocks_paragraph(tests));
+    paragraphs.extend(plate_clocks_paragraph(joint.as_ref()));
     let mut md = format!(
         "# Diagnosis of {}\n\n{}\n\n{}\n\n{}\n",
         args.run.display(),
@@ -678,7 +677,7 @@ pub(super) fn write(
         held_out_note: o.held_out_note.clone(),
         testable_run: o.testable_run.clone(),
         reference: o.comparison.cloned(),
-        plate_clocks: super::plate_clocks::read(tests),
+        plate_clocks: joint,
         verdict: verdict.clone(),
         verified: o
             .verified

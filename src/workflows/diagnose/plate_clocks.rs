@@ -19,9 +19,9 @@
 //! (its `sd² a`; the largest of the three). No solve is added: the profiles' points are
 //! the only evidence, and a profile whose parabola is missing leaves no joint reading.
 
-use super::profile::at_bound;
-use crate::model::effects::EffectSpec;
+use super::profile::{at_bound, plate};
 use crate::problems::diagnose::{ProfileVertex, ScoreTest};
+use nalgebra::{Matrix2, Vector2};
 use serde::{Deserialize, Serialize};
 
 /// The label of the joint reading wherever it is reported or compared.
@@ -107,40 +107,32 @@ impl PlateClocks {
         let (ar, br, kr) = section(r, "right")?;
         let (al, bl, kl) = section(l, "left")?;
         let (ab, bb, kb) = section(b, "shared")?;
-        let h = [[2.0 * ar, ab - ar - al], [ab - ar - al, 2.0 * al]];
-        let det = h[0][0] * h[1][1] - h[0][1] * h[1][0];
-        if !(det > 0.0 && det.is_finite()) {
+        let h = Matrix2::new(2.0 * ar, ab - ar - al, ab - ar - al, 2.0 * al);
+        let Some(cholesky) = h.cholesky() else {
             return Err(format!(
                 "the three profiles' curvatures (right {ar:.3e}, left {al:.3e}, shared {ab:.3e} per s²) make no quadratic with a minimum: the shared profile bends too little or too much for the two plates' profiles"
             ));
-        }
+        };
         // least squares of g_r = b_R, g_l = b_L, g_r + g_l = b_B
-        let g = [(2.0 * br - bl + bb) / 3.0, (2.0 * bl - br + bb) / 3.0];
-        let inv = [
-            [h[1][1] / det, -h[0][1] / det],
-            [-h[1][0] / det, h[0][0] / det],
-        ];
-        let x = [
-            -(inv[0][0] * g[0] + inv[0][1] * g[1]),
-            -(inv[1][0] * g[0] + inv[1][1] * g[1]),
-        ];
+        let g = Vector2::new((2.0 * br - bl + bb) / 3.0, (2.0 * bl - br + bb) / 3.0);
+        let x = -cholesky.solve(&g);
         let k = kr.max(kl).max(kb);
-        let covariance = [
-            [2.0 * k * inv[0][0], 2.0 * k * inv[0][1]],
-            [2.0 * k * inv[1][0], 2.0 * k * inv[1][1]],
-        ];
+        let covariance = cholesky.inverse() * (2.0 * k);
         let scale = br.abs().max(bl.abs()).max(bb.abs());
         Ok(PlateClocks {
-            offsets: x,
-            covariance,
-            decrease: 0.5 * (g[0] * -x[0] + g[1] * -x[1]),
+            offsets: [x[0], x[1]],
+            covariance: [
+                [covariance[(0, 0)], covariance[(0, 1)]],
+                [covariance[(1, 0)], covariance[(1, 1)]],
+            ],
+            decrease: -0.5 * g.dot(&x),
             noise_scale: k,
             slope_mismatch: if scale > 0.0 {
                 (bb - br - bl) / scale
             } else {
                 0.0
             },
-            at_bound: x.iter().any(|&o| at_bound(o) || o.abs() > 0.1),
+            at_bound: x.iter().any(|&o| at_bound(o)),
         })
     }
 }
@@ -148,12 +140,10 @@ impl PlateClocks {
 /// The refined profile vertex of the clock candidate of plate `side` (`right`, `left`,
 /// `both`) among `tests`, if it was profiled.
 fn vertex_of<'a>(tests: &[&'a ScoreTest], side: &str) -> Option<&'a ProfileVertex> {
-    tests.iter().find_map(|t| match &t.effect {
-        EffectSpec::ForcePlateTimeOffset { side: s, .. } if s == side => {
-            t.profile.as_ref()?.vertex.as_ref()
-        }
-        _ => None,
-    })
+    tests
+        .iter()
+        .find(|t| plate(&t.effect) == Some(side))
+        .and_then(|t| t.profile.as_ref()?.vertex.as_ref())
 }
 
 /// The joint reading of `tests` (a diagnosis's ranking): `None` when not all three clock

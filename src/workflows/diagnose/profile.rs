@@ -251,8 +251,9 @@ pub(super) fn profile_clock(
     // a refined profile's parabola through the lowest point (the run's among them): its
     // vertex and curvature, read once for the profile's own reading and its re-fit
     let known = known_points(&profile.points, run_cost, base_costs.is_some());
-    let coefficients = parabola(&known).map(|p| (p.a, p.b));
-    let parabola = refine.then(|| vertex(&known, ForcePlateTimeOffset::BOUNDS));
+    let fit = parabola(&known);
+    let coefficients = fit.map(|p| (p.a, p.b));
+    let parabola = refine.then(|| vertex(fit, &known, ForcePlateTimeOffset::BOUNDS));
     // the profile's reading, kept even when its re-fit does not become the candidate's
     // test or no point lies below the run, its sd with the score test's inflation
     if let Some((offset, curvature)) = parabola {
@@ -437,11 +438,7 @@ fn curvature_identifiability(
 }
 
 /// The profile's points with a cost, (offset, cost), and the run's own at zero.
-pub(super) fn known_points(
-    points: &[ProfilePoint],
-    run_value: f64,
-    by_samples: bool,
-) -> Vec<(f64, f64)> {
+fn known_points(points: &[ProfilePoint], run_value: f64, by_samples: bool) -> Vec<(f64, f64)> {
     let mut known: Vec<(f64, f64)> = points
         .iter()
         .filter_map(|q| Some((q.offset, point_value(q, by_samples)?)))
@@ -531,8 +528,9 @@ fn extension(points: &[(f64, f64)], bounds: (f64, f64)) -> Option<f64> {
 /// on one side at an end of the profile), kept within half a step beyond those three and
 /// within `bounds`; with the parabola's curvature `a` of `J ≈ J* + a (δ − δ*)²` (`None`
 /// with fewer than three points). A parabola open downwards gives the lowest point.
-fn vertex(points: &[(f64, f64)], bounds: (f64, f64)) -> (f64, Option<f64>) {
-    let Some(p) = parabola(points) else {
+/// `fit` is `parabola(points)`, read once by the caller.
+fn vertex(fit: Option<Parabola>, points: &[(f64, f64)], bounds: (f64, f64)) -> (f64, Option<f64>) {
+    let Some(p) = fit else {
         let low = points.iter().min_by(|a, b| a.1.total_cmp(&b.1));
         return (low.map_or(0.0, |l| l.0), None);
     };
@@ -545,12 +543,12 @@ fn vertex(points: &[(f64, f64)], bounds: (f64, f64)) -> (f64, Option<f64>) {
 }
 
 /// The parabola `a δ² + b δ + c` through the lowest of a profile's `points` (offset,
-/// cost) and its two neighbours in offset (its two nearest on one side at an end).
+/// cost) and its two neighbours in offset (its two nearest on one side at an end); `c`
+/// is not needed.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub(super) struct Parabola {
     pub a: f64,
     pub b: f64,
-    pub c: f64,
     /// The lowest point's offset.
     pub lowest: f64,
     /// The three points' first and last offsets.
@@ -576,7 +574,6 @@ pub(super) fn parabola(points: &[(f64, f64)]) -> Option<Parabola> {
     Some(Parabola {
         a,
         b,
-        c: y0 - a * x0 * x0 - b * x0,
         lowest: p[low].0,
         span: (x0, x2),
         steps: (x1 - x0, x2 - x1),
@@ -585,7 +582,7 @@ pub(super) fn parabola(points: &[(f64, f64)]) -> Option<Parabola> {
 
 #[cfg(test)]
 mod tests {
-    use super::{extension, vertex};
+    use super::{extension, parabola, vertex};
 
     /// The vertex and curvature of a parabola sampled at the profile's points, at an end
     /// of them too, and the lowest point where the three around it bend downwards.
@@ -593,7 +590,8 @@ mod tests {
     fn the_vertex_of_three_profile_points() {
         let j = |d: f64| 1.5 + 300.0 * (d - 0.013) * (d - 0.013);
         let at = |xs: &[f64]| xs.iter().map(|&x| (x, j(x))).collect::<Vec<_>>();
-        let (v, a) = vertex(&at(&[-0.04, -0.02, 0.0, 0.02, 0.04]), (-0.05, 0.05));
+        let pts = at(&[-0.04, -0.02, 0.0, 0.02, 0.04]);
+        let (v, a) = vertex(parabola(&pts), &pts, (-0.05, 0.05));
         assert!((v - 0.013).abs() < 1e-12 && (a.unwrap() - 300.0).abs() < 1e-9);
         // lowest at the end: the two nearest on one side, kept within half a step
         let far = |d: f64| 1.5 + 300.0 * (d - 0.09) * (d - 0.09);
@@ -601,11 +599,11 @@ mod tests {
             .iter()
             .map(|&x| (x, far(x)))
             .collect();
-        let (v, _) = vertex(&pts, (-0.05, 0.05));
+        let (v, _) = vertex(parabola(&pts), &pts, (-0.05, 0.05));
         assert!((v - 0.05).abs() < 1e-12, "{v}");
         // bent downwards (at an end): the lowest point
         let pts = [(0.02, 0.99), (-0.02, 1.2), (0.04, 0.5), (0.0, 1.0)];
-        assert_eq!(vertex(&pts, (-0.05, 0.05)), (0.04, None));
+        assert_eq!(vertex(parabola(&pts), &pts, (-0.05, 0.05)), (0.04, None));
     }
 
     /// A refined profile walks outwards while its outermost point is its lowest, by the
@@ -633,7 +631,7 @@ mod tests {
         let (added, pts) = walk(&j);
         assert_eq!(added.len(), 2, "{added:?}");
         assert!((added[0] - 0.06).abs() < 1e-12 && (added[1] - 0.08).abs() < 1e-12);
-        let (v, a) = vertex(&pts, bounds);
+        let (v, a) = vertex(parabola(&pts), &pts, bounds);
         assert!(
             (v - 0.057).abs() < 1e-9 && (a.unwrap() - 500.0).abs() < 1e-6,
             "{v} {a:?}"

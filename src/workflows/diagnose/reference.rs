@@ -61,7 +61,7 @@ pub struct Difference {
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub by_profiles: bool,
     /// Whether the two readings are both plates' clocks read jointly from each run's three
-    /// clock profiles ([`plate_clocks`](super::plate_clocks)), which then replace the three
+    /// clock profiles ([`plate_clocks`](super::plate_clocks)), compared beside the three
     /// clock candidates' own readings.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub jointly: bool,
@@ -82,6 +82,16 @@ pub struct Comparison {
     pub differences: Vec<Difference>,
     /// Candidates not compared, and why.
     pub not_compared: Vec<String>,
+}
+
+impl Comparison {
+    /// The joint clock reading's difference for `parameter` (one of
+    /// [`plate_clocks::PARAMETERS`] or [`plate_clocks::RELATIVE`]), when both runs had one.
+    pub fn joint(&self, parameter: &str) -> Option<&Difference> {
+        self.differences
+            .iter()
+            .find(|d| d.jointly && d.parameter == parameter)
+    }
 }
 
 /// The diagnosis folder of `reference`: the folder itself when it holds a diagnosis's
@@ -573,10 +583,10 @@ mod tests {
         t
     }
 
-    /// With the three clocks profiled in both runs, the plates' clocks are compared
+    /// With the three clocks profiled in both runs, the plates' clocks are also compared
     /// through their joint reading, which puts a left plate 20 ms early on the left plate
-    /// alone, where the one-plate readings (here compared one by one when the reference
-    /// has no shared clock) blame the right plate too. The cost: steeper across the
+    /// alone, where the one-plate readings (compared beside it, and alone when the
+    /// reference has no shared clock) blame the right plate too. The cost: steeper across the
     /// plates' relative timing than along their shared one, the model's own bias a shared
     /// +24 ms (the compliant foot's at 600 Hz, stop 72).
     #[test]
@@ -606,7 +616,7 @@ mod tests {
         let joint: Vec<&Difference> = c.differences.iter().filter(|d| d.jointly).collect();
         assert_eq!(joint.len(), 3, "{:?}", c.not_compared);
         assert!(joint.iter().all(|d| d.label == plate_clocks::LABEL));
-        let by = |name: &str| *joint.iter().find(|d| d.parameter == name).unwrap();
+        let by = |name: &str| c.joint(name).unwrap();
         let left = by(plate_clocks::PARAMETERS[1]);
         assert!((left.difference + 0.020).abs() < 1e-12, "{left:?}");
         assert!(by(plate_clocks::PARAMETERS[0]).difference.abs() < 1e-12);
