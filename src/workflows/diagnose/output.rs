@@ -183,8 +183,26 @@ fn joint_clock_sentence(c: &super::reference::Comparison) -> Option<String> {
         (false, false, true) => "the plates' relative timing differs, but which plate moved is not settled: neither plate's own offset differs beyond noise",
         (false, false, false) => "with both plates' clocks free, neither plate's offset nor their relative timing differs beyond noise, so which plate moved is not settled",
     };
+    let evidence = c.which_plate.as_ref().map_or(String::new(), |w| {
+        let f = w.index();
+        // the other hypothesis holds the favoured plate's offset at zero
+        let rejected = [r, l][f].significant;
+        format!(
+            " Of the two one-plate hypotheses, the {} plate's clock alone leaves less of the joint difference unexplained (χ² {:.2}, against {:.2} for the {} plate's alone: a likelihood ratio of {:.1} : 1), so its one-plate row is listed first of the two; {}.",
+            w.favoured,
+            w.unexplained[f],
+            w.unexplained[1 - f],
+            ["right", "left"][1 - f],
+            w.likelihood_ratio,
+            if rejected {
+                "the other is rejected"
+            } else {
+                "that is a preference, not a finding, for the other is not rejected at the threshold"
+            }
+        )
+    });
     Some(format!(
-        " Both plates' clocks read jointly ({}: each run's three clock profiles as sections of one quadratic in both offsets, its minimum and curvature): the left plate against the right {}, the right plate {}, the left plate {}; {which}. A one-plate clock's difference holds the other plate's clock at zero, so it takes the plates' relative timing as its own plate's either way.",
+        " Both plates' clocks read jointly ({}: each run's three clock profiles as sections of one quadratic in both offsets, its minimum and curvature): the left plate against the right {}, the right plate {}, the left plate {}; {which}. A one-plate clock's difference holds the other plate's clock at zero, so it takes the plates' relative timing as its own plate's either way.{evidence}",
         super::plate_clocks::LABEL,
         read(rel),
         read(r),
@@ -210,9 +228,13 @@ fn one_plate_caveat(c: &super::reference::Comparison, d: &super::reference::Diff
     match (mine.significant, other.significant) {
         (true, _) => String::new(),
         (false, true) => format!("; the joint reading puts it on the {other_plate} plate"),
-        (false, false) => {
-            "; as the plates' relative timing: the joint reading does not settle which plate".into()
-        }
+        (false, false) => format!(
+            "; as the plates' relative timing: the joint reading does not settle which plate{}",
+            c.which_plate.as_ref().map_or(String::new(), |w| format!(
+                " (it favours the {}, {:.1} : 1)",
+                w.favoured, w.likelihood_ratio
+            ))
+        ),
     }
 }
 
@@ -909,6 +931,11 @@ mod tests {
                 difference(LABEL, PARAMETERS[0], -0.0014, 0.0123, true),
             ],
             not_compared: Vec::new(),
+            which_plate: Some(super::super::plate_clocks::WhichPlate {
+                favoured: "left".into(),
+                unexplained: [3.16, 0.01],
+                likelihood_ratio: 4.8,
+            }),
         };
         let verdict = |c: &super::super::reference::Comparison, row: usize| {
             comparison_section(c).1.rows[row].last().unwrap().clone()
@@ -921,8 +948,19 @@ mod tests {
         );
         assert!(verdict(&unsettled, 1).contains("does not settle which plate"));
         assert_eq!(verdict(&unsettled, 2), "same within noise");
+        assert!(
+            verdict(&unsettled, 0).ends_with("(it favours the left, 4.8 : 1)"),
+            "{}",
+            verdict(&unsettled, 0)
+        );
         let text = comparison_section(&unsettled).0;
         assert!(text.contains("which plate moved is not settled"), "{text}");
+        assert!(
+            text.contains("the left plate's clock alone leaves less")
+                && text.contains("a likelihood ratio of 4.8 : 1")
+                && text.contains("a preference, not a finding"),
+            "{text}"
+        );
         // a joint left reading beyond noise puts the right clock's difference on the left
         let settled = comparison(0.0040);
         assert!(
@@ -931,8 +969,8 @@ mod tests {
             verdict(&settled, 0)
         );
         assert_eq!(verdict(&settled, 1), "differs, not validated");
-        assert!(comparison_section(&settled)
-            .0
-            .contains("it is the left plate's clock"));
+        let text = comparison_section(&settled).0;
+        assert!(text.contains("it is the left plate's clock"), "{text}");
+        assert!(text.contains("the other is rejected"), "{text}");
     }
 }

@@ -82,6 +82,12 @@ pub struct Comparison {
     pub differences: Vec<Difference>,
     /// Candidates not compared, and why.
     pub not_compared: Vec<String>,
+    /// Which plate's clock alone explains the joint difference better, when both runs
+    /// were read jointly ([`plate_clocks::which_plate`]). The two one-plate clocks' rows
+    /// are listed in its order: they read the same relative timing, and this is the
+    /// evidence on which plate it is.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub which_plate: Option<plate_clocks::WhichPlate>,
 }
 
 impl Comparison {
@@ -232,6 +238,11 @@ pub(super) fn compare(tests: &[ScoreTest], reference: &Reference) -> Comparison 
         }
         _ => None,
     };
+    let which_plate = joint.as_ref().and_then(|(a, b)| {
+        let d = [0, 1].map(|i| a.offsets[i] - b.offsets[i]);
+        let c = [0, 1].map(|i| [0, 1].map(|j| a.covariance[i][j] + b.covariance[i][j]));
+        plate_clocks::which_plate(d, c)
+    });
     // each plate's offset and their relative timing, three more compared parameters
     if let Some((a, b)) = &joint {
         let (ra, rb) = (a.relative(), b.relative());
@@ -376,11 +387,36 @@ pub(super) fn compare(tests: &[ScoreTest], reference: &Reference) -> Comparison 
         })
         .collect();
     differences.sort_by(|a, b| b.z.abs().total_cmp(&a.z.abs()));
+    if let Some(w) = &which_plate {
+        order_one_plate_clocks(&mut differences, w);
+    }
     Comparison {
         reference: folder.clone(),
         threshold,
         differences,
         not_compared,
+        which_plate,
+    }
+}
+
+/// List the two one-plate clocks' rows of `differences` (sorted by |z|) in the order of
+/// the joint reading's evidence `w`: the favoured plate's row takes the earlier of the
+/// two rows' places, the other the later; every other row keeps its place. Both rows read
+/// the plates' relative timing, so their own |z| differ by the two profiles' noise (0.02
+/// on the compliant left-clock trial at stop 73), while the joint reading holds the
+/// evidence on the shared part that tells the plates apart.
+fn order_one_plate_clocks(differences: &mut [Difference], w: &plate_clocks::WhichPlate) {
+    let row = |parameter: &str| {
+        differences
+            .iter()
+            .position(|d| !d.jointly && d.parameter == parameter)
+    };
+    let favoured = plate_clocks::PARAMETERS[w.index()];
+    let other = plate_clocks::PARAMETERS[1 - w.index()];
+    if let (Some(f), Some(o)) = (row(favoured), row(other)) {
+        if o < f {
+            differences.swap(o, f);
+        }
     }
 }
 
@@ -554,6 +590,11 @@ mod tests {
             free: vec!["offset".into()],
         };
         t.label = t.effect.label();
+        // the names the effect's parameters have in a diagnosis's summary
+        t.parameters = vec![match side {
+            "both" => "force_plate_time_offset.offset".to_string(),
+            _ => format!("force_plate_time_offset.{side}.offset"),
+        }];
         t.set_identifiability(
             identifiability(
                 t.parameters.clone(),
@@ -633,6 +674,16 @@ mod tests {
             .find(|d| !d.jointly && d.label.contains("right"))
             .unwrap();
         assert!(right.difference.abs() > 0.005, "{right:?}");
+        // the joint reading favours the left plate, and its one-plate row comes first
+        let w = c.which_plate.as_ref().unwrap();
+        assert_eq!(w.favoured, "left", "{w:?}");
+        assert!(w.unexplained[1] < 1e-9 && w.unexplained[0] > 1.0, "{w:?}");
+        let row = |p: &str| {
+            c.differences
+                .iter()
+                .position(|d| !d.jointly && d.parameter == p)
+        };
+        assert!(row(plate_clocks::PARAMETERS[1]) < row(plate_clocks::PARAMETERS[0]));
 
         // without the shared clock in the reference, one by one: the right plate's own
         // reading moves too (the left edit taken as relative timing)
@@ -645,6 +696,121 @@ mod tests {
             .find(|d| d.label.contains("right"))
             .unwrap();
         assert!(right.difference.abs() > 0.005, "{right:?}");
+        assert!(c.which_plate.is_none());
+    }
+
+    /// The two one-plate clocks' rows follow the joint reading's evidence, in the places
+    /// the two took by |z|; a row between them and every other row keep their places, and
+    /// rows already in the favoured order stay.
+    #[test]
+    fn the_one_plate_clocks_are_listed_in_the_joint_readings_order() {
+        let row = |parameter: &str, z: f64, jointly: bool| Difference {
+            label: String::new(),
+            parameter: parameter.into(),
+            reading: z,
+            reference: 0.0,
+            difference: z,
+            sd: 1.0,
+            z,
+            significant: z.abs() > 4.0,
+            by_profiles: false,
+            jointly,
+            held_out: None,
+        };
+        let [right, left] = plate_clocks::PARAMETERS;
+        let rows = vec![
+            row(right, 4.65, false),
+            row("gain", 4.3, false),
+            row(left, -4.63, false),
+            row(plate_clocks::RELATIVE, -3.8, true),
+            row(left, -1.8, true),
+        ];
+        let favour = |plate: &str| plate_clocks::WhichPlate {
+            favoured: plate.into(),
+            unexplained: [3.2, 0.01],
+            likelihood_ratio: 4.8,
+        };
+        let mut ordered = rows.clone();
+        order_one_plate_clocks(&mut ordered, &favour("left"));
+        let names: Vec<(&str, bool)> = ordered
+            .iter()
+            .map(|d| (d.parameter.as_str(), d.jointly))
+            .collect();
+        assert_eq!(
+            names,
+            [
+                (left, false),
+                ("gain", false),
+                (right, false),
+                (plate_clocks::RELATIVE, true),
+                (left, true)
+            ]
+        );
+        let mut kept = rows.clone();
+        order_one_plate_clocks(&mut kept, &favour("right"));
+        assert_eq!(kept, rows);
+    }
+
+    /// The compliant foot's diagnoses of the real 600 Hz trials (stop 73, kept in
+    /// `tests/data/real_compliant_600hz/*/diagnosis`), compared again with the untouched
+    /// trial's: the comparison gives what each diagnosis wrote (every parameter's
+    /// difference and z, to the last bit), and the edited plate's one-plate clock is listed
+    /// first, significant and within 20 % or 2 sd of the edit (left −20 ms, right +25 ms;
+    /// the joint reading's evidence orders the left-clock trial's two one-plate clocks,
+    /// whose own |z| differ by 0.02). Neither trial's plate is settled by the joint
+    /// reading on the left-clock trial (a preference of about 4.8 : 1); the right-clock
+    /// trial's is favoured about 20 : 1.
+    #[test]
+    fn the_kept_compliant_diagnoses_list_each_edited_plates_clock_first() {
+        let data = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/real_compliant_600hz");
+        let reference = read_reference(&data.join("untouched/diagnosis")).unwrap();
+        for (trial, plate, truth, ratio) in [
+            ("real_clock_l-20ms", 1, -0.020_f64, (4.0, 6.0)),
+            ("real_clock_r+25ms", 0, 0.025, (15.0, 30.0)),
+        ] {
+            let run = DiagnosisSummary::read(&data.join(trial).join("diagnosis")).unwrap();
+            let c = compare(&run.ranking, &reference);
+            // what the diagnosis wrote, in any order (the joint order is new); the joint
+            // rows to 1e-12 (their 2×2 solve was since rewritten with a Cholesky factor)
+            let written = run.reference.as_ref().unwrap();
+            let sorted = |ds: &[Difference]| {
+                let mut v: Vec<(String, bool, f64)> = ds
+                    .iter()
+                    .map(|d| (d.parameter.clone(), d.jointly, d.z))
+                    .collect();
+                v.sort_by(|a, b| (&a.0, a.1).cmp(&(&b.0, b.1)));
+                v
+            };
+            let (ours, theirs) = (sorted(&c.differences), sorted(&written.differences));
+            assert_eq!(ours.len(), theirs.len(), "{trial}");
+            for (a, b) in ours.iter().zip(&theirs) {
+                assert!(
+                    a.0 == b.0 && a.1 == b.1 && (a.2 - b.2).abs() <= 1e-12 * b.2.abs(),
+                    "{trial}: {a:?} against {b:?}"
+                );
+                assert!(
+                    a.1 || a.2.to_bits() == b.2.to_bits(),
+                    "{trial}: {a:?} {b:?}"
+                );
+            }
+            let first = &c.differences[0];
+            assert!(
+                !first.jointly && first.parameter == plate_clocks::PARAMETERS[plate],
+                "{trial}: {first:?}"
+            );
+            assert!(first.significant, "{trial}: {first:?}");
+            let tolerance = (0.2 * truth.abs()).max(2.0 * first.sd);
+            assert!(
+                (first.difference - truth).abs() <= tolerance,
+                "{trial}: {first:?}"
+            );
+            let w = c.which_plate.as_ref().unwrap();
+            assert_eq!(w.index(), plate, "{trial}: {w:?}");
+            assert!(
+                w.likelihood_ratio > ratio.0 && w.likelihood_ratio < ratio.1,
+                "{trial}: {w:?}"
+            );
+        }
     }
 
     /// The reference's run folder, for its held-out half cycle: `--reference` itself when
