@@ -420,3 +420,106 @@ fn a_clock_edited_at_the_plates_rate_is_the_untouched_trial_held_at_its_offset()
         gap(g[1], g0[1])
     );
 }
+
+/// The error tables of a run, and the default cost (node targets), compare the CoP as the
+/// sample targets' cost does: the left-clock trial held at its true offset (−20 ms), at the
+/// kept solution, has the untouched trial's node-target cost (to 1e-5) and errors in
+/// every channel, sample for sample at the nodes (to 1e-3 cm, N or °: the moved
+/// instants round), its CoP included. Before this was
+/// mended the table read the moved CoP with the treadmill belt's displacement at the moved
+/// instant: 1.1322 m/s × 20 ms = 2.3 cm off over the whole left stance, and so did the
+/// node targets' cost (stop 74; the
+/// compliant right-clock trial's re-fit held at +23.5 ms showed CoP 1.20 cm against the
+/// untouched trial's 0.70 while its cost's CoP part was the untouched one's).
+#[test]
+fn a_held_clocks_error_table_is_the_untouched_trials() {
+    use footfall::problems::evaluation::Comparison;
+    let p = path("phases/ellipse_walk.json");
+    let seq = footfall::phases::PhaseSequence::load(&p).unwrap();
+    let kept = footfall::workflows::read_solution(
+        &root().join("tests/data/real_hidden_600hz_kept/rigid_left_clock_held_solution.json"),
+    )
+    .unwrap();
+    let table = |csv: &str, effects: serde_json::Value| {
+        let m = model_with_effects("opensim_subject01.json", "ellipse.json", effects);
+        let data = footfall::workflows::load_data(Some(&root().join(csv)), false).unwrap();
+        assert!(
+            data.overground && data.belt_speed.is_some(),
+            "a treadmill trial"
+        );
+        let sets = seq.resolve(&m, &p).unwrap();
+        let nodes = kept.node_samples(&m, &sets).unwrap();
+        Comparison::through_model(&nodes, &data, &m, &kept.theta)
+            .unwrap()
+            .table_channels()
+    };
+    let untouched = table(
+        "tests/data/real_hidden_600hz/untouched/trial.csv",
+        serde_json::json!([]),
+    );
+    let held = table(
+        "tests/data/real_hidden_600hz/real_clock_l-20ms/trial.csv",
+        serde_json::json!([{ "type": "force_plate_time_offset", "side": "left",
+                             "offset": -0.020, "free": [] }]),
+    );
+    // and the default cost (node targets, splines through the samples), as the table
+    let objective = |csv: &str, effects: serde_json::Value| {
+        let m = model_with_effects("opensim_subject01.json", "ellipse.json", effects);
+        let data = footfall::workflows::load_data(Some(&root().join(csv)), false).unwrap();
+        let sets = seq.resolve(&m, &p).unwrap();
+        let mut setup =
+            footfall::problems::track::TrackingSetup::new(&m, &seq, &sets, &data).unwrap();
+        setup.start_from(&kept).unwrap();
+        let cycle = GaitCycle::new(&m, &setup.seq, &sets).unwrap();
+        let ocp = setup
+            .ocp(&cycle, &m, &sets, IntegratorSettings::default())
+            .unwrap();
+        let tr = Transcription::new(&ocp).unwrap();
+        let (_, _, w) = tr.variable_bounds_and_guess();
+        let b = setup
+            .cost_breakdown(
+                &m,
+                &sets,
+                &cycle.continuous,
+                &GaitSolution::from_nlp(&tr, &w, &cycle.continuous, setup.window.0),
+                &IntegratorSettings::default(),
+            )
+            .unwrap();
+        (Nlp::evaluate(&tr, &w, false).unwrap().f, b)
+    };
+    let (f0, b0) = objective(
+        "tests/data/real_hidden_600hz/untouched/trial.csv",
+        serde_json::json!([]),
+    );
+    let (f, b) = objective(
+        "tests/data/real_hidden_600hz/real_clock_l-20ms/trial.csv",
+        serde_json::json!([{ "type": "force_plate_time_offset", "side": "left",
+                             "offset": -0.020, "free": [] }]),
+    );
+    let cop = |b: &footfall::problems::track::CostBreakdown| {
+        let i = b.channels.iter().position(|c| c == "CoP").unwrap();
+        b.cost[i].iter().sum::<f64>()
+    };
+    let (c0, c) = (cop(&b0), cop(&b));
+    println!("node targets: J {f:.7} against {f0:.7}, its CoP part {c:.6e} against {c0:.6e}");
+    assert!(
+        ((f - f0) / f0).abs() < 1e-5,
+        "node targets: held {f} against untouched {f0}"
+    );
+    assert!(
+        ((c - c0) / c0).abs() < 1e-5,
+        "the CoP part: held {c} against untouched {c0}"
+    );
+    for (a, b) in untouched.iter().zip(&held) {
+        assert_eq!(a.name, b.name);
+        let defined = a.errors.iter().filter(|e| e.is_finite()).count();
+        assert!(defined > 10, "{}: {defined} defined entries", a.name);
+        for (i, (x, y)) in a.errors.iter().zip(&b.errors).enumerate() {
+            assert!(
+                x.is_finite() == y.is_finite() && (!x.is_finite() || (x - y).abs() < 1e-3),
+                "{} entry {i}: untouched {x} against held {y}",
+                a.name
+            );
+        }
+    }
+}

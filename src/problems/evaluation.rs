@@ -466,7 +466,8 @@ impl Comparison {
 
     /// As [`new`](Self::new) with each foot's force plate read at t + its clock offset
     /// (s), its CoP offset (m) taken off its CoP and its forces divided by its gain
-    /// (`offsets`, per foot).
+    /// (`offsets`, per foot); on a treadmill trial the CoP read at t + δ is taken back by
+    /// the belt's displacement over δ.
     pub fn with_offsets(
         samples: &[Sample],
         data: &GaitData,
@@ -512,6 +513,14 @@ impl Comparison {
         // the forces at their own instants; NaN (not measured) propagates to the
         // neighbouring samples and leaves those entries out of the error tables
         let (force_time, force_feet) = data.force_record();
+        // a treadmill trial's overground CoP holds the belt's displacement at each
+        // sample's own instant: read δ later, it is δ·v further on than at the model's
+        // instant (as the tracking cost takes it back, `MeasuredLoads::belt_speed`)
+        let belt = if data.overground {
+            data.belt_speed.unwrap_or(0.0)
+        } else {
+            0.0
+        };
         let data_side = |k: usize| -> [Vec<f64>; 3] {
             let f = &force_feet[k];
             let plate_times: Vec<f64> = times
@@ -525,7 +534,7 @@ impl Comparison {
                 scaled(interp_linear(&plate_times, force_time, &f.fy)),
                 interp_linear(&plate_times, force_time, &f.cop_x)
                     .into_iter()
-                    .map(|c| c - offsets.cop_offset[k])
+                    .map(|c| c - offsets.cop_offset[k] - offsets.force_time_offset[k] * belt)
                     .collect(),
             ]
         };

@@ -466,7 +466,13 @@ impl<'a> TrackingResidual<'a> {
                     Some((m, adj)) => {
                         let t = adj.force_time_offset[s] + node_time;
                         let (a, b) = m.forces(s, t);
-                        let c = cop.map(|c0| m.cop(s, t).unwrap_or(S::c(c0)));
+                        // the overground CoP read δ later holds the belt's displacement
+                        // δ·v further on: back to the node's instant
+                        let c = cop.map(|c0| {
+                            m.cop(s, t)
+                                .map(|c| c - adj.force_time_offset[s] * m.belt_speed)
+                                .unwrap_or(S::c(c0))
+                        });
                         (a, b, c, adj.cop_offset[s], adj.force_gain[s])
                     }
                     None => (S::c(fx), S::c(fy), cop.map(S::c), S::c(0.0), S::c(1.0)),
