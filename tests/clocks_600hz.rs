@@ -187,7 +187,8 @@ fn the_left_clock_20_ms_early_is_read_against_the_untouched_trial_by_the_complia
 /// the left plate −20 ms and the right plate unchanged, so the plates' relative timing
 /// (left less right) −20 ms: each of the three is read within 20 % or 2 sd of its truth.
 /// The one-plate clocks cannot tell the plates apart (stop 72: left −20.6 ± 4.5 ms, right
-/// +24.9 ± 5.4 ms, both significant); measured at stop 73 in `docs/instruments.md`.
+/// +24.9 ± 5.4 ms, both significant); measured at stop 73 in `docs/instruments.md`. The
+/// joint reading's evidence on which plate lists the left plate's one-plate clock first.
 #[test]
 #[ignore = "slow (two compliant-foot diagnoses with every candidate and the clock profiles at 600 Hz: 15 and 25 minutes on a quiet machine at stop 73); run with cargo test --test suite -- --ignored clocks_600hz::"]
 fn both_plates_clocks_are_read_jointly_against_the_untouched_trial_by_the_compliant_profiles() {
@@ -226,6 +227,13 @@ fn both_plates_clocks_are_read_jointly_against_the_untouched_trial_by_the_compli
             "{name}: {diff} ± {sd} s against {truth} s"
         );
     }
+    // the joint reading's evidence lists the left plate's one-plate clock first (stop 74)
+    let first = &c["differences"][0];
+    assert!(
+        first["jointly"] != true && first["parameter"] == PARAMETERS[1],
+        "first: {first}"
+    );
+    assert_eq!(c["which_plate"]["favoured"], "left", "{}", c["which_plate"]);
 }
 
 /// Each channel's mean error at the nodes (the run's table, as `track` writes it) of

@@ -183,7 +183,12 @@ fn joint_clock_sentence(c: &super::reference::Comparison) -> Option<String> {
         (false, false, true) => "the plates' relative timing differs, but which plate moved is not settled: neither plate's own offset differs beyond noise",
         (false, false, false) => "with both plates' clocks free, neither plate's offset nor their relative timing differs beyond noise, so which plate moved is not settled",
     };
-    let evidence = c.which_plate.as_ref().map_or(String::new(), |w| {
+    // said only when a one-plate clock differs: otherwise there is nothing to place
+    let one_plate_differs = c
+        .differences
+        .iter()
+        .any(|d| !d.jointly && d.significant && PARAMETERS.contains(&d.parameter.as_str()));
+    let evidence = c.which_plate.as_ref().filter(|_| one_plate_differs).map_or(String::new(), |w| {
         let f = w.index();
         // the other hypothesis holds the favoured plate's offset at zero
         let rejected = [r, l][f].significant;
@@ -972,5 +977,11 @@ mod tests {
         let text = comparison_section(&settled).0;
         assert!(text.contains("it is the left plate's clock"), "{text}");
         assert!(text.contains("the other is rejected"), "{text}");
+        // no one-plate clock differs: nothing to place, so no preference is stated
+        let mut quiet = comparison(0.0120);
+        for d in &mut quiet.differences {
+            d.significant = false;
+        }
+        assert!(!comparison_section(&quiet).0.contains("alone leaves less"));
     }
 }
