@@ -159,6 +159,15 @@ fn verdict(o: &Outcome<'_>) -> String {
     v
 }
 
+/// A likelihood ratio as people read it: `4.8 : 1`, `2.1e5 : 1`.
+fn ratio_text(r: f64) -> String {
+    if r < 1e4 {
+        format!("{r:.1} : 1")
+    } else {
+        format!("{r:.1e} : 1")
+    }
+}
+
 /// Which plate's clock differs from the reference's, by the joint reading of both
 /// plates' clocks (`None`: not read jointly in both runs).
 fn joint_clock_sentence(c: &super::reference::Comparison) -> Option<String> {
@@ -193,12 +202,12 @@ fn joint_clock_sentence(c: &super::reference::Comparison) -> Option<String> {
         // the other hypothesis holds the favoured plate's offset at zero
         let rejected = [r, l][f].significant;
         format!(
-            " Of the two one-plate hypotheses, the {} plate's clock alone leaves less of the joint difference unexplained (χ² {:.2}, against {:.2} for the {} plate's alone: a likelihood ratio of {:.1} : 1), so its one-plate row is listed first of the two; {}.",
+            " Of the two one-plate hypotheses, the {} plate's clock alone leaves less of the joint difference unexplained (χ² {:.2}, against {:.2} for the {} plate's alone: a likelihood ratio of {}), so its one-plate row is listed first of the two; {}.",
             w.favoured,
             w.unexplained[f],
             w.unexplained[1 - f],
             ["right", "left"][1 - f],
-            w.likelihood_ratio,
+            ratio_text(w.likelihood_ratio),
             if rejected {
                 "the other is rejected"
             } else {
@@ -236,8 +245,9 @@ fn one_plate_caveat(c: &super::reference::Comparison, d: &super::reference::Diff
         (false, false) => format!(
             "; as the plates' relative timing: the joint reading does not settle which plate{}",
             c.which_plate.as_ref().map_or(String::new(), |w| format!(
-                " (it favours the {}, {:.1} : 1)",
-                w.favoured, w.likelihood_ratio
+                " (it favours the {}, {})",
+                w.favoured,
+                ratio_text(w.likelihood_ratio)
             ))
         ),
     }
@@ -977,6 +987,7 @@ mod tests {
         let text = comparison_section(&settled).0;
         assert!(text.contains("it is the left plate's clock"), "{text}");
         assert!(text.contains("the other is rejected"), "{text}");
+        assert_eq!(ratio_text(2.1e5), "2.1e5 : 1");
         // no one-plate clock differs: nothing to place, so no preference is stated
         let mut quiet = comparison(0.0120);
         for d in &mut quiet.differences {

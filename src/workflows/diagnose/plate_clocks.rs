@@ -155,7 +155,8 @@ pub struct WhichPlate {
     /// The χ² each one-plate hypothesis leaves unexplained: only the right plate's clock
     /// moved, only the left's.
     pub unexplained: [f64; 2],
-    /// The favoured hypothesis's likelihood ratio over the other's (≥ 1).
+    /// The favoured hypothesis's likelihood ratio over the other's (≥ 1; at most
+    /// `exp(700)`, so that it stays a finite number in `summary.json`).
     pub likelihood_ratio: f64,
 }
 
@@ -187,7 +188,9 @@ pub fn which_plate(difference: [f64; 2], covariance: [[f64; 2]; 2]) -> Option<Wh
     Some(WhichPlate {
         favoured: ["right", "left"][favoured].to_string(),
         unexplained,
-        likelihood_ratio: (0.5 * (unexplained[1 - favoured] - unexplained[favoured])).exp(),
+        likelihood_ratio: (0.5 * (unexplained[1 - favoured] - unexplained[favoured]))
+            .min(700.0)
+            .exp(),
     })
 }
 
@@ -316,6 +319,12 @@ mod tests {
         let m = which_plate([d[1], d[0]], [[c[1][1], c[0][1]], [c[0][1], c[0][0]]]).unwrap();
         assert_eq!(m.favoured, "right");
         assert!((m.likelihood_ratio - w.likelihood_ratio).abs() < 1e-12);
+        // a decisive difference keeps a finite ratio
+        let far = which_plate([0.0, 1.0], [[1e-4, 0.0], [0.0, 1e-4]]).unwrap();
+        assert!(
+            far.likelihood_ratio.is_finite() && far.likelihood_ratio > 1e300,
+            "{far:?}"
+        );
         // no preference between equal explanations, none without a variance
         assert!(which_plate([0.01, 0.01], [[1e-4, 0.0], [0.0, 1e-4]]).is_none());
         assert!(which_plate(d, [[0.0, 0.0], [0.0, 1e-4]]).is_none());
