@@ -238,7 +238,7 @@ fn both_plates_clocks_are_read_jointly_against_the_untouched_trial_by_the_compli
 
 /// Each channel's mean error at the nodes (the run's table, as `track` writes it) of
 /// `trial` at the kept solution `kept`, its `setup.json`'s effects held.
-fn errors_at(trial: &str, kept: &Path) -> Vec<(String, f64)> {
+pub(crate) fn errors_at(trial: &str, kept: &Path) -> Vec<(String, f64)> {
     use footfall::problems::evaluation::Comparison;
     let effects = json(&kept.join("setup.json"))["effects"].clone();
     let m = model_with_effects(

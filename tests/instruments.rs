@@ -654,7 +654,24 @@ fn per_plate_effects_parse_and_join_the_catalog() {
     let l = EffectSpec::parse_cli("cop_offset:side=left").unwrap();
     let both = EffectSpec::parse_cli("cop_offset").unwrap();
     assert!(!r.overlaps(&l) && r.overlaps(&both) && both.overlaps(&l));
+    // both plates' gains in one candidate, each its own: it overlaps each plate's gain
+    // and the shared one, and is a gain's side only
+    let each = EffectSpec::parse_cli("force_plate_gain:side=each").unwrap();
+    assert_eq!(each.label(), "force-plate gain (each plate)");
+    for other in [
+        "force_plate_gain:side=right",
+        "force_plate_gain:side=left",
+        "force_plate_gain",
+    ] {
+        assert!(
+            each.overlaps(&EffectSpec::parse_cli(other).unwrap()),
+            "{other}"
+        );
+    }
+    assert!(!each.overlaps(&r));
     for (bad, needle) in [
+        ("cop_offset:side=each", "side"),
+        ("force_plate_time_offset:side=each", "side"),
         ("cop_offset:side=middle", "side"),
         ("force_plate_gain:error=0.5", "error"),
         ("mtg_damping:change=-1.5", "change"),
@@ -670,6 +687,7 @@ fn per_plate_effects_parse_and_join_the_catalog() {
         "CoP offset (left)",
         "force-plate gain (right)",
         "force-plate gain (left)",
+        "force-plate gain (each plate)",
         "body-mass error",
     ] {
         assert!(labels.iter().any(|l| l == want), "{want} not in {labels:?}");

@@ -22,6 +22,7 @@ mod foot_geometry;
 mod gait_hessian;
 mod hidden_effects;
 mod instruments;
+mod instruments_600hz;
 mod ocp_benchmarks;
 mod opensim;
 mod overground;

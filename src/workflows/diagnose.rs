@@ -20,6 +20,7 @@ use crate::problems::diagnose::{
 mod heldout;
 mod output;
 pub mod plate_clocks;
+pub mod plate_gains;
 pub mod profile;
 pub mod reference;
 mod refit;
@@ -227,13 +228,14 @@ fn residual_series(
 }
 
 /// Whether `c` is an instrument effect of both plates together (one clock, CoP offset or
-/// gain for both feet), which the largest model replaces by one per plate.
+/// gain for both feet, or both plates' gains in one candidate), which the largest model
+/// replaces by one per plate.
 fn both_plates(c: &EffectSpec) -> bool {
     matches!(
         c,
         EffectSpec::ForcePlateTimeOffset { side, .. }
             | EffectSpec::CopOffset { side, .. }
-            | EffectSpec::ForcePlateGain { side, .. } if side == "both"
+            | EffectSpec::ForcePlateGain { side, .. } if side == "both" || side == "each"
     )
 }
 

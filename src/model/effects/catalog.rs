@@ -6,7 +6,7 @@ use super::EffectSpec;
 /// with its identifiable parameters free: ground slope, trunk mass and COM offset, passive
 /// stiffness of hip, knee and ankle (both legs, rest angle 0); the instruments, each
 /// force plate its own (clock offset and CoP offset of both plates together and of each
-/// foot's plate, gain of each foot's plate) and the body mass.
+/// foot's plate), gain of each foot's plate and of both read jointly) and the body mass.
 pub fn catalog() -> Vec<EffectSpec> {
     let mut out = vec![
         EffectSpec::GroundSlope {
@@ -40,7 +40,11 @@ pub fn catalog() -> Vec<EffectSpec> {
             free: vec![],
         });
     }
-    for side in ["right", "left"] {
+    // each foot's plate's gain, and both plates' gains read jointly: a one-plate gain
+    // holds the other plate's at zero, so it takes up a load the two plates share in
+    // double support; the joint reading says whether one plate or both alike (as a
+    // body-mass error makes them) read high (`diagnose::plate_gains`)
+    for side in ["right", "left", "each"] {
         out.push(EffectSpec::ForcePlateGain {
             side: side.into(),
             error: 0.0,

@@ -100,9 +100,12 @@ pub enum EffectSpec {
         #[serde(default)]
         free: Vec<String>,
     },
-    /// [`ForcePlateGain`]: one foot's plate or both.
+    /// [`ForcePlateGain`]: one foot's plate, both with one shared error, or each plate
+    /// its own error in one effect (`each`: two parameters, read jointly).
     ForcePlateGain {
-        /// `both` (default), `right` or `left`.
+        /// `both` (default), `right`, `left`, or `each` (the right plate's and the left
+        /// plate's gain, `force_plate_gain.right.error` and `.left.error`, both starting
+        /// at `error` and freed by `error`).
         #[serde(default = "both")]
         side: String,
         /// Reported over true force, minus one (0.06: the plate reads 6 % high).
@@ -277,6 +280,9 @@ impl EffectSpec {
             }
             EffectSpec::CopOffset { side, .. } => format!("CoP offset{}", side_suffix(side)),
             EffectSpec::HeelPadCompliance { .. } => "heel-pad compliance".into(),
+            EffectSpec::ForcePlateGain { side, .. } if side == "each" => {
+                "force-plate gain (each plate)".into()
+            }
             EffectSpec::ForcePlateGain { side, .. } => {
                 format!("force-plate gain{}", side_suffix(side))
             }
@@ -490,9 +496,16 @@ impl EffectSpec {
                 return Err(("side", format!("'{side}' is not one of both, right, left")));
             }
         }
-        if let EffectSpec::ForcePlateTimeOffset { side, .. }
-        | EffectSpec::CopOffset { side, .. }
-        | EffectSpec::ForcePlateGain { side, .. } = self
+        if let EffectSpec::ForcePlateGain { side, .. } = self {
+            if !["both", "right", "left", "each"].contains(&side.as_str()) {
+                return Err((
+                    "side",
+                    format!("'{side}' is not one of both, right, left (the foot whose force plate it is), each (both plates, each its own gain)"),
+                ));
+            }
+        }
+        if let EffectSpec::ForcePlateTimeOffset { side, .. } | EffectSpec::CopOffset { side, .. } =
+            self
         {
             if !["both", "right", "left"].contains(&side.as_str()) {
                 return Err((
@@ -598,6 +611,12 @@ impl EffectSpec {
                     self.is_free("offset"),
                 ))]
             }
+            EffectSpec::ForcePlateGain { side, error, .. } if side == "each" => [0, 1]
+                .map(|s| {
+                    Box::new(ForcePlateGain::on(Some(s), *error, self.is_free("error")))
+                        as Box<dyn DynEffect>
+                })
+                .into(),
             EffectSpec::ForcePlateGain { side, error, .. } => {
                 vec![Box::new(ForcePlateGain::on(
                     side_index(side),
@@ -738,7 +757,11 @@ impl EffectSpec {
                 EffectSpec::ForcePlateTimeOffset { side: sb, .. }
                 | EffectSpec::CopOffset { side: sb, .. }
                 | EffectSpec::ForcePlateGain { side: sb, .. },
-            ) => self.kind() == other.kind() && (sa == sb || sa == "both" || sb == "both"),
+            ) => {
+                // `each` is both plates' gains, each its own
+                let whole = |s: &str| s == "both" || s == "each";
+                self.kind() == other.kind() && (sa == sb || whole(sa) || whole(sb))
+            }
             _ => self.kind() == other.kind(),
         }
     }

@@ -253,6 +253,77 @@ fn one_plate_caveat(c: &super::reference::Comparison, d: &super::reference::Diff
     }
 }
 
+/// What each gain hypothesis of [`plate_gains`](super::plate_gains) is, in words.
+const GAIN_HYPOTHESES: [&str; 3] = [
+    "only the right plate's gain",
+    "only the left plate's gain",
+    "both plates alike (a body-mass error, or one gain of both plates)",
+];
+
+/// The hypothesis group of a difference's row among the gain hypotheses' rows, if any.
+fn gain_group(d: &super::reference::Difference) -> Option<usize> {
+    super::plate_gains::ROWS.iter().position(|g| {
+        g.iter()
+            .any(|r| *r == (d.label.as_str(), d.parameter.as_str()))
+    })
+}
+
+/// Which gain hypothesis the joint reading of both plates' gains favours, said when a
+/// one-plate gain's or the body mass's row differs significantly (empty otherwise).
+fn joint_gain_sentence(c: &super::reference::Comparison) -> String {
+    let Some(w) = &c.which_gain else {
+        return String::new();
+    };
+    if !c
+        .differences
+        .iter()
+        .any(|d| d.significant && gain_group(d).is_some())
+    {
+        return String::new();
+    }
+    let f = w.index();
+    let pct = |i: usize| {
+        format!(
+            "{:+.1} ± {:.1} %",
+            100.0 * w.difference[i],
+            100.0 * w.covariance[i][i].sqrt()
+        )
+    };
+    format!(
+        " Both plates' gains read jointly ({}, both free in one re-fit): the right plate {}, the left {} against the reference. A one-plate gain holds the other plate's at zero, and a body-mass error moves both alike; of the three hypotheses, {} leaves least of the joint difference unexplained (χ² {:.2} for only the right plate's gain, {:.2} for only the left's, {:.2} for both alike: a likelihood ratio of {} over the next), so its rows are listed first of the one-plate gains' and the body mass's; {}.",
+        super::plate_gains::LABEL,
+        pct(0),
+        pct(1),
+        GAIN_HYPOTHESES[f],
+        w.unexplained[0],
+        w.unexplained[1],
+        w.unexplained[2],
+        ratio_text(w.likelihood_ratio),
+        if w.settled(c.threshold) {
+            "the others are rejected"
+        } else {
+            "that is a preference, not a finding, for another is not rejected at the threshold"
+        }
+    )
+}
+
+/// What the joint reading of both plates' gains says of a significant one-plate gain's
+/// or body mass's difference `d` (empty for any other row, or without it).
+fn gain_caveat(c: &super::reference::Comparison, d: &super::reference::Difference) -> String {
+    let (Some(w), Some(g), true) = (&c.which_gain, gain_group(d), d.significant) else {
+        return String::new();
+    };
+    match (w.index() == g, w.settled(c.threshold)) {
+        (true, true) => String::new(),
+        (false, true) => format!("; the joint gains put it on {}", GAIN_HYPOTHESES[w.index()]),
+        (_, false) => format!(
+            "; the joint gains do not settle which (they favour {}, {})",
+            GAIN_HYPOTHESES[w.index()],
+            ratio_text(w.likelihood_ratio)
+        ),
+    }
+}
+
 /// The readings against a reference trial's: a paragraph and the table.
 fn comparison_section(c: &super::reference::Comparison) -> (String, Table) {
     let significant: Vec<String> = c
@@ -285,6 +356,7 @@ fn comparison_section(c: &super::reference::Comparison) -> (String, Table) {
         );
     }
     text += &joint_clock_sentence(c).unwrap_or_default();
+    text += &joint_gain_sentence(c);
     if !c.not_compared.is_empty() {
         text += &format!(" Not compared: {}.", c.not_compared.join("; "));
     }
@@ -351,7 +423,8 @@ fn comparison_section(c: &super::reference::Comparison) -> (String, Table) {
                         (None, true) => "differs, not validated",
                     }
                     .to_string()
-                        + &one_plate_caveat(c, d),
+                        + &one_plate_caveat(c, d)
+                        + &gain_caveat(c, d),
                 ]
             })
             .collect(),
@@ -951,6 +1024,7 @@ mod tests {
                 unexplained: [3.16, 0.01],
                 likelihood_ratio: 4.8,
             }),
+            which_gain: None,
         };
         let verdict = |c: &super::super::reference::Comparison, row: usize| {
             comparison_section(c).1.rows[row].last().unwrap().clone()
@@ -994,5 +1068,70 @@ mod tests {
             d.significant = false;
         }
         assert!(!comparison_section(&quiet).0.contains("alone leaves less"));
+    }
+    /// A significant body-mass or one-plate gain row is qualified by the joint reading of
+    /// both plates' gains: the paragraph names the favoured hypothesis with the three χ²,
+    /// and each such row says whether the joint gains settle it.
+    #[test]
+    fn a_gain_or_body_mass_row_is_qualified_by_the_joint_gains() {
+        use super::super::plate_gains::WhichGain;
+        let which = |favoured: &str, unexplained: [f64; 3]| WhichGain {
+            difference: [0.02, 0.06],
+            covariance: [[0.07 * 0.07, 0.0], [0.0, 0.014 * 0.014]],
+            favoured: favoured.into(),
+            unexplained,
+            likelihood_ratio: 1.9,
+        };
+        let mut c = super::super::reference::Comparison {
+            reference: "UV-diagnose".into(),
+            threshold: 16.0,
+            differences: vec![
+                difference(
+                    "force-plate gain (left)",
+                    "force_plate_gain.left.error",
+                    0.0596,
+                    0.0137,
+                    false,
+                ),
+                difference(
+                    "body-mass error",
+                    "body_mass_error.relative",
+                    0.0509,
+                    0.0114,
+                    false,
+                ),
+                difference("ground slope", "ground_slope.angle", 0.001, 0.003, false),
+            ],
+            not_compared: Vec::new(),
+            which_plate: None,
+            which_gain: Some(which("left", [18.4, 0.1, 1.4])),
+        };
+        let verdict = |c: &super::super::reference::Comparison, row: usize| {
+            comparison_section(c).1.rows[row].last().unwrap().clone()
+        };
+        let text = comparison_section(&c).0;
+        assert!(
+            text.contains("only the left plate's gain leaves least")
+                && text.contains("χ² 18.40 for only the right plate's gain, 0.10 for only the left's, 1.40 for both alike")
+                && text.contains("the right plate +2.0 ± 7.0 %, the left +6.0 ± 1.4 %")
+                && text.contains("a preference, not a finding"),
+            "{text}"
+        );
+        assert!(verdict(&c, 0).ends_with("; the joint gains do not settle which (they favour only the left plate's gain, 1.9 : 1)"), "{}", verdict(&c, 0));
+        assert_eq!(verdict(&c, 2), "same within noise");
+        // settled: the favoured row stands alone, the other is put on it
+        c.which_gain = Some(which("left", [18.4, 0.1, 17.0]));
+        assert!(comparison_section(&c).0.contains("the others are rejected"));
+        assert_eq!(verdict(&c, 0), "differs, not validated");
+        assert!(
+            verdict(&c, 1).ends_with("; the joint gains put it on only the left plate's gain"),
+            "{}",
+            verdict(&c, 1)
+        );
+        // nothing to say when no gain row differs
+        for d in &mut c.differences {
+            d.significant = false;
+        }
+        assert!(!comparison_section(&c).0.contains("gains read jointly"));
     }
 }

@@ -28,6 +28,7 @@
 //! edited); the joint reading says which plate moved, or that the data do not settle it.
 
 use super::plate_clocks::{self, PlateClocks};
+use super::plate_gains;
 use super::profile::at_bound;
 use super::summary::{self, DiagnosisSummary};
 use crate::problems::diagnose::{chi2_1_upper, HeldOut, ProfileVertex, ScoreTest};
@@ -88,6 +89,12 @@ pub struct Comparison {
     /// evidence on which plate it is.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub which_plate: Option<plate_clocks::WhichPlate>,
+    /// Which of the gain hypotheses (only the right plate's, only the left's, both
+    /// alike) explains the difference of both plates' gains read jointly, when both runs
+    /// read them ([`plate_gains`]). The right-gain, left-gain and body-mass rows are
+    /// listed in its order.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub which_gain: Option<plate_gains::WhichGain>,
 }
 
 impl Comparison {
@@ -390,12 +397,25 @@ pub(super) fn compare(tests: &[ScoreTest], reference: &Reference) -> Comparison 
     if let Some(w) = &which_plate {
         order_one_plate_clocks(&mut differences, w);
     }
+    // both plates' gains read jointly in both runs: which plate's gain, or both alike,
+    // explains their difference, and the one-plate gains' and body mass's rows in its
+    // order (each of those holds what it does not move at zero)
+    let which_gain = plate_gains::compare(tests, &theirs);
+    if let Some(w) = &which_gain {
+        let rows: Vec<(&str, &str)> = differences
+            .iter()
+            .map(|d| (d.label.as_str(), d.parameter.as_str()))
+            .collect();
+        let order = plate_gains::order(&rows, w);
+        differences = order.into_iter().map(|i| differences[i].clone()).collect();
+    }
     Comparison {
         reference: folder.clone(),
         threshold,
         differences,
         not_compared,
         which_plate,
+        which_gain,
     }
 }
 
