@@ -204,36 +204,56 @@ pub(super) fn half_cycle_name(stride: usize, mirrored: bool) -> String {
 
 /// `effect` with its parameters `names` (qualified, `kind.name`) fixed at `values`; on
 /// the other leg's half cycle (`mirrored`) a one-sided effect moves to the other side,
-/// where the data it was fitted on now are.
+/// where the data it was fitted on now are. Both plates' gains read jointly (`each`)
+/// become one fixed gain per plate, each at its own value.
 pub(super) fn fixed_at(
     effect: &EffectSpec,
     names: &[String],
     values: &[f64],
     mirrored: bool,
-) -> anyhow::Result<EffectSpec> {
+) -> anyhow::Result<Vec<EffectSpec>> {
+    let swap = |side: &str| -> String {
+        match side {
+            "right" if mirrored => "left",
+            "left" if mirrored => "right",
+            s => s,
+        }
+        .to_string()
+    };
+    // both plates' gains in one candidate: each plate's gain fixed at its own value
+    if matches!(effect, EffectSpec::ForcePlateGain { side, .. } if side == "each") {
+        return Ok(names
+            .iter()
+            .zip(values)
+            .map(|(n, &error)| EffectSpec::ForcePlateGain {
+                side: swap(if n.contains(".right.") {
+                    "right"
+                } else {
+                    "left"
+                }),
+                error,
+                free: Vec::new(),
+            })
+            .collect());
+    }
     let mut v = serde_json::to_value(effect.fixed())?;
     for (n, x) in names.iter().zip(values) {
         let key = n.rsplit('.').next().unwrap_or(n);
         v[key] = (*x).into();
     }
-    if mirrored {
-        let other = match v["side"].as_str() {
-            Some("right") => Some("left"),
-            Some("left") => Some("right"),
-            _ => None,
-        };
-        if let Some(o) = other {
-            v["side"] = o.into();
-        }
+    if let Some(side) = v["side"].as_str() {
+        v["side"] = swap(side).into();
     }
-    serde_json::from_value(v).map_err(|e| anyhow!("{}: fixing its parameters: {e}", effect.label()))
+    Ok(vec![serde_json::from_value(v).map_err(|e| {
+        anyhow!("{}: fixing its parameters: {e}", effect.label())
+    })?])
 }
 
 /// Apply candidate `t` (fitted on the run's half cycle) to the held-out half cycle,
 /// the other variables re-fitted by a truncated re-fit (as the score test's).
 fn validate(base: &HeldOutBase, t: &ScoreTest) -> anyhow::Result<HeldOut> {
-    let spec = fixed_at(&t.effect, &t.parameters, &t.step_values, base.mirrored)?;
-    let mut prob = TrackingProblem::build(&base.setup, std::slice::from_ref(&spec))?;
+    let specs = fixed_at(&t.effect, &t.parameters, &t.step_values, base.mirrored)?;
+    let mut prob = TrackingProblem::build(&base.setup, &specs)?;
     prob.setup
         .start_from(&base.solution)
         .map_err(|e| anyhow!(e))?;
@@ -256,8 +276,8 @@ fn validate_held_clock(
     base: &HeldOutBase,
     t: &ScoreTest,
 ) -> anyhow::Result<(HeldOut, bool)> {
-    let spec = fixed_at(&t.effect, &t.parameters, &t.step_values, base.mirrored)?;
-    let mut prob = TrackingProblem::build(&base.setup, std::slice::from_ref(&spec))?;
+    let specs = fixed_at(&t.effect, &t.parameters, &t.step_values, base.mirrored)?;
+    let mut prob = TrackingProblem::build(&base.setup, &specs)?;
     prob.start_at(&base.solution)?;
     let settings = super::refit::full_solve_settings(args, &prob);
     let (res, sol) = prob.solve(&settings, &super::super::Quiet)?;
@@ -559,5 +579,45 @@ mod tests {
         // alone, the trial's change of a difference 6 sd from zero is a rise
         let v = 6.0 * 2f64.sqrt() * sd;
         assert!(a * (2.0 * -0.045 * v + v * v) < 0.0);
+    }
+    /// Both plates' gains read jointly are applied as one fixed gain per plate at its own
+    /// value; on the other leg's half cycle each value moves to the other plate.
+    #[test]
+    fn joint_gains_are_fixed_one_plate_each() {
+        let each = EffectSpec::parse_cli("force_plate_gain:side=each").unwrap();
+        let names = [
+            "force_plate_gain.right.error",
+            "force_plate_gain.left.error",
+        ]
+        .map(String::from);
+        let fixed = super::fixed_at(&each, &names, &[0.02, 0.06], false).unwrap();
+        let plate = |s: &EffectSpec| match s {
+            EffectSpec::ForcePlateGain { side, error, free } => {
+                assert!(free.is_empty());
+                (side.clone(), *error)
+            }
+            other => panic!("{other:?}"),
+        };
+        let got: Vec<_> = fixed.iter().map(plate).collect();
+        assert_eq!(
+            got,
+            [("right".to_string(), 0.02), ("left".to_string(), 0.06)]
+        );
+        let mirrored: Vec<_> = super::fixed_at(&each, &names, &[0.02, 0.06], true)
+            .unwrap()
+            .iter()
+            .map(plate)
+            .collect();
+        assert_eq!(
+            mirrored,
+            [("left".to_string(), 0.02), ("right".to_string(), 0.06)]
+        );
+        // a one-plate gain keeps its one spec, moved to the other plate when mirrored
+        let left = EffectSpec::parse_cli("force_plate_gain:side=left").unwrap();
+        let one = super::fixed_at(&left, &names[1..], &[0.06], true).unwrap();
+        assert_eq!(
+            one.iter().map(plate).collect::<Vec<_>>(),
+            [("right".to_string(), 0.06)]
+        );
     }
 }

@@ -65,7 +65,18 @@ fn parameters_cell(t: &ScoreTest) -> String {
                     .and_then(|id| id.sd.get(i).copied().flatten())
                     .map_or(String::new(), |s| format!(" ± {s:.2e}"))
             };
-            format!("{} = {v:.4}{sd}", n.rsplit('.').next().unwrap_or(n))
+            // the last part of the name, or all but the kind where two share it (both
+            // plates' gains read jointly: `right.error`, `left.error`)
+            fn short(n: &str) -> &str {
+                n.rsplit('.').next().unwrap_or(n)
+            }
+            let shared = t.parameters.iter().filter(|m| short(m) == short(n)).count() > 1;
+            let name = if shared {
+                n.split_once('.').map_or(n.as_str(), |(_, rest)| rest)
+            } else {
+                short(n)
+            };
+            format!("{name} = {v:.4}{sd}")
         })
         .collect::<Vec<_>>()
         .join(", ")
@@ -262,10 +273,9 @@ const GAIN_HYPOTHESES: [&str; 3] = [
 
 /// The hypothesis group of a difference's row among the gain hypotheses' rows, if any.
 fn gain_group(d: &super::reference::Difference) -> Option<usize> {
-    super::plate_gains::ROWS.iter().position(|g| {
-        g.iter()
-            .any(|r| *r == (d.label.as_str(), d.parameter.as_str()))
-    })
+    super::plate_gains::ROWS
+        .iter()
+        .position(|g| g.contains(&(d.label.as_str(), d.parameter.as_str())))
 }
 
 /// Which gain hypothesis the joint reading of both plates' gains favours, said when a
