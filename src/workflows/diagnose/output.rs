@@ -273,9 +273,7 @@ const GAIN_HYPOTHESES: [&str; 3] = [
 
 /// The hypothesis group of a difference's row among the gain hypotheses' rows, if any.
 fn gain_group(d: &super::reference::Difference) -> Option<usize> {
-    super::plate_gains::ROWS
-        .iter()
-        .position(|g| g.contains(&(d.label.as_str(), d.parameter.as_str())))
+    super::plate_gains::group((d.label.as_str(), d.parameter.as_str()))
 }
 
 /// Which gain hypothesis the joint reading of both plates' gains favours, said when a

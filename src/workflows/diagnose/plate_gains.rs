@@ -170,12 +170,18 @@ pub fn compare(ours: &[ScoreTest], theirs: &[&ScoreTest]) -> Option<WhichGain> {
     which_gain([a[0] - b[0], a[1] - b[1]], c)
 }
 
+/// The hypothesis (index into [`HYPOTHESES`]) whose rows include `row`, a difference's
+/// `(label, parameter)`, if any.
+pub fn group(row: (&str, &str)) -> Option<usize> {
+    ROWS.iter().position(|g| g.contains(&row))
+}
+
 /// The rows of `rows` (each a difference's `(label, parameter)`, sorted by |z|) that the
 /// three hypotheses stand for, reordered so that the favoured hypothesis's rows take the
 /// earliest of their places and the others follow in their own order; every other row
 /// keeps its place. Returns the new order as indices into `rows`.
 pub fn order(rows: &[(&str, &str)], w: &WhichGain) -> Vec<usize> {
-    let group = |i: usize| ROWS.iter().position(|g| g.iter().any(|r| *r == rows[i]));
+    let group = |i: usize| group(rows[i]);
     let places: Vec<usize> = (0..rows.len()).filter(|&i| group(i).is_some()).collect();
     let favoured = w.index();
     let mut moved: Vec<usize> = places
