@@ -31,7 +31,7 @@ use std::path::{Path, PathBuf};
 
 /// The two feet's identification tracks, and where each keeps its solutions.
 #[derive(Clone, Copy)]
-enum Foot {
+pub(crate) enum Foot {
     Rigid,
     Compliant,
 }
@@ -63,7 +63,7 @@ impl Foot {
 
 /// Track `trial` (of tests/data/real_hidden_600hz) with `foot` at the identification
 /// cost from its kept solution, into `dir`.
-fn tracked(foot: Foot, dir: &Path, trial: &str) -> PathBuf {
+pub(crate) fn tracked(foot: Foot, dir: &Path, trial: &str) -> PathBuf {
     let out = dir.join(trial);
     let mut req = foot.request();
     req.run.data = Some(
@@ -87,7 +87,7 @@ fn tracked(foot: Foot, dir: &Path, trial: &str) -> PathBuf {
 
 /// `run` diagnosed with `candidates` (none: the catalog) and the clock profiles, no
 /// re-fit and no held-out half cycle, against `reference` when given; its summary.
-fn diagnosed(run: &Path, candidates: &[&str], reference: Option<PathBuf>) -> Value {
+pub(crate) fn diagnosed(run: &Path, candidates: &[&str], reference: Option<PathBuf>) -> Value {
     let req = DiagnoseRequest {
         verify: 0,
         held_out: false,

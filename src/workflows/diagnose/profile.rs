@@ -48,8 +48,13 @@ const POINT_TOL: f64 = 1e-3;
 
 /// Iteration limit of a profile point's re-fit. A point far from the data's offset
 /// converges slowly (the right-clock trial's −20 ms point: 133 iterations, 217 s, to
-/// J = 10.14 against the run's 8.76), and its cost after this many iterations bounds its
-/// minimum from above, which is all the profile needs of it.
+/// J = 10.14 against the run's 8.76). Its cost after this many iterations is not a bound
+/// on its minimum: the Gauss–Newton steps of a compliant 600 Hz point leave the run
+/// infeasible and J then rises as the violation falls, linearly at full steps (the gain
+/// trial's left clock held at +20 ms: J 0.49179 at violation 7.7e-3 after 20
+/// iterations, 0.492359 at 1.7e-4 after 40, still rising by 3e-6 an iteration; stop 76,
+/// `docs/instruments.md`). The profile compares points whose costs differ by 1e-2 and
+/// more, so an error of 1e-4 does not move its lowest point or vertex.
 const POINT_MAX_ITER: usize = 40;
 
 /// The plate (`right`, `left`, or `both` for one clock shared by both plates) of a clock
