@@ -790,16 +790,18 @@ fn volumetric_dynamics_second_derivatives_match_finite_differences() {
 /// transition matrix, the largest entry was off about 1000× (the pelvis
 /// height's curvature −1.8e5 against −247 by differences) at 5, 10 and 40 ms alike: the
 /// contact's damping gives ∂f/∂x an eigenvalue of about −2.7e5 1/s (printed), so Ψ(τ) is
-/// singular to working precision. Volumetric feet now chain the segments' transition
-/// matrices instead (`ControlledOde::stiff_transition`): the error is 3.7e-2 (touching
-/// down) to 6.3e-2 (pressed and sliding) of the largest entry, against 1.0 before. What
-/// remains is the fast mode's boundary layers at the interval's ends, which Gauss nodes
-/// miss (a composite rule of 4 × 4 nodes gave 3.1e-2 and 7.2e-2, no better). Since stop 69
-/// a stiff model's pieces are halved (the millisecond change at heel strike inside an
-/// interval of the identification track): here 8.4e-2 and 3.0e-2, the boundary layers
-/// still missed. 40–80 s in the test profile.
+/// singular to working precision. Volumetric feet then chained the segments' transition
+/// matrices (`ControlledOde::stiff_transition`): the error was 3.7e-2 (touching
+/// down) to 6.3e-2 (pressed and sliding) of the largest entry, against 1.0 before, the
+/// fast mode's boundary layers at the interval's ends missed by the Gauss nodes; with a
+/// stiff model's pieces halved (stop 69) 8.4e-2 and 3.0e-2. Since stop 77 the adjoint is
+/// integrated backward and the rule weighs its moments over each cell, so the layers
+/// before the jumps are integrated (8.4e-2 → 1.6e-2 and 3.0e-2 → 5.5e-4), and the first
+/// cell shrinks toward the start in five more (the sensitivities' own layer): 5.9e-3 and
+/// 7.0e-4, both at the duration's own curvature (row and column 42). 40–80 s in the test
+/// profile.
 #[test]
-#[ignore = "fails: the volumetric interval curvature is within 3–7 % of differences, not 1e-5 (the stiff contact mode's boundary layers); see docs/engine-investigation.md (stop 43)"]
+#[ignore = "fails: the volumetric interval curvature is within 0.07–0.6 % of differences, not 1e-5 (the duration's own curvature); see docs/engine-investigation.md (stops 43, 77)"]
 fn volumetric_interval_curvature_matches_finite_differences_of_sensitivities() {
     use footfall::integrate::{ControlShape, ControlledOde, IntegratorSettings, ShootingInterval};
     use footfall::problems::gait_ode::GaitOde;

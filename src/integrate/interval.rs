@@ -12,8 +12,8 @@
 use std::ops::Range;
 
 use super::cvodes::IntegratorError;
-use super::quadrature::{piece_nodes, span_nodes, STIFF_SPLIT};
-use super::{Ode, OdeError};
+use super::quadrature::{flatten, grade_start, piece_cells, span_cells, Cell, STIFF_SPLIT};
+use super::{AdjointSweep, Ode, OdeError};
 
 /// A time-invariant controlled model ẋ = f(x, u, θ) with exact Jacobians.
 pub trait ControlledOde: Sync {
@@ -54,10 +54,13 @@ pub trait ControlledOde: Sync {
 
     /// Whether the dynamics can be so stiff that a shooting interval's state transition
     /// matrix Ψ(τ) becomes singular to working precision (a compliant contact's damping:
-    /// eigenvalues of ∂f/∂x near −1e5 1/s). The interval curvature then chains the
-    /// segments' transition matrices between its quadrature nodes instead of inverting
-    /// Ψ(τ), and takes twice the nodes, since its integrand changes within milliseconds
-    /// at the contacts' onsets (default: false, the single pass).
+    /// eigenvalues of ∂f/∂x near −1e5 1/s). The interval curvature then integrates its
+    /// adjoint backward instead of inverting Ψ(τ), and with it the adjoint's moments over
+    /// each cell of the rule, so that the fast mode's boundary layers before the jumps are
+    /// integrated, not sampled ([`Integrator::adjoints`](super::Integrator::adjoints)); it
+    /// takes twice the nodes, since its integrand changes within milliseconds at the
+    /// contacts' onsets, and cells shrinking toward the interval's start, where the
+    /// sensitivities' own layer lies (default: false, the single pass).
     fn stiff_transition(&self) -> bool {
         false
     }
@@ -307,26 +310,10 @@ enum SpanAdjoint {
     /// From `c = Σ Ψ(t_end)ᵀw_end` of each piece (by its end), by solving with Ψ(τ) at
     /// each node (the single pass).
     Inverse(Vec<(f64, Vec<f64>)>),
-    /// Given, one per node (the chained segments of a stiff model).
-    Given(Vec<Vec<f64>>),
-}
-
-/// `μ(t_q) = Ψ(t_end, t_q)ᵀ w_end` from the segments' transition matrices `psis` (the
-/// segment ending at `times[k]` is `psis[k]`), for `q ≤ q_end`: products, no inverse.
-fn adjoint_weights(
-    psis: &[Vec<f64>],
-    nx: usize,
-    q: usize,
-    q_end: usize,
-    w_end: &[f64],
-) -> Vec<f64> {
-    let mut r = w_end.to_vec();
-    for psi in psis[q + 1..=q_end].iter().rev() {
-        r = (0..nx)
-            .map(|c| (0..nx).map(|i| psi[i + c * nx] * r[i]).sum())
-            .collect();
-    }
-    r
+    /// A stiff model's, integrated backward: per node its moment `∫ L_q(τ) μ(τ) dτ` over
+    /// its cell ([`Integrator::adjoints`](super::Integrator::adjoints)), which stands for
+    /// `w_q μ(τ_q)` in the rule and also integrates the stiff mode's boundary layers.
+    Moments(Vec<Vec<f64>>),
 }
 
 impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
@@ -337,7 +324,8 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
     ///   \mu(\tau)^T = \lambda^T\Psi(1)\Psi(\tau)^{-1},$$
     /// with $S = \partial x/\partial z$ and $\Psi = \partial x/\partial x_0$ from the forward
     /// sensitivities at 4 Gauss–Legendre nodes (CVODES dense output; a stiff model's
-    /// interval in parts of 4 nodes each, `integrate/quadrature.rs`), $P = [0\;|\;I]$ and
+    /// interval in parts of 4 nodes each, `integrate/quadrature.rs`, with μ from a backward
+    /// adjoint pass, [`ControlledOde::stiff_transition`]), $P = [0\;|\;I]$ and
     /// $F = T f(x, u(\tau), \theta)$. Second derivatives of $f$ come from the model
     /// ([`ControlledOde::weighted_hessian`]); no finite differences.
     /// Returns `Ok(false)` when the model has no second derivatives.
@@ -441,13 +429,24 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
             .collect();
         // a stiff model's contact transients need finer pieces (STIFF_SPLIT)
         let split = if m.stiff_transition() { STIFF_SPLIT } else { 1 };
-        let nodes = piece_nodes(&folded, split);
+        let mut cells = piece_cells(&folded, split);
+        if m.stiff_transition() {
+            grade_start(&mut cells);
+        }
+        let nodes = flatten(&cells);
         // the spans of their own: 4 nodes on [0, τ_i] (on each of its parts), all in the
         // piece ending at τ_i
-        let own_nodes: Vec<Vec<(f64, f64, f64)>> = (0..interior.len())
+        let own_cells: Vec<Vec<Cell>> = (0..interior.len())
             .filter(|&i| own(i))
-            .map(|i| span_nodes(interior[i], split))
+            .map(|i| {
+                let mut cells = span_cells(interior[i], split);
+                if m.stiff_transition() {
+                    grade_start(&mut cells);
+                }
+                cells
+            })
             .collect();
+        let own_nodes: Vec<Vec<(f64, f64, f64)>> = own_cells.iter().map(|c| flatten(c)).collect();
         let mut times: Vec<f64> = nodes
             .iter()
             .chain(own_nodes.iter().flatten())
@@ -459,15 +458,8 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
         times.dedup();
         let at = |t: f64| times.partition_point(|&v| v < t);
         let (mut xs, mut ss) = (Vec::new(), Vec::new());
-        // the segments' own transition matrices Ψ(t_k, t_{k−1}), for a stiff model
-        let mut segments: Option<Vec<Vec<f64>>> = None;
-        if m.stiff_transition() {
-            segments = Some(self.chained_pass(integ, x0, p, &times, &mut xs, &mut ss)?);
-        } else {
-            integ.integrate_with_sensitivities_dense(
-                self, 0.0, 1.0, x0, p, &times, &mut xs, &mut ss,
-            )?;
-        }
+        integ
+            .integrate_with_sensitivities_dense(self, 0.0, 1.0, x0, p, &times, &mut xs, &mut ss)?;
         let sz = nx * nz;
         let end = times.len() - 1;
         x1.copy_from_slice(&xs[end * nx..(end + 1) * nx]);
@@ -490,12 +482,52 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
                 spans.push((ti, w));
             }
         }
-        if !self.add_spans_curvature(p, &xs, &ss, &times, &segments, &nodes, &spans, hess)? {
+        // a stiff model's adjoint moments on the cells, by backward integration: one
+        // sweep for the folded spans, one for each span of its own
+        let backward: Option<Vec<Vec<Vec<f64>>>> = if m.stiff_transition() {
+            let sweep = |spans: &[(f64, Vec<f64>)], cells: &[Cell]| AdjointSweep {
+                jumps: spans.to_vec(),
+                cells: cells
+                    .iter()
+                    .map(|c| (c.a, c.b, c.nodes.iter().map(|n| n.0).collect()))
+                    .collect(),
+            };
+            let sweeps: Vec<AdjointSweep> = std::iter::once(sweep(&spans, &cells))
+                .chain(
+                    own_spans
+                        .iter()
+                        .zip(&own_cells)
+                        .map(|(span, cells)| sweep(std::slice::from_ref(span), cells)),
+                )
+                .collect();
+            let moments = integ.adjoints(self, 0.0, 1.0, x0, p, &sweeps)?;
+            // per node, in the nodes' order (cells in time order, nodes in cell order)
+            Some(
+                moments
+                    .into_iter()
+                    .map(|sweep| sweep.into_iter().flatten().collect())
+                    .collect(),
+            )
+        } else {
+            None
+        };
+        let mut given = backward.map(|b| b.into_iter());
+        if !self.add_spans_curvature(
+            p,
+            &xs,
+            &ss,
+            &times,
+            given.as_mut().and_then(|g| g.next()),
+            &nodes,
+            &spans,
+            hess,
+        )? {
             return Ok(false);
         }
         for (span, nodes) in own_spans.iter().zip(&own_nodes) {
             let spans = std::slice::from_ref(span);
-            if !self.add_spans_curvature(p, &xs, &ss, &times, &segments, nodes, spans, hess)? {
+            let mus = given.as_mut().and_then(|g| g.next());
+            if !self.add_spans_curvature(p, &xs, &ss, &times, mus, nodes, spans, hess)? {
                 return Ok(false);
             }
         }
@@ -512,7 +544,7 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
         xs: &[f64],
         ss: &[f64],
         times: &[f64],
-        segments: &Option<Vec<Vec<f64>>>,
+        backward: Option<Vec<Vec<f64>>>,
         nodes: &[(f64, f64, f64)],
         spans: &[(f64, Vec<f64>)],
         hess: &mut [f64],
@@ -521,21 +553,9 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
         let sz = nx * (nx + self.np());
         let at = |t: f64| times.partition_point(|&v| v < t);
         // μ(τ)ᵀ = Σ w_endᵀΨ(t_end, τ)
-        let adjoint = match segments {
-            // from the chained segments, node by node
-            Some(psis) => SpanAdjoint::Given(
-                nodes
-                    .iter()
-                    .map(|&(tau, _, b)| {
-                        let mut mu = vec![0.0; nx];
-                        for (t_end, w_end) in spans.iter().filter(|sp| sp.0 >= b) {
-                            let m = adjoint_weights(psis, nx, at(tau), at(*t_end), w_end);
-                            mu.iter_mut().zip(&m).for_each(|(a, v)| *a += v);
-                        }
-                        mu
-                    })
-                    .collect(),
-            ),
+        let adjoint = match backward {
+            // the moments on the nodes' cells, integrated backward
+            Some(moments) => SpanAdjoint::Moments(moments),
             // Σ w_endᵀΨ(t_end), per piece end
             None => {
                 let mut per_end: Vec<(f64, Vec<f64>)> = Vec::new();
@@ -557,57 +577,6 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
             }
         };
         self.add_node_curvature(p, xs, ss, times, nodes, &adjoint, hess)
-    }
-
-    /// States and sensitivities at `times` (strictly increasing, ending at 1) by one
-    /// integration per segment `[t_{k−1}, t_k]` from the sensitivities `[I | 0]`, composed
-    /// as `S(t_k) = Ψ_k S(t_{k−1}) + [0 | P_k]`; returns the segments' Ψ_k (nx × nx,
-    /// column-major). No transition matrix is ever inverted.
-    fn chained_pass(
-        &self,
-        integ: &mut super::Integrator,
-        x0: &[f64],
-        p: &[f64],
-        times: &[f64],
-        xs: &mut Vec<f64>,
-        ss: &mut Vec<f64>,
-    ) -> Result<Vec<Vec<f64>>, IntegratorError> {
-        let nx = self.model.nx();
-        let nz = nx + self.np();
-        let mut x = x0.to_vec();
-        let mut s = vec![0.0; nx * nz];
-        for i in 0..nx {
-            s[i + i * nx] = 1.0;
-        }
-        let (mut x1, mut seg) = (vec![0.0; nx], vec![0.0; nx * nz]);
-        let mut psis = Vec::with_capacity(times.len());
-        let mut t0 = 0.0;
-        for &t1 in times {
-            integ.integrate_with_sensitivities(self, t0, t1, &x, p, &mut x1, &mut seg)?;
-            let mut next = vec![0.0; nx * nz];
-            for c in 0..nz {
-                for k in 0..nx {
-                    let skc = s[k + c * nx];
-                    if skc != 0.0 {
-                        for r in 0..nx {
-                            next[r + c * nx] += seg[r + k * nx] * skc;
-                        }
-                    }
-                }
-                if c >= nx {
-                    for r in 0..nx {
-                        next[r + c * nx] += seg[r + c * nx];
-                    }
-                }
-            }
-            psis.push(seg[..nx * nx].to_vec());
-            x.copy_from_slice(&x1);
-            s = next;
-            xs.extend_from_slice(&x);
-            ss.extend_from_slice(&s);
-            t0 = t1;
-        }
-        Ok(psis)
     }
 
     /// Add `∇²_z w_endᵀ x(t_end)` to `hess` by Gauss–Legendre quadrature over `[0, t_end]`
@@ -642,8 +611,8 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
             let q = at(tau);
             let x = &xs[q * nx..(q + 1) * nx];
             let s = &ss[q * sz..(q + 1) * sz];
-            let mu: Vec<f64> = match adjoint {
-                SpanAdjoint::Given(mus) => mus[node].clone(),
+            let (wq, mu): (f64, Vec<f64>) = match adjoint {
+                SpanAdjoint::Moments(moments) => (1.0, moments[node].clone()),
                 SpanAdjoint::Inverse(per_end) => {
                     // μ(τ)ᵀ = cᵀΨ(τ)⁻¹ with c = Σ Ψ(t_end)ᵀw_end of the piece: solve
                     // Ψ(τ)ᵀ μ = c
@@ -659,7 +628,7 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
                         .lu()
                         .solve(&rhs)
                         .ok_or(IntegratorError::NonFinite { t: tau })?;
-                    mu.iter().copied().collect()
+                    (wq, mu.iter().copied().collect())
                 }
             };
             let u0 = &p[self.p_u0()];

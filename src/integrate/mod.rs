@@ -16,7 +16,10 @@ mod cvodes;
 mod interval;
 mod quadrature;
 
-pub use cvodes::{IntegrationStats, Integrator, IntegratorError, IntegratorSettings, Method};
+pub use cvodes::{
+    AdjointSweep, IntegrationStats, Integrator, IntegratorError, IntegratorSettings, Method,
+    MAX_CELL_NODES,
+};
 pub use interval::{ControlShape, ControlledOde, ShootingInterval};
 
 /// Failure of an ODE right-hand side evaluation.

@@ -45,7 +45,23 @@ const GAUSS3: [(f64, f64); 3] = [
 /// interior instants: the 4-point rule on [0, 1]. With `split` > 1 each piece's rule is
 /// applied on that many equal parts of it (a stiff model, [`STIFF_SPLIT`]); the nodes
 /// still name their piece's end, where the adjoint jumps.
+#[cfg(test)]
 pub(super) fn piece_nodes(interior: &[f64], split: usize) -> Vec<(f64, f64, f64)> {
+    flatten(&piece_cells(interior, split))
+}
+
+/// One part of a piece: `[a, b]`, the end of its piece (where the adjoint jumps) and its
+/// Gauss–Legendre nodes and weights.
+#[derive(Debug, Clone, PartialEq)]
+pub(super) struct Cell {
+    pub(super) a: f64,
+    pub(super) b: f64,
+    pub(super) piece_end: f64,
+    pub(super) nodes: Vec<(f64, f64)>,
+}
+
+/// The cells of [`piece_nodes`], in time order.
+pub(super) fn piece_cells(interior: &[f64], split: usize) -> Vec<Cell> {
     let mut breaks: Vec<f64> = interior
         .iter()
         .copied()
@@ -75,19 +91,93 @@ pub(super) fn piece_nodes(interior: &[f64], split: usize) -> Vec<(f64, f64, f64)
 
 /// The 4-point rule on `split` equal parts of `[0, end]`, every node naming `end` as its
 /// piece's end (a check point's own span).
+#[cfg(test)]
 pub(super) fn span_nodes(end: f64, split: usize) -> Vec<(f64, f64, f64)> {
+    flatten(&span_cells(end, split))
+}
+
+/// The cells of [`span_nodes`], in time order.
+pub(super) fn span_cells(end: f64, split: usize) -> Vec<Cell> {
     let mut out = Vec::new();
     push_split(&mut out, &GAUSS4, 0.0, end, split);
     out
 }
 
-/// Append `rule` on each of `split` equal parts of `[a, b]`, as `(τ, weight, b)`.
-fn push_split(out: &mut Vec<(f64, f64, f64)>, rule: &[(f64, f64)], a: f64, b: f64, split: usize) {
+/// Into how many geometrically shrinking cells (ratio 4) a stiff model's first cell is
+/// divided toward τ = 0, each with the 2-point rule. The sensitivities start at
+/// `[I | 0]`, and the fast contact mode of a compliant foot decays within microseconds
+/// (`∂f/∂x` has eigenvalues near −2.7e5 1/s): the integrand has a boundary layer at the
+/// interval's start that the piece's own rule, spaced in milliseconds, misses. The smallest
+/// cell is 4⁻⁵ of the first, about a microsecond of a 20 ms interval split in two.
+pub(super) const START_LAYER_CELLS: usize = 5;
+
+/// Divide the first of `cells` into [`START_LAYER_CELLS`] cells shrinking toward its start,
+/// plus the outer three quarters of it with its own rule.
+pub(super) fn grade_start(cells: &mut Vec<Cell>) {
+    let Some(first) = cells.first().cloned() else {
+        return;
+    };
+    let (a, h) = (first.a, first.b - first.a);
+    let mut graded = Vec::with_capacity(START_LAYER_CELLS + 1);
+    let mut lo = a;
+    for k in (1..=START_LAYER_CELLS).rev() {
+        let hi = a + h * 0.25f64.powi(k as i32 - 1) * 0.25;
+        let len = hi - lo;
+        graded.push(Cell {
+            a: lo,
+            b: hi,
+            piece_end: first.piece_end,
+            nodes: GAUSS2
+                .iter()
+                .map(|&(g, w)| (lo + len * g, len * w))
+                .collect(),
+        });
+        lo = hi;
+    }
+    // the outer part, [a + h/4, b], with the cell's own rule rescaled to it
+    let len = first.b - lo;
+    graded.push(Cell {
+        a: lo,
+        b: first.b,
+        piece_end: first.piece_end,
+        nodes: first
+            .nodes
+            .iter()
+            .map(|&(t, w)| (lo + (t - a) / h * len, w / h * len))
+            .collect(),
+    });
+    cells.splice(0..1, graded);
+}
+
+/// The nodes of `cells` as `(τ, weight, end of τ's piece)`, in order.
+pub(super) fn flatten(cells: &[Cell]) -> Vec<(f64, f64, f64)> {
+    cells
+        .iter()
+        .flat_map(|c| c.nodes.iter().map(move |&(t, w)| (t, w, c.piece_end)))
+        .collect()
+}
+
+/// Append `rule` on each of `split` equal parts of `[a, b]` as cells of the piece ending at
+/// `b`.
+fn push_split(out: &mut Vec<Cell>, rule: &[(f64, f64)], a: f64, b: f64, split: usize) {
     let parts = split.max(1);
     let len = (b - a) / parts as f64;
     for k in 0..parts {
         let start = a + len * k as f64;
-        out.extend(rule.iter().map(|&(g, w)| (start + len * g, len * w, b)));
+        let end = if k + 1 == parts {
+            b
+        } else {
+            a + len * (k + 1) as f64
+        };
+        out.push(Cell {
+            a: start,
+            b: end,
+            piece_end: b,
+            nodes: rule
+                .iter()
+                .map(|&(g, w)| (start + len * g, len * w))
+                .collect(),
+        });
     }
 }
 

@@ -57,6 +57,8 @@ pub(super) struct Shared {
     pub(super) fx: Vec<f64>,
     pub(super) fp: Vec<f64>,
     pub(super) xdot: Vec<f64>,
+    /// The adjoint pass's last restart time, where its running moments start.
+    pub(super) restart: f64,
 }
 
 impl Shared {
@@ -69,7 +71,12 @@ impl Shared {
     }
 
     /// Evaluate `fx`, `fp` at `(t, y)` unless the cache already holds exactly that point.
-    fn ensure_jacobians(&mut self, ctx: &CallCtx<'_>, t: f64, y: &[f64]) -> Result<(), OdeError> {
+    pub(super) fn ensure_jacobians(
+        &mut self,
+        ctx: &CallCtx<'_>,
+        t: f64,
+        y: &[f64],
+    ) -> Result<(), OdeError> {
         if self.cache_valid
             && self.cache_t.to_bits() == t.to_bits()
             && self

@@ -35,6 +35,9 @@ pub struct Integrator {
     pub(super) shared: *mut Shared,
     /// Whether CVODES root finding is switched on (by the last call).
     pub(super) roots_on: bool,
+    /// The adjoint pass's own CVODES objects, made by the first
+    /// [`adjoints`](Self::adjoints) call.
+    pub(super) adjoint: Option<super::adjoint::Adjoint>,
 }
 
 // SAFETY: every pointer is exclusively owned by this value (nothing is shared with other
@@ -92,6 +95,7 @@ impl Integrator {
             fx: vec![0.0; nx * nx],
             fp: vec![0.0; nx * np],
             xdot: vec![0.0; nx],
+            restart: 0.0,
         }));
         // From here on `Drop` frees whatever has been created.
         let mut this = Self {
@@ -107,6 +111,7 @@ impl Integrator {
             ls: ptr::null_mut(),
             shared,
             roots_on: false,
+            adjoint: None,
         };
         // SAFETY: every call below receives pointers created in this function and checked
         // for null; `shared` is a live heap block that outlives the CVODES memory.

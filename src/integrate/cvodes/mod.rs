@@ -14,9 +14,10 @@
 //!
 //! One home per concept: `settings` (options, counters, errors), `callbacks` (the C
 //! callbacks and the block they share with CVODES), `integrator` (creation, the end-point
-//! calls, teardown), `dense` (output at interior times, events), `dense_lu` (the Newton
+//! calls, teardown), `adjoint` (backward adjoints of stiff models), `dense` (output at interior times, events), `dense_lu` (the Newton
 //! systems' linear solver), `vector_ops` (the serial vector kernels CVODES runs on).
 
+mod adjoint;
 mod callbacks;
 mod dense;
 mod dense_lu;
@@ -24,6 +25,7 @@ mod integrator;
 mod settings;
 mod vector_ops;
 
+pub use adjoint::{AdjointSweep, MAX_CELL_NODES};
 pub(crate) use callbacks::check_dim;
 pub use integrator::Integrator;
 pub use settings::{IntegrationStats, IntegratorError, IntegratorSettings, Method};
