@@ -172,7 +172,8 @@ pub(super) fn run(
         (None, Some(ws)) if fits(ws.lambda, m) => ws.lambda.to_vec(),
         (None, _) => vec![0.0; m],
     };
-    let (ev, hess) = match eval.derivs(&w, &lambda0) {
+    // the curvature only once a step uses it (below, at the top of the loop)
+    let (ev, hess) = match eval.derivs(&w, &lambda0, false) {
         Ok(r) => r,
         Err(e) => return fail(SqpStatus::EvaluationFailure(e.chain()), w),
     };
@@ -218,9 +219,25 @@ pub(super) fn run(
     }
     for iter in first_iter..=settings.max_iter {
         // --- QP subproblem at the current point
-        let viol = violations(&st.ev.c, &s.c_lb, &s.c_ub);
-        let infeas = viol.iter().copied().fold(0.0, f64::max);
+        let mut viol = violations(&st.ev.c, &s.c_lb, &s.c_ub);
+        let mut infeas = viol.iter().copied().fold(0.0, f64::max);
         let curvature = step::curvature_in_use(settings, infeas, &history);
+        // the exact mode's curvature where the accepted point's evaluation went without
+        // (its violation said Gauss–Newton): the same evaluation again, with it
+        if curvature && eval.exact() && st.hess.is_none() {
+            match eval.derivs(&st.w, &lambda, true) {
+                Ok((ev, hess)) => {
+                    st.ev = ev;
+                    st.hess = hess;
+                    viol = violations(&st.ev.c, &s.c_lb, &s.c_ub);
+                    infeas = viol.iter().copied().fold(0.0, f64::max);
+                }
+                Err(e) => {
+                    status = SqpStatus::EvaluationFailure(e.chain());
+                    break;
+                }
+            }
+        }
         // the curvature in use only because the Gauss–Newton steps stalled, not told yet
         let stalled = settings
             .exact_hessian_on_stall
@@ -358,7 +375,10 @@ pub(super) fn run(
                 }
                 Search::Fatal(e) => break Err(SqpStatus::EvaluationFailure(e.chain())),
             };
-            match eval.derivs(&trial.w, &sol.lambda) {
+            // with the curvature when the next step will likely use it: this one did, or
+            // the trial's summed violation bounds its largest one below the switch
+            let want = curvature || trial.plain.1 <= settings.exact_hessian_below;
+            match eval.derivs(&trial.w, &sol.lambda, want) {
                 Ok((ev, hess)) => break Ok((trial, ev, hess)),
                 Err(e)
                     if e.is_recoverable() && 0.5 * trial.step >= settings.line_search_min_step =>

@@ -54,16 +54,18 @@ impl<'a> Evaluator<'a> {
         r
     }
 
-    /// Derivatives at `w`; in Exact mode with the constraint curvature for the
-    /// multipliers `lam`.
+    /// Derivatives at `w`; in Exact mode with `curvature`, also the constraint curvature
+    /// for the multipliers `lam` (a compliant foot's costs about seven evaluations
+    /// without it, so the Gauss–Newton steps of the exact mode go without).
     pub(super) fn derivs(
         &self,
         w: &[f64],
         lam: &[f64],
+        curvature: bool,
     ) -> Result<(NlpEval, Option<Triplets>), EvalError> {
         let mut out = Err(EvalError::fatal("not evaluated"));
         self.timed(true, &mut || {
-            out = if self.exact {
+            out = if self.exact && curvature {
                 self.nlp
                     .evaluate_with_hessian(w, lam)
                     .map(|(ev, (r, c, v))| {
@@ -81,6 +83,11 @@ impl<'a> Evaluator<'a> {
             }
         });
         out
+    }
+
+    /// Whether derivatives can come with the constraint curvature (Exact mode).
+    pub(super) fn exact(&self) -> bool {
+        self.exact
     }
 
     /// Solve a QP with Clarabel (or fail it, if its number is one of the injected ones).
