@@ -14,7 +14,7 @@
 //! instruments_600hz::`.
 
 use super::clocks_600hz::{
-    diagnosed, refit_brings_every_channel_near_the_untouched_trials, tracked, Foot,
+    diagnosed, refit_brings_every_channel_near_the_untouched_trials, tracked, within_truth, Foot,
 };
 use crate::common::root;
 use serde_json::Value;
@@ -44,11 +44,13 @@ fn the_compliant_cop_mass_and_gain_refits_bring_every_channel_near_the_untouched
 
 /// `trial` tracked from its kept solution and diagnosed afresh against the untouched
 /// trial's kept diagnosis: the comparison's first row is `row` (label, parameter), read
-/// within 20 % or 2 sd of `truth`; the comparison, for the caller's further checks.
+/// within 20 % or 2 sd of `truth`; with `favoured`, also significant, the joint gains
+/// favouring that hypothesis. The comparison, for the caller's further checks.
 fn diagnosed_first_against_the_untouched_trial(
     trial: &str,
     row: (&str, &str),
     truth: f64,
+    favoured: Option<&str>,
 ) -> Value {
     let dir = tempfile::tempdir().unwrap();
     let run = tracked(Foot::Compliant, dir.path(), trial);
@@ -67,9 +69,17 @@ fn diagnosed_first_against_the_untouched_trial(
         first["sd"].as_f64().unwrap(),
     );
     assert!(
-        (diff - truth).abs() <= (0.2 * f64::abs(truth)).max(2.0 * sd),
+        within_truth(diff, sd, truth),
         "{trial}: {diff} ± {sd} against {truth}"
     );
+    if let Some(hypothesis) = favoured {
+        assert_eq!(first["significant"], true, "{trial}: {first}");
+        assert_eq!(
+            c["which_gain"]["favoured"], hypothesis,
+            "{trial}: {}",
+            c["which_gain"]
+        );
+    }
     c
 }
 
@@ -79,13 +89,12 @@ fn diagnosed_first_against_the_untouched_trial(
 #[test]
 #[ignore = "slow (a compliant-foot diagnosis with every candidate and the clock profiles at 600 Hz, about 25 minutes); run with cargo test --test suite -- --ignored instruments_600hz::"]
 fn the_left_plates_gain_is_diagnosed_first_against_the_untouched_trial() {
-    let c = diagnosed_first_against_the_untouched_trial(
+    diagnosed_first_against_the_untouched_trial(
         "real_gain_l+6pct",
         ("force-plate gain (left)", "force_plate_gain.left.error"),
         0.06,
+        Some("left"),
     );
-    assert_eq!(c["differences"][0]["significant"], true, "{c}");
-    assert_eq!(c["which_gain"]["favoured"], "left", "{}", c["which_gain"]);
 }
 
 /// Every force 5 % high, as a body-mass error makes them: the body mass first and
@@ -94,18 +103,18 @@ fn the_left_plates_gain_is_diagnosed_first_against_the_untouched_trial() {
 #[test]
 #[ignore = "slow (a compliant-foot diagnosis with every candidate and the clock profiles at 600 Hz, about 25 minutes); run with cargo test --test suite -- --ignored instruments_600hz::"]
 fn the_body_mass_is_diagnosed_first_against_the_untouched_trial() {
-    let c = diagnosed_first_against_the_untouched_trial(
+    diagnosed_first_against_the_untouched_trial(
         "real_mass+5pct",
         ("body-mass error", "body_mass_error.relative"),
         0.05,
+        Some("both"),
     );
-    assert_eq!(c["differences"][0]["significant"], true, "{c}");
-    assert_eq!(c["which_gain"]["favoured"], "both", "{}", c["which_gain"]);
 }
 
-/// The right foot's CoP 25 mm forward: its CoP offset first, within noise (kept, stop
-/// 74, against the untouched trial's diagnosis without the joint gains: +26.9 ± 17.7 mm,
-/// z +1.51), the edit moving no other reading by as much.
+/// The right foot's CoP 25 mm forward: its CoP offset first, above one sd but within
+/// noise (kept, stop 74, against the untouched trial's diagnosis without the joint gains:
+/// +26.9 ± 17.7 mm, z +1.51). That the edit moves no other reading by as much is checked
+/// on the kept diagnosis (`diagnose::reference`'s library test), not here.
 #[test]
 #[ignore = "slow (a compliant-foot diagnosis with every candidate and the clock profiles at 600 Hz, about 25 minutes); run with cargo test --test suite -- --ignored instruments_600hz::"]
 fn the_right_cop_offset_is_diagnosed_first_against_the_untouched_trial() {
@@ -113,6 +122,7 @@ fn the_right_cop_offset_is_diagnosed_first_against_the_untouched_trial() {
         "real_cop_r+25mm",
         ("CoP offset (right)", "cop_offset.right.offset"),
         0.025,
+        None,
     );
     assert!(c["differences"][0]["z"].as_f64().unwrap() > 1.0, "{c}");
 }
