@@ -172,8 +172,8 @@ pub(super) fn run(
         (None, Some(ws)) if fits(ws.lambda, m) => ws.lambda.to_vec(),
         (None, _) => vec![0.0; m],
     };
-    // the curvature only once a step uses it (below, at the top of the loop)
-    let (ev, hess) = match eval.derivs(&w, &lambda0, false) {
+    // on demand, the curvature only once a step uses it (below, at the top of the loop)
+    let (ev, hess) = match eval.derivs(&w, &lambda0, !eval.on_demand()) {
         Ok(r) => r,
         Err(e) => return fail(SqpStatus::EvaluationFailure(e.chain()), w),
     };
@@ -375,9 +375,11 @@ pub(super) fn run(
                 }
                 Search::Fatal(e) => break Err(SqpStatus::EvaluationFailure(e.chain())),
             };
-            // with the curvature when the next step will likely use it: this one did, or
-            // the trial's summed violation bounds its largest one below the switch
-            let want = curvature || trial.plain.1 <= settings.exact_hessian_below;
+            // with the curvature unless on demand; then when the next step will likely use
+            // it: this one did, or the trial's summed violation bounds its largest one
+            // below the switch
+            let want =
+                !eval.on_demand() || curvature || trial.plain.1 <= settings.exact_hessian_below;
             match eval.derivs(&trial.w, &sol.lambda, want) {
                 Ok((ev, hess)) => break Ok((trial, ev, hess)),
                 Err(e)

@@ -56,7 +56,8 @@ impl<'a> Evaluator<'a> {
 
     /// Derivatives at `w`; in Exact mode with `curvature`, also the constraint curvature
     /// for the multipliers `lam` (a compliant foot's costs about seven evaluations
-    /// without it, so the Gauss–Newton steps of the exact mode go without).
+    /// without it, so its Gauss–Newton steps of the exact mode go without,
+    /// [`on_demand`](Self::on_demand)).
     pub(super) fn derivs(
         &self,
         w: &[f64],
@@ -88,6 +89,12 @@ impl<'a> Evaluator<'a> {
     /// Whether derivatives can come with the constraint curvature (Exact mode).
     pub(super) fn exact(&self) -> bool {
         self.exact
+    }
+
+    /// Whether the curvature is computed only where a step uses it
+    /// ([`Nlp::curvature_on_demand`]); otherwise at every accepted point.
+    pub(super) fn on_demand(&self) -> bool {
+        self.exact && self.nlp.curvature_on_demand()
     }
 
     /// Solve a QP with Clarabel (or fail it, if its number is one of the injected ones).

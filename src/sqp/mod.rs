@@ -74,6 +74,12 @@ pub trait Nlp {
     ) -> Result<(NlpEval, (Vec<usize>, Vec<usize>, Vec<f64>)), EvalError> {
         Ok((self.evaluate(w, true)?, self.exact_hessian(w, lambda)?))
     }
+    /// Whether the exact curvature costs several evaluations (a stiff model's, integrated
+    /// backward), so that the exact mode computes it only where a step uses it, not at
+    /// every accepted point (default: false; the path then stays bit for bit what it was).
+    fn curvature_on_demand(&self) -> bool {
+        false
+    }
     /// Rows whose curvature [`exact_hessian`](Self::exact_hessian) provides (the
     /// quasi-Newton update leaves them out). Default: none.
     fn rows_with_exact_hessian(&self) -> Vec<bool> {

@@ -40,6 +40,9 @@ impl crate::sqp::Nlp for Transcription<'_, '_> {
     fn set_integration_tolerance(&self, rtol: f64) {
         Transcription::set_integration_tolerance(self, rtol);
     }
+    fn curvature_on_demand(&self) -> bool {
+        self.ocp.phases.iter().any(|p| p.ode.stiff_transition())
+    }
     fn elastic_weights(&self) -> Vec<f64> {
         let dynamics = self
             .ocp
