@@ -59,22 +59,7 @@ impl Adjoint {
             expected: c_int::MAX as usize,
             found: nx,
         })?;
-        let shared = Box::into_raw(Box::new(Shared {
-            nx,
-            np,
-            call: ptr::null(),
-            fatal: None,
-            recoverable: None,
-            cvodes_error: None,
-            cvodes_warning: None,
-            cache_valid: false,
-            cache_t: 0.0,
-            cache_y: vec![0.0; nx],
-            fx: vec![0.0; nx * nx],
-            fp: vec![0.0; nx * np],
-            xdot: vec![0.0; nx],
-            restart: 0.0,
-        }));
+        let shared = Box::into_raw(Box::new(Shared::new(nx, np)));
         // From here on `Drop` frees whatever has been created.
         let mut this = Self {
             nx,
@@ -177,26 +162,9 @@ impl Adjoint {
         unsafe { &mut *self.shared }
     }
 
-    /// A CVODES failure as an error, preferring the ODE's own fatal error.
+    /// A CVODES failure as an error ([`Shared::failure`]).
     fn failure(&mut self, flag: c_int, t: f64) -> IntegratorError {
-        let shared = self.shared_mut();
-        if let Some((t, source)) = shared.fatal.take() {
-            return IntegratorError::Rhs { t, source };
-        }
-        let mut message = shared
-            .cvodes_error
-            .take()
-            .or_else(|| shared.cvodes_warning.take())
-            .unwrap_or_default();
-        if let Some((tr, e)) = shared.recoverable.take() {
-            message.push_str(&format!("; last recoverable ODE failure at t = {tr}: {e}"));
-        }
-        IntegratorError::Failed {
-            flag,
-            flag_name: super::callbacks::flag_name(flag),
-            t,
-            message,
-        }
+        self.shared_mut().failure(flag, t)
     }
 
     /// Start (or restart) the backward problem at `(t, μ)`, its moments at zero, with the

@@ -62,6 +62,48 @@ pub(super) struct Shared {
 }
 
 impl Shared {
+    /// A fresh block for `nx` states and `np` parameters, outside any call.
+    pub(super) fn new(nx: usize, np: usize) -> Self {
+        Shared {
+            nx,
+            np,
+            call: ptr::null(),
+            fatal: None,
+            recoverable: None,
+            cvodes_error: None,
+            cvodes_warning: None,
+            cache_valid: false,
+            cache_t: 0.0,
+            cache_y: vec![0.0; nx],
+            fx: vec![0.0; nx * nx],
+            fp: vec![0.0; nx * np],
+            xdot: vec![0.0; nx],
+            restart: 0.0,
+        }
+    }
+
+    /// A failed CVODES call (`flag`, at `t`) as an error, preferring the ODE's own fatal
+    /// error, with CVODES's message and the last recoverable ODE failure.
+    pub(super) fn failure(&mut self, flag: c_int, t: f64) -> IntegratorError {
+        if let Some((t, source)) = self.fatal.take() {
+            return IntegratorError::Rhs { t, source };
+        }
+        let mut message = self
+            .cvodes_error
+            .take()
+            .or_else(|| self.cvodes_warning.take())
+            .unwrap_or_default();
+        if let Some((tr, e)) = self.recoverable.take() {
+            message.push_str(&format!("; last recoverable ODE failure at t = {tr}: {e}"));
+        }
+        IntegratorError::Failed {
+            flag,
+            flag_name: flag_name(flag),
+            t,
+            message,
+        }
+    }
+
     pub(super) fn reset(&mut self) {
         self.fatal = None;
         self.recoverable = None;

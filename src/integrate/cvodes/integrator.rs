@@ -7,7 +7,7 @@ use std::ptr;
 use sundials_sys as sys;
 
 use super::callbacks::{
-    all_finite, check_dim, check_interval, check_lin_setup, check_setup, error_handler, flag_name,
+    all_finite, check_dim, check_interval, check_lin_setup, check_setup, error_handler,
     jac_callback, null_error, nv_slice, nv_slice_mut, rhs_callback, sens_rhs_callback, CallCtx,
     CallGuard, Shared,
 };
@@ -81,22 +81,7 @@ impl Integrator {
         // Overflow guard for the nx × nx and nx × np buffers.
         nx.checked_mul(ntot).ok_or(too_large(ntot))?;
 
-        let shared = Box::into_raw(Box::new(Shared {
-            nx,
-            np,
-            call: ptr::null(),
-            fatal: None,
-            recoverable: None,
-            cvodes_error: None,
-            cvodes_warning: None,
-            cache_valid: false,
-            cache_t: 0.0,
-            cache_y: vec![0.0; nx],
-            fx: vec![0.0; nx * nx],
-            fp: vec![0.0; nx * np],
-            xdot: vec![0.0; nx],
-            restart: 0.0,
-        }));
+        let shared = Box::into_raw(Box::new(Shared::new(nx, np)));
         // From here on `Drop` frees whatever has been created.
         let mut this = Self {
             nx,
@@ -422,24 +407,7 @@ impl Integrator {
 
     /// Turn a negative CVODES flag into an error, preferring the ODE's own fatal error.
     pub(super) fn failure(&mut self, flag: c_int, t: f64) -> IntegratorError {
-        let shared = self.shared_mut();
-        if let Some((t, source)) = shared.fatal.take() {
-            return IntegratorError::Rhs { t, source };
-        }
-        let mut message = shared
-            .cvodes_error
-            .take()
-            .or_else(|| shared.cvodes_warning.take())
-            .unwrap_or_default();
-        if let Some((tr, e)) = shared.recoverable.take() {
-            message.push_str(&format!("; last recoverable ODE failure at t = {tr}: {e}"));
-        }
-        IntegratorError::Failed {
-            flag,
-            flag_name: flag_name(flag),
-            t,
-            message,
-        }
+        self.shared_mut().failure(flag, t)
     }
 
     pub(super) fn stats(&self, sensitivities: bool) -> IntegrationStats {
