@@ -53,8 +53,10 @@ pub struct Args {
     /// Start the diagnosis's own solves from kept solutions of the same problems
     /// (repeatable): an earlier re-fit's run folder (`<RUN>+<effect>`) starts the re-fit
     /// with the same effects, an earlier diagnosis folder (`<RUN>-diagnose`) gives its
-    /// held-out track (`held_out`) and any run folders inside it. Each solve still
-    /// iterates to the KKT tolerance from there; only its path is shortened.
+    /// held-out track (`held_out`), its clock profiles' points (`profile_<plate>_<offset>`)
+    /// and any run folders inside it; a profile's re-fit held at its vertex starts from
+    /// the kept one of that plate held nearest. Each solve still iterates to the KKT
+    /// tolerance from there; only its path is shortened.
     #[arg(long = "start", value_name = "DIR")]
     starts: Vec<PathBuf>,
 }

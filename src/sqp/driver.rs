@@ -223,8 +223,36 @@ pub(super) fn run(
         let mut infeas = viol.iter().copied().fold(0.0, f64::max);
         let curvature = step::curvature_in_use(settings, infeas, &history);
         // the exact mode's curvature where the accepted point's evaluation went without
-        // (its violation said Gauss–Newton): the same evaluation again, with it
+        // (its violation said Gauss–Newton): where asked, first the Gauss–Newton QP, whose
+        // multipliers may already show a KKT point (a kept solution re-evaluated: the
+        // curvature, most of a compliant foot's evaluation, is then not needed);
+        // otherwise the same evaluation again, with it
         if curvature && eval.exact() && st.hess.is_none() {
+            if let Some(rec) = settings
+                .gauss_newton_check
+                .then(|| {
+                    gauss_newton_check(
+                        nlp,
+                        settings,
+                        &s,
+                        &st,
+                        (&lambda, &nu),
+                        (&bfgs, &zero_blocks),
+                        mem,
+                        &eval,
+                        (iter, infeas, last_step, start),
+                    )
+                })
+                .flatten()
+            {
+                observer.iteration(&rec.record);
+                kkt = rec.record.kkt;
+                history.push(rec.record);
+                lambda = rec.lambda;
+                nu = rec.nu;
+                status = SqpStatus::Converged;
+                break;
+            }
             match eval.derivs(&st.w, &lambda, true) {
                 Ok((ev, hess)) => {
                     st.ev = ev;
@@ -481,6 +509,72 @@ pub(super) fn run(
 
 /// The tightest integrator tolerance the inexact SQP asks for.
 const TIGHTEST_INTEGRATION_TOL: f64 = 1e-12;
+
+/// The Gauss–Newton check of the exact mode at a point evaluated without the curvature:
+/// its QP's multipliers, a record and the multipliers if they show a KKT point at
+/// `settings.tol_kkt` (elastic QPs are not a KKT point's), otherwise `None`. Works on a
+/// copy of the step memory, so that a point that is no KKT point goes on as if unchecked.
+#[allow(clippy::too_many_arguments)]
+fn gauss_newton_check(
+    nlp: &dyn Nlp,
+    settings: &SqpSettings,
+    s: &Structure,
+    st: &State,
+    (lambda, nu): (&[f64], &[f64]),
+    blocks: (&BlockBfgs, &BlockBfgs),
+    mut mem: StepMemory,
+    eval: &Evaluator<'_>,
+    (iter, infeas, last_step, start): (usize, f64, f64, Instant),
+) -> Option<Checked> {
+    let sub = step::subproblem(nlp, settings, s, st, (lambda, nu), false, blocks, &mut mem).ok()?;
+    let step = step::solve(eval, &sub, &mut mem).ok()?;
+    if step.elastic {
+        return None;
+    }
+    let sol = step.sol;
+    let kkt = kkt::residual(&KktPoint {
+        grad: &st.ev.grad,
+        jac_rows: &s.jac_rows,
+        jac_cols: &s.jac_cols,
+        jac: &st.ev.jac,
+        c: &st.ev.c,
+        c_lb: &s.c_lb,
+        c_ub: &s.c_ub,
+        lambda: &sol.lambda,
+        nu: &sol.nu,
+        w: &st.w,
+        w_lb: &s.w_lb,
+        w_ub: &s.w_ub,
+        infeasibility: infeas,
+    });
+    if !kkt::converged(kkt, settings.tol_kkt, false) {
+        return None;
+    }
+    Some(Checked {
+        record: IterationRecord {
+            iter,
+            objective: st.ev.f,
+            infeasibility: infeas,
+            kkt,
+            step: last_step,
+            seconds: start.elapsed().as_secs_f64(),
+            qp_iterations: sol.iterations,
+            integration_tol: nlp.integration_tolerance(),
+            hessian_shift: None,
+            qp_route: Some(step.route),
+        },
+        lambda: sol.lambda,
+        nu: sol.nu,
+    })
+}
+
+/// A KKT point shown by [`gauss_newton_check`]: its iteration record and the QP's
+/// multipliers.
+struct Checked {
+    record: IterationRecord,
+    lambda: Vec<f64>,
+    nu: Vec<f64>,
+}
 
 /// Tighten the NLP's integrator tolerance to `inexact_integration · kkt` when that is
 /// less than half the current one (so that it changes in few, clear steps); whether it

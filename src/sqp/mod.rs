@@ -254,6 +254,20 @@ pub struct SqpSettings {
     /// (docs/foot-identification.md, stop 53).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub violation_growth: Option<f64>,
+    /// Exact mode with the curvature on demand ([`Nlp::curvature_on_demand`]): at a
+    /// point evaluated without the curvature where a step would use it, first solve the
+    /// Gauss–Newton QP, and stop there if its multipliers show a KKT point (default:
+    /// false). A KKT point is one whatever QP gave its multipliers; this saves the
+    /// curvature, most of a compliant foot's evaluation (the gain trial at 600 Hz: 3.4 s
+    /// of 4.5 s), where a solve starts at a kept solution of its own problem, as a
+    /// diagnosis's clock-profile points do from an earlier diagnosis's (`diagnose
+    /// --start`). Off where a looser round is followed by a tighter one (check-point
+    /// rounds, `workflows::refine`): there the Gauss–Newton multipliers' residual often
+    /// meets the loose tolerance and not the tight one (the gain trial's kept track:
+    /// 2.9e-5 against the exact QP's 4.7e-6), and the second round then needs the
+    /// curvature anyway.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub gauss_newton_check: bool,
     /// Fault injection for tests: the QP solves (numbered from 0 over the whole solve,
     /// elastic and second-order-correction QPs included) that fail as if Clarabel had
     /// stopped with a numerical error, so that the recovery path can be shown to work.
@@ -278,6 +292,7 @@ impl Default for SqpSettings {
             exact_convexification: ExactConvexification::Augmented,
             inexact_integration: 1e-5,
             violation_growth: None,
+            gauss_newton_check: false,
             inject_qp_failures: Vec::new(),
         }
     }

@@ -76,8 +76,8 @@ pub struct DiagnoseRequest {
     /// Kept solutions to start the diagnosis's own solves from (`--start`): run folders
     /// with `setup.json` and `solution.json` (an earlier re-fit `<RUN>+<effect>`), or
     /// folders of them (an earlier `<RUN>-diagnose`, whose `held_out` is its held-out
-    /// track); each starts the solve of the same problem, which still iterates to the KKT
-    /// tolerance from there.
+    /// track and whose `profile_*` are its clock profiles' points); each starts the solve
+    /// of the same problem, which still iterates to the KKT tolerance from there.
     pub starts: Vec<PathBuf>,
 }
 
@@ -613,6 +613,7 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
                 &resid,
                 &t,
                 full.as_ref(),
+                folder.staging_path(),
                 progress,
             )?;
             // the profile's re-fit is the candidate's test when it lowers J more

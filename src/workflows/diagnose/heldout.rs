@@ -183,12 +183,7 @@ impl HeldOutBase {
     /// `solution.json`), so that a later diagnosis of the run can start from it
     /// (`--start`).
     pub(super) fn write_into(&self, dir: &std::path::Path) -> anyhow::Result<()> {
-        std::fs::create_dir_all(dir).map_err(|e| anyhow!("{}: {e}", dir.display()))?;
-        let setup = serde_json::to_string_pretty(&self.setup)?;
-        let solution = serde_json::to_string_pretty(&self.solution)?;
-        crate::runfolder::write_atomic(dir, "setup.json", setup.as_bytes())?;
-        crate::runfolder::write_atomic(dir, "solution.json", solution.as_bytes())?;
-        Ok(())
+        super::starts::keep(dir, &self.setup, &self.solution)
     }
 }
 

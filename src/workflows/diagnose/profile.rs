@@ -76,6 +76,21 @@ fn clock(side: &str, offset: f64, free: bool) -> EffectSpec {
     }
 }
 
+/// The problem of a profile's point: the run's with the plate's clock `held`.
+fn point_setup(setup: &TrackingRunSetup, held: &EffectSpec) -> TrackingRunSetup {
+    TrackingRunSetup {
+        effects: setup.effects.iter().chain([held]).cloned().collect(),
+        ..setup.clone()
+    }
+}
+
+/// The folder, inside the diagnosis folder, that keeps the solution of the point of
+/// `side`'s clock held at `offset` (s): `profile_left_+20.0ms`. A later diagnosis of the
+/// run given the diagnosis folder with `--start` starts that point there.
+pub fn point_folder(side: &str, offset: f64) -> String {
+    format!("profile_{side}_{:+.1}ms", 1e3 * offset)
+}
+
 /// The test made of a profile's free re-fit, the re-fit and its per-channel errors
 /// against the run.
 pub(super) type ProfileTest = (ScoreTest, TrackedRun, RunDiff);
@@ -93,6 +108,7 @@ pub(super) fn profile_clock(
     resid: &Residuals,
     local: &ScoreTest,
     noise: Option<&FullModel>,
+    keep: &std::path::Path,
     progress: &dyn Progress,
 ) -> anyhow::Result<(ClockProfile, Option<ProfileTest>)> {
     let side = plate(c).unwrap_or("both");
@@ -101,8 +117,12 @@ pub(super) fn profile_clock(
     } else {
         format!("the {side} plate's")
     };
-    let settings = |p: &TrackingProblem| {
-        tracking_sqp_settings(
+    // a point started at a kept solution of its own problem (`--start`) is a KKT point
+    // at its first evaluation: the Gauss–Newton QP's multipliers show it without the
+    // curvature
+    let settings = |p: &TrackingProblem| crate::sqp::SqpSettings {
+        gauss_newton_check: true,
+        ..tracking_sqp_settings(
             POINT_TOL,
             POINT_MAX_ITER.min(args.max_iter),
             None,
@@ -170,16 +190,33 @@ pub(super) fn profile_clock(
         let offset = offsets[next];
         next += 1;
         let t0 = std::time::Instant::now();
+        let held = clock(side, offset, false);
+        let want = point_setup(setup, &held);
         let solved =
-            TrackingProblem::build(setup, &[clock(side, offset, false)]).and_then(|mut p| {
-                p.setup
-                    .start_from(base.solution)
-                    .map_err(|e| anyhow::anyhow!(e))?;
+            TrackingProblem::build(setup, std::slice::from_ref(&held)).and_then(|mut p| {
+                // the point's kept solution (`--start`, an earlier diagnosis's
+                // `profile_*`) when it fits, otherwise the run's
+                let started = super::starts::start_from_kept(
+                    args,
+                    &want,
+                    &mut p,
+                    || TrackingProblem::build(setup, std::slice::from_ref(&held)),
+                    "starting from the run's solution",
+                    progress,
+                )?;
+                if !started {
+                    p.setup
+                        .start_from(base.solution)
+                        .map_err(|e| anyhow::anyhow!(e))?;
+                }
                 let (res, sol) = p.solve(&settings(&p), &Quiet)?;
                 let costs = match base_costs {
                     Some(_) if res.objective.is_finite() => p.sample_costs(&sol)?,
                     _ => Vec::new(),
                 };
+                if res.objective.is_finite() {
+                    super::starts::keep(&keep.join(point_folder(side, offset)), &want, &sol)?;
+                }
                 Ok((res, sol, costs))
             });
         let seconds = t0.elapsed().as_secs_f64();

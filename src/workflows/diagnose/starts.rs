@@ -20,6 +20,7 @@
 use super::super::track::TrackingProblem;
 use super::super::{note, warn_note, Progress};
 use super::DiagnoseRequest;
+use crate::model::effects::EffectSpec;
 use crate::problems::diagnose::TrackingRunSetup;
 use crate::problems::evaluation::GaitSolution;
 use anyhow::{anyhow, bail, Context};
@@ -106,17 +107,67 @@ fn find(
     if args.starts.is_empty() {
         return Ok(None);
     }
-    let want = key(want)?;
+    let (exact, (loose, held)) = (key(want)?, held_clocks(want)?);
+    // the same problem; failing that, the same problem with a plate's clock held elsewhere
+    // (a profile's re-fit held at its parabola's vertex, which moves with the points'
+    // costs in their last digits), the nearest
+    let mut nearest: Option<(f64, PathBuf)> = None;
     for dir in kept_solutions(&args.starts)? {
         let setup = TrackingRunSetup::read(&dir.join("setup.json"))
             .map_err(|e| anyhow!("--start {}: {e}", dir.display()))?;
-        if key(&setup)? == want {
-            let solution = super::super::read_solution(&dir)
-                .with_context(|| format!("--start {}", dir.display()))?;
-            return Ok(Some((dir, solution)));
+        if key(&setup)? == exact {
+            nearest = Some((0.0, dir));
+            break;
+        }
+        let (theirs, at) = held_clocks(&setup)?;
+        if !held.is_empty() && theirs == loose && at.len() == held.len() {
+            let distance = held
+                .iter()
+                .zip(&at)
+                .map(|(a, b)| (a - b).abs())
+                .sum::<f64>();
+            if nearest.as_ref().is_none_or(|(d, _)| distance < *d) {
+                nearest = Some((distance, dir));
+            }
         }
     }
-    Ok(None)
+    let Some((_, dir)) = nearest else {
+        return Ok(None);
+    };
+    let solution =
+        super::super::read_solution(&dir).with_context(|| format!("--start {}", dir.display()))?;
+    Ok(Some((dir, solution)))
+}
+
+/// [`key`] with each held plate clock's offset left out, and those offsets (s) in the
+/// setup's order: the problem up to where its clocks are held.
+fn held_clocks(setup: &TrackingRunSetup) -> anyhow::Result<(serde_json::Value, Vec<f64>)> {
+    let mut offsets = Vec::new();
+    let mut loose = setup.clone();
+    for e in &mut loose.effects {
+        if let EffectSpec::ForcePlateTimeOffset { offset, free, .. } = e {
+            if free.is_empty() {
+                offsets.push(*offset);
+                *offset = 0.0;
+            }
+        }
+    }
+    Ok((key(&loose)?, offsets))
+}
+
+/// Keep `solution` of the problem `setup` in `dir` (`setup.json`, `solution.json`), so
+/// that a later diagnosis of the run can start that solve from it (`--start`).
+pub(super) fn keep(
+    dir: &Path,
+    setup: &TrackingRunSetup,
+    solution: &GaitSolution,
+) -> anyhow::Result<()> {
+    std::fs::create_dir_all(dir).map_err(|e| anyhow!("{}: {e}", dir.display()))?;
+    let setup = serde_json::to_string_pretty(setup)?;
+    let solution = serde_json::to_string_pretty(solution)?;
+    crate::runfolder::write_atomic(dir, "setup.json", setup.as_bytes())?;
+    crate::runfolder::write_atomic(dir, "solution.json", solution.as_bytes())?;
+    Ok(())
 }
 
 /// Start `prob`, the problem `want`, from its kept solution among `args.starts` when there
@@ -159,7 +210,6 @@ pub(super) fn start_from_kept(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::effects::EffectSpec;
 
     fn setup(effects: &[&str], stride: Option<usize>) -> TrackingRunSetup {
         let mut s: TrackingRunSetup = serde_json::from_value(serde_json::json!({
