@@ -8,11 +8,11 @@ use super::evaluator::Evaluator;
 use super::hessian::BlockBfgs;
 use super::kkt::{self, KktPoint};
 use super::line_search::{self, Filter, Search};
-use super::qp::{QpData, Triplets};
+use super::qp::{QpData, QpSolution, Triplets};
 use super::step::{self, StepMemory};
 use super::{
-    violations, HessianMode, IterationRecord, Nlp, NlpEval, Observer, SqpResult, SqpSettings,
-    SqpStatus, SqpTimings, Violation,
+    violations, HessianMode, IterationRecord, Nlp, NlpEval, Observer, QpRoute, SqpResult,
+    SqpSettings, SqpStatus, SqpTimings, Violation,
 };
 use std::time::Instant;
 
@@ -304,37 +304,19 @@ pub(super) fn run(
             }
         };
         // --- KKT residual at the current point with the QP multipliers
-        kkt = kkt::residual(&KktPoint {
-            grad: &st.ev.grad,
-            jac_rows: &s.jac_rows,
-            jac_cols: &s.jac_cols,
-            jac: &st.ev.jac,
-            c: &st.ev.c,
-            c_lb: &s.c_lb,
-            c_ub: &s.c_ub,
-            lambda: &sol.lambda,
-            nu: &sol.nu,
-            w: &st.w,
-            w_lb: &s.w_lb,
-            w_ub: &s.w_ub,
-            infeasibility: infeas,
-        });
+        kkt = kkt_with(&s, &st, &sol, infeas);
         // --- inexact SQP: integrate more precisely as the optimum nears
         let tightened = !kkt::converged(kkt, settings.tol_kkt, elastic)
             && tighten_integration(nlp, settings, kkt);
-        let rec = IterationRecord {
-            iter,
-            objective: st.ev.f,
-            infeasibility: infeas,
+        let shift = (curvature && settings.hessian == HessianMode::Exact).then_some(mem.shift);
+        let rec = record(
+            nlp,
+            &st,
+            (iter, infeas, last_step, start),
             kkt,
-            step: last_step,
-            seconds: start.elapsed().as_secs_f64(),
-            qp_iterations: sol.iterations,
-            integration_tol: nlp.integration_tolerance(),
-            hessian_shift: (curvature && settings.hessian == HessianMode::Exact)
-                .then_some(mem.shift),
-            qp_route: Some(route),
-        };
+            (&sol, route),
+            shift,
+        );
         let go_on = observer.iteration(&rec);
         history.push(rec);
         lambda.clone_from(&sol.lambda);
@@ -507,6 +489,51 @@ pub(super) fn run(
     }
 }
 
+/// The KKT residual at the point `st` with the multipliers of the QP solution `sol`
+/// (`infeas`: its constraint violation).
+fn kkt_with(s: &Structure, st: &State, sol: &QpSolution, infeas: f64) -> f64 {
+    kkt::residual(&KktPoint {
+        grad: &st.ev.grad,
+        jac_rows: &s.jac_rows,
+        jac_cols: &s.jac_cols,
+        jac: &st.ev.jac,
+        c: &st.ev.c,
+        c_lb: &s.c_lb,
+        c_ub: &s.c_ub,
+        lambda: &sol.lambda,
+        nu: &sol.nu,
+        w: &st.w,
+        w_lb: &s.w_lb,
+        w_ub: &s.w_ub,
+        infeasibility: infeas,
+    })
+}
+
+/// The record of iteration `iter` at the point `st` (`infeas`: its violation; `last_step`:
+/// the step that reached it; `start`: the solve's start), whose QP `sol` came by `route`
+/// (`hessian_shift`: the exact Hessian's inertia correction, where it was used).
+fn record(
+    nlp: &dyn Nlp,
+    st: &State,
+    (iter, infeas, last_step, start): (usize, f64, f64, Instant),
+    kkt: f64,
+    (sol, route): (&QpSolution, QpRoute),
+    hessian_shift: Option<f64>,
+) -> IterationRecord {
+    IterationRecord {
+        iter,
+        objective: st.ev.f,
+        infeasibility: infeas,
+        kkt,
+        step: last_step,
+        seconds: start.elapsed().as_secs_f64(),
+        qp_iterations: sol.iterations,
+        integration_tol: nlp.integration_tolerance(),
+        hessian_shift,
+        qp_route: Some(route),
+    }
+}
+
 /// The tightest integrator tolerance the inexact SQP asks for.
 const TIGHTEST_INTEGRATION_TOL: f64 = 1e-12;
 
@@ -532,37 +559,19 @@ fn gauss_newton_check(
         return None;
     }
     let sol = step.sol;
-    let kkt = kkt::residual(&KktPoint {
-        grad: &st.ev.grad,
-        jac_rows: &s.jac_rows,
-        jac_cols: &s.jac_cols,
-        jac: &st.ev.jac,
-        c: &st.ev.c,
-        c_lb: &s.c_lb,
-        c_ub: &s.c_ub,
-        lambda: &sol.lambda,
-        nu: &sol.nu,
-        w: &st.w,
-        w_lb: &s.w_lb,
-        w_ub: &s.w_ub,
-        infeasibility: infeas,
-    });
+    let kkt = kkt_with(s, st, &sol, infeas);
     if !kkt::converged(kkt, settings.tol_kkt, false) {
         return None;
     }
     Some(Checked {
-        record: IterationRecord {
-            iter,
-            objective: st.ev.f,
-            infeasibility: infeas,
+        record: record(
+            nlp,
+            st,
+            (iter, infeas, last_step, start),
             kkt,
-            step: last_step,
-            seconds: start.elapsed().as_secs_f64(),
-            qp_iterations: sol.iterations,
-            integration_tol: nlp.integration_tolerance(),
-            hessian_shift: None,
-            qp_route: Some(step.route),
-        },
+            (&sol, step.route),
+            None,
+        ),
         lambda: sol.lambda,
         nu: sol.nu,
     })

@@ -466,7 +466,13 @@ fn backward_sweep(
                 if let (Some((q_end, t_r)), Some(_)) = (opened[c].take(), at) {
                     let nodes = &sweep.cells[c].2;
                     // L_k(s) = Σ_j coef[k][j] (t_r − s)^j; M_k = Σ_j coef[k][j] (q_j(a) − q_j(b))
-                    let coef = lagrange_coefficients(nodes, t_r);
+                    // nodes too close to tell apart in floating point: as if repeated
+                    let coef = lagrange_coefficients(nodes, t_r).ok_or(
+                        IntegratorError::BadOutputTime {
+                            index: c,
+                            t: sweep.cells[c].0,
+                        },
+                    )?;
                     for (k, m) in out[c].iter_mut().enumerate() {
                         for (j, &ckj) in coef[k].iter().enumerate() {
                             for i in 0..nx {
@@ -501,18 +507,18 @@ fn backward_sweep(
 }
 
 /// The coefficients `c[k][j]` of the Lagrange polynomials of `nodes` in powers of
-/// `(t_r − t)`: `L_k(t) = Σ_j c[k][j] (t_r − t)^j`, `L_k(nodes[i]) = δ_ki`.
-fn lagrange_coefficients(nodes: &[f64], t_r: f64) -> Vec<Vec<f64>> {
+/// `(t_r − t)`: `L_k(t) = Σ_j c[k][j] (t_r − t)^j`, `L_k(nodes[i]) = δ_ki`; `None` when
+/// their Vandermonde matrix cannot be inverted (nodes that coincide in floating point).
+fn lagrange_coefficients(nodes: &[f64], t_r: f64) -> Option<Vec<Vec<f64>>> {
     let n = nodes.len();
     let s: Vec<f64> = nodes.iter().map(|&t| t_r - t).collect();
     // V[i][j] = s_i^j; the coefficients of L_k solve V c = e_k, i.e. c = column k of V⁻¹
     let v = nalgebra::DMatrix::from_fn(n, n, |i, j| s[i].powi(j as i32));
-    let inv = v
-        .try_inverse()
-        .unwrap_or_else(|| nalgebra::DMatrix::zeros(n, n));
-    (0..n)
+    let inv = v.try_inverse()?;
+    let coef: Vec<Vec<f64>> = (0..n)
         .map(|k| (0..n).map(|j| inv[(j, k)]).collect())
-        .collect()
+        .collect();
+    coef.iter().flatten().all(|c| c.is_finite()).then_some(coef)
 }
 
 /// `CVQuadRhsFnB`: the running moments' integrands `−(t_r − t)^j μ(t)` (backward in time,
@@ -599,4 +605,29 @@ unsafe extern "C" fn adjoint_jac_callback(
         }
         Ok(())
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::lagrange_coefficients;
+
+    /// The Lagrange polynomials in powers of `t_r − t` are one at their own node and zero
+    /// at the others; repeated nodes have none (never zeros in their place).
+    #[test]
+    fn lagrange_polynomials_interpolate_their_nodes_and_repeated_nodes_have_none() {
+        let (nodes, t_r) = ([0.10, 0.13, 0.17, 0.2], 0.21);
+        let coef = lagrange_coefficients(&nodes, t_r).unwrap();
+        for (k, c) in coef.iter().enumerate() {
+            for (i, &t) in nodes.iter().enumerate() {
+                let l: f64 = c
+                    .iter()
+                    .enumerate()
+                    .map(|(j, ckj)| ckj * (t_r - t).powi(j as i32))
+                    .sum();
+                let want = if i == k { 1.0 } else { 0.0 };
+                assert!((l - want).abs() < 1e-9, "L_{k}({t}) = {l}");
+            }
+        }
+        assert!(lagrange_coefficients(&[0.1, 0.1, 0.2], t_r).is_none());
+    }
 }

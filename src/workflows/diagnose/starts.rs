@@ -104,20 +104,30 @@ fn find(
     args: &DiagnoseRequest,
     want: &TrackingRunSetup,
 ) -> anyhow::Result<Option<(PathBuf, GaitSolution)>> {
-    if args.starts.is_empty() {
+    let Some(dir) = find_folder(&args.starts, want)? else {
+        return Ok(None);
+    };
+    let solution =
+        super::super::read_solution(&dir).with_context(|| format!("--start {}", dir.display()))?;
+    Ok(Some((dir, solution)))
+}
+
+/// The folder among the kept solutions of `starts` that solves `want`: the first of the
+/// same problem; failing that, the one of the same problem with its plates' clocks held
+/// nearest `want`'s (a profile's re-fit held at its parabola's vertex, which moves with
+/// the points' costs in their last digits). Never another effect set's, cost's or half
+/// cycle's, nor one with another plate's clock held or a clock free.
+fn find_folder(starts: &[PathBuf], want: &TrackingRunSetup) -> anyhow::Result<Option<PathBuf>> {
+    if starts.is_empty() {
         return Ok(None);
     }
     let (exact, (loose, held)) = (key(want)?, held_clocks(want)?);
-    // the same problem; failing that, the same problem with a plate's clock held elsewhere
-    // (a profile's re-fit held at its parabola's vertex, which moves with the points'
-    // costs in their last digits), the nearest
     let mut nearest: Option<(f64, PathBuf)> = None;
-    for dir in kept_solutions(&args.starts)? {
+    for dir in kept_solutions(starts)? {
         let setup = TrackingRunSetup::read(&dir.join("setup.json"))
             .map_err(|e| anyhow!("--start {}: {e}", dir.display()))?;
         if key(&setup)? == exact {
-            nearest = Some((0.0, dir));
-            break;
+            return Ok(Some(dir));
         }
         let (theirs, at) = held_clocks(&setup)?;
         if !held.is_empty() && theirs == loose && at.len() == held.len() {
@@ -131,12 +141,7 @@ fn find(
             }
         }
     }
-    let Some((_, dir)) = nearest else {
-        return Ok(None);
-    };
-    let solution =
-        super::super::read_solution(&dir).with_context(|| format!("--start {}", dir.display()))?;
-    Ok(Some((dir, solution)))
+    Ok(nearest.map(|(_, dir)| dir))
 }
 
 /// [`key`] with each held plate clock's offset left out, and those offsets (s) in the
@@ -268,5 +273,80 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("holds no solution"), "{e}");
+    }
+
+    /// A held clock with no exact match starts from the kept solution of the same problem
+    /// whose clock is held nearest, never from one with another plate's clock, another
+    /// effect set, a free clock or another half cycle; an exact match wins over a nearer one.
+    #[test]
+    fn a_held_clock_starts_from_the_nearest_kept_clock_of_the_same_problem_only() {
+        let tmp = tempfile::tempdir().unwrap();
+        let clock = |side: &str, offset: f64, more: &[&str]| {
+            let spec = format!("force_plate_time_offset:side={side},offset={offset},free=");
+            let mut effects = vec![spec.as_str()];
+            effects.extend_from_slice(more);
+            setup(&effects, None)
+        };
+        let kept = tmp.path().join("kept");
+        keep(&kept.join("a_left_+20"), &clock("left", 0.020, &[]));
+        keep(&kept.join("b_left_-20"), &clock("left", -0.020, &[]));
+        keep(&kept.join("c_right_-5"), &clock("right", -0.005, &[]));
+        keep(
+            &kept.join("d_left_-6_knee"),
+            &clock("left", -0.006, &["passive_joint_stiffness:joint=knee"]),
+        );
+        let mut other_half = clock("left", -0.006, &[]);
+        other_half.stride = Some(2);
+        keep(&kept.join("e_left_-6_stride"), &other_half);
+        keep(
+            &kept.join("f_left_free"),
+            &setup(&["force_plate_time_offset:side=left,offset=-0.006"], None),
+        );
+        let starts = [kept.clone()];
+        let found = |want: &TrackingRunSetup| {
+            find_folder(&starts, want)
+                .unwrap()
+                .map(|d| d.file_name().unwrap().to_string_lossy().into_owned())
+        };
+        // the left clock held at -6 ms: the nearest left clock of the same problem, -20 ms
+        assert_eq!(
+            found(&clock("left", -0.006, &[])).as_deref(),
+            Some("b_left_-20")
+        );
+        assert_eq!(
+            found(&clock("left", 0.012, &[])).as_deref(),
+            Some("a_left_+20")
+        );
+        // the right clock held: only the right plate's kept clock
+        assert_eq!(
+            found(&clock("right", 0.030, &[])).as_deref(),
+            Some("c_right_-5")
+        );
+        // an exact match is taken though a nearer one comes first by name
+        keep(&kept.join("0_left_+15"), &clock("left", 0.015, &[]));
+        assert_eq!(
+            found(&clock("left", 0.020, &[])).as_deref(),
+            Some("a_left_+20")
+        );
+        // no held clock of this problem: none
+        assert_eq!(
+            found(&clock(
+                "left",
+                -0.006,
+                &["passive_joint_stiffness:joint=hip"]
+            )),
+            None
+        );
+        let mut third_half = clock("left", -0.006, &[]);
+        third_half.stride = Some(3);
+        assert_eq!(found(&third_half), None);
+        assert_eq!(
+            found(&setup(
+                &["force_plate_time_offset:side=left,offset=0.01"],
+                None
+            )),
+            None
+        );
+        assert_eq!(found(&setup(&[], None)), None);
     }
 }
