@@ -44,10 +44,10 @@ fn the_compliant_cop_mass_and_gain_refits_bring_every_channel_near_the_untouched
     }
 }
 
-/// `trial` tracked from its kept solution and diagnosed afresh against the untouched
-/// trial's kept diagnosis: the comparison's first row is `row` (label, parameter), read
-/// within 20 % or 2 sd of `truth`; with `favoured`, also significant, the joint gains
-/// favouring that hypothesis. The comparison, for the caller's further checks.
+/// `trial` tracked from its kept solution and diagnosed afresh from its kept solves
+/// against the untouched trial's fresh diagnosis: the comparison's first row is `row`
+/// (label, parameter), read within 20 % or 2 sd of `truth`; with `favoured`, also
+/// significant, the joint gains favouring that hypothesis. The comparison, for the caller's further checks.
 fn diagnosed_first_against_the_untouched_trial(
     trial: &str,
     row: (&str, &str),

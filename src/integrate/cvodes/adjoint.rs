@@ -15,13 +15,12 @@ use std::ptr;
 use sundials_sys as sys;
 
 use super::callbacks::{
-    all_finite, check_dim, check_interval, check_lin_setup, check_setup, error_handler,
-    jac_callback, null_error, nv_slice, nv_slice_mut, rhs_callback, run_callback, CallCtx,
-    CallGuard, Shared,
+    all_finite, check_dim, check_interval, check_lin_setup, check_setup, null_error, nv_slice,
+    nv_slice_mut, run_callback, CallCtx, CallGuard, Shared,
 };
 use super::integrator::Integrator;
 use super::settings::{IntegratorError, IntegratorSettings};
-use super::{dense_lu, vector_ops};
+use super::{dense_lu, forward, vector_ops};
 use crate::integrate::{Ode, OdeError};
 
 /// Forward steps between two check points. One interval of the gait model takes a few
@@ -76,31 +75,32 @@ impl Adjoint {
             which: None,
         };
         // SAFETY: every call receives pointers created here and checked for null; `shared`
-        // is a live heap block that outlives the CVODES memory.
+        // is a live heap block that outlives the CVODES memory, and the slots are the fresh
+        // value's null fields.
         unsafe {
-            check_setup(
-                "SUNContext_Create",
-                sys::SUNContext_Create(ptr::null_mut(), &mut this.ctx),
+            forward::create(
+                forward::Slots {
+                    ctx: &mut this.ctx,
+                    mem: &mut this.mem,
+                    y: &mut this.y,
+                    mat: &mut this.mat,
+                    ls: &mut this.ls,
+                },
+                (nx, n),
+                settings,
+                shared,
+                forward::Options {
+                    fused_ops: false,
+                    initial_step: None,
+                },
             )?;
-            if this.ctx.is_null() {
-                return Err(null_error("SUNContext_Create"));
+            // the backward problem's state and moments, and its own Newton solver
+            this.yb = sys::N_VNew_Serial(n, this.ctx);
+            if this.yb.is_null() {
+                return Err(null_error("N_VNew_Serial"));
             }
-            this.mem = sys::CVodeCreate(settings.method.lmm(), this.ctx);
-            if this.mem.is_null() {
-                return Err(null_error("CVodeCreate"));
-            }
-            check_setup(
-                "CVodeSetErrHandlerFn",
-                sys::CVodeSetErrHandlerFn(this.mem, Some(error_handler), shared.cast()),
-            )?;
-            for v in [&mut this.y, &mut this.yb] {
-                *v = sys::N_VNew_Serial(n, this.ctx);
-                if v.is_null() {
-                    return Err(null_error("N_VNew_Serial"));
-                }
-                vector_ops::install(*v);
-                sys::N_VConst(0.0, *v);
-            }
+            vector_ops::install(this.yb);
+            sys::N_VConst(0.0, this.yb);
             let nq = sys::sunindextype::try_from(nx * MAX_CELL_NODES).unwrap_or(n);
             this.qb = sys::N_VNew_Serial(nq, this.ctx);
             if this.qb.is_null() {
@@ -108,47 +108,14 @@ impl Adjoint {
             }
             vector_ops::install(this.qb);
             sys::N_VConst(0.0, this.qb);
-            check_setup(
-                "CVodeInit",
-                sys::CVodeInit(this.mem, Some(rhs_callback), 0.0, this.y),
-            )?;
-            check_setup(
-                "CVodeSStolerances",
-                sys::CVodeSStolerances(this.mem, settings.rtol, settings.atol),
-            )?;
-            check_setup(
-                "CVodeSetUserData",
-                sys::CVodeSetUserData(this.mem, shared.cast()),
-            )?;
-            let max_steps = c_long::try_from(settings.max_steps).unwrap_or(c_long::MAX);
-            check_setup(
-                "CVodeSetMaxNumSteps",
-                sys::CVodeSetMaxNumSteps(this.mem, max_steps),
-            )?;
-            if let Some(order) = settings.max_order {
-                check_setup("CVodeSetMaxOrd", sys::CVodeSetMaxOrd(this.mem, order))?;
+            this.mat_b = sys::SUNDenseMatrix(n, n, this.ctx);
+            if this.mat_b.is_null() {
+                return Err(null_error("SUNDenseMatrix"));
             }
-            for (mat, ls) in [
-                (&mut this.mat, &mut this.ls),
-                (&mut this.mat_b, &mut this.ls_b),
-            ] {
-                *mat = sys::SUNDenseMatrix(n, n, this.ctx);
-                if mat.is_null() {
-                    return Err(null_error("SUNDenseMatrix"));
-                }
-                *ls = dense_lu::new(nx, this.ctx);
-                if ls.is_null() {
-                    return Err(null_error("SUNLinSolNewEmpty"));
-                }
+            this.ls_b = dense_lu::new(nx, this.ctx);
+            if this.ls_b.is_null() {
+                return Err(null_error("SUNLinSolNewEmpty"));
             }
-            check_lin_setup(
-                "CVodeSetLinearSolver",
-                sys::CVodeSetLinearSolver(this.mem, this.ls, this.mat),
-            )?;
-            check_lin_setup(
-                "CVodeSetJacFn",
-                sys::CVodeSetJacFn(this.mem, Some(jac_callback)),
-            )?;
             check_setup(
                 "CVodeAdjInit",
                 sys::CVodeAdjInit(this.mem, CHECKPOINT_STEPS, sys::CV_HERMITE),

@@ -7,12 +7,11 @@ use std::ptr;
 use sundials_sys as sys;
 
 use super::callbacks::{
-    all_finite, check_dim, check_interval, check_lin_setup, check_setup, error_handler,
-    jac_callback, null_error, nv_slice, nv_slice_mut, rhs_callback, sens_rhs_callback, CallCtx,
-    CallGuard, Shared,
+    all_finite, check_dim, check_interval, check_setup, null_error, nv_slice, nv_slice_mut,
+    sens_rhs_callback, CallCtx, CallGuard, Shared,
 };
+use super::forward;
 use super::settings::{IntegrationStats, IntegratorError, IntegratorSettings};
-use super::{dense_lu, vector_ops};
 use crate::integrate::Ode;
 
 /// A reusable CVODES instance for ODEs with `nx` states and `np` parameters.
@@ -99,80 +98,26 @@ impl Integrator {
             adjoint: None,
         };
         // SAFETY: every call below receives pointers created in this function and checked
-        // for null; `shared` is a live heap block that outlives the CVODES memory.
+        // for null; `shared` is a live heap block that outlives the CVODES memory, and the
+        // slots are the fresh value's null fields.
         unsafe {
-            check_setup(
-                "SUNContext_Create",
-                sys::SUNContext_Create(ptr::null_mut(), &mut this.ctx),
-            )?;
-            if this.ctx.is_null() {
-                return Err(null_error("SUNContext_Create"));
-            }
-            this.mem = sys::CVodeCreate(this.settings.method.lmm(), this.ctx);
-            if this.mem.is_null() {
-                return Err(null_error("CVodeCreate"));
-            }
-            let eh_data: *mut c_void = shared.cast();
-            check_setup(
-                "CVodeSetErrHandlerFn",
-                sys::CVodeSetErrHandlerFn(this.mem, Some(error_handler), eh_data),
-            )?;
-            this.y = sys::N_VNew_Serial(n, this.ctx);
-            if this.y.is_null() {
-                return Err(null_error("N_VNew_Serial"));
-            }
-            // Fused vector kernels: CVODES then updates all sensitivity vectors in one
-            // pass per operation instead of one `N_VLinearSum` per vector (the work and
-            // its vectors are cloned from `y`, so they inherit the setting).
-            check_setup(
-                "N_VEnableFusedOps_Serial",
-                sys::N_VEnableFusedOps_Serial(this.y, 1),
-            )?;
-            // and footfall's optimised kernels in place of the serial library's
-            // (vector_ops.rs), inherited by the clones the same way
-            vector_ops::install(this.y);
-            sys::N_VConst(0.0, this.y);
-            check_setup(
-                "CVodeInit",
-                sys::CVodeInit(this.mem, Some(rhs_callback), 0.0, this.y),
-            )?;
-            let s = &this.settings;
-            check_setup(
-                "CVodeSStolerances",
-                sys::CVodeSStolerances(this.mem, s.rtol, s.atol),
-            )?;
-            check_setup(
-                "CVodeSetUserData",
-                sys::CVodeSetUserData(this.mem, shared.cast()),
-            )?;
-            // Validated positive and within c_long in `validate`.
-            let max_steps = c_long::try_from(s.max_steps).unwrap_or(c_long::MAX);
-            check_setup(
-                "CVodeSetMaxNumSteps",
-                sys::CVodeSetMaxNumSteps(this.mem, max_steps),
-            )?;
-            if let Some(order) = s.max_order {
-                check_setup("CVodeSetMaxOrd", sys::CVodeSetMaxOrd(this.mem, order))?;
-            }
-            if let Some(h) = s.initial_step {
-                check_setup("CVodeSetInitStep", sys::CVodeSetInitStep(this.mem, h))?;
-            }
-
-            this.mat = sys::SUNDenseMatrix(n, n, this.ctx);
-            if this.mat.is_null() {
-                return Err(null_error("SUNDenseMatrix"));
-            }
-            this.ls = dense_lu::new(nx, this.ctx);
-            if this.ls.is_null() {
-                return Err(null_error("SUNLinSolNewEmpty"));
-            }
-            check_lin_setup(
-                "CVodeSetLinearSolver",
-                sys::CVodeSetLinearSolver(this.mem, this.ls, this.mat),
-            )?;
-            check_lin_setup(
-                "CVodeSetJacFn",
-                sys::CVodeSetJacFn(this.mem, Some(jac_callback)),
+            forward::create(
+                forward::Slots {
+                    ctx: &mut this.ctx,
+                    mem: &mut this.mem,
+                    y: &mut this.y,
+                    mat: &mut this.mat,
+                    ls: &mut this.ls,
+                },
+                (nx, n),
+                &this.settings,
+                shared,
+                // the sensitivity vectors are cloned from `y`: CVODES then updates them all
+                // in one pass per operation instead of one `N_VLinearSum` per vector
+                forward::Options {
+                    fused_ops: true,
+                    initial_step: this.settings.initial_step,
+                },
             )?;
 
             this.ys = sys::N_VCloneVectorArray(ns, this.y);

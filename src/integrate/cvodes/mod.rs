@@ -13,7 +13,7 @@
 //! quotients.
 //!
 //! One home per concept: `settings` (options, counters, errors), `callbacks` (the C
-//! callbacks and the block they share with CVODES), `integrator` (creation, the end-point
+//! callbacks and the block they share with CVODES), `forward` (the forward problem both create), `integrator` (creation, the end-point
 //! calls, teardown), `adjoint` (backward adjoints of stiff models), `dense` (output at interior times, events), `dense_lu` (the Newton
 //! systems' linear solver), `vector_ops` (the serial vector kernels CVODES runs on).
 
@@ -21,6 +21,7 @@ mod adjoint;
 mod callbacks;
 mod dense;
 mod dense_lu;
+mod forward;
 mod integrator;
 mod settings;
 mod vector_ops;
