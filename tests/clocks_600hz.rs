@@ -43,7 +43,7 @@ pub(crate) enum Foot {
 }
 
 impl Foot {
-    fn request(self) -> TrackRequest {
+    pub(crate) fn request(self) -> TrackRequest {
         match self {
             Foot::Rigid => {
                 let mut req = TrackRequest::new("ellipse");
@@ -100,10 +100,22 @@ pub(crate) fn diagnosed(
     reference: Option<PathBuf>,
     starts: Vec<PathBuf>,
 ) -> Value {
+    diagnosed_held_out(run, candidates, reference, starts, false)
+}
+
+/// [`diagnosed`], its significant candidates validated on the held-out half cycle when
+/// `held_out`.
+fn diagnosed_held_out(
+    run: &Path,
+    candidates: &[&str],
+    reference: Option<PathBuf>,
+    starts: Vec<PathBuf>,
+    held_out: bool,
+) -> Value {
     let req = DiagnoseRequest {
         starts,
         verify: 0,
-        held_out: false,
+        held_out,
         candidates: candidates.iter().map(|c| c.to_string()).collect(),
         profile_clocks: footfall::workflows::diagnose::profile::CLOCK_PROFILE.to_vec(),
         reference,
@@ -129,10 +141,11 @@ pub(crate) fn diagnosis_starts(trial: &str) -> Vec<PathBuf> {
 }
 
 /// The compliant foot's untouched trial tracked from its kept solution and diagnosed
-/// afresh with every candidate and the clock profiles, its solves started from its kept
-/// diagnosis's ([`diagnosis_starts`]), once per test run for every test that reads an
-/// edited trial against it (in the target's scratch folder, made anew by the first
-/// caller); the diagnosis folder, for `--reference`.
+/// afresh with every candidate, the clock profiles and the held-out validation of its
+/// significant candidates, its solves (the held-out half cycle's track among them)
+/// started from its kept diagnosis's ([`diagnosis_starts`]), once per test run for every
+/// test that reads an edited trial against it (in the target's scratch folder, made anew
+/// by the first caller); the diagnosis folder, for `--reference`.
 pub(crate) fn untouched_compliant_diagnosis() -> &'static Path {
     static FOLDER: std::sync::OnceLock<PathBuf> = std::sync::OnceLock::new();
     FOLDER.get_or_init(|| {
@@ -142,10 +155,61 @@ pub(crate) fn untouched_compliant_diagnosis() -> &'static Path {
         }
         std::fs::create_dir_all(&dir).unwrap();
         let run = tracked(Foot::Compliant, &dir, "untouched");
-        let s = diagnosed(&run, &[], None, diagnosis_starts("untouched"));
+        let s = diagnosed_held_out(&run, &[], None, diagnosis_starts("untouched"), true);
         assert!(s["plate_clocks"]["Ok"].is_object(), "{}", s["plate_clocks"]);
         PathBuf::from(format!("{}-diagnose", run.display()))
     })
+}
+
+/// Issue 23, Done-means 2, for the compliant foot: on the untouched trial every candidate
+/// significant in-sample is judged on the held-out half cycle (the other leg's, mirrored),
+/// and what is reported as found is what lowered that half cycle's cost beyond its noise
+/// band. One is (stop 81): a clock shared by both plates, the forces about 24 ms late
+/// against the kinematics (+23.6 ± 6.5 ms in-sample; held out it lowers J by 18 %, the
+/// band 5 %). The rigid ellipse with the seed's damping found the same offset, +15 ms, on
+/// all three half cycles (stop 62): a synchronisation offset of these recordings, or a lag
+/// common to both feet's contacts, which these data do not tell apart.
+#[test]
+fn the_untouched_compliant_trial_reports_only_what_its_held_out_half_cycle_confirms() {
+    let s = json(&untouched_compliant_diagnosis().join("summary.json"));
+    let ranking = s["ranking"].as_array().unwrap();
+    for t in ranking.iter().filter(|t| t["significant"] == true) {
+        let h = &t["held_out"];
+        assert!(h.is_object(), "{} was not validated: {t}", t["label"]);
+        let confirmed = h["change"].as_f64().unwrap() > h["band"].as_f64().unwrap();
+        assert_eq!(h["beyond_noise"], confirmed, "{h}");
+        assert_eq!(t["found"], confirmed && t["verdict"] == "found", "{t}");
+    }
+    let found: Vec<&Value> = ranking.iter().filter(|t| t["found"] == true).collect();
+    assert_eq!(found.len(), 1, "{}", s["found"]);
+    let clock = found[0];
+    assert_eq!(
+        clock["effect"]["type"], "force_plate_time_offset",
+        "{clock}"
+    );
+    assert_eq!(clock["effect"]["side"], "both", "{clock}");
+    let offset = clock["step_values"][0].as_f64().unwrap();
+    assert!((0.010..0.040).contains(&offset), "{offset} s");
+    assert_eq!(ranking[0]["label"], clock["label"]);
+    // the one line to add it: the clock held at its reading, to four digits (with sample
+    // targets a free one cannot move its plate's events)
+    let add = s["add_effects"].as_array().unwrap();
+    assert_eq!(add.len(), 1, "{add:?}");
+    match footfall::model::effects::EffectSpec::parse_cli(add[0].as_str().unwrap()).unwrap() {
+        footfall::model::effects::EffectSpec::ForcePlateTimeOffset {
+            side,
+            offset: held,
+            free,
+        } => assert!(
+            side == "both" && free.is_empty() && (held - offset).abs() <= 5e-4 * offset,
+            "{add:?}"
+        ),
+        e => panic!("{e:?}"),
+    }
+    assert!(s["verdict"]
+        .as_str()
+        .unwrap()
+        .contains("Add it with one line"));
 }
 
 /// Whether a reading `diff ± sd` identifies `truth` as issue 23 asks: within 20 % of it

@@ -496,3 +496,38 @@ fn heel_pad_needs_a_heel_primitive_and_sane_values() {
         assert!(err.contains(needle), "{bad}: {err}");
     }
 }
+
+/// The command-line form a diagnosis prints to add an effect reads back as the same
+/// entry: every catalog effect with all parameters freed, with none freed, and a clock
+/// held at a reading (`force_plate_time_offset:offset=0.0236,free=`, side `both`).
+#[test]
+fn an_effects_command_line_form_reads_back_as_the_same_entry() {
+    let mut entries = Vec::new();
+    for e in catalog() {
+        let mut free = e.clone();
+        free.free_all();
+        entries.push(free);
+        entries.push(e.fixed());
+    }
+    entries.push(EffectSpec::ForcePlateTimeOffset {
+        side: "both".into(),
+        offset: 0.0236,
+        free: vec![],
+    });
+    for e in entries {
+        let text = e
+            .cli_text()
+            .unwrap_or_else(|| panic!("{e:?} has no command-line form"));
+        let back = EffectSpec::parse_cli(&text).unwrap_or_else(|err| panic!("{text}: {err}"));
+        assert_eq!(
+            serde_json::to_value(&back).unwrap(),
+            serde_json::to_value(&e).unwrap(),
+            "{text}"
+        );
+    }
+    let held = EffectSpec::parse_cli("force_plate_time_offset:offset=0.0236,free=").unwrap();
+    assert_eq!(
+        held.cli_text().unwrap(),
+        "force_plate_time_offset:offset=0.0236,side=both,free="
+    );
+}

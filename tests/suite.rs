@@ -32,6 +32,7 @@ mod real_hidden_refit;
 mod reliability;
 mod report_gait;
 mod run_anywhere;
+mod stepwise_600hz;
 mod synth;
 mod torque_tracking;
 mod track_third_foot;

@@ -867,6 +867,7 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
         testable_run,
         comparison: comparison.as_ref(),
         held_out: held_base.as_ref().and_then(|b| b.as_ref().ok()),
+        clock_moves_events: setup.sample_targets || setup.one_sided_targets,
     };
     output::write(&ctx, folder, progress)
 }

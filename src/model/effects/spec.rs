@@ -443,6 +443,38 @@ impl EffectSpec {
         e
     }
 
+    /// The command-line form of the effect, `NAME:key=value,…,free=a+b`, that
+    /// [`parse_cli`](Self::parse_cli) reads back as this entry: what a diagnosis tells
+    /// the user to add with one line. `None` for an entry with a value the command line
+    /// cannot carry (a list or an object).
+    pub fn cli_text(&self) -> Option<String> {
+        let v = serde_json::to_value(self).ok()?;
+        let obj = v.as_object()?;
+        let mut parts = Vec::new();
+        // the values first, what is freed last, as people write it
+        let free = obj.get("free").map(|f| ("free", f));
+        for (k, x) in obj
+            .iter()
+            .filter(|(k, _)| *k != "free")
+            .map(|(k, x)| (k.as_str(), x))
+            .chain(free)
+        {
+            let text = match (k, x) {
+                ("type", _) | (_, serde_json::Value::Null) => continue,
+                ("free", serde_json::Value::Array(names)) => names
+                    .iter()
+                    .map(|n| n.as_str().map(String::from))
+                    .collect::<Option<Vec<_>>>()?
+                    .join("+"),
+                (_, serde_json::Value::Number(n)) => n.as_f64()?.to_string(),
+                (_, serde_json::Value::String(t)) => t.clone(),
+                _ => return None,
+            };
+            parts.push(format!("{k}={text}"));
+        }
+        Some(format!("{}:{}", self.kind(), parts.join(",")))
+    }
+
     /// Parse a command-line effect `NAME[:key=value,…]`, e.g. `ground_slope`,
     /// `passive_joint_stiffness:joint=knee`, `ground_slope:angle=0.03,free=`. Without a
     /// `free` key every parameter is freed ([`free_all`](Self::free_all)); `free=a+b`

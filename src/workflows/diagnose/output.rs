@@ -41,6 +41,45 @@ pub(super) struct Outcome<'a> {
     /// The plain model's track of the held-out half cycle, kept in `held_out/` (a start
     /// for a later diagnosis of the run, `--start`).
     pub held_out: Option<&'a super::heldout::HeldOutBase>,
+    /// Whether a held clock moves its plate's events in the run's cost (sample or
+    /// one-sided targets), so that one is added held rather than freed.
+    pub clock_moves_events: bool,
+}
+
+/// The first found candidate in `track --effect` form, at its reading to four significant
+/// digits: held where it is a plate's clock that moves its plate's events (a free one
+/// cannot), otherwise freed and started there, so that the re-fit identifies it. Both
+/// plates' gains read jointly are one entry per plate. Empty when nothing was found or a
+/// value has no command-line form.
+pub(super) fn add_effects(tests: &[ScoreTest], clock_moves_events: bool) -> Vec<String> {
+    let Some(t) = tests.iter().find(|t| t.found) else {
+        return Vec::new();
+    };
+    let four_digits = |v: f64| {
+        if v == 0.0 || !v.is_finite() {
+            return v;
+        }
+        let scale = 10f64.powi(3 - v.abs().log10().floor() as i32);
+        (v * scale).round() / scale
+    };
+    let values: Vec<f64> = t.step_values.iter().map(|&v| four_digits(v)).collect();
+    let Ok(specs) = super::heldout::fixed_at(&t.effect, &t.parameters, &values, false) else {
+        return Vec::new();
+    };
+    specs
+        .into_iter()
+        .map(|mut e| {
+            let clock = matches!(
+                e,
+                crate::model::effects::EffectSpec::ForcePlateTimeOffset { .. }
+            );
+            if !(clock && clock_moves_events) {
+                e.free_all();
+            }
+            e.cli_text()
+        })
+        .collect::<Option<Vec<_>>>()
+        .unwrap_or_default()
 }
 
 /// Each channel's variance inflation in the largest model's residuals.
@@ -144,6 +183,19 @@ fn verdict(o: &Outcome<'_>) -> String {
     let tests = o.tests;
     let untestable: Vec<&ScoreTest> = tests.iter().filter(|t| !t.testable).collect();
     let mut v = found_sentence(tests);
+    let add = add_effects(tests, o.clock_moves_events);
+    if !add.is_empty() {
+        v += &format!(
+            " Add it with one line and re-fit: `footfall track <the run's options> --init {} {}`{}; then diagnose that run, where what it explained is the model's and the next missing effect can show.",
+            o.args.run.display(),
+            add.iter().map(|a| format!("--effect {a}")).collect::<Vec<_>>().join(" "),
+            if add.iter().any(|a| a.starts_with("force_plate_time_offset") && a.ends_with("free=")) {
+                " (the clock held at its reading: with sample or one-sided targets a free clock cannot move its plate's events)"
+            } else {
+                ""
+            }
+        );
+    }
     if !untestable.is_empty() {
         v += &format!(
             " Not testable with this run's cost (neither absent nor present as far as this run can tell): {}.",
@@ -797,6 +849,7 @@ pub(super) fn write(
         reference: o.comparison.cloned(),
         plate_clocks: joint,
         verdict: verdict.clone(),
+        add_effects: add_effects(tests, o.clock_moves_events),
         verified: o
             .verified
             .iter()

@@ -133,6 +133,10 @@ pub struct DiagnosisSummary {
     /// The verdict in a sentence.
     #[serde(default)]
     pub verdict: String,
+    /// The most likely missing effect in `track --effect` form, at its reading: what to
+    /// add with one line, re-fit and diagnose again (empty when nothing was found).
+    #[serde(default)]
+    pub add_effects: Vec<String>,
     /// The verifying re-fits.
     #[serde(default)]
     pub verified: Vec<VerifiedRecord>,

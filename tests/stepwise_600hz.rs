@@ -1,0 +1,196 @@
+//! Issue 23, Done-means 1 in-sample, for the compliant foot's CoP, gain and mass trials
+//! at 600 Hz: the diagnosis taken one step further, as a user would. The untouched trial's
+//! diagnosis finds one effect, a clock shared by both plates (the forces +23.6 ms late
+//! against the kinematics, confirmed on the held-out half cycle:
+//! `clocks_600hz::the_untouched_compliant_trial_reports_only_what_…`). The edited trials
+//! are edits of that same recording, so they hold it too, and in-sample it is what their
+//! own diagnoses rank first (stop 80). Added by one line (`track … --effect
+//! force_plate_time_offset:offset=0.0236,free=`, held: with sample targets a free clock
+//! cannot move its plate's events) and each trial diagnosed again, the edit comes first.
+//!
+//! The diagnosis says so: its `add_effects` is that line, which these tests check the
+//! kept tracks' clock against. Each trial's track with the clock held is kept in
+//! `tests/data/real_compliant_600hz/<trial>/shared_clock` (from the trial's kept solve
+//! held at +20 ms, stop 81), and its held-out half cycle's track in
+//! `<trial>/shared_clock_diagnosis_starts`; each is re-evaluated and, a KKT point of the
+//! current code's problem, stopped at. The scores, variance inflation, identifiability and
+//! held-out changes are computed afresh. The clock candidates are already in the model
+//! and are not tested again (a plate's clock on top of the shared one is not a candidate
+//! yet), so the clock trials are not diagnosed this way.
+
+use crate::clocks_600hz::{within_truth, Foot};
+use crate::common::*;
+use footfall::model::effects::EffectSpec;
+use footfall::runfolder::RunFolder;
+use footfall::workflows::diagnose::DiagnoseRequest;
+use footfall::workflows::track::track;
+use footfall::workflows::Quiet;
+use serde_json::Value;
+use std::path::Path;
+
+/// `trial` tracked with the untouched trial's shared clock held, from its kept track of
+/// that problem, and diagnosed with every candidate, no verifying re-fit, its significant
+/// candidates validated on the held-out half cycle; the summary.
+fn diagnosed_with_the_shared_clock(trial: &str) -> Value {
+    let kept = root().join("tests/data/real_compliant_600hz").join(trial);
+    let setup = json(&kept.join("shared_clock/setup.json"));
+    let effects: Vec<EffectSpec> = serde_json::from_value(setup["effects"].clone()).unwrap();
+    // the clock the untouched trial's diagnosis says to add, rounded to 0.1 ms
+    let untouched =
+        json(&crate::clocks_600hz::untouched_compliant_diagnosis().join("summary.json"));
+    let add = EffectSpec::parse_cli(untouched["add_effects"][0].as_str().unwrap()).unwrap();
+    match (&effects[..], add) {
+        (
+            [EffectSpec::ForcePlateTimeOffset {
+                side, offset, free, ..
+            }],
+            EffectSpec::ForcePlateTimeOffset { offset: read, .. },
+        ) => assert!(
+            side == "both" && free.is_empty() && (offset - read).abs() < 1e-4,
+            "kept {offset} s, read {read} s"
+        ),
+        (kept, add) => panic!("kept {kept:?}, to add {add:?}"),
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let run = dir.path().join(trial);
+    let mut req = Foot::Compliant.request();
+    req.run.data = Some(
+        root()
+            .join("tests/data/real_hidden_600hz")
+            .join(trial)
+            .join("trial.csv"),
+    );
+    req.effects = effects;
+    req.init = Some(kept.join("shared_clock"));
+    let r = track(&req, RunFolder::create(&run, false).unwrap(), &Quiet)
+        .unwrap_or_else(|e| panic!("track {trial}: {e:#}"));
+    eprintln!(
+        "{trial} with the shared clock: {} after {} iterations, J = {:.6}",
+        r.result.status,
+        r.result.history.len().saturating_sub(1),
+        r.result.objective
+    );
+    assert!(r.converged, "{trial}: {}", r.result.status);
+    let starts = kept.join("shared_clock_diagnosis_starts");
+    let req = DiagnoseRequest {
+        starts: if starts.is_dir() {
+            vec![starts]
+        } else {
+            vec![]
+        },
+        verify: 0,
+        ..DiagnoseRequest::new(run.clone())
+    };
+    let t = std::time::Instant::now();
+    footfall::workflows::diagnose::run(&req, &Quiet).unwrap();
+    let folder = Path::new(&format!("{}-diagnose", run.display())).to_path_buf();
+    eprintln!(
+        "diagnose {trial} with the shared clock: {:.0} s\n{}",
+        t.elapsed().as_secs_f64(),
+        std::fs::read_to_string(folder.join("diagnose.md")).unwrap()
+    );
+    let s = json(&folder.join("summary.json"));
+    // the clocks are the model's: named as skipped, not scored
+    let skipped = s["skipped"].to_string();
+    assert!(skipped.contains("already in the model"), "{skipped}");
+    s
+}
+
+/// A ranking row's reading of parameter `name` and its standard deviation.
+fn reading(row: &Value, name: &str) -> (f64, f64) {
+    let i = row["parameters"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .position(|p| p == name)
+        .unwrap_or_else(|| panic!("{name} in {row}"));
+    (
+        row["step_values"][i].as_f64().unwrap(),
+        row["identifiability"]["sd"][i].as_f64().unwrap(),
+    )
+}
+
+/// The row of the ranking labelled `label`.
+fn row<'a>(s: &'a Value, label: &str) -> &'a Value {
+    s["ranking"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|r| r["label"] == label)
+        .unwrap_or_else(|| panic!("{label} in the ranking"))
+}
+
+/// With the shared clock added, nothing else is significant on the untouched trial
+/// (stop 81: the largest statistic 2.3 against 10.8): what the untouched trial held was
+/// that clock.
+#[test]
+fn with_the_shared_clock_nothing_else_is_significant_on_the_untouched_trial() {
+    let s = diagnosed_with_the_shared_clock("untouched");
+    for r in s["ranking"].as_array().unwrap() {
+        assert_ne!(r["significant"], true, "{r}");
+    }
+}
+
+/// The right foot's CoP 25 mm forward: with the shared clock added, the right CoP offset
+/// is first, significant, confirmed on the held-out half cycle and read within 20 % or 2
+/// sd of +25 mm (stop 81: +41.6 ± 11.3 mm, statistic 13.3 against 10.8, the held-out
+/// half cycle's J 52.7 % lower). Without it the shared clock came first (stop 80).
+#[test]
+fn with_the_shared_clock_the_right_cop_offset_is_found_first() {
+    let s = diagnosed_with_the_shared_clock("real_cop_r+25mm");
+    let first = &s["ranking"][0];
+    assert_eq!(first["label"], "CoP offset (right)", "{first}");
+    assert_eq!(first["found"], true, "{first}");
+    let (x, sd) = reading(first, "cop_offset.right.offset");
+    assert!(within_truth(x, sd, 0.025), "{x} ± {sd} m against 0.025 m");
+}
+
+/// The left plate's forces 6 % high: with the shared clock added, a plate gain is
+/// first, the left plate's read within 20 % or 2 sd of +6 % and the right plate's within
+/// 2 sd of zero (stop 81: both plates' gains first, left +6.1 ± 1.3 %, right −2.9 ± 5.0 %;
+/// the left gain alone second, +5.8 ± 1.1 %). Neither is confirmed on the held-out half
+/// cycle: there each raises J, by 11 % and 2 % (not asserted).
+#[test]
+fn with_the_shared_clock_the_left_plates_gain_is_read_first() {
+    let s = diagnosed_with_the_shared_clock("real_gain_l+6pct");
+    let first = &s["ranking"][0];
+    assert_eq!(first["effect"]["type"], "force_plate_gain", "{first}");
+    assert_eq!(first["significant"], true, "{first}");
+    let (left, sd) = reading(first, "force_plate_gain.left.error");
+    assert!(within_truth(left, sd, 0.06), "left {left} ± {sd}");
+    if first["effect"]["side"] == "each" {
+        let (right, sd) = reading(first, "force_plate_gain.right.error");
+        assert!(right.abs() <= 2.0 * sd, "right {right} ± {sd}");
+    }
+    let alone = row(&s, "force-plate gain (left)");
+    let (left, sd) = reading(alone, "force_plate_gain.left.error");
+    assert!(
+        alone["significant"] == true && within_truth(left, sd, 0.06),
+        "{alone}"
+    );
+}
+
+/// Every force 5 % high: with the shared clock added, both plates' gains are first,
+/// each read within 20 % or 2 sd of +5 %, and the body-mass error is found (significant,
+/// confirmed held out) within 20 % or 2 sd of +5 % (stop 81: gains right +1.7 ± 4.4 %,
+/// left +5.1 ± 1.1 %; body mass +4.5 ± 0.8 %, fourth by its decrease, 13.4 % of J
+/// against the gains' 14.5 %). On this half cycle a plate gain and a body-mass error scale
+/// the same forces; which one it is, the comparison with the untouched trial's joint gains
+/// says (`instruments_600hz`).
+#[test]
+fn with_the_shared_clock_every_force_scaled_is_read_first() {
+    let s = diagnosed_with_the_shared_clock("real_mass+5pct");
+    let first = &s["ranking"][0];
+    assert_eq!(first["label"], "force-plate gain (each plate)", "{first}");
+    for name in [
+        "force_plate_gain.right.error",
+        "force_plate_gain.left.error",
+    ] {
+        let (x, sd) = reading(first, name);
+        assert!(within_truth(x, sd, 0.05), "{name} {x} ± {sd}");
+    }
+    let mass = row(&s, "body-mass error");
+    assert_eq!(mass["found"], true, "{mass}");
+    let (x, sd) = reading(mass, "body_mass_error.relative");
+    assert!(within_truth(x, sd, 0.05), "body mass {x} ± {sd}");
+}
