@@ -531,3 +531,41 @@ fn an_effects_command_line_form_reads_back_as_the_same_entry() {
         "force_plate_time_offset:offset=0.0236,side=both,free="
     );
 }
+
+/// A clock held for both plates (the correction a diagnosis found) and one plate's
+/// further clock error are one model: the second is added in addition to the first, its
+/// parameter named by its side, and that plate's offset is their sum, the other plate's
+/// the held one alone. Two free clocks of overlapping plates, or two of one side, are
+/// refused.
+#[test]
+fn a_held_shared_clock_and_one_plates_clock_add_up() {
+    use footfall::model::GaitModel;
+    let r = root();
+    let (m, f) = (
+        r.join("models/opensim_subject01.json"),
+        r.join("models/feet/ellipse.json"),
+    );
+    let held = EffectSpec::parse_cli("force_plate_time_offset:offset=0.02,free=").unwrap();
+    let left = EffectSpec::parse_cli("force_plate_time_offset:side=left").unwrap();
+    assert!(held.composes_with(&left) && !left.composes_with(&held));
+    let model = GaitModel::load_with_effects(&m, &f, &[held.clone(), left.clone()]).unwrap();
+    assert_eq!(model.ntheta(), 1);
+    let names: Vec<&str> = model.parameters().iter().map(|p| p.name.as_str()).collect();
+    assert_eq!(
+        names,
+        [
+            "force_plate_time_offset.offset",
+            "force_plate_time_offset.left.offset"
+        ]
+    );
+    let adj = model.measurement_adjust(&[-0.005]);
+    // sides: 0 right, 1 left
+    assert!((adj.force_time_offset[0] - 0.02).abs() < 1e-15);
+    assert!((adj.force_time_offset[1] - 0.015).abs() < 1e-15);
+    let mut shared = held.clone();
+    shared.free_all();
+    assert!(GaitModel::load_with_effects(&m, &f, &[shared, left.clone()]).is_err());
+    let held_left =
+        EffectSpec::parse_cli("force_plate_time_offset:side=left,offset=0.01,free=").unwrap();
+    assert!(GaitModel::load_with_effects(&m, &f, &[held_left, left]).is_err());
+}

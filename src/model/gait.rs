@@ -144,7 +144,11 @@ impl GaitModel {
         );
         let mut spec = ModelSpec::load(model_path)?;
         for e in extra {
-            if let Some(j) = spec.effects.iter().position(|o| o.overlaps(e)) {
+            if let Some(j) = spec
+                .effects
+                .iter()
+                .position(|o| o.overlaps(e) && !o.composes_with(e))
+            {
                 return Err(ModelError::invalid(
                     model_path,
                     format!("effects[{j}]"),

@@ -447,7 +447,10 @@ impl ModelSpec {
         for (i, e) in self.effects.iter().enumerate() {
             e.check()
                 .map_err(|(f, r)| ModelError::invalid(path, format!("effects[{i}].{f}"), r))?;
-            if let Some(j) = self.effects[..i].iter().position(|o| o.overlaps(e)) {
+            if let Some(j) = self.effects[..i]
+                .iter()
+                .position(|o| o.overlaps(e) && !o.composes_with(e))
+            {
                 let (field, what) = match e {
                     EffectSpec::PassiveJointStiffness { joint, side, .. } => {
                         let which = match (side.as_str(), &self.effects[j]) {

@@ -495,8 +495,12 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
     let problems: Vec<Option<anyhow::Result<TrackingProblem>>> = candidates
         .iter()
         .map(|c| {
-            (c.kind() != pad.kind() && !setup.effects.iter().any(|e| e.overlaps(c)))
-                .then(|| TrackingProblem::build(&setup, std::slice::from_ref(c)))
+            (c.kind() != pad.kind()
+                && !setup
+                    .effects
+                    .iter()
+                    .any(|e| e.overlaps(c) && !e.composes_with(c)))
+            .then(|| TrackingProblem::build(&setup, std::slice::from_ref(c)))
         })
         .collect();
     let accepted: Vec<&EffectSpec> = candidates
@@ -565,7 +569,11 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
         })
         .collect();
     for (c, scored) in candidates.iter().zip(scored) {
-        if setup.effects.iter().any(|e| e.overlaps(c)) {
+        if setup
+            .effects
+            .iter()
+            .any(|e| e.overlaps(c) && !e.composes_with(c))
+        {
             skipped.push(format!("{}: already in the model", c.label()));
             continue;
         }

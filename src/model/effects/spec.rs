@@ -770,6 +770,24 @@ impl EffectSpec {
         })
     }
 
+    /// Whether `other`, an instrument effect of this held one's kind (no free parameter)
+    /// on another side, adds to it in one model: clock and CoP offsets add, gains
+    /// multiply, and their parameters are named by side. So a correction held for both
+    /// plates (a shared clock a diagnosis found) leaves one plate's further error a
+    /// candidate.
+    pub fn composes_with(&self, other: &EffectSpec) -> bool {
+        let side = |e: &EffectSpec| match e {
+            EffectSpec::ForcePlateTimeOffset { side, .. }
+            | EffectSpec::CopOffset { side, .. }
+            | EffectSpec::ForcePlateGain { side, .. } => Some(side.clone()),
+            _ => None,
+        };
+        match (side(self), side(other)) {
+            (Some(a), Some(b)) => self.kind() == other.kind() && a != b && self.free().is_empty(),
+            _ => false,
+        }
+    }
+
     /// Whether `other` describes the same effect slot (same kind, and for passive
     /// stiffness an overlapping joint and side), so a model cannot hold both.
     pub fn overlaps(&self, other: &EffectSpec) -> bool {
