@@ -59,7 +59,7 @@ impl Foot {
         }
     }
 
-    fn kept(self) -> PathBuf {
+    pub(crate) fn kept(self) -> PathBuf {
         root().join(match self {
             Foot::Rigid => "tests/data/real_hidden_600hz_kept",
             Foot::Compliant => "tests/data/real_compliant_600hz",
@@ -144,12 +144,17 @@ pub(crate) fn diagnosis_starts(trial: &str) -> Vec<PathBuf> {
 /// afresh with every candidate, the clock profiles and the held-out validation of its
 /// significant candidates, its solves (the held-out half cycle's track among them)
 /// started from its kept diagnosis's ([`diagnosis_starts`]), once per test run for every
-/// test that reads an edited trial against it (in the target's scratch folder, made anew
-/// by the first caller); the diagnosis folder, for `--reference`.
+/// test that reads an edited trial against it (in the target's scratch folder, one per
+/// test process, made anew by its first caller); the diagnosis folder, for `--reference`.
 pub(crate) fn untouched_compliant_diagnosis() -> &'static Path {
     static FOLDER: std::sync::OnceLock<PathBuf> = std::sync::OnceLock::new();
     FOLDER.get_or_init(|| {
-        let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join("untouched_compliant_diagnosis");
+        // one folder per test process: a runner that starts each test in its own process
+        // (cargo nextest) runs several of these side by side
+        let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!(
+            "untouched_compliant_diagnosis-{}",
+            std::process::id()
+        ));
         if dir.exists() {
             std::fs::remove_dir_all(&dir).unwrap();
         }
@@ -200,10 +205,30 @@ fn the_untouched_compliant_trial_reports_only_what_its_held_out_half_cycle_confi
             side,
             offset: held,
             free,
-        } => assert!(
-            side == "both" && free.is_empty() && (held - offset).abs() <= 5e-4 * offset,
-            "{add:?}"
-        ),
+        } => {
+            assert!(
+                side == "both" && free.is_empty() && (held - offset).abs() <= 5e-4 * offset,
+                "{add:?}"
+            );
+            // the trials' kept tracks with the shared clock (`tests/stepwise_600hz.rs`
+            // starts from them) hold this clock, rounded to 0.1 ms
+            for trial in std::fs::read_dir(Foot::Compliant.kept()).unwrap() {
+                let kept = trial.unwrap().path().join("shared_clock/setup.json");
+                if !kept.is_file() {
+                    continue;
+                }
+                let effects = &json(&kept)["effects"];
+                assert!(
+                    effects.as_array().is_some_and(|e| e.len() == 1)
+                        && effects[0]["type"] == "force_plate_time_offset"
+                        && effects[0]["side"] == "both"
+                        && effects[0]["free"].as_array().is_some_and(|f| f.is_empty())
+                        && (effects[0]["offset"].as_f64().unwrap() - held).abs() < 1e-4,
+                    "{}: {effects} against the {held} s to add",
+                    kept.display()
+                );
+            }
+        }
         e => panic!("{e:?}"),
     }
     assert!(s["verdict"]

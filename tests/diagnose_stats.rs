@@ -160,6 +160,8 @@ fn check_every_candidate(d: &Value) {
             "not significant"
         } else if t["found"] == true {
             "found"
+        } else if t["held_out"]["reading"]["powered"] == false {
+            "not validatable on the held-out half cycle"
         } else {
             "not confirmed on the held-out half cycle"
         };

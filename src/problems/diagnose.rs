@@ -267,8 +267,8 @@ pub struct ScoreTest {
     /// where the trial has no other half cycle: see `held_out`).
     pub found: bool,
     /// One of `not testable with this run's cost`, `not significant`, `significant at
-    /// its bound, not a reading`, `not confirmed on the held-out half cycle`, `found`,
-    /// `significant, not validated`.
+    /// its bound, not a reading`, `not confirmed on the held-out half cycle`,
+    /// [`NOT_VALIDATABLE`], `found`, `significant, not validated`.
     pub verdict: String,
     /// The profile of the cost over a plate's clock offset (`diagnose --profile-clocks`),
     /// when one was made for this candidate.
@@ -375,6 +375,10 @@ pub struct ProfileVertex {
     pub parabola: Option<(f64, f64)>,
 }
 
+/// The verdict of a significant candidate that the held-out half cycle is too weakly
+/// informed about to confirm or refute ([`HeldOutReading::powered`]).
+pub const NOT_VALIDATABLE: &str = "not validatable on the held-out half cycle";
+
 /// A candidate fitted on the run's half cycle, applied with its parameters fixed to
 /// another half cycle of the trial and the other variables re-optimised there.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -416,6 +420,65 @@ pub struct HeldOut {
     /// cycle (`−(Δ_ref(θ) + Δ_ref(−θ))`); the paired band's.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reference_curvature: Option<f64>,
+    /// The held-out half cycle's own reading of the candidate along its fitted values,
+    /// from its changes at `θ` and `−θ` (a difference from a reference: the paired
+    /// change against its expectation). `None` where `−θ` could not be applied or the
+    /// validation was a full solve (a clock held at its profile's vertex).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub reading: Option<HeldOutReading>,
+}
+
+/// What a held-out half cycle itself says about a candidate fitted elsewhere at `θ`.
+/// Its cost along `θ` is a parabola `c(ρθ)`, `ρ` the fraction of `θ` it reads:
+/// `Δ(θ) = q (ρ − ½)` and `Δ(−θ) = −q (ρ + ½)` (falls of the cost), so `q = −(Δ(θ) +
+/// Δ(−θ))` is its curvature `θᵀH_hθ` and `ρ = (Δ(θ) − Δ(−θ)) / 2q`, with sd
+/// `√(2 φ s² / q)` (the noise model of [`stats::held_out_band`]). The candidate clears
+/// the band at that curvature exactly when `ρ > 2 sd`: the held-out half cycle reads it,
+/// in the same direction, beyond two sd. It can do so for a true effect (`ρ = 1`) only
+/// when `sd < ½`; otherwise that half cycle is too weakly informed about this candidate
+/// to confirm it or to refute it (`powered` false): a plate's gain fitted where that
+/// foot is in stance, held out where it only pushes off, is one such case.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct HeldOutReading {
+    /// The held-out cost's curvature along the fitted values, `q = θᵀH_hθ` (cost units).
+    pub curvature: f64,
+    /// The fraction `ρ` of the fitted values the held-out half cycle reads (1: the same
+    /// values, 0: none of it, negative: the opposite way).
+    pub fraction: f64,
+    /// Its standard deviation, inflated by the candidate's `φ`.
+    pub sd: f64,
+    /// Whether a true effect of the fitted size would clear the band on average
+    /// (`sd < ½`).
+    pub powered: bool,
+}
+
+impl HeldOut {
+    /// This validation with the held-out half cycle's own reading attached.
+    pub fn with_reading(self, reading: HeldOutReading) -> Self {
+        Self {
+            reading: Some(reading),
+            ..self
+        }
+    }
+}
+
+impl HeldOutReading {
+    /// From the held-out cost's falls at `θ` (`up`) and at `−θ` (`down`), its residual
+    /// mean square `s2` and the candidate's variance inflation `phi`; `None` when the
+    /// cost does not curve along `θ` there (`q ≤ 0`: that half cycle does not inform
+    /// the candidate at all).
+    pub fn from_changes(up: f64, down: f64, s2: f64, phi: f64) -> Option<Self> {
+        let q = -(up + down);
+        (q > 0.0 && q.is_finite()).then(|| {
+            let sd = (2.0 * phi.max(1.0) * s2 / q).sqrt();
+            Self {
+                curvature: q,
+                fraction: (up - down) / (2.0 * q),
+                sd,
+                powered: sd < 0.5,
+            }
+        })
+    }
 }
 
 /// Mean error per Table 3 channel of the tracking solution in `w` against `data`.
@@ -732,6 +795,10 @@ impl ScoreTest {
         } else {
             match &self.held_out {
                 Some(h) if h.beyond_noise => (true, "found".into()),
+                // too weakly informed there to confirm or refute it
+                Some(h) if h.reading.as_ref().is_some_and(|r| !r.powered) => {
+                    (false, NOT_VALIDATABLE.into())
+                }
                 Some(_) => (false, "not confirmed on the held-out half cycle".into()),
                 // no other half cycle, validation off, or a candidate tested by a full
                 // re-fit (no reduced curvature to set its band): the diagnosis says why
@@ -866,5 +933,75 @@ mod tests {
             assert!((got - x).abs() < 2e-3, "α = {alpha}: {got} against {x}");
         }
         assert!((chi2_1_upper(0.001) - chi2_999(1)).abs() < 2e-3);
+    }
+
+    /// A held-out cost that is a parabola along the fitted values, `c(x) = a (x − x₀)²`
+    /// in units of `θ = 0.06`: its falls at `θ` and `−θ` give back its curvature `2aθ²`
+    /// and its own reading `x₀/θ` exactly; the candidate clears the band at that
+    /// curvature ([`stats::held_out_band`]) exactly when that reading lies beyond 2 sd,
+    /// and a true effect (`x₀ = θ`) clears it exactly when the reading's sd is below ½.
+    #[test]
+    fn a_held_out_parabola_reads_the_candidate_and_says_when_it_cannot_tell() {
+        let (theta, s2, phi) = (0.06, 5e-4, 3.5);
+        for a in [0.5, 1.6, 5.0, 20.0, 200.0] {
+            for x0 in [-0.06, -0.01, 0.0, 0.02, 0.05, 0.06, 0.09, 0.2] {
+                let c = |x: f64| a * (x - x0) * (x - x0);
+                let (up, down) = (c(0.0) - c(theta), c(0.0) - c(-theta));
+                let r = HeldOutReading::from_changes(up, down, s2, phi).unwrap();
+                let q = 2.0 * a * theta * theta;
+                assert!((r.curvature - q).abs() < 1e-12 * q, "a {a}");
+                assert!((r.fraction - x0 / theta).abs() < 1e-9, "a {a} x0 {x0}");
+                let sd = (2.0 * phi * s2 / q).sqrt();
+                assert!((r.sd - sd).abs() < 1e-12 * sd);
+                let band = stats::held_out_band(q, s2, phi);
+                assert_eq!(up > band, r.fraction > 2.0 * r.sd, "a {a} x0 {x0}");
+                let truth = q / 2.0; // the fall a true effect (x₀ = θ) makes
+                assert_eq!(truth > band, r.powered, "a {a}");
+            }
+        }
+        // a cost that does not curve along θ reads nothing
+        assert!(HeldOutReading::from_changes(0.01, -0.01, s2, phi).is_none());
+        assert!(HeldOutReading::from_changes(0.05, -0.02, s2, phi).is_none());
+    }
+
+    /// A significant candidate that the held-out half cycle cannot tell about is neither
+    /// found nor "not confirmed": it is not validatable there.
+    #[test]
+    fn a_weakly_informed_held_out_half_cycle_leaves_the_candidate_not_validatable() {
+        let slope = EffectSpec::GroundSlope {
+            angle: 0.0,
+            free: vec!["angle".into()],
+        };
+        let mut t = refit_test(&slope, vec!["ground_slope.angle".into()], vec![0.01], 2.0, 1.0, 20, 3);
+        t.testable = true;
+        t.significant = true;
+        let held = |reading: Option<HeldOutReading>, beyond: bool| HeldOut {
+            stride: 1,
+            mirrored: true,
+            window: (0.6, 1.2),
+            values: vec![0.01],
+            objective: 1.0,
+            change: 0.0,
+            change_fraction: 0.0,
+            band: 0.01,
+            beyond_noise: beyond,
+            reference_change: None,
+            reference_curvature: None,
+            reading,
+        };
+        let weak = HeldOutReading::from_changes(0.0, -0.004, 5e-4, 3.5).unwrap();
+        assert!(!weak.powered, "{weak:?}");
+        let strong = HeldOutReading::from_changes(0.0, -0.4, 5e-4, 3.5).unwrap();
+        assert!(strong.powered, "{strong:?}");
+        for (h, verdict, found) in [
+            (held(Some(weak.clone()), false), NOT_VALIDATABLE, false),
+            (held(Some(strong), false), "not confirmed on the held-out half cycle", false),
+            (held(None, false), "not confirmed on the held-out half cycle", false),
+            (held(Some(weak), true), "found", true),
+        ] {
+            t.held_out = Some(h);
+            t.settle();
+            assert_eq!((t.verdict.as_str(), t.found), (verdict, found));
+        }
     }
 }

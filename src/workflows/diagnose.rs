@@ -676,7 +676,7 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
             )?) {
                 Ok(hb) => {
                     held_out_note += &format!(
-                        " Held-out: each significant candidate, with the values fitted on this run's half cycle ({:.3}–{:.3} s), applied to {} ({:.3}–{:.3} s; the plain model tracked there: J = {:.6}, {} iterations{}) with the other variables re-fitted; it is found if it lowers that cost beyond its noise band (2 sd, inflated by φ, above the mean change a fit to noise makes, which is a rise).",
+                        " Held-out: each significant candidate, with the values fitted on this run's half cycle ({:.3}–{:.3} s), applied to {} ({:.3}–{:.3} s; the plain model tracked there: J = {:.6}, {} iterations{}) with the other variables re-fitted; it is found if it lowers that cost beyond its noise band (2 sd, inflated by φ, above the mean change a fit to noise makes, which is a rise). Each is applied at the opposite values too: the two changes give that half cycle's own curvature along the candidate, which sets its band, and its own reading of the candidate as a fraction of the fitted values (found: that reading lies beyond 2 sd). Where a true effect of the fitted size would not clear the band on average (the reading's sd above one half), that half cycle is too weakly informed to confirm or refute it: not validatable.",
                         base.setup.window.0,
                         base.setup.window.1,
                         heldout::half_cycle_name(hb.stride, hb.mirrored),
@@ -693,9 +693,9 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
                         match heldout::check(args, hb, t, &mut held_out_note) {
                             Ok(h) => {
                                 note!(progress,
-                                    "  held-out {:<32} change {:>10.3e} ({:>5.1} % of J), noise band {:.3e}{}",
+                                    "  held-out {:<32} change {:>10.3e} ({:>5.1} % of J), noise band {:.3e}{}{}",
                                     t.label, h.change, 100.0 * h.change_fraction, h.band,
-                                    if h.beyond_noise { "  confirmed" } else { "  not confirmed" });
+                                    reading_note(&h), confirmed_note(&h));
                                 t.held_out = Some(h);
                             }
                             Err(e) => {
@@ -785,11 +785,11 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
                         match validated {
                             Ok(h) => {
                                 note!(progress,
-                                    "  held-out {:<32} its difference from the reference: change {:>10.3e} ({:>5.1} % of J){}, noise band {:.3e}{}",
+                                    "  held-out {:<32} its difference from the reference: change {:>10.3e} ({:>5.1} % of J){}, noise band {:.3e}{}{}",
                                     t.label, h.change, 100.0 * h.change_fraction,
                                     h.reference_change.map_or(String::new(), |rc| format!(", the reference's {rc:.3e}")),
                                     h.band,
-                                    if h.beyond_noise { "  confirmed" } else { "  not confirmed" });
+                                    reading_note(&h), confirmed_note(&h));
                                 for d in c.differences.iter_mut().filter(|d| d.label == t.label) {
                                     d.held_out = Some(h.clone());
                                 }
@@ -878,4 +878,22 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
         clock_moves_events: setup.sample_targets || setup.one_sided_targets,
     };
     output::write(&ctx, folder, progress)
+}
+
+/// The progress line's reading of a held-out validation: `, reads 0.62 ± 0.41 of it`.
+fn reading_note(h: &crate::problems::diagnose::HeldOut) -> String {
+    h.reading.as_ref().map_or(String::new(), |r| {
+        format!(", reads {:.2} ± {:.2} of it", r.fraction, r.sd)
+    })
+}
+
+/// The progress line's verdict of a held-out validation.
+fn confirmed_note(h: &crate::problems::diagnose::HeldOut) -> &'static str {
+    if h.beyond_noise {
+        "  confirmed"
+    } else if h.reading.as_ref().is_some_and(|r| !r.powered) {
+        "  not validatable (too weakly informed there)"
+    } else {
+        "  not confirmed"
+    }
 }

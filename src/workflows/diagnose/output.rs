@@ -9,7 +9,7 @@ use super::summary::{
 };
 use super::{DiagnoseRequest, Evidence, Residuals, Verified};
 use crate::problems::diagnose::stats::variance_inflation;
-use crate::problems::diagnose::ScoreTest;
+use crate::problems::diagnose::{HeldOut, ScoreTest, NOT_VALIDATABLE};
 use crate::report::diff::{fmt_value, RunSummary};
 use crate::report::html::{Report, Section, Summary, Tone};
 use crate::report::table::Table;
@@ -125,14 +125,28 @@ fn parameters_cell(t: &ScoreTest) -> String {
 fn held_out_cell(t: &ScoreTest) -> String {
     match &t.held_out {
         Some(h) => format!(
-            "{:.3e} ({:+.1} % of J) vs {:.3e}",
+            "{:.3e} ({:+.1} % of J) vs {:.3e}{}",
             h.change,
             100.0 * h.change_fraction,
-            h.band
+            h.band,
+            reading_text(h)
         ),
         None if t.significant => "not run".into(),
         None => "—".into(),
     }
+}
+
+/// What the held-out half cycle itself reads of a candidate (`; reads 0.62 ± 0.41 of
+/// it`), empty when it was not measured.
+fn reading_text(h: &HeldOut) -> String {
+    h.reading.as_ref().map_or(String::new(), |r| {
+        format!(
+            "; reads {:.2} ± {:.2} of it{}",
+            r.fraction,
+            r.sd,
+            if r.powered { "" } else { " (too weakly informed to tell)" }
+        )
+    })
 }
 
 /// The diagnosis' first sentence: what was found, and whether a held-out half cycle
@@ -146,7 +160,7 @@ fn found_sentence(tests: &[ScoreTest]) -> String {
         return if significant == 0 {
             "No testable candidate explains more than the noise: every statistic (corrected for correlated residuals) is below its χ² 0.1 % point. No effect is suggested.".to_string()
         } else {
-            format!("{significant} candidate(s) are significant in-sample, but none is found: each fails to lower the error of the held-out half cycle beyond its noise band or reads a value at its bound (the verdicts say which).")
+            format!("{significant} candidate(s) are significant in-sample, but none is found: each fails to lower the error of the held-out half cycle beyond its noise band, or that half cycle cannot tell, or it reads a value at its bound (the verdicts say which).")
         };
     }
     let confirmed = found.iter().filter(|t| t.held_out.is_some()).count();
@@ -194,6 +208,22 @@ fn verdict(o: &Outcome<'_>) -> String {
             } else {
                 ""
             }
+        );
+    }
+    let weak: Vec<&ScoreTest> = tests
+        .iter()
+        .filter(|t| t.verdict == NOT_VALIDATABLE)
+        .collect();
+    if !weak.is_empty() {
+        v += &format!(
+            " Significant in-sample but not validatable on the held-out half cycle, which reads each too loosely to confirm or refute it (to better than half its size at 2 sd; neither confirmed nor refuted): {}. To validate it: a second trial of the same subject, or a half cycle where its data play the part they play in this one (a plate's foot in stance in both).",
+            weak.iter()
+                .map(|t| match t.held_out.as_ref().and_then(|h| h.reading.as_ref()) {
+                    Some(r) => format!("{} (held out it reads {:.2} ± {:.2} of its fitted value)", t.label, r.fraction, r.sd),
+                    None => t.label.clone(),
+                })
+                .collect::<Vec<_>>()
+                .join("; ")
         );
     }
     if !untestable.is_empty() {
@@ -462,12 +492,13 @@ fn comparison_section(c: &super::reference::Comparison) -> (String, Table) {
                             100.0 * h.change_fraction
                         ),
                         Some(rc) => format!(
-                            "{:.3e} ({:.1} % of J) − the reference's {:.3e} = {:.3e} vs {:.3e}",
+                            "{:.3e} ({:.1} % of J) − the reference's {:.3e} = {:.3e} vs {:.3e}{}",
                             h.change,
                             100.0 * h.change_fraction,
                             rc,
                             h.change - rc,
-                            h.band
+                            h.band,
+                            reading_text(h)
                         ),
                         None => format!(
                             "{:.3e} ({:.1} % of J) vs {:.3e}",
@@ -479,6 +510,9 @@ fn comparison_section(c: &super::reference::Comparison) -> (String, Table) {
                     match (&d.held_out, d.significant) {
                         (_, false) => "same within noise",
                         (Some(h), true) if h.beyond_noise => "differs, confirmed held-out",
+                        (Some(h), true) if h.reading.as_ref().is_some_and(|r| !r.powered) => {
+                            "differs, not validatable on the held-out half cycle (too weakly informed there)"
+                        }
                         (Some(_), true) => "differs, not confirmed on the held-out half cycle",
                         (None, true) => "differs, not validated",
                     }
@@ -930,7 +964,7 @@ pub(super) fn write(
 mod tests {
     use super::*;
     use crate::model::effects::EffectSpec;
-    use crate::problems::diagnose::{refit_test, HeldOut};
+    use crate::problems::diagnose::refit_test;
 
     /// A significant slope candidate (statistic 20 against 10.8), held out with
     /// `held_out`: `Some(true)` beyond its band, `Some(false)` within it, `None` not run.
@@ -964,6 +998,7 @@ mod tests {
             beyond_noise: beyond,
             reference_change: None,
             reference_curvature: None,
+            reading: None,
         });
         t.settle();
         t
