@@ -972,7 +972,15 @@ mod tests {
             angle: 0.0,
             free: vec!["angle".into()],
         };
-        let mut t = refit_test(&slope, vec!["ground_slope.angle".into()], vec![0.01], 2.0, 1.0, 20, 3);
+        let mut t = refit_test(
+            &slope,
+            vec!["ground_slope.angle".into()],
+            vec![0.01],
+            2.0,
+            1.0,
+            20,
+            3,
+        );
         t.testable = true;
         t.significant = true;
         let held = |reading: Option<HeldOutReading>, beyond: bool| HeldOut {
@@ -995,8 +1003,16 @@ mod tests {
         assert!(strong.powered, "{strong:?}");
         for (h, verdict, found) in [
             (held(Some(weak.clone()), false), NOT_VALIDATABLE, false),
-            (held(Some(strong), false), "not confirmed on the held-out half cycle", false),
-            (held(None, false), "not confirmed on the held-out half cycle", false),
+            (
+                held(Some(strong), false),
+                "not confirmed on the held-out half cycle",
+                false,
+            ),
+            (
+                held(None, false),
+                "not confirmed on the held-out half cycle",
+                false,
+            ),
             (held(Some(weak), true), "found", true),
         ] {
             t.held_out = Some(h);

@@ -144,7 +144,11 @@ fn reading_text(h: &HeldOut) -> String {
             "; reads {:.2} ± {:.2} of it{}",
             r.fraction,
             r.sd,
-            if r.powered { "" } else { " (too weakly informed to tell)" }
+            if r.powered {
+                ""
+            } else {
+                " (too weakly informed to tell)"
+            }
         )
     })
 }
