@@ -455,10 +455,21 @@ pub(crate) type ChannelErrors = Vec<(String, f64)>;
 pub(crate) fn refit_brings_every_channel_near_the_untouched_trials(
     trial: &str,
 ) -> (ChannelErrors, ChannelErrors) {
+    refit_in_brings_every_channel_near_the_untouched_trials(trial, "", "refit")
+}
+
+/// [`refit_brings_every_channel_near_the_untouched_trials`] for the kept tracks in the
+/// sub-folder `plain` of the untouched and the edited trial's (`""`: the trials' own
+/// tracks) and the edited trial's re-fit in `refit`.
+pub(crate) fn refit_in_brings_every_channel_near_the_untouched_trials(
+    trial: &str,
+    plain: &str,
+    refit: &str,
+) -> (ChannelErrors, ChannelErrors) {
     let kept = root().join("tests/data/real_compliant_600hz");
-    let untouched = errors_at("untouched", &kept.join("untouched"));
-    let edited = errors_at(trial, &kept.join(trial));
-    let refit = errors_at(trial, &kept.join(trial).join("refit"));
+    let untouched = errors_at("untouched", &kept.join("untouched").join(plain));
+    let edited = errors_at(trial, &kept.join(trial).join(plain));
+    let refit = errors_at(trial, &kept.join(trial).join(refit));
     for ((name, u), ((_, e), (_, r))) in untouched.iter().zip(edited.iter().zip(&refit)) {
         eprintln!("{trial} {name}: untouched {u:.3}, edited {e:.3}, re-fitted {r:.3}");
         assert!(
