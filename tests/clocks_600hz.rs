@@ -144,26 +144,67 @@ pub(crate) fn diagnosis_starts(trial: &str) -> Vec<PathBuf> {
 /// afresh with every candidate, the clock profiles and the held-out validation of its
 /// significant candidates, its solves (the held-out half cycle's track among them)
 /// started from its kept diagnosis's ([`diagnosis_starts`]), once per test run for every
-/// test that reads an edited trial against it (in the target's scratch folder, one per
-/// test process, made anew by its first caller); the diagnosis folder, for `--reference`.
+/// test that reads an edited trial against it (in the target's scratch folder, shared by
+/// the processes of one test run: [`shared_fixture`]); the diagnosis folder, for
+/// `--reference`.
 pub(crate) fn untouched_compliant_diagnosis() -> &'static Path {
     static FOLDER: std::sync::OnceLock<PathBuf> = std::sync::OnceLock::new();
     FOLDER.get_or_init(|| {
-        // one folder per test process: a runner that starts each test in its own process
-        // (cargo nextest) runs several of these side by side
-        let dir = Path::new(env!("CARGO_TARGET_TMPDIR")).join(format!(
-            "untouched_compliant_diagnosis-{}",
-            std::process::id()
-        ));
-        if dir.exists() {
-            std::fs::remove_dir_all(&dir).unwrap();
-        }
-        std::fs::create_dir_all(&dir).unwrap();
-        let run = tracked(Foot::Compliant, &dir, "untouched");
-        let s = diagnosed_held_out(&run, &[], None, diagnosis_starts("untouched"), true);
-        assert!(s["plate_clocks"]["Ok"].is_object(), "{}", s["plate_clocks"]);
-        PathBuf::from(format!("{}-diagnose", run.display()))
+        shared_fixture("untouched_compliant_diagnosis", |dir| {
+            let run = tracked(Foot::Compliant, dir, "untouched");
+            let s = diagnosed_held_out(&run, &[], None, diagnosis_starts("untouched"), true);
+            assert!(s["plate_clocks"]["Ok"].is_object(), "{}", s["plate_clocks"]);
+        })
+        .join("untouched-diagnose")
     })
+}
+
+/// A fixture folder made once per test run by `make`, in the target's scratch folder,
+/// for every test of the run that needs it. `cargo test` runs one binary's tests in one
+/// process; cargo-nextest (`tools/test`) starts each test in a process of its own, so
+/// the processes of one run (`NEXTEST_RUN_ID`) share it through a lock file: the first
+/// makes it, the others wait for it and read it. A folder whose lock no process holds
+/// and that is not this run's is an earlier run's, and is removed.
+fn shared_fixture(name: &str, make: impl FnOnce(&Path)) -> PathBuf {
+    let scratch = Path::new(env!("CARGO_TARGET_TMPDIR"));
+    let run = std::env::var("NEXTEST_RUN_ID").unwrap_or_else(|_| std::process::id().to_string());
+    let dir = scratch.join(format!("{name}-{run}"));
+    std::fs::create_dir_all(&dir).unwrap();
+    let lock = std::fs::File::create(scratch.join(format!("{name}-{run}.lock"))).unwrap();
+    lock.lock().unwrap();
+    let done = dir.join(".complete");
+    if !done.is_file() {
+        // earlier runs' folders, unless a process of theirs still holds their lock
+        for old in std::fs::read_dir(scratch).unwrap().flatten() {
+            let path = old.path();
+            let file = path.file_name().unwrap().to_string_lossy().into_owned();
+            let Some(other) = file
+                .strip_prefix(&format!("{name}-"))
+                .and_then(|f| f.strip_suffix(".lock"))
+            else {
+                continue;
+            };
+            if other == run {
+                continue;
+            }
+            let Ok(held) = std::fs::File::open(&path) else {
+                continue;
+            };
+            if held.try_lock().is_ok() {
+                std::fs::remove_dir_all(scratch.join(format!("{name}-{other}"))).ok();
+                std::fs::remove_file(&path).ok();
+            }
+        }
+        for entry in std::fs::read_dir(&dir).unwrap().flatten() {
+            std::fs::remove_dir_all(entry.path())
+                .or_else(|_| std::fs::remove_file(entry.path()))
+                .unwrap();
+        }
+        make(&dir);
+        std::fs::write(&done, "").unwrap();
+    }
+    lock.unlock().unwrap();
+    dir
 }
 
 /// Issue 23, Done-means 2, for the compliant foot: on the untouched trial every candidate
