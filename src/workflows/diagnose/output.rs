@@ -220,7 +220,7 @@ fn verdict(o: &Outcome<'_>) -> String {
         .collect();
     if !weak.is_empty() {
         v += &format!(
-            " Significant in-sample but not validatable on the held-out half cycle, which reads each too loosely to confirm or refute it (to better than half its size at 2 sd; neither confirmed nor refuted): {}. To validate it: a second trial of the same subject, or a half cycle where its data play the part they play in this one (a plate's foot in stance in both).",
+            " Significant in-sample but not validatable on the held-out half cycle, which reads each too loosely to confirm or refute it (to better than half its size at 2 sd; neither confirmed nor refuted): {}. What would validate one: a second trial of the same subject, or a half cycle where its data play the part they play in this one (a plate's foot in stance in both).",
             weak.iter()
                 .map(|t| match t.held_out.as_ref().and_then(|h| h.reading.as_ref()) {
                     Some(r) => format!("{} (held out it reads {:.2} ± {:.2} of its fitted value)", t.label, r.fraction, r.sd),
