@@ -882,16 +882,16 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
 
 /// The progress line's reading of a held-out validation: `, reads 0.62 ± 0.41 of it`.
 fn reading_note(h: &crate::problems::diagnose::HeldOut) -> String {
-    h.reading.as_ref().map_or(String::new(), |r| {
-        format!(", reads {:.2} ± {:.2} of it", r.fraction, r.sd)
-    })
+    h.reading
+        .as_ref()
+        .map_or(String::new(), |r| format!(", {}", r.text()))
 }
 
 /// The progress line's verdict of a held-out validation.
 fn confirmed_note(h: &crate::problems::diagnose::HeldOut) -> &'static str {
     if h.beyond_noise {
         "  confirmed"
-    } else if h.reading.as_ref().is_some_and(|r| !r.powered) {
+    } else if h.too_weakly_informed() {
         "  not validatable (too weakly informed there)"
     } else {
         "  not confirmed"

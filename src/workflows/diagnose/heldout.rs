@@ -412,15 +412,8 @@ pub(super) fn paired(
     };
     // the paired change reads the difference as the fraction `(Δ − Δ_ref)/q` of the
     // applied one (1 for a true difference, 0 for none), sd `band/2q` = `2√(φ s²/q)`
-    let reading = (q > 0.0).then(|| {
-        let sd = band / (2.0 * q);
-        HeldOutReading {
-            curvature: q,
-            fraction: (own.change - theirs.change) / q,
-            sd,
-            powered: sd < 0.5,
-        }
-    });
+    let reading = (q > 0.0)
+        .then(|| HeldOutReading::new(q, (own.change - theirs.change) / q, band / (2.0 * q)));
     HeldOut {
         band,
         beyond_noise: q > 0.0 && own.change - theirs.change > band,

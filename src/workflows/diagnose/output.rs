@@ -141,9 +141,8 @@ fn held_out_cell(t: &ScoreTest) -> String {
 fn reading_text(h: &HeldOut) -> String {
     h.reading.as_ref().map_or(String::new(), |r| {
         format!(
-            "; reads {:.2} ± {:.2} of it{}",
-            r.fraction,
-            r.sd,
+            "; {}{}",
+            r.text(),
             if r.powered {
                 ""
             } else {
@@ -514,7 +513,7 @@ fn comparison_section(c: &super::reference::Comparison) -> (String, Table) {
                     match (&d.held_out, d.significant) {
                         (_, false) => "same within noise",
                         (Some(h), true) if h.beyond_noise => "differs, confirmed held-out",
-                        (Some(h), true) if h.reading.as_ref().is_some_and(|r| !r.powered) => {
+                        (Some(h), true) if h.too_weakly_informed() => {
                             "differs, not validatable on the held-out half cycle (too weakly informed there)"
                         }
                         (Some(_), true) => "differs, not confirmed on the held-out half cycle",
@@ -967,29 +966,12 @@ pub(super) fn write(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::model::effects::EffectSpec;
-    use crate::problems::diagnose::refit_test;
+    use crate::problems::diagnose::significant_slope;
 
     /// A significant slope candidate (statistic 20 against 10.8), held out with
     /// `held_out`: `Some(true)` beyond its band, `Some(false)` within it, `None` not run.
     fn slope(held_out: Option<bool>) -> ScoreTest {
-        let effect = EffectSpec::GroundSlope {
-            angle: 0.0,
-            free: vec!["angle".into()],
-        };
-        let mut t = refit_test(
-            &effect,
-            vec!["ground_slope.angle".into()],
-            vec![0.01],
-            2.0,
-            1.0,
-            20,
-            3,
-        );
-        t.testable = true;
-        t.statistic = 20.0;
-        t.threshold = 10.8;
-        t.significant = true;
+        let mut t = significant_slope();
         t.held_out = held_out.map(|beyond| HeldOut {
             stride: 1,
             mirrored: false,
