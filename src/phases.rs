@@ -1,6 +1,6 @@
 //! Phase sequences in JSON (`phases/`): ordered continuous phases (an active contact set
 //! held for a duration) and instantaneous impact phases (the plastic impact map of the
-//! contacts that are active after it), seed 001 §3.3.
+//! contacts that are active after it), as in Millard & Mombaur (2019), §3.3.
 
 use crate::limits::{show, MAX_COORDINATE, MAX_INTERVALS, MAX_VELOCITY};
 use crate::model::spec::read_json;
@@ -220,7 +220,7 @@ fn default_symmetry() -> Vec<[String; 2]> {
     .collect()
 }
 
-/// Settings of a walking cycle (seed 001 §3.3).
+/// Settings of a walking cycle (Millard & Mombaur 2019, §3.3).
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct GaitSpec {

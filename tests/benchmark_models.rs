@@ -4,7 +4,8 @@
 //! (plastic impact: new stance foot at rest, kinetic energy not increased, angular momentum
 //! of Kelly's five sub-chains conserved).
 //!
-//! Tests that need `../shared/peer/problems/*.json` print a note and pass when it is absent.
+//! Tests that need the peer's `peer/problems/*.json` (`common::peer_dir`) print a note and
+//! pass when it is absent.
 
 use std::hint::black_box;
 use std::path::PathBuf;
@@ -21,7 +22,7 @@ use serde_json::Value;
 const FLIP: [usize; 5] = [4, 3, 2, 1, 0];
 
 fn problem_path(name: &str) -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(format!("../shared/peer/problems/{name}.json"))
+    crate::common::peer_dir().join(format!("peer/problems/{name}.json"))
 }
 
 /// The peer file, or `None` with a note when it is not there.

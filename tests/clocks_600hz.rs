@@ -4,12 +4,12 @@
 //! trials' clock profiles, with the rigid ellipse and with the compliant foot.
 //!
 //! At the identification cost (sample targets, the pelvis position tracked) the left
-//! clock's profile on the edited trial is the untouched trial's moved by the edit's 20 ms
-//! (stop 71, `docs/instruments.md`). On the edited trial a point of the profile lies
+//! clock's profile on the edited trial is the untouched trial's moved by the edit's 20 ms.
+//! On the edited trial a point of the profile lies
 //! below the run and the re-fit held at its parabola's vertex is the candidate's test;
 //! on the untouched trial none does, so its test is the score test's truncated re-fit,
 //! another estimator. The comparison takes the two profiles' own readings, each the
-//! vertex of its parabola with the run's cost among its points (stop 72).
+//! vertex of its parabola with the run's cost among its points.
 //!
 //! Each trial is tracked from its solution kept in `tests/data/real_hidden_600hz_kept`
 //! (the rigid ellipse, the bundled model, `track --sample-targets
@@ -210,10 +210,10 @@ fn shared_fixture(name: &str, make: impl FnOnce(&Path)) -> PathBuf {
 /// Issue 23, Done-means 2, for the compliant foot: on the untouched trial every candidate
 /// significant in-sample is judged on the held-out half cycle (the other leg's, mirrored),
 /// and what is reported as found is what lowered that half cycle's cost beyond its noise
-/// band. One is (stop 81): a clock shared by both plates, the forces about 24 ms late
+/// band. One is: a clock shared by both plates, the forces about 24 ms late
 /// against the kinematics (+23.6 ± 6.5 ms in-sample; held out it lowers J by 18 %, the
 /// band 5 %). The rigid ellipse with the seed's damping found the same offset, +15 ms, on
-/// all three half cycles (stop 62): a synchronisation offset of these recordings, or a lag
+/// all three half cycles: a synchronisation offset of these recordings, or a lag
 /// common to both feet's contacts, which these data do not tell apart.
 #[test]
 fn the_untouched_compliant_trial_reports_only_what_its_held_out_half_cycle_confirms() {
@@ -348,7 +348,7 @@ fn left_clock_against_the_untouched_trial(
     (diff, sd)
 }
 
-/// The rigid ellipse. Measured (stop 72): the untouched trial's vertex −9.8 ± 8.2 ms (its
+/// The rigid ellipse. Measured: the untouched trial's vertex −9.8 ± 8.2 ms (its
 /// score test −7.0 ± 5.8 ms, not significant), the edited trial's re-fit held at
 /// −29.4 ms: −19.6 ± 10.1 ms against the untouched trial, z −1.9, within noise (the
 /// rigid foot's profiles are flat: each reading's sd is 6–8 ms).
@@ -358,13 +358,13 @@ fn the_left_clock_20_ms_early_is_read_against_the_untouched_trial_by_the_rigid_p
     left_clock_against_the_untouched_trial(Foot::Rigid, 0.02, false);
 }
 
-/// The compliant foot. Measured (stop 72): the untouched trial's vertex +7.6 ± 4.1 ms
+/// The compliant foot. Measured: the untouched trial's vertex +7.6 ± 4.1 ms
 /// (its score test +9.4 ± 4.2 ms, statistic 4.3 against 10.8), the edited trial's re-fit
 /// held at −13.0 ms: −20.6 ± 5.5 ms against the untouched trial, z −3.7, significant
 /// against the one compared candidate's 10.8 (in-sample alone the left clock's statistic
-/// is 11.6 against 13.8). At 60 Hz without a profile it read −9.7 ± 4.7 ms (stop 68).
-/// From the kept diagnoses' solves the two diagnoses take 8 and 16 s (stop 80; 32
-/// minutes from the runs at stop 72).
+/// is 11.6 against 13.8). At 60 Hz without a profile it read −9.7 ± 4.7 ms.
+/// From the kept diagnoses' solves the two diagnoses take 8 and 16 s (32
+/// minutes from the runs).
 #[test]
 fn the_left_clock_20_ms_early_is_read_against_the_untouched_trial_by_the_compliant_profiles() {
     left_clock_against_the_untouched_trial(Foot::Compliant, 0.012, true);
@@ -374,8 +374,8 @@ fn the_left_clock_20_ms_early_is_read_against_the_untouched_trial_by_the_complia
 /// clock profiles (`diagnose::plate_clocks`) against the untouched trial. The truth is
 /// the left plate −20 ms and the right plate unchanged, so the plates' relative timing
 /// (left less right) −20 ms: each of the three is read within 20 % or 2 sd of its truth.
-/// The one-plate clocks cannot tell the plates apart (stop 72: left −20.6 ± 4.5 ms, right
-/// +24.9 ± 5.4 ms, both significant); measured at stop 73 in `docs/instruments.md`. The
+/// The one-plate clocks cannot tell the plates apart (left −20.6 ± 4.5 ms, right
+/// +24.9 ± 5.4 ms, both significant). The
 /// joint reading's evidence on which plate lists the left plate's one-plate clock first.
 #[test]
 fn both_plates_clocks_are_read_jointly_against_the_untouched_trial_by_the_compliant_profiles() {
@@ -403,7 +403,7 @@ fn both_plates_clocks_are_read_jointly_against_the_untouched_trial_by_the_compli
             "{name}: {diff} ± {sd} s against {truth} s"
         );
     }
-    // the joint reading's evidence lists the left plate's one-plate clock first (stop 74)
+    // the joint reading's evidence lists the left plate's one-plate clock first
     let first = &c["differences"][0];
     assert!(
         first["jointly"] != true && first["parameter"] == PARAMETERS[1],
@@ -428,7 +428,7 @@ pub(crate) fn diagnosed_against_the_untouched_trial(trial: &str) -> Value {
 
 /// The compliant foot, every candidate: the right plate's clock 25 ms late is listed
 /// first against the untouched trial, significant and within 20 % or 2 sd of +25 ms, and
-/// the joint reading of both plates' clocks favours the right plate (kept, stop 73, as
+/// the joint reading of both plates' clocks favours the right plate (kept: as
 /// `diagnose::reference`'s library test reads it: about 20 : 1).
 #[test]
 fn the_right_clock_25_ms_late_is_diagnosed_first_against_the_untouched_trial() {
@@ -523,10 +523,10 @@ pub(crate) fn refit_in_brings_every_channel_near_the_untouched_trials(
 
 /// Issue 23, Done-means 1's re-fit, for the compliant foot's two clock trials at 600 Hz:
 /// the re-fit that each edited trial's diagnosis makes with the edited plate's clock held
-/// at its profile's vertex (kept in `tests/data/real_compliant_600hz/<trial>/refit`, stop
-/// 80, from the diagnosis that `tools/make-compliant-diagnosis-starts` refreshed: right
+/// at its profile's vertex (kept in `tests/data/real_compliant_600hz/<trial>/refit`,
+/// from the diagnosis that `tools/make-compliant-diagnosis-starts` refreshed: right
 /// +23.5 ms, J 0.320836, left −13.0 ms, J 0.320390, both converged (KKT below 1e-5);
-/// stop 73's had stopped at 200 Gauss–Newton iterations) brings every channel's error at
+/// an earlier kept re-fit had stopped at 200 Gauss–Newton iterations) brings every channel's error at
 /// the nodes near the untouched trial's: it closes at least half the gap the edit opened,
 /// or lies within 20 % of the untouched trial's. The edits open gaps in the CoP and the
 /// normal force (the edited trials' tracks, kept beside them: CoP 1.37 and 1.28 against

@@ -1,24 +1,20 @@
-//! Issue 23, Done-means 1, with the compliant foot: the hidden-effect trials made from the
-//! real measurements (`tools/make-real-hidden-trials`) diagnosed against the untouched
-//! trial with the volumetric ellipse instead of the rigid one.
+//! The hidden-effect trials made from the real measurements (`tools/make-real-hidden-trials`)
+//! diagnosed against the untouched trial with the compliant foot, the volumetric ellipse,
+//! instead of the rigid one.
 //!
 //! The rigid ellipse reads the untouched trial's right plate +25 ms late and its left
 //! plate −38 ms early: its heel strike and push-off come at fixed contact events, so the
-//! push-off plate's forces look late and the heel-strike plate's early (stop 62,
-//! `docs/instruments.md`). The compliant foot's force grows and fades with the foot's
+//! push-off plate's forces look late and the heel-strike plate's early. The compliant foot's force grows and fades with the foot's
 //! sinking and has no such event; on the untouched trial it reads both clocks within a
-//! few milliseconds of zero and finds nothing (stop 68). Each trial is tracked as
+//! few milliseconds of zero and finds nothing. Each trial is tracked as
 //! `tools/make-compliant-real-tracks` tracked it (the seed's MTG damping, the
 //! identification cost, CVODES at 1e-10), starting from the solution kept in
 //! tests/data/real_compliant/<trial>; then `diagnose --verify 0 --no-held-out
 //! --reference <the untouched trial's diagnosis>`.
 //!
-//! Near a compliant foot's optimum the SQP's KKT residual fell slowly at stop 68 (about
-//! 7 % per iteration on the right-clock trial, J constant to nine digits meanwhile:
-//! `docs/instruments.md`), so the kept solutions were taken where their KKT residual was
-//! 1.2e-4 to 1.3e-3 and the tracks here stop at 2e-3. The cause was the interval
-//! curvature's quadrature; since stop 69 the same track converges (26 iterations to 1e-5,
-//! `docs/engine-investigation.md`). What the score tests
+//! The kept solutions have KKT residuals of 1.2e-4 to 1.3e-3 and the tracks here stop at
+//! 2e-3 (from the kept point the same track converges, 26 iterations to 1e-5). What the
+//! score tests
 //! assume, the Gauss–Newton decrease left at the solution, is below 1e-8 there (J is
 //! 0.34–0.52).
 //!
@@ -159,8 +155,8 @@ fn first_against_the_untouched_trial(
 }
 
 /// On the untouched trial the compliant foot reads each plate's clock within 10 ms of
-/// zero (the rigid ellipse under the same model and cost: right +22.7 ms, left −31 ms,
-/// stop 62) and finds nothing. Measured (stop 68): right −2.1 ± 2.8 ms, left
+/// zero (the rigid ellipse under the same model and cost: right +22.7 ms, left −31 ms)
+/// and finds nothing. Measured: right −2.1 ± 2.8 ms, left
 /// +5.7 ± 3.4 ms, the largest statistic the ground slope's, 6.3 against 10.8.
 #[test]
 #[ignore = "slow (a compliant-foot diagnosis, about 4 minutes); run with cargo test --test suite -- --ignored compliant_instruments::"]
@@ -175,7 +171,7 @@ fn the_untouched_trial_reads_both_clocks_near_zero_and_finds_nothing() {
 }
 
 /// The right plate's clock 25 ms late: first against the untouched trial and significant.
-/// Measured (stop 68): +24.7 ± 4.6 ms, z +5.3 against 3.9; in-sample +22.7 ± 3.7 ms,
+/// Measured: +24.7 ± 4.6 ms, z +5.3 against 3.9; in-sample +22.7 ± 3.7 ms,
 /// third after two ghosts of the edit (trunk mass, ground slope) that the untouched
 /// trial shares (same within noise against it).
 #[test]
@@ -191,7 +187,7 @@ fn the_right_plates_clock_25_ms_late_is_read_first_against_the_untouched_trial()
 }
 
 /// Every force 5 % high: the body-mass error first against the untouched trial and
-/// significant. Measured (stop 68): +4.95 ± 1.04 %, z +4.8.
+/// significant. Measured: +4.95 ± 1.04 %, z +4.8.
 #[test]
 #[ignore = "slow (two compliant-foot diagnoses, about 8 minutes); run with cargo test --test suite -- --ignored compliant_instruments::"]
 fn every_force_5_percent_high_is_read_first_as_a_body_mass_error() {
@@ -205,7 +201,7 @@ fn every_force_5_percent_high_is_read_first_as_a_body_mass_error() {
 }
 
 /// The right foot's CoP 25 mm forward: first against the untouched trial, within 2 sd,
-/// but not significant. Measured (stop 68): +27.0 ± 17.9 mm, z +1.5.
+/// but not significant. Measured: +27.0 ± 17.9 mm, z +1.5.
 #[test]
 #[ignore = "slow (two compliant-foot diagnoses, about 8 minutes); run with cargo test --test suite -- --ignored compliant_instruments::"]
 fn the_right_cop_25_mm_forward_is_read_first_but_within_noise() {
@@ -218,12 +214,12 @@ fn the_right_cop_25_mm_forward_is_read_first_but_within_noise() {
     );
 }
 
-/// The left plate 6 % high. Measured (stop 68): first in-sample (+5.8 ± 1.0 %), but
+/// The left plate 6 % high. Measured: first in-sample (+5.8 ± 1.0 %), but
 /// against the untouched trial the body-mass error differs more (+5.2 %, z 5.0) than the
 /// left gain (+6.0 ± 1.6 %, z 3.7, third): on this half cycle one plate's gain and the
 /// whole body's mass scale much the same forces.
 #[test]
-#[ignore = "not found yet: against the untouched trial the body-mass error ranks first (z 5.0), the left gain third (+6.0 ± 1.6 %, z 3.7); docs/instruments.md, stop 68"]
+#[ignore = "not found yet: against the untouched trial the body-mass error ranks first (z 5.0), the left gain third (+6.0 ± 1.6 %, z 3.7)"]
 fn the_left_plate_6_percent_high_is_read_first_against_the_untouched_trial() {
     first_against_the_untouched_trial(
         "real_gain_l+6pct",
@@ -234,12 +230,12 @@ fn the_left_plate_6_percent_high_is_read_first_against_the_untouched_trial() {
     );
 }
 
-/// The left plate's clock 20 ms early. Measured (stop 68): the left clock reads
+/// The left plate's clock 20 ms early. Measured: the left clock reads
 /// −9.7 ± 4.7 ms against the untouched trial (z −2.1, sixth); the right clock's +18.9 ms
 /// (z 4.2) ranks first. The edit moves the half cycle's start (the left heel strike) 20
 /// ms earlier, and the truncated re-fit from zero does not reach the left clock.
 #[test]
-#[ignore = "not found yet: the right clock ranks first (+18.9 ms, z 4.2), the left clock reads -9.7 +- 4.7 ms (truth -20 ms); docs/instruments.md, stop 68"]
+#[ignore = "not found yet: the right clock ranks first (+18.9 ms, z 4.2), the left clock reads -9.7 +- 4.7 ms (truth -20 ms)"]
 fn the_left_plates_clock_20_ms_early_is_read_first_against_the_untouched_trial() {
     first_against_the_untouched_trial(
         "real_clock_l-20ms",

@@ -336,7 +336,7 @@ fn held_left_clocks_move_the_window_and_the_profile_compares_the_common_samples(
 /// its timestamp's phase's end), its CoP moved with the treadmill belt. At the data's own
 /// start their objectives agree to 2.6e-6, at the held trial's tracked solution (kept in
 /// `tests/data/real_hidden_600hz_kept`) to 7.3e-7 (before these were mended, 9e-3 and 5 %:
-/// `docs/instruments.md`, stop 71). At 60 Hz the moved clock reads the raw forces at
+/// `docs/instruments.md`). At 60 Hz the moved clock reads the raw forces at
 /// other instants than the untouched trial does: 4.3 % apart at the same solution.
 #[test]
 fn a_clock_edited_at_the_plates_rate_is_the_untouched_trial_held_at_its_offset() {
@@ -428,7 +428,7 @@ fn a_clock_edited_at_the_plates_rate_is_the_untouched_trial_held_at_its_offset()
 /// instants round), its CoP included. Before this was
 /// mended the table read the moved CoP with the treadmill belt's displacement at the moved
 /// instant: 1.1322 m/s × 20 ms = 2.3 cm off over the whole left stance, and so did the
-/// node targets' cost (stop 74; the
+/// node targets' cost (the
 /// compliant right-clock trial's re-fit held at +23.5 ms showed CoP 1.20 cm against the
 /// untouched trial's 0.70 while its cost's CoP part was the untouched one's).
 #[test]

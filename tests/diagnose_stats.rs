@@ -445,7 +445,7 @@ fn swapping_the_legs_gives_the_other_legs_half_cycles() {
 /// (mirrored), which held-out validation may use. The MTG damping (an opt-in candidate,
 /// `--candidate mtg_damping`) is significant in-sample and confirmed on the other leg's
 /// half cycle before the run's (0.624–1.252 s), whose data the fit never saw: the data
-/// ask for less damping than the model's η = 2.0 (stop 41, `footfall diagnose` of the
+/// ask for less damping than the model's η = 2.0 (`footfall diagnose` of the
 /// bundled track with check points, release build: statistic 46.3 against 10.8, change
 /// −0.966 of η, held-out change 7.0 against a noise band of 0.50). About 65 s here.
 #[test]

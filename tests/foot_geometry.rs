@@ -37,7 +37,7 @@ fn every_primitive_gets_its_centre_size_and_angle_within_bounds_of_the_files() {
     );
     assert!(names[0].starts_with("foot_geometry."));
     assert_eq!(m.ntheta(), 5);
-    // the file's shape: centre (4.30, −8.11) cm, semi-axes 15.25 × 4.03 cm (seed 001)
+    // the file's shape: centre (4.30, −8.11) cm, semi-axes 15.25 × 4.03 cm (Millard & Mombaur 2019)
     let foot: serde_json::Value = serde_json::from_str(
         &std::fs::read_to_string(root().join("models/feet/ellipse.json")).unwrap(),
     )

@@ -471,7 +471,7 @@ fn sample_targets_move_a_plates_events_by_its_held_clock_offset() {
 /// strikes 66 ms later, which turns an early one (before the data's first 0.05 s) into
 /// the start of a half cycle at 0.070 s; chosen on the moved events, that half cycle
 /// would have been tracked instead of the trial's own (1.252 s), and a clock profile
-/// would have compared costs of different half cycles (stop 61). The tracked half cycle
+/// would have compared costs of different half cycles. The tracked half cycle
 /// is the trial's own, its start moved by the offset.
 #[test]
 fn a_held_clock_offset_keeps_the_half_cycle_tracked() {

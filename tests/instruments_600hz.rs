@@ -4,14 +4,14 @@
 //! high, and the left plate's forces 6 % high. Each trial's track and its re-fit with the
 //! diagnosed effect added by one line (`footfall track … --effect cop_offset:side=right`,
 //! `--effect body_mass_error` or `--effect force_plate_gain:side=left`, from the trial's
-//! own track) are kept in `tests/data/real_compliant_600hz/<trial>` (stop 75). The clock
+//! own track) are kept in `tests/data/real_compliant_600hz/<trial>`. The clock
 //! trials' re-fits are in `clocks_600hz`.
 //!
 //! The diagnosis tests diagnose each trial afresh (every candidate, the clock profiles, no
 //! verifying re-fit and no held-out half cycle, as the kept diagnoses were made) against
 //! the untouched trial's fresh diagnosis (`clocks_600hz::untouched_compliant_diagnosis`),
 //! each solve started from the trial's kept diagnosis's
-//! (`tests/data/real_compliant_600hz/<trial>/diagnosis_starts`, stop 80): a solve that
+//! (`tests/data/real_compliant_600hz/<trial>/diagnosis_starts`): a solve that
 //! is a KKT point of the current code's problem stops there, so each diagnosis takes one
 //! to three minutes instead of 11–25 and still checks where every solve converges.
 
@@ -26,7 +26,7 @@ use serde_json::Value;
 /// lies within 20 % of the untouched trial's. The CoP edit opens a gap in the CoP (the
 /// track follows the moved CoP with the foot, so the gap is small: 0.89 against 0.70 cm),
 /// the mass and gain edits in the normal force (31.2 and 33.2 against 22.5 N). The three
-/// re-fits converged (stop 75: J 0.316933 in 21 iterations, 0.320114 in 24, 0.315913 in 26; the
+/// re-fits converged (J 0.316933 in 21 iterations, 0.320114 in 24, 0.315913 in 26; the
 /// untouched trial's J is 0.320195).
 #[test]
 fn the_compliant_cop_mass_and_gain_refits_bring_every_channel_near_the_untouched_trials() {
@@ -81,7 +81,7 @@ fn diagnosed_first_against_the_untouched_trial(
 }
 
 /// The left plate's forces 6 % high: the left plate's gain first and significant, the
-/// joint gains favouring the left plate alone (kept, stop 75: +5.96 ± 1.37 %, z +4.35;
+/// joint gains favouring the left plate alone (kept: +5.96 ± 1.37 %, z +4.35;
 /// left alone 1.24 : 1 over both alike, not settled).
 #[test]
 fn the_left_plates_gain_is_diagnosed_first_against_the_untouched_trial() {
@@ -94,7 +94,7 @@ fn the_left_plates_gain_is_diagnosed_first_against_the_untouched_trial() {
 }
 
 /// Every force 5 % high, as a body-mass error makes them: the body mass first and
-/// significant, the joint gains favouring both plates alike (kept, stop 75: +4.92 ±
+/// significant, the joint gains favouring both plates alike (kept: +4.92 ±
 /// 1.13 %, z +4.34; both alike 1.28 : 1 over the left plate alone, not settled).
 #[test]
 fn the_body_mass_is_diagnosed_first_against_the_untouched_trial() {
@@ -107,7 +107,7 @@ fn the_body_mass_is_diagnosed_first_against_the_untouched_trial() {
 }
 
 /// The right foot's CoP 25 mm forward: its CoP offset first, above one sd but within
-/// noise (kept, stop 74, against the untouched trial's diagnosis without the joint gains:
+/// noise (kept: against the untouched trial's diagnosis without the joint gains:
 /// +26.9 ± 17.7 mm, z +1.51). That the edit moves no other reading by as much is checked
 /// on the kept diagnosis (`diagnose::reference`'s library test), not here.
 #[test]

@@ -6,12 +6,9 @@ use footfall::integrate::{ControlShape, Integrator, IntegratorSettings, Shooting
 use footfall::ocp::{Block, Transcription};
 use footfall::problems::benchmarks::{read_problem_json, Benchmark};
 use footfall::sqp::{self, HessianMode, Silent, SqpSettings, SqpStatus};
-use std::path::PathBuf;
 
 fn peer(name: &str) -> Option<serde_json::Value> {
-    let p = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-        .join("../shared/peer/problems")
-        .join(name);
+    let p = crate::common::peer_dir().join("peer/problems").join(name);
     if !p.exists() {
         eprintln!("{} not found: skipped", p.display());
         return None;

@@ -708,7 +708,7 @@ fn sample_report() -> (Report, Vec<String>) {
     let knee =
         ErrorStats::from_errors(&[0.01, 0.03, f64::NAN]).scaled(180.0 / std::f64::consts::PI);
     let table = error_table(
-        "Tracking errors (seed Table 3 layout)",
+        "Tracking errors (layout of Millard & Mombaur 2019, Table 3)",
         &["ellipse".to_string(), "double circle".to_string()],
         &[ChannelErrors {
             name: "knee angle".into(),

@@ -4,7 +4,7 @@
 //! against the kinematics, confirmed on the held-out half cycle:
 //! `clocks_600hz::the_untouched_compliant_trial_reports_only_what_…`). The edited trials
 //! are edits of that same recording, so they hold it too, and in-sample it is what their
-//! own diagnoses rank first (stop 80). Added by one line (`track … --effect
+//! own diagnoses rank first. Added by one line (`track … --effect
 //! force_plate_time_offset:offset=0.0236,free=`, held: with sample targets a free clock
 //! cannot move its plate's events) and each trial diagnosed again, the edit comes first.
 //!
@@ -13,7 +13,7 @@
 //! clock against (once, not in each test here: under cargo-nextest each test is its own
 //! process and would diagnose the untouched trial again). Each trial's track with the clock held is kept in
 //! `tests/data/real_compliant_600hz/<trial>/shared_clock` (from the trial's kept solve
-//! held at +20 ms, stop 81), and its held-out half cycle's track in
+//! held at +20 ms), and its held-out half cycle's track in
 //! `<trial>/shared_clock_diagnosis_starts`; each is re-evaluated and, a KKT point of the
 //! current code's problem, stopped at. The scores, variance inflation, identifiability and
 //! held-out changes are computed afresh. The shared clock is already in the model and is
@@ -126,7 +126,7 @@ fn row<'a>(s: &'a Value, label: &str) -> &'a Value {
 }
 
 /// With the shared clock added, nothing else is significant on the untouched trial
-/// (stop 81: the largest statistic 2.3 against 10.8): what the untouched trial held was
+/// (the largest statistic 2.3 against 10.8): what the untouched trial held was
 /// that clock.
 #[test]
 fn with_the_shared_clock_nothing_else_is_significant_on_the_untouched_trial() {
@@ -138,8 +138,8 @@ fn with_the_shared_clock_nothing_else_is_significant_on_the_untouched_trial() {
 
 /// The right foot's CoP 25 mm forward: with the shared clock added, the right CoP offset
 /// is first, significant, confirmed on the held-out half cycle and read within 20 % or 2
-/// sd of +25 mm (stop 81: +41.6 ± 11.3 mm, statistic 13.3 against 10.8, the held-out
-/// half cycle's J 52.7 % lower). Without it the shared clock came first (stop 80).
+/// sd of +25 mm (+41.6 ± 11.3 mm, statistic 13.3 against 10.8, the held-out
+/// half cycle's J 52.7 % lower). Without it the shared clock came first.
 #[test]
 fn with_the_shared_clock_the_right_cop_offset_is_found_first() {
     let s = diagnosed_with_the_shared_clock("real_cop_r+25mm");
@@ -152,11 +152,11 @@ fn with_the_shared_clock_the_right_cop_offset_is_found_first() {
 
 /// The left plate's forces 6 % high: with the shared clock added, a plate gain is
 /// first, the left plate's read within 20 % or 2 sd of +6 % and the right plate's within
-/// 2 sd of zero (stop 81: both plates' gains first, left +6.1 ± 1.3 %, right −2.9 ± 5.0 %;
+/// 2 sd of zero (both plates' gains first, left +6.1 ± 1.3 %, right −2.9 ± 5.0 %;
 /// the left gain alone second, +5.8 ± 1.1 %).
 ///
 /// The left gain alone cannot be validated on the held-out half cycle, and the diagnosis
-/// says so rather than calling it refuted (stop 83). In the run's half cycle the left
+/// says so rather than calling it refuted. In the run's half cycle the left
 /// foot is in stance throughout; in the held-out one (the other leg's, mirrored) the
 /// left plate is loaded only in the first double support, at push-off. There the plain
 /// model's own apparent gain of that plate is −8.8 ± 1.8 % on the untouched trial, and
@@ -193,7 +193,7 @@ fn with_the_shared_clock_the_left_plates_gain_is_read_first() {
 
 /// Every force 5 % high: with the shared clock added, both plates' gains are first,
 /// each read within 20 % or 2 sd of +5 %, and the body-mass error is found (significant,
-/// confirmed held out) within 20 % or 2 sd of +5 % (stop 81: gains right +1.7 ± 4.4 %,
+/// confirmed held out) within 20 % or 2 sd of +5 % (gains right +1.7 ± 4.4 %,
 /// left +5.1 ± 1.1 %; body mass +4.5 ± 0.8 %, fourth by its decrease, 13.4 % of J
 /// against the gains' 14.5 %). On this half cycle a plate gain and a body-mass error scale
 /// the same forces; which one it is, the comparison with the untouched trial's joint gains
@@ -218,12 +218,12 @@ fn with_the_shared_clock_every_force_scaled_is_read_first() {
 
 /// The left plate's forces 20 ms early: with the shared clock added, the left plate's
 /// clock is first, significant, confirmed on the held-out half cycle and read within 20 %
-/// or 2 sd of −20 ms, and it is the line to add (stop 82: −20.7 ± 3.5 ms, statistic 31.7
+/// or 2 sd of −20 ms, and it is the line to add (−20.7 ± 3.5 ms, statistic 31.7
 /// against 10.8, the held-out half cycle's J 40.3 % lower). Without the step the right
-/// plate's clock came first in-sample (stop 80). The right plate's clock +23.4 ms, the
+/// plate's clock came first in-sample. The right plate's clock +23.4 ms, the
 /// same offset between the plates the other way round, explains nearly as much (19.6 %
 /// of J against 20.3 %) and is found too: which plate it is, this trial alone barely says
-/// (not asserted; against the untouched trial the left, 4.5 : 1, stop 80).
+/// (not asserted; against the untouched trial the left, 4.5 : 1).
 #[test]
 fn with_the_shared_clock_the_left_plates_clock_is_found_first() {
     let s = diagnosed_with_the_shared_clock("real_clock_l-20ms");
@@ -246,7 +246,7 @@ fn with_the_shared_clock_the_left_plates_clock_is_found_first() {
 
 /// The right plate's forces 25 ms late: with the shared clock added, the right plate's
 /// clock is first, significant, confirmed on the held-out half cycle and read within
-/// 20 % or 2 sd of +25 ms (stop 82: +29.9 ± 3.7 ms, statistic 64.5 against 10.8, 29.1 %
+/// 20 % or 2 sd of +25 ms (+29.9 ± 3.7 ms, statistic 64.5 against 10.8, 29.1 %
 /// of J, the held-out half cycle's J 55.1 % lower). The left plate's clock, the same
 /// offset between the plates the other way round, is fifth (16.7 % of J).
 #[test]
@@ -264,7 +264,7 @@ fn with_the_shared_clock_the_right_plates_clock_is_found_first() {
 
 /// Issue 23, Done-means 1's re-fit, one step further: each edited trial re-tracked with
 /// the shared clock held and what its stepwise diagnosis reads first added by one line,
-/// at its reading (stop 83; kept in `tests/data/real_compliant_600hz/<trial>/
+/// at its reading (kept in `tests/data/real_compliant_600hz/<trial>/
 /// shared_clock_refit`, each converged from its `shared_clock` track):
 /// - the clock trials with the edited plate's clock held (left −20.66 ms, right +29.9 ms);
 /// - the CoP trial with the right CoP offset free (from +41.56 mm: +39.9 ± 5.4 mm);

@@ -1,5 +1,5 @@
 //! Torque-driven tracking of the bundled trial: the actuation of the CasADi gait peer
-//! (`../shared/peer_gait`), six joint torques of at most 500 N·m, on both feet, solved
+//! (`peer_gait` in `common::peer_dir`), six joint torques of at most 500 N·m, on both feet, solved
 //! from the data as `footfall track --model models/opensim_subject01_torque.json` does.
 //!
 //! Two faults once kept it from converging: the torques were bounded as excitations, to

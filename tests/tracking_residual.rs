@@ -302,7 +302,7 @@ fn residual_use_reports_rms_peak_and_saturation() {
 /// overground: its overground CoP holds the belt's displacement at its own instant, so
 /// compared δ earlier it is `v·δ` further back. Without the correction a left plate 20 ms
 /// early on the bundled trial's 1.13 m/s belt held at its true offset compared its CoP
-/// 23 mm off (`docs/instruments.md`, "Stop 71").
+/// 23 mm off.
 #[test]
 fn a_moved_cop_sample_moves_with_the_treadmill_belt() {
     use footfall::data::CubicSpline;

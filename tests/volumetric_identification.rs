@@ -1,4 +1,4 @@
-//! Identifying the volumetric foot's contact law by optimal control (seed 000): the
+//! Identifying the volumetric foot's contact law by optimal control (as Ezati et al. 2020 do): the
 //! `volumetric_contact` effect frees the stiffness, damping and dynamic friction
 //! coefficient of the foot's volumetric primitives, with exact sensitivities.
 //!
@@ -224,7 +224,7 @@ fn trial_aligned_with_the_truth(dir: &Path, tmp: &Path) -> PathBuf {
 /// reads 0.413 ± 0.083 s/m (−24 %, 1.5 sd) and the stiffness 1.460 ± 0.041 (−2.7 %).
 /// That shortfall is a bias of the effort terms, not the noise: four noise seeds average
 /// −19 %, a noise-free trial gives −20 %, and −2.5 % with a tenth of the regularisation
-/// weight (docs/foot-identification.md, stop 48). At 1 kHz and that weight both come back
+/// weight. At 1 kHz and that weight both come back
 /// within 20 %: the ignored test below. At 100 Hz the weight does not help the damping
 /// (−37 % ± 35 % at 1e-4): there the noise limits it.
 /// Out of phase (synth's events) the same fit ended at 1.145 N/mm² and damping 0.
@@ -337,11 +337,11 @@ fn fit_the_law(
 /// weight for effort-costly parameters, chosen on the trunk trial as the smallest decade
 /// at which `diagnose` invents nothing on the trial without a hidden effect). Stiffness and
 /// damping within 20 %. Measured with the exact Hessian (release build,
-/// docs/foot-identification.md, stop 49): 8 iterations, stiffness 1.4845 ± 0.035 N/mm²
+/// docs/foot-identification.md): 8 iterations, stiffness 1.4845 ± 0.035 N/mm²
 /// (−1.0 %), damping 0.514 ± 0.068 s/m (−4.8 %); over four noise seeds the damping reads
 /// −4.8, +7.9, −3.1 and −17.0 %. At the seed's 1e-3 the same fits average −18.8 % (the
 /// effort terms' bias), and at 100 Hz even 1e-4 leaves the damping −37 % ± 35 % (two
-/// samples of its ~20 ms effect). With Gauss–Newton steps (stop 57, release build): 8
+/// samples of its ~20 ms effect). With Gauss–Newton steps (release build): 8
 /// iterations, 25 s instead of 4–8 minutes (41 s in the test profile), stiffness 1.4844 ±
 /// 0.035 (−1.0 %), damping 0.5140 ± 0.068 (−4.8 %).
 #[test]
@@ -564,14 +564,14 @@ fn diagnose_ranking(run: &Path, candidates: &[&str], out: &Path) -> serde_json::
 /// ellipse's walk) fitted the same way, where the same candidate explains a part of J
 /// at least five times smaller.
 ///
-/// Measured (stop 57, release build): the compliant trial's fit J 1.581532; foot
+/// Measured (release build): the compliant trial's fit J 1.581532; foot
 /// geometry 43.5 % of J, statistic 522 against its χ²₅ point 20.5, its short semi-axis at
 /// its +30 % bound ("significant at its bound, not a reading": no rigid ellipse within
 /// the bounds is the compliant foot); next the plates' clocks at 20.7 and 18.2 (ghosts:
 /// the rigid foot's misfit leans on them too); 39 s of diagnosis in the test profile. The
 /// control (J 1.337232), the geometry scored alone: 3.7 % of J, statistic 27.1 — above
 /// its χ² point there too, so the geometry's significance alone is not evidence at this
-/// cost; its size is (docs/foot-identification.md, stop 57, also for the seed's weights,
+/// cost; its size is (also for the seed's weights,
 /// where the geometry ranks first on both trials with 13.6 % and 4.4 % of J).
 #[test]
 fn diagnose_ranks_the_foot_geometry_first_on_the_rigid_fit_of_the_compliant_trial() {
@@ -749,7 +749,7 @@ fn the_hidden_law_held_fixed_fits_the_trial() {
 /// exact-Hessian SQP's interval curvature), against central differences of the exact AD
 /// Jacobian, at a state where a foot presses into the ground and slides, as
 /// `tests/derivatives.rs` checks the rigid feet. Measured: 5.0e-9 of the largest entry
-/// (3.1e7). The volumetric track's wrong curvature (docs/engine-investigation.md, stop 43)
+/// (3.1e7). The volumetric track's wrong curvature
 /// is therefore not the model's second derivatives.
 #[test]
 fn volumetric_dynamics_second_derivatives_match_finite_differences() {
@@ -785,7 +785,7 @@ fn volumetric_dynamics_second_derivatives_match_finite_differences() {
 /// rigid feet and the benchmarks the two agree to 1e-5 of the largest entry
 /// (tests/ocp_engine.rs, tests/gait_hessian.rs).
 ///
-/// **Fails today** (measured at stop 43, docs/engine-investigation.md). With the
+/// **Fails today.** With the
 /// single-pass identity, whose adjoint weights `μ(τ)ᵀ = λᵀΨ(1)Ψ(τ)⁻¹` invert the state
 /// transition matrix, the largest entry was off about 1000× (the pelvis
 /// height's curvature −1.8e5 against −247 by differences) at 5, 10 and 40 ms alike: the
@@ -794,14 +794,14 @@ fn volumetric_dynamics_second_derivatives_match_finite_differences() {
 /// matrices (`ControlledOde::stiff_transition`): the error was 3.7e-2 (touching
 /// down) to 6.3e-2 (pressed and sliding) of the largest entry, against 1.0 before, the
 /// fast mode's boundary layers at the interval's ends missed by the Gauss nodes; with a
-/// stiff model's pieces halved (stop 69) 8.4e-2 and 3.0e-2. Since stop 77 the adjoint is
+/// stiff model's pieces halved 8.4e-2 and 3.0e-2. Now the adjoint is
 /// integrated backward and the rule weighs its moments over each cell, so the layers
 /// before the jumps are integrated (8.4e-2 → 1.6e-2 and 3.0e-2 → 5.5e-4), and the first
 /// cell shrinks toward the start in five more (the sensitivities' own layer): 5.9e-3 and
 /// 7.0e-4, both at the duration's own curvature (row and column 42). 40–80 s in the test
 /// profile.
 #[test]
-#[ignore = "fails: the volumetric interval curvature is within 0.07–0.6 % of differences, not 1e-5 (the duration's own curvature); see docs/engine-investigation.md (stops 43, 77)"]
+#[ignore = "fails: the volumetric interval curvature is within 0.07–0.6 % of differences, not 1e-5 (the duration's own curvature); see docs/engine-investigation.md"]
 fn volumetric_interval_curvature_matches_finite_differences_of_sensitivities() {
     use footfall::integrate::{ControlShape, ControlledOde, IntegratorSettings, ShootingInterval};
     use footfall::problems::gait_ode::GaitOde;

@@ -21,7 +21,8 @@ pub struct Args {
     /// The rigid foot: `ellipse`, `double-circle` or a foot file (JSON).
     #[arg(long, default_value = "ellipse")]
     rigid_foot: String,
-    /// The rigid foot's phase graph (default: the seed's graph for the bundled feet).
+    /// The rigid foot's phase graph (default: Millard & Mombaur's (2019)
+    /// graph for the bundled feet).
     #[arg(long)]
     rigid_phases: Option<PathBuf>,
     /// The volumetric foot file (JSON).
@@ -36,7 +37,7 @@ pub struct Args {
     /// Compare every sample in the tracked window with the model at its own instant
     /// instead of node targets from splines (as `track --sample-targets`), in every run.
     /// The volumetric law's identification on the bundled trial converges with it and
-    /// the pelvis position tracked (docs/foot-identification.md, stop 55).
+    /// the pelvis position tracked.
     #[arg(long)]
     sample_targets: bool,
     /// Relative and absolute CVODES tolerance of the shooting intervals (the volumetric

@@ -25,11 +25,11 @@ pub struct PredictOptions {
     /// Average forward speed (m/s; default: the subject's).
     #[arg(long)]
     pub speed: Option<f64>,
-    /// Impulse weight w_Δ of eq. 21.
+    /// Impulse weight w_Δ of Millard & Mombaur (2019), eq. 21.
     #[arg(long, default_value_t = SEED_IMPULSE_WEIGHT, value_parser = super::validate::non_negative)]
     pub impulse_weight: f64,
     /// Bound on |ankle angular velocity| (rad/s), replacing the data's range ± 1 rad/s
-    /// (the seed's predictions: 14.6; its control experiment: 3.96).
+    /// (Millard & Mombaur's (2019) predictions: 14.6; their control experiment: 3.96).
     #[arg(long, value_parser = super::validate::positive)]
     pub ankle_velocity_limit: Option<f64>,
     /// Hessian: exact (default) or an approximation.
@@ -69,7 +69,8 @@ pub struct Args {
     /// Foot: `ellipse`, `double-circle` or a foot file.
     #[arg(long, default_value = "ellipse")]
     foot: String,
-    /// Phase graph (default: the seed's graph for the bundled feet; for a foot file whose
+    /// Phase graph (default: Millard & Mombaur's (2019) graph for the bundled feet; for a
+    /// foot file whose
     /// primitives are all volumetric, phases/volumetric_ellipse_walk.json).
     #[arg(long)]
     phases: Option<PathBuf>,

@@ -20,7 +20,8 @@ pub struct Args {
     /// `--from` track run's, else ellipse).
     #[arg(long)]
     foot: Option<String>,
-    /// Phase graph (default: the `--from` track run's, else the seed's graph for the foot).
+    /// Phase graph (default: the `--from` track run's, else Millard & Mombaur's
+    /// (2019) graph for the foot).
     #[arg(long)]
     phases: Option<PathBuf>,
     /// Sampling rate (Hz).

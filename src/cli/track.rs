@@ -16,7 +16,8 @@ use std::path::PathBuf;
 pub struct Args {
     #[command(flatten)]
     model: super::ModelArgs,
-    /// Phase graph (default: the seed's graph for the bundled feet; for a foot file whose
+    /// Phase graph (default: Millard & Mombaur's (2019) graph for the bundled feet; for a
+    /// foot file whose
     /// primitives are all volumetric, phases/volumetric_ellipse_walk.json).
     #[arg(long)]
     phases: Option<PathBuf>,
@@ -38,7 +39,8 @@ pub struct Args {
     /// last SQP iteration, with the options it was started with (give no others).
     #[arg(long, value_name = "DIR")]
     pub resume: Option<PathBuf>,
-    /// Hessian: exact (converges), or gauss-newton (the seed's; stalls near KKT 3e-5).
+    /// Hessian: exact (converges), or gauss-newton (Millard & Mombaur's
+    /// (2019) method; stalls near KKT 3e-5).
     #[arg(long, value_enum, default_value = "exact")]
     hessian: super::HessianArg,
     /// Relative and absolute CVODES tolerance of the shooting intervals.
@@ -66,7 +68,7 @@ pub struct Args {
     #[arg(long = "effect", value_name = "NAME[:key=value,…]")]
     effects: Vec<String>,
     /// Track the pelvis position (x, y) too, weighted 1/(0.1 m) as angles are by
-    /// 1/(π/4); the seed leaves it untracked (then a CoP offset cannot be identified: the
+    /// 1/(π/4); Millard & Mombaur (2019) leave it untracked (then a CoP offset cannot be identified: the
     /// model shifts along the walkway instead).
     #[arg(long)]
     track_pelvis_position: bool,
@@ -75,8 +77,8 @@ pub struct Args {
     /// unit²), so the model can follow the data and the residuals show what it lacks.
     #[arg(long)]
     residual_actuators: bool,
-    /// Weight of the excitation² and activation² regularisation terms (default: the
-    /// seed's 1e-3). Smaller weights let effort-costly parameters (slope, trunk mass)
+    /// Weight of the excitation² and activation² regularisation terms (default: 1e-3,
+    /// as Millard & Mombaur 2019). Smaller weights let effort-costly parameters (slope, trunk mass)
     /// move further from zero.
     #[arg(long, value_parser = super::validate::non_negative)]
     regularisation: Option<f64>,
@@ -96,13 +98,13 @@ pub struct Args {
     #[arg(long)]
     sample_targets: bool,
     /// Weight every channel by the inverse variance of its measurement noise instead of
-    /// the seed's weights (the maximum-likelihood weighting; the angles keep the seed's
-    /// weight, so the regularisation keeps its meaning): `angle=DEG,position=MM,force=N,cop=MM`,
+    /// Millard & Mombaur's (2019) weights (the maximum-likelihood weighting; the angles
+    /// keep their weight, so the regularisation keeps its meaning): `angle=DEG,position=MM,force=N,cop=MM`,
     /// e.g. `angle=0.5,position=2,force=5,cop=5` (synth's default noise).
     #[arg(long, value_name = "angle=DEG,position=MM,force=N,cop=MM")]
     noise_weights: Option<String>,
-    /// Weight of the angular-velocity targets relative to the angles (default: the seed's
-    /// 0.1; 0 drops them). The targets differentiate the smoothed angles, so they carry
+    /// Weight of the angular-velocity targets relative to the angles (default: 0.1,
+    /// as Millard & Mombaur 2019; 0 drops them). The targets differentiate the smoothed angles, so they carry
     /// the filter's bias and its low-passed noise, which a fit can follow.
     #[arg(long, allow_negative_numbers = true, value_parser = super::validate::non_negative)]
     velocity_weight: Option<f64>,

@@ -1,5 +1,5 @@
 //! Fourier-series fits of periodic gait signals and the half-cycle shift that generates
-//! the unmeasured leg from the measured one (seed 000, §3.3).
+//! the unmeasured leg from the measured one (Ezati et al. 2020, §3.3).
 //!
 //! A signal sampled at $t_j$ over one gait cycle of period $T_c$ is fitted by least
 //! squares with
@@ -12,7 +12,7 @@
 use super::error::{memory_path, DataError};
 use nalgebra::{DMatrix, DVector};
 
-/// Number of harmonics of the seed's fit (m = 5, seed 000 §3.3).
+/// Number of harmonics of the fit (m = 5, Ezati et al. 2020, §3.3).
 pub const SEED_FOURIER_ORDER: usize = 5;
 
 /// A fitted truncated Fourier series of period `period`.
@@ -118,7 +118,7 @@ fn basis(time: &[f64], w: f64, order: usize) -> DMatrix<f64> {
 }
 
 /// The values of the other leg: a [`SEED_FOURIER_ORDER`]-harmonic Fourier series fitted to
-/// `values` at `time`, evaluated half a period later, $x(t_j + T_c/2)$ (seed 000 §3.3).
+/// `values` at `time`, evaluated half a period later, $x(t_j + T_c/2)$ (Ezati et al. 2020, §3.3).
 ///
 /// `time` should span one gait cycle of duration `period` (see [`FourierSeries::fit`]).
 /// Exact for signals made of up to five harmonics of $1/T_c$; for real gait signals the

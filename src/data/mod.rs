@@ -18,7 +18,7 @@
 //!   [`Events::contact_phases`] give initial phase durations.
 //! * [`half_cycle_shift`] / [`GaitData::mirror_missing_side`]: the unmeasured leg as the
 //!   measured one's Fourier series shifted by half a cycle, $x_l(t) = x_r(t + T_c/2)$
-//!   (seed 000 §3.3).
+//!   (Ezati et al. 2020, §3.3).
 //! * [`GaitData::to_overground`]: treadmill data moved to an overground frame,
 //!   $x \mapsto x + v_{belt}\,t$.
 //!

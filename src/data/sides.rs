@@ -40,7 +40,7 @@ impl GaitData {
     }
 
     /// Fill a [`SideSource::Missing`] side from the measured one by the half-cycle shift
-    /// of a Fourier series (seed 000 §3.3, [`half_cycle_shift`], five harmonics):
+    /// of a Fourier series (Ezati et al. 2020, §3.3, [`half_cycle_shift`], five harmonics):
     /// $x_{other}(t) = \hat x(t + T_c/2)$ for hip, knee, ankle, $F_x$ and $F_y$.
     ///
     /// The CoP moves with the body, so it is shifted relative to the pelvis:

@@ -22,7 +22,7 @@ pub(super) const GAUSS4: [(f64, f64); 4] = [
 /// largest entry undivided (the first interval, at heel strike), 0.20 in two parts, 4e-3
 /// in four. With the undivided rule the SQP's KKT residual fell by 7 % per iteration near
 /// the optimum, steps alternating in sign (the Hessian too flat along the pelvis height);
-/// in two parts the same track converged (docs/engine-investigation.md, stop 69).
+/// in two parts the same track converges.
 pub(super) const STIFF_SPLIT: usize = 2;
 
 /// Gauss–Legendre rules of 1 to 3 points on [0, 1] (nodes, weights).

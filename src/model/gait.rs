@@ -382,6 +382,10 @@ impl GaitModel {
     pub fn tree(&self) -> &Tree {
         &self.tree
     }
+    /// Gravitational acceleration of the model file (m/s², before any effect tilts it).
+    pub fn gravity(&self) -> f64 {
+        self.gravity
+    }
     /// Number of generalised coordinates.
     pub fn nq(&self) -> usize {
         self.tree.nq()
@@ -440,7 +444,7 @@ impl GaitModel {
         }
     }
 
-    /// Add residual actuators (seed 003's residual reduction): a generalised force on
+    /// Add residual actuators (as in residual reduction of inverse dynamics): a generalised force on
     /// each pelvis translation of `force_n` newtons per unit control and a torque on the
     /// pelvis tilt and every joint of `torque_nm` newton-metres per unit control. Their
     /// controls follow the actuators' (names `<coordinate>_residual`), so a tracking

@@ -401,7 +401,7 @@ impl ModelSpec {
                         path,
                         "actuators.eta",
                         format!(
-                            "must be in [0, {}] (the seed uses 0.4 to 2), got {}",
+                            "must be in [0, {}] (Millard & Mombaur 2019 use 0.4 to 2), got {}",
                             show(MAX_ETA),
                             show(*eta)
                         ),

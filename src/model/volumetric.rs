@@ -1,18 +1,18 @@
 //! Volumetric contact of a foot primitive with the ground, reduced to the sagittal plane
-//! (seed 002 eq. 1, 4–5; seed 000 §2).
+//! (Brown & McPhee 2018, eq. 1, 4–5; Ezati et al. 2020, §2).
 //!
 //! In 3-D the normal force is proportional to the penetrated volume, $F_n = k_V V(1 + a_V
 //! v_{cn})$, and acts at the volume's centroid. In the plane the penetrated volume is the
 //! penetrated *area* $A$ of the ellipse (or circle) below the ground line times the foot's
 //! width, which the stiffness absorbs: $F_n = k_A A (1 + a_V v_{cn})$ with $k_A$ in N/m²
 //! and $v_{cn}$ the velocity of the foot's material point at the area's centroid into the
-//! ground (m/s). The tangential force is seed 002's continuous velocity-based friction law
+//! ground (m/s). The tangential force is Brown & McPhee's (2018) continuous velocity-based friction law
 //! (eq. 4–5) with the signed tangential velocity $v$ of that point:
 //! $F_t = -F_n\,\mu(v)$, $\mu(v) = \mu_d \tanh(4v/v_t) + (\mu_s - \mu_d)\,
 //! \frac{v/v_t}{(\frac14 (v/v_t)^2 + \frac34)^2}$; in the plane $\mu(|v|)\,v/|v|$ is this odd,
-//! smooth function of $v$. Seed 002 found the law unusable for identification by inverse
+//! smooth function of $v$. Brown & McPhee found the law unusable for identification by inverse
 //! simulation (the measured sticking foot has no slip velocity to make friction from);
-//! seed 000 used it in optimal control, where the dynamics make the small slip, with
+//! Ezati et al. (2020) used it in optimal control, where the dynamics make the small slip, with
 //! $v_t$ = 0.1 m/s, and identified it there. That is how footfall uses it.
 //!
 //! **Geometry.** An affine map takes the ellipse to the unit disc and the ground line to a
@@ -40,16 +40,16 @@ use serde::{Deserialize, Serialize};
 #[serde(deny_unknown_fields)]
 pub struct VolumetricLaw {
     /// Area stiffness $k_A$ (N/m²): normal force per penetrated area of the sagittal
-    /// section (seed 002's volumetric stiffness times the foot's width).
+    /// section (Brown & McPhee's volumetric stiffness times the foot's width).
     pub stiffness: f64,
     /// Damping $a_V$ (s/m): the normal force grows by this fraction per m/s of penetration
-    /// rate at the centroid (seed 002 eq. 1).
+    /// rate at the centroid (Brown & McPhee 2018, eq. 1).
     pub damping: f64,
     /// Dynamic friction coefficient $\mu_d$.
     pub mu_dynamic: f64,
     /// Static friction coefficient $\mu_s$ ($\ge \mu_d$; equal: no Stribeck peak).
     pub mu_static: f64,
-    /// Transition velocity $v_t$ (m/s) of the friction law (seed 000: 0.1 m/s).
+    /// Transition velocity $v_t$ (m/s) of the friction law (Ezati et al. 2020: 0.1 m/s).
     pub transition_velocity: f64,
 }
 

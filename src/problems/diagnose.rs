@@ -370,7 +370,7 @@ pub struct ProfileVertex {
     /// (cost per s²) and its slope at zero offset (cost per s), in the costs the profile
     /// compares its points by. The three clock profiles' parabolas are the sections of
     /// one quadratic in both plates' offsets (`diagnose::plate_clocks`). `None`: fewer
-    /// than three points (or a summary written before stop 73).
+    /// than three points (or a summary of an older footfall, which did not write it).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub parabola: Option<(f64, f64)>,
 }

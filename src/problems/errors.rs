@@ -1,4 +1,5 @@
-//! Tracking-error statistics: what the error tables of seed 001 Tables 3/4 report,
+//! Tracking-error statistics: what the error tables of Millard & Mombaur
+//! (2019), Tables 3/4, report,
 //! computed here; the report layer (`table` module) renders them.
 //!
 //! [`ErrorStats`] summarises a tracking error ε(t) = |model − measurement| over the

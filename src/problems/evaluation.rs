@@ -1,8 +1,8 @@
 //! A gait OCP solution read back from the NLP variables and held against the
 //! measurement: model and data side by side at the shooting nodes or on a fine grid, the
-//! error channels of seed 001 Tables 3/4 (overall and phase by phase), and the
-//! re-integration of every shooting interval on a 1 ms grid, where force transients that
-//! fall between nodes show (seed §5).
+//! error channels of Millard & Mombaur (2019), Tables 3/4 (overall and phase by phase), and
+//! the re-integration of every shooting interval on a 1 ms grid, where force transients
+//! that fall between nodes show (their §5).
 
 use super::errors::{ChannelErrors, ErrorStats};
 use crate::controls::ControlTable;

@@ -1,4 +1,4 @@
-//! Foot fitting (seed 001 §3.2, eq. 13): pose the foot at toe-off so that its contact
+//! Foot fitting (Millard & Mombaur 2019, §3.2, eq. 13): pose the foot at toe-off so that its contact
 //! point sits on the measured CoP with the measured foot orientation, roll it backwards
 //! without slipping along the measured CoP to heel strike, and minimise the
 //! force-weighted ankle position and orientation errors

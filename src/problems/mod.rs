@@ -3,6 +3,7 @@
 //! nothing about gait.
 
 pub mod benchmarks;
+pub mod check;
 pub mod diagnose;
 pub mod errors;
 pub mod evaluation;

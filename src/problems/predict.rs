@@ -1,4 +1,4 @@
-//! The prediction problem (seed 001 §3.5): the walking cycle that minimises muscle
+//! The prediction problem (Millard & Mombaur 2019, §3.5): the walking cycle that minimises muscle
 //! activation, $\int \sum a_i^2\,dt$ (eq. 20), plus the foot-ground impulses,
 //! $w_\Delta \sum \Delta_i^2$ with $w_\Delta = 10^{-2}$ (eq. 21), at the subject's step
 //! length and average forward speed. Phase durations are free within the phase file's

@@ -1,5 +1,5 @@
-//! Node-wise least-squares tracking residuals (seed 001 eq. 18, evaluated at the shooting
-//! nodes as the seed does): joint and pelvis-tilt angles and angular velocities, ground
+//! Node-wise least-squares tracking residuals (Millard & Mombaur 2019, eq. 18, evaluated
+//! at the shooting nodes as they do): joint and pelvis-tilt angles and angular velocities, ground
 //! reaction forces and centre of pressure per foot, and the regularisation of excitations
 //! and activations.
 //!

@@ -1,5 +1,5 @@
 //! Ground-force transients: short excursions of the model's force above the measured
-//! force, found on a fine re-integration grid (seed 001 §4: the ellipse foot's ≈13 ms,
+//! force, found on a fine re-integration grid (Millard & Mombaur 2019, §4: the ellipse foot's ≈13 ms,
 //! 6582.7 N spike in prediction, which falls between shooting nodes).
 //!
 //! A transient is a maximal run of samples where the excess `model − measured` exceeds a

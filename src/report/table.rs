@@ -2,8 +2,9 @@
 //!
 //! [`ErrorStats`] (computed in [`crate::problems::errors`], re-exported here) summarises a
 //! tracking error ε(t) = |model − measurement|; [`ErrorStats::cell`] writes it as a table
-//! cell. [`error_table`] lays such figures out as in seed 001 Table 3: one row per
-//! channel, one column per run, each cell `mean ± sd (max M)`, the unit in the row label.
+//! cell. [`error_table`] lays such figures out as in Millard & Mombaur (2019), Table 3: one
+//! row per channel, one column per run, each cell `mean ± sd (max M)`, the unit in the row
+//! label.
 //!
 //! # Example
 //!
@@ -164,7 +165,7 @@ pub(crate) fn csv_field(s: &str) -> String {
     }
 }
 
-/// A table like seed 001 Table 3: rows = channels, labelled `name (unit)`; columns =
+/// A table like Millard & Mombaur's (2019) Table 3: rows = channels, labelled `name (unit)`; columns =
 /// runs; cells `mean ± sd (max M)`, `—` where a run lacks the channel or has no defined
 /// sample.
 pub fn error_table(title: &str, runs: &[String], channels: &[ChannelErrors]) -> Table {

@@ -238,7 +238,7 @@ pub fn where_it_fails(
     Section {
         heading: "Where the model fails".into(),
         paragraphs: vec![format!(
-            "The tracking cost J = {:.6} (weighted squared residuals at the nodes, seed eq. 18) by channel and phase: its share, and the normalised error (RMS of the weighted residual: the error in units of the channel's weighting scale). Below, the data cost of every node over time (phases shaded) and the stretches of five nodes where it is largest.",
+            "The tracking cost J = {:.6} (weighted squared residuals at the nodes, Millard & Mombaur 2019, eq. 18) by channel and phase: its share, and the normalised error (RMS of the weighted residual: the error in units of the channel's weighting scale). Below, the data cost of every node over time (phases shaded) and the stretches of five nodes where it is largest.",
             b.total()
         )],
         tables: vec![share, normalised, windows],

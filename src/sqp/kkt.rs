@@ -40,7 +40,7 @@ pub(super) struct KktPoint<'a> {
 /// QP's multiplier then balances the step's curvature `h_vv d_v` (the exact mode gives a
 /// held variable a diagonal of the Hessian's size), which is not the NLP's stationarity
 /// at the point. The bundled track's tail rose so, 4.7e-6 → 8.5e-6, on an excitation at
-/// its lower bound 0 (`docs/engine-investigation.md`, stop 41). The component's residual
+/// its lower bound 0. The component's residual
 /// is the smaller of the two choices; the other's complementarity, `|ν_v|` times the
 /// distance to the bound, is below `AT_BOUND · |ν_v|`.
 pub(super) fn residual(p: &KktPoint<'_>) -> f64 {

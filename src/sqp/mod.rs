@@ -225,8 +225,7 @@ pub struct SqpSettings {
     /// volumetric foot's identification started at another problem's solution (violation
     /// 8e-9) crawled with the curvature from its first step (J 0.3151 → 0.2434 in 56
     /// iterations, far from converged), while its Gauss–Newton steps reached J 0.2165 in 14
-    /// and then cycled at violations of 2e-3 to 1e-2, above any fixed switch
-    /// (docs/foot-identification.md, stop 56).
+    /// and then cycled at violations of 2e-3 to 1e-2, above any fixed switch.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub exact_hessian_on_stall: Option<StallSwitch>,
     /// How the exact mode keeps its QPs convex (default: augmented).
@@ -250,8 +249,7 @@ pub struct SqpSettings {
     /// prediction of the volumetric foot from its tracking solution (θ₀ = 0.11) took a
     /// first step to J = 0.048 and a violation of 12.9, lifted both feet off the ground
     /// (where the compliant contact has no force and no gradient) and ended infeasible;
-    /// with k = 10 it backtracks and reaches a feasible point valid on the 1 ms grid
-    /// (docs/foot-identification.md, stop 53).
+    /// with k = 10 it backtracks and reaches a feasible point valid on the 1 ms grid.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub violation_growth: Option<f64>,
     /// Exact mode with the curvature on demand ([`Nlp::curvature_on_demand`]): at a

@@ -1,5 +1,5 @@
-//! `footfall compare`: the same prediction for two or more feet, side by side (seed 001
-//! §4: the ellipse foot's ground-force transient against the double-circle foot).
+//! `footfall compare`: the same prediction for two or more feet, side by side (Millard &
+//! Mombaur 2019, §4: the ellipse foot's ground-force transient against the double-circle foot).
 
 use super::predict::predict;
 use super::read_solution;
@@ -188,7 +188,7 @@ pub fn run(args: &CompareRequest, progress: &dyn Progress) -> anyhow::Result<()>
             o.out.errors[c].runs[0].map_or("—".into(), |s| s.cell(1))
         }));
     }
-    let table = Table { title: "Prediction compared across feet (errors in the layout of seed Table 4; forces on the 1 ms grid)".into(), headers, rows };
+    let table = Table { title: "Prediction compared across feet (errors in the layout of Millard & Mombaur 2019, Table 4; forces on the 1 ms grid)".into(), headers, rows };
 
     // normal forces of all feet over the measurement
     let mut plots = Vec::new();
@@ -300,7 +300,7 @@ pub fn run(args: &CompareRequest, progress: &dyn Progress) -> anyhow::Result<()>
         sections: vec![
             Section {
                 heading: "Side by side".into(),
-                paragraphs: vec!["Identical prediction problems that differ only in the foot (seed §4). Each foot's full run folder, with its own report, is in the sub-folder of its name.".into()],
+                paragraphs: vec!["Identical prediction problems that differ only in the foot (Millard & Mombaur 2019, §4). Each foot's full run folder, with its own report, is in the sub-folder of its name.".into()],
                 tables: vec![table.clone()],
                 svgs: vec![],
             },

@@ -1,8 +1,9 @@
 //! `footfall compare-contact`: one trial tracked with a rigid foot, the same foot with its
 //! geometry identified, a volumetric foot with its file's contact law, and that foot with
-//! its law identified (issue 26; seed 000's optimal-control identification). Each run is a
+//! its law identified (the optimal-control identification of Ezati et al. 2020). Each run is a
 //! full track run folder; the comparison sets their Table 3 side by side, with the ground
-//! forces' RMSE next to seed 000's Table 7, the push-off CoP error and the solve times.
+//! forces' RMSE next to Ezati et al.'s (2020) Table 7, the push-off CoP error and the solve
+//! times.
 
 use super::track::{track, TrackRequest, TrackingProblem};
 use super::{note, Progress};
@@ -17,9 +18,9 @@ use crate::sqp::{SqpSettings, SqpStatus};
 use anyhow::Context;
 use std::path::PathBuf;
 
-/// Seed 000, Table 7, optimal control: RMSE of the tangential and normal ground reaction
+/// Ezati et al. (2020), Table 7, optimal control: RMSE of the tangential and normal ground reaction
 /// force (N), right and left leg, over the gait cycle.
-pub const SEED000_GRF_RMSE: [[f64; 2]; 2] = [[19.81, 8.33], [26.49, 26.38]];
+pub const EZATI2020_GRF_RMSE: [[f64; 2]; 2] = [[19.81, 8.33], [26.49, 26.38]];
 
 /// Measured normal force (N) above which a foot counts as loaded for the push-off CoP
 /// error.
@@ -312,7 +313,7 @@ pub fn compare_contact(
         Section {
             heading: "Rigid against compliant".into(),
             paragraphs: vec![format!(
-                "The same trial and tracking problem with four feet: the rigid foot ({}), the same with its geometry identified (`foot_geometry`, started from the rigid run), the volumetric foot with its file's contact law ({}) and the same with its law identified (`volumetric_contact`, started from the volumetric run). RMSE on the 1 ms grid over the tracked half cycle, each foot's forces against its own measurement; seed 000 reports its RMSE over a gait cycle (Table 7, optimal control). The push-off CoP error: |model − measured| CoP of the trailing foot while both measured normal forces exceed {LOADED_N} N. Each run's own folder, with its report, is the sub-folder of its name. Every run's cost: {}, the pelvis position {}.",
+                "The same trial and tracking problem with four feet: the rigid foot ({}), the same with its geometry identified (`foot_geometry`, started from the rigid run), the volumetric foot with its file's contact law ({}) and the same with its law identified (`volumetric_contact`, started from the volumetric run). RMSE on the 1 ms grid over the tracked half cycle, each foot's forces against its own measurement; Ezati et al. (2020) report their RMSE over a gait cycle (Table 7, optimal control). The push-off CoP error: |model − measured| CoP of the trailing foot while both measured normal forces exceed {LOADED_N} N. Each run's own folder, with its report, is the sub-folder of its name. Every run's cost: {}, the pelvis position {}.",
                 req.rigid_foot,
                 req.volumetric_foot,
                 targets_said(&req.run),
@@ -329,7 +330,7 @@ pub fn compare_contact(
         "volumetric_foot": req.volumetric_foot,
         "targets": targets_said(&req.run),
         "pelvis_position_tracked": req.run.track_pelvis_position,
-        "seed000_grf_rmse_n": {"tangential": SEED000_GRF_RMSE[0], "normal": SEED000_GRF_RMSE[1]},
+        "ezati2020_grf_rmse_n": {"tangential": EZATI2020_GRF_RMSE[0], "normal": EZATI2020_GRF_RMSE[1]},
         "runs": runs,
     });
     folder.write(
@@ -359,11 +360,11 @@ fn targets_said(run: &TrackingRunSetup) -> &'static str {
     }
 }
 
-/// The comparison's table: one column per run and one for seed 000.
+/// The comparison's table: one column per run and one for Ezati et al. (2020).
 fn contact_table(runs: &[RunOutcome]) -> Table {
     let mut headers = vec![String::new()];
     headers.extend(runs.iter().map(|r| r.name.clone()));
-    headers.push("seed 000 (Table 7)".into());
+    headers.push("Ezati et al. 2020 (Table 7)".into());
     let n = |v: Option<f64>| v.map_or("—".to_string(), |x| format!("{x:.1}"));
     let mean = |a: [Option<f64>; 2]| match a {
         [Some(r), Some(l)] => Some(0.5 * (r + l)),
@@ -375,7 +376,7 @@ fn contact_table(runs: &[RunOutcome]) -> Table {
         r.push(seed);
         r
     };
-    let s = SEED000_GRF_RMSE;
+    let s = EZATI2020_GRF_RMSE;
     let rows = vec![
         row(
             "status",
@@ -594,14 +595,13 @@ mod tests {
     }
 
     #[test]
-    fn the_seed_column_is_table_7s_optimal_control() {
-        // the figures the issue quotes: 14.07 N tangential and 26.44 N normal, the mean
-        // of the legs
-        let s = SEED000_GRF_RMSE;
+    fn the_published_column_is_table_7s_optimal_control() {
+        // the paper's figures as means of the legs: 14.07 N tangential and 26.44 N normal
+        let s = EZATI2020_GRF_RMSE;
         assert!((0.5 * (s[0][0] + s[0][1]) - 14.07).abs() < 1e-9);
         assert!((0.5 * (s[1][0] + s[1][1]) - 26.435).abs() < 1e-9);
         let t = contact_table(&[]);
-        assert_eq!(t.headers.last().unwrap(), "seed 000 (Table 7)");
+        assert_eq!(t.headers.last().unwrap(), "Ezati et al. 2020 (Table 7)");
         assert!(t
             .rows
             .iter()

@@ -1,4 +1,5 @@
-//! `footfall fit-foot`: fit a foot's geometry to the measured stance (seed 001 §3.2).
+//! `footfall fit-foot`: fit a foot's geometry to the measured stance (Millard & Mombaur
+//! 2019, §3.2).
 
 #[allow(unused_imports)]
 use super::{note, warn_note, Progress};
@@ -61,7 +62,7 @@ pub fn run(args: &FitFootRequest, progress: &dyn Progress) -> anyhow::Result<()>
     let deg = 180.0 / std::f64::consts::PI;
     let stats = |v: &[f64], k: f64| ErrorStats::from_errors(v).scaled(k);
     let table1 = Table {
-        title: "Ankle frame errors while rolling along the measured CoP (seed Table 1 layout)"
+        title: "Ankle frame errors while rolling along the measured CoP (layout of Millard & Mombaur 2019, Table 1)"
             .into(),
         headers: vec![
             "error".into(),
@@ -84,7 +85,7 @@ pub fn run(args: &FitFootRequest, progress: &dyn Progress) -> anyhow::Result<()>
     let names = param_names(&foot);
     let (p0, p1) = (parameters(&foot), parameters(&res.foot));
     let table2 = Table {
-        title: "Foot parameters (seed Table 2 layout; lengths in cm, angles in degrees)".into(),
+        title: "Foot parameters (layout of Millard & Mombaur 2019, Table 2; lengths in cm, angles in degrees)".into(),
         headers: vec!["parameter".into(), "initial".into(), "fitted".into()],
         rows: names
             .iter()
@@ -102,7 +103,7 @@ pub fn run(args: &FitFootRequest, progress: &dyn Progress) -> anyhow::Result<()>
     let mut fitted = res.foot.clone();
     fitted.name = format!("{}_fitted", foot.name);
     fitted.description = format!(
-        "{} fitted to {} by footfall fit-foot (seed §3.2, eq. 13; length fixed at {:.1} cm); eq. 13 cost {:.4} → {:.4}.",
+        "{} fitted to {} by footfall fit-foot (Millard & Mombaur 2019, §3.2, eq. 13; length fixed at {:.1} cm); eq. 13 cost {:.4} → {:.4}.",
         foot.name,
         data.name,
         100.0 * foot_length(&foot),

@@ -1,5 +1,5 @@
-//! The prediction workflow: the gait the model prefers (seed 001 §3.5): minimum activation
-//! plus impulses, at the subject's step length and speed, started from a tracking solution.
+//! The prediction workflow: the gait the model prefers (Millard & Mombaur 2019, §3.5):
+//! minimum activation plus impulses, at the subject's step length and speed, started from a tracking solution.
 
 use super::run_folder::{GaitRun, GaitRunOutput, DEFAULT_TRANSIENT_THRESHOLD_N};
 #[allow(unused_imports)]
@@ -286,7 +286,7 @@ pub fn predict(
             extra_sections: vec![Section {
                 heading: "Problem".into(),
                 paragraphs: vec![format!(
-                    "Minimum ∫Σa² dt (eq. 20) plus w_Δ ΣΔ² with w_Δ = {} (eq. 21), at step length {:.3} m and average speed {:.3} m/s{}; started from {}. The errors above compare the predicted gait with the measurement in the layout of seed Table 4.",
+                    "Minimum ∫Σa² dt plus w_Δ ΣΔ² with w_Δ = {} (Millard & Mombaur 2019, eq. 20–21), at step length {:.3} m and average speed {:.3} m/s{}; started from {}. The errors above compare the predicted gait with the measurement in the layout of their Table 4.",
                     settings.impulse_weight,
                     settings.step_length,
                     settings.speed,

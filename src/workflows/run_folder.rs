@@ -160,7 +160,7 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
     };
     let table = error_table(
         &format!(
-            "{what} errors at the shooting nodes (seed Table {} layout; both legs pooled)",
+            "{what} errors at the shooting nodes (layout of Millard & Mombaur 2019, Table {}; both legs pooled)",
             if run.command == "predict" { 4 } else { 3 }
         ),
         &[foot],
@@ -363,7 +363,7 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
                 format!("{:.1e} N", f.max_baumgarte_force_n),
             ));
             format!(
-                "Forces between the nodes come from the 1 ms re-integration (transients hide between nodes, seed §5): peak normal force {:.1} N (right) and {:.1} N (left); largest Baumgarte force {:.1e} N; largest position drift {:.2e} m.",
+                "Forces between the nodes come from the 1 ms re-integration (transients hide between nodes, Millard & Mombaur 2019, §5): peak normal force {:.1} N (right) and {:.1} N (left); largest Baumgarte force {:.1e} N; largest position drift {:.2e} m.",
                 f.peak_normal_force_n[0], f.peak_normal_force_n[1], f.max_baumgarte_force_n, f.max_position_drift_m
             )
         }

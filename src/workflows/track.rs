@@ -1,5 +1,5 @@
-//! The tracking workflow: track measured walking with the model (seed 001 §3.4), solve
-//! until valid between the nodes, and write the run folder.
+//! The tracking workflow: track measured walking with the model (Millard & Mombaur 2019,
+//! §3.4), solve until valid between the nodes, and write the run folder.
 
 use super::run_folder::GaitRun;
 use super::{note, warn_note, Progress};
@@ -23,11 +23,10 @@ pub use write::{RunWriting, TrackedRun};
 /// When a tracking solve with the exact Hessian uses it above the usual violation
 /// ([`tracking_sqp_settings`]): once five Gauss–Newton iterations below a violation of 0.1
 /// have not lowered the best objective by 0.1 %. Gauss–Newton steps can cycle above the
-/// usual 1e-3 for good: a volumetric track at violations of 1e-3 to 1e-2
-/// (docs/engine-investigation.md, stop 54), a rigid one between two points for 35
-/// iterations (the real right-clock trial, docs/engine-investigation.md, stop 59). The
-/// exact Hessian from the data's start (violation ~10) ran into a QP failure or a far
-/// worse local minimum (stop 54), so it is not the default from the first step.
+/// usual 1e-3 for good: a volumetric track at violations of 1e-3 to 1e-2, a rigid one
+/// between two points for 35 iterations (the real right-clock trial). The exact Hessian
+/// from the data's start (violation ~10) runs into a QP failure or a far worse local
+/// minimum, so it is not the default from the first step.
 pub const STALL_SWITCH: StallSwitch = StallSwitch {
     below: 0.1,
     iterations: 5,
@@ -143,7 +142,7 @@ impl TrackingProblem {
         if let Some(w) = run.regularisation {
             if !(w.is_finite() && w >= 0.0) {
                 return Err(anyhow!(
-                    "--regularisation {w}: expected a finite weight ≥ 0 (the seed's is 1e-3)"
+                    "--regularisation {w}: expected a finite weight ≥ 0 (Millard & Mombaur 2019 use 1e-3)"
                 ));
             }
             setup.weights.excitation = w;
@@ -151,7 +150,7 @@ impl TrackingProblem {
         }
         if let Some(v) = run.velocity_weight {
             if !(v.is_finite() && v >= 0.0) {
-                return Err(anyhow!("--velocity-weight {v}: expected a finite weight ≥ 0 relative to the angles' (the seed's is 0.1)"));
+                return Err(anyhow!("--velocity-weight {v}: expected a finite weight ≥ 0 relative to the angles' (Millard & Mombaur 2019 use 0.1)"));
             }
             setup.weights = setup.weights.clone().with_velocity_weight(v);
         }

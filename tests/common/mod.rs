@@ -37,17 +37,27 @@ impl Rng {
     }
 }
 
+/// The CasADi peers' folder (their problem files, check values and results), which is not
+/// part of the repository: `FOOTFALL_PEER_DIR`, else the folder `shared` beside the
+/// repository's own. The tests that read it print a note and pass when it is absent.
+pub fn peer_dir() -> PathBuf {
+    match std::env::var_os("FOOTFALL_PEER_DIR") {
+        Some(d) => PathBuf::from(d),
+        None => root().parent().map(|p| p.join("shared")).unwrap_or_default(),
+    }
+}
+
 /// Peer problem file with check values.
 pub fn peer_gait_problem() -> serde_json::Value {
-    let p = root().join("../shared/peer_gait/problem/gait_track_ellipse.json");
+    let p = peer_dir().join("peer_gait/problem/gait_track_ellipse.json");
     let text = std::fs::read_to_string(&p).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
     serde_json::from_str(&text).expect("peer problem JSON")
 }
 
-/// Whether the shared peer folder exists beside the project (it does in CI and for developers).
+/// Whether the peers' folder ([`peer_dir`]) is present.
 pub fn have_shared() -> bool {
-    root()
-        .join("../shared/peer_gait/problem/gait_track_ellipse.json")
+    peer_dir()
+        .join("peer_gait/problem/gait_track_ellipse.json")
         .exists()
 }
 

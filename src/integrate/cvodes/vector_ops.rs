@@ -5,7 +5,7 @@
 //! history array, weighted RMS norms): with 55 columns of 30 states, about a million
 //! numbers per interval. Debian's `libsundials_nvecserial` (6.4.1) is compiled without
 //! optimisation (each loop index is loaded from and stored to the stack), and those
-//! kernels took 30 % of a diagnosis's time on the slowest machines here (stop 67, `perf`).
+//! kernels took 30 % of a diagnosis's time on a two-core machine (measured with `perf`).
 //!
 //! [`install`] puts these kernels into a serial vector's table of operations; CVODES
 //! clones its work vectors and the sensitivity arrays from that vector, and the clones

@@ -1,6 +1,6 @@
 //! The `volumetric_contact` effect: the volumetric contact law's stiffness, damping and
 //! dynamic friction coefficient ([`crate::model::volumetric`]) as parameters of the model,
-//! identified by optimal control as seed 000 does.
+//! identified by optimal control as Ezati et al. (2020) do.
 
 use super::{Effect, ParamSpec};
 
@@ -36,7 +36,7 @@ impl VolumetricContact {
     /// Bounds of the area stiffness (N/mm²): 0.05 N/mm² sinks a foot about 3 cm under body
     /// weight, 50 N/mm² under 1 mm.
     pub const STIFFNESS_BOUNDS: (f64, f64) = (0.05, 50.0);
-    /// Bounds of the damping (s/m; seed 000 identified 0.92).
+    /// Bounds of the damping (s/m; Ezati et al. (2020) identified 0.92).
     pub const DAMPING_BOUNDS: (f64, f64) = (0.0, 5.0);
     /// Bounds of the dynamic friction coefficient.
     pub const MU_BOUNDS: (f64, f64) = (0.05, 1.5);

@@ -1,5 +1,5 @@
-//! The generic benchmark problems of `../shared/peer/problems/*.json`, transcribed
-//! exactly as defined there: N equal intervals, piecewise-constant controls, objective
+//! The generic benchmark problems of the CasADi peer's problem files (copies in
+//! `problems/`), transcribed exactly as defined there: N equal intervals, piecewise-constant controls, objective
 //! `h Σ_k |u_k|²`, bounds and path constraints at the N + 1 nodes, the same initial guess.
 
 use super::{biped, CartPole, FiveLinkBiped};

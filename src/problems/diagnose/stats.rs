@@ -73,11 +73,10 @@ impl Identifiability {
 /// rows and columns `cols` of `Z (ZᵀHZ)⁻¹ Zᵀ` for the Gauss–Newton Hessian H and the
 /// constraints active at the Gauss–Newton step ([`GaussNewtonModel::reduced_inverse`]),
 /// i.e. the step's response to a unit shift of `∂f/∂w_j` while the active set stays
-/// (before stop 47 measured by probing the full QP with shifted gradients, 1–8 solves per
-/// column, which remains the fallback).
+/// (the fallback probes the full QP with shifted gradients, 1–8 solves per column).
 /// The bounds of `cols` are not held: a step that ran to a parameter's bound would not
-/// respond, and the parameter would look perfectly known (the real left CoP offset of
-/// stop 41 read "0.1000 ± 8e-5" at its 0.1 m bound). H is regularised as the score
+/// respond, and the parameter would look perfectly known (a real left CoP offset held
+/// so read "0.1000 ± 8e-5" at its 0.1 m bound). H is regularised as the score
 /// test's (`1e-12` of the largest curvature), so a direction the cost does not see gets
 /// an inverse of ~1e12 / max curvature instead of a singular matrix.
 pub fn reduced_inverse_hessian(

@@ -1,4 +1,4 @@
-//! The walking cycle as a multi-phase OCP (seed 001 §3.3): continuous phases with their
+//! The walking cycle as a multi-phase OCP (Millard & Mombaur 2019, §3.3): continuous phases with their
 //! contact sets, impacts as state transitions, contact-force path constraints
 //! (λₙ ≥ 0, friction cone |λₜ| ≤ μλₙ), swing-foot clearance, landing contacts on the
 //! ground, and periodicity through the left↔right symmetry map. Costs are added by the

@@ -1,7 +1,7 @@
-//! The tracking problem (seed 001 §3.4) assembled from measured data: the phase graph's
+//! The tracking problem (Millard & Mombaur 2019, §3.4) assembled from measured data: the phase graph's
 //! durations fixed to the measured contact sequence, node targets from splines of the
 //! data, an initial guess from the data projected onto the contacts (activations 0.01,
-//! excitations 0.025, seed §3.6), and the node-wise least-squares residuals of eq. 18.
+//! excitations 0.025, their §3.6), and the node-wise least-squares residuals of eq. 18.
 
 use super::gait::GaitGuess;
 use super::tracking::{MeasuredLoads, NodeTarget, TrackingWeights};

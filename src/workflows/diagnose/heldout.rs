@@ -387,7 +387,7 @@ fn judged_at(base: &HeldOutBase, t: &ScoreTest, change: f64, q: f64) -> HeldOut 
 /// model's bias is a property of the half cycle: on the bundled trial the rigid ellipse
 /// wants the push-off plate's forces late and the heel-strike plate's early, and the
 /// right plate is the push-off plate in the tracked half cycle and the heel-strike plate
-/// in the held-out one (`docs/instruments.md`, stop 62). So the difference applied from
+/// in the held-out one. So the difference applied from
 /// zero is judged against that half cycle's bias. In the two trials' changes the bias is
 /// the same and cancels. The band's curvature is the held-out half cycle's own,
 /// `q = −(Δ_ref(θ) + Δ_ref(−θ))` (a second difference of the reference's cost, which

@@ -1073,8 +1073,8 @@ mod tests {
 
     /// A one-plate clock that differs significantly is qualified by the joint reading of
     /// both plates' clocks: as the plates' relative timing when the joint reading does not
-    /// settle which plate (the compliant left-clock trial at stop 73, its one-plate right
-    /// clock spurious), or put on the other plate when it does; the paragraph says which.
+    /// settle which plate (the compliant left-clock trial, its one-plate right clock
+    /// spurious), or put on the other plate when it does; the paragraph says which.
     #[test]
     fn a_one_plate_clock_is_qualified_by_the_joint_reading() {
         use super::super::plate_clocks::{LABEL, PARAMETERS, RELATIVE};

@@ -7,7 +7,7 @@
 //! holds the other plate's clock at zero, so it takes the relative timing either way. On
 //! the real 600 Hz trial whose left plate was edited 20 ms early, the compliant foot read
 //! the left clock −20.6 ± 4.5 ms against the untouched trial and the right clock, which
-//! was not edited, +24.9 ± 5.4 ms (stop 72, `docs/instruments.md`).
+//! was not edited, +24.9 ± 5.4 ms (`tests/clocks_600hz.rs`).
 //!
 //! The three profiles are sections of one cost over both offsets `x = (r, l)`, along
 //! `(1, 0)`, `(0, 1)` and `(1, 1)`. If that cost is quadratic near its minimum,

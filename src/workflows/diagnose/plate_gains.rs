@@ -7,7 +7,7 @@
 //! of the other plate: on the real 600 Hz trial whose left plate was edited 6 % high, the
 //! compliant foot read the right plate's gain +10.5 ± 7.6 % against the untouched trial
 //! (truth 0), and the body-mass error, which scales both plates' forces alike, ranked
-//! above the left gain by 0.14 sd (stop 74, `docs/instruments.md`). Both gains free in one
+//! above the left gain by 0.14 sd. Both gains free in one
 //! truncated re-fit read each plate's with the other's taken into account; the difference
 //! from the reference is then a point `d` in the plane of the two gains with covariance
 //! `C` (the two runs' summed, each `2 φ s² H⁻¹` of its reduced Fisher information).
@@ -23,7 +23,7 @@
 //!
 //! On the gain trial the joint reading puts the right plate at +0.4 ± 7.4 % and the left
 //! at +5.9 ± 1.8 % and favours the left plate alone, 1.24 : 1 over both alike; on the
-//! trial with every force 5 % high it favours both alike, 1.28 : 1 (stop 75). The right
+//! trial with every force 5 % high it favours both alike, 1.28 : 1. The right
 //! plate, loaded only in the first double support of the half cycle, reads its gain to
 //! 7 %, so neither is settled.
 

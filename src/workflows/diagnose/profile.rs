@@ -52,10 +52,9 @@ const POINT_TOL: f64 = 1e-3;
 /// on its minimum: the Gauss–Newton steps of a compliant 600 Hz point leave the run
 /// infeasible and J then rises as the violation falls, linearly at full steps (the gain
 /// trial's left clock held at +20 ms: J 0.49179 at violation 7.7e-3 after 20
-/// iterations, 0.492359 at 1.7e-4 after 40, still rising by 3e-6 an iteration; stop 76,
-/// `docs/instruments.md`). The profile compares points whose costs differ by 1e-2 and
-/// more, so an error of 1e-4 does not move its lowest point or vertex. Since stop 77 a
-/// compliant foot's points switch to the exact Hessian once those steps stall, and that
+/// iterations, 0.492359 at 1.7e-4 after 40, still rising by 3e-6 an iteration). The profile compares points whose costs differ by 1e-2 and
+/// more, so an error of 1e-4 does not move its lowest point or vertex. A compliant
+/// foot's points switch to the exact Hessian once those steps stall, and that
 /// point converges in 15 iterations ([`super::refit::solve_hessian`]).
 const POINT_MAX_ITER: usize = 40;
 

@@ -2,7 +2,7 @@
 //!
 //! On real data the model's own misfit moves the readings: the rigid ellipse reads the
 //! right plate's clock +16.9 ms late on the untouched bundled trial, where the plates
-//! are synchronised (`docs/instruments.md`, stop 40). That bias belongs to the model and
+//! are synchronised. That bias belongs to the model and
 //! the subject and is in every trial of both; an instrument error of one trial is not.
 //! The difference of a candidate's reading between this trial and a reference trial
 //! diagnosed the same way (same model, foot, candidates and options) cancels the bias:
@@ -18,12 +18,12 @@
 //! profiles' own readings, each the vertex of its parabola with the run's cost among its
 //! points: the same estimator in both. On the 600 Hz left-clock trial the profile read
 //! −29.4 ms while the untouched trial's profile lay nowhere below its run, so that its
-//! test stayed the score test's and the two could not be compared (stop 71). A reading
+//! test stayed the score test's and the two could not be compared. A reading
 //! at a bound of its range, in either run, is a limit the data pushed against and is not
 //! compared. When both runs profiled all three clocks (right, left, shared), the plates'
 //! clocks are also compared through their joint reading ([`plate_clocks`]): each plate's
 //! offset and their relative timing. A one-plate clock holds the other plate's at zero
-//! and so takes the plates' relative timing either way (stop 72: a left plate 20 ms early
+//! and so takes the plates' relative timing either way (a left plate 20 ms early
 //! read −20.6 ms on the left clock and +24.9 ms on the right clock, which was not
 //! edited); the joint reading says which plate moved, or that the data do not settle it.
 
@@ -423,7 +423,7 @@ pub(super) fn compare(tests: &[ScoreTest], reference: &Reference) -> Comparison 
 /// the joint reading's evidence `w`: the favoured plate's row takes the earlier of the
 /// two rows' places, the other the later; every other row keeps its place. Both rows read
 /// the plates' relative timing, so their own |z| differ by the two profiles' noise (0.02
-/// on the compliant left-clock trial at stop 73), while the joint reading holds the
+/// on the compliant left-clock trial), while the joint reading holds the
 /// evidence on the shared part that tells the plates apart.
 fn order_one_plate_clocks(differences: &mut [Difference], w: &plate_clocks::WhichPlate) {
     let row = |parameter: &str| {
@@ -540,7 +540,7 @@ mod tests {
     /// their sds; without a profile in the reference it is not compared (different
     /// estimators). The figures are the 600 Hz left-clock trial's (−29.4 ms) and the
     /// untouched trial's profile vertex that the exact 20 ms shift of its profile implies
-    /// (−9.4 ms), stop 71.
+    /// (−9.4 ms).
     #[test]
     fn a_clock_profiled_in_both_runs_is_compared_by_the_profiles_vertices() {
         let dir = tempfile::tempdir().unwrap();
@@ -649,7 +649,7 @@ mod tests {
     /// alone, where the one-plate readings (compared beside it, and alone when the
     /// reference has no shared clock) blame the right plate too. The cost: steeper across the
     /// plates' relative timing than along their shared one, the model's own bias a shared
-    /// +24 ms (the compliant foot's at 600 Hz, stop 72).
+    /// +24 ms (the compliant foot's at 600 Hz).
     #[test]
     fn the_plates_clocks_are_compared_jointly_when_all_three_are_profiled() {
         let bowl = |r0: f64, l0: f64| {
@@ -771,7 +771,7 @@ mod tests {
         assert_eq!(kept, rows);
     }
 
-    /// The compliant foot's diagnoses of the real 600 Hz trials (stop 73, kept in
+    /// The compliant foot's diagnoses of the real 600 Hz trials (kept in
     /// `tests/data/real_compliant_600hz/*/diagnosis`), compared again with the untouched
     /// trial's: the comparison gives what each diagnosis wrote (every parameter's z, to the
     /// last bit but the joint rows' to 1e-12), and the edited plate's one-plate clock is listed
@@ -833,16 +833,15 @@ mod tests {
         }
     }
 
-    /// The compliant foot's diagnoses of the real 600 Hz gain and mass trials (stop 75,
-    /// with both plates' gains read jointly; kept in `tests/data/real_compliant_600hz`),
+    /// The compliant foot's diagnoses of the real 600 Hz gain and mass trials (with both plates' gains read jointly; kept in `tests/data/real_compliant_600hz`),
     /// compared with the untouched trial's diagnosed the same way
     /// (`untouched/diagnosis_joint_gains`): the edited effect's row is listed first,
     /// significant, within 20 % or 2 sd of the edit (the left plate 6 % high; every force
     /// 5 % high, which is a body-mass error in the forces). The joint gains favour the left
     /// plate alone on the gain trial, and both plates alike on the mass trial, where the
     /// right plate's gain, loaded only in the first double support, is read to 7 %: a
-    /// preference there, not a finding. The CoP trial (stop 74's diagnosis, against the
-    /// stop-73 untouched one, without the joint gains) lists the right foot's CoP offset
+    /// preference there, not a finding. The CoP trial (its diagnosis against the
+    /// untouched one without the joint gains) lists the right foot's CoP offset
     /// first, +26.9 ± 17.7 mm (truth +25), within noise: nothing else moved.
     #[test]
     fn the_kept_compliant_gain_mass_and_cop_diagnoses_list_the_edit_first() {

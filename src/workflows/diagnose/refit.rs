@@ -171,10 +171,10 @@ pub(super) fn full_solve_settings(
 /// against 18 (51 s; both with another job beside). So exact, unless the samples outnumber
 /// the intervals [`GAUSS_NEWTON_SAMPLES_PER_INTERVAL`] times and the foot is rigid. A
 /// compliant foot's solves take the exact mode's Gauss–Newton steps until they stall and
-/// its curvature after (integrated backward since stop 77): the 600 Hz gain trial's left
+/// its curvature after (integrated backward): the 600 Hz gain trial's left
 /// clock held at +20 ms converged (KKT 8.3e-4) in 15 iterations and 28 s, 13 of them
 /// Gauss–Newton, where Gauss–Newton alone stopped at its 40-iteration limit after 57 s,
-/// its violation still 1.7e-4 (`docs/engine-investigation.md`, stop 77).
+/// its violation still 1.7e-4.
 pub(super) fn solve_hessian(prob: &TrackingProblem) -> HessianMode {
     if prob.model.has_volumetric_contacts() {
         return HessianMode::Exact;

@@ -55,8 +55,7 @@ impl TrackingProblem {
         };
         // a finishing round starts from the last round's multipliers (constraints' and
         // bounds'): from zero, the compliant foot's finishing rounds began with an inertia
-        // shift of 0.16 that took them 9 iterations to shed (docs/engine-investigation.md,
-        // stop 70)
+        // shift of 0.16 that took them 9 iterations to shed
         let mut solve = |tr: &Transcription,
                          (w, warm): crate::workflows::refine::RoundStart<'_>,
                          tol_kkt: f64,
