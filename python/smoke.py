@@ -11,7 +11,7 @@ run = footfall.track(foot="ellipse", out=out, init="tests/data/hidden/base",
                      max_iter=0, check_points=False, quiet=True)
 assert run["converged"], run["status"]
 assert abs(run["objective"] - 7.896) < 0.01, run["objective"]
-# the kept solution lets the ground pull the left foot between two nodes (README,
+# the kept solution lets the ground pull the left foot between two nodes (`docs/method.md`,
 # "Physically valid between the nodes")
 assert run["physically_valid"] is False, run["physically_valid"]
 states, time = run["states"], run["time"]

@@ -1,4 +1,4 @@
-//! Exit codes of the `footfall` binary (README, "Exit codes"): option values outside
+//! Exit codes of the `footfall` binary (`docs/commands.md`, "Exit codes"): option values outside
 //! their range are usage errors (2, clap's), bad files are bad input (1), a solve stopped
 //! by its iteration limit exits 3 and an infeasible one 4, both with the run folder
 //! written. Success (0) is in tests/cli_solve.rs, interruption (130) in tests/cli.rs.

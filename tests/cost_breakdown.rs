@@ -335,8 +335,8 @@ fn held_left_clocks_move_the_window_and_the_profile_compares_the_common_samples(
 /// compares, sample for sample: each left load where its moved instant falls (not held at
 /// its timestamp's phase's end), its CoP moved with the treadmill belt. At the data's own
 /// start their objectives agree to 2.6e-6, at the held trial's tracked solution (kept in
-/// `tests/data/real_hidden_600hz_kept`) to 7.3e-7 (before these were mended, 9e-3 and 5 %:
-/// `docs/instruments.md`). At 60 Hz the moved clock reads the raw forces at
+/// `tests/data/real_hidden_600hz_kept`) to 7.3e-7 (when a held clock placed each load by its
+/// timestamp, 9e-3 and 5 %). At 60 Hz the moved clock reads the raw forces at
 /// other instants than the untouched trial does: 4.3 % apart at the same solution.
 #[test]
 fn a_clock_edited_at_the_plates_rate_is_the_untouched_trial_held_at_its_offset() {

@@ -504,7 +504,7 @@ fn hidden_ground_slope_is_found_and_identified() {
 /// offset comes out at 0.0166 ± 0.0041 m against 0.03 m (−45 %) and the ankle at 1.68×
 /// the floor: the seed's u², a² regularisation (1e-3) and its velocity targets (derivatives
 /// of the filtered angles, not measurements) prefer the lighter, more upright trunk, which
-/// needs less effort (README, "Which effect is missing"). With the pelvis position tracked,
+/// needs less effort (`docs/method.md`, "Diagnosis"). With the pelvis position tracked,
 /// no velocity targets and the regularisation at 1e-4 the COM offset is identified. At
 /// 1e-5 the fit follows the noise (mean force errors of 2.2 and 3.9 N against the noise's
 /// mean absolute 4.0 N), J/N underestimates the noise and `diagnose` invents a force-plate
@@ -584,8 +584,8 @@ fn two_hidden_effects_are_found_one_after_the_other() {
 ///
 /// At 100 Hz (`Setup::Samples`) the trial holds five samples of the heel's 55 ms of
 /// contact before the forefoot lands, and the damping came out −27, −17 and −27 % on
-/// three noise draws, about two of its standard deviations low (`docs/heel-pad.md`,
-/// sections 6–7). The 1 kHz test needs the force-plate clock offset to move the model
+/// three noise draws, about two of its standard deviations low (`docs/method.md`,
+/// "The heel pad"). The 1 kHz test needs the force-plate clock offset to move the model
 /// rather than interpolate the measured forces: interpolating white noise smooths it,
 /// and on the 1 kHz trial without a hidden effect `diagnose` then found an offset of
 /// 0.2–0.5 ms significant (statistic 72.1; now 0.4, `without_a_hidden_effect_…`).

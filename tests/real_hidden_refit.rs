@@ -184,7 +184,7 @@ fn refit_finds(
 }
 
 #[test]
-#[ignore = "not found yet: the re-fit stops at -4.4 ± 1.4 ms (truth +25 ms), and the untouched trial's re-fit with the right clock ends in a failed line search; see docs/instruments.md"]
+#[ignore = "not found yet: the re-fit stops at -4.4 ± 1.4 ms (truth +25 ms), and the untouched trial's re-fit with the right clock ends in a failed line search"]
 fn right_plate_clock_late_25_ms() {
     refit_finds(
         "real_clock_r+25ms",
@@ -236,7 +236,7 @@ fn every_force_5_percent_high_as_a_body_mass_error() {
 }
 
 #[test]
-#[ignore = "not found yet: with the pelvis position tracked the re-fit reads -78.9 ± 26.4 mm (truth +25 mm); see docs/instruments.md"]
+#[ignore = "not found yet: with the pelvis position tracked the re-fit reads -78.9 ± 26.4 mm (truth +25 mm)"]
 fn right_cop_25_mm_forward_with_the_pelvis_position_tracked() {
     refit_finds(
         "real_cop_r+25mm",

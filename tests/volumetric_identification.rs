@@ -215,7 +215,7 @@ fn trial_aligned_with_the_truth(dir: &Path, tmp: &Path) -> PathBuf {
 /// join): the solver has to move the law towards the hidden one to make the walk
 /// continuous again and fit the forces.
 ///
-/// Measured (docs/foot-identification.md): KKT 1e-3 in 6 iterations (36 s in the test
+/// Measured: KKT 1e-3 in 6 iterations (36 s in the test
 /// profile), stiffness 1.236 ± 0.167 N/mm² (truth 1.5: −17.6 %), damping 0.327 ± 0.304 s/m
 /// (truth 0.54: −39 %, 0.7 sd); to KKT 1e-4 it takes 11 iterations and the figures agree to
 /// the fourth digit. The stiffness meets the 20 %; the damping does not, and
@@ -336,8 +336,7 @@ fn fit_the_law(
 /// cost's regularisation weight, 1e-4 (`tests/hidden_effects.rs`, `Setup::Identify`: the
 /// weight for effort-costly parameters, chosen on the trunk trial as the smallest decade
 /// at which `diagnose` invents nothing on the trial without a hidden effect). Stiffness and
-/// damping within 20 %. Measured with the exact Hessian (release build,
-/// docs/foot-identification.md): 8 iterations, stiffness 1.4845 ± 0.035 N/mm²
+/// damping within 20 %. Measured with the exact Hessian (release build): 8 iterations, stiffness 1.4845 ± 0.035 N/mm²
 /// (−1.0 %), damping 0.514 ± 0.068 s/m (−4.8 %); over four noise seeds the damping reads
 /// −4.8, +7.9, −3.1 and −17.0 %. At the seed's 1e-3 the same fits average −18.8 % (the
 /// effort terms' bias), and at 100 Hz even 1e-4 leaves the damping −37 % ± 35 % (two
@@ -447,7 +446,7 @@ fn diagnose_ranks_the_contact_law_first_on_the_fit_with_the_wrong_law() {
     }
     eprintln!("diagnose: {:.0} s", t.elapsed().as_secs_f64());
     // The ranking puts testable candidates first. On this 100 Hz trial the law's damping
-    // has no curvature under the cost (it runs to its bound, docs/foot-identification.md: the law is not
+    // has no curvature under the cost (it runs to its bound: the law is not
     // recovered), so the candidate is reported "not testable"; its in-sample statistic
     // is still the largest: the contact law is what the forces point at.
     let ranking = d["ranking"].as_array().unwrap();
@@ -714,7 +713,7 @@ fn make_volumetric_contact_trial() {
 
 /// Scratch: the optimum of the synthetic trial with the law held at the hidden values.
 #[test]
-#[ignore = "measurement for docs/foot-identification.md (minutes)"]
+#[ignore = "a measurement, not a check (minutes)"]
 fn the_hidden_law_held_fixed_fits_the_trial() {
     use footfall::sqp::HessianMode;
     use footfall::workflows::track::{tracking_sqp_settings, TrackRequest, TrackingProblem};
@@ -801,7 +800,7 @@ fn volumetric_dynamics_second_derivatives_match_finite_differences() {
 /// 7.0e-4, both at the duration's own curvature (row and column 42). 40–80 s in the test
 /// profile.
 #[test]
-#[ignore = "fails: the volumetric interval curvature is within 0.07–0.6 % of differences, not 1e-5 (the duration's own curvature); see docs/engine-investigation.md"]
+#[ignore = "fails: the volumetric interval curvature is within 0.07–0.6 % of differences, not 1e-5 (the duration's own curvature)"]
 fn volumetric_interval_curvature_matches_finite_differences_of_sensitivities() {
     use footfall::integrate::{ControlShape, ControlledOde, IntegratorSettings, ShootingInterval};
     use footfall::problems::gait_ode::GaitOde;

@@ -28,7 +28,7 @@ impl Default for ValidityLimits {
     fn default() -> Self {
         // −1 N and the cone's 1 N: the bounds, well above integration noise; 1 mm of
         // penetration: the clearance a fine grid can resolve; 50 N of stabilisation: a
-        // converged solution has below 1e-4 N (README), the simulated examples up to 128 N
+        // converged solution has below 1e-4 N, the simulated examples up to 128 N
         Self {
             normal_force_n: 1.0,
             friction_n: 1.0,

@@ -4,7 +4,7 @@
 //! the kinematics, because the impact transients move across samples: on the real trial
 //! whose right plate was delayed by 25 ms (`tests/data/real_hidden/real_clock_r+25ms`) the
 //! truncated re-fit from zero stops at −4 ms, while re-fits with the offset held at
-//! +20 ms lower J from 8.756 to 7.577 (`docs/instruments.md`). The profile re-fits the run
+//! +20 ms lower J from 8.756 to 7.577 (`tests/real_hidden_refit.rs`). The profile re-fits the run
 //! with the offset held at [`CLOCK_PROFILE`] and starts a free re-fit from the lowest
 //! point; that re-fit is the candidate's test when it lowers J more than the score test's.
 //! With sample or one-sided targets (a free offset cannot move its plate's events there)
