@@ -412,7 +412,7 @@ fn sibling(run: &Path, suffix: &str) -> PathBuf {
 /// across the jumps a rigid contact makes and a pad bends to meet them. With
 /// `track --sample-targets` (every sample compared at its own instant) it does not, on
 /// the 100 Hz noisy trials of tests/hidden_effects.rs; `docs/method.md` ("The heel pad") explains why.
-const UNSCORABLE_PAD: &str = "not scored — it has no null value (the rigid heel is its limit of infinite stiffness), so it is tested by a re-fit, and on a run with interpolated node targets a re-fit's decrease is no evidence (a free pad lowers J on data without one too, from the node targets on the contact changes; see docs/method.md, "The heel pad"); track with `--sample-targets` (every sample compared at its own instant; 100 Hz tested) and diagnose that run, or re-fit it with `footfall track --foot … --effect heel_pad_compliance --init RUN` and judge the identified stiffness and damping and the per-channel errors with `footfall diff`";
+const UNSCORABLE_PAD: &str = "not scored — it has no null value (the rigid heel is its limit of infinite stiffness), so it is tested by a re-fit, and on a run with interpolated node targets a re-fit's decrease is no evidence (a free pad lowers J on data without one too, from the node targets on the contact changes; see docs/method.md, \"The heel pad\"); track with `--sample-targets` (every sample compared at its own instant; 100 Hz tested) and diagnose that run, or re-fit it with `footfall track --foot … --effect heel_pad_compliance --init RUN` and judge the identified stiffness and damping and the per-channel errors with `footfall diff`";
 
 /// Run `diagnose` as `args` describes, reporting to `progress`.
 pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()> {
