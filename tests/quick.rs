@@ -24,6 +24,7 @@ mod effects;
 mod eval_errors;
 mod filter;
 mod foot_fit;
+mod front_door;
 mod fuzz;
 mod gait_ocp;
 mod integrate;
