@@ -1,6 +1,5 @@
-//! Issue 23, Done-means 1, for the left plate's clock: the real trial whose left plate
-//! runs 20 ms early, written at the plates' own 600 Hz (`tests/data/real_hidden_600hz`,
-//! `tools/make-real-hidden-trials`), read against the untouched trial by the two
+//! The real trial whose left plate runs 20 ms early, written at the plates' own 600 Hz
+//! (`tests/data/real_hidden_600hz`, `tools/make-real-hidden-trials`), read against the untouched trial by the two
 //! trials' clock profiles, with the rigid ellipse and with the compliant foot.
 //!
 //! At the identification cost (sample targets, the pelvis position tracked) the left
@@ -207,7 +206,7 @@ fn shared_fixture(name: &str, make: impl FnOnce(&Path)) -> PathBuf {
     dir
 }
 
-/// Issue 23, Done-means 2, for the compliant foot: on the untouched trial every candidate
+/// The compliant foot on the untouched trial: every candidate
 /// significant in-sample is judged on the held-out half cycle (the other leg's, mirrored),
 /// and what is reported as found is what lowered that half cycle's cost beyond its noise
 /// band. One is: a clock shared by both plates, the forces about 24 ms late
@@ -278,7 +277,7 @@ fn the_untouched_compliant_trial_reports_only_what_its_held_out_half_cycle_confi
         .contains("Add it with one line"));
 }
 
-/// Whether a reading `diff ± sd` identifies `truth` as issue 23 asks: within 20 % of it
+/// Whether a reading `diff ± sd` identifies `truth` as the diagnosis must: within 20 % of it
 /// or within 2 sd, whichever is larger.
 pub(crate) fn within_truth(diff: f64, sd: f64, truth: f64) -> bool {
     (diff - truth).abs() <= (0.2 * truth.abs()).max(2.0 * sd)
@@ -521,7 +520,7 @@ pub(crate) fn refit_in_brings_every_channel_near_the_untouched_trials(
     (untouched, edited)
 }
 
-/// Issue 23, Done-means 1's re-fit, for the compliant foot's two clock trials at 600 Hz:
+/// The re-fit of the compliant foot's two clock trials at 600 Hz:
 /// the re-fit that each edited trial's diagnosis makes with the edited plate's clock held
 /// at its profile's vertex (kept in `tests/data/real_compliant_600hz/<trial>/refit`,
 /// from the diagnosis that `tools/make-compliant-diagnosis-starts` refreshed: right

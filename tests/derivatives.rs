@@ -100,7 +100,7 @@ fn dynamics_jacobian_matches_central_differences() {
     }
 }
 
-/// Done-means 1 of the model issue: CVODES sensitivities (exact RHS derivatives) vs central
+/// CVODES sensitivities (exact RHS derivatives) vs central
 /// differences of the integrated end state, both at tolerance 1e-12, to 1e-5 relative.
 #[test]
 fn cvodes_sensitivities_match_finite_differences_for_every_constraint_set() {

@@ -1,4 +1,4 @@
-//! `diagnose`'s statistics on a trial with a hidden CoP offset (issue 23): under the
+//! `diagnose`'s statistics on a trial with a hidden CoP offset: under the
 //! seed's cost the pelvis position is free and absorbs the offset, so the candidate must
 //! be reported "not testable with this run's cost" (never scored 0 as if absent), with
 //! the hint that makes it testable; the report (`summary.json`, `diagnose.md`,
@@ -440,7 +440,7 @@ fn swapping_the_legs_gives_the_other_legs_half_cycles() {
     }
 }
 
-/// Issue 23, Done-means 2, on the real bundled trial. Its kinematics hold one half cycle
+/// Held-out validation on the real bundled trial. Its kinematics hold one half cycle
 /// from a left heel strike to a right one, which the run tracks, and the other leg's two
 /// (mirrored), which held-out validation may use. The MTG damping (an opt-in candidate,
 /// `--candidate mtg_damping`) is significant in-sample and confirmed on the other leg's

@@ -258,7 +258,7 @@ fn semi_axis(path: &Path) -> f64 {
 /// file's, tracked with the file's ellipse and `--effect foot_geometry:free=size`, started
 /// from the file-shaped ellipse's converged fit of the bundled trial
 /// (tests/data/hidden/base): the identified semi-axis moves from the file's towards the
-/// hidden one and ends within 20 % of it (issue 26's criterion).
+/// hidden one and ends within 20 % of it.
 ///
 /// Measured: 25 iterations, J 34.88 → 27.01, a = 0.1817 m against the hidden 0.1678 m
 /// (file 0.1525 m; 8.3 % off), while b ran from 0.0403 m to its upper bound 0.0524 m

@@ -1,4 +1,4 @@
-//! Property-based fuzzing of the input readers (issue 28): model, foot and phase files,
+//! Property-based fuzzing of the input readers: model, foot and phase files,
 //! the sagittal CSV and its meta file, OpenSim `.mot`/`.sto` storages, `solve` problem
 //! files, run summaries, control tables, and the command line.
 //!

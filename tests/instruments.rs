@@ -2,7 +2,7 @@
 //! body-mass error) and actuator properties (MTG damping, strength, activation time
 //! constants) as effects: each against closed-form truth, with exact parameter
 //! derivatives checked against central differences; and a plate's clock offset moving
-//! the contact events that plate's force threshold gave (issue 23, item 2).
+//! the contact events that plate's force threshold gave.
 
 use crate::common;
 use common::*;

@@ -1,4 +1,4 @@
-//! Issue 23, Done-means 1's re-fits, for the compliant foot's CoP, body-mass and gain
+//! The re-fits of the compliant foot's CoP, body-mass and gain
 //! trials at 600 Hz (`tests/data/real_hidden_600hz`, the real trial edited by
 //! `tools/make-real-hidden-trials`): the right foot's CoP 25 mm forward, every force 5 %
 //! high, and the left plate's forces 6 % high. Each trial's track and its re-fit with the

@@ -114,7 +114,7 @@ fn every_module_uses_only_modules_below_it() {
     assert!(bad.is_empty(), "uses that do not point down: {bad:?}");
 }
 
-/// The check fails on an upward use (the one issue 27 found: `problems` using `report`),
+/// The check fails on an upward use (such as `problems` using `report`),
 /// a use within a layer that the map does not allow, and passes the allowed ones.
 #[test]
 fn an_upward_use_is_caught() {

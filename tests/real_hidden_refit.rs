@@ -1,4 +1,4 @@
-//! Issue 23, Done-means 1 (the re-fit half): on each hidden-effect trial made from the
+//! The re-fits of the hidden-effect trials: on each trial made from the
 //! real measurements (`tools/make-real-hidden-trials`), a track with the default settings
 //! re-fitted with the true effect identifies it within 20 % or 2 sd of the truth
 //! (whichever is larger) and brings every channel's mean error back near the untouched
@@ -197,7 +197,7 @@ fn right_plate_clock_late_25_ms() {
 }
 
 #[test]
-#[ignore = "slow (each test tracks the real trial 2–4 times: about 9 minutes together in the test profile), beyond the CI's 30-minute budget until the engine is faster (issue 22); run with cargo test --test suite -- --ignored real_hidden_refit::"]
+#[ignore = "slow (each test tracks the real trial 2–4 times: about 9 minutes together in the test profile), beyond the CI's time budget; run with cargo test --test suite -- --ignored real_hidden_refit::"]
 fn left_plate_clock_early_20_ms() {
     refit_finds(
         "real_clock_l-20ms",
@@ -210,7 +210,7 @@ fn left_plate_clock_early_20_ms() {
 }
 
 #[test]
-#[ignore = "slow (each test tracks the real trial 2–4 times: about 9 minutes together in the test profile), beyond the CI's 30-minute budget until the engine is faster (issue 22); run with cargo test --test suite -- --ignored real_hidden_refit::"]
+#[ignore = "slow (each test tracks the real trial 2–4 times: about 9 minutes together in the test profile), beyond the CI's time budget; run with cargo test --test suite -- --ignored real_hidden_refit::"]
 fn left_plate_gain_6_percent() {
     refit_finds(
         "real_gain_l+6pct",
@@ -223,7 +223,7 @@ fn left_plate_gain_6_percent() {
 }
 
 #[test]
-#[ignore = "slow (each test tracks the real trial 2–4 times: about 9 minutes together in the test profile), beyond the CI's 30-minute budget until the engine is faster (issue 22); run with cargo test --test suite -- --ignored real_hidden_refit::"]
+#[ignore = "slow (each test tracks the real trial 2–4 times: about 9 minutes together in the test profile), beyond the CI's time budget; run with cargo test --test suite -- --ignored real_hidden_refit::"]
 fn every_force_5_percent_high_as_a_body_mass_error() {
     refit_finds(
         "real_mass+5pct",
@@ -254,7 +254,7 @@ fn right_cop_25_mm_forward_with_the_pelvis_position_tracked() {
 /// beside the seed's stated damping; the re-fit must lower J by more than half and move η
 /// below 2.0.
 #[test]
-#[ignore = "slow (each test tracks the real trial 2–4 times: about 9 minutes together in the test profile), beyond the CI's 30-minute budget until the engine is faster (issue 22); run with cargo test --test suite -- --ignored real_hidden_refit::"]
+#[ignore = "slow (each test tracks the real trial 2–4 times: about 9 minutes together in the test profile), beyond the CI's time budget; run with cargo test --test suite -- --ignored real_hidden_refit::"]
 fn the_untouched_trial_refits_a_lower_mtg_damping() {
     let reference = untouched(false);
     let before = json(&reference.join("summary.json"))["objective"]

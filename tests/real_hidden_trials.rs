@@ -1,4 +1,4 @@
-//! The hidden-effect trials made from the real measurements (issue 23: `tools/make-real-
+//! The hidden-effect trials made from the real measurements (`tools/make-real-
 //! hidden-trials`, committed under `tests/data/real_hidden/`) hold what their truth says,
 //! checked against the raw 600 Hz force record read by the library's own storage reader
 //! (independently of the script): the kinematics are the bundled trial's, the edited

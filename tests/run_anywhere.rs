@@ -1,5 +1,5 @@
-//! footfall runs from any folder, and its run folders carry their inputs (issue 24, item
-//! 5): started in a temporary folder outside the repository, `track` finds the bundled
+//! footfall runs from any folder, and its run folders carry their inputs:
+//! started in a temporary folder outside the repository, `track` finds the bundled
 //! model, foot, phases and trial; the run folder holds copies of them under `inputs/`
 //! that `setup.json` names relative to the folder; `report`, `diagnose`, `synth` and
 //! `diff` work on it from that folder, and on a copy of it at another path, from yet

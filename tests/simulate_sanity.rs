@@ -1,4 +1,4 @@
-//! Simulation sanity (issue 25, item 3): the shipped `phases/sim_*.json` examples end their
+//! Simulation sanity: the shipped `phases/sim_*.json` examples end their
 //! swing at the touchdown of the landing contact, so the impact starts on the ground;
 //! a landing away from the ground, a touchdown not reached, or a large stabilisation force
 //! is a typed warning of the library, printed by `footfall simulate` (exit 0) or refused

@@ -1,5 +1,4 @@
-//! Issue 23, Done-means 1 in-sample, for the compliant foot's CoP, gain and mass trials
-//! at 600 Hz: the diagnosis taken one step further, as a user would. The untouched trial's
+//! The compliant foot's CoP, gain and mass trials at 600 Hz: the diagnosis taken one step further, as a user would. The untouched trial's
 //! diagnosis finds one effect, a clock shared by both plates (the forces +23.6 ms late
 //! against the kinematics, confirmed on the held-out half cycle:
 //! `clocks_600hz::the_untouched_compliant_trial_reports_only_what_…`). The edited trials
@@ -262,7 +261,7 @@ fn with_the_shared_clock_the_right_plates_clock_is_found_first() {
     assert!(share(left) < share(first), "{left}");
 }
 
-/// Issue 23, Done-means 1's re-fit, one step further: each edited trial re-tracked with
+/// The re-fit, one step further: each edited trial re-tracked with
 /// the shared clock held and what its stepwise diagnosis reads first added by one line,
 /// at its reading (kept in `tests/data/real_compliant_600hz/<trial>/
 /// shared_clock_refit`, each converged from its `shared_clock` track):

@@ -143,7 +143,7 @@ fn noise_model_events_and_csv_round_trip() {
 
 /// A model effect is hidden by re-fitting the `--from` run's data with the effect held in
 /// the model. A downhill slope of −0.022 rad once stopped that re-fit on Clarabel's
-/// numerical error (issue 22); it converges, and the truth it keeps is the slope.
+/// numerical error; it converges, and the truth it keeps is the slope.
 #[test]
 fn a_downhill_slope_is_hidden_by_a_converged_refit() {
     let root = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"));

@@ -388,7 +388,7 @@ fn the_iteration_limit_holds_across_the_rounds_of_check_points() {
     assert_eq!(run.result.status, SqpStatus::MaxIterations, "{lines}");
 }
 
-/// Issue 22, Done-means 4: the bundled ellipse track from the data, at KKT tolerance
+/// The bundled ellipse track from the data, at KKT tolerance
 /// 1e-6, ends with its KKT residual falling over each of its last five iterations, the
 /// last below 1e-6. With the QP's bound multipliers taken as they come the last five were 2.0e-5, 8.1e-6, 4.7e-6, 8.5e-6,
 /// 1.75e-7: an excitation at its lower bound 0 kept a slack of ~4e-8 in the QP's

@@ -206,7 +206,7 @@ fn trial_aligned_with_the_truth(dir: &Path, tmp: &Path) -> PathBuf {
     tmp.join("synthetic.csv")
 }
 
-/// Done-means 2 of issue 26, the volumetric half: data from a volumetric foot whose law is
+/// The volumetric law recovered: data from a volumetric foot whose law is
 /// not the shipped file's (1.5 × its stiffness, 0.6 × its damping; 100 Hz, synth's default
 /// noise), tracked with the shipped foot and `--effect volumetric_contact` (stiffness and
 /// damping free, the pelvis position tracked, sample targets). It starts from the truth's
@@ -331,7 +331,7 @@ fn fit_the_law(
     }
 }
 
-/// Done-means 2 of issue 26 at a force plate's rate: the same truth, `synth` at 1 kHz
+/// The law at a force plate's rate: the same truth, `synth` at 1 kHz
 /// (default noise, seed 1), heel strikes aligned, fitted as above at the identification
 /// cost's regularisation weight, 1e-4 (`tests/hidden_effects.rs`, `Setup::Identify`: the
 /// weight for effort-costly parameters, chosen on the trunk trial as the smallest decade
@@ -555,7 +555,7 @@ fn diagnose_ranking(run: &Path, candidates: &[&str], out: &Path) -> serde_json::
     d
 }
 
-/// Done-means 2 of issue 26, the rigid half: the compliant foot's trial (the hidden law,
+/// The rigid foot's diagnosis of the compliant foot's walk: the compliant foot's trial (the hidden law,
 /// 100 Hz, heel strikes aligned) tracked with the rigid ellipse at the maximum-likelihood
 /// cost ([`RigidCost::Diagnosed`]) and diagnosed with the catalog and the foot's shape
 /// (`--candidate catalog --candidate foot_geometry`): the foot geometry ranks first,
