@@ -17,7 +17,7 @@ pub const MAX_FORCE: f64 = 1e5;
 pub const MAX_GROUND_HEIGHT: f64 = 10.0;
 /// Largest Baumgarte stabilisation gain (1/s): stiffer than any sampling of a gait.
 pub const MAX_BAUMGARTE: f64 = 1e4;
-/// Largest MTG damping coefficient η (dimensionless; the seed uses 0.4 to 2).
+/// Largest MTG damping coefficient η (dimensionless; Millard & Mombaur use 0.4 to 2).
 pub const MAX_ETA: f64 = 1e3;
 /// Largest magnitude of an initial generalised coordinate (m or rad).
 pub const MAX_COORDINATE: f64 = 100.0;

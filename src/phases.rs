@@ -238,7 +238,7 @@ pub struct GaitSpec {
     /// Swing-foot clearance φ ≥ 0 for every primitive not in contact (default true).
     #[serde(default = "yes")]
     pub clearance: bool,
-    /// Control parameterisation (default `linear`, as the seed).
+    /// Control parameterisation (default `linear`, as Millard & Mombaur 2019).
     #[serde(default = "linear")]
     pub controls: crate::integrate::ControlShape,
 }

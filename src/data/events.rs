@@ -16,7 +16,7 @@ use super::{side_index, GaitData};
 use crate::model::Side;
 use std::path::PathBuf;
 
-/// The seed's event threshold: 5 % of the peak normal force.
+/// Millard & Mombaur's event threshold: 5 % of the peak normal force.
 pub const DEFAULT_EVENT_FRACTION: f64 = 0.05;
 
 /// Heel strikes and toe offs of both feet (s), each list increasing.
@@ -87,7 +87,7 @@ pub fn threshold_crossings(time: &[f64], force: &[f64], threshold: f64) -> (Vec<
 }
 
 /// Heel strikes and toe offs of both feet, from the normal force threshold
-/// `fraction × peak normal force` (see the module docs; the seed uses
+/// `fraction × peak normal force` (see the module docs; Millard & Mombaur use
 /// [`DEFAULT_EVENT_FRACTION`] = 0.05).
 ///
 /// The forces are read at their own instants ([`GaitData::force_record`]). A foot has

@@ -5,9 +5,9 @@
 //! squares with
 //! $$x(t) = a_0 + \sum_{i=1}^{m} a_i \cos(i\omega t) + b_i \sin(i\omega t), \qquad \omega = 2\pi/T_c,$$
 //! i.e. $x = M(t)\,c$ with the basis matrix $M = [1\ \cos(i\omega t_j)\ \sin(i\omega t_j)]$
-//! (seed eq. 1) and $c = M^\dagger x$ by the SVD pseudo-inverse. The other leg is
-//! $x_l(t_j) = M(t_j + T_{sh})\, M(t_j)^\dagger x_r$ (seed eq. 2–3) with $T_{sh} = T_c/2$ for
-//! a symmetric gait. The seed uses $m = 5$ harmonics ([`SEED_FOURIER_ORDER`]).
+//! (Ezati et al. 2020, eq. 1) and $c = M^\dagger x$ by the SVD pseudo-inverse. The other leg is
+//! $x_l(t_j) = M(t_j + T_{sh})\, M(t_j)^\dagger x_r$ (Ezati et al. 2020, eq. 2–3) with $T_{sh} = T_c/2$ for
+//! a symmetric gait. Ezati et al. use $m = 5$ harmonics ([`SEED_FOURIER_ORDER`]).
 
 use super::error::{memory_path, DataError};
 use nalgebra::{DMatrix, DVector};
@@ -100,7 +100,7 @@ impl FourierSeries {
     }
 }
 
-/// The seed's basis matrix $[1\ \cos(i\omega t_j)\ \sin(i\omega t_j)]$, columns interleaved.
+/// Ezati et al.'s basis matrix $[1\ \cos(i\omega t_j)\ \sin(i\omega t_j)]$, columns interleaved.
 fn basis(time: &[f64], w: f64, order: usize) -> DMatrix<f64> {
     DMatrix::from_fn(time.len(), 2 * order + 1, |j, k| {
         if k == 0 {

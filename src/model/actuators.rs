@@ -1,28 +1,28 @@
 //! Muscle-torque generators (MTGs), activation dynamics and joint damping
-//! (seed paper "A Quick Turn of Foot", §2, eq. 9–12).
+//! (Millard & Mombaur 2019, "A Quick Turn of Foot", §2, eq. 9–12).
 //!
 //! # Model
 //!
 //! Each leg joint (hip, knee, ankle; both legs share the parameters) is driven by one
-//! flexor and one extensor MTG (seed eq. 9):
+//! flexor and one extensor MTG (Millard & Mombaur 2019, eq. 9):
 //!
 //! ```text
 //! τ^M = s · τ_o · a · f^A(θ) · f^V(ω)          s = ±1, see MuscleSide::torque_sign
 //! ```
 //!
-//! with first-order activation dynamics in the C2 form of seed eq. 10
+//! with first-order activation dynamics in the C2 form of Millard & Mombaur 2019, eq. 10
 //!
 //! ```text
-//! ȧ = (e − a) / (½ (τ_A + τ_D)),   τ_A = 15 ms, τ_D = 50 ms  (Thelen 2003, via the seed)
+//! ȧ = (e − a) / (½ (τ_A + τ_D)),   τ_A = 15 ms, τ_D = 50 ms  (Thelen 2003, via Millard & Mombaur 2019)
 //! ```
 //!
-//! and the net joint torque (seed eq. 11–12)
+//! and the net joint torque (Millard & Mombaur 2019, eq. 11–12)
 //!
 //! ```text
 //! τ_i = τ^MF + τ^ME − β ω_i,   β = η (τ_o^MF + τ_o^ME) / (ω_max^MF + ω_max^ME),  η = 2.0
 //! ```
 //!
-//! The passive parallel element is ignored, as in the seed.
+//! The passive parallel element is ignored, as Millard & Mombaur (2019) do.
 //!
 //! # Sign conventions (this crate)
 //!
@@ -83,29 +83,30 @@ use crate::model::scalar::Scalar;
 /// (`const double gravity = 9.81; // Needed for the strength scaling used by Anderson`).
 pub const ANDERSON_GRAVITY: f64 = 9.81;
 
-/// Seed subject (seed §3.1, data of Millard et al. 2017): 35-year-old male, 81.7 kg.
+/// The subject of Millard & Mombaur (2019, §3.1; data of Millard et al. 2017): 35-year-old
+/// male, 81.7 kg.
 pub const SEED_SUBJECT_MASS: f64 = 81.7;
-/// Seed subject height, 1.72 m (seed §3.1).
+/// Height of the subject of Millard & Mombaur (2019, §3.1): 1.72 m.
 pub const SEED_SUBJECT_HEIGHT: f64 = 1.72;
 
-/// Damping scale factor η of seed eq. 12 ("We use a value of 2.0 for η").
+/// Damping scale factor η of Millard & Mombaur 2019, eq. 12 ("We use a value of 2.0 for η").
 ///
-/// Note: with any published MTG set found (Anderson 2007 scaled to the seed subject:
+/// Note: with any published MTG set found (Anderson 2007 scaled to the subject of Millard & Mombaur (2019):
 /// hip 49.1, knee 14.8, ankle 12.2 N·m·s/rad; Millard 2019 gymnast: 36.6, 21.4, 11.8)
-/// η = 2.0 does **not** give the seed's stated 2.7–7.3 N·m·s/rad; η = 0.4
+/// η = 2.0 does **not** give Millard & Mombaur's stated 2.7–7.3 N·m·s/rad; η = 0.4
 /// (= 2 × [`MILLARD2017_CODE_ETA`]) with the gymnast set gives 2.37–7.32. See
 /// `docs/parameters.md` §7.
 pub const SEED_ETA: f64 = 2.0;
 
 /// Normalised joint damping used in the published code of Millard, Sreenivasa & Mombaur
-/// (2017) (`setupJointDamping`: `normDamping = 0.2`, same formula as seed eq. 12; that
+/// (2017) (`setupJointDamping`: `normDamping = 0.2`, same formula as Millard & Mombaur 2019, eq. 12; that
 /// model also doubles the strength of the right-side MTGs because one planar limb stands
 /// for two). Kept for comparison only; see `docs/parameters.md`.
 pub const MILLARD2017_CODE_ETA: f64 = 0.2;
 
-/// Activation time constant τ_A = 15 ms (seed eq. 10, citing Thelen 2003).
+/// Activation time constant τ_A = 15 ms (Millard & Mombaur 2019, eq. 10, citing Thelen 2003).
 pub const TAU_ACTIVATION: f64 = 0.015;
-/// Deactivation time constant τ_D = 50 ms (seed eq. 10, citing Thelen 2003).
+/// Deactivation time constant τ_D = 50 ms (Millard & Mombaur 2019, eq. 10, citing Thelen 2003).
 pub const TAU_DEACTIVATION: f64 = 0.050;
 
 /// SMOOTHING: width of the smooth positive part applied to Anderson's cosine
@@ -392,21 +393,21 @@ pub fn torque_velocity<S: Scalar>(p: &MtgParams, omega: S) -> S {
     smooth_pos(f, TV_FLOOR_EPS) * (1.0 / smooth_pos_f64(sh.f0, TV_FLOOR_EPS))
 }
 
-/// Signed torque of one MTG (seed eq. 9): `s · τ_o · a · f^A(θ) · f^V(ω)` [N·m].
+/// Signed torque of one MTG (Millard & Mombaur 2019, eq. 9): `s · τ_o · a · f^A(θ) · f^V(ω)` [N·m].
 pub fn mtg_torque<S: Scalar>(p: &MtgParams, a: S, theta: S, omega: S) -> S {
     a * active_torque_angle(p, theta)
         * torque_velocity(p, omega)
         * (p.torque_sign() * p.max_isometric_torque)
 }
 
-/// Joint damping coefficient β of seed eq. 12 [N·m·s/rad]:
+/// Joint damping coefficient β of Millard & Mombaur 2019, eq. 12 [N·m·s/rad]:
 /// `η (τ_o^F + τ_o^E) / (ω_max^F + ω_max^E)`.
 pub fn damping_coefficient(flexor: &MtgParams, extensor: &MtgParams, eta: f64) -> f64 {
     eta * (flexor.max_isometric_torque + extensor.max_isometric_torque)
         / (flexor.omega_max + extensor.omega_max)
 }
 
-/// First-order activation dynamics in the C2 form of seed eq. 10.
+/// First-order activation dynamics in the C2 form of Millard & Mombaur 2019, eq. 10.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
 pub struct ActivationDynamics {
     /// τ_A [s] (seed: 15 ms).
@@ -425,12 +426,12 @@ impl Default for ActivationDynamics {
 }
 
 impl ActivationDynamics {
-    /// Effective time constant ½(τ_A + τ_D) [s] (32.5 ms with the seed values).
+    /// Effective time constant ½(τ_A + τ_D) [s] (32.5 ms with the values of Millard & Mombaur (2019)).
     pub fn time_constant(&self) -> f64 {
         0.5 * (self.tau_activation + self.tau_deactivation)
     }
 
-    /// ȧ = (e − a) / (½(τ_A + τ_D)) (seed eq. 10).
+    /// ȧ = (e − a) / (½(τ_A + τ_D)) (Millard & Mombaur 2019, eq. 10).
     pub fn rate<S: Scalar>(&self, e: S, a: S) -> S {
         (e - a) * (1.0 / self.time_constant())
     }
@@ -455,14 +456,14 @@ impl ActivationDynamics {
 pub struct JointActuatorSet {
     /// Six MTGs: (hip, knee, ankle) × (flexor, extensor), any order.
     pub mtgs: Vec<MtgParams>,
-    /// Damping factor η of seed eq. 12.
+    /// Damping factor η of Millard & Mombaur 2019, eq. 12.
     pub eta: f64,
     /// Activation dynamics shared by all MTGs.
     pub activation: ActivationDynamics,
 }
 
 impl JointActuatorSet {
-    /// Anderson et al. (2007) young-male MTGs scaled (C1·m·g·h) to the seed subject
+    /// Anderson et al. (2007) young-male MTGs scaled (C1·m·g·h) to the subject of Millard & Mombaur (2019)
     /// (81.7 kg, 1.72 m), η = 2.0, τ_A = 15 ms, τ_D = 50 ms.
     pub fn anderson2007_young_male() -> Self {
         Self::anderson2007_young_male_for(SEED_SUBJECT_MASS, SEED_SUBJECT_HEIGHT)
@@ -494,7 +495,7 @@ impl JointActuatorSet {
     }
 
     /// Millard et al. (2019) gymnast MTGs (Jackson 2010 hip/knee, scaled Anderson ankle;
-    /// 69.6 kg, 1.732 m subject, unscaled), η = 2.0, seed activation constants. Angles
+    /// 69.6 kg, 1.732 m subject, unscaled), η = 2.0, the activation constants of Millard & Mombaur (2019). Angles
     /// converted with the same sign map as Anderson's.
     pub fn millard2019_gymnast() -> Self {
         JointActuatorSet {
@@ -576,7 +577,7 @@ impl JointActuatorSet {
         (f, e)
     }
 
-    /// Damping coefficient β of `joint` (seed eq. 12) [N·m·s/rad].
+    /// Damping coefficient β of `joint` (Millard & Mombaur 2019, eq. 12) [N·m·s/rad].
     pub fn damping(&self, joint: Joint) -> f64 {
         let (f, e) = self.pair(joint);
         damping_coefficient(f, e, self.eta)

@@ -5,7 +5,7 @@
 //! [`Primitive::contact_offset`] returns the world vector $d(\psi)$ from the primitive's
 //! reference point (its centre) to that point, where $\psi$ is the body's world angle.
 //!
-//! The ellipse has no closed form in the polar angle used by the seed (eq. 3–4): the
+//! The ellipse has no closed form in the polar angle used by Millard & Mombaur (2019, eq. 3–4): the
 //! polar angle $\phi$ of the lowest point, $p(\phi) = r(\phi)(\cos\phi, \sin\phi)$ with
 //! $r(\phi) = ab/\sqrt{b^2\cos^2\phi + a^2\sin^2\phi}$, is bracketed by sampling, narrowed by
 //! bisection on $h'(\phi)$ and polished by Newton's method to 1e-12 rad in `f64`. Derivative

@@ -160,13 +160,13 @@ impl Default for ContactSettings {
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub enum ActuatorSpec {
-    /// A flexor and an extensor muscle-torque generator per joint (seed eq. 9–12) with
+    /// A flexor and an extensor muscle-torque generator per joint (Millard & Mombaur 2019, eq. 9–12) with
     /// activation dynamics; controls are the 12 excitations in [0, 1].
     MuscleTorqueGenerators {
         /// Multiplies every maximum isometric torque (default 1).
         #[serde(default = "one")]
         strength_scale: f64,
-        /// Passive damping scale η of seed eq. 12 (default 2.0).
+        /// Passive damping scale η of Millard & Mombaur 2019, eq. 12 (default 2.0).
         #[serde(default = "default_eta")]
         eta: f64,
         /// Activation time constant (s, default 0.015).

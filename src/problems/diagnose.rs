@@ -81,7 +81,7 @@ pub struct TrackingRunSetup {
     /// Whether the pelvis position is tracked too (`--track-pelvis-position`).
     #[serde(default)]
     pub track_pelvis_position: bool,
-    /// Weight of the excitation² and activation² regularisation (`None`: the seed's
+    /// Weight of the excitation² and activation² regularisation (`None`: Millard & Mombaur's
     /// 1e-3).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub regularisation: Option<f64>,
@@ -105,10 +105,10 @@ pub struct TrackingRunSetup {
     /// [`GaitData::swap_sides`]: crate::data::GaitData::swap_sides
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub mirror: bool,
-    /// Channels weighted by their noise (`--noise-weights`; `None`: the seed's weights).
+    /// Channels weighted by their noise (`--noise-weights`; `None`: Millard & Mombaur's weights).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub noise_weights: Option<crate::problems::tracking::ChannelNoise>,
-    /// Weight of the velocity targets relative to the angles (`None`: the seed's 0.1).
+    /// Weight of the velocity targets relative to the angles (`None`: Millard & Mombaur's 0.1).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub velocity_weight: Option<f64>,
     /// Check points holding the contact constraints between the nodes, as (continuous

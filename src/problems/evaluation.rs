@@ -561,7 +561,7 @@ impl Comparison {
         self.times.is_empty()
     }
 
-    /// The error channels of seed Tables 3/4 (foot orientation, CoP, tangential and
+    /// The error channels of Millard & Mombaur 2019, Tables 3/4 (foot orientation, CoP, tangential and
     /// normal GRF, ankle, knee, hip), each as the signed error of the right leg's samples
     /// followed by the left's, in display units (°, cm, N). Ground forces count where
     /// the measured foot is loaded (above the CoP threshold); NaN marks samples where a

@@ -22,7 +22,7 @@ use crate::ocp::{Block, Ocp, Term};
 use crate::phases::{Duration, Phase, PhaseSequence};
 use std::sync::Arc;
 
-/// The seed's impulse weight w_Δ (eq. 21, N⁻²s⁻²).
+/// Millard & Mombaur's impulse weight w_Δ (eq. 21, N⁻²s⁻²).
 pub const SEED_IMPULSE_WEIGHT: f64 = 1e-2;
 
 /// Targets and options of the prediction.
@@ -35,7 +35,7 @@ pub struct PredictionSettings {
     /// Impulse weight w_Δ.
     pub impulse_weight: f64,
     /// Bound on |ankle angular velocity| (rad/s), replacing the data-derived bound
-    /// (measured range ± 1 rad/s, seed §3.3). The seed's predictions ran with 14.6 rad/s
+    /// (measured range ± 1 rad/s, Millard & Mombaur 2019, §3.3). Millard & Mombaur's predictions ran with 14.6 rad/s
     /// (which its ellipse foot reached) and its control experiment with 3.96.
     pub ankle_velocity_limit: Option<f64>,
 }
@@ -71,7 +71,7 @@ pub struct PredictionSetup {
 
 impl PredictionSetup {
     /// Start from `solution` (e.g. a tracking solution of the same model and phase file),
-    /// with the state bounds of the tracking problem of `tracking` (seed §3.3).
+    /// with the state bounds of the tracking problem of `tracking` (Millard & Mombaur 2019, §3.3).
     pub fn from_solution(
         original: &PhaseSequence,
         tracking: &TrackingSetup,

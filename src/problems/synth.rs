@@ -191,7 +191,7 @@ pub fn synthesize(
     let mut clean = clean;
     hide_unloaded_cop(&mut clean);
     // a foot of volumetric primitives has no contact changes in its phase graph: its
-    // events are where its clean normal force crosses the seed's event threshold (5 % of
+    // events are where its clean normal force crosses Millard & Mombaur's event threshold (5 % of
     // the peak), as a lab would find them on noise-free forces
     let events = if sets.iter().all(|s| s.rows.is_empty()) && model.has_volumetric_contacts() {
         crate::data::detect_events(&clean, crate::data::DEFAULT_EVENT_FRACTION).map_err(|e| {

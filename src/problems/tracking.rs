@@ -116,7 +116,7 @@ pub struct TrackingWeights {
 }
 
 impl TrackingWeights {
-    /// Seed eq. 18: angles 1/(π/4), angular velocities 0.1/(π/4), ankles at 1/100 of
+    /// Millard & Mombaur (2019), eq. 18: angles 1/(π/4), angular velocities 0.1/(π/4), ankles at 1/100 of
     /// these; pelvis translations untracked; forces and CoP normalised by the peak force
     /// (and the foot length); u², a² at 1e-3.
     pub fn seed(nq: usize, peak_force: f64, foot_length: f64) -> Self {
@@ -144,11 +144,11 @@ impl TrackingWeights {
         }
     }
 
-    /// The seed's weight of the angular-velocity targets relative to the angles' (eq. 18).
+    /// Millard & Mombaur's weight of the angular-velocity targets relative to the angles' (eq. 18).
     pub const SEED_VELOCITY: f64 = 0.1;
 
     /// These weights with the velocity targets weighted `relative` to the angles instead
-    /// of the seed's [`SEED_VELOCITY`](Self::SEED_VELOCITY) (the ankles keeping their
+    /// of Millard & Mombaur's [`SEED_VELOCITY`](Self::SEED_VELOCITY) (the ankles keeping their
     /// 1/100, untracked coordinates staying untracked); 0 drops the velocity targets,
     /// which come from differentiating the smoothed angles rather than from a measurement.
     pub fn with_velocity_weight(mut self, relative: f64) -> Self {
@@ -159,15 +159,15 @@ impl TrackingWeights {
     }
 
     /// Weight of the pelvis position (x, y) errors when they are tracked: 1/(0.1 m), as
-    /// the seed weights angles by 1/(π/4). The seed leaves the translations untracked,
+    /// Millard & Mombaur weight angles by 1/(π/4) and leave the translations untracked,
     /// which makes the model free to shift along the walkway — and a CoP offset of the
     /// force plates indistinguishable from such a shift.
     pub const PELVIS_POSITION: f64 = 10.0;
 
     /// These weights with every data channel weighted by the inverse variance of its
     /// measurement noise (`noise`: σ of the angles in rad, the pelvis position in m, the
-    /// forces in N and the CoP in m), scaled so that the angles keep the seed's weight:
-    /// the maximum-likelihood weighting for independent Gaussian noise, where the seed's
+    /// forces in N and the CoP in m), scaled so that the angles keep Millard & Mombaur's weight:
+    /// the maximum-likelihood weighting for independent Gaussian noise, where Millard & Mombaur's
     /// weights count an angle's noise (0.5°) 3.8 times a force's (5 N, peak 995 N) and the
     /// ankles at 1/100. The CoP row, a load-weighted moment error, is weighted so that its
     /// noise counts fully at the peak force (these weights' `force_scale`, N). Untracked

@@ -404,7 +404,7 @@ fn sibling(run: &Path, suffix: &str) -> PathBuf {
 /// what to do instead (followed by the run).
 ///
 /// The pad has no null value for a score test (the rigid heel is its limit of infinite
-/// stiffness), so `diagnose` tests it by a full re-fit ([`refit_test`]). With the seed's
+/// stiffness), so `diagnose` tests it by a full re-fit ([`refit_test`]). With Millard & Mombaur's
 /// interpolated node targets that re-fit's decrease is no evidence: a free pad lowers J
 /// on data *without* a pad too (the double-circle trial without a hidden effect: J
 /// 0.3938 → 0.3696, a statistic of 34 against the χ²₂ 0.1 % point 13.8), even on

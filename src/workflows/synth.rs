@@ -24,7 +24,7 @@ pub struct SynthRequest {
     /// Foot: `ellipse`, `double-circle` or a foot file (the solution's; default: the
     /// `--from` track run's, else ellipse).
     pub foot: Option<String>,
-    /// Phase graph (default: the `--from` track run's, else the seed's graph for the foot).
+    /// Phase graph (default: the `--from` track run's, else Millard & Mombaur's graph for the foot).
     pub phases: Option<PathBuf>,
     /// Sampling rate (Hz).
     pub rate: f64,

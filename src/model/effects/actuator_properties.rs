@@ -6,8 +6,8 @@ use super::kinds::param;
 use super::{ActuatorAdjust, Effect, ParamSpec};
 use crate::model::Scalar;
 
-/// The passive joint damping of seed eq. 12, β = η (τ₀ᶠ + τ₀ᵉ)/(ω_maxᶠ + ω_maxᵉ), with
-/// η scaled by `1 + change`. The seed states η = 2.0 but its damping figures need
+/// The passive joint damping of Millard & Mombaur 2019, eq. 12, β = η (τ₀ᶠ + τ₀ᵉ)/(ω_maxᶠ + ω_maxᵉ), with
+/// η scaled by `1 + change`. Millard & Mombaur (2019) state η = 2.0 but their damping figures need
 /// η ≈ 0.4 (`docs/parameters.md` §7; `models/opensim_subject01_seed_damping.json`):
 /// change = −0.8 from η = 2.0.
 #[derive(Debug, Clone)]
@@ -50,7 +50,7 @@ impl Effect for MtgDampingScale {
 
 /// Every MTG's maximum isometric torque τ₀ scaled by `1 + change` (the subject stronger
 /// or weaker than the anthropometric scaling of the published MTGs); the damping β of
-/// seed eq. 12, proportional to τ₀, scales with it, as in
+/// Millard & Mombaur 2019, eq. 12, proportional to τ₀, scales with it, as in
 /// [`JointActuatorSet::scaled`](crate::model::actuators::JointActuatorSet::scaled).
 #[derive(Debug, Clone)]
 pub struct MtgStrengthScale {
@@ -90,8 +90,8 @@ impl Effect for MtgStrengthScale {
     }
 }
 
-/// The activation and deactivation time constants τ_A, τ_D (seed eq. 10) both scaled by
-/// `1 + change`. The seed's C2 activation dynamics ȧ = (e − a)/(½(τ_A + τ_D)) depend on
+/// The activation and deactivation time constants τ_A, τ_D (Millard & Mombaur 2019, eq. 10) both scaled by
+/// `1 + change`. Millard & Mombaur's C2 activation dynamics ȧ = (e − a)/(½(τ_A + τ_D)) depend on
 /// their mean only, so one factor is all that tracking data can identify; a separate
 /// τ_A and τ_D would make the information matrix singular.
 #[derive(Debug, Clone)]

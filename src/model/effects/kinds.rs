@@ -27,7 +27,7 @@ pub(super) fn param(
 /// as the half-cycle problems with their left↔right periodicity assume).
 ///
 /// Models the passive elastic torque of ligaments, joint capsule and stretched muscle
-/// that the muscle-torque generators leave out (seed §2 ignores it).
+/// that the muscle-torque generators leave out (Millard & Mombaur 2019, §2 ignores it).
 #[derive(Debug, Clone)]
 pub struct PassiveJointStiffness {
     coordinates: Vec<usize>,

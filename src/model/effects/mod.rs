@@ -104,12 +104,12 @@ impl<S: Scalar> MeasurementAdjust<S> {
 /// (all one without such an effect). Only muscle-torque generators have them.
 #[derive(Debug, Clone, Copy)]
 pub struct ActuatorAdjust<S> {
-    /// Factor on every MTG's maximum isometric torque τ₀ (and so, by seed eq. 12, on the
+    /// Factor on every MTG's maximum isometric torque τ₀ (and so, by Millard & Mombaur 2019, eq. 12, on the
     /// passive damping β, which is proportional to τ₀).
     pub strength: S,
-    /// Factor on the damping factor η of seed eq. 12 (β ∝ η).
+    /// Factor on the damping factor η of Millard & Mombaur 2019, eq. 12 (β ∝ η).
     pub damping: S,
-    /// Factor on the activation and deactivation time constants τ_A, τ_D (seed eq. 10).
+    /// Factor on the activation and deactivation time constants τ_A, τ_D (Millard & Mombaur 2019, eq. 10).
     pub time: S,
 }
 

@@ -227,7 +227,7 @@ impl GaitModel {
         cholesky(&mut a, nc, 1e-10).err().map(|e| idx[e.pivot])
     }
 
-    /// Project a state onto the constraint manifold of `set` (seed §3.6: the initial
+    /// Project a state onto the constraint manifold of `set` (Millard & Mombaur 2019, §3.6: the initial
     /// guess is "polished to satisfy the foot-ground constraints"): positions by
     /// minimum-norm Gauss–Newton steps on the normal gaps φ = 0, velocities by the
     /// M-orthogonal projection onto `G q̇ = 0` (the plastic impact map). Returns the

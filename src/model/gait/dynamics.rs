@@ -1,6 +1,6 @@
 //! Forward dynamics of the gait model with contact, and the impact map.
 //!
-//! Forward dynamics solve the index-reduced DAE (seed eq. 1–2)
+//! Forward dynamics solve the index-reduced DAE (Millard & Mombaur 2019, eq. 1–2)
 //! $$\begin{bmatrix} M & G^T \\ G & 0\end{bmatrix}\begin{bmatrix}\ddot q \\ -\lambda\end{bmatrix}
 //!   = \begin{bmatrix}\tau - c \\ b\end{bmatrix},$$
 //! by Cholesky factors of $M$ and of $G M^{-1} G^T$ (a rank-deficient $G$, i.e. an

@@ -125,7 +125,7 @@ impl<'m> GaitCycle<'m> {
     }
 
     /// Whole-cycle constraints: step length `L` = pelvis_x(end) − pelvis_x(start) (m) and
-    /// average forward speed `L / Σ T_j` (m/s), each when given (seed §3.5).
+    /// average forward speed `L / Σ T_j` (m/s), each when given (Millard & Mombaur 2019, §3.5).
     pub fn step_constraints<'s>(
         &'s self,
         ocp: &Ocp<'s>,

@@ -12,7 +12,7 @@ use crate::phases::{Duration, Phase, PhaseSequence};
 use std::sync::Arc;
 
 /// A measured half cycle from a left heel strike to the next right heel strike (the
-/// span the seed's phase graphs describe: 1e*/1c* … 4e*/7c*).
+/// span Millard & Mombaur's phase graphs describe: 1e*/1c* … 4e*/7c*).
 pub fn half_cycle(events: &Events) -> Result<(f64, f64), String> {
     // keep a margin from the start of the recording, where splines are least reliable
     let earliest = events.span.0 + 0.05;
@@ -41,7 +41,7 @@ pub fn loaded_feet(model: &GaitModel, set: &ConstraintSet) -> [bool; 2] {
 /// How the node targets are read from the samples.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub enum TargetSides {
-    /// Splines through all the samples (the seed's). At a node on a contact change they
+    /// Splines through all the samples (Millard & Mombaur's). At a node on a contact change they
     /// average across the jump a rigid contact makes there (the force at heel strike,
     /// the velocities at an impact), whatever the sampling rate.
     #[default]
@@ -726,7 +726,7 @@ impl TrackingSetup {
             t += duration.value();
         }
         // bounds: the data's range ± 1 (m, rad) and ± 1 (m/s, rad/s) beyond the measured
-        // velocities (seed §3.3); knee hyper-extension up to 0.1 rad; a, u in [0, 1]
+        // velocities (Millard & Mombaur 2019, §3.3); knee hyper-extension up to 0.1 rad; a, u in [0, 1]
         let (mut x_lb, mut x_ub) = (vec![0.0; model.nx()], vec![0.0; model.nx()]);
         for i in 0..nq {
             let (lo, hi) = data.q[i]
