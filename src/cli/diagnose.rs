@@ -42,7 +42,7 @@ pub struct Args {
     /// Profile the cost over each force plate's clock offset: re-fit the run with it held
     /// at −40, −20, +20 and +40 ms and re-fit freely from the lowest point (a clock error
     /// of two frames or more is beyond the score test's reach; about half a minute per
-    /// point and plate on this machine).
+    /// point and plate on two cores).
     #[arg(long)]
     profile_clocks: bool,
     /// A reference trial's run (or its diagnosis folder), diagnosed the same way (same

@@ -67,7 +67,7 @@ pub struct DiagnoseRequest {
     pub held_out: bool,
     /// The offsets (s) at which each force plate's clock is held to profile the cost over
     /// it (empty: no profile; `--profile-clocks` gives [`profile::CLOCK_PROFILE`]): re-fits
-    /// beyond the score test's reach, about half a minute to a minute each on this machine.
+    /// beyond the score test's reach, about half a minute to a minute each on two cores.
     pub profile_clocks: Vec<f64>,
     /// A reference trial's run (or its diagnosis folder), diagnosed the same way: every
     /// candidate's reading is also given against the reference's
