@@ -1,5 +1,5 @@
 //! Criterion benchmarks of the OCP engine on the generic problems (same definitions as the
-//! CasADi peer in `../shared/peer`): one forward-sensitivity sweep over all intervals,
+//! CasADi peer of the cart-pole and five-link biped): one forward-sensitivity sweep over all intervals,
 //! one QP subproblem, and full solves from the problem's initial guess; and the
 //! per-iteration evaluations of the CasADi gait peer's tracking problem.
 

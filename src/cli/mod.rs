@@ -7,6 +7,7 @@
 //! picks the code.
 
 mod args;
+mod check;
 mod compare;
 mod compare_contact;
 mod diagnose;
@@ -55,17 +56,21 @@ enum Command {
     Simulate(simulate::Args),
     /// Solve a generic optimal control problem (cart-pole, five-link biped).
     Solve(solve::Args),
-    /// Fit a foot's geometry to the measured stance (seed §3.2); a foot file's values are
+    /// Fit a foot's geometry to the measured stance (Millard & Mombaur 2019, §3.2); a foot file's values are
     /// the start.
     FitFoot(fit_foot::Args),
+    /// Check the measurement against itself before any model: the trial's whole-body
+    /// Newton–Euler balance reads the plates' clocks, gains and CoP offsets, the body's
+    /// mass and trunk, and the ground slope (no contact model, no optimal control).
+    Check(check::Args),
     /// Track measured walking (default: the bundled trial with the ellipse foot).
     Track(track::Args),
-    /// Predict the gait the model prefers (minimum activation and impulses; seed §3.5).
+    /// Predict the gait the model prefers (minimum activation and impulses; Millard & Mombaur 2019, §3.5).
     Predict(predict::Args),
     /// Run the same prediction for two or more feet and compare their ground forces.
     Compare(compare::Args),
     /// Track one trial with a rigid foot, its geometry identified, a volumetric foot and its
-    /// contact law identified, side by side (RMSE next to seed 000's Table 7).
+    /// contact law identified, side by side (RMSE next to Ezati et al. 2020, Table 7).
     CompareContact(compare_contact::Args),
     /// Generate a measurement set from a model solution, with noise and the truth kept apart.
     Synth(synth::Args),
@@ -168,6 +173,7 @@ pub fn main() -> ExitCode {
     let result = match cli.command {
         Command::Simulate(args) => simulate::run(args, cli.quiet),
         Command::Solve(args) => solve::run(args, cli.quiet),
+        Command::Check(args) => check::run(args, &progress),
         Command::Track(args) => track::run(args, &progress),
         Command::FitFoot(args) => fit_foot::run(args, cli.quiet),
         Command::Predict(args) => predict::run(args, &progress),

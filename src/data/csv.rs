@@ -550,14 +550,24 @@ fn parse_sagittal_csv(
         .flatten()
         .flat_map(|c| c[3..6].iter().copied())
         .collect();
+    // an extra channel with no value in any row (lower-body Plug-in Gait output has no
+    // trunk: lumbar_extension all NaN) is not read: the model never uses it
+    let empty: Vec<usize> = extra_cols
+        .iter()
+        .copied()
+        .filter(|&j| table[j].iter().all(|v| v.is_nan()))
+        .collect();
     let kin_cols: Vec<usize> = (0..ncol)
-        .filter(|j| *j != t_col && !load_cols.contains(j))
+        .filter(|j| *j != t_col && !load_cols.contains(j) && !empty.contains(j))
         .collect();
     let force_only: Vec<bool> = (0..rows.len())
         .map(|k| kin_cols.iter().all(|&j| table[j][k].is_nan()))
         .collect();
     for (j, col) in table.iter().enumerate() {
         let load = load_cols.contains(&j);
+        if empty.contains(&j) {
+            continue;
+        }
         for (k, &v) in col.iter().enumerate() {
             if v.is_finite() || (v.is_nan() && (load || force_only[k])) {
                 continue;
@@ -661,6 +671,7 @@ fn parse_sagittal_csv(
     }
     let extra = extra_cols
         .iter()
+        .filter(|j| !empty.contains(j))
         .map(|&j| {
             let f = match cols[j].as_str() {
                 "hip_center_x" | "hip_center_y" => units.position,

@@ -8,6 +8,7 @@
 //! [`Unsolved`] solve (with the solver's status), a physically [`Invalid`] solution, or
 //! anything else (bad input, I/O).
 
+pub mod check;
 pub mod compare;
 pub mod compare_contact;
 pub mod diagnose;
@@ -171,7 +172,7 @@ pub fn foot_path(arg: &str) -> PathBuf {
     }
 }
 
-/// The default phase file of a foot argument: the seed's graphs for the bundled feet, the
+/// The default phase file of a foot argument: the phase graphs of Millard & Mombaur (2019) for the bundled feet, the
 /// single continuous phase of `phases/volumetric_ellipse_walk.json` for a foot file whose
 /// primitives are all volumetric (no contact constraints, so it fits any such foot), else
 /// the ellipse's graph.

@@ -1,0 +1,587 @@
+//! The measurement against itself: the trial's whole-body Newton–Euler balance, read
+//! before any contact model is fitted.
+//!
+//! Measured motion and measured loads must satisfy $\sum_b m_b a_b = \sum_s F_s + m g$ and
+//! $\dot H_c = \sum_s (p_{cop,s} - c) \times F_s$ for the whole body ([`balance`]), with no
+//! contact model and no optimal control. Each instrument or body error leaves its own
+//! signature in the residual wrench: a plate's clock shifts its loads in time, a gain
+//! scales one plate's loads, a CoP offset adds $d F_y$ of one plate to the moment, a mass
+//! error scales the body's side, a trunk offset adds $m_t (a - g) \times d$, a slope
+//! tilts gravity against the plates' normal. [`check`] reads them by forward stepwise
+//! least squares ([`fit`]): at each step the candidate that explains most of the
+//! residual is read jointly with those already found, and is found when its reading
+//! exceeds its Newey–West standard deviation by the Bonferroni-corrected point of the
+//! stated family-wise level. Residual thresholds labs use are checked before and after
+//! ([`thresholds`]); implausible units and signs are refused first ([`plausibility`]).
+
+pub mod balance;
+pub mod fit;
+pub mod plausibility;
+pub mod signals;
+pub mod thresholds;
+
+pub use balance::{Param, NPARAM};
+pub use thresholds::Thresholds;
+
+use crate::data::{DataError, GaitData};
+use crate::model::GaitModel;
+use balance::{Body, Instant};
+use fit::{Fit, Problem};
+use signals::Signals;
+
+/// Why the balance cannot be read.
+#[derive(Debug, thiserror::Error)]
+pub enum CheckError {
+    /// The trial's data are unusable.
+    #[error(transparent)]
+    Data(#[from] DataError),
+    /// The cutoff is not below the kinematics' Nyquist rate.
+    #[error("filter cutoff {cutoff_hz} Hz: expected a frequency above 0 and below {limit_hz:.1} Hz (0.8 × the kinematics' Nyquist rate)")]
+    Cutoff {
+        /// The cutoff asked for (Hz).
+        cutoff_hz: f64,
+        /// The largest accepted (Hz).
+        limit_hz: f64,
+    },
+    /// A coordinate has missing samples.
+    #[error("coordinate '{coordinate}' has missing (NaN) samples: the balance needs the whole body's motion at every instant")]
+    Kinematics {
+        /// The coordinate.
+        coordinate: &'static str,
+    },
+    /// The model has no trunk body.
+    #[error("the model has no trunk body 'hat'")]
+    NoTrunk,
+    /// A foot has no measured loads at all.
+    #[error("{0}")]
+    Forces(String),
+    /// The data cannot be right as declared (units, signs, the body's mass).
+    #[error("{0}")]
+    Implausible(String),
+    /// Too few instants where both feet's loads are known.
+    #[error("only {instants} force samples ({seconds:.3} s) have both feet's loads known inside the motion (the balance needs both feet's loads at once, and {margin_s} s of margin at either end for the filter and any clock shift); at least {needed} are needed")]
+    TooShort {
+        /// Instants available.
+        instants: usize,
+        /// Their span (s).
+        seconds: f64,
+        /// The margin (s).
+        margin_s: f64,
+        /// Instants needed.
+        needed: usize,
+    },
+}
+
+/// How the balance is read.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CheckSettings {
+    /// Low-pass cutoff of kinematics and loads alike (Hz; 6 by default, a common choice
+    /// for walking).
+    pub cutoff_hz: f64,
+    /// Family-wise significance level of the stepwise reading (0.05 by default).
+    pub level: f64,
+    /// Newey–West bandwidth (s): the residual's correlation time after smoothing and the
+    /// body model's own error (0.2 s by default, about a double support).
+    pub bandwidth_s: f64,
+    /// Largest plate clock read (s) and the margin kept at either end of the loads.
+    pub clock_limit_s: f64,
+    /// The spread of each candidate's reading on untouched trials, in θ order: what the
+    /// body model's own error reads as that candidate ([`NULL_SD`]); added in quadrature
+    /// to the reading's Newey–West standard deviation.
+    pub null_sd: [f64; NPARAM],
+}
+
+/// The spread (root mean square about zero) of each candidate's reading, read alone, over
+/// the untouched half cycles of the shipped recordings (three subjects; bundled models;
+/// `tools/calibrate-check` recomputes it), in θ order: the spread beyond each reading's own
+/// Newey–West noise, over the half cycles whose loads can read it.
+pub const NULL_SD: [f64; NPARAM] = [
+    0.0072819,  // both plates' clock (s)
+    0.0022777,  // right plate's clock (s)
+    0.00239338, // left plate's clock (s)
+    0.00244738, // right plate's gain
+    0.00894465, // left plate's gain
+    0.0391306,  // right plate's CoP offset (m)
+    0.0397072,  // left plate's CoP offset (m)
+    0.00124305, // body mass
+    0.049748,   // trunk's centre of mass (m)
+    0.153658,   // trunk's mass (kg)
+    0.0,        // ground slope (rad)
+];
+
+impl Default for CheckSettings {
+    fn default() -> Self {
+        Self {
+            cutoff_hz: 6.0,
+            level: 0.05,
+            bandwidth_s: 0.2,
+            clock_limit_s: 0.06,
+            null_sd: NULL_SD,
+        }
+    }
+}
+
+/// What a candidate's reading says.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+#[serde(rename_all = "snake_case", tag = "verdict")]
+pub enum Verdict {
+    /// Read beyond its threshold: the measurement carries it.
+    Found,
+    /// Within its noise band.
+    NotSignificant,
+    /// Its signature is (nearly) a combination of effects already found.
+    NotSeparable {
+        /// The found effects it cannot be told from.
+        from: Vec<Param>,
+    },
+    /// The data cannot read it (e.g. a plate that carries no load in the window).
+    NotTestable {
+        /// Why.
+        reason: String,
+    },
+}
+
+impl Verdict {
+    /// In words.
+    pub fn text(&self) -> String {
+        match self {
+            Verdict::Found => "found".into(),
+            Verdict::NotSignificant => "not significant".into(),
+            Verdict::NotSeparable { from } => format!(
+                "not separable from {}",
+                from.iter()
+                    .map(|p| p.label())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ),
+            Verdict::NotTestable { reason } => format!("not testable: {reason}"),
+        }
+    }
+}
+
+/// One candidate's reading.
+#[derive(Debug, Clone, serde::Serialize)]
+pub struct Reading {
+    /// The candidate.
+    pub param: Param,
+    /// Estimate (the parameter's unit).
+    pub estimate: f64,
+    /// Standard deviation: the Newey–West one and the untouched trials' spread in
+    /// quadrature.
+    pub sd: f64,
+    /// The Newey–West standard deviation alone (the window's own noise).
+    pub sd_within: f64,
+    /// `estimate / sd`.
+    pub z: f64,
+    /// The |z| it had to exceed.
+    pub threshold: f64,
+    /// Share of the residual's weighted sum of squares it explains when added.
+    pub explained: f64,
+    /// The verdict.
+    pub verdict: Verdict,
+}
+
+/// The balance of one trial, read.
+#[derive(Debug, Clone)]
+pub struct MeasurementCheck {
+    /// Instants read (s).
+    pub time: Vec<f64>,
+    /// Residual wrench with nothing corrected `[N, N, N·m]`.
+    pub before: Vec<[f64; 3]>,
+    /// Residual wrench with the found effects corrected.
+    pub after: Vec<[f64; 3]>,
+    /// Every candidate's reading, found first in the order found.
+    pub readings: Vec<Reading>,
+    /// Every testable candidate read alone (the first step), as the calibration of
+    /// [`NULL_SD`] uses them.
+    pub alone: Vec<Reading>,
+    /// The final joint fit of the found effects.
+    pub fit: Fit,
+    /// The labs' thresholds before and after correction.
+    pub thresholds: [Thresholds; 2],
+    /// The model's mass (kg) and the mass the vertical forces imply over the window.
+    pub mass: (f64, f64),
+    /// Whole-body linear momentum (N·s, x and y) and angular momentum about the centre of
+    /// mass (N·m·s) at each instant.
+    pub momentum: Vec<[f64; 3]>,
+    /// The force record's rate (Hz) and the kinematics' (Hz).
+    pub rates: (f64, f64),
+    /// What the plausibility checks say short of refusing the trial.
+    pub warnings: Vec<String>,
+}
+
+impl MeasurementCheck {
+    /// The readings found, in the order found.
+    pub fn found(&self) -> impl Iterator<Item = &Reading> {
+        self.readings.iter().filter(|r| r.verdict == Verdict::Found)
+    }
+}
+
+/// Read the balance of `data` (coordinates of `model`) over `[t0, t1]` (the whole trial
+/// when `None`).
+pub fn check(
+    data: &GaitData,
+    model: &GaitModel,
+    settings: &CheckSettings,
+    window: Option<(f64, f64)>,
+) -> Result<MeasurementCheck, CheckError> {
+    for (s, name) in [(0, "right"), (1, "left")] {
+        let (_, feet) = data.force_record();
+        if !feet[s].fy.iter().any(|v| v.is_finite() && v.abs() > 0.0) {
+            return Err(CheckError::Forces(format!(
+                "{}: the {name} foot has no measured load: the balance needs both feet's ground forces (a foot in swing reads 0 N, a foot off the plates NaN)",
+                data.source.display()
+            )));
+        }
+    }
+    plausibility::check_units(data)?;
+    let signals = Signals::new(data, settings.cutoff_hz, settings.clock_limit_s)?;
+    let body = Body::of(model)?;
+    let instants: Vec<Instant> = signals
+        .instants
+        .iter()
+        .filter(|&&t| window.is_none_or(|(a, b)| t >= a && t <= b))
+        .map(|&t| body.instant(&signals, t))
+        .collect();
+    let needed = (0.25 * signals.force_rate).ceil() as usize;
+    if instants.len() < needed.max(20) {
+        let seconds = match (instants.first(), instants.last()) {
+            (Some(a), Some(b)) => b.t - a.t,
+            _ => 0.0,
+        };
+        return Err(CheckError::TooShort {
+            instants: instants.len(),
+            seconds,
+            margin_s: settings.clock_limit_s,
+            needed: needed.max(20),
+        });
+    }
+    let problem = Problem {
+        body: &body,
+        signals: &signals,
+        instants: &instants,
+        bandwidth: (settings.bandwidth_s * signals.force_rate).round() as usize,
+        clock_limit: settings.clock_limit_s - 1.5 / signals.force_rate,
+    };
+    let mass = (body.mass(), implied_mass(&problem));
+    let warnings =
+        plausibility::check_balance(data, mass.0, mass.1, horizontal_correlation(&problem))?;
+    let (readings, alone, fit) = stepwise(&problem, settings);
+    let zero = [0.0; NPARAM];
+    let before = problem.linearise(&zero, &[]).r;
+    let thresholds = [
+        Thresholds::of(&before, &problem),
+        Thresholds::of(&fit.residual, &problem),
+    ];
+    let momentum = instants
+        .iter()
+        .map(|at| momentum(&body, &signals, at))
+        .collect();
+    Ok(MeasurementCheck {
+        time: instants.iter().map(|i| i.t).collect(),
+        before,
+        after: fit.residual.clone(),
+        readings,
+        alone,
+        fit,
+        thresholds,
+        mass,
+        momentum,
+        rates: (signals.force_rate, signals.kinematic_rate),
+        warnings,
+    })
+}
+
+/// Correlation of the measured horizontal ground force with the body's Σ m aₓ.
+fn horizontal_correlation(p: &Problem) -> f64 {
+    let zero = [0.0; NPARAM];
+    let pairs: Vec<(f64, f64)> = p
+        .instants
+        .iter()
+        .filter_map(|at| {
+            let m = balance::measured(p.signals, at, &zero)?;
+            Some((m[0], p.body.required(at, &zero)[0]))
+        })
+        .collect();
+    let n = pairs.len() as f64;
+    let (mx, my) = pairs
+        .iter()
+        .fold((0.0, 0.0), |(a, b), (x, y)| (a + x / n, b + y / n));
+    let (mut sxy, mut sxx, mut syy) = (0.0, 0.0, 0.0);
+    for (x, y) in &pairs {
+        sxy += (x - mx) * (y - my);
+        sxx += (x - mx) * (x - mx);
+        syy += (y - my) * (y - my);
+    }
+    sxy / (sxx * syy).sqrt()
+}
+
+/// The mass (kg) that makes the vertical balance hold on average over the instants:
+/// Σ F_y / Σ (a_y + g) of the body's centre of mass.
+fn implied_mass(p: &Problem) -> f64 {
+    let zero = [0.0; NPARAM];
+    let (mut f, mut a) = (0.0, 0.0);
+    for at in p.instants {
+        let req = p.body.required(at, &zero);
+        if let Some(m) = balance::measured(p.signals, at, &zero) {
+            f += m[1];
+            a += req[1] / p.body.mass();
+        }
+    }
+    f / a
+}
+
+/// Linear momentum (N·s) and angular momentum about the centre of mass (N·m·s).
+fn momentum(body: &Body, signals: &Signals, at: &Instant) -> [f64; 3] {
+    let tree = body.tree();
+    let (q, qd, _) = signals.motion(at.t);
+    let k = tree.kinematics::<f64>(&q, &qd);
+    let mut out = [0.0; 3];
+    for (b, i) in tree.inertias::<f64>().iter().enumerate() {
+        if i.mass == 0.0 {
+            continue;
+        }
+        let c = tree.point(&k, b, i.com);
+        let (v, _) = tree.point_motion(&k, b, c);
+        out[0] += i.mass * v[0];
+        out[1] += i.mass * v[1];
+        out[2] +=
+            i.mass * ((c[0] - at.com[0]) * v[1] - (c[1] - at.com[1]) * v[0]) + i.izz * k.omega[b];
+    }
+    out
+}
+
+/// Whether the signature of `c` is a near combination of the `active` ones, and if so
+/// which of them it is most like: `1 − R²` of its column on theirs below 1 %.
+fn collinear(b: &nalgebra::DMatrix<f64>, c: usize, active: &[usize]) -> Option<Vec<usize>> {
+    if active.is_empty() {
+        return None;
+    }
+    let baa = b.select_rows(active).select_columns(active);
+    let bac = nalgebra::DVector::from_iterator(active.len(), active.iter().map(|&a| b[(a, c)]));
+    let explained = baa
+        .clone()
+        .try_inverse()
+        .map(|inv| (bac.transpose() * inv * &bac)[0])?;
+    if 1.0 - explained / b[(c, c)] > 0.01 {
+        return None;
+    }
+    let mut like: Vec<(usize, f64)> = active
+        .iter()
+        .map(|&a| (a, (b[(a, c)] / (b[(a, a)] * b[(c, c)]).sqrt()).abs()))
+        .collect();
+    like.sort_by(|x, y| y.1.total_cmp(&x.1));
+    Some(
+        like.into_iter()
+            .filter(|l| l.1 > 0.3)
+            .map(|l| l.0)
+            .collect(),
+    )
+}
+
+/// The largest standard deviation at which a candidate still counts as testable: a
+/// reading looser than this says nothing a lab could act on.
+fn testable_sd(p: Param) -> f64 {
+    match p {
+        Param::SharedClock | Param::ClockRight | Param::ClockLeft => 0.02,
+        Param::GainRight | Param::GainLeft | Param::BodyMass => 0.2,
+        Param::CopRight | Param::CopLeft | Param::TrunkCom => 0.05,
+        Param::TrunkMass => 10.0,
+        Param::Slope => 0.1,
+    }
+}
+
+/// Least share of the window's vertical impulse a plate must carry for its own clock,
+/// gain or CoP offset to be read: a plate that only touches the window's edge reads a
+/// few newtons' ramp, whose shape the body model's error dominates.
+pub const MIN_PLATE_SHARE: f64 = 0.15;
+
+/// Why a plate's own candidate cannot be read in this window, if it cannot.
+fn unloaded(p: &Problem, c: Param) -> Option<String> {
+    let s = match c {
+        Param::ClockRight | Param::GainRight | Param::CopRight => 0,
+        Param::ClockLeft | Param::GainLeft | Param::CopLeft => 1,
+        _ => return None,
+    };
+    let (mut own, mut all) = (0.0, 0.0);
+    for at in p.instants {
+        for side in 0..2 {
+            if let Some(l) = p.signals.stretch(side, at.t) {
+                let fy = l.eval(at.t)[1].max(0.0);
+                all += fy;
+                if side == s {
+                    own += fy;
+                }
+            }
+        }
+    }
+    let share = own / all;
+    (share < MIN_PLATE_SHARE).then(|| {
+        format!(
+            "its plate carries {:.0} % of the window's vertical impulse (at least {:.0} % is needed)",
+            100.0 * share,
+            100.0 * MIN_PLATE_SHARE
+        )
+    })
+}
+
+/// One candidate added to `fit` for one Gauss–Newton step: its reading and the share of
+/// the residual it explains.
+fn one_step(p: &Problem, fit: &Fit, c: Param) -> (f64, f64, f64) {
+    let mut cols = fit.active.clone();
+    cols.push(c);
+    let k = cols.len();
+    let lin = p.linearise(&fit.theta, &cols);
+    let (b, g) = fit::normal_equations(&lin, &fit.weights, k);
+    let Some(chol) = b.clone().cholesky() else {
+        return (f64::NAN, f64::NAN, 0.0);
+    };
+    let step = chol.solve(&(-&g));
+    let decrease = -(g.transpose() * &step)[0];
+    let mut moved = lin;
+    for (r, j) in moved.r.iter_mut().zip(&moved.jac) {
+        for i in 0..3 {
+            r[i] += (0..k).map(|a| j[i * k + a] * step[a]).sum::<f64>();
+        }
+    }
+    let cov = fit::sandwich(&moved, &fit.weights, k, &b, p.bandwidth);
+    let est = fit.theta[c.index()] + step[k - 1];
+    let sd = cov[(k - 1) * k + (k - 1)].max(0.0).sqrt();
+    (est, sd, decrease / fit.rss)
+}
+
+/// Forward stepwise reading of every candidate.
+fn stepwise(p: &Problem, settings: &CheckSettings) -> (Vec<Reading>, Vec<Reading>, Fit) {
+    let level = settings.level;
+    let mut fit = p.fit(&[], &[0.0; NPARAM]);
+    let mut found: Vec<Reading> = Vec::new();
+    let mut last: Vec<Reading> = Vec::new();
+    let mut first_readings: Vec<Reading> = Vec::new();
+    let mut first = true;
+    loop {
+        let lin = p.linearise(&fit.theta, &Param::ALL);
+        let (b, _) = fit::normal_equations(&lin, &fit.weights, NPARAM);
+        let active: Vec<usize> = fit.active.iter().map(|a| a.index()).collect();
+        let mut tested = Vec::new();
+        last.clear();
+        for c in Param::ALL.into_iter().filter(|c| !fit.active.contains(c)) {
+            if c == Param::TrunkMass {
+                // its signature is the body mass's but for the limbs' share of Σ m a:
+                // read as the body mass, never beside it
+                last.push(untested(
+                    c,
+                    Verdict::NotSeparable {
+                        from: vec![Param::BodyMass],
+                    },
+                ));
+                continue;
+            }
+            if let Some(from) = collinear(&b, c.index(), &active) {
+                last.push(untested(
+                    c,
+                    Verdict::NotSeparable {
+                        from: from.into_iter().map(|i| Param::ALL[i]).collect(),
+                    },
+                ));
+                continue;
+            }
+            if let Some(reason) = unloaded(p, c) {
+                last.push(untested(c, Verdict::NotTestable { reason }));
+                continue;
+            }
+            let (estimate, within, explained) = one_step(p, &fit, c);
+            let sd = within.hypot(settings.null_sd[c.index()]);
+            if first {
+                first_readings.push(Reading {
+                    param: c,
+                    estimate,
+                    sd,
+                    sd_within: within,
+                    z: estimate / sd,
+                    threshold: f64::NAN,
+                    explained,
+                    verdict: Verdict::NotSignificant,
+                });
+            }
+            if !(sd.is_finite() && sd <= testable_sd(c)) {
+                last.push(untested(
+                    c,
+                    Verdict::NotTestable {
+                        reason: format!(
+                            "read only to ±{} here: the window's loads do not carry its signature",
+                            fmt_sd(c, sd)
+                        ),
+                    },
+                ));
+                continue;
+            }
+            tested.push(Reading {
+                param: c,
+                estimate,
+                sd,
+                sd_within: within,
+                z: estimate / sd,
+                threshold: 0.0,
+                explained,
+                verdict: Verdict::NotSignificant,
+            });
+        }
+        let threshold = if tested.is_empty() {
+            f64::INFINITY
+        } else {
+            crate::problems::diagnose::chi2_1_upper(level / tested.len() as f64).sqrt()
+        };
+        for t in tested.iter_mut() {
+            t.threshold = threshold;
+        }
+        first = false;
+        let best = tested
+            .iter()
+            .enumerate()
+            .max_by(|a, b| a.1.explained.total_cmp(&b.1.explained))
+            .map(|(i, _)| i);
+        match best {
+            Some(i) if tested[i].z.abs() > threshold => {
+                let mut r = tested.swap_remove(i);
+                let mut cols = fit.active.clone();
+                cols.push(r.param);
+                fit = p.fit(&cols, &fit.theta);
+                r.verdict = Verdict::Found;
+                found.push(r);
+            }
+            _ => {
+                last.extend(tested);
+                break;
+            }
+        }
+    }
+    // the found effects' final joint readings
+    for r in found.iter_mut() {
+        r.estimate = fit.theta[r.param.index()];
+        r.sd_within = fit.sd(r.param);
+        r.sd = r.sd_within.hypot(settings.null_sd[r.param.index()]);
+        r.z = r.estimate / r.sd;
+    }
+    last.sort_by_key(|r| r.param);
+    found.extend(last);
+    (found, first_readings, fit)
+}
+
+fn untested(c: Param, verdict: Verdict) -> Reading {
+    Reading {
+        param: c,
+        estimate: f64::NAN,
+        sd: f64::NAN,
+        sd_within: f64::NAN,
+        z: f64::NAN,
+        threshold: f64::NAN,
+        explained: 0.0,
+        verdict,
+    }
+}
+
+/// A standard deviation in the candidate's reporting unit.
+fn fmt_sd(c: Param, sd: f64) -> String {
+    let (v, unit) = c.display_value(sd);
+    format!("{v:.3} {unit}")
+}

@@ -1,0 +1,280 @@
+//! `footfall check TRIAL`: the measurement against itself, before any model is fitted.
+//! The trial's whole-body Newton–Euler balance ([`crate::problems::check`]) over the
+//! whole trial and over each half cycle on its own, written as a run folder: the
+//! readings with their verdicts, the labs' residual thresholds before and after
+//! correction, the residual wrench and the whole-body momenta against time, the trial
+//! with the found instrument effects corrected, and the `--effect` lines that add each
+//! found effect to `track`.
+
+use super::trial::{load_trial, TrialFiles};
+use super::Progress;
+use crate::data::{detect_events, GaitData, DEFAULT_EVENT_FRACTION};
+use crate::model::effects::EffectSpec;
+use crate::model::GaitModel;
+use crate::problems::check::{check, CheckError, CheckSettings, MeasurementCheck, Param, Reading};
+use crate::runfolder::RunFolder;
+use anyhow::Context;
+use std::path::PathBuf;
+
+mod output;
+pub use output::write_folder;
+
+/// What `check` does: the arguments of `footfall check`.
+#[derive(Debug, Clone)]
+pub struct CheckRequest {
+    /// The trial.
+    pub trial: TrialFiles,
+    /// Model file whose body the balance uses.
+    pub model: PathBuf,
+    /// Output folder (default `runs/check-<trial>`).
+    pub out: Option<PathBuf>,
+    /// Replace the output folder if it exists.
+    pub overwrite: bool,
+    /// How the balance is read.
+    pub settings: CheckSettings,
+}
+
+/// One half cycle read on its own.
+#[derive(Debug, Clone)]
+pub struct HalfCycle {
+    /// From one heel strike to the next (either foot's) (s).
+    pub span: (f64, f64),
+    /// Its reading, or why it has none.
+    pub result: Result<MeasurementCheck, String>,
+}
+
+/// The outcome of `check`.
+#[derive(Debug)]
+pub struct CheckOutcome {
+    /// The trial as read.
+    pub data: GaitData,
+    /// The whole trial's reading.
+    pub check: MeasurementCheck,
+    /// Each half cycle's.
+    pub half_cycles: Vec<HalfCycle>,
+    /// The run folder written (`None` when not asked to write one).
+    pub folder: Option<PathBuf>,
+}
+
+/// Read the trial and the model, and check the balance of the whole trial and of each
+/// half cycle.
+pub fn read(req: &CheckRequest) -> anyhow::Result<(GaitData, MeasurementCheck, Vec<HalfCycle>)> {
+    let loaded = load_trial(&req.trial)?;
+    let model = GaitModel::load(&req.model, &super::foot_path("ellipse"))
+        .with_context(|| format!("--model {}", req.model.display()))?;
+    let data = hips_on_measured_centres(loaded.data, &model);
+    let whole = check(&data, &model, &req.settings, None).map_err(|e| checked(e, &data))?;
+    let half_cycles = half_cycles(&data)
+        .into_iter()
+        .map(|span| HalfCycle {
+            span,
+            result: check(&data, &model, &req.settings, Some(span)).map_err(|e| e.to_string()),
+        })
+        .collect();
+    Ok((data, whole, half_cycles))
+}
+
+/// Run `check` as `req` describes: read, report to `progress`, write the run folder.
+pub fn run(req: &CheckRequest, progress: &dyn Progress) -> anyhow::Result<CheckOutcome> {
+    let (data, check, half_cycles) = read(req)?;
+    for w in &check.warnings {
+        progress.warn(&format!("warning: {w}"));
+    }
+    progress.result(&output::verdict_text(&check));
+    let out = req
+        .out
+        .clone()
+        .unwrap_or_else(|| PathBuf::from("runs").join(format!("check-{}", data.name)));
+    let folder = RunFolder::create(&out, req.overwrite)?;
+    write_folder(&folder, req, &data, &check, &half_cycles)?;
+    let done = folder.commit()?;
+    progress.note(&format!("run folder: {}", done.display()));
+    Ok(CheckOutcome {
+        data,
+        check,
+        half_cycles,
+        folder: Some(done),
+    })
+}
+
+fn checked(e: CheckError, data: &GaitData) -> anyhow::Error {
+    match e {
+        CheckError::Data(d) => d.into(),
+        other => anyhow::anyhow!("{}: {other}", data.source.display()).context("check"),
+    }
+}
+
+/// The trial with the model's hips on the measured hip centres where the trial gives
+/// them (`hip_center_x`, `hip_center_y`): the pelvis reference point of a model whose
+/// pelvis frame differs from the lab's (a hip-centred body, say) is placed so that its
+/// hips are where the markers put them.
+pub fn hips_on_measured_centres(mut data: GaitData, model: &GaitModel) -> GaitData {
+    let (Some(hx), Some(hy)) = (
+        data.extra.get("hip_center_x"),
+        data.extra.get("hip_center_y"),
+    ) else {
+        return data;
+    };
+    if hx.iter().chain(hy).any(|v| !v.is_finite()) {
+        return data;
+    }
+    let tree = model.tree();
+    let Some(thigh) = tree.body_index("thigh_r") else {
+        return data;
+    };
+    let h = tree.bodies()[thigh].joint_in_parent;
+    let (hx, hy) = (hx.clone(), hy.clone());
+    for k in 0..data.time.len() {
+        let (s, c) = data.q[2][k].sin_cos();
+        data.q[0][k] = hx[k] - (c * h[0] - s * h[1]);
+        data.q[1][k] = hy[k] - (s * h[0] + c * h[1]);
+    }
+    data
+}
+
+/// From each heel strike to the next (either foot's), over the trial's force record.
+pub fn half_cycles(data: &GaitData) -> Vec<(f64, f64)> {
+    let Ok(ev) = detect_events(data, DEFAULT_EVENT_FRACTION) else {
+        return vec![];
+    };
+    let mut hs: Vec<f64> = ev.heel_strike.iter().flatten().copied().collect();
+    hs.sort_by(f64::total_cmp);
+    hs.windows(2).map(|w| (w[0], w[1])).collect()
+}
+
+/// Replace entries of `null_sd` by those a JSON file names (`{"shared_clock": 0.004}`,
+/// SI units, each finite and ≥ 0).
+pub fn read_null_sd(
+    path: &std::path::Path,
+    null_sd: &mut [f64; crate::problems::check::NPARAM],
+) -> anyhow::Result<()> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("--null-sd {}", path.display()))?;
+    let map: std::collections::BTreeMap<String, f64> =
+        serde_json::from_str(text.trim_start_matches('\u{feff}')).with_context(|| {
+            format!(
+                "--null-sd {}: expected a JSON object of effect name to a number",
+                path.display()
+            )
+        })?;
+    for (name, v) in map {
+        let Some(p) = Param::ALL.iter().find(|p| p.name() == name) else {
+            anyhow::bail!(
+                "--null-sd {}: '{name}' is not a candidate; use one of {}",
+                path.display(),
+                Param::ALL.map(|p| p.name()).join(", ")
+            );
+        };
+        if !(v.is_finite() && v >= 0.0) {
+            anyhow::bail!(
+                "--null-sd {}: '{name}': {v} is not a finite spread ≥ 0",
+                path.display()
+            );
+        }
+        null_sd[p.index()] = v;
+    }
+    Ok(())
+}
+
+/// The `track --effect` line of each found effect, held at its reading.
+pub fn effect_lines(check: &MeasurementCheck) -> Vec<String> {
+    check
+        .found()
+        .filter_map(|r| effect_spec(r).and_then(|e| e.cli_text()))
+        .collect()
+}
+
+/// The model effect a found reading adds, held at its value.
+pub fn effect_spec(r: &Reading) -> Option<EffectSpec> {
+    let side = |p: Param| match p {
+        Param::ClockRight | Param::GainRight | Param::CopRight => "right",
+        Param::ClockLeft | Param::GainLeft | Param::CopLeft => "left",
+        _ => "both",
+    };
+    let v = r.estimate;
+    let e = match r.param {
+        Param::SharedClock | Param::ClockRight | Param::ClockLeft => {
+            EffectSpec::ForcePlateTimeOffset {
+                side: side(r.param).into(),
+                offset: round4(v),
+                free: vec![],
+            }
+        }
+        Param::GainRight | Param::GainLeft => EffectSpec::ForcePlateGain {
+            side: side(r.param).into(),
+            error: round4(v),
+            free: vec![],
+        },
+        Param::CopRight | Param::CopLeft => EffectSpec::CopOffset {
+            side: side(r.param).into(),
+            offset: round4(v),
+            free: vec![],
+        },
+        Param::BodyMass => EffectSpec::BodyMassError {
+            relative: round4(v),
+            free: vec![],
+        },
+        Param::TrunkCom => EffectSpec::TrunkMass {
+            added_mass: 0.0,
+            com_offset: round4(v),
+            free: vec![],
+        },
+        Param::TrunkMass => EffectSpec::TrunkMass {
+            added_mass: round4(v),
+            com_offset: 0.0,
+            free: vec![],
+        },
+        Param::Slope => EffectSpec::GroundSlope {
+            angle: round4(v),
+            free: vec![],
+        },
+    };
+    Some(e)
+}
+
+/// Four significant digits.
+fn round4(v: f64) -> f64 {
+    if v == 0.0 || !v.is_finite() {
+        return v;
+    }
+    let mag = 10f64.powi(3 - v.abs().log10().floor() as i32);
+    (v * mag).round() / mag
+}
+
+/// The trial with the found instrument effects (clocks, gains, CoP offsets) taken out of
+/// its forces, at the force record's own instants. Body effects (mass, trunk, slope) stay
+/// for the model: they are `--effect` lines.
+pub fn corrected(data: &GaitData, check: &MeasurementCheck) -> GaitData {
+    let th = &check.fit.theta;
+    let mut out = data.clone();
+    let (t, feet) = data.force_record();
+    let mut fixed = feet.clone();
+    for s in 0..2 {
+        let (clock, gain, cop) = if s == 0 {
+            (Param::ClockRight, Param::GainRight, Param::CopRight)
+        } else {
+            (Param::ClockLeft, Param::GainLeft, Param::CopLeft)
+        };
+        let shift = th[Param::SharedClock.index()] + th[clock.index()];
+        let at: Vec<f64> = t.iter().map(|x| x + shift).collect();
+        let moved = crate::data::ForceSamples {
+            time: t.to_vec(),
+            feet: feet.clone(),
+        }
+        .resample_foot(s, &at);
+        let g = 1.0 + th[gain.index()];
+        fixed[s].fx = moved.fx.iter().map(|v| v / g).collect();
+        fixed[s].fy = moved.fy.iter().map(|v| v / g).collect();
+        fixed[s].cop_x = moved.cop_x.iter().map(|v| v - th[cop.index()]).collect();
+    }
+    match &mut out.forces {
+        Some(f) => {
+            f.feet = fixed;
+            for s in 0..2 {
+                out.feet[s] = f.resample_foot(s, &data.time);
+            }
+        }
+        None => out.feet = fixed,
+    }
+    out
+}

@@ -1,0 +1,438 @@
+//! The check's run folder: `summary.json`, `readings.md`/`.csv`, `half_cycles.csv`,
+//! `residual.csv`, `residual.svg`, `momentum.svg`, `effects.txt`, the corrected trial
+//! (`corrected/trial.csv` with its meta file) and `report.html`.
+
+use super::{corrected, effect_lines, CheckRequest, HalfCycle};
+use crate::data::{write_sagittal_csv, GaitData};
+use crate::problems::check::{MeasurementCheck, Param, Reading, Thresholds, Verdict};
+use crate::report::html::{Report, Section, Summary, Tone};
+use crate::report::plot::{grid, LinePlot, LineStyle, Series};
+use crate::report::table::Table;
+use crate::runfolder::RunFolder;
+use serde_json::json;
+use std::fmt::Write;
+
+/// A reading's estimate ± sd in its reporting unit, e.g. `+29.8 ± 1.2 ms`.
+pub fn estimate_text(r: &Reading) -> String {
+    if !r.estimate.is_finite() {
+        return "—".into();
+    }
+    let (v, unit) = r.param.display_value(r.estimate);
+    let (sd, _) = r.param.display_value(r.sd);
+    format!("{v:+.2} ± {sd:.2} {unit}")
+}
+
+/// The verdict in a few lines: what was found, with the line that adds it.
+pub fn verdict_text(c: &MeasurementCheck) -> String {
+    let mut s = String::new();
+    let found: Vec<&Reading> = c.found().collect();
+    if found.is_empty() {
+        s.push_str("measurement check: nothing found beyond the noise (every candidate's reading is within its band)\n");
+    } else {
+        s.push_str("measurement check: found\n");
+        for r in &found {
+            writeln!(
+                s,
+                "  {}: {} (z {:.1} against {:.2}); or: {}",
+                r.param.label(),
+                estimate_text(r),
+                r.z,
+                r.threshold,
+                r.param.look_alikes()
+            )
+            .ok();
+        }
+        s.push_str("add to track with:");
+        for l in effect_lines(c) {
+            write!(s, " --effect {l}").ok();
+        }
+        s.push('\n');
+    }
+    let [before, after] = &c.thresholds;
+    writeln!(
+        s,
+        "residual thresholds (Hicks et al. 2015): peak force {:.1} N → {:.1} N (limit {:.1}), RMS moment {:.2} → {:.2} N·m (limit {:.2})",
+        before.peak_force, after.peak_force, after.force_limit, before.rms_moment, after.rms_moment, after.moment_limit
+    )
+    .ok();
+    s
+}
+
+fn readings_table(c: &MeasurementCheck) -> Table {
+    Table {
+        title: "Readings of the whole-body balance".into(),
+        headers: [
+            "candidate",
+            "estimate ± sd",
+            "z",
+            "threshold |z|",
+            "explains",
+            "verdict",
+            "what else could produce it",
+        ]
+        .map(String::from)
+        .to_vec(),
+        rows: c
+            .readings
+            .iter()
+            .map(|r| {
+                vec![
+                    r.param.label().into(),
+                    estimate_text(r),
+                    fmt(r.z, 2),
+                    fmt(r.threshold, 2),
+                    format!("{:.1} %", 100.0 * r.explained),
+                    r.verdict.text(),
+                    r.param.look_alikes().into(),
+                ]
+            })
+            .collect(),
+    }
+}
+
+fn thresholds_table(c: &MeasurementCheck) -> Table {
+    let row = |name: &str, t: &Thresholds| {
+        vec![
+            name.into(),
+            format!("{:.1} N", t.peak_force),
+            format!("{:.1} N", t.force_limit),
+            pass(t.force_passes()),
+            format!("{:.2} N·m", t.rms_moment),
+            format!("{:.2} N·m", t.moment_limit),
+            pass(t.moment_passes()),
+        ]
+    };
+    Table {
+        title: "Residual thresholds (Hicks et al. 2015)".into(),
+        headers: [
+            "",
+            "peak residual force",
+            "limit (5 % of peak ground force)",
+            "",
+            "RMS residual moment",
+            "limit (1 % of COM height × peak force)",
+            "",
+        ]
+        .map(String::from)
+        .to_vec(),
+        rows: vec![
+            row("as measured", &c.thresholds[0]),
+            row("corrected", &c.thresholds[1]),
+        ],
+    }
+}
+
+fn half_cycle_table(half: &[HalfCycle]) -> Table {
+    let mut rows = Vec::new();
+    for h in half {
+        let span = format!("{:.3}–{:.3} s", h.span.0, h.span.1);
+        match &h.result {
+            Ok(c) => {
+                let found: Vec<String> = c
+                    .found()
+                    .map(|r| format!("{} {}", r.param.label(), estimate_text(r)))
+                    .collect();
+                let clock = c.readings.iter().find(|r| r.param == Param::SharedClock);
+                rows.push(vec![
+                    span,
+                    if found.is_empty() {
+                        "—".into()
+                    } else {
+                        found.join("; ")
+                    },
+                    clock.map_or("—".into(), estimate_text),
+                ]);
+            }
+            Err(e) => rows.push(vec![span, format!("not read: {e}"), String::new()]),
+        }
+    }
+    Table {
+        title: "Each half cycle on its own".into(),
+        headers: ["half cycle", "found", "both plates' clock"]
+            .map(String::from)
+            .to_vec(),
+        rows,
+    }
+}
+
+fn pass(ok: bool) -> String {
+    if ok { "pass" } else { "fail" }.into()
+}
+
+fn fmt(v: f64, d: usize) -> String {
+    if v.is_finite() {
+        format!("{v:.d$}")
+    } else {
+        "—".into()
+    }
+}
+
+fn residual_plots(c: &MeasurementCheck) -> String {
+    let names = [
+        ("horizontal residual force", "N"),
+        ("vertical residual force", "N"),
+        ("residual moment about the COM", "N·m"),
+    ];
+    let plots: Vec<LinePlot> = (0..3)
+        .map(|i| {
+            let mut p = LinePlot::new(names[i].0, "time (s)", names[i].1);
+            p.series.push(Series::new(
+                "as measured",
+                c.time.clone(),
+                c.before.iter().map(|r| r[i]).collect(),
+                LineStyle::Solid,
+            ));
+            p.series.push(Series::new(
+                "corrected",
+                c.time.clone(),
+                c.after.iter().map(|r| r[i]).collect(),
+                LineStyle::Solid,
+            ));
+            p
+        })
+        .collect();
+    grid(&plots, 1)
+}
+
+fn momentum_plots(c: &MeasurementCheck) -> String {
+    let names = [
+        ("horizontal linear momentum", "N·s"),
+        ("vertical linear momentum", "N·s"),
+        ("angular momentum about the COM", "N·m·s"),
+    ];
+    let plots: Vec<LinePlot> = (0..3)
+        .map(|i| {
+            let mut p = LinePlot::new(names[i].0, "time (s)", names[i].1);
+            p.series.push(Series::new(
+                "",
+                c.time.clone(),
+                c.momentum.iter().map(|m| m[i]).collect(),
+                LineStyle::Solid,
+            ));
+            p
+        })
+        .collect();
+    grid(&plots, 1)
+}
+
+fn residual_csv(c: &MeasurementCheck) -> String {
+    let mut s = String::from("time,fx_measured,fy_measured,m_measured,fx_corrected,fy_corrected,m_corrected,px,py,h_com\n");
+    for k in 0..c.time.len() {
+        let (b, a, m) = (c.before[k], c.after[k], c.momentum[k]);
+        writeln!(
+            s,
+            "{},{},{},{},{},{},{},{},{},{}",
+            c.time[k], b[0], b[1], b[2], a[0], a[1], a[2], m[0], m[1], m[2]
+        )
+        .ok();
+    }
+    s
+}
+
+fn summary_json(
+    req: &CheckRequest,
+    data: &GaitData,
+    c: &MeasurementCheck,
+    half: &[HalfCycle],
+) -> serde_json::Value {
+    let reading = |r: &Reading| {
+        let (v, unit) = r.param.display_value(r.estimate);
+        let (sd, _) = r.param.display_value(r.sd);
+        let mut j = json!({
+            "effect": r.param.name(), "label": r.param.label(), "estimate": finite(r.estimate), "sd": finite(r.sd), "sd_within": finite(r.sd_within),
+            "display": {"estimate": finite(v), "sd": finite(sd), "unit": unit},
+            "z": finite(r.z), "threshold": finite(r.threshold), "explained": r.explained,
+            "verdict": r.verdict.text(), "look_alikes": r.param.look_alikes(),
+        });
+        if let Verdict::NotSeparable { from } = &r.verdict {
+            j["not_separable_from"] = json!(from.iter().map(|p| p.name()).collect::<Vec<_>>());
+        }
+        j
+    };
+    let half_json: Vec<serde_json::Value> = half
+        .iter()
+        .map(|h| match &h.result {
+            Ok(c) => json!({"span_s": [h.span.0, h.span.1], "found": c.found().map(|r| r.param.name()).collect::<Vec<_>>(),
+                "readings": c.readings.iter().map(reading).collect::<Vec<_>>(),
+                "alone": c.alone.iter().map(reading).collect::<Vec<_>>()}),
+            Err(e) => json!({"span_s": [h.span.0, h.span.1], "error": e}),
+        })
+        .collect();
+    let found_total: usize = half
+        .iter()
+        .filter_map(|h| h.result.as_ref().ok())
+        .map(|c| c.found().count())
+        .sum();
+    json!({
+        "command": "check",
+        "trial": data.source.display().to_string(),
+        "model": req.model.display().to_string(),
+        "settings": {"cutoff_hz": req.settings.cutoff_hz, "level": req.settings.level, "bandwidth_s": req.settings.bandwidth_s, "clock_limit_s": req.settings.clock_limit_s},
+        "rates_hz": {"forces": c.rates.0, "kinematics": c.rates.1},
+        "window_s": [c.time.first(), c.time.last()],
+        "instants": c.time.len(),
+        "mass_kg": {"model": c.mass.0, "implied_by_forces": c.mass.1},
+        "warnings": c.warnings,
+        "candidates": c.readings.iter().map(reading).collect::<Vec<_>>(),
+        "found": c.found().map(|r| r.param.name()).collect::<Vec<_>>(),
+        "add_effects": effect_lines(c),
+        "thresholds": {"as_measured": c.thresholds[0], "corrected": c.thresholds[1]},
+        "half_cycles": half_json,
+        "half_cycles_found_total": found_total,
+    })
+}
+
+fn finite(v: f64) -> serde_json::Value {
+    if v.is_finite() {
+        json!(v)
+    } else {
+        serde_json::Value::Null
+    }
+}
+
+/// Write every file of the check's run folder into `folder` (staged; the caller commits).
+pub fn write_folder(
+    folder: &RunFolder,
+    req: &CheckRequest,
+    data: &GaitData,
+    c: &MeasurementCheck,
+    half: &[HalfCycle],
+) -> anyhow::Result<()> {
+    let readings = readings_table(c);
+    let thresholds = thresholds_table(c);
+    let halves = half_cycle_table(half);
+    let residual_svg = residual_plots(c);
+    let momentum_svg = momentum_plots(c);
+    let verdict = verdict_text(c);
+    folder.write(
+        "summary.json",
+        serde_json::to_string_pretty(&summary_json(req, data, c, half))?.as_bytes(),
+    )?;
+    folder.write(
+        "readings.md",
+        format!(
+            "{}\n{}\n{}",
+            readings.to_markdown(),
+            thresholds.to_markdown(),
+            halves.to_markdown()
+        )
+        .as_bytes(),
+    )?;
+    folder.write("readings.csv", readings.to_csv().as_bytes())?;
+    folder.write("half_cycles.csv", halves.to_csv().as_bytes())?;
+    folder.write("residual.csv", residual_csv(c).as_bytes())?;
+    folder.write("residual.svg", residual_svg.as_bytes())?;
+    folder.write("momentum.svg", momentum_svg.as_bytes())?;
+    folder.write(
+        "effects.txt",
+        effect_lines(c)
+            .iter()
+            .map(|l| format!("--effect {l}\n"))
+            .collect::<String>()
+            .as_bytes(),
+    )?;
+    let (csv, meta) = write_sagittal_csv_mixed(&corrected(data, c));
+    std::fs::create_dir_all(folder.staging_path().join("corrected"))?;
+    folder.write("corrected/trial.csv", csv.as_bytes())?;
+    folder.write("corrected/trial_meta.json", meta.as_bytes())?;
+    let found = c.found().count();
+    let (status, tone) = if found == 0 {
+        ("nothing found", Tone::Good)
+    } else {
+        ("effects found", Tone::Warning)
+    };
+    let mut summary = Summary::new(status, tone, verdict.lines().next().unwrap_or_default());
+    summary.extra = vec![
+        ("trial".into(), data.source.display().to_string()),
+        (
+            "body".into(),
+            format!(
+                "{} ({:.1} kg; the forces imply {:.1} kg)",
+                req.model.display(),
+                c.mass.0,
+                c.mass.1
+            ),
+        ),
+        (
+            "window".into(),
+            format!("{} instants at {:.0} Hz", c.time.len(), c.rates.0),
+        ),
+    ];
+    let report = Report {
+        title: format!("footfall check — {}", data.name),
+        summary,
+        sections: vec![
+            Section {
+                heading: "What the measurement says of itself".into(),
+                paragraphs: vec![
+                    "Measured motion and measured ground forces must satisfy Newton–Euler for the whole body, with no contact model. Each instrument or body error leaves its own signature in the residual; each candidate is read by least squares, jointly with those already found, and is found when it exceeds its Newey–West band by the Bonferroni-corrected point of the family-wise level.".into(),
+                    verdict.clone(),
+                ],
+                tables: vec![readings, thresholds],
+                svgs: vec![],
+            },
+            Section { heading: "Residual wrench".into(), paragraphs: vec!["The force and moment the measured loads leave unexplained, as measured and with the found effects corrected.".into()], tables: vec![], svgs: vec![residual_svg] },
+            Section { heading: "Whole-body momentum".into(), paragraphs: vec!["Linear momentum and angular momentum about the centre of mass, from the measured motion and the model's segments.".into()], tables: vec![], svgs: vec![momentum_svg] },
+            Section { heading: "Each half cycle on its own".into(), paragraphs: vec![], tables: vec![halves], svgs: vec![] },
+        ],
+    };
+    folder.write("report.html", report.to_html().as_bytes())?;
+    Ok(())
+}
+
+/// The trial as a sagittal CSV at the force record's own instants where it has one
+/// (rows between the kinematic ones carry forces only, their coordinates `NaN`).
+pub fn write_sagittal_csv_mixed(data: &GaitData) -> (String, String) {
+    let Some(f) = &data.forces else {
+        return write_sagittal_csv(data);
+    };
+    let (head, meta) = write_sagittal_csv(data);
+    let meta = match (
+        serde_json::from_str::<serde_json::Value>(&meta),
+        data.force_plate_height,
+    ) {
+        (Ok(mut m), Some(h)) => {
+            m["force_plate_surface_y_m"] = json!(h);
+            serde_json::to_string_pretty(&m).unwrap_or(meta)
+        }
+        _ => meta,
+    };
+    let header = head.lines().next().unwrap_or_default().to_string();
+    let mut rows: Vec<(f64, String)> = Vec::new();
+    for k in 0..data.time.len() {
+        let mut r = format!("{}", data.time[k]);
+        for q in &data.q {
+            write!(r, ",{}", q[k]).ok();
+        }
+        rows.push((data.time[k], r));
+    }
+    let mut forces: Vec<(f64, String)> = (0..f.time.len())
+        .map(|k| {
+            let mut r = String::new();
+            for foot in &f.feet {
+                write!(r, ",{},{},{}", foot.fx[k], foot.fy[k], foot.cop_x[k]).ok();
+            }
+            (f.time[k], r)
+        })
+        .collect();
+    forces.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let nan_q = ",NaN".repeat(9);
+    let mut out = header + "\n";
+    let mut i = 0;
+    for (t, fr) in &forces {
+        while i < rows.len() && rows[i].0 < *t - 1e-9 {
+            writeln!(out, "{}{}", rows[i].1, ",NaN".repeat(6)).ok();
+            i += 1;
+        }
+        if i < rows.len() && (rows[i].0 - t).abs() <= 1e-9 {
+            writeln!(out, "{}{fr}", rows[i].1).ok();
+            i += 1;
+        } else {
+            writeln!(out, "{t}{nan_q}{fr}").ok();
+        }
+    }
+    for r in &rows[i..] {
+        writeln!(out, "{}{}", r.1, ",NaN".repeat(6)).ok();
+    }
+    (out, meta)
+}

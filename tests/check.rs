@@ -1,0 +1,357 @@
+//! The measurement check (`footfall check`): the whole-body balance's exact derivatives
+//! against finite differences, edits of real recordings read against the untouched
+//! recording with the truth kept beside them (tests/data/check/trials, made by
+//! tools/make-check-trials), the untouched recordings' half cycles against the stated
+//! level, and the refusals of data that cannot be right as declared.
+
+use crate::common::{footfall, json, root, stderr};
+use footfall::problems::check::balance::{residual, Body, Param, NPARAM};
+use footfall::problems::check::signals::Signals;
+use footfall::workflows::check::hips_on_measured_centres;
+use footfall::workflows::trial::{load_trial, TrialFiles};
+use std::path::{Path, PathBuf};
+
+const BUNDLED_600: &str = "tests/data/check/opensim_subject01_600hz.csv";
+
+fn model_of(recording: &str) -> &'static str {
+    if recording.starts_with("opencap") {
+        "models/opencap_s4.json"
+    } else {
+        "models/opensim_subject01.json"
+    }
+}
+
+fn untouched_of(recording: &str) -> String {
+    if recording.starts_with("opencap") {
+        format!("data/{recording}_sagittal.csv")
+    } else {
+        BUNDLED_600.into()
+    }
+}
+
+/// `footfall check TRIAL --model MODEL` into a fresh folder; its summary.json.
+fn check(trial: &str, model: &str) -> serde_json::Value {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = dir.path().join("check");
+    let o = footfall(&[
+        "--quiet",
+        "check",
+        trial,
+        "--model",
+        model,
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "check {trial}: {}", stderr(&o));
+    json(&out.join("summary.json"))
+}
+
+fn candidate<'a>(summary: &'a serde_json::Value, effect: &str) -> &'a serde_json::Value {
+    summary["candidates"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|c| c["effect"] == effect)
+        .unwrap_or_else(|| panic!("no candidate {effect}"))
+}
+
+#[test]
+fn the_residuals_exact_jacobian_matches_central_differences() {
+    let loaded = load_trial(&TrialFiles {
+        data: Some(root().join(BUNDLED_600)),
+        ..TrialFiles::default()
+    })
+    .expect("trial");
+    let model = crate::common::model("opensim_subject01.json", "ellipse.json");
+    let data = hips_on_measured_centres(loaded.data, &model);
+    let signals = Signals::new(&data, 6.0, 0.06).expect("signals");
+    let body = Body::of(&model).expect("body");
+    let theta = [
+        0.004, -0.003, 0.002, 0.02, -0.03, 0.01, -0.02, 0.03, 0.02, 1.5, 0.02,
+    ];
+    for &t in signals.instants.iter().step_by(97) {
+        let at = body.instant(&signals, t);
+        for p in Param::ALL {
+            let k = p.index();
+            let mut dual = [num_dual::Dual64::from(0.0); NPARAM];
+            for (j, v) in theta.iter().enumerate() {
+                dual[j] = num_dual::Dual64::from(*v);
+            }
+            dual[k] = num_dual::Dual64::from(theta[k]).derivative();
+            let exact = residual(&body, &signals, &at, &dual).expect("inside");
+            let h = 1e-6 * theta[k].abs().max(1e-3);
+            let (mut up, mut down) = (theta, theta);
+            up[k] += h;
+            down[k] -= h;
+            let fu = residual(&body, &signals, &at, &up).expect("inside");
+            let fd = residual(&body, &signals, &at, &down).expect("inside");
+            for i in 0..3 {
+                let numeric = (fu[i] - fd[i]) / (2.0 * h);
+                let e = exact[i].eps;
+                assert!(
+                    (e - numeric).abs() <= 1e-5 * numeric.abs().max(1.0),
+                    "t {t}, {p:?}, component {i}: exact {e}, central difference {numeric}"
+                );
+            }
+        }
+    }
+}
+
+/// The edits the check reads within 20 % or 2 sd of the truth against the untouched
+/// recording, and calls found, on each recording.
+const READ_EDITS: [(&str, &[&str]); 3] = [
+    (
+        "opensim_subject01",
+        &[
+            "clock_l-10ms",
+            "clock_l-20ms",
+            "clock_l-40ms",
+            "clock_r+40ms",
+            "cop_r+10mm",
+            "cop_r+25mm",
+            "gain_l-3pct",
+            "gain_l-7pct",
+            "gain_r+3pct",
+            "gain_r+7pct",
+            "mass+5pct",
+        ],
+    ),
+    (
+        "opencap_s4_walking1",
+        &[
+            "clock_both+20ms",
+            "clock_both-20ms",
+            "clock_l-40ms",
+            "clock_r+10ms",
+            "clock_r+20ms",
+            "clock_r+40ms",
+            "cop_l-25mm",
+            "gain_l-7pct",
+            "gain_r+3pct",
+            "gain_r+7pct",
+        ],
+    ),
+    (
+        "opencap_s4_walking2",
+        &[
+            "clock_both+20ms",
+            "clock_both-20ms",
+            "clock_l-40ms",
+            "clock_r+10ms",
+            "clock_r+20ms",
+            "clock_r+40ms",
+            "cop_l-25mm",
+            "gain_r+3pct",
+            "gain_r+7pct",
+        ],
+    ),
+];
+
+#[test]
+fn edits_of_real_recordings_are_found_and_read_against_the_untouched_recording() {
+    for (recording, edits) in READ_EDITS {
+        let model = model_of(recording);
+        let base = check(&untouched_of(recording), model);
+        for edit in edits {
+            let dir: PathBuf = Path::new("tests/data/check/trials")
+                .join(recording)
+                .join(edit);
+            let truth = json(&root().join(&dir).join("truth.json"));
+            let effect = truth["effect"].as_str().unwrap();
+            let value = truth["value"].as_f64().unwrap();
+            let s = check(dir.join("trial.csv").to_str().unwrap(), model);
+            let c = candidate(&s, effect);
+            assert_eq!(
+                c["verdict"], "found",
+                "{recording}/{edit}: {effect} is {}",
+                c["verdict"]
+            );
+            let reading = c["estimate"].as_f64().unwrap()
+                - candidate(&base, effect)["estimate"].as_f64().unwrap();
+            let sd = c["sd"].as_f64().unwrap();
+            assert!(
+                (reading - value).abs() <= (0.2 * value.abs()).max(2.0 * sd),
+                "{recording}/{edit}: read {reading} ± {sd} against the untouched recording, truth {value}"
+            );
+            let line = s["add_effects"].as_array().unwrap();
+            assert!(!line.is_empty(), "{recording}/{edit}: no --effect line");
+        }
+    }
+}
+
+#[test]
+fn the_untouched_recordings_half_cycles_find_no_more_than_the_level_allows() {
+    let mut found = 0;
+    let mut half_cycles = 0;
+    for (trial, model) in [
+        (BUNDLED_600, "models/opensim_subject01.json"),
+        (
+            "data/opencap_s4_walking1_sagittal.csv",
+            "models/opencap_s4.json",
+        ),
+        (
+            "data/opencap_s4_walking2_sagittal.csv",
+            "models/opencap_s4.json",
+        ),
+        (
+            "data/pig_c3dorg_D123_sagittal.csv",
+            "models/pig_c3dorg_D123.json",
+        ),
+    ] {
+        let s = check(trial, model);
+        for h in s["half_cycles"].as_array().unwrap() {
+            if let Some(f) = h["found"].as_array() {
+                half_cycles += 1;
+                found += f.len();
+            }
+        }
+    }
+    // family-wise 5 % per half cycle: on average 0.05 × n half cycles with any finding
+    assert!(half_cycles >= 8, "{half_cycles} half cycles read");
+    assert!(
+        found <= 1,
+        "{found} effects found in {half_cycles} untouched half cycles"
+    );
+}
+
+/// The bundled 600 Hz trial with `edit` applied to every data row's cells, written to a
+/// temporary folder with its meta file.
+fn edited(edit: impl Fn(&str, &mut f64)) -> (tempfile::TempDir, String) {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let text = std::fs::read_to_string(root().join(BUNDLED_600)).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let mut out = header.join(",") + "\n";
+    for l in lines {
+        let cells: Vec<String> = l
+            .split(',')
+            .zip(&header)
+            .map(|(c, h)| {
+                let mut v: f64 = c.parse().unwrap();
+                edit(h, &mut v);
+                if v.is_nan() {
+                    "NaN".into()
+                } else {
+                    v.to_string()
+                }
+            })
+            .collect();
+        out += &(cells.join(",") + "\n");
+    }
+    let path = dir.path().join("trial.csv");
+    std::fs::write(&path, out).unwrap();
+    std::fs::copy(
+        root().join("tests/data/check/opensim_subject01_600hz_meta.json"),
+        dir.path().join("trial_meta.json"),
+    )
+    .unwrap();
+    let p = path.to_str().unwrap().to_string();
+    (dir, p)
+}
+
+fn refused(trial: &str, words: &[&str]) {
+    let out = tempfile::tempdir().unwrap();
+    let o = footfall(&[
+        "check",
+        trial,
+        "--out",
+        out.path().join("c").to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    let e = stderr(&o);
+    assert!(e.contains("trial.csv"), "no file named: {e}");
+    for w in words {
+        assert!(e.contains(w), "'{w}' missing from: {e}");
+    }
+    assert!(!e.contains("panicked"), "{e}");
+}
+
+#[test]
+fn data_that_cannot_be_right_as_declared_are_refused_with_what_was_found() {
+    let (_d, t) = edited(|h, v| {
+        if h == "time" {
+            *v *= 1000.0
+        }
+    });
+    refused(&t, &["'time'", "milliseconds"]);
+    let (_d, t) = edited(|h, v| {
+        if h == "pelvis_y" {
+            *v *= 1000.0
+        }
+    });
+    refused(&t, &["'pelvis_y'", "millimetres"]);
+    let (_d, t) = edited(|h, v| {
+        if h.starts_with("grf_") {
+            *v *= 1.5
+        }
+    });
+    refused(&t, &["imply a body of", "72.6 kg"]);
+    let (_d, t) = edited(|h, v| {
+        if h.starts_with("grf_x") {
+            *v = -*v
+        }
+    });
+    refused(&t, &["grf_x", "flipped"]);
+}
+
+#[test]
+fn a_trial_without_one_foots_forces_or_too_short_is_refused_clearly() {
+    let (_d, t) = edited(|h, v| {
+        if h.ends_with("_l") && (h.starts_with("grf") || h.starts_with("cop")) {
+            *v = f64::NAN
+        }
+    });
+    refused(&t, &["left foot has no measured load"]);
+    let (_d, t) = edited(|h, v| {
+        if h.ends_with("_r") && (h.starts_with("grf") || h.starts_with("cop")) && *v != 0.0 {
+            *v = f64::NAN
+        }
+    });
+    let out = tempfile::tempdir().unwrap();
+    let o = footfall(&["check", &t, "--out", out.path().join("c").to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+    assert!(!stderr(&o).contains("panicked"));
+}
+
+#[test]
+fn a_check_writes_its_run_folder_and_says_how_to_add_what_it_found() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("check");
+    let trial = "tests/data/check/trials/opencap_s4_walking1/clock_r+40ms/trial.csv";
+    let o = footfall(&[
+        "check",
+        trial,
+        "--model",
+        "models/opencap_s4.json",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        stdout.contains("--effect force_plate_time_offset:offset=0.04"),
+        "{stdout}"
+    );
+    for f in [
+        "summary.json",
+        "readings.md",
+        "readings.csv",
+        "half_cycles.csv",
+        "residual.csv",
+        "residual.svg",
+        "momentum.svg",
+        "effects.txt",
+        "report.html",
+        "corrected/trial.csv",
+        "corrected/trial_meta.json",
+    ] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    // the corrected trial reads back and no longer carries the clock
+    let again = check(
+        out.join("corrected/trial.csv").to_str().unwrap(),
+        "models/opencap_s4.json",
+    );
+    let clock = candidate(&again, "clock_right");
+    assert_ne!(clock["verdict"], "found", "{clock}");
+}
