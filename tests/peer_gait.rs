@@ -21,7 +21,9 @@ fn bench() -> Benchmark {
 
 /// The peer's solution (node states and torques per phase) as our variables.
 fn peer_solution(tr: &Transcription, file: &str) -> Option<Vec<f64>> {
-    let p = crate::common::peer_dir().join("peer_gait/results").join(file);
+    let p = crate::common::peer_dir()
+        .join("peer_gait/results")
+        .join(file);
     if !p.exists() {
         eprintln!("{} not found: skipped", p.display());
         return None;

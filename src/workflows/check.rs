@@ -16,7 +16,7 @@ use crate::runfolder::RunFolder;
 use anyhow::Context;
 use std::path::PathBuf;
 
-mod output;
+pub mod output;
 pub use output::write_folder;
 
 /// What `check` does: the arguments of `footfall check`.
@@ -62,6 +62,8 @@ pub fn read(req: &CheckRequest) -> anyhow::Result<(GaitData, MeasurementCheck, V
     let loaded = load_trial(&req.trial)?;
     let model = GaitModel::load(&req.model, &super::foot_path("ellipse"))
         .with_context(|| format!("--model {}", req.model.display()))?;
+    crate::problems::check::plausibility::check_units(&loaded.data)
+        .map_err(|e| checked(e, &loaded.data))?;
     let data = hips_on_measured_centres(loaded.data, &model);
     let whole = check(&data, &model, &req.settings, None).map_err(|e| checked(e, &data))?;
     let half_cycles = half_cycles(&data)
@@ -100,7 +102,15 @@ pub fn run(req: &CheckRequest, progress: &dyn Progress) -> anyhow::Result<CheckO
 fn checked(e: CheckError, data: &GaitData) -> anyhow::Error {
     match e {
         CheckError::Data(d) => d.into(),
-        other => anyhow::anyhow!("{}: {other}", data.source.display()).context("check"),
+        other => {
+            let text = other.to_string();
+            let file = data.source.display().to_string();
+            if text.contains(&file) {
+                anyhow::anyhow!(text)
+            } else {
+                anyhow::anyhow!("{file}: {text}")
+            }
+        }
     }
 }
 

@@ -414,7 +414,47 @@ fn sibling(run: &Path, suffix: &str) -> PathBuf {
 /// the 100 Hz noisy trials of tests/hidden_effects.rs; `docs/method.md` ("The heel pad") explains why.
 const UNSCORABLE_PAD: &str = "not scored — it has no null value (the rigid heel is its limit of infinite stiffness), so it is tested by a re-fit, and on a run with interpolated node targets a re-fit's decrease is no evidence (a free pad lowers J on data without one too, from the node targets on the contact changes; see docs/method.md, \"The heel pad\"); track with `--sample-targets` (every sample compared at its own instant; 100 Hz tested) and diagnose that run, or re-fit it with `footfall track --foot … --effect heel_pad_compliance --init RUN` and judge the identified stiffness and damping and the per-channel errors with `footfall diff`";
 
-/// Run `diagnose` as `args` describes, reporting to `progress`.
+/// The first stage: the run's trial checked against itself (whole-body Newton–Euler,
+/// no model fitted), reported before the model stage. Returns its text (`None` where the
+/// trial cannot be read so, which is said).
+fn measurement_stage(
+    setup: &crate::problems::diagnose::TrackingRunSetup,
+    progress: &dyn Progress,
+) -> Option<String> {
+    let req = super::check::CheckRequest {
+        trial: super::trial::TrialFiles {
+            data: setup.data.clone(),
+            forces: setup.forces.clone(),
+            plates: setup.plates.clone(),
+            lab_axes: setup.lab_axes.clone(),
+            belt_speed: setup.belt_speed,
+            overground: setup.overground,
+        },
+        model: setup.model.clone(),
+        out: None,
+        overwrite: false,
+        settings: crate::problems::check::CheckSettings::default(),
+    };
+    match super::check::read(&req) {
+        Ok((_, check, _)) => {
+            let text = format!(
+                "stage 1, the measurement against itself (footfall check):\n{}",
+                super::check::output::verdict_text(&check)
+            );
+            progress.result(&text);
+            Some(text)
+        }
+        Err(e) => {
+            progress.note(&format!(
+                "stage 1, the measurement against itself: not read ({e:#})"
+            ));
+            None
+        }
+    }
+}
+
+/// Run `diagnose` as `args` describes, reporting to `progress`: the measurement stage
+/// first, then the model stage.
 pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()> {
     let reference = args
         .reference
@@ -431,6 +471,10 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
         .clone()
         .unwrap_or_else(|| sibling(&args.run, "-diagnose"));
     let folder = RunFolder::create(&out, args.overwrite)?;
+    let measured = measurement_stage(&setup, progress);
+    if let Some(text) = &measured {
+        folder.write("measurement.md", text.as_bytes())?;
+    }
     // the default set (the catalog, and the heel pad or the contact law where the foot
     // has them) when no candidate is named or `catalog` is among them
     let with_catalog = args.candidates.is_empty() || args.candidates.iter().any(|c| c == CATALOG);

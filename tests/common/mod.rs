@@ -43,7 +43,10 @@ impl Rng {
 pub fn peer_dir() -> PathBuf {
     match std::env::var_os("FOOTFALL_PEER_DIR") {
         Some(d) => PathBuf::from(d),
-        None => root().parent().map(|p| p.join("shared")).unwrap_or_default(),
+        None => root()
+            .parent()
+            .map(|p| p.join("shared"))
+            .unwrap_or_default(),
     }
 }
 
