@@ -23,9 +23,11 @@ macro_rules! bundle {
 /// The bundled files: (path relative to the repository root, contents).
 pub const FILES: &[(&str, &[u8])] = bundle!(
     "models/gait9dof.json",
+    "models/opencap_s4.json",
     "models/opensim_subject01.json",
     "models/opensim_subject01_seed_damping.json",
     "models/opensim_subject01_torque.json",
+    "models/pig_c3dorg_D123.json",
     "models/feet/double_circle.json",
     "models/feet/ellipse.json",
     "models/feet/heel_circle_forefoot_ellipse.json",

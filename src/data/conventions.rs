@@ -18,6 +18,18 @@ pub const MIN_OVERGROUND_SPEED: f64 = 0.15;
 /// Shortest trial on which the pelvis speed is judged (s).
 const MIN_JUDGED_DURATION: f64 = 0.5;
 
+/// Slowest kinematic rate that counts as motion capture (Hz); times in milliseconds read
+/// as a rate below 1 Hz.
+pub const MIN_RATE_HZ: f64 = 10.0;
+/// Fastest (Hz); times in minutes read as tens of kilohertz.
+pub const MAX_RATE_HZ: f64 = 5000.0;
+/// Highest pelvis above the ground that a walking adult reaches (m); millimetres read as
+/// hundreds of metres.
+pub const MAX_PELVIS_HEIGHT_M: f64 = 2.0;
+/// Farthest a loaded foot's CoP lies from the pelvis horizontally (m): a step is under
+/// 1 m, so 1.5 m is beyond any foot's reach; a CoP in millimetres reads as hundreds.
+pub const MAX_COP_REACH_M: f64 = 1.5;
+
 /// Normal force a loaded foot exceeds (N): a vertical force that never rises above it
 /// while falling far below zero has its sign flipped.
 const LOADED_N: f64 = 20.0;
@@ -26,6 +38,7 @@ impl GaitData {
     /// Check the trial's units and conventions (see the module doc). `overground`: the
     /// user asserts the trial is overground as it is (no belt speed needed).
     pub fn check_conventions(&self, overground: bool) -> Result<(), DataError> {
+        self.check_scales()?;
         self.check_angles()?;
         self.check_force_signs()?;
         if !overground {
@@ -60,6 +73,45 @@ impl GaitData {
                         "spans {lo:.3} to {hi:.3}, more than π (180°) apart or beyond 2π, which an angle of walking in radians never is: this looks like degrees. footfall reads radians; convert the column, or declare \"units\": {{\"angles\": \"deg\"}} in the trial's meta file"
                     ),
                 ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Times in seconds, positions and CoP in metres, judged against walking.
+    fn check_scales(&self) -> Result<(), DataError> {
+        let mut steps: Vec<f64> = self.time.windows(2).map(|w| w[1] - w[0]).collect();
+        steps.sort_by(f64::total_cmp);
+        if let Some(&h) = steps.get(steps.len() / 2) {
+            let rate = 1.0 / h;
+            if !(MIN_RATE_HZ..=MAX_RATE_HZ).contains(&rate) {
+                return Err(DataError::invalid(
+                    &self.source,
+                    "time",
+                    format!("samples {h:.4} apart, a rate of {rate:.3} Hz; motion capture runs at {MIN_RATE_HZ}–{MAX_RATE_HZ} Hz. footfall reads time in seconds: times in milliseconds read as a rate below 1 Hz"),
+                ));
+            }
+        }
+        if let Some((_, top)) = Self::range(&self.q[1]) {
+            if top > MAX_PELVIS_HEIGHT_M {
+                return Err(DataError::invalid(
+                    &self.source,
+                    "pelvis_y",
+                    format!("reaches {top:.3}; a walking pelvis is under {MAX_PELVIS_HEIGHT_M} m above the ground. footfall reads positions in metres: millimetres read a thousand times too high"),
+                ));
+            }
+        }
+        for (s, side) in ["r", "l"].iter().enumerate() {
+            let foot = &self.feet[s];
+            for k in 0..self.time.len() {
+                let (c, fy, px) = (foot.cop_x[k], foot.fy[k], self.q[0][k]);
+                if c.is_finite() && fy > self.cop_threshold && (c - px).abs() > MAX_COP_REACH_M {
+                    return Err(DataError::invalid(
+                        &self.source,
+                        format!("cop_x_{side}"),
+                        format!("at {:.3} s the CoP lies {:.3} from the pelvis (x {px:.3}), beyond the {MAX_COP_REACH_M} m any foot reaches. footfall reads the CoP in metres in the same frame as pelvis_x: millimetres read a thousand times too far", self.time[k], c - px),
+                    ));
+                }
             }
         }
         Ok(())

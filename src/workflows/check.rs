@@ -62,8 +62,6 @@ pub fn read(req: &CheckRequest) -> anyhow::Result<(GaitData, MeasurementCheck, V
     let loaded = load_trial(&req.trial)?;
     let model = GaitModel::load(&req.model, &super::foot_path("ellipse"))
         .with_context(|| format!("--model {}", req.model.display()))?;
-    crate::problems::check::plausibility::check_units(&loaded.data)
-        .map_err(|e| checked(e, &loaded.data))?;
     let data = hips_on_measured_centres(loaded.data, &model);
     let whole = check(&data, &model, &req.settings, None).map_err(|e| checked(e, &data))?;
     let half_cycles = half_cycles(&data)

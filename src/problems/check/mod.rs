@@ -234,7 +234,6 @@ pub fn check(
             )));
         }
     }
-    plausibility::check_units(data)?;
     let signals = Signals::new(data, settings.cutoff_hz, settings.clock_limit_s)?;
     let body = Body::of(model)?;
     let instants: Vec<Instant> = signals
