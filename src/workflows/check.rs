@@ -81,6 +81,7 @@ pub fn run(req: &CheckRequest, progress: &dyn Progress) -> anyhow::Result<CheckO
         progress.warn(&format!("warning: {w}"));
     }
     progress.result(&output::verdict_text(&check));
+    progress.result(&output::half_cycle_text(&half_cycles));
     let out = req
         .out
         .clone()

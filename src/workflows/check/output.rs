@@ -58,6 +58,29 @@ pub fn verdict_text(c: &MeasurementCheck) -> String {
     s
 }
 
+/// How many half cycles were read on their own and what they found.
+pub fn half_cycle_text(half: &[HalfCycle]) -> String {
+    let read: Vec<&MeasurementCheck> = half.iter().filter_map(|h| h.result.as_ref().ok()).collect();
+    let found: Vec<String> = read
+        .iter()
+        .flat_map(|c| {
+            c.found()
+                .map(|r| format!("{} {}", r.param.label(), estimate_text(r)))
+        })
+        .collect();
+    format!(
+        "each half cycle on its own: {} of {} read, {} effect(s) found in them{}",
+        read.len(),
+        half.len(),
+        found.len(),
+        if found.is_empty() {
+            String::new()
+        } else {
+            format!(" ({})", found.join("; "))
+        }
+    )
+}
+
 fn readings_table(c: &MeasurementCheck) -> Table {
     Table {
         title: "Readings of the whole-body balance".into(),
