@@ -419,3 +419,24 @@ fn a_check_writes_its_run_folder_and_says_how_to_add_what_it_found() {
     let clock = candidate(&again, "clock_right");
     assert_ne!(clock["verdict"], "found", "{clock}");
 }
+
+#[test]
+fn a_plate_clock_read_on_the_other_plate_names_the_true_one_as_its_look_alike() {
+    // the right plate made 20 ms late reads best as the left plate early; the check must
+    // then say that these data cannot tell it from the right plate's clock
+    let s = check(
+        "tests/data/check/trials/opensim_subject01/clock_r+20ms/trial.csv",
+        "models/opensim_subject01.json",
+    );
+    let left = candidate(&s, "clock_left");
+    assert_eq!(left["verdict"], "found", "{left}");
+    let alternatives = left["alternatives"]
+        .as_array()
+        .expect("alternatives listed");
+    assert!(
+        alternatives
+            .iter()
+            .any(|a| a["effect"] == "clock_right" && a["estimate"].as_f64().unwrap() > 0.0),
+        "{left}"
+    );
+}

@@ -179,6 +179,9 @@ pub struct Reading {
     pub explained: f64,
     /// The verdict.
     pub verdict: Verdict,
+    /// For a found candidate: the others that were beyond the band at the same step when
+    /// read in its place, `(candidate, estimate, z)`: what these data cannot tell it from.
+    pub alternatives: Vec<(Param, f64, f64)>,
 }
 
 /// The balance of one trial, read.
@@ -500,6 +503,7 @@ fn stepwise(p: &Problem, settings: &CheckSettings) -> (Vec<Reading>, Vec<Reading
                     threshold: f64::NAN,
                     explained,
                     verdict: Verdict::NotSignificant,
+                    alternatives: vec![],
                 });
             }
             if !(sd.is_finite() && sd <= testable_sd(c)) {
@@ -523,6 +527,7 @@ fn stepwise(p: &Problem, settings: &CheckSettings) -> (Vec<Reading>, Vec<Reading
                 threshold: 0.0,
                 explained,
                 verdict: Verdict::NotSignificant,
+                alternatives: vec![],
             });
         }
         let threshold = if tested.is_empty() {
@@ -542,6 +547,11 @@ fn stepwise(p: &Problem, settings: &CheckSettings) -> (Vec<Reading>, Vec<Reading
         match best {
             Some(i) if tested[i].z.abs() > threshold => {
                 let mut r = tested.swap_remove(i);
+                r.alternatives = tested
+                    .iter()
+                    .filter(|t| t.z.abs() > threshold)
+                    .map(|t| (t.param, t.estimate, t.z))
+                    .collect();
                 let mut cols = fit.active.clone();
                 cols.push(r.param);
                 fit = p.fit(&cols, &fit.theta);
@@ -576,6 +586,7 @@ fn untested(c: Param, verdict: Verdict) -> Reading {
         threshold: f64::NAN,
         explained: 0.0,
         verdict,
+        alternatives: vec![],
     }
 }
 

@@ -41,6 +41,14 @@ pub fn verdict_text(c: &MeasurementCheck) -> String {
                 r.param.look_alikes()
             )
             .ok();
+            if !r.alternatives.is_empty() {
+                writeln!(
+                    s,
+                    "    these data cannot tell it from: {}",
+                    alternatives_text(r)
+                )
+                .ok();
+            }
         }
         s.push_str("add to track with:");
         for l in effect_lines(c) {
@@ -81,6 +89,19 @@ pub fn half_cycle_text(half: &[HalfCycle]) -> String {
     )
 }
 
+/// A found reading's alternatives: each candidate also beyond the band at its step, read
+/// in its place.
+pub fn alternatives_text(r: &Reading) -> String {
+    r.alternatives
+        .iter()
+        .map(|&(p, v, z)| {
+            let (v, unit) = p.display_value(v);
+            format!("{} {v:+.2} {unit} (z {z:.1})", p.label())
+        })
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
 fn readings_table(c: &MeasurementCheck) -> Table {
     Table {
         title: "Readings of the whole-body balance".into(),
@@ -105,7 +126,15 @@ fn readings_table(c: &MeasurementCheck) -> Table {
                     fmt(r.z, 2),
                     fmt(r.threshold, 2),
                     format!("{:.1} %", 100.0 * r.explained),
-                    r.verdict.text(),
+                    if r.alternatives.is_empty() {
+                        r.verdict.text()
+                    } else {
+                        format!(
+                            "{}; cannot be told here from {}",
+                            r.verdict.text(),
+                            alternatives_text(r)
+                        )
+                    },
                     r.param.look_alikes().into(),
                 ]
             })
@@ -267,6 +296,13 @@ fn summary_json(
             "z": finite(r.z), "threshold": finite(r.threshold), "explained": r.explained,
             "verdict": r.verdict.text(), "look_alikes": r.param.look_alikes(),
         });
+        if !r.alternatives.is_empty() {
+            j["alternatives"] = json!(r
+                .alternatives
+                .iter()
+                .map(|(p, v, z)| json!({"effect": p.name(), "estimate": v, "z": z}))
+                .collect::<Vec<_>>());
+        }
         if let Verdict::NotSeparable { from } = &r.verdict {
             j["not_separable_from"] = json!(from.iter().map(|p| p.name()).collect::<Vec<_>>());
         }
