@@ -80,9 +80,7 @@ impl GaitData {
 
     /// Times in seconds, positions and CoP in metres, judged against walking.
     fn check_scales(&self) -> Result<(), DataError> {
-        let mut steps: Vec<f64> = self.time.windows(2).map(|w| w[1] - w[0]).collect();
-        steps.sort_by(f64::total_cmp);
-        if let Some(&h) = steps.get(steps.len() / 2) {
+        if let Some(h) = super::median_step(&self.time) {
             let rate = 1.0 / h;
             if !(MIN_RATE_HZ..=MAX_RATE_HZ).contains(&rate) {
                 return Err(DataError::invalid(

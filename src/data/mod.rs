@@ -138,16 +138,19 @@ impl ForceSamples {
     }
 }
 
+/// The median time step of increasing instants `t` (s; `None` for fewer than two).
+pub fn median_step(t: &[f64]) -> Option<f64> {
+    let mut steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
+    steps.sort_by(f64::total_cmp);
+    steps.get(steps.len() / 2).copied()
+}
+
 /// The measured stretches of a force channel `fy` sampled at `t`, as index ranges
 /// `(first, last)`: runs of consecutive finite samples, broken also where a time step is
 /// more than 1.5 times the median step (rows left out of a mixed-rate file).
 pub fn stretch_indices(t: &[f64], fy: &[f64]) -> Vec<(usize, usize)> {
     let n = t.len().min(fy.len());
-    let mut steps: Vec<f64> = t[..n].windows(2).map(|w| w[1] - w[0]).collect();
-    steps.sort_by(f64::total_cmp);
-    let gap = steps
-        .get(steps.len() / 2)
-        .map_or(f64::INFINITY, |m| 1.5 * m);
+    let gap = median_step(&t[..n]).map_or(f64::INFINITY, |m| 1.5 * m);
     let mut out = Vec::new();
     let mut start: Option<usize> = None;
     for k in 0..n {

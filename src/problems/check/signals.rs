@@ -55,9 +55,7 @@ pub struct Signals {
 
 /// Median sample rate (Hz) of increasing instants `t`.
 pub fn median_rate(t: &[f64]) -> f64 {
-    let mut steps: Vec<f64> = t.windows(2).map(|w| w[1] - w[0]).collect();
-    steps.sort_by(f64::total_cmp);
-    steps.get(steps.len() / 2).map_or(f64::NAN, |h| 1.0 / h)
+    crate::data::median_step(t).map_or(f64::NAN, |h| 1.0 / h)
 }
 
 impl Signals {

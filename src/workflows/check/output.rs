@@ -219,31 +219,38 @@ fn fmt(v: f64, d: usize) -> String {
     }
 }
 
+/// Three panels against time, one per component `[x, y, moment]`, each with the series
+/// `series` gives for its component.
+fn three_panels(
+    c: &MeasurementCheck,
+    names: [(&str, &str); 3],
+    series: impl Fn(usize) -> Vec<(&'static str, Vec<f64>)>,
+) -> String {
+    let plots: Vec<LinePlot> = (0..3)
+        .map(|i| {
+            let mut p = LinePlot::new(names[i].0, "time (s)", names[i].1);
+            for (name, y) in series(i) {
+                p.series
+                    .push(Series::new(name, c.time.clone(), y, LineStyle::Solid));
+            }
+            p
+        })
+        .collect();
+    grid(&plots, 1)
+}
+
 fn residual_plots(c: &MeasurementCheck) -> String {
     let names = [
         ("horizontal residual force", "N"),
         ("vertical residual force", "N"),
         ("residual moment about the COM", "N·m"),
     ];
-    let plots: Vec<LinePlot> = (0..3)
-        .map(|i| {
-            let mut p = LinePlot::new(names[i].0, "time (s)", names[i].1);
-            p.series.push(Series::new(
-                "as measured",
-                c.time.clone(),
-                c.before.iter().map(|r| r[i]).collect(),
-                LineStyle::Solid,
-            ));
-            p.series.push(Series::new(
-                "corrected",
-                c.time.clone(),
-                c.after.iter().map(|r| r[i]).collect(),
-                LineStyle::Solid,
-            ));
-            p
-        })
-        .collect();
-    grid(&plots, 1)
+    three_panels(c, names, |i| {
+        vec![
+            ("as measured", c.before.iter().map(|r| r[i]).collect()),
+            ("corrected", c.after.iter().map(|r| r[i]).collect()),
+        ]
+    })
 }
 
 fn momentum_plots(c: &MeasurementCheck) -> String {
@@ -252,19 +259,9 @@ fn momentum_plots(c: &MeasurementCheck) -> String {
         ("vertical linear momentum", "N·s"),
         ("angular momentum about the COM", "N·m·s"),
     ];
-    let plots: Vec<LinePlot> = (0..3)
-        .map(|i| {
-            let mut p = LinePlot::new(names[i].0, "time (s)", names[i].1);
-            p.series.push(Series::new(
-                "",
-                c.time.clone(),
-                c.momentum.iter().map(|m| m[i]).collect(),
-                LineStyle::Solid,
-            ));
-            p
-        })
-        .collect();
-    grid(&plots, 1)
+    three_panels(c, names, |i| {
+        vec![("", c.momentum.iter().map(|m| m[i]).collect())]
+    })
 }
 
 fn residual_csv(c: &MeasurementCheck) -> String {
