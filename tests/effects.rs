@@ -3,7 +3,7 @@
 
 use crate::common;
 use common::*;
-use footfall::model::effects::{catalog, EffectSpec};
+use footfall::model::effects::{catalog, measurement_effects, EffectSpec};
 
 const G: f64 = 9.80665;
 
@@ -118,7 +118,7 @@ fn command_line_effects_parse_free_their_parameters_and_refuse_mistakes() {
 
 #[test]
 fn the_catalog_builds_into_the_model_with_free_parameters_at_their_null_values() {
-    let cat = catalog();
+    let cat: Vec<EffectSpec> = catalog().into_iter().chain(measurement_effects()).collect();
     let kinds: Vec<&str> = cat.iter().map(|e| e.kind()).collect();
     for k in [
         "ground_slope",
@@ -129,6 +129,11 @@ fn the_catalog_builds_into_the_model_with_free_parameters_at_their_null_values()
     ] {
         assert!(kinds.contains(&k), "{k} missing from the catalog");
     }
+    // the model's physics are the diagnosis's candidates; the instruments and the body
+    // are the measurement check's
+    assert!(catalog()
+        .iter()
+        .all(|e| e.kind() == "passive_joint_stiffness"));
     for e in &cat {
         let m = model_with_effects(
             "opensim_subject01.json",
@@ -498,12 +503,12 @@ fn heel_pad_needs_a_heel_primitive_and_sane_values() {
 }
 
 /// The command-line form a diagnosis prints to add an effect reads back as the same
-/// entry: every catalog effect with all parameters freed, with none freed, and a clock
+/// entry: every catalog and measurement effect with all parameters freed, with none freed, and a clock
 /// held at a reading (`force_plate_time_offset:offset=0.0236,free=`, side `both`).
 #[test]
 fn an_effects_command_line_form_reads_back_as_the_same_entry() {
     let mut entries = Vec::new();
-    for e in catalog() {
+    for e in catalog().into_iter().chain(measurement_effects()) {
         let mut free = e.clone();
         free.free_all();
         entries.push(free);

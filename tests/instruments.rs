@@ -7,7 +7,7 @@
 use crate::common;
 use common::*;
 use footfall::data::{read_sagittal_csv, CubicSpline, GaitData};
-use footfall::model::effects::{catalog, EffectSpec};
+use footfall::model::effects::{catalog, measurement_effects, EffectSpec};
 use footfall::model::GaitModel;
 use footfall::ocp::NodeFunction;
 use footfall::problems::track::{TargetSides, TrackingSetup};
@@ -400,8 +400,8 @@ fn a_plates_clock_offset_moves_the_events_of_its_threshold() {
 /// With sample targets (cut at fixed phase boundaries) a plate's clock offset moves the
 /// events of its threshold by its value as the model starts it: held at the truth on the
 /// real trial whose right plate reports 25 ms late, the window and the durations are the
-/// untouched trial's (to the 6 ms to which the threshold crossings follow a moved clock),
-/// as `diagnose --profile-clocks` needs at its points; a free offset moves them by its
+/// untouched trial's (to the 6 ms to which the threshold crossings follow a moved clock);
+/// a free offset moves them by its
 /// start value and warns that they stay there. Interpolated targets move the events
 /// with the offset itself (the OCP's duration rows), so their setup keeps the measured
 /// ones.
@@ -470,8 +470,7 @@ fn sample_targets_move_a_plates_events_by_its_held_clock_offset() {
 /// the real right-clock trial the left plate's clock held at −66 ms moves the left heel
 /// strikes 66 ms later, which turns an early one (before the data's first 0.05 s) into
 /// the start of a half cycle at 0.070 s; chosen on the moved events, that half cycle
-/// would have been tracked instead of the trial's own (1.252 s), and a clock profile
-/// would have compared costs of different half cycles. The tracked half cycle
+/// would have been tracked instead of the trial's own (1.252 s). The tracked half cycle
 /// is the trial's own, its start moved by the offset.
 #[test]
 fn a_held_clock_offset_keeps_the_half_cycle_tracked() {
@@ -626,10 +625,11 @@ fn actuator_properties_scale_the_mtgs_with_exact_derivatives() {
     );
 }
 
-/// The command line names a plate by its foot; the catalog holds every instrument per
-/// plate, the body mass and the actuator properties, each at its null value.
+/// The command line names a plate by its foot; the measurement effects hold every
+/// instrument per plate and the body mass, each at its null value; neither they nor the
+/// actuator properties are default diagnosis candidates.
 #[test]
-fn per_plate_effects_parse_and_join_the_catalog() {
+fn per_plate_effects_parse_and_are_the_measurement_checks() {
     let e = EffectSpec::parse_cli("force_plate_time_offset:side=right").unwrap();
     assert_eq!(
         e,
@@ -679,7 +679,8 @@ fn per_plate_effects_parse_and_join_the_catalog() {
         let err = EffectSpec::parse_cli(bad).unwrap_err();
         assert!(err.contains(needle), "{bad}: {err}");
     }
-    let labels: Vec<String> = catalog().iter().map(|e| e.label()).collect();
+    let labels: Vec<String> = measurement_effects().iter().map(|e| e.label()).collect();
+    let candidates: Vec<String> = catalog().iter().map(|e| e.label()).collect();
     for want in [
         "force-plate time offset (right)",
         "force-plate time offset (left)",
@@ -691,17 +692,21 @@ fn per_plate_effects_parse_and_join_the_catalog() {
         "body-mass error",
     ] {
         assert!(labels.iter().any(|l| l == want), "{want} not in {labels:?}");
+        assert!(
+            !candidates.contains(&want.to_string()),
+            "{want} in {candidates:?}"
+        );
     }
     // the actuator properties change what the effort regularisation charges: not default
-    // candidates (they made ghosts on the synthetic trials), asked for with --candidate
+    // candidates, asked for with --candidate
     for absent in [
         "MTG damping (η)",
         "MTG strength",
         "activation/deactivation time constants",
     ] {
         assert!(
-            !labels.iter().any(|l| l == absent),
-            "{absent} in {labels:?}"
+            !candidates.iter().any(|l| l == absent),
+            "{absent} in {candidates:?}"
         );
     }
 }

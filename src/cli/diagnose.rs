@@ -31,32 +31,15 @@ pub struct Args {
     /// Iteration limit of the re-fits.
     #[arg(long, default_value_t = 200, value_parser = super::validate::iterations)]
     max_iter: usize,
-    /// Re-track the run with what makes its untestable candidates testable (the pelvis
-    /// position tracked, into `<RUN>+pelvis-position`) and diagnose that run too.
-    #[arg(long)]
-    make_testable: bool,
     /// Skip the held-out validation of significant candidates (it tracks another half
     /// cycle of the trial once); they are then reported as not validated.
     #[arg(long)]
     no_held_out: bool,
-    /// Profile the cost over each force plate's clock offset: re-fit the run with it held
-    /// at −40, −20, +20 and +40 ms and re-fit freely from the lowest point (a clock error
-    /// of two frames or more is beyond the score test's reach; about half a minute per
-    /// point and plate on two cores).
-    #[arg(long)]
-    profile_clocks: bool,
-    /// A reference trial's run (or its diagnosis folder), diagnosed the same way (same
-    /// model, foot, candidates and options): every candidate's reading is also given
-    /// less the reference's, which cancels the model's own bias.
-    #[arg(long)]
-    reference: Option<PathBuf>,
     /// Start the diagnosis's own solves from kept solutions of the same problems
     /// (repeatable): an earlier re-fit's run folder (`<RUN>+<effect>`) starts the re-fit
     /// with the same effects, an earlier diagnosis folder (`<RUN>-diagnose`) gives its
-    /// held-out track (`held_out`), its clock profiles' points (`profile_<plate>_<offset>`)
-    /// and any run folders inside it; a profile's re-fit held at its vertex starts from
-    /// the kept one of that plate held nearest. Each solve still iterates to the KKT
-    /// tolerance from there; only its path is shortened.
+    /// held-out track (`held_out`) and any run folders inside it. Each solve still
+    /// iterates to the KKT tolerance from there; only its path is shortened.
     #[arg(long = "start", value_name = "DIR")]
     starts: Vec<PathBuf>,
 }
@@ -71,14 +54,7 @@ impl From<Args> for DiagnoseRequest {
             overwrite: a.overwrite,
             tol: a.tol,
             max_iter: a.max_iter,
-            make_testable: a.make_testable,
             held_out: !a.no_held_out,
-            profile_clocks: if a.profile_clocks {
-                footfall::workflows::diagnose::profile::CLOCK_PROFILE.to_vec()
-            } else {
-                Vec::new()
-            },
-            reference: a.reference,
             starts: a.starts,
         }
     }

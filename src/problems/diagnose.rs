@@ -27,7 +27,6 @@
 //! fixed to another half cycle of the trial, it lowers that cost beyond its noise band
 //! ([`HeldOut`], [`stats::held_out_band`]).
 
-pub mod common_samples;
 pub mod stats;
 
 use crate::model::effects::EffectSpec;
@@ -220,8 +219,7 @@ pub struct ScoreTest {
     /// Their values after the Gauss–Newton step.
     pub step_values: Vec<f64>,
     /// The parameters whose value lies at a bound of its admissible range: a limit the
-    /// data pushed against, not a reading (the real trials' left CoP offset runs to its
-    /// 0.1 m bound with or without a calibration error: the rigid foot's CoP misfit).
+    /// data pushed against, not a reading.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub at_bound: Vec<String>,
     /// Fall of the tracking cost over the truncated re-fit (cost units), less that of
@@ -270,109 +268,6 @@ pub struct ScoreTest {
     /// its bound, not a reading`, `not confirmed on the held-out half cycle`,
     /// [`NOT_VALIDATABLE`], `found`, `significant, not validated`.
     pub verdict: String,
-    /// The profile of the cost over a plate's clock offset (`diagnose --profile-clocks`),
-    /// when one was made for this candidate.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub profile: Option<ClockProfile>,
-}
-
-/// One point of a [`ClockProfile`]: the run re-fitted with the plate's clock offset held
-/// at `offset`.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct ProfilePoint {
-    /// The offset held fixed (s).
-    pub offset: f64,
-    /// The cost of that re-fit (`None`: it failed).
-    pub objective: Option<f64>,
-    /// Its solver status (or the failure).
-    pub status: String,
-    /// Its SQP iterations.
-    pub iterations: usize,
-    /// Its wall time (s).
-    pub seconds: f64,
-    /// With sample targets, its data cost over the samples every point, the run and the
-    /// re-fit compare ([`ClockProfile::compared`]): what the points are compared by.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub compared: Option<f64>,
-}
-
-/// The samples a profile with sample targets compares its points over: a held offset
-/// moves its plate's contact events and with them the window's start or end, so each
-/// point compares a different set of samples
-/// ([`common_samples`](crate::problems::diagnose::common_samples)).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct ComparedSamples {
-    /// How many samples every point, the run and the re-fit compare.
-    pub samples: usize,
-    /// Their first and last instants (s).
-    pub span: (f64, f64),
-    /// The run's data cost over them.
-    pub run: f64,
-    /// The re-fit's.
-    pub refit: Option<f64>,
-}
-
-/// The cost profiled over one force plate's clock offset. The score test is local: J is
-/// not convex in a clock offset of more than about a frame of the kinematics (the
-/// impact transients move across samples), and a truncated re-fit from zero stops in the
-/// nearest dip. The profile re-fits the run with the offset held at points a fixed step
-/// apart and starts a free re-fit from the lowest; its decrease is judged against the χ²₁
-/// point at 0.1 % divided by the number of starts (a Bonferroni correction for picking
-/// the best of them, `family`).
-#[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct ClockProfile {
-    /// The profile's points (the run itself, at zero, is not among them).
-    pub points: Vec<ProfilePoint>,
-    /// The offset the free re-fit started from (`None`: no point was below the run's cost).
-    pub start: Option<f64>,
-    /// The free re-fit's offset and cost.
-    pub refit: Option<(f64, f64)>,
-    /// How many starts the best is chosen from (the points and zero).
-    pub family: usize,
-    /// Whether the profile's re-fit replaced the local score test (it lowered J more).
-    pub chosen: bool,
-    /// Whether the re-fit held the offset at the vertex of the parabola through the
-    /// lowest point and its neighbours instead of freeing it (one-sided or sample targets,
-    /// whose events a free offset cannot move); `refit` is then that vertex and its cost,
-    /// and the reading's sd comes from the parabola's curvature.
-    #[serde(default)]
-    pub refined: bool,
-    /// Why the profile's re-fit failed, when it did (the candidate keeps its score test).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub refit_error: Option<String>,
-    /// Where the profile's re-fit stopped short of its KKT tolerance (its status, KKT
-    /// residual and iterations; `None`: it converged, or there was none). Its cost then
-    /// bounds the held minimum from above, so the decrease it gives is a lower bound.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub refit_unconverged: Option<String>,
-    /// With sample targets, the samples the points are compared over, and the run's and
-    /// re-fit's costs there: the lowest point, the parabola and the re-fit's decrease are
-    /// read from these costs, not from J.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub compared: Option<ComparedSamples>,
-    /// A refined profile's own reading, whether or not its re-fit became the candidate's
-    /// test: the vertex of its parabola (the run at zero among its points), so that
-    /// `diagnose --reference` can compare one trial's profile with another's even where
-    /// one of them did not lie below its run (`None`: not refined, or failed).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub vertex: Option<ProfileVertex>,
-}
-
-/// Where a refined clock profile's parabola is lowest, and how sharply it bends.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
-pub struct ProfileVertex {
-    /// The vertex's offset (s).
-    pub offset: f64,
-    /// Its standard deviation (s) from the parabola's curvature, as the profile's re-fit
-    /// reads it (`None`: fewer than three points, or bent downwards at its lowest).
-    pub sd: Option<f64>,
-    /// The parabola `c + b δ + a δ²` the vertex is read from, as `(a, b)`: its curvature
-    /// (cost per s²) and its slope at zero offset (cost per s), in the costs the profile
-    /// compares its points by. The three clock profiles' parabolas are the sections of
-    /// one quadratic in both plates' offsets (`diagnose::plate_clocks`). `None`: fewer
-    /// than three points (or a summary of an older footfall, which did not write it).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub parabola: Option<(f64, f64)>,
 }
 
 /// The verdict of a significant candidate that the held-out half cycle is too weakly
@@ -396,8 +291,7 @@ pub struct HeldOut {
     pub objective: f64,
     /// Fall of the held-out cost with the candidate at `values` (cost units; negative:
     /// it got worse), after a truncated re-fit of the other variables and less that of
-    /// the plain model (a plate's clock read from its refined profile: after a full
-    /// solve with the clock held, its events moved).
+    /// the plain model.
     pub change: f64,
     /// `change` as a fraction of `objective`.
     pub change_fraction: f64,
@@ -405,25 +299,10 @@ pub struct HeldOut {
     /// deviations above the mean change a candidate fitted on noise makes (which is
     /// negative).
     pub band: f64,
-    /// Whether `change` exceeds `band` (with `reference_change`: whether `change −
-    /// reference_change` does).
+    /// Whether `change` exceeds `band`.
     pub beyond_noise: bool,
-    /// For a difference from a reference trial: the change the same values make on the
-    /// reference's own held-out half cycle (the same half cycle, tracked the same way).
-    /// The difference is judged by `change − reference_change`, in which the model's
-    /// bias on that half cycle cancels, against the paired band
-    /// ([`stats::paired_held_out_band`]) at `reference_curvature`.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub reference_change: Option<f64>,
-    /// For a difference from a reference trial: the held-out cost's curvature along the
-    /// values, `q = θᵀHθ`, from the reference's changes at `θ` and `−θ` on that half
-    /// cycle (`−(Δ_ref(θ) + Δ_ref(−θ))`); the paired band's.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub reference_curvature: Option<f64>,
     /// The held-out half cycle's own reading of the candidate along its fitted values,
-    /// from its changes at `θ` and `−θ` (a difference from a reference: the paired
-    /// change against its expectation). `None` where `−θ` could not be applied or the
-    /// validation was a full solve (a clock held at its profile's vertex).
+    /// from its changes at `θ` and `−θ`. `None` where `−θ` could not be applied.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub reading: Option<HeldOutReading>,
 }
@@ -796,7 +675,6 @@ impl ScoreTest {
             held_out: None,
             found: false,
             verdict: String::new(),
-            profile: None,
         }
     }
 
@@ -1022,8 +900,6 @@ mod tests {
             change_fraction: 0.0,
             band: 0.01,
             beyond_noise: beyond,
-            reference_change: None,
-            reference_curvature: None,
             reading,
         };
         let weak = HeldOutReading::from_changes(0.0, -0.004, 5e-4, 3.5).unwrap();

@@ -4,8 +4,10 @@
 //! heel pad, which has no null value) with the statistic corrected for correlated
 //! residuals; the significant ones are validated on another half cycle of the trial
 //! (`diagnose/heldout.rs`) and the top found ones re-fitted for real (each written as a track run
-//! folder, so `diff` and a second `diagnose` can start from it). `--make-testable`
-//! re-tracks the run with the pelvis position tracked and diagnoses that run too.
+//! folder, so `diff` and a second `diagnose` can start from it). The instruments and the
+//! body are not among the candidates: the measurement stage (`footfall check`, the trial's
+//! own Newton–Euler balance) reads them without a contact model, and its verdict is shown
+//! first.
 
 use super::track::{read_run_setup, TrackingProblem};
 #[allow(unused_imports)]
@@ -19,10 +21,6 @@ use crate::problems::diagnose::{
 
 mod heldout;
 mod output;
-pub mod plate_clocks;
-pub mod plate_gains;
-pub mod profile;
-pub mod reference;
 mod refit;
 mod starts;
 pub mod summary;
@@ -33,7 +31,7 @@ use crate::runfolder::RunFolder;
 use crate::sqp::linearised::GaussNewtonModel;
 use anyhow::anyhow;
 use rayon::prelude::*;
-use refit::{channel_changes, diff_with, refit, refit_into, test_by_refit, Evidence, Verified};
+use refit::{diff_with, refit, test_by_refit, Evidence, Verified};
 use std::path::{Path, PathBuf};
 
 /// The `--candidate` name that stands for the default candidates: the catalog, the heel
@@ -59,24 +57,13 @@ pub struct DiagnoseRequest {
     pub tol: f64,
     /// Iteration limit of the re-fits.
     pub max_iter: usize,
-    /// Re-track the run with the change that makes its untestable candidates testable
-    /// (the pelvis position tracked) and diagnose that run too (`--make-testable`).
-    pub make_testable: bool,
     /// Validate significant candidates on another half cycle of the trial (default on;
     /// off: they are reported "significant, not validated").
     pub held_out: bool,
-    /// The offsets (s) at which each force plate's clock is held to profile the cost over
-    /// it (empty: no profile; `--profile-clocks` gives [`profile::CLOCK_PROFILE`]): re-fits
-    /// beyond the score test's reach, about half a minute to a minute each on two cores.
-    pub profile_clocks: Vec<f64>,
-    /// A reference trial's run (or its diagnosis folder), diagnosed the same way: every
-    /// candidate's reading is also given against the reference's
-    /// ([`reference::compare`]), which cancels the model's own bias (`--reference`).
-    pub reference: Option<PathBuf>,
     /// Kept solutions to start the diagnosis's own solves from (`--start`): run folders
     /// with `setup.json` and `solution.json` (an earlier re-fit `<RUN>+<effect>`), or
     /// folders of them (an earlier `<RUN>-diagnose`, whose `held_out` is its held-out
-    /// track and whose `profile_*` are its clock profiles' points); each starts the solve
+    /// track); each starts the solve
     /// of the same problem, which still iterates to the KKT tolerance from there.
     pub starts: Vec<PathBuf>,
 }
@@ -85,7 +72,7 @@ impl DiagnoseRequest {
     /// A request with `footfall diagnose`'s defaults for the track run `run`: the default
     /// candidates, one verifying re-fit, held-out validation, re-fits to KKT 1e-5 within
     /// 200 iterations, the output beside the run (`<RUN>-diagnose`, not replaced); no
-    /// re-track, clock profile, reference or kept starts.
+    /// kept starts.
     pub fn new(run: PathBuf) -> Self {
         DiagnoseRequest {
             run,
@@ -95,10 +82,7 @@ impl DiagnoseRequest {
             overwrite: false,
             tol: 1e-5,
             max_iter: 200,
-            make_testable: false,
             held_out: true,
-            profile_clocks: Vec::new(),
-            reference: None,
             starts: Vec::new(),
         }
     }
@@ -456,11 +440,6 @@ fn measurement_stage(
 /// Run `diagnose` as `args` describes, reporting to `progress`: the measurement stage
 /// first, then the model stage.
 pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()> {
-    let reference = args
-        .reference
-        .as_deref()
-        .map(reference::read_reference)
-        .transpose()?;
     // a bad --start is named before any work
     starts::kept_solutions(&args.starts)?;
     let setup = read_run_setup(&args.run)?;
@@ -571,7 +550,7 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
             None
         }
     };
-    // the run every candidate's re-fit (the pad's, a clock profile's) is measured against
+    // the run every candidate's re-fit (the pad's) is measured against
     let baseline = Baseline {
         solution: &solution,
         summary: &before,
@@ -647,7 +626,7 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
         }
         // scored above for every candidate that gets here (neither in the model nor the pad)
         let Some(scored) = scored else { continue };
-        let (mut t, start, seconds) = match scored {
+        let (t, start, seconds) = match scored {
             Scored::Unbuilt(e) => {
                 skipped.push(format!("{}: {e:#}", c.label()));
                 continue;
@@ -655,40 +634,13 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
             Scored::Tested(result) => *result?,
         };
         print_progress(progress, &t, true, seconds);
-        if !args.profile_clocks.is_empty() && profile::plate(c).is_some() {
-            let t1 = std::time::Instant::now();
-            let (mut prof, refitted) = profile::profile_clock(
-                args,
-                &setup,
-                c,
-                &baseline,
-                &resid,
-                &t,
-                full.as_ref(),
-                folder.staging_path(),
-                progress,
-            )?;
-            // the profile's re-fit is the candidate's test when it lowers J more
-            if let Some((mut tp, run, diff)) = refitted {
-                if tp.predicted_decrease > t.predicted_decrease {
-                    prof.chosen = true;
-                    tp.profile = Some(prof);
-                    print_progress(progress, &tp, run.converged, t1.elapsed().as_secs_f64());
-                    tests.push((tp, Evidence::Refit(Box::new(run), diff)));
-                    continue;
-                }
-            }
-            t.profile = Some(prof);
-        }
         tests.push((t, Evidence::Start(start)));
     }
     // testable candidates first, the untestable after them (their statistic says
     // nothing), and the significant before the rest; among them by how much each explains, the
     // decrease (its likelihood gain under the largest model's noise, which all share):
     // the statistic's φ, weighted by the channels a candidate improves, decides whether
-    // it explains more than the noise, not which explains most (on the synthetic trunk
-    // trial a CoP offset of the left foot, improving the less correlated CoP channel,
-    // outscored the hidden trunk, which explains twice as much of J)
+    // it explains more than the noise, not which explains most
     tests.sort_by(|a, b| {
         b.0.testable
             .cmp(&a.0.testable)
@@ -698,12 +650,10 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
     let (mut tests, evidence): (Vec<ScoreTest>, Vec<Evidence>) = tests.into_iter().unzip();
 
     // held-out validation of the significant ones
-    let held_clock = heldout::held_clock;
-    let validated =
-        |t: &ScoreTest| t.significant && t.at_bound.is_empty() && (!t.refit || held_clock(t));
+    let validated = |t: &ScoreTest| t.significant && t.at_bound.is_empty() && !t.refit;
     let mut held_out_note: String = tests
         .iter()
-        .filter(|t| t.significant && t.refit && !held_clock(t))
+        .filter(|t| t.significant && t.refit)
         .map(|t| format!(" {} is not validated on a held-out half cycle: it was tested by a full re-fit, which gives no reduced curvature to set its noise band.", t.label))
         .collect();
     // the held-out half cycle's plain track, once (`None`: not tracked yet)
@@ -730,11 +680,8 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
                         hb.iterations,
                         if hb.converged { "" } else { ", NOT converged" }
                     );
-                    if tests.iter().any(|t| validated(t) && held_clock(t)) {
-                        held_out_note += " A plate's clock read from its profile is held there at the profile's vertex and the half cycle solved again in full (the offset moves that plate's events); its band comes from the profile's curvature.";
-                    }
                     for t in tests.iter_mut().filter(|t| validated(t)) {
-                        match heldout::check(args, hb, t, &mut held_out_note) {
+                        match heldout::check(hb, t) {
                             Ok(h) => {
                                 note!(progress,
                                     "  held-out {:<32} change {:>10.3e} ({:>5.1} % of J), noise band {:.3e}{}{}",
@@ -760,105 +707,6 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
     for t in &mut tests {
         t.settle();
     }
-    let comparison = match &reference {
-        Some(r) => {
-            let mut c = reference::compare(&tests, r);
-            // a significant difference is validated on a held-out half cycle: applied,
-            // as the candidate's value, to that half cycle of this trial and of the
-            // reference, and judged by this trial's change less the reference's, in
-            // which the model's bias on that half cycle cancels
-            if args.held_out && c.differences.iter().any(|d| d.significant) {
-                if held_base.is_none() {
-                    let tracked =
-                        heldout::held_out_base(args, &setup, base.setup.window, progress)?;
-                    if let Err(why) = &tracked {
-                        held_out_note += &format!(" No held-out half cycle in this trial ({why}): the differences from the reference are not validated.");
-                    }
-                    held_base = Some(tracked);
-                }
-                if let Some(Ok(hb)) = &held_base {
-                    let name = heldout::half_cycle_name(hb.stride, hb.mirrored);
-                    let their_base = match r.run_folder() {
-                        None => Err("its track run folder was not found".to_string()),
-                        Some(run) => read_run_setup(&run)
-                            .and_then(|s| heldout::held_out_base_like(args, &s, hb, progress))
-                            .map_err(|e| format!("{}: {e:#}", run.display())),
-                    };
-                    match &their_base {
-                        Ok(_) => held_out_note += &format!(
-                            " A candidate whose reading differs significantly from the reference's is applied, with the difference as its value, to {name} of this trial and of the reference (each tracked there with the plain model first), the same way; it is confirmed if this trial's change less the reference's exceeds the paired band (two sd of the difference of two changes, at the curvature of the reference's cost there, from its changes at the difference and at its opposite). The model's bias on that half cycle is in both changes and cancels."
-                        ),
-                        Err(why) => held_out_note += &format!(
-                            " A candidate whose reading differs significantly from the reference's is applied to {name} with the difference as its value, the same way. The reference's {name} could not be tracked ({why}), so each difference is judged by this trial's change alone, which the model's bias on that half cycle moves."
-                        ),
-                    }
-                    let differing: Vec<String> = c
-                        .differences
-                        .iter()
-                        .filter(|d| d.significant)
-                        .map(|d| d.label.clone())
-                        .collect();
-                    for t in tests.iter().filter(|t| differing.contains(&t.label)) {
-                        let probe = ScoreTest {
-                            step_values: t
-                                .parameters
-                                .iter()
-                                .map(|n| {
-                                    c.differences
-                                        .iter()
-                                        .find(|d| d.label == t.label && &d.parameter == n)
-                                        .map_or(0.0, |d| d.difference)
-                                })
-                                .collect(),
-                            ..t.clone()
-                        };
-                        let validated = heldout::check(args, hb, &probe, &mut held_out_note)
-                            .and_then(|own| match &their_base {
-                                Ok(rb) => {
-                                    let mut at = |p: &ScoreTest| {
-                                        heldout::check(args, rb, p, &mut held_out_note).map_err(
-                                            |e| e.context("on the reference's held-out half cycle"),
-                                        )
-                                    };
-                                    let theirs = at(&probe)?;
-                                    let opposite = at(&heldout::opposite(&probe))?;
-                                    Ok(heldout::paired(hb.s2, &probe, own, &theirs, &opposite))
-                                }
-                                Err(_) => Ok(own),
-                            });
-                        match validated {
-                            Ok(h) => {
-                                note!(progress,
-                                    "  held-out {:<32} its difference from the reference: change {:>10.3e} ({:>5.1} % of J){}, noise band {:.3e}{}{}",
-                                    t.label, h.change, 100.0 * h.change_fraction,
-                                    h.reference_change.map_or(String::new(), |rc| format!(", the reference's {rc:.3e}")),
-                                    h.band,
-                                    reading_note(&h), confirmed_note(&h));
-                                for d in c.differences.iter_mut().filter(|d| d.label == t.label) {
-                                    d.held_out = Some(h.clone());
-                                }
-                            }
-                            Err(e) => {
-                                held_out_note += &format!(
-                                    " {}: the held-out validation of its difference from the reference failed ({e:#}).",
-                                    t.label
-                                );
-                            }
-                        }
-                    }
-                }
-            }
-            if let Some(d) = c.differences.first() {
-                note!(progress,
-                    "against the reference {}: the largest change is {} {}: {:+.4e} ({:+.4e} against {:+.4e}), {:.1} sd{}",
-                    c.reference.display(), d.label, d.parameter, d.difference, d.reading, d.reference, d.z,
-                    if d.significant { ", significant" } else { "" });
-            }
-            Some(c)
-        }
-        None => None,
-    };
-
     let mut verified = Vec::new();
     for (t, e) in tests
         .iter()
@@ -879,30 +727,6 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
         verified.push(v);
     }
 
-    // --make-testable: re-track with the pelvis position and diagnose that run too
-    let mut testable_run = None;
-    if args.make_testable {
-        let pelvis = tests
-            .iter()
-            .any(|t| !t.testable && t.effect.kind().contains("cop"));
-        if pelvis && !setup.track_pelvis_position {
-            let retracked = heldout::retrack_with_pelvis(args, &setup, &solution, progress)?;
-            let path = retracked.output.path.clone();
-            let sub = DiagnoseRequest {
-                run: path.clone(),
-                out: None,
-                make_testable: false,
-                // the reference was diagnosed under the run's own cost, not this one's
-                reference: None,
-                ..args.clone()
-            };
-            run(&sub, progress)?;
-            testable_run = Some(path);
-        } else {
-            held_out_note += " --make-testable: no untestable candidate here that tracking the pelvis position would make testable; the others need sample targets or a second trial.";
-        }
-    }
-
     let ctx = output::Outcome {
         args,
         before: &before,
@@ -916,8 +740,7 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
         verified: &verified,
         skipped: &skipped,
         held_out_note: held_out_note.trim().to_string(),
-        testable_run,
-        comparison: comparison.as_ref(),
+        measurement: measured,
         held_out: held_base.as_ref().and_then(|b| b.as_ref().ok()),
         clock_moves_events: setup.sample_targets || setup.one_sided_targets,
     };

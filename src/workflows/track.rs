@@ -297,31 +297,6 @@ impl TrackingProblem {
         f(&tr, &cycle, w0)
     }
 
-    /// The data cost of `solution` per compared sample (its data instant, s, and cost), for
-    /// comparing solutions whose windows hold different samples
-    /// ([`crate::problems::diagnose::common_samples`]); empty without sample targets.
-    pub fn sample_costs(
-        &self,
-        solution: &GaitSolution,
-    ) -> anyhow::Result<crate::problems::diagnose::common_samples::SampleCosts> {
-        if self.setup.samples.is_empty() {
-            return Ok(Vec::new());
-        }
-        let cycle =
-            GaitCycle::new(&self.model, &self.setup.seq, &self.sets).map_err(|e| anyhow!(e))?;
-        let b = self
-            .setup
-            .cost_breakdown(
-                &self.model,
-                &self.sets,
-                &cycle.continuous,
-                solution,
-                &self.integrator,
-            )
-            .map_err(|e| anyhow!("the samples' costs: {e}"))?;
-        Ok(b.sample_costs())
-    }
-
     /// Solve the problem (interruptibly, with `progress`) and read its
     /// solution.
     pub fn solve(

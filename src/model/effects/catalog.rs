@@ -1,13 +1,46 @@
-//! The catalog of candidate effects `footfall diagnose` tries when the user names none.
+//! The catalog of candidate effects `footfall diagnose` tries when the user names none:
+//! the model's own physics.
 
 use super::EffectSpec;
 
 /// The candidate effects `footfall diagnose` tries, each at its null value (no effect)
-/// with its identifiable parameters free: ground slope, trunk mass and COM offset, passive
-/// stiffness of hip, knee and ankle (both legs, rest angle 0); the instruments, each
-/// force plate its own (clock offset and CoP offset of both plates together and of each
-/// foot's plate), gain of each foot's plate and of both read jointly) and the body mass.
+/// with its identifiable parameters free: passive stiffness of hip, knee and ankle (both
+/// legs, rest angle 0). The diagnosis adds the heel pad on a foot with a heel circle and
+/// the contact law on a volumetric foot.
+///
+/// The instruments (the plates' clocks, gains and CoP offsets) and the body (its mass,
+/// the trunk, the ground's slope) are not candidates here: the measurement stage
+/// (`footfall check`) reads them from the trial's own Newton–Euler balance, without the
+/// contact model whose misfit confounds them in a track. They can still be named with
+/// `--candidate`.
+///
+/// The actuator properties (`mtg_damping`, `mtg_strength`,
+/// `activation_time_constants`) are not default candidates either: they change what the
+/// effort regularisation charges, so they lower J whether or not the data ask for them.
+/// Ask for them with `--candidate`.
 pub fn catalog() -> Vec<EffectSpec> {
+    let mut out: Vec<EffectSpec> = ["hip", "knee", "ankle"]
+        .into_iter()
+        .map(|joint| EffectSpec::PassiveJointStiffness {
+            joint: joint.into(),
+            side: "both".into(),
+            stiffness: 0.0,
+            rest_angle: 0.0,
+            free: vec![],
+        })
+        .collect();
+    for e in &mut out {
+        e.free_all();
+    }
+    out
+}
+
+/// The instrument and body effects the measurement stage owns, each at its null value
+/// with its parameters free: the ground slope, the trunk's mass and COM offset, each
+/// plate's clock and CoP offset (both plates together and each foot's), each plate's gain
+/// (and both read jointly) and the body mass. Each is also an effect a track can add
+/// (`track --effect`), which is how a correction the check reads is applied to a model.
+pub fn measurement_effects() -> Vec<EffectSpec> {
     let mut out = vec![
         EffectSpec::GroundSlope {
             angle: 0.0,
@@ -19,15 +52,6 @@ pub fn catalog() -> Vec<EffectSpec> {
             free: vec![],
         },
     ];
-    for joint in ["hip", "knee", "ankle"] {
-        out.push(EffectSpec::PassiveJointStiffness {
-            joint: joint.into(),
-            side: "both".into(),
-            stiffness: 0.0,
-            rest_angle: 0.0,
-            free: vec![],
-        });
-    }
     for side in ["both", "right", "left"] {
         out.push(EffectSpec::ForcePlateTimeOffset {
             side: side.into(),
@@ -40,10 +64,6 @@ pub fn catalog() -> Vec<EffectSpec> {
             free: vec![],
         });
     }
-    // each foot's plate's gain, and both plates' gains read jointly: a one-plate gain
-    // holds the other plate's at zero, so it takes up a load the two plates share in
-    // double support; the joint reading says whether one plate or both alike (as a
-    // body-mass error makes them) read high (`diagnose::plate_gains`)
     for side in ["right", "left", "each"] {
         out.push(EffectSpec::ForcePlateGain {
             side: side.into(),
@@ -55,11 +75,6 @@ pub fn catalog() -> Vec<EffectSpec> {
         relative: 0.0,
         free: vec![],
     });
-    // The actuator properties (mtg_damping, mtg_strength, activation_time_constants) are
-    // not default candidates: they change what the effort regularisation charges, so they
-    // lower J without the data asking (on the synthetic trials MTG strength was "found"
-    // with no hidden effect, MTG damping ranked above a hidden heel pad). Ask for them
-    // with `--candidate`.
     for e in &mut out {
         e.free_all();
     }

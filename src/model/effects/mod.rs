@@ -14,7 +14,8 @@
 //!
 //! A user adds an effect with one entry in the model JSON (`"effects": [{"type": …}]`)
 //! or `--effect NAME` on the command line; [`EffectSpec`] lists the known kinds and
-//! [`catalog`] the candidates `footfall diagnose` tries.
+//! [`catalog`] the candidates `footfall diagnose` tries; [`measurement_effects`] the
+//! instrument and body effects the measurement check reads.
 
 mod actuator_properties;
 mod catalog;
@@ -25,7 +26,7 @@ mod spec;
 mod volumetric;
 
 pub use actuator_properties::{ActivationTimeConstants, MtgDampingScale, MtgStrengthScale};
-pub use catalog::catalog;
+pub use catalog::{catalog, measurement_effects};
 pub use geometry::FootGeometry;
 pub use instruments::{BodyMassError, ForcePlateGain};
 pub use kinds::{

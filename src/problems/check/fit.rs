@@ -123,7 +123,7 @@ impl Problem<'_> {
                 for (k, c) in active.iter().enumerate() {
                     theta[c.index()] += step[k];
                 }
-                self.hold_clocks(&mut theta);
+                self.hold_in_range(&mut theta);
                 if step
                     .iter()
                     .zip(active)
@@ -169,7 +169,16 @@ impl Problem<'_> {
         ms.map(|m| if m > 0.0 { n / m } else { 1.0 })
     }
 
-    fn hold_clocks(&self, theta: &mut [f64; NPARAM]) {
+    /// Hold θ in the range a reading can take: the clocks within `clock_limit` (alone
+    /// and with the shared one), every other parameter within [`range`]. Two near-equal
+    /// signatures read together (a body-mass error and both plates' gains) can otherwise
+    /// walk off along their shared direction to a fit of no physical meaning.
+    fn hold_in_range(&self, theta: &mut [f64; NPARAM]) {
+        for p in Param::ALL {
+            if let Some(r) = range(p) {
+                theta[p.index()] = theta[p.index()].clamp(-r, r);
+            }
+        }
         let lim = self.clock_limit;
         for c in [Param::SharedClock, Param::ClockRight, Param::ClockLeft] {
             theta[c.index()] = theta[c.index()].clamp(-lim, lim);
@@ -181,6 +190,21 @@ impl Problem<'_> {
                 theta[c.index()] -= over * total.signum();
             }
         }
+    }
+}
+
+/// The largest magnitude a reading of `p` can take (`None`: the clocks, held by the
+/// problem's `clock_limit`): twice the body-mass error the units check refuses (25 %),
+/// a CoP offset of a foot's length, a trunk COM shift of half the trunk, a mass of half
+/// a trunk and a slope of 1 in 5.
+pub fn range(p: Param) -> Option<f64> {
+    match p {
+        Param::SharedClock | Param::ClockRight | Param::ClockLeft => None,
+        Param::GainRight | Param::GainLeft | Param::BodyMass => Some(0.5),
+        Param::CopRight | Param::CopLeft => Some(0.25),
+        Param::TrunkCom => Some(0.2),
+        Param::TrunkMass => Some(20.0),
+        Param::Slope => Some(0.2),
     }
 }
 

@@ -147,6 +147,9 @@ impl Verdict {
         match self {
             Verdict::Found => "found".into(),
             Verdict::NotSignificant => "not significant".into(),
+            Verdict::NotSeparable { from } if from.is_empty() => {
+                "not separable from the effects already found together".into()
+            }
             Verdict::NotSeparable { from } => format!(
                 "not separable from {}",
                 from.iter()
@@ -353,6 +356,19 @@ fn momentum(body: &Body, signals: &Signals, at: &Instant) -> [f64; 3] {
     out
 }
 
+/// The three scales of the balance, each a factor on one side of it: the body's mass
+/// (on Σ m a and m g) and each plate's gain (on its load). Scaling all three alike
+/// scales the whole residual, so read together they fit it to zero by shrinking both
+/// sides; at most two of them can be read at once.
+const SCALES: [Param; 3] = [Param::BodyMass, Param::GainRight, Param::GainLeft];
+
+/// Whether `c` is the third of the balance's [`SCALES`] while the other two are read:
+/// those two, which it cannot be told from.
+fn scale_bound(c: Param, active: &[Param]) -> Option<Vec<Param>> {
+    let others: Vec<Param> = SCALES.into_iter().filter(|&s| s != c).collect();
+    (SCALES.contains(&c) && others.iter().all(|o| active.contains(o))).then_some(others)
+}
+
 /// Whether the signature of `c` is a near combination of the `active` ones, and if so
 /// which of them it is most like: `1 − R²` of its column on theirs below 1 %.
 fn collinear(b: &nalgebra::DMatrix<f64>, c: usize, active: &[usize]) -> Option<Vec<usize>> {
@@ -476,6 +492,10 @@ fn stepwise(p: &Problem, settings: &CheckSettings) -> (Vec<Reading>, Vec<Reading
                         from: vec![Param::BodyMass],
                     },
                 ));
+                continue;
+            }
+            if let Some(from) = scale_bound(c, &fit.active) {
+                last.push(untested(c, Verdict::NotSeparable { from }));
                 continue;
             }
             if let Some(from) = collinear(&b, c.index(), &active) {

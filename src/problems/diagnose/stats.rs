@@ -313,18 +313,6 @@ pub fn held_out_band(q: f64, s2: f64, phi: f64) -> f64 {
     -0.5 * q + 2.0 * (2.0 * phi * s2 * q).sqrt()
 }
 
-/// The noise band of a paired held-out change: a difference `θ` between two trials'
-/// readings, applied with its values fixed to the held-out half cycle of each, changes
-/// the trial's cost by `Δ` and the reference's by `Δ_ref`. Where the model's bias is the
-/// same in both trials it is the same in both changes, so without a true difference
-/// `Δ − Δ_ref` has mean 0 and, from two independent recordings, variance
-/// `2 · 2 φ s² q` ([`held_out_band`]'s, twice), with `q = θᵀHθ`; a true difference makes
-/// it `q` on average (`a θ²` in the trial, `−a θ²` in the reference, `q = 2 a θ²`). The
-/// band's upper edge is two standard deviations, `4 √(φ s² q)`.
-pub fn paired_held_out_band(q: f64, s2: f64, phi: f64) -> f64 {
-    4.0 * (phi * s2 * q).sqrt()
-}
-
 /// Effective sample size of a residual series `x` (NaN entries split it into segments,
 /// e.g. a force channel undefined in swing): `N_eff = N / (1 + 2 Σ ρ_k)`, with `ρ_k` the
 /// autocorrelation at lag `k` pooled over the segments (about their common mean) and

@@ -50,7 +50,6 @@ impl TrackingSetup {
                         phase: ph.name.clone(),
                         data,
                         largest,
-                        parts: 0,
                     });
                 }
             }
@@ -122,7 +121,6 @@ impl TrackingSetup {
                     phase: solution.phases[st.phase].name.clone(),
                     data,
                     largest,
-                    parts: sample_parts(&st.target),
                 });
             }
             nodes.sort_by(|a, b| a.time.total_cmp(&b.time));
@@ -218,33 +216,9 @@ pub struct NodeCost {
     pub data: f64,
     /// The channel contributing most.
     pub largest: String,
-    /// What a sample compares ([`sample_parts`]); 0 for a node.
-    #[serde(skip)]
-    pub parts: u8,
-}
-
-/// What a sample target compares, as bits: 1 its angles, 2 the right foot's loads, 4 the
-/// left's. A held plate clock moves a foot's loads in or out of the window (or of the
-/// phases that load that foot), so the same instant can compare other parts in another
-/// solution; such samples are not the same sample.
-pub fn sample_parts(target: &crate::problems::tracking::NodeTarget) -> u8 {
-    u8::from(target.q.iter().any(Option::is_some))
-        | (u8::from(target.feet[0].is_some()) << 1)
-        | (u8::from(target.feet[1].is_some()) << 2)
 }
 
 impl CostBreakdown {
-    /// Each entry's (time in s, [`sample_parts`], data cost): with sample targets one per
-    /// sample at its data instant, what
-    /// [`common_sample_costs`](crate::problems::diagnose::common_samples::common_sample_costs)
-    /// compares.
-    pub fn sample_costs(&self) -> crate::problems::diagnose::common_samples::SampleCosts {
-        self.nodes
-            .iter()
-            .map(|n| (n.time, n.parts, n.data))
-            .collect()
-    }
-
     /// Total cost.
     pub fn total(&self) -> f64 {
         self.cost.iter().flatten().sum()

@@ -68,8 +68,8 @@ fn free_clock(model: &GaitModel) -> bool {
 /// The offsets (s; right, left) by which, with one-sided or sample targets (cut at fixed
 /// phase boundaries), the events of each plate's force threshold are moved to the motion
 /// capture's clock (`t − δ`, as its loads are read at `t + δ`): each plate's clock offset
-/// as the model starts it. A held offset (`diagnose --profile-clocks`' points, or
-/// `--effect force_plate_time_offset:offset=0.02,free=`) so moves everything derived from
+/// as the model starts it. A held offset
+/// (`--effect force_plate_time_offset:offset=0.02,free=`) so moves everything derived from
 /// its plate; a free one moves the events by its start value only ([`FIXED_EVENTS`]).
 /// Zero with interpolated node targets, which move the events with the offset itself
 /// ([`PlateClock`]), and for events given with the data, which belong to no plate. With

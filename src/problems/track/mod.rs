@@ -887,4 +887,4 @@ pub use window::{
     WindowChoice,
 };
 
-pub use breakdown::{sample_parts, CostBreakdown, NodeCost};
+pub use breakdown::{CostBreakdown, NodeCost};

@@ -1,5 +1,4 @@
-//! Held-out validation of `diagnose`'s significant candidates, and the re-track that
-//! makes untestable candidates testable (`--make-testable`).
+//! Held-out validation of `diagnose`'s significant candidates.
 //!
 //! A candidate significant on the run's half cycle is fitted there (its truncated
 //! re-fit's values); those values, fixed, are then applied to another half cycle of the
@@ -11,16 +10,14 @@
 //! plain model is tracked once; each candidate's change
 //! of that cost, after a truncated re-fit of the other variables, must exceed its noise
 //! band ([`crate::problems::diagnose::stats::held_out_band`]) for the candidate to be
-//! "found". A difference from a reference trial (`--reference`) is judged on the same
-//! half cycle of both trials, by the trial's change less the reference's ([`paired`]).
+//! "found".
 
-use super::super::track::{TrackedRun, TrackingProblem};
+use super::super::track::TrackingProblem;
 #[allow(unused_imports)]
 use super::super::{note, Progress};
-use super::{sibling, DiagnoseRequest};
+use super::DiagnoseRequest;
 use crate::model::effects::EffectSpec;
-use crate::problems::diagnose::common_samples::common_sample_costs;
-use crate::problems::diagnose::stats::{curvature_along, held_out_band, paired_held_out_band};
+use crate::problems::diagnose::stats::{curvature_along, held_out_band};
 use crate::problems::diagnose::{
     truncated_refit, HeldOut, HeldOutReading, ScoreTest, TrackingRunSetup, MAX_STEPS, REL_STOP,
 };
@@ -88,18 +85,6 @@ pub(super) fn held_out_base(
         return track_base(args, setup, prob, stride, mirrored, progress).map(Ok);
     }
     Ok(Err(why.join("; ")))
-}
-
-/// Track the plain model of another run (`run`, a reference trial's) on the half cycle
-/// `like` was: the same stride, the legs swapped or not against that run's own.
-pub(super) fn held_out_base_like(
-    args: &DiagnoseRequest,
-    run: &TrackingRunSetup,
-    like: &HeldOutBase,
-    progress: &dyn Progress,
-) -> anyhow::Result<HeldOutBase> {
-    let (setup, prob) = half_cycle(run, like.stride, like.mirrored)?;
-    track_base(args, setup, prob, like.stride, like.mirrored, progress)
 }
 
 /// The setup and the plain problem of `run`'s half cycle `stride` (legs swapped against
@@ -282,79 +267,15 @@ fn validate(base: &HeldOutBase, t: &ScoreTest) -> anyhow::Result<HeldOut> {
     })
 }
 
-/// Apply a plate's clock read from its profile (`t`, a re-fit held at the profile's
-/// vertex) to the held-out half cycle, held there too, and solve that half cycle in
-/// full. A truncated re-fit would not do: the held offset moves the plate's events (with
-/// sample or one-sided targets), so the phases no longer sit where the plain model's
-/// solution put them, and a few Gauss–Newton steps from there understate the change.
-/// Returns the validation and whether the solve converged.
-fn validate_held_clock(
-    args: &DiagnoseRequest,
-    base: &HeldOutBase,
-    t: &ScoreTest,
-) -> anyhow::Result<(HeldOut, bool)> {
-    let specs = fixed_at(&t.effect, &t.parameters, &t.step_values, base.mirrored)?;
-    let mut prob = TrackingProblem::build(&base.setup, &specs)?;
-    prob.start_at(&base.solution)?;
-    let settings = super::refit::full_solve_settings(args, &prob);
-    let (res, sol) = prob.solve(&settings, &super::super::Quiet)?;
-    if !res.objective.is_finite() {
-        return Err(anyhow!(
-            "the held-out solve ended without a finite cost ({})",
-            res.status
-        ));
-    }
-    let converged = res.status == crate::sqp::SqpStatus::Converged;
-    // with sample targets the held offset moves the half cycle's start or end with its
-    // plate's events: the change is read over the samples both solutions compare
-    // (`common_samples`), as the profile's points are
-    let change = if base.setup.sample_targets {
-        let plain = TrackingProblem::build(&base.setup, &[])?.sample_costs(&base.solution)?;
-        let held = prob.sample_costs(&sol)?;
-        let common = common_sample_costs(&[&plain, &held]);
-        common.costs[0] - common.costs[1]
-    } else {
-        base.objective - res.objective
-    };
-    Ok((judged(base, t, change), converged))
-}
-
-/// Whether test `t` is a plate's clock read from its refined profile (a re-fit held at
-/// the vertex): validated by a full solve with the clock held, its band from the
-/// parabola's curvature. Other full re-fits (the heel pad, a free profile re-fit) have no
-/// reduced curvature and are not validated.
-pub(super) fn held_clock(t: &ScoreTest) -> bool {
-    t.refit && t.profile.as_ref().is_some_and(|p| p.refined)
-}
-
-/// Validate candidate `t` (at its `step_values`) on the held-out half cycle: a clock read
-/// from its refined profile by a full solve with it held ([`validate_held_clock`]), any
-/// other by a truncated re-fit ([`validate`]). A held-out solve that did not converge is
-/// said in `note`.
-pub(super) fn check(
-    args: &DiagnoseRequest,
-    base: &HeldOutBase,
-    t: &ScoreTest,
-    note: &mut String,
-) -> anyhow::Result<HeldOut> {
-    if held_clock(t) {
-        let (h, converged) = validate_held_clock(args, base, t)?;
-        if !converged {
-            *note += &format!(
-                " {}: its held-out solve did not converge; its change is that of the last iterate.",
-                t.label
-            );
-        }
-        Ok(h)
-    } else {
-        validate(base, t)
-    }
+/// Validate candidate `t` (at its `step_values`) on the held-out half cycle by a
+/// truncated re-fit ([`validate`]).
+pub(super) fn check(base: &HeldOutBase, t: &ScoreTest) -> anyhow::Result<HeldOut> {
+    validate(base, t)
 }
 
 /// The held-out validation of candidate `t` whose values lowered the held-out cost by
 /// `change` (negative: it rose), judged against its noise band. The band's curvature is
-/// the run's reduced curvature along the fitted values (the score test's, or a clock
-/// profile's parabola).
+/// the run's reduced curvature along the fitted values (the score test's).
 fn judged(base: &HeldOutBase, t: &ScoreTest, change: f64) -> HeldOut {
     judged_at(base, t, change, band(t, base.s2).0)
 }
@@ -374,59 +295,12 @@ fn judged_at(base: &HeldOutBase, t: &ScoreTest, change: f64, q: f64) -> HeldOut 
         band,
         // a candidate without curvature here (q = 0) has no band: it must lower the cost
         beyond_noise: change > band.max(0.0) && q > 0.0,
-        reference_change: None,
-        reference_curvature: None,
         reading: None,
     }
 }
 
-/// A difference from a reference trial (`t`, its values `θ` the difference), validated
-/// on this trial's held-out half cycle (`own`, from [`check`]) and on the same half cycle
-/// of the reference at `θ` (`theirs`) and at `−θ` (`theirs_opposite`). It is judged by
-/// `own.change − theirs.change` against the paired band ([`paired_held_out_band`]). The
-/// model's bias is a property of the half cycle: on the bundled trial the rigid ellipse
-/// wants the push-off plate's forces late and the heel-strike plate's early, and the
-/// right plate is the push-off plate in the tracked half cycle and the heel-strike plate
-/// in the held-out one. So the difference applied from
-/// zero is judged against that half cycle's bias. In the two trials' changes the bias is
-/// the same and cancels. The band's curvature is the held-out half cycle's own,
-/// `q = −(Δ_ref(θ) + Δ_ref(−θ))` (a second difference of the reference's cost, which
-/// does not see this trial's held-out data). The run's curvature can differ from it by a
-/// factor of two: on the synthetic clock trial of `tests/diagnose_stats.rs` the held-out
-/// change was half the run's `a θ²`. Without curvature there (`q ≤ 0`) nothing is
-/// confirmed. `s2` is the residual mean square `J/N` on this trial's held-out half cycle.
-pub(super) fn paired(
-    s2: f64,
-    t: &ScoreTest,
-    own: HeldOut,
-    theirs: &HeldOut,
-    theirs_opposite: &HeldOut,
-) -> HeldOut {
-    let q = -(theirs.change + theirs_opposite.change);
-    // without curvature there is no band (0 here, kept finite for summary.json), and
-    // nothing is confirmed
-    let band = if q > 0.0 {
-        paired_held_out_band(q, s2, t.inflation)
-    } else {
-        0.0
-    };
-    // the paired change reads the difference as the fraction `(Δ − Δ_ref)/q` of the
-    // applied one (1 for a true difference, 0 for none), sd `band/2q` = `2√(φ s²/q)`
-    let reading = (q > 0.0)
-        .then(|| HeldOutReading::new(q, (own.change - theirs.change) / q, band / (2.0 * q)));
-    HeldOut {
-        band,
-        beyond_noise: q > 0.0 && own.change - theirs.change > band,
-        reference_change: Some(theirs.change),
-        reference_curvature: Some(q),
-        reading,
-        ..own
-    }
-}
-
-/// `t` with its values negated: the reference's held-out cost at `−θ`, for the
-/// curvature of [`paired`].
-pub(super) fn opposite(t: &ScoreTest) -> ScoreTest {
+/// `t` with its values negated, for the held-out half cycle's own curvature along them.
+fn opposite(t: &ScoreTest) -> ScoreTest {
     ScoreTest {
         step_values: t.step_values.iter().map(|v| -v).collect(),
         ..t.clone()
@@ -449,7 +323,7 @@ fn band(t: &ScoreTest, s2: f64) -> (f64, f64) {
 /// is tracked.
 pub(super) fn hint(effect: &EffectSpec, run: &TrackingRunSetup) -> String {
     if effect.kind().contains("cop") && !run.track_pelvis_position {
-        "the free pelvis position absorbs it: track the pelvis position too (`footfall track --track-pelvis-position`, or `diagnose --make-testable`, which re-tracks the run so)".into()
+        "the free pelvis position absorbs it: track the pelvis position too (`footfall track --track-pelvis-position`)".into()
     } else if !run.sample_targets {
         "the other variables (most likely the actuators) absorb it under this cost: compare every sample at its own instant (`footfall track --sample-targets`), or fit it on a second trial of the same subject".into()
     } else {
@@ -457,39 +331,15 @@ pub(super) fn hint(effect: &EffectSpec, run: &TrackingRunSetup) -> String {
     }
 }
 
-/// Re-track the run with the pelvis position tracked, from its solution, into
-/// `<RUN>+pelvis-position` (`--make-testable`).
-pub(super) fn retrack_with_pelvis(
-    args: &DiagnoseRequest,
-    run: &TrackingRunSetup,
-    solution: &GaitSolution,
-    progress: &dyn Progress,
-) -> anyhow::Result<TrackedRun> {
-    let setup = TrackingRunSetup {
-        track_pelvis_position: true,
-        ..run.clone()
-    };
-    let dir = sibling(&args.run, "+pelvis-position");
-    {
-        note!(
-            progress,
-            "--make-testable: re-tracking with the pelvis position tracked → {}",
-            dir.display()
-        );
-    }
-    super::refit::solve_into(args, &setup, &[], solution, dir, progress)
-}
-
 #[cfg(test)]
 mod tests {
-    use super::{band, paired};
+    use super::band;
     use crate::model::effects::EffectSpec;
     use crate::problems::diagnose::refit_test;
     use crate::problems::diagnose::stats::identifiability;
-    use crate::problems::diagnose::HeldOut;
 
-    /// A right-plate clock read with the curvature `a` of a profile of the bundled
-    /// trial's size, at residual mean square `s2` and variance inflation `phi`.
+    /// A right-plate clock read with the curvature `a` of the bundled trial's size, at
+    /// residual mean square `s2` and variance inflation `phi`.
     const A: f64 = 600.6;
     const S2: f64 = 0.3994 / 456.0;
     const PHI: f64 = 5.2;
@@ -505,13 +355,12 @@ mod tests {
         )
     }
 
-    /// A clock read from its profile's parabola `J ≈ J* + a (δ − δ*)²` and applied to
-    /// held-out data with the same offset lowers that cost by about `a δ*²`. That clears
-    /// the held-out band exactly when the reading lies more than 2 sd from zero, the sd
-    /// being the one the profile reports (`√(φ s²/a)`): the band and the profile's sd
-    /// are one noise model.
+    /// A reading on a cost `J ≈ J* + a (δ − δ*)²` applied to held-out data with the same
+    /// offset lowers that cost by about `a δ*²`. That clears the held-out band exactly
+    /// when the reading lies more than 2 sd from zero, the sd being the one the reading
+    /// reports (`√(φ s²/a)`): the band and the reading's sd are one noise model.
     #[test]
-    fn a_profile_reading_clears_its_held_out_band_beyond_two_sd() {
+    fn a_reading_clears_its_held_out_band_beyond_two_sd() {
         let (a, s2, phi) = (A, S2, PHI);
         let (name, clock) = right_clock();
         let sd = (phi * s2 / a).sqrt();
@@ -537,79 +386,6 @@ mod tests {
         }
     }
 
-    /// A difference `v` between a trial's clock reading and a reference's, both biased
-    /// by the model on the held-out half cycle (its cost there `a₂ (x − r)²` in the
-    /// reference, `a₂ (x − r − v)²` in the trial): applied from zero, it changes the
-    /// trial's cost by `a₂ (2 r v + v²)` and the reference's by `a₂ (2 r v − v²)`, and
-    /// at `−v` the reference's by `−a₂ (2 r v + v²)`. The paired change `2 a₂ v²` does not
-    /// depend on the bias `r`; the curvature `q = 2 a₂ v²` comes from the reference's two
-    /// changes, whatever the run's curvature `a`. It clears the paired band exactly when
-    /// `v` lies more than 2 sd of the difference (`√2` times each reading's sd at the
-    /// held-out curvature) from zero. Judged on the trial's change alone, a bias against
-    /// the difference hides it.
-    #[test]
-    fn a_paired_held_out_change_cancels_the_half_cycles_bias() {
-        let (a, s2, phi) = (A, S2, PHI);
-        let (name, clock) = right_clock();
-        let held = |change: f64| HeldOut {
-            stride: 1,
-            mirrored: true,
-            window: (0.6, 1.2),
-            values: vec![],
-            objective: 1.6,
-            change,
-            change_fraction: change / 1.6,
-            band: 0.0,
-            beyond_noise: false,
-            reference_change: None,
-            reference_curvature: None,
-            reading: None,
-        };
-        for a2 in [a, 0.5 * a] {
-            let sd = (phi * s2 / a2).sqrt();
-            for r in [-0.045, -0.01, 0.0, 0.03] {
-                for k in [0.5, 1.5, 1.95, 2.05, 3.0, 6.0] {
-                    let v = k * 2f64.sqrt() * sd;
-                    let mut t = refit_test(&clock, vec![name.clone()], vec![v], 1.7, 1.6, 456, 9);
-                    t.set_inflation(phi);
-                    let id = identifiability(
-                        vec![name.clone()],
-                        vec![vec![0.5 / a]],
-                        vec![0.1],
-                        s2,
-                        phi,
-                    );
-                    t.set_identifiability(id, None);
-                    let own = held(a2 * (2.0 * r * v + v * v));
-                    let theirs = held(a2 * (2.0 * r * v - v * v));
-                    let opposite = held(-a2 * (2.0 * r * v + v * v));
-                    let h = paired(s2, &t, own, &theirs, &opposite);
-                    assert_eq!(h.reference_change, Some(theirs.change));
-                    let q = h.reference_curvature.unwrap();
-                    assert!((q - 2.0 * a2 * v * v).abs() < 1e-12 * q.max(1e-12), "q {q}");
-                    assert!(((h.change - theirs.change) - q).abs() < 1e-12);
-                    assert_eq!(
-                        h.beyond_noise,
-                        k > 2.0,
-                        "a₂ {a2}, bias {r}, k {k}: paired change {}, band {}",
-                        h.change - theirs.change,
-                        h.band
-                    );
-                }
-            }
-        }
-        // a reference whose held-out cost does not curve along the difference confirms
-        // nothing
-        let mut t = refit_test(&clock, vec![name.clone()], vec![0.02], 1.7, 1.6, 456, 9);
-        t.set_inflation(phi);
-        let flat = paired(s2, &t, held(0.5), &held(0.0), &held(0.0));
-        assert!(!flat.beyond_noise && flat.band == 0.0);
-        let sd = (phi * s2 / a).sqrt();
-        // the rigid ellipse's held-out bias on the bundled trial is of this size: judged
-        // alone, the trial's change of a difference 6 sd from zero is a rise
-        let v = 6.0 * 2f64.sqrt() * sd;
-        assert!(a * (2.0 * -0.045 * v + v * v) < 0.0);
-    }
     /// Both plates' gains read jointly are applied as one fixed gain per plate at its own
     /// value; on the other leg's half cycle each value moves to the other plate.
     #[test]

@@ -81,7 +81,7 @@ pub(super) fn refit(
 }
 
 /// [`refit`] into the run folder `dir`.
-pub(super) fn refit_into(
+fn refit_into(
     args: &DiagnoseRequest,
     setup: &TrackingRunSetup,
     effect: &EffectSpec,
@@ -108,7 +108,7 @@ pub(super) fn refit_into(
 }
 
 /// Track `setup` with `effects` added, from `start`, into the run folder `dir` (a
-/// candidate's re-fit, or `--make-testable`'s re-track with no effect added).
+/// candidate's re-fit).
 pub(super) fn solve_into(
     args: &DiagnoseRequest,
     setup: &TrackingRunSetup,
@@ -233,7 +233,7 @@ pub(super) fn test_by_refit(
 
 /// Each channel's mean error before and after a re-fit, from its diff against the run:
 /// `(channel, unit, before, after)`, as a test's `expected_channels`.
-pub(super) fn channel_changes(diff: &RunDiff) -> Vec<(String, String, f64, f64)> {
+fn channel_changes(diff: &RunDiff) -> Vec<(String, String, f64, f64)> {
     diff.channels
         .iter()
         .filter_map(|c| {

@@ -1,7 +1,7 @@
 //! Kept starting points for a diagnosis's own solves (`diagnose --start DIR`).
 //!
 //! A diagnosis solves whole problems: a candidate's verifying re-fit, the heel pad's test
-//! by a re-fit, the held-out half cycle's plain track, `--make-testable`'s re-track. Each
+//! by a re-fit, the held-out half cycle's plain track. Each
 //! starts where the diagnosis has got to (the run's solution, a truncated re-fit's point,
 //! the data of the held-out half cycle), and takes 5–25 SQP iterations from there. An
 //! earlier diagnosis of the same run has already solved the same problems: its re-fit run
@@ -20,7 +20,6 @@
 use super::super::track::TrackingProblem;
 use super::super::{note, warn_note, Progress};
 use super::DiagnoseRequest;
-use crate::model::effects::EffectSpec;
 use crate::problems::diagnose::TrackingRunSetup;
 use crate::problems::evaluation::GaitSolution;
 use anyhow::{anyhow, bail, Context};
@@ -112,52 +111,21 @@ fn find(
     Ok(Some((dir, solution)))
 }
 
-/// The folder among the kept solutions of `starts` that solves `want`: the first of the
-/// same problem; failing that, the one of the same problem with its plates' clocks held
-/// nearest `want`'s (a profile's re-fit held at its parabola's vertex, which moves with
-/// the points' costs in their last digits). Never another effect set's, cost's or half
-/// cycle's, nor one with another plate's clock held or a clock free.
+/// The first folder among the kept solutions of `starts` that solves `want`: the same
+/// effects, half cycle and cost; never another's.
 fn find_folder(starts: &[PathBuf], want: &TrackingRunSetup) -> anyhow::Result<Option<PathBuf>> {
     if starts.is_empty() {
         return Ok(None);
     }
-    let (exact, (loose, held)) = (key(want)?, held_clocks(want)?);
-    let mut nearest: Option<(f64, PathBuf)> = None;
+    let exact = key(want)?;
     for dir in kept_solutions(starts)? {
         let setup = TrackingRunSetup::read(&dir.join("setup.json"))
             .map_err(|e| anyhow!("--start {}: {e}", dir.display()))?;
         if key(&setup)? == exact {
             return Ok(Some(dir));
         }
-        let (theirs, at) = held_clocks(&setup)?;
-        if !held.is_empty() && theirs == loose && at.len() == held.len() {
-            let distance = held
-                .iter()
-                .zip(&at)
-                .map(|(a, b)| (a - b).abs())
-                .sum::<f64>();
-            if nearest.as_ref().is_none_or(|(d, _)| distance < *d) {
-                nearest = Some((distance, dir));
-            }
-        }
     }
-    Ok(nearest.map(|(_, dir)| dir))
-}
-
-/// [`key`] with each held plate clock's offset left out, and those offsets (s) in the
-/// setup's order: the problem up to where its clocks are held.
-fn held_clocks(setup: &TrackingRunSetup) -> anyhow::Result<(serde_json::Value, Vec<f64>)> {
-    let mut offsets = Vec::new();
-    let mut loose = setup.clone();
-    for e in &mut loose.effects {
-        if let EffectSpec::ForcePlateTimeOffset { offset, free, .. } = e {
-            if free.is_empty() {
-                offsets.push(*offset);
-                *offset = 0.0;
-            }
-        }
-    }
-    Ok((key(&loose)?, offsets))
+    Ok(None)
 }
 
 /// Keep `solution` of the problem `setup` in `dir` (`setup.json`, `solution.json`), so
@@ -215,6 +183,7 @@ pub(super) fn start_from_kept(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::effects::EffectSpec;
 
     fn setup(effects: &[&str], stride: Option<usize>) -> TrackingRunSetup {
         let mut s: TrackingRunSetup = serde_json::from_value(serde_json::json!({
@@ -273,80 +242,5 @@ mod tests {
             .unwrap_err()
             .to_string();
         assert!(e.contains("holds no solution"), "{e}");
-    }
-
-    /// A held clock with no exact match starts from the kept solution of the same problem
-    /// whose clock is held nearest, never from one with another plate's clock, another
-    /// effect set, a free clock or another half cycle; an exact match wins over a nearer one.
-    #[test]
-    fn a_held_clock_starts_from_the_nearest_kept_clock_of_the_same_problem_only() {
-        let tmp = tempfile::tempdir().unwrap();
-        let clock = |side: &str, offset: f64, more: &[&str]| {
-            let spec = format!("force_plate_time_offset:side={side},offset={offset},free=");
-            let mut effects = vec![spec.as_str()];
-            effects.extend_from_slice(more);
-            setup(&effects, None)
-        };
-        let kept = tmp.path().join("kept");
-        keep(&kept.join("a_left_+20"), &clock("left", 0.020, &[]));
-        keep(&kept.join("b_left_-20"), &clock("left", -0.020, &[]));
-        keep(&kept.join("c_right_-5"), &clock("right", -0.005, &[]));
-        keep(
-            &kept.join("d_left_-6_knee"),
-            &clock("left", -0.006, &["passive_joint_stiffness:joint=knee"]),
-        );
-        let mut other_half = clock("left", -0.006, &[]);
-        other_half.stride = Some(2);
-        keep(&kept.join("e_left_-6_stride"), &other_half);
-        keep(
-            &kept.join("f_left_free"),
-            &setup(&["force_plate_time_offset:side=left,offset=-0.006"], None),
-        );
-        let starts = [kept.clone()];
-        let found = |want: &TrackingRunSetup| {
-            find_folder(&starts, want)
-                .unwrap()
-                .map(|d| d.file_name().unwrap().to_string_lossy().into_owned())
-        };
-        // the left clock held at -6 ms: the nearest left clock of the same problem, -20 ms
-        assert_eq!(
-            found(&clock("left", -0.006, &[])).as_deref(),
-            Some("b_left_-20")
-        );
-        assert_eq!(
-            found(&clock("left", 0.012, &[])).as_deref(),
-            Some("a_left_+20")
-        );
-        // the right clock held: only the right plate's kept clock
-        assert_eq!(
-            found(&clock("right", 0.030, &[])).as_deref(),
-            Some("c_right_-5")
-        );
-        // an exact match is taken though a nearer one comes first by name
-        keep(&kept.join("0_left_+15"), &clock("left", 0.015, &[]));
-        assert_eq!(
-            found(&clock("left", 0.020, &[])).as_deref(),
-            Some("a_left_+20")
-        );
-        // no held clock of this problem: none
-        assert_eq!(
-            found(&clock(
-                "left",
-                -0.006,
-                &["passive_joint_stiffness:joint=hip"]
-            )),
-            None
-        );
-        let mut third_half = clock("left", -0.006, &[]);
-        third_half.stride = Some(3);
-        assert_eq!(found(&third_half), None);
-        assert_eq!(
-            found(&setup(
-                &["force_plate_time_offset:side=left,offset=0.01"],
-                None
-            )),
-            None
-        );
-        assert_eq!(found(&setup(&[], None)), None);
     }
 }

@@ -1,11 +1,9 @@
 //! A diagnosis's `summary.json` as one serde struct, [`DiagnosisSummary`]: `diagnose`
-//! fills and writes it, and `diagnose --reference` reads a reference's back through it.
+//! fills and writes it, and readers (the report, tests, scripts) read it back through it.
 //! Reading names the file and the JSON path of a field that is missing or of the wrong
 //! kind ([`crate::runfolder::read_json`]); the fields a reader needs (`command`,
 //! `ranking`) are required, the rest default when absent.
 
-use super::plate_clocks::PlateClocks;
-use super::reference::Comparison;
 use crate::problems::diagnose::ScoreTest;
 use crate::runfolder::{read_json, RunFileError};
 use serde::{Deserialize, Serialize};
@@ -120,16 +118,10 @@ pub struct DiagnosisSummary {
     /// How the held-out validation went (empty when none was needed).
     #[serde(default)]
     pub held_out_note: String,
-    /// The run re-tracked by `--make-testable`.
-    #[serde(default)]
-    pub testable_run: Option<PathBuf>,
-    /// The readings against a reference trial's (`--reference`).
-    #[serde(default)]
-    pub reference: Option<Comparison>,
-    /// Both plates' clocks read jointly from the three clock profiles, when all three were
-    /// profiled (`Err`: why there is no reading).
+    /// The measurement stage's verdict (`footfall check`), shown first (`None`: the
+    /// trial could not be checked).
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub plate_clocks: Option<Result<PlateClocks, String>>,
+    pub measurement: Option<String>,
     /// The verdict in a sentence.
     #[serde(default)]
     pub verdict: String,
