@@ -437,6 +437,14 @@ fn single_effect(name: &str, how: Setup, floor_factor: f64, named: &[&str]) {
         );
     }
     if name == "ground_slope" {
+        // the measurement stage, first, reads the slope from the trial's own balance and
+        // says how to correct for it before reading the model's physics
+        let measured = d["measurement"].as_str().expect("the measurement stage");
+        assert!(
+            measured.contains("ground slope: +1.")
+                && measured.contains("re-track the run with `--effect ground_slope:angle="),
+            "{measured}"
+        );
         // the diagnosis report renders with its ranking, the before/after table and plot
         let url = format!("file://{}-diagnose/report.html", run.display());
         let dom = String::from_utf8(common::chromium(

@@ -400,7 +400,9 @@ const UNSCORABLE_PAD: &str = "not scored — it has no null value (the rigid hee
 
 /// The first stage: the run's trial checked against itself (whole-body Newton–Euler,
 /// no model fitted), reported before the model stage. Returns its text (`None` where the
-/// trial cannot be read so, which is said).
+/// trial cannot be read so, which is said). Where it finds an instrument or body effect
+/// the run's model lacks, the text says that the model stage reads the model against a
+/// measurement not yet corrected, and how to correct it first.
 fn measurement_stage(
     setup: &crate::problems::diagnose::TrackingRunSetup,
     progress: &dyn Progress,
@@ -421,10 +423,24 @@ fn measurement_stage(
     };
     match super::check::read(&req) {
         Ok((_, check, _)) => {
-            let text = format!(
+            let mut text = format!(
                 "stage 1, the measurement against itself (footfall check):\n{}",
                 super::check::output::verdict_text(&check)
             );
+            let missing: Vec<String> = super::check::effect_lines(&check)
+                .into_iter()
+                .filter(|line| !held_already(setup, line))
+                .collect();
+            if !missing.is_empty() {
+                text += &format!(
+                    "The model stage below reads the model against this measurement as it is: what the check found also moves the model's misfit. To read the model's physics alone, re-track the run with {} (or on the check's corrected trial, `footfall check TRIAL --out DIR` then `--data DIR/corrected/trial.csv`) and diagnose that run.\n",
+                    missing
+                        .iter()
+                        .map(|l| format!("`--effect {l}`"))
+                        .collect::<Vec<_>>()
+                        .join(" ")
+                );
+            }
             progress.result(&text);
             Some(text)
         }
@@ -435,6 +451,12 @@ fn measurement_stage(
             None
         }
     }
+}
+
+/// Whether the run's model already holds an effect of the kind `line` (an `--effect`
+/// line of the check) adds.
+fn held_already(setup: &crate::problems::diagnose::TrackingRunSetup, line: &str) -> bool {
+    EffectSpec::parse_cli(line).is_ok_and(|spec| setup.effects.iter().any(|e| e.overlaps(&spec)))
 }
 
 /// Run `diagnose` as `args` describes, reporting to `progress`: the measurement stage

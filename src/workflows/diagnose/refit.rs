@@ -160,8 +160,7 @@ pub(super) fn full_solve_settings(
     tracking_sqp_settings(args.tol, args.max_iter, None, solve_hessian(prob), None)
 }
 
-/// The Hessian of the diagnosis's own solves (re-fits, held-out half cycles, clock
-/// profiles). The exact Hessian converges in fewer iterations, but with sample targets its
+/// The Hessian of the diagnosis's own solves (re-fits, held-out half cycles). The exact Hessian converges in fewer iterations, but with sample targets its
 /// curvature is integrated piece by piece between an interval's samples, so an iteration
 /// costs more the more samples an interval holds; Gauss–Newton's costs the same. Measured
 /// on the double-circle heel pad's re-fit (release build, `diagnose --candidate
@@ -171,10 +170,8 @@ pub(super) fn full_solve_settings(
 /// against 18 (51 s; both with another job beside). So exact, unless the samples outnumber
 /// the intervals [`GAUSS_NEWTON_SAMPLES_PER_INTERVAL`] times and the foot is rigid. A
 /// compliant foot's solves take the exact mode's Gauss–Newton steps until they stall and
-/// its curvature after (integrated backward): the 600 Hz gain trial's left
-/// clock held at +20 ms converged (KKT 8.3e-4) in 15 iterations and 28 s, 13 of them
-/// Gauss–Newton, where Gauss–Newton alone stopped at its 40-iteration limit after 57 s,
-/// its violation still 1.7e-4.
+/// its curvature after (integrated backward), where Gauss–Newton alone can stop at its
+/// iteration limit with the constraints still violated.
 pub(super) fn solve_hessian(prob: &TrackingProblem) -> HessianMode {
     if prob.model.has_volumetric_contacts() {
         return HessianMode::Exact;
