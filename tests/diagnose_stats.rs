@@ -287,13 +287,14 @@ fn swapping_the_legs_gives_the_other_legs_half_cycles() {
 /// Held-out validation on the real bundled trial. Its kinematics hold one half cycle
 /// from a left heel strike to a right one, which the run tracks, and the other leg's two
 /// (mirrored), which held-out validation may use. The MTG damping (an opt-in candidate,
-/// `--candidate mtg_damping`) is significant in-sample and confirmed on the other leg's
-/// half cycle before the run's (0.624–1.252 s), whose data the fit never saw: the data
-/// ask for less damping than the model's η = 2.0 (`footfall diagnose` of the
-/// bundled track with check points, release build: statistic 46.3 against 10.8, change
-/// −0.966 of η, held-out change 7.0 against a noise band of 0.50). About 65 s here.
+/// `--candidate mtg_damping`) is significant in-sample and its fitted values, applied to
+/// the other leg's half cycle before the run's (0.624–1.252 s), whose data the fit never
+/// saw, lower that half cycle's cost beyond its band. What this shows is the validation
+/// on real data, not that the subject's damping is lower than the model's: a free damping
+/// also runs towards its lower bound on the model-made trial without a hidden effect,
+/// because it lowers what the effort regularisation charges (`model::effects::catalog`).
 #[test]
-fn the_real_trials_mtg_damping_is_found_and_confirmed_on_the_other_legs_half_cycle() {
+fn the_real_trials_mtg_damping_is_confirmed_on_the_other_legs_half_cycle() {
     let dir = tempfile::tempdir().unwrap();
     let run = dir.path().join("untouched");
     let t = std::time::Instant::now();
@@ -332,7 +333,7 @@ fn the_real_trials_mtg_damping_is_found_and_confirmed_on_the_other_legs_half_cyc
     assert_eq!(t["verdict"], "found");
     assert!(
         t["step_values"][0].as_f64().unwrap() < 0.0,
-        "less damping than the model's: {}",
+        "less damping than the model's, as the effort regularisation prefers: {}",
         t["step_values"]
     );
 }

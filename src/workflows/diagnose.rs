@@ -13,6 +13,7 @@ use super::track::{read_run_setup, TrackingProblem};
 #[allow(unused_imports)]
 use super::{note, warn_note, Progress};
 use crate::model::effects::{catalog, EffectSpec};
+use crate::model::GaitModel;
 use crate::problems::diagnose::stats::{candidate_identifiability_at, variance_inflation};
 use crate::problems::diagnose::{
     channel_means, channel_series, gauss_newton_decrease, refit_point, score_test_from, ScoreTest,
@@ -459,6 +460,16 @@ fn held_already(setup: &crate::problems::diagnose::TrackingRunSetup, line: &str)
     EffectSpec::parse_cli(line).is_ok_and(|spec| setup.effects.iter().any(|e| e.overlaps(&spec)))
 }
 
+/// What every step of a diagnosis reads: the request, the run's setup, solution and
+/// summary, and where progress goes.
+struct RunInputs<'a> {
+    args: &'a DiagnoseRequest,
+    setup: &'a TrackingRunSetup,
+    solution: &'a GaitSolution,
+    before: &'a RunSummary,
+    progress: &'a dyn Progress,
+}
+
 /// Run `diagnose` as `args` describes, reporting to `progress`: the measurement stage
 /// first, then the model stage.
 pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()> {
@@ -476,24 +487,54 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
     if let Some(text) = &measured {
         folder.write("measurement.md", text.as_bytes())?;
     }
-    // the default set (the catalog, and the heel pad or the contact law where the foot
-    // has them) when no candidate is named or `catalog` is among them
-    let with_catalog = args.candidates.is_empty() || args.candidates.iter().any(|c| c == CATALOG);
-    let mut candidates: Vec<EffectSpec> = if with_catalog { catalog() } else { Vec::new() };
-    for c in args.candidates.iter().filter(|c| *c != CATALOG) {
-        let spec = EffectSpec::parse_cli(c).map_err(|e| anyhow!("--candidate: {e}"))?;
-        if !candidates.contains(&spec) {
-            candidates.push(spec);
-        }
-    }
+    let run = RunInputs {
+        args,
+        setup: &setup,
+        solution: &solution,
+        before: &before,
+        progress,
+    };
     // the baseline: the run's own problem at its solution
     let mut base = linearisation(TrackingProblem::build(&setup, &[])?);
     base.setup
         .start_from(&solution)
         .map_err(|e| anyhow!("{}: {e}", args.run.display()))?;
-    let (objective, base_decrease, rows) = decrease_at_solution(&base)?;
+    let (resid, phi_all) = baseline_residuals(&run, &base)?;
+    let candidates = candidates_of(args, &base.model)?;
+    let (mut tests, evidence, skipped, full) =
+        score_all(&run, &base, &resid, phi_all, &candidates)?;
+    let (held_out_note, held_base) = validate_held_out(&run, base.setup.window, &mut tests)?;
+    for t in &mut tests {
+        t.settle();
+    }
+    let verified = verify_found(&run, resid.objective, &tests, &evidence)?;
+    let ctx = output::Outcome {
+        args,
+        before: &before,
+        objective: resid.objective,
+        rows: resid.rows,
+        resid: &resid,
+        phi: phi_all,
+        noise: full.as_ref(),
+        tests: &tests,
+        evidence: &evidence,
+        verified: &verified,
+        skipped: &skipped,
+        held_out_note: held_out_note.trim().to_string(),
+        measurement: measured,
+        held_out: held_base.as_ref().and_then(|b| b.as_ref().ok()),
+        clock_moves_events: setup.sample_targets || setup.one_sided_targets,
+    };
+    output::write(&ctx, folder, progress)
+}
+
+/// The run's own residuals at its solution (`base`): its cost, the decrease a
+/// truncated re-fit still makes, and each channel's variance inflation; with the
+/// inflation over all channels alike.
+fn baseline_residuals(run: &RunInputs, base: &TrackingProblem) -> anyhow::Result<(Residuals, f64)> {
+    let (objective, base_decrease, rows) = decrease_at_solution(base)?;
     let series =
-        base.with_transcription(|tr, cycle, w| residual_series(&base, tr, &cycle.continuous, &w))?;
+        base.with_transcription(|tr, cycle, w| residual_series(base, tr, &cycle.continuous, &w))?;
     let values: Vec<Vec<f64>> = series.iter().map(|s| s.1.clone()).collect();
     let (inflation, phi_all) = variance_inflation(&values, &[]);
     let resid = Residuals {
@@ -503,60 +544,64 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
         series,
         inflation,
     };
-    {
-        note!(progress,
-            "diagnosing {}: J = {objective:.6} over {rows} data residuals (mean square {:.3e}); Gauss–Newton decrease left at the solution {base_decrease:.2e}; variance inflation of the correlated residuals {phi_all:.1} ({})",
-            args.run.display(),
-            objective / rows as f64,
-            resid.series.iter().zip(&resid.inflation).map(|(s, p)| format!("{} {}", s.0, p.map_or("—".into(), |p| format!("{p:.1}")))).collect::<Vec<_>>().join(", ")
-        );
-    }
-    let mut tests = Vec::new();
-    let mut skipped = Vec::new();
-    // the heel pad, not in the catalog, is a candidate on feet with a heel circle: tested
-    // by a re-fit on runs with sample or one-sided targets, named as not scored on others
-    let pad = EffectSpec::parse_cli("heel_pad_compliance").map_err(|e| anyhow!(e))?;
-    if with_catalog
-        && !candidates.contains(&pad)
-        && base
-            .model
-            .contacts
-            .iter()
-            .any(|c| c.name.ends_with(".heel"))
-    {
-        candidates.push(pad.clone());
-    }
-    // the volumetric contact law is a candidate on feet with volumetric primitives, its
-    // null value the foot file's law ("is the law the one the forces ask for?")
-    if with_catalog && base.model.has_volumetric_contacts() {
-        let law = EffectSpec::parse_cli("volumetric_contact").map_err(|e| anyhow!(e))?;
-        if !candidates.contains(&law) {
-            candidates.push(law);
+    note!(run.progress,
+        "diagnosing {}: J = {objective:.6} over {rows} data residuals (mean square {:.3e}); Gauss–Newton decrease left at the solution {base_decrease:.2e}; variance inflation of the correlated residuals {phi_all:.1} ({})",
+        run.args.run.display(),
+        objective / rows as f64,
+        resid.series.iter().zip(&resid.inflation).map(|(s, p)| format!("{} {}", s.0, p.map_or("—".into(), |p| format!("{p:.1}")))).collect::<Vec<_>>().join(", ")
+    );
+    Ok((resid, phi_all))
+}
+
+/// The candidates to test: the named ones, and the default set (the catalog, the heel
+/// pad on a foot with a heel circle, the contact law on a volumetric foot) when none is
+/// named or [`CATALOG`] is among them.
+fn candidates_of(args: &DiagnoseRequest, model: &GaitModel) -> anyhow::Result<Vec<EffectSpec>> {
+    let with_catalog = args.candidates.is_empty() || args.candidates.iter().any(|c| c == CATALOG);
+    let mut candidates: Vec<EffectSpec> = if with_catalog { catalog() } else { Vec::new() };
+    for c in args.candidates.iter().filter(|c| *c != CATALOG) {
+        let spec = EffectSpec::parse_cli(c).map_err(|e| anyhow!("--candidate: {e}"))?;
+        if !candidates.contains(&spec) {
+            candidates.push(spec);
         }
     }
-    // each score-tested candidate's problem, built once (the model, phases and trial read
-    // from their files): the largest model is made of those the model accepts, and each
-    // is then score-tested
-    let problems: Vec<Option<anyhow::Result<TrackingProblem>>> = candidates
+    if !with_catalog {
+        return Ok(candidates);
+    }
+    // the heel pad, tested by a re-fit on runs with sample or one-sided targets, named as
+    // not scored on others
+    let mut extra = Vec::new();
+    if model.contacts.iter().any(|c| c.name.ends_with(".heel")) {
+        extra.push("heel_pad_compliance");
+    }
+    // the volumetric contact law, its null value the foot file's law ("is the law the
+    // one the forces ask for?")
+    if model.has_volumetric_contacts() {
+        extra.push("volumetric_contact");
+    }
+    for name in extra {
+        let spec = EffectSpec::parse_cli(name).map_err(|e| anyhow!(e))?;
+        if !candidates.contains(&spec) {
+            candidates.push(spec);
+        }
+    }
+    Ok(candidates)
+}
+
+/// Whether the run's model already holds an effect that candidate `c` would duplicate.
+fn in_the_model(setup: &TrackingRunSetup, c: &EffectSpec) -> bool {
+    setup
+        .effects
         .iter()
-        .map(|c| {
-            (c.kind() != pad.kind()
-                && !setup
-                    .effects
-                    .iter()
-                    .any(|e| e.overlaps(c) && !e.composes_with(c)))
-            .then(|| TrackingProblem::build(&setup, std::slice::from_ref(c)))
-        })
-        .collect();
-    let accepted: Vec<&EffectSpec> = candidates
-        .iter()
-        .zip(&problems)
-        .filter(|(_, p)| matches!(p, Some(Ok(_))))
-        .map(|(c, _)| c)
-        .collect();
-    let full = match full_model_series(&setup, &solution, &accepted) {
+        .any(|e| e.overlaps(c) && !e.composes_with(c))
+}
+
+/// The largest model's residuals (every accepted candidate at once), said in a line;
+/// `None` with fewer than two, or where its re-fit failed (said as a warning).
+fn largest_model(run: &RunInputs, accepted: &[&EffectSpec], objective: f64) -> Option<FullModel> {
+    match full_model_series(run.setup, run.solution, accepted) {
         Ok(Some(full)) => {
-            note!(progress,
+            note!(run.progress,
                 "the largest model ({} candidates at once: {}) lowers J from {objective:.6} to {:.6}; its residuals are the noise every statistic is measured against",
                 full.effects.len(),
                 full.effects.join(", "),
@@ -566,66 +611,74 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
         }
         Ok(None) => None,
         Err(e) => {
-            warn_note!(progress,
+            warn_note!(run.progress,
                 "the largest model (every candidate at once) could not be re-fitted ({e:#}); each candidate's statistic is corrected with the residuals after its own re-fit"
             );
             None
         }
-    };
+    }
+}
+
+/// Every candidate's test, in rank order, with the evidence each rests on; the
+/// candidates not tested, and why; and the largest model's residuals.
+type Scores = (
+    Vec<ScoreTest>,
+    Vec<Evidence>,
+    Vec<String>,
+    Option<FullModel>,
+);
+
+/// Test every candidate: a score test at the run's solution for each with a null value
+/// (in parallel), a re-fit for the heel pad, and rank them.
+fn score_all(
+    run: &RunInputs,
+    base: &TrackingProblem,
+    resid: &Residuals,
+    phi_all: f64,
+    candidates: &[EffectSpec],
+) -> anyhow::Result<Scores> {
+    let (args, setup, progress) = (run.args, run.setup, run.progress);
+    let pad = EffectSpec::parse_cli("heel_pad_compliance").map_err(|e| anyhow!(e))?;
+    // each score-tested candidate's problem, built once (the model, phases and trial read
+    // from their files): the largest model is made of those the model accepts, and each
+    // is then score-tested
+    let problems: Vec<Option<anyhow::Result<TrackingProblem>>> = candidates
+        .iter()
+        .map(|c| {
+            (c.kind() != pad.kind() && !in_the_model(setup, c))
+                .then(|| TrackingProblem::build(setup, std::slice::from_ref(c)))
+        })
+        .collect();
+    let accepted: Vec<&EffectSpec> = candidates
+        .iter()
+        .zip(&problems)
+        .filter(|(_, p)| matches!(p, Some(Ok(_))))
+        .map(|(c, _)| c)
+        .collect();
+    let full = largest_model(run, &accepted, resid.objective);
     // the run every candidate's re-fit (the pad's) is measured against
     let baseline = Baseline {
-        solution: &solution,
-        summary: &before,
-        objective,
-        rows,
+        solution: run.solution,
+        summary: run.before,
+        objective: resid.objective,
+        rows: resid.rows,
     };
-    // the score tests: each candidate's is independent of the others' (its own problem,
-    // started at the run's solution), so they run at once, as many as rayon has threads;
-    // each one's figures are the same whichever thread runs it and when, and they are
-    // reported in the candidates' order
     let scored_count = problems.iter().filter(|p| p.is_some()).count();
     if scored_count > 1 {
         note!(progress, "score-testing {scored_count} candidates");
     }
-    let scored: Vec<Option<Scored>> = candidates
-        .par_iter()
-        .zip(problems.into_par_iter())
-        .map(|(c, built)| {
-            // none for the candidates already in the model and the pad (built above only
-            // for the others)
-            Some(match built? {
-                Err(e) => Scored::Unbuilt(e),
-                Ok(p) => Scored::Tested((|| {
-                    let mut prob = linearisation(p);
-                    let k = prob.model.ntheta() - base.model.ntheta();
-                    prob.setup.start_from(&solution).map_err(|e| anyhow!(e))?;
-                    let t0 = std::time::Instant::now();
-                    let (t, start) = test_candidate(
-                        &prob,
-                        c,
-                        k,
-                        &resid,
-                        full.as_ref(),
-                        heldout::hint(c, &setup),
-                    )?;
-                    Ok(Box::new((t, start, t0.elapsed().as_secs_f64())))
-                })()),
-            })
-        })
-        .collect();
+    let scored = score_tests(run, base, resid, full.as_ref(), candidates, problems);
+    let mut tests = Vec::new();
+    let mut skipped = Vec::new();
     for (c, scored) in candidates.iter().zip(scored) {
-        if setup
-            .effects
-            .iter()
-            .any(|e| e.overlaps(c) && !e.composes_with(c))
-        {
+        if in_the_model(setup, c) {
             skipped.push(format!("{}: already in the model", c.label()));
             continue;
         }
         if c.kind() == pad.kind() {
             // a foot without a heel circle has no place for the pad: the candidate is
             // named with the model's reason, and the other candidates' scores stand
-            if let Err(e) = TrackingProblem::build(&setup, std::slice::from_ref(c)) {
+            if let Err(e) = TrackingProblem::build(setup, std::slice::from_ref(c)) {
                 skipped.push(format!("{}: {e:#}", c.label()));
                 continue;
             }
@@ -638,12 +691,10 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
                 continue;
             }
             let t0 = std::time::Instant::now();
-            let (mut t, run, diff) = test_by_refit(args, &setup, c, &baseline, progress)?;
+            let (mut t, refitted, diff) = test_by_refit(args, setup, c, &baseline, progress)?;
             t.set_inflation(phi_all);
-            {
-                print_progress(progress, &t, run.converged, t0.elapsed().as_secs_f64());
-            }
-            tests.push((t, Evidence::Refit(Box::new(run), diff)));
+            print_progress(progress, &t, refitted.converged, t0.elapsed().as_secs_f64());
+            tests.push((t, Evidence::Refit(Box::new(refitted), diff)));
             continue;
         }
         // scored above for every candidate that gets here (neither in the model nor the pad)
@@ -669,104 +720,140 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
             .then(b.0.significant.cmp(&a.0.significant))
             .then(b.0.predicted_decrease.total_cmp(&a.0.predicted_decrease))
     });
-    let (mut tests, evidence): (Vec<ScoreTest>, Vec<Evidence>) = tests.into_iter().unzip();
+    let (tests, evidence): (Vec<ScoreTest>, Vec<Evidence>) = tests.into_iter().unzip();
+    Ok((tests, evidence, skipped, full))
+}
 
-    // held-out validation of the significant ones
+/// The score tests: each candidate's is independent of the others' (its own problem,
+/// started at the run's solution), so they run at once, as many as rayon has threads;
+/// each one's figures are the same whichever thread runs it and when, and they are
+/// returned in the candidates' order (`None` for those not built: in the model, or the
+/// pad).
+fn score_tests(
+    run: &RunInputs,
+    base: &TrackingProblem,
+    resid: &Residuals,
+    full: Option<&FullModel>,
+    candidates: &[EffectSpec],
+    problems: Vec<Option<anyhow::Result<TrackingProblem>>>,
+) -> Vec<Option<Scored>> {
+    let (setup, solution) = (run.setup, run.solution);
+    let base_theta = base.model.ntheta();
+    candidates
+        .par_iter()
+        .zip(problems.into_par_iter())
+        .map(|(c, built)| {
+            Some(match built? {
+                Err(e) => Scored::Unbuilt(e),
+                Ok(p) => Scored::Tested((|| {
+                    let mut prob = linearisation(p);
+                    let k = prob.model.ntheta() - base_theta;
+                    prob.setup.start_from(solution).map_err(|e| anyhow!(e))?;
+                    let t0 = std::time::Instant::now();
+                    let (t, start) =
+                        test_candidate(&prob, c, k, resid, full, heldout::hint(c, setup))?;
+                    Ok(Box::new((t, start, t0.elapsed().as_secs_f64())))
+                })()),
+            })
+        })
+        .collect()
+}
+
+/// The held-out half cycle's plain track, once (`None`: none was needed; `Err`: why the
+/// trial has none).
+type HeldOutTrack = Option<Result<heldout::HeldOutBase, String>>;
+
+/// Validate the significant candidates of `tests` on another half cycle of the trial
+/// than the run's (`window`, s): the note that says how it went, and that half cycle's
+/// track.
+fn validate_held_out(
+    run: &RunInputs,
+    window: (f64, f64),
+    tests: &mut [ScoreTest],
+) -> anyhow::Result<(String, HeldOutTrack)> {
+    let (args, progress) = (run.args, run.progress);
     let validated = |t: &ScoreTest| t.significant && t.at_bound.is_empty() && !t.refit;
-    let mut held_out_note: String = tests
+    let mut note: String = tests
         .iter()
         .filter(|t| t.significant && t.refit)
         .map(|t| format!(" {} is not validated on a held-out half cycle: it was tested by a full re-fit, which gives no reduced curvature to set its noise band.", t.label))
         .collect();
-    // the held-out half cycle's plain track, once (`None`: not tracked yet)
-    let mut held_base: Option<Result<heldout::HeldOutBase, String>> = None;
-    if tests.iter().any(|t| validated(t)) {
-        if !args.held_out {
-            held_out_note += " Held-out validation was not asked for (--no-held-out): significant candidates are not validated.";
-        } else {
-            match held_base.insert(heldout::held_out_base(
-                args,
-                &setup,
-                base.setup.window,
-                progress,
-            )?) {
-                Ok(hb) => {
-                    held_out_note += &format!(
-                        " Held-out: each significant candidate, with the values fitted on this run's half cycle ({:.3}–{:.3} s), applied to {} ({:.3}–{:.3} s; the plain model tracked there: J = {:.6}, {} iterations{}) with the other variables re-fitted; it is found if it lowers that cost beyond its noise band (2 sd, inflated by φ, above the mean change a fit to noise makes, which is a rise). Each is applied at the opposite values too: the two changes give that half cycle's own curvature along the candidate, which sets its band, and its own reading of the candidate as a fraction of the fitted values (found: that reading lies beyond 2 sd). Where a true effect of the fitted size would not clear the band on average (the reading's sd above one half), that half cycle is too weakly informed to confirm or refute it: not validatable.",
-                        base.setup.window.0,
-                        base.setup.window.1,
-                        heldout::half_cycle_name(hb.stride, hb.mirrored),
-                        hb.window.0,
-                        hb.window.1,
-                        hb.objective,
-                        hb.iterations,
-                        if hb.converged { "" } else { ", NOT converged" }
-                    );
-                    for t in tests.iter_mut().filter(|t| validated(t)) {
-                        match heldout::check(hb, t) {
-                            Ok(h) => {
-                                note!(progress,
-                                    "  held-out {:<32} change {:>10.3e} ({:>5.1} % of J), noise band {:.3e}{}{}",
-                                    t.label, h.change, 100.0 * h.change_fraction, h.band,
-                                    reading_note(&h), confirmed_note(&h));
-                                t.held_out = Some(h);
-                            }
-                            Err(e) => {
-                                held_out_note += &format!(
-                                    " {}: the held-out validation failed ({e:#}).",
-                                    t.label
-                                );
-                            }
-                        }
-                    }
-                }
-                Err(why) => {
-                    held_out_note += &format!(" No held-out half cycle in this trial ({why}): significant candidates are not validated.");
-                }
+    if !tests.iter().any(validated) {
+        return Ok((note, None));
+    }
+    if !args.held_out {
+        note += " Held-out validation was not asked for (--no-held-out): significant candidates are not validated.";
+        return Ok((note, None));
+    }
+    let held_base = heldout::held_out_base(args, run.setup, window, progress)?;
+    let hb = match &held_base {
+        Ok(hb) => hb,
+        Err(why) => {
+            note += &format!(" No held-out half cycle in this trial ({why}): significant candidates are not validated.");
+            return Ok((note, Some(held_base)));
+        }
+    };
+    note += &format!(
+        " Held-out: each significant candidate, with the values fitted on this run's half cycle ({:.3}–{:.3} s), applied to {} ({:.3}–{:.3} s; the plain model tracked there: J = {:.6}, {} iterations{}) with the other variables re-fitted; it is found if it lowers that cost beyond its noise band (2 sd, inflated by φ, above the mean change a fit to noise makes, which is a rise). Each is applied at the opposite values too: the two changes give that half cycle's own curvature along the candidate, which sets its band, and its own reading of the candidate as a fraction of the fitted values (found: that reading lies beyond 2 sd). Where a true effect of the fitted size would not clear the band on average (the reading's sd above one half), that half cycle is too weakly informed to confirm or refute it: not validatable.",
+        window.0,
+        window.1,
+        heldout::half_cycle_name(hb.stride, hb.mirrored),
+        hb.window.0,
+        hb.window.1,
+        hb.objective,
+        hb.iterations,
+        if hb.converged { "" } else { ", NOT converged" }
+    );
+    for t in tests.iter_mut().filter(|t| validated(t)) {
+        match heldout::check(hb, t) {
+            Ok(h) => {
+                note!(
+                    progress,
+                    "  held-out {:<32} change {:>10.3e} ({:>5.1} % of J), noise band {:.3e}{}{}",
+                    t.label,
+                    h.change,
+                    100.0 * h.change_fraction,
+                    h.band,
+                    reading_note(&h),
+                    confirmed_note(&h)
+                );
+                t.held_out = Some(h);
+            }
+            Err(e) => {
+                note += &format!(" {}: the held-out validation failed ({e:#}).", t.label);
             }
         }
     }
-    for t in &mut tests {
-        t.settle();
-    }
+    Ok((note, Some(held_base)))
+}
+
+/// Re-fit the top `--verify` found candidates for real, each from where its test got to.
+fn verify_found(
+    run: &RunInputs,
+    objective: f64,
+    tests: &[ScoreTest],
+    evidence: &[Evidence],
+) -> anyhow::Result<Vec<Verified>> {
     let mut verified = Vec::new();
     for (t, e) in tests
         .iter()
-        .zip(&evidence)
+        .zip(evidence)
         .filter(|(t, _)| t.found)
-        .take(args.verify)
+        .take(run.args.verify)
     {
         let v = match e {
             // the test was the re-fit
-            Evidence::Refit(run, diff) => Verified::new(t, run, diff.clone(), objective),
+            Evidence::Refit(refitted, diff) => Verified::new(t, refitted, diff.clone(), objective),
             // from where the candidate's truncated re-fit got to (fewer SQP iterations
             // than from the run's solution)
             Evidence::Start(start) => {
-                let run = refit(args, &setup, &t.effect, start, progress)?;
-                Verified::new(t, &run, diff_with(&before, &run)?, objective)
+                let refitted = refit(run.args, run.setup, &t.effect, start, run.progress)?;
+                Verified::new(t, &refitted, diff_with(run.before, &refitted)?, objective)
             }
         };
         verified.push(v);
     }
-
-    let ctx = output::Outcome {
-        args,
-        before: &before,
-        objective,
-        rows,
-        resid: &resid,
-        phi: phi_all,
-        noise: full.as_ref(),
-        tests: &tests,
-        evidence: &evidence,
-        verified: &verified,
-        skipped: &skipped,
-        held_out_note: held_out_note.trim().to_string(),
-        measurement: measured,
-        held_out: held_base.as_ref().and_then(|b| b.as_ref().ok()),
-        clock_moves_events: setup.sample_targets || setup.one_sided_targets,
-    };
-    output::write(&ctx, folder, progress)
+    Ok(verified)
 }
 
 /// The progress line's reading of a held-out validation: `, reads 0.62 ± 0.41 of it`.

@@ -16,8 +16,10 @@ use super::EffectSpec;
 ///
 /// The actuator properties (`mtg_damping`, `mtg_strength`,
 /// `activation_time_constants`) are not default candidates either: they change what the
-/// effort regularisation charges, so they lower J whether or not the data ask for them.
-/// Ask for them with `--candidate`.
+/// effort regularisation charges, so they lower J whether or not the data ask for them
+/// (on the model-made trial without a hidden effect, whose damping is the model's, a free
+/// damping runs to its lower bound with a statistic far beyond the threshold). Ask for
+/// them with `--candidate`, and read what they find with that in mind.
 pub fn catalog() -> Vec<EffectSpec> {
     let mut out: Vec<EffectSpec> = ["hip", "knee", "ankle"]
         .into_iter()
