@@ -39,11 +39,15 @@ fn out_of_range_option_values_are_usage_errors_naming_the_option() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("run");
     let finite_positive = "expected a finite number > 0";
+    let kkt = "expected a KKT tolerance > 0 and ≤ 0.01";
     let cases: &[(&[&str], &str, &str)] = &[
-        (&["track", "--tol", "NaN"], "'--tol <TOL>'", finite_positive),
-        (&["track", "--tol=-1"], "'--tol <TOL>'", finite_positive),
+        (&["track", "--tol", "NaN"], "'--tol <TOL>'", kkt),
+        (&["track", "--tol=-1"], "'--tol <TOL>'", kkt),
+        (&["track", "--tol", "-1"], "'--tol <TOL>'", kkt),
+        (&["track", "--tol", "1e300"], "'--tol <TOL>'", kkt),
+        (&["predict", "--tol", "0.5"], "'--tol <TOL>'", kkt),
         (
-            &["track", "--max-time=-5"],
+            &["track", "--max-time", "-5"],
             "'--max-time <MAX_TIME>'",
             finite_positive,
         ),
@@ -102,7 +106,7 @@ fn out_of_range_option_values_are_usage_errors_naming_the_option() {
                 "NaN",
             ],
             "'--tol <TOL>'",
-            finite_positive,
+            kkt,
         ),
         (
             &[
@@ -343,4 +347,96 @@ fn compare_contact_checks_every_foot_before_solving_anything() {
         "a refused comparison wrote {}",
         out.display()
     );
+}
+
+#[test]
+fn a_missing_foot_is_bad_input_listing_the_bundled_feet() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("run");
+    let o = footfall(&["track", "--foot", "nonexistent", "--out", s(&out)]);
+    assert_exit(
+        &o,
+        1,
+        &[
+            "foot nonexistent: no such file",
+            "`ellipse`, `double-circle`",
+            "models/feet/volumetric_ellipse.json",
+        ],
+    );
+    assert!(!out.exists());
+}
+
+#[test]
+fn a_prediction_target_outside_human_gait_is_refused_before_solving() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("run");
+    let cases: &[(&[&str], &[&str])] = &[
+        (
+            &["--step-length", "-0.5"],
+            &[
+                "step length -0.5 m",
+                "> 0 and ≤ 2.5 m",
+                "the subject's: 0.687 m",
+            ],
+        ),
+        (&["--step-length=0"], &["step length 0 m", "≤ 2.5 m"]),
+        (
+            &["--speed", "1e6"],
+            &[
+                "speed 1000000 m/s",
+                "> 0 and ≤ 12 m/s",
+                "the subject's: 1.133 m/s",
+            ],
+        ),
+    ];
+    for (extra, names) in cases {
+        let mut a = vec!["predict", "--out", s(&out), "--quiet"];
+        a.extend(*extra);
+        assert_exit(&footfall(&a), 1, names);
+        assert!(!out.exists());
+    }
+}
+
+/// The cart-pole problem file with `edit` applied, written into `dir`.
+fn edited_cartpole(dir: &Path, edit: impl Fn(&mut serde_json::Value)) -> PathBuf {
+    let text = std::fs::read_to_string(root().join("problems/cartpole_swingup.json")).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    edit(&mut v);
+    let p = dir.join("edited.json");
+    std::fs::write(&p, v.to_string()).unwrap();
+    p
+}
+
+#[test]
+fn a_problem_without_a_positive_horizon_or_with_crossed_bounds_is_refused_before_solving() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("run");
+    type Edit = fn(&mut serde_json::Value);
+    let cases: &[(Edit, &[&str])] = &[
+        (
+            |v| v["horizon"]["T"] = (-2.0).into(),
+            &["field 'horizon.T'", "> 0 and ≤ 10000 s", "got -2"],
+        ),
+        (
+            |v| v["horizon"]["T"] = 0.into(),
+            &["field 'horizon.T'", "got 0"],
+        ),
+        (
+            |v| {
+                v["bounds"]["u_lb"] = serde_json::json!([10.0]);
+                v["bounds"]["u_ub"] = serde_json::json!([-10.0]);
+            },
+            &[
+                "field 'bounds.u_ub[0]' (-10) is below 'bounds.u_lb[0]' (10)",
+                "at most the upper one",
+            ],
+        ),
+    ];
+    for (edit, names) in cases {
+        let p = edited_cartpole(tmp.path(), edit);
+        let o = footfall(&["solve", "--problem", s(&p), "--out", s(&out), "--quiet"]);
+        let err = assert_exit(&o, 1, names);
+        assert!(err.contains("edited.json"), "{err}");
+        assert!(!out.exists(), "{err}");
+    }
 }

@@ -72,8 +72,8 @@ impl From<TrialArgs> for footfall::workflows::trial::TrialFiles {
 /// `compare-contact` (the latter applies them to each of its runs).
 #[derive(Debug, Clone, clap::Args)]
 pub struct TrackSolverArgs {
-    /// KKT tolerance.
-    #[arg(long, default_value_t = 1e-5, value_parser = super::validate::positive)]
+    /// KKT tolerance (at most 0.01).
+    #[arg(long, default_value_t = 1e-5, value_parser = super::validate::kkt_tolerance)]
     pub tol: f64,
     /// With `--hessian exact`: Gauss–Newton steps until the constraint violation is below
     /// this (default: 1e-3, and below 0.1 once five Gauss–Newton iterations have not

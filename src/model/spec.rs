@@ -476,6 +476,12 @@ impl FootSpec {
     /// Read and validate a foot file.
     pub fn load(path: &Path) -> Result<Self, ModelError> {
         let path = &crate::bundled::resolve(path);
+        if !path.exists() {
+            return Err(ModelError::NoFoot {
+                path: path.clone(),
+                bundled: crate::bundled::feet().join(", "),
+            });
+        }
         let spec: FootSpec = read_json(path)?;
         spec.validate(path)?;
         Ok(spec)
