@@ -5,6 +5,8 @@
 pub const MAX_GRAVITY: f64 = 100.0;
 /// Largest body or segment mass (kg).
 pub const MAX_MASS: f64 = 1000.0;
+/// Smallest stature (m): a newborn's; the model's segment lengths scale with it.
+pub const MIN_HEIGHT: f64 = 0.5;
 /// Largest stature (m).
 pub const MAX_HEIGHT: f64 = 3.0;
 /// Largest segment moment of inertia (kg·m²).

@@ -98,6 +98,26 @@ fn out_of_range_option_values_are_usage_errors_naming_the_option() {
         ),
         (&["track", "--stride", "0"], "'--stride <N>'", "not in 1.."),
         (
+            &["track", "--plate", "x"],
+            "'--plate <FOOT=PREFIX|FOOT=N>'",
+            "expected FOOT=PREFIX",
+        ),
+        (
+            &["predict", "--plate", "q=2"],
+            "'--plate <FOOT=PREFIX|FOOT=N>'",
+            "foot 'q' is neither r (right) nor l (left)",
+        ),
+        (
+            &["track", "--effect", "bogus"],
+            "'--effect <NAME[:key=value,…]>'",
+            "'bogus' is not a known effect; use one of ground_slope",
+        ),
+        (
+            &["track", "--effect", "trunk_mass:added_mass=4,added_mass=5"],
+            "'--effect <NAME[:key=value,…]>'",
+            "'added_mass' is given twice",
+        ),
+        (
             &[
                 "solve",
                 "--problem",
@@ -439,4 +459,54 @@ fn a_problem_without_a_positive_horizon_or_with_crossed_bounds_is_refused_before
         assert!(err.contains("edited.json"), "{err}");
         assert!(!out.exists(), "{err}");
     }
+}
+
+#[test]
+fn an_effect_added_twice_is_a_usage_error_naming_both_items() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("run");
+    let o = footfall(&[
+        "track",
+        "--effect",
+        "trunk_mass",
+        "--effect",
+        "trunk_mass:added_mass=2",
+        "--out",
+        s(&out),
+    ]);
+    let err = assert_exit(
+        &o,
+        2,
+        &[
+            "--effect: 'trunk_mass' and 'trunk_mass:added_mass=2' both add the effect 'trunk mass and COM offset'",
+            "give it once",
+        ],
+    );
+    assert!(!err.contains("models/"), "{err}");
+    assert!(!out.exists());
+}
+
+#[test]
+fn a_force_plate_surface_away_from_the_models_ground_is_refused_before_solving() {
+    let tmp = tempfile::tempdir().unwrap();
+    let csv = tmp.path().join("trial_sagittal.csv");
+    std::fs::copy(root().join("data/opensim_subject01_sagittal.csv"), &csv).unwrap();
+    let text = std::fs::read_to_string(root().join("data/opensim_subject01_meta.json")).unwrap();
+    let mut meta: serde_json::Value = serde_json::from_str(&text).unwrap();
+    meta["force_plate_surface_y_m"] = 0.05.into();
+    std::fs::write(tmp.path().join("trial_meta.json"), meta.to_string()).unwrap();
+    let out = tmp.path().join("run");
+    let o = footfall(&["track", "--data", s(&csv), "--out", s(&out), "--quiet"]);
+    assert_exit(
+        &o,
+        1,
+        &[
+            "trial_sagittal.csv",
+            "force-plate surface is at y = 0.05 m",
+            "force_plate_surface_y_m",
+            "contact.ground_height) is at y = -0.0075 m",
+            "at most 10 mm",
+        ],
+    );
+    assert!(!out.join("summary.json").exists());
 }

@@ -448,7 +448,7 @@ fn plates_are_detected_or_named_and_unknown_ones_refused() {
         ],
     );
     plain.plates = vec!["x=1_".into()];
-    refused(&plain, &["--plate x=1_", "neither r nor l"]);
+    refused(&plain, &["--plate x=1_", "neither r (right) nor l (left)"]);
     plain.plates = vec!["r1_".into()];
     refused(&plain, &["--plate r1_", "FOOT=PREFIX"]);
     plain.plates = vec!["l=".into()];

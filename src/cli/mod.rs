@@ -85,6 +85,9 @@ enum Command {
 
 /// Failure classes mapped to exit codes.
 pub enum Failure {
+    /// An option value refused after parsing, e.g. two `--effect` items that add the
+    /// same effect (exit 2, as clap's usage errors).
+    Usage(anyhow::Error),
     /// Bad input or an I/O error (exit 1).
     Input(anyhow::Error),
     /// Solved but not converged (exit 3).
@@ -124,6 +127,7 @@ impl Failure {
     /// The process exit code.
     pub fn code(&self) -> u8 {
         match self {
+            Failure::Usage(_) => 2,
             Failure::Input(_) => 1,
             Failure::NotConverged(_) => 3,
             Failure::Infeasible(_) => 4,
@@ -134,7 +138,8 @@ impl Failure {
 
     fn error(&self) -> &anyhow::Error {
         match self {
-            Failure::Input(e)
+            Failure::Usage(e)
+            | Failure::Input(e)
             | Failure::NotConverged(e)
             | Failure::Infeasible(e)
             | Failure::PhysicallyInvalid(e)

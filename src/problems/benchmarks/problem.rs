@@ -165,7 +165,8 @@ impl Benchmark {
             path: path.into(),
             source,
         })?;
-        let json: Value = serde_json::from_str(&text).map_err(|source| ProblemError::Json {
+        let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
+        let json: Value = serde_json::from_str(text).map_err(|source| ProblemError::Json {
             path: path.into(),
             source,
         })?;
