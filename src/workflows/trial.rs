@@ -178,9 +178,7 @@ fn load_csv(path: &Path, t: &TrialFiles) -> anyhow::Result<LoadedTrial> {
 /// and its value (trimmed); the error says what the item should look like.
 pub fn split_plate(p: &str) -> Result<(crate::model::Side, &str), String> {
     let Some((side, value)) = p.split_once('=') else {
-        return Err(format!(
-            "expected FOOT=PREFIX (OpenSim loads, e.g. r=1_ or l=2_; r= for the unprefixed ground_force_*) or FOOT=N (a C3D plate number, e.g. r=1)"
-        ));
+        return Err("expected FOOT=PREFIX (OpenSim loads, e.g. r=1_ or l=2_; r= for the unprefixed ground_force_*) or FOOT=N (a C3D plate number, e.g. r=1)".into());
     };
     match side.trim().to_ascii_lowercase().as_str() {
         "r" | "right" => Ok((crate::model::Side::Right, value.trim())),
