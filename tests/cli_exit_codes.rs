@@ -510,3 +510,25 @@ fn a_force_plate_surface_away_from_the_models_ground_is_refused_before_solving()
     );
     assert!(!out.join("summary.json").exists());
 }
+
+#[test]
+fn an_unconverged_runs_table_and_motion_say_so_in_their_first_line() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("run");
+    let o = footfall(&["track", "--max-iter", "0", "--out", s(&out), "--quiet"]);
+    assert_exit(&o, 3, &["iteration limit reached", "results written to"]);
+    let first = |name: &str| {
+        let text = std::fs::read_to_string(out.join(name)).unwrap();
+        text.lines().next().unwrap_or_default().to_string()
+    };
+    let table = first("table3.md");
+    assert!(table.starts_with("**not converged"), "{table}");
+    let sto = first("kinematics.sto");
+    assert!(sto.starts_with("footfall_tracking: not converged"), "{sto}");
+    for line in [table, sto] {
+        assert!(
+            line.contains("(iteration limit reached): the last iterate, not a solution"),
+            "{line}"
+        );
+    }
+}

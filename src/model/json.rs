@@ -95,8 +95,10 @@ pub fn parse_json<T: DeserializeOwned>(text: &str, path: &Path) -> Result<T, Mod
         } else {
             format!("invalid JSON: {what} (near field '{field}')")
         }
+    } else if let Some(held) = not_an_object(text) {
+        held
     } else if field.is_empty() {
-        not_an_object(text).unwrap_or(what)
+        what
     } else {
         format!("field '{field}': {what}")
     };
