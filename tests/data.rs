@@ -1377,3 +1377,29 @@ fn a_trial_whose_every_force_is_nan_is_refused_naming_the_column() {
     assert!(msg.contains("no normal force was measured"), "{msg}");
     assert!(!msg.contains("NaN N"), "{msg}");
 }
+
+#[test]
+fn times_in_milliseconds_and_positions_or_cop_in_millimetres_are_refused() {
+    let s = Scratch::new();
+    let (csv, d) = edited_trial(&s, &["time"], |t| t * 1e3, Some(TREADMILL_META));
+    assert_refused(
+        d.check_conventions(false).unwrap_err(),
+        &csv,
+        "time",
+        &["a rate of 0.060 Hz", "10–5000 Hz", "milliseconds"],
+    );
+    let (csv, d) = edited_trial(&s, &["pelvis_x", "pelvis_y"], |x| x * 1e3, Some(TREADMILL_META));
+    assert_refused(
+        d.check_conventions(false).unwrap_err(),
+        &csv,
+        "pelvis_y",
+        &["under 2 m above the ground", "millimetres"],
+    );
+    let (csv, d) = edited_trial(&s, &["cop_x_r", "cop_x_l"], |x| x * 1e3, Some(TREADMILL_META));
+    assert_refused(
+        d.check_conventions(false).unwrap_err(),
+        &csv,
+        "cop_x_",
+        &["beyond the 1.5 m any foot reaches", "millimetres"],
+    );
+}
