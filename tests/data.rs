@@ -1388,18 +1388,45 @@ fn times_in_milliseconds_and_positions_or_cop_in_millimetres_are_refused() {
         "time",
         &["a rate of 0.060 Hz", "10–5000 Hz", "milliseconds"],
     );
-    let (csv, d) = edited_trial(&s, &["pelvis_x", "pelvis_y"], |x| x * 1e3, Some(TREADMILL_META));
+    let (csv, d) = edited_trial(
+        &s,
+        &["pelvis_x", "pelvis_y"],
+        |x| x * 1e3,
+        Some(TREADMILL_META),
+    );
     assert_refused(
         d.check_conventions(false).unwrap_err(),
         &csv,
         "pelvis_y",
         &["under 2 m above the ground", "millimetres"],
     );
-    let (csv, d) = edited_trial(&s, &["cop_x_r", "cop_x_l"], |x| x * 1e3, Some(TREADMILL_META));
+    let (csv, d) = edited_trial(
+        &s,
+        &["cop_x_r", "cop_x_l"],
+        |x| x * 1e3,
+        Some(TREADMILL_META),
+    );
     assert_refused(
         d.check_conventions(false).unwrap_err(),
         &csv,
         "cop_x_",
         &["beyond the 1.5 m any foot reaches", "millimetres"],
     );
+}
+
+#[test]
+fn a_mistyped_meta_value_names_its_field_and_line() {
+    let s = Scratch::new();
+    let (csv, meta) = with_edited_meta(&s, |m| m["belt_speed_m_s"] = "1.13".into());
+    let e = read_sagittal_csv(&csv).unwrap_err();
+    let msg = e.to_string();
+    assert!(matches!(e, DataError::Json { line: 1, .. }), "{msg}");
+    for w in [
+        meta.display().to_string().as_str(),
+        "field 'belt_speed_m_s'",
+        "string \"1.13\", expected a number",
+    ] {
+        assert!(msg.contains(w), "{w:?} not in {msg}");
+    }
+    assert!(!msg.contains("at line"), "{msg}");
 }

@@ -86,6 +86,29 @@ pub struct TrialMeta {
     pub events_20n: Option<BTreeMap<String, MetaEvents>>,
 }
 
+/// The meta file's fields; an error names the field, what serde found and its line.
+fn parse_meta(text: &str, path: &Path) -> Result<TrialMeta, DataError> {
+    let mut de = serde_json::Deserializer::from_str(text);
+    serde_path_to_error::deserialize(&mut de).map_err(|e| {
+        let field = e.path().to_string();
+        let inner = e.into_inner();
+        let what = inner.to_string();
+        let what = match what.rfind(" at line ") {
+            Some(k) => what[..k].replace("f64", "a number"),
+            None => what,
+        };
+        DataError::Json {
+            path: path.to_path_buf(),
+            message: match field.as_str() {
+                "." | "" => what,
+                f => format!("field '{f}': {what}"),
+            },
+            line: inner.line(),
+            column: inner.column(),
+        }
+    })
+}
+
 /// Fastest treadmill belt a meta file may give (m/s), beyond a sprinter's speed.
 pub const MAX_BELT_SPEED: f64 = 12.0;
 
@@ -97,12 +120,7 @@ pub fn read_meta(path: &Path) -> Result<TrialMeta, DataError> {
 fn load_meta(path: &Path) -> Result<(TrialMeta, Units), DataError> {
     let text = std::fs::read_to_string(path).map_err(|e| DataError::io(path, e))?;
     let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
-    let meta: TrialMeta = serde_json::from_str(text).map_err(|e| DataError::Json {
-        path: path.to_path_buf(),
-        message: e.to_string(),
-        line: e.line(),
-        column: e.column(),
-    })?;
+    let meta = parse_meta(text, path)?;
     for (field, v) in [
         ("body_mass_kg_model", meta.body_mass_kg_model),
         ("belt_speed_m_s", meta.belt_speed_m_s),
