@@ -532,3 +532,28 @@ fn an_unconverged_runs_table_and_motion_say_so_in_their_first_line() {
         );
     }
 }
+
+#[test]
+fn compare_checks_every_foot_and_phase_file_before_solving_anything() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("cmp");
+    let o = footfall(&["compare", "--feet", "ellipse,nonexistent", "--out", s(&out)]);
+    assert_exit(
+        &o,
+        1,
+        &["--feet nonexistent", "no such file", "`double-circle`"],
+    );
+    let phases = tmp.path().join("no_phases.json");
+    let feet = format!("ellipse,models/feet/double_circle.json:{}", s(&phases));
+    let o = footfall(&["compare", "--feet", &feet, "--out", s(&out)]);
+    assert_exit(
+        &o,
+        1,
+        &["--feet models/feet/double_circle.json:", "no_phases.json"],
+    );
+    assert!(
+        !out.exists(),
+        "a refused comparison wrote {}",
+        out.display()
+    );
+}
