@@ -557,3 +557,25 @@ fn compare_checks_every_foot_and_phase_file_before_solving_anything() {
         out.display()
     );
 }
+
+#[test]
+fn an_output_that_cannot_be_replaced_is_refused_without_a_hint_at_overwrite() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = tmp.path().join("notes.txt");
+    std::fs::write(&file, "notes").unwrap();
+    let problem = root().join("problems/cartpole_swingup.json");
+    for (out, says) in [
+        (".", "is the current folder or one of its parents"),
+        ("/", "is the current folder or one of its parents"),
+        (s(&file), "exists and is not a folder"),
+    ] {
+        let o = Command::new(env!("CARGO_BIN_EXE_footfall"))
+            .args(["solve", "--problem", s(&problem), "--out", out, "--quiet"])
+            .current_dir(tmp.path())
+            .output()
+            .unwrap();
+        let err = assert_exit(&o, 1, &[says, "choose another --out"]);
+        assert!(!err.contains("pass --overwrite"), "{err}");
+    }
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), "notes");
+}
