@@ -301,6 +301,7 @@ fn load_opensim(ik_path: &Path, t: &TrialFiles) -> anyhow::Result<LoadedTrial> {
     }
     let ik = read_storage(ik_path)?;
     let grf = read_storage(grf_path)?;
+    check_not_swapped(&ik, &grf)?;
     require_angle_unit(&ik)?;
     let (prefixes, note) = foot_prefixes(&grf, &t.plates)?;
     let map = opensim_map(&ik, &prefixes);
@@ -315,6 +316,21 @@ fn load_opensim(ik_path: &Path, t: &TrialFiles) -> anyhow::Result<LoadedTrial> {
         data,
         notes: vec![note],
     })
+}
+
+/// Kinematics given with --forces and forces with --data: named as such, before either
+/// file is judged by the other's rules.
+fn check_not_swapped(ik: &Storage, grf: &Storage) -> anyhow::Result<()> {
+    let forces = |s: &Storage| s.columns.iter().any(|c| c.ends_with("ground_force_vy"));
+    let kinematics = |s: &Storage| s.column("pelvis_tilt").is_some();
+    if forces(ik) && !kinematics(ik) && kinematics(grf) {
+        bail!(
+            "--data {} holds ground forces and --forces {} holds kinematics (pelvis_tilt): the two are swapped; give the inverse kinematics with --data and the external loads with --forces",
+            ik.path.display(),
+            grf.path.display()
+        );
+    }
+    Ok(())
 }
 
 /// An OpenSim kinematics file must say its angle unit.
