@@ -899,6 +899,28 @@ fn impact_that_does_not_match_the_next_phase_is_refused() {
 }
 
 #[test]
+fn a_contact_mistyped_in_a_phase_is_named_beside_the_impacts_spelling() {
+    let d = Scratch::new();
+    let text = std::fs::read_to_string(root().join("phases/ellipse_walk.json")).unwrap();
+    let typo = text.replacen(
+        r#""name": "2e", "contacts": [ { "contact": "r.sole" }, { "contact": "l.sole" } ]"#,
+        r#""name": "2e", "contacts": [ { "contact": "r.sole" }, { "contact": "l.sloe" } ]"#,
+        1,
+    );
+    assert_ne!(typo, text, "the edit did not apply");
+    let p = d.write("typo.json", &typo);
+    assert_invalid(
+        PhaseSequence::load(&p).unwrap_err(),
+        &p,
+        "phases[0] ('1e*').contacts",
+        &[
+            "the impact has 'l.sole' where the next phase '2e' has 'l.sloe'",
+            "correct whichever name is mistyped",
+        ],
+    );
+}
+
+#[test]
 fn last_impact_of_a_periodic_cycle_must_mirror_the_first_phase() {
     let d = Scratch::new();
     let p = d.write(
