@@ -1430,3 +1430,15 @@ fn a_mistyped_meta_value_names_its_field_and_line() {
     }
     assert!(!msg.contains("at line"), "{msg}");
 }
+
+#[test]
+fn a_constant_knee_angle_is_refused_naming_the_column() {
+    let s = Scratch::new();
+    let (csv, d) = edited_trial(&s, &["knee_l"], |_| -0.2, Some(TREADMILL_META));
+    assert_refused(
+        d.check_conventions(false).unwrap_err(),
+        &csv,
+        "knee_l",
+        &["spans only 0.0000 rad", "at least 0.1 rad", "frozen"],
+    );
+}

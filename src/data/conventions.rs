@@ -48,6 +48,7 @@ impl GaitData {
     pub fn check_conventions(&self, overground: bool) -> Result<(), DataError> {
         self.check_scales()?;
         self.check_angles()?;
+        self.check_knees_move()?;
         self.check_forces_measured()?;
         self.check_force_signs()?;
         if !overground {
@@ -159,6 +160,35 @@ impl GaitData {
                 t.len()
             ),
         ))
+    }
+
+    /// Each measured knee bends over a walk of at least [`MIN_SPAN_DURATION`]: one that
+    /// spans less than [`MIN_LEG_SPAN_RAD`] is a frozen or copied channel.
+    fn check_knees_move(&self) -> Result<(), DataError> {
+        let duration = match (self.time.first(), self.time.last()) {
+            (Some(a), Some(b)) if b - a >= MIN_SPAN_DURATION => b - a,
+            _ => return Ok(()),
+        };
+        for (s, i) in [(0, 4), (1, 7)] {
+            if self.sides[s] != SideSource::Measured {
+                continue;
+            }
+            let Some((lo, hi)) = Self::range(&self.q[i]) else {
+                continue;
+            };
+            if hi - lo < MIN_LEG_SPAN_RAD {
+                return Err(DataError::invalid(
+                    &self.source,
+                    Q_NAMES[i],
+                    format!(
+                        "spans only {:.4} rad ({:.2}°) in {duration:.2} s: a walking knee bends about 1 rad (60°) each stride, at least {MIN_LEG_SPAN_RAD} rad; the column looks frozen or filled with a constant",
+                        hi - lo,
+                        (hi - lo).to_degrees()
+                    ),
+                ));
+            }
+        }
+        Ok(())
     }
 
     fn check_force_signs(&self) -> Result<(), DataError> {
