@@ -46,6 +46,15 @@ pub const FILES: &[(&str, &[u8])] = bundle!(
     "data/opensim_subject01_sagittal.csv",
 );
 
+/// The bundled foot files (`models/feet/…`).
+pub fn feet() -> Vec<&'static str> {
+    FILES
+        .iter()
+        .map(|(name, _)| *name)
+        .filter(|name| name.starts_with("models/feet/"))
+        .collect()
+}
+
 /// The bundled name of `path`: its components without `.`, with `/` between, when that
 /// is one of [`FILES`].
 fn bundled_name(path: &Path) -> Option<&'static str> {

@@ -5,6 +5,8 @@
 pub const MAX_GRAVITY: f64 = 100.0;
 /// Largest body or segment mass (kg).
 pub const MAX_MASS: f64 = 1000.0;
+/// Smallest stature (m): a newborn's; the model's segment lengths scale with it.
+pub const MIN_HEIGHT: f64 = 0.5;
 /// Largest stature (m).
 pub const MAX_HEIGHT: f64 = 3.0;
 /// Largest segment moment of inertia (kg·m²).
@@ -25,6 +27,9 @@ pub const MAX_COORDINATE: f64 = 100.0;
 pub const MAX_VELOCITY: f64 = 1e3;
 /// Most shooting intervals in one phase.
 pub const MAX_INTERVALS: usize = 10_000;
+/// Largest KKT tolerance a command accepts: the residual bounds the constraint violation
+/// (m, rad), and a looser one calls a start centimetres off its constraints converged.
+pub const MAX_KKT_TOL: f64 = 1e-2;
 /// Most SQP (or Nelder–Mead) iterations a command accepts.
 pub const MAX_ITERATIONS: usize = 100_000;
 

@@ -334,6 +334,28 @@ impl PhaseSequence {
         self.check_impacts(path)
     }
 
+    /// Where an impact and the phase after it (`which`) name different contacts, e.g. `;
+    /// the impact has 'l.sole' where the next phase '2e' has 'l.sloe': correct whichever
+    /// name is mistyped` (empty when only the rolling flags differ or one list only lacks
+    /// a contact).
+    fn odd_names(here: &[ContactUse], there: &[ContactUse], which: &str) -> String {
+        let only = |a: &[ContactUse], b: &[ContactUse]| {
+            a.iter()
+                .filter(|c| !b.iter().any(|o| o.contact == c.contact))
+                .map(|c| format!("'{}'", c.contact))
+                .collect::<Vec<_>>()
+        };
+        let (h, t) = (only(here, there), only(there, here));
+        if h.is_empty() || t.is_empty() {
+            return String::new();
+        }
+        format!(
+            "; the impact has {} where {which} has {}: correct whichever name is mistyped",
+            h.join(", "),
+            t.join(", ")
+        )
+    }
+
     /// An impact lists the contacts active right after it, so it must list those of the
     /// phase after it (in a periodic gait, a last impact those of the first continuous
     /// phase mirrored), and it must add a contact to those of the phase before it.
@@ -392,7 +414,7 @@ impl PhaseSequence {
                     return Err(ModelError::invalid(
                         path,
                         field,
-                        format!("an impact lists the contacts active right after it, so must list those of {which}: {}; got {}", list(&want), list(contacts)),
+                        format!("an impact lists the contacts active right after it, so must list those of {which}: {}; got {}{}", list(&want), list(contacts), Self::odd_names(contacts, &want, &which)),
                     ));
                 }
             }

@@ -207,16 +207,17 @@ pub fn check_replaceable(target: &Path) -> Result<(), RunFolderError> {
 }
 
 impl RunFolder {
-    /// Start writing the folder `target`. An existing `target` is refused unless
-    /// `overwrite` is set and it may be replaced ([`check_replaceable`]); the refusal comes
-    /// before any work. Stale staging folders of dead processes for the same target are
+    /// Start writing the folder `target`. An existing `target` is refused unless it may be
+    /// replaced ([`check_replaceable`]) and `overwrite` is set; the refusal comes before
+    /// any work. Stale staging folders of dead processes for the same target are
     /// removed.
     pub fn create(target: &Path, overwrite: bool) -> Result<Self, RunFolderError> {
         if std::fs::symlink_metadata(target).is_ok() {
+            // one that cannot be replaced is refused as such, not with a hint at --overwrite
+            check_replaceable(target)?;
             if !overwrite {
                 return Err(RunFolderError::Exists(target.to_path_buf()));
             }
-            check_replaceable(target)?;
         }
         let (name, parent) = name_and_parent(target);
         let mut list = unfinished();

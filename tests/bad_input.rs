@@ -385,6 +385,22 @@ fn non_positive_gravity_and_stature_are_refused() {
 }
 
 #[test]
+fn a_stature_below_any_humans_is_refused() {
+    let d = Scratch::new();
+    let m = d.write(
+        "tiny.json",
+        r#"{ "name": "x", "body": { "preset": "de_leva", "mass": 80.0, "height": 0.01, "sex": "male" },
+             "actuators": { "type": "joint_torques" } }"#,
+    );
+    assert_invalid(
+        ModelSpec::load(&m).unwrap_err(),
+        &m,
+        "body.height",
+        &["0.01 m is below any human's", "[0.5, 3] m"],
+    );
+}
+
+#[test]
 fn absurd_gravity_mass_and_sizes_are_refused_with_short_numbers() {
     let d = Scratch::new();
     let m = d.write(
@@ -586,6 +602,39 @@ fn effect_on_unknown_joint_is_refused() {
 
 // ---------------------------------------------------------------------------------------
 // Foot files
+
+#[test]
+fn a_foot_file_with_a_byte_order_mark_is_read() {
+    let d = Scratch::new();
+    let f = d.write("bom.json", &format!("\u{feff}{GOOD_FOOT}"));
+    assert_eq!(FootSpec::load(&f).unwrap().primitives.len(), 2);
+}
+
+#[test]
+fn a_json_file_that_is_not_an_object_says_what_it_holds() {
+    let d = Scratch::new();
+    for (text, held) in [("null", "null"), ("[1, 2]", "an array"), ("3", "a number")] {
+        let f = d.write("foot.json", text);
+        let msg = assert_json(FootSpec::load(&f).unwrap_err(), &f, 1, "", &[]);
+        let want = format!("the file holds {held}, not a JSON object");
+        assert!(msg.contains(&want), "{msg}");
+        assert!(!msg.contains("struct"), "{msg}");
+    }
+}
+
+#[test]
+fn a_missing_foot_file_lists_the_bundled_feet() {
+    let err = FootSpec::load(Path::new("no/such/foot.json")).unwrap_err();
+    assert!(matches!(err, ModelError::NoFoot { .. }), "{err}");
+    let msg = err.to_string();
+    for w in [
+        "no/such/foot.json",
+        "`ellipse`, `double-circle`",
+        "models/feet/peer_ellipse.json",
+    ] {
+        assert!(msg.contains(w), "{w:?} not in {msg}");
+    }
+}
 
 #[test]
 fn zero_or_negative_ellipse_semi_axis_is_refused() {
@@ -846,6 +895,28 @@ fn impact_that_does_not_match_the_next_phase_is_refused() {
         &p,
         "phases[1] ('strike').contacts",
         &["l.sole (not rolling)", "got r.sole, l.sole (not rolling)"],
+    );
+}
+
+#[test]
+fn a_contact_mistyped_in_a_phase_is_named_beside_the_impacts_spelling() {
+    let d = Scratch::new();
+    let text = std::fs::read_to_string(root().join("phases/ellipse_walk.json")).unwrap();
+    let typo = text.replacen(
+        r#""name": "2e", "contacts": [ { "contact": "r.sole" }, { "contact": "l.sole" } ]"#,
+        r#""name": "2e", "contacts": [ { "contact": "r.sole" }, { "contact": "l.sloe" } ]"#,
+        1,
+    );
+    assert_ne!(typo, text, "the edit did not apply");
+    let p = d.write("typo.json", &typo);
+    assert_invalid(
+        PhaseSequence::load(&p).unwrap_err(),
+        &p,
+        "phases[0] ('1e*').contacts",
+        &[
+            "the impact has 'l.sole' where the next phase '2e' has 'l.sloe'",
+            "correct whichever name is mistyped",
+        ],
     );
 }
 

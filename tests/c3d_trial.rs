@@ -462,7 +462,7 @@ fn plates_and_lab_axes_are_checked_naming_the_file_and_what_is_valid() {
     );
     refused(
         trial(&c3d, &["x=1", "l=2"], None),
-        &["--plate x=1", "neither r nor l"],
+        &["--plate x=1", "neither r (right) nor l (left)"],
     );
     // a foot with no plate
     refused(

@@ -227,7 +227,15 @@ fn existing_output_folder_is_kept_without_overwrite() {
     std::fs::create_dir(&out).unwrap();
     std::fs::write(out.join("keep.txt"), "precious").unwrap();
     let o = footfall(&step_args(s(&out), &[]));
-    let err = assert_user_error(&o, &[s(&out), "already exists", "--overwrite"]);
+    // a folder of the user's own: --overwrite would not replace it either
+    let err = assert_user_error(
+        &o,
+        &[
+            s(&out),
+            "was not written by footfall",
+            "choose another --out",
+        ],
+    );
     eprintln!("{err}");
     assert_eq!(entries(tmp.path()), ["run"], "staging folder left behind");
     assert_eq!(entries(&out), ["keep.txt"]);

@@ -39,11 +39,15 @@ fn out_of_range_option_values_are_usage_errors_naming_the_option() {
     let tmp = tempfile::tempdir().unwrap();
     let out = tmp.path().join("run");
     let finite_positive = "expected a finite number > 0";
+    let kkt = "expected a KKT tolerance > 0 and ≤ 0.01";
     let cases: &[(&[&str], &str, &str)] = &[
-        (&["track", "--tol", "NaN"], "'--tol <TOL>'", finite_positive),
-        (&["track", "--tol=-1"], "'--tol <TOL>'", finite_positive),
+        (&["track", "--tol", "NaN"], "'--tol <TOL>'", kkt),
+        (&["track", "--tol=-1"], "'--tol <TOL>'", kkt),
+        (&["track", "--tol", "-1"], "'--tol <TOL>'", kkt),
+        (&["track", "--tol", "1e300"], "'--tol <TOL>'", kkt),
+        (&["predict", "--tol", "0.5"], "'--tol <TOL>'", kkt),
         (
-            &["track", "--max-time=-5"],
+            &["track", "--max-time", "-5"],
             "'--max-time <MAX_TIME>'",
             finite_positive,
         ),
@@ -94,6 +98,26 @@ fn out_of_range_option_values_are_usage_errors_naming_the_option() {
         ),
         (&["track", "--stride", "0"], "'--stride <N>'", "not in 1.."),
         (
+            &["track", "--plate", "x"],
+            "'--plate <FOOT=PREFIX|FOOT=N>'",
+            "expected FOOT=PREFIX",
+        ),
+        (
+            &["predict", "--plate", "q=2"],
+            "'--plate <FOOT=PREFIX|FOOT=N>'",
+            "foot 'q' is neither r (right) nor l (left)",
+        ),
+        (
+            &["track", "--effect", "bogus"],
+            "'--effect <NAME[:key=value,…]>'",
+            "'bogus' is not a known effect; use one of ground_slope",
+        ),
+        (
+            &["track", "--effect", "trunk_mass:added_mass=4,added_mass=5"],
+            "'--effect <NAME[:key=value,…]>'",
+            "'added_mass' is given twice",
+        ),
+        (
             &[
                 "solve",
                 "--problem",
@@ -102,7 +126,7 @@ fn out_of_range_option_values_are_usage_errors_naming_the_option() {
                 "NaN",
             ],
             "'--tol <TOL>'",
-            finite_positive,
+            kkt,
         ),
         (
             &[
@@ -343,4 +367,215 @@ fn compare_contact_checks_every_foot_before_solving_anything() {
         "a refused comparison wrote {}",
         out.display()
     );
+}
+
+#[test]
+fn a_missing_foot_is_bad_input_listing_the_bundled_feet() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("run");
+    let o = footfall(&["track", "--foot", "nonexistent", "--out", s(&out)]);
+    assert_exit(
+        &o,
+        1,
+        &[
+            "foot nonexistent: no such file",
+            "`ellipse`, `double-circle`",
+            "models/feet/volumetric_ellipse.json",
+        ],
+    );
+    assert!(!out.exists());
+}
+
+#[test]
+fn a_prediction_target_outside_human_gait_is_refused_before_solving() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("run");
+    let cases: &[(&[&str], &[&str])] = &[
+        (
+            &["--step-length", "-0.5"],
+            &[
+                "step length -0.5 m",
+                "> 0 and ≤ 2.5 m",
+                "the subject's: 0.687 m",
+            ],
+        ),
+        (&["--step-length=0"], &["step length 0 m", "≤ 2.5 m"]),
+        (
+            &["--speed", "1e6"],
+            &[
+                "speed 1000000 m/s",
+                "> 0 and ≤ 12 m/s",
+                "the subject's: 1.133 m/s",
+            ],
+        ),
+    ];
+    for (extra, names) in cases {
+        let mut a = vec!["predict", "--out", s(&out), "--quiet"];
+        a.extend(*extra);
+        assert_exit(&footfall(&a), 1, names);
+        assert!(!out.exists());
+    }
+}
+
+/// The cart-pole problem file with `edit` applied, written into `dir`.
+fn edited_cartpole(dir: &Path, edit: impl Fn(&mut serde_json::Value)) -> PathBuf {
+    let text = std::fs::read_to_string(root().join("problems/cartpole_swingup.json")).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    edit(&mut v);
+    let p = dir.join("edited.json");
+    std::fs::write(&p, v.to_string()).unwrap();
+    p
+}
+
+#[test]
+fn a_problem_without_a_positive_horizon_or_with_crossed_bounds_is_refused_before_solving() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("run");
+    type Edit = fn(&mut serde_json::Value);
+    let cases: &[(Edit, &[&str])] = &[
+        (
+            |v| v["horizon"]["T"] = (-2.0).into(),
+            &["field 'horizon.T'", "> 0 and ≤ 10000 s", "got -2"],
+        ),
+        (
+            |v| v["horizon"]["T"] = 0.into(),
+            &["field 'horizon.T'", "got 0"],
+        ),
+        (
+            |v| {
+                v["bounds"]["u_lb"] = serde_json::json!([10.0]);
+                v["bounds"]["u_ub"] = serde_json::json!([-10.0]);
+            },
+            &[
+                "field 'bounds.u_ub[0]' (-10) is below 'bounds.u_lb[0]' (10)",
+                "at most the upper one",
+            ],
+        ),
+    ];
+    for (edit, names) in cases {
+        let p = edited_cartpole(tmp.path(), edit);
+        let o = footfall(&["solve", "--problem", s(&p), "--out", s(&out), "--quiet"]);
+        let err = assert_exit(&o, 1, names);
+        assert!(err.contains("edited.json"), "{err}");
+        assert!(!out.exists(), "{err}");
+    }
+}
+
+#[test]
+fn an_effect_added_twice_is_a_usage_error_naming_both_items() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("run");
+    let o = footfall(&[
+        "track",
+        "--effect",
+        "trunk_mass",
+        "--effect",
+        "trunk_mass:added_mass=2",
+        "--out",
+        s(&out),
+    ]);
+    let err = assert_exit(
+        &o,
+        2,
+        &[
+            "--effect: 'trunk_mass' and 'trunk_mass:added_mass=2' both add the effect 'trunk mass and COM offset'",
+            "give it once",
+        ],
+    );
+    assert!(!err.contains("models/"), "{err}");
+    assert!(!out.exists());
+}
+
+#[test]
+fn a_force_plate_surface_away_from_the_models_ground_is_refused_before_solving() {
+    let tmp = tempfile::tempdir().unwrap();
+    let csv = tmp.path().join("trial_sagittal.csv");
+    std::fs::copy(root().join("data/opensim_subject01_sagittal.csv"), &csv).unwrap();
+    let text = std::fs::read_to_string(root().join("data/opensim_subject01_meta.json")).unwrap();
+    let mut meta: serde_json::Value = serde_json::from_str(&text).unwrap();
+    meta["force_plate_surface_y_m"] = 0.05.into();
+    std::fs::write(tmp.path().join("trial_meta.json"), meta.to_string()).unwrap();
+    let out = tmp.path().join("run");
+    let o = footfall(&["track", "--data", s(&csv), "--out", s(&out), "--quiet"]);
+    assert_exit(
+        &o,
+        1,
+        &[
+            "trial_sagittal.csv",
+            "force-plate surface is at y = 0.05 m",
+            "force_plate_surface_y_m",
+            "contact.ground_height) is at y = -0.0075 m",
+            "at most 10 mm",
+        ],
+    );
+    assert!(!out.join("summary.json").exists());
+}
+
+#[test]
+fn an_unconverged_runs_table_and_motion_say_so_in_their_first_line() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("run");
+    let o = footfall(&["track", "--max-iter", "0", "--out", s(&out), "--quiet"]);
+    assert_exit(&o, 3, &["iteration limit reached", "results written to"]);
+    let first = |name: &str| {
+        let text = std::fs::read_to_string(out.join(name)).unwrap();
+        text.lines().next().unwrap_or_default().to_string()
+    };
+    let table = first("table3.md");
+    assert!(table.starts_with("**not converged"), "{table}");
+    let sto = first("kinematics.sto");
+    assert!(sto.starts_with("footfall_tracking: not converged"), "{sto}");
+    for line in [table, sto] {
+        assert!(
+            line.contains("(iteration limit reached): the last iterate, not a solution"),
+            "{line}"
+        );
+    }
+}
+
+#[test]
+fn compare_checks_every_foot_and_phase_file_before_solving_anything() {
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("cmp");
+    let o = footfall(&["compare", "--feet", "ellipse,nonexistent", "--out", s(&out)]);
+    assert_exit(
+        &o,
+        1,
+        &["--feet nonexistent", "no such file", "`double-circle`"],
+    );
+    let phases = tmp.path().join("no_phases.json");
+    let feet = format!("ellipse,models/feet/double_circle.json:{}", s(&phases));
+    let o = footfall(&["compare", "--feet", &feet, "--out", s(&out)]);
+    assert_exit(
+        &o,
+        1,
+        &["--feet models/feet/double_circle.json:", "no_phases.json"],
+    );
+    assert!(
+        !out.exists(),
+        "a refused comparison wrote {}",
+        out.display()
+    );
+}
+
+#[test]
+fn an_output_that_cannot_be_replaced_is_refused_without_a_hint_at_overwrite() {
+    let tmp = tempfile::tempdir().unwrap();
+    let file = tmp.path().join("notes.txt");
+    std::fs::write(&file, "notes").unwrap();
+    let problem = root().join("problems/cartpole_swingup.json");
+    for (out, says) in [
+        (".", "is the current folder or one of its parents"),
+        ("/", "is the current folder or one of its parents"),
+        (s(&file), "exists and is not a folder"),
+    ] {
+        let o = Command::new(env!("CARGO_BIN_EXE_footfall"))
+            .args(["solve", "--problem", s(&problem), "--out", out, "--quiet"])
+            .current_dir(tmp.path())
+            .output()
+            .unwrap();
+        let err = assert_exit(&o, 1, &[says, "choose another --out"]);
+        assert!(!err.contains("pass --overwrite"), "{err}");
+    }
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), "notes");
 }

@@ -1277,3 +1277,168 @@ fn error_messages_name_file_line_and_column() {
     }
     let _ = PI;
 }
+
+/// The bundled meta file with `edit` applied, written beside a copy of the bundled CSV;
+/// the CSV's path and the meta file's.
+fn with_edited_meta(s: &Scratch, edit: fn(&mut serde_json::Value)) -> (PathBuf, PathBuf) {
+    let mut m = meta_json();
+    edit(&mut m);
+    let meta = s.write("trial_meta.json", &m.to_string());
+    let csv = s.write(
+        "trial_sagittal.csv",
+        &std::fs::read_to_string(csv_path()).unwrap(),
+    );
+    (csv, meta)
+}
+
+#[test]
+fn a_meta_file_with_a_negative_belt_speed_is_refused() {
+    let s = Scratch::new();
+    let (csv, meta) = with_edited_meta(&s, |m| m["belt_speed_m_s"] = (-1.1322).into());
+    let e = read_sagittal_csv(&csv).unwrap_err();
+    assert_refused(
+        e,
+        &meta,
+        "belt_speed_m_s",
+        &["backward speed, > 0 and ≤ 12 m/s", "got -1.1322 m/s"],
+    );
+}
+
+#[test]
+fn a_meta_file_declaring_degrees_over_radians_is_refused() {
+    let s = Scratch::new();
+    let (csv, meta) = with_edited_meta(&s, |m| m["units"]["angles"] = "deg".into());
+    let e = read_sagittal_csv(&csv).unwrap_err();
+    assert_refused(
+        e,
+        &meta,
+        "units.angles",
+        &[
+            "declares degrees",
+            "knee_r",
+            "spans only 1.297°",
+            "look like radians",
+        ],
+    );
+}
+
+#[test]
+fn a_semicolon_or_tab_separated_csv_is_refused_naming_the_separator() {
+    let s = Scratch::new();
+    let text = std::fs::read_to_string(csv_path()).unwrap();
+    for (sep, name) in [(";", "semicolons"), ("\t", "tabs")] {
+        let p = s.write("sep_sagittal.csv", &text.replace(',', sep));
+        let e = read_sagittal_csv_with(&p, &MetaSource::None).unwrap_err();
+        let msg = e.to_string();
+        assert!(matches!(e, DataError::Format { row: 1, .. }), "{msg}");
+        assert!(msg.contains("sep_sagittal.csv"), "{msg}");
+        assert!(msg.contains(&format!("separated by {name}")), "{msg}");
+        assert!(msg.contains("comma-separated"), "{msg}");
+    }
+}
+
+#[test]
+fn a_meta_file_with_a_byte_order_mark_is_read() {
+    let s = Scratch::new();
+    let meta = std::fs::read_to_string(root().join("data/opensim_subject01_meta.json")).unwrap();
+    s.write("trial_meta.json", &format!("\u{feff}{meta}"));
+    let csv = s.write(
+        "trial_sagittal.csv",
+        &std::fs::read_to_string(csv_path()).unwrap(),
+    );
+    assert_eq!(read_sagittal_csv(&csv).unwrap().belt_speed, Some(1.1322));
+}
+
+#[test]
+fn a_trial_whose_every_force_is_nan_is_refused_naming_the_column() {
+    let mut cells = csv_cells();
+    for name in [
+        "grf_x_r", "grf_y_r", "cop_x_r", "grf_x_l", "grf_y_l", "cop_x_l",
+    ] {
+        let j = col_index(&cells, name);
+        for r in cells.iter_mut().skip(1) {
+            r[j] = "NaN".into();
+        }
+    }
+    let s = Scratch::new();
+    let p = s.write("nan_sagittal.csv", &join(&cells));
+    let d = read_sagittal_csv_with(&p, &MetaSource::None).unwrap();
+    assert_refused(
+        d.check_conventions(true).unwrap_err(),
+        &p,
+        "grf_y_r",
+        &[
+            "no foot's vertical ground force holds a number",
+            "151 samples",
+        ],
+    );
+    // events asked for directly say so too, with no NaN threshold
+    let msg = detect_events(&d, 0.05).unwrap_err().to_string();
+    assert!(msg.contains("no normal force was measured"), "{msg}");
+    assert!(!msg.contains("NaN N"), "{msg}");
+}
+
+#[test]
+fn times_in_milliseconds_and_positions_or_cop_in_millimetres_are_refused() {
+    let s = Scratch::new();
+    let (csv, d) = edited_trial(&s, &["time"], |t| t * 1e3, Some(TREADMILL_META));
+    assert_refused(
+        d.check_conventions(false).unwrap_err(),
+        &csv,
+        "time",
+        &["a rate of 0.060 Hz", "10–5000 Hz", "milliseconds"],
+    );
+    let (csv, d) = edited_trial(
+        &s,
+        &["pelvis_x", "pelvis_y"],
+        |x| x * 1e3,
+        Some(TREADMILL_META),
+    );
+    assert_refused(
+        d.check_conventions(false).unwrap_err(),
+        &csv,
+        "pelvis_y",
+        &["under 2 m above the ground", "millimetres"],
+    );
+    let (csv, d) = edited_trial(
+        &s,
+        &["cop_x_r", "cop_x_l"],
+        |x| x * 1e3,
+        Some(TREADMILL_META),
+    );
+    assert_refused(
+        d.check_conventions(false).unwrap_err(),
+        &csv,
+        "cop_x_",
+        &["beyond the 1.5 m any foot reaches", "millimetres"],
+    );
+}
+
+#[test]
+fn a_mistyped_meta_value_names_its_field_and_line() {
+    let s = Scratch::new();
+    let (csv, meta) = with_edited_meta(&s, |m| m["belt_speed_m_s"] = "1.13".into());
+    let e = read_sagittal_csv(&csv).unwrap_err();
+    let msg = e.to_string();
+    assert!(matches!(e, DataError::Json { line: 1, .. }), "{msg}");
+    for w in [
+        meta.display().to_string().as_str(),
+        "field 'belt_speed_m_s'",
+        "string \"1.13\", expected a number",
+    ] {
+        assert!(msg.contains(w), "{w:?} not in {msg}");
+    }
+    assert!(!msg.contains("at line"), "{msg}");
+}
+
+#[test]
+fn a_constant_knee_angle_is_refused_naming_the_column() {
+    let s = Scratch::new();
+    let (csv, d) = edited_trial(&s, &["knee_l"], |_| -0.2, Some(TREADMILL_META));
+    assert_refused(
+        d.check_conventions(false).unwrap_err(),
+        &csv,
+        "knee_l",
+        &["spans only 0.0000 rad", "at least 0.1 rad", "frozen"],
+    );
+}

@@ -399,6 +399,20 @@ fn edited_grf(dir: &Path, rename: impl Fn(&str) -> String, negate: Option<&str>)
 }
 
 #[test]
+fn kinematics_and_forces_given_the_wrong_way_round_are_named_as_swapped() {
+    let e = refused(
+        &files(&grf(), Some(&ik())),
+        &[
+            "--data",
+            "subject01_walk1_grf.mot holds ground forces",
+            "subject01_walk1_ik.mot holds kinematics",
+            "swapped",
+        ],
+    );
+    assert!(!e.contains("inDegrees"), "{e}");
+}
+
+#[test]
 fn plates_are_detected_or_named_and_unknown_ones_refused() {
     let dir = tempfile::tempdir().unwrap();
     let numbered = edited_grf(
@@ -448,7 +462,7 @@ fn plates_are_detected_or_named_and_unknown_ones_refused() {
         ],
     );
     plain.plates = vec!["x=1_".into()];
-    refused(&plain, &["--plate x=1_", "neither r nor l"]);
+    refused(&plain, &["--plate x=1_", "neither r (right) nor l (left)"]);
     plain.plates = vec!["r1_".into()];
     refused(&plain, &["--plate r1_", "FOOT=PREFIX"]);
     plain.plates = vec!["l=".into()];

@@ -409,6 +409,33 @@ fn a_killed_solve_resumes_along_the_same_iterates() {
 }
 
 #[test]
+fn a_checkpoint_holding_nan_is_refused_naming_the_file_and_the_entry() {
+    let args = ["--problem", &r("problems/five_link_biped.json")];
+    let tmp = tempfile::tempdir().unwrap();
+    let killed = tmp.path();
+    kill_after_checkpoint(killed, &args, "1", 2);
+    let partial = entries(killed)
+        .into_iter()
+        .find(|e| e.starts_with(".run.partial-"))
+        .expect("the killed run's staging folder");
+    let cp = killed.join(partial).join(".resume-checkpoint-0.json");
+    let mut v: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&cp).unwrap()).unwrap();
+    v["w"][3] = f64::NAN.to_bits().into();
+    std::fs::write(&cp, v.to_string()).unwrap();
+    let o = resume(killed, "1");
+    refused(
+        &o,
+        &[
+            ".resume-checkpoint-0.json",
+            "the checkpoint is damaged: w[3] is NaN",
+            "without --resume",
+        ],
+    );
+    assert!(!killed.join("run").exists(), "{}", stderr(&o));
+}
+
+#[test]
 fn a_killed_solve_resumes_to_the_same_optimum() {
     let args = ["--problem", &r("problems/five_link_biped.json")];
     let tmp = tempfile::tempdir().unwrap();

@@ -38,7 +38,7 @@ pub struct TrialArgs {
     /// ground_force_*; default: `""` or `r_` is the right foot, `l_` the left (the choice
     /// is printed). C3D: the 1-based plate number(s) of each foot, e.g. `--plate r=1
     /// --plate l=2` (a foot may take several plates: `--plate r=1 --plate r=3`); required.
-    #[arg(long = "plate", value_name = "FOOT=PREFIX|FOOT=N")]
+    #[arg(long = "plate", value_name = "FOOT=PREFIX|FOOT=N", value_parser = super::validate::plate)]
     pub plates: Vec<String>,
     /// Lab axes of a C3D `--forces` file: the walking direction and up, `FORWARD,UP`, each
     /// one of +x, -x, +y, -y, +z, -z (default `+x,+z`, the usual C3D lab).
@@ -72,8 +72,8 @@ impl From<TrialArgs> for footfall::workflows::trial::TrialFiles {
 /// `compare-contact` (the latter applies them to each of its runs).
 #[derive(Debug, Clone, clap::Args)]
 pub struct TrackSolverArgs {
-    /// KKT tolerance.
-    #[arg(long, default_value_t = 1e-5, value_parser = super::validate::positive)]
+    /// KKT tolerance (at most 0.01).
+    #[arg(long, default_value_t = 1e-5, value_parser = super::validate::kkt_tolerance)]
     pub tol: f64,
     /// With `--hessian exact`: Gauss–Newton steps until the constraint violation is below
     /// this (default: 1e-3, and below 0.1 once five Gauss–Newton iterations have not

@@ -25,8 +25,8 @@ pub struct Args {
     /// Replace existing output folders.
     #[arg(long)]
     overwrite: bool,
-    /// KKT tolerance of the re-fits.
-    #[arg(long, default_value_t = 1e-5, value_parser = super::validate::positive)]
+    /// KKT tolerance of the re-fits (at most 0.01).
+    #[arg(long, default_value_t = 1e-5, value_parser = super::validate::kkt_tolerance)]
     tol: f64,
     /// Iteration limit of the re-fits.
     #[arg(long, default_value_t = 200, value_parser = super::validate::iterations)]

@@ -24,7 +24,7 @@ mod validate;
 pub use args::{
     CheckPointArgs, CliProgress, HessianArg, MethodArg, ModelArgs, TrackSolverArgs, TrialArgs,
 };
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use footfall::sqp::SqpStatus;
 use std::process::ExitCode;
 
@@ -85,6 +85,9 @@ enum Command {
 
 /// Failure classes mapped to exit codes.
 pub enum Failure {
+    /// An option value refused after parsing, e.g. two `--effect` items that add the
+    /// same effect (exit 2, as clap's usage errors).
+    Usage(anyhow::Error),
     /// Bad input or an I/O error (exit 1).
     Input(anyhow::Error),
     /// Solved but not converged (exit 3).
@@ -124,6 +127,7 @@ impl Failure {
     /// The process exit code.
     pub fn code(&self) -> u8 {
         match self {
+            Failure::Usage(_) => 2,
             Failure::Input(_) => 1,
             Failure::NotConverged(_) => 3,
             Failure::Infeasible(_) => 4,
@@ -134,7 +138,8 @@ impl Failure {
 
     fn error(&self) -> &anyhow::Error {
         match self {
-            Failure::Input(e)
+            Failure::Usage(e)
+            | Failure::Input(e)
             | Failure::NotConverged(e)
             | Failure::Infeasible(e)
             | Failure::PhysicallyInvalid(e)
@@ -146,7 +151,7 @@ impl Failure {
 pub fn main() -> ExitCode {
     // before any work: a Ctrl-C during setup removes what this process staged and exits 130
     footfall::workflows::session::install_interrupt_handler();
-    let mut cli = Cli::parse();
+    let mut cli = parse(std::env::args_os());
     let args: Vec<String> = std::env::args().skip(1).collect();
     let resuming = match &cli.command {
         Command::Track(a) => a.resume.is_some().then_some("track"),
@@ -157,9 +162,7 @@ pub fn main() -> ExitCode {
     let recorded = match resuming {
         Some(sub) => footfall::workflows::session::prepare_resume(sub, &args).map(|original| {
             let quiet = cli.quiet;
-            cli = Cli::parse_from(
-                std::iter::once("footfall".to_string()).chain(original.iter().cloned()),
-            );
+            cli = parse(std::iter::once("footfall".to_string()).chain(original.iter().cloned()));
             cli.quiet |= quiet;
             original
         }),
@@ -191,6 +194,24 @@ pub fn main() -> ExitCode {
             ExitCode::from(f.code())
         }
     }
+}
+
+/// The command line parsed, or clap's usage error printed and exit 2. Every option's
+/// value may start with a minus sign: `--tol -1` is the value −1, refused by the option's
+/// range, where clap would take `-1` for an unknown flag.
+fn parse<I, T>(argv: I) -> Cli
+where
+    I: IntoIterator<Item = T>,
+    T: Into<std::ffi::OsString> + Clone,
+{
+    let mut cmd = Cli::command().mut_subcommands(|s| {
+        s.mut_args(|a| {
+            let values = a.get_action().takes_values();
+            a.allow_negative_numbers(values)
+        })
+    });
+    let matches = cmd.clone().get_matches_from(argv);
+    Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.format(&mut cmd).exit())
 }
 
 /// The error and its causes joined by ": ", skipping a cause whose text the message

@@ -19,10 +19,10 @@ pub struct PredictOptions {
     pub model: PathBuf,
     #[command(flatten)]
     pub trial: super::TrialArgs,
-    /// Step length (m; default: the subject's over the tracked half cycle).
+    /// Step length (m, > 0 and ≤ 2.5; default: the subject's over the tracked half cycle).
     #[arg(long)]
     pub step_length: Option<f64>,
-    /// Average forward speed (m/s; default: the subject's).
+    /// Average forward speed (m/s, > 0 and ≤ 12; default: the subject's).
     #[arg(long)]
     pub speed: Option<f64>,
     /// Impulse weight w_Δ of Millard & Mombaur (2019), eq. 21.
@@ -35,8 +35,8 @@ pub struct PredictOptions {
     /// Hessian: exact (default) or an approximation.
     #[arg(long, value_enum, default_value = "exact")]
     pub hessian: super::HessianArg,
-    /// KKT tolerance.
-    #[arg(long, default_value_t = 1e-5, value_parser = super::validate::positive)]
+    /// KKT tolerance (at most 0.01).
+    #[arg(long, default_value_t = 1e-5, value_parser = super::validate::kkt_tolerance)]
     pub tol: f64,
     /// Relative and absolute CVODES tolerance of the shooting intervals.
     #[arg(long, default_value_t = 1e-8, value_parser = super::validate::positive)]

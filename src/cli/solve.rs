@@ -25,8 +25,8 @@ pub struct Args {
     /// Start from the variables of a previous solution.json.
     #[arg(long)]
     warm_start: Option<PathBuf>,
-    /// KKT tolerance.
-    #[arg(long, default_value_t = 1e-6, value_parser = super::validate::positive)]
+    /// KKT tolerance (at most 0.01).
+    #[arg(long, default_value_t = 1e-6, value_parser = super::validate::kkt_tolerance)]
     tol: f64,
     /// Iteration limit.
     #[arg(long, default_value_t = 200, value_parser = super::validate::iterations)]

@@ -65,7 +65,7 @@ pub struct Args {
     /// activation_time_constants, volumetric_contact — a volumetric foot's stiffness
     /// (N/mm²), damping (s/m) and mu_dynamic — and foot_geometry — the primitives' centres,
     /// sizes and angles).
-    #[arg(long = "effect", value_name = "NAME[:key=value,…]")]
+    #[arg(long = "effect", value_name = "NAME[:key=value,…]", value_parser = super::validate::effect)]
     effects: Vec<String>,
     /// Track the pelvis position (x, y) too, weighted 1/(0.1 m) as angles are by
     /// 1/(π/4); Millard & Mombaur (2019) leave it untracked (then a CoP offset cannot be identified: the
@@ -199,19 +199,17 @@ fn parse_noise_weights(text: &str) -> anyhow::Result<ChannelNoise> {
 }
 
 pub fn run(args: Args, progress: &CliProgress) -> Result<(), Failure> {
-    run_inner(args, progress).map_err(Failure::classify)
+    // two --effect items that add the same effect are a usage error, like a malformed one
+    let effects = EffectSpec::parse_cli_all(&args.effects)
+        .map_err(|r| Failure::Usage(anyhow!("--effect: {r}")))?;
+    run_inner(args, effects, progress).map_err(Failure::classify)
 }
 
-fn run_inner(args: Args, progress: &CliProgress) -> anyhow::Result<()> {
+fn run_inner(args: Args, effects: Vec<EffectSpec>, progress: &CliProgress) -> anyhow::Result<()> {
     let phases = args
         .phases
         .clone()
         .unwrap_or_else(|| default_phases(&args.model.foot));
-    let effects: Vec<EffectSpec> = args
-        .effects
-        .iter()
-        .map(|e| EffectSpec::parse_cli(e).map_err(|r| anyhow!("--effect: {r}")))
-        .collect::<Result<_, _>>()?;
     let req = TrackRequest {
         run: TrackingRunSetup {
             model: args.model.model.clone(),

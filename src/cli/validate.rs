@@ -1,7 +1,7 @@
 //! Value parsers of numeric options: clap refuses a bad value before anything runs,
 //! naming the option and what would be valid (clap's usage errors exit with code 2).
 
-use footfall::limits::MAX_ITERATIONS;
+use footfall::limits::{show, MAX_ITERATIONS, MAX_KKT_TOL};
 
 fn number(s: &str) -> Result<f64, String> {
     s.trim()
@@ -14,6 +14,17 @@ pub fn positive(s: &str) -> Result<f64, String> {
     match number(s)? {
         v if v.is_finite() && v > 0.0 => Ok(v),
         _ => Err("expected a finite number > 0".into()),
+    }
+}
+
+/// A KKT tolerance: finite, > 0 and at most [`MAX_KKT_TOL`].
+pub fn kkt_tolerance(s: &str) -> Result<f64, String> {
+    match number(s)? {
+        v if v.is_finite() && v > 0.0 && v <= MAX_KKT_TOL => Ok(v),
+        _ => Err(format!(
+            "expected a KKT tolerance > 0 and ≤ {} (e.g. 1e-5; a looser one accepts constraint violations of centimetres)",
+            show(MAX_KKT_TOL)
+        )),
     }
 }
 
@@ -31,6 +42,16 @@ pub fn threshold(s: &str) -> Result<f64, String> {
         v if v >= 0.0 => Ok(v),
         _ => Err("expected a number ≥ 0 (or inf)".into()),
     }
+}
+
+/// A `--plate FOOT=PREFIX|FOOT=N` item whose foot is r or l (the file checks the rest).
+pub fn plate(s: &str) -> Result<String, String> {
+    footfall::workflows::trial::split_plate(s).map(|_| s.to_string())
+}
+
+/// An `--effect NAME[:key=value,…]` text naming a known effect with valid parameters.
+pub fn effect(s: &str) -> Result<String, String> {
+    footfall::model::effects::EffectSpec::parse_cli(s).map(|_| s.to_string())
 }
 
 /// An iteration limit: 0 to [`MAX_ITERATIONS`].
@@ -53,6 +74,8 @@ mod tests {
             assert!(positive(bad).is_err(), "{bad}");
         }
         assert_eq!(positive("1e-5"), Ok(1e-5));
+        assert!(kkt_tolerance("1e300").is_err() && kkt_tolerance("-1").is_err());
+        assert_eq!(kkt_tolerance("1e-2"), Ok(1e-2));
         assert!(non_negative("-0.1").is_err() && non_negative("NaN").is_err());
         assert_eq!(non_negative("0"), Ok(0.0));
         assert!(threshold("NaN").is_err() && threshold("-1").is_err());

@@ -30,6 +30,14 @@ pub const MAX_PELVIS_HEIGHT_M: f64 = 2.0;
 /// 1 m, so 1.5 m is beyond any foot's reach; a CoP in millimetres reads as hundreds.
 pub const MAX_COP_REACH_M: f64 = 1.5;
 
+/// Smallest span (rad, 5.7°) of the widest-moving leg joint of a walk longer than
+/// [`MIN_SPAN_DURATION`]: a knee spans about 60°, so joints that all stay within this
+/// after a conversion from degrees were radians.
+pub const MIN_LEG_SPAN_RAD: f64 = 0.1;
+
+/// Shortest trial (s) on which [`MIN_LEG_SPAN_RAD`] is judged (about half a gait cycle).
+pub const MIN_SPAN_DURATION: f64 = 0.5;
+
 /// Normal force a loaded foot exceeds (N): a vertical force that never rises above it
 /// while falling far below zero has its sign flipped.
 const LOADED_N: f64 = 20.0;
@@ -40,11 +48,28 @@ impl GaitData {
     pub fn check_conventions(&self, overground: bool) -> Result<(), DataError> {
         self.check_scales()?;
         self.check_angles()?;
+        self.check_knees_move()?;
+        self.check_forces_measured()?;
         self.check_force_signs()?;
         if !overground {
             self.check_treadmill()?;
         }
         Ok(())
+    }
+
+    /// The leg joint that moves most, as (index into [`Q_NAMES`], span in rad, trial
+    /// duration in s), when its span is below [`MIN_LEG_SPAN_RAD`] over at least
+    /// [`MIN_SPAN_DURATION`]: the trial's angles, read as degrees, were radians.
+    pub fn still_legs(&self) -> Option<(usize, f64, f64)> {
+        let duration = self.time.last()? - self.time.first()?;
+        if duration < MIN_SPAN_DURATION {
+            return None;
+        }
+        let span = |i: usize| Self::range(&self.q[i]).map_or(0.0, |(lo, hi)| hi - lo);
+        let (widest, s) = (3..9)
+            .map(|i| (i, span(i)))
+            .fold((3, f64::NEG_INFINITY), |a, b| if b.1 > a.1 { b } else { a });
+        (s < MIN_LEG_SPAN_RAD).then_some((widest, s, duration))
     }
 
     fn range(v: &[f64]) -> Option<(f64, f64)> {
@@ -110,6 +135,57 @@ impl GaitData {
                         format!("at {:.3} s the CoP lies {:.3} from the pelvis (x {px:.3}), beyond the {MAX_COP_REACH_M} m any foot reaches. footfall reads the CoP in metres in the same frame as pelvis_x: millimetres read a thousand times too far", self.time[k], c - px),
                     ));
                 }
+            }
+        }
+        Ok(())
+    }
+
+    /// Some foot has a vertical force somewhere (NaN is a foot off the plates, and a
+    /// trial whose every force is NaN has nothing to find its stances in).
+    fn check_forces_measured(&self) -> Result<(), DataError> {
+        let (t, feet) = self.force_record();
+        if feet.iter().any(|f| f.fy.iter().any(|v| v.is_finite())) {
+            return Ok(());
+        }
+        let side = if self.sides[0] == SideSource::Missing {
+            "l"
+        } else {
+            "r"
+        };
+        Err(DataError::invalid(
+            &self.source,
+            format!("grf_y_{side}"),
+            format!(
+                "no foot's vertical ground force holds a number in the {} samples (all NaN): footfall finds the stances in the forces; give the forces of at least one foot",
+                t.len()
+            ),
+        ))
+    }
+
+    /// Each measured knee bends over a walk of at least [`MIN_SPAN_DURATION`]: one that
+    /// spans less than [`MIN_LEG_SPAN_RAD`] is a frozen or copied channel.
+    fn check_knees_move(&self) -> Result<(), DataError> {
+        let duration = match (self.time.first(), self.time.last()) {
+            (Some(a), Some(b)) if b - a >= MIN_SPAN_DURATION => b - a,
+            _ => return Ok(()),
+        };
+        for (s, i) in [(0, 4), (1, 7)] {
+            if self.sides[s] != SideSource::Measured {
+                continue;
+            }
+            let Some((lo, hi)) = Self::range(&self.q[i]) else {
+                continue;
+            };
+            if hi - lo < MIN_LEG_SPAN_RAD {
+                return Err(DataError::invalid(
+                    &self.source,
+                    Q_NAMES[i],
+                    format!(
+                        "spans only {:.4} rad ({:.2}°) in {duration:.2} s: a walking knee bends about 1 rad (60°) each stride, at least {MIN_LEG_SPAN_RAD} rad; the column looks frozen or filled with a constant",
+                        hi - lo,
+                        (hi - lo).to_degrees()
+                    ),
+                ));
             }
         }
         Ok(())

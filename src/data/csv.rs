@@ -86,6 +86,32 @@ pub struct TrialMeta {
     pub events_20n: Option<BTreeMap<String, MetaEvents>>,
 }
 
+/// The meta file's fields; an error names the field, what serde found and its line.
+fn parse_meta(text: &str, path: &Path) -> Result<TrialMeta, DataError> {
+    let mut de = serde_json::Deserializer::from_str(text);
+    serde_path_to_error::deserialize(&mut de).map_err(|e| {
+        let field = e.path().to_string();
+        let inner = e.into_inner();
+        let what = inner.to_string();
+        let what = match what.rfind(" at line ") {
+            Some(k) => what[..k].replace("f64", "a number"),
+            None => what,
+        };
+        DataError::Json {
+            path: path.to_path_buf(),
+            message: match field.as_str() {
+                "." | "" => what,
+                f => format!("field '{f}': {what}"),
+            },
+            line: inner.line(),
+            column: inner.column(),
+        }
+    })
+}
+
+/// Fastest treadmill belt a meta file may give (m/s), beyond a sprinter's speed.
+pub const MAX_BELT_SPEED: f64 = 12.0;
+
 /// Read a meta JSON file (its units are checked too).
 pub fn read_meta(path: &Path) -> Result<TrialMeta, DataError> {
     load_meta(path).map(|(m, _)| m)
@@ -93,12 +119,8 @@ pub fn read_meta(path: &Path) -> Result<TrialMeta, DataError> {
 
 fn load_meta(path: &Path) -> Result<(TrialMeta, Units), DataError> {
     let text = std::fs::read_to_string(path).map_err(|e| DataError::io(path, e))?;
-    let meta: TrialMeta = serde_json::from_str(&text).map_err(|e| DataError::Json {
-        path: path.to_path_buf(),
-        message: e.to_string(),
-        line: e.line(),
-        column: e.column(),
-    })?;
+    let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
+    let meta = parse_meta(text, path)?;
     for (field, v) in [
         ("body_mass_kg_model", meta.body_mass_kg_model),
         ("belt_speed_m_s", meta.belt_speed_m_s),
@@ -124,7 +146,19 @@ fn load_meta(path: &Path) -> Result<(TrialMeta, Units), DataError> {
             ));
         }
     }
-    let units = Units::from_meta(&meta, &text, path)?;
+    if let Some(v) = meta.belt_speed_m_s {
+        if !(v > 0.0 && v <= MAX_BELT_SPEED) {
+            return Err(DataError::invalid(
+                path,
+                "belt_speed_m_s",
+                format!(
+                    "must be the belt's backward speed, > 0 and ≤ {MAX_BELT_SPEED} m/s, got {} m/s (leave the field out for an overground trial)",
+                    crate::limits::show(v)
+                ),
+            ));
+        }
+    }
+    let units = Units::from_meta(&meta, text, path)?;
     Ok((meta, units))
 }
 
@@ -278,6 +312,9 @@ pub fn read_sagittal_csv_with(path: &Path, meta: &MetaSource) -> Result<GaitData
         .and_then(|m| m.cop_threshold_n)
         .unwrap_or(DEFAULT_COP_THRESHOLD);
     let mut data = parse_sagittal_csv(&text, path, cop_threshold, units)?;
+    if let (Some(mp), true) = (&meta_path, units.angle != 1.0) {
+        check_degrees_declared(&data, mp)?;
+    }
     if let Some(m) = meta {
         data.body_mass = m.body_mass_kg_model;
         data.belt_speed = m.belt_speed_m_s;
@@ -294,6 +331,24 @@ pub fn read_sagittal_csv_with(path: &Path, meta: &MetaSource) -> Result<GaitData
         }
     }
     Ok(data)
+}
+
+/// A meta file that declares degrees over angles that, so converted, barely move: they
+/// were radians.
+fn check_degrees_declared(data: &GaitData, meta_path: &Path) -> Result<(), DataError> {
+    let Some((widest, s, duration)) = data.still_legs() else {
+        return Ok(());
+    };
+    Err(DataError::invalid(
+        meta_path,
+        "units.angles",
+        format!(
+            "declares degrees, but then {} of {} spans only {:.3}° in {duration:.2} s, the most of any leg joint: a walking knee spans about 60°, so the angles look like radians; declare \"angles\": \"rad\" (or leave the unit out) if they are",
+            Q_NAMES[widest],
+            data.source.display(),
+            s.to_degrees()
+        ),
+    ))
 }
 
 /// Events given in a meta file: both sides, increasing, inside the recording; a foot is
@@ -410,6 +465,29 @@ fn foot_columns(side: &str) -> [String; 6] {
     ]
 }
 
+/// A header that is one column holding semicolons or tabs: the file is separated by
+/// those, and footfall reads commas.
+fn check_separator(header: &str, row: usize, path: &Path) -> Result<(), DataError> {
+    if header.contains(',') {
+        return Ok(());
+    }
+    let Some((sep, name)) = [(';', "semicolons"), ('\t', "tabs")]
+        .into_iter()
+        .find(|(c, _)| header.contains(*c))
+    else {
+        return Ok(());
+    };
+    let first: Vec<&str> = header.split(sep).take(3).collect();
+    Err(DataError::Format {
+        path: path.to_path_buf(),
+        row,
+        reason: format!(
+            "the header ('{}{sep}…') is separated by {name}; footfall reads comma-separated values ('time,pelvis_x,…' with '.' as the decimal point): save the file with commas",
+            first.join(&sep.to_string())
+        ),
+    })
+}
+
 fn parse_sagittal_csv(
     text: &str,
     path: &Path,
@@ -427,8 +505,9 @@ fn parse_sagittal_csv(
         row: 1,
         reason: "the file is empty; expected a header row 'time,pelvis_x,…'".into(),
     })?;
+    let header = header.trim_start_matches('\u{feff}');
+    check_separator(header, header_row, path)?;
     let cols: Vec<String> = header
-        .trim_start_matches('\u{feff}')
         .split(',')
         .map(|c| c.trim().trim_matches('"').to_string())
         .collect();

@@ -146,7 +146,7 @@ pub enum DataError {
         reason: String,
     },
     /// No foot's normal force ever exceeds the contact threshold: the trial has no stance.
-    #[error("{path}: no stance phase: no normal force exceeds the threshold {} N (peak normal force {} N)", crate::limits::show(*threshold), crate::limits::show(*peak))]
+    #[error("{path}: no stance phase: {}", no_stance(*threshold, *peak))]
     NoStance {
         /// File.
         path: PathBuf,
@@ -283,4 +283,17 @@ impl DataError {
 /// The path used for data built in memory.
 pub(crate) fn memory_path() -> PathBuf {
     PathBuf::from("<memory>")
+}
+
+/// Why a trial has no stance: no normal force measured at all, or none above the
+/// threshold.
+fn no_stance(threshold: f64, peak: f64) -> String {
+    if peak.is_nan() {
+        return "no normal force was measured (every grf_y value is NaN or missing); a trial needs the vertical ground force of at least one foot".into();
+    }
+    format!(
+        "no normal force exceeds the threshold {} N (peak normal force {} N)",
+        crate::limits::show(threshold),
+        crate::limits::show(peak)
+    )
 }

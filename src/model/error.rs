@@ -13,6 +13,14 @@ pub enum ModelError {
         /// Cause.
         source: std::io::Error,
     },
+    /// A foot that is neither a bundled foot nor an existing file.
+    #[error("foot {path}: no such file; a foot is `ellipse`, `double-circle`, a bundled foot file ({bundled}) or the path of a foot file (JSON)")]
+    NoFoot {
+        /// The foot as given.
+        path: PathBuf,
+        /// The bundled foot files, comma-separated.
+        bundled: String,
+    },
     /// The file is not valid JSON or does not match the schema.
     #[error("{path}: {message} (line {line}, column {column})")]
     Json {

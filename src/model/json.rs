@@ -27,7 +27,10 @@ pub fn read_json<T: DeserializeOwned>(path: &Path) -> Result<T, ModelError> {
 /// The error names the dotted path of the offending field (`body.segments.thigh.mass`,
 /// `primitives[0].shape.type`), serde's description of what is wrong and what it expected,
 /// and the line and column of the field.
+///
+/// A leading byte-order mark is skipped, as spreadsheet programs write one.
 pub fn parse_json<T: DeserializeOwned>(text: &str, path: &Path) -> Result<T, ModelError> {
+    let text = text.strip_prefix('\u{feff}').unwrap_or(text);
     let mut de = serde_json::Deserializer::from_str(text);
     let (e, mut field) = match serde_path_to_error::deserialize::<_, T>(&mut de) {
         Ok(v) => match de.end() {
@@ -92,6 +95,8 @@ pub fn parse_json<T: DeserializeOwned>(text: &str, path: &Path) -> Result<T, Mod
         } else {
             format!("invalid JSON: {what} (near field '{field}')")
         }
+    } else if let Some(held) = not_an_object(text) {
+        held
     } else if field.is_empty() {
         what
     } else {
@@ -103,6 +108,23 @@ pub fn parse_json<T: DeserializeOwned>(text: &str, path: &Path) -> Result<T, Mod
         line,
         column,
     })
+}
+
+/// What a document that is valid JSON but no object holds, e.g. `the file holds null,
+/// not a JSON object { … } of fields`; None for an object.
+fn not_an_object(text: &str) -> Option<String> {
+    use serde_json::Value;
+    let held = match serde_json::from_str::<Value>(text).ok()? {
+        Value::Null => "null",
+        Value::Bool(_) => "a boolean",
+        Value::Number(_) => "a number",
+        Value::String(_) => "a string",
+        Value::Array(_) => "an array",
+        Value::Object(_) => return None,
+    };
+    Some(format!(
+        "the file holds {held}, not a JSON object {{ … }} of fields"
+    ))
 }
 
 /// One step of a path into a JSON document.

@@ -10,7 +10,7 @@ use super::error::ModelError;
 use super::geometry::Shape;
 use crate::limits::{
     show, MAX_BAUMGARTE, MAX_ETA, MAX_GRAVITY, MAX_GROUND_HEIGHT, MAX_HEIGHT, MAX_INERTIA,
-    MAX_MASS, MAX_SEGMENT_EXTENT,
+    MAX_MASS, MAX_SEGMENT_EXTENT, MIN_HEIGHT,
 };
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -283,6 +283,24 @@ fn check_at_most(path: &Path, field: &str, v: f64, max: f64, unit: &str) -> Resu
     }
 }
 
+/// A stature (m) in [`MIN_HEIGHT`], [`MAX_HEIGHT`].
+fn check_stature(path: &Path, field: &str, v: f64) -> Result<(), ModelError> {
+    check_at_most(path, field, v, MAX_HEIGHT, "m")?;
+    if v >= MIN_HEIGHT {
+        return Ok(());
+    }
+    Err(ModelError::invalid(
+        path,
+        field,
+        format!(
+            "a stature of {} m is below any human's; expected a value in [{}, {}] m",
+            show(v),
+            show(MIN_HEIGHT),
+            show(MAX_HEIGHT)
+        ),
+    ))
+}
+
 fn check_finite(path: &Path, field: &str, v: &[f64]) -> Result<(), ModelError> {
     if v.iter().all(|x| x.is_finite()) {
         Ok(())
@@ -356,7 +374,7 @@ impl ModelSpec {
         match &self.body {
             BodySpec::DeLeva { mass, height, .. } => {
                 check_at_most(path, "body.mass", *mass, MAX_MASS, "kg")?;
-                check_at_most(path, "body.height", *height, MAX_HEIGHT, "m")?;
+                check_stature(path, "body.height", *height)?;
             }
             BodySpec::Explicit { segments } => segments.validate(path)?,
             BodySpec::OpensimModel { file, .. } => {
@@ -388,7 +406,7 @@ impl ModelSpec {
                     check_at_most(path, "actuators.subject_mass", *m, MAX_MASS, "kg")?;
                 }
                 if let Some(h) = subject_height {
-                    check_at_most(path, "actuators.subject_height", *h, MAX_HEIGHT, "m")?;
+                    check_stature(path, "actuators.subject_height", *h)?;
                 }
                 check_positive(
                     path,
@@ -476,6 +494,12 @@ impl FootSpec {
     /// Read and validate a foot file.
     pub fn load(path: &Path) -> Result<Self, ModelError> {
         let path = &crate::bundled::resolve(path);
+        if !path.exists() {
+            return Err(ModelError::NoFoot {
+                path: path.clone(),
+                bundled: crate::bundled::feet().join(", "),
+            });
+        }
         let spec: FootSpec = read_json(path)?;
         spec.validate(path)?;
         Ok(spec)

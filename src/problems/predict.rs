@@ -25,6 +25,28 @@ use std::sync::Arc;
 /// Millard & Mombaur's impulse weight w_Δ (eq. 21, N⁻²s⁻²).
 pub const SEED_IMPULSE_WEIGHT: f64 = 1e-2;
 
+/// Longest step a prediction accepts (m): forward pelvis travel over a half cycle,
+/// beyond a sprinter's.
+pub const MAX_STEP_LENGTH: f64 = 2.5;
+/// Fastest average speed a prediction accepts (m/s), beyond a sprinter's.
+pub const MAX_SPEED: f64 = 12.0;
+
+/// A step length or speed target outside human gait.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{what} {value} {unit} is not a human gait's: expected a forward {what} > 0 and ≤ {max} {unit} (the subject's: {subject:.3} {unit})")]
+pub struct TargetError {
+    /// `step length` or `speed`.
+    pub what: &'static str,
+    /// The target given.
+    pub value: f64,
+    /// Its unit.
+    pub unit: &'static str,
+    /// The largest accepted.
+    pub max: f64,
+    /// The subject's, from the data.
+    pub subject: f64,
+}
+
 /// Targets and options of the prediction.
 #[derive(Debug, Clone, PartialEq, serde::Serialize)]
 pub struct PredictionSettings {
@@ -52,6 +74,34 @@ impl PredictionSettings {
             impulse_weight: SEED_IMPULSE_WEIGHT,
             ankle_velocity_limit: None,
         }
+    }
+
+    /// Replace the subject's step length and speed by the given targets, each > 0 and at
+    /// most [`MAX_STEP_LENGTH`] and [`MAX_SPEED`].
+    pub fn set_targets(
+        &mut self,
+        step_length: Option<f64>,
+        speed: Option<f64>,
+    ) -> Result<(), TargetError> {
+        let target = |what, unit, max, value: Option<f64>, subject: f64| match value {
+            Some(v) if !(v > 0.0 && v <= max) => Err(TargetError {
+                what,
+                value: v,
+                unit,
+                max,
+                subject,
+            }),
+            _ => Ok(value.unwrap_or(subject)),
+        };
+        self.step_length = target(
+            "step length",
+            "m",
+            MAX_STEP_LENGTH,
+            step_length,
+            self.step_length,
+        )?;
+        self.speed = target("speed", "m/s", MAX_SPEED, speed, self.speed)?;
+        Ok(())
     }
 }
 

@@ -132,6 +132,16 @@ pub enum CheckpointError {
         /// This problem's constraints.
         m: usize,
     },
+    /// A number the resumed solve needs finite is not.
+    #[error("the checkpoint is damaged: {what}[{index}] is {value}, where a solve needs a finite number; start the run again without --resume")]
+    NonFinite {
+        /// Which vector: `w` (the iterate), `lambda`, `nu` or `bfgs`.
+        what: &'static str,
+        /// Index in it.
+        index: usize,
+        /// The value found.
+        value: f64,
+    },
     /// Inconsistent lengths inside the checkpoint.
     #[error("the checkpoint is damaged: {0}")]
     Damaged(&'static str),
@@ -168,6 +178,28 @@ impl SqpCheckpoint {
             return Err(CheckpointError::Damaged(
                 "history length differs from the iteration count",
             ));
+        }
+        self.check_finite()
+    }
+
+    /// Check that the iterate, the multipliers and the BFGS blocks are finite (NaN or ±∞
+    /// there would carry on to a different result).
+    pub fn check_finite(&self) -> Result<(), CheckpointError> {
+        let bfgs = self.bfgs.iter().flat_map(|(b, _)| b.0.iter());
+        let vectors: [(&'static str, Box<dyn Iterator<Item = &u64>>); 4] = [
+            ("w", Box::new(self.w.0.iter())),
+            ("lambda", Box::new(self.lambda.0.iter())),
+            ("nu", Box::new(self.nu.0.iter())),
+            ("bfgs", Box::new(bfgs)),
+        ];
+        for (what, bits) in vectors {
+            let found = bits
+                .map(|&b| f64::from_bits(b))
+                .enumerate()
+                .find(|(_, v)| !v.is_finite());
+            if let Some((index, value)) = found {
+                return Err(CheckpointError::NonFinite { what, index, value });
+            }
         }
         Ok(())
     }

@@ -6,6 +6,8 @@ use super::read_solution;
 use super::run_folder::GaitRunOutput;
 #[allow(unused_imports)]
 use super::{note, warn_note, Progress};
+use crate::model::GaitModel;
+use crate::phases::PhaseSequence;
 use crate::problems::evaluation::GaitSolution;
 use crate::report::html::{Report, Section, Summary, Tone};
 use crate::report::plot::{LinePlot, LineStyle, Series};
@@ -52,6 +54,29 @@ struct Outcome {
     kkt: f64,
 }
 
+/// A `--feet` item: the foot and its phase file, if given (`FOOT_FILE:PHASE_FILE`).
+fn foot_and_phases(spec: &str) -> (String, Option<PathBuf>) {
+    match spec.split_once(':') {
+        Some((f, p)) => (f.to_string(), Some(PathBuf::from(p))),
+        None => (spec.to_string(), None),
+    }
+}
+
+/// Every foot and its phase file read and checked against the model before the first
+/// prediction, so that a bad later foot does not cost the earlier ones' solves.
+fn check_feet(args: &CompareRequest) -> anyhow::Result<()> {
+    for spec in &args.feet {
+        let (foot, phases) = foot_and_phases(spec);
+        let model = GaitModel::load(&args.options.model, &super::foot_path(&foot))
+            .map_err(|e| anyhow!("--feet {spec}: {e}"))?;
+        let phases = phases.unwrap_or_else(|| super::default_phases(&foot));
+        PhaseSequence::load(&phases)
+            .and_then(|seq| seq.resolve(&model, &phases).map(|_| ()))
+            .map_err(|e| anyhow!("--feet {spec}: {e}"))?;
+    }
+    Ok(())
+}
+
 /// Run `compare` as `args` describes, reporting to `progress`.
 pub fn run(args: &CompareRequest, progress: &dyn Progress) -> anyhow::Result<()> {
     if args.feet.len() < 2 {
@@ -79,13 +104,11 @@ pub fn run(args: &CompareRequest, progress: &dyn Progress) -> anyhow::Result<()>
             bail!("--expect-transient {e}: not among --feet {:?}", args.feet);
         }
     }
+    check_feet(args)?;
     let folder = RunFolder::create(&args.out, args.overwrite)?;
     let mut outcomes = Vec::new();
     for spec in &args.feet {
-        let (foot, phases) = match spec.split_once(':') {
-            Some((f, p)) => (f.to_string(), Some(PathBuf::from(p))),
-            None => (spec.clone(), None),
-        };
+        let (foot, phases) = foot_and_phases(spec);
         let name = std::path::Path::new(&foot)
             .file_stem()
             .map_or(foot.clone(), |s| s.to_string_lossy().replace('_', "-"));

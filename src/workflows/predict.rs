@@ -124,8 +124,7 @@ pub fn predict(
     let tracking = TrackingSetup::new(&model, &seq, &sets, &data)
         .map_err(|e| anyhow!("{}: {e}", data.source.display()))?;
     let mut settings = PredictionSettings::from_data(&tracking, &data);
-    settings.step_length = o.step_length.unwrap_or(settings.step_length);
-    settings.speed = o.speed.unwrap_or(settings.speed);
+    settings.set_targets(o.step_length, o.speed)?;
     settings.impulse_weight = o.impulse_weight;
     settings.ankle_velocity_limit = o.ankle_velocity_limit;
     let setup = match init {

@@ -602,20 +602,35 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
     for (name, q) in crate::data::OPENSIM_COORDINATES.iter().zip(&line.model_q) {
         kinematics.push(*name, pick(q))?;
     }
-    folder.write(
-        "kinematics.sto",
-        kinematics
-            .to_sto(&format!("footfall_{csv_name}"))
-            .as_bytes(),
-    )?;
+    // an unconverged run's table and motion say so in their first line
+    let unsolved = (!converged).then(|| match interrupted {
+        true => format!("{verdict}: the last accepted iterate, not a solution"),
+        false => format!(
+            "{verdict} ({}): the last iterate, not a solution",
+            res.status
+        ),
+    });
+    let sto_name = match &unsolved {
+        Some(note) => format!("footfall_{csv_name}: {note}"),
+        None => format!("footfall_{csv_name}"),
+    };
+    folder.write("kinematics.sto", kinematics.to_sto(&sto_name).as_bytes())?;
     let table_file = if run.command == "predict" {
         "table4.md"
     } else {
         "table3.md"
     };
+    let caution = unsolved
+        .map(|note| format!("**{note}**\n\n"))
+        .unwrap_or_default();
     folder.write(
         table_file,
-        format!("{}\n{}", table.to_markdown(), by_phase.to_markdown()).as_bytes(),
+        format!(
+            "{caution}{}\n{}",
+            table.to_markdown(),
+            by_phase.to_markdown()
+        )
+        .as_bytes(),
     )?;
     for (name, bytes) in &run.extra_files {
         folder.write(name, bytes)?;

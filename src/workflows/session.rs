@@ -280,6 +280,8 @@ pub fn prepare_resume(subcommand: &str, args: &[String]) -> anyhow::Result<Vec<S
             .with_context(|| entry.path().display().to_string())?;
         let cp: SqpCheckpoint = serde_json::from_str(&text)
             .with_context(|| format!("{}: not a footfall checkpoint", entry.path().display()))?;
+        cp.check_finite()
+            .with_context(|| entry.path().display().to_string())?;
         resume.insert(k, cp);
     }
     std::env::set_current_dir(&cmd.cwd)

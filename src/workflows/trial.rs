@@ -174,6 +174,19 @@ fn load_csv(path: &Path, t: &TrialFiles) -> anyhow::Result<LoadedTrial> {
     })
 }
 
+/// A `--plate FOOT=VALUE` item split into its foot (`r`/`right`, `l`/`left`, any case)
+/// and its value (trimmed); the error says what the item should look like.
+pub fn split_plate(p: &str) -> Result<(crate::model::Side, &str), String> {
+    let Some((side, value)) = p.split_once('=') else {
+        return Err("expected FOOT=PREFIX (OpenSim loads, e.g. r=1_ or l=2_; r= for the unprefixed ground_force_*) or FOOT=N (a C3D plate number, e.g. r=1)".into());
+    };
+    match side.trim().to_ascii_lowercase().as_str() {
+        "r" | "right" => Ok((crate::model::Side::Right, value.trim())),
+        "l" | "left" => Ok((crate::model::Side::Left, value.trim())),
+        other => Err(format!("foot '{other}' is neither r (right) nor l (left)")),
+    }
+}
+
 /// The foot prefixes of a GRF storage: `[right, left]` and the sentence that says how
 /// they were chosen.
 pub fn foot_prefixes(grf: &Storage, plates: &[String]) -> anyhow::Result<([String; 2], String)> {
@@ -196,13 +209,10 @@ pub fn foot_prefixes(grf: &Storage, plates: &[String]) -> anyhow::Result<([Strin
     };
     let mut given: [Option<String>; 2] = [None, None];
     for p in plates {
-        let Some((side, prefix)) = p.split_once('=') else {
-            bail!("--plate {p}: expected FOOT=PREFIX, e.g. r=1_ or l=2_ (r= for the unprefixed ground_force_*)");
-        };
-        let s = match side.trim().to_ascii_lowercase().as_str() {
-            "r" | "right" => 0,
-            "l" | "left" => 1,
-            other => bail!("--plate {p}: foot '{other}' is neither r nor l"),
+        let (side, prefix) = split_plate(p).map_err(|r| anyhow::anyhow!("--plate {p}: {r}"))?;
+        let s = match side {
+            crate::model::Side::Right => 0,
+            crate::model::Side::Left => 1,
         };
         if given[s].is_some() {
             bail!(
@@ -210,7 +220,7 @@ pub fn foot_prefixes(grf: &Storage, plates: &[String]) -> anyhow::Result<([Strin
                 ["right", "left"][s]
             );
         }
-        let prefix = prefix.trim().to_string();
+        let prefix = prefix.to_string();
         if !found.contains(&prefix) {
             return Err(DataError::MissingColumn {
                 path: grf.path.clone(),
@@ -291,6 +301,7 @@ fn load_opensim(ik_path: &Path, t: &TrialFiles) -> anyhow::Result<LoadedTrial> {
     }
     let ik = read_storage(ik_path)?;
     let grf = read_storage(grf_path)?;
+    check_not_swapped(&ik, &grf)?;
     require_angle_unit(&ik)?;
     let (prefixes, note) = foot_prefixes(&grf, &t.plates)?;
     let map = opensim_map(&ik, &prefixes);
@@ -307,6 +318,21 @@ fn load_opensim(ik_path: &Path, t: &TrialFiles) -> anyhow::Result<LoadedTrial> {
     })
 }
 
+/// Kinematics given with --forces and forces with --data: named as such, before either
+/// file is judged by the other's rules.
+fn check_not_swapped(ik: &Storage, grf: &Storage) -> anyhow::Result<()> {
+    let forces = |s: &Storage| s.columns.iter().any(|c| c.ends_with("ground_force_vy"));
+    let kinematics = |s: &Storage| s.column("pelvis_tilt").is_some();
+    if forces(ik) && !kinematics(ik) && kinematics(grf) {
+        bail!(
+            "--data {} holds ground forces and --forces {} holds kinematics (pelvis_tilt): the two are swapped; give the inverse kinematics with --data and the external loads with --forces",
+            ik.path.display(),
+            grf.path.display()
+        );
+    }
+    Ok(())
+}
+
 /// An OpenSim kinematics file must say its angle unit.
 fn require_angle_unit(ik: &Storage) -> Result<(), DataError> {
     if !ik.angle_unit_stated {
@@ -321,13 +347,7 @@ fn require_angle_unit(ik: &Storage) -> Result<(), DataError> {
     Ok(())
 }
 
-/// Smallest span (rad, 5.7°) of the widest-moving leg joint of a walk longer than
-/// [`MIN_SPAN_DURATION`]: a knee spans about 60°, so joints that all stay within this
-/// after a conversion from degrees were radians.
-pub const MIN_LEG_SPAN_RAD: f64 = 0.1;
-
-/// Shortest trial (s) on which [`MIN_LEG_SPAN_RAD`] is judged (about half a gait cycle).
-pub const MIN_SPAN_DURATION: f64 = 0.5;
+pub use crate::data::conventions::{MIN_LEG_SPAN_RAD, MIN_SPAN_DURATION};
 
 /// Radians in a file whose header says degrees: after the conversion every leg joint
 /// barely moves.
@@ -336,32 +356,17 @@ fn check_radians_said_degrees(
     ik: &Storage,
     map: &StorageMap,
 ) -> Result<(), DataError> {
-    let duration = data.time[data.time.len() - 1] - data.time[0];
-    if !ik.in_degrees || duration < MIN_SPAN_DURATION {
+    let Some((widest, s, duration)) = data.still_legs().filter(|_| ik.in_degrees) else {
         return Ok(());
-    }
-    let span = |v: &[f64]| {
-        let (lo, hi) = v
-            .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &x| {
-                (a.min(x), b.max(x))
-            });
-        hi - lo
     };
-    let (widest, s) = (3..9)
-        .map(|i| (i, span(&data.q[i])))
-        .fold((3, f64::NEG_INFINITY), |a, b| if b.1 > a.1 { b } else { a });
-    if s < MIN_LEG_SPAN_RAD {
-        return Err(DataError::invalid(
-            &ik.path,
-            map.q[widest].column.clone(),
-            format!(
-                "spans only {:.3}° in {duration:.2} s, the most of any leg joint, read as degrees as the header says: a walking knee spans about 60°, so the values look like radians; set 'inDegrees=no' above 'endheader' if they are",
-                s.to_degrees()
-            ),
-        ));
-    }
-    Ok(())
+    Err(DataError::invalid(
+        &ik.path,
+        map.q[widest].column.clone(),
+        format!(
+            "spans only {:.3}° in {duration:.2} s, the most of any leg joint, read as degrees as the header says: a walking knee spans about 60°, so the values look like radians; set 'inDegrees=no' above 'endheader' if they are",
+            s.to_degrees()
+        ),
+    ))
 }
 
 /// A convention error of a trial read from an OpenSim pair, told in that pair's terms:

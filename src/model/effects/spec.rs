@@ -494,6 +494,11 @@ impl EffectSpec {
             let (k, v) = kv
                 .split_once('=')
                 .ok_or_else(|| format!("'{kv}' in '{text}' is not key=value"))?;
+            if obj.contains_key(k) {
+                return Err(format!(
+                    "'{k}' is given twice in '{text}'; give each parameter once"
+                ));
+            }
             let value = if k == "free" {
                 free_given = true;
                 serde_json::Value::from(v.split('+').filter(|s| !s.is_empty()).collect::<Vec<_>>())
@@ -512,6 +517,26 @@ impl EffectSpec {
         spec.check()
             .map_err(|(f, r)| format!("effect '{text}': {f}: {r}"))?;
         Ok(spec)
+    }
+
+    /// Parse several `--effect` texts, refusing two that add the same effect (two sides
+    /// of a held measurement effect compose, as in a model file).
+    pub fn parse_cli_all(texts: &[String]) -> Result<Vec<Self>, String> {
+        let specs = texts
+            .iter()
+            .map(|t| Self::parse_cli(t))
+            .collect::<Result<Vec<_>, _>>()?;
+        for (j, b) in specs.iter().enumerate() {
+            if let Some(i) = (0..j).find(|&i| specs[i].overlaps(b) && !specs[i].composes_with(b)) {
+                return Err(format!(
+                    "'{}' and '{}' both add the effect '{}'; give it once",
+                    texts[i],
+                    texts[j],
+                    b.label()
+                ));
+            }
+        }
+        Ok(specs)
     }
 
     /// Check the entry without a model; the error names the offending field and what is

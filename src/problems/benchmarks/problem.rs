@@ -88,6 +88,37 @@ fn intervals(v: &Value) -> Result<usize, String> {
     Ok(n as usize)
 }
 
+/// Longest horizon a problem file may ask for (s).
+pub const MAX_HORIZON: f64 = 1e4;
+
+/// The horizon `horizon.T`: finite, > 0 and at most [`MAX_HORIZON`] s.
+fn horizon(v: &Value) -> Result<f64, String> {
+    let t = num(v, "/horizon/T")?;
+    if !(t > 0.0 && t <= MAX_HORIZON) {
+        return Err(format!(
+            "field 'horizon.T' must be a duration > 0 and ≤ {} s, got {}",
+            crate::limits::show(MAX_HORIZON),
+            crate::limits::show(t)
+        ));
+    }
+    Ok(t)
+}
+
+/// Lower and upper bounds `bounds.{kind}_lb`, `bounds.{kind}_ub` of `len` entries (null:
+/// unbounded), each lower bound at most its upper one.
+fn bounds(v: &Value, kind: &str, len: usize) -> Result<(Vec<f64>, Vec<f64>), String> {
+    let lb = vecn(v, &format!("/bounds/{kind}_lb"), len)?;
+    let ub = vecn(v, &format!("/bounds/{kind}_ub"), len)?;
+    if let Some(i) = (0..len).find(|&i| lb[i] > ub[i]) {
+        return Err(format!(
+            "field 'bounds.{kind}_ub[{i}]' ({}) is below 'bounds.{kind}_lb[{i}]' ({}): the lower bound must be at most the upper one",
+            crate::limits::show(ub[i]),
+            crate::limits::show(lb[i])
+        ));
+    }
+    Ok((bound(lb, f64::NEG_INFINITY), bound(ub, f64::INFINITY)))
+}
+
 fn vecn(v: &Value, ptr: &str, len: usize) -> Result<Vec<f64>, String> {
     let a = v.pointer(ptr).and_then(Value::as_array).ok_or_else(|| {
         format!(
@@ -134,7 +165,8 @@ impl Benchmark {
             path: path.into(),
             source,
         })?;
-        let json: Value = serde_json::from_str(&text).map_err(|source| ProblemError::Json {
+        let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
+        let json: Value = serde_json::from_str(text).map_err(|source| ProblemError::Json {
             path: path.into(),
             source,
         })?;
@@ -228,13 +260,11 @@ fn cartpole<'a>(
     integrator: IntegratorSettings,
 ) -> Result<Ocp<'a>, String> {
     let n = intervals(json)?;
-    let t = num(json, "/horizon/T")?;
+    let t = horizon(json)?;
     let xi = vecn(json, "/boundary/x_initial", 4)?;
     let xf = vecn(json, "/boundary/x_final", 4)?;
-    let u_lb = bound(vecn(json, "/bounds/u_lb", 1)?, f64::NEG_INFINITY);
-    let u_ub = bound(vecn(json, "/bounds/u_ub", 1)?, f64::INFINITY);
-    let x_lb = bound(vecn(json, "/bounds/x_lb", 4)?, f64::NEG_INFINITY);
-    let x_ub = bound(vecn(json, "/bounds/x_ub", 4)?, f64::INFINITY);
+    let (u_lb, u_ub) = bounds(json, "u", 1)?;
+    let (x_lb, x_ub) = bounds(json, "x", 4)?;
     let mut xl = vec![x_lb; n + 1];
     let mut xu = vec![x_ub; n + 1];
     xl[0] = xi.clone();
@@ -283,12 +313,10 @@ fn five_link_biped<'a>(
 ) -> Result<Ocp<'a>, String> {
     use biped::{NQ, NU, NX};
     let n = intervals(json)?;
-    let t = num(json, "/horizon/T")?;
+    let t = horizon(json)?;
     let step = num(json, "/parameters/step_length")?;
-    let x_lb = vecn(json, "/bounds/x_lb", NX)?;
-    let x_ub = vecn(json, "/bounds/x_ub", NX)?;
-    let u_lb = vecn(json, "/bounds/u_lb", NU)?;
-    let u_ub = vecn(json, "/bounds/u_ub", NU)?;
+    let (x_lb, x_ub) = bounds(json, "x", NX)?;
+    let (u_lb, u_ub) = bounds(json, "u", NU)?;
     let q0 = vecn(json, "/initial_guess/q_start", NQ)?;
     let qf: Vec<f64> = q0.iter().rev().copied().collect();
     let dq: Vec<f64> = (0..NQ).map(|i| (qf[i] - q0[i]) / t).collect();

@@ -458,6 +458,27 @@ impl ForceTrack {
     }
 }
 
+/// Largest distance (m) between the trial's force-plate surface and the model's ground
+/// that a tracking accepts: the model's feet touch its ground, so a plate surface
+/// elsewhere would be ignored.
+pub const MAX_PLATE_GROUND_GAP: f64 = 0.01;
+
+/// Refuse a trial whose force-plate surface (`force_plate_surface_y_m` of its meta file,
+/// or the CoP height of its force file) is more than [`MAX_PLATE_GROUND_GAP`] from the
+/// model's `contact.ground_height`.
+fn check_plate_height(model: &GaitModel, data: &GaitData) -> Result<(), String> {
+    let ground = model.contact_settings().ground_height;
+    match data.force_plate_height {
+        Some(h) if (h - ground).abs() > MAX_PLATE_GROUND_GAP => Err(format!(
+            "the force-plate surface is at y = {} m (force_plate_surface_y_m of the meta file, or the force file's CoP height), but the model's ground (contact.ground_height) is at y = {} m; they may differ by at most {} mm: set the model's contact.ground_height to the plate surface",
+            crate::limits::show(h),
+            crate::limits::show(ground),
+            MAX_PLATE_GROUND_GAP * 1e3
+        )),
+        _ => Ok(()),
+    }
+}
+
 impl TrackingSetup {
     /// Build from `data` for `model` and the phase file `seq` (with its resolved
     /// constraint sets `sets`), with the events given with the data or else detected from
@@ -495,6 +516,7 @@ impl TrackingSetup {
         sides: TargetSides,
         choice: WindowChoice,
     ) -> Result<Self, String> {
+        check_plate_height(model, data)?;
         let (offsets, moved) =
             clock::start_offsets(model, data, sides == TargetSides::Interpolated);
         let (events, mut notes) = window::combined_events_on_clocks(model, data, offsets)?;

@@ -57,18 +57,10 @@ fn plate_assignment(forces: &C3dForces, plates: &[String]) -> anyhow::Result<Vec
     }
     let mut out = Vec::new();
     for p in plates {
-        let Some((side, n)) = p.split_once('=') else {
-            bail!("--plate {p}: expected FOOT=N with a plate number of {path}, e.g. r=1 or l=2");
-        };
-        let side = match side.trim().to_ascii_lowercase().as_str() {
-            "r" | "right" => Side::Right,
-            "l" | "left" => Side::Left,
-            other => bail!("--plate {p}: foot '{other}' is neither r nor l"),
-        };
-        let Ok(n) = n.trim().parse::<usize>() else {
+        let (side, n) = super::split_plate(p).map_err(|r| anyhow::anyhow!("--plate {p}: {r}"))?;
+        let Ok(n) = n.parse::<usize>() else {
             bail!(
-                "--plate {p}: '{}' is not a plate number; {path} has {}",
-                n.trim(),
+                "--plate {p}: '{n}' is not a plate number; {path} has {}",
                 plate_list(forces)
             );
         };
