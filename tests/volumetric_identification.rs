@@ -599,7 +599,12 @@ fn diagnose_ranks_the_foot_geometry_first_on_the_rigid_fit_of_the_compliant_tria
     let ranking = d["ranking"].as_array().unwrap();
     // every catalog candidate was scored beside the geometry
     let catalog = footfall::model::effects::catalog().len();
-    assert_eq!(ranking.len(), catalog + 1, "{} candidates ranked", ranking.len());
+    assert_eq!(
+        ranking.len(),
+        catalog + 1,
+        "{} candidates ranked",
+        ranking.len()
+    );
     let first = &ranking[0];
     assert_eq!(
         first["effect"]["type"], "foot_geometry",

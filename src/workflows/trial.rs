@@ -309,9 +309,11 @@ fn load_opensim(ik_path: &Path, t: &TrialFiles) -> anyhow::Result<LoadedTrial> {
     if let Some(v) = t.belt_speed {
         data = data.to_overground(v)?;
     }
+    // a declared unit the data contradict is the more telling diagnosis than the
+    // conventions' (a knee that barely moves, read in the wrong unit)
+    check_radians_said_degrees(&data, &ik, &map)?;
     data.check_conventions(t.overground)
         .map_err(|e| opensim_error(e, &ik, &grf, &map))?;
-    check_radians_said_degrees(&data, &ik, &map)?;
     Ok(LoadedTrial {
         data,
         notes: vec![note],
