@@ -579,3 +579,46 @@ fn an_output_that_cannot_be_replaced_is_refused_without_a_hint_at_overwrite() {
     }
     assert_eq!(std::fs::read_to_string(&file).unwrap(), "notes");
 }
+
+/// A trial whose forces never load a foot is refused naming its file once, with the
+/// threshold and the peak force it found.
+#[test]
+fn a_trial_without_a_stance_names_its_file_once() {
+    let tmp = tempfile::tempdir().unwrap();
+    let csv = std::fs::read_to_string(root().join("data/opensim_subject01_sagittal.csv")).unwrap();
+    let mut lines = csv.lines();
+    let header = lines.next().unwrap();
+    let forces: Vec<usize> = header
+        .split(',')
+        .enumerate()
+        .filter(|(_, c)| c.starts_with("grf_"))
+        .map(|(i, _)| i)
+        .collect();
+    let mut text = format!("{header}\n");
+    for line in lines {
+        let row: Vec<String> = line
+            .split(',')
+            .enumerate()
+            .map(|(i, v)| {
+                if forces.contains(&i) {
+                    "0".into()
+                } else {
+                    v.to_string()
+                }
+            })
+            .collect();
+        text += &(row.join(",") + "\n");
+    }
+    let trial = tmp.path().join("unloaded.csv");
+    std::fs::write(&trial, text).unwrap();
+    std::fs::copy(
+        root().join("data/opensim_subject01_meta.json"),
+        tmp.path().join("unloaded_meta.json"),
+    )
+    .unwrap();
+    let out = tmp.path().join("run");
+    let o = footfall(&["track", "--data", s(&trial), "--out", s(&out)]);
+    let err = assert_exit(&o, 1, &["unloaded.csv", "no stance phase"]);
+    assert_eq!(err.matches("unloaded.csv").count(), 1, "{err}");
+    assert!(!out.exists());
+}

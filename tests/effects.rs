@@ -110,6 +110,7 @@ fn command_line_effects_parse_free_their_parameters_and_refuse_mistakes() {
         ("passive_joint_stiffness:joint=elbow", "elbow"),
         ("cop_offset:free=offset+offset", "twice"),
         ("cop_offset:offset", "key=value"),
+        ("trunk_mass:added_mass=abc", "'added_mass' must be a number"),
     ] {
         let err = EffectSpec::parse_cli(bad).unwrap_err();
         assert!(err.contains(needle), "{bad}: {err}");

@@ -132,7 +132,15 @@ impl TrackingProblem {
             (None, None) => WindowChoice::First,
         };
         let mut setup = TrackingSetup::for_window(&model, &seq, &sets, &data, sides, choice)
-            .map_err(|e| anyhow!("{}: {e}", data.source.display()))?;
+            .map_err(|e| {
+                // the data layer's errors name the file already
+                let source = data.source.display().to_string();
+                if e.starts_with(&format!("{source}: ")) {
+                    anyhow!(e)
+                } else {
+                    anyhow!("{source}: {e}")
+                }
+            })?;
         if run.track_pelvis_position {
             setup.weights = setup.weights.clone().with_pelvis_position();
         }

@@ -509,8 +509,14 @@ impl EffectSpec {
             };
             obj.insert(k.into(), value);
         }
-        let mut spec: EffectSpec = serde_json::from_value(serde_json::Value::Object(obj))
-            .map_err(|e| format!("effect '{text}': {e}"))?;
+        let mut spec: EffectSpec = serde_json::from_value(serde_json::Value::Object(obj.clone()))
+            .map_err(|e| match not_a_number(&obj, &e.to_string()) {
+            Some(k) => format!(
+                "effect '{text}': '{k}' must be a number (for example {k}=0.02), got '{}'",
+                obj[k].as_str().unwrap_or_default()
+            ),
+            None => format!("effect '{text}': {e}"),
+        })?;
         if !free_given {
             spec.free_all();
         }
@@ -840,4 +846,22 @@ impl EffectSpec {
             _ => self.kind() == other.kind(),
         }
     }
+}
+
+/// The key of an effect's text whose value is not a number where serde's error `message`
+/// says a number was expected (`invalid type: string "abc", expected f64`).
+fn not_a_number<'a>(
+    obj: &'a serde_json::Map<String, serde_json::Value>,
+    message: &str,
+) -> Option<&'a str> {
+    if !message.contains("expected f64") {
+        return None;
+    }
+    obj.iter()
+        .filter(|(k, _)| k.as_str() != "type")
+        .find(|(_, v)| {
+            v.as_str()
+                .is_some_and(|v| message.contains(&format!("string \"{v}\"")))
+        })
+        .map(|(k, _)| k.as_str())
 }
