@@ -61,15 +61,19 @@ impl GaitData {
     /// duration in s), when its span is below [`MIN_LEG_SPAN_RAD`] over at least
     /// [`MIN_SPAN_DURATION`]: the trial's angles, read as degrees, were radians.
     pub fn still_legs(&self) -> Option<(usize, f64, f64)> {
-        let duration = self.time.last()? - self.time.first()?;
-        if duration < MIN_SPAN_DURATION {
-            return None;
-        }
+        let duration = self.long_enough_to_judge_spans()?;
         let span = |i: usize| Self::range(&self.q[i]).map_or(0.0, |(lo, hi)| hi - lo);
         let (widest, s) = (3..9)
             .map(|i| (i, span(i)))
             .fold((3, f64::NEG_INFINITY), |a, b| if b.1 > a.1 { b } else { a });
         (s < MIN_LEG_SPAN_RAD).then_some((widest, s, duration))
+    }
+
+    /// The trial's duration (s) when it lasts at least [`MIN_SPAN_DURATION`], long enough
+    /// for a walking leg's joints to span their range.
+    fn long_enough_to_judge_spans(&self) -> Option<f64> {
+        let duration = self.time.last()? - self.time.first()?;
+        (duration >= MIN_SPAN_DURATION).then_some(duration)
     }
 
     fn range(v: &[f64]) -> Option<(f64, f64)> {
@@ -165,9 +169,8 @@ impl GaitData {
     /// Each measured knee bends over a walk of at least [`MIN_SPAN_DURATION`]: one that
     /// spans less than [`MIN_LEG_SPAN_RAD`] is a frozen or copied channel.
     fn check_knees_move(&self) -> Result<(), DataError> {
-        let duration = match (self.time.first(), self.time.last()) {
-            (Some(a), Some(b)) if b - a >= MIN_SPAN_DURATION => b - a,
-            _ => return Ok(()),
+        let Some(duration) = self.long_enough_to_judge_spans() else {
+            return Ok(());
         };
         for (s, i) in [(0, 4), (1, 7)] {
             if self.sides[s] != SideSource::Measured {

@@ -805,7 +805,7 @@ fn validate_held_out(
         if hb.converged { "" } else { ", NOT converged" }
     );
     for t in tests.iter_mut().filter(|t| validated(t)) {
-        match heldout::check(hb, t) {
+        match heldout::validate(hb, t) {
             Ok(h) => {
                 note!(
                     progress,

@@ -253,7 +253,7 @@ fn change_at(base: &HeldOutBase, t: &ScoreTest, values: &[f64]) -> anyhow::Resul
 /// foot is in stance in one and only pushes off in the other). Where `−θ` cannot be
 /// applied (the effect refuses it), the run's curvature sets the band, as for a held
 /// clock.
-fn validate(base: &HeldOutBase, t: &ScoreTest) -> anyhow::Result<HeldOut> {
+pub(super) fn validate(base: &HeldOutBase, t: &ScoreTest) -> anyhow::Result<HeldOut> {
     let up = change_at(base, t, &t.step_values)?;
     let reading = change_at(base, t, &opposite(t).step_values)
         .ok()
@@ -265,12 +265,6 @@ fn validate(base: &HeldOutBase, t: &ScoreTest) -> anyhow::Result<HeldOut> {
         // only 2.1e-2): the run's curvature sets the band, and nothing is read
         None => judged(base, t, up),
     })
-}
-
-/// Validate candidate `t` (at its `step_values`) on the held-out half cycle by a
-/// truncated re-fit ([`validate`]).
-pub(super) fn check(base: &HeldOutBase, t: &ScoreTest) -> anyhow::Result<HeldOut> {
-    validate(base, t)
 }
 
 /// The held-out validation of candidate `t` whose values lowered the held-out cost by
