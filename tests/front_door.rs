@@ -17,6 +17,8 @@ use std::collections::{BTreeMap, HashSet};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
+use crate::common::docs::{invocations, sh_lines, DOCUMENTED};
+
 fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
@@ -250,72 +252,6 @@ fn nothing_large_is_tracked_outside_the_data_folders() {
     );
 }
 
-/// The shell lines of the ```sh blocks of a Markdown file, continuation lines joined.
-fn sh_lines(markdown: &str) -> Vec<String> {
-    let mut out = Vec::new();
-    let mut inside = false;
-    let mut pending = String::new();
-    for line in markdown.lines() {
-        let t = line.trim();
-        if t.starts_with("```") {
-            inside = !inside && matches!(t.trim_start_matches('`'), "sh" | "bash" | "shell");
-            continue;
-        }
-        if !inside || t.starts_with('#') || t.is_empty() {
-            continue;
-        }
-        if let Some(head) = t.strip_suffix('\\') {
-            pending.push_str(head.trim_end());
-            pending.push(' ');
-            continue;
-        }
-        pending.push_str(t);
-        out.push(std::mem::take(&mut pending));
-    }
-    out
-}
-
-/// One invocation of footfall in a shell line: the subcommand and the options it uses.
-#[derive(Debug)]
-struct Invocation {
-    line: String,
-    subcommand: String,
-    flags: Vec<String>,
-}
-
-/// Every footfall invocation in a shell line (`footfall …`, `target/release/footfall …`,
-/// `cargo run --release -- …`), split at `&&`, `||`, `;` and `|`.
-fn invocations(line: &str) -> Vec<Invocation> {
-    let mut out = Vec::new();
-    for part in line.split(['&', ';', '|']) {
-        let words: Vec<&str> = part.split_whitespace().collect();
-        let rest = match words.first() {
-            Some(w) if w.ends_with("footfall") => &words[1..],
-            Some(&"cargo") if words.get(1) == Some(&"run") => {
-                match words.iter().position(|w| *w == "--") {
-                    Some(k) => &words[k + 1..],
-                    None => continue,
-                }
-            }
-            _ => continue,
-        };
-        let Some(sub) = rest.iter().find(|w| !w.starts_with('-')) else {
-            continue;
-        };
-        let flags = rest
-            .iter()
-            .filter(|w| w.starts_with("--"))
-            .map(|w| w.split('=').next().unwrap().to_string())
-            .collect();
-        out.push(Invocation {
-            line: line.to_string(),
-            subcommand: sub.to_string(),
-            flags,
-        });
-    }
-    out
-}
-
 /// `footfall <sub> --help`, or an error naming what failed.
 fn help_of(sub: &str) -> Result<String, String> {
     let o = Command::new(env!("CARGO_BIN_EXE_footfall"))
@@ -350,7 +286,7 @@ fn documented_commands_parse() {
     let mut problems = Vec::new();
     let mut helps: BTreeMap<String, Result<String, String>> = BTreeMap::new();
     let mut checked = 0;
-    for doc in ["README.md", "docs/commands.md"] {
+    for doc in DOCUMENTED {
         let Ok(md) = std::fs::read_to_string(root().join(doc)) else {
             problems.push(format!("{doc} is missing"));
             continue;

@@ -16,6 +16,7 @@ mod c3d_trial;
 mod cli;
 mod derivatives;
 mod diagnose_stats;
+mod documented_commands;
 mod foot_geometry;
 mod gait_hessian;
 mod hidden_effects;

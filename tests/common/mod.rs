@@ -1,6 +1,8 @@
 //! Shared helpers for the integration tests.
 #![allow(dead_code)]
 
+pub mod docs;
+
 use footfall::model::GaitModel;
 use std::io::Read;
 use std::path::{Path, PathBuf};
