@@ -14,6 +14,7 @@ mod common;
 mod actuators;
 mod benchmark_models;
 mod c3d;
+mod c3d_damaged;
 mod check;
 mod cli_exit_codes;
 mod cli_solve;

@@ -151,6 +151,7 @@ impl Failure {
 pub fn main() -> ExitCode {
     // before any work: a Ctrl-C during setup removes what this process staged and exits 130
     footfall::workflows::session::install_interrupt_handler();
+    quiet_reader_panics();
     let mut cli = parse(std::env::args_os());
     let args: Vec<String> = std::env::args().skip(1).collect();
     let resuming = match &cli.command {
@@ -194,6 +195,18 @@ pub fn main() -> ExitCode {
             ExitCode::from(f.code())
         }
     }
+}
+
+/// Panics inside the C3D reader crate print nothing: the reader catches them and returns an
+/// error naming the file and the damaged section, which the user sees instead of the
+/// crate's panic text. Every other panic is a bug of footfall's and prints as usual.
+fn quiet_reader_panics() {
+    let default = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        if !footfall::data::c3d::crate_is_parsing() {
+            default(info);
+        }
+    }));
 }
 
 /// The command line parsed, or clap's usage error printed and exit 2. Every option's

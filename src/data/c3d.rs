@@ -212,7 +212,85 @@ fn parse_error(path: &Path, e: c3dio::C3dParseError) -> DataError {
             &what.replacen('_', ":", 1),
             "malformed values (wrong type or dimensions)",
         ),
-        other => c3d_err(path, "file", format!("not a readable C3D file ({other:?})")),
+        other => {
+            let (section, what) = damaged_section(&other);
+            c3d_err(path, section, format!("not a readable C3D file: {what}"))
+        }
+    }
+}
+
+/// The section of a C3D file a structural error of c3dio's points at, and what was wrong
+/// there, in the terms of the C3D format's description (c3d.org).
+fn damaged_section(e: &c3dio::C3dParseError) -> (&'static str, String) {
+    use c3dio::C3dParseError as E;
+    match e {
+        E::InsufficientBlocks(part) => (
+            "file",
+            format!("the file ends before its {part} section (shorter than its header says)"),
+        ),
+        E::InvalidHeaderStartBlock => (
+            "header",
+            "the header's first word does not point at the parameter section".into(),
+        ),
+        E::InvalidParameterStartBlock | E::InvalidParametersOffset => (
+            "parameter section",
+            "shorter than one 512-byte block, or not where the header says".into(),
+        ),
+        E::InvalidDataStartBlock => (
+            "header",
+            "the data section's start block lies outside the file".into(),
+        ),
+        E::InvalidProcessorType => (
+            "parameter section",
+            "the processor type is none of Intel (84), DEC (85) and MIPS (86)".into(),
+        ),
+        E::InvalidDataType => (
+            "parameter section",
+            "a parameter's type byte is none of -1 (char), 1 (byte), 2 (integer) and 4 (float)".into(),
+        ),
+        E::MissingPointScale => ("POINT:SCALE", "missing".into()),
+        E::InvalidParameterData
+        | E::InvalidDescription
+        | E::InvalidGroupId
+        | E::InvalidNextParameter
+        | E::InvalidParameterDimensions(_)
+        | E::InvalidParameterType(_) => (
+            "parameter section",
+            "a group or parameter record is malformed (its name, type, dimensions or link to the next record)".into(),
+        ),
+        E::NotEnoughData | E::NumFramesMismatch(..) => (
+            "data section",
+            "it holds fewer frames than POINT:FRAMES and the header say".into(),
+        ),
+        E::AnalogBytesPerFrameMismatch => (
+            "ANALOG:USED",
+            "the analog bytes of a frame (header) are not ANALOG:USED channels times the samples per frame".into(),
+        ),
+        E::AnalogOffsetScaleMismatch | E::InsufficientAnalogOffsets => (
+            "ANALOG:OFFSET",
+            "fewer offsets or scales than ANALOG:USED channels".into(),
+        ),
+        E::FrameRateMismatch(a, b) => (
+            "POINT:RATE",
+            format!("the header's frame rate {a} Hz and the parameter's {b} Hz differ"),
+        ),
+        E::ScaleFactorMismatch(a, b) => (
+            "POINT:SCALE",
+            format!("the header's scale {a} and the parameter's {b} differ"),
+        ),
+        E::TooManyEvents(_)
+        | E::InvalidEventLabel(..)
+        | E::MissingEventTime(_)
+        | E::MissingEventLabel(_)
+        | E::NoParameterTimeEvents => (
+            "EVENT",
+            "the events' count, labels or times are inconsistent".into(),
+        ),
+        E::FileNotOpen | E::ReadError(_) => ("file", "it could not be read".into()),
+        _ => (
+            "file",
+            "its header or parameter blocks are inconsistent".into(),
+        ),
     }
 }
 
@@ -222,6 +300,17 @@ fn supported_list() -> String {
         .map(|t| t.to_string())
         .collect::<Vec<_>>()
         .join(", ")
+}
+
+thread_local! {
+    /// Whether this thread is inside the C3D crate's parser (see [`crate_is_parsing`]).
+    static CRATE_RUNNING: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Whether this thread is inside the C3D crate's parser: a panic there is caught and
+/// becomes an error naming the file, so a panic hook may leave its text unprinted.
+pub fn crate_is_parsing() -> bool {
+    CRATE_RUNNING.with(|r| r.get())
 }
 
 #[allow(clippy::result_large_err)] // c3dio's error type, converted at once
@@ -248,7 +337,10 @@ fn load(path: &Path) -> Result<(c3dio::C3d, Vec<u8>), DataError> {
     }
     // c3dio indexes slices from header values; a corrupt file must become an error here,
     // never a panic of the caller.
-    match std::panic::catch_unwind(|| c3dio::C3d::from_bytes(&bytes)) {
+    CRATE_RUNNING.with(|r| r.set(true));
+    let parsed = std::panic::catch_unwind(|| c3dio::C3d::from_bytes(&bytes));
+    CRATE_RUNNING.with(|r| r.set(false));
+    match parsed {
         Ok(Ok(c)) => Ok((c, bytes)),
         Ok(Err(e)) => Err(parse_error(path, e)),
         Err(_) => Err(c3d_err(

@@ -308,7 +308,8 @@ pub(super) fn run(
         // --- inexact SQP: integrate more precisely as the optimum nears
         let tightened = !kkt::converged(kkt, settings.tol_kkt, elastic)
             && tighten_integration(nlp, settings, kkt);
-        let shift = (curvature && settings.hessian == HessianMode::Exact).then_some(mem.shift);
+        let shift = (curvature && settings.hessian == HessianMode::Exact && !mem.gauss_newton)
+            .then_some(mem.shift);
         let rec = record(
             nlp,
             &st,

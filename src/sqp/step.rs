@@ -26,6 +26,9 @@ pub(super) struct StepMemory {
     pub(super) test_rho_scale: f64,
     /// Inertia-correction shift of the exact mode's QP Hessian (last value).
     pub(super) shift: f64,
+    /// Whether the exact mode's last QP took the Gauss–Newton Hessian
+    /// ([`ExactConvexification::GaussNewtonWhereNonconvex`]).
+    pub(super) gauss_newton: bool,
 }
 
 impl Default for StepMemory {
@@ -34,6 +37,7 @@ impl Default for StepMemory {
             lam_est: 1.0,
             test_rho_scale: 1.0,
             shift: 0.0,
+            gauss_newton: false,
         }
     }
 }
@@ -159,8 +163,11 @@ pub(super) fn subproblem<'a>(
                 });
                 ex.extend_scaled(&row_gram(&eq_rows), aug_rho);
             } else if use_curvature {
-                mem.shift = exact_qp_hessian(
+                let search = settings.exact_convexification
+                    == ExactConvexification::InertiaCorrection;
+                let shift = exact_qp_hessian(
                     &mut ex,
+                    search,
                     &ExactQpContext {
                         n,
                         w: &st.w,
@@ -178,6 +185,15 @@ pub(super) fn subproblem<'a>(
                         previous_shift: mem.shift,
                     },
                 );
+                mem.gauss_newton = shift.is_none();
+                mem.shift = shift.unwrap_or(0.0);
+                if mem.gauss_newton {
+                    ex = Triplets {
+                        rows: s.gn_rows.clone(),
+                        cols: s.gn_cols.clone(),
+                        vals: st.ev.gn.clone(),
+                    };
+                }
             }
             h = ex;
         }
@@ -323,7 +339,8 @@ struct ExactQpContext<'a> {
 }
 
 /// Make the exact Hessian of the Lagrangian `h` usable in a convex QP without changing
-/// the Newton step where that is possible; returns the shift δ applied.
+/// the Newton step where that is possible; returns the shift δ applied (with `search`),
+/// or `Some(0)` if `h` is convex as it is and `None` if it is not (without).
 ///
 /// Multiple-shooting Hessians are indefinite; what matters is the curvature on the
 /// directions the linearised active constraints leave free. (1) Variables held at a bound
@@ -335,7 +352,7 @@ struct ExactQpContext<'a> {
 /// sequence that passes (the inertia correction of Wächter & Biegler 2006, §3.1), and at
 /// least a third of the previous iteration's δ. The QP itself gets `h + δI` without the ρ
 /// term, so its multipliers are the Lagrangian's.
-fn exact_qp_hessian(h: &mut Triplets, cx: &ExactQpContext<'_>) -> f64 {
+fn exact_qp_hessian(h: &mut Triplets, search: bool, cx: &ExactQpContext<'_>) -> Option<f64> {
     let n = cx.n;
     let hmax = h.vals.iter().map(|v| v.abs()).fold(1.0, f64::max);
     for i in 0..n {
@@ -360,10 +377,16 @@ fn exact_qp_hessian(h: &mut Triplets, cx: &ExactQpContext<'_>) -> f64 {
         cx.jac,
         |i| tested[i],
     ));
-    let mut best: Option<f64> = None;
     let mut test = hessian::ConvexityTest::new(n, h, &jtj);
-    for f in [1.0, 1e2, 1e4] {
-        let rho = cx.test_rho_scale * hmax * f;
+    let rhos = [1.0, 1e2, 1e4].map(|f| cx.test_rho_scale * hmax * f);
+    if !search {
+        return rhos
+            .iter()
+            .any(|&rho| test.is_positive_definite(rho, 0.0))
+            .then_some(0.0);
+    }
+    let mut best: Option<f64> = None;
+    for rho in rhos {
         if let Some(d) = test.shift(rho, cx.previous_shift, 1e-12 * hmax, 1e2 * hmax) {
             if best.is_none_or(|b| d < b) {
                 best = Some(d);
@@ -385,7 +408,7 @@ fn exact_qp_hessian(h: &mut Triplets, cx: &ExactQpContext<'_>) -> f64 {
             h.push(i, i, delta);
         }
     }
-    delta
+    Some(delta)
 }
 
 /// The rows `i` of a sparse Jacobian (triplets in pattern order) with `keep(i)`, each as
@@ -648,41 +671,45 @@ mod tests {
         sub
     }
 
+    /// `exact_qp_hessian` of the diagonal Hessian `diag` of two free variables, after an
+    /// iteration whose shift was `previous`: the shift it returns, after checking that
+    /// exactly that shift was added to the diagonal the QP gets.
+    fn diagonal_exact_hessian(diag: [f64; 2], previous: f64, search: bool) -> Option<f64> {
+        let mut h = Triplets::default();
+        h.push(0, 0, diag[0]);
+        h.push(1, 1, diag[1]);
+        let cx = ExactQpContext {
+            n: 2,
+            w: &[0.0, 0.0],
+            w_lb: &[-1.0, -1.0],
+            w_ub: &[1.0, 1.0],
+            nu: &[0.0, 0.0],
+            c: &[],
+            c_lb: &[],
+            c_ub: &[],
+            lambda: &[],
+            jac_rows: &[],
+            jac_cols: &[],
+            jac: &[],
+            test_rho_scale: 1.0,
+            previous_shift: previous,
+        };
+        let delta = exact_qp_hessian(&mut h, search, &cx);
+        let added: f64 = (0..h.rows.len())
+            .filter(|&k| h.rows[k] == 0 && h.cols[k] == 0)
+            .map(|k| h.vals[k])
+            .sum::<f64>()
+            - diag[0];
+        assert!((added - delta.unwrap_or(0.0)).abs() < 1e-15, "{added} vs {delta:?}");
+        delta
+    }
+
     /// The inertia correction of a convex Hessian: no shift at first; after an iteration
     /// that needed δ = 0.9, a third of it (0.3), then a ninth; an indefinite one still
     /// gets the shift that makes it convex.
     #[test]
     fn the_inertia_shift_decays_by_a_third_per_iteration() {
-        let run = |diag: [f64; 2], previous: f64| {
-            let mut h = Triplets::default();
-            h.push(0, 0, diag[0]);
-            h.push(1, 1, diag[1]);
-            let cx = ExactQpContext {
-                n: 2,
-                w: &[0.0, 0.0],
-                w_lb: &[-1.0, -1.0],
-                w_ub: &[1.0, 1.0],
-                nu: &[0.0, 0.0],
-                c: &[],
-                c_lb: &[],
-                c_ub: &[],
-                lambda: &[],
-                jac_rows: &[],
-                jac_cols: &[],
-                jac: &[],
-                test_rho_scale: 1.0,
-                previous_shift: previous,
-            };
-            let delta = exact_qp_hessian(&mut h, &cx);
-            // the shift is added to the diagonal the QP gets
-            let added: f64 = (0..h.rows.len())
-                .filter(|&k| h.rows[k] == 0 && h.cols[k] == 0)
-                .map(|k| h.vals[k])
-                .sum::<f64>()
-                - diag[0];
-            assert!((added - delta).abs() < 1e-15, "{added} vs {delta}");
-            delta
-        };
+        let run = |diag, previous| diagonal_exact_hessian(diag, previous, true).unwrap();
         assert_eq!(run([2.0, 1.0], 0.0), 0.0);
         assert!((run([2.0, 1.0], 0.9) - 0.3).abs() < 1e-15);
         assert!((run([2.0, 1.0], 0.3) - 0.1).abs() < 1e-15);
@@ -690,6 +717,17 @@ mod tests {
         let d = run([2.0, -1.0], 0.0);
         assert!(d > 1.0, "{d}");
         assert!(run([2.0, -1.0], 30.0) >= 10.0);
+    }
+
+    /// Without the search (Gauss–Newton where the exact Hessian is not convex): a convex
+    /// Hessian is used as it is, whatever the history; an indefinite one is reported, not
+    /// shifted.
+    #[test]
+    fn without_the_search_the_test_only_reports_convexity() {
+        assert_eq!(diagonal_exact_hessian([2.0, 1.0], 0.9, false), Some(0.0));
+        assert_eq!(diagonal_exact_hessian([2.0, 1e-9], 0.0, false), Some(0.0));
+        assert_eq!(diagonal_exact_hessian([2.0, -1.0], 0.0, false), None);
+        assert_eq!(diagonal_exact_hessian([-1e-9, 1.0], 30.0, false), None);
     }
 
     /// A history of `(objective, violation)` per iteration.
