@@ -32,6 +32,7 @@ mod report_gait;
 mod run_anywhere;
 mod synth;
 mod torque_tracking;
+mod unseen_recordings;
 mod track_third_foot;
 mod tracking_recovery;
 mod tracking_residual;

@@ -10,6 +10,7 @@ use super::kkt::{self, KktPoint};
 use super::line_search::{self, Filter, Search};
 use super::qp::{QpData, QpSolution, Triplets};
 use super::step::{self, StepMemory};
+use super::ExactConvexification;
 use super::{
     violations, HessianMode, IterationRecord, Nlp, NlpEval, Observer, QpRoute, SqpResult,
     SqpSettings, SqpStatus, SqpTimings, Violation,
@@ -216,6 +217,13 @@ pub(super) fn run(
             .collect();
         history = cp.records();
         first_iter = cp.next_iter;
+        // the switch is a function of the history: made at the first iteration whose
+        // history so far stalled
+        mem.shift_stalled = settings.exact_convexification
+            == ExactConvexification::InertiaCorrectionThenGaussNewton
+            && (1..=history.len()).any(|l| {
+                super::shifted_steps_stalled(&history[..l], settings.exact_hessian_below)
+            });
     }
     for iter in first_iter..=settings.max_iter {
         // --- QP subproblem at the current point
@@ -265,6 +273,17 @@ pub(super) fn run(
                     break;
                 }
             }
+        }
+        // shifted exact steps that no longer progress: Gauss–Newton where not convex
+        if settings.exact_convexification == ExactConvexification::InertiaCorrectionThenGaussNewton
+            && !mem.shift_stalled
+            && super::shifted_steps_stalled(&history, settings.exact_hessian_below)
+        {
+            mem.shift_stalled = true;
+            observer.note(&format!(
+                "the steps from iteration {iter} on take the Gauss–Newton Hessian where the exact one is not convex: the last {} shifted steps did not halve the KKT residual",
+                super::SHIFTED_STALL
+            ));
         }
         // the curvature in use only because the Gauss–Newton steps stalled, not told yet
         let stalled = settings

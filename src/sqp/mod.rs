@@ -195,16 +195,38 @@ pub enum ExactConvexification {
     /// ρ term, so its multipliers are the Lagrangian's. Measured: converges the gait
     /// tracking problems; the cart-pole needs δ > 0 near its solution and stalls.
     InertiaCorrection,
-    /// The exact Hessian where it is convex on the null space of the equality and active
-    /// rows (the same LDLᵀ test, with δ = 0; variables held at a bound get a diagonal),
-    /// and the Gauss–Newton Hessian of the least-squares objective where it is not. For
-    /// tracking problems, whose objective is a sum of squares: far from the optimum the
-    /// constraints' curvature makes the Lagrangian's Hessian indefinite on directions the
-    /// data barely determine, where a shifted Hessian creeps (δ of 1–300 held the KKT
-    /// residual near 1e-3 for hundreds of iterations on recordings of a second subject,
-    /// the objective falling in its seventh digit); the Gauss–Newton steps cross that
-    /// region, and the exact ones converge fast once it is convex.
-    GaussNewtonWhereNonconvex,
+    /// The inertia correction until its shifted steps stall ([`SHIFTED_STALL`] iterations
+    /// in a row with a shift, near feasibility, without halving the smallest KKT residual
+    /// before them), then, for the rest of the solve, the exact Hessian where it is convex
+    /// on the null space of the equality and active rows (the same LDLᵀ test, δ = 0) and
+    /// the Gauss–Newton Hessian of the least-squares objective where it is not. For
+    /// tracking problems, whose objective is a sum of squares. Where a small shift makes
+    /// the Hessian convex the shifted step is nearly Newton's and converges; where the
+    /// constraints' curvature needs a large one, on directions the data barely determine,
+    /// the shifted steps creep (on a second subject's recordings: δ of 1 to 300, the KKT
+    /// residual near 1e-3 for hundreds of iterations, the objective falling in its seventh
+    /// digit), and the Gauss–Newton steps cross that region.
+    InertiaCorrectionThenGaussNewton,
+}
+
+/// Shifted exact steps in a row without progress that make
+/// [`ExactConvexification::InertiaCorrectionThenGaussNewton`] switch.
+pub const SHIFTED_STALL: usize = 10;
+
+/// Whether the last [`SHIFTED_STALL`] iterations all took a shifted exact Hessian at a
+/// violation of at most `below`, and none halved the smallest KKT residual before them.
+pub fn shifted_steps_stalled(history: &[IterationRecord], below: f64) -> bool {
+    let k = SHIFTED_STALL;
+    if history.len() <= k {
+        return false;
+    }
+    let (before, window) = history.split_at(history.len() - k);
+    let best_before = before.iter().map(|r| r.kkt).fold(f64::INFINITY, f64::min);
+    window.iter().all(|r| {
+        r.hessian_shift.is_some_and(|d| d > 0.0)
+            && r.infeasibility <= below
+            && r.kkt > 0.5 * best_before
+    })
 }
 
 /// SQP settings.

@@ -26,8 +26,11 @@ pub(super) struct StepMemory {
     pub(super) test_rho_scale: f64,
     /// Inertia-correction shift of the exact mode's QP Hessian (last value).
     pub(super) shift: f64,
-    /// Whether the exact mode's last QP took the Gauss–Newton Hessian
-    /// ([`ExactConvexification::GaussNewtonWhereNonconvex`]).
+    /// Whether the shifted steps stalled, so that the exact mode now takes the
+    /// Gauss–Newton Hessian where the exact one is not convex
+    /// ([`ExactConvexification::InertiaCorrectionThenGaussNewton`]).
+    pub(super) shift_stalled: bool,
+    /// Whether the exact mode's last QP took the Gauss–Newton Hessian.
     pub(super) gauss_newton: bool,
 }
 
@@ -37,6 +40,7 @@ impl Default for StepMemory {
             lam_est: 1.0,
             test_rho_scale: 1.0,
             shift: 0.0,
+            shift_stalled: false,
             gauss_newton: false,
         }
     }
@@ -163,8 +167,7 @@ pub(super) fn subproblem<'a>(
                 });
                 ex.extend_scaled(&row_gram(&eq_rows), aug_rho);
             } else if use_curvature {
-                let search = settings.exact_convexification
-                    == ExactConvexification::InertiaCorrection;
+                let search = !mem.shift_stalled;
                 let shift = exact_qp_hessian(
                     &mut ex,
                     search,
@@ -748,6 +751,33 @@ mod tests {
                 qp_route: None,
             })
             .collect()
+    }
+
+    /// The shifted steps' stall: ten shifted steps near feasibility that do not halve the
+    /// smallest KKT residual before them; not when one of them halves it, one is unshifted,
+    /// one is far from feasible, or there is nothing before them to compare with.
+    #[test]
+    fn shifted_steps_stall_when_ten_in_a_row_do_not_halve_the_residual() {
+        let tail = |kkt: &[f64], shift: Option<f64>, infeasibility: f64| {
+            let mut h = history(&vec![(1.0, infeasibility); kkt.len() + 1]);
+            h[0].kkt = 1e-3;
+            h[0].infeasibility = 1e-6;
+            for (r, &k) in h[1..].iter_mut().zip(kkt) {
+                r.kkt = k;
+                r.hessian_shift = shift;
+            }
+            h
+        };
+        let flat = [8e-4; super::super::SHIFTED_STALL];
+        let stalled = |h: &[IterationRecord]| super::super::shifted_steps_stalled(h, 1e-3);
+        assert!(stalled(&tail(&flat, Some(5.0), 1e-6)));
+        let mut halved = flat;
+        halved[6] = 4e-4;
+        assert!(!stalled(&tail(&halved, Some(5.0), 1e-6)));
+        assert!(!stalled(&tail(&flat, Some(0.0), 1e-6)));
+        assert!(!stalled(&tail(&flat, None, 1e-6)));
+        assert!(!stalled(&tail(&flat, Some(5.0), 1e-2)));
+        assert!(!stalled(&tail(&flat, Some(5.0), 1e-6)[1..]));
     }
 
     /// The stall switch: steady progress never trips it; a cycle that dips and rises

@@ -260,7 +260,7 @@ pub fn tracking_sqp_settings(
         max_time,
         hessian,
         exact_hessian_below: exact_below.unwrap_or(EXACT_BELOW),
-        exact_convexification: ExactConvexification::GaussNewtonWhereNonconvex,
+        exact_convexification: ExactConvexification::InertiaCorrectionThenGaussNewton,
         exact_hessian_on_stall: (hessian == HessianMode::Exact && exact_below.is_none())
             .then_some(STALL_SWITCH),
         ..Default::default()
