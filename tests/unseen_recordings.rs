@@ -2,9 +2,10 @@
 //! converges to the KKT tolerance (1e-5) and is physically valid on the 1 ms grid.
 //!
 //! OpenCap subject 4's second overground walk (two plates, forces off the plates
-//! missing, its own scaled model): with the exact Hessian shifted where it is not convex,
-//! this track crept at a KKT residual near 1e-3 until its iteration limit;
-//! `sqp::ExactConvexification::GaussNewtonWhereNonconvex` is what the tracking solves use.
+//! missing, its own scaled model): with the exact Hessian only ever shifted where it is
+//! not convex, this track crept at a KKT residual near 1e-3 until its iteration limit; the
+//! tracking solves switch to Gauss–Newton steps there once the shifted ones stall
+//! (`sqp::ExactConvexification::InertiaCorrectionThenGaussNewton`).
 
 use crate::common::root;
 use std::process::Command;
