@@ -217,13 +217,7 @@ pub(super) fn run(
             .collect();
         history = cp.records();
         first_iter = cp.next_iter;
-        // the switch is a function of the history: made at the first iteration whose
-        // history so far stalled
-        mem.shift_stalled = settings.exact_convexification
-            == ExactConvexification::InertiaCorrectionThenGaussNewton
-            && (1..=history.len()).any(|l| {
-                super::shifted_steps_stalled(&history[..l], settings.exact_hessian_below)
-            });
+        mem.shift_stalled = shift_switch_made(settings, &history);
     }
     for iter in first_iter..=settings.max_iter {
         // --- QP subproblem at the current point
@@ -275,10 +269,7 @@ pub(super) fn run(
             }
         }
         // shifted exact steps that no longer progress: Gauss–Newton where not convex
-        if settings.exact_convexification == ExactConvexification::InertiaCorrectionThenGaussNewton
-            && !mem.shift_stalled
-            && super::shifted_steps_stalled(&history, settings.exact_hessian_below)
-        {
+        if !mem.shift_stalled && shift_switch_made(settings, &history) {
             mem.shift_stalled = true;
             observer.note(&format!(
                 "the steps from iteration {iter} on take the Gauss–Newton Hessian where the exact one is not convex: the last {} shifted steps did not halve the KKT residual",
@@ -507,6 +498,16 @@ pub(super) fn run(
         lambda,
         nu,
     }
+}
+
+/// Whether the solve has switched to Gauss–Newton steps where the exact Hessian is not
+/// convex ([`ExactConvexification::InertiaCorrectionThenGaussNewton`]): a function of the
+/// history, made at the first iteration whose history so far had stalled, so that a resumed
+/// solve finds the switch where the killed one made it.
+fn shift_switch_made(settings: &SqpSettings, history: &[IterationRecord]) -> bool {
+    settings.exact_convexification == ExactConvexification::InertiaCorrectionThenGaussNewton
+        && (1..=history.len())
+            .any(|l| super::shifted_steps_stalled(&history[..l], settings.exact_hessian_below))
 }
 
 /// The KKT residual at the point `st` with the multipliers of the QP solution `sol`

@@ -133,19 +133,11 @@ pub(super) fn subproblem<'a>(
     let mut aug_rho = 0.0;
     let mut eq_rows: Vec<Vec<(usize, f64)>> = Vec::new();
     match settings.hessian {
-        HessianMode::GaussNewton => {
-            h.rows.clone_from(&s.gn_rows);
-            h.cols.clone_from(&s.gn_cols);
-            h.vals.clone_from(&st.ev.gn);
-        }
+        HessianMode::GaussNewton => h = gauss_newton(s, st),
         HessianMode::Bfgs if !s.any_exact => bfgs.push_upper(&mut h),
         HessianMode::Bfgs => {}
         HessianMode::Exact => {
-            let mut ex = Triplets {
-                rows: s.gn_rows.clone(),
-                cols: s.gn_cols.clone(),
-                vals: st.ev.gn.clone(),
-            };
+            let mut ex = gauss_newton(s, st);
             let use_curvature = curvature && st.hess.is_some();
             if let (Some(hx), true) = (&st.hess, use_curvature) {
                 ex.rows.extend_from_slice(&hx.rows);
@@ -167,10 +159,9 @@ pub(super) fn subproblem<'a>(
                 });
                 ex.extend_scaled(&row_gram(&eq_rows), aug_rho);
             } else if use_curvature {
-                let search = !mem.shift_stalled;
                 let shift = exact_qp_hessian(
                     &mut ex,
-                    search,
+                    !mem.shift_stalled,
                     &ExactQpContext {
                         n,
                         w: &st.w,
@@ -191,19 +182,13 @@ pub(super) fn subproblem<'a>(
                 mem.gauss_newton = shift.is_none();
                 mem.shift = shift.unwrap_or(0.0);
                 if mem.gauss_newton {
-                    ex = Triplets {
-                        rows: s.gn_rows.clone(),
-                        cols: s.gn_cols.clone(),
-                        vals: st.ev.gn.clone(),
-                    };
+                    ex = gauss_newton(s, st);
                 }
             }
             h = ex;
         }
         HessianMode::GaussNewtonBfgs => {
-            h.rows.clone_from(&s.gn_rows);
-            h.cols.clone_from(&s.gn_cols);
-            h.vals.clone_from(&st.ev.gn);
+            h = gauss_newton(s, st);
             if !s.any_exact {
                 bfgs.push_upper(&mut h);
             }
@@ -299,6 +284,16 @@ pub(super) fn solve(
         elastic,
         route,
     })
+}
+
+/// The Gauss–Newton Hessian of the least-squares objective at the current point, as
+/// upper-triangle triplets.
+fn gauss_newton(s: &Structure, st: &State) -> Triplets {
+    Triplets {
+        rows: s.gn_rows.clone(),
+        cols: s.gn_cols.clone(),
+        vals: st.ev.gn.clone(),
+    }
 }
 
 /// The interior-point solver lost accuracy on this QP: a proximal shift δI (growing,
