@@ -394,7 +394,8 @@ fn the_iteration_limit_holds_across_the_rounds_of_check_points() {
 /// 1.75e-7: an excitation at its lower bound 0 kept a slack of ~4e-8 in the QP's
 /// interior point, and the QP's bound multiplier balanced the curvature of that slack
 /// instead of the gradient (`sqp::kkt::residual`). Now (release build): 2.0e-5, 7.8e-6,
-/// 4.7e-6, 1.3e-6, 8.4e-8, in 30 iterations, J = 7.915125.
+/// 4.7e-6, 1.3e-6, 8.4e-8, in 30 iterations, J = 7.915125. The track is also physically
+/// valid on the 1 ms grid: the bundled recording's ellipse case of `every_recording`.
 #[test]
 fn the_bundled_tracks_kkt_residual_falls_over_its_last_five_iterations_to_below_1e_6() {
     use footfall::runfolder::RunFolder;
@@ -406,6 +407,12 @@ fn the_bundled_tracks_kkt_residual_falls_over_its_last_five_iterations_to_below_
     let folder = RunFolder::create(&tmp.path().join("tail"), false).unwrap();
     let run = track(&req, folder, &Quiet).unwrap();
     assert!(run.converged, "{}", run.result.status);
+    let validity = run
+        .output
+        .validity
+        .as_ref()
+        .expect("re-integrated on the 1 ms grid");
+    assert!(validity.is_valid(), "{:?}", validity.violations);
     let kkt: Vec<f64> = run.result.history.iter().map(|r| r.kkt).collect();
     let last = &kkt[kkt.len() - 5..];
     eprintln!("last five KKT residuals: {last:?}");

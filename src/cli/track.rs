@@ -5,6 +5,7 @@ use super::{CliProgress, Failure};
 use anyhow::anyhow;
 use footfall::model::effects::EffectSpec;
 use footfall::problems::diagnose::TrackingRunSetup;
+use footfall::problems::track::start::Guess;
 use footfall::problems::tracking::ChannelNoise;
 use footfall::workflows::run_folder::DEFAULT_TRANSIENT_THRESHOLD_N;
 use footfall::workflows::track::{track, TrackRequest};
@@ -108,6 +109,13 @@ pub struct Args {
     /// the filter's bias and its low-passed noise, which a fit can follow.
     #[arg(long, allow_negative_numbers = true, value_parser = super::validate::non_negative)]
     velocity_weight: Option<f64>,
+    /// Where the solve from the data starts: `data`, the measured states with the
+    /// activations 0.01 and excitations 0.025 of Millard & Mombaur (2019, §3.6); or
+    /// `inverse-dynamics`, the measured states with the activations and excitations that
+    /// give the trial's own joint torques (static optimisation of the inverse dynamics).
+    /// The two can end at different local optima.
+    #[arg(long, value_enum, default_value = "data")]
+    guess: GuessArg,
     /// Track the first half cycle (left heel strike to the next right heel strike) that
     /// lies inside T0–T1 (s). Default: the first half cycle in which every loaded foot's
     /// force was measured (overground trials with force plates in places).
@@ -228,6 +236,10 @@ fn run_inner(args: Args, effects: Vec<EffectSpec>, progress: &CliProgress) -> an
             residual_actuators: args.residual_actuators,
             regularisation: args.regularisation,
             velocity_weight: args.velocity_weight,
+            guess: match args.guess {
+                GuessArg::Data => Guess::Data,
+                GuessArg::InverseDynamics => Guess::InverseDynamics,
+            },
             one_sided_targets: args.one_sided_targets,
             sample_targets: args.sample_targets,
             window: args.window,
@@ -251,4 +263,11 @@ fn run_inner(args: Args, effects: Vec<EffectSpec>, progress: &CliProgress) -> an
     let folder = session::create_checkpointed_run_folder(&args.out, args.overwrite)?;
     let run = track(&req, folder, progress)?;
     footfall::workflows::check_run(&run.output, &run.result)
+}
+
+/// `--guess`.
+#[derive(Debug, Clone, Copy, clap::ValueEnum)]
+enum GuessArg {
+    Data,
+    InverseDynamics,
 }

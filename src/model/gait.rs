@@ -412,6 +412,14 @@ impl GaitModel {
             Actuation::Torques { .. } => LEG_JOINTS.len(),
         }
     }
+    /// The effective time constant (s) of the activation dynamics; `None` without
+    /// muscle-torque generators.
+    pub fn activation_time_constant(&self) -> Option<f64> {
+        match &self.actuation {
+            Actuation::Mtg(set) => Some(set.activation.time_constant()),
+            Actuation::Torques { .. } => None,
+        }
+    }
     /// Lower and upper bound of every control, in [`Self::control_names`] order:
     /// excitations in [0, 1], joint torques in ±`max_torque` (in units of
     /// [`Self::torque_unit`]), residual actuators in [−1, 1] (their scale is in the model).

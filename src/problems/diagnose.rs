@@ -110,6 +110,12 @@ pub struct TrackingRunSetup {
     /// Weight of the velocity targets relative to the angles (`None`: Millard & Mombaur's 0.1).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub velocity_weight: Option<f64>,
+    /// Where the solve from the data starts (`--guess`).
+    #[serde(
+        default,
+        skip_serializing_if = "crate::problems::track::start::Guess::is_data"
+    )]
+    pub guess: crate::problems::track::start::Guess,
     /// Check points holding the contact constraints between the nodes, as (continuous
     /// phase, interval, τ): the run's problem has them, so a rebuild must too.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]

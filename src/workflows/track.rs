@@ -11,6 +11,7 @@ use crate::phases::PhaseSequence;
 use crate::problems::diagnose::{parameter_sd, IdentifiedParameter, TrackingRunSetup};
 use crate::problems::evaluation::GaitSolution;
 use crate::problems::gait::GaitCycle;
+use crate::problems::track::start::{self, Guess};
 use crate::problems::track::{TrackingSetup, WindowChoice};
 use crate::runfolder::RunFolder;
 use crate::sqp::{ExactConvexification, HessianMode, SqpSettings, SqpStatus, StallSwitch};
@@ -141,6 +142,21 @@ impl TrackingProblem {
                     anyhow!("{source}: {e}")
                 }
             })?;
+        let mut trial_notes = trial_notes;
+        if run.guess == Guess::InverseDynamics {
+            let r =
+                start::from_inverse_dynamics(&model, &data, &setup.node_times, &mut setup.guess)
+                    .map_err(|e| {
+                        anyhow!(
+                            "{}: the start from the inverse dynamics: {e}",
+                            data.source.display()
+                        )
+                    })?;
+            trial_notes.push(format!(
+                "start: activations and excitations from the inverse dynamics at {} of {} nodes ({} joint torques beyond the actuators' strength, held at it)",
+                r.set, r.nodes, r.saturated
+            ));
+        }
         if run.track_pelvis_position {
             setup.weights = setup.weights.clone().with_pelvis_position();
         }
@@ -492,6 +508,7 @@ impl TrackRequest {
                 mirror: false,
                 noise_weights: None,
                 velocity_weight: None,
+                guess: Default::default(),
                 check_points: vec![],
                 effects: vec![],
                 parameters: vec![],

@@ -328,15 +328,17 @@ pub fn residual<S: Scalar>(
     Some([r[0] - m[0], r[1] - m[1], r[2] - m[2]])
 }
 
-/// Joint torques of the measured trial at one instant (N·m, hip, knee, ankle of the right
-/// then the left leg): $\tau = M\ddot q + c - \sum_s J_s^T F_s$ on the joint rows, each
+/// The generalised forces the measured trial needs at one instant (N or N·m per
+/// coordinate, in the model's order): $\tau = M\ddot q + c - \sum_s J_s^T F_s$, each
 /// foot's load applied at its CoP on the foot (at the ankle where the foot is unloaded).
-pub fn joint_torques(
+/// The joint rows are the joint torques of the inverse dynamics; the pelvis rows are the
+/// residual wrench in joint space. `None` where a foot's load is not measured at `t`.
+pub fn inverse_dynamics(
     body: &Body,
     signals: &Signals,
     model: &GaitModel,
     t: f64,
-) -> Option<[f64; 6]> {
+) -> Option<Vec<f64>> {
     let tree = &body.tree;
     let (q, qd, qdd) = signals.motion(t);
     let k = tree.kinematics::<f64>(&q, &qd);
@@ -365,5 +367,5 @@ pub fn joint_torques(
             tau[j] -= jac[j] * fx + jac[n + j] * fy;
         }
     }
-    Some([tau[3], tau[4], tau[5], tau[6], tau[7], tau[8]])
+    Some(tau)
 }

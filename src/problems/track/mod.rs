@@ -786,6 +786,7 @@ impl TrackingSetup {
             u_lb,
             u_ub,
         };
+
         let foot_length = 0.305;
         let weights = TrackingWeights::seed(nq, peak, foot_length);
         let measured = Arc::new(MeasuredLoads {
@@ -900,6 +901,7 @@ impl TrackingSetup {
 mod breakdown;
 mod clock;
 mod residual;
+pub mod start;
 mod window;
 
 pub use clock::{DurationClock, PlateClock};
