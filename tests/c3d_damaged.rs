@@ -88,7 +88,10 @@ fn flipped_bytes_are_refused_in_the_formats_terms_without_a_panic() {
         }
     }
     assert!(problems.is_empty(), "{}", problems.join("\n"));
-    assert!(refused >= VARIANTS / 10, "only {refused} of {VARIANTS} damaged files refused");
+    assert!(
+        refused >= VARIANTS / 10,
+        "only {refused} of {VARIANTS} damaged files refused"
+    );
 }
 
 /// The first damaged copy whose parse panics inside the crate (caught by the reader).
@@ -113,7 +116,15 @@ fn a_panic_inside_the_c3d_crate_prints_only_footfalls_error() {
     };
     let ik = root().join("data/raw/opensim_subject01/subject01_walk1_ik.mot");
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_footfall"))
-        .args(["track", "--overground", "--plate", "r=1", "--plate", "l=2", "--data"])
+        .args([
+            "track",
+            "--overground",
+            "--plate",
+            "r=1",
+            "--plate",
+            "l=2",
+            "--data",
+        ])
         .arg(&ik)
         .arg("--forces")
         .arg(&c3d)

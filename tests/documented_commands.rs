@@ -22,7 +22,10 @@ use std::process::{Command, Stdio};
 /// that runs it).
 const RUN_BY_CI: &[(&str, &str)] = &[
     ("./tools/setup && ./tools/test", "./tools/test"),
-    ("python3 -m venv .venv && .venv/bin/pip install ./python", "pip install -q ./python"),
+    (
+        "python3 -m venv .venv && .venv/bin/pip install ./python",
+        "pip install -q ./python",
+    ),
     (".venv/bin/python -c", "the command guide's Python example"),
 ];
 
@@ -76,7 +79,10 @@ fn run_documented(doc: &str) {
     let mut ran = 0;
     for line in sh_lines(&md) {
         if let Some((_, by)) = RUN_BY_CI.iter().find(|(start, _)| line.starts_with(start)) {
-            assert!(ci.contains(by), "{doc}: `{line}` is left to .ci/run, which has no `{by}`");
+            assert!(
+                ci.contains(by),
+                "{doc}: `{line}` is left to .ci/run, which has no `{by}`"
+            );
             continue;
         }
         script.push_str(&format!("echo {:?} >&2\n{line}\n", format!("$ {line}")));

@@ -17,15 +17,16 @@ fn converges_from_the_data(data: &str, model: &str, foot: &str) {
     let run = dir.path().join("run");
     let out = Command::new(env!("CARGO_BIN_EXE_footfall"))
         .current_dir(root())
-        .args(["track", "--quiet", "--data", data, "--model", model, "--foot", foot])
+        .args([
+            "track", "--quiet", "--data", data, "--model", model, "--foot", foot,
+        ])
         .arg("--out")
         .arg(&run)
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&out.stderr);
     let summary: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(run.join("summary.json")).unwrap())
-            .unwrap();
+        serde_json::from_str(&std::fs::read_to_string(run.join("summary.json")).unwrap()).unwrap();
     let kkt = summary["kkt"].as_f64().unwrap();
     let iterations = summary["iterations"].as_u64().unwrap();
     assert_eq!(
@@ -34,7 +35,10 @@ fn converges_from_the_data(data: &str, model: &str, foot: &str) {
         summary["stop_reason"]
     );
     assert!(kkt <= 1e-5, "{data}, {foot}: KKT {kkt:.2e}");
-    assert_eq!(summary["physically_valid"], true, "{data}, {foot}: {stderr}");
+    assert_eq!(
+        summary["physically_valid"], true,
+        "{data}, {foot}: {stderr}"
+    );
     assert_eq!(out.status.code(), Some(0), "{stderr}");
 }
 

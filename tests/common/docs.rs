@@ -69,4 +69,3 @@ pub fn invocations(line: &str) -> Vec<Invocation> {
     }
     out
 }
-

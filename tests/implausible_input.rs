@@ -1,0 +1,173 @@
+//! Input that reads without error but cannot be right (a flipped axis, a unit off by a
+//! thousand, an option outside its range) is refused by the command line before any
+//! solve, with exit code 1 and a message that names the file, the column or field, what
+//! was found and what would be valid.
+
+use crate::common::{footfall, root, s, stderr};
+use std::path::{Path, PathBuf};
+use std::process::Output;
+
+/// Exit code `code`, one `error:` report naming every item of `names`, no panic.
+fn assert_exit(o: &Output, code: i32, names: &[&str]) -> String {
+    let err = stderr(o);
+    assert_eq!(o.status.code(), Some(code), "stderr: {err}");
+    assert!(err.starts_with("error: "), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    for n in names {
+        assert!(err.contains(n), "stderr does not name {n:?}: {err}");
+    }
+    err
+}
+
+/// The bundled sagittal CSV with `edit` applied to the cells of `columns` (NaN cells
+/// left as they are), written as `dir/trial.csv` beside the bundled meta file.
+fn edited_csv(dir: &Path, columns: &[&str], edit: impl Fn(f64) -> f64) -> PathBuf {
+    let text = std::fs::read_to_string(root().join("data/opensim_subject01_sagittal.csv")).unwrap();
+    let mut lines = text.lines();
+    let header = lines.next().unwrap();
+    let idx: Vec<usize> = header
+        .split(',')
+        .enumerate()
+        .filter(|(_, c)| columns.contains(c))
+        .map(|(i, _)| i)
+        .collect();
+    assert_eq!(idx.len(), columns.len(), "{columns:?} in {header}");
+    let mut out = format!("{header}\n");
+    for line in lines.filter(|l| !l.is_empty()) {
+        let row: Vec<String> = line
+            .split(',')
+            .enumerate()
+            .map(|(i, v)| match v.parse::<f64>() {
+                Ok(x) if idx.contains(&i) && x.is_finite() => format!("{:.12e}", edit(x)),
+                _ => v.to_string(),
+            })
+            .collect();
+        out += &(row.join(",") + "\n");
+    }
+    let p = dir.join("trial.csv");
+    std::fs::write(&p, out).unwrap();
+    std::fs::copy(
+        root().join("data/opensim_subject01_meta.json"),
+        dir.join("trial_meta.json"),
+    )
+    .unwrap();
+    p
+}
+
+/// The bundled OpenSim external loads with `edit` applied to the columns whose names end
+/// in `suffix`, written as `dir/grf.mot`.
+fn edited_grf(dir: &Path, suffix: &str, edit: impl Fn(f64) -> f64) -> PathBuf {
+    let src = root().join("data/raw/opensim_subject01/subject01_walk1_grf.mot");
+    let text = std::fs::read_to_string(src).unwrap();
+    let mut out = String::new();
+    let mut idx: Option<Vec<usize>> = None;
+    let mut header_done = false;
+    for line in text.lines() {
+        let cells: Vec<&str> = line.split('\t').collect();
+        if !header_done {
+            header_done = line.trim() == "endheader";
+            out += &format!("{line}\n");
+            continue;
+        }
+        let Some(cols) = &idx else {
+            idx = Some(
+                (0..cells.len())
+                    .filter(|&i| cells[i].trim().ends_with(suffix))
+                    .collect(),
+            );
+            out += &format!("{line}\n");
+            continue;
+        };
+        let row: Vec<String> = cells
+            .iter()
+            .enumerate()
+            .map(|(i, v)| match v.trim().parse::<f64>() {
+                Ok(x) if cols.contains(&i) => format!("{}", edit(x)),
+                _ => v.to_string(),
+            })
+            .collect();
+        out += &(row.join("\t") + "\n");
+    }
+    assert!(idx.is_some_and(|c| c.len() == 2), "two {suffix} columns");
+    let p = dir.join("grf.mot");
+    std::fs::write(&p, out).unwrap();
+    p
+}
+
+/// `footfall track` on `data` (and `forces`, with the bundled trial's belt speed) with one
+/// iteration at most, into `dir/run`; the run folder must not exist afterwards.
+fn track(dir: &Path, data: &Path, forces: Option<&Path>) -> Output {
+    let out = dir.join("run");
+    let mut args = vec!["track", "--data", s(data), "--out", s(&out), "--quiet"];
+    args.extend(["--max-iter", "1"]);
+    if let Some(f) = forces {
+        args.extend(["--forces", s(f), "--belt-speed", "1.1322"]);
+    }
+    let o = footfall(&args);
+    assert!(!out.exists(), "{}", stderr(&o));
+    o
+}
+
+fn ik() -> PathBuf {
+    root().join("data/raw/opensim_subject01/subject01_walk1_ik.mot")
+}
+
+#[test]
+fn a_flipped_forward_force_is_refused_with_the_braking_and_propulsion_it_shows() {
+    let tmp = tempfile::tempdir().unwrap();
+    let csv = edited_csv(tmp.path(), &["grf_x_r", "grf_x_l"], |v| -v);
+    for cmd in ["track", "check"] {
+        let o = if cmd == "track" {
+            track(tmp.path(), &csv, None)
+        } else {
+            let out = tmp.path().join("check");
+            footfall(&["check", s(&csv), "--out", s(&out)])
+        };
+        assert_exit(
+            &o,
+            1,
+            &[
+                "trial.csv: grf_x_r:",
+                "pushes the foot forward in the first half (+20.1 N·s",
+                "back in the second (-21.2 N·s)",
+                "brakes first and then propels",
+                "sign looks flipped",
+            ],
+        );
+    }
+    // one plate's axis alone is named too
+    let csv = edited_csv(tmp.path(), &["grf_x_l"], |v| -v);
+    assert_exit(
+        &track(tmp.path(), &csv, None),
+        1,
+        &["trial.csv: grf_x_l:", "2 complete stances"],
+    );
+}
+
+#[test]
+fn an_opensim_forward_force_flipped_is_refused_naming_the_force_file_and_column() {
+    let tmp = tempfile::tempdir().unwrap();
+    let grf = edited_grf(tmp.path(), "ground_force_vx", |v| -v);
+    let err = assert_exit(
+        &track(tmp.path(), &ik(), Some(&grf)),
+        1,
+        &["grf.mot: ground_force_vx:", "sign looks flipped"],
+    );
+    assert!(!err.contains("grf_x_r"), "{err}");
+}
+
+#[test]
+fn an_opensim_cop_in_millimetres_is_refused_naming_the_force_file_and_column() {
+    let tmp = tempfile::tempdir().unwrap();
+    let grf = edited_grf(tmp.path(), "ground_force_px", |v| 1e3 * v);
+    let err = assert_exit(
+        &track(tmp.path(), &ik(), Some(&grf)),
+        1,
+        &[
+            "grf.mot: ground_force_px:",
+            "beyond the 1.5 m any foot reaches",
+            "millimetres",
+        ],
+    );
+    assert!(!err.contains("ik.mot"), "{err}");
+}
