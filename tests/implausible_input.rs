@@ -171,3 +171,44 @@ fn an_opensim_cop_in_millimetres_is_refused_naming_the_force_file_and_column() {
     );
     assert!(!err.contains("ik.mot"), "{err}");
 }
+
+#[test]
+fn a_kkt_tolerance_that_calls_any_start_converged_is_refused_by_the_library_before_solving() {
+    use footfall::limits::OutOfRange;
+    use footfall::workflows::{track::TrackRequest, Quiet};
+    let tmp = tempfile::tempdir().unwrap();
+    let out = tmp.path().join("run");
+    let expected = "--tol 1e300: expected a KKT tolerance > 0 and ≤ 0.01";
+    let mut req = TrackRequest::new("ellipse");
+    req.sqp.tol_kkt = 1e300;
+    let folder = footfall::runfolder::RunFolder::create(&out, false).unwrap();
+    let Err(e) = footfall::workflows::track::track(&req, folder, &Quiet) else {
+        panic!("a KKT tolerance of 1e300 was accepted");
+    };
+    let typed = e.downcast_ref::<OutOfRange>().expect("an OutOfRange error");
+    assert_eq!((typed.option, typed.value), ("--tol", 1e300));
+    assert!(e.to_string().contains(expected), "{e}");
+    assert!(!out.exists());
+    let solve = footfall::workflows::solve::SolveRequest {
+        problem: Some(root().join("problems/cartpole_swingup.json")),
+        out: out.clone(),
+        overwrite: false,
+        warm_start: None,
+        tol: 1e300,
+        max_iter: 1,
+        max_time: None,
+        integrator: None,
+        hessian: None,
+    };
+    let e = footfall::workflows::solve::run(&solve, &Quiet).unwrap_err();
+    assert!(e.downcast_ref::<OutOfRange>().is_some(), "{e}");
+    assert!(e.to_string().contains(expected), "{e}");
+    assert!(!out.exists());
+    // the command line refuses it as a usage error, naming the option
+    let o = footfall(&["track", "--tol", "1e300", "--out", s(&out)]);
+    assert_exit(
+        &o,
+        2,
+        &["'--tol <TOL>'", "expected a KKT tolerance > 0 and ≤ 0.01"],
+    );
+}
