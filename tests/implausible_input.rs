@@ -212,3 +212,104 @@ fn a_kkt_tolerance_that_calls_any_start_converged_is_refused_by_the_library_befo
         &["'--tol <TOL>'", "expected a KKT tolerance > 0 and ≤ 0.01"],
     );
 }
+
+#[test]
+fn a_trunk_angle_with_gaps_is_read_as_it_is_because_the_model_does_not_use_it() {
+    // lower-body Plug-in Gait output has no trunk: lumbar_extension NaN in all rows or
+    // in some; the bundled models freeze the trunk at their own angle
+    let tmp = tempfile::tempdir().unwrap();
+    let csv = edited_csv(tmp.path(), &["lumbar_extension"], |_| f64::NAN);
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut gaps = String::new();
+    for (k, line) in text.lines().enumerate() {
+        let keep = k == 0 || k % 3 == 0;
+        let row = match line.rsplit_once(',') {
+            Some((head, _)) if !keep => format!("{head},NaN"),
+            Some((head, v)) if k > 0 => format!("{head},{}", if v == "NaN" { "-0.4" } else { v }),
+            _ => line.to_string(),
+        };
+        gaps += &(row + "\n");
+    }
+    assert!(text.lines().next().unwrap().ends_with(",lumbar_extension"));
+    for (name, body) in [("all_nan.csv", text.clone()), ("gaps.csv", gaps)] {
+        let p = tmp.path().join(name);
+        std::fs::write(&p, body).unwrap();
+        std::fs::copy(
+            root().join("data/opensim_subject01_meta.json"),
+            tmp.path().join(name.replace(".csv", "_meta.json")),
+        )
+        .unwrap();
+        let trial = footfall::workflows::trial::load_trial(
+            &footfall::workflows::trial::TrialFiles::csv(Some(p.clone()), false),
+        )
+        .unwrap_or_else(|e| panic!("{name}: {e}"));
+        let lumbar = trial.data.extra.get("lumbar_extension");
+        assert_eq!(lumbar.is_some(), name == "gaps.csv", "{name}");
+        let out = tmp.path().join("run");
+        let o = footfall(&[
+            "track",
+            "--data",
+            s(&p),
+            "--max-iter",
+            "0",
+            "--no-check-points",
+            "--out",
+            s(&out),
+            "--quiet",
+        ]);
+        assert_exit(&o, 3, &["iteration limit reached"]);
+        std::fs::remove_dir_all(&out).unwrap();
+    }
+    // a gap in a coordinate is still refused, naming the line and the column
+    let csv = edited_csv(
+        tmp.path(),
+        &["hip_r"],
+        |v| if v > 0.2 { f64::NAN } else { v },
+    );
+    assert_exit(
+        &track(tmp.path(), &csv, None),
+        1,
+        &["trial.csv: line", "column 'hip_r': value is NaN"],
+    );
+}
+
+#[test]
+fn a_checkpoint_holding_nan_in_its_filter_or_constants_is_refused_naming_the_entry() {
+    use footfall::sqp::checkpoint::{CheckpointError, ExactVec, SqpCheckpoint, CHECKPOINT_VERSION};
+    let cp = |scalars: [f64; 7], filter: [f64; 4]| SqpCheckpoint {
+        version: CHECKPOINT_VERSION,
+        n: 2,
+        m: 1,
+        next_iter: 0,
+        w: ExactVec::new(&[1.0, 2.0]),
+        lambda: ExactVec::new(&[0.5]),
+        nu: ExactVec::new(&[0.0, 0.0]),
+        scalars: ExactVec::new(&scalars),
+        filter: ExactVec::new(&filter),
+        bfgs: vec![],
+        history: vec![],
+        timings: Default::default(),
+    };
+    let nan = f64::NAN;
+    // θ_max before the first line search, the filter's first entry and the integrator
+    // tolerance of an NLP that does not integrate are not numbers a solve must have
+    let good = cp(
+        [1.0, 1.0, 0.0, f64::INFINITY, 0.5, 3.0, nan],
+        [1e4, f64::NEG_INFINITY, 1.0, 2.0],
+    );
+    good.check(2, 1).unwrap();
+    for (bad, what) in [
+        (
+            cp([nan, 1.0, 0.0, 1e4, 0.5, 3.0, nan], [1e4, 0.0, 1.0, 2.0]),
+            "scalars[0] is NaN",
+        ),
+        (
+            cp([1.0, 1.0, 0.0, 1e4, 0.5, 3.0, nan], [1e4, 0.0, nan, 2.0]),
+            "filter[2] is NaN",
+        ),
+    ] {
+        let e = bad.check(2, 1).unwrap_err();
+        assert!(matches!(e, CheckpointError::NonFinite { .. }), "{e}");
+        assert!(e.to_string().contains(what), "{e}");
+    }
+}
