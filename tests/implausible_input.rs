@@ -313,3 +313,95 @@ fn a_checkpoint_holding_nan_in_its_filter_or_constants_is_refused_naming_the_ent
         assert!(e.to_string().contains(what), "{e}");
     }
 }
+
+/// Replace the meta file `edited_csv` wrote beside `dir/trial.csv` by the bundled one
+/// with `edit` applied.
+fn edit_meta(dir: &Path, edit: impl Fn(&mut serde_json::Value)) -> PathBuf {
+    let text = std::fs::read_to_string(root().join("data/opensim_subject01_meta.json")).unwrap();
+    let mut meta: serde_json::Value = serde_json::from_str(&text).unwrap();
+    edit(&mut meta);
+    let p = dir.join("trial_meta.json");
+    std::fs::write(&p, meta.to_string()).unwrap();
+    p
+}
+
+#[test]
+fn csv_times_in_milliseconds_are_refused_with_the_rate_they_imply() {
+    let tmp = tempfile::tempdir().unwrap();
+    let csv = edited_csv(tmp.path(), &["time"], |t| 1e3 * t);
+    assert_exit(
+        &track(tmp.path(), &csv, None),
+        1,
+        &[
+            "trial.csv: time:",
+            "a rate of 0.060 Hz",
+            "10–5000 Hz",
+            "milliseconds",
+        ],
+    );
+}
+
+#[test]
+fn csv_positions_in_millimetres_are_refused_naming_the_pelvis_height() {
+    let tmp = tempfile::tempdir().unwrap();
+    let csv = edited_csv(tmp.path(), &["pelvis_x", "pelvis_y"], |x| 1e3 * x);
+    assert_exit(
+        &track(tmp.path(), &csv, None),
+        1,
+        &["trial.csv: pelvis_y:", "under 2 m", "millimetres"],
+    );
+}
+
+#[test]
+fn a_csv_cop_in_millimetres_is_refused_naming_the_column() {
+    let tmp = tempfile::tempdir().unwrap();
+    let csv = edited_csv(tmp.path(), &["cop_x_r", "cop_x_l"], |x| 1e3 * x);
+    assert_exit(
+        &track(tmp.path(), &csv, None),
+        1,
+        &["trial.csv: cop_x_r:", "beyond the 1.5 m", "millimetres"],
+    );
+}
+
+#[test]
+fn a_meta_file_declaring_degrees_over_radians_is_refused_naming_the_meta_file() {
+    let tmp = tempfile::tempdir().unwrap();
+    let csv = edited_csv(tmp.path(), &[], |x| x);
+    edit_meta(tmp.path(), |m| m["units"]["angles"] = "deg".into());
+    assert_exit(
+        &track(tmp.path(), &csv, None),
+        1,
+        &[
+            "trial_meta.json: units.angles:",
+            "knee_r",
+            "look like radians",
+        ],
+    );
+}
+
+#[test]
+fn a_constant_knee_angle_is_refused_naming_the_column() {
+    let tmp = tempfile::tempdir().unwrap();
+    let csv = edited_csv(tmp.path(), &["knee_r", "knee_l"], |_| -0.2);
+    assert_exit(
+        &track(tmp.path(), &csv, None),
+        1,
+        &["trial.csv: knee_r:", "at least 0.1 rad", "frozen"],
+    );
+}
+
+#[test]
+fn a_negative_belt_speed_in_a_meta_file_is_refused_naming_the_field() {
+    let tmp = tempfile::tempdir().unwrap();
+    let csv = edited_csv(tmp.path(), &[], |x| x);
+    edit_meta(tmp.path(), |m| m["belt_speed_m_s"] = (-1.1322).into());
+    assert_exit(
+        &track(tmp.path(), &csv, None),
+        1,
+        &[
+            "trial_meta.json: belt_speed_m_s:",
+            "> 0 and ≤ 12 m/s",
+            "got -1.1322",
+        ],
+    );
+}
