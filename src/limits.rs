@@ -33,6 +33,57 @@ pub const MAX_KKT_TOL: f64 = 1e-2;
 /// Most SQP (or Nelder–Mead) iterations a command accepts.
 pub const MAX_ITERATIONS: usize = 100_000;
 
+/// An option value outside the range a command accepts, refused before any work.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{option} {}: expected {expected}", show(*.value))]
+pub struct OutOfRange {
+    /// The option, as the command line spells it (`--tol`).
+    pub option: &'static str,
+    /// The value given.
+    pub value: f64,
+    /// What would be valid.
+    pub expected: String,
+}
+
+/// A KKT tolerance (`--tol`): finite, > 0 and at most [`MAX_KKT_TOL`].
+pub fn kkt_tolerance(tol: f64) -> Result<f64, OutOfRange> {
+    if tol.is_finite() && tol > 0.0 && tol <= MAX_KKT_TOL {
+        return Ok(tol);
+    }
+    Err(OutOfRange {
+        option: "--tol",
+        value: tol,
+        expected: format!(
+            "a KKT tolerance > 0 and ≤ {} (e.g. 1e-5; a looser one accepts constraint violations of centimetres)",
+            show(MAX_KKT_TOL)
+        ),
+    })
+}
+
+/// An iteration limit (`--max-iter`): at most [`MAX_ITERATIONS`].
+pub fn iteration_limit(n: usize) -> Result<usize, OutOfRange> {
+    if n <= MAX_ITERATIONS {
+        return Ok(n);
+    }
+    Err(OutOfRange {
+        option: "--max-iter",
+        value: n as f64,
+        expected: format!("a whole number of iterations from 0 to {MAX_ITERATIONS}"),
+    })
+}
+
+/// A wall-time limit (`--max-time`, s): finite and > 0.
+pub fn time_limit(seconds: f64) -> Result<f64, OutOfRange> {
+    if seconds.is_finite() && seconds > 0.0 {
+        return Ok(seconds);
+    }
+    Err(OutOfRange {
+        option: "--max-time",
+        value: seconds,
+        expected: "a finite number > 0 (seconds)".into(),
+    })
+}
+
 /// `v` as plain decimal when that is short (1e-4 ≤ |v| < 1e6, or 0), else in
 /// scientific notation: `1e308` never becomes 309 digits.
 pub fn show(v: f64) -> String {

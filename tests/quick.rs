@@ -29,6 +29,7 @@ mod foot_fit;
 mod front_door;
 mod fuzz;
 mod gait_ocp;
+mod implausible_input;
 mod integrate;
 mod layers;
 mod linearised;

@@ -1,7 +1,7 @@
 //! Value parsers of numeric options: clap refuses a bad value before anything runs,
 //! naming the option and what would be valid (clap's usage errors exit with code 2).
 
-use footfall::limits::{show, MAX_ITERATIONS, MAX_KKT_TOL};
+use footfall::limits::MAX_ITERATIONS;
 
 fn number(s: &str) -> Result<f64, String> {
     s.trim()
@@ -17,15 +17,10 @@ pub fn positive(s: &str) -> Result<f64, String> {
     }
 }
 
-/// A KKT tolerance: finite, > 0 and at most [`MAX_KKT_TOL`].
+/// A KKT tolerance: finite, > 0 and at most [`MAX_KKT_TOL`](footfall::limits::MAX_KKT_TOL)
+/// ([`footfall::limits::kkt_tolerance`], which the workflows apply as well).
 pub fn kkt_tolerance(s: &str) -> Result<f64, String> {
-    match number(s)? {
-        v if v.is_finite() && v > 0.0 && v <= MAX_KKT_TOL => Ok(v),
-        _ => Err(format!(
-            "expected a KKT tolerance > 0 and ≤ {} (e.g. 1e-5; a looser one accepts constraint violations of centimetres)",
-            show(MAX_KKT_TOL)
-        )),
-    }
+    footfall::limits::kkt_tolerance(number(s)?).map_err(|e| format!("expected {}", e.expected))
 }
 
 /// A weight or standard deviation: finite and ≥ 0.

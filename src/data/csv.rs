@@ -17,11 +17,12 @@
 //! left out together when only one side was measured ([`SideSource::Missing`]; fill it
 //! with [`GaitData::mirror_missing_side`]); leaving out some of them is an error. `NaN`
 //! in `grf_*` and `cop_x_*` means "not measured" (a foot off the force plates; a CoP the
-//! lab did not export while the foot is loaded, which then tracks its forces only).
+//! lab did not export while the foot is loaded, which then tracks its forces only); in an
+//! extra column (which the model does not read) it is a gap, kept as it is.
 //!
 //! **Mixed rates in one file.** Kinematics at 60–200 Hz and forces at 600–2,000 Hz may
-//! share one file: a row whose kinematic columns (pelvis, angles, extras) are all `NaN`
-//! is a force-only row. The kinematics are then the other rows, and the forces are kept
+//! share one file: a row whose coordinates (pelvis and angles) are all `NaN` is a
+//! force-only row. The kinematics are then the other rows, and the forces are kept
 //! at their own instants ([`GaitData::forces`]: the force-only rows and the kinematic
 //! rows that carry a force), with their view at the kinematic instants in
 //! [`GaitData::feet`].
@@ -622,37 +623,35 @@ fn parse_sagittal_csv(
         }
     }
     // NaN: in forces and CoP it means "not measured" (off the plates, a CoP the lab did
-    // not export); in kinematics only in force-only rows of a mixed-rate file (every
-    // kinematic column NaN). ∞ nowhere.
+    // not export); in an extra column a gap; in the coordinates only in force-only rows
+    // of a mixed-rate file (every coordinate NaN). ∞ nowhere.
     let load_cols: Vec<usize> = side_cols
         .iter()
         .flatten()
         .flat_map(|c| c[3..6].iter().copied())
         .collect();
     // an extra channel with no value in any row (lower-body Plug-in Gait output has no
-    // trunk: lumbar_extension all NaN) is not read: the model never uses it
+    // trunk: lumbar_extension all NaN) is not read; one with gaps keeps its NaN: the
+    // model reads no extra channel, so neither decides a row's kind
     let empty: Vec<usize> = extra_cols
         .iter()
         .copied()
         .filter(|&j| table[j].iter().all(|v| v.is_nan()))
         .collect();
     let kin_cols: Vec<usize> = (0..ncol)
-        .filter(|j| *j != t_col && !load_cols.contains(j) && !empty.contains(j))
+        .filter(|j| *j != t_col && !load_cols.contains(j) && !extra_cols.contains(j))
         .collect();
     let force_only: Vec<bool> = (0..rows.len())
         .map(|k| kin_cols.iter().all(|&j| table[j][k].is_nan()))
         .collect();
     for (j, col) in table.iter().enumerate() {
-        let load = load_cols.contains(&j);
-        if empty.contains(&j) {
-            continue;
-        }
+        let may_be_nan = load_cols.contains(&j) || extra_cols.contains(&j);
         for (k, &v) in col.iter().enumerate() {
-            if v.is_finite() || (v.is_nan() && (load || force_only[k])) {
+            if v.is_finite() || (v.is_nan() && (may_be_nan || force_only[k])) {
                 continue;
             }
             let reason = if v.is_nan() {
-                "value is NaN; NaN is allowed in grf_* and cop_x_* (not measured), and in kinematic columns only in a force-only row of a mixed-rate file (every kinematic column NaN)".to_string()
+                "value is NaN; NaN is allowed in grf_* and cop_x_* (not measured), in extra columns such as lumbar_extension (which the model does not read), and in the coordinates only in a force-only row of a mixed-rate file (every coordinate NaN)".to_string()
             } else {
                 format!("value is {v}; NaN marks a value that was not measured")
             };

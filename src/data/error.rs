@@ -89,8 +89,8 @@ pub enum DataError {
         reason: String,
     },
     /// A value is NaN or infinite where that is not allowed (in the sagittal CSV NaN
-    /// means "not measured" in `grf_*` and `cop_x_*`, and marks a force-only row when
-    /// every kinematic column of the row is NaN).
+    /// means "not measured" in `grf_*` and `cop_x_*`, is a gap in an extra column, and
+    /// marks a force-only row when every coordinate of the row is NaN).
     #[error("{path}: line {row}, column '{column}': {reason}")]
     NotFinite {
         /// File.

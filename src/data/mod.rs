@@ -652,8 +652,9 @@ impl GaitData {
                 loads.push((format!("cop_x_{side} (force record)"), &f.cop_x, &fs.time));
             }
         }
+        // extra channels may have gaps (NaN): the model reads none of them
         for (k, v) in &self.extra {
-            channels.push((k.clone(), v, true, n));
+            channels.push((k.clone(), v, false, n));
         }
         for (name, v, required, len) in &channels {
             if v.len() != *len {

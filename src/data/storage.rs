@@ -469,13 +469,22 @@ fn column<'a>(s: &'a Storage, name: &str, what: &str) -> Result<&'a [f64], DataE
 }
 
 fn check_finite(s: &Storage, name: &str, v: &[f64]) -> Result<(), DataError> {
-    if let Some(k) = v.iter().position(|x| !x.is_finite()) {
+    check_values(s, name, v, false)
+}
+
+/// No infinity in `v`, and no NaN unless `gaps` (an extra channel, which the model does
+/// not read, may have gaps).
+fn check_values(s: &Storage, name: &str, v: &[f64], gaps: bool) -> Result<(), DataError> {
+    if let Some(k) = v
+        .iter()
+        .position(|x| x.is_infinite() || (x.is_nan() && !gaps))
+    {
         return Err(DataError::NotFinite {
             path: s.path.clone(),
             row: s.line_of(k),
             column: name.to_string(),
             reason: format!(
-                "value is {} (NaN is allowed only in a CoP column while that foot is unloaded)",
+                "value is {} (NaN is allowed only in a CoP column while that foot is unloaded, and in an extra channel such as lumbar_extension)",
                 v[k]
             ),
         });
@@ -558,7 +567,7 @@ impl GaitData {
         let mut extra = BTreeMap::new();
         for (name, c) in &map.extras {
             let v = column(ks, &c.column, &format!("extra channel {name}"))?;
-            check_finite(ks, &c.column, v)?;
+            check_values(ks, &c.column, v, true)?;
             let f = scale(c);
             extra.insert(name.clone(), v.iter().map(|x| x * f).collect::<Vec<f64>>());
         }

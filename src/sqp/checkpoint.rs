@@ -135,7 +135,8 @@ pub enum CheckpointError {
     /// A number the resumed solve needs finite is not.
     #[error("the checkpoint is damaged: {what}[{index}] is {value}, where a solve needs a finite number; start the run again without --resume")]
     NonFinite {
-        /// Which vector: `w` (the iterate), `lambda`, `nu` or `bfgs`.
+        /// Which vector: `w` (the iterate), `lambda`, `nu`, `bfgs`, `scalars` (the adaptive
+        /// constants) or `filter`.
         what: &'static str,
         /// Index in it.
         index: usize,
@@ -182,9 +183,25 @@ impl SqpCheckpoint {
         self.check_finite()
     }
 
-    /// Check that the iterate, the multipliers and the BFGS blocks are finite (NaN or ±∞
-    /// there would carry on to a different result).
+    /// Check that the iterate, the multipliers and the BFGS blocks are finite, and that
+    /// the adaptive constants and the filter hold no NaN (either would carry on to a
+    /// different result; the filter's first entry and θ_max before the first line search
+    /// are infinite by design, and the integrator tolerance is NaN for an NLP that does
+    /// not integrate).
     pub fn check_finite(&self) -> Result<(), CheckpointError> {
+        let nan = |what: &'static str, bits: &[u64]| {
+            bits.iter()
+                .position(|&b| f64::from_bits(b).is_nan())
+                .map(|index| CheckpointError::NonFinite {
+                    what,
+                    index,
+                    value: f64::NAN,
+                })
+        };
+        let constants = &self.scalars.0[..self.scalars.0.len().min(6)];
+        if let Some(e) = nan("scalars", constants).or_else(|| nan("filter", &self.filter.0)) {
+            return Err(e);
+        }
         let bfgs = self.bfgs.iter().flat_map(|(b, _)| b.0.iter());
         let vectors: [(&'static str, Box<dyn Iterator<Item = &u64>>); 4] = [
             ("w", Box::new(self.w.0.iter())),

@@ -328,6 +328,20 @@ impl Default for SqpSettings {
     }
 }
 
+impl SqpSettings {
+    /// The stopping rules a command takes within the ranges of [`crate::limits`]: the KKT
+    /// tolerance, the iteration limit and the time limit. A KKT tolerance of 1e300 would
+    /// call any start converged, however far it is from its constraints.
+    pub fn check_limits(&self) -> Result<(), crate::limits::OutOfRange> {
+        crate::limits::kkt_tolerance(self.tol_kkt)?;
+        crate::limits::iteration_limit(self.max_iter)?;
+        if let Some(t) = self.max_time {
+            crate::limits::time_limit(t)?;
+        }
+        Ok(())
+    }
+}
+
 /// Why the SQP stopped.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]

@@ -698,7 +698,10 @@ mod tests {
             .map(|k| h.vals[k])
             .sum::<f64>()
             - diag[0];
-        assert!((added - delta.unwrap_or(0.0)).abs() < 1e-15, "{added} vs {delta:?}");
+        assert!(
+            (added - delta.unwrap_or(0.0)).abs() < 1e-15,
+            "{added} vs {delta:?}"
+        );
         delta
     }
 

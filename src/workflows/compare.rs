@@ -79,6 +79,7 @@ fn check_feet(args: &CompareRequest) -> anyhow::Result<()> {
 
 /// Run `compare` as `args` describes, reporting to `progress`.
 pub fn run(args: &CompareRequest, progress: &dyn Progress) -> anyhow::Result<()> {
+    args.options.check_limits()?;
     if args.feet.len() < 2 {
         bail!(
             "--feet: give at least two feet to compare, got {:?}",

@@ -210,6 +210,7 @@ pub fn compare_contact(
     req: &CompareContactRequest,
     progress: &dyn Progress,
 ) -> anyhow::Result<ContactComparison> {
+    req.sqp.check_limits()?;
     // every run's problem is built before the first is solved: a bad foot, phase graph or
     // trial stops the comparison before any time is spent, with nothing written
     let setups: Vec<(TrackingRunSetup, Vec<EffectSpec>)> = PLANS

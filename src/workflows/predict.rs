@@ -62,6 +62,20 @@ pub struct PredictionOptions {
     pub transient_threshold: f64,
 }
 
+impl PredictionOptions {
+    /// The stopping rules within the ranges of [`crate::limits`] (the KKT tolerance, the
+    /// iteration and time limits), as [`SqpSettings::check_limits`].
+    pub fn check_limits(&self) -> Result<(), crate::limits::OutOfRange> {
+        SqpSettings {
+            tol_kkt: self.tol,
+            max_iter: self.max_iter,
+            max_time: self.max_time,
+            ..Default::default()
+        }
+        .check_limits()
+    }
+}
+
 impl Default for PredictionOptions {
     /// The `predict` command's defaults.
     fn default() -> Self {
@@ -109,6 +123,7 @@ pub fn predict(
     folder: RunFolder,
     progress: &dyn Progress,
 ) -> anyhow::Result<(GaitRunOutput, SqpResult)> {
+    o.check_limits()?;
     let foot_path = super::foot_path(foot);
     let model = GaitModel::load(&o.model, &foot_path)?;
     let phases = phases

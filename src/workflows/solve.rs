@@ -44,6 +44,11 @@ pub fn run(args: &SolveRequest, progress: &dyn Progress) -> anyhow::Result<()> {
         .problem
         .clone()
         .ok_or_else(|| anyhow!("--problem is required"))?;
+    crate::limits::kkt_tolerance(args.tol)?;
+    crate::limits::iteration_limit(args.max_iter)?;
+    if let Some(t) = args.max_time {
+        crate::limits::time_limit(t)?;
+    }
     let bench = Benchmark::load(&problem)?;
     // Adams for the smooth generic problems; BDF for the gait, whose light feet make the
     // contact dynamics stiff

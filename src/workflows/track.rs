@@ -531,6 +531,7 @@ pub fn track(
     folder: RunFolder,
     progress: &dyn Progress,
 ) -> anyhow::Result<TrackedRun> {
+    req.sqp.check_limits()?;
     let mut base = req.run.clone();
     let init = match &req.init {
         Some(p) => {

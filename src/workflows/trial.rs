@@ -87,8 +87,8 @@ pub struct LoadedTrial {
     pub notes: Vec<String>,
 }
 
-/// Read the trial `t` describes and check its units and conventions
-/// ([`GaitData::check_conventions`]); a treadmill trial is moved overground with its belt
+/// Read the trial `t` describes and check its units and conventions ([`check_trial`]); a
+/// treadmill trial is moved overground with its belt
 /// speed (the CSV's meta file or [`TrialFiles::belt_speed`]).
 ///
 /// Errors: an unknown extension; `--forces` or `--plate` with a CSV; an OpenSim `data`
@@ -114,7 +114,7 @@ pub fn load_trial(t: &TrialFiles) -> anyhow::Result<LoadedTrial> {
         // the compiled-in copy, wherever footfall is started
         let root = crate::bundled::root().map_err(anyhow::Error::msg)?;
         let data = GaitData::bundled(&root)?;
-        data.check_conventions(t.overground)?;
+        check_trial(&data, t.overground)?;
         return Ok(LoadedTrial {
             data,
             notes: vec![],
@@ -131,6 +131,15 @@ pub fn load_trial(t: &TrialFiles) -> anyhow::Result<LoadedTrial> {
         TrialFormat::Storage => load_opensim(path, t),
         TrialFormat::C3d => unreachable!("trial_format accepts .c3d for --forces only"),
     }
+}
+
+/// The trial's units and conventions ([`GaitData::check_conventions`]) and the forward
+/// force's braking-then-propulsion sign
+/// ([`check_forward_force_sign`](crate::problems::check::plausibility::check_forward_force_sign)),
+/// which every command reads the trial through.
+pub fn check_trial(data: &GaitData, overground: bool) -> Result<(), DataError> {
+    data.check_conventions(overground)?;
+    crate::problems::check::plausibility::check_forward_force_sign(data)
 }
 
 fn load_csv(path: &Path, t: &TrialFiles) -> anyhow::Result<LoadedTrial> {
@@ -167,7 +176,7 @@ fn load_csv(path: &Path, t: &TrialFiles) -> anyhow::Result<LoadedTrial> {
             data = data.to_overground(v)?;
         }
     }
-    data.check_conventions(t.overground)?;
+    check_trial(&data, t.overground)?;
     Ok(LoadedTrial {
         data,
         notes: vec![],
@@ -312,8 +321,7 @@ fn load_opensim(ik_path: &Path, t: &TrialFiles) -> anyhow::Result<LoadedTrial> {
     // a declared unit the data contradict is the more telling diagnosis than the
     // conventions' (a knee that barely moves, read in the wrong unit)
     check_radians_said_degrees(&data, &ik, &map)?;
-    data.check_conventions(t.overground)
-        .map_err(|e| opensim_error(e, &ik, &grf, &map))?;
+    check_trial(&data, t.overground).map_err(|e| opensim_error(e, &ik, &grf, &map))?;
     Ok(LoadedTrial {
         data,
         notes: vec![note],
@@ -401,9 +409,14 @@ fn opensim_error(e: DataError, ik: &Storage, grf: &Storage, map: &StorageMap) ->
         return DataError::invalid(&ik.path, column, format!("{head}; {advice}"));
     }
     for (s, side) in ["r", "l"].iter().enumerate() {
-        if field == &format!("grf_y_{side}") {
-            if let Some(cols) = &map.feet[s] {
-                return DataError::invalid(&grf.path, cols.fy.clone(), reason.clone());
+        let Some(cols) = &map.feet[s] else { continue };
+        for (name, column) in [
+            ("grf_x", &cols.fx),
+            ("grf_y", &cols.fy),
+            ("cop_x", &cols.cop_x),
+        ] {
+            if field == &format!("{name}_{side}") {
+                return DataError::invalid(&grf.path, column.clone(), reason.clone());
             }
         }
     }

@@ -135,7 +135,7 @@ pub(super) fn load(ik_path: &Path, c3d_path: &Path, t: &TrialFiles) -> anyhow::R
         data = data.to_overground(v)?;
     }
     // Convention errors of the forces name the C3D and the plates.
-    data.check_conventions(t.overground).map_err(|e| match e {
+    super::check_trial(&data, t.overground).map_err(|e| match e {
         DataError::Invalid { field, reason, .. } if field.starts_with("grf_") => {
             DataError::invalid(
                 c3d_path,
