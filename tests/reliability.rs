@@ -123,6 +123,111 @@ fn overwrite_refuses_a_foreign_folder_the_current_folder_and_a_file() {
 }
 
 #[test]
+fn overwrite_refuses_a_run_folder_holding_a_users_file_and_deletes_nothing() {
+    let tmp = tempfile::tempdir().unwrap();
+    let t = tmp.path();
+    let o = simulate(t, "run", &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let run = t.join("run");
+    let before = std::fs::read(run.join("summary.json")).unwrap();
+    std::fs::write(run.join("notes.txt"), "mine").unwrap();
+    refused(
+        &simulate(t, "run", &["--overwrite", "--dt", "0.002"]),
+        &[
+            "run",
+            "footfall did not write",
+            "'notes.txt'",
+            "nothing was replaced",
+        ],
+    );
+    assert_eq!(
+        std::fs::read_to_string(run.join("notes.txt")).unwrap(),
+        "mine"
+    );
+    assert_eq!(std::fs::read(run.join("summary.json")).unwrap(), before);
+    assert_eq!(
+        entries(&run),
+        [
+            ".footfall-run",
+            "notes.txt",
+            "summary.json",
+            "timeseries.csv"
+        ]
+    );
+    assert_eq!(entries(t), ["run"], "something was left behind");
+    // moved out, the run folder is footfall's alone and replaced
+    std::fs::remove_file(run.join("notes.txt")).unwrap();
+    let o = simulate(t, "run", &["--overwrite", "--dt", "0.002"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_ne!(std::fs::read(run.join("summary.json")).unwrap(), before);
+}
+
+#[test]
+fn a_solve_whose_output_folder_appeared_meanwhile_keeps_its_results_beside_it() {
+    let tmp = tempfile::tempdir().unwrap();
+    let t = tmp.path();
+    // a start for `--init`
+    let first = t.join("first");
+    let o = bin()
+        .args(["--quiet", "track", "--max-iter", "0", "--out"])
+        .arg(&first)
+        .current_dir(root())
+        .output()
+        .expect("run footfall");
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    // the run reads --init from a FIFO after making its staging folder: it is held there
+    // while the output folder appears
+    let fifo = t.join("init.json");
+    assert!(Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .expect("mkfifo")
+        .success());
+    let out = t.join("run");
+    let child = bin()
+        .args(["track", "--max-iter", "0", "--init"])
+        .arg(&fifo)
+        .arg("--out")
+        .arg(&out)
+        .current_dir(root())
+        .stderr(Stdio::piped())
+        .stdout(Stdio::null())
+        .spawn()
+        .expect("spawn");
+    let staging = t.join(format!(".run.partial-{}", child.id()));
+    let start = Instant::now();
+    while !staging.exists() {
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "no staging folder"
+        );
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    std::fs::create_dir(&out).unwrap();
+    std::fs::write(out.join("theirs.txt"), "theirs").unwrap();
+    std::fs::write(&fifo, std::fs::read(first.join("solution.json")).unwrap()).unwrap();
+    let o = child.wait_with_output().expect("wait");
+    let err = stderr(&o);
+    // the exit code of the run itself: the iteration limit
+    assert_eq!(o.status.code(), Some(3), "{err}");
+    let sibling = t.join("run-2");
+    assert!(
+        err.contains(&format!(
+            "the output folder {} appeared while this run was working",
+            out.display()
+        )) && err.contains(&format!("the results are in {}", sibling.display())),
+        "{err}"
+    );
+    assert!(
+        err.contains(&format!("results written to {}", sibling.display())),
+        "{err}"
+    );
+    assert_eq!(entries(&out), ["theirs.txt"]);
+    assert!(sibling.join("summary.json").is_file() && sibling.join(".footfall-run").is_file());
+    assert_eq!(entries(t), ["first", "init.json", "run", "run-2"]);
+}
+
+#[test]
 fn stale_staging_folders_of_dead_processes_are_cleaned_up() {
     let tmp = tempfile::tempdir().unwrap();
     let t = tmp.path();

@@ -188,6 +188,14 @@ pub fn main() -> ExitCode {
         Command::Diff(args) => diff::run(args, cli.quiet),
         Command::Report(args) => report::run(args, cli.quiet),
     };
+    // printed even with --quiet: the results are not where the command line said
+    for (target, went) in footfall::runfolder::take_relocations() {
+        eprintln!(
+            "warning: the output folder {} appeared while this run was working and is left as it is; the results are in {}",
+            target.display(),
+            went.display()
+        );
+    }
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(f) => {
