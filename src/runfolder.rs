@@ -31,9 +31,6 @@ const MARKER_TEXT: &str = "This folder was written by footfall; `--overwrite` ma
 const MANIFEST_HEADING: &str =
     "Written by footfall (`--overwrite` refuses a folder that holds anything else):";
 
-/// How many of a folder's own files a refusal names; the rest are counted.
-const NAMED_FILES: usize = 5;
-
 /// Most siblings (`NAME-2` … ) tried for a run whose target another process made meanwhile.
 const MAX_SIBLINGS: usize = 1000;
 
@@ -271,19 +268,6 @@ pub fn user_files(target: &Path) -> Result<Vec<String>, RunFolderError> {
         .collect())
 }
 
-/// The first [`NAMED_FILES`] of `entries`, quoted, and how many more there are.
-fn name_a_few(entries: &[String]) -> String {
-    let mut named: Vec<String> = entries
-        .iter()
-        .take(NAMED_FILES)
-        .map(|e| format!("'{e}'"))
-        .collect();
-    if entries.len() > NAMED_FILES {
-        named.push(format!("and {} more", entries.len() - NAMED_FILES));
-    }
-    named.join(", ")
-}
-
 /// Check that an existing `target` may be replaced: a folder footfall made (it holds the
 /// marker) holding nothing but what footfall wrote there, or an empty one, and not the
 /// current folder or one of its parents.
@@ -303,7 +287,9 @@ pub fn check_replaceable(target: &Path) -> Result<(), RunFolderError> {
         return Err(RunFolderError::UserFiles {
             path: target.to_path_buf(),
             count: users.len(),
-            named: name_a_few(&users),
+            named: crate::limits::first_few(
+                &users.iter().map(|u| format!("'{u}'")).collect::<Vec<_>>(),
+            ),
         });
     }
     let mut entries: Vec<String> = std::fs::read_dir(target)
