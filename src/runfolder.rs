@@ -10,7 +10,7 @@
 //! one of its parents, and the old folder is removed only after the new one is in place. Staging folders of processes that died
 //! (`kill -9`, a power cut) are removed by the next run with the same output folder.
 //! Staging folders of this process are registered, so that a Ctrl-C handler can remove
-//! them before exiting ([`remove_unfinished_and_exit`]). Every write into a staging folder
+//! them before exiting ([`remove_unfinished`]). Every write into a staging folder
 //! holds the same lock as that removal, so a second Ctrl-C during the writing of a run
 //! cannot leave a staging folder that a write made again after the removal.
 
@@ -108,25 +108,29 @@ fn unfinished() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
         .unwrap_or_else(|poisoned| poisoned.into_inner())
 }
 
-/// Remove every staging folder this process has created and not committed, and keep any
-/// other thread from committing one until the process exits: for a Ctrl-C handler that
-/// exits at once (the folders' `Drop` would not run).
-pub fn remove_unfinished_and_exit(code: i32) -> ! {
+/// Keeps other threads from writing into or committing a staging folder while held.
+pub struct NoWrites(#[allow(dead_code)] std::sync::MutexGuard<'static, Vec<PathBuf>>);
+
+/// Remove every staging folder this process has created and not committed; while the
+/// returned guard is held no other thread writes into or commits one: for a Ctrl-C
+/// handler that exits at once, holding it (the folders' `Drop` would not run).
+pub fn remove_unfinished() -> NoWrites {
     let mut list = unfinished();
     for p in list.drain(..) {
         let _ = std::fs::remove_dir_all(&p);
     }
-    std::process::exit(code)
+    NoWrites(list)
 }
 
 /// Prefix of the files that let a killed run be resumed (its command and the solver's
-/// checkpoints): they live in the staging folder and are removed when the run commits.
+/// checkpoints): they live in the staging folder and are removed when the run commits,
+/// unless a stop was asked ([`crate::interrupt`]): an interrupted run keeps them.
 pub const RESUME_PREFIX: &str = ".resume-";
 
 /// Write `dir/name` whole or not at all: written under a temporary name, then renamed.
 /// `name` may name a file in a subfolder (`inputs/model/x.json`); the subfolders are made.
 ///
-/// The write holds the lock of [`remove_unfinished_and_exit`]: it either completes before
+/// The write holds the lock of [`remove_unfinished`]: it either completes before
 /// an interrupt removes the staging folders, or never starts (the handler keeps the lock
 /// until the process exits), so it cannot make a removed folder again.
 pub fn write_atomic(dir: &Path, name: &str, bytes: &[u8]) -> Result<(), RunFolderError> {
@@ -401,20 +405,23 @@ impl RunFolder {
     pub fn commit(mut self) -> Result<PathBuf, RunFolderError> {
         let mut list = unfinished();
         let Some(pos) = list.iter().position(|p| p == &self.staging) else {
-            // removed by remove_unfinished_and_exit (an interrupt): nothing to commit
+            // removed by remove_unfinished (an interrupt): nothing to commit
             return Err(io(&self.staging)(std::io::Error::new(
                 std::io::ErrorKind::Interrupted,
                 "the run was interrupted",
             )));
         };
+        // an interrupted run keeps its checkpoints, for `--resume`
+        let keep_checkpoints = crate::interrupt::requested();
         for entry in std::fs::read_dir(&self.staging)
             .map_err(io(&self.staging))?
             .flatten()
         {
-            if entry
-                .file_name()
-                .to_string_lossy()
-                .starts_with(RESUME_PREFIX)
+            if !keep_checkpoints
+                && entry
+                    .file_name()
+                    .to_string_lossy()
+                    .starts_with(RESUME_PREFIX)
             {
                 std::fs::remove_file(entry.path()).map_err(io(&entry.path()))?;
             }

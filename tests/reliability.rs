@@ -1,8 +1,10 @@
 //! Never lose a user's files, leave nothing half-written, and continue a killed run:
-//! `--overwrite` replaces only footfall's own run folders; staging folders of dead
+//! `--overwrite` replaces only footfall's own run folders holding nothing else; a run
+//! whose output folder appeared meanwhile goes beside it; staging folders of dead
 //! processes are cleaned up; Ctrl-C during setup or a solve exits 130 with nothing
-//! half-written; a solve killed with SIGKILL resumes (`--resume`) to the same optimum,
-//! following the same iterates bit for bit.
+//! half-written, within two seconds even inside a long iteration; a solve killed with
+//! SIGKILL or interrupted resumes (`--resume`) to the same optimum, following the same
+//! iterates bit for bit.
 
 use crate::common;
 use common::stderr;
@@ -382,6 +384,134 @@ fn ctrl_c_twice_during_a_solve_exits_130_and_leaves_nothing() {
     }
 }
 
+/// Every line of the child's stderr, as it comes.
+fn stderr_lines(child: &mut Child) -> std::sync::mpsc::Receiver<String> {
+    let err = child.stderr.take().expect("piped stderr");
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(err).lines().map_while(Result::ok) {
+            let _ = tx.send(line);
+        }
+    });
+    rx
+}
+
+#[test]
+fn ctrl_c_inside_a_long_iteration_stops_the_track_within_two_seconds() {
+    let tmp = tempfile::tempdir().unwrap();
+    let t = tmp.path();
+    // 500 shooting intervals: the first evaluation alone takes many seconds
+    let phases = t.join("fine.json");
+    let mut v: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(root().join("phases/ellipse_walk.json")).unwrap(),
+    )
+    .unwrap();
+    v["phases"][1]["intervals"] = 120.into();
+    v["phases"][2]["intervals"] = 380.into();
+    std::fs::write(&phases, v.to_string()).unwrap();
+    let out = t.join("run");
+    let mut child = bin()
+        .args(["track", "--max-iter", "5", "--phases"])
+        .arg(&phases)
+        .arg("--out")
+        .arg(&out)
+        .current_dir(root())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn");
+    let rx = stderr_lines(&mut child);
+    let mut log = Vec::new();
+    // the line that opens the solve
+    loop {
+        let line = rx
+            .recv_timeout(Duration::from_secs(120))
+            .unwrap_or_else(|_| panic!("the solve did not start: {log:?}"));
+        let start = line.starts_with("tracking ");
+        log.push(line);
+        if start {
+            break;
+        }
+    }
+    // inside the first evaluation of the shooting intervals
+    std::thread::sleep(Duration::from_millis(1500));
+    assert!(child.try_wait().unwrap().is_none(), "{log:?}");
+    signal(&child, "-INT");
+    let sent = Instant::now();
+    let status = wait_with_limit(&mut child, Duration::from_secs(60));
+    let took = sent.elapsed();
+    log.extend(rx.try_iter());
+    assert_eq!(status.code(), Some(130), "{log:?}");
+    assert!(
+        took < Duration::from_millis(2500),
+        "exited {took:?} after the signal: {log:?}"
+    );
+    let log = log.join("\n");
+    assert!(log.contains("interrupted: stopping the solve"), "{log}");
+    assert!(
+        log.contains("the solver stopped without converging: interrupted (results written to"),
+        "{log}"
+    );
+    let summary = common::json(&out.join("summary.json"));
+    assert_eq!(summary["status"], "interrupted");
+    // the command line, for --resume
+    assert!(out.join(".resume-command.json").is_file());
+}
+
+#[test]
+fn an_interrupted_solve_resumes_from_its_run_folder_along_the_same_iterates() {
+    let args = [
+        "--problem",
+        &r("problems/five_link_biped.json"),
+        "--hessian",
+        "bfgs",
+        "--max-iter",
+        "25",
+    ];
+    let tmp = tempfile::tempdir().unwrap();
+    let whole = tmp.path().join("whole");
+    let stopped = tmp.path().join("stopped");
+    std::fs::create_dir_all(&whole).unwrap();
+    std::fs::create_dir_all(&stopped).unwrap();
+    let o = bin()
+        .args(["--quiet", "solve"])
+        .args(args)
+        .args(["--out", "run"])
+        .env("RAYON_NUM_THREADS", "1")
+        .current_dir(&whole)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    let mut child = bin()
+        .arg("solve")
+        .args(args)
+        .args(["--out", "run"])
+        .env("RAYON_NUM_THREADS", "1")
+        .current_dir(&stopped)
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn");
+    let lines = wait_for_line(
+        &mut child,
+        |l| l.trim_start().starts_with("3 "),
+        Duration::from_secs(120),
+    );
+    signal(&child, "-INT");
+    let status = wait_with_limit(&mut child, Duration::from_secs(60));
+    assert_eq!(status.code(), Some(130), "{lines:?}");
+    let run = stopped.join("run");
+    let (h, _, s) = iterates(&run);
+    assert_eq!(s, "\"interrupted\"");
+    assert!(h.len() < 26, "not interrupted: {} iterations", h.len());
+    assert!(run.join(".resume-checkpoint-0.json").is_file());
+    // --resume continues it in place, to the end the whole run reached
+    let o = resume(&stopped, "1");
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    assert_eq!(iterates(&whole.join("run")), iterates(&run));
+    assert_eq!(entries(&stopped), ["run"]);
+    assert!(entries(&run).iter().all(|e| !e.starts_with(".resume-")));
+}
+
 /// The iterate history (exact bits of every figure but the time) and the final variables
 /// of a `solve` run folder.
 fn iterates(run: &Path) -> (Vec<[u64; 4]>, Vec<u64>, String) {
@@ -510,7 +640,7 @@ fn a_killed_solve_resumes_along_the_same_iterates() {
         .all(|e| !e.starts_with(".resume-")));
     // nothing left to resume
     let o = resume(&killed, "1");
-    refused(&o, &["no killed run to resume"]);
+    refused(&o, &["no killed or interrupted run to resume"]);
 }
 
 #[test]
