@@ -229,6 +229,84 @@ fn a_solve_whose_output_folder_appeared_meanwhile_keeps_its_results_beside_it() 
     assert_eq!(entries(t), ["first", "init.json", "run", "run-2"]);
 }
 
+/// The status column of a run's CSV file: the header's second name and every row's value.
+fn status_column(csv: &Path) -> (String, Vec<String>) {
+    let text = std::fs::read_to_string(csv).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let values = lines
+        .map(|l| l.split(',').nth(1).unwrap_or_default().to_string())
+        .collect();
+    (header[1].to_string(), values)
+}
+
+#[test]
+fn an_unconverged_runs_files_say_so() {
+    let tmp = tempfile::tempdir().unwrap();
+    let run = tmp.path().join("run");
+    let o = bin()
+        .args(["--quiet", "track", "--max-iter", "0", "--out"])
+        .arg(&run)
+        .current_dir(root())
+        .output()
+        .expect("run footfall");
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    for csv in ["tracking.csv", "fine_grid.csv"] {
+        let (name, values) = status_column(&run.join(csv));
+        assert_eq!(name, "status", "{csv}");
+        assert!(
+            values.len() > 10 && values.iter().all(|v| v == "not converged"),
+            "{csv}: {values:?}"
+        );
+    }
+    let first_line = |f: &str| {
+        std::fs::read_to_string(run.join(f))
+            .unwrap()
+            .lines()
+            .next()
+            .unwrap()
+            .to_string()
+    };
+    for f in ["table3.md", "kinematics.sto", "film_strip.svg"] {
+        let line = first_line(f);
+        // "not converged" or "not converged, physically invalid"
+        assert!(
+            line.contains("not converged")
+                && line.contains("(iteration limit reached): the last iterate, not a solution"),
+            "{f}: {line}"
+        );
+    }
+    assert!(first_line("film_strip.svg").starts_with("<!-- "));
+    // footfall's own reader of the files takes the column: the runs side by side
+    let side = tmp.path().join("side");
+    let o = bin()
+        .args(["--quiet", "report"])
+        .args([&run, &run])
+        .arg("--out")
+        .arg(&side)
+        .current_dir(root())
+        .output()
+        .expect("run footfall");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let html = std::fs::read_to_string(side.join("report.html")).unwrap();
+    assert!(
+        html.contains("run (not converged"),
+        "the curves are not marked"
+    );
+    // a generic solve's table too
+    let o = bin()
+        .args(["--quiet", "solve", "--max-iter", "1", "--problem"])
+        .arg(r("problems/cartpole_swingup.json"))
+        .arg("--out")
+        .arg(tmp.path().join("solve"))
+        .output()
+        .expect("run footfall");
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    let (name, values) = status_column(&tmp.path().join("solve/solution.csv"));
+    assert_eq!(name, "status");
+    assert!(!values.is_empty() && values.iter().all(|v| v == "not converged"));
+}
+
 #[test]
 fn stale_staging_folders_of_dead_processes_are_cleaned_up() {
     let tmp = tempfile::tempdir().unwrap();
@@ -454,6 +532,9 @@ fn ctrl_c_inside_a_long_iteration_stops_the_track_within_two_seconds() {
     );
     let summary = common::json(&out.join("summary.json"));
     assert_eq!(summary["status"], "interrupted");
+    let (name, values) = status_column(&out.join("tracking.csv"));
+    assert_eq!(name, "status");
+    assert!(values.iter().all(|v| v == "interrupted"), "{values:?}");
     // the command line, for --resume
     assert!(out.join(".resume-command.json").is_file());
 }

@@ -1,5 +1,5 @@
-//! Process-wide state of one `footfall` invocation: Ctrl-C handling, the run folder's
-//! checkpoints, and resuming a killed run.
+//! Process-wide state of one `footfall` invocation: interruption, the run folder's
+//! checkpoints, and resuming a killed or interrupted run.
 //!
 //! * Interruption: a stop asked through [`crate::interrupt`] (the CLI's Ctrl-C handler)
 //!   ends a solve within a fraction of a second, inside an iteration too, at its last
@@ -133,8 +133,8 @@ impl Observer for Interruptible<'_> {
     }
 }
 
-/// Solve `nlp` from `w0`, stopping when asked ([`crate::interrupt`]), logging each iteration to stderr unless
-/// `progress`; checkpointed in a run folder made by [`create_checkpointed_run_folder`], and
+/// Solve `nlp` from `w0`, stopping when asked ([`crate::interrupt`]), logging each
+/// iteration to stderr unless `progress`; checkpointed in a run folder made by [`create_checkpointed_run_folder`], and
 /// continued from the killed run's checkpoint when resuming.
 pub fn solve_interruptibly(
     nlp: &dyn Nlp,
