@@ -20,7 +20,7 @@
 //! | [`integrate`] | the safe wrapper over CVODES (the only module with `unsafe`): integrators, forward sensitivities, dense output | — |
 //! | [`data`], [`controls`] | measured gait data (CSV, OpenSim storage files) and control tables | model, limits |
 //! | [`model`] | planar multibody dynamics, contact sets, impact maps, actuators, effects, JSON model specs | limits |
-//! | [`limits`], [`runfolder`], [`bundled`] | limits of plausible input; run folders that are complete or absent, their `setup.json` and `summary.json`; the files footfall ships with, compiled in | — |
+//! | [`limits`], [`runfolder`], [`bundled`], [`interrupt`] | limits of plausible input; run folders that are complete or absent, their `setup.json` and `summary.json`; the files footfall ships with, compiled in; the request to stop that the long loops read | — |
 //!
 //! `ocp`, `sqp` and `integrate` know nothing of gait: they solve the cart-pole and the
 //! five-link biped as well ([`problems`]' benchmark problems).
@@ -31,6 +31,7 @@ pub mod bundled;
 pub mod controls;
 pub mod data;
 pub mod integrate;
+pub mod interrupt;
 pub mod limits;
 pub mod model;
 pub mod ocp;

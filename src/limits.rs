@@ -25,8 +25,17 @@ pub const MAX_ETA: f64 = 1e3;
 pub const MAX_COORDINATE: f64 = 100.0;
 /// Largest magnitude of an initial generalised velocity (m/s or rad/s).
 pub const MAX_VELOCITY: f64 = 1e3;
-/// Most shooting intervals in one phase.
-pub const MAX_INTERVALS: usize = 10_000;
+/// Most shooting intervals in a phase sequence, all phases together: forty times the
+/// shipped cycles' 25 to 31; memory and the time of an iteration grow with the count.
+pub const MAX_INTERVALS: usize = 1_000;
+/// Longest phase (s), and longest phase sequence: a gait phase lasts under a second,
+/// and a simulation's samples and time grow with its length.
+pub const MAX_DURATION: f64 = 60.0;
+/// Most contact primitives in a foot file: a foot of spheres has a dozen; the contact
+/// bookkeeping grows with the square of the count.
+pub const MAX_PRIMITIVES: usize = 100;
+/// How many items a message lists before it counts the rest.
+pub const LISTED: usize = 5;
 /// Largest KKT tolerance a command accepts: the residual bounds the constraint violation
 /// (m, rad), and a looser one calls a start centimetres off its constraints converged.
 pub const MAX_KKT_TOL: f64 = 1e-2;
@@ -93,4 +102,14 @@ pub fn show(v: f64) -> String {
     } else {
         format!("{v:e}")
     }
+}
+
+/// The first [`LISTED`] of `items` joined by ", ", with "and N more" for the rest: a
+/// message quoting a list stays short however long the list.
+pub fn first_few<T: std::fmt::Display>(items: &[T]) -> String {
+    let mut out: Vec<String> = items.iter().take(LISTED).map(|i| i.to_string()).collect();
+    if items.len() > LISTED {
+        out.push(format!("and {} more", items.len() - LISTED));
+    }
+    out.join(", ")
 }

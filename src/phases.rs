@@ -2,7 +2,7 @@
 //! held for a duration) and instantaneous impact phases (the plastic impact map of the
 //! contacts that are active after it), as in Millard & Mombaur (2019), §3.3.
 
-use crate::limits::{show, MAX_COORDINATE, MAX_INTERVALS, MAX_VELOCITY};
+use crate::limits::{first_few, show, MAX_COORDINATE, MAX_DURATION, MAX_INTERVALS, MAX_VELOCITY};
 use crate::model::spec::read_json;
 use crate::model::{ConstraintSet, GaitModel, ModelError};
 use serde::{Deserialize, Serialize};
@@ -129,8 +129,8 @@ pub enum Phase {
         contacts: Vec<ContactUse>,
         /// Duration.
         duration: Duration,
-        /// Number of shooting intervals (used by optimal control; 1 to
-        /// [`MAX_INTERVALS`]).
+        /// Number of shooting intervals (used by optimal control; 1 or more, at most
+        /// [`MAX_INTERVALS`] in the whole sequence).
         #[serde(default = "one_interval")]
         intervals: usize,
         /// Event that ends the phase before its duration (forward simulation only; the
@@ -277,6 +277,7 @@ impl PhaseSequence {
                 "the sequence has no phase; list at least one continuous phase",
             ));
         }
+        let (mut total_intervals, mut total_s) = (0usize, 0.0);
         for (i, ph) in self.phases.iter().enumerate() {
             let f = |x: &str| format!("phases[{i}] ('{}').{x}", ph.name());
             if ph.name().trim().is_empty() {
@@ -306,14 +307,17 @@ impl PhaseSequence {
                         format!("must be 1 to {MAX_INTERVALS} shooting intervals, got {intervals}"),
                     ));
                 }
+                total_intervals += intervals;
+                total_s += duration.value();
                 let ok = match *duration {
-                    Duration::Fixed(v) => v.is_finite() && v > 0.0,
+                    Duration::Fixed(v) => v.is_finite() && v > 0.0 && v <= MAX_DURATION,
                     Duration::Free { initial, min, max } => {
                         min.is_finite()
                             && max.is_finite()
                             && min > 0.0
                             && min <= initial
                             && initial <= max
+                            && max <= MAX_DURATION
                     }
                 };
                 if !ok {
@@ -321,15 +325,32 @@ impl PhaseSequence {
                         path,
                         f("duration"),
                         format!(
-                            "must be a positive number of seconds, or {{initial, min, max}} with 0 < min ≤ initial ≤ max; got {}",
+                            "must be a positive number of seconds, at most {MAX_DURATION}, or {{initial, min, max}} with 0 < min ≤ initial ≤ max ≤ {MAX_DURATION}; got {}",
                             match *duration {
-                                Duration::Fixed(v) => format!("{v}"),
-                                Duration::Free { initial, min, max } => format!("{{initial: {initial}, min: {min}, max: {max}}}"),
+                                Duration::Fixed(v) => show(v),
+                                Duration::Free { initial, min, max } => format!("{{initial: {}, min: {}, max: {}}}", show(initial), show(min), show(max)),
                             }
                         ),
                     ));
                 }
             }
+        }
+        if total_intervals > MAX_INTERVALS {
+            return Err(ModelError::invalid(
+                path,
+                "phases[*].intervals",
+                format!("the phases' shooting intervals must add up to at most {MAX_INTERVALS}, got {total_intervals}"),
+            ));
+        }
+        if total_s > MAX_DURATION {
+            return Err(ModelError::invalid(
+                path,
+                "phases[*].duration",
+                format!(
+                    "the phases' durations must add up to at most {MAX_DURATION} s, got {} s",
+                    show(total_s)
+                ),
+            ));
         }
         self.check_impacts(path)
     }
@@ -460,7 +481,7 @@ impl PhaseSequence {
                                 ph.name(),
                                 c.contact,
                                 model.foot_name,
-                                known.join(", ")
+                                first_few(&known)
                             ),
                         ));
                     }
@@ -482,7 +503,7 @@ impl PhaseSequence {
                                 ph.name(),
                                 end.touchdown,
                                 model.foot_name,
-                                known.join(", ")
+                                first_few(&known)
                             ),
                         ));
                     }

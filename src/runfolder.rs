@@ -2,13 +2,15 @@
 //!
 //! Files are written into a hidden sibling staging folder `.NAME.partial-PID`;
 //! [`RunFolder::commit`] renames it into place as the last step, so a failed or interrupted
-//! run never leaves a folder that looks complete. Every folder footfall writes holds a
-//! marker file ([`MARKER`]); `--overwrite` replaces only a folder that holds it (or an
-//! empty one), never the current folder or one of its parents, and the old folder is
-//! removed only after the new one is in place. Staging folders of processes that died
+//! run never leaves a folder that looks complete. A target that another process made
+//! meanwhile is left alone: the run goes to the first free sibling `NAME-2`, `NAME-3`, …
+//! ([`take_relocations`] tells which). Every folder footfall writes holds a marker file
+//! ([`MARKER`]) listing the files footfall wrote there; `--overwrite` replaces only a
+//! folder that holds it and nothing else (or an empty one), never the current folder or
+//! one of its parents, and the old folder is removed only after the new one is in place. Staging folders of processes that died
 //! (`kill -9`, a power cut) are removed by the next run with the same output folder.
 //! Staging folders of this process are registered, so that a Ctrl-C handler can remove
-//! them before exiting ([`remove_unfinished_and_exit`]). Every write into a staging folder
+//! them before exiting ([`remove_unfinished`]). Every write into a staging folder
 //! holds the same lock as that removal, so a second Ctrl-C during the writing of a run
 //! cannot leave a staging folder that a write made again after the removal.
 
@@ -20,8 +22,17 @@ use std::sync::Mutex;
 /// replaces only folders that hold it.
 pub const MARKER: &str = ".footfall-run";
 
-/// Contents of the marker (constant, so that identical runs write identical folders).
+/// First line of the marker.
 const MARKER_TEXT: &str = "This folder was written by footfall; `--overwrite` may replace it.\n";
+
+/// The line of a committed folder's marker before the list of what footfall wrote there,
+/// one path a line (folders end in `/`); the list depends on the files only, so that
+/// identical runs write identical folders.
+const MANIFEST_HEADING: &str =
+    "Written by footfall (`--overwrite` refuses a folder that holds anything else):";
+
+/// Most siblings (`NAME-2` … ) tried for a run whose target another process made meanwhile.
+const MAX_SIBLINGS: usize = 1000;
 
 /// Failure to write a run folder.
 #[derive(Debug, thiserror::Error)]
@@ -40,6 +51,22 @@ pub enum RunFolderError {
         /// One of the entries it holds.
         entry: String,
     },
+    /// `--overwrite` was asked for a run folder that holds files footfall did not write.
+    #[error(
+        "output folder {path} holds {count} file(s) footfall did not write ({named}): \
+         --overwrite would delete them, so nothing was replaced; move them out of the folder or choose another --out"
+    )]
+    UserFiles {
+        /// The target.
+        path: PathBuf,
+        /// How many entries are not footfall's.
+        count: usize,
+        /// The first few of them, quoted, with "and N more" where there are more.
+        named: String,
+    },
+    /// No free sibling was found for a run whose target another process made meanwhile.
+    #[error("output folder {0} and its siblings {0}-2 … -{MAX_SIBLINGS} all exist: the results could not be placed; choose another --out")]
+    NoFreeSibling(PathBuf),
     /// The target is the current folder or one of its parents.
     #[error("output folder {0} is the current folder or one of its parents: it cannot be replaced; choose another --out")]
     HoldsCurrentFolder(PathBuf),
@@ -81,25 +108,29 @@ fn unfinished() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
         .unwrap_or_else(|poisoned| poisoned.into_inner())
 }
 
-/// Remove every staging folder this process has created and not committed, and keep any
-/// other thread from committing one until the process exits: for a Ctrl-C handler that
-/// exits at once (the folders' `Drop` would not run).
-pub fn remove_unfinished_and_exit(code: i32) -> ! {
+/// Keeps other threads from writing into or committing a staging folder while held.
+pub struct NoWrites(#[allow(dead_code)] std::sync::MutexGuard<'static, Vec<PathBuf>>);
+
+/// Remove every staging folder this process has created and not committed; while the
+/// returned guard is held no other thread writes into or commits one: for a Ctrl-C
+/// handler that exits at once, holding it (the folders' `Drop` would not run).
+pub fn remove_unfinished() -> NoWrites {
     let mut list = unfinished();
     for p in list.drain(..) {
         let _ = std::fs::remove_dir_all(&p);
     }
-    std::process::exit(code)
+    NoWrites(list)
 }
 
 /// Prefix of the files that let a killed run be resumed (its command and the solver's
-/// checkpoints): they live in the staging folder and are removed when the run commits.
+/// checkpoints): they live in the staging folder and are removed when the run commits,
+/// unless a stop was asked ([`crate::interrupt`]): an interrupted run keeps them.
 pub const RESUME_PREFIX: &str = ".resume-";
 
 /// Write `dir/name` whole or not at all: written under a temporary name, then renamed.
 /// `name` may name a file in a subfolder (`inputs/model/x.json`); the subfolders are made.
 ///
-/// The write holds the lock of [`remove_unfinished_and_exit`]: it either completes before
+/// The write holds the lock of [`remove_unfinished`]: it either completes before
 /// an interrupt removes the staging folders, or never starts (the handler keeps the lock
 /// until the process exits), so it cannot make a removed folder again.
 pub fn write_atomic(dir: &Path, name: &str, bytes: &[u8]) -> Result<(), RunFolderError> {
@@ -178,8 +209,72 @@ fn holds_current_folder(target: &Path) -> bool {
     cwd.starts_with(&t)
 }
 
+/// Every entry under `dir`, as paths relative to it with `/` between components (folders
+/// end in `/`), sorted; the marker at the top is left out.
+fn tree(dir: &Path) -> Result<Vec<String>, RunFolderError> {
+    fn walk(dir: &Path, prefix: &str, out: &mut Vec<String>) -> Result<(), RunFolderError> {
+        for entry in std::fs::read_dir(dir).map_err(io(dir))?.flatten() {
+            let name = format!("{prefix}{}", entry.file_name().to_string_lossy());
+            // a symbolic link is an entry of its own, never followed
+            let is_dir = entry.file_type().map(|t| t.is_dir()).unwrap_or(false);
+            if is_dir {
+                out.push(format!("{name}/"));
+                walk(&entry.path(), &format!("{name}/"), out)?;
+            } else if name != MARKER {
+                out.push(name);
+            }
+        }
+        Ok(())
+    }
+    let mut out = Vec::new();
+    walk(dir, "", &mut out)?;
+    out.sort();
+    Ok(out)
+}
+
+/// The marker's text for a folder holding `entries` (see [`MANIFEST_HEADING`]).
+fn marker_with_manifest(entries: &[String]) -> String {
+    let mut text = format!("{MARKER_TEXT}{MANIFEST_HEADING}\n");
+    for e in entries {
+        text.push_str(e);
+        text.push('\n');
+    }
+    text
+}
+
+/// What the marker of `target` lists as footfall's, or None for a marker without a list
+/// (a folder being staged, or one written before footfall listed its files).
+fn manifest(target: &Path) -> Option<std::collections::BTreeSet<String>> {
+    let text = std::fs::read_to_string(target.join(MARKER)).ok()?;
+    let (_, list) = text.split_once(&format!("{MANIFEST_HEADING}\n"))?;
+    Some(list.lines().map(str::to_string).collect())
+}
+
+/// The entries of a marked `target` that its marker does not list: files a user put
+/// into footfall's run folder.
+pub fn user_files(target: &Path) -> Result<Vec<String>, RunFolderError> {
+    let Some(listed) = manifest(target) else {
+        return Ok(Vec::new());
+    };
+    let unlisted: Vec<String> = tree(target)?
+        .into_iter()
+        .filter(|e| !listed.contains(e))
+        .collect();
+    // a user's folder is named once, not with everything inside it
+    Ok(unlisted
+        .iter()
+        .filter(|e| {
+            !unlisted
+                .iter()
+                .any(|f| f.ends_with('/') && f != *e && e.starts_with(f.as_str()))
+        })
+        .cloned()
+        .collect())
+}
+
 /// Check that an existing `target` may be replaced: a folder footfall made (it holds the
-/// marker) or an empty one, and not the current folder or one of its parents.
+/// marker) holding nothing but what footfall wrote there, or an empty one, and not the
+/// current folder or one of its parents.
 pub fn check_replaceable(target: &Path) -> Result<(), RunFolderError> {
     let meta = std::fs::symlink_metadata(target).map_err(io(target))?;
     if !meta.is_dir() {
@@ -189,7 +284,17 @@ pub fn check_replaceable(target: &Path) -> Result<(), RunFolderError> {
         return Err(RunFolderError::HoldsCurrentFolder(target.to_path_buf()));
     }
     if target.join(MARKER).is_file() {
-        return Ok(());
+        let users = user_files(target)?;
+        if users.is_empty() {
+            return Ok(());
+        }
+        return Err(RunFolderError::UserFiles {
+            path: target.to_path_buf(),
+            count: users.len(),
+            named: crate::limits::first_few(
+                &users.iter().map(|u| format!("'{u}'")).collect::<Vec<_>>(),
+            ),
+        });
     }
     let mut entries: Vec<String> = std::fs::read_dir(target)
         .map_err(io(target))?
@@ -204,6 +309,35 @@ pub fn check_replaceable(target: &Path) -> Result<(), RunFolderError> {
             entry: format!("'{e}'"),
         }),
     }
+}
+
+/// Run folders committed to a sibling because their target appeared meanwhile: (target,
+/// where the run went).
+static RELOCATED: Mutex<Vec<(PathBuf, PathBuf)>> = Mutex::new(Vec::new());
+
+/// The run folders of this process that went to a sibling of their target because
+/// another process made the target while the run was working, as (target, sibling); the
+/// list is emptied.
+pub fn take_relocations() -> Vec<(PathBuf, PathBuf)> {
+    std::mem::take(&mut *RELOCATED.lock().unwrap_or_else(|p| p.into_inner()))
+}
+
+/// The `n`-th sibling of `target` (`NAME-n`).
+fn sibling(target: &Path, n: usize) -> PathBuf {
+    let (name, parent) = name_and_parent(target);
+    let sibling = format!("{name}-{n}");
+    match target.parent().filter(|p| !p.as_os_str().is_empty()) {
+        Some(_) => parent.join(sibling),
+        None => PathBuf::from(sibling),
+    }
+}
+
+/// How [`RunFolder::place`] went.
+enum Placement {
+    /// The run is in place; a folder it replaced was moved to this path, to be removed.
+    Placed(Option<PathBuf>),
+    /// The path is taken by a folder that is not to be replaced.
+    Taken,
 }
 
 impl RunFolder {
@@ -263,60 +397,105 @@ impl RunFolder {
     }
 
     /// Move the folder into place. A folder it replaces is moved aside first and removed
-    /// only once the new one is in place (it is moved back if that fails).
+    /// only once the new one is in place (it is moved back if that fails). A target that
+    /// appeared meanwhile and may not be replaced (`--overwrite` not given, or a folder
+    /// that is not footfall's alone) is left as it is: the run goes to the first free
+    /// sibling `NAME-2`, `NAME-3`, …, recorded for [`take_relocations`]. Returns where the
+    /// run is.
     pub fn commit(mut self) -> Result<PathBuf, RunFolderError> {
         let mut list = unfinished();
         let Some(pos) = list.iter().position(|p| p == &self.staging) else {
-            // removed by remove_unfinished_and_exit (an interrupt): nothing to commit
+            // removed by remove_unfinished (an interrupt): nothing to commit
             return Err(io(&self.staging)(std::io::Error::new(
                 std::io::ErrorKind::Interrupted,
                 "the run was interrupted",
             )));
         };
+        // an interrupted run keeps its checkpoints, for `--resume`
+        let keep_checkpoints = crate::interrupt::requested();
         for entry in std::fs::read_dir(&self.staging)
             .map_err(io(&self.staging))?
             .flatten()
         {
-            if entry
-                .file_name()
-                .to_string_lossy()
-                .starts_with(RESUME_PREFIX)
+            if !keep_checkpoints
+                && entry
+                    .file_name()
+                    .to_string_lossy()
+                    .starts_with(RESUME_PREFIX)
             {
                 std::fs::remove_file(entry.path()).map_err(io(&entry.path()))?;
             }
         }
-        let mut aside = None;
-        if std::fs::symlink_metadata(&self.target).is_ok() {
-            if !self.overwrite {
-                return Err(RunFolderError::Exists(self.target.clone()));
+        // under the lock already held: written directly
+        let marker = marker_with_manifest(&tree(&self.staging)?);
+        let tmp = self.staging.join(format!(".{MARKER}.tmp"));
+        std::fs::write(&tmp, marker).map_err(io(&tmp))?;
+        std::fs::rename(&tmp, self.staging.join(MARKER)).map_err(io(&self.staging))?;
+        let mut dest = self.target.clone();
+        let mut n = 1;
+        let aside = loop {
+            match self.place(&dest, n == 1 && self.overwrite)? {
+                Placement::Placed(aside) => break aside,
+                Placement::Taken if n < MAX_SIBLINGS => {
+                    n += 1;
+                    dest = sibling(&self.target, n);
+                }
+                Placement::Taken => return Err(RunFolderError::NoFreeSibling(self.target.clone())),
             }
-            check_replaceable(&self.target)?;
-            let (name, parent) = name_and_parent(&self.target);
+        };
+        list.remove(pos);
+        self.committed = true;
+        drop(list);
+        if dest != self.target {
+            RELOCATED
+                .lock()
+                .unwrap_or_else(|p| p.into_inner())
+                .push((self.target.clone(), dest.clone()));
+        }
+        if let Some(old) = aside {
+            std::fs::remove_dir_all(&old).map_err(io(&old))?;
+        }
+        Ok(dest)
+    }
+
+    /// Rename the staging folder to `dest`, replacing a folder there if `replace` is set
+    /// and it may be replaced ([`check_replaceable`]).
+    fn place(&self, dest: &Path, replace: bool) -> Result<Placement, RunFolderError> {
+        let mut aside = None;
+        if std::fs::symlink_metadata(dest).is_ok() {
+            if !replace || check_replaceable(dest).is_err() {
+                return Ok(Placement::Taken);
+            }
+            let (name, parent) = name_and_parent(dest);
             let old = parent.join(format!(".{name}.old-{}", std::process::id()));
             if old.exists() {
                 std::fs::remove_dir_all(&old).map_err(io(&old))?;
             }
-            // an empty folder gets the marker, so a crash before the removal below leaves
-            // a folder the next run recognises as its own
-            if !self.target.join(MARKER).exists() {
-                std::fs::write(self.target.join(MARKER), MARKER_TEXT).map_err(io(&self.target))?;
+            // an empty folder gets the marker, so a crash before the removal leaves a
+            // folder the next run recognises as its own
+            if !dest.join(MARKER).exists() {
+                std::fs::write(dest.join(MARKER), MARKER_TEXT).map_err(io(dest))?;
             }
-            std::fs::rename(&self.target, &old).map_err(io(&self.target))?;
+            std::fs::rename(dest, &old).map_err(io(dest))?;
             aside = Some(old);
         }
-        if let Err(e) = std::fs::rename(&self.staging, &self.target) {
-            if let Some(old) = &aside {
-                let _ = std::fs::rename(old, &self.target);
+        match std::fs::rename(&self.staging, dest) {
+            Ok(()) => Ok(Placement::Placed(aside)),
+            Err(e) => {
+                if let Some(old) = &aside {
+                    let _ = std::fs::rename(old, dest);
+                }
+                // a folder that another process made between the check and the rename
+                match e.kind() {
+                    std::io::ErrorKind::DirectoryNotEmpty | std::io::ErrorKind::AlreadyExists
+                        if aside.is_none() =>
+                    {
+                        Ok(Placement::Taken)
+                    }
+                    _ => Err(io(dest)(e)),
+                }
             }
-            return Err(io(&self.target)(e));
         }
-        list.remove(pos);
-        self.committed = true;
-        drop(list);
-        if let Some(old) = aside {
-            std::fs::remove_dir_all(&old).map_err(io(&old))?;
-        }
-        Ok(self.target.clone())
     }
 }
 
@@ -501,6 +680,82 @@ mod tests {
             std::fs::read(staging.join("inputs/model.json")).unwrap(),
             b"{}"
         );
+    }
+
+    /// A finished run whose target another process made between the start and the
+    /// commit goes to the first free sibling, leaving the other folder as it is.
+    #[test]
+    fn a_target_made_meanwhile_sends_the_run_to_the_first_free_sibling() {
+        let tmp = tempfile::tempdir().unwrap();
+        let t = tmp.path();
+        for (overwrite, name, taken, want) in [
+            (false, "run", &["run", "run-2"][..], "run-3"),
+            (true, "other", &["other"][..], "other-2"),
+        ] {
+            let target = t.join(name);
+            let f = RunFolder::create(&target, overwrite).unwrap();
+            f.write("summary.json", b"{}").unwrap();
+            // made meanwhile, by someone else
+            for d in taken {
+                std::fs::create_dir(t.join(d)).unwrap();
+                std::fs::write(t.join(d).join("theirs.txt"), "theirs").unwrap();
+            }
+            let went = f.commit().unwrap();
+            assert_eq!(went, t.join(want));
+            assert_eq!(std::fs::read(went.join("summary.json")).unwrap(), b"{}");
+            for d in taken {
+                assert_eq!(
+                    std::fs::read_to_string(t.join(d).join("theirs.txt")).unwrap(),
+                    "theirs"
+                );
+            }
+            assert_eq!(take_relocations(), vec![(target, t.join(want))]);
+        }
+        let mut left = std::fs::read_dir(t)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().into_string().unwrap())
+            .collect::<Vec<_>>();
+        left.sort();
+        assert_eq!(
+            left,
+            ["other", "other-2", "run", "run-2", "run-3"],
+            "a staging folder left behind"
+        );
+    }
+
+    /// The marker lists what footfall wrote; `--overwrite` refuses a folder holding
+    /// anything else, naming a few entries and counting the rest, and deletes nothing.
+    #[test]
+    fn overwrite_refuses_a_run_folder_holding_a_user_file() {
+        let tmp = tempfile::tempdir().unwrap();
+        let target = tmp.path().join("run");
+        let f = RunFolder::create(&target, false).unwrap();
+        f.write("inputs/model.json", b"{}").unwrap();
+        f.write("summary.json", b"{}").unwrap();
+        f.commit().unwrap();
+        // footfall's own files alone: replaceable
+        check_replaceable(&target).unwrap();
+        std::fs::write(target.join("inputs/notes.txt"), "mine").unwrap();
+        std::fs::create_dir(target.join("mine")).unwrap();
+        for k in 0..7 {
+            std::fs::write(target.join(format!("mine/{k}.txt")), "mine").unwrap();
+            std::fs::write(target.join(format!("z{k}.txt")), "mine").unwrap();
+        }
+        let e = RunFolder::create(&target, true).unwrap_err().to_string();
+        assert!(
+            e.contains("holds 9 file(s) footfall did not write ('inputs/notes.txt', 'mine/', 'z0.txt', 'z1.txt', 'z2.txt', and 4 more)"),
+            "{e}"
+        );
+        assert!(e.len() < 400, "{e}");
+        assert!(target.join("inputs/notes.txt").is_file() && target.join("summary.json").is_file());
+        // once the user's files are gone, the run folder is replaced again
+        std::fs::remove_file(target.join("inputs/notes.txt")).unwrap();
+        std::fs::remove_dir_all(target.join("mine")).unwrap();
+        for k in 0..7 {
+            std::fs::remove_file(target.join(format!("z{k}.txt"))).unwrap();
+        }
+        RunFolder::create(&target, true).unwrap().commit().unwrap();
+        assert!(!target.join("summary.json").exists());
     }
 
     #[test]

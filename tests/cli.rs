@@ -298,8 +298,8 @@ fn invalid_integrator_tolerance_is_refused() {
     assert!(entries(tmp.path()).is_empty());
 }
 
-/// Ctrl-C during `footfall track` stops after the current iteration and still writes a
-/// complete run folder from the last accepted iterate, with the stop reason saying so.
+/// Ctrl-C during `footfall track` stops the solve and still writes a complete run folder
+/// from the last accepted iterate, with the stop reason saying so.
 #[test]
 fn track_interrupted_by_ctrl_c_writes_the_last_iterate() {
     let tmp = tempfile::tempdir().unwrap();

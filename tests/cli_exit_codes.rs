@@ -238,10 +238,122 @@ fn an_absurd_phase_file_is_bad_input() {
         &[
             "p.json",
             "phases[0] ('single_stance_r').intervals",
-            "1 to 10000",
+            "1 to 1000",
             "got 1000000",
         ],
     );
+    assert!(!out.exists());
+}
+
+/// `simulate` of the bundled step with its phase file edited by `edit`: the result.
+fn simulate_edited_phases(edit: impl Fn(&mut serde_json::Value)) -> (Output, PathBuf) {
+    let tmp = tempfile::tempdir().unwrap().keep();
+    let p = tmp.join("p.json");
+    let text = std::fs::read_to_string(root().join("phases/sim_ellipse_step.json")).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    edit(&mut v);
+    std::fs::write(&p, v.to_string()).unwrap();
+    let out = tmp.join("run");
+    let o = footfall(&[
+        "simulate",
+        "--phase-set",
+        s(&p),
+        "--out",
+        s(&out),
+        "--quiet",
+    ]);
+    (o, out)
+}
+
+#[test]
+fn a_phase_sequence_of_too_many_intervals_in_all_is_bad_input() {
+    let (o, out) = simulate_edited_phases(|v| {
+        v["phases"][0]["intervals"] = 600.into();
+        v["phases"][2]["intervals"] = 600.into();
+    });
+    let err = assert_exit(
+        &o,
+        1,
+        &["p.json", "phases[*].intervals", "at most 1000", "got 1200"],
+    );
+    assert!(err.len() < 300, "{err}");
+    assert!(!out.exists());
+    std::fs::remove_dir_all(out.parent().unwrap()).unwrap();
+}
+
+#[test]
+fn a_phase_of_a_billion_seconds_is_bad_input() {
+    let (o, out) = simulate_edited_phases(|v| v["phases"][0]["duration"] = 1e9.into());
+    let err = assert_exit(
+        &o,
+        1,
+        &[
+            "p.json",
+            "phases[0] ('single_stance_r').duration",
+            "positive number of seconds, at most 60",
+            "got 1e9",
+        ],
+    );
+    assert!(err.len() < 300, "{err}");
+    // each phase within the limit, the sequence beyond it
+    let (o, _) = simulate_edited_phases(|v| {
+        v["phases"][0]["duration"] = 40.0.into();
+        v["phases"][2]["duration"] = 40.0.into();
+    });
+    assert_exit(&o, 1, &["phases[*].duration", "at most 60 s", "got 80 s"]);
+    assert!(!out.exists());
+    std::fs::remove_dir_all(out.parent().unwrap()).unwrap();
+}
+
+/// A foot file of `n` circles named `p0`, `p1`, …
+fn foot_of_circles(path: &Path, n: usize) {
+    let prims: Vec<String> = (0..n)
+        .map(|k| {
+            format!(
+                r#"{{"name":"p{k}","shape":{{"type":"circle","centre":[0.0,-0.08],"radius":0.03}}}}"#
+            )
+        })
+        .collect();
+    let text = format!(r#"{{"name":"many","primitives":[{}]}}"#, prims.join(","));
+    std::fs::write(path, text).unwrap();
+}
+
+#[test]
+fn a_foot_of_300000_primitives_is_refused_at_once_in_a_short_message() {
+    let tmp = tempfile::tempdir().unwrap();
+    let foot = tmp.path().join("many.json");
+    let out = tmp.path().join("run");
+    foot_of_circles(&foot, 300_000);
+    let start = std::time::Instant::now();
+    let sim = |foot: &Path| {
+        footfall(&[
+            "simulate",
+            "--foot",
+            s(foot),
+            "--phase-set",
+            "phases/sim_ellipse_step.json",
+            "--out",
+            s(&out),
+            "--quiet",
+        ])
+    };
+    let o = sim(&foot);
+    let err = assert_exit(
+        &o,
+        1,
+        &["many.json", "primitives", "1 to 100", "got 300000"],
+    );
+    assert!(err.len() < 300, "{err}");
+    assert!(start.elapsed().as_secs() < 20, "took {:?}", start.elapsed());
+    // at the limit the foot is read, and a phase file naming a contact it lacks lists a
+    // few of its 200 contacts and counts the rest
+    foot_of_circles(&foot, 100);
+    let err = assert_exit(
+        &sim(&foot),
+        1,
+        &["unknown contact 'r.sole'", "r.p0, r.p1", "and 195 more"],
+    );
+    assert!(err.len() < 400, "{err}");
     assert!(!out.exists());
 }
 

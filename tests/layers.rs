@@ -17,7 +17,7 @@ const LAYERS: [&[&str]; 10] = [
     &["integrate"],
     &["data", "controls"],
     &["model"],
-    &["limits", "runfolder", "bundled"],
+    &["limits", "runfolder", "bundled", "interrupt"],
 ];
 
 /// Uses within one layer that the map allows: `simulate` runs `phases`' sequences.

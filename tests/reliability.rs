@@ -1,8 +1,10 @@
 //! Never lose a user's files, leave nothing half-written, and continue a killed run:
-//! `--overwrite` replaces only footfall's own run folders; staging folders of dead
+//! `--overwrite` replaces only footfall's own run folders holding nothing else; a run
+//! whose output folder appeared meanwhile goes beside it; staging folders of dead
 //! processes are cleaned up; Ctrl-C during setup or a solve exits 130 with nothing
-//! half-written; a solve killed with SIGKILL resumes (`--resume`) to the same optimum,
-//! following the same iterates bit for bit.
+//! half-written, within two seconds even inside a long iteration; a solve killed with
+//! SIGKILL or interrupted resumes (`--resume`) to the same optimum, following the same
+//! iterates bit for bit.
 
 use crate::common;
 use common::stderr;
@@ -120,6 +122,189 @@ fn overwrite_refuses_a_foreign_folder_the_current_folder_and_a_file() {
         "not replaced"
     );
     assert_eq!(entries(t), ["mine", "notes.txt", "run"]);
+}
+
+#[test]
+fn overwrite_refuses_a_run_folder_holding_a_users_file_and_deletes_nothing() {
+    let tmp = tempfile::tempdir().unwrap();
+    let t = tmp.path();
+    let o = simulate(t, "run", &[]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let run = t.join("run");
+    let before = std::fs::read(run.join("summary.json")).unwrap();
+    std::fs::write(run.join("notes.txt"), "mine").unwrap();
+    refused(
+        &simulate(t, "run", &["--overwrite", "--dt", "0.002"]),
+        &[
+            "run",
+            "footfall did not write",
+            "'notes.txt'",
+            "nothing was replaced",
+        ],
+    );
+    assert_eq!(
+        std::fs::read_to_string(run.join("notes.txt")).unwrap(),
+        "mine"
+    );
+    assert_eq!(std::fs::read(run.join("summary.json")).unwrap(), before);
+    assert_eq!(
+        entries(&run),
+        [
+            ".footfall-run",
+            "notes.txt",
+            "summary.json",
+            "timeseries.csv"
+        ]
+    );
+    assert_eq!(entries(t), ["run"], "something was left behind");
+    // moved out, the run folder is footfall's alone and replaced
+    std::fs::remove_file(run.join("notes.txt")).unwrap();
+    let o = simulate(t, "run", &["--overwrite", "--dt", "0.002"]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_ne!(std::fs::read(run.join("summary.json")).unwrap(), before);
+}
+
+#[test]
+fn a_solve_whose_output_folder_appeared_meanwhile_keeps_its_results_beside_it() {
+    let tmp = tempfile::tempdir().unwrap();
+    let t = tmp.path();
+    // a start for `--init`
+    let first = t.join("first");
+    let o = bin()
+        .args(["--quiet", "track", "--max-iter", "0", "--out"])
+        .arg(&first)
+        .current_dir(root())
+        .output()
+        .expect("run footfall");
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    // the run reads --init from a FIFO after making its staging folder: it is held there
+    // while the output folder appears
+    let fifo = t.join("init.json");
+    assert!(Command::new("mkfifo")
+        .arg(&fifo)
+        .status()
+        .expect("mkfifo")
+        .success());
+    let out = t.join("run");
+    let child = bin()
+        .args(["track", "--max-iter", "0", "--init"])
+        .arg(&fifo)
+        .arg("--out")
+        .arg(&out)
+        .current_dir(root())
+        .stderr(Stdio::piped())
+        .stdout(Stdio::null())
+        .spawn()
+        .expect("spawn");
+    let staging = t.join(format!(".run.partial-{}", child.id()));
+    let start = Instant::now();
+    while !staging.exists() {
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "no staging folder"
+        );
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    std::fs::create_dir(&out).unwrap();
+    std::fs::write(out.join("theirs.txt"), "theirs").unwrap();
+    std::fs::write(&fifo, std::fs::read(first.join("solution.json")).unwrap()).unwrap();
+    let o = child.wait_with_output().expect("wait");
+    let err = stderr(&o);
+    // the exit code of the run itself: the iteration limit
+    assert_eq!(o.status.code(), Some(3), "{err}");
+    let sibling = t.join("run-2");
+    assert!(
+        err.contains(&format!(
+            "the output folder {} appeared while this run was working",
+            out.display()
+        )) && err.contains(&format!("the results are in {}", sibling.display())),
+        "{err}"
+    );
+    assert!(
+        err.contains(&format!("results written to {}", sibling.display())),
+        "{err}"
+    );
+    assert_eq!(entries(&out), ["theirs.txt"]);
+    assert!(sibling.join("summary.json").is_file() && sibling.join(".footfall-run").is_file());
+    assert_eq!(entries(t), ["first", "init.json", "run", "run-2"]);
+}
+
+/// The status column of a run's CSV file: the header's second name and every row's value.
+fn status_column(csv: &Path) -> (String, Vec<String>) {
+    let text = std::fs::read_to_string(csv).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let values = lines
+        .map(|l| l.split(',').nth(1).unwrap_or_default().to_string())
+        .collect();
+    (header[1].to_string(), values)
+}
+
+#[test]
+fn an_unconverged_runs_files_say_so() {
+    let tmp = tempfile::tempdir().unwrap();
+    let run = tmp.path().join("run");
+    let o = bin()
+        .args(["--quiet", "track", "--max-iter", "0", "--out"])
+        .arg(&run)
+        .current_dir(root())
+        .output()
+        .expect("run footfall");
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    for csv in ["tracking.csv", "fine_grid.csv"] {
+        let (name, values) = status_column(&run.join(csv));
+        assert_eq!(name, "status", "{csv}");
+        assert!(
+            values.len() > 10 && values.iter().all(|v| v == "not converged"),
+            "{csv}: {values:?}"
+        );
+    }
+    let first_line = |f: &str| {
+        std::fs::read_to_string(run.join(f))
+            .unwrap()
+            .lines()
+            .next()
+            .unwrap()
+            .to_string()
+    };
+    for f in ["table3.md", "kinematics.sto", "film_strip.svg"] {
+        let line = first_line(f);
+        // "not converged" or "not converged, physically invalid"
+        assert!(
+            line.contains("not converged")
+                && line.contains("(iteration limit reached): the last iterate, not a solution"),
+            "{f}: {line}"
+        );
+    }
+    assert!(first_line("film_strip.svg").starts_with("<!-- "));
+    // footfall's own reader of the files takes the column: the runs side by side
+    let side = tmp.path().join("side");
+    let o = bin()
+        .args(["--quiet", "report"])
+        .args([&run, &run])
+        .arg("--out")
+        .arg(&side)
+        .current_dir(root())
+        .output()
+        .expect("run footfall");
+    assert!(o.status.success(), "{}", stderr(&o));
+    let html = std::fs::read_to_string(side.join("report.html")).unwrap();
+    assert!(
+        html.contains("run (not converged"),
+        "the curves are not marked"
+    );
+    // a generic solve's table too
+    let o = bin()
+        .args(["--quiet", "solve", "--max-iter", "1", "--problem"])
+        .arg(r("problems/cartpole_swingup.json"))
+        .arg("--out")
+        .arg(tmp.path().join("solve"))
+        .output()
+        .expect("run footfall");
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    let (name, values) = status_column(&tmp.path().join("solve/solution.csv"));
+    assert_eq!(name, "status");
+    assert!(!values.is_empty() && values.iter().all(|v| v == "not converged"));
 }
 
 #[test]
@@ -277,6 +462,137 @@ fn ctrl_c_twice_during_a_solve_exits_130_and_leaves_nothing() {
     }
 }
 
+/// Every line of the child's stderr, as it comes.
+fn stderr_lines(child: &mut Child) -> std::sync::mpsc::Receiver<String> {
+    let err = child.stderr.take().expect("piped stderr");
+    let (tx, rx) = std::sync::mpsc::channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(err).lines().map_while(Result::ok) {
+            let _ = tx.send(line);
+        }
+    });
+    rx
+}
+
+#[test]
+fn ctrl_c_inside_a_long_iteration_stops_the_track_within_two_seconds() {
+    let tmp = tempfile::tempdir().unwrap();
+    let t = tmp.path();
+    // 500 shooting intervals: the first evaluation alone takes many seconds
+    let phases = t.join("fine.json");
+    let mut v: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(root().join("phases/ellipse_walk.json")).unwrap(),
+    )
+    .unwrap();
+    v["phases"][1]["intervals"] = 120.into();
+    v["phases"][2]["intervals"] = 380.into();
+    std::fs::write(&phases, v.to_string()).unwrap();
+    let out = t.join("run");
+    let mut child = bin()
+        .args(["track", "--max-iter", "5", "--phases"])
+        .arg(&phases)
+        .arg("--out")
+        .arg(&out)
+        .current_dir(root())
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn");
+    let rx = stderr_lines(&mut child);
+    let mut log = Vec::new();
+    // the line that opens the solve
+    loop {
+        let line = rx
+            .recv_timeout(Duration::from_secs(120))
+            .unwrap_or_else(|_| panic!("the solve did not start: {log:?}"));
+        let start = line.starts_with("tracking ");
+        log.push(line);
+        if start {
+            break;
+        }
+    }
+    // inside the first evaluation of the shooting intervals
+    std::thread::sleep(Duration::from_millis(1500));
+    assert!(child.try_wait().unwrap().is_none(), "{log:?}");
+    signal(&child, "-INT");
+    let sent = Instant::now();
+    let status = wait_with_limit(&mut child, Duration::from_secs(60));
+    let took = sent.elapsed();
+    log.extend(rx.try_iter());
+    assert_eq!(status.code(), Some(130), "{log:?}");
+    assert!(
+        took < Duration::from_millis(2500),
+        "exited {took:?} after the signal: {log:?}"
+    );
+    let log = log.join("\n");
+    assert!(log.contains("interrupted: stopping the solve"), "{log}");
+    assert!(
+        log.contains("the solver stopped without converging: interrupted (results written to"),
+        "{log}"
+    );
+    let summary = common::json(&out.join("summary.json"));
+    assert_eq!(summary["status"], "interrupted");
+    let (name, values) = status_column(&out.join("tracking.csv"));
+    assert_eq!(name, "status");
+    assert!(values.iter().all(|v| v == "interrupted"), "{values:?}");
+    // the command line, for --resume
+    assert!(out.join(".resume-command.json").is_file());
+}
+
+#[test]
+fn an_interrupted_solve_resumes_from_its_run_folder_along_the_same_iterates() {
+    let args = [
+        "--problem",
+        &r("problems/five_link_biped.json"),
+        "--hessian",
+        "bfgs",
+        "--max-iter",
+        "25",
+    ];
+    let tmp = tempfile::tempdir().unwrap();
+    let whole = tmp.path().join("whole");
+    let stopped = tmp.path().join("stopped");
+    std::fs::create_dir_all(&whole).unwrap();
+    std::fs::create_dir_all(&stopped).unwrap();
+    let o = bin()
+        .args(["--quiet", "solve"])
+        .args(args)
+        .args(["--out", "run"])
+        .env("RAYON_NUM_THREADS", "1")
+        .current_dir(&whole)
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    let mut child = bin()
+        .arg("solve")
+        .args(args)
+        .args(["--out", "run"])
+        .env("RAYON_NUM_THREADS", "1")
+        .current_dir(&stopped)
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("spawn");
+    let lines = wait_for_line(
+        &mut child,
+        |l| l.trim_start().starts_with("3 "),
+        Duration::from_secs(120),
+    );
+    signal(&child, "-INT");
+    let status = wait_with_limit(&mut child, Duration::from_secs(60));
+    assert_eq!(status.code(), Some(130), "{lines:?}");
+    let run = stopped.join("run");
+    let (h, _, s) = iterates(&run);
+    assert_eq!(s, "\"interrupted\"");
+    assert!(h.len() < 26, "not interrupted: {} iterations", h.len());
+    assert!(run.join(".resume-checkpoint-0.json").is_file());
+    // --resume continues it in place, to the end the whole run reached
+    let o = resume(&stopped, "1");
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    assert_eq!(iterates(&whole.join("run")), iterates(&run));
+    assert_eq!(entries(&stopped), ["run"]);
+    assert!(entries(&run).iter().all(|e| !e.starts_with(".resume-")));
+}
+
 /// The iterate history (exact bits of every figure but the time) and the final variables
 /// of a `solve` run folder.
 fn iterates(run: &Path) -> (Vec<[u64; 4]>, Vec<u64>, String) {
@@ -405,7 +721,7 @@ fn a_killed_solve_resumes_along_the_same_iterates() {
         .all(|e| !e.starts_with(".resume-")));
     // nothing left to resume
     let o = resume(&killed, "1");
-    refused(&o, &["no killed run to resume"]);
+    refused(&o, &["no killed or interrupted run to resume"]);
 }
 
 #[test]

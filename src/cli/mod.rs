@@ -150,7 +150,7 @@ impl Failure {
 
 pub fn main() -> ExitCode {
     // before any work: a Ctrl-C during setup removes what this process staged and exits 130
-    footfall::workflows::session::install_interrupt_handler();
+    install_interrupt_handler();
     quiet_reader_panics();
     let mut cli = parse(std::env::args_os());
     let args: Vec<String> = std::env::args().skip(1).collect();
@@ -188,6 +188,14 @@ pub fn main() -> ExitCode {
         Command::Diff(args) => diff::run(args, cli.quiet),
         Command::Report(args) => report::run(args, cli.quiet),
     };
+    // printed even with --quiet: the results are not where the command line said
+    for (target, went) in footfall::runfolder::take_relocations() {
+        eprintln!(
+            "warning: the output folder {} appeared while this run was working and is left as it is; the results are in {}",
+            target.display(),
+            went.display()
+        );
+    }
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(f) => {
@@ -195,6 +203,24 @@ pub fn main() -> ExitCode {
             ExitCode::from(f.code())
         }
     }
+}
+
+/// Ctrl-C: during a solve the first one asks the library to stop
+/// ([`footfall::interrupt`]): the solve ends within a second, inside an iteration too, and
+/// the run folder is written from its last accepted iterate, with the checkpoints that
+/// `--resume` continues from. A second one, or one outside a solve, removes this process's
+/// unfinished staging folders and exits with 130 at once.
+fn install_interrupt_handler() {
+    let _ = ctrlc::set_handler(|| {
+        if footfall::interrupt::in_solve() && !footfall::interrupt::request() {
+            eprintln!("interrupted: stopping the solve and writing the run from its last accepted iterate (Ctrl-C again to abort)");
+        } else {
+            eprintln!("interrupted: nothing written");
+            // held until the process ends: nothing is written into a removed folder
+            let _no_writes = footfall::runfolder::remove_unfinished();
+            std::process::exit(130);
+        }
+    });
 }
 
 /// Panics inside the C3D reader crate print nothing: the reader catches them and returns an

@@ -18,8 +18,9 @@ pub struct Args {
     /// Replace the output folder if it exists.
     #[arg(long)]
     overwrite: bool,
-    /// Continue the run a killed process left unfinished in this output folder, from its
-    /// last SQP iteration, with the options it was started with (give no others).
+    /// Continue the run a killed process left unfinished in this output folder, or the
+    /// interrupted run it holds, from its last SQP iteration, with the options it was
+    /// started with (give no others).
     #[arg(long, value_name = "DIR")]
     pub resume: Option<PathBuf>,
     /// Start from the variables of a previous solution.json.

@@ -36,8 +36,9 @@ pub struct Args {
     overwrite: bool,
     #[command(flatten)]
     check_points: super::CheckPointArgs,
-    /// Continue the run a killed process left unfinished in this output folder, from its
-    /// last SQP iteration, with the options it was started with (give no others).
+    /// Continue the run a killed process left unfinished in this output folder, or the
+    /// interrupted run it holds, from its last SQP iteration, with the options it was
+    /// started with (give no others).
     #[arg(long, value_name = "DIR")]
     pub resume: Option<PathBuf>,
     /// Hessian: exact (converges), or gauss-newton (Millard & Mombaur's

@@ -514,6 +514,17 @@ impl FootSpec {
                 "the foot has no contact primitive, so it can never touch the ground; add a circle, ellipse or point",
             ));
         }
+        if self.primitives.len() > crate::limits::MAX_PRIMITIVES {
+            return Err(ModelError::invalid(
+                path,
+                "primitives",
+                format!(
+                    "must list 1 to {} contact primitives, got {}",
+                    crate::limits::MAX_PRIMITIVES,
+                    self.primitives.len()
+                ),
+            ));
+        }
         for (i, p) in self.primitives.iter().enumerate() {
             if p.name.is_empty() || p.name.contains('.') {
                 return Err(ModelError::invalid(

@@ -114,6 +114,8 @@ pub(super) fn run(
     observer: &mut dyn Observer,
     resume: Option<&SqpCheckpoint>,
 ) -> SqpResult {
+    // the integrator, the QP and the evaluations stop while this runs, if asked to
+    let _solving = crate::interrupt::solving();
     let elapsed_before =
         resume.map_or(0.0, |cp| cp.scalars.values().get(5).copied().unwrap_or(0.0));
     let start = Instant::now()
@@ -131,12 +133,12 @@ pub(super) fn run(
         .map(|(&v, (&l, &u))| v.max(l).min(u))
         .collect();
     let fail = |status: SqpStatus, w: Vec<f64>| SqpResult {
+        status: interrupted_or(status),
         lambda: vec![0.0; m],
         nu: vec![0.0; n],
         objective: f64::NAN,
         infeasibility: f64::NAN,
         kkt: f64::NAN,
-        status,
         history: Vec::new(),
         most_violated: Vec::new(),
         seconds: start.elapsed().as_secs_f64(),
@@ -220,6 +222,10 @@ pub(super) fn run(
         mem.shift_stalled = shift_switch_made(settings, &history);
     }
     for iter in first_iter..=settings.max_iter {
+        if crate::interrupt::requested() {
+            status = SqpStatus::Interrupted;
+            break;
+        }
         // --- QP subproblem at the current point
         let mut viol = violations(&st.ev.c, &s.c_lb, &s.c_ub);
         let mut infeas = viol.iter().copied().fold(0.0, f64::max);
@@ -474,6 +480,10 @@ pub(super) fn run(
             });
         }
     }
+    // an evaluation or a QP that failed because the solve was asked to stop
+    if status != SqpStatus::Converged {
+        status = interrupted_or(status);
+    }
     let viol = violations(&st.ev.c, &s.c_lb, &s.c_ub);
     let mut order: Vec<usize> = (0..m).filter(|&i| viol[i] > settings.tol_kkt).collect();
     order.sort_by(|&a, &b| viol[b].total_cmp(&viol[a]));
@@ -497,6 +507,16 @@ pub(super) fn run(
         w: st.w,
         lambda,
         nu,
+    }
+}
+
+/// `status`, or [`SqpStatus::Interrupted`] when the solve was asked to stop: the failure
+/// is then the stop's.
+fn interrupted_or(status: SqpStatus) -> SqpStatus {
+    if crate::interrupt::requested() {
+        SqpStatus::Interrupted
+    } else {
+        status
     }
 }
 

@@ -50,8 +50,11 @@ impl<'a> Evaluator<'a> {
     /// Objective and constraints at `w`, without derivatives (a trial point).
     pub(super) fn plain(&self, w: &[f64]) -> Result<NlpEval, EvalError> {
         let mut r = Err(EvalError::fatal("not evaluated"));
+        if crate::interrupt::stop_now() {
+            return Err(EvalError::fatal(crate::interrupt::STOPPED));
+        }
         self.timed(true, &mut || r = self.nlp.evaluate(w, false));
-        r
+        stopped(r)
     }
 
     /// Derivatives at `w`; in Exact mode with `curvature`, also the constraint curvature
@@ -65,6 +68,9 @@ impl<'a> Evaluator<'a> {
         curvature: bool,
     ) -> Result<(NlpEval, Option<Triplets>), EvalError> {
         let mut out = Err(EvalError::fatal("not evaluated"));
+        if crate::interrupt::stop_now() {
+            return Err(EvalError::fatal(crate::interrupt::STOPPED));
+        }
         self.timed(true, &mut || {
             out = if self.exact && curvature {
                 self.nlp
@@ -83,7 +89,7 @@ impl<'a> Evaluator<'a> {
                 self.nlp.evaluate(w, true).map(|ev| (ev, None))
             }
         });
-        out
+        stopped(out)
     }
 
     /// Whether derivatives can come with the constraint curvature (Exact mode).
@@ -111,5 +117,14 @@ impl<'a> Evaluator<'a> {
         }
         self.timed(false, &mut || r = qp::solve(d));
         r
+    }
+}
+
+/// An evaluation that failed because the solve was asked to stop, as a fatal failure: the
+/// line search does not step around it.
+fn stopped<T>(r: Result<T, EvalError>) -> Result<T, EvalError> {
+    match r {
+        Err(_) if crate::interrupt::stop_now() => Err(EvalError::fatal(crate::interrupt::STOPPED)),
+        r => r,
     }
 }

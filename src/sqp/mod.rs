@@ -365,6 +365,18 @@ pub enum SqpStatus {
     Interrupted,
 }
 
+impl SqpStatus {
+    /// The outcome in one of three words, without commas (the `status` column of a run's
+    /// CSV files): `converged`, `interrupted` or `not converged`.
+    pub fn outcome(&self) -> &'static str {
+        match self {
+            SqpStatus::Converged => "converged",
+            SqpStatus::Interrupted => "interrupted",
+            _ => "not converged",
+        }
+    }
+}
+
 impl std::fmt::Display for SqpStatus {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {

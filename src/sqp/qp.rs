@@ -351,9 +351,14 @@ fn interior_point(q: &QpData<'_>, jrows: &[Vec<(usize, f64)>]) -> Result<QpSolut
         };
         let mut solver = DefaultSolver::new(&pm, &qv, &am, &b, &cones, settings)
             .map_err(|e| QpError::Failed(e.to_string()))?;
+        // a solve asked to stop ends the QP at its next iteration
+        solver.set_termination_callback(|_| crate::interrupt::stop_now());
         solver.solve();
         let sol = solver.solution;
         match sol.status {
+            SolverStatus::CallbackTerminated => {
+                return Err(QpError::Failed(crate::interrupt::STOPPED.into()))
+            }
             SolverStatus::Solved | SolverStatus::AlmostSolved => {
                 solved = Some(sol);
                 break;

@@ -268,8 +268,12 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
     let animation = body_animation(model, sol, line, states, &cycle, (t0, t1));
     let film_strip = animation.film_strip();
 
-    // time series at the nodes
+    // time series at the nodes; every row carries the solve's outcome, so that a table of
+    // an unfinished solve says so wherever it is read (a comment line would break CSV
+    // readers)
+    let outcome = |n: usize| vec![res.status.outcome().to_string(); n];
     let mut ts = TimeSeries::new(cmp.times.clone())?;
+    ts.push_text("status", outcome(cmp.times.len()))?;
     ts.push_text(
         "phase",
         cmp.phase.iter().map(|&p| sets[p].name.clone()).collect(),
@@ -290,6 +294,7 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
     let fine_ts = match (&fine_run, &fine_cmp) {
         (Ok(f), Some(fc)) => {
             let mut t = TimeSeries::new(fc.times.clone())?;
+            t.push_text("status", outcome(fc.times.len()))?;
             t.push_text(
                 "phase",
                 fc.phase.iter().map(|&p| sets[p].name.clone()).collect(),
@@ -602,7 +607,7 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
     for (name, q) in crate::data::OPENSIM_COORDINATES.iter().zip(&line.model_q) {
         kinematics.push(*name, pick(q))?;
     }
-    // an unconverged run's table and motion say so in their first line
+    // an unconverged run's table, motion and film strip say so in their first line
     let unsolved = (!converged).then(|| match interrupted {
         true => format!("{verdict}: the last accepted iterate, not a solution"),
         false => format!(
@@ -620,6 +625,7 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
     } else {
         "table3.md"
     };
+    let unsolved_note = unsolved.clone();
     let caution = unsolved
         .map(|note| format!("**{note}**\n\n"))
         .unwrap_or_default();
@@ -636,7 +642,15 @@ pub fn write(run: GaitRun, folder: RunFolder) -> anyhow::Result<GaitRunOutput> {
         folder.write(name, bytes)?;
     }
     if !animation.keys.is_empty() {
-        folder.write("film_strip.svg", film_strip.as_bytes())?;
+        // an XML comment may open the file before the <svg> element
+        let caution = unsolved_note
+            .as_ref()
+            .map(|note| format!("<!-- {note} -->\n"))
+            .unwrap_or_default();
+        folder.write(
+            "film_strip.svg",
+            format!("{caution}{film_strip}").as_bytes(),
+        )?;
     }
     folder.write("report.html", report.to_html().as_bytes())?;
     let path = folder.commit()?;

@@ -1,19 +1,20 @@
-//! Process-wide state of one `footfall` invocation: Ctrl-C handling, the run folder's
-//! checkpoints, and resuming a killed run.
+//! Process-wide state of one `footfall` invocation: interruption, the run folder's
+//! checkpoints, and resuming a killed or interrupted run.
 //!
-//! * Ctrl-C: the handler is installed before any work. During a solve the first Ctrl-C
-//!   stops it after the current iteration (the run folder is written with status
-//!   `interrupted`); a second one, or one outside a solve, removes this process's
-//!   unfinished staging folders and exits with 130 at once.
+//! * Interruption: a stop asked through [`crate::interrupt`] (the CLI's Ctrl-C handler)
+//!   ends a solve within a fraction of a second, inside an iteration too, at its last
+//!   accepted iterate; the run folder is written with status `interrupted`.
 //! * Checkpoints: `track`, `predict` and `solve` write their command line and, after every
 //!   accepted SQP iteration, the solver's state into the run's staging folder
 //!   (`.resume-*`, written atomically). A run killed outright (`kill -9`, a power cut)
-//!   leaves that staging folder behind.
+//!   leaves that staging folder behind; an interrupted run keeps them in its run folder.
 //! * Resume: `--resume DIR` finds the staging folder a dead process left for the output
-//!   folder `DIR`, runs its command again in its working folder, and continues each solve
-//!   from its last checkpoint (solves are counted in the order the command runs them, so a
-//!   staged solve resumes at the stage it reached). Evaluations are deterministic, so the
-//!   resumed run follows the same iterates, bit for bit, as one that was never killed.
+//!   folder `DIR`, or the interrupted run folder `DIR`, runs its command again in its
+//!   working folder, and continues each solve from its last checkpoint (solves are counted
+//!   in the order the command runs them, so a staged solve resumes at the stage it
+//!   reached); an interrupted run's folder is replaced by the resumed run's. Evaluations
+//!   are deterministic, so the resumed run follows the same iterates, bit for bit, as one
+//!   that was never stopped.
 
 use super::{note, warn_note, Progress};
 use crate::runfolder::{self, RunFolder, RESUME_PREFIX};
@@ -23,11 +24,9 @@ use anyhow::{anyhow, bail, Context};
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 
-static INTERRUPTED: AtomicBool = AtomicBool::new(false);
-static SOLVING: AtomicBool = AtomicBool::new(false);
 /// Solves started so far by this process (the index of a solve's checkpoint file).
 static SOLVES: AtomicUsize = AtomicUsize::new(0);
 
@@ -39,12 +38,15 @@ struct Session {
     checkpoint_dir: Option<PathBuf>,
     /// Checkpoints of the killed run being resumed, by solve index.
     resume: BTreeMap<usize, SqpCheckpoint>,
+    /// The interrupted run folder being resumed, which the resumed run replaces.
+    replaces: Option<PathBuf>,
 }
 
 static SESSION: Mutex<Session> = Mutex::new(Session {
     command: None,
     checkpoint_dir: None,
     resume: BTreeMap::new(),
+    replaces: None,
 });
 
 fn session() -> std::sync::MutexGuard<'static, Session> {
@@ -66,18 +68,6 @@ pub struct RecordedCommand {
     pub cwd: PathBuf,
 }
 
-/// Install the Ctrl-C handler (first thing in `main`).
-pub fn install_interrupt_handler() {
-    let _ = ctrlc::set_handler(|| {
-        if SOLVING.load(Ordering::SeqCst) && !INTERRUPTED.swap(true, Ordering::SeqCst) {
-            eprintln!("interrupted: stopping after this iteration (Ctrl-C again to abort)");
-        } else {
-            eprintln!("interrupted: nothing written");
-            runfolder::remove_unfinished_and_exit(130);
-        }
-    });
-}
-
 /// Record the command line of this invocation (written into checkpointed run folders).
 pub fn record_command(args: Vec<String>) -> anyhow::Result<()> {
     let cwd = std::env::current_dir().context("reading the current folder")?;
@@ -88,7 +78,10 @@ pub fn record_command(args: Vec<String>) -> anyhow::Result<()> {
 /// Create the run folder of a `track`, `predict` or `solve` run: its staging folder takes
 /// the command line and the solver's checkpoints, so a killed run can be resumed.
 pub fn create_checkpointed_run_folder(out: &Path, overwrite: bool) -> anyhow::Result<RunFolder> {
-    let folder = RunFolder::create(out, overwrite)?;
+    // the interrupted run folder being resumed is replaced by the resumed run's
+    let replaces = session().replaces.take();
+    let resumed_here = replaces.is_some() && out.canonicalize().ok() == replaces;
+    let folder = RunFolder::create(out, overwrite || resumed_here)?;
     let mut s = session();
     if let Some(cmd) = &s.command {
         folder.write(COMMAND_FILE, serde_json::to_string_pretty(cmd)?.as_bytes())?;
@@ -102,8 +95,8 @@ pub fn create_checkpointed_run_folder(out: &Path, overwrite: bool) -> anyhow::Re
     Ok(folder)
 }
 
-/// Wraps an SQP observer: Ctrl-C stops the solve after the current iteration, and
-/// checkpoints go to the run's staging folder.
+/// Wraps an SQP observer: a stop asked ends the solve (at the latest after the current
+/// iteration), and checkpoints go to the run's staging folder.
 struct Interruptible<'a> {
     progress: &'a dyn Progress,
     checkpoints: Option<(PathBuf, String)>,
@@ -112,7 +105,7 @@ struct Interruptible<'a> {
 impl Observer for Interruptible<'_> {
     fn iteration(&mut self, rec: &IterationRecord) -> bool {
         self.progress.iteration(rec);
-        !INTERRUPTED.load(Ordering::SeqCst)
+        !crate::interrupt::requested()
     }
     fn wants_checkpoints(&self) -> bool {
         self.checkpoints.is_some()
@@ -140,8 +133,8 @@ impl Observer for Interruptible<'_> {
     }
 }
 
-/// Solve `nlp` from `w0` with Ctrl-C handled, logging each iteration to stderr unless
-/// `progress`; checkpointed in a run folder made by [`create_checkpointed_run_folder`], and
+/// Solve `nlp` from `w0`, stopping when asked ([`crate::interrupt`]), logging each
+/// iteration to stderr unless `progress`; checkpointed in a run folder made by [`create_checkpointed_run_folder`], and
 /// continued from the killed run's checkpoint when resuming.
 pub fn solve_interruptibly(
     nlp: &dyn Nlp,
@@ -174,7 +167,6 @@ pub fn solve_interruptibly_warm(
         progress,
         checkpoints,
     };
-    SOLVING.store(true, Ordering::SeqCst);
     let res = match &resume {
         Some(cp) => {
             cp.check(nlp.n(), nlp.m())
@@ -193,7 +185,6 @@ pub fn solve_interruptibly_warm(
             None => crate::sqp::solve(nlp, w0, settings, &mut observer),
         },
     };
-    SOLVING.store(false, Ordering::SeqCst);
     Ok(res)
 }
 
@@ -242,10 +233,18 @@ pub fn prepare_resume(subcommand: &str, args: &[String]) -> anyhow::Result<Vec<S
             .and_then(|m| m.modified())
             .ok()
     });
-    let Some(staging) = newest else {
+    // else an interrupted run's folder, which keeps its checkpoints
+    let interrupted = (target.join(runfolder::MARKER).is_file()
+        && target.join(COMMAND_FILE).is_file())
+    .then_some(&target);
+    let Some(staging) = newest.or(interrupted) else {
         bail!(
-            "{dir}: no killed run to resume (a killed run leaves a hidden staging folder .NAME.partial-PID beside the output folder; a run that finished, failed or was stopped by Ctrl-C has none)"
+            "{dir}: no killed or interrupted run to resume (a killed run leaves a hidden staging folder .NAME.partial-PID beside the output folder, an interrupted one its checkpoints in the run folder; a run that finished or failed has none)"
         );
+    };
+    let replaces = match newest {
+        Some(_) => None,
+        None => Some(target.canonicalize().with_context(|| dir.clone())?),
     };
     let text = std::fs::read_to_string(staging.join(COMMAND_FILE))
         .with_context(|| staging.join(COMMAND_FILE).display().to_string())?;
@@ -289,5 +288,6 @@ pub fn prepare_resume(subcommand: &str, args: &[String]) -> anyhow::Result<Vec<S
     let mut s = session();
     s.resume = resume;
     s.command = Some(cmd.clone());
+    s.replaces = replaces;
     Ok(cmd.args)
 }

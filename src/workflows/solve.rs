@@ -240,7 +240,7 @@ fn write_run(
             .map(|k| res.w[tr.range(Block::Control { phase: j, node: k })].to_vec())
             .collect();
         if j == 0 {
-            csv.push_str("time,phase");
+            csv.push_str("time,status,phase");
             for i in 0..ph.ode.nx() {
                 write!(csv, ",x{i}").ok();
             }
@@ -250,7 +250,14 @@ fn write_run(
             csv.push('\n');
         }
         for (k, x) in states.iter().enumerate() {
-            write!(csv, "{:.9},{}", k as f64 * h, ph.name).ok();
+            write!(
+                csv,
+                "{:.9},{},{}",
+                k as f64 * h,
+                res.status.outcome(),
+                ph.name
+            )
+            .ok();
             for v in x {
                 write!(csv, ",{v:.12e}").ok();
             }

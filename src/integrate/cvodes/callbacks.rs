@@ -180,6 +180,7 @@ fn panic_message(payload: &(dyn std::any::Any + Send)) -> String {
 
 /// Run one callback body with the current call's context, translate its result into the
 /// CVODES convention (0 ok, >0 recoverable, <0 fatal) and stop panics at the C boundary.
+/// A solve asked to stop ([`crate::interrupt::stop_now`]) fails the call at once.
 ///
 /// # Safety
 /// `user_data` must be null or the integrator's `Shared` block, whose `call` is null or
@@ -194,6 +195,13 @@ pub(super) unsafe fn run_callback(
     }
     let shared = &mut *user_data.cast::<Shared>();
     if shared.call.is_null() {
+        return -1;
+    }
+    // a solve asked to stop: the integration ends at this step
+    if crate::interrupt::stop_now() {
+        if shared.fatal.is_none() {
+            shared.fatal = Some((t, OdeError::Fatal(crate::interrupt::STOPPED.into())));
+        }
         return -1;
     }
     let ctx = &*shared.call.cast::<CallCtx<'_>>();
