@@ -836,10 +836,7 @@ fn phase_with_too_many_intervals_is_refused() {
     eprintln!("{msg}");
     let p = d.write(
         "phases.json",
-        &PHASES.replace(
-            "\"duration\": 0.3",
-            "\"duration\": 0.3, \"intervals\": 999",
-        ),
+        &PHASES.replace("\"duration\": 0.3", "\"duration\": 0.3, \"intervals\": 999"),
     );
     // with the other phase's one, the sequence's limit of 1000
     PhaseSequence::load(&p).expect("1000 intervals are allowed");

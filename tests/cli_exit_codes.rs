@@ -3,36 +3,9 @@
 //! by its iteration limit exits 3 and an infeasible one 4, both with the run folder
 //! written. Success (0) is in tests/cli_solve.rs, interruption (130) in tests/cli.rs.
 
+use crate::common::{assert_exit, edited_json, footfall, root, s};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn footfall(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_footfall"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .expect("run footfall")
-}
-
-fn s(p: &Path) -> &str {
-    p.to_str().expect("UTF-8 temp path")
-}
-
-/// Exit code `code`, one `error:` report naming every item of `names`, no panic.
-fn assert_exit(o: &Output, code: i32, names: &[&str]) -> String {
-    let err = String::from_utf8_lossy(&o.stderr).into_owned();
-    assert_eq!(o.status.code(), Some(code), "stderr: {err}");
-    assert!(err.starts_with("error: "), "{err}");
-    assert!(!err.contains("panicked"), "{err}");
-    for n in names {
-        assert!(err.contains(n), "stderr does not name {n:?}: {err}");
-    }
-    err
-}
 
 #[test]
 fn out_of_range_option_values_are_usage_errors_naming_the_option() {
@@ -212,26 +185,9 @@ fn out_of_range_option_values_are_usage_errors_naming_the_option() {
 #[test]
 fn an_absurd_phase_file_is_bad_input() {
     let tmp = tempfile::tempdir().unwrap();
-    let p = tmp.path().join("p.json");
-    let text = std::fs::read_to_string(root().join("phases/sim_ellipse_step.json")).unwrap();
-    std::fs::write(
-        &p,
-        text.replacen(
-            "\"type\": \"continuous\",",
-            "\"type\": \"continuous\", \"intervals\": 1000000,",
-            1,
-        ),
-    )
-    .unwrap();
-    let out = tmp.path().join("run");
-    let o = footfall(&[
-        "simulate",
-        "--phase-set",
-        s(&p),
-        "--out",
-        s(&out),
-        "--quiet",
-    ]);
+    let (o, out) = simulate_edited_phases(tmp.path(), |v| {
+        v["phases"][0]["intervals"] = 1_000_000.into()
+    });
     assert_exit(
         &o,
         1,
@@ -245,15 +201,14 @@ fn an_absurd_phase_file_is_bad_input() {
     assert!(!out.exists());
 }
 
-/// `simulate` of the bundled step with its phase file edited by `edit`: the result.
-fn simulate_edited_phases(edit: impl Fn(&mut serde_json::Value)) -> (Output, PathBuf) {
-    let tmp = tempfile::tempdir().unwrap().keep();
-    let p = tmp.join("p.json");
-    let text = std::fs::read_to_string(root().join("phases/sim_ellipse_step.json")).unwrap();
-    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
-    edit(&mut v);
-    std::fs::write(&p, v.to_string()).unwrap();
-    let out = tmp.join("run");
+/// `simulate` of the bundled step with its phase file edited by `edit` (written to
+/// `dir/p.json`): the result, and the run folder it was asked for (`dir/run`).
+fn simulate_edited_phases(
+    dir: &Path,
+    edit: impl FnOnce(&mut serde_json::Value),
+) -> (Output, PathBuf) {
+    let p = edited_json("phases/sim_ellipse_step.json", &dir.join("p.json"), edit);
+    let out = dir.join("run");
     let o = footfall(&[
         "simulate",
         "--phase-set",
@@ -267,7 +222,8 @@ fn simulate_edited_phases(edit: impl Fn(&mut serde_json::Value)) -> (Output, Pat
 
 #[test]
 fn a_phase_sequence_of_too_many_intervals_in_all_is_bad_input() {
-    let (o, out) = simulate_edited_phases(|v| {
+    let tmp = tempfile::tempdir().unwrap();
+    let (o, out) = simulate_edited_phases(tmp.path(), |v| {
         v["phases"][0]["intervals"] = 600.into();
         v["phases"][2]["intervals"] = 600.into();
     });
@@ -278,12 +234,12 @@ fn a_phase_sequence_of_too_many_intervals_in_all_is_bad_input() {
     );
     assert!(err.len() < 300, "{err}");
     assert!(!out.exists());
-    std::fs::remove_dir_all(out.parent().unwrap()).unwrap();
 }
 
 #[test]
 fn a_phase_of_a_billion_seconds_is_bad_input() {
-    let (o, out) = simulate_edited_phases(|v| v["phases"][0]["duration"] = 1e9.into());
+    let tmp = tempfile::tempdir().unwrap();
+    let (o, out) = simulate_edited_phases(tmp.path(), |v| v["phases"][0]["duration"] = 1e9.into());
     let err = assert_exit(
         &o,
         1,
@@ -296,13 +252,12 @@ fn a_phase_of_a_billion_seconds_is_bad_input() {
     );
     assert!(err.len() < 300, "{err}");
     // each phase within the limit, the sequence beyond it
-    let (o, _) = simulate_edited_phases(|v| {
+    let (o, _) = simulate_edited_phases(tmp.path(), |v| {
         v["phases"][0]["duration"] = 40.0.into();
         v["phases"][2]["duration"] = 40.0.into();
     });
     assert_exit(&o, 1, &["phases[*].duration", "at most 60 s", "got 80 s"]);
     assert!(!out.exists());
-    std::fs::remove_dir_all(out.parent().unwrap()).unwrap();
 }
 
 /// A foot file of `n` circles named `p0`, `p1`, …
@@ -360,11 +315,11 @@ fn a_foot_of_300000_primitives_is_refused_at_once_in_a_short_message() {
 #[test]
 fn an_absurd_gravity_is_bad_input_naming_the_field() {
     let tmp = tempfile::tempdir().unwrap();
-    let m = tmp.path().join("model.json");
-    let text = std::fs::read_to_string(root().join("models/gait9dof.json")).unwrap();
-    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
-    v["gravity"] = 1e308.into();
-    std::fs::write(&m, v.to_string()).unwrap();
+    let m = edited_json(
+        "models/gait9dof.json",
+        &tmp.path().join("model.json"),
+        |v| v["gravity"] = 1e308.into(),
+    );
     let out = tmp.path().join("run");
     let o = footfall(&[
         "simulate",
@@ -415,13 +370,15 @@ fn an_infeasible_problem_exits_4_with_the_run_written() {
     // the cart-pole cannot swing up with |u| ≤ 1 mN: the solver finds a stationary point
     // of the constraint violation (9 iterations on 10 intervals)
     let tmp = tempfile::tempdir().unwrap();
-    let text = std::fs::read_to_string(root().join("problems/cartpole_swingup.json")).unwrap();
-    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
-    v["bounds"]["u_lb"] = serde_json::json!([-0.001]);
-    v["bounds"]["u_ub"] = serde_json::json!([0.001]);
-    v["discretization"]["N"] = 10.into();
-    let p = tmp.path().join("weak.json");
-    std::fs::write(&p, v.to_string()).unwrap();
+    let p = edited_json(
+        "problems/cartpole_swingup.json",
+        &tmp.path().join("weak.json"),
+        |v| {
+            v["bounds"]["u_lb"] = serde_json::json!([-0.001]);
+            v["bounds"]["u_ub"] = serde_json::json!([0.001]);
+            v["discretization"]["N"] = 10.into();
+        },
+    );
     let out = tmp.path().join("weak");
     let o = footfall(&["solve", "--problem", s(&p), "--out", s(&out), "--quiet"]);
     assert_exit(&o, 4, &["infeasible"]);
@@ -531,12 +488,11 @@ fn a_prediction_target_outside_human_gait_is_refused_before_solving() {
 
 /// The cart-pole problem file with `edit` applied, written into `dir`.
 fn edited_cartpole(dir: &Path, edit: impl Fn(&mut serde_json::Value)) -> PathBuf {
-    let text = std::fs::read_to_string(root().join("problems/cartpole_swingup.json")).unwrap();
-    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
-    edit(&mut v);
-    let p = dir.join("edited.json");
-    std::fs::write(&p, v.to_string()).unwrap();
-    p
+    edited_json(
+        "problems/cartpole_swingup.json",
+        &dir.join("edited.json"),
+        edit,
+    )
 }
 
 #[test]
@@ -603,10 +559,11 @@ fn a_force_plate_surface_away_from_the_models_ground_is_refused_before_solving()
     let tmp = tempfile::tempdir().unwrap();
     let csv = tmp.path().join("trial_sagittal.csv");
     std::fs::copy(root().join("data/opensim_subject01_sagittal.csv"), &csv).unwrap();
-    let text = std::fs::read_to_string(root().join("data/opensim_subject01_meta.json")).unwrap();
-    let mut meta: serde_json::Value = serde_json::from_str(&text).unwrap();
-    meta["force_plate_surface_y_m"] = 0.05.into();
-    std::fs::write(tmp.path().join("trial_meta.json"), meta.to_string()).unwrap();
+    edited_json(
+        "data/opensim_subject01_meta.json",
+        &tmp.path().join("trial_meta.json"),
+        |meta| meta["force_plate_surface_y_m"] = 0.05.into(),
+    );
     let out = tmp.path().join("run");
     let o = footfall(&["track", "--data", s(&csv), "--out", s(&out), "--quiet"]);
     assert_exit(

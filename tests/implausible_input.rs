@@ -3,21 +3,9 @@
 //! solve, with exit code 1 and a message that names the file, the column or field, what
 //! was found and what would be valid.
 
-use crate::common::{footfall, root, s, stderr};
+use crate::common::{assert_exit, edited_json, footfall, root, s, stderr};
 use std::path::{Path, PathBuf};
 use std::process::Output;
-
-/// Exit code `code`, one `error:` report naming every item of `names`, no panic.
-fn assert_exit(o: &Output, code: i32, names: &[&str]) -> String {
-    let err = stderr(o);
-    assert_eq!(o.status.code(), Some(code), "stderr: {err}");
-    assert!(err.starts_with("error: "), "{err}");
-    assert!(!err.contains("panicked"), "{err}");
-    for n in names {
-        assert!(err.contains(n), "stderr does not name {n:?}: {err}");
-    }
-    err
-}
 
 /// The bundled sagittal CSV with `edit` applied to the cells of `columns` (NaN cells
 /// left as they are), written as `dir/trial.csv` beside the bundled meta file.
@@ -317,12 +305,11 @@ fn a_checkpoint_holding_nan_in_its_filter_or_constants_is_refused_naming_the_ent
 /// Replace the meta file `edited_csv` wrote beside `dir/trial.csv` by the bundled one
 /// with `edit` applied.
 fn edit_meta(dir: &Path, edit: impl Fn(&mut serde_json::Value)) -> PathBuf {
-    let text = std::fs::read_to_string(root().join("data/opensim_subject01_meta.json")).unwrap();
-    let mut meta: serde_json::Value = serde_json::from_str(&text).unwrap();
-    edit(&mut meta);
-    let p = dir.join("trial_meta.json");
-    std::fs::write(&p, meta.to_string()).unwrap();
-    p
+    edited_json(
+        "data/opensim_subject01_meta.json",
+        &dir.join("trial_meta.json"),
+        edit,
+    )
 }
 
 #[test]

@@ -554,14 +554,7 @@ fn an_interrupted_solve_resumes_from_its_run_folder_along_the_same_iterates() {
     let stopped = tmp.path().join("stopped");
     std::fs::create_dir_all(&whole).unwrap();
     std::fs::create_dir_all(&stopped).unwrap();
-    let o = bin()
-        .args(["--quiet", "solve"])
-        .args(args)
-        .args(["--out", "run"])
-        .env("RAYON_NUM_THREADS", "1")
-        .current_dir(&whole)
-        .output()
-        .unwrap();
+    let o = solve_whole(&whole, &args, Some("1"));
     assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
     let mut child = bin()
         .arg("solve")
@@ -616,6 +609,20 @@ fn iterates(run: &Path) -> (Vec<[u64; 4]>, Vec<u64>, String) {
         .collect();
     let w = solution["w"].as_array().unwrap().iter().map(f).collect();
     (history, w, summary["status"].to_string())
+}
+
+/// `footfall --quiet solve ARGS --out run` in `dir`, run to its end undisturbed, with
+/// `threads` threads (`None`: the machine's).
+fn solve_whole(dir: &Path, args: &[&str], threads: Option<&str>) -> Output {
+    let mut cmd = bin();
+    cmd.args(["--quiet", "solve"])
+        .args(args)
+        .args(["--out", "run"])
+        .current_dir(dir);
+    if let Some(t) = threads {
+        cmd.env("RAYON_NUM_THREADS", t);
+    }
+    cmd.output().expect("run footfall")
 }
 
 /// Start `footfall solve ARGS --out run` in `dir`, SIGKILL it once its checkpoint has
@@ -689,14 +696,7 @@ fn a_killed_solve_resumes_along_the_same_iterates() {
     let killed = tmp.path().join("killed");
     std::fs::create_dir_all(&whole).unwrap();
     std::fs::create_dir_all(&killed).unwrap();
-    let o = bin()
-        .args(["--quiet", "solve"])
-        .args(args)
-        .args(["--out", "run"])
-        .env("RAYON_NUM_THREADS", "1")
-        .current_dir(&whole)
-        .output()
-        .unwrap();
+    let o = solve_whole(&whole, &args, Some("1"));
     assert_eq!(
         o.status.code(),
         Some(3),
@@ -759,13 +759,7 @@ fn a_killed_solve_resumes_to_the_same_optimum() {
     let killed = tmp.path().join("killed");
     std::fs::create_dir_all(&whole).unwrap();
     std::fs::create_dir_all(&killed).unwrap();
-    let o = bin()
-        .args(["--quiet", "solve"])
-        .args(args)
-        .args(["--out", "run"])
-        .current_dir(&whole)
-        .output()
-        .unwrap();
+    let o = solve_whole(&whole, &args, None);
     assert!(o.status.success(), "{}", stderr(&o));
     kill_after_checkpoint(&killed, &args, "2", 3);
     // other options beside --resume are refused: the run continues as it was started

@@ -295,9 +295,31 @@ pub fn stderr(o: &std::process::Output) -> String {
     String::from_utf8_lossy(&o.stderr).into_owned()
 }
 
+/// Exit code `code`, one `error:` report naming every item of `names`, no panic; the
+/// report.
+pub fn assert_exit(o: &std::process::Output, code: i32, names: &[&str]) -> String {
+    let err = stderr(o);
+    assert_eq!(o.status.code(), Some(code), "stderr: {err}");
+    assert!(err.starts_with("error: "), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    for n in names {
+        assert!(err.contains(n), "stderr does not name {n:?}: {err}");
+    }
+    err
+}
+
 /// A JSON file, read.
 pub fn json(path: &Path) -> serde_json::Value {
     serde_json::from_str(&std::fs::read_to_string(path).expect("read JSON")).expect("JSON")
+}
+
+/// The repository's JSON file `from` (relative to its root) with `edit` applied, written
+/// to `to`; returns `to`.
+pub fn edited_json(from: &str, to: &Path, edit: impl FnOnce(&mut serde_json::Value)) -> PathBuf {
+    let mut v = json(&root().join(from));
+    edit(&mut v);
+    std::fs::write(to, v.to_string()).expect("write the edited JSON");
+    to.to_path_buf()
 }
 
 /// The columns of a CSV written by a run: header names and numbers (NaN for empty cells).
