@@ -75,49 +75,71 @@ fn tracking_problem_builds_from_the_bundled_trial_for_both_feet() {
 }
 
 /// The start from the inverse dynamics: at every node the model's joint torques with the
-/// start's activations equal the trial's inverse-dynamics torques, except where the
-/// actuators cannot reach them (the start reports those).
+/// start's activations (muscle-torque generators) or controls (joint torques) equal the
+/// trial's inverse-dynamics torques, except where the actuators cannot reach them (the
+/// start reports those).
 #[test]
 fn the_inverse_dynamics_start_gives_the_trials_joint_torques() {
     use footfall::problems::check::balance::{inverse_dynamics, Body};
     use footfall::problems::check::signals::Signals;
     use footfall::problems::track::start::from_inverse_dynamics;
     let data = GaitData::bundled(&root()).unwrap();
-    let m = model("opensim_subject01.json", "ellipse.json");
-    let p = path("phases/ellipse_walk.json");
-    let seq = PhaseSequence::load(&p).unwrap();
-    let sets = seq.resolve(&m, &p).unwrap();
-    let mut started = TrackingSetup::new(&m, &seq, &sets, &data).unwrap();
-    let report = from_inverse_dynamics(&m, &data, &started.node_times, &mut started.guess).unwrap();
-    assert_eq!(report.set, report.nodes);
-    let body = Body::of(&m).unwrap();
     let signals = Signals::new(&data, 6.0, 0.0).unwrap();
-    let (mut exact, mut far, mut pairs) = (0, 0, 0);
-    for (times, xs) in started.node_times.iter().zip(&started.guess.x) {
-        for (&t, x) in times.iter().zip(xs) {
-            let want = inverse_dynamics(&body, &signals, &m, t).unwrap();
-            let parts = m.generalized_force_parts(x, &vec![0.0; m.nu()], &m.theta0());
-            for c in 3..9 {
-                let got = parts.actuators[c] + parts.effects.iter().map(|e| e.1[c]).sum::<f64>();
-                let err = (got - want[c]).abs();
-                pairs += 1;
-                exact += usize::from(err <= 1e-6 * want[c].abs().max(1.0));
-                far += usize::from(err > 3.0);
+    for file in ["opensim_subject01.json", "opensim_subject01_torque.json"] {
+        let m = model(file, "ellipse.json");
+        let p = path("phases/ellipse_walk.json");
+        let seq = PhaseSequence::load(&p).unwrap();
+        let sets = seq.resolve(&m, &p).unwrap();
+        let mut started = TrackingSetup::new(&m, &seq, &sets, &data).unwrap();
+        let report =
+            from_inverse_dynamics(&m, &data, &started.node_times, &mut started.guess).unwrap();
+        assert_eq!(report.set, report.nodes);
+        let body = Body::of(&m).unwrap();
+        let (mut exact, mut far, mut pairs) = (0, 0, 0);
+        // the largest inverse-dynamics joint torque (N·m), against a joint-torque model's bound
+        let mut largest: f64 = 0.0;
+        let phases = started
+            .node_times
+            .iter()
+            .zip(&started.guess.x)
+            .zip(&started.guess.u);
+        for ((times, xs), us) in phases {
+            for ((&t, x), u) in times.iter().zip(xs).zip(us) {
+                let want = inverse_dynamics(&body, &signals, &m, t).unwrap();
+                let parts = m.generalized_force_parts(x, u, &m.theta0());
+                for c in 3..9 {
+                    let got =
+                        parts.actuators[c] + parts.effects.iter().map(|e| e.1[c]).sum::<f64>();
+                    largest = largest.max(want[c].abs());
+                    let err = (got - want[c]).abs();
+                    pairs += 1;
+                    exact += usize::from(err <= 1e-6 * want[c].abs().max(1.0));
+                    far += usize::from(err > 3.0);
+                }
             }
         }
+        eprintln!(
+            "{file}: {exact} of {pairs} joint torques exact, {far} off by > 3 N·m, {} saturated",
+            report.saturated
+        );
+        // a joint-torque model strong enough for every torque reaches each one exactly
+        let spec = json(&root().join("models").join(file));
+        if let Some(bound) = spec["actuators"]["max_torque"].as_f64() {
+            assert!(largest < bound, "{file}: {largest} N·m against {bound}");
+            assert_eq!(
+                report.saturated, 0,
+                "{file}: every torque is within {bound} N·m"
+            );
+        }
+        assert!(
+            far <= report.saturated,
+            "{file}: {far} torques off by > 3 N·m, {} saturated",
+            report.saturated
+        );
+        assert!(
+            exact + report.saturated >= pairs,
+            "{file}: only {exact} of {pairs} joint torques exact, {} saturated",
+            report.saturated
+        );
     }
-    eprintln!(
-        "{exact} of {pairs} joint torques exact, {far} off by > 3 N·m, {} saturated",
-        report.saturated
-    );
-    assert!(
-        far <= report.saturated,
-        "{far} torques off by > 3 N·m, {} saturated",
-        report.saturated
-    );
-    assert!(
-        exact + report.saturated >= pairs,
-        "only {exact} of {pairs} joint torques exact, {} saturated",
-        report.saturated
-    );
 }

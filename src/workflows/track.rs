@@ -153,7 +153,7 @@ impl TrackingProblem {
                         )
                     })?;
             trial_notes.push(format!(
-                "start: activations and excitations from the inverse dynamics at {} of {} nodes ({} joint torques beyond the actuators' strength, held at it)",
+                "start: the actuators' activations and excitations (or joint torques) from the inverse dynamics at {} of {} nodes ({} joint torques beyond the actuators' strength, held at it)",
                 r.set, r.nodes, r.saturated
             ));
         }

@@ -93,13 +93,10 @@ pub fn from_inverse_dynamics(
                 activations.push(None);
                 continue;
             };
-            let mut u = guess.u[p].get(k).cloned().unwrap_or_default();
-            report.saturated += static_optimisation(model, &tau, x, &mut u, &bounds);
-            if model.na() == 0 {
-                if let Some(uk) = guess.u[p].get_mut(k) {
-                    *uk = u;
-                }
-            }
+            // a node without a control of its own (piecewise-constant controls' last)
+            let mut none = vec![0.0; model.nu()];
+            let u = guess.u[p].get_mut(k).unwrap_or(&mut none);
+            report.saturated += static_optimisation(model, &tau, x, u, &bounds);
             report.set += 1;
             activations.push(Some(x[2 * nq..].to_vec()));
         }
@@ -161,7 +158,9 @@ fn static_optimisation(
             .max_by(|a, b| a.1.gain.abs().total_cmp(&b.1.gain.abs()))
         {
             let v = idle + need / l.gain;
-            let clipped = v.clamp(lb[l.var].max(idle.min(ub[l.var])), ub[l.var]);
+            // an activation stays at least idle; a joint torque may take either sign
+            let lo = if mtg { lb[l.var].max(idle) } else { lb[l.var] };
+            let clipped = v.clamp(lo.min(ub[l.var]), ub[l.var]);
             saturated += usize::from(clipped != v);
             value[i] = Some(clipped);
         }
