@@ -7,8 +7,16 @@ use crate::common::{root, Rng};
 use footfall::data::c3d::read_c3d_plates;
 use std::path::{Path, PathBuf};
 
-/// Damaged copies of the shipped C3D file.
-const VARIANTS: usize = 400;
+/// Damaged copies of the shipped C3D file: `FOOTFALL_FUZZ_CASES` (as the fuzz targets,
+/// tests/fuzz.rs), else 400.
+fn variants() -> usize {
+    std::env::var("FOOTFALL_FUZZ_CASES")
+        .map(|v| {
+            v.parse()
+                .unwrap_or_else(|_| panic!("FOOTFALL_FUZZ_CASES={v:?} is not a count"))
+        })
+        .unwrap_or(400)
+}
 
 /// The C3D crate's error names (its `C3dParseError` variants), which a message must not show.
 const CRATE_NAMES: &[&str] = &[
@@ -72,7 +80,8 @@ fn flipped_bytes_are_refused_in_the_formats_terms_without_a_panic() {
     let dir = tempfile::tempdir().unwrap();
     let original = shipped();
     let (mut refused, mut problems) = (0, Vec::new());
-    for k in 0..VARIANTS {
+    let variants = variants();
+    for k in 0..variants {
         let path = dir.path().join(format!("damaged_{k}.c3d"));
         std::fs::write(&path, damaged(&original, k)).unwrap();
         let read = std::panic::catch_unwind(|| read_c3d_plates(&path, 20.0));
@@ -89,15 +98,16 @@ fn flipped_bytes_are_refused_in_the_formats_terms_without_a_panic() {
     }
     assert!(problems.is_empty(), "{}", problems.join("\n"));
     assert!(
-        refused >= VARIANTS / 10,
-        "only {refused} of {VARIANTS} damaged files refused"
+        refused >= variants / 10,
+        "only {refused} of {variants} damaged files refused"
     );
+    eprintln!("{variants} damaged C3D files: {refused} refused, the rest read");
 }
 
 /// The first damaged copy whose parse panics inside the crate (caught by the reader).
 fn one_that_panics_in_the_crate(dir: &Path) -> Option<PathBuf> {
     let original = shipped();
-    (0..VARIANTS).find_map(|k| {
+    (0..variants()).find_map(|k| {
         let bytes = damaged(&original, k);
         let parsed = std::panic::catch_unwind(|| c3dio::C3d::from_bytes(&bytes));
         parsed.is_err().then(|| {
@@ -112,7 +122,7 @@ fn one_that_panics_in_the_crate(dir: &Path) -> Option<PathBuf> {
 fn a_panic_inside_the_c3d_crate_prints_only_footfalls_error() {
     let dir = tempfile::tempdir().unwrap();
     let Some(c3d) = one_that_panics_in_the_crate(dir.path()) else {
-        panic!("none of {VARIANTS} damaged copies makes the crate panic: the test sees nothing");
+        panic!("none of the {} damaged copies makes the crate panic: the test sees nothing", variants());
     };
     let ik = root().join("data/raw/opensim_subject01/subject01_walk1_ik.mot");
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_footfall"))

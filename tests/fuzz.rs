@@ -5,8 +5,8 @@
 //! Each case mutates a seed of the checked-in corpus (`tests/data/fuzz/`) and checks: no
 //! panic, done within 10 s, and either a successful load (whose object then works once)
 //! or an error whose message names the file. The RNG seed is fixed, so a run is
-//! reproducible; `FOOTFALL_FUZZ_CASES` sets the cases per library target (the CLI target
-//! runs a tenth of them) and `FOOTFALL_FUZZ_SEED` (any text) picks other cases. Inputs that once failed live in `tests/data/fuzz/regressions/`
+//! reproducible; `FOOTFALL_FUZZ_CASES` sets the cases per target (without it, the CLI target,
+//! one process per case, runs a tenth of the library targets' count) and `FOOTFALL_FUZZ_SEED` (any text) picks other cases. Inputs that once failed live in `tests/data/fuzz/regressions/`
 //! and are replayed by every run. A failing case is written to
 //! `target/fuzz-failures/<target>/` after shrinking.
 
@@ -221,7 +221,11 @@ fn regressions_stay_fixed() {
 
 #[test]
 fn fuzz_command_line() {
-    let n = (cases(SHORT) / 10).max(20);
+    let n = if std::env::var_os("FOOTFALL_FUZZ_CASES").is_some() {
+        cases(SHORT)
+    } else {
+        SHORT / 10
+    };
     let scratch = tempfile::tempdir().unwrap();
     let result = runner("cli", n).run(&cli::case(), |c| {
         let dir = scratch.path().to_path_buf();
