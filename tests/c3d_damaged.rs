@@ -122,7 +122,10 @@ fn one_that_panics_in_the_crate(dir: &Path) -> Option<PathBuf> {
 fn a_panic_inside_the_c3d_crate_prints_only_footfalls_error() {
     let dir = tempfile::tempdir().unwrap();
     let Some(c3d) = one_that_panics_in_the_crate(dir.path()) else {
-        panic!("none of the {} damaged copies makes the crate panic: the test sees nothing", variants());
+        panic!(
+            "none of the {} damaged copies makes the crate panic: the test sees nothing",
+            variants()
+        );
     };
     let ik = root().join("data/raw/opensim_subject01/subject01_walk1_ik.mot");
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_footfall"))

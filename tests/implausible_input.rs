@@ -392,3 +392,48 @@ fn a_negative_belt_speed_in_a_meta_file_is_refused_naming_the_field() {
         ],
     );
 }
+
+#[test]
+fn forces_that_imply_another_body_are_refused_by_track_as_by_check() {
+    // the vertical forces × 1.5: the balance reads a body half as heavy again as the model's
+    let tmp = tempfile::tempdir().unwrap();
+    let csv = edited_csv(tmp.path(), &["grf_y_r", "grf_y_l"], |v| 1.5 * v);
+    let checked = footfall(&["check", s(&csv), "--out", s(&tmp.path().join("check"))]);
+    let tracked = track(tmp.path(), &csv, None);
+    for o in [&checked, &tracked] {
+        assert_exit(
+            o,
+            1,
+            &[
+                "trial.csv: the vertical forces imply a body of",
+                "the model's is",
+                "(+50 %)",
+                "give the subject's model with --model",
+            ],
+        );
+    }
+}
+
+#[test]
+fn forces_a_sixth_off_the_models_body_are_tracked_with_a_note() {
+    let tmp = tempfile::tempdir().unwrap();
+    let csv = edited_csv(tmp.path(), &["grf_y_r", "grf_y_l"], |v| 1.15 * v);
+    let out = tmp.path().join("run");
+    let o = footfall(&[
+        "track",
+        "--data",
+        s(&csv),
+        "--out",
+        s(&out),
+        "--max-iter",
+        "1",
+    ]);
+    // the iteration limit (exit 3), with the mass named before the solve
+    assert_eq!(o.status.code(), Some(3), "{}", stderr(&o));
+    let err = stderr(&o);
+    assert!(
+        err.contains("trial.csv: the vertical forces imply a body of")
+            && err.contains("+15 % from the model's"),
+        "{err}"
+    );
+}

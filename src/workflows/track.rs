@@ -3,6 +3,7 @@
 
 use super::run_folder::GaitRun;
 use super::{note, warn_note, Progress};
+use crate::data::GaitData;
 use crate::integrate::IntegratorSettings;
 use crate::model::effects::EffectSpec;
 use crate::model::GaitModel;
@@ -105,8 +106,9 @@ impl TrackingProblem {
         let seq = PhaseSequence::load(&run.phases)?;
         let sets = seq.resolve(&model, &run.phases)?;
         let trial = super::trial::load_trial(&run.into())?;
-        let trial_notes = trial.notes;
+        let mut trial_notes = trial.notes;
         let mut data = trial.data;
+        trial_notes.extend(forces_fit_the_body(&data, &model)?);
         if run.mirror {
             data.swap_sides();
         }
@@ -142,7 +144,6 @@ impl TrackingProblem {
                     anyhow!("{source}: {e}")
                 }
             })?;
-        let mut trial_notes = trial_notes;
         if run.guess == Guess::InverseDynamics {
             let r =
                 start::from_inverse_dynamics(&model, &data, &setup.node_times, &mut setup.guess)
@@ -421,6 +422,23 @@ impl TrackingProblem {
         let mut total = self.integration.get();
         total += tr.integration_totals();
         self.integration.set(total);
+    }
+}
+
+/// The measurement check's gate ([`crate::problems::check::gate`]): a trial whose forces
+/// cannot belong to the model's body (the mass they imply more than 25 % off, the
+/// horizontal force against the body's acceleration) is refused before the solve; one
+/// more than 10 % off is tracked with a note. A trial whose balance cannot be read (a
+/// foot never loaded, too short) is not judged here.
+fn forces_fit_the_body(data: &GaitData, model: &GaitModel) -> anyhow::Result<Vec<String>> {
+    use crate::problems::check::{gate, CheckError, CheckSettings};
+    match gate(data, model, &CheckSettings::default()) {
+        Ok(warnings) => Ok(warnings
+            .into_iter()
+            .map(|w| format!("{}: {w}", data.source.display()))
+            .collect()),
+        Err(CheckError::Implausible(why)) => Err(anyhow!(why)),
+        Err(_) => Ok(Vec::new()),
     }
 }
 

@@ -64,6 +64,25 @@ impl Fit {
     }
 }
 
+impl<'a> Problem<'a> {
+    /// The balance of `instants`, with the settings' Bartlett bandwidth and clock limit
+    /// (1.5 force samples inside the stated one).
+    pub fn new(
+        body: &'a Body,
+        signals: &'a Signals,
+        instants: &'a [Instant],
+        settings: &super::CheckSettings,
+    ) -> Self {
+        Problem {
+            body,
+            signals,
+            instants,
+            bandwidth: (settings.bandwidth_s * signals.force_rate).round() as usize,
+            clock_limit: settings.clock_limit_s - 1.5 / signals.force_rate,
+        }
+    }
+}
+
 impl Problem<'_> {
     /// Residual and Jacobian in `cols` at θ.
     pub fn linearise(&self, theta: &[f64; NPARAM], cols: &[Param]) -> Linearised {

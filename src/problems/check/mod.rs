@@ -231,43 +231,9 @@ pub fn check(
     settings: &CheckSettings,
     window: Option<(f64, f64)>,
 ) -> Result<MeasurementCheck, CheckError> {
-    for (s, name) in [(0, "right"), (1, "left")] {
-        let (_, feet) = data.force_record();
-        if !feet[s].fy.iter().any(|v| v.is_finite() && v.abs() > 0.0) {
-            return Err(CheckError::Forces(format!(
-                "{}: the {name} foot has no measured load: the balance needs both feet's ground forces (a foot in swing reads 0 N, a foot off the plates NaN)",
-                data.source.display()
-            )));
-        }
-    }
-    let signals = Signals::new(data, settings.cutoff_hz, settings.clock_limit_s)?;
-    let body = Body::of(model)?;
-    let instants: Vec<Instant> = signals
-        .instants
-        .iter()
-        .filter(|&&t| window.is_none_or(|(a, b)| t >= a && t <= b))
-        .map(|&t| body.instant(&signals, t))
-        .collect();
-    let needed = (0.25 * signals.force_rate).ceil() as usize;
-    if instants.len() < needed.max(20) {
-        let seconds = match (instants.first(), instants.last()) {
-            (Some(a), Some(b)) => b.t - a.t,
-            _ => 0.0,
-        };
-        return Err(CheckError::TooShort {
-            instants: instants.len(),
-            seconds,
-            margin_s: settings.clock_limit_s,
-            needed: needed.max(20),
-        });
-    }
-    let problem = Problem {
-        body: &body,
-        signals: &signals,
-        instants: &instants,
-        bandwidth: (settings.bandwidth_s * signals.force_rate).round() as usize,
-        clock_limit: settings.clock_limit_s - 1.5 / signals.force_rate,
-    };
+    let (signals, body) = balance_inputs(data, model, settings)?;
+    let instants = balance_instants(&signals, &body, settings, window)?;
+    let problem = Problem::new(&body, &signals, &instants, settings);
     let mass = (body.mass(), implied_mass(&problem));
     let warnings =
         plausibility::check_balance(data, mass.0, mass.1, horizontal_correlation(&problem))?;
@@ -295,6 +261,80 @@ pub fn check(
         rates: (signals.force_rate, signals.kinematic_rate),
         warnings,
     })
+}
+
+/// Whether the trial's forces can belong to the body of `model`, as the measurement
+/// check judges them before it reads anything (the mass the vertical forces imply within
+/// 25 % of the model's, the horizontal force not running against the body's
+/// acceleration): the gate a solve passes before it starts. `Ok` holds the warnings (a
+/// mass more than 10 % off); `Err(CheckError::Implausible)` refuses the trial; any other
+/// error says that the balance cannot be read on this trial (a foot without forces, too
+/// short), and so cannot judge it.
+pub fn gate(
+    data: &GaitData,
+    model: &GaitModel,
+    settings: &CheckSettings,
+) -> Result<Vec<String>, CheckError> {
+    let (signals, body) = balance_inputs(data, model, settings)?;
+    let instants = balance_instants(&signals, &body, settings, None)?;
+    let problem = Problem::new(&body, &signals, &instants, settings);
+    plausibility::check_balance(
+        data,
+        body.mass(),
+        implied_mass(&problem),
+        horizontal_correlation(&problem),
+    )
+}
+
+/// The trial's filtered signals and the model's segments, once both feet are known to
+/// carry loads.
+fn balance_inputs(
+    data: &GaitData,
+    model: &GaitModel,
+    settings: &CheckSettings,
+) -> Result<(Signals, Body), CheckError> {
+    for (s, name) in [(0, "right"), (1, "left")] {
+        let (_, feet) = data.force_record();
+        if !feet[s].fy.iter().any(|v| v.is_finite() && v.abs() > 0.0) {
+            return Err(CheckError::Forces(format!(
+                "{}: the {name} foot has no measured load: the balance needs both feet's ground forces (a foot in swing reads 0 N, a foot off the plates NaN)",
+                data.source.display()
+            )));
+        }
+    }
+    let signals = Signals::new(data, settings.cutoff_hz, settings.clock_limit_s)?;
+    let body = Body::of(model)?;
+    Ok((signals, body))
+}
+
+/// The instants inside `window` (all when `None`) where both feet's loads are known,
+/// enough of them for the balance to be read.
+fn balance_instants(
+    signals: &Signals,
+    body: &Body,
+    settings: &CheckSettings,
+    window: Option<(f64, f64)>,
+) -> Result<Vec<Instant>, CheckError> {
+    let instants: Vec<Instant> = signals
+        .instants
+        .iter()
+        .filter(|&&t| window.is_none_or(|(a, b)| t >= a && t <= b))
+        .map(|&t| body.instant(signals, t))
+        .collect();
+    let needed = (0.25 * signals.force_rate).ceil() as usize;
+    if instants.len() < needed.max(20) {
+        let seconds = match (instants.first(), instants.last()) {
+            (Some(a), Some(b)) => b.t - a.t,
+            _ => 0.0,
+        };
+        return Err(CheckError::TooShort {
+            instants: instants.len(),
+            seconds,
+            margin_s: settings.clock_limit_s,
+            needed: needed.max(20),
+        });
+    }
+    Ok(instants)
 }
 
 /// Correlation of the measured horizontal ground force with the body's Σ m aₓ.
