@@ -437,3 +437,51 @@ fn forces_a_sixth_off_the_models_body_are_tracked_with_a_note() {
         "{err}"
     );
 }
+
+#[test]
+fn opensim_forces_shorter_than_the_motion_are_refused_naming_both_spans() {
+    // the bundled external loads cut at 1.0 s, the kinematics left whole
+    let tmp = tempfile::tempdir().unwrap();
+    let src = root().join("data/raw/opensim_subject01/subject01_walk1_grf.mot");
+    let text = std::fs::read_to_string(src).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    let end = lines.iter().position(|l| l.trim() == "endheader").unwrap();
+    let rows: Vec<&str> = lines[end + 2..]
+        .iter()
+        .copied()
+        .filter(|l| l.split('\t').next().unwrap().trim().parse::<f64>().unwrap() <= 1.0)
+        .collect();
+    let mut out = String::new();
+    for l in &lines[..end + 2] {
+        let l = if l.starts_with("datarows") {
+            format!("datarows {}", rows.len())
+        } else if l.starts_with("range") {
+            "range 0.000000 1.000000".to_string()
+        } else {
+            l.to_string()
+        };
+        out += &format!("{l}\n");
+    }
+    for l in rows {
+        out += &format!("{l}\n");
+    }
+    let grf = tmp.path().join("grf.mot");
+    std::fs::write(&grf, out).unwrap();
+    let check = tmp.path().join("check");
+    for o in [
+        footfall(&[
+            "check",
+            "--data",
+            s(&ik()),
+            "--forces",
+            s(&grf),
+            "--belt-speed",
+            "1.1322",
+            "--out",
+            s(&check),
+        ]),
+        track(tmp.path(), &ik(), Some(&grf)),
+    ] {
+        assert_exit(&o, 1, &["grf.mot", "the forces cover", "the kinematics"]);
+    }
+}

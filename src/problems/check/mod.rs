@@ -214,9 +214,46 @@ pub struct MeasurementCheck {
     pub rates: (f64, f64),
     /// What the plausibility checks say short of refusing the trial.
     pub warnings: Vec<String>,
+    /// The kinematics' first and last instants (s): the motion the instants read lie in.
+    pub motion: (f64, f64),
+}
+
+/// Where the balance was read: its first and last instants (s), how many there are, and
+/// the gaps between them longer than two force samples (no force known for a foot).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Coverage {
+    /// First instant read (s).
+    pub first: f64,
+    /// Last instant read (s).
+    pub last: f64,
+    /// Instants read.
+    pub samples: usize,
+    /// Gaps inside `[first, last]` longer than two force samples.
+    pub gaps: usize,
+    /// Their total length (s).
+    pub gap_s: f64,
 }
 
 impl MeasurementCheck {
+    /// Where the balance was read.
+    pub fn coverage(&self) -> Coverage {
+        let step = 2.0 / self.rates.0;
+        let (mut gaps, mut gap_s) = (0, 0.0);
+        for w in self.time.windows(2) {
+            if w[1] - w[0] > step {
+                gaps += 1;
+                gap_s += w[1] - w[0];
+            }
+        }
+        Coverage {
+            first: self.time.first().copied().unwrap_or(f64::NAN),
+            last: self.time.last().copied().unwrap_or(f64::NAN),
+            samples: self.time.len(),
+            gaps,
+            gap_s,
+        }
+    }
+
     /// The readings found, in the order found.
     pub fn found(&self) -> impl Iterator<Item = &Reading> {
         self.readings.iter().filter(|r| r.verdict == Verdict::Found)
@@ -260,6 +297,10 @@ pub fn check(
         momentum,
         rates: (signals.force_rate, signals.kinematic_rate),
         warnings,
+        motion: (
+            data.time.first().copied().unwrap_or(f64::NAN),
+            data.time.last().copied().unwrap_or(f64::NAN),
+        ),
     })
 }
 

@@ -56,6 +56,7 @@ pub fn verdict_text(c: &MeasurementCheck) -> String {
         }
         s.push('\n');
     }
+    s.push_str(&coverage_text(c));
     let [before, after] = &c.thresholds;
     writeln!(
         s,
@@ -63,6 +64,26 @@ pub fn verdict_text(c: &MeasurementCheck) -> String {
         before.peak_force, after.peak_force, after.force_limit, before.rms_moment, after.rms_moment, after.moment_limit
     )
     .ok();
+    s
+}
+
+/// Where the balance was read, against the motion: a trial whose forces stop early, start
+/// late or have gaps is read only where both feet's loads are known, and says so.
+pub fn coverage_text(c: &MeasurementCheck) -> String {
+    let cov = c.coverage();
+    let mut s = format!(
+        "read over {:.3}–{:.3} s ({} force samples with both feet's loads known) of the motion's {:.3}–{:.3} s",
+        cov.first, cov.last, cov.samples, c.motion.0, c.motion.1
+    );
+    if cov.gaps > 0 {
+        write!(
+            s,
+            ", with {} gap(s) of {:.3} s in all where a foot's load is unknown",
+            cov.gaps, cov.gap_s
+        )
+        .ok();
+    }
+    s.push('\n');
     s
 }
 
