@@ -1,19 +1,6 @@
 //! `footfall solve` end to end: a converged run folder, warm start, and clear errors.
 
-use std::path::PathBuf;
-use std::process::Command;
-
-fn root() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
-}
-
-fn footfall(args: &[&str]) -> std::process::Output {
-    Command::new(env!("CARGO_BIN_EXE_footfall"))
-        .args(args)
-        .current_dir(root())
-        .output()
-        .expect("run footfall")
-}
+use crate::common::footfall;
 
 #[test]
 fn solve_writes_a_converged_run_and_warm_starts_from_it() {
