@@ -1,0 +1,325 @@
+//! Findings across trials: an instrument's readings (plate clocks, gains, CoP offsets)
+//! pooled over the trials of a lab session, the body's (mass, trunk) over the trials of a
+//! subject. Each trial's candidate read alone (the check's first step, the same reading
+//! in every trial whatever else it found) is pooled ([`super::pool`]); a pooled reading is
+//! beyond its band when its |z| exceeds the Bonferroni point of the family-wise level over
+//! every pooled reading of the study. Of those beyond, the one that explains most of the
+//! trials' residual is the group's shared effect, the others its look-alikes, as the
+//! check's own first step decides. A finding of the check that holds in some trials of a
+//! group and not in the others is said to.
+
+use super::pool::{pool, Pooled, Sample};
+use super::table::{Reading, Status, TrialEntry};
+use crate::problems::check::Param;
+use crate::problems::diagnose::chi2_1_upper;
+use serde::Serialize;
+
+/// The candidates pooled over a lab session's trials.
+pub const INSTRUMENT: [Param; 7] = [
+    Param::SharedClock,
+    Param::ClockRight,
+    Param::ClockLeft,
+    Param::GainRight,
+    Param::GainLeft,
+    Param::CopRight,
+    Param::CopLeft,
+];
+
+/// The candidates pooled over a subject's trials.
+pub const BODY: [Param; 2] = [Param::BodyMass, Param::TrunkCom];
+
+/// What a group of trials shares.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum GroupKind {
+    /// A lab session: its instruments.
+    Session,
+    /// A subject: the body.
+    Subject,
+}
+
+/// One candidate pooled over a group.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct PooledReading {
+    /// Candidate ([`Param::name`]).
+    pub effect: String,
+    /// The pooled reading.
+    pub pooled: Pooled,
+    /// Mean share of the trials' residual it explains, read alone.
+    pub explained: f64,
+    /// Whether |z| exceeds the study's threshold.
+    pub beyond: bool,
+    /// Trials whose check found it.
+    pub found_in: Vec<String>,
+}
+
+/// The pooled readings of one group and what they say.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct GroupFindings {
+    /// Session or subject.
+    pub kind: GroupKind,
+    /// Its name in the manifest.
+    pub name: String,
+    /// The group's trials with a check, by id.
+    pub trials: Vec<String>,
+    /// The group's trials without one (failed or not run).
+    pub missing: Vec<String>,
+    /// Each candidate, pooled.
+    pub readings: Vec<PooledReading>,
+    /// The shared effect found, if any.
+    pub shared: Option<String>,
+    /// The other candidates beyond their band, which the pool cannot tell from it.
+    pub look_alikes: Vec<String>,
+    /// What the readings say, in sentences.
+    pub statements: Vec<String>,
+}
+
+/// Pool every session's and subject's trials; the groups and the study's threshold
+/// (`None` when nothing could be pooled).
+pub fn pool_study(trials: &[TrialEntry], level: f64) -> (Vec<GroupFindings>, Option<f64>) {
+    let mut groups = Vec::new();
+    for (kind, params) in [
+        (GroupKind::Session, &INSTRUMENT[..]),
+        (GroupKind::Subject, &BODY[..]),
+    ] {
+        for name in names(trials, kind) {
+            let members: Vec<&TrialEntry> = trials
+                .iter()
+                .filter(|t| group_name(t, kind) == name)
+                .collect();
+            groups.push(pool_group(kind, &name, &members, params));
+        }
+    }
+    let tests: usize = groups.iter().map(|g| g.readings.len()).sum();
+    if tests == 0 {
+        return (groups, None);
+    }
+    let threshold = chi2_1_upper(level / tests as f64).sqrt();
+    for g in groups.iter_mut() {
+        decide(g, threshold, level);
+    }
+    (groups, Some(threshold))
+}
+
+fn group_name(t: &TrialEntry, kind: GroupKind) -> &str {
+    match kind {
+        GroupKind::Session => &t.session,
+        GroupKind::Subject => &t.subject,
+    }
+}
+
+/// The group names of `kind` in order of first appearance (empty names are no group).
+fn names(trials: &[TrialEntry], kind: GroupKind) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    for t in trials {
+        let n = group_name(t, kind);
+        if !n.is_empty() && !out.iter().any(|o| o == n) {
+            out.push(n.to_string());
+        }
+    }
+    out
+}
+
+fn alone_of<'a>(t: &'a TrialEntry, p: Param) -> Option<&'a Reading> {
+    t.check
+        .as_ref()?
+        .alone
+        .iter()
+        .find(|r| r.effect == p.name())
+}
+
+fn pool_group(
+    kind: GroupKind,
+    name: &str,
+    members: &[&TrialEntry],
+    params: &[Param],
+) -> GroupFindings {
+    let read: Vec<&TrialEntry> = members
+        .iter()
+        .copied()
+        .filter(|t| t.status == Status::Done && t.check.is_some())
+        .collect();
+    let mut readings = Vec::new();
+    for &p in params {
+        let rs: Vec<&Reading> = read.iter().filter_map(|t| alone_of(t, p)).collect();
+        let samples: Vec<Sample> = rs
+            .iter()
+            .filter_map(|r| {
+                Some(Sample {
+                    estimate: r.estimate?,
+                    sd: r.sd?,
+                    sd_within: r.sd_within?,
+                })
+            })
+            .collect();
+        let Some(pooled) = pool(&samples).filter(|q| q.trials >= 2) else {
+            continue;
+        };
+        let explained = rs.iter().filter_map(|r| r.explained).sum::<f64>() / rs.len() as f64;
+        readings.push(PooledReading {
+            effect: p.name().to_string(),
+            pooled,
+            explained,
+            beyond: false,
+            found_in: read
+                .iter()
+                .filter(|t| {
+                    t.check
+                        .as_ref()
+                        .is_some_and(|c| c.found.iter().any(|f| f == p.name()))
+                })
+                .map(|t| t.id.clone())
+                .collect(),
+        });
+    }
+    GroupFindings {
+        kind,
+        name: name.to_string(),
+        trials: read.iter().map(|t| t.id.clone()).collect(),
+        missing: members
+            .iter()
+            .filter(|t| !read.iter().any(|r| r.id == t.id))
+            .map(|t| t.id.clone())
+            .collect(),
+        readings,
+        shared: None,
+        look_alikes: vec![],
+        statements: vec![],
+    }
+}
+
+/// Mark the readings beyond `threshold`, pick the shared effect, and say what holds.
+fn decide(g: &mut GroupFindings, threshold: f64, level: f64) {
+    for r in g.readings.iter_mut() {
+        r.beyond = r.pooled.z.abs() > threshold;
+    }
+    let best = g
+        .readings
+        .iter()
+        .filter(|r| r.beyond)
+        .max_by(|a, b| a.explained.total_cmp(&b.explained))
+        .map(|r| r.effect.clone());
+    g.look_alikes = g
+        .readings
+        .iter()
+        .filter(|r| r.beyond && Some(&r.effect) != best.as_ref())
+        .map(|r| r.effect.clone())
+        .collect();
+    g.shared = best;
+    g.statements = statements(g, threshold, level);
+}
+
+fn label(effect: &str) -> &'static str {
+    param(effect).map_or("?", |p| p.label())
+}
+
+fn param(effect: &str) -> Option<Param> {
+    Param::ALL.into_iter().find(|p| p.name() == effect)
+}
+
+/// `+23.16 ± 2.74 ms`
+pub fn value_text(effect: &str, v: f64, sd: f64) -> String {
+    match param(effect) {
+        Some(p) => {
+            let (v, unit) = p.display_value(v);
+            let (sd, _) = p.display_value(sd);
+            format!("{v:+.2} ± {sd:.2} {unit}")
+        }
+        None => format!("{v:+.4} ± {sd:.4}"),
+    }
+}
+
+fn statements(g: &GroupFindings, threshold: f64, level: f64) -> Vec<String> {
+    let what = match g.kind {
+        GroupKind::Session => "instrument effect",
+        GroupKind::Subject => "body effect",
+    };
+    let n = g.trials.len();
+    let mut out = Vec::new();
+    if g.readings.is_empty() {
+        out.push(format!(
+            "{n} trial(s) read: fewer than two, nothing to pool"
+        ));
+        return out;
+    }
+    match g
+        .readings
+        .iter()
+        .find(|r| Some(&r.effect) == g.shared.as_ref())
+    {
+        Some(r) => {
+            let p = &r.pooled;
+            let mut s = format!(
+                "shared {what}: {} {} over {} trials (z {:.1} against {:.2}); the check found it in {} of them",
+                label(&r.effect),
+                value_text(&r.effect, p.estimate, p.sd),
+                p.trials,
+                p.z,
+                threshold,
+                r.found_in.len()
+            );
+            if p.p_heterogeneity < level {
+                s.push_str(&format!("; the trials disagree (Cochran's Q {:.1} on {} df, p {:.3}, I² {:.0} %): it is not the same in every trial", p.q, p.df, p.p_heterogeneity, 100.0 * p.i2));
+            } else if p.df > 0 {
+                s.push_str(&format!(
+                    "; the trials agree (Cochran's Q {:.1} on {} df, p {:.2})",
+                    p.q, p.df, p.p_heterogeneity
+                ));
+            }
+            out.push(s);
+            if !g.look_alikes.is_empty() {
+                out.push(format!(
+                    "the pooled readings cannot tell it from: {}",
+                    g.look_alikes
+                        .iter()
+                        .filter_map(|e| g.readings.iter().find(|r| &r.effect == e))
+                        .map(|r| format!(
+                            "{} {} (z {:.1})",
+                            label(&r.effect),
+                            value_text(&r.effect, r.pooled.estimate, r.pooled.sd),
+                            r.pooled.z
+                        ))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ));
+            }
+        }
+        None => out.push(format!(
+            "no shared {what}: every pooled reading is within its band (|z| ≤ {threshold:.2})"
+        )),
+    }
+    for r in &g.readings {
+        let k = r.found_in.len();
+        if k == 0 || k == n {
+            continue;
+        }
+        let not: Vec<&String> = g
+            .trials
+            .iter()
+            .filter(|t| !r.found_in.contains(t))
+            .collect();
+        out.push(format!(
+            "{}: found in {} only ({k} of {n}), not in {}; pooled {} (z {:.1}){}",
+            label(&r.effect),
+            r.found_in.join(", "),
+            not.iter()
+                .map(|s| s.as_str())
+                .collect::<Vec<_>>()
+                .join(", "),
+            value_text(&r.effect, r.pooled.estimate, r.pooled.sd),
+            r.pooled.z,
+            if r.beyond {
+                ""
+            } else {
+                ": it does not hold across the trials"
+            }
+        ));
+    }
+    if !g.missing.is_empty() {
+        out.push(format!(
+            "not read (failed or not run): {}",
+            g.missing.join(", ")
+        ));
+    }
+    out
+}
