@@ -393,22 +393,3 @@ fn resolve(base: &Path, p: &str) -> PathBuf {
         given
     }
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn csv_cells_honour_quotes() {
-        assert_eq!(csv_cells(r#"a, "b,c" ,"d""e""#), ["a", "b,c", "d\"e"]);
-        assert_eq!(csv_cells("x,,y"), ["x", "", "y"]);
-    }
-
-    #[test]
-    fn ids_are_folder_names() {
-        assert!(valid_id("s4_walk-1+edit.2"));
-        assert!(!valid_id(".hidden"));
-        assert!(!valid_id("a/b"));
-        assert!(!valid_id("a b"));
-    }
-}

@@ -141,14 +141,3 @@ pub fn submit(array: &Path, collect: &Path) -> Result<(String, String), SubmitEr
     let after = sbatch(collect, &[format!("--dependency=afterany:{id}")])?;
     Ok((id, after))
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn quoting_survives_quotes_and_spaces() {
-        assert_eq!(quote("a b"), "'a b'");
-        assert_eq!(quote("it's"), r"'it'\''s'");
-    }
-}
