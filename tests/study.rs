@@ -258,6 +258,14 @@ fn a_clock_edit_shared_by_a_sessions_trials_is_found_in_each_and_pooled_and_unto
         "pooled {read} ± {} against the untouched session, edit 0.02",
         edited.sd
     );
+    // the checks' joint readings, pooled: the same edit against the same untouched pool
+    let joint = r.joint.expect("both checks found the right clock alone");
+    let read = joint.estimate - untouched.estimate;
+    assert!(
+        (read - 0.02).abs() <= (0.2 * 0.02f64).max(2.0 * joint.sd),
+        "joint pooled {read} ± {} against the untouched session, edit 0.02",
+        joint.sd
+    );
     // lab-a, two untouched recordings: no shared instrument effect, none beyond its band
     let a = group(&t, "lab-a");
     assert_eq!(a.shared, None, "{:?}", a.statements);

@@ -5,7 +5,8 @@
 //! beyond its band when its |z| exceeds the Bonferroni point of the family-wise level over
 //! every pooled reading of the study. Of those beyond, the one that explains most of the
 //! trials' residual is the group's shared effect, the others its look-alikes, as the
-//! check's own first step decides. A finding of the check that holds in some trials of a
+//! check's own first step decides; where every trial's check found the same effects, the
+//! shared effect's joint readings (each check's final value) are pooled too. A finding of the check that holds in some trials of a
 //! group and not in the others is said to.
 
 use super::pool::{pool, Pooled, Sample};
@@ -49,6 +50,10 @@ pub struct PooledReading {
     pub explained: f64,
     /// Whether |z| exceeds the study's threshold.
     pub beyond: bool,
+    /// The trials' readings jointly with what each check found, pooled, where every
+    /// trial's check found the same candidates (the same reading in each): the group's
+    /// best value of an effect its checks found.
+    pub joint: Option<Pooled>,
     /// Trials whose check found it.
     pub found_in: Vec<String>,
 }
@@ -161,6 +166,7 @@ fn pool_group(
             pooled,
             explained,
             beyond: false,
+            joint: joint(&read, p),
             found_in: read
                 .iter()
                 .filter(|t| {
@@ -186,6 +192,35 @@ fn pool_group(
         look_alikes: vec![],
         statements: vec![],
     }
+}
+
+/// The trials' joint readings of `p` pooled, when every trial's check found the same
+/// candidates, `p` among them.
+fn joint(read: &[&TrialEntry], p: Param) -> Option<Pooled> {
+    let checks: Vec<_> = read.iter().filter_map(|t| t.check.as_ref()).collect();
+    let first = checks.first()?;
+    let mut same: Vec<&String> = first.found.iter().collect();
+    same.sort();
+    let all_same = checks.iter().all(|c| {
+        let mut f: Vec<&String> = c.found.iter().collect();
+        f.sort();
+        f == same
+    });
+    if !all_same || !first.found.iter().any(|f| f == p.name()) {
+        return None;
+    }
+    let samples: Vec<Sample> = checks
+        .iter()
+        .filter_map(|c| {
+            let r = c.readings.iter().find(|r| r.effect == p.name())?;
+            Some(Sample {
+                estimate: r.estimate?,
+                sd: r.sd?,
+                sd_within: r.sd_within?,
+            })
+        })
+        .collect();
+    pool(&samples).filter(|q| q.trials >= 2)
 }
 
 /// Mark the readings beyond `threshold`, pick the shared effect, and say what holds.
@@ -264,6 +299,12 @@ fn statements(g: &GroupFindings, threshold: f64, level: f64) -> Vec<String> {
                 s.push_str(&format!(
                     "; the trials agree (Cochran's Q {:.1} on {} df, p {:.2})",
                     p.q, p.df, p.p_heterogeneity
+                ));
+            }
+            if let Some(j) = &r.joint {
+                s.push_str(&format!(
+                    "; read jointly with what each trial's check found, {}",
+                    value_text(&r.effect, j.estimate, j.sd)
                 ));
             }
             out.push(s);

@@ -221,6 +221,7 @@ fn group_table(g: &GroupFindings) -> Table {
             "I²",
             "found by the check in",
             "beyond the band",
+            "pooled jointly with the checks' findings",
         ]
         .map(String::from)
         .to_vec(),
@@ -243,6 +244,8 @@ fn group_table(g: &GroupFindings) -> Table {
                     format!("{:.0} %", 100.0 * p.i2),
                     r.found_in.join(", "),
                     if r.beyond { "yes" } else { "no" }.into(),
+                    r.joint
+                        .map_or("—".into(), |j| value_text(&r.effect, j.estimate, j.sd)),
                 ]
             })
             .collect(),
