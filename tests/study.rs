@@ -364,6 +364,31 @@ fn a_killed_study_resumes_without_redoing_finished_trials() {
             .any(|l| l.starts_with("[") && l.contains("w1: check")),
         "{lines:?}"
     );
+    // a row that now names a missing file: its old folder is not taken for its results
+    let text: String = std::fs::read_to_string(&m)
+        .unwrap()
+        .lines()
+        .map(|l| {
+            let mut cells: Vec<&str> = l.split(',').collect();
+            if cells[0] == "w2" {
+                cells[4] = "/nonexistent/w2.csv";
+            }
+            cells.join(",") + "\n"
+        })
+        .collect();
+    std::fs::write(&m, text).unwrap();
+    let (outcome, _) = run(&s, &out, 2);
+    let t = outcome.table.unwrap();
+    let w2 = t.trials.iter().find(|e| e.id == "w2").unwrap();
+    assert_eq!(w2.status, Status::Failed);
+    let error = w2.error.as_deref().unwrap();
+    assert!(error.contains("/nonexistent/w2.csv"), "{error}");
+    assert!(w2.check.is_none(), "the old check of w2 is in the table");
+    assert!(
+        out.join("trials/w2/check/summary.json").exists(),
+        "the old folder was removed"
+    );
+    assert_eq!(group(&t, "lab-a").trials, ["w1"]);
 }
 
 #[test]

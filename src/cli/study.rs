@@ -32,7 +32,8 @@ pub struct Args {
     /// Family-wise significance level of each check and of the pooled readings.
     #[arg(long, default_value_t = 0.05, value_parser = super::validate::positive)]
     level: f64,
-    /// Trials at once (default: the machine's cores).
+    /// Trials at once (default: the machine's cores), each with the cores divided by N
+    /// for a track's own threads.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=1024))]
     jobs: Option<u32>,
     /// Run only this row of the manifest (1-based) and write no table: a Slurm task.

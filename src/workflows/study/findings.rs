@@ -10,7 +10,7 @@
 //! group and not in the others is said to.
 
 use super::pool::{pool, Pooled, Sample};
-use super::table::{Reading, Status, TrialEntry};
+use super::table::{Reading, TrialEntry};
 use crate::problems::check::Param;
 use crate::problems::diagnose::chi2_1_upper;
 use serde::Serialize;
@@ -65,7 +65,7 @@ pub struct GroupFindings {
     pub kind: GroupKind,
     /// Its name in the manifest.
     pub name: String,
-    /// The group's trials with a check, by id.
+    /// The group's trials with a check (of the current inputs), by id.
     pub trials: Vec<String>,
     /// The group's trials without one (failed or not run).
     pub missing: Vec<String>,
@@ -125,7 +125,7 @@ fn names(trials: &[TrialEntry], kind: GroupKind) -> Vec<String> {
     out
 }
 
-fn alone_of<'a>(t: &'a TrialEntry, p: Param) -> Option<&'a Reading> {
+fn alone_of(t: &TrialEntry, p: Param) -> Option<&Reading> {
     t.check
         .as_ref()?
         .alone
@@ -142,7 +142,7 @@ fn pool_group(
     let read: Vec<&TrialEntry> = members
         .iter()
         .copied()
-        .filter(|t| t.status == Status::Done && t.check.is_some())
+        .filter(|t| t.check.is_some())
         .collect();
     let mut readings = Vec::new();
     for &p in params {

@@ -170,21 +170,23 @@ pub fn read(path: &Path) -> Result<Vec<TrialRow>, ManifestError> {
 
 /// The cells of one CSV line (`"` quotes a cell; `""` inside quotes is one `"`).
 fn csv_cells(line: &str) -> Vec<String> {
-    let mut cells = vec![String::new()];
+    let mut cells = Vec::new();
+    let mut cell = String::new();
     let mut quoted = false;
     let mut chars = line.chars().peekable();
     while let Some(c) = chars.next() {
         match c {
             '"' if quoted && chars.peek() == Some(&'"') => {
                 chars.next();
-                cells.last_mut().unwrap_or(&mut String::new()).push('"');
+                cell.push('"');
             }
             '"' => quoted = !quoted,
-            ',' if !quoted => cells.push(String::new()),
-            _ => cells.last_mut().unwrap_or(&mut String::new()).push(c),
+            ',' if !quoted => cells.push(std::mem::take(&mut cell).trim().to_string()),
+            _ => cell.push(c),
         }
     }
-    cells.into_iter().map(|c| c.trim().to_string()).collect()
+    cells.push(cell.trim().to_string());
+    cells
 }
 
 fn csv_records(path: &Path, text: &str) -> Result<Vec<Record>, ManifestError> {

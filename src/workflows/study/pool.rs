@@ -105,7 +105,7 @@ fn shared_spread(s: &Sample) -> f64 {
 
 /// `P(χ²_k > x)`: the regularised upper incomplete gamma function `Q(k/2, x/2)`.
 pub fn chi2_upper(x: f64, k: f64) -> f64 {
-    if !(x > 0.0) {
+    if x.is_nan() || x <= 0.0 {
         return 1.0;
     }
     gamma_q(0.5 * k, 0.5 * x)

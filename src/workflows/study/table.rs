@@ -4,7 +4,7 @@
 //! track's status, objective and iterations; and the pooled readings ([`super::findings`]).
 
 use super::findings::{self, GroupFindings};
-use super::trial::{folder, ERROR_FILE, INPUTS_FILE};
+use super::trial::{complete, folder, Stage, ERROR_FILE};
 use super::{StudySettings, TrialRow};
 use crate::problems::check::Param;
 use serde::Serialize;
@@ -93,7 +93,7 @@ pub struct TrialEntry {
     pub status: Status,
     /// Why it failed (`status` failed), or which stage is missing (not run).
     pub error: Option<String>,
-    /// The check.
+    /// The check (also of a trial whose track failed).
     pub check: Option<CheckResult>,
     /// The track (with `--track`).
     pub track: Option<TrackResult>,
@@ -144,29 +144,33 @@ fn entry(dir: &Path, row: &TrialRow, settings: &StudySettings) -> TrialEntry {
         check: None,
         track: None,
     };
-    if let Some(err) = read_error(&tdir) {
-        e.status = Status::Failed;
-        e.error = Some(err);
-        return e;
-    }
-    let check = read_summary(&tdir.join("check")).map(|s| check_result(&s));
-    let track = settings
-        .track
-        .then(|| read_summary(&tdir.join("track")).map(|s| track_result(&s)))
-        .flatten();
-    let missing = match (&check, settings.track, &track) {
+    let read = |stage: Stage| {
+        let dir = tdir.join(stage.name());
+        complete(&dir, &stage.inputs(row, settings))
+            .then(|| read_summary(&dir))
+            .flatten()
+    };
+    e.check = read(Stage::Check).map(|s| check_result(&s));
+    e.track = if settings.track {
+        read(Stage::Track).map(|s| track_result(&s))
+    } else {
+        None
+    };
+    let missing = match (&e.check, settings.track, &e.track) {
         (None, _, _) => Some("check"),
         (Some(_), true, None) => Some("track"),
         _ => None,
     };
-    e.status = if missing.is_some() {
-        Status::NotRun
-    } else {
-        Status::Done
+    (e.status, e.error) = match (read_error(&tdir), missing) {
+        (Some(err), Some(_)) => (Status::Failed, Some(err)),
+        (_, Some(m)) => (
+            Status::NotRun,
+            Some(format!(
+                "no complete {m} folder for this row and these settings"
+            )),
+        ),
+        (_, None) => (Status::Done, None),
     };
-    e.error = missing.map(|m| format!("no complete {m} folder"));
-    e.check = check;
-    e.track = track;
     e
 }
 
@@ -181,12 +185,8 @@ fn read_error(dir: &Path) -> Option<String> {
     ))
 }
 
-/// A committed stage folder's `summary.json` (a folder without its inputs record is not
-/// a study's).
+/// A committed stage folder's `summary.json`.
 fn read_summary(stage: &Path) -> Option<serde_json::Value> {
-    if !stage.join(INPUTS_FILE).is_file() {
-        return None;
-    }
     let text = std::fs::read_to_string(stage.join("summary.json")).ok()?;
     serde_json::from_str(&text).ok()
 }

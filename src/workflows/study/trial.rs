@@ -37,7 +37,15 @@ pub fn folder(out: &Path, id: &str) -> PathBuf {
     out.join("trials").join(id)
 }
 
-/// Run `rows` with at most `jobs` at once; each trial's outcome, in `rows`' order.
+/// Threads each of `jobs` trials at once may use for its own parallel work (a track's
+/// shooting intervals): the machine's cores shared out, at least one.
+pub fn threads_per_trial(jobs: usize) -> usize {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    (cores / jobs.max(1)).max(1)
+}
+
+/// Run `rows` with at most `jobs` at once, each in a thread pool of its own
+/// ([`threads_per_trial`]); each trial's outcome, in `rows`' order.
 pub fn run_all(
     rows: &[&TrialRow],
     settings: &StudySettings,
@@ -48,13 +56,14 @@ pub fn run_all(
     let next = AtomicUsize::new(0);
     let finished = AtomicUsize::new(0);
     let results = Mutex::new(vec![Ran::Skipped; rows.len()]);
+    let threads = threads_per_trial(jobs);
     std::thread::scope(|s| {
         for _ in 0..jobs.min(rows.len()) {
             s.spawn(|| loop {
                 let i = next.fetch_add(1, Ordering::SeqCst);
                 let Some(row) = rows.get(i) else { break };
                 let start = std::time::Instant::now();
-                let (ran, what) = run_one(row, settings, out, progress);
+                let (ran, what) = in_pool(threads, || run_one(row, settings, out, progress));
                 let k = finished.fetch_add(1, Ordering::SeqCst) + 1;
                 progress.note(&format!(
                     "[{k}/{}] {}: {what} ({:.1} s)",
@@ -67,6 +76,15 @@ pub fn run_all(
         }
     });
     results.into_inner().unwrap_or_else(|p| p.into_inner())
+}
+
+/// `f` run in a thread pool of `threads` (in the caller's thread where the pool cannot
+/// be made).
+fn in_pool<T: Send>(threads: usize, f: impl FnOnce() -> T + Send) -> T {
+    match rayon::ThreadPoolBuilder::new().num_threads(threads).build() {
+        Ok(pool) => pool.install(f),
+        Err(_) => f(),
+    }
 }
 
 /// Run one trial's stages; what happened, in words.
@@ -116,13 +134,16 @@ pub fn run_one(
 
 /// The stages of a trial.
 #[derive(Debug, Clone, Copy)]
-enum Stage {
+pub enum Stage {
+    /// The measurement check (`check/`).
     Check,
+    /// The track (`track/`).
     Track,
 }
 
 impl Stage {
-    fn name(self) -> &'static str {
+    /// Its folder's name.
+    pub fn name(self) -> &'static str {
         match self {
             Stage::Check => "check",
             Stage::Track => "track",
@@ -130,7 +151,7 @@ impl Stage {
     }
 
     /// What the stage's results depend on.
-    fn inputs(self, row: &TrialRow, s: &StudySettings) -> serde_json::Value {
+    pub fn inputs(self, row: &TrialRow, s: &StudySettings) -> serde_json::Value {
         let f = &row.files;
         let files = json!({
             "data": f.data, "forces": f.forces, "plates": f.plates, "lab_axes": f.lab_axes,
@@ -147,7 +168,7 @@ impl Stage {
 }
 
 /// Whether the committed folder `target` was made from `inputs`.
-fn complete(target: &Path, inputs: &serde_json::Value) -> bool {
+pub fn complete(target: &Path, inputs: &serde_json::Value) -> bool {
     let Ok(text) = std::fs::read_to_string(target.join(INPUTS_FILE)) else {
         return false;
     };
