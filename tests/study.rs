@@ -175,6 +175,7 @@ fn settings(manifest: &Path) -> StudySettings {
     StudySettings {
         manifest: manifest.to_path_buf(),
         track: false,
+        diagnose: false,
         max_iter: 200,
         cutoff_hz: 6.0,
         level: 0.05,

@@ -18,11 +18,15 @@ pub struct Args {
     #[arg(long, default_value = "runs/study")]
     out: PathBuf,
     /// Build the study table from the finished trial folders of DIR (after a Slurm array).
-    #[arg(long, value_name = "DIR", conflicts_with_all = ["manifest", "slurm", "only_row", "track"])]
+    #[arg(long, value_name = "DIR", conflicts_with_all = ["manifest", "slurm", "only_row", "track", "diagnose"])]
     collect: Option<PathBuf>,
     /// Track each trial after its check (40–250 s a trial).
     #[arg(long)]
     track: bool,
+    /// Diagnose each track (`footfall diagnose`: score tests, held-out validation, a
+    /// re-fit; minutes a trial), its re-fits at --max-iter.
+    #[arg(long, requires = "track")]
+    diagnose: bool,
     /// A track's iteration limit (a row's max_iter overrides it).
     #[arg(long, default_value_t = 200, value_parser = super::validate::iterations)]
     max_iter: usize,
@@ -73,6 +77,7 @@ pub fn run(args: Args, progress: &CliProgress) -> Result<(), Failure> {
     let settings = StudySettings {
         manifest,
         track: args.track,
+        diagnose: args.diagnose,
         max_iter: args.max_iter,
         cutoff_hz: args.cutoff,
         level: args.level,

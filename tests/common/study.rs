@@ -1,4 +1,4 @@
-//! Helpers of the study tests (quick's `study` and suite's `study_slurm`).
+//! Helpers of the study tests (quick's `study` and suite's `study_runs`).
 
 use super::root;
 use std::path::{Path, PathBuf};

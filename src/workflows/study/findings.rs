@@ -75,6 +75,8 @@ pub struct GroupFindings {
     pub shared: Option<String>,
     /// The other candidates beyond their band, which the pool cannot tell from it.
     pub look_alikes: Vec<String>,
+    /// A subject's diagnoses: each effect they suggest, and in which trials.
+    pub model_stage: Vec<String>,
     /// What the readings say, in sentences.
     pub statements: Vec<String>,
 }
@@ -96,14 +98,12 @@ pub fn pool_study(trials: &[TrialEntry], level: f64) -> (Vec<GroupFindings>, Opt
         }
     }
     let tests: usize = groups.iter().map(|g| g.readings.len()).sum();
-    if tests == 0 {
-        return (groups, None);
-    }
-    let threshold = chi2_1_upper(level / tests as f64).sqrt();
+    let threshold = (tests > 0).then(|| chi2_1_upper(level / tests as f64).sqrt());
     for g in groups.iter_mut() {
-        decide(g, threshold, level);
+        // with nothing pooled no group has a reading to judge
+        decide(g, threshold.unwrap_or(f64::INFINITY), level);
     }
-    (groups, Some(threshold))
+    (groups, threshold)
 }
 
 fn group_name(t: &TrialEntry, kind: GroupKind) -> &str {
@@ -190,8 +190,63 @@ fn pool_group(
         readings,
         shared: None,
         look_alikes: vec![],
+        model_stage: match kind {
+            GroupKind::Subject => model_stage(&read),
+            GroupKind::Session => vec![],
+        },
         statements: vec![],
     }
+}
+
+/// Each effect the trials' diagnoses suggest (`--effect NAME:…`), with the trials that
+/// suggest it out of those diagnosed: the model's physics is the same in every trial of a
+/// subject.
+fn model_stage(read: &[&TrialEntry]) -> Vec<String> {
+    let diagnosed: Vec<(&str, Vec<&str>)> = read
+        .iter()
+        .filter_map(|t| {
+            let d = t.diagnose.as_ref()?;
+            let names = d
+                .add_effects
+                .iter()
+                .map(|l| l.split(':').next().unwrap_or(l))
+                .collect();
+            Some((t.id.as_str(), names))
+        })
+        .collect();
+    if diagnosed.is_empty() {
+        return vec![];
+    }
+    let mut effects: Vec<&str> = diagnosed.iter().flat_map(|(_, e)| e.clone()).collect();
+    effects.sort();
+    effects.dedup();
+    if effects.is_empty() {
+        return vec![format!(
+            "model stage: no diagnosis of the {} diagnosed trial(s) suggests an effect",
+            diagnosed.len()
+        )];
+    }
+    effects
+        .iter()
+        .map(|e| {
+            let with: Vec<&str> = diagnosed
+                .iter()
+                .filter(|(_, es)| es.contains(e))
+                .map(|(id, _)| *id)
+                .collect();
+            format!(
+                "model stage: {e} suggested in {} of {} diagnosed trial(s) ({}){}",
+                with.len(),
+                diagnosed.len(),
+                with.join(", "),
+                if with.len() < diagnosed.len() {
+                    ": not in the others"
+                } else {
+                    ""
+                }
+            )
+        })
+        .collect()
 }
 
 /// The trials' joint readings of `p` pooled, when every trial's check found the same
@@ -275,6 +330,7 @@ fn statements(g: &GroupFindings, threshold: f64, level: f64) -> Vec<String> {
         out.push(format!(
             "{n} trial(s) read: fewer than two, nothing to pool"
         ));
+        out.extend(g.model_stage.iter().cloned());
         return out;
     }
     match g
@@ -356,6 +412,7 @@ fn statements(g: &GroupFindings, threshold: f64, level: f64) -> Vec<String> {
             }
         ));
     }
+    out.extend(g.model_stage.iter().cloned());
     if !g.missing.is_empty() {
         out.push(format!(
             "not read (failed or not run): {}",

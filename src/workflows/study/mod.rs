@@ -81,7 +81,11 @@ pub struct StudySettings {
     pub manifest: PathBuf,
     /// Track each trial after its check.
     pub track: bool,
-    /// The track's iteration limit (a row's `max_iter` overrides it).
+    /// Diagnose each track (with `track`).
+    #[serde(default)]
+    pub diagnose: bool,
+    /// The track's iteration limit (a row's `max_iter` overrides it), and the diagnosis's
+    /// re-fits'.
     pub max_iter: usize,
     /// The check's low-pass cutoff (Hz; a row's `cutoff` overrides it).
     pub cutoff_hz: f64,
@@ -176,6 +180,9 @@ pub fn task_args(s: &StudySettings) -> Vec<String> {
             "--max-iter".into(),
             s.max_iter.to_string(),
         ]);
+    }
+    if s.track && s.diagnose {
+        a.push("--diagnose".into());
     }
     a
 }

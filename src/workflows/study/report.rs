@@ -70,6 +70,9 @@ pub fn csv(t: &StudyTable) -> String {
             "track_status",
             "track_objective",
             "track_iterations",
+            "diagnose_significant",
+            "diagnose_found",
+            "diagnose_add_effects",
         ]
         .map(String::from),
     );
@@ -121,6 +124,16 @@ fn csv_row(e: &TrialEntry) -> Vec<String> {
             .and_then(|x| x.iterations)
             .map_or(String::new(), |i| i.to_string()),
     );
+    let d = e.diagnose.as_ref();
+    r.push(
+        d.and_then(|d| d.significant)
+            .map_or(String::new(), |n| n.to_string()),
+    );
+    r.push(
+        d.and_then(|d| d.found)
+            .map_or(String::new(), |n| n.to_string()),
+    );
+    r.push(d.map_or(String::new(), |d| d.add_effects.join(";")));
     r
 }
 
@@ -163,6 +176,7 @@ fn trials_table(t: &StudyTable) -> Table {
         .to_vec();
     headers.extend(Param::ALL.iter().take(8).map(|p| p.label().to_string()));
     headers.push("track".into());
+    headers.push("diagnosis suggests".into());
     let rows = t
         .trials
         .iter()
@@ -197,6 +211,13 @@ fn trials_table(t: &StudyTable) -> Table {
                     num(x.objective),
                     x.iterations.unwrap_or(0)
                 )
+            }));
+            r.push(e.diagnose.as_ref().map_or("—".into(), |d| {
+                if d.add_effects.is_empty() {
+                    "nothing".into()
+                } else {
+                    d.add_effects.join("; ")
+                }
             }));
             r
         })

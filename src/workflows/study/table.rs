@@ -1,10 +1,10 @@
 //! The study table, built from the trial folders alone (so that a local run and a Slurm
 //! array give the same table): one row per manifest row with its status, its error, the
-//! check's readings (estimate, sd, verdict per candidate) and, with `--track`, the
-//! track's status, objective and iterations; and the pooled readings ([`super::findings`]).
+//! check's readings (estimate, sd, verdict per candidate), with `--track` the track's
+//! status, objective and iterations, and with `--diagnose` what the diagnosis suggests; and the pooled readings ([`super::findings`]).
 
 use super::findings::{self, GroupFindings};
-use super::trial::{complete, folder, Stage, ERROR_FILE};
+use super::trial::{complete, folder, Stage, DIAGNOSIS, ERROR_FILE};
 use super::{StudySettings, TrialRow};
 use crate::problems::check::Param;
 use serde::Serialize;
@@ -74,6 +74,19 @@ pub struct TrackResult {
     pub iterations: Option<u64>,
 }
 
+/// A trial's diagnosis, as its folder holds it.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct DiagnoseResult {
+    /// What the diagnosis concludes, in words.
+    pub verdict: String,
+    /// Candidates significant against the noise.
+    pub significant: Option<u64>,
+    /// Candidates found (significant and validated).
+    pub found: Option<u64>,
+    /// The `--effect` lines it suggests.
+    pub add_effects: Vec<String>,
+}
+
 /// One row of the study table.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct TrialEntry {
@@ -97,6 +110,8 @@ pub struct TrialEntry {
     pub check: Option<CheckResult>,
     /// The track (with `--track`).
     pub track: Option<TrackResult>,
+    /// The track's diagnosis (with `--diagnose`).
+    pub diagnose: Option<DiagnoseResult>,
 }
 
 /// The study table.
@@ -143,6 +158,7 @@ fn entry(dir: &Path, row: &TrialRow, settings: &StudySettings) -> TrialEntry {
         error: None,
         check: None,
         track: None,
+        diagnose: None,
     };
     let read = |stage: Stage| {
         let dir = tdir.join(stage.name());
@@ -156,9 +172,18 @@ fn entry(dir: &Path, row: &TrialRow, settings: &StudySettings) -> TrialEntry {
     } else {
         None
     };
+    let diagnosing = settings.track && settings.diagnose;
+    if diagnosing {
+        let dir = tdir.join(Stage::Diagnose.name());
+        e.diagnose = complete(&dir, &Stage::Diagnose.inputs(row, settings))
+            .then(|| read_summary(&dir.join(DIAGNOSIS)))
+            .flatten()
+            .map(|s| diagnose_result(&s));
+    }
     let missing = match (&e.check, settings.track, &e.track) {
         (None, _, _) => Some("check"),
         (Some(_), true, None) => Some("track"),
+        _ if diagnosing && e.diagnose.is_none() => Some("diagnose"),
         _ => None,
     };
     (e.status, e.error) = match (read_error(&tdir), missing) {
@@ -227,6 +252,22 @@ fn check_result(s: &serde_json::Value) -> CheckResult {
             s["mass_kg"]["model"].as_f64(),
             s["mass_kg"]["implied_by_forces"].as_f64(),
         ),
+    }
+}
+
+fn diagnose_result(s: &serde_json::Value) -> DiagnoseResult {
+    DiagnoseResult {
+        verdict: s["verdict"].as_str().unwrap_or_default().to_string(),
+        significant: s["significant"].as_u64(),
+        found: s["found"].as_u64(),
+        add_effects: s["add_effects"]
+            .as_array()
+            .map(|a| {
+                a.iter()
+                    .filter_map(|x| x.as_str().map(String::from))
+                    .collect()
+            })
+            .unwrap_or_default(),
     }
 }
 

@@ -1,5 +1,5 @@
 //! One trial of a study, into `DIR/trials/<id>/`: its check (`check/`) and, when asked,
-//! its track (`track/`), each a run folder committed whole ([`crate::runfolder`]) that
+//! its track (`track/`) and the track's diagnosis (`diagnose/`), each a run folder committed whole ([`crate::runfolder`]) that
 //! holds the inputs it was made from (`study-row.json`). A stage whose folder holds the
 //! same inputs is complete and skipped; one made from other inputs (an edited row, other
 //! settings) is replaced. A failed stage writes `error.json` beside them (removed when
@@ -8,6 +8,7 @@
 use super::{StudySettings, TrialRow};
 use crate::runfolder::{write_atomic, RunFolder};
 use crate::workflows::check::{self as check_flow, CheckRequest};
+use crate::workflows::diagnose::{self, DiagnoseRequest};
 use crate::workflows::track::{track, TrackRequest};
 use crate::workflows::{Progress, WarningsOnly};
 use serde_json::json;
@@ -100,6 +101,9 @@ pub fn run_one(
     if settings.track {
         stages.push(Stage::Track);
     }
+    if settings.track && settings.diagnose {
+        stages.push(Stage::Diagnose);
+    }
     for stage in stages {
         let inputs = stage.inputs(row, settings);
         let target = dir.join(stage.name());
@@ -109,6 +113,7 @@ pub fn run_one(
         let result = match stage {
             Stage::Check => run_check(row, settings, &target, &inputs, progress),
             Stage::Track => run_track(row, settings, &target, &inputs, progress),
+            Stage::Diagnose => run_diagnose(row, settings, &dir, &inputs, progress),
         };
         match result {
             Ok(text) => did.push(format!("{}: {text}", stage.name())),
@@ -139,6 +144,9 @@ pub enum Stage {
     Check,
     /// The track (`track/`).
     Track,
+    /// The track's diagnosis (`diagnose/`, its run folder `diagnose/diagnosis/`; the
+    /// re-fits beside the track, `track+<effect>/`).
+    Diagnose,
 }
 
 impl Stage {
@@ -147,6 +155,7 @@ impl Stage {
         match self {
             Stage::Check => "check",
             Stage::Track => "track",
+            Stage::Diagnose => "diagnose",
         }
     }
 
@@ -160,8 +169,8 @@ impl Stage {
         match self {
             Stage::Check => json!({"stage": "check", "files": files,
                 "cutoff_hz": row.cutoff_hz.unwrap_or(s.cutoff_hz), "level": s.level}),
-            Stage::Track => json!({"stage": "track", "files": files, "foot": row.foot,
-                "max_iter": row.max_iter.unwrap_or(s.max_iter),
+            Stage::Track | Stage::Diagnose => json!({"stage": self.name(), "files": files,
+                "foot": row.foot, "max_iter": row.max_iter.unwrap_or(s.max_iter),
                 "kinematics_cutoff": row.kinematics_cutoff}),
         }
     }
@@ -240,6 +249,35 @@ fn run_track(
         run.result.status, run.result.objective
     ))
 }
+
+/// The diagnosis of the trial's track: `diagnose` written into this stage's folder, its
+/// re-fits (at the track's iteration limit) beside the track.
+fn run_diagnose(
+    row: &TrialRow,
+    settings: &StudySettings,
+    dir: &Path,
+    inputs: &serde_json::Value,
+    progress: &dyn Progress,
+) -> anyhow::Result<String> {
+    let folder = RunFolder::create(&dir.join(Stage::Diagnose.name()), true)?;
+    folder.write(
+        INPUTS_FILE,
+        serde_json::to_string_pretty(inputs)?.as_bytes(),
+    )?;
+    let mut req = DiagnoseRequest::new(dir.join(Stage::Track.name()));
+    req.out = Some(folder.staging_path().join(DIAGNOSIS));
+    req.overwrite = true;
+    req.max_iter = row.max_iter.unwrap_or(settings.max_iter);
+    diagnose::run(&req, &WarningsOnly(progress))?;
+    let summary: serde_json::Value =
+        crate::runfolder::read_json(&folder.staging_path().join(DIAGNOSIS).join("summary.json"))?;
+    folder.commit()?;
+    let effects = summary["add_effects"].as_array().map_or(0, Vec::len);
+    Ok(format!("{} effect(s) to add", effects))
+}
+
+/// The diagnosis's run folder inside the diagnose stage's folder.
+pub const DIAGNOSIS: &str = "diagnosis";
 
 /// An error and its causes joined by ": ", skipping a cause the text already holds.
 fn render(e: &anyhow::Error) -> String {
