@@ -35,22 +35,41 @@ fn run_local(s: &StudySettings, out: &Path) -> study::StudyTable {
         .expect("table")
 }
 
-/// The one-node cluster's `SLURM_CONF`, or why it cannot start.
-fn local_slurm() -> Result<String, String> {
+/// A one-node cluster: its `SLURM_CONF`; stopped when dropped if this test started it.
+struct LocalSlurm {
+    conf: String,
+    started: bool,
+}
+
+impl Drop for LocalSlurm {
+    fn drop(&mut self) {
+        if self.started {
+            let _ = std::process::Command::new(root().join("tools/slurm-local"))
+                .arg("stop")
+                .output();
+        }
+    }
+}
+
+/// The one-node cluster, started if it is not running, or why it cannot start.
+fn local_slurm() -> Result<LocalSlurm, String> {
     let o = std::process::Command::new(root().join("tools/slurm-local"))
         .arg("start")
         .output()
         .map_err(|e| e.to_string())?;
     let out = String::from_utf8_lossy(&o.stdout);
     match out.lines().find_map(|l| l.strip_prefix("SLURM_CONF=")) {
-        Some(conf) if o.status.success() => Ok(conf.to_string()),
+        Some(conf) if o.status.success() => Ok(LocalSlurm {
+            conf: conf.to_string(),
+            started: out.lines().any(|l| l == "started"),
+        }),
         _ => Err(stderr(&o)),
     }
 }
 
 #[test]
 fn a_study_run_as_a_slurm_array_gives_the_local_runs_results_bit_for_bit() {
-    let conf = match local_slurm() {
+    let slurm = match local_slurm() {
         Ok(c) => c,
         Err(why) => {
             eprintln!(
@@ -73,7 +92,7 @@ fn a_study_run_as_a_slurm_array_gives_the_local_runs_results_bit_for_bit() {
             array.to_str().unwrap(),
             "--slurm",
         ])
-        .env("SLURM_CONF", &conf)
+        .env("SLURM_CONF", &slurm.conf)
         .current_dir(root())
         .output()
         .unwrap();
@@ -87,7 +106,7 @@ fn a_study_run_as_a_slurm_array_gives_the_local_runs_results_bit_for_bit() {
             "no table after 300 s; squeue: {}",
             String::from_utf8_lossy(
                 &std::process::Command::new("squeue")
-                    .env("SLURM_CONF", &conf)
+                    .env("SLURM_CONF", &slurm.conf)
                     .output()
                     .unwrap()
                     .stdout
