@@ -2,7 +2,8 @@
 //! (tools/slurm-local starts munge, slurmctld and slurmd on this machine) the array's
 //! per-trial results bit for bit the local run's; a study that tracks records each
 //! trial's objective, iterations and status, and one that diagnoses what the diagnosis
-//! suggests; a study killed during a trial resumes without redoing the finished ones.
+//! suggests; a study killed during a trial, or stopped by Ctrl-C, finishes when run again
+//! without redoing what was finished.
 
 use crate::common::study::{study_manifest, trial_files};
 use crate::common::{root, stderr};
@@ -302,4 +303,76 @@ fn a_study_killed_during_a_trial_resumes_without_redoing_the_finished_ones() {
         0,
         "{left:?}"
     );
+}
+
+#[test]
+fn a_study_interrupted_by_ctrl_c_keeps_no_stopped_track_and_finishes_when_run_again() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = two_walks(dir.path());
+    let out = dir.path().join("out");
+    let args = [
+        "study",
+        m.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--track",
+        "--max-iter",
+        "3",
+        "--jobs",
+        "1",
+    ];
+    let child = std::process::Command::new(env!("CARGO_BIN_EXE_footfall"))
+        .args(args)
+        .current_dir(root())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Ctrl-C once the first trial's track is being written
+    let w1 = out.join("trials/w1");
+    let start = Instant::now();
+    let staging = || {
+        std::fs::read_dir(&w1).ok().is_some_and(|d| {
+            d.flatten().any(|e| {
+                e.file_name()
+                    .to_string_lossy()
+                    .starts_with(".track.partial-")
+            })
+        })
+    };
+    while !staging() {
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "no track started"
+        );
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    std::thread::sleep(Duration::from_millis(500));
+    let kill = std::process::Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let o = child.wait_with_output().unwrap();
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(130), "{err}");
+    assert!(err.contains("interrupted"), "{err}");
+    assert!(
+        !w1.join("track").exists(),
+        "a stopped track was kept as the trial's"
+    );
+    assert!(
+        !out.join("trials/w2").exists(),
+        "a trial started after the interrupt"
+    );
+    // the same command again: w1's check is kept, its track and w2 run
+    let o = crate::common::footfall(&args);
+    let err = stderr(&o);
+    assert!(o.status.success(), "{err}");
+    assert!(
+        err.contains("w1: track:") && !err.contains("w1: check:"),
+        "{err}"
+    );
+    assert!(err.contains("w2: check: nothing found; track:"), "{err}");
+    assert!(!w1.join(study::trial::ERROR_FILE).exists());
 }

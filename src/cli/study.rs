@@ -100,6 +100,11 @@ pub fn run(args: Args, progress: &CliProgress) -> Result<(), Failure> {
         outcome.failed,
         req.out.display()
     ));
+    if outcome.interrupted {
+        return Err(Failure::Interrupted(anyhow::anyhow!(
+            "interrupted: the trials done are in the table; run the same command again to run the others"
+        )));
+    }
     if outcome.failed > 0 && req.only_row.is_some() {
         return Err(Failure::Input(anyhow::anyhow!(
             "row {}: the trial failed; its error is in {}",

@@ -126,6 +126,9 @@ pub struct StudyOutcome {
     pub skipped: usize,
     /// Trials that failed now.
     pub failed: usize,
+    /// Whether a stop was asked (Ctrl-C): the trials running stopped, none was started
+    /// after it; the table holds what is done.
+    pub interrupted: bool,
     /// The table, when written (not for `--only-row`).
     pub table: Option<StudyTable>,
 }
@@ -149,10 +152,12 @@ pub fn run(req: &StudyRequest, progress: &dyn Progress) -> Result<StudyOutcome, 
         write_settings(&req.out, &req.settings)?;
     }
     let done = trial::run_all(&chosen, &req.settings, &req.out, req.jobs, progress);
+    let count = |r: trial::Ran| done.iter().filter(|d| **d == r).count();
     let mut outcome = StudyOutcome {
-        ran: done.iter().filter(|d| **d != trial::Ran::Skipped).count(),
-        skipped: done.iter().filter(|d| **d == trial::Ran::Skipped).count(),
-        failed: done.iter().filter(|d| **d == trial::Ran::Failed).count(),
+        ran: count(trial::Ran::Done) + count(trial::Ran::Failed),
+        skipped: count(trial::Ran::Skipped),
+        failed: count(trial::Ran::Failed),
+        interrupted: crate::interrupt::requested(),
         table: None,
     };
     if req.only_row.is_none() {

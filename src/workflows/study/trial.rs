@@ -7,6 +7,7 @@
 
 use super::{StudySettings, TrialRow};
 use crate::runfolder::{write_atomic, RunFolder};
+use crate::sqp::SqpStatus;
 use crate::workflows::check::{self as check_flow, CheckRequest};
 use crate::workflows::diagnose::{self, DiagnoseRequest};
 use crate::workflows::track::{track, TrackRequest};
@@ -31,6 +32,8 @@ pub enum Ran {
     Done,
     /// A stage failed; its error is recorded.
     Failed,
+    /// Not started: the study was interrupted first.
+    NotStarted,
 }
 
 /// The folder of a trial.
@@ -56,11 +59,15 @@ pub fn run_all(
 ) -> Vec<Ran> {
     let next = AtomicUsize::new(0);
     let finished = AtomicUsize::new(0);
-    let results = Mutex::new(vec![Ran::Skipped; rows.len()]);
+    let results = Mutex::new(vec![Ran::NotStarted; rows.len()]);
     let threads = threads_per_trial(jobs);
     std::thread::scope(|s| {
         for _ in 0..jobs.min(rows.len()) {
             s.spawn(|| loop {
+                if crate::interrupt::requested() {
+                    // Ctrl-C: the trials running stop; none is started
+                    break;
+                }
                 let i = next.fetch_add(1, Ordering::SeqCst);
                 let Some(row) = rows.get(i) else { break };
                 let start = std::time::Instant::now();
@@ -244,6 +251,11 @@ fn run_track(
         serde_json::to_string_pretty(inputs)?.as_bytes(),
     )?;
     let run = track(&req, folder, &WarningsOnly(progress))?;
+    if run.result.status == SqpStatus::Interrupted {
+        // a study's track is run again whole, never resumed: the stopped one is not its result
+        std::fs::remove_dir_all(&run.output.path)?;
+        anyhow::bail!("interrupted: the track runs again when the study is run again");
+    }
     Ok(format!(
         "{}, J = {:.4}",
         run.result.status, run.result.objective
