@@ -7,6 +7,7 @@ use super::table::{StudyTable, TrialEntry};
 use super::StudyError;
 use crate::problems::check::Param;
 use crate::report::html::{Report, Section, Summary, Tone};
+use crate::report::plot::{BarChart, BarSeries};
 use crate::report::table::Table;
 use crate::runfolder::write_atomic;
 use std::fmt::Write;
@@ -273,6 +274,37 @@ fn group_table(g: &GroupFindings) -> Table {
     }
 }
 
+/// The shared effect of a group: each trial's reading alone (its sd on the bar) against
+/// the pooled value.
+fn shared_chart(t: &StudyTable, g: &GroupFindings) -> Option<String> {
+    let effect = g.shared.as_deref()?;
+    let p = Param::ALL.into_iter().find(|p| p.name() == effect)?;
+    let pooled = g.readings.iter().find(|r| r.effect == effect)?.pooled;
+    let (mut values, mut labels) = (Vec::new(), Vec::new());
+    for id in &g.trials {
+        let r = t
+            .trials
+            .iter()
+            .find(|e| &e.id == id)
+            .and_then(|e| e.check.as_ref())
+            .and_then(|c| c.alone.iter().find(|r| r.effect == effect));
+        let (v, sd) = (r.and_then(|r| r.estimate), r.and_then(|r| r.sd));
+        values.push(v.map_or(f64::NAN, |v| p.display_value(v).0));
+        labels.push(sd.map_or(String::new(), |sd| {
+            format!("± {:.2}", p.display_value(sd).0)
+        }));
+    }
+    let (v, unit) = p.display_value(pooled.estimate);
+    let mut chart = BarChart::new(format!("{}: each trial read alone", p.label()), unit);
+    chart.categories = g.trials.clone();
+    chart.series = vec![BarSeries::new("read alone", values, labels)];
+    chart.reference = Some((
+        v,
+        format!("pooled {}", value_text(effect, pooled.estimate, pooled.sd)),
+    ));
+    Some(chart.to_svg())
+}
+
 /// `report.html`.
 pub fn html(t: &StudyTable) -> String {
     let shared: Vec<String> = t
@@ -321,7 +353,7 @@ pub fn html(t: &StudyTable) -> String {
             heading: group_heading(g),
             paragraphs: g.statements.clone(),
             tables: vec![],
-            svgs: vec![],
+            svgs: shared_chart(t, g).into_iter().collect(),
         });
     }
     Report {
