@@ -312,6 +312,45 @@ fn a_clock_edit_shared_by_a_sessions_trials_is_found_in_each_and_pooled_and_unto
 }
 
 #[test]
+fn a_finding_of_one_trial_that_the_others_do_not_share_is_said_to_hold_in_it_alone() {
+    // one session: one walk with the right plate's clock 20 ms late, the other untouched
+    let dir = tempfile::tempdir().unwrap();
+    let r = root();
+    let m = file(
+        dir.path(),
+        "m.csv",
+        &format!(
+            "id,subject,session,data,model\nw1-late,s4,lab,{},{}\nw2,s4,lab,{},{}\n",
+            r.join("tests/data/check/trials/opencap_s4_walking1/clock_r+20ms/trial.csv")
+                .display(),
+            r.join("models/opencap_s4.json").display(),
+            r.join("data/opencap_s4_walking2_sagittal.csv").display(),
+            r.join("models/opencap_s4.json").display(),
+        ),
+    );
+    let (outcome, _) = run(&settings(&m), &dir.path().join("out"), 2);
+    let t = outcome.table.unwrap();
+    let g = group(&t, "lab");
+    let clock = g
+        .readings
+        .iter()
+        .find(|r| r.effect == "clock_right")
+        .unwrap();
+    assert_eq!(clock.found_in, ["w1-late"]);
+    // 20 ms apart on noise of a few ms: Cochran's Q rejects one shared value
+    assert!(clock.pooled.p_heterogeneity < 0.05, "{:?}", clock.pooled);
+    assert_eq!(g.shared, None, "{:?}", g.statements);
+    let said = g.statements.join("\n");
+    assert!(
+        said.contains("right plate's clock: found in w1-late only (1 of 2), not in w2"),
+        "{said}"
+    );
+    if clock.beyond {
+        assert!(said.contains("the trials disagree"), "{said}");
+    }
+}
+
+#[test]
 fn a_killed_study_resumes_without_redoing_finished_trials() {
     let dir = tempfile::tempdir().unwrap();
     let m = study_manifest(dir.path());

@@ -3,9 +3,10 @@
 //! subject. Each trial's candidate read alone (the check's first step, the same reading
 //! in every trial whatever else it found) is pooled ([`super::pool`]); a pooled reading is
 //! beyond its band when its |z| exceeds the Bonferroni point of the family-wise level over
-//! every pooled reading of the study. Of those beyond, the one that explains most of the
-//! trials' residual is the group's shared effect, the others its look-alikes, as the
-//! check's own first step decides; where every trial's check found the same effects, the
+//! every pooled reading of the study. Of those beyond on which the trials agree (Cochran's
+//! Q below its point at the same level), the one that explains most of the trials'
+//! residual is the group's shared effect, the others its look-alikes, as the check's own
+//! first step decides; where every trial's check found the same effects, the
 //! shared effect's joint readings (each check's final value) are pooled too. A finding of the check that holds in some trials of a
 //! group and not in the others is said to.
 
@@ -283,16 +284,19 @@ fn decide(g: &mut GroupFindings, threshold: f64, level: f64) {
     for r in g.readings.iter_mut() {
         r.beyond = r.pooled.z.abs() > threshold;
     }
+    // one value shared by the trials: beyond its band, and the trials agree on it
+    let shared = |r: &&PooledReading| r.beyond && r.pooled.p_heterogeneity >= level;
     let best = g
         .readings
         .iter()
-        .filter(|r| r.beyond)
+        .filter(shared)
         .max_by(|a, b| a.explained.total_cmp(&b.explained))
         .map(|r| r.effect.clone());
     g.look_alikes = g
         .readings
         .iter()
-        .filter(|r| r.beyond && Some(&r.effect) != best.as_ref())
+        .filter(shared)
+        .filter(|r| Some(&r.effect) != best.as_ref())
         .map(|r| r.effect.clone())
         .collect();
     g.shared = best;
@@ -305,6 +309,97 @@ fn label(effect: &str) -> &'static str {
 
 fn param(effect: &str) -> Option<Param> {
     Param::ALL.into_iter().find(|p| p.name() == effect)
+}
+
+/// The shared effect: pooled value, z, how many checks found it, whether the trials
+/// agree, and the pooled joint reading.
+fn shared_text(r: &PooledReading, what: &str, threshold: f64) -> String {
+    let p = &r.pooled;
+    let mut s = format!(
+        "shared {what}: {} {} over {} trials (z {:.1} against {:.2}); the check found it in {} of them",
+        label(&r.effect),
+        value_text(&r.effect, p.estimate, p.sd),
+        p.trials,
+        p.z,
+        threshold,
+        r.found_in.len()
+    );
+    if p.df > 0 {
+        s.push_str(&format!(
+            "; the trials agree (Cochran's Q {:.1} on {} df, p {:.2})",
+            p.q, p.df, p.p_heterogeneity
+        ));
+    }
+    if let Some(j) = &r.joint {
+        s.push_str(&format!(
+            "; read jointly with what each trial's check found, {}",
+            value_text(&r.effect, j.estimate, j.sd)
+        ));
+    }
+    s
+}
+
+/// A pooled reading beyond its band on which the trials disagree.
+fn disagree_text(r: &PooledReading) -> String {
+    let p = &r.pooled;
+    format!(
+        "{}: pooled {} (z {:.1}) is beyond its band, but the trials disagree (Cochran's Q {:.1} on {} df, p {:.3}, I² {:.0} %): not one value the trials share",
+        label(&r.effect),
+        value_text(&r.effect, p.estimate, p.sd),
+        p.z,
+        p.q,
+        p.df,
+        p.p_heterogeneity,
+        100.0 * p.i2
+    )
+}
+
+/// The other pooled readings beyond their band.
+fn look_alikes_text(g: &GroupFindings) -> String {
+    let items: Vec<String> = g
+        .look_alikes
+        .iter()
+        .filter_map(|e| g.readings.iter().find(|r| &r.effect == e))
+        .map(|r| {
+            format!(
+                "{} {} (z {:.1})",
+                label(&r.effect),
+                value_text(&r.effect, r.pooled.estimate, r.pooled.sd),
+                r.pooled.z
+            )
+        })
+        .collect();
+    format!(
+        "the pooled readings cannot tell it from: {}",
+        items.join(", ")
+    )
+}
+
+/// A check's finding in some of the group's trials and not the others, if it is one.
+fn partly_text(g: &GroupFindings, r: &PooledReading) -> Option<String> {
+    let (k, n) = (r.found_in.len(), g.trials.len());
+    if k == 0 || k == n {
+        return None;
+    }
+    let not: Vec<&str> = g
+        .trials
+        .iter()
+        .filter(|t| !r.found_in.contains(t))
+        .map(String::as_str)
+        .collect();
+    Some(format!(
+        "{}: found in {} only ({k} of {n}), not in {}; pooled {} (z {:.1}){}",
+        label(&r.effect),
+        r.found_in.join(", "),
+        not.join(", "),
+        value_text(&r.effect, r.pooled.estimate, r.pooled.sd),
+        r.pooled.z,
+        if r.beyond {
+            ""
+        } else {
+            ": it does not hold across the trials"
+        }
+    ))
 }
 
 /// `+23.16 ± 2.74 ms`
@@ -324,94 +419,40 @@ fn statements(g: &GroupFindings, threshold: f64, level: f64) -> Vec<String> {
         GroupKind::Session => "instrument effect",
         GroupKind::Subject => "body effect",
     };
-    let n = g.trials.len();
     let mut out = Vec::new();
     if g.readings.is_empty() {
         out.push(format!(
-            "{n} trial(s) read: fewer than two, nothing to pool"
+            "{} trial(s) read: fewer than two, nothing to pool",
+            g.trials.len()
         ));
         out.extend(g.model_stage.iter().cloned());
         return out;
     }
-    match g
+    let shared = g
         .readings
         .iter()
-        .find(|r| Some(&r.effect) == g.shared.as_ref())
-    {
+        .find(|r| Some(&r.effect) == g.shared.as_ref());
+    match shared {
         Some(r) => {
-            let p = &r.pooled;
-            let mut s = format!(
-                "shared {what}: {} {} over {} trials (z {:.1} against {:.2}); the check found it in {} of them",
-                label(&r.effect),
-                value_text(&r.effect, p.estimate, p.sd),
-                p.trials,
-                p.z,
-                threshold,
-                r.found_in.len()
-            );
-            if p.p_heterogeneity < level {
-                s.push_str(&format!("; the trials disagree (Cochran's Q {:.1} on {} df, p {:.3}, I² {:.0} %): it is not the same in every trial", p.q, p.df, p.p_heterogeneity, 100.0 * p.i2));
-            } else if p.df > 0 {
-                s.push_str(&format!(
-                    "; the trials agree (Cochran's Q {:.1} on {} df, p {:.2})",
-                    p.q, p.df, p.p_heterogeneity
-                ));
-            }
-            if let Some(j) = &r.joint {
-                s.push_str(&format!(
-                    "; read jointly with what each trial's check found, {}",
-                    value_text(&r.effect, j.estimate, j.sd)
-                ));
-            }
-            out.push(s);
+            out.push(shared_text(r, what, threshold));
             if !g.look_alikes.is_empty() {
-                out.push(format!(
-                    "the pooled readings cannot tell it from: {}",
-                    g.look_alikes
-                        .iter()
-                        .filter_map(|e| g.readings.iter().find(|r| &r.effect == e))
-                        .map(|r| format!(
-                            "{} {} (z {:.1})",
-                            label(&r.effect),
-                            value_text(&r.effect, r.pooled.estimate, r.pooled.sd),
-                            r.pooled.z
-                        ))
-                        .collect::<Vec<_>>()
-                        .join(", ")
-                ));
+                out.push(look_alikes_text(g));
             }
         }
+        None if g.readings.iter().any(|r| r.beyond) => out.push(format!(
+            "no shared {what}: the trials disagree on every pooled reading beyond its band (|z| > {threshold:.2})"
+        )),
         None => out.push(format!(
             "no shared {what}: every pooled reading is within its band (|z| ≤ {threshold:.2})"
         )),
     }
-    for r in &g.readings {
-        let k = r.found_in.len();
-        if k == 0 || k == n {
-            continue;
-        }
-        let not: Vec<&String> = g
-            .trials
+    out.extend(
+        g.readings
             .iter()
-            .filter(|t| !r.found_in.contains(t))
-            .collect();
-        out.push(format!(
-            "{}: found in {} only ({k} of {n}), not in {}; pooled {} (z {:.1}){}",
-            label(&r.effect),
-            r.found_in.join(", "),
-            not.iter()
-                .map(|s| s.as_str())
-                .collect::<Vec<_>>()
-                .join(", "),
-            value_text(&r.effect, r.pooled.estimate, r.pooled.sd),
-            r.pooled.z,
-            if r.beyond {
-                ""
-            } else {
-                ": it does not hold across the trials"
-            }
-        ));
-    }
+            .filter(|r| r.beyond && r.pooled.p_heterogeneity < level)
+            .map(disagree_text),
+    );
+    out.extend(g.readings.iter().filter_map(|r| partly_text(g, r)));
     out.extend(g.model_stage.iter().cloned());
     if !g.missing.is_empty() {
         out.push(format!(

@@ -275,6 +275,99 @@ fn known(path: &Path, field: &str) -> Result<(), ManifestError> {
     }
 }
 
+/// One record's fields, with the row they are on for the errors.
+struct Fields<'a> {
+    path: &'a Path,
+    row: usize,
+    rec: &'a Record,
+}
+
+impl Fields<'_> {
+    /// A field's value (`None` when absent or empty).
+    fn get(&self, f: &str) -> Option<&str> {
+        self.rec
+            .iter()
+            .find(|(k, _)| k == f)
+            .map(|(_, v)| v.as_str())
+            .filter(|v| !v.is_empty())
+    }
+
+    fn refuse(&self, field: &'static str, value: &str, expected: &str) -> ManifestError {
+        ManifestError::Value {
+            path: self.path.to_path_buf(),
+            row: self.row,
+            field,
+            value: value.to_string(),
+            expected: expected.to_string(),
+        }
+    }
+
+    /// A positive finite number.
+    fn number(&self, field: &'static str) -> Result<Option<f64>, ManifestError> {
+        self.get(field)
+            .map(|v| {
+                v.parse::<f64>()
+                    .ok()
+                    .filter(|x| x.is_finite() && *x > 0.0)
+                    .ok_or_else(|| self.refuse(field, v, "is not a positive finite number"))
+            })
+            .transpose()
+    }
+
+    /// true/yes/1 or false/no/0 (absent: false).
+    fn flag(&self, field: &'static str) -> Result<bool, ManifestError> {
+        match self.get(field).map(str::to_ascii_lowercase).as_deref() {
+            None | Some("false") | Some("no") | Some("0") => Ok(false),
+            Some("true") | Some("yes") | Some("1") => Ok(true),
+            Some(other) => Err(self.refuse(field, other, "is not true or false")),
+        }
+    }
+
+    /// An iteration count from 1 to 100000.
+    fn count(&self, field: &'static str) -> Result<Option<usize>, ManifestError> {
+        self.get(field)
+            .map(|v| {
+                v.parse::<usize>()
+                    .ok()
+                    .filter(|n| (1..=100_000).contains(n))
+                    .ok_or_else(|| {
+                        self.refuse(field, v, "is not an iteration count from 1 to 100000")
+                    })
+            })
+            .transpose()
+    }
+
+    /// `r=…`/`l=…` items separated by `;` or spaces.
+    fn plates(&self) -> Result<Vec<String>, ManifestError> {
+        let items = self.get("plate").map_or(vec![], |p| {
+            p.split([';', ' ']).filter(|s| !s.is_empty()).collect()
+        });
+        items
+            .into_iter()
+            .map(|p| {
+                if p.starts_with("r=") || p.starts_with("l=") {
+                    Ok(p.to_string())
+                } else {
+                    Err(self.refuse(
+                        "plate",
+                        p,
+                        "is not FOOT=PREFIX or FOOT=N with FOOT r or l (several separated by ';')",
+                    ))
+                }
+            })
+            .collect()
+    }
+
+    /// The id given, or `row-N` (zero-padded to `width` digits).
+    fn id(&self, width: usize) -> Result<String, ManifestError> {
+        match self.get("id") {
+            Some(id) if valid_id(id) => Ok(id.to_string()),
+            Some(id) => Err(self.refuse("id", id, "is not a folder name: use letters, digits, '.', '_', '+', '-', not starting with '.'")),
+            None => Ok(format!("row-{:0width$}", self.row)),
+        }
+    }
+}
+
 /// One record as a trial row.
 fn row_of(
     path: &Path,
@@ -283,92 +376,30 @@ fn row_of(
     width: usize,
     rec: &Record,
 ) -> Result<TrialRow, ManifestError> {
-    let get = |f: &str| {
-        rec.iter()
-            .find(|(k, _)| k == f)
-            .map(|(_, v)| v.as_str())
-            .filter(|v| !v.is_empty())
-    };
-    let value_error = |field: &'static str, value: &str, expected: &str| ManifestError::Value {
-        path: path.to_path_buf(),
-        row,
-        field,
-        value: value.to_string(),
-        expected: expected.to_string(),
-    };
-    let id = match get("id") {
-        Some(id) => {
-            if !valid_id(id) {
-                return Err(value_error("id", id, "is not a folder name: use letters, digits, '.', '_', '+', '-', not starting with '.'"));
-            }
-            id.to_string()
-        }
-        None => format!("row-{row:0width$}"),
-    };
-    let data = get("data").ok_or_else(|| {
-        value_error("data", "", "is missing: each trial needs its trial file (a sagittal CSV or OpenSim inverse kinematics)")
+    let f = Fields { path, row, rec };
+    let data = f.get("data").ok_or_else(|| {
+        f.refuse("data", "", "is missing: each trial needs its trial file (a sagittal CSV or OpenSim inverse kinematics)")
     })?;
-    let number = |field: &'static str| -> Result<Option<f64>, ManifestError> {
-        get(field)
-            .map(|v| {
-                v.parse::<f64>()
-                    .ok()
-                    .filter(|x| x.is_finite() && *x > 0.0)
-                    .ok_or_else(|| value_error(field, v, "is not a positive finite number"))
-            })
-            .transpose()
-    };
-    let overground = match get("overground").map(str::to_ascii_lowercase).as_deref() {
-        None | Some("false") | Some("no") | Some("0") => false,
-        Some("true") | Some("yes") | Some("1") => true,
-        Some(other) => return Err(value_error("overground", other, "is not true or false")),
-    };
-    let max_iter = get("max_iter")
-        .map(|v| {
-            v.parse::<usize>()
-                .ok()
-                .filter(|n| (1..=100_000).contains(n))
-                .ok_or_else(|| {
-                    value_error("max_iter", v, "is not an iteration count from 1 to 100000")
-                })
-        })
-        .transpose()?;
-    let plates: Vec<String> = get("plate")
-        .map(|p| {
-            p.split([';', ' '])
-                .filter(|s| !s.is_empty())
-                .map(str::to_string)
-                .collect()
-        })
-        .unwrap_or_default();
-    for p in &plates {
-        if !(p.starts_with("r=") || p.starts_with("l=")) {
-            return Err(value_error(
-                "plate",
-                p,
-                "is not FOOT=PREFIX or FOOT=N with FOOT r or l (several separated by ';')",
-            ));
-        }
-    }
+    let text = |k: &str| f.get(k).unwrap_or("").to_string();
     Ok(TrialRow {
         row,
-        id,
-        subject: get("subject").unwrap_or("").to_string(),
-        session: get("session").unwrap_or("").to_string(),
-        condition: get("condition").unwrap_or("").to_string(),
+        id: f.id(width)?,
+        subject: text("subject"),
+        session: text("session"),
+        condition: text("condition"),
         files: TrialFiles {
             data: Some(resolve(base, data)),
-            forces: get("forces").map(|f| resolve(base, f)),
-            plates,
-            lab_axes: get("lab_axes").map(str::to_string),
-            belt_speed: number("belt_speed")?,
-            overground,
+            forces: f.get("forces").map(|p| resolve(base, p)),
+            plates: f.plates()?,
+            lab_axes: f.get("lab_axes").map(str::to_string),
+            belt_speed: f.number("belt_speed")?,
+            overground: f.flag("overground")?,
         },
-        model: resolve(base, get("model").unwrap_or(DEFAULT_MODEL)),
-        foot: get("foot").unwrap_or("ellipse").to_string(),
-        cutoff_hz: number("cutoff")?,
-        max_iter,
-        kinematics_cutoff: number("kinematics_cutoff")?,
+        model: resolve(base, f.get("model").unwrap_or(DEFAULT_MODEL)),
+        foot: f.get("foot").unwrap_or("ellipse").to_string(),
+        cutoff_hz: f.number("cutoff")?,
+        max_iter: f.count("max_iter")?,
+        kinematics_cutoff: f.number("kinematics_cutoff")?,
     })
 }
 
