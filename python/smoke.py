@@ -18,3 +18,16 @@ states, time = run["states"], run["time"]
 assert isinstance(states, np.ndarray) and states.shape == (len(time), len(run["state_names"]))
 assert np.all(np.diff(time) > 0) and np.all(np.isfinite(states))
 print(f"python binding: {run['status']}, J = {run['objective']:.4f}, states {states.shape}")
+
+# a study of the shipped manifest (checks only): the table returned is the one written
+import csv
+
+study_out = tempfile.mkdtemp() + "/study"
+table = footfall.study("tests/data/study/clock_edit.csv", out=study_out, quiet=True)
+with open(study_out + "/study.csv", newline="") as f:
+    rows = list(csv.DictReader(f))
+assert list(table["id"]) == [r["id"] for r in rows], table["id"]
+assert list(table["status"]) == ["done"] * len(rows), table["status"]
+clock = np.asarray(table["clock_right"], dtype=float)
+assert np.array_equal(clock, [float(r["clock_right"]) for r in rows]), clock
+print(f"python binding: a study of {len(rows)} trials, right plate's clock {np.round(clock * 1e3, 2)} ms")

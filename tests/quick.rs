@@ -43,6 +43,7 @@ mod report;
 mod simulate_sanity;
 mod sqp_convexity;
 mod sqp_warm_start;
+mod study;
 mod tracking_setup;
 mod transient;
 mod volumetric;

@@ -31,6 +31,7 @@ mod real_hidden_refit;
 mod reliability;
 mod report_gait;
 mod run_anywhere;
+mod study_runs;
 mod synth;
 mod torque_tracking;
 mod track_third_foot;

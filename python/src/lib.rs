@@ -4,12 +4,14 @@
 //! import footfall
 //! run = footfall.track(foot="ellipse", out="runs/py_track")
 //! print(run["status"], run["objective"], run["states"].shape)
+//! table = footfall.study("tests/data/study/clock_edit.csv", out="runs/py_study")
 //! ```
 //!
 //! Paths are relative to the working folder (the repository root for the bundled model
 //! and trial), as for the command line.
 
 use footfall::runfolder::RunFolder;
+use footfall::workflows::study::{self as study_workflow, StudyRequest, StudySettings};
 use footfall::workflows::track::{track as track_workflow, TrackRequest};
 use footfall::workflows::Printed;
 use numpy::{PyArray1, PyArray2};
@@ -108,10 +110,104 @@ fn track<'py>(
     Ok(d)
 }
 
+/// Run the study of a manifest into `out` (as `footfall study`) and return its table,
+/// one row per trial: a pandas DataFrame where pandas is installed, else a dict of
+/// columns (numbers as numpy arrays, NaN where absent; text as lists). The columns are
+/// those of `study.csv`.
+#[pyfunction]
+#[pyo3(signature = (manifest, out="runs/study", track=false, diagnose=false, max_iter=200, cutoff=6.0, level=0.05, jobs=None, quiet=false))]
+#[allow(clippy::too_many_arguments)]
+fn study<'py>(
+    py: Python<'py>,
+    manifest: PathBuf,
+    out: &str,
+    track: bool,
+    diagnose: bool,
+    max_iter: usize,
+    cutoff: f64,
+    level: f64,
+    jobs: Option<usize>,
+    quiet: bool,
+) -> PyResult<Bound<'py, PyAny>> {
+    let manifest = manifest
+        .canonicalize()
+        .map_err(|e| PyValueError::new_err(format!("manifest {}: {e}", manifest.display())))?;
+    let req = StudyRequest {
+        settings: StudySettings {
+            manifest,
+            track,
+            diagnose,
+            max_iter,
+            cutoff_hz: cutoff,
+            level,
+        },
+        out: std::path::absolute(out).unwrap_or_else(|_| PathBuf::from(out)),
+        jobs: jobs.unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get())),
+        only_row: None,
+    };
+    let outcome = py
+        .detach(|| study_workflow::run(&req, &Printed { quiet }))
+        .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+    let table = outcome
+        .table
+        .ok_or_else(|| PyRuntimeError::new_err("the study wrote no table"))?;
+    let csv = study_workflow::report::csv(&table);
+    let columns = PyDict::new(py);
+    let mut lines = csv.lines().map(split_csv);
+    let header = lines.next().unwrap_or_default();
+    let rows: Vec<Vec<String>> = lines.collect();
+    for (i, name) in header.iter().enumerate() {
+        let cells: Vec<&str> = rows
+            .iter()
+            .map(|r| r.get(i).map_or("", String::as_str))
+            .collect();
+        let numbers: Option<Vec<f64>> = cells
+            .iter()
+            .map(|c| {
+                if c.is_empty() {
+                    Some(f64::NAN)
+                } else {
+                    c.parse().ok()
+                }
+            })
+            .collect();
+        match numbers.filter(|n| n.iter().any(|x| x.is_finite())) {
+            Some(n) => columns.set_item(name, PyArray1::from_vec(py, n))?,
+            None => columns.set_item(name, cells)?,
+        }
+    }
+    match py.import("pandas") {
+        Ok(pd) => pd.call_method1("DataFrame", (columns,)),
+        Err(_) => Ok(columns.into_any()),
+    }
+}
+
+/// The cells of a line of `study.csv` (quoted cells with `""` for a quote).
+fn split_csv(line: &str) -> Vec<String> {
+    let mut cells = Vec::new();
+    let mut cell = String::new();
+    let mut quoted = false;
+    let mut chars = line.chars().peekable();
+    while let Some(c) = chars.next() {
+        match c {
+            '"' if quoted && chars.peek() == Some(&'"') => {
+                chars.next();
+                cell.push('"');
+            }
+            '"' => quoted = !quoted,
+            ',' if !quoted => cells.push(std::mem::take(&mut cell)),
+            _ => cell.push(c),
+        }
+    }
+    cells.push(cell);
+    cells
+}
+
 /// footfall: fit and predict human gait with foot-ground contact models.
 #[pymodule]
 #[pyo3(name = "footfall")]
 fn footfall_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(track, m)?)?;
+    m.add_function(wrap_pyfunction!(study, m)?)?;
     Ok(())
 }

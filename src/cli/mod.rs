@@ -17,6 +17,7 @@ mod predict;
 mod report;
 mod simulate;
 mod solve;
+mod study;
 mod synth;
 mod track;
 mod validate;
@@ -81,6 +82,10 @@ enum Command {
     /// Rewrite a track run's report from its solution: where the model fails, by channel,
     /// phase and time.
     Report(report::Args),
+    /// Check (and track) every trial of a manifest, each into its own run folder, here or
+    /// as a Slurm array, and read the findings across trials: instruments pooled over a
+    /// lab session, the body over a subject.
+    Study(study::Args),
 }
 
 /// Failure classes mapped to exit codes.
@@ -187,6 +192,7 @@ pub fn main() -> ExitCode {
         Command::Diagnose(args) => diagnose::run(args, cli.quiet),
         Command::Diff(args) => diff::run(args, cli.quiet),
         Command::Report(args) => report::run(args, cli.quiet),
+        Command::Study(args) => study::run(args, &progress),
     };
     // printed even with --quiet: the results are not where the command line said
     for (target, went) in footfall::runfolder::take_relocations() {

@@ -22,6 +22,7 @@ pub mod run_folder;
 pub mod session;
 pub mod simulate;
 pub mod solve;
+pub mod study;
 pub mod synth;
 pub mod track;
 pub mod trial;

@@ -2,6 +2,7 @@
 #![allow(dead_code)]
 
 pub mod docs;
+pub mod study;
 
 use footfall::model::GaitModel;
 use std::io::Read;

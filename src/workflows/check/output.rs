@@ -351,6 +351,7 @@ fn summary_json(
         "mass_kg": {"model": c.mass.0, "implied_by_forces": c.mass.1},
         "warnings": c.warnings,
         "candidates": c.readings.iter().map(reading).collect::<Vec<_>>(),
+        "alone": c.alone.iter().map(reading).collect::<Vec<_>>(),
         "found": c.found().map(|r| r.param.name()).collect::<Vec<_>>(),
         "add_effects": effect_lines(c),
         "thresholds": {"as_measured": c.thresholds[0], "corrected": c.thresholds[1]},
