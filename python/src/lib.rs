@@ -153,7 +153,7 @@ fn study<'py>(
         .ok_or_else(|| PyRuntimeError::new_err("the study wrote no table"))?;
     let csv = study_workflow::report::csv(&table);
     let columns = PyDict::new(py);
-    let mut lines = csv.lines().map(split_csv);
+    let mut lines = csv.lines().map(footfall::report::table::csv_fields);
     let header = lines.next().unwrap_or_default();
     let rows: Vec<Vec<String>> = lines.collect();
     for (i, name) in header.iter().enumerate() {
@@ -180,27 +180,6 @@ fn study<'py>(
         Ok(pd) => pd.call_method1("DataFrame", (columns,)),
         Err(_) => Ok(columns.into_any()),
     }
-}
-
-/// The cells of a line of `study.csv` (quoted cells with `""` for a quote).
-fn split_csv(line: &str) -> Vec<String> {
-    let mut cells = Vec::new();
-    let mut cell = String::new();
-    let mut quoted = false;
-    let mut chars = line.chars().peekable();
-    while let Some(c) = chars.next() {
-        match c {
-            '"' if quoted && chars.peek() == Some(&'"') => {
-                chars.next();
-                cell.push('"');
-            }
-            '"' => quoted = !quoted,
-            ',' if !quoted => cells.push(std::mem::take(&mut cell)),
-            _ => cell.push(c),
-        }
-    }
-    cells.push(cell);
-    cells
 }
 
 /// footfall: fit and predict human gait with foot-ground contact models.

@@ -175,7 +175,7 @@ pub fn main() -> ExitCode {
         None => Ok(args),
     };
     if let Err(e) = recorded.and_then(footfall::workflows::session::record_command) {
-        eprintln!("error: {}", render_chain(&e));
+        eprintln!("error: {}", footfall::workflows::error_text(&e));
         return ExitCode::from(1);
     }
     let progress = CliProgress { quiet: cli.quiet };
@@ -205,7 +205,7 @@ pub fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(f) => {
-            eprintln!("error: {}", render_chain(f.error()));
+            eprintln!("error: {}", footfall::workflows::error_text(f.error()));
             ExitCode::from(f.code())
         }
     }
@@ -257,22 +257,6 @@ where
     });
     let matches = cmd.clone().get_matches_from(argv);
     Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.format(&mut cmd).exit())
-}
-
-/// The error and its causes joined by ": ", skipping a cause whose text the message
-/// already contains (library errors often quote their cause).
-fn render_chain(e: &anyhow::Error) -> String {
-    let mut out = String::new();
-    for cause in e.chain() {
-        let text = cause.to_string();
-        if out.is_empty() {
-            out = text;
-        } else if !out.contains(&text) {
-            out.push_str(": ");
-            out.push_str(&text);
-        }
-    }
-    out
 }
 
 /// One subcommand's arguments `A` parsed from `argv` (its name first), as `footfall`

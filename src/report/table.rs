@@ -165,6 +165,28 @@ pub(crate) fn csv_field(s: &str) -> String {
     }
 }
 
+/// The fields of one CSV line as [`csv_field`] writes them: `"` quotes a field, `""`
+/// inside quotes is one `"`; fields are not trimmed.
+pub fn csv_fields(line: &str) -> Vec<String> {
+    let mut cells = Vec::new();
+    let mut cell = String::new();
+    let mut quoted = false;
+    let mut chars = line.chars().peekable();
+    while let Some(c) = chars.next() {
+        match c {
+            '"' if quoted && chars.peek() == Some(&'"') => {
+                chars.next();
+                cell.push('"');
+            }
+            '"' => quoted = !quoted,
+            ',' if !quoted => cells.push(std::mem::take(&mut cell)),
+            _ => cell.push(c),
+        }
+    }
+    cells.push(cell);
+    cells
+}
+
 /// A table like Millard & Mombaur's (2019) Table 3: rows = channels, labelled `name (unit)`; columns =
 /// runs; cells `mean ± sd (max M)`, `—` where a run lacks the channel or has no defined
 /// sample.

@@ -336,3 +336,19 @@ mod tests {
         );
     }
 }
+
+/// The error and its causes joined by ": ", skipping a cause whose text the message
+/// already contains (library errors often quote their cause).
+pub fn error_text(e: &anyhow::Error) -> String {
+    let mut out = String::new();
+    for cause in e.chain() {
+        let text = cause.to_string();
+        if out.is_empty() {
+            out = text;
+        } else if !out.contains(&text) {
+            out.push_str(": ");
+            out.push_str(&text);
+        }
+    }
+    out
+}

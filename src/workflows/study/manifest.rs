@@ -168,25 +168,12 @@ pub fn read(path: &Path) -> Result<Vec<TrialRow>, ManifestError> {
     Ok(rows)
 }
 
-/// The cells of one CSV line (`"` quotes a cell; `""` inside quotes is one `"`).
+/// The cells of one manifest line, each trimmed.
 fn csv_cells(line: &str) -> Vec<String> {
-    let mut cells = Vec::new();
-    let mut cell = String::new();
-    let mut quoted = false;
-    let mut chars = line.chars().peekable();
-    while let Some(c) = chars.next() {
-        match c {
-            '"' if quoted && chars.peek() == Some(&'"') => {
-                chars.next();
-                cell.push('"');
-            }
-            '"' => quoted = !quoted,
-            ',' if !quoted => cells.push(std::mem::take(&mut cell).trim().to_string()),
-            _ => cell.push(c),
-        }
-    }
-    cells.push(cell.trim().to_string());
-    cells
+    crate::report::table::csv_fields(line)
+        .into_iter()
+        .map(|c| c.trim().to_string())
+        .collect()
 }
 
 fn csv_records(path: &Path, text: &str) -> Result<Vec<Record>, ManifestError> {

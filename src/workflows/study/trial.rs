@@ -125,7 +125,7 @@ pub fn run_one(
         match result {
             Ok(text) => did.push(format!("{}: {text}", stage.name())),
             Err(e) => {
-                let message = render(&e);
+                let message = crate::workflows::error_text(&e);
                 let record = json!({"stage": stage.name(), "error": message});
                 let text = serde_json::to_string_pretty(&record).unwrap_or_default();
                 let _ = std::fs::create_dir_all(&dir);
@@ -290,18 +290,3 @@ fn run_diagnose(
 
 /// The diagnosis's run folder inside the diagnose stage's folder.
 pub const DIAGNOSIS: &str = "diagnosis";
-
-/// An error and its causes joined by ": ", skipping a cause the text already holds.
-fn render(e: &anyhow::Error) -> String {
-    let mut out = String::new();
-    for cause in e.chain() {
-        let text = cause.to_string();
-        if out.is_empty() {
-            out = text;
-        } else if !out.contains(&text) {
-            out.push_str(": ");
-            out.push_str(&text);
-        }
-    }
-    out
-}
