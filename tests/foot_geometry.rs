@@ -268,7 +268,6 @@ fn semi_axis(path: &Path) -> f64 {
 fn freeing_the_size_recovers_a_longer_ellipse() {
     use footfall::sqp::HessianMode;
     use footfall::workflows::track::{tracking_sqp_settings, TrackRequest, TrackingProblem};
-    use footfall::workflows::Printed;
     let dir = root().join("tests/data/hidden/foot_geometry");
     let truth = semi_axis(&dir.join("hidden_foot.json"));
     let file = semi_axis(&root().join("models/feet/ellipse.json"));
@@ -295,7 +294,7 @@ fn freeing_the_size_recovers_a_longer_ellipse() {
     prob.setup.start_from(&start).unwrap();
     let t = std::time::Instant::now();
     let settings = tracking_sqp_settings(1e-4, 40, None, HessianMode::Exact, None);
-    let (res, sol) = prob.solve(&settings, &Printed { quiet: false }).unwrap();
+    let (res, sol) = prob.solve(&settings, &crate::common::printed()).unwrap();
     eprintln!(
         "{} iterations, {:.0} s, J {:.6} → {:.6}, KKT {:.1e}, {}; a {:.5} m (file {file:.5}, hidden {truth:.5}), b {:.5} m",
         res.history.len() - 1,
@@ -324,14 +323,14 @@ fn freeing_the_size_recovers_a_longer_ellipse() {
 fn make_foot_geometry_trial() {
     use footfall::runfolder::RunFolder;
     use footfall::sqp::HessianMode;
-    use footfall::workflows::{self, track::tracking_sqp_settings, Printed};
+    use footfall::workflows::{self, track::tracking_sqp_settings};
     std::env::set_current_dir(root()).unwrap();
     let dest = root().join("tests/data/hidden/foot_geometry");
     std::fs::create_dir_all(&dest).unwrap();
     let foot = dest.join("hidden_foot.json");
     std::fs::write(&foot, hidden_foot()).unwrap();
     let tmp = tempfile::tempdir().unwrap();
-    let progress = Printed { quiet: false };
+    let progress = crate::common::printed();
     let truth = tmp.path().join("truth");
     let mut req = workflows::track::TrackRequest::new(foot.to_str().unwrap());
     req.run.phases = PathBuf::from("phases/ellipse_walk.json");

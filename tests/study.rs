@@ -6,8 +6,10 @@
 
 use crate::common::study::{file, study_manifest, trial_files};
 use crate::common::{assert_exit, footfall, root, stderr};
-use footfall::workflows::study::pool::{chi2_upper, pool, Sample};
-use footfall::workflows::study::table::{Status, StudyTable};
+use footfall::problems::distributions::chi2_upper;
+use footfall::workflows::study::pool::{pool, Sample};
+use footfall::workflows::study::entry::Status;
+use footfall::workflows::study::table::StudyTable;
 use footfall::workflows::study::{self, manifest, StudyRequest, StudySettings};
 use footfall::workflows::Collected;
 use std::path::Path;

@@ -193,7 +193,7 @@ fn a_study_that_diagnoses_records_what_each_diagnosis_suggests() {
     s.diagnose = true;
     let t = run_local(&s, &out);
     let e = &t.trials[0];
-    assert_eq!(e.status, study::table::Status::Done, "{:?}", e.error);
+    assert_eq!(e.status, study::entry::Status::Done, "{:?}", e.error);
     let summary: serde_json::Value = serde_json::from_str(
         &std::fs::read_to_string(out.join("trials/w1/diagnose/diagnosis/summary.json")).unwrap(),
     )
@@ -291,7 +291,7 @@ fn a_study_killed_during_a_trial_resumes_without_redoing_the_finished_ones() {
     assert!(t
         .trials
         .iter()
-        .all(|e| e.status == study::table::Status::Done && e.track.is_some()));
+        .all(|e| e.status == study::entry::Status::Done && e.track.is_some()));
     // nothing of the killed process is left beside the trials' folders
     let left: Vec<String> = std::fs::read_dir(out.join("trials/w2"))
         .unwrap()

@@ -270,7 +270,7 @@ fn fit_the_law(
     tmp: &Path,
 ) -> LawFit {
     use footfall::runfolder::RunFolder;
-    use footfall::workflows::{self, track::tracking_sqp_settings, Printed};
+    use footfall::workflows::{self, track::tracking_sqp_settings};
     let dir = root().join("tests/data/hidden/volumetric_contact");
     let truth = file_law(&dir.join("hidden_foot.json"));
     let shipped = file_law(&root().join(FOOT));
@@ -298,7 +298,7 @@ fn fit_the_law(
     workflows::track::track(
         &req,
         RunFolder::create(&run, false).unwrap(),
-        &Printed { quiet: false },
+        &crate::common::printed(),
     )
     .unwrap();
     let s: serde_json::Value =
@@ -683,14 +683,14 @@ fn hidden_foot() -> String {
 fn make_volumetric_contact_trial() {
     use footfall::runfolder::RunFolder;
     use footfall::sqp::HessianMode;
-    use footfall::workflows::{self, track::tracking_sqp_settings, Printed};
+    use footfall::workflows::{self, track::tracking_sqp_settings};
     std::env::set_current_dir(root()).unwrap();
     let dest = root().join("tests/data/hidden/volumetric_contact");
     std::fs::create_dir_all(&dest).unwrap();
     let foot = dest.join("hidden_foot.json");
     std::fs::write(&foot, hidden_foot()).unwrap();
     let tmp = tempfile::tempdir().unwrap();
-    let progress = Printed { quiet: false };
+    let progress = crate::common::printed();
     let truth = tmp.path().join("truth");
     let mut req = workflows::track::TrackRequest::new(foot.to_str().unwrap());
     req.run.phases = PathBuf::from(PHASES);
@@ -721,7 +721,6 @@ fn make_volumetric_contact_trial() {
 fn the_hidden_law_held_fixed_fits_the_trial() {
     use footfall::sqp::HessianMode;
     use footfall::workflows::track::{tracking_sqp_settings, TrackRequest, TrackingProblem};
-    use footfall::workflows::Printed;
     let dir = root().join("tests/data/hidden/volumetric_contact");
     let mut run = TrackRequest::new(FOOT).run;
     run.model = root().join(MODEL);
@@ -737,7 +736,7 @@ fn the_hidden_law_held_fixed_fits_the_trial() {
             .unwrap();
     prob.setup.start_from(&start).unwrap();
     let settings = tracking_sqp_settings(1e-4, 40, None, HessianMode::Exact, None);
-    let (res, _) = prob.solve(&settings, &Printed { quiet: false }).unwrap();
+    let (res, _) = prob.solve(&settings, &crate::common::printed()).unwrap();
     eprintln!(
         "hidden law fixed: {} iterations, J {:.6}, infeasibility {:.1e}, KKT {:.1e}, {}",
         res.history.len() - 1,

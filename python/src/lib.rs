@@ -13,12 +13,24 @@
 use footfall::runfolder::RunFolder;
 use footfall::workflows::study::{self as study_workflow, StudyRequest, StudySettings};
 use footfall::workflows::track::{track as track_workflow, TrackRequest};
-use footfall::workflows::Printed;
+use footfall::workflows::{Stream, TextProgress};
 use numpy::{PyArray1, PyArray2};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::PathBuf;
+
+/// The binding's progress, as a terminal shows it: results on standard output, news, the
+/// iteration table and warnings on standard error (only warnings if `quiet`).
+fn printed(quiet: bool) -> TextProgress {
+    fn write(stream: Stream, text: &str) {
+        match stream {
+            Stream::Results => println!("{text}"),
+            Stream::Messages => eprintln!("{text}"),
+        }
+    }
+    TextProgress { quiet, write }
+}
 
 /// Track measured walking with the model and write the run folder `out`.
 ///
@@ -64,7 +76,7 @@ fn track<'py>(
     let run = py
         .detach(|| -> anyhow::Result<_> {
             let folder = RunFolder::create(&out, overwrite)?;
-            Ok(track_workflow(&req, folder, &Printed { quiet })?)
+            Ok(track_workflow(&req, folder, &printed(quiet))?)
         })
         .map_err(|e| PyRuntimeError::new_err(format!("{e:#}")))?;
     let solution = &run.solution;
@@ -146,7 +158,7 @@ fn study<'py>(
         only_row: None,
     };
     let outcome = py
-        .detach(|| study_workflow::run(&req, &Printed { quiet }))
+        .detach(|| study_workflow::run(&req, &printed(quiet)))
         .map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
     let table = outcome
         .table

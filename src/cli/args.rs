@@ -1,6 +1,6 @@
 //! Arguments and printing shared by several subcommands.
 
-use footfall::workflows::Printed;
+use footfall::workflows::{Stream, TextProgress};
 use std::path::PathBuf;
 
 /// The model and foot shared by `simulate`, `fit-foot` and `track`.
@@ -123,8 +123,24 @@ impl CheckPointArgs {
     }
 }
 
-/// Progress printed as the command line shows it (the library's [`Printed`]).
-pub type CliProgress = Printed;
+/// Progress as the command line shows it: results on standard output, news, the
+/// iteration table and warnings on standard error.
+pub type CliProgress = TextProgress;
+
+/// The command line's progress, only warnings if `quiet`.
+pub fn cli_progress(quiet: bool) -> CliProgress {
+    TextProgress {
+        quiet,
+        write: print_line,
+    }
+}
+
+fn print_line(stream: Stream, text: &str) {
+    match stream {
+        Stream::Results => println!("{text}"),
+        Stream::Messages => eprintln!("{text}"),
+    }
+}
 
 /// Hessian choice on the command line.
 #[derive(Debug, Clone, Copy, clap::ValueEnum)]

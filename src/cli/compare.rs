@@ -2,7 +2,7 @@
 //! ([`footfall::workflows::compare`]).
 
 use super::predict::PredictOptions;
-use super::{CliProgress, Failure};
+use super::{cli_progress, Failure};
 use footfall::workflows::compare::CompareRequest;
 #[allow(unused_imports)]
 use std::path::PathBuf;
@@ -51,6 +51,5 @@ impl From<Args> for CompareRequest {
 }
 
 pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
-    footfall::workflows::compare::run(&args.into(), &CliProgress { quiet })
-        .map_err(Failure::classify)
+    footfall::workflows::compare::run(&args.into(), &cli_progress(quiet)).map_err(Failure::classify)
 }

@@ -1,7 +1,7 @@
 //! `footfall compare-contact`: the arguments of the rigid-against-compliant comparison
 //! ([`footfall::workflows::compare_contact`]).
 
-use super::{CliProgress, Failure};
+use super::{cli_progress, Failure};
 use footfall::workflows::compare_contact::{
     compare_contact, first_unconverged, CompareContactRequest,
 };
@@ -90,7 +90,7 @@ impl From<Args> for CompareContactRequest {
 }
 
 pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
-    let progress = CliProgress { quiet };
+    let progress = cli_progress(quiet);
     let cmp = compare_contact(&args.into(), &progress).map_err(Failure::classify)?;
     match first_unconverged(&cmp) {
         Some(r) => Err(Failure::classify(

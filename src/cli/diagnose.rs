@@ -1,7 +1,7 @@
 //! `footfall diagnose`: the arguments of the `diagnose` workflow
 //! ([`footfall::workflows::diagnose`]).
 
-use super::{CliProgress, Failure};
+use super::{cli_progress, Failure};
 use footfall::workflows::diagnose::DiagnoseRequest;
 #[allow(unused_imports)]
 use std::path::PathBuf;
@@ -61,7 +61,7 @@ impl From<Args> for DiagnoseRequest {
 }
 
 pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
-    footfall::workflows::diagnose::run(&args.into(), &CliProgress { quiet })
+    footfall::workflows::diagnose::run(&args.into(), &cli_progress(quiet))
         .map_err(Failure::classify)
 }
 

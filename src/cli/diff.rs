@@ -1,7 +1,7 @@
 //! `footfall diff`: the arguments of the `diff` workflow
 //! ([`footfall::workflows::diff`]).
 
-use super::{CliProgress, Failure};
+use super::{cli_progress, Failure};
 use footfall::workflows::diff::DiffRequest;
 #[allow(unused_imports)]
 use std::path::PathBuf;
@@ -37,5 +37,5 @@ impl From<Args> for DiffRequest {
 }
 
 pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
-    footfall::workflows::diff::run(&args.into(), &CliProgress { quiet }).map_err(Failure::classify)
+    footfall::workflows::diff::run(&args.into(), &cli_progress(quiet)).map_err(Failure::classify)
 }

@@ -1,7 +1,7 @@
 //! `footfall fit_foot`: the arguments of the `fit_foot` workflow
 //! ([`footfall::workflows::fit_foot`]).
 
-use super::{CliProgress, Failure};
+use super::{cli_progress, Failure};
 use footfall::workflows::fit_foot::FitFootRequest;
 #[allow(unused_imports)]
 use std::path::PathBuf;
@@ -44,6 +44,6 @@ impl From<Args> for FitFootRequest {
 }
 
 pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
-    footfall::workflows::fit_foot::run(&args.into(), &CliProgress { quiet })
+    footfall::workflows::fit_foot::run(&args.into(), &cli_progress(quiet))
         .map_err(Failure::classify)
 }

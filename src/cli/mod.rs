@@ -23,7 +23,8 @@ mod track;
 mod validate;
 
 pub use args::{
-    CheckPointArgs, CliProgress, HessianArg, MethodArg, ModelArgs, TrackSolverArgs, TrialArgs,
+    cli_progress, CheckPointArgs, CliProgress, HessianArg, MethodArg, ModelArgs, TrackSolverArgs,
+    TrialArgs,
 };
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use footfall::sqp::SqpStatus;
@@ -178,7 +179,7 @@ pub fn main() -> ExitCode {
         eprintln!("error: {}", footfall::workflows::error_text(&e));
         return ExitCode::from(1);
     }
-    let progress = CliProgress { quiet: cli.quiet };
+    let progress = cli_progress(cli.quiet);
     let result = match cli.command {
         Command::Simulate(args) => simulate::run(args, cli.quiet),
         Command::Solve(args) => solve::run(args, cli.quiet),

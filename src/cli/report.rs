@@ -1,7 +1,7 @@
 //! `footfall report`: the arguments of the `report` workflow
 //! ([`footfall::workflows::report`]).
 
-use super::{CliProgress, Failure};
+use super::{cli_progress, Failure};
 use footfall::workflows::report::ReportRequest;
 #[allow(unused_imports)]
 use std::path::PathBuf;
@@ -37,6 +37,5 @@ impl From<Args> for ReportRequest {
 }
 
 pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
-    footfall::workflows::report::run(&args.into(), &CliProgress { quiet })
-        .map_err(Failure::classify)
+    footfall::workflows::report::run(&args.into(), &cli_progress(quiet)).map_err(Failure::classify)
 }

@@ -1,7 +1,7 @@
 //! `footfall simulate`: the arguments of the `simulate` workflow
 //! ([`footfall::workflows::simulate`]).
 
-use super::{CliProgress, Failure};
+use super::{cli_progress, Failure};
 use footfall::workflows::simulate::SimulateRequest;
 #[allow(unused_imports)]
 use std::path::PathBuf;
@@ -71,6 +71,6 @@ impl From<Args> for SimulateRequest {
 }
 
 pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
-    footfall::workflows::simulate::run(&args.into(), &CliProgress { quiet })
+    footfall::workflows::simulate::run(&args.into(), &cli_progress(quiet))
         .map_err(Failure::classify)
 }

@@ -1,7 +1,7 @@
 //! `footfall solve`: the arguments of the `solve` workflow
 //! ([`footfall::workflows::solve`]).
 
-use super::{CliProgress, Failure, HessianArg, MethodArg};
+use super::{cli_progress, Failure, HessianArg, MethodArg};
 use footfall::workflows::solve::SolveRequest;
 #[allow(unused_imports)]
 use std::path::PathBuf;
@@ -61,5 +61,5 @@ impl From<Args> for SolveRequest {
 }
 
 pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
-    footfall::workflows::solve::run(&args.into(), &CliProgress { quiet }).map_err(Failure::classify)
+    footfall::workflows::solve::run(&args.into(), &cli_progress(quiet)).map_err(Failure::classify)
 }

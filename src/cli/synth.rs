@@ -1,7 +1,7 @@
 //! `footfall synth`: the arguments of the `synth` workflow
 //! ([`footfall::workflows::synth`]).
 
-use super::{CliProgress, Failure};
+use super::{cli_progress, Failure};
 use footfall::workflows::synth::SynthRequest;
 #[allow(unused_imports)]
 use std::path::PathBuf;
@@ -84,5 +84,5 @@ impl From<Args> for SynthRequest {
 }
 
 pub fn run(args: Args, quiet: bool) -> Result<(), Failure> {
-    footfall::workflows::synth::run(&args.into(), &CliProgress { quiet }).map_err(Failure::classify)
+    footfall::workflows::synth::run(&args.into(), &cli_progress(quiet)).map_err(Failure::classify)
 }

@@ -18,13 +18,14 @@ pub use dynamics::ForceParts;
 pub use volumetric::VolumetricReport;
 
 use super::actuators::{Joint as MtgJoint, JointActuatorSet};
-use super::anthropometry::{self, build_bodies, estimated_stature, segments_from_de_leva};
+use super::anthropometry;
 use super::effects::{
     ActuatorAdjust, DynEffect, MeasurementAdjust, ModelAdjust, ModelScalar, ParamSpec,
 };
 use super::error::ModelError;
 use super::geometry::{Shape, ShapeScalars};
 use super::multibody::{Inertia, Tree, V2};
+use super::segments::{build_bodies, estimated_stature, segments_from_de_leva};
 use super::spec::{self, ActuatorSpec, BodySpec, ContactSettings, FootSpec, ModelSpec};
 use super::Scalar;
 use std::path::Path;

@@ -10,6 +10,7 @@ pub mod json;
 pub mod linalg;
 pub mod multibody;
 pub mod scalar;
+pub mod segments;
 pub mod spec;
 pub mod volumetric;
 

@@ -29,6 +29,7 @@
 
 pub mod stats;
 
+use super::distributions::chi2_999;
 use crate::model::effects::EffectSpec;
 use crate::ocp::{Block, Transcription};
 use crate::sqp::linearised::{GaussNewtonModel, GaussNewtonStep};
@@ -163,54 +164,6 @@ pub struct IdentifiedParameter {
     pub unit: String,
     /// Whether it was identified.
     pub free: bool,
-}
-
-/// The χ² 99.9 % point for `k` degrees of freedom (k ≥ 6 by the Wilson–Hilferty
-/// approximation).
-pub fn chi2_999(k: usize) -> f64 {
-    const TABLE: [f64; 5] = [10.828, 13.816, 16.266, 18.467, 20.515];
-    if (1..=5).contains(&k) {
-        return TABLE[k - 1];
-    }
-    let kf = k.max(1) as f64;
-    let z = 3.0902; // standard normal 99.9 % point
-    kf * (1.0 - 2.0 / (9.0 * kf) + z * (2.0 / (9.0 * kf)).sqrt()).powi(3)
-}
-
-/// The upper `alpha` point of the χ² distribution with one degree of freedom: the `x`
-/// with `P(χ²₁ > x) = erfc(√(x/2)) = alpha` (bisection; `alpha` in (0, 1)).
-pub fn chi2_1_upper(alpha: f64) -> f64 {
-    let (mut lo, mut hi) = (0.0f64, 200.0f64);
-    for _ in 0..200 {
-        let mid = 0.5 * (lo + hi);
-        if erfc((0.5 * mid).sqrt()) > alpha {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    0.5 * (lo + hi)
-}
-
-/// The complementary error function (Numerical Recipes' Chebyshev fit, relative error
-/// below 1.2e-7 everywhere).
-fn erfc(x: f64) -> f64 {
-    let z = x.abs();
-    let t = 1.0 / (1.0 + 0.5 * z);
-    let poly = -z * z - 1.265_512_23
-        + t * (1.000_023_68
-            + t * (0.374_091_96
-                + t * (0.096_784_18
-                    + t * (-0.186_288_06
-                        + t * (0.278_868_07
-                            + t * (-1.135_203_98
-                                + t * (1.488_515_87 + t * (-0.822_152_23 + t * 0.170_872_77))))))));
-    let r = t * poly.exp();
-    if x >= 0.0 {
-        r
-    } else {
-        2.0 - r
-    }
 }
 
 /// Result of a score test of one candidate.
@@ -844,23 +797,6 @@ fn probed_inverse_diagonal(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// The χ²₁ upper points against a published table (Abramowitz & Stegun, table 26.8):
-    /// 3.841 at 5 %, 6.635 at 1 %, 10.828 at 0.1 % (the same as [`chi2_999`]'s), 15.137
-    /// at 0.01 %.
-    #[test]
-    fn chi2_1_upper_points_match_the_table() {
-        for (alpha, x) in [
-            (0.05, 3.841),
-            (0.01, 6.635),
-            (0.001, 10.828),
-            (1e-4, 15.137),
-        ] {
-            let got = chi2_1_upper(alpha);
-            assert!((got - x).abs() < 2e-3, "α = {alpha}: {got} against {x}");
-        }
-        assert!((chi2_1_upper(0.001) - chi2_999(1)).abs() < 2e-3);
-    }
 
     /// A held-out cost that is a parabola along the fitted values, `c(x) = a (x − x₀)²`
     /// in units of `θ = 0.06`: its falls at `θ` and `−θ` give back its curvature `2aθ²`

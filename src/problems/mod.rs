@@ -5,6 +5,7 @@
 pub mod benchmarks;
 pub mod check;
 pub mod diagnose;
+pub mod distributions;
 pub mod errors;
 pub mod evaluation;
 pub mod foot_fit;

@@ -8,7 +8,7 @@
 //! values at `w + d`; then the step is halved. A recoverable evaluation failure at a
 //! trial point counts as a rejection (the step is shortened); a fatal one ends the search.
 
-use super::driver::{State, Structure};
+use super::iterate::{State, Structure};
 use super::{violations, EvalError, NlpEval, SqpSettings};
 
 /// Margin of the violation in the filter and the h-type test (γ_θ).

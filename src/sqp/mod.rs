@@ -18,14 +18,16 @@
 //! One home per concept: `driver` (the iteration), `step` (the QP subproblem, elastic
 //! mode and the rescue of a failed QP), `line_search` (the filter and the second-order
 //! correction), `kkt` (the convergence test), `evaluator` (timed NLP and QP calls),
-//! `active_set` (a QP asked at a solution, solved on its guessed active set).
+//! `iterate` (the NLP's structure and the current iterate, which these share), `qp` (the
+//! QP subproblem's data and its solvers: Clarabel, and `qp::active_set` for a QP asked at
+//! a solution, solved on its guessed active set).
 
-mod active_set;
 pub mod checkpoint;
 mod driver;
 mod eval_error;
 mod evaluator;
 pub mod hessian;
+mod iterate;
 mod kkt;
 mod line_search;
 pub mod linearised;
@@ -513,6 +515,58 @@ pub struct SqpResult {
     pub timings: SqpTimings,
 }
 
+impl IterationRecord {
+    /// The head of the iteration table whose rows are [`table_row`](Self::table_row).
+    pub fn table_head() -> String {
+        format!(
+            "{:>5} {:>16} {:>10} {:>10} {:>8} {:>8} {:>8} {:>8}",
+            "iter", "objective", "infeas", "kkt", "step", "seconds", "shift", "qp"
+        )
+    }
+
+    /// This iteration as a row of the iteration table.
+    pub fn table_row(&self) -> String {
+        let shift = self
+            .hessian_shift
+            .map_or("-".to_string(), |d| format!("{d:.1e}"));
+        let route = self.qp_route.map_or("-", QpRoute::word);
+        format!(
+            "{:>5} {:>16.9e} {:>10.3e} {:>10.3e} {:>8.2e} {:>8.2} {:>8} {:>8}",
+            self.iter,
+            self.objective,
+            self.infeasibility,
+            self.kkt,
+            self.step,
+            self.seconds,
+            shift,
+            route
+        )
+    }
+}
+
+impl SqpResult {
+    /// One result of two solves, `second` started where this one stopped: the second's
+    /// point and status, the iteration history of both (the second's numbered on, without
+    /// its repeated initial point), their times added up.
+    pub fn followed_by(self, second: SqpResult) -> SqpResult {
+        let (used, elapsed) = (self.history.len().saturating_sub(1), self.seconds);
+        let mut history = self.history;
+        history.extend(second.history.iter().skip(1).map(|r| IterationRecord {
+            iter: r.iter + used,
+            seconds: r.seconds + elapsed,
+            ..r.clone()
+        }));
+        let mut timings = self.timings;
+        timings += second.timings;
+        SqpResult {
+            history,
+            timings,
+            seconds: self.seconds + second.seconds,
+            ..second
+        }
+    }
+}
+
 /// Receives iteration records; return `false` to stop.
 pub trait Observer {
     /// Called after every iteration.
@@ -528,29 +582,6 @@ pub trait Observer {
     /// A turn in the solve worth telling the user (e.g. that the Gauss–Newton steps
     /// stalled and the exact Hessian took over), before the iteration it affects.
     fn note(&mut self, _text: &str) {}
-}
-
-/// An observer that prints one line per iteration to stderr.
-pub struct StderrLog;
-
-impl Observer for StderrLog {
-    fn iteration(&mut self, r: &IterationRecord) -> bool {
-        if r.iter == 0 {
-            eprintln!(
-                "{:>5} {:>16} {:>10} {:>10} {:>8} {:>8} {:>8} {:>8}",
-                "iter", "objective", "infeas", "kkt", "step", "seconds", "shift", "qp"
-            );
-        }
-        let shift = r
-            .hessian_shift
-            .map_or("-".to_string(), |d| format!("{d:.1e}"));
-        let route = r.qp_route.map_or("-", QpRoute::word);
-        eprintln!(
-            "{:>5} {:>16.9e} {:>10.3e} {:>10.3e} {:>8.2e} {:>8.2} {:>8} {:>8}",
-            r.iter, r.objective, r.infeasibility, r.kkt, r.step, r.seconds, shift, route
-        );
-        true
-    }
 }
 
 /// An observer that does nothing.

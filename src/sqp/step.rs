@@ -7,9 +7,9 @@
 //! penalised; when that fails too, a growing proximal shift `δ I` gives a
 //! better-conditioned QP with a shorter step.
 
-use super::driver::{State, Structure};
 use super::evaluator::Evaluator;
 use super::hessian::{self, BlockBfgs};
+use super::iterate::{State, Structure};
 use super::qp::{QpData, QpError, QpSolution, Triplets};
 use super::{
     ExactConvexification, HessianMode, IterationRecord, Nlp, QpRoute, SqpSettings, SqpStatus,

@@ -71,31 +71,46 @@ impl Progress for WarningsOnly<'_> {
     }
 }
 
-/// Progress printed as a terminal shows it (the command line and the Python binding):
-/// news and the SQP's iteration table on standard error and results on standard output,
-/// unless quiet; warnings always.
-pub struct Printed {
-    /// Print only warnings.
-    pub quiet: bool,
+/// Which of a front end's streams a line of progress goes to.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stream {
+    /// Results (the command line's standard output).
+    Results,
+    /// News, the SQP's iteration table and warnings (standard error).
+    Messages,
 }
 
-impl Progress for Printed {
+/// Progress as lines of text, for a front end that shows them (the command line, the
+/// Python binding): news, the SQP's iteration table and results unless quiet, warnings
+/// always, each line handed to `write` with the stream it belongs to.
+#[derive(Clone, Copy)]
+pub struct TextProgress {
+    /// Only warnings.
+    pub quiet: bool,
+    /// Shows a line.
+    pub write: fn(Stream, &str),
+}
+
+impl Progress for TextProgress {
     fn note(&self, text: &str) {
         if !self.quiet {
-            eprintln!("{text}");
+            (self.write)(Stream::Messages, text);
         }
     }
     fn warn(&self, text: &str) {
-        eprintln!("{text}");
+        (self.write)(Stream::Messages, text);
     }
     fn result(&self, text: &str) {
         if !self.quiet {
-            println!("{text}");
+            (self.write)(Stream::Results, text);
         }
     }
     fn iteration(&self, rec: &IterationRecord) {
         if !self.quiet {
-            crate::sqp::Observer::iteration(&mut crate::sqp::StderrLog, rec);
+            if rec.iter == 0 {
+                (self.write)(Stream::Messages, &IterationRecord::table_head());
+            }
+            (self.write)(Stream::Messages, &rec.table_row());
         }
     }
 }

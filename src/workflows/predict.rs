@@ -240,7 +240,7 @@ pub fn predict(
             ..sqp_settings.clone()
         };
         let second = super::solve_interruptibly(tr, &first.w, &rest, progress)?;
-        Ok(super::track::merge_stages(first, second))
+        Ok(first.followed_by(second))
     };
     let (sites, res) = refinement.solve(
         &build,

@@ -118,7 +118,7 @@ impl<'m> Refinement<'_, 'm> {
             let next = res.w.clone();
             let mut all = match merged {
                 None => res,
-                Some(first) => super::track::merge_stages(first, res),
+                Some(first) => first.followed_by(res),
             };
             let used = all.history.len().saturating_sub(1);
             // whether the solution is still short of the run's own tolerance

@@ -141,7 +141,7 @@ pub fn run(args: &SolveRequest, progress: &dyn Progress) -> anyhow::Result<()> {
                 );
             }
             let r2 = super::solve_interruptibly(&tr, &r1.w, &s2, progress)?;
-            let res = super::track::merge_stages(r1, r2);
+            let res = r1.followed_by(r2);
             counters += tr.integration_totals();
             write_run(
                 folder, ocp, &tr, &bench, &problem, &s2, res, counters, progress,

@@ -414,7 +414,7 @@ impl TrackingProblem {
         };
         let second = super::solve_interruptibly_warm(&tr2, &first.w, Some(warm), &rest, progress);
         self.count_integration(&tr2);
-        finish(&tr2, merge_stages(first, second?))
+        finish(&tr2, first.followed_by(second?))
     }
 
     /// Add the integrator counters of `tr`'s evaluations to this problem's.
@@ -444,36 +444,6 @@ fn forces_fit_the_body(data: &GaitData, model: &GaitModel) -> anyhow::Result<Vec
 
 /// The tightest integrator tolerance a failed line search moves a tracking solve to.
 const TIGHTEST_TOL: f64 = 1e-12;
-
-/// One result of two solves, the second started where the first stopped: the second's
-/// point and status, the iteration history of both (the second's numbered on, without
-/// its repeated initial point), their times added up.
-pub fn merge_stages(
-    first: crate::sqp::SqpResult,
-    second: crate::sqp::SqpResult,
-) -> crate::sqp::SqpResult {
-    let (used, elapsed) = (first.history.len().saturating_sub(1), first.seconds);
-    let mut history = first.history;
-    history.extend(
-        second
-            .history
-            .iter()
-            .skip(1)
-            .map(|r| crate::sqp::IterationRecord {
-                iter: r.iter + used,
-                seconds: r.seconds + elapsed,
-                ..r.clone()
-            }),
-    );
-    let mut timings = first.timings;
-    timings += second.timings;
-    crate::sqp::SqpResult {
-        history,
-        timings,
-        seconds: first.seconds + second.seconds,
-        ..second
-    }
-}
 
 pub use super::inputs::read_run_setup;
 

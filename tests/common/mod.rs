@@ -455,3 +455,15 @@ pub fn interval_curvature_fd_error(
     }
     (worst.0, scale, worst.1)
 }
+
+/// Progress shown as the command line shows it, for a test whose solve is worth watching
+/// with `--nocapture`.
+pub fn printed() -> footfall::workflows::TextProgress {
+    fn write(_: footfall::workflows::Stream, text: &str) {
+        eprintln!("{text}");
+    }
+    footfall::workflows::TextProgress {
+        quiet: false,
+        write,
+    }
+}

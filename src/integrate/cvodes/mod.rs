@@ -13,11 +13,12 @@
 //! quotients.
 //!
 //! One home per concept: `settings` (options, counters, errors), `callbacks` (the C
-//! callbacks and the block they share with CVODES), `forward` (the forward problem both create), `integrator` (creation, the end-point
-//! calls, teardown), `adjoint` (backward adjoints of stiff models), `dense` (output at interior times, events), `dense_lu` (the Newton
-//! systems' linear solver), `vector_ops` (the serial vector kernels CVODES runs on).
+//! callbacks and the block they share with CVODES), `forward` (the forward problem both
+//! create), `integrator` (creation, the end-point calls, teardown, and in
+//! `integrator::adjoint` the backward adjoints of stiff models), `dense` (output at interior
+//! times, events), `dense_lu` (the Newton systems' linear solver), `vector_ops` (the serial
+//! vector kernels CVODES runs on).
 
-mod adjoint;
 mod callbacks;
 mod dense;
 mod dense_lu;
@@ -26,7 +27,6 @@ mod integrator;
 mod settings;
 mod vector_ops;
 
-pub use adjoint::{AdjointSweep, MAX_CELL_NODES};
 pub(crate) use callbacks::check_dim;
-pub use integrator::Integrator;
+pub use integrator::{AdjointSweep, Integrator, MAX_CELL_NODES};
 pub use settings::{IntegrationStats, IntegratorError, IntegratorSettings, Method};

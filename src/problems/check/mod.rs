@@ -634,7 +634,7 @@ fn stepwise(p: &Problem, settings: &CheckSettings) -> (Vec<Reading>, Vec<Reading
         let threshold = if tested.is_empty() {
             f64::INFINITY
         } else {
-            crate::problems::diagnose::chi2_1_upper(level / tested.len() as f64).sqrt()
+            crate::problems::distributions::chi2_1_upper(level / tested.len() as f64).sqrt()
         };
         for t in tested.iter_mut() {
             t.threshold = threshold;

@@ -10,10 +10,10 @@
 //! shared effect's joint readings (each check's final value) are pooled too. A finding of the check that holds in some trials of a
 //! group and not in the others is said to.
 
+use super::entry::{Reading, TrialEntry};
 use super::pool::{pool, Pooled, Sample};
-use super::table::{Reading, TrialEntry};
 use crate::problems::check::Param;
-use crate::problems::diagnose::chi2_1_upper;
+use crate::problems::distributions::chi2_1_upper;
 use serde::Serialize;
 
 /// The candidates pooled over a lab session's trials.

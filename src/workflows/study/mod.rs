@@ -3,10 +3,11 @@
 //! `DIR/trials/<id>/` ([`trial`]); a trial whose folders are complete is skipped, a trial
 //! that fails records its error and the others go on. The study table
 //! (`study.csv`, `study.json`, `report.html`) is then built from the trial folders alone
-//! ([`table`]), with the readings of an instrument pooled over a lab session's trials and
+//! ([`table`], one row per trial as [`entry`] reads it), with the readings of an instrument pooled over a lab session's trials and
 //! those of the body over a subject's ([`pool`], [`findings`]). The same trials run as a
 //! Slurm job array ([`slurm`]): one task per row, the table gathered from the folders.
 
+pub mod entry;
 pub mod findings;
 pub mod manifest;
 pub mod pool;

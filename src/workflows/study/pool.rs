@@ -10,6 +10,7 @@
 //! of freedom, its upper-tail probability under $\chi^2_{k-1}$, and
 //! $I^2 = \max(0, (Q - (k-1))/Q)$.
 
+use crate::problems::distributions::chi2_upper;
 use serde::Serialize;
 
 /// One trial's reading of a candidate.
@@ -101,81 +102,4 @@ fn shared_spread(s: &Sample) -> f64 {
     } else {
         0.0
     }
-}
-
-/// `P(χ²_k > x)`: the regularised upper incomplete gamma function `Q(k/2, x/2)`.
-pub fn chi2_upper(x: f64, k: f64) -> f64 {
-    if x.is_nan() || x <= 0.0 {
-        return 1.0;
-    }
-    gamma_q(0.5 * k, 0.5 * x)
-}
-
-/// Regularised upper incomplete gamma `Q(a, x)` (series below `a + 1`, Lentz's continued
-/// fraction above; Numerical Recipes §6.2), to about 1e-14.
-fn gamma_q(a: f64, x: f64) -> f64 {
-    let log_prefactor = a * x.ln() - x - ln_gamma(a);
-    if x < a + 1.0 {
-        let (mut sum, mut term, mut ap) = (1.0 / a, 1.0 / a, a);
-        for _ in 0..1000 {
-            ap += 1.0;
-            term *= x / ap;
-            sum += term;
-            if term.abs() < sum.abs() * 1e-16 {
-                break;
-            }
-        }
-        (1.0 - sum * log_prefactor.exp()).clamp(0.0, 1.0)
-    } else {
-        let tiny = 1e-300;
-        let mut b = x + 1.0 - a;
-        let mut c = 1.0 / tiny;
-        let mut d = 1.0 / b;
-        let mut h = d;
-        for i in 1..1000 {
-            let an = -(i as f64) * (i as f64 - a);
-            b += 2.0;
-            d = an * d + b;
-            if d.abs() < tiny {
-                d = tiny;
-            }
-            c = b + an / c;
-            if c.abs() < tiny {
-                c = tiny;
-            }
-            d = 1.0 / d;
-            let del = d * c;
-            h *= del;
-            if (del - 1.0).abs() < 1e-16 {
-                break;
-            }
-        }
-        (log_prefactor.exp() * h).clamp(0.0, 1.0)
-    }
-}
-
-/// `ln Γ(x)` for `x > 0` (Lanczos, g = 7, nine terms; relative error below 1e-15).
-fn ln_gamma(x: f64) -> f64 {
-    const C: [f64; 9] = [
-        0.999_999_999_999_809_9,
-        676.520_368_121_885_1,
-        -1_259.139_216_722_402_8,
-        771.323_428_777_653_1,
-        -176.615_029_162_140_6,
-        12.507_343_278_686_905,
-        -0.138_571_095_265_720_12,
-        9.984_369_578_019_572e-6,
-        1.505_632_735_149_311_6e-7,
-    ];
-    if x < 0.5 {
-        let pi = std::f64::consts::PI;
-        return (pi / (pi * x).sin()).ln() - ln_gamma(1.0 - x);
-    }
-    let x = x - 1.0;
-    let mut a = C[0];
-    let t = x + 7.5;
-    for (i, c) in C.iter().enumerate().skip(1) {
-        a += c / (x + i as f64);
-    }
-    0.5 * (2.0 * std::f64::consts::PI).ln() + (x + 0.5) * t.ln() - t + a.ln()
 }

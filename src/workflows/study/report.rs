@@ -2,8 +2,9 @@
 //! pooled readings) and `report.html` (both, with each group's pooled readings), each
 //! written atomically.
 
+use super::entry::{Status, TrialEntry};
 use super::findings::{value_text, GroupFindings, GroupKind};
-use super::table::{StudyTable, TrialEntry};
+use super::table::StudyTable;
 use super::StudyError;
 use crate::problems::check::Param;
 use crate::report::html::{Report, Section, Summary, Tone};
@@ -147,13 +148,13 @@ fn group_heading(g: &GroupFindings) -> String {
 
 /// A few lines for the terminal: trials by status and each group's verdict.
 pub fn summary_text(t: &StudyTable) -> String {
-    let count = |s: super::table::Status| t.trials.iter().filter(|e| e.status == s).count();
+    let count = |s: Status| t.trials.iter().filter(|e| e.status == s).count();
     let mut out = format!(
         "study: {} trial(s): {} done, {} failed, {} not run\n",
         t.trials.len(),
-        count(super::table::Status::Done),
-        count(super::table::Status::Failed),
-        count(super::table::Status::NotRun)
+        count(Status::Done),
+        count(Status::Failed),
+        count(Status::NotRun)
     );
     for e in t.trials.iter().filter(|e| e.error.is_some()) {
         writeln!(

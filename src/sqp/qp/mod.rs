@@ -6,7 +6,10 @@
 //! variables) in the zero cone, each finite inequality bound as one row of the
 //! nonnegative cone. In elastic mode every constraint row gets a pair of non-negative
 //! slacks $p, n$ penalised by $\rho \sum (p + n)$, so the QP is always feasible (used when
-//! the linearised constraints are inconsistent).
+//! the linearised constraints are inconsistent). A QP asked at a solution is solved on
+//! its guessed active set first ([`active_set`]).
+
+mod active_set;
 
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{DefaultSettings, DefaultSolver, IPSolver, SolverStatus, SupportedConeT};
@@ -192,13 +195,13 @@ pub fn solve(q: &QpData<'_>) -> Result<QpSolution, QpError> {
 
 /// Solve a QP subproblem asked at a solution (a Gauss–Newton model's steps and probes):
 /// first on the active set guessed from the bounds and rows that hold at the point (one
-/// sparse LDLᵀ, `sqp::active_set`), which settles on the QP's KKT point
+/// sparse LDLᵀ, `sqp::qp::active_set`), which settles on the QP's KKT point
 /// in a few corrections when the point is a solution of a nearby problem; else with
 /// Clarabel, as [`solve`]. Not used inside the SQP's iterations: there the guess rarely
 /// holds (the CI's predictions took Clarabel's path at every QP, 2 % slower).
 pub fn solve_near_solution(q: &QpData<'_>) -> Result<QpSolution, QpError> {
     let jrows = rows_of(q);
-    match super::active_set::solve(q, &jrows) {
+    match active_set::solve(q, &jrows) {
         Some(sol) => Ok(sol),
         None => interior_point(q, &jrows),
     }

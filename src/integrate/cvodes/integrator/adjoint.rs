@@ -14,13 +14,13 @@ use std::ptr;
 
 use sundials_sys as sys;
 
-use super::callbacks::{
+use super::super::callbacks::{
     all_finite, check_dim, check_interval, check_lin_setup, check_setup, null_error, nv_slice,
     nv_slice_mut, run_callback, CallCtx, CallGuard, Shared,
 };
-use super::integrator::Integrator;
-use super::settings::{IntegratorError, IntegratorSettings};
-use super::{dense_lu, forward, vector_ops};
+use super::super::settings::{IntegratorError, IntegratorSettings};
+use super::super::{dense_lu, forward, vector_ops};
+use super::Integrator;
 use crate::integrate::{Ode, OdeError};
 
 /// Forward steps between two check points. One interval of the gait model takes a few

@@ -15,7 +15,7 @@
 //! precision of the factorisation with iterative refinement. Otherwise the caller solves
 //! the QP with Clarabel, so a wrong guess costs time, never a different answer.
 
-use super::qp::{CscPattern, QpData, QpSolution};
+use super::{CscPattern, QpData, QpSolution};
 use clarabel::qdldl::{QDLDLFactorisation, QDLDLSettings};
 
 /// How a bound pair holds in the guess.

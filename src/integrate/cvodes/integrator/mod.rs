@@ -1,5 +1,10 @@
-//! The [`Integrator`]: creation, the calls that return the end point, and teardown.
+//! The [`Integrator`]: creation, the calls that return the end point, and teardown; its
+//! backward adjoints of stiff models in [`adjoint`].
 #![allow(unsafe_code)]
+
+mod adjoint;
+
+pub use adjoint::{AdjointSweep, MAX_CELL_NODES};
 
 use std::ffi::{c_int, c_long, c_void};
 use std::ptr;
@@ -36,7 +41,7 @@ pub struct Integrator {
     pub(super) roots_on: bool,
     /// The adjoint pass's own CVODES objects, made by the first
     /// [`adjoints`](Self::adjoints) call.
-    pub(super) adjoint: Option<super::adjoint::Adjoint>,
+    adjoint: Option<adjoint::Adjoint>,
 }
 
 // SAFETY: every pointer is exclusively owned by this value (nothing is shared with other
