@@ -286,3 +286,65 @@ fn the_bound_multipliers_of_the_problem_a_solve_continues_hold_its_bounds() {
     assert_eq!(ignored.w, lambda_only.w);
     assert_eq!(ignored.history.len(), lambda_only.history.len());
 }
+
+/// A problem that cannot be evaluated anywhere (as a round whose start the integrator
+/// cannot cross): the circle's structure, every evaluation failing.
+struct Unevaluable;
+
+impl Nlp for Unevaluable {
+    fn n(&self) -> usize {
+        OnA::Circle.n()
+    }
+    fn m(&self) -> usize {
+        OnA::Circle.m()
+    }
+    fn bounds(&self) -> (Vec<f64>, Vec<f64>, Vec<f64>, Vec<f64>) {
+        OnA::Circle.bounds()
+    }
+    fn jacobian_pattern(&self) -> (Vec<usize>, Vec<usize>) {
+        OnA::Circle.jacobian_pattern()
+    }
+    fn gauss_newton_pattern(&self) -> (Vec<usize>, Vec<usize>) {
+        OnA::Circle.gauss_newton_pattern()
+    }
+    fn hessian_blocks(&self) -> Vec<Vec<usize>> {
+        OnA::Circle.hessian_blocks()
+    }
+    fn row_name(&self, i: usize) -> String {
+        OnA::Circle.row_name(i)
+    }
+    fn evaluate(&self, _w: &[f64], _derivs: bool) -> Result<NlpEval, EvalError> {
+        Err(EvalError::recoverable("non-finite value"))
+    }
+}
+
+/// Work a solve finished is kept when the solve that continues it fails before its start
+/// is evaluated: the joined result holds the first solve's point, objective, violation
+/// and iterations, and the second's stop reason.
+#[test]
+fn a_continuation_that_fails_at_its_start_keeps_the_first_solves_point() {
+    let first = sqp::solve(
+        &OnA::Circle,
+        &[1.2, 0.6],
+        &SqpSettings {
+            max_iter: 3,
+            ..settings()
+        },
+        &mut Silent,
+    );
+    assert_eq!(first.status, SqpStatus::MaxIterations);
+    assert!(first.objective.is_finite() && first.history.len() == 4);
+    let second = sqp::solve(&Unevaluable, &first.w, &settings(), &mut Silent);
+    assert!(second.history.is_empty() && second.objective.is_nan());
+    let (w, objective, kkt) = (first.w.clone(), first.objective, first.kkt);
+    let joined = first.followed_by(second);
+    assert!(
+        matches!(&joined.status, SqpStatus::EvaluationFailure(why) if why.contains("non-finite value")),
+        "{:?}",
+        joined.status
+    );
+    assert_eq!(joined.w, w);
+    assert_eq!(joined.objective.to_bits(), objective.to_bits());
+    assert_eq!(joined.kkt.to_bits(), kkt.to_bits());
+    assert_eq!(joined.history.len(), 4);
+}

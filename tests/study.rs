@@ -7,8 +7,8 @@
 use crate::common::study::{file, study_manifest, trial_files};
 use crate::common::{assert_exit, footfall, root, stderr};
 use footfall::problems::distributions::chi2_upper;
-use footfall::workflows::study::pool::{pool, Sample};
 use footfall::workflows::study::entry::Status;
+use footfall::workflows::study::pool::{pool, Sample};
 use footfall::workflows::study::table::StudyTable;
 use footfall::workflows::study::{self, manifest, StudyRequest, StudySettings};
 use footfall::workflows::Collected;

@@ -547,8 +547,21 @@ impl IterationRecord {
 impl SqpResult {
     /// One result of two solves, `second` started where this one stopped: the second's
     /// point and status, the iteration history of both (the second's numbered on, without
-    /// its repeated initial point), their times added up.
+    /// its repeated initial point), their times added up. A second solve that stopped
+    /// before its start was evaluated (no history) leaves this one's point, values and
+    /// history standing, with its own stop reason.
     pub fn followed_by(self, second: SqpResult) -> SqpResult {
+        let mut timings = self.timings;
+        timings += second.timings;
+        let seconds = self.seconds + second.seconds;
+        if second.history.is_empty() {
+            return SqpResult {
+                status: second.status,
+                timings,
+                seconds,
+                ..self
+            };
+        }
         let (used, elapsed) = (self.history.len().saturating_sub(1), self.seconds);
         let mut history = self.history;
         history.extend(second.history.iter().skip(1).map(|r| IterationRecord {
@@ -556,12 +569,10 @@ impl SqpResult {
             seconds: r.seconds + elapsed,
             ..r.clone()
         }));
-        let mut timings = self.timings;
-        timings += second.timings;
         SqpResult {
             history,
             timings,
-            seconds: self.seconds + second.seconds,
+            seconds,
             ..second
         }
     }

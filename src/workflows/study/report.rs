@@ -146,7 +146,8 @@ fn group_heading(g: &GroupFindings) -> String {
     }
 }
 
-/// A few lines for the terminal: trials by status and each group's verdict.
+/// A few lines for the terminal: trials by status, the tracks that did not converge, and
+/// each group's verdict.
 pub fn summary_text(t: &StudyTable) -> String {
     let count = |s: Status| t.trials.iter().filter(|e| e.status == s).count();
     let mut out = format!(
@@ -165,6 +166,29 @@ pub fn summary_text(t: &StudyTable) -> String {
             e.error.as_deref().unwrap_or("")
         )
         .ok();
+    }
+    let tracks: Vec<(&str, &str)> = t
+        .trials
+        .iter()
+        .filter_map(|e| e.track.as_ref().map(|r| (e.id.as_str(), r.status.as_str())))
+        .collect();
+    if !tracks.is_empty() {
+        let unconverged: Vec<String> = tracks
+            .iter()
+            .filter(|(_, status)| *status != "converged")
+            .map(|(id, status)| format!("{id} ({status})"))
+            .collect();
+        write!(
+            out,
+            "tracks: {} of {} converged",
+            tracks.len() - unconverged.len(),
+            tracks.len()
+        )
+        .ok();
+        if !unconverged.is_empty() {
+            write!(out, "; not converged: {}", unconverged.join(", ")).ok();
+        }
+        out.push('\n');
     }
     for g in &t.pooled {
         writeln!(out, "{}: {}", group_heading(g), g.statements.join("; ")).ok();
@@ -363,4 +387,55 @@ pub fn html(t: &StudyTable) -> String {
         sections,
     }
     .to_html()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::workflows::study::entry::TrackResult;
+
+    fn entry(id: &str, track: Option<&str>) -> TrialEntry {
+        TrialEntry {
+            row: 1,
+            id: id.into(),
+            subject: "s".into(),
+            session: "lab".into(),
+            condition: "untouched".into(),
+            data: "trial.csv".into(),
+            status: Status::Done,
+            error: None,
+            check: None,
+            track: track.map(|status| TrackResult {
+                status: status.into(),
+                objective: Some(7.0),
+                iterations: Some(40),
+            }),
+            diagnose: None,
+        }
+    }
+
+    /// The summary counts the tracks that converged and names those that did not, with
+    /// their stop reasons; a study without tracks says nothing of them.
+    #[test]
+    fn the_summary_names_the_tracks_that_did_not_converge() {
+        let table = |trials| StudyTable {
+            trials,
+            pooled: Vec::new(),
+            threshold: None,
+            level: 0.05,
+        };
+        let text = summary_text(&table(vec![
+            entry("a", Some("converged")),
+            entry("b", Some("max_iterations")),
+            entry("c", Some("evaluation_failure")),
+        ]));
+        assert!(
+            text.contains(
+                "tracks: 1 of 3 converged; not converged: b (max_iterations), c (evaluation_failure)"
+            ),
+            "{text}"
+        );
+        let checks_only = summary_text(&table(vec![entry("a", None)]));
+        assert!(!checks_only.contains("tracks"), "{checks_only}");
+    }
 }

@@ -170,8 +170,34 @@ fn diagnose_result(s: &serde_json::Value) -> DiagnoseResult {
 
 fn track_result(s: &serde_json::Value) -> TrackResult {
     TrackResult {
-        status: s["status"].as_str().unwrap_or_default().to_string(),
+        // a status with a reason is written as an object keyed by its name
+        status: match &s["status"] {
+            serde_json::Value::Object(o) => o.keys().next().cloned().unwrap_or_default(),
+            v => v.as_str().unwrap_or_default().to_string(),
+        },
         objective: s["objective"].as_f64(),
         iterations: s["iterations"].as_u64(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A track's status is read whether the summary writes it as a name or, with its
+    /// reason, as an object keyed by the name.
+    #[test]
+    fn a_tracks_status_is_read_with_or_without_its_reason() {
+        let plain =
+            serde_json::json!({"status": "max_iterations", "objective": 8.2, "iterations": 200});
+        assert_eq!(track_result(&plain).status, "max_iterations");
+        let with_reason = serde_json::json!({
+            "status": {"evaluation_failure": "non-finite value at t = 0.93"},
+            "objective": 7.77,
+            "iterations": 121
+        });
+        let r = track_result(&with_reason);
+        assert_eq!(r.status, "evaluation_failure");
+        assert_eq!((r.objective, r.iterations), (Some(7.77), Some(121)));
     }
 }
