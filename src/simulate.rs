@@ -706,9 +706,8 @@ impl Run<'_> {
         let (st, root) = match watch {
             Some(c) => {
                 let gap = |_: f64, xx: &[f64]| model.contact_point(c, &xx[..nq], theta).1;
-                self.integrator.integrate_dense_until(
-                    ode, a, b, &self.x, theta, &times, &gap, &mut out,
-                )
+                self.integrator
+                    .integrate_dense_until(ode, a, b, &self.x, theta, &times, &gap, &mut out)
             }
             None => self
                 .integrator

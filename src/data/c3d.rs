@@ -681,7 +681,9 @@ impl PlateReading<'_> {
         cop_threshold: f64,
     ) -> Result<(Vec<[f64; 3]>, Vec<[f64; 3]>, Vec<f64>), DataError> {
         let (path, number, ch, ms) = (self.path, self.number, &self.channels, &self.moment_scales);
-        let PlateFrame { r, origin, o_lab, .. } = self.frame;
+        let PlateFrame {
+            r, origin, o_lab, ..
+        } = self.frame;
         let n = time.len();
         let mut force = Vec::with_capacity(n);
         let mut cop = Vec::with_capacity(n);

@@ -567,8 +567,8 @@ fn actuation(spec: &ModelSpec, seg: &Segments, model_path: &Path) -> Result<Actu
                 BodySpec::DeLeva { height, .. } => *height,
                 _ => estimated_stature(seg),
             });
-            let mut set = JointActuatorSet::anderson2007_young_male_for(mass, height)
-                .scaled(*strength_scale);
+            let mut set =
+                JointActuatorSet::anderson2007_young_male_for(mass, height).scaled(*strength_scale);
             set.eta = *eta;
             set.activation.tau_activation = *tau_activation;
             set.activation.tau_deactivation = *tau_deactivation;

@@ -144,9 +144,10 @@ fn check_angle_unit_stated(ks: &Storage, map: &StorageMap) -> Result<(), DataErr
             row: None,
             column: "inDegrees".into(),
             text: String::new(),
-            reason: "the header states neither 'inDegrees=yes|no' nor 'Angles are in degrees|radians'; \
+            reason:
+                "the header states neither 'inDegrees=yes|no' nor 'Angles are in degrees|radians'; \
                      set Storage::in_degrees and Storage::angle_unit_stated once the unit is known"
-                .into(),
+                    .into(),
         });
     }
     Ok(())

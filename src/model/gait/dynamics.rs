@@ -271,8 +271,7 @@ impl GaitModel {
             }
             let stab = match row.kind {
                 RowKind::Normal => {
-                    gqd * (2.0 * cs.baumgarte_alpha)
-                        + phi * (cs.baumgarte_beta * cs.baumgarte_beta)
+                    gqd * (2.0 * cs.baumgarte_alpha) + phi * (cs.baumgarte_beta * cs.baumgarte_beta)
                 }
                 RowKind::Tangential => gqd * cs.baumgarte_gamma,
             };
