@@ -547,7 +547,7 @@ struct Sampler<'a> {
 
 impl Sampler<'_> {
     /// The sample at time `tt` (s) and state `xx`; `u` receives the controls.
-    fn at(&self, tt: f64, xx: &[f64], u: &mut Vec<f64>) -> Result<Sample, SimulationError> {
+    fn at(&self, tt: f64, xx: &[f64], u: &mut [f64]) -> Result<Sample, SimulationError> {
         let (model, set) = (self.model, self.set);
         self.controls.at(tt, u);
         let mut xdot = vec![0.0; model.nx()];

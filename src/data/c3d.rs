@@ -456,7 +456,7 @@ pub fn read_c3d_plates(path: &Path, cop_threshold: f64) -> Result<C3dForces, Dat
             moment_scales,
             frame: PlateFrame::new(path, number, fp, ls)?,
         };
-        let (force, cop, free) = reading.samples(analog, &time, cop_threshold)?;
+        let PlateLoads { force, cop, free } = reading.samples(analog, &time, cop_threshold)?;
         plates.push(PlateForces {
             plate: number,
             plate_type,
@@ -679,7 +679,7 @@ impl PlateReading<'_> {
         analog: &c3dio::Analog,
         time: &[f64],
         cop_threshold: f64,
-    ) -> Result<(Vec<[f64; 3]>, Vec<[f64; 3]>, Vec<f64>), DataError> {
+    ) -> Result<PlateLoads, DataError> {
         let (path, number, ch, ms) = (self.path, self.number, &self.channels, &self.moment_scales);
         let PlateFrame {
             r, origin, o_lab, ..
@@ -722,6 +722,14 @@ impl PlateReading<'_> {
                 free.push(f64::NAN);
             }
         }
-        Ok((force, cop, free))
+        Ok(PlateLoads { force, cop, free })
     }
+}
+
+/// A plate's loads at its analog samples, lab frame: the ground's force on the foot (N),
+/// the CoP (m) and the free moment (N·m).
+struct PlateLoads {
+    force: Vec<[f64; 3]>,
+    cop: Vec<[f64; 3]>,
+    free: Vec<f64>,
 }

@@ -197,7 +197,11 @@ impl GaitModel {
         let actuation = actuation(spec, &seg, model_path)?;
         let effects = build_effects(spec, model_path, &tree, foot, foot_path)?;
         check_actuator_effects(&actuation, &effects, model_path)?;
-        let (params, effect_offsets, free) = effect_parameters(&effects, model_path)?;
+        let EffectParameters {
+            params,
+            offsets: effect_offsets,
+            free,
+        } = effect_parameters(&effects, model_path)?;
         let slots = ContactSlots::new(&contacts, &effects);
         let model = Self {
             name: spec.name.clone(),
@@ -646,12 +650,21 @@ fn check_actuator_effects(
     Ok(())
 }
 
-/// The effects' parameters in order, the offset of each effect's first, and the indices
-/// of the free ones; a name two effects define is an error.
+/// The effects' parameters in order.
+struct EffectParameters {
+    /// Every effect's parameters, effect by effect.
+    params: Vec<ParamSpec>,
+    /// The index of each effect's first parameter.
+    offsets: Vec<usize>,
+    /// The indices of the free parameters.
+    free: Vec<usize>,
+}
+
+/// The effects' parameters; a name two effects define is an error.
 fn effect_parameters(
     effects: &[Box<dyn DynEffect>],
     model_path: &Path,
-) -> Result<(Vec<ParamSpec>, Vec<usize>, Vec<usize>), ModelError> {
+) -> Result<EffectParameters, ModelError> {
     let mut params = Vec::new();
     let mut effect_offsets = Vec::new();
     for e in effects {
@@ -673,7 +686,11 @@ fn effect_parameters(
         .filter(|(_, p)| p.free)
         .map(|(i, _)| i)
         .collect();
-    Ok((params, effect_offsets, free))
+    Ok(EffectParameters {
+        params,
+        offsets: effect_offsets,
+        free,
+    })
 }
 
 /// Per contact, the effects that act on it (see the fields of [`GaitModel`] of the same

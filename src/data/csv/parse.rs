@@ -9,6 +9,9 @@ use crate::data::{FootData, ForceSamples, GaitData, SideSource, Q_NAMES};
 use std::collections::BTreeMap;
 use std::path::Path;
 
+/// A file's numbers by column: `table[j][k]` is column `j` at row `k`.
+type Table = Vec<Vec<f64>>;
+
 /// Where the schema's columns are in a sagittal CSV's header (indices into `names`).
 struct Columns {
     /// The header's column names, in file order.
@@ -235,7 +238,7 @@ fn read_rows<'a>(
     lines: impl Iterator<Item = (usize, &'a str)>,
     cols: &Columns,
     path: &Path,
-) -> Result<(Vec<Vec<f64>>, Vec<usize>), DataError> {
+) -> Result<(Table, Vec<usize>), DataError> {
     let p = path.to_path_buf();
     let ncol = cols.names.len();
     let mut table = vec![Vec::new(); ncol];
@@ -345,7 +348,7 @@ fn split_mixed_rate(
     cols: &Columns,
     units: Units,
     path: &Path,
-) -> Result<(Vec<Vec<f64>>, Vec<usize>, ForceSamples), DataError> {
+) -> Result<(Table, Vec<usize>, ForceSamples), DataError> {
     let load_cols = cols.load();
     let all_time: Vec<f64> = table[cols.time].iter().map(|t| t * units.time).collect();
     check_time(&all_time, rows, "time", path)?;
@@ -383,7 +386,7 @@ fn split_mixed_rate(
             ),
         });
     }
-    let kt: Vec<Vec<f64>> = table
+    let kt: Table = table
         .iter()
         .map(|col| krows.iter().map(|&k| col[k]).collect())
         .collect();
