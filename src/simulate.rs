@@ -15,7 +15,7 @@ use crate::integrate::{
 };
 use crate::model::gait::{ContactReport, FootLoad};
 use crate::model::{ConstraintSet, DynamicsError, GaitModel, RowKind};
-use crate::phases::{Phase, PhaseSequence};
+use crate::phases::{Phase, PhaseEnd, PhaseSequence};
 use serde::Serialize;
 
 /// Settings of a forward simulation.
@@ -468,179 +468,271 @@ pub fn simulate(
             settings.output_step
         )));
     }
-    let nq = model.nq();
-    let mut integrator = Integrator::new(model.nx(), model.ntheta(), settings.integrator.clone())
+    let integrator = Integrator::new(model.nx(), model.ntheta(), settings.integrator.clone())
         .map_err(|e| SimulationError::Integrator {
-        phase: seq.phases[0].name().into(),
-        source: e,
-    })?;
-    let mut x = x0.to_vec();
-    let mut t = 0.0;
-    let mut res = SimulationResult {
-        samples: Vec::new(),
-        impacts: Vec::new(),
-        phases: Vec::new(),
-        stats: Default::default(),
+            phase: seq.phases[0].name().into(),
+            source: e,
+        })?;
+    let mut run = Run {
+        model,
+        controls,
+        theta,
+        settings,
+        integrator,
+        x: x0.to_vec(),
+        t: 0.0,
+        u: vec![0.0; model.nu()],
+        res: SimulationResult {
+            samples: Vec::new(),
+            impacts: Vec::new(),
+            phases: Vec::new(),
+            stats: Default::default(),
+        },
     };
-    let mut u = vec![0.0; model.nu()];
     for (pi, phase) in seq.phases.iter().enumerate() {
         let set = &sets[pi];
         match phase {
-            Phase::Impact { name, .. } => {
-                let (q, qd) = (&x[..nq], &x[nq..2 * nq]);
-                let (qd_plus, imp) =
-                    model
-                        .impact(set, q, qd, theta)
-                        .map_err(|e| SimulationError::Dynamics {
-                            phase: name.clone(),
-                            t,
-                            source: e,
-                        })?;
-                let ke0 = model.energy(q, qd, theta).0;
-                let ke1 = model.energy(q, &qd_plus, theta).0;
-                res.impacts.push(ImpactRecord {
-                    phase: name.clone(),
-                    t,
-                    impulses: set
-                        .rows
-                        .iter()
-                        .zip(&imp)
-                        .map(|(r, v)| (model.contacts[r.contact].name.clone(), r.kind, *v))
-                        .collect(),
-                    kinetic_energy: (ke0, ke1),
-                    gaps: set
-                        .rows
-                        .iter()
-                        .filter(|r| r.kind == RowKind::Normal)
-                        .map(|r| {
-                            (
-                                model.contacts[r.contact].name.clone(),
-                                model.contact_point(r.contact, q, theta).1,
-                            )
-                        })
-                        .collect(),
-                });
-                x[nq..2 * nq].copy_from_slice(&qd_plus);
-                res.phases.push(PhaseSpan {
-                    name: name.clone(),
-                    t0: t,
-                    t1: t,
-                    touchdown: None,
-                });
-            }
+            Phase::Impact { name, .. } => run.impact(set, name)?,
             Phase::Continuous {
                 name,
                 duration,
                 end,
                 ..
             } => {
-                let t_max = t + duration.value();
-                let ode = SimulationOde {
+                let sampler = Sampler {
                     model,
-                    set,
                     controls,
+                    set,
+                    theta,
+                    phase: pi,
+                    name,
                 };
-                let mut bounds = controls.knots_within(t, t_max);
-                bounds.push(t_max);
-                let sample =
-                    |tt: f64, xx: &[f64], u: &mut Vec<f64>| -> Result<Sample, SimulationError> {
-                        controls.at(tt, u);
-                        let mut xdot = vec![0.0; model.nx()];
-                        let mut lam = vec![0.0; set.rows.len()];
-                        let mut rep = ContactReport::default();
-                        model
-                            .dynamics(set, xx, u, theta, &mut xdot, &mut lam, Some(&mut rep))
-                            .map_err(|e| SimulationError::Dynamics {
-                                phase: name.clone(),
-                                t: tt,
-                                source: e,
-                            })?;
-                        Ok(Sample {
-                            t: tt,
-                            phase: pi,
-                            x: xx.to_vec(),
-                            feet: model.foot_loads(set, &rep),
-                            contact: rep,
-                        })
-                    };
-                // The touchdown watch: the landing contact's index; CVODES stops at the first
-                // fall of its gap φ from above zero to zero.
-                let watch = match end {
-                    Some(e) => Some(model.contact_index(&e.touchdown).ok_or_else(|| {
-                        SimulationError::Input(format!(
-                            "phase '{name}' ends at the touchdown of unknown contact '{}'",
-                            e.touchdown
-                        ))
-                    })?),
-                    None => None,
-                };
-                let mut landed = false;
-                res.samples.push(sample(t, &x, &mut u)?);
-                let mut a = t;
-                for &b in &bounds {
-                    let step = settings.output_step;
-                    let mut times: Vec<f64> = Vec::new();
-                    let mut k = (a / step).floor() as i64 + 1;
-                    while (k as f64) * step < b - 1e-12 {
-                        if (k as f64) * step > a + 1e-12 {
-                            times.push(k as f64 * step);
-                        }
-                        k += 1;
-                    }
-                    times.push(b);
-                    let mut out = Vec::new();
-                    let (st, root) = match watch {
-                        Some(c) => {
-                            let gap =
-                                |_: f64, xx: &[f64]| model.contact_point(c, &xx[..nq], theta).1;
-                            integrator.integrate_dense_until(
-                                &ode, a, b, &x, theta, &times, &gap, &mut out,
-                            )
-                        }
-                        None => integrator
-                            .integrate_dense(&ode, a, b, &x, theta, &times, &mut out)
-                            .map(|st| (st, None)),
-                    }
-                    .map_err(|e| SimulationError::Integrator {
-                        phase: name.clone(),
-                        source: e,
-                    })?;
-                    res.stats += st;
-                    // with a root, the last row of `out` is the state at the touchdown
-                    let n_out = out.len() / model.nx();
-                    for i in 0..n_out {
-                        let tt = match root {
-                            Some(tr) if i + 1 == n_out => tr,
-                            _ => times[i],
-                        };
-                        res.samples.push(sample(
-                            tt,
-                            &out[i * model.nx()..(i + 1) * model.nx()],
-                            &mut u,
-                        )?);
-                    }
-                    x.copy_from_slice(&out[out.len() - model.nx()..]);
-                    if let Some(tr) = root {
-                        a = tr;
-                        landed = true;
-                        break;
-                    }
-                    a = b;
-                }
-                let touchdown = watch.map(|c| TouchdownOutcome {
-                    contact: model.contacts[c].name.clone(),
-                    landed,
-                    gap_m: model.contact_point(c, &x[..nq], theta).1,
-                });
-                res.phases.push(PhaseSpan {
-                    name: name.clone(),
-                    t0: t,
-                    t1: a,
-                    touchdown,
-                });
-                t = a;
+                run.continuous(&sampler, duration.value(), end.as_ref())?;
             }
         }
     }
-    Ok(res)
+    Ok(run.res)
+}
+
+/// A simulation under way: its inputs, the integrator, the state reached and the result
+/// so far.
+struct Run<'a> {
+    model: &'a GaitModel,
+    controls: &'a ControlTable,
+    theta: &'a [f64],
+    settings: &'a SimulationSettings,
+    integrator: Integrator,
+    /// The state at `t`.
+    x: Vec<f64>,
+    /// The time reached (s).
+    t: f64,
+    /// The controls at a sample (scratch).
+    u: Vec<f64>,
+    res: SimulationResult,
+}
+
+/// The samples of one continuous phase: the dynamics re-evaluated at a state to report
+/// the contact forces.
+struct Sampler<'a> {
+    model: &'a GaitModel,
+    controls: &'a ControlTable,
+    /// The phase's active constraints.
+    set: &'a ConstraintSet,
+    theta: &'a [f64],
+    /// The phase's index in the sequence.
+    phase: usize,
+    /// The phase's name.
+    name: &'a str,
+}
+
+impl Sampler<'_> {
+    /// The sample at time `tt` (s) and state `xx`; `u` receives the controls.
+    fn at(&self, tt: f64, xx: &[f64], u: &mut [f64]) -> Result<Sample, SimulationError> {
+        let (model, set) = (self.model, self.set);
+        self.controls.at(tt, u);
+        let mut xdot = vec![0.0; model.nx()];
+        let mut lam = vec![0.0; set.rows.len()];
+        let mut rep = ContactReport::default();
+        model
+            .dynamics(set, xx, u, self.theta, &mut xdot, &mut lam, Some(&mut rep))
+            .map_err(|e| SimulationError::Dynamics {
+                phase: self.name.to_string(),
+                t: tt,
+                source: e,
+            })?;
+        Ok(Sample {
+            t: tt,
+            phase: self.phase,
+            x: xx.to_vec(),
+            feet: model.foot_loads(set, &rep),
+            contact: rep,
+        })
+    }
+}
+
+/// The output instants of a span from `a` to `b` (s): the multiples of `step` (s) more
+/// than 1e-12 s inside it, then `b`.
+fn output_times(a: f64, b: f64, step: f64) -> Vec<f64> {
+    let mut times: Vec<f64> = Vec::new();
+    let mut k = (a / step).floor() as i64 + 1;
+    while (k as f64) * step < b - 1e-12 {
+        if (k as f64) * step > a + 1e-12 {
+            times.push(k as f64 * step);
+        }
+        k += 1;
+    }
+    times.push(b);
+    times
+}
+
+impl Run<'_> {
+    /// Apply impact phase `name`'s plastic impact map under `set` to the velocities, and
+    /// record its impulses, kinetic energies and gaps.
+    fn impact(&mut self, set: &ConstraintSet, name: &str) -> Result<(), SimulationError> {
+        let (model, theta, t) = (self.model, self.theta, self.t);
+        let nq = model.nq();
+        let (q, qd) = (&self.x[..nq], &self.x[nq..2 * nq]);
+        let (qd_plus, imp) =
+            model
+                .impact(set, q, qd, theta)
+                .map_err(|e| SimulationError::Dynamics {
+                    phase: name.to_string(),
+                    t,
+                    source: e,
+                })?;
+        let ke0 = model.energy(q, qd, theta).0;
+        let ke1 = model.energy(q, &qd_plus, theta).0;
+        self.res.impacts.push(ImpactRecord {
+            phase: name.to_string(),
+            t,
+            impulses: set
+                .rows
+                .iter()
+                .zip(&imp)
+                .map(|(r, v)| (model.contacts[r.contact].name.clone(), r.kind, *v))
+                .collect(),
+            kinetic_energy: (ke0, ke1),
+            gaps: set
+                .rows
+                .iter()
+                .filter(|r| r.kind == RowKind::Normal)
+                .map(|r| {
+                    (
+                        model.contacts[r.contact].name.clone(),
+                        model.contact_point(r.contact, q, theta).1,
+                    )
+                })
+                .collect(),
+        });
+        self.x[nq..2 * nq].copy_from_slice(&qd_plus);
+        self.res.phases.push(PhaseSpan {
+            name: name.to_string(),
+            t0: t,
+            t1: t,
+            touchdown: None,
+        });
+        Ok(())
+    }
+
+    /// Integrate the continuous phase of `sampler` for at most `duration` (s) from knot to
+    /// knot of the controls, sampling on the output grid; with an `end`, stop at the
+    /// first touchdown of its contact.
+    fn continuous(
+        &mut self,
+        sampler: &Sampler<'_>,
+        duration: f64,
+        end: Option<&PhaseEnd>,
+    ) -> Result<(), SimulationError> {
+        let (model, theta, t, name) = (self.model, self.theta, self.t, sampler.name);
+        let nq = model.nq();
+        let t_max = t + duration;
+        let ode = SimulationOde {
+            model,
+            set: sampler.set,
+            controls: self.controls,
+        };
+        let mut bounds = self.controls.knots_within(t, t_max);
+        bounds.push(t_max);
+        // The touchdown watch: the landing contact's index; CVODES stops at the first
+        // fall of its gap φ from above zero to zero.
+        let watch = match end {
+            Some(e) => Some(model.contact_index(&e.touchdown).ok_or_else(|| {
+                SimulationError::Input(format!(
+                    "phase '{name}' ends at the touchdown of unknown contact '{}'",
+                    e.touchdown
+                ))
+            })?),
+            None => None,
+        };
+        let mut landed = false;
+        self.res.samples.push(sampler.at(t, &self.x, &mut self.u)?);
+        let mut a = t;
+        for &b in &bounds {
+            if let Some(tr) = self.span(&ode, sampler, (a, b), watch)? {
+                a = tr;
+                landed = true;
+                break;
+            }
+            a = b;
+        }
+        let touchdown = watch.map(|c| TouchdownOutcome {
+            contact: model.contacts[c].name.clone(),
+            landed,
+            gap_m: model.contact_point(c, &self.x[..nq], theta).1,
+        });
+        self.res.phases.push(PhaseSpan {
+            name: name.to_string(),
+            t0: t,
+            t1: a,
+            touchdown,
+        });
+        self.t = a;
+        Ok(())
+    }
+
+    /// Integrate from `a` to `b` (s), sampling on the output grid and at `b`; with a
+    /// `watch`ed contact, stop at its touchdown and return the instant (s).
+    fn span(
+        &mut self,
+        ode: &SimulationOde<'_>,
+        sampler: &Sampler<'_>,
+        (a, b): (f64, f64),
+        watch: Option<usize>,
+    ) -> Result<Option<f64>, SimulationError> {
+        let (model, theta) = (self.model, self.theta);
+        let nq = model.nq();
+        let times = output_times(a, b, self.settings.output_step);
+        let mut out = Vec::new();
+        let (st, root) = match watch {
+            Some(c) => {
+                let gap = |_: f64, xx: &[f64]| model.contact_point(c, &xx[..nq], theta).1;
+                self.integrator
+                    .integrate_dense_until(ode, a, b, &self.x, theta, &times, &gap, &mut out)
+            }
+            None => self
+                .integrator
+                .integrate_dense(ode, a, b, &self.x, theta, &times, &mut out)
+                .map(|st| (st, None)),
+        }
+        .map_err(|e| SimulationError::Integrator {
+            phase: sampler.name.to_string(),
+            source: e,
+        })?;
+        self.res.stats += st;
+        // with a root, the last row of `out` is the state at the touchdown
+        let n_out = out.len() / model.nx();
+        for i in 0..n_out {
+            let tt = match root {
+                Some(tr) if i + 1 == n_out => tr,
+                _ => times[i],
+            };
+            self.res.samples.push(sampler.at(
+                tt,
+                &out[i * model.nx()..(i + 1) * model.nx()],
+                &mut self.u,
+            )?);
+        }
+        self.x.copy_from_slice(&out[out.len() - model.nx()..]);
+        Ok(root)
+    }
 }

@@ -54,12 +54,11 @@
 //! ```
 
 use super::error::DataError;
-use super::{interp_linear, side_index, FootData};
-use crate::model::Side;
 use std::path::{Path, PathBuf};
-use std::str::FromStr;
 
 mod params;
+mod sagittal;
+pub use sagittal::{feet_from_plates, AxisMap, LabAxis, SagittalPlate};
 
 /// Plate types [`read_c3d_plates`] converts (`FORCE_PLATFORM:TYPE`).
 pub const SUPPORTED_PLATE_TYPES: [i64; 2] = [2, 4];
@@ -431,15 +430,68 @@ pub fn read_c3d_plates(path: &Path, cop_threshold: f64) -> Result<C3dForces, Dat
             format!("{rate} Hz; the analog rate must be positive to time the plate samples"),
         ));
     }
-    // c3dio fills `points.units` only when there are markers; a plate-only file keeps
-    // POINT:UNITS among the raw parameters.
+    let ls = length_scale(path, &point_units(&c3d))?;
+    let time = analog_times(path, &c3d, rate)?;
+    let mut plates = Vec::new();
+    let used = c3d.forces.len();
+    let mut type4_seen = 0;
+    for (i, fp) in c3d.forces.iter().enumerate() {
+        let number = i + 1;
+        let plate_type = plate_type(path, number, fp)?;
+        let channels = plate_channels(path, number, fp, analog.cols())?;
+        // Type 2: channels in N and N·m (or N·mm); type 4: channels (V) through the
+        // calibration matrix to N and N·(POINT unit).
+        let (cal, moment_scales) = if plate_type == 4 {
+            let c = cal_matrix(path, &bytes, number, type4_seen, used)?;
+            type4_seen += 1;
+            (Some(c), vec![ls; 3])
+        } else {
+            (None, type2_moment_scales(path, analog, &channels, ls)?)
+        };
+        let reading = PlateReading {
+            path,
+            number,
+            channels,
+            cal,
+            moment_scales,
+            frame: PlateFrame::new(path, number, fp, ls)?,
+        };
+        let PlateLoads { force, cop, free } = reading.samples(analog, &time, cop_threshold)?;
+        plates.push(PlateForces {
+            plate: number,
+            plate_type,
+            time: time.clone(),
+            force,
+            cop,
+            free_moment: free,
+            centre: reading.frame.centre,
+            up: reading.frame.up(),
+        });
+    }
+    Ok(C3dForces {
+        path: path.to_path_buf(),
+        analog_rate: rate,
+        cop_threshold,
+        plates,
+    })
+}
+
+/// `POINT:UNITS`: c3dio fills `points.units` only when there are markers; a plate-only
+/// file keeps it among the raw parameters.
+fn point_units(c3d: &c3dio::C3d) -> String {
     let mut units: String = c3d.points.units.iter().collect();
     if units.trim().is_empty() {
         if let Some(p) = c3d.parameters.get("POINT", "UNITS") {
             units = String::try_from(p).unwrap_or_default();
         }
     }
-    let ls = length_scale(path, &units)?;
+    units
+}
+
+/// The instants of the analog samples (s), from the first point frame's time at `rate`
+/// (Hz); no analog samples is an error.
+fn analog_times(path: &Path, c3d: &c3dio::C3d, rate: f64) -> Result<Vec<f64>, DataError> {
+    let analog = &c3d.analog;
     let t0 = if c3d.points.frame_rate > 0.0 {
         (c3d.points.first_frame.max(1) as f64 - 1.0) / c3d.points.frame_rate as f64
     } else {
@@ -456,78 +508,113 @@ pub fn read_c3d_plates(path: &Path, cop_threshold: f64) -> Result<C3dForces, Dat
             ),
         ));
     }
-    let time: Vec<f64> = (0..n).map(|k| t0 + k as f64 / rate).collect();
-    let mut plates = Vec::new();
-    let used = c3d.forces.len();
-    let mut type4_seen = 0;
-    for (i, fp) in c3d.forces.iter().enumerate() {
-        let number = i + 1;
-        let plate_type = match fp.plate_type {
-            c3dio::ForcePlatformType::Type1 => 1,
-            c3dio::ForcePlatformType::Type2 => 2,
-            c3dio::ForcePlatformType::Type3 => 3,
-            c3dio::ForcePlatformType::Type4 => 4,
+    Ok((0..n).map(|k| t0 + k as f64 / rate).collect())
+}
+
+/// Plate `number`'s `FORCE_PLATFORM:TYPE`, one of [`SUPPORTED_PLATE_TYPES`].
+fn plate_type(path: &Path, number: usize, fp: &c3dio::ForcePlatform) -> Result<i64, DataError> {
+    let plate_type = match fp.plate_type {
+        c3dio::ForcePlatformType::Type1 => 1,
+        c3dio::ForcePlatformType::Type2 => 2,
+        c3dio::ForcePlatformType::Type3 => 3,
+        c3dio::ForcePlatformType::Type4 => 4,
+    };
+    if !SUPPORTED_PLATE_TYPES.contains(&plate_type) {
+        let why = match plate_type {
+            1 => "type 1 (force and CoP channels)",
+            3 => "type 3 (eight-channel Kistler)",
+            _ => "of an unknown type",
         };
-        if !SUPPORTED_PLATE_TYPES.contains(&plate_type) {
-            let why = match plate_type {
-                1 => "type 1 (force and CoP channels)",
-                3 => "type 3 (eight-channel Kistler)",
-                _ => "of an unknown type",
-            };
+        return Err(c3d_err(
+            path,
+            "FORCE_PLATFORM:TYPE",
+            format!(
+                "plate {number} is {why}; this reader converts types {} (six channels Fx Fy Fz Mx My Mz, type 4 through its calibration matrix)",
+                supported_list()
+            ),
+        ));
+    }
+    Ok(plate_type)
+}
+
+/// Plate `number`'s six channels (`Fx Fy Fz Mx My Mz`) as 0-based indices into the
+/// `cols` analog channels (the file's are 1-based).
+fn plate_channels(
+    path: &Path,
+    number: usize,
+    fp: &c3dio::ForcePlatform,
+    cols: usize,
+) -> Result<[usize; 6], DataError> {
+    let mut ch = [0usize; 6];
+    for (j, c) in ch.iter_mut().enumerate() {
+        let idx = fp.channels[j] as usize;
+        if idx == 0 || idx > cols {
             return Err(c3d_err(
                 path,
-                "FORCE_PLATFORM:TYPE",
+                "FORCE_PLATFORM:CHANNEL",
                 format!(
-                    "plate {number} is {why}; this reader converts types {} (six channels Fx Fy Fz Mx My Mz, type 4 through its calibration matrix)",
-                    supported_list()
+                    "plate {number}, entry {}: channel {idx} is not one of the {} analog channels (valid: 1–{})",
+                    j + 1,
+                    cols,
+                    cols
                 ),
             ));
         }
-        // Six channels, 1-based indices into the analog channels.
-        let mut ch = [0usize; 6];
-        for (j, c) in ch.iter_mut().enumerate() {
-            let idx = fp.channels[j] as usize;
-            if idx == 0 || idx > analog.cols() {
-                return Err(c3d_err(
-                    path,
-                    "FORCE_PLATFORM:CHANNEL",
-                    format!(
-                        "plate {number}, entry {}: channel {idx} is not one of the {} analog channels (valid: 1–{})",
-                        j + 1,
-                        analog.cols(),
-                        analog.cols()
-                    ),
-                ));
-            }
-            *c = idx - 1;
+        *c = idx - 1;
+    }
+    Ok(ch)
+}
+
+/// A type-2 plate's moment scales to N·m of its three moment channels, once its force
+/// channels are checked to be in N (or blank).
+fn type2_moment_scales(
+    path: &Path,
+    analog: &c3dio::Analog,
+    ch: &[usize; 6],
+    ls: f64,
+) -> Result<Vec<f64>, DataError> {
+    let unit_of = |c: usize| analog.units.get(c).map(String::as_str).unwrap_or("");
+    for &c in &ch[..3] {
+        let u = unit_of(c).trim();
+        if !(u.is_empty() || u.eq_ignore_ascii_case("n")) {
+            return Err(c3d_err(
+                path,
+                "ANALOG:UNITS",
+                format!(
+                    "analog channel {} is a plate force in '{u}'; valid: N (or blank)",
+                    c + 1
+                ),
+            ));
         }
-        let unit_of = |c: usize| analog.units.get(c).map(String::as_str).unwrap_or("");
-        // Type 2: channels in N and N·m (or N·mm); type 4: channels (V) through the
-        // calibration matrix to N and N·(POINT unit).
-        let (cal, ms) = if plate_type == 4 {
-            let c = cal_matrix(path, &bytes, number, type4_seen, used)?;
-            type4_seen += 1;
-            (Some(c), vec![ls; 3])
-        } else {
-            for &c in &ch[..3] {
-                let u = unit_of(c).trim();
-                if !(u.is_empty() || u.eq_ignore_ascii_case("n")) {
-                    return Err(c3d_err(
-                        path,
-                        "ANALOG:UNITS",
-                        format!(
-                            "analog channel {} is a plate force in '{u}'; valid: N (or blank)",
-                            c + 1
-                        ),
-                    ));
-                }
-            }
-            let ms = ch[3..]
-                .iter()
-                .map(|&c| moment_scale(path, unit_of(c), ls, c + 1))
-                .collect::<Result<Vec<f64>, _>>()?;
-            (None, ms)
-        };
+    }
+    ch[3..]
+        .iter()
+        .map(|&c| moment_scale(path, unit_of(c), ls, c + 1))
+        .collect::<Result<Vec<f64>, _>>()
+}
+
+/// A plate's frame in the lab (m): its axes, the centre of its working surface and its
+/// measurement origin.
+struct PlateFrame {
+    /// The plate's axes in the lab, `[x, y, z]` (z pointing down into the plate).
+    r: [[f64; 3]; 3],
+    /// `FORCE_PLATFORM:ORIGIN` in the plate frame (m).
+    origin: [f64; 3],
+    /// Geometric centre of the working surface, lab frame (m).
+    centre: [f64; 3],
+    /// The measurement origin in the lab (m).
+    o_lab: [f64; 3],
+}
+
+impl PlateFrame {
+    /// Plate `number`'s frame from its corners and origin, scaled to metres by `ls`;
+    /// corners that span no rectangle are an error.
+    fn new(
+        path: &Path,
+        number: usize,
+        fp: &c3dio::ForcePlatform,
+        ls: f64,
+    ) -> Result<Self, DataError> {
         let corners: [[f64; 3]; 4] =
             std::array::from_fn(|k| std::array::from_fn(|d| fp.corners[k][d] as f64 * ls));
         let origin: [f64; 3] = std::array::from_fn(|d| fp.origin[d] as f64 * ls);
@@ -552,6 +639,52 @@ pub fn read_c3d_plates(path: &Path, cop_threshold: f64) -> Result<C3dForces, Dat
             std::array::from_fn(|d| corners.iter().map(|c| c[d]).sum::<f64>() / 4.0);
         let ro = rot(&r, origin);
         let o_lab = sub(centre, ro);
+        Ok(Self {
+            r,
+            origin,
+            centre,
+            o_lab,
+        })
+    }
+
+    /// Upward unit normal of the working surface, lab frame.
+    fn up(&self) -> [f64; 3] {
+        let z = self.r[2];
+        [-z[0], -z[1], -z[2]]
+    }
+}
+
+/// How one plate's analog channels become its loads.
+struct PlateReading<'a> {
+    /// The file, for errors.
+    path: &'a Path,
+    /// Plate number (1-based).
+    number: usize,
+    /// Its six analog channels (0-based).
+    channels: [usize; 6],
+    /// A type-4 plate's calibration matrix.
+    cal: Option<[[f64; 6]; 6]>,
+    /// Scale of the three moment outputs to N·m.
+    moment_scales: Vec<f64>,
+    /// The plate's frame.
+    frame: PlateFrame,
+}
+
+impl PlateReading<'_> {
+    /// Force of the ground on the foot (N), CoP (m) and free moment (N·m) in the lab at
+    /// each analog sample (instants `time`, s); CoP and free moment NaN below
+    /// `cop_threshold` (N). A channel that is not finite is an error.
+    fn samples(
+        &self,
+        analog: &c3dio::Analog,
+        time: &[f64],
+        cop_threshold: f64,
+    ) -> Result<PlateLoads, DataError> {
+        let (path, number, ch, ms) = (self.path, self.number, &self.channels, &self.moment_scales);
+        let PlateFrame {
+            r, origin, o_lab, ..
+        } = self.frame;
+        let n = time.len();
         let mut force = Vec::with_capacity(n);
         let mut cop = Vec::with_capacity(n);
         let mut free = Vec::with_capacity(n);
@@ -559,7 +692,7 @@ pub fn read_c3d_plates(path: &Path, cop_threshold: f64) -> Result<C3dForces, Dat
         for k in 0..n {
             let v = |j: usize| analog.get(k, ch[j]).copied().unwrap_or(f64::NAN);
             let raw: [f64; 6] = std::array::from_fn(v);
-            let out: [f64; 6] = match &cal {
+            let out: [f64; 6] = match &self.cal {
                 Some(c) => std::array::from_fn(|i| (0..6).map(|j| c[i][j] * raw[j]).sum()),
                 None => raw,
             };
@@ -589,276 +722,14 @@ pub fn read_c3d_plates(path: &Path, cop_threshold: f64) -> Result<C3dForces, Dat
                 free.push(f64::NAN);
             }
         }
-        plates.push(PlateForces {
-            plate: number,
-            plate_type,
-            time: time.clone(),
-            force,
-            cop,
-            free_moment: free,
-            centre,
-            up: [-z[0], -z[1], -z[2]],
-        });
-    }
-    Ok(C3dForces {
-        path: path.to_path_buf(),
-        analog_rate: rate,
-        cop_threshold,
-        plates,
-    })
-}
-
-/// A signed lab axis of the C3D file (`+x`, `-z`, …).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct LabAxis {
-    /// 0, 1, 2 for x, y, z.
-    pub index: usize,
-    /// +1 or −1.
-    pub sign: i8,
-}
-
-impl LabAxis {
-    fn pick(self, v: [f64; 3]) -> f64 {
-        f64::from(self.sign) * v[self.index]
+        Ok(PlateLoads { force, cop, free })
     }
 }
 
-impl FromStr for LabAxis {
-    type Err = String;
-    /// `+x`, `x`, `-x`, … `-z` (case-insensitive).
-    fn from_str(s: &str) -> Result<Self, String> {
-        let t = s.trim().to_ascii_lowercase();
-        let (sign, rest) = match t.strip_prefix('-') {
-            Some(r) => (-1, r),
-            None => (1, t.strip_prefix('+').unwrap_or(&t)),
-        };
-        let index = match rest {
-            "x" => 0,
-            "y" => 1,
-            "z" => 2,
-            _ => {
-                return Err(format!(
-                    "'{s}' is not a lab axis; valid: +x, -x, +y, -y, +z, -z"
-                ))
-            }
-        };
-        Ok(LabAxis { index, sign })
-    }
-}
-
-impl std::fmt::Display for LabAxis {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        let s = if self.sign < 0 { '-' } else { '+' };
-        write!(f, "{s}{}", ["x", "y", "z"][self.index])
-    }
-}
-
-/// Which lab axes of the C3D file are the model's forward (walking direction, sagittal
-/// x) and up (sagittal y). The default is `forward = +x`, `up = +z`, the usual C3D lab
-/// with z vertical and the walkway along x.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub struct AxisMap {
-    /// Lab axis of the walking direction.
-    pub forward: LabAxis,
-    /// Lab axis pointing up.
-    pub up: LabAxis,
-}
-
-impl Default for AxisMap {
-    fn default() -> Self {
-        AxisMap {
-            forward: LabAxis { index: 0, sign: 1 },
-            up: LabAxis { index: 2, sign: 1 },
-        }
-    }
-}
-
-impl AxisMap {
-    /// An axis map from two axis names, e.g. `AxisMap::new("-y", "+z")`.
-    ///
-    /// Errors: a name that is not a signed axis, or the same axis twice.
-    pub fn new(forward: &str, up: &str) -> Result<AxisMap, DataError> {
-        let mem = super::error::memory_path();
-        let f = forward
-            .parse::<LabAxis>()
-            .map_err(|e| DataError::invalid(&mem, "forward", e))?;
-        let u = up
-            .parse::<LabAxis>()
-            .map_err(|e| DataError::invalid(&mem, "up", e))?;
-        if f.index == u.index {
-            return Err(DataError::invalid(
-                &mem,
-                "up",
-                format!("forward ({f}) and up ({u}) are the same lab axis; they must be two different axes"),
-            ));
-        }
-        Ok(AxisMap { forward: f, up: u })
-    }
-}
-
-/// One plate's ground reaction in the model's sagittal frame, at the analog rate: the same
-/// quantities as [`FootData`] (forces of the ground on the foot).
-#[derive(Debug, Clone, PartialEq)]
-pub struct SagittalPlate {
-    /// Plate number (1-based).
-    pub plate: usize,
-    /// Sample times (s).
-    pub time: Vec<f64>,
-    /// Force component along the walking direction, + forward (N).
-    pub fx: Vec<f64>,
-    /// Vertical force, + up (N).
-    pub fy: Vec<f64>,
-    /// CoP along the walking direction (m); NaN where the plate is unloaded.
-    pub cop_x: Vec<f64>,
-    /// Mean height of the loaded CoP samples along `up` (m), the plate surface; `None` if
-    /// the plate is never loaded.
-    pub surface_height: Option<f64>,
-}
-
-impl PlateForces {
-    /// The plate's sagittal components along `map` (the lab's forward and up axes).
-    pub fn sagittal(&self, map: AxisMap) -> SagittalPlate {
-        let heights: Vec<f64> = self
-            .cop
-            .iter()
-            .map(|c| map.up.pick(*c))
-            .filter(|h| h.is_finite())
-            .collect();
-        SagittalPlate {
-            plate: self.plate,
-            time: self.time.clone(),
-            fx: self.force.iter().map(|f| map.forward.pick(*f)).collect(),
-            fy: self.force.iter().map(|f| map.up.pick(*f)).collect(),
-            cop_x: self.cop.iter().map(|c| map.forward.pick(*c)).collect(),
-            surface_height: (!heights.is_empty())
-                .then(|| heights.iter().sum::<f64>() / heights.len() as f64),
-        }
-    }
-}
-
-/// Per-foot [`FootData`] (`[right, left]`) at the instants `time` from the plates of a C3D
-/// file, with `assign` saying which plate (1-based) a foot stepped on: e.g.
-/// `[(Side::Right, 1), (Side::Left, 2)]`. A foot on several plates gets their summed
-/// force and the force-weighted CoP $\sum_i F_{y,i} c_i / \sum_i F_{y,i}$ over its loaded
-/// plates. Forces are resampled by linear interpolation (as [`super::GaitData::from_storage`]
-/// does), a plate's CoP too, except that between a loaded and an unloaded sample the loaded
-/// one's CoP is taken; CoP is NaN where the foot's vertical force is below `forces.cop_threshold`. A foot
-/// with no plate is NaN throughout (not measured).
-///
-/// Errors: a plate number not in the file, a plate assigned twice, `time` not finite and
-/// increasing, or outside the analog samples' span.
-pub fn feet_from_plates(
-    forces: &C3dForces,
-    assign: &[(Side, usize)],
-    map: AxisMap,
-    time: &[f64],
-) -> Result<[FootData; 2], DataError> {
-    let path = &forces.path;
-    let n = time.len();
-    if let Some(k) = (0..n).find(|&k| !time[k].is_finite() || (k > 0 && time[k] <= time[k - 1])) {
-        return Err(DataError::invalid(
-            path,
-            "time",
-            format!(
-                "instant {k} ({} s) is not finite and larger than the previous",
-                time[k]
-            ),
-        ));
-    }
-    let mut seen = Vec::new();
-    let mut per_foot: [Vec<SagittalPlate>; 2] = Default::default();
-    for &(side, plate) in assign {
-        let Some(p) = forces.plates.iter().find(|p| p.plate == plate) else {
-            return Err(DataError::invalid(
-                path,
-                "plate",
-                format!(
-                    "plate {plate} is not in the file; it has plates 1–{}",
-                    forces.plates.len()
-                ),
-            ));
-        };
-        if seen.contains(&plate) {
-            return Err(DataError::invalid(
-                path,
-                "plate",
-                format!("plate {plate} is assigned twice; a plate belongs to one foot"),
-            ));
-        }
-        seen.push(plate);
-        per_foot[side_index(side)].push(p.sagittal(map));
-    }
-    let nan = || vec![f64::NAN; n];
-    let mut feet: [FootData; 2] = std::array::from_fn(|_| FootData {
-        fx: nan(),
-        fy: nan(),
-        cop_x: nan(),
-    });
-    for (s, plates) in per_foot.iter().enumerate() {
-        if plates.is_empty() {
-            continue;
-        }
-        let (mut fx, mut fy, mut moment) = (vec![0.0; n], vec![0.0; n], vec![0.0; n]);
-        let mut loaded_fy = vec![0.0; n];
-        for p in plates {
-            let (a, b) = (p.time[0], p.time[p.time.len() - 1]);
-            let tol = 1e-9 * (1.0 + b.abs());
-            if n > 0 && (time[0] < a - tol || time[n - 1] > b + tol) {
-                return Err(DataError::invalid(
-                    path,
-                    "time",
-                    format!(
-                        "plate {} covers {a}–{b} s but the instants run {}–{} s",
-                        p.plate,
-                        time[0],
-                        time[n - 1]
-                    ),
-                ));
-            }
-            let rx = interp_linear(time, &p.time, &p.fx);
-            let ry = interp_linear(time, &p.time, &p.fy);
-            // The CoP between a loaded and an unloaded sample is the loaded one's.
-            let rc = interp_defined(time, &p.time, &p.cop_x);
-            for k in 0..n {
-                fx[k] += rx[k];
-                fy[k] += ry[k];
-                if rc[k].is_finite() && ry[k] > 0.0 {
-                    moment[k] += ry[k] * rc[k];
-                    loaded_fy[k] += ry[k];
-                }
-            }
-        }
-        let cop = (0..n)
-            .map(|k| {
-                if fy[k] >= forces.cop_threshold && loaded_fy[k] > 0.0 {
-                    moment[k] / loaded_fy[k]
-                } else {
-                    f64::NAN
-                }
-            })
-            .collect();
-        feet[s] = FootData { fx, fy, cop_x: cop };
-    }
-    Ok(feet)
-}
-
-/// [`interp_linear`] of a channel that is NaN where undefined (the CoP of an unloaded
-/// plate): between a defined and an undefined sample the defined one is taken, so that an
-/// instant just inside a loaded stretch keeps its CoP; NaN between two undefined ones.
-fn interp_defined(xn: &[f64], x: &[f64], y: &[f64]) -> Vec<f64> {
-    let lin = interp_linear(xn, x, y);
-    xn.iter()
-        .zip(lin)
-        .map(|(&t, v)| {
-            if !v.is_nan() || t <= x[0] || t >= x[x.len() - 1] {
-                return v;
-            }
-            let i = x.partition_point(|&u| u <= t) - 1;
-            if y[i].is_nan() {
-                y[i + 1]
-            } else {
-                y[i]
-            }
-        })
-        .collect()
+/// A plate's loads at its analog samples, lab frame: the ground's force on the foot (N),
+/// the CoP (m) and the free moment (N·m).
+struct PlateLoads {
+    force: Vec<[f64; 3]>,
+    cop: Vec<[f64; 3]>,
+    free: Vec<f64>,
 }

@@ -17,10 +17,9 @@
 //! which is why [`StorageMap`] says which columns are rotational.
 
 use super::error::DataError;
-use super::{FootData, ForceSamples, GaitData, SideSource, Q_NAMES};
-use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
+mod gait;
 mod map;
 pub use map::{ColumnMap, ForceColumns, StorageMap, OPENSIM_COORDINATES};
 
@@ -182,119 +181,212 @@ pub fn parse_storage(text: &str, path: &Path) -> Result<Storage, DataError> {
             row: lines.len(),
             reason: "no 'endheader' line: not an OpenSim .mot/.sto file".into(),
         })?;
-    let mut name = path
-        .file_stem()
-        .map(|s| s.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let mut header = Vec::new();
-    let mut in_degrees_key: Option<(bool, usize)> = None;
-    let mut angles_sentence: Option<(bool, usize)> = None;
-    let mut n_rows: Option<(usize, usize, String)> = None;
-    let mut n_cols: Option<(usize, usize, String)> = None;
-    let parse_count = |text: &str, key: &str, row: usize| -> Result<usize, DataError> {
-        text.trim().parse::<usize>().map_err(|e| DataError::Format {
-            path: p.clone(),
-            row,
-            reason: format!("header '{key}' = '{}' is not a count: {e}", text.trim()),
-        })
-    };
-    for (i, raw) in lines[..end].iter().enumerate() {
-        let row = i + 1;
-        let l = raw.trim();
-        if l.is_empty() {
-            continue;
-        }
-        header.push(l.to_string());
-        let lower = l.to_ascii_lowercase();
-        if let Some((k, v)) = l.split_once('=') {
-            let key = k.trim();
-            match key.to_ascii_lowercase().as_str() {
-                "indegrees" => {
-                    let b = parse_yes_no(v).ok_or_else(|| DataError::Units {
-                        path: p.clone(),
-                        row: Some(row),
-                        column: key.to_string(),
-                        text: v.trim().to_string(),
-                        reason: "inDegrees must be 'yes' or 'no'".into(),
-                    })?;
-                    in_degrees_key = Some((b, row));
-                }
-                "nrows" => n_rows = Some((parse_count(v, key, row)?, row, key.to_string())),
-                "ncolumns" => n_cols = Some((parse_count(v, key, row)?, row, key.to_string())),
-                _ => {}
-            }
-            continue;
-        }
-        if let Some(rest) = lower.strip_prefix("angles are in") {
-            let rest = rest.trim().trim_end_matches('.').trim();
-            let b = match rest {
-                "degrees" => true,
-                "radians" => false,
-                _ => {
-                    return Err(DataError::Units {
-                        path: p.clone(),
-                        row: Some(row),
-                        column: "Angles are in".into(),
-                        text: rest.to_string(),
-                        reason: "expected 'degrees' or 'radians'".into(),
-                    })
-                }
-            };
-            angles_sentence = Some((b, row));
-            continue;
-        }
-        let mut words = l.split_whitespace();
-        match words.next().map(str::to_ascii_lowercase).as_deref() {
-            Some("datarows") => {
-                let v = words.next().unwrap_or("");
-                n_rows = Some((parse_count(v, "datarows", row)?, row, "datarows".into()));
-            }
-            Some("datacolumns") => {
-                let v = words.next().unwrap_or("");
-                n_cols = Some((
-                    parse_count(v, "datacolumns", row)?,
-                    row,
-                    "datacolumns".into(),
-                ));
-            }
-            Some("name") => {
-                let rest: Vec<&str> = words.collect();
-                if !rest.is_empty() {
-                    name = rest.join(" ");
-                }
-            }
-            _ => {
-                if i == 0 && !l.starts_with('#') {
-                    name = l.to_string();
-                }
-            }
+    let head = StorageHeader::read(&lines[..end], path)?;
+    let (in_degrees, angle_unit_stated) = head.angle_unit(path)?;
+    let (idx, labels, columns) = read_labels(&lines, end, path)?;
+    let label_line = idx + 1;
+    if let Some((n, row, key)) = &head.n_cols {
+        if *n != labels.len() {
+            return Err(DataError::Format {
+                path: p,
+                row: *row,
+                reason: format!(
+                    "header '{key}' says {n} columns but line {label_line} has {} labels",
+                    labels.len()
+                ),
+            });
         }
     }
-    let (in_degrees, angle_unit_stated) = match (in_degrees_key, angles_sentence) {
-        (Some((a, row)), Some((b, _))) if a != b => {
-            return Err(DataError::Units {
+    let (data, row_lines) = read_rows(&lines, idx, &columns, path)?;
+    if let Some((n, row, key)) = &head.n_rows {
+        if *n != row_lines.len() {
+            return Err(DataError::Format {
                 path: p,
-                row: Some(row),
-                column: "inDegrees".into(),
-                text: if a { "yes" } else { "no" }.into(),
+                row: *row,
                 reason: format!(
-                    "contradicts the header line 'Angles are in {}'",
-                    if b { "degrees" } else { "radians" }
+                    "header '{key}' says {n} rows but the file has {} data rows",
+                    row_lines.len()
                 ),
-            })
+            });
         }
-        (Some((a, _)), _) | (None, Some((a, _))) => (a, true),
-        (None, None) => (false, false),
-    };
+    }
+    check_time(&data[0], &row_lines, &columns[0], &p)?;
+    Ok(Storage {
+        path: p,
+        name: head.name,
+        header: head.lines,
+        columns,
+        labels,
+        data,
+        lines: row_lines,
+        label_line,
+        in_degrees,
+        angle_unit_stated,
+    })
+}
 
-    // Column labels: the first non-empty line after endheader.
+/// A count the header states (`nRows=N`, `datacolumns N`, …): the count, its line and the
+/// key as written.
+type HeaderCount = Option<(usize, usize, String)>;
+
+/// What a storage file's header says.
+struct StorageHeader {
+    /// The storage's name: `name X`, or a first line that is neither `key=value` nor a
+    /// comment, or the file stem.
+    name: String,
+    /// The header's non-empty lines, trimmed.
+    lines: Vec<String>,
+    /// `inDegrees=yes|no`, and its line.
+    in_degrees_key: Option<(bool, usize)>,
+    /// `Angles are in degrees|radians` (true: degrees), and its line.
+    angles_sentence: Option<(bool, usize)>,
+    /// `nRows` or `datarows`.
+    n_rows: HeaderCount,
+    /// `nColumns` or `datacolumns`.
+    n_cols: HeaderCount,
+}
+
+impl StorageHeader {
+    /// The header from its `lines` (those before `endheader`); an `inDegrees` that is not
+    /// yes or no, an angle sentence that names no unit and a count that is not a number
+    /// are errors.
+    fn read(lines: &[&str], path: &Path) -> Result<Self, DataError> {
+        let p = path.to_path_buf();
+        let mut name = path
+            .file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let mut header = Vec::new();
+        let mut in_degrees_key: Option<(bool, usize)> = None;
+        let mut angles_sentence: Option<(bool, usize)> = None;
+        let mut n_rows: HeaderCount = None;
+        let mut n_cols: HeaderCount = None;
+        let parse_count = |text: &str, key: &str, row: usize| -> Result<usize, DataError> {
+            text.trim().parse::<usize>().map_err(|e| DataError::Format {
+                path: p.clone(),
+                row,
+                reason: format!("header '{key}' = '{}' is not a count: {e}", text.trim()),
+            })
+        };
+        for (i, raw) in lines.iter().enumerate() {
+            let row = i + 1;
+            let l = raw.trim();
+            if l.is_empty() {
+                continue;
+            }
+            header.push(l.to_string());
+            let lower = l.to_ascii_lowercase();
+            if let Some((k, v)) = l.split_once('=') {
+                let key = k.trim();
+                match key.to_ascii_lowercase().as_str() {
+                    "indegrees" => {
+                        let b = parse_yes_no(v).ok_or_else(|| DataError::Units {
+                            path: p.clone(),
+                            row: Some(row),
+                            column: key.to_string(),
+                            text: v.trim().to_string(),
+                            reason: "inDegrees must be 'yes' or 'no'".into(),
+                        })?;
+                        in_degrees_key = Some((b, row));
+                    }
+                    "nrows" => n_rows = Some((parse_count(v, key, row)?, row, key.to_string())),
+                    "ncolumns" => n_cols = Some((parse_count(v, key, row)?, row, key.to_string())),
+                    _ => {}
+                }
+                continue;
+            }
+            if let Some(rest) = lower.strip_prefix("angles are in") {
+                let rest = rest.trim().trim_end_matches('.').trim();
+                let b = match rest {
+                    "degrees" => true,
+                    "radians" => false,
+                    _ => {
+                        return Err(DataError::Units {
+                            path: p.clone(),
+                            row: Some(row),
+                            column: "Angles are in".into(),
+                            text: rest.to_string(),
+                            reason: "expected 'degrees' or 'radians'".into(),
+                        })
+                    }
+                };
+                angles_sentence = Some((b, row));
+                continue;
+            }
+            let mut words = l.split_whitespace();
+            match words.next().map(str::to_ascii_lowercase).as_deref() {
+                Some("datarows") => {
+                    let v = words.next().unwrap_or("");
+                    n_rows = Some((parse_count(v, "datarows", row)?, row, "datarows".into()));
+                }
+                Some("datacolumns") => {
+                    let v = words.next().unwrap_or("");
+                    n_cols = Some((
+                        parse_count(v, "datacolumns", row)?,
+                        row,
+                        "datacolumns".into(),
+                    ));
+                }
+                Some("name") => {
+                    let rest: Vec<&str> = words.collect();
+                    if !rest.is_empty() {
+                        name = rest.join(" ");
+                    }
+                }
+                _ => {
+                    if i == 0 && !l.starts_with('#') {
+                        name = l.to_string();
+                    }
+                }
+            }
+        }
+        Ok(Self {
+            name,
+            lines: header,
+            in_degrees_key,
+            angles_sentence,
+            n_rows,
+            n_cols,
+        })
+    }
+
+    /// Whether angles are in degrees, and whether the header says so either way; an
+    /// `inDegrees` that contradicts the sentence is an error.
+    fn angle_unit(&self, path: &Path) -> Result<(bool, bool), DataError> {
+        Ok(match (self.in_degrees_key, self.angles_sentence) {
+            (Some((a, row)), Some((b, _))) if a != b => {
+                return Err(DataError::Units {
+                    path: path.to_path_buf(),
+                    row: Some(row),
+                    column: "inDegrees".into(),
+                    text: if a { "yes" } else { "no" }.into(),
+                    reason: format!(
+                        "contradicts the header line 'Angles are in {}'",
+                        if b { "degrees" } else { "radians" }
+                    ),
+                })
+            }
+            (Some((a, _)), _) | (None, Some((a, _))) => (a, true),
+            (None, None) => (false, false),
+        })
+    }
+}
+
+/// The column labels, the first non-empty line after `endheader` (line `end` + 1): its
+/// index in `lines`, the labels as written and their short names; a first column that is
+/// not `time` is an error.
+fn read_labels(
+    lines: &[&str],
+    end: usize,
+    path: &Path,
+) -> Result<(usize, Vec<String>, Vec<String>), DataError> {
     let mut idx = end + 1;
     while idx < lines.len() && lines[idx].trim().is_empty() {
         idx += 1;
     }
     if idx >= lines.len() {
         return Err(DataError::Format {
-            path: p,
+            path: path.to_path_buf(),
             row: end + 1,
             reason: "no column labels after 'endheader'".into(),
         });
@@ -307,26 +399,26 @@ pub fn parse_storage(text: &str, path: &Path) -> Result<Storage, DataError> {
     let columns: Vec<String> = labels.iter().map(|l| short_label(l)).collect();
     if !columns[0].eq_ignore_ascii_case("time") {
         return Err(DataError::MissingColumn {
-            path: p,
+            path: path.to_path_buf(),
             row: label_line,
             column: "time".into(),
             reason: format!("the first column must be 'time', found '{}'", labels[0]),
         });
     }
-    if let Some((n, row, key)) = &n_cols {
-        if *n != labels.len() {
-            return Err(DataError::Format {
-                path: p,
-                row: *row,
-                reason: format!(
-                    "header '{key}' says {n} columns but line {label_line} has {} labels",
-                    labels.len()
-                ),
-            });
-        }
-    }
+    Ok((idx, labels, columns))
+}
 
-    let ncol = labels.len();
+/// The numbers of the rows after the labels (at `lines[idx]`), column-major, and each
+/// row's line (1-based); a row of the wrong length, a field that is not a number and no
+/// rows at all are errors.
+fn read_rows(
+    lines: &[&str],
+    idx: usize,
+    columns: &[String],
+    path: &Path,
+) -> Result<(Vec<Vec<f64>>, Vec<usize>), DataError> {
+    let p = path.to_path_buf();
+    let ncol = columns.len();
     let mut data = vec![Vec::new(); ncol];
     let mut row_lines = Vec::new();
     for (i, raw) in lines.iter().enumerate().skip(idx + 1) {
@@ -351,35 +443,11 @@ pub fn parse_storage(text: &str, path: &Path) -> Result<Storage, DataError> {
     if row_lines.is_empty() {
         return Err(DataError::Format {
             path: p,
-            row: label_line,
+            row: idx + 1,
             reason: "no data rows after the column labels".into(),
         });
     }
-    if let Some((n, row, key)) = &n_rows {
-        if *n != row_lines.len() {
-            return Err(DataError::Format {
-                path: p,
-                row: *row,
-                reason: format!(
-                    "header '{key}' says {n} rows but the file has {} data rows",
-                    row_lines.len()
-                ),
-            });
-        }
-    }
-    check_time(&data[0], &row_lines, &columns[0], &p)?;
-    Ok(Storage {
-        path: p,
-        name,
-        header,
-        columns,
-        labels,
-        data,
-        lines: row_lines,
-        label_line,
-        in_degrees,
-        angle_unit_stated,
-    })
+    Ok((data, row_lines))
 }
 
 /// The text of an OpenSim 4 storage file that [`parse_storage`] (and OpenSim's `Storage`
@@ -445,261 +513,4 @@ pub(crate) fn check_time(
         }
     }
     Ok(())
-}
-
-/// A mapped column: present and unambiguous.
-fn column<'a>(s: &'a Storage, name: &str, what: &str) -> Result<&'a [f64], DataError> {
-    let j = s
-        .column_index(name)
-        .ok_or_else(|| DataError::MissingColumn {
-            path: s.path.clone(),
-            row: s.label_line,
-            column: name.to_string(),
-            reason: format!("needed for {what}"),
-        })?;
-    let count = |v: &[String]| v.iter().filter(|c| *c == name).count();
-    if count(&s.columns) > 1 || count(&s.labels) > 1 {
-        return Err(DataError::DuplicateColumn {
-            path: s.path.clone(),
-            row: s.label_line,
-            column: name.to_string(),
-        });
-    }
-    Ok(&s.data[j])
-}
-
-fn check_finite(s: &Storage, name: &str, v: &[f64]) -> Result<(), DataError> {
-    check_values(s, name, v, false)
-}
-
-/// No infinity in `v`, and no NaN unless `gaps` (an extra channel, which the model does
-/// not read, may have gaps).
-fn check_values(s: &Storage, name: &str, v: &[f64], gaps: bool) -> Result<(), DataError> {
-    if let Some(k) = v
-        .iter()
-        .position(|x| x.is_infinite() || (x.is_nan() && !gaps))
-    {
-        return Err(DataError::NotFinite {
-            path: s.path.clone(),
-            row: s.line_of(k),
-            column: name.to_string(),
-            reason: format!(
-                "value is {} (NaN is allowed only in a CoP column while that foot is unloaded, and in an extra channel such as lumbar_extension)",
-                v[k]
-            ),
-        });
-    }
-    Ok(())
-}
-
-fn check_not_infinite(s: &Storage, name: &str, v: &[f64]) -> Result<(), DataError> {
-    if let Some(k) = v.iter().position(|x| x.is_infinite()) {
-        return Err(DataError::NotFinite {
-            path: s.path.clone(),
-            row: s.line_of(k),
-            column: name.to_string(),
-            reason: format!(
-                "value is {}; a force or CoP is finite, or NaN where not measured",
-                v[k]
-            ),
-        });
-    }
-    Ok(())
-}
-
-impl GaitData {
-    /// Sagittal gait data from OpenSim storages: `kinematics` (coordinates) and, optionally,
-    /// `grf` (external loads), with the columns named in `map`.
-    ///
-    /// Rotational coordinates are converted from degrees to radians when the kinematics
-    /// header says `inDegrees=yes` (or `Angles are in degrees`); a kinematics file that
-    /// states no angle unit is refused. Forces and CoP are resampled onto the kinematic
-    /// instants by linear interpolation (as `data/convert_opensim_subject01.py` does); CoP
-    /// is NaN where the resampled normal force is below `map.cop_threshold`. The forces
-    /// must cover the kinematic time span. The force-plate height is the mean CoP y of
-    /// the loaded samples when `cop_y` columns are mapped. The result is in the lab frame
-    /// (`belt_speed` and `body_mass` are `None`; see [`GaitData::to_overground`]).
-    ///
-    /// Errors: missing or repeated columns (row = the label line), NaN/∞ in kinematics or forces, NaN
-    /// CoP while loaded (row, column), unstated angle unit, forces not covering the
-    /// kinematics.
-    pub fn from_storage(
-        kinematics: &Storage,
-        grf: Option<&Storage>,
-        map: &StorageMap,
-    ) -> Result<GaitData, DataError> {
-        let ks = kinematics;
-        ks.validate()?;
-        if let Some(g) = grf {
-            g.validate()?;
-        }
-        let time = ks.time().to_vec();
-        let needs_angles = map
-            .q
-            .iter()
-            .chain(map.extras.iter().map(|(_, c)| c))
-            .any(|c| c.rotational);
-        if needs_angles && !ks.angle_unit_stated {
-            return Err(DataError::Units {
-                path: ks.path.clone(),
-                row: None,
-                column: "inDegrees".into(),
-                text: String::new(),
-                reason: "the header states neither 'inDegrees=yes|no' nor 'Angles are in degrees|radians'; \
-                         set Storage::in_degrees and Storage::angle_unit_stated once the unit is known"
-                    .into(),
-            });
-        }
-        let scale = |c: &ColumnMap| {
-            if c.rotational && ks.in_degrees {
-                std::f64::consts::PI / 180.0
-            } else {
-                1.0
-            }
-        };
-        let mut q: [Vec<f64>; 9] = Default::default();
-        for (i, c) in map.q.iter().enumerate() {
-            let v = column(ks, &c.column, &format!("coordinate {}", Q_NAMES[i]))?;
-            check_finite(ks, &c.column, v)?;
-            let f = scale(c);
-            q[i] = v.iter().map(|x| x * f).collect();
-        }
-        let mut extra = BTreeMap::new();
-        for (name, c) in &map.extras {
-            let v = column(ks, &c.column, &format!("extra channel {name}"))?;
-            check_values(ks, &c.column, v, true)?;
-            let f = scale(c);
-            extra.insert(name.clone(), v.iter().map(|x| x * f).collect::<Vec<f64>>());
-        }
-        if let Some([ox, oy]) = map.hip_offset_in_pelvis {
-            let (hx, hy): (Vec<f64>, Vec<f64>) = (0..time.len())
-                .map(|k| {
-                    let (s, c) = q[2][k].sin_cos();
-                    (q[0][k] + c * ox - s * oy, q[1][k] + s * ox + c * oy)
-                })
-                .unzip();
-            extra.insert("hip_center_x".into(), hx);
-            extra.insert("hip_center_y".into(), hy);
-        }
-        let n = time.len();
-        let nan_foot = || FootData {
-            fx: vec![f64::NAN; n],
-            fy: vec![f64::NAN; n],
-            cop_x: vec![f64::NAN; n],
-        };
-        let mut feet = [nan_foot(), nan_foot()];
-        let mut plate = Vec::new();
-        let mut forces = None;
-        if let Some(g) = grf {
-            let tg = g.time();
-            let mut raw_px = [Vec::new(), Vec::new()];
-            let mut record = ForceSamples {
-                time: Vec::new(),
-                feet: std::array::from_fn(|_| FootData {
-                    fx: vec![f64::NAN; tg.len()],
-                    fy: vec![f64::NAN; tg.len()],
-                    cop_x: vec![f64::NAN; tg.len()],
-                }),
-            };
-            let (g0, g1) = (tg[0], tg[tg.len() - 1]);
-            let tol = 1e-9 * (1.0 + g1.abs());
-            if time[0] < g0 - tol || time[n - 1] > g1 + tol {
-                return Err(DataError::invalid(
-                    &g.path,
-                    "time",
-                    format!(
-                        "the forces cover {g0}–{g1} s but the kinematics ({}) run {}–{} s",
-                        ks.path.display(),
-                        time[0],
-                        time[n - 1]
-                    ),
-                ));
-            }
-            for (s, cols) in map.feet.iter().enumerate() {
-                let Some(cols) = cols else { continue };
-                let fx = column(g, &cols.fx, "the horizontal ground reaction force")?;
-                let fy = column(g, &cols.fy, "the vertical ground reaction force")?;
-                let px = column(g, &cols.cop_x, "the centre of pressure")?;
-                // NaN is "not measured" (the foot off the plates); ∞ is refused
-                check_not_infinite(g, &cols.fx, fx)?;
-                check_not_infinite(g, &cols.fy, fy)?;
-                check_not_infinite(g, &cols.cop_x, px)?;
-                let cop: Vec<f64> = (0..px.len())
-                    .map(|k| {
-                        if fy[k] >= map.cop_threshold {
-                            px[k]
-                        } else {
-                            f64::NAN
-                        }
-                    })
-                    .collect();
-                record.feet[s] = FootData {
-                    fx: fx.to_vec(),
-                    fy: fy.to_vec(),
-                    cop_x: cop,
-                };
-                raw_px[s] = px.to_vec();
-                if let Some(py) = cols.cop_y.as_deref().and_then(|c| g.column(c)) {
-                    plate.extend(
-                        (0..py.len())
-                            .filter(|&k| fy[k] >= map.cop_threshold && py[k].is_finite())
-                            .map(|k| py[k]),
-                    );
-                }
-            }
-            // the record at its own instants over the kinematic span (one sample beyond
-            // either end, for interpolation), and its view at the kinematic instants
-            let k0 = tg.partition_point(|&t| t < time[0]).saturating_sub(1);
-            let k1 = (tg.partition_point(|&t| t <= time[n - 1]) + 1).min(tg.len());
-            let crop = |v: &[f64]| v[k0..k1].to_vec();
-            let record = ForceSamples {
-                time: crop(tg),
-                feet: std::array::from_fn(|s| FootData {
-                    fx: crop(&record.feet[s].fx),
-                    fy: crop(&record.feet[s].fy),
-                    cop_x: crop(&record.feet[s].cop_x),
-                }),
-            };
-            for s in 0..2 {
-                if map.feet[s].is_some() {
-                    // the CoP view: the raw CoP resampled, NaN where the resampled normal
-                    // force is below the threshold
-                    let raw = ForceSamples {
-                        time: record.time.clone(),
-                        feet: std::array::from_fn(|_| FootData {
-                            fx: record.feet[s].fx.clone(),
-                            fy: record.feet[s].fy.clone(),
-                            cop_x: crop(&raw_px[s]),
-                        }),
-                    };
-                    let mut f = raw.resample_foot(0, &time);
-                    for (c, &fy) in f.cop_x.iter_mut().zip(&f.fy) {
-                        if fy.is_nan() || fy < map.cop_threshold {
-                            *c = f64::NAN;
-                        }
-                    }
-                    feet[s] = f;
-                }
-            }
-            forces = Some(record);
-        }
-        let force_plate_height =
-            (!plate.is_empty()).then(|| plate.iter().sum::<f64>() / plate.len() as f64);
-        Ok(GaitData {
-            events: None,
-            name: ks.name.clone(),
-            source: ks.path.clone(),
-            time,
-            q,
-            feet,
-            forces,
-            extra,
-            body_mass: None,
-            force_plate_height,
-            belt_speed: None,
-            cop_threshold: map.cop_threshold,
-            sides: [SideSource::Measured, SideSource::Measured],
-            overground: false,
-        })
-    }
 }

@@ -26,7 +26,7 @@ use super::error::ModelError;
 use super::geometry::{Shape, ShapeScalars};
 use super::multibody::{Inertia, Tree, V2};
 use super::segments::{build_bodies, estimated_stature, segments_from_de_leva};
-use super::spec::{self, ActuatorSpec, BodySpec, ContactSettings, FootSpec, ModelSpec};
+use super::spec::{self, ActuatorSpec, BodySpec, ContactSettings, FootSpec, ModelSpec, Segments};
 use super::Scalar;
 use std::path::Path;
 
@@ -190,158 +190,19 @@ impl GaitModel {
     ) -> Result<Self, ModelError> {
         spec.validate(model_path)?;
         foot.validate(foot_path)?;
-        let seg = match &spec.body {
-            BodySpec::Explicit { segments } => segments.clone(),
-            BodySpec::OpensimModel { file, lumbar } => {
-                spec::opensim_segments(&spec::relative_to(model_path, file), *lumbar)?
-            }
-            BodySpec::DeLeva { mass, height, sex } => {
-                let p = anthropometry::de_leva_planar(*mass, *height, *sex)
-                    .map_err(|r| ModelError::invalid(model_path, "body", r))?;
-                segments_from_de_leva(&p)
-            }
-        };
+        let seg = body_segments(spec, model_path)?;
         let tree = Tree::new(build_bodies(&seg))
             .map_err(|r| ModelError::invalid(model_path, "body", r))?;
-        let mut contacts = Vec::new();
-        for side in [Side::Right, Side::Left] {
-            let body = tree
-                .body_index(&format!("foot_{}", side.prefix()))
-                .expect("foot body exists");
-            for p in &foot.primitives {
-                contacts.push(Contact {
-                    name: format!("{}.{}", side.prefix(), p.name),
-                    side,
-                    body,
-                    shape: p.shape.clone(),
-                    law: match p.contact {
-                        spec::ContactLaw::Rigid => None,
-                        spec::ContactLaw::Volumetric(law) => Some(law),
-                    },
-                });
-            }
-        }
-        let actuation = match &spec.actuators {
-            ActuatorSpec::MuscleTorqueGenerators {
-                strength_scale,
-                eta,
-                tau_activation,
-                tau_deactivation,
-                subject_mass,
-                subject_height,
-            } => {
-                let mass = subject_mass.unwrap_or_else(|| seg.total_mass());
-                let height = subject_height.unwrap_or_else(|| match &spec.body {
-                    BodySpec::DeLeva { height, .. } => *height,
-                    _ => estimated_stature(&seg),
-                });
-                let mut set = JointActuatorSet::anderson2007_young_male_for(mass, height)
-                    .scaled(*strength_scale);
-                set.eta = *eta;
-                set.activation.tau_activation = *tau_activation;
-                set.activation.tau_deactivation = *tau_deactivation;
-                set.validate()
-                    .map_err(|r| ModelError::invalid(model_path, "actuators", r))?;
-                Actuation::Mtg(set)
-            }
-            ActuatorSpec::JointTorques {
-                max_torque,
-                reference_torque,
-            } => Actuation::Torques {
-                max_torque: *max_torque,
-                reference_torque: *reference_torque,
-            },
-        };
-        let coords: Vec<String> = COORDINATES.iter().map(|s| s.to_string()).collect();
-        let bodies: Vec<String> = tree.bodies().iter().map(|b| b.name.clone()).collect();
-        let primitives: Vec<String> = foot.primitives.iter().map(|p| p.name.clone()).collect();
-        let laws: Vec<_> = foot
-            .primitives
-            .iter()
-            .map(|p| match p.contact {
-                spec::ContactLaw::Rigid => None,
-                spec::ContactLaw::Volumetric(law) => Some(law),
-            })
-            .collect();
-        let foot_file = foot_path.display().to_string();
-        let shapes: Vec<Shape> = foot.primitives.iter().map(|p| p.shape.clone()).collect();
-        let ctx = super::effects::BuildContext {
-            coordinates: &coords,
-            bodies: &bodies,
-            primitives: &primitives,
-            laws: &laws,
-            shapes: &shapes,
-            foot: &foot_file,
-        };
-        let mut effects = Vec::new();
-        for (i, e) in spec.effects.iter().enumerate() {
-            effects.extend(
-                e.build(&ctx)
-                    .map_err(|r| ModelError::invalid(model_path, format!("effects[{i}]"), r))?,
-            );
-        }
-        if !matches!(actuation, Actuation::Mtg(_)) {
-            if let Some(i) = effects.iter().position(|e| e.is_actuator()) {
-                return Err(ModelError::invalid(
-                    model_path,
-                    format!("effects[{i}]"),
-                    format!(
-                        "'{}' changes the muscle-torque generators, and this model is driven by joint torques; use a model with \"actuators\": {{\"type\": \"muscle_torque_generators\", …}}",
-                        effects[i].kind()
-                    ),
-                ));
-            }
-        }
-        let mut params = Vec::new();
-        let mut effect_offsets = Vec::new();
-        for e in &effects {
-            effect_offsets.push(params.len());
-            params.extend(e.parameters().iter().cloned());
-        }
-        for w in 0..params.len() {
-            if params[..w].iter().any(|p| p.name == params[w].name) {
-                return Err(ModelError::invalid(
-                    model_path,
-                    "effects",
-                    format!("parameter '{}' is defined by two effects", params[w].name),
-                ));
-            }
-        }
-        let free = params
-            .iter()
-            .enumerate()
-            .filter(|(_, p)| p.free)
-            .map(|(i, _)| i)
-            .collect();
-        let compliant = contacts
-            .iter()
-            .map(|c| {
-                effects.iter().position(|e| {
-                    e.compliant_primitive()
-                        .is_some_and(|p| c.name.split_once('.').is_some_and(|(_, n)| n == p))
-                })
-            })
-            .collect();
-        let volumetric_params = contacts
-            .iter()
-            .map(|c| {
-                let (_, name) = c.name.split_once('.')?;
-                effects.iter().enumerate().find_map(|(e, eff)| {
-                    let slot = eff.volumetric_primitives().iter().position(|p| p == name)?;
-                    Some((e, slot))
-                })
-            })
-            .collect();
-        let geometry_params = contacts
-            .iter()
-            .map(|c| {
-                let (_, name) = c.name.split_once('.')?;
-                effects.iter().enumerate().find_map(|(e, eff)| {
-                    let &(_, offset) = eff.geometry_primitives().iter().find(|p| p.0 == name)?;
-                    Some((e, offset))
-                })
-            })
-            .collect();
+        let contacts = foot_contacts(&tree, foot);
+        let actuation = actuation(spec, &seg, model_path)?;
+        let effects = build_effects(spec, model_path, &tree, foot, foot_path)?;
+        check_actuator_effects(&actuation, &effects, model_path)?;
+        let EffectParameters {
+            params,
+            offsets: effect_offsets,
+            free,
+        } = effect_parameters(&effects, model_path)?;
+        let slots = ContactSlots::new(&contacts, &effects);
         let model = Self {
             name: spec.name.clone(),
             tree,
@@ -353,9 +214,9 @@ impl GaitModel {
             effects,
             residuals: None,
             effect_offsets,
-            compliant,
-            volumetric_params,
-            geometry_params,
+            compliant: slots.compliant,
+            volumetric_params: slots.volumetric,
+            geometry_params: slots.geometry,
             params,
             free,
         };
@@ -652,5 +513,232 @@ impl GaitModel {
             S::adjust(self.effects[e].as_ref(), self.effect_params(p, e), &mut adj);
         }
         (inertia, gravity, ground_height, ground_normal)
+    }
+}
+
+/// The body's segments: as given, from an OpenSim model, or from de Leva's tables.
+fn body_segments(spec: &ModelSpec, model_path: &Path) -> Result<Segments, ModelError> {
+    Ok(match &spec.body {
+        BodySpec::Explicit { segments } => segments.clone(),
+        BodySpec::OpensimModel { file, lumbar } => {
+            spec::opensim_segments(&spec::relative_to(model_path, file), *lumbar)?
+        }
+        BodySpec::DeLeva { mass, height, sex } => {
+            let p = anthropometry::de_leva_planar(*mass, *height, *sex)
+                .map_err(|r| ModelError::invalid(model_path, "body", r))?;
+            segments_from_de_leva(&p)
+        }
+    })
+}
+
+/// Each foot primitive on each side (right, then left), named `r.NAME` and `l.NAME`.
+fn foot_contacts(tree: &Tree, foot: &FootSpec) -> Vec<Contact> {
+    let mut contacts = Vec::new();
+    for side in [Side::Right, Side::Left] {
+        let body = tree
+            .body_index(&format!("foot_{}", side.prefix()))
+            .expect("foot body exists");
+        for p in &foot.primitives {
+            contacts.push(Contact {
+                name: format!("{}.{}", side.prefix(), p.name),
+                side,
+                body,
+                shape: p.shape.clone(),
+                law: match p.contact {
+                    spec::ContactLaw::Rigid => None,
+                    spec::ContactLaw::Volumetric(law) => Some(law),
+                },
+            });
+        }
+    }
+    contacts
+}
+
+/// The joints' drive: muscle-torque generators scaled to the subject (its mass and
+/// stature default to the body's), or joint torques.
+fn actuation(spec: &ModelSpec, seg: &Segments, model_path: &Path) -> Result<Actuation, ModelError> {
+    Ok(match &spec.actuators {
+        ActuatorSpec::MuscleTorqueGenerators {
+            strength_scale,
+            eta,
+            tau_activation,
+            tau_deactivation,
+            subject_mass,
+            subject_height,
+        } => {
+            let mass = subject_mass.unwrap_or_else(|| seg.total_mass());
+            let height = subject_height.unwrap_or_else(|| match &spec.body {
+                BodySpec::DeLeva { height, .. } => *height,
+                _ => estimated_stature(seg),
+            });
+            let mut set =
+                JointActuatorSet::anderson2007_young_male_for(mass, height).scaled(*strength_scale);
+            set.eta = *eta;
+            set.activation.tau_activation = *tau_activation;
+            set.activation.tau_deactivation = *tau_deactivation;
+            set.validate()
+                .map_err(|r| ModelError::invalid(model_path, "actuators", r))?;
+            Actuation::Mtg(set)
+        }
+        ActuatorSpec::JointTorques {
+            max_torque,
+            reference_torque,
+        } => Actuation::Torques {
+            max_torque: *max_torque,
+            reference_torque: *reference_torque,
+        },
+    })
+}
+
+/// The model file's effects, built for this body and foot; an error names the entry.
+fn build_effects(
+    spec: &ModelSpec,
+    model_path: &Path,
+    tree: &Tree,
+    foot: &FootSpec,
+    foot_path: &Path,
+) -> Result<Vec<Box<dyn DynEffect>>, ModelError> {
+    let coords: Vec<String> = COORDINATES.iter().map(|s| s.to_string()).collect();
+    let bodies: Vec<String> = tree.bodies().iter().map(|b| b.name.clone()).collect();
+    let primitives: Vec<String> = foot.primitives.iter().map(|p| p.name.clone()).collect();
+    let laws: Vec<_> = foot
+        .primitives
+        .iter()
+        .map(|p| match p.contact {
+            spec::ContactLaw::Rigid => None,
+            spec::ContactLaw::Volumetric(law) => Some(law),
+        })
+        .collect();
+    let foot_file = foot_path.display().to_string();
+    let shapes: Vec<Shape> = foot.primitives.iter().map(|p| p.shape.clone()).collect();
+    let ctx = super::effects::BuildContext {
+        coordinates: &coords,
+        bodies: &bodies,
+        primitives: &primitives,
+        laws: &laws,
+        shapes: &shapes,
+        foot: &foot_file,
+    };
+    let mut effects = Vec::new();
+    for (i, e) in spec.effects.iter().enumerate() {
+        effects.extend(
+            e.build(&ctx)
+                .map_err(|r| ModelError::invalid(model_path, format!("effects[{i}]"), r))?,
+        );
+    }
+    Ok(effects)
+}
+
+/// An effect on the muscle-torque generators needs a model driven by them.
+fn check_actuator_effects(
+    actuation: &Actuation,
+    effects: &[Box<dyn DynEffect>],
+    model_path: &Path,
+) -> Result<(), ModelError> {
+    if !matches!(actuation, Actuation::Mtg(_)) {
+        if let Some(i) = effects.iter().position(|e| e.is_actuator()) {
+            return Err(ModelError::invalid(
+                model_path,
+                format!("effects[{i}]"),
+                format!(
+                    "'{}' changes the muscle-torque generators, and this model is driven by joint torques; use a model with \"actuators\": {{\"type\": \"muscle_torque_generators\", …}}",
+                    effects[i].kind()
+                ),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The effects' parameters in order.
+struct EffectParameters {
+    /// Every effect's parameters, effect by effect.
+    params: Vec<ParamSpec>,
+    /// The index of each effect's first parameter.
+    offsets: Vec<usize>,
+    /// The indices of the free parameters.
+    free: Vec<usize>,
+}
+
+/// The effects' parameters; a name two effects define is an error.
+fn effect_parameters(
+    effects: &[Box<dyn DynEffect>],
+    model_path: &Path,
+) -> Result<EffectParameters, ModelError> {
+    let mut params = Vec::new();
+    let mut effect_offsets = Vec::new();
+    for e in effects {
+        effect_offsets.push(params.len());
+        params.extend(e.parameters().iter().cloned());
+    }
+    for w in 0..params.len() {
+        if params[..w].iter().any(|p| p.name == params[w].name) {
+            return Err(ModelError::invalid(
+                model_path,
+                "effects",
+                format!("parameter '{}' is defined by two effects", params[w].name),
+            ));
+        }
+    }
+    let free = params
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| p.free)
+        .map(|(i, _)| i)
+        .collect();
+    Ok(EffectParameters {
+        params,
+        offsets: effect_offsets,
+        free,
+    })
+}
+
+/// Per contact, the effects that act on it (see the fields of [`GaitModel`] of the same
+/// meaning).
+struct ContactSlots {
+    /// The effect that makes its normal contact compliant.
+    compliant: Vec<Option<usize>>,
+    /// The effect whose parameters replace its volumetric law, and the primitive's slot.
+    volumetric: Vec<Option<(usize, usize)>>,
+    /// The effect whose parameters replace its geometry, and the primitive's offset.
+    geometry: Vec<Option<(usize, usize)>>,
+}
+
+impl ContactSlots {
+    fn new(contacts: &[Contact], effects: &[Box<dyn DynEffect>]) -> Self {
+        let compliant = contacts
+            .iter()
+            .map(|c| {
+                effects.iter().position(|e| {
+                    e.compliant_primitive()
+                        .is_some_and(|p| c.name.split_once('.').is_some_and(|(_, n)| n == p))
+                })
+            })
+            .collect();
+        let volumetric = contacts
+            .iter()
+            .map(|c| {
+                let (_, name) = c.name.split_once('.')?;
+                effects.iter().enumerate().find_map(|(e, eff)| {
+                    let slot = eff.volumetric_primitives().iter().position(|p| p == name)?;
+                    Some((e, slot))
+                })
+            })
+            .collect();
+        let geometry = contacts
+            .iter()
+            .map(|c| {
+                let (_, name) = c.name.split_once('.')?;
+                effects.iter().enumerate().find_map(|(e, eff)| {
+                    let &(_, offset) = eff.geometry_primitives().iter().find(|p| p.0 == name)?;
+                    Some((e, offset))
+                })
+            })
+            .collect();
+        Self {
+            compliant,
+            volumetric,
+            geometry,
+        }
     }
 }

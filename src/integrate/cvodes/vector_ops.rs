@@ -533,45 +533,67 @@ mod tests {
         v.assert_same(what);
     }
 
+    /// The kernels' checks in one sequence on one set of vectors: each step starts from
+    /// the vectors the steps before it left.
     #[test]
     fn the_kernels_compute_sundials_serial_results_bit_for_bit() {
         let v = Vectors::new();
+        check_elementwise(&v);
+        check_norms(&v);
+        // fused and array operations, with 1, 2 and more terms, out of place and in place
+        for terms in 1..=4usize {
+            for c in [
+                [1.0, 0.5, -0.25, 2.0],
+                [0.3, 0.3, 1.5, -1.0],
+                [-2.0, 2.0, 1.0, 0.1],
+            ] {
+                check_fused(&v, terms, c);
+                check_vector_arrays(&v, terms, c);
+            }
+        }
+        check_linear_sum_arrays(&v);
+        check_array_norms(&v);
+    }
+
+    /// Linear sums, scaling, constants and the element-wise operations.
+    fn check_elementwise(v: &Vectors) {
         let coefficients = [1.0, -1.0, 0.0, 0.7, -0.7, 2.5, 1.0 / 3.0];
-        // SAFETY (all closures): the live vectors of `v`, arrays of the stated lengths.
+        // SAFETY (all closures): the live vectors of `v`.
         for &a in &coefficients {
             for &b in &coefficients {
-                check(&v, &format!("linear sum {a} {b}"), |x| unsafe {
+                check(v, &format!("linear sum {a} {b}"), |x| unsafe {
                     sys::N_VLinearSum(a, x[0], b, x[1], x[2])
                 });
                 check(
-                    &v,
+                    v,
                     &format!("linear sum in place of y {a} {b}"),
                     |x| unsafe { sys::N_VLinearSum(a, x[3], b, x[4], x[4]) },
                 );
                 check(
-                    &v,
+                    v,
                     &format!("linear sum in place of x {a} {b}"),
                     |x| unsafe { sys::N_VLinearSum(a, x[5], b, x[6], x[5]) },
                 );
             }
-            check(&v, &format!("scale {a}"), |x| unsafe {
+            check(v, &format!("scale {a}"), |x| unsafe {
                 sys::N_VScale(a, x[1], x[7])
             });
-            check(&v, &format!("scale in place {a}"), |x| unsafe {
+            check(v, &format!("scale in place {a}"), |x| unsafe {
                 sys::N_VScale(a, x[7], x[7])
             });
-            check(&v, &format!("add constant {a}"), |x| unsafe {
+            check(v, &format!("add constant {a}"), |x| unsafe {
                 sys::N_VAddConst(x[2], a, x[8])
             });
         }
-        check(&v, "product", |x| unsafe { sys::N_VProd(x[0], x[1], x[9]) });
-        check(&v, "quotient", |x| unsafe {
-            sys::N_VDiv(x[9], x[2], x[10])
-        });
-        check(&v, "absolute", |x| unsafe { sys::N_VAbs(x[10], x[11]) });
-        check(&v, "inverse", |x| unsafe { sys::N_VInv(x[11], x[11]) });
-        check(&v, "constant", |x| unsafe { sys::N_VConst(0.25, x[11]) });
-        // the norms: equal numbers
+        check(v, "product", |x| unsafe { sys::N_VProd(x[0], x[1], x[9]) });
+        check(v, "quotient", |x| unsafe { sys::N_VDiv(x[9], x[2], x[10]) });
+        check(v, "absolute", |x| unsafe { sys::N_VAbs(x[10], x[11]) });
+        check(v, "inverse", |x| unsafe { sys::N_VInv(x[11], x[11]) });
+        check(v, "constant", |x| unsafe { sys::N_VConst(0.25, x[11]) });
+    }
+
+    /// The norms: equal numbers.
+    fn check_norms(v: &Vectors) {
         for (i, j) in [(0, 1), (2, 3), (4, 4), (9, 10)] {
             // SAFETY: live vectors.
             unsafe {
@@ -585,121 +607,118 @@ mod tests {
                 );
             }
         }
-        // fused and array operations, with 1, 2 and more terms, out of place and in place
-        for terms in 1..=4usize {
-            for c in [
-                [1.0, 0.5, -0.25, 2.0],
-                [0.3, 0.3, 1.5, -1.0],
-                [-2.0, 2.0, 1.0, 0.1],
-            ] {
-                check(
-                    &v,
-                    &format!("linear combination {terms} {c:?}"),
-                    |x| unsafe {
-                        let mut xs = x[..terms].to_vec();
-                        let mut c = c;
-                        sys::N_VLinearCombination(
-                            terms as i32,
-                            c.as_mut_ptr(),
-                            xs.as_mut_ptr(),
-                            x[11],
-                        );
-                    },
+    }
+
+    /// The fused operations with `terms` terms and coefficients `c`, out of place and in
+    /// place.
+    fn check_fused(v: &Vectors, terms: usize, c: [f64; 4]) {
+        // SAFETY (all closures): the live vectors of `v`, arrays of the stated lengths.
+        check(
+            v,
+            &format!("linear combination {terms} {c:?}"),
+            |x| unsafe {
+                let mut xs = x[..terms].to_vec();
+                let mut c = c;
+                sys::N_VLinearCombination(terms as i32, c.as_mut_ptr(), xs.as_mut_ptr(), x[11]);
+            },
+        );
+        check(
+            v,
+            &format!("linear combination in place {terms} {c:?}"),
+            |x| unsafe {
+                let mut xs = x[4..4 + terms].to_vec();
+                let mut c = c;
+                sys::N_VLinearCombination(terms as i32, c.as_mut_ptr(), xs.as_mut_ptr(), x[4]);
+            },
+        );
+        check(v, &format!("scale add multi {terms} {c:?}"), |x| unsafe {
+            let mut ys = x[1..1 + terms].to_vec();
+            let mut zs = x[6..6 + terms].to_vec();
+            let mut c = c;
+            sys::N_VScaleAddMulti(
+                terms as i32,
+                c.as_mut_ptr(),
+                x[0],
+                ys.as_mut_ptr(),
+                zs.as_mut_ptr(),
+            );
+        });
+        check(
+            v,
+            &format!("scale add multi in place {terms} {c:?}"),
+            |x| unsafe {
+                let mut ys = x[6..6 + terms].to_vec();
+                let mut c = c;
+                let p = ys.as_mut_ptr();
+                sys::N_VScaleAddMulti(terms as i32, c.as_mut_ptr(), x[0], p, p);
+            },
+        );
+        check(v, &format!("scale array {terms} {c:?}"), |x| unsafe {
+            let mut xs = x[..terms].to_vec();
+            let mut zs = x[7..7 + terms].to_vec();
+            let mut c = c;
+            sys::N_VScaleVectorArray(
+                terms as i32,
+                c.as_mut_ptr(),
+                xs.as_mut_ptr(),
+                zs.as_mut_ptr(),
+            );
+        });
+    }
+
+    /// The vector-array operations with `terms` arrays of two vectors each and
+    /// coefficients `c`: X[i] = (x[i], x[i+1]), Z = (x[10], x[11]).
+    fn check_vector_arrays(v: &Vectors, terms: usize, c: [f64; 4]) {
+        let nvec = 2usize;
+        // SAFETY (all closures): the live vectors of `v`, arrays of the stated lengths.
+        check(
+            v,
+            &format!("linear combination array {terms} {c:?}"),
+            |x| unsafe {
+                let mut arrays: Vec<Vec<sys::N_Vector>> =
+                    (0..terms).map(|i| vec![x[2 * i], x[2 * i + 1]]).collect();
+                let mut ptrs: Vec<*mut sys::N_Vector> =
+                    arrays.iter_mut().map(|a| a.as_mut_ptr()).collect();
+                let mut zs = vec![x[10], x[11]];
+                let mut c = c;
+                sys::N_VLinearCombinationVectorArray(
+                    nvec as i32,
+                    terms as i32,
+                    c.as_mut_ptr(),
+                    ptrs.as_mut_ptr(),
+                    zs.as_mut_ptr(),
                 );
-                check(
-                    &v,
-                    &format!("linear combination in place {terms} {c:?}"),
-                    |x| unsafe {
-                        let mut xs = x[4..4 + terms].to_vec();
-                        let mut c = c;
-                        sys::N_VLinearCombination(
-                            terms as i32,
-                            c.as_mut_ptr(),
-                            xs.as_mut_ptr(),
-                            x[4],
-                        );
-                    },
+            },
+        );
+        check(
+            v,
+            &format!("scale add multi array {terms} {c:?}"),
+            |x| unsafe {
+                let mut xs = vec![x[0], x[1]];
+                let mut ys: Vec<Vec<sys::N_Vector>> =
+                    (0..terms).map(|j| vec![x[2 + j], x[6 + j]]).collect();
+                let mut zs: Vec<Vec<sys::N_Vector>> =
+                    (0..terms).map(|j| vec![x[2 + j], x[6 + j]]).collect();
+                let mut yp: Vec<*mut sys::N_Vector> =
+                    ys.iter_mut().map(|a| a.as_mut_ptr()).collect();
+                let mut zp: Vec<*mut sys::N_Vector> =
+                    zs.iter_mut().map(|a| a.as_mut_ptr()).collect();
+                let mut c = c;
+                sys::N_VScaleAddMultiVectorArray(
+                    nvec as i32,
+                    terms as i32,
+                    c.as_mut_ptr(),
+                    xs.as_mut_ptr(),
+                    yp.as_mut_ptr(),
+                    zp.as_mut_ptr(),
                 );
-                check(&v, &format!("scale add multi {terms} {c:?}"), |x| unsafe {
-                    let mut ys = x[1..1 + terms].to_vec();
-                    let mut zs = x[6..6 + terms].to_vec();
-                    let mut c = c;
-                    sys::N_VScaleAddMulti(
-                        terms as i32,
-                        c.as_mut_ptr(),
-                        x[0],
-                        ys.as_mut_ptr(),
-                        zs.as_mut_ptr(),
-                    );
-                });
-                check(
-                    &v,
-                    &format!("scale add multi in place {terms} {c:?}"),
-                    |x| unsafe {
-                        let mut ys = x[6..6 + terms].to_vec();
-                        let mut c = c;
-                        let p = ys.as_mut_ptr();
-                        sys::N_VScaleAddMulti(terms as i32, c.as_mut_ptr(), x[0], p, p);
-                    },
-                );
-                check(&v, &format!("scale array {terms} {c:?}"), |x| unsafe {
-                    let mut xs = x[..terms].to_vec();
-                    let mut zs = x[7..7 + terms].to_vec();
-                    let mut c = c;
-                    sys::N_VScaleVectorArray(
-                        terms as i32,
-                        c.as_mut_ptr(),
-                        xs.as_mut_ptr(),
-                        zs.as_mut_ptr(),
-                    );
-                });
-                // arrays of two vectors each: X[i] = (x[i], x[i+1]), Z = (x[10], x[11])
-                let nvec = 2usize;
-                check(
-                    &v,
-                    &format!("linear combination array {terms} {c:?}"),
-                    |x| unsafe {
-                        let mut arrays: Vec<Vec<sys::N_Vector>> =
-                            (0..terms).map(|i| vec![x[2 * i], x[2 * i + 1]]).collect();
-                        let mut ptrs: Vec<*mut sys::N_Vector> =
-                            arrays.iter_mut().map(|a| a.as_mut_ptr()).collect();
-                        let mut zs = vec![x[10], x[11]];
-                        let mut c = c;
-                        sys::N_VLinearCombinationVectorArray(
-                            nvec as i32,
-                            terms as i32,
-                            c.as_mut_ptr(),
-                            ptrs.as_mut_ptr(),
-                            zs.as_mut_ptr(),
-                        );
-                    },
-                );
-                check(
-                    &v,
-                    &format!("scale add multi array {terms} {c:?}"),
-                    |x| unsafe {
-                        let mut xs = vec![x[0], x[1]];
-                        let mut ys: Vec<Vec<sys::N_Vector>> =
-                            (0..terms).map(|j| vec![x[2 + j], x[6 + j]]).collect();
-                        let mut zs: Vec<Vec<sys::N_Vector>> =
-                            (0..terms).map(|j| vec![x[2 + j], x[6 + j]]).collect();
-                        let mut yp: Vec<*mut sys::N_Vector> =
-                            ys.iter_mut().map(|a| a.as_mut_ptr()).collect();
-                        let mut zp: Vec<*mut sys::N_Vector> =
-                            zs.iter_mut().map(|a| a.as_mut_ptr()).collect();
-                        let mut c = c;
-                        sys::N_VScaleAddMultiVectorArray(
-                            nvec as i32,
-                            terms as i32,
-                            c.as_mut_ptr(),
-                            xs.as_mut_ptr(),
-                            yp.as_mut_ptr(),
-                            zp.as_mut_ptr(),
-                        );
-                    },
-                );
-            }
-        }
+            },
+        );
+    }
+
+    /// Linear sums of arrays, out of place and in place, and a constant array.
+    fn check_linear_sum_arrays(v: &Vectors) {
+        // SAFETY (all closures): the live vectors of `v`, arrays of the stated lengths.
         for (a, b) in [
             (1.0, 1.0),
             (1.0, -1.0),
@@ -708,7 +727,7 @@ mod tests {
             (0.5, -0.5),
             (0.25, 3.0),
         ] {
-            check(&v, &format!("linear sum array {a} {b}"), |x| unsafe {
+            check(v, &format!("linear sum array {a} {b}"), |x| unsafe {
                 let mut xs = vec![x[0], x[1], x[2]];
                 let mut ys = vec![x[3], x[4], x[5]];
                 let mut zs = vec![x[6], x[7], x[8]];
@@ -722,7 +741,7 @@ mod tests {
                 );
             });
             check(
-                &v,
+                v,
                 &format!("linear sum array in place {a} {b}"),
                 |x| unsafe {
                     let mut xs = vec![x[0], x[1], x[2]];
@@ -732,11 +751,14 @@ mod tests {
                 },
             );
         }
-        check(&v, "constant array", |x| unsafe {
+        check(v, "constant array", |x| unsafe {
             let mut zs = vec![x[9], x[10]];
             sys::N_VConstVectorArray(2, -3.5, zs.as_mut_ptr());
         });
-        // norms of arrays
+    }
+
+    /// Norms of arrays: equal numbers.
+    fn check_array_norms(v: &Vectors) {
         // SAFETY: live vectors.
         unsafe {
             let mut norms_plain = [0.0; 3];

@@ -19,7 +19,7 @@ use super::{Actuation, ConstraintSet, ContactReport, GaitModel, RowKind, LEG_JOI
 use crate::model::effects::{EffectState, ModelScalar};
 use crate::model::error::DynamicsError;
 use crate::model::linalg::{cholesky, cholesky_solve};
-use crate::model::multibody::{add, dot, perp, scale, V2};
+use crate::model::multibody::{add, dot, perp, scale, Kinematics, V2};
 use crate::model::Scalar;
 
 /// The generalised forces of the dynamics by source (N·m or N per coordinate).
@@ -178,127 +178,17 @@ impl GaitModel {
 
         let nc = set.rows.len();
         if nc > 0 {
-            let t = [n[1], -n[0]];
-            let cs = &self.contact_settings;
-            let mut g = vec![S::c(0.0); nc * nq];
-            let mut b = vec![S::c(0.0); nc];
-            let mut b_baum = vec![0.0; nc];
-            let mut jp = vec![S::c(0.0); 2 * nq];
-            let mut rep_rows = Vec::new();
-            // geometry once per contact (a rolling contact has two rows)
-            let mut geo: Vec<(usize, V2<S>, V2<S>)> = Vec::with_capacity(nc);
-            // compliant normal rows: an explicit force, not a constraint
-            let mut compliant_force = vec![S::c(0.0); nq];
-            let mut rigid = Vec::with_capacity(nc);
-            for (r, row) in set.rows.iter().enumerate() {
-                let contact = &self.contacts[row.contact];
-                let (pt, bias) = match geo.iter().find(|g| g.0 == row.contact) {
-                    Some(&(_, pt, bias)) => (pt, bias),
-                    None => {
-                        let (pt, d, d1) = self.contact_geometry(&k, row.contact, n, &p);
-                        let (_, acc) = self.tree.point_motion(&k, contact.body, pt);
-                        let w = k.omega[contact.body];
-                        let bias = add(acc, scale(add(perp(d1), d), w * w));
-                        geo.push((row.contact, pt, bias));
-                        (pt, bias)
-                    }
-                };
-                let gdot_qd_vec = bias;
-                self.tree.point_jacobian(&k, contact.body, pt, &mut jp);
-                let e = if row.kind == RowKind::Normal { n } else { t };
-                for j in 0..nq {
-                    g[r * nq + j] = e[0] * jp[j] + e[1] * jp[nq + j];
-                }
-                let gqd: S = (0..nq).map(|j| g[r * nq + j] * qd[j]).sum();
-                let phi = dot(n, pt) - ground_h;
-                rep_rows.push(([pt[0].value(), pt[1].value()], phi.value(), gqd.value()));
-                if let (RowKind::Normal, Some(eff)) = (row.kind, self.compliant[row.contact]) {
-                    // depth below the ground and its rate: the pad's compression
-                    lambda[r] = S::normal_force(
-                        self.effects[eff].as_ref(),
-                        self.effect_params(&p, eff),
-                        -phi,
-                        -gqd,
-                    );
-                    for j in 0..nq {
-                        compliant_force[j] += g[r * nq + j] * lambda[r];
-                    }
-                    continue;
-                }
-                let stab = match row.kind {
-                    RowKind::Normal => {
-                        gqd * (2.0 * cs.baumgarte_alpha)
-                            + phi * (cs.baumgarte_beta * cs.baumgarte_beta)
-                    }
-                    RowKind::Tangential => gqd * cs.baumgarte_gamma,
-                };
-                b[r] = -dot(e, gdot_qd_vec) - stab;
-                b_baum[r] = -stab.value();
-                rigid.push(r);
-            }
-            if rigid.len() < nc {
-                cholesky_solve(&m, nq, &mut compliant_force);
-                for (a, f) in qdd.iter_mut().zip(&compliant_force) {
+            let mut rows = self.contact_rows(set, &k, qd, &p, (ground_h, n), lambda);
+            if rows.rigid.len() < nc {
+                cholesky_solve(&m, nq, &mut rows.compliant_force);
+                for (a, f) in qdd.iter_mut().zip(&rows.compliant_force) {
                     *a += *f;
                 }
             }
-            let nr = rigid.len();
-            let mut b_baum_rigid = vec![0.0; nr];
-            if nr > 0 {
-                let g_rigid: Vec<S> = rigid
-                    .iter()
-                    .flat_map(|&r| g[r * nq..(r + 1) * nq].iter().copied())
-                    .collect();
-                let (y, amat, amat_f64) = schur_complement(&m, nq, &g_rigid, nr, &set.name)?;
-                let mut lam_rigid: Vec<S> = rigid
-                    .iter()
-                    .enumerate()
-                    .map(|(i, &r)| {
-                        let gq: S = (0..nq).map(|l| g_rigid[i * nq + l] * qdd[l]).sum();
-                        b[r] - gq
-                    })
-                    .collect();
-                cholesky_solve(&amat, nr, &mut lam_rigid);
-                for i in 0..nr {
-                    for l in 0..nq {
-                        qdd[l] += y[i * nq + l] * lam_rigid[i];
-                    }
-                    lambda[rigid[i]] = lam_rigid[i];
-                }
-                if report.is_some() {
-                    let mut af = amat_f64;
-                    b_baum_rigid = rigid.iter().map(|&r| b_baum[r]).collect();
-                    if cholesky(&mut af, nr, 1e-10).is_ok() {
-                        cholesky_solve(&af, nr, &mut b_baum_rigid);
-                    }
-                }
-            }
+            let b_baum_rigid =
+                solve_rigid_rows(&m, &rows, &set.name, &mut qdd, lambda, report.is_some())?;
             if let Some(rep) = report.as_deref_mut() {
-                let mut baum = vec![0.0; nc];
-                for (i, &r) in rigid.iter().enumerate() {
-                    baum[r] = b_baum_rigid[i];
-                }
-                // a compliant row's depth is its pad's compression, not a constraint error
-                let rigid_or_zero = |r: usize, v: f64| {
-                    if self.is_compliant_row(&set.rows[r]) {
-                        0.0
-                    } else {
-                        v
-                    }
-                };
-                rep.points = rep_rows.iter().map(|r| r.0).collect();
-                rep.position_error = rep_rows
-                    .iter()
-                    .enumerate()
-                    .map(|(r, x)| rigid_or_zero(r, x.1))
-                    .collect();
-                rep.velocity_error = rep_rows
-                    .iter()
-                    .enumerate()
-                    .map(|(r, x)| rigid_or_zero(r, x.2))
-                    .collect();
-                rep.lambda = lambda.iter().map(|v| v.value()).collect();
-                rep.baumgarte_force = baum;
+                self.fill_contact_report(rep, set, &rows, &b_baum_rigid, lambda);
             }
         } else if let Some(rep) = report.as_deref_mut() {
             *rep = ContactReport::default();
@@ -316,6 +206,126 @@ impl GaitModel {
             }
         }
         Ok(())
+    }
+
+    /// The rows of `set` at kinematics `k` and velocities `qd`, on the ground `(h, n)`
+    /// (height, unit normal): each row of G, the right-hand side of the rigid rows, and
+    /// the compliant rows' forces (written to `lambda`) as generalised forces.
+    fn contact_rows<S: ModelScalar>(
+        &self,
+        set: &ConstraintSet,
+        k: &Kinematics<S>,
+        qd: &[S],
+        p: &[S],
+        (ground_h, n): (S, V2<S>),
+        lambda: &mut [S],
+    ) -> ContactRows<S> {
+        let nq = self.nq();
+        let nc = set.rows.len();
+        let t = [n[1], -n[0]];
+        let cs = &self.contact_settings;
+        let mut g = vec![S::c(0.0); nc * nq];
+        let mut b = vec![S::c(0.0); nc];
+        let mut b_baum = vec![0.0; nc];
+        let mut jp = vec![S::c(0.0); 2 * nq];
+        let mut rep_rows = Vec::new();
+        // geometry once per contact (a rolling contact has two rows)
+        let mut geo: Vec<(usize, V2<S>, V2<S>)> = Vec::with_capacity(nc);
+        // compliant normal rows: an explicit force, not a constraint
+        let mut compliant_force = vec![S::c(0.0); nq];
+        let mut rigid = Vec::with_capacity(nc);
+        for (r, row) in set.rows.iter().enumerate() {
+            let contact = &self.contacts[row.contact];
+            let (pt, bias) = match geo.iter().find(|g| g.0 == row.contact) {
+                Some(&(_, pt, bias)) => (pt, bias),
+                None => {
+                    let (pt, d, d1) = self.contact_geometry(k, row.contact, n, p);
+                    let (_, acc) = self.tree.point_motion(k, contact.body, pt);
+                    let w = k.omega[contact.body];
+                    let bias = add(acc, scale(add(perp(d1), d), w * w));
+                    geo.push((row.contact, pt, bias));
+                    (pt, bias)
+                }
+            };
+            let gdot_qd_vec = bias;
+            self.tree.point_jacobian(k, contact.body, pt, &mut jp);
+            let e = if row.kind == RowKind::Normal { n } else { t };
+            for j in 0..nq {
+                g[r * nq + j] = e[0] * jp[j] + e[1] * jp[nq + j];
+            }
+            let gqd: S = (0..nq).map(|j| g[r * nq + j] * qd[j]).sum();
+            let phi = dot(n, pt) - ground_h;
+            rep_rows.push(([pt[0].value(), pt[1].value()], phi.value(), gqd.value()));
+            if let (RowKind::Normal, Some(eff)) = (row.kind, self.compliant[row.contact]) {
+                // depth below the ground and its rate: the pad's compression
+                lambda[r] = S::normal_force(
+                    self.effects[eff].as_ref(),
+                    self.effect_params(p, eff),
+                    -phi,
+                    -gqd,
+                );
+                for j in 0..nq {
+                    compliant_force[j] += g[r * nq + j] * lambda[r];
+                }
+                continue;
+            }
+            let stab = match row.kind {
+                RowKind::Normal => {
+                    gqd * (2.0 * cs.baumgarte_alpha) + phi * (cs.baumgarte_beta * cs.baumgarte_beta)
+                }
+                RowKind::Tangential => gqd * cs.baumgarte_gamma,
+            };
+            b[r] = -dot(e, gdot_qd_vec) - stab;
+            b_baum[r] = -stab.value();
+            rigid.push(r);
+        }
+        ContactRows {
+            nq,
+            g,
+            b,
+            b_baum,
+            rep_rows,
+            compliant_force,
+            rigid,
+        }
+    }
+
+    /// Fill `rep` with the rows' points, constraint errors (zero for a compliant row),
+    /// forces `lambda` and the rigid rows' Baumgarte forces `b_baum_rigid`.
+    fn fill_contact_report<S: ModelScalar>(
+        &self,
+        rep: &mut ContactReport,
+        set: &ConstraintSet,
+        rows: &ContactRows<S>,
+        b_baum_rigid: &[f64],
+        lambda: &[S],
+    ) {
+        let rep_rows = &rows.rep_rows;
+        let mut baum = vec![0.0; set.rows.len()];
+        for (i, &r) in rows.rigid.iter().enumerate() {
+            baum[r] = b_baum_rigid[i];
+        }
+        // a compliant row's depth is its pad's compression, not a constraint error
+        let rigid_or_zero = |r: usize, v: f64| {
+            if self.is_compliant_row(&set.rows[r]) {
+                0.0
+            } else {
+                v
+            }
+        };
+        rep.points = rep_rows.iter().map(|r| r.0).collect();
+        rep.position_error = rep_rows
+            .iter()
+            .enumerate()
+            .map(|(r, x)| rigid_or_zero(r, x.1))
+            .collect();
+        rep.velocity_error = rep_rows
+            .iter()
+            .enumerate()
+            .map(|(r, x)| rigid_or_zero(r, x.2))
+            .collect();
+        rep.lambda = lambda.iter().map(|v| v.value()).collect();
+        rep.baumgarte_force = baum;
     }
 
     /// Plastic impact map: post-impact velocities and impulses (N·s, one per row) for
@@ -399,6 +409,70 @@ impl GaitModel {
         let k = self.tree.kinematics(q, &vec![0.0; self.nq()]);
         self.tree.point(&k, body, local)
     }
+}
+
+/// The rows of a constraint set at one state, before the rigid ones are solved.
+struct ContactRows<S> {
+    /// Number of coordinates.
+    nq: usize,
+    /// G (rows × nq, row-major): each row's direction times the contact point's Jacobian.
+    g: Vec<S>,
+    /// The rigid rows' right-hand side b, stabilisation included.
+    b: Vec<S>,
+    /// The Baumgarte stabilisation's part of b.
+    b_baum: Vec<f64>,
+    /// Per row, for the report: the contact point (m), the gap φ (m) and G q̇ (m/s).
+    rep_rows: Vec<([f64; 2], f64, f64)>,
+    /// The compliant rows' forces as generalised forces.
+    compliant_force: Vec<S>,
+    /// The rigid rows' indices.
+    rigid: Vec<usize>,
+}
+
+/// Solve the rigid rows for their forces by the Schur complement of `m` (the mass
+/// matrix's Cholesky factor): add their accelerations to `qdd` and write their forces to
+/// `lambda`. With `want_baum`, returns each rigid row's Baumgarte force (else zeros).
+fn solve_rigid_rows<S: Scalar>(
+    m: &[S],
+    rows: &ContactRows<S>,
+    set_name: &str,
+    qdd: &mut [S],
+    lambda: &mut [S],
+    want_baum: bool,
+) -> Result<Vec<f64>, DynamicsError> {
+    let (nq, rigid, b, g) = (rows.nq, &rows.rigid, &rows.b, &rows.g);
+    let nr = rigid.len();
+    let mut b_baum_rigid = vec![0.0; nr];
+    if nr > 0 {
+        let g_rigid: Vec<S> = rigid
+            .iter()
+            .flat_map(|&r| g[r * nq..(r + 1) * nq].iter().copied())
+            .collect();
+        let (y, amat, amat_f64) = schur_complement(m, nq, &g_rigid, nr, set_name)?;
+        let mut lam_rigid: Vec<S> = rigid
+            .iter()
+            .enumerate()
+            .map(|(i, &r)| {
+                let gq: S = (0..nq).map(|l| g_rigid[i * nq + l] * qdd[l]).sum();
+                b[r] - gq
+            })
+            .collect();
+        cholesky_solve(&amat, nr, &mut lam_rigid);
+        for i in 0..nr {
+            for l in 0..nq {
+                qdd[l] += y[i * nq + l] * lam_rigid[i];
+            }
+            lambda[rigid[i]] = lam_rigid[i];
+        }
+        if want_baum {
+            let mut af = amat_f64;
+            b_baum_rigid = rigid.iter().map(|&r| rows.b_baum[r]).collect();
+            if cholesky(&mut af, nr, 1e-10).is_ok() {
+                cholesky_solve(&af, nr, &mut b_baum_rigid);
+            }
+        }
+    }
+    Ok(b_baum_rigid)
 }
 
 /// With the Cholesky factor of `M` and the constraint rows `G` (nc × nq, row-major):

@@ -97,11 +97,31 @@ impl BarChart {
 
     /// The chart as a standalone SVG document (`<svg xmlns=…>…</svg>`, newline-terminated).
     pub fn to_svg(&self) -> String {
-        let n_cat = self.categories.len();
-        let n_ser = self.series.len().max(1);
-        let h = self.height.max(160.0);
+        let l = self.layout();
+        let sy = |y: f64| l.sy(y);
+        let mut out = String::new();
+        svg_header(&mut out, &self.title, l.w, l.h, None, l.left + l.pw / 2.0);
 
-        // y axis
+        // grid, frame, y ticks and label
+        y_grid(&mut out, &l.y_axis, l.left, l.pw, sy);
+        y_ticks(&mut out, &l.y_axis, l.left, sy);
+        y_label(&mut out, &self.y_label, l.top, l.ph);
+
+        self.draw_reference(&mut out, &l);
+        self.draw_bars(&mut out, &l);
+        frame(&mut out, l.left, l.top, l.pw, l.ph);
+        self.draw_legend(&mut out, &l);
+        if self.categories.is_empty() {
+            no_data(&mut out, l.left, l.top, l.pw, l.ph);
+        }
+        out.push_str("</svg>\n");
+        out
+    }
+
+    /// The y axis of a chart `h` px high: the given range, or from zero (or the lowest
+    /// bar) to the highest bar or reference with a 4 % margin.
+    fn y_axis(&self, h: f64) -> Axis {
+        let n_cat = self.categories.len();
         let mut yr = (0.0f64, f64::NEG_INFINITY);
         for s in 0..self.series.len() {
             for c in 0..n_cat {
@@ -122,7 +142,17 @@ impl BarChart {
                 (if a < 0.0 { a - m } else { a }, b + m)
             }
         };
-        let y_axis = Axis::new(ya, yb, nice_step((yb - ya) / (y_target - 1) as f64));
+        Axis::new(ya, yb, nice_step((yb - ya) / (y_target - 1) as f64))
+    }
+
+    /// The chart's layout: each category gets a slot wide enough for its label lines and
+    /// for the labels of its bars side by side; the legend rows below the category
+    /// labels wrap at the plot width.
+    fn layout(&self) -> BarLayout<'_> {
+        let n_cat = self.categories.len();
+        let n_ser = self.series.len().max(1);
+        let h = self.height.max(160.0);
+        let y_axis = self.y_axis(h);
         let left = left_margin(&y_axis, &self.y_label);
         let ref_w = self
             .reference
@@ -130,8 +160,6 @@ impl BarChart {
             .map_or(0.0, |r| text_width(&r.1, SPAN_SIZE) + 8.0);
         let right = ref_w.max(24.0);
 
-        // x layout: each category gets a slot wide enough for its label lines and for
-        // the labels of its bars side by side.
         let cat_lines: Vec<Vec<&str>> = self
             .categories
             .iter()
@@ -155,7 +183,6 @@ impl BarChart {
         let slot = pw / n_cat.max(1) as f64;
         let bar_w = slot * 0.8 / n_ser as f64;
 
-        // legend rows below the category labels, wrapping at the plot width
         let names = self.series.iter().map(|s| s.name.as_str());
         let (legend, legend_rows) = legend_layout(names, 14.0, pw);
 
@@ -165,25 +192,31 @@ impl BarChart {
         let legend_band = legend_band(legend_rows);
         let bottom = 8.0 + cat_band + legend_band + 8.0;
         let ph = (h - top - bottom).max(40.0);
-        let sy = |y: f64| {
-            top + ph - (y.clamp(y_axis.lo, y_axis.hi) - y_axis.lo) / (y_axis.hi - y_axis.lo) * ph
-        };
+        BarLayout {
+            w,
+            h,
+            left,
+            pw,
+            top,
+            ph,
+            y_axis,
+            cat_lines,
+            cat_band,
+            slot,
+            bar_w,
+            legend,
+        }
+    }
 
-        let mut out = String::new();
-        svg_header(&mut out, &self.title, w, h, None, left + pw / 2.0);
-
-        // grid, frame, y ticks and label
-        y_grid(&mut out, &y_axis, left, pw, sy);
-        y_ticks(&mut out, &y_axis, left, sy);
-        y_label(&mut out, &self.y_label, top, ph);
-
-        // the reference line behind the bars, labelled right of the frame
+    /// The reference line behind the bars, labelled right of the frame.
+    fn draw_reference(&self, out: &mut String, l: &BarLayout<'_>) {
+        let (left, pw) = (l.left, l.pw);
         if let Some((r, name)) = self
             .reference
             .as_ref()
-            .filter(|r| r.0.is_finite() && r.0 >= y_axis.lo && r.0 <= y_axis.hi)
+            .filter(|r| r.0.is_finite() && r.0 >= l.y_axis.lo && r.0 <= l.y_axis.hi)
         {
-            let y = sy(*r);
+            let y = l.sy(*r);
             writeln!(
                 out,
                 r##"<line x1="{}" y1="{y}" x2="{}" y2="{y}" stroke="#333333" stroke-width="1" stroke-dasharray="5 3"/>"##,
@@ -203,17 +236,20 @@ impl BarChart {
                 .ok();
             }
         }
+    }
 
-        // bars and their labels
-        let base = sy(0.0);
-        for (c, lines) in cat_lines.iter().enumerate() {
+    /// The bars and their labels, and the category labels below the frame.
+    fn draw_bars(&self, out: &mut String, l: &BarLayout<'_>) {
+        let (left, slot, bar_w) = (l.left, l.slot, l.bar_w);
+        let base = l.sy(0.0);
+        for (c, lines) in l.cat_lines.iter().enumerate() {
             let x0 = left + c as f64 * slot + 0.1 * slot;
             for (s, series) in self.series.iter().enumerate() {
                 let x = x0 + s as f64 * bar_w;
                 let label = self.label(s, c);
                 let label_y = match self.value(s, c) {
                     Some(v) => {
-                        let (y0, y1) = (sy(v).min(base), sy(v).max(base));
+                        let (y0, y1) = (l.sy(v).min(base), l.sy(v).max(base));
                         writeln!(
                             out,
                             r#"<rect x="{}" y="{}" width="{}" height="{}" fill="{}"><title>{}</title></rect>"#,
@@ -245,18 +281,19 @@ impl BarChart {
                     out,
                     r##"<text x="{}" y="{}" font-size="{TICK_SIZE}" text-anchor="middle" fill="#333333">{}</text>"##,
                     px(left + (c as f64 + 0.5) * slot),
-                    px(top + ph + 6.0 + (k as f64 + 1.0) * (TICK_SIZE + 3.0) - 3.0),
+                    px(l.top + l.ph + 6.0 + (k as f64 + 1.0) * (TICK_SIZE + 3.0) - 3.0),
                     escape_xml(line)
                 )
                 .ok();
             }
         }
-        frame(&mut out, left, top, pw, ph);
+    }
 
-        // legend
-        let legend_top = top + ph + 8.0 + cat_band + 4.0;
-        for it in &legend {
-            let x = left + it.x;
+    /// The legend below the category labels: a swatch and the series' name.
+    fn draw_legend(&self, out: &mut String, l: &BarLayout<'_>) {
+        let legend_top = l.top + l.ph + 8.0 + l.cat_band + 4.0;
+        for it in &l.legend {
+            let x = l.left + it.x;
             let y = legend_top + it.row as f64 * LEGEND_ROW + LEGEND_ROW / 2.0;
             writeln!(
                 out,
@@ -275,10 +312,36 @@ impl BarChart {
             )
             .ok();
         }
-        if n_cat == 0 {
-            no_data(&mut out, left, top, pw, ph);
-        }
-        out.push_str("</svg>\n");
-        out
+    }
+}
+
+/// A bar chart's layout (px): its size, the plot area and y axis, the category slots
+/// and the legend.
+struct BarLayout<'a> {
+    /// Width and height of the figure.
+    w: f64,
+    h: f64,
+    /// The plot area: left edge, width, top edge, height.
+    left: f64,
+    pw: f64,
+    top: f64,
+    ph: f64,
+    y_axis: Axis,
+    /// Each category's label lines.
+    cat_lines: Vec<Vec<&'a str>>,
+    /// Height of the category labels' band.
+    cat_band: f64,
+    /// Width of a category's slot and of one bar.
+    slot: f64,
+    bar_w: f64,
+    legend: Vec<LegendItem>,
+}
+
+impl BarLayout<'_> {
+    /// The px y of value y, clamped to the axis.
+    fn sy(&self, y: f64) -> f64 {
+        let y_axis = &self.y_axis;
+        self.top + self.ph
+            - (y.clamp(y_axis.lo, y_axis.hi) - y_axis.lo) / (y_axis.hi - y_axis.lo) * self.ph
     }
 }

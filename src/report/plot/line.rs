@@ -72,13 +72,91 @@ impl LinePlot {
 
     /// Write the SVG into `out`; `at` places it as a nested `<svg>` inside another.
     pub(super) fn render(&self, out: &mut String, at: Option<(f64, f64)>) {
+        let l = self.layout();
+        svg_header(out, &self.title, l.w, l.h, at, l.left + l.pw / 2.0);
+        self.draw_spans(out, &l);
+        self.draw_axes(out, &l);
+        self.draw_data(out, &l);
+        self.draw_legend(out, &l);
+        if let Some(note) = &self.note {
+            let (cx, cy) = (l.left + l.pw / 2.0, l.top + l.ph / 2.0);
+            let size = (l.pw / (text_width(note, 1.0) + 1.0)).clamp(10.0, 30.0);
+            writeln!(
+                out,
+                r##"<text class="plot-note" x="{x}" y="{y}" font-size="{}" font-weight="bold" text-anchor="middle" fill="#c62828" fill-opacity="0.3" transform="rotate(-12 {x} {y})">{}</text>"##,
+                px(size),
+                escape_xml(note),
+                x = px(cx),
+                y = px(cy)
+            )
+            .ok();
+        }
+        if self.series.iter().all(|s| Self::points(s).next().is_none()) {
+            no_data(out, l.left, l.top, l.pw, l.ph);
+        }
+        out.push_str("</svg>\n");
+    }
+
+    /// The figure's layout: the axes, the margins, the span labels and the legend.
+    fn layout(&self) -> Layout {
         let (w, h) = (self.width.max(160.0), self.height.max(120.0));
         let (xe, ye) = self.extents();
+        let y_axis = self.y_axis(h, ye);
+        let left = left_margin(&y_axis, &self.y_label);
+        let right = 24.0;
+        let pw = (w - left - right).max(40.0);
+        let x_axis = self.x_axis(xe, pw);
 
-        // y axis: at most one tick per 35 px of the estimated plot height (the nice step
-        // rounds up, so the ticks end up 35–90 px apart).
+        // Legend rows below the x-axis label, wrapping at the plot width.
+        // bands are listed after the series, as legend items `series.len() + band`
+        let names = self
+            .series
+            .iter()
+            .map(|s| s.name.as_str())
+            .chain(self.bands.iter().map(|b| b.name.as_str()));
+        let (legend, legend_rows) = legend_layout(names, LEGEND_SAMPLE, pw);
+
+        let span_labels = self.span_labels(&x_axis, left, pw);
+        let span_rows = span_labels.iter().map(|l| l.row + 1).max().unwrap_or(0);
+
+        let title_band = title_band(&self.title);
+        let top_axis_band = if self.top_axis.is_some() {
+            LABEL_SIZE + 6.0 + TICK_SIZE + 6.0
+        } else {
+            0.0
+        };
+        let top = title_band + span_rows as f64 * SPAN_ROW + top_axis_band + 6.0;
+        let x_label_band = if self.x_label.is_empty() {
+            0.0
+        } else {
+            LABEL_SIZE + 8.0
+        };
+        let legend_band = legend_band(legend_rows);
+        let bottom = 6.0 + TICK_SIZE + 6.0 + x_label_band + legend_band + 6.0;
+        let ph = (h - top - bottom).max(40.0);
+        Layout {
+            w,
+            h,
+            left,
+            pw,
+            top,
+            ph,
+            x_axis,
+            y_axis,
+            title_band,
+            span_rows,
+            span_labels,
+            legend,
+            x_label_band,
+        }
+    }
+
+    /// The y axis of a figure `h` px high over the data's y extent `ye`: at most one tick
+    /// per 35 px of the estimated plot height (the nice step rounds up, so the ticks end
+    /// up 35–90 px apart).
+    fn y_axis(&self, h: f64, ye: (f64, f64)) -> Axis {
         let y_target = (((h - 110.0) / 35.0).floor() as usize).clamp(3, 10);
-        let y_axis = match self.y_range {
+        match self.y_range {
             Some((a, b)) => {
                 let (a, b) = widen(a, b);
                 Axis::new(a, b, nice_step((b - a) / (y_target - 1) as f64))
@@ -90,17 +168,17 @@ impl LinePlot {
                 let (a, b) = (a - 0.04 * (b - a), b + 0.04 * (b - a));
                 Axis::new(a, b, nice_step((b - a) / (y_target - 1) as f64))
             }
-        };
-        let left = left_margin(&y_axis, &self.y_label);
-        let right = 24.0;
-        let pw = (w - left - right).max(40.0);
+        }
+    }
 
-        // x axis: the most ticks whose labels keep a 12 px gap.
+    /// The x axis over the data's x extent `xe` on a plot `pw` px wide: the most ticks
+    /// whose labels keep a 12 px gap.
+    fn x_axis(&self, xe: (f64, f64), pw: f64) -> Axis {
         let (xa, xb) = widen(
             self.x_range.map_or(xe.0, |r| r.0),
             self.x_range.map_or(xe.1, |r| r.1),
         );
-        let x_axis = (2..=12)
+        (2..=12)
             .rev()
             .map(|n| Axis::new(xa, xb, nice_step((xb - xa) / (n - 1) as f64)))
             .find(|ax| {
@@ -111,20 +189,13 @@ impl LinePlot {
                     .sum();
                 widths <= pw
             })
-            .unwrap_or_else(|| Axis::new(xa, xb, xb - xa));
+            .unwrap_or_else(|| Axis::new(xa, xb, xb - xa))
+    }
+
+    /// Span labels: centred on their span, moved to a further row when they would
+    /// overlap a label already placed (the plot area starts at `left` and is `pw` px wide).
+    fn span_labels(&self, x_axis: &Axis, left: f64, pw: f64) -> Vec<SpanLabel> {
         let sx = |x: f64| left + (x - x_axis.lo) / (x_axis.hi - x_axis.lo) * pw;
-
-        // Legend rows below the x-axis label, wrapping at the plot width.
-        // bands are listed after the series, as legend items `series.len() + band`
-        let names = self
-            .series
-            .iter()
-            .map(|s| s.name.as_str())
-            .chain(self.bands.iter().map(|b| b.name.as_str()));
-        let (legend, legend_rows) = legend_layout(names, LEGEND_SAMPLE, pw);
-
-        // Span labels: centred on their span, moved to a further row when they would
-        // overlap a label already placed.
         let mut row_end = [f64::NEG_INFINITY; MAX_SPAN_ROWS];
         let mut span_labels = Vec::new();
         let mut order: Vec<usize> = (0..self.shaded.len())
@@ -157,29 +228,13 @@ impl LinePlot {
             row_end[row] = cx + tw / 2.0;
             span_labels.push(SpanLabel { span: i, cx, row });
         }
-        let span_rows = span_labels.iter().map(|l| l.row + 1).max().unwrap_or(0);
+        span_labels
+    }
 
-        let title_band = title_band(&self.title);
-        let top_axis_band = if self.top_axis.is_some() {
-            LABEL_SIZE + 6.0 + TICK_SIZE + 6.0
-        } else {
-            0.0
-        };
-        let top = title_band + span_rows as f64 * SPAN_ROW + top_axis_band + 6.0;
-        let x_label_band = if self.x_label.is_empty() {
-            0.0
-        } else {
-            LABEL_SIZE + 8.0
-        };
-        let legend_band = legend_band(legend_rows);
-        let bottom = 6.0 + TICK_SIZE + 6.0 + x_label_band + legend_band + 6.0;
-        let ph = (h - top - bottom).max(40.0);
-        let sy = |y: f64| top + ph - (y - y_axis.lo) / (y_axis.hi - y_axis.lo) * ph;
-
-        // Header.
-        svg_header(out, &self.title, w, h, at, left + pw / 2.0);
-
-        // Shaded spans, alternately tinted, with their edges.
+    /// Shaded spans, alternately tinted, with their edges and labels.
+    fn draw_spans(&self, out: &mut String, l: &Layout) {
+        let (x_axis, top, ph) = (&l.x_axis, l.top, l.ph);
+        let sx = |x: f64| l.sx(x);
         for (i, sp) in self.shaded.iter().enumerate() {
             let (a, b) = (sp.x0.max(x_axis.lo), sp.x1.min(x_axis.hi));
             if !(a.is_finite() && b.is_finite()) || b < a {
@@ -212,19 +267,24 @@ impl LinePlot {
                 }
             }
         }
-        for l in &span_labels {
+        for sl in &l.span_labels {
             writeln!(
                 out,
                 r##"<text x="{}" y="{}" font-size="{SPAN_SIZE}" text-anchor="middle" fill="#3d4a5c">{}</text>"##,
-                px(l.cx),
-                px(title_band + (l.row as f64 + 1.0) * SPAN_ROW - 3.0),
-                escape_xml(&self.shaded[l.span].label)
+                px(sl.cx),
+                px(l.title_band + (sl.row as f64 + 1.0) * SPAN_ROW - 3.0),
+                escape_xml(&self.shaded[sl.span].label)
             )
             .ok();
         }
+    }
 
-        // Grid, zero line, frame, ticks.
-        y_grid(out, &y_axis, left, pw, sy);
+    /// Grid, frame, ticks, axis labels and the top axis.
+    fn draw_axes(&self, out: &mut String, l: &Layout) {
+        let (x_axis, left, pw, top, ph) = (&l.x_axis, l.left, l.pw, l.top, l.ph);
+        let sx = |x: f64| l.sx(x);
+        let sy = |y: f64| l.sy(y);
+        y_grid(out, &l.y_axis, left, pw, sy);
         for &t in &x_axis.ticks {
             writeln!(
                 out,
@@ -236,12 +296,12 @@ impl LinePlot {
             .ok();
         }
         frame(out, left, top, pw, ph);
-        y_ticks(out, &y_axis, left, sy);
-        for (t, l) in x_axis.ticks.iter().zip(&x_axis.labels) {
+        y_ticks(out, &l.y_axis, left, sy);
+        for (t, lab) in x_axis.ticks.iter().zip(&x_axis.labels) {
             let x = sx(*t);
             writeln!(
                 out,
-                r##"<line x1="{x}" y1="{}" x2="{x}" y2="{}" stroke="#333333"/><text x="{x}" y="{}" font-size="{TICK_SIZE}" text-anchor="middle" fill="#333333">{l}</text>"##,
+                r##"<line x1="{x}" y1="{}" x2="{x}" y2="{}" stroke="#333333"/><text x="{x}" y="{}" font-size="{TICK_SIZE}" text-anchor="middle" fill="#333333">{lab}</text>"##,
                 px(top + ph),
                 px(top + ph + 4.0),
                 px(top + ph + 6.0 + TICK_SIZE),
@@ -268,12 +328,16 @@ impl LinePlot {
                 &sx,
                 (x_axis.lo, x_axis.hi),
                 top,
-                title_band + span_rows as f64 * SPAN_ROW,
+                l.title_band + l.span_rows as f64 * SPAN_ROW,
             );
         }
+    }
 
-        // Bands, under the curves.
-        let bx = (x_axis.lo, x_axis.hi, y_axis.lo, y_axis.hi);
+    /// Bands, under the curves, then the series.
+    fn draw_data(&self, out: &mut String, l: &Layout) {
+        let sx = |x: f64| l.sx(x);
+        let sy = |y: f64| l.sy(y);
+        let bx = (l.x_axis.lo, l.x_axis.hi, l.y_axis.lo, l.y_axis.hi);
         for (i, b) in self.bands.iter().enumerate() {
             let d = band_path(b, bx, &sx, &sy);
             if !d.is_empty() {
@@ -286,8 +350,6 @@ impl LinePlot {
                 .ok();
             }
         }
-
-        // Series.
         for (i, s) in self.series.iter().enumerate() {
             let colour = PALETTE[s.colour.unwrap_or(i) % PALETTE.len()];
             let d = match s.style {
@@ -311,11 +373,13 @@ impl LinePlot {
             }
             .ok();
         }
+    }
 
-        // Legend.
-        let legend_top = top + ph + 12.0 + TICK_SIZE + x_label_band + 4.0;
-        for it in &legend {
-            let x = left + it.x;
+    /// The legend below the x-axis label: a line, marker or band swatch and the name.
+    fn draw_legend(&self, out: &mut String, l: &Layout) {
+        let legend_top = l.top + l.ph + 12.0 + TICK_SIZE + l.x_label_band + 4.0;
+        for it in &l.legend {
+            let x = l.left + it.x;
             let y = legend_top + it.row as f64 * LEGEND_ROW + LEGEND_ROW / 2.0;
             if it.series >= self.series.len() {
                 let k = it.series - self.series.len();
@@ -361,23 +425,41 @@ impl LinePlot {
             )
             .ok();
         }
-        if let Some(note) = &self.note {
-            let (cx, cy) = (left + pw / 2.0, top + ph / 2.0);
-            let size = (pw / (text_width(note, 1.0) + 1.0)).clamp(10.0, 30.0);
-            writeln!(
-                out,
-                r##"<text class="plot-note" x="{x}" y="{y}" font-size="{}" font-weight="bold" text-anchor="middle" fill="#c62828" fill-opacity="0.3" transform="rotate(-12 {x} {y})">{}</text>"##,
-                px(size),
-                escape_xml(note),
-                x = px(cx),
-                y = px(cy)
-            )
-            .ok();
-        }
-        if self.series.iter().all(|s| Self::points(s).next().is_none()) {
-            no_data(out, left, top, pw, ph);
-        }
-        out.push_str("</svg>\n");
+    }
+}
+
+/// A line plot's layout (px): its size, the plot area and its axes, and the placed span
+/// labels and legend.
+struct Layout {
+    /// Width and height of the figure.
+    w: f64,
+    h: f64,
+    /// The plot area: left edge, width, top edge, height.
+    left: f64,
+    pw: f64,
+    top: f64,
+    ph: f64,
+    x_axis: Axis,
+    y_axis: Axis,
+    /// Height of the title band.
+    title_band: f64,
+    /// Rows of span labels below the title.
+    span_rows: usize,
+    span_labels: Vec<SpanLabel>,
+    legend: Vec<LegendItem>,
+    /// Height of the x-axis label's band.
+    x_label_band: f64,
+}
+
+impl Layout {
+    /// The px x of data x.
+    fn sx(&self, x: f64) -> f64 {
+        self.left + (x - self.x_axis.lo) / (self.x_axis.hi - self.x_axis.lo) * self.pw
+    }
+
+    /// The px y of data y.
+    fn sy(&self, y: f64) -> f64 {
+        self.top + self.ph - (y - self.y_axis.lo) / (self.y_axis.hi - self.y_axis.lo) * self.ph
     }
 }
 

@@ -2,17 +2,18 @@
 //! parameters are, how they are checked and parsed, and how they build the model's effects.
 
 use super::actuator_properties::{ActivationTimeConstants, MtgDampingScale, MtgStrengthScale};
-use super::geometry::FootGeometry;
 use super::instruments::{BodyMassError, ForcePlateGain};
 use super::kinds::{
     CopOffset, ForcePlateTimeOffset, GroundSlope, HeelPadCompliance, PassiveJointStiffness,
     TrunkMass,
 };
-use super::volumetric::{VolumetricContact, VolumetricStart};
-use super::DynEffect;
+use super::volumetric::VolumetricContact;
 use crate::model::geometry::Shape;
 use crate::model::volumetric::VolumetricLaw;
 use serde::{Deserialize, Serialize};
+
+mod build;
+mod cli;
 
 /// What an effect needs to know about the model it is built for.
 #[derive(Debug, Clone, Copy)]
@@ -183,8 +184,8 @@ pub enum EffectSpec {
         #[serde(default)]
         free: Vec<String>,
     },
-    /// [`FootGeometry`]: the shape of every primitive of the foot, starting from the foot
-    /// file's.
+    /// [`FootGeometry`](super::FootGeometry): the shape of every primitive of the foot,
+    /// starting from the foot file's.
     FootGeometry {
         /// Any of `centre` (x and y of every primitive), `size` (radii and semi-axes),
         /// `angle` (ellipses' orientation).
@@ -443,108 +444,6 @@ impl EffectSpec {
         e
     }
 
-    /// The command-line form of the effect, `NAME:key=value,…,free=a+b`, that
-    /// [`parse_cli`](Self::parse_cli) reads back as this entry: what a diagnosis tells
-    /// the user to add with one line. `None` for an entry with a value the command line
-    /// cannot carry (a list or an object).
-    pub fn cli_text(&self) -> Option<String> {
-        let v = serde_json::to_value(self).ok()?;
-        let obj = v.as_object()?;
-        let mut parts = Vec::new();
-        // the values first, what is freed last, as people write it
-        let free = obj.get("free").map(|f| ("free", f));
-        for (k, x) in obj
-            .iter()
-            .filter(|(k, _)| *k != "free")
-            .map(|(k, x)| (k.as_str(), x))
-            .chain(free)
-        {
-            let text = match (k, x) {
-                ("type", _) | (_, serde_json::Value::Null) => continue,
-                ("free", serde_json::Value::Array(names)) => names
-                    .iter()
-                    .map(|n| n.as_str().map(String::from))
-                    .collect::<Option<Vec<_>>>()?
-                    .join("+"),
-                (_, serde_json::Value::Number(n)) => n.as_f64()?.to_string(),
-                (_, serde_json::Value::String(t)) => t.clone(),
-                _ => return None,
-            };
-            parts.push(format!("{k}={text}"));
-        }
-        Some(format!("{}:{}", self.kind(), parts.join(",")))
-    }
-
-    /// Parse a command-line effect `NAME[:key=value,…]`, e.g. `ground_slope`,
-    /// `passive_joint_stiffness:joint=knee`, `ground_slope:angle=0.03,free=`. Without a
-    /// `free` key every parameter is freed ([`free_all`](Self::free_all)); `free=a+b`
-    /// frees the listed ones, `free=` none.
-    pub fn parse_cli(text: &str) -> Result<Self, String> {
-        let (name, rest) = text.split_once(':').unwrap_or((text, ""));
-        if !EFFECT_KINDS.contains(&name) {
-            return Err(format!(
-                "'{name}' is not a known effect; use one of {}",
-                EFFECT_KINDS.join(", ")
-            ));
-        }
-        let mut obj = serde_json::Map::new();
-        obj.insert("type".into(), name.into());
-        let mut free_given = false;
-        for kv in rest.split(',').filter(|s| !s.is_empty()) {
-            let (k, v) = kv
-                .split_once('=')
-                .ok_or_else(|| format!("'{kv}' in '{text}' is not key=value"))?;
-            if obj.contains_key(k) {
-                return Err(format!(
-                    "'{k}' is given twice in '{text}'; give each parameter once"
-                ));
-            }
-            let value = if k == "free" {
-                free_given = true;
-                serde_json::Value::from(v.split('+').filter(|s| !s.is_empty()).collect::<Vec<_>>())
-            } else if let Ok(x) = v.parse::<f64>() {
-                serde_json::Value::from(x)
-            } else {
-                serde_json::Value::from(v)
-            };
-            obj.insert(k.into(), value);
-        }
-        let mut spec: EffectSpec = serde_json::from_value(serde_json::Value::Object(obj.clone()))
-            .map_err(|e| match not_a_number(&obj, &e.to_string()) {
-            Some(k) => format!(
-                "effect '{text}': '{k}' must be a number (for example {k}=0.02), got '{}'",
-                obj[k].as_str().unwrap_or_default()
-            ),
-            None => format!("effect '{text}': {e}"),
-        })?;
-        if !free_given {
-            spec.free_all();
-        }
-        spec.check()
-            .map_err(|(f, r)| format!("effect '{text}': {f}: {r}"))?;
-        Ok(spec)
-    }
-
-    /// Parse several `--effect` texts, refusing two that add the same effect (two sides
-    /// of a held measurement effect compose, as in a model file).
-    pub fn parse_cli_all(texts: &[String]) -> Result<Vec<Self>, String> {
-        let specs = texts
-            .iter()
-            .map(|t| Self::parse_cli(t))
-            .collect::<Result<Vec<_>, _>>()?;
-        for (j, b) in specs.iter().enumerate() {
-            if let Some(i) = (0..j).find(|&i| specs[i].overlaps(b) && !specs[i].composes_with(b)) {
-                return Err(format!(
-                    "'{}' and '{}' both add the effect '{}'; give it once",
-                    texts[i],
-                    texts[j],
-                    b.label()
-                ));
-            }
-        }
-        Ok(specs)
-    }
-
     /// Check the entry without a model; the error names the offending field and what is
     /// wrong.
     pub fn check(&self) -> Result<(), (&'static str, String)> {
@@ -603,204 +502,6 @@ impl EffectSpec {
         Ok(())
     }
 
-    /// Build the effect instances for a model.
-    pub fn build(&self, ctx: &BuildContext<'_>) -> Result<Vec<Box<dyn DynEffect>>, String> {
-        self.check()
-            .map_err(|(field, reason)| format!("{field}: {reason}"))?;
-        Ok(match self {
-            EffectSpec::PassiveJointStiffness {
-                joint,
-                side,
-                stiffness,
-                rest_angle,
-                ..
-            } => {
-                let (sides, name): (&[&str], String) = match side.as_str() {
-                    "right" => (&["r"], format!("{joint}_r")),
-                    "left" => (&["l"], format!("{joint}_l")),
-                    _ => (&["r", "l"], joint.clone()),
-                };
-                let mut coords = Vec::new();
-                for s in sides {
-                    let c = format!("{joint}_{s}");
-                    coords.push(
-                        ctx.coordinates
-                            .iter()
-                            .position(|x| *x == c)
-                            .ok_or_else(|| format!("joint: the model has no coordinate '{c}'"))?,
-                    );
-                }
-                vec![Box::new(PassiveJointStiffness::new(
-                    coords,
-                    &name,
-                    *stiffness,
-                    *rest_angle,
-                    self.is_free("stiffness"),
-                    self.is_free("rest_angle"),
-                ))]
-            }
-            EffectSpec::GroundSlope { angle, .. } => {
-                vec![Box::new(GroundSlope::new(*angle, self.is_free("angle")))]
-            }
-            EffectSpec::TrunkMass {
-                added_mass,
-                com_offset,
-                ..
-            } => {
-                let body = ctx
-                    .bodies
-                    .iter()
-                    .position(|b| b == "hat")
-                    .ok_or("the model has no trunk body 'hat'")?;
-                vec![Box::new(TrunkMass::new(
-                    body,
-                    *added_mass,
-                    *com_offset,
-                    self.is_free("added_mass"),
-                    self.is_free("com_offset"),
-                ))]
-            }
-            EffectSpec::ForcePlateTimeOffset { side, offset, .. } => {
-                vec![Box::new(ForcePlateTimeOffset::on(
-                    side_index(side),
-                    *offset,
-                    self.is_free("offset"),
-                ))]
-            }
-            EffectSpec::CopOffset { side, offset, .. } => {
-                vec![Box::new(CopOffset::on(
-                    side_index(side),
-                    *offset,
-                    self.is_free("offset"),
-                ))]
-            }
-            EffectSpec::ForcePlateGain { side, error, .. } if side == "each" => [0, 1]
-                .map(|s| {
-                    Box::new(ForcePlateGain::on(Some(s), *error, self.is_free("error")))
-                        as Box<dyn DynEffect>
-                })
-                .into(),
-            EffectSpec::ForcePlateGain { side, error, .. } => {
-                vec![Box::new(ForcePlateGain::on(
-                    side_index(side),
-                    *error,
-                    self.is_free("error"),
-                ))]
-            }
-            EffectSpec::BodyMassError { relative, .. } => {
-                vec![Box::new(BodyMassError::new(
-                    *relative,
-                    self.is_free("relative"),
-                ))]
-            }
-            EffectSpec::MtgDamping { change, .. } => {
-                vec![Box::new(MtgDampingScale::new(
-                    *change,
-                    self.is_free("change"),
-                ))]
-            }
-            EffectSpec::MtgStrength { change, .. } => {
-                vec![Box::new(MtgStrengthScale::new(
-                    *change,
-                    self.is_free("change"),
-                ))]
-            }
-            EffectSpec::ActivationTimeConstants { change, .. } => {
-                vec![Box::new(ActivationTimeConstants::new(
-                    *change,
-                    self.is_free("change"),
-                ))]
-            }
-            EffectSpec::HeelPadCompliance {
-                primitive,
-                stiffness,
-                damping,
-                ..
-            } => {
-                if !ctx.primitives.contains(primitive) {
-                    return Err(format!("primitive: this foot has no primitive '{primitive}' (it has: {}); the pad goes under a heel circle", ctx.primitives.join(", ")));
-                }
-                vec![Box::new(HeelPadCompliance::new(
-                    primitive,
-                    *stiffness,
-                    *damping,
-                    self.is_free("stiffness"),
-                    self.is_free("damping"),
-                ))]
-            }
-            EffectSpec::VolumetricContact {
-                stiffness,
-                damping,
-                mu_dynamic,
-                ..
-            } => {
-                let starts: Vec<(String, VolumetricStart)> = ctx
-                    .primitives
-                    .iter()
-                    .zip(ctx.laws)
-                    .filter_map(|(name, law)| {
-                        let law = law.as_ref()?;
-                        Some((
-                            name.clone(),
-                            VolumetricStart {
-                                stiffness: stiffness.map_or(law.stiffness, |k| {
-                                    k * VolumetricContact::STIFFNESS_UNIT
-                                }),
-                                damping: damping.unwrap_or(law.damping),
-                                mu_dynamic: mu_dynamic.unwrap_or(law.mu_dynamic),
-                            },
-                        ))
-                    })
-                    .collect();
-                if starts.is_empty() {
-                    return Err(format!(
-                        "volumetric_contact: the foot {} has no volumetric primitive (its primitives {} are rigid), so there is no contact law to free; use a volumetric foot, e.g. --foot models/feet/volumetric_ellipse.json, or give a primitive \"contact\": {{\"type\": \"volumetric\", …}} in the foot file",
-                        ctx.foot,
-                        ctx.primitives.join(", ")
-                    ));
-                }
-                // a value outside the bounds from the foot file (the effect's own values
-                // are checked above)
-                for (name, s) in &starts {
-                    let k = s.stiffness / VolumetricContact::STIFFNESS_UNIT;
-                    for (field, v, (lo, hi)) in [
-                        ("stiffness", k, VolumetricContact::STIFFNESS_BOUNDS),
-                        ("damping", s.damping, VolumetricContact::DAMPING_BOUNDS),
-                        ("mu_dynamic", s.mu_dynamic, VolumetricContact::MU_BOUNDS),
-                    ] {
-                        if !(lo..=hi).contains(&v) {
-                            return Err(format!("volumetric_contact: primitive '{name}' of the foot {} has {field} {v} (in the effect's units), outside the bounds [{lo}, {hi}] an identification may use; give a start value with {field}=…", ctx.foot));
-                        }
-                    }
-                }
-                vec![Box::new(VolumetricContact::new(
-                    &starts,
-                    [
-                        self.is_free("stiffness"),
-                        self.is_free("damping"),
-                        self.is_free("mu_dynamic"),
-                    ],
-                ))]
-            }
-            EffectSpec::FootGeometry { .. } => {
-                let shapes: Vec<(String, Shape)> = ctx
-                    .primitives
-                    .iter()
-                    .cloned()
-                    .zip(ctx.shapes.iter().cloned())
-                    .collect();
-                vec![Box::new(FootGeometry::new(
-                    &shapes,
-                    [
-                        self.is_free("centre"),
-                        self.is_free("size"),
-                        self.is_free("angle"),
-                    ],
-                ))]
-            }
-        })
-    }
-
     /// Whether `other`, an instrument effect of this held one's kind (no free parameter)
     /// on another side, adds to it in one model: clock and CoP offsets add, gains
     /// multiply, and their parameters are named by side. So a correction held for both
@@ -846,22 +547,4 @@ impl EffectSpec {
             _ => self.kind() == other.kind(),
         }
     }
-}
-
-/// The key of an effect's text whose value is not a number where serde's error `message`
-/// says a number was expected (`invalid type: string "abc", expected f64`).
-fn not_a_number<'a>(
-    obj: &'a serde_json::Map<String, serde_json::Value>,
-    message: &str,
-) -> Option<&'a str> {
-    if !message.contains("expected f64") {
-        return None;
-    }
-    obj.iter()
-        .filter(|(k, _)| k.as_str() != "type")
-        .find(|(_, v)| {
-            v.as_str()
-                .is_some_and(|v| message.contains(&format!("string \"{v}\"")))
-        })
-        .map(|(k, _)| k.as_str())
 }
