@@ -27,128 +27,18 @@
 //! fixed to another half cycle of the trial, it lowers that cost beyond its noise band
 //! ([`HeldOut`], [`stats::held_out_band`]).
 
+mod held_out;
+mod run_setup;
 pub mod stats;
+
+pub use held_out::{HeldOut, HeldOutReading, NOT_VALIDATABLE};
+pub use run_setup::TrackingRunSetup;
 
 use super::distributions::chi2_999;
 use crate::model::effects::EffectSpec;
 use crate::ocp::{Block, Transcription};
 use crate::sqp::linearised::{GaussNewtonModel, GaussNewtonStep};
 use serde::{Deserialize, Serialize};
-use std::path::PathBuf;
-
-/// How a tracking run was set up: enough to rebuild its problem (`setup.json`).
-#[derive(Debug, Clone, Serialize, Deserialize)]
-pub struct TrackingRunSetup {
-    /// Model file.
-    pub model: PathBuf,
-    /// Foot argument (`ellipse`, `double-circle` or a foot file).
-    pub foot: String,
-    /// Phase file.
-    pub phases: PathBuf,
-    /// Data file (`None`: the bundled trial).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub data: Option<PathBuf>,
-    /// Whether a trial without a belt speed is taken as overground as it is
-    /// (`--overground`; otherwise a treadmill trial without one is refused).
-    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
-    pub overground: bool,
-    /// OpenSim external loads going with an OpenSim `data` (`--forces`).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub forces: Option<PathBuf>,
-    /// Force-column prefix of each foot in `forces`, `r=PREFIX` / `l=PREFIX` (`--plate`;
-    /// empty: detected).
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub plates: Vec<String>,
-    /// Lab axes `FORWARD,UP` of a C3D `forces` file (`--lab-axes`; `None`: the default
-    /// `+x,+z`).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub lab_axes: Option<String>,
-    /// Treadmill belt speed (m/s) moving the trial overground (`--belt-speed`).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub belt_speed: Option<f64>,
-    /// Kinematics low-pass cutoff (Hz).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub kinematics_cutoff: Option<f64>,
-    /// CVODES tolerance of the states.
-    pub integrator_tol: f64,
-    /// CVODES tolerance of the forward sensitivities when it differs from the states'
-    /// (`None`: the same; a heel pad tightens only the states).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub sensitivity_tol: Option<f64>,
-    /// Whether the model has residual actuators (`--residual-actuators`).
-    #[serde(default)]
-    pub residual_actuators: bool,
-    /// Whether the pelvis position is tracked too (`--track-pelvis-position`).
-    #[serde(default)]
-    pub track_pelvis_position: bool,
-    /// Weight of the excitation² and activation² regularisation (`None`: Millard & Mombaur's
-    /// 1e-3).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub regularisation: Option<f64>,
-    /// Whether the node targets are one-sided at contact changes (`--one-sided-targets`).
-    #[serde(default)]
-    pub one_sided_targets: bool,
-    /// Whether every sample is compared with the model at its own instant instead of node
-    /// targets (`--sample-targets`).
-    #[serde(default)]
-    pub sample_targets: bool,
-    /// Track the first half cycle inside this span (s, `--window T0,T1`).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub window: Option<(f64, f64)>,
-    /// Track the n-th half cycle of the trial (1-based, `--stride N`).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub stride: Option<usize>,
-    /// Track the trial with its legs swapped (`--mirror`, [`GaitData::swap_sides`]):
-    /// the half cycles are then those from a right heel strike to the next left one,
-    /// and the model's right leg follows the subject's left.
-    ///
-    /// [`GaitData::swap_sides`]: crate::data::GaitData::swap_sides
-    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
-    pub mirror: bool,
-    /// Channels weighted by their noise (`--noise-weights`; `None`: Millard & Mombaur's weights).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub noise_weights: Option<crate::problems::tracking::ChannelNoise>,
-    /// Weight of the velocity targets relative to the angles (`None`: Millard & Mombaur's 0.1).
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub velocity_weight: Option<f64>,
-    /// Where the solve from the data starts (`--guess`).
-    #[serde(
-        default,
-        skip_serializing_if = "crate::problems::track::start::Guess::is_data"
-    )]
-    pub guess: crate::problems::track::start::Guess,
-    /// Check points holding the contact constraints between the nodes, as (continuous
-    /// phase, interval, τ): the run's problem has them, so a rebuild must too.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub check_points: Vec<(usize, usize, f64)>,
-    /// Effects added on top of the model file (`--effect`).
-    pub effects: Vec<EffectSpec>,
-    /// Every effect parameter of the model at the solution.
-    pub parameters: Vec<IdentifiedParameter>,
-}
-
-impl TrackingRunSetup {
-    /// Read a `setup.json` (paths as recorded; see `workflows::track::read_run_setup`
-    /// for a run folder's own inputs). Errors name the file and the field.
-    pub fn read(path: &std::path::Path) -> Result<Self, crate::runfolder::RunFileError> {
-        crate::runfolder::read_json(path)
-    }
-
-    /// How the run's node targets are read from the samples; one-sided targets win
-    /// should both flags be set (the CLI refuses both).
-    pub fn target_sides(&self) -> super::track::TargetSides {
-        use super::track::TargetSides;
-        if self.one_sided_targets {
-            TargetSides::OneSided {
-                cutoff_hz: self.kinematics_cutoff,
-            }
-        } else if self.sample_targets {
-            TargetSides::Samples
-        } else {
-            TargetSides::Interpolated
-        }
-    }
-}
 
 /// An effect parameter at a solution.
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -227,116 +117,6 @@ pub struct ScoreTest {
     /// its bound, not a reading`, `not confirmed on the held-out half cycle`,
     /// [`NOT_VALIDATABLE`], `found`, `significant, not validated`.
     pub verdict: String,
-}
-
-/// The verdict of a significant candidate that the held-out half cycle is too weakly
-/// informed about to confirm or refute ([`HeldOutReading::powered`]).
-pub const NOT_VALIDATABLE: &str = "not validatable on the held-out half cycle";
-
-/// A candidate fitted on the run's half cycle, applied with its parameters fixed to
-/// another half cycle of the trial and the other variables re-optimised there.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct HeldOut {
-    /// Which half cycle (`--stride`) was held out.
-    pub stride: usize,
-    /// Whether it is the other leg's half cycle, the legs swapped (`--mirror`).
-    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
-    pub mirrored: bool,
-    /// Its time span (s).
-    pub window: (f64, f64),
-    /// The parameter values fitted on the run's half cycle.
-    pub values: Vec<f64>,
-    /// The held-out cost of the plain model (its own tracking solution).
-    pub objective: f64,
-    /// Fall of the held-out cost with the candidate at `values` (cost units; negative:
-    /// it got worse), after a truncated re-fit of the other variables and less that of
-    /// the plain model.
-    pub change: f64,
-    /// `change` as a fraction of `objective`.
-    pub change_fraction: f64,
-    /// Upper edge of the noise band of `change` ([`stats::held_out_band`]): two standard
-    /// deviations above the mean change a candidate fitted on noise makes (which is
-    /// negative).
-    pub band: f64,
-    /// Whether `change` exceeds `band`.
-    pub beyond_noise: bool,
-    /// The held-out half cycle's own reading of the candidate along its fitted values,
-    /// from its changes at `θ` and `−θ`. `None` where `−θ` could not be applied.
-    #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub reading: Option<HeldOutReading>,
-}
-
-/// What a held-out half cycle itself says about a candidate fitted elsewhere at `θ`.
-/// Its cost along `θ` is a parabola `c(ρθ)`, `ρ` the fraction of `θ` it reads:
-/// `Δ(θ) = q (ρ − ½)` and `Δ(−θ) = −q (ρ + ½)` (falls of the cost), so `q = −(Δ(θ) +
-/// Δ(−θ))` is its curvature `θᵀH_hθ` and `ρ = (Δ(θ) − Δ(−θ)) / 2q`, with sd
-/// `√(2 φ s² / q)` (the noise model of [`stats::held_out_band`]). The candidate clears
-/// the band at that curvature exactly when `ρ > 2 sd`: the held-out half cycle reads it,
-/// in the same direction, beyond two sd. It can do so for a true effect (`ρ = 1`) only
-/// when `sd < ½`; otherwise that half cycle is too weakly informed about this candidate
-/// to confirm it or to refute it (`powered` false): a plate's gain fitted where that
-/// foot is in stance, held out where it only pushes off, is one such case.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
-pub struct HeldOutReading {
-    /// The held-out cost's curvature along the fitted values, `q = θᵀH_hθ` (cost units).
-    pub curvature: f64,
-    /// The fraction `ρ` of the fitted values the held-out half cycle reads (1: the same
-    /// values, 0: none of it, negative: the opposite way).
-    pub fraction: f64,
-    /// Its standard deviation, inflated by the candidate's `φ`.
-    pub sd: f64,
-    /// Whether a true effect of the fitted size would clear the band on average
-    /// (`sd < ½`).
-    pub powered: bool,
-}
-
-impl HeldOut {
-    /// This validation with the held-out half cycle's own reading attached.
-    pub fn with_reading(self, reading: HeldOutReading) -> Self {
-        Self {
-            reading: Some(reading),
-            ..self
-        }
-    }
-
-    /// Whether the held-out half cycle read the candidate too loosely to confirm or
-    /// refute it ([`HeldOutReading::powered`] false; `false` where it was not read).
-    pub fn too_weakly_informed(&self) -> bool {
-        self.reading.as_ref().is_some_and(|r| !r.powered)
-    }
-}
-
-impl HeldOutReading {
-    /// The reading at curvature `curvature`: the fraction `fraction` of the fitted values,
-    /// sd `sd`; powered when `sd < ½`.
-    pub fn new(curvature: f64, fraction: f64, sd: f64) -> Self {
-        Self {
-            curvature,
-            fraction,
-            sd,
-            powered: sd < 0.5,
-        }
-    }
-
-    /// As the tables and progress lines print it: `reads 0.62 ± 0.41 of it`.
-    pub fn text(&self) -> String {
-        format!("reads {:.2} ± {:.2} of it", self.fraction, self.sd)
-    }
-
-    /// From the held-out cost's falls at `θ` (`up`) and at `−θ` (`down`), its residual
-    /// mean square `s2` and the candidate's variance inflation `phi`; `None` when the
-    /// cost does not curve along `θ` there (`q ≤ 0`: that half cycle does not inform
-    /// the candidate at all).
-    pub fn from_changes(up: f64, down: f64, s2: f64, phi: f64) -> Option<Self> {
-        let q = -(up + down);
-        (q > 0.0 && q.is_finite()).then(|| {
-            Self::new(
-                q,
-                (up - down) / (2.0 * q),
-                (2.0 * phi.max(1.0) * s2 / q).sqrt(),
-            )
-        })
-    }
 }
 
 /// Mean error per Table 3 channel of the tracking solution in `w` against `data`.
@@ -797,35 +577,6 @@ fn probed_inverse_diagonal(
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// A held-out cost that is a parabola along the fitted values, `c(x) = a (x − x₀)²`
-    /// in units of `θ = 0.06`: its falls at `θ` and `−θ` give back its curvature `2aθ²`
-    /// and its own reading `x₀/θ` exactly; the candidate clears the band at that
-    /// curvature ([`stats::held_out_band`]) exactly when that reading lies beyond 2 sd,
-    /// and a true effect (`x₀ = θ`) clears it exactly when the reading's sd is below ½.
-    #[test]
-    fn a_held_out_parabola_reads_the_candidate_and_says_when_it_cannot_tell() {
-        let (theta, s2, phi) = (0.06, 5e-4, 3.5);
-        for a in [0.5, 1.6, 5.0, 20.0, 200.0] {
-            for x0 in [-0.06, -0.01, 0.0, 0.02, 0.05, 0.06, 0.09, 0.2] {
-                let c = |x: f64| a * (x - x0) * (x - x0);
-                let (up, down) = (c(0.0) - c(theta), c(0.0) - c(-theta));
-                let r = HeldOutReading::from_changes(up, down, s2, phi).unwrap();
-                let q = 2.0 * a * theta * theta;
-                assert!((r.curvature - q).abs() < 1e-12 * q, "a {a}");
-                assert!((r.fraction - x0 / theta).abs() < 1e-9, "a {a} x0 {x0}");
-                let sd = (2.0 * phi * s2 / q).sqrt();
-                assert!((r.sd - sd).abs() < 1e-12 * sd);
-                let band = stats::held_out_band(q, s2, phi);
-                assert_eq!(up > band, r.fraction > 2.0 * r.sd, "a {a} x0 {x0}");
-                let truth = q / 2.0; // the fall a true effect (x₀ = θ) makes
-                assert_eq!(truth > band, r.powered, "a {a}");
-            }
-        }
-        // a cost that does not curve along θ reads nothing
-        assert!(HeldOutReading::from_changes(0.01, -0.01, s2, phi).is_none());
-        assert!(HeldOutReading::from_changes(0.05, -0.02, s2, phi).is_none());
-    }
 
     /// A significant candidate that the held-out half cycle cannot tell about is neither
     /// found nor "not confirmed": it is not validatable there.

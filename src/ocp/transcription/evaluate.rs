@@ -2,8 +2,10 @@
 //! intervals in parallel, then transitions, user terms, check points and sample terms
 //! assembled in pattern order.
 
-use super::{Evaluation, TermKind, TermRef, Transcription, TranscriptionError};
+use super::sweep::{IntervalResult, SampleSums};
+use super::{Evaluation, IntervalRef, TermKind, TermRef, Transcription, TranscriptionError};
 use crate::integrate::{IntegrationStats, ShootingInterval};
+use crate::ocp::checks::CheckValues;
 use crate::ocp::problem::Block;
 use rayon::prelude::*;
 
@@ -13,6 +15,8 @@ impl<'o, 'a> Transcription<'o, 'a> {
     pub fn evaluate(&self, w: &[f64], derivs: bool) -> Result<Evaluation, TranscriptionError> {
         self.evaluate_inner(w, derivs, None).map(|(ev, _)| ev)
     }
+    /// [`evaluate`](Self::evaluate), and with the multipliers `lambda` each interval's
+    /// curvature block (in interval order).
     #[allow(clippy::type_complexity)]
     pub(super) fn evaluate_inner(
         &self,
@@ -36,9 +40,6 @@ impl<'o, 'a> Transcription<'o, 'a> {
                 )
             })
             .collect();
-        let mut blocks = Vec::with_capacity(results.len());
-        let mut sample_sums = Vec::new();
-        let mut check_values = Vec::new();
         let mut ev = Evaluation {
             f: 0.0,
             c: vec![0.0; self.m],
@@ -59,7 +60,29 @@ impl<'o, 'a> Transcription<'o, 'a> {
             },
             stats: IntegrationStats::default(),
         };
-        // continuity (Jacobian values in pattern order)
+        let out = self.add_continuity(&mut ev, w, derivs, results)?;
+        self.add_transitions(&mut ev, w, derivs)?;
+        self.add_terms(&mut ev, w, derivs)?;
+        add_check_values(&mut ev, derivs, out.check_values);
+        self.add_sample_sums(&mut ev, derivs, out.sample_sums);
+        if let Ok(mut t) = self.totals.lock() {
+            *t += ev.stats;
+        }
+        Ok((ev, out.blocks))
+    }
+
+    /// The continuity rows from the intervals' integrations `results` (Jacobian values in
+    /// pattern order); what the rest of the assembly needs of them.
+    fn add_continuity<'t>(
+        &'t self,
+        ev: &mut Evaluation,
+        w: &[f64],
+        derivs: bool,
+        results: Vec<Result<IntervalResult, TranscriptionError>>,
+    ) -> Result<IntervalOutputs<'t>, TranscriptionError> {
+        let mut blocks = Vec::with_capacity(results.len());
+        let mut sample_sums = Vec::new();
+        let mut check_values = Vec::new();
         for (iv, r) in self.intervals.iter().zip(results) {
             let (x1, s, st, hess, sums, checks) = r?;
             blocks.push(hess);
@@ -99,7 +122,20 @@ impl<'o, 'a> Transcription<'o, 'a> {
                 }
             }
         }
-        // transitions, in pattern order
+        Ok(IntervalOutputs {
+            blocks,
+            sample_sums,
+            check_values,
+        })
+    }
+
+    /// The transition rows, in pattern order.
+    fn add_transitions(
+        &self,
+        ev: &mut Evaluation,
+        w: &[f64],
+        derivs: bool,
+    ) -> Result<(), TranscriptionError> {
         for (j, tr) in self.ocp.transitions.iter().enumerate() {
             let next = &self.ocp.phases[j + 1];
             let nx1 = next.ode.nx();
@@ -143,7 +179,16 @@ impl<'o, 'a> Transcription<'o, 'a> {
                 }
             }
         }
-        // user constraints and costs, in term order
+        Ok(())
+    }
+
+    /// The user constraints and costs, in term order.
+    fn add_terms(
+        &self,
+        ev: &mut Evaluation,
+        w: &[f64],
+        derivs: bool,
+    ) -> Result<(), TranscriptionError> {
         for t in &self.terms {
             match t.kind {
                 TermKind::Transition => {}
@@ -166,31 +211,7 @@ impl<'o, 'a> Transcription<'o, 'a> {
                         }
                     }
                 }
-                TermKind::LeastSquares => {
-                    let term = &self.ocp.least_squares[t.term];
-                    let d = term.f.dim();
-                    let z = self.gather(w, &t.cols);
-                    let mut r = vec![0.0; d];
-                    let mut jac = vec![0.0; d * z.len()];
-                    eval_term(term, &z, &mut r, derivs.then_some(&mut jac[..]))?;
-                    ev.f += r.iter().map(|v| v * v).sum::<f64>();
-                    if derivs {
-                        let nz = z.len();
-                        for (a, &ca) in t.cols.iter().enumerate() {
-                            ev.grad[ca] += 2.0 * (0..d).map(|i| jac[i + a * d] * r[i]).sum::<f64>();
-                        }
-                        for a in 0..nz {
-                            for b in a..nz {
-                                let mut v = 2.0
-                                    * (0..d).map(|i| jac[i + a * d] * jac[i + b * d]).sum::<f64>();
-                                if t.cols[a] == t.cols[b] && a != b {
-                                    v *= 2.0;
-                                }
-                                ev.gauss_newton.push(v);
-                            }
-                        }
-                    }
-                }
+                TermKind::LeastSquares => self.add_least_squares(ev, t, w, derivs)?,
                 TermKind::Cost => {
                     let term = &self.ocp.costs[t.term];
                     let z = self.gather(w, &t.cols);
@@ -206,19 +227,51 @@ impl<'o, 'a> Transcription<'o, 'a> {
                 }
             }
         }
-        // check points, in row order (after the user constraints in the pattern)
-        for cv in check_values {
-            let d = cv.values.len();
-            ev.c[cv.row..cv.row + d].copy_from_slice(&cv.values);
-            if derivs {
-                let ncols = cv.jac.len() / d.max(1);
-                for i in 0..d {
-                    ev.jac.extend((0..ncols).map(|c| cv.jac[i + c * d]));
+        Ok(())
+    }
+
+    /// The least-squares term `t`: its square sum, and with `derivs` its gradient and
+    /// Gauss–Newton block.
+    fn add_least_squares(
+        &self,
+        ev: &mut Evaluation,
+        t: &TermRef,
+        w: &[f64],
+        derivs: bool,
+    ) -> Result<(), TranscriptionError> {
+        let term = &self.ocp.least_squares[t.term];
+        let d = term.f.dim();
+        let z = self.gather(w, &t.cols);
+        let mut r = vec![0.0; d];
+        let mut jac = vec![0.0; d * z.len()];
+        eval_term(term, &z, &mut r, derivs.then_some(&mut jac[..]))?;
+        ev.f += r.iter().map(|v| v * v).sum::<f64>();
+        if derivs {
+            let nz = z.len();
+            for (a, &ca) in t.cols.iter().enumerate() {
+                ev.grad[ca] += 2.0 * (0..d).map(|i| jac[i + a * d] * r[i]).sum::<f64>();
+            }
+            for a in 0..nz {
+                for b in a..nz {
+                    let mut v = 2.0 * (0..d).map(|i| jac[i + a * d] * jac[i + b * d]).sum::<f64>();
+                    if t.cols[a] == t.cols[b] && a != b {
+                        v *= 2.0;
+                    }
+                    ev.gauss_newton.push(v);
                 }
             }
         }
-        // sample terms, in interval order (their Gauss–Newton blocks follow the
-        // least-squares terms' in the pattern)
+        Ok(())
+    }
+
+    /// The sample terms, in interval order (their Gauss–Newton blocks follow the
+    /// least-squares terms' in the pattern).
+    fn add_sample_sums(
+        &self,
+        ev: &mut Evaluation,
+        derivs: bool,
+        sample_sums: Vec<(&IntervalRef, SampleSums)>,
+    ) {
         for (iv, sums) in sample_sums {
             ev.f += sums.f;
             if derivs {
@@ -229,10 +282,6 @@ impl<'o, 'a> Transcription<'o, 'a> {
                 ev.gauss_newton.extend_from_slice(&sums.gauss_newton);
             }
         }
-        if let Ok(mut t) = self.totals.lock() {
-            *t += ev.stats;
-        }
-        Ok((ev, blocks))
     }
 
     fn transition_row(&self, j: usize) -> usize {
@@ -273,4 +322,27 @@ fn eval_term(
             term: term.name.clone(),
             reason,
         })
+}
+
+/// The check points, in row order (after the user constraints in the pattern).
+fn add_check_values(ev: &mut Evaluation, derivs: bool, check_values: Vec<CheckValues>) {
+    for cv in check_values {
+        let d = cv.values.len();
+        ev.c[cv.row..cv.row + d].copy_from_slice(&cv.values);
+        if derivs {
+            let ncols = cv.jac.len() / d.max(1);
+            for i in 0..d {
+                ev.jac.extend((0..ncols).map(|c| cv.jac[i + c * d]));
+            }
+        }
+    }
+}
+
+/// What the intervals' integrations leave for the assembly after the continuity rows:
+/// their curvature blocks (in interval order), their sample terms' sums and their check
+/// points' values.
+struct IntervalOutputs<'t> {
+    blocks: Vec<Option<Vec<f64>>>,
+    sample_sums: Vec<(&'t IntervalRef, SampleSums)>,
+    check_values: Vec<CheckValues>,
 }

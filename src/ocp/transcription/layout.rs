@@ -10,20 +10,30 @@ use crate::ocp::problem::{Block, Ocp};
 use std::sync::atomic::AtomicU64;
 use std::sync::Mutex;
 
-impl<'o, 'a> Transcription<'o, 'a> {
-    /// Lay out variables and constraints and build the sparsity patterns.
-    pub fn new(ocp: &'o Ocp<'a>) -> Result<Self, TranscriptionError> {
-        let inv = |s: String| TranscriptionError::Invalid(s);
-        if ocp.phases.is_empty() {
-            return Err(inv("no phase".into()));
-        }
-        if ocp.transitions.len() + 1 != ocp.phases.len() {
-            return Err(inv(format!(
-                "{} transitions for {} phases (need one between each pair)",
-                ocp.transitions.len(),
-                ocp.phases.len()
-            )));
-        }
+/// An invalid problem, with its reason.
+fn inv(reason: String) -> TranscriptionError {
+    TranscriptionError::Invalid(reason)
+}
+
+/// Where each phase's variables start: per node its state and (where it has one) its
+/// control, then the phase's duration; θ after the last phase.
+struct Offsets {
+    /// Number of variables.
+    n: usize,
+    /// Per phase and node, the state's first variable.
+    state: Vec<Vec<usize>>,
+    /// Per phase and control node, the control's first variable.
+    control: Vec<Vec<usize>>,
+    /// Per phase, its duration's variable.
+    duration: Vec<usize>,
+    /// θ's first variable.
+    theta: usize,
+}
+
+impl Offsets {
+    /// The offsets of `ocp`'s variables, its phases checked against its parameters and
+    /// their bounds and guesses against their sizes.
+    fn of(ocp: &Ocp<'_>) -> Result<Self, TranscriptionError> {
         let mut n = 0;
         let mut state_off = Vec::new();
         let mut control_off = Vec::new();
@@ -75,14 +85,37 @@ impl<'o, 'a> Transcription<'o, 'a> {
         }
         let theta_off = n;
         n += ocp.ntheta;
+        Ok(Self {
+            n,
+            state: state_off,
+            control: control_off,
+            duration: duration_off,
+            theta: theta_off,
+        })
+    }
+}
 
+impl<'o, 'a> Transcription<'o, 'a> {
+    /// Lay out variables and constraints and build the sparsity patterns.
+    pub fn new(ocp: &'o Ocp<'a>) -> Result<Self, TranscriptionError> {
+        if ocp.phases.is_empty() {
+            return Err(inv("no phase".into()));
+        }
+        if ocp.transitions.len() + 1 != ocp.phases.len() {
+            return Err(inv(format!(
+                "{} transitions for {} phases (need one between each pair)",
+                ocp.transitions.len(),
+                ocp.phases.len()
+            )));
+        }
+        let offsets = Offsets::of(ocp)?;
         let mut t = Self {
             ocp,
-            n,
-            state_off,
-            control_off,
-            duration_off,
-            theta_off,
+            n: offsets.n,
+            state_off: offsets.state,
+            control_off: offsets.control,
+            duration_off: offsets.duration,
+            theta_off: offsets.theta,
             m: 0,
             intervals: Vec::new(),
             terms: Vec::new(),
@@ -97,7 +130,20 @@ impl<'o, 'a> Transcription<'o, 'a> {
             totals: Mutex::new(IntegrationStats::default()),
             tolerance_scale: AtomicU64::new(1f64.to_bits()),
         };
-        // sample terms, grouped by interval and τ
+        let samples = t.fixed_samples()?;
+        t.add_continuity_rows(samples);
+        t.add_transition_rows()?;
+        t.add_constraint_rows()?;
+        let checks = t.checks_by_interval()?;
+        t.add_check_rows(checks);
+        t.add_objective_terms()?;
+        Ok(t)
+    }
+
+    /// The sample terms at fixed instants, grouped by phase, interval and τ (ascending);
+    /// the shifted ones are listed in `shifted`.
+    fn fixed_samples(&mut self) -> Result<Vec<Vec<Instants>>, TranscriptionError> {
+        let ocp = self.ocp;
         let mut samples: Vec<Vec<Instants>> = ocp
             .phases
             .iter()
@@ -131,7 +177,7 @@ impl<'o, 'a> Transcription<'o, 'a> {
                         shift.dim()
                     )));
                 }
-                t.shifted.push(si);
+                self.shifted.push(si);
                 continue;
             }
             add_instant(list, st.tau, si);
@@ -139,19 +185,25 @@ impl<'o, 'a> Transcription<'o, 'a> {
         for list in samples.iter_mut().flatten() {
             list.sort_by(|a, b| a.0.total_cmp(&b.0));
         }
+        Ok(samples)
+    }
+
+    /// The shooting intervals, each with its fixed sample terms (`samples`, by phase and
+    /// interval), and their continuity rows.
+    fn add_continuity_rows(&mut self, mut samples: Vec<Vec<Instants>>) {
+        let ocp = self.ocp;
         let mut shifted_phase = vec![false; ocp.phases.len()];
-        for &si in &t.shifted {
+        for &si in &self.shifted {
             shifted_phase[ocp.samples[si].phase] = true;
         }
-        // continuity rows
         for (j, ph) in ocp.phases.iter().enumerate() {
             let nx = ph.ode.nx();
-            t.first_interval.push(t.intervals.len());
+            self.first_interval.push(self.intervals.len());
             for k in 0..ph.intervals {
-                let row = t.m;
+                let row = self.m;
                 let fixed = std::mem::take(&mut samples[j][k]);
                 let sample_block = shifted_phase[j] || !fixed.is_empty();
-                t.intervals.push(IntervalRef {
+                self.intervals.push(IntervalRef {
                     phase: j,
                     k,
                     row,
@@ -159,28 +211,32 @@ impl<'o, 'a> Transcription<'o, 'a> {
                     sample_block,
                     checks: Vec::new(),
                 });
-                let cols = t.interval_cols(j, k);
+                let cols = self.interval_cols(j, k);
                 for i in 0..nx {
                     for &c in &cols {
-                        t.jac_rows.push(row + i);
-                        t.jac_cols.push(c);
+                        self.jac_rows.push(row + i);
+                        self.jac_cols.push(c);
                     }
-                    t.jac_rows.push(row + i);
-                    t.jac_cols.push(t.state_off[j][k + 1] + i);
-                    t.labels.push(RowLabel {
+                    self.jac_rows.push(row + i);
+                    self.jac_cols.push(self.state_off[j][k + 1] + i);
+                    self.labels.push(RowLabel {
                         phase: ph.name.clone(),
                         node: k,
                         name: format!("continuity[{i}]"),
                     });
                 }
-                t.m += nx;
+                self.m += nx;
             }
         }
-        // transitions
+    }
+
+    /// The rows joining each phase to the next: its transition term, or the states equal.
+    fn add_transition_rows(&mut self) -> Result<(), TranscriptionError> {
+        let ocp = self.ocp;
         for (j, tr) in ocp.transitions.iter().enumerate() {
             let next = &ocp.phases[j + 1];
             let nx1 = next.ode.nx();
-            let row = t.m;
+            let row = self.m;
             match tr {
                 Some(term) => {
                     if term.f.dim() != nx1 {
@@ -191,8 +247,8 @@ impl<'o, 'a> Transcription<'o, 'a> {
                             next.name
                         )));
                     }
-                    let cols = t.term_cols(&term.args)?;
-                    t.terms.push(TermRef {
+                    let cols = self.term_cols(&term.args)?;
+                    self.terms.push(TermRef {
                         term: j,
                         kind: TermKind::Transition,
                         row,
@@ -200,8 +256,8 @@ impl<'o, 'a> Transcription<'o, 'a> {
                     });
                     for i in 0..nx1 {
                         for &c in &cols {
-                            t.jac_rows.push(row + i);
-                            t.jac_cols.push(c);
+                            self.jac_rows.push(row + i);
+                            self.jac_cols.push(c);
                         }
                     }
                 }
@@ -214,24 +270,28 @@ impl<'o, 'a> Transcription<'o, 'a> {
                         )));
                     }
                     for i in 0..nx1 {
-                        t.jac_rows.push(row + i);
-                        t.jac_cols.push(t.state_off[j][prev.intervals] + i);
+                        self.jac_rows.push(row + i);
+                        self.jac_cols.push(self.state_off[j][prev.intervals] + i);
                     }
                 }
             }
             for i in 0..nx1 {
-                t.jac_rows.push(row + i);
-                t.jac_cols.push(t.state_off[j + 1][0] + i);
-                t.labels.push(RowLabel {
+                self.jac_rows.push(row + i);
+                self.jac_cols.push(self.state_off[j + 1][0] + i);
+                self.labels.push(RowLabel {
                     phase: next.name.clone(),
                     node: 0,
                     name: format!("transition[{i}]"),
                 });
             }
-            t.m += nx1;
+            self.m += nx1;
         }
-        // user constraints
-        for (ci, con) in ocp.constraints.iter().enumerate() {
+        Ok(())
+    }
+
+    /// The rows of the user constraints.
+    fn add_constraint_rows(&mut self) -> Result<(), TranscriptionError> {
+        for (ci, con) in self.ocp.constraints.iter().enumerate() {
             let d = con.term.f.dim();
             if con.lb.len() != d || con.ub.len() != d {
                 return Err(inv(format!(
@@ -239,30 +299,36 @@ impl<'o, 'a> Transcription<'o, 'a> {
                     con.term.name
                 )));
             }
-            let cols = t.term_cols(&con.term.args)?;
-            let row = t.m;
-            t.terms.push(TermRef {
+            let cols = self.term_cols(&con.term.args)?;
+            let row = self.m;
+            self.terms.push(TermRef {
                 term: ci,
                 kind: TermKind::Constraint,
                 row,
                 cols: cols.clone(),
             });
-            let (phase, node) = t.locate(&con.term.args);
+            let (phase, node) = self.locate(&con.term.args);
             for i in 0..d {
                 for &c in &cols {
-                    t.jac_rows.push(row + i);
-                    t.jac_cols.push(c);
+                    self.jac_rows.push(row + i);
+                    self.jac_cols.push(c);
                 }
-                t.labels.push(RowLabel {
+                self.labels.push(RowLabel {
                     phase: phase.clone(),
                     node,
                     name: format!("{}[{i}]", con.term.name),
                 });
             }
-            t.m += d;
+            self.m += d;
         }
-        // check points: rows in interval order, by τ within an interval
-        let mut per_interval: Vec<Vec<(f64, usize)>> = vec![Vec::new(); t.intervals.len()];
+        Ok(())
+    }
+
+    /// The check points per interval (in transcription order), each as (τ, index in
+    /// `Ocp::checks`), validated.
+    fn checks_by_interval(&self) -> Result<Vec<Vec<(f64, usize)>>, TranscriptionError> {
+        let ocp = self.ocp;
+        let mut per_interval: Vec<Vec<(f64, usize)>> = vec![Vec::new(); self.intervals.len()];
         for (ci, cp) in ocp.checks.iter().enumerate() {
             let Some(ph) = ocp
                 .phases
@@ -287,40 +353,51 @@ impl<'o, 'a> Transcription<'o, 'a> {
                     cp.name
                 )));
             }
-            per_interval[t.first_interval[cp.phase] + cp.interval].push((cp.tau, ci));
+            per_interval[self.first_interval[cp.phase] + cp.interval].push((cp.tau, ci));
         }
+        Ok(per_interval)
+    }
+
+    /// The check points' rows: in interval order, by τ within an interval.
+    fn add_check_rows(&mut self, per_interval: Vec<Vec<(f64, usize)>>) {
+        let ocp = self.ocp;
         for (i, mut list) in per_interval.into_iter().enumerate() {
             list.sort_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-            let (j, k) = (t.intervals[i].phase, t.intervals[i].k);
-            let cols = t.interval_cols(j, k);
+            let (j, k) = (self.intervals[i].phase, self.intervals[i].k);
+            let cols = self.interval_cols(j, k);
             for (tau, ci) in list {
                 let cp = &ocp.checks[ci];
-                let row = t.m;
-                t.intervals[i].checks.push((tau, ci, row));
+                let row = self.m;
+                self.intervals[i].checks.push((tau, ci, row));
                 for r in 0..cp.f.dim() {
                     for &c in &cols {
-                        t.jac_rows.push(row + r);
-                        t.jac_cols.push(c);
+                        self.jac_rows.push(row + r);
+                        self.jac_cols.push(c);
                     }
-                    t.labels.push(RowLabel {
+                    self.labels.push(RowLabel {
                         phase: ocp.phases[j].name.clone(),
                         node: k,
                         name: format!("{}@τ={tau:.3}[{r}]", cp.name),
                     });
                 }
-                t.m += cp.f.dim();
+                self.m += cp.f.dim();
             }
         }
-        // costs
+    }
+
+    /// The objective's terms and the Gauss–Newton pattern: the least-squares terms', then
+    /// the sample terms' blocks in interval order, then the general costs.
+    fn add_objective_terms(&mut self) -> Result<(), TranscriptionError> {
+        let ocp = self.ocp;
         for (li, ls) in ocp.least_squares.iter().enumerate() {
-            let cols = t.term_cols(&ls.args)?;
+            let cols = self.term_cols(&ls.args)?;
             for (a, &ca) in cols.iter().enumerate() {
                 for &cb in &cols[a..] {
-                    t.gn_rows.push(ca.min(cb));
-                    t.gn_cols.push(ca.max(cb));
+                    self.gn_rows.push(ca.min(cb));
+                    self.gn_cols.push(ca.max(cb));
                 }
             }
-            t.terms.push(TermRef {
+            self.terms.push(TermRef {
                 term: li,
                 kind: TermKind::LeastSquares,
                 row: 0,
@@ -329,12 +406,12 @@ impl<'o, 'a> Transcription<'o, 'a> {
         }
         // the sample terms' Gauss–Newton blocks, after the least-squares terms', in
         // interval order
-        for iv in t.intervals.iter().filter(|iv| iv.sample_block) {
-            let cols = t.interval_cols(iv.phase, iv.k);
+        for iv in self.intervals.iter().filter(|iv| iv.sample_block) {
+            let cols = self.interval_cols(iv.phase, iv.k);
             for (a, &ca) in cols.iter().enumerate() {
                 for &cb in &cols[a..] {
-                    t.gn_rows.push(ca.min(cb));
-                    t.gn_cols.push(ca.max(cb));
+                    self.gn_rows.push(ca.min(cb));
+                    self.gn_cols.push(ca.max(cb));
                 }
             }
         }
@@ -342,15 +419,15 @@ impl<'o, 'a> Transcription<'o, 'a> {
             if g.f.dim() != 1 {
                 return Err(inv(format!("cost '{}' must be scalar", g.name)));
             }
-            let cols = t.term_cols(&g.args)?;
-            t.terms.push(TermRef {
+            let cols = self.term_cols(&g.args)?;
+            self.terms.push(TermRef {
                 term: gi,
                 kind: TermKind::Cost,
                 row: 0,
                 cols,
             });
         }
-        Ok(t)
+        Ok(())
     }
 
     /// The columns an interval depends on: its start state, its control(s), its phase's

@@ -4,10 +4,11 @@
 
 use super::{add_instant, Instants, IntervalRef, Transcription, TranscriptionError};
 use crate::integrate::{
-    ControlShape, IntegrationStats, Integrator, IntegratorError, ShootingInterval,
+    ControlShape, ControlledOde, IntegrationStats, Integrator, IntegratorError, ShootingInterval,
 };
 use crate::ocp::checks::{self, CheckValues};
 use crate::ocp::problem::Block;
+use std::sync::Mutex;
 
 /// Instants of the sample terms at one evaluation, per interval in transcription order
 /// (`None`: the fixed ones only), and per sample term the gradient of its instant in θ
@@ -65,7 +66,7 @@ pub(super) struct SampleSums {
 
 /// One interval's integration: end state, sensitivities, statistics, curvature block
 /// (with multipliers) and what its sample terms add.
-type IntervalResult = (
+pub(super) type IntervalResult = (
     Vec<f64>,
     Vec<f64>,
     IntegrationStats,
@@ -118,7 +119,10 @@ impl<'o, 'a> Transcription<'o, 'a> {
         Ok((lists, gradients))
     }
 
-    #[allow(clippy::too_many_arguments)]
+    /// Integrate interval `iv` at `w` with its sample terms at the instants `list` (τ
+    /// ascending, each with its terms; `moves`: per sample term the gradient of its instant
+    /// in θ, where it moves): with `sens` the sensitivities, with the multipliers `lambda`
+    /// also the curvature block.
     pub(super) fn integrate_interval(
         &self,
         iv: &IntervalRef,
@@ -160,25 +164,7 @@ impl<'o, 'a> Transcription<'o, 'a> {
             .pack_params(u0, u1, h, theta, &mut p)
             .map_err(err)?;
         let pool = &self.pools[iv.phase];
-        let taken = pool.lock().map(|mut v| v.pop()).unwrap_or(None);
-        let mut integ = match taken {
-            Some(i) => i,
-            None => Integrator::new(nx, np, self.ocp.integrator.clone()).map_err(err)?,
-        };
-        let base = &self.ocp.integrator;
-        let scale = self.tolerance_scale();
-        if integ.settings().rtol != base.rtol * scale {
-            integ
-                .set_tolerances(
-                    base.rtol * scale,
-                    base.atol * scale,
-                    base.sens_tol.map(|t| t * scale),
-                )
-                .map_err(err)?;
-        }
-        let mut x1 = vec![0.0; nx];
-        let mut s = Vec::new();
-        let mut hess = None;
+        let mut integ = self.pooled_integrator(pool, (nx, np)).map_err(err)?;
         // the sample terms' and check points' instants, with the interval's end for one
         // pass to all
         let mut taus: Vec<f64> = list.iter().map(|e| e.0).collect();
@@ -191,103 +177,28 @@ impl<'o, 'a> Transcription<'o, 'a> {
         if times.last().is_some_and(|&t| t < 1.0) {
             times.push(1.0);
         }
-        let (mut xs, mut ss) = (Vec::new(), Vec::new());
+        let run = IntervalRun {
+            iv,
+            list,
+            interval,
+            nx,
+            np,
+            x0,
+            p,
+            taus,
+            times,
+        };
+        let mut out = Pass {
+            x1: vec![0.0; nx],
+            s: Vec::new(),
+            hess: None,
+            xs: Vec::new(),
+            ss: Vec::new(),
+        };
         let res = if let Some(lam) = lambda {
-            // continuity rows are s_{k+1} − x(1): their curvature is that of −λᵀx(1)
-            s = vec![0.0; nx * (nx + np)];
-            let weights: Vec<f64> = lam[iv.row..iv.row + nx].iter().map(|v| -v).collect();
-            let mut h = vec![0.0; (nx + np) * (nx + np)];
-            // the samples' and check points' states and sensitivities come from the same
-            // pass, with the curvature of the check points' state dependence
-            // and of the sample terms' residuals (their weight 2 r ∂r/∂x on x(τ))
-            let sample_taus: &[(f64, Vec<usize>)] = if iv.sample_block { list } else { &[] };
-            let interior: Vec<f64> = {
-                let mut v: Vec<f64> = iv.checks.iter().map(|c| c.0).collect();
-                v.extend(sample_taus.iter().map(|e| e.0));
-                v.sort_by(f64::total_cmp);
-                v.dedup();
-                v
-            };
-            // a check point's own span, as before samples had curvature (a check point
-            // that is also a sample instant is folded in with it)
-            let own_span: Vec<bool> = interior
-                .iter()
-                .map(|t| !sample_taus.iter().any(|e| e.0 == *t))
-                .collect();
-            let mut check_weights = |i: usize, x: &[f64]| {
-                let tau = interior[i];
-                // zero where no check point is at τ
-                let mut w = checks::state_weights(self.ocp, iv.phase, &iv.checks, tau, &p, x, lam)
-                    .map_err(|reason| IntegratorError::BadSettings {
-                        field: "check point",
-                        reason,
-                    })?;
-                if let Some((_, terms)) = sample_taus.iter().find(|e| e.0 == tau) {
-                    self.sample_state_weights(&interval, terms, tau, &p, x, &mut w)
-                        .map_err(|e| IntegratorError::BadSettings {
-                            field: "sample term",
-                            reason: e.to_string(),
-                        })?;
-                }
-                Ok(w)
-            };
-            match interval.integrate_with_hessian_interior(
-                &mut integ,
-                x0,
-                &p,
-                &weights,
-                &mut x1,
-                &mut s,
-                &mut h,
-                &taus,
-                &mut xs,
-                &mut ss,
-                &interior,
-                &own_span,
-                &mut check_weights,
-            ) {
-                Ok(true) => match checks::add_direct_curvature(
-                    self.ocp, iv.phase, &iv.checks, &taus, &p, &xs, &ss, lam, &mut h,
-                ) {
-                    Ok(()) => {
-                        hess = Some(h);
-                        Ok(integ.stats_snapshot())
-                    }
-                    Err(reason) => Err(IntegratorError::BadSettings {
-                        field: "check point",
-                        reason,
-                    }),
-                },
-                Ok(false) => Err(IntegratorError::BadSettings {
-                    field: "hessian",
-                    reason: format!(
-                        "the dynamics of phase '{}' provide no second derivatives",
-                        ph.name
-                    ),
-                }),
-                Err(e) => Err(e),
-            }
-        } else if sens {
-            s = vec![0.0; nx * (nx + np)];
-            if taus.is_empty() {
-                integ.integrate_with_sensitivities(&interval, 0.0, 1.0, x0, &p, &mut x1, &mut s)
-            } else {
-                integ
-                    .integrate_with_sensitivities_dense(
-                        &interval, 0.0, 1.0, x0, &p, &times, &mut xs, &mut ss,
-                    )
-                    .inspect(|_| {
-                        let sz = nx * (nx + np);
-                        x1.copy_from_slice(&xs[xs.len() - nx..]);
-                        s.copy_from_slice(&ss[ss.len() - sz..]);
-                    })
-            }
-        } else if taus.is_empty() {
-            integ.integrate(&interval, 0.0, 1.0, x0, &p, &mut x1)
+            self.integrate_with_curvature(&run, &mut integ, lam, &mut out)
         } else {
-            integ
-                .integrate_dense(&interval, 0.0, 1.0, x0, &p, &times, &mut xs)
-                .inspect(|_| x1.copy_from_slice(&xs[xs.len() - nx..]))
+            run.integrate(&mut integ, sens, &mut out)
         };
         if let Ok(mut v) = pool.lock() {
             v.push(integ);
@@ -298,34 +209,160 @@ impl<'o, 'a> Transcription<'o, 'a> {
             self.ocp,
             iv.phase,
             &iv.checks,
-            &taus,
-            &p,
-            &xs,
-            derivs.then_some(&ss[..]),
+            &run.taus,
+            &run.p,
+            &out.xs,
+            derivs.then_some(&out.ss[..]),
         )?;
         let sums = if !iv.sample_block {
             None
         } else {
-            // the samples' own rows of the merged instants
-            let rows;
-            let (xs, ss) = if iv.checks.is_empty() {
-                (&xs[..], &ss[..])
-            } else {
-                rows = checks::rows_at(
-                    list.iter().map(|e| e.0),
-                    &taus,
-                    nx,
-                    nx * (nx + np),
-                    &xs,
-                    &ss,
-                    derivs,
-                );
-                (&rows.0[..], &rows.1[..])
-            };
-            let ss = derivs.then_some(ss);
-            Some(self.sample_sums(iv, list, moves, &p, xs, ss, hess.as_deref_mut())?)
+            Some(self.interval_sample_sums(&run, moves, derivs, &mut out)?)
         };
-        Ok((x1, s, stats, hess, sums, checks))
+        Ok((out.x1, out.s, stats, out.hess, sums, checks))
+    }
+
+    /// An integrator from the phase's `pool` (or a new one for `nx` states and `np`
+    /// parameters), at the tolerances the transcription's scale asks for.
+    fn pooled_integrator(
+        &self,
+        pool: &Mutex<Vec<Integrator>>,
+        (nx, np): (usize, usize),
+    ) -> Result<Integrator, IntegratorError> {
+        let taken = pool.lock().map(|mut v| v.pop()).unwrap_or(None);
+        let mut integ = match taken {
+            Some(i) => i,
+            None => Integrator::new(nx, np, self.ocp.integrator.clone())?,
+        };
+        let base = &self.ocp.integrator;
+        let scale = self.tolerance_scale();
+        if integ.settings().rtol != base.rtol * scale {
+            integ.set_tolerances(
+                base.rtol * scale,
+                base.atol * scale,
+                base.sens_tol.map(|t| t * scale),
+            )?;
+        }
+        Ok(integ)
+    }
+
+    /// The interval's pass with the curvature of `−λᵀx(1)` (`lam`: the multipliers of all
+    /// rows), of its check points' state dependence and of its sample terms' residuals,
+    /// with the states and sensitivities at the instants.
+    fn integrate_with_curvature<O: ControlledOde + ?Sized>(
+        &self,
+        run: &IntervalRun<'_, O>,
+        integ: &mut Integrator,
+        lam: &[f64],
+        out: &mut Pass,
+    ) -> Result<IntegrationStats, IntegratorError> {
+        let (iv, list, interval, p) = (run.iv, run.list, &run.interval, &run.p[..]);
+        let (nx, np) = (run.nx, run.np);
+        // continuity rows are s_{k+1} − x(1): their curvature is that of −λᵀx(1)
+        out.s = vec![0.0; nx * (nx + np)];
+        let weights: Vec<f64> = lam[iv.row..iv.row + nx].iter().map(|v| -v).collect();
+        let mut h = vec![0.0; (nx + np) * (nx + np)];
+        // the samples' and check points' states and sensitivities come from the same
+        // pass, with the curvature of the check points' state dependence
+        // and of the sample terms' residuals (their weight 2 r ∂r/∂x on x(τ))
+        let sample_taus: &[(f64, Vec<usize>)] = if iv.sample_block { list } else { &[] };
+        let interior: Vec<f64> = {
+            let mut v: Vec<f64> = iv.checks.iter().map(|c| c.0).collect();
+            v.extend(sample_taus.iter().map(|e| e.0));
+            v.sort_by(f64::total_cmp);
+            v.dedup();
+            v
+        };
+        // a check point's own span, as before samples had curvature (a check point
+        // that is also a sample instant is folded in with it)
+        let own_span: Vec<bool> = interior
+            .iter()
+            .map(|t| !sample_taus.iter().any(|e| e.0 == *t))
+            .collect();
+        let mut check_weights = |i: usize, x: &[f64]| {
+            let tau = interior[i];
+            // zero where no check point is at τ
+            let mut w = checks::state_weights(self.ocp, iv.phase, &iv.checks, tau, p, x, lam)
+                .map_err(|reason| IntegratorError::BadSettings {
+                    field: "check point",
+                    reason,
+                })?;
+            if let Some((_, terms)) = sample_taus.iter().find(|e| e.0 == tau) {
+                self.sample_state_weights(interval, terms, tau, p, x, &mut w)
+                    .map_err(|e| IntegratorError::BadSettings {
+                        field: "sample term",
+                        reason: e.to_string(),
+                    })?;
+            }
+            Ok(w)
+        };
+        match interval.integrate_with_hessian_interior(
+            integ,
+            run.x0,
+            p,
+            &weights,
+            &mut out.x1,
+            &mut out.s,
+            &mut h,
+            &run.taus,
+            &mut out.xs,
+            &mut out.ss,
+            &interior,
+            &own_span,
+            &mut check_weights,
+        ) {
+            Ok(true) => match checks::add_direct_curvature(
+                self.ocp, iv.phase, &iv.checks, &run.taus, p, &out.xs, &out.ss, lam, &mut h,
+            ) {
+                Ok(()) => {
+                    out.hess = Some(h);
+                    Ok(integ.stats_snapshot())
+                }
+                Err(reason) => Err(IntegratorError::BadSettings {
+                    field: "check point",
+                    reason,
+                }),
+            },
+            Ok(false) => Err(IntegratorError::BadSettings {
+                field: "hessian",
+                reason: format!(
+                    "the dynamics of phase '{}' provide no second derivatives",
+                    self.ocp.phases[iv.phase].name
+                ),
+            }),
+            Err(e) => Err(e),
+        }
+    }
+
+    /// What the interval's sample terms add, read at their own rows of the pass's merged
+    /// instants (`derivs`: whether the pass has sensitivities); their curvature goes into
+    /// the pass's block, where it has one.
+    fn interval_sample_sums<O: ControlledOde + ?Sized>(
+        &self,
+        run: &IntervalRun<'_, O>,
+        moves: &[Option<Vec<f64>>],
+        derivs: bool,
+        out: &mut Pass,
+    ) -> Result<SampleSums, TranscriptionError> {
+        let (iv, list, nx, np) = (run.iv, run.list, run.nx, run.np);
+        // the samples' own rows of the merged instants
+        let rows;
+        let (xs, ss) = if iv.checks.is_empty() {
+            (&out.xs[..], &out.ss[..])
+        } else {
+            rows = checks::rows_at(
+                list.iter().map(|e| e.0),
+                &run.taus,
+                nx,
+                nx * (nx + np),
+                &out.xs,
+                &out.ss,
+                derivs,
+            );
+            (&rows.0[..], &rows.1[..])
+        };
+        let ss = derivs.then_some(ss);
+        self.sample_sums(iv, list, moves, &run.p, xs, ss, out.hess.as_deref_mut())
     }
 
     /// Add the sample terms' `2 Σ_j r_j ∂r_j/∂x` at the state `x` of instant `tau` to `w`
@@ -483,5 +520,87 @@ impl<'o, 'a> Transcription<'o, 'a> {
             }
         }
         Ok(out)
+    }
+}
+
+/// One interval's integration at one point: the interval, where it starts, its
+/// parameters and the instants it reports.
+struct IntervalRun<'r, O: ControlledOde + ?Sized> {
+    iv: &'r IntervalRef,
+    /// The sample terms' instants (τ ascending, each with its terms).
+    list: &'r [(f64, Vec<usize>)],
+    interval: ShootingInterval<'r, O>,
+    nx: usize,
+    /// Number of the integrator's parameters.
+    np: usize,
+    /// The start state.
+    x0: &'r [f64],
+    /// The integrator's parameters (controls, interval length, θ).
+    p: Vec<f64>,
+    /// The sample terms' and check points' instants (τ ascending).
+    taus: Vec<f64>,
+    /// `taus` with the interval's end.
+    times: Vec<f64>,
+}
+
+/// What an interval's integration gives: the end state, with derivatives its
+/// sensitivities (nx·(nx+np)), with multipliers the curvature block, and the states (nx per
+/// instant) and sensitivities at the reported instants.
+struct Pass {
+    x1: Vec<f64>,
+    s: Vec<f64>,
+    hess: Option<Vec<f64>>,
+    xs: Vec<f64>,
+    ss: Vec<f64>,
+}
+
+impl<O: ControlledOde + ?Sized> IntervalRun<'_, O> {
+    /// The interval's pass without curvature: with `sens` the sensitivities; the states
+    /// (and sensitivities) at the instants where there are any.
+    fn integrate(
+        &self,
+        integ: &mut Integrator,
+        sens: bool,
+        out: &mut Pass,
+    ) -> Result<IntegrationStats, IntegratorError> {
+        let (interval, x0, p, times) = (&self.interval, self.x0, &self.p[..], &self.times[..]);
+        let (nx, np) = (self.nx, self.np);
+        if sens {
+            out.s = vec![0.0; nx * (nx + np)];
+            if self.taus.is_empty() {
+                integ.integrate_with_sensitivities(
+                    interval,
+                    0.0,
+                    1.0,
+                    x0,
+                    p,
+                    &mut out.x1,
+                    &mut out.s,
+                )
+            } else {
+                integ
+                    .integrate_with_sensitivities_dense(
+                        interval,
+                        0.0,
+                        1.0,
+                        x0,
+                        p,
+                        times,
+                        &mut out.xs,
+                        &mut out.ss,
+                    )
+                    .inspect(|_| {
+                        let sz = nx * (nx + np);
+                        out.x1.copy_from_slice(&out.xs[out.xs.len() - nx..]);
+                        out.s.copy_from_slice(&out.ss[out.ss.len() - sz..]);
+                    })
+            }
+        } else if self.taus.is_empty() {
+            integ.integrate(interval, 0.0, 1.0, x0, p, &mut out.x1)
+        } else {
+            integ
+                .integrate_dense(interval, 0.0, 1.0, x0, p, times, &mut out.xs)
+                .inspect(|_| out.x1.copy_from_slice(&out.xs[out.xs.len() - nx..]))
+        }
     }
 }

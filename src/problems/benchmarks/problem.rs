@@ -328,6 +328,48 @@ fn five_link_biped<'a>(
             x
         })
         .collect();
+    let mut constraints = knee_hyperextension(n);
+    constraints.push(heel_strike_periodicity(model, n));
+    constraints.push(swing_foot_end(model, n, step));
+    // lift-off (ẏ₅ ≥ 0 at t = 0) and touch-down (ẏ₅ ≤ 0 at t = T)
+    for (node, name, lb, ub) in [
+        (0, "liftoff", 0.0, f64::INFINITY),
+        (n, "touchdown", f64::NEG_INFINITY, 0.0),
+    ] {
+        constraints.push(swing_foot_vertical_velocity(model, node, name, (lb, ub)));
+    }
+    Ok(Ocp {
+        phases: vec![Phase {
+            name: "single_stance".into(),
+            ode: model,
+            intervals: n,
+            duration: PhaseDuration::fixed(t),
+            controls: ControlShape::Constant,
+            x_lb: vec![x_lb; n + 1],
+            x_ub: vec![x_ub; n + 1],
+            u_lb: vec![u_lb; n],
+            u_ub: vec![u_ub; n],
+            x_guess,
+            u_guess: vec![vec![0.0; NU]; n],
+        }],
+        transitions: vec![],
+        ntheta: 0,
+        theta_guess: vec![],
+        theta_lb: vec![],
+        theta_ub: vec![],
+        constraints,
+        least_squares: u_squared_terms(n, NU, t / n as f64),
+        samples: Vec::new(),
+        checks: Vec::new(),
+        costs: vec![],
+        integrator,
+    })
+}
+
+/// The five-link biped's path constraints q1 − q2 ≤ 0 and q5 − q4 ≤ 0 at every node of
+/// `n` intervals.
+fn knee_hyperextension<'a>(n: usize) -> Vec<Constraint<'a>> {
+    use biped::NX;
     let mut constraints = Vec::new();
     // path: q1 − q2 ≤ 0 and q5 − q4 ≤ 0 at every node
     let mut a = vec![0.0; 2 * NX];
@@ -347,6 +389,13 @@ fn five_link_biped<'a>(
             ub: vec![0.0; 2],
         });
     }
+    constraints
+}
+
+/// The five-link biped's periodicity through heel strike, `x_0 − Δ(x_N) = 0` (`n`: the
+/// intervals).
+fn heel_strike_periodicity<'a>(model: &FiveLinkBiped, n: usize) -> Constraint<'a> {
+    use biped::NX;
     let m1 = model.clone();
     // periodicity through heel strike: x_0 − Δ(x_N) = 0
     let periodic = FnTerm::new(
@@ -389,7 +438,7 @@ fn five_link_biped<'a>(
         }
         Ok(())
     }));
-    constraints.push(Constraint {
+    Constraint {
         term: Term {
             name: "periodicity".into(),
             args: vec![
@@ -400,7 +449,13 @@ fn five_link_biped<'a>(
         },
         lb: vec![0.0; NX],
         ub: vec![0.0; NX],
-    });
+    }
+}
+
+/// The five-link biped's swing foot at the last node (of `n` intervals): `step` (m) ahead
+/// and on the ground.
+fn swing_foot_end<'a>(model: &FiveLinkBiped, n: usize, step: f64) -> Constraint<'a> {
+    use biped::{NQ, NX};
     // step length and height of the swing foot at the end
     let m2 = model.clone();
     let foot_end = FnTerm::new(
@@ -433,7 +488,7 @@ fn five_link_biped<'a>(
         }
         Ok(())
     }));
-    constraints.push(Constraint {
+    Constraint {
         term: Term {
             name: "step_length_height".into(),
             args: vec![Block::State { phase: 0, node: n }],
@@ -441,68 +496,47 @@ fn five_link_biped<'a>(
         },
         lb: vec![0.0; 2],
         ub: vec![0.0; 2],
-    });
-    // lift-off (ẏ₅ ≥ 0 at t = 0) and touch-down (ẏ₅ ≤ 0 at t = T)
-    for (node, name, lb, ub) in [
-        (0, "liftoff", 0.0, f64::INFINITY),
-        (n, "touchdown", f64::NEG_INFINITY, 0.0),
-    ] {
-        let m3 = model.clone();
-        let vy = FnTerm::new(
-            1,
-            move |z: &[f64], v: &mut [f64], jac: Option<&mut [f64]>| {
-                let (vel, vj) = m3.swing_foot_velocity_jacobian(z);
-                v[0] = vel[1];
-                if let Some(j) = jac {
-                    for c in 0..NX {
-                        j[c] = vj[1 + c * 2];
-                    }
-                }
-                Ok(())
-            },
-        );
-        let m4 = model.clone();
-        let vy = vy.with_hessian(Box::new(move |z: &[f64], w: &[f64], out: &mut [f64]| {
-            let hx = dense_hessian::<NX>(z, |xs| {
-                m4.swing_foot_velocity(&xs[..NQ], &xs[NQ..])[1] * w[0]
-            });
-            out.copy_from_slice(&hx);
-            Ok(())
-        }));
-        constraints.push(Constraint {
-            term: Term {
-                name: name.into(),
-                args: vec![Block::State { phase: 0, node }],
-                f: Arc::new(vy),
-            },
-            lb: vec![lb],
-            ub: vec![ub],
-        });
     }
-    Ok(Ocp {
-        phases: vec![Phase {
-            name: "single_stance".into(),
-            ode: model,
-            intervals: n,
-            duration: PhaseDuration::fixed(t),
-            controls: ControlShape::Constant,
-            x_lb: vec![x_lb; n + 1],
-            x_ub: vec![x_ub; n + 1],
-            u_lb: vec![u_lb; n],
-            u_ub: vec![u_ub; n],
-            x_guess,
-            u_guess: vec![vec![0.0; NU]; n],
-        }],
-        transitions: vec![],
-        ntheta: 0,
-        theta_guess: vec![],
-        theta_lb: vec![],
-        theta_ub: vec![],
-        constraints,
-        least_squares: u_squared_terms(n, NU, t / n as f64),
-        samples: Vec::new(),
-        checks: Vec::new(),
-        costs: vec![],
-        integrator,
-    })
+}
+
+/// The five-link biped's swing foot's vertical velocity ẏ₅ at `node`, named `name`, in
+/// `[lb, ub]`.
+fn swing_foot_vertical_velocity<'a>(
+    model: &FiveLinkBiped,
+    node: usize,
+    name: &str,
+    (lb, ub): (f64, f64),
+) -> Constraint<'a> {
+    use biped::{NQ, NX};
+    let m3 = model.clone();
+    let vy = FnTerm::new(
+        1,
+        move |z: &[f64], v: &mut [f64], jac: Option<&mut [f64]>| {
+            let (vel, vj) = m3.swing_foot_velocity_jacobian(z);
+            v[0] = vel[1];
+            if let Some(j) = jac {
+                for c in 0..NX {
+                    j[c] = vj[1 + c * 2];
+                }
+            }
+            Ok(())
+        },
+    );
+    let m4 = model.clone();
+    let vy = vy.with_hessian(Box::new(move |z: &[f64], w: &[f64], out: &mut [f64]| {
+        let hx = dense_hessian::<NX>(z, |xs| {
+            m4.swing_foot_velocity(&xs[..NQ], &xs[NQ..])[1] * w[0]
+        });
+        out.copy_from_slice(&hx);
+        Ok(())
+    }));
+    Constraint {
+        term: Term {
+            name: name.into(),
+            args: vec![Block::State { phase: 0, node }],
+            f: Arc::new(vy),
+        },
+        lb: vec![lb],
+        ub: vec![ub],
+    }
 }

@@ -192,107 +192,197 @@ fn gait_ocp<'a>(
         .gait
         .clone()
         .unwrap_or_else(|| serde_json::from_str("{}").expect("defaults"));
-    let (nx, nu) = (model.nx(), model.nu());
     let theta = model.theta0();
     let nt = theta.len();
-    // continuous phases and the impact that precedes each of them
-    let mut cont: Vec<(usize, &str, usize, Duration)> = Vec::new();
-    let mut pending_impact: Option<usize> = None;
-    let mut impact_before: Vec<Option<usize>> = Vec::new();
-    let mut trailing_impact: Option<usize> = None;
-    for (i, ph) in seq.phases.iter().enumerate() {
-        match ph {
-            Phase::Impact { .. } => pending_impact = Some(i),
-            Phase::Continuous {
-                name,
-                duration,
-                intervals,
-                ..
-            } => {
-                impact_before.push(if cont.is_empty() {
-                    None
-                } else {
-                    pending_impact.take()
-                });
-                if cont.is_empty() {
-                    pending_impact = None;
-                }
-                cont.push((i, name, *intervals, *duration));
-            }
-        }
-    }
-    if let Some(i) = pending_impact {
-        trailing_impact = Some(i);
-    }
-    if cont.is_empty() {
+    let layout = PhaseLayout::of(seq);
+    if layout.cont.is_empty() {
         return Err("the phase file has no continuous phase".into());
     }
-    if guess.x.len() != cont.len() || guess.u.len() != cont.len() {
+    if guess.x.len() != layout.cont.len() || guess.u.len() != layout.cont.len() {
         return Err(format!(
             "the guess has {} phases, the file {} continuous phases",
             guess.x.len(),
-            cont.len()
+            layout.cont.len()
         ));
     }
-    // the contacts that land at the end of each continuous phase: those of the impact after
-    // it that are not on the ground during it
-    let lands_after: Vec<Vec<usize>> = (0..cont.len())
-        .map(|j| {
-            let impact = if j + 1 < cont.len() {
-                impact_before[j + 1]
-            } else {
-                trailing_impact
-            };
-            let active: Vec<usize> = sets[cont[j].0].rows.iter().map(|r| r.contact).collect();
-            impact.map_or(Vec::new(), |ii| {
-                sets[ii]
-                    .rows
-                    .iter()
-                    .filter(|r| r.kind == RowKind::Normal && !active.contains(&r.contact))
-                    .map(|r| r.contact)
-                    .collect()
-            })
-        })
-        .collect();
-    let mut phases = Vec::new();
-    for (j, &(_, name, n, dur)) in cont.iter().enumerate() {
-        let duration = match dur {
-            Duration::Fixed(v) => PhaseDuration::fixed(v),
-            Duration::Free { initial, min, max } => PhaseDuration {
-                value: initial,
-                lb: min,
-                ub: max,
-            },
-        };
-        let cn = if spec.controls == ControlShape::Linear {
-            n + 1
-        } else {
-            n
-        };
-        phases.push(OcpPhase {
-            name: name.to_string(),
-            ode: &odes[j],
-            intervals: n,
-            duration,
-            controls: spec.controls,
-            x_lb: vec![guess.x_lb.clone(); n + 1],
-            x_ub: vec![guess.x_ub.clone(); n + 1],
-            u_lb: vec![guess.u_lb.clone(); cn],
-            u_ub: vec![guess.u_ub.clone(); cn],
-            x_guess: guess.x[j].clone(),
-            u_guess: guess.u[j].clone(),
-        });
-    }
+    let phases = layout.ocp_phases(&spec, odes, guess);
+    let cont = &layout.cont;
     // transitions: impact maps where an impact phase separates continuous phases
     let mut transitions = Vec::new();
     for j in 1..cont.len() {
-        transitions
-            .push(impact_before[j].map(|i| impact_term(model, &sets[i], cont[j - 1].2, j - 1)));
+        transitions.push(
+            layout.impact_before[j].map(|i| impact_term(model, &sets[i], cont[j - 1].2, j - 1)),
+        );
     }
+    let rows = GaitRows {
+        model,
+        sets,
+        spec: &spec,
+        layout: &layout,
+        lands_after: layout.lands_after(sets),
+    };
     let mut constraints = Vec::new();
-    let mu = spec.friction;
-    for (j, &(i, _, n, _)) in cont.iter().enumerate() {
+    for j in 0..cont.len() {
+        rows.add_phase_constraints(j, &mut constraints);
+    }
+    rows.add_cycle_constraints(&mut constraints);
+    Ok(Ocp {
+        phases,
+        transitions,
+        ntheta: nt,
+        theta_guess: theta.clone(),
+        theta_lb: model
+            .free_parameters()
+            .iter()
+            .map(|&i| model.parameters()[i].lower)
+            .collect(),
+        theta_ub: model
+            .free_parameters()
+            .iter()
+            .map(|&i| model.parameters()[i].upper)
+            .collect(),
+        constraints,
+        least_squares: Vec::new(),
+        samples: Vec::new(),
+        checks: Vec::new(),
+        costs: Vec::new(),
+        integrator,
+    })
+}
+
+/// The continuous phases of a phase file and the impacts between them.
+struct PhaseLayout<'s> {
+    /// Continuous phases: (index in the file, name, intervals, duration).
+    cont: Vec<(usize, &'s str, usize, Duration)>,
+    /// Per continuous phase, the impact phase that precedes it (none before the first).
+    impact_before: Vec<Option<usize>>,
+    /// The impact phase after the last continuous phase, if any.
+    trailing_impact: Option<usize>,
+}
+
+impl<'s> PhaseLayout<'s> {
+    /// The continuous phases of `seq` and the impact that precedes each of them.
+    fn of(seq: &'s PhaseSequence) -> Self {
+        let mut cont: Vec<(usize, &str, usize, Duration)> = Vec::new();
+        let mut pending_impact: Option<usize> = None;
+        let mut impact_before: Vec<Option<usize>> = Vec::new();
+        let mut trailing_impact: Option<usize> = None;
+        for (i, ph) in seq.phases.iter().enumerate() {
+            match ph {
+                Phase::Impact { .. } => pending_impact = Some(i),
+                Phase::Continuous {
+                    name,
+                    duration,
+                    intervals,
+                    ..
+                } => {
+                    impact_before.push(if cont.is_empty() {
+                        None
+                    } else {
+                        pending_impact.take()
+                    });
+                    if cont.is_empty() {
+                        pending_impact = None;
+                    }
+                    cont.push((i, name, *intervals, *duration));
+                }
+            }
+        }
+        if let Some(i) = pending_impact {
+            trailing_impact = Some(i);
+        }
+        Self {
+            cont,
+            impact_before,
+            trailing_impact,
+        }
+    }
+
+    /// The contacts that land at the end of each continuous phase: those of the impact
+    /// after it that are not on the ground during it.
+    fn lands_after(&self, sets: &[ConstraintSet]) -> Vec<Vec<usize>> {
+        let cont = &self.cont;
+        (0..cont.len())
+            .map(|j| {
+                let impact = if j + 1 < cont.len() {
+                    self.impact_before[j + 1]
+                } else {
+                    self.trailing_impact
+                };
+                let active: Vec<usize> = sets[cont[j].0].rows.iter().map(|r| r.contact).collect();
+                impact.map_or(Vec::new(), |ii| {
+                    sets[ii]
+                        .rows
+                        .iter()
+                        .filter(|r| r.kind == RowKind::Normal && !active.contains(&r.contact))
+                        .map(|r| r.contact)
+                        .collect()
+                })
+            })
+            .collect()
+    }
+
+    /// The OCP's phases: the continuous phases with their dynamics `odes`, bounds and
+    /// initial guess.
+    fn ocp_phases<'a>(
+        &self,
+        spec: &GaitSpec,
+        odes: &'a [GaitOde<'a>],
+        guess: &GaitGuess,
+    ) -> Vec<OcpPhase<'a>> {
+        let mut phases = Vec::new();
+        for (j, &(_, name, n, dur)) in self.cont.iter().enumerate() {
+            let duration = match dur {
+                Duration::Fixed(v) => PhaseDuration::fixed(v),
+                Duration::Free { initial, min, max } => PhaseDuration {
+                    value: initial,
+                    lb: min,
+                    ub: max,
+                },
+            };
+            let cn = if spec.controls == ControlShape::Linear {
+                n + 1
+            } else {
+                n
+            };
+            phases.push(OcpPhase {
+                name: name.to_string(),
+                ode: &odes[j],
+                intervals: n,
+                duration,
+                controls: spec.controls,
+                x_lb: vec![guess.x_lb.clone(); n + 1],
+                x_ub: vec![guess.x_ub.clone(); n + 1],
+                u_lb: vec![guess.u_lb.clone(); cn],
+                u_ub: vec![guess.u_ub.clone(); cn],
+                x_guess: guess.x[j].clone(),
+                u_guess: guess.u[j].clone(),
+            });
+        }
+        phases
+    }
+}
+
+/// What the gait OCP's path and point constraints are built from.
+struct GaitRows<'a, 's> {
+    model: &'a GaitModel,
+    /// The resolved constraint sets, one per phase of the file.
+    sets: &'a [ConstraintSet],
+    spec: &'s GaitSpec,
+    layout: &'s PhaseLayout<'s>,
+    /// Per continuous phase, the contacts that land at its end.
+    lands_after: Vec<Vec<usize>>,
+}
+
+impl<'a> GaitRows<'a, '_> {
+    /// The constraints of continuous phase `j`: contact forces, clearance, the contacts on
+    /// the ground at the start and those landing at the impact before it.
+    fn add_phase_constraints(&self, j: usize, constraints: &mut Vec<Constraint<'a>>) {
+        let (model, sets, spec) = (self.model, self.sets, self.spec);
+        let cont = &self.layout.cont;
+        let (i, _, n, _) = cont[j];
         let set = &sets[i];
+        let mu = spec.friction;
         // contact forces at every node with the node's control
         for k in 0..=n {
             let ku = if spec.controls == ControlShape::Linear {
@@ -317,44 +407,8 @@ fn gait_ocp<'a>(
                 ub: rows_ub,
             });
         }
-        // clearance of every primitive not in contact, at every node but two: the first
-        // node after it was in contact, where the phase before holds its gap at zero (a
-        // row whose gradient the Baumgarte term has all but damped away: held active, its
-        // multiplier grows without bound; and a compliant contact leaves the ground with
-        // its pad still compressed), and the last before it lands, where the landing row
-        // sets the gap to zero (the same row twice)
         if spec.clearance {
-            let active: Vec<usize> = set.rows.iter().map(|r| r.contact).collect();
-            let was_active: Vec<usize> = if j > 0 {
-                sets[cont[j - 1].0].rows.iter().map(|r| r.contact).collect()
-            } else {
-                Vec::new()
-            };
-            for (c, _) in model
-                .contacts
-                .iter()
-                .enumerate()
-                // a volumetric primitive penetrates the ground by design
-                .filter(|(c, _)| !active.contains(c) && !model.is_volumetric(*c))
-            {
-                let first = usize::from(was_active.contains(&c));
-                let last = if lands_after[j].contains(&c) {
-                    n - 1
-                } else {
-                    n
-                };
-                for k in first..=last {
-                    constraints.push(gap_constraint(
-                        model,
-                        c,
-                        j,
-                        k,
-                        "clearance",
-                        0.0,
-                        f64::INFINITY,
-                    ));
-                }
-            }
+            self.add_clearance(j, constraints);
         }
         // contacts on the ground at the first node of the first phase; not in a gait
         // periodic through a trailing impact, where they would repeat the landing row:
@@ -363,7 +417,7 @@ fn gait_ocp<'a>(
         // Baumgarte rows from there on keep a zero gap too (a repeated row leaves the
         // multipliers undetermined; on the torque-driven track, 47 iterations instead of
         // 28 to the same optimum)
-        if j == 0 && !(spec.periodic && trailing_impact.is_some()) {
+        if j == 0 && !(spec.periodic && self.layout.trailing_impact.is_some()) {
             for c in set
                 .rows
                 .iter()
@@ -375,7 +429,7 @@ fn gait_ocp<'a>(
         }
         // a landing contact touches the ground at the impact (last node of the phase before)
         if j > 0 {
-            if let Some(ii) = impact_before[j] {
+            if let Some(ii) = self.layout.impact_before[j] {
                 let prev_active: Vec<usize> =
                     sets[cont[j - 1].0].rows.iter().map(|r| r.contact).collect();
                 for c in sets[ii]
@@ -399,93 +453,123 @@ fn gait_ocp<'a>(
             }
         }
     }
-    // trailing impact and periodicity through the symmetry map
-    let last = cont.len() - 1;
-    let n_last = cont[last].2;
-    if let Some(ti) = trailing_impact {
-        let prev_active: Vec<usize> = sets[cont[last].0].rows.iter().map(|r| r.contact).collect();
-        for c in sets[ti]
-            .rows
+
+    /// The clearance of every primitive not in contact in continuous phase `j`, at every
+    /// node but two: the first node after it was in contact, where the phase before holds
+    /// its gap at zero (a row whose gradient the Baumgarte term has all but damped away:
+    /// held active, its multiplier grows without bound; and a compliant contact leaves the
+    /// ground with its pad still compressed), and the last before it lands, where the
+    /// landing row sets the gap to zero (the same row twice).
+    fn add_clearance(&self, j: usize, constraints: &mut Vec<Constraint<'a>>) {
+        let (model, sets) = (self.model, self.sets);
+        let cont = &self.layout.cont;
+        let (i, _, n, _) = cont[j];
+        let set = &sets[i];
+        let active: Vec<usize> = set.rows.iter().map(|r| r.contact).collect();
+        let was_active: Vec<usize> = if j > 0 {
+            sets[cont[j - 1].0].rows.iter().map(|r| r.contact).collect()
+        } else {
+            Vec::new()
+        };
+        for (c, _) in model
+            .contacts
             .iter()
-            .filter(|r| r.kind == RowKind::Normal)
-            .map(|r| r.contact)
+            .enumerate()
+            // a volumetric primitive penetrates the ground by design
+            .filter(|(c, _)| !active.contains(c) && !model.is_volumetric(*c))
         {
-            if !prev_active.contains(&c) {
-                constraints.push(gap_constraint(model, c, last, n_last, "landing", 0.0, 0.0));
+            let first = usize::from(was_active.contains(&c));
+            let last = if self.lands_after[j].contains(&c) {
+                n - 1
+            } else {
+                n
+            };
+            for k in first..=last {
+                constraints.push(gap_constraint(
+                    model,
+                    c,
+                    j,
+                    k,
+                    "clearance",
+                    0.0,
+                    f64::INFINITY,
+                ));
             }
         }
     }
-    if spec.periodic {
-        let (xmap, umap) = mirror_maps(model, &spec);
-        let skip = 0usize; // pelvis_x is not periodic
-        let impact = trailing_impact.map(|ti| sets[ti].clone());
-        let f = AdTerm(Periodicity {
-            model,
-            impact,
-            xmap,
-            skip,
-        });
-        constraints.push(Constraint {
-            term: Term {
-                name: "periodicity".into(),
-                args: vec![
-                    Block::State { phase: 0, node: 0 },
-                    Block::State {
-                        phase: last,
-                        node: n_last,
-                    },
-                    Block::Params,
-                ],
-                f: Arc::new(f),
-            },
-            lb: vec![0.0; nx - 1],
-            ub: vec![0.0; nx - 1],
-        });
-        if spec.controls == ControlShape::Linear {
-            let mut a = vec![0.0; nu * 2 * nu];
-            for i in 0..nu {
-                a[i * 2 * nu + i] = 1.0;
-                a[i * 2 * nu + nu + umap[i]] = -1.0;
+
+    /// The trailing impact's landing contacts and periodicity through the symmetry map.
+    fn add_cycle_constraints(&self, constraints: &mut Vec<Constraint<'a>>) {
+        let (model, sets, spec) = (self.model, self.sets, self.spec);
+        let (nx, nu) = (model.nx(), model.nu());
+        let cont = &self.layout.cont;
+        let last = cont.len() - 1;
+        let n_last = cont[last].2;
+        let trailing_impact = self.layout.trailing_impact;
+        if let Some(ti) = trailing_impact {
+            let prev_active: Vec<usize> =
+                sets[cont[last].0].rows.iter().map(|r| r.contact).collect();
+            for c in sets[ti]
+                .rows
+                .iter()
+                .filter(|r| r.kind == RowKind::Normal)
+                .map(|r| r.contact)
+            {
+                if !prev_active.contains(&c) {
+                    constraints.push(gap_constraint(model, c, last, n_last, "landing", 0.0, 0.0));
+                }
             }
+        }
+        if spec.periodic {
+            let (xmap, umap) = mirror_maps(model, spec);
+            let skip = 0usize; // pelvis_x is not periodic
+            let impact = trailing_impact.map(|ti| sets[ti].clone());
+            let f = AdTerm(Periodicity {
+                model,
+                impact,
+                xmap,
+                skip,
+            });
             constraints.push(Constraint {
                 term: Term {
-                    name: "control_periodicity".into(),
+                    name: "periodicity".into(),
                     args: vec![
-                        Block::Control { phase: 0, node: 0 },
-                        Block::Control {
+                        Block::State { phase: 0, node: 0 },
+                        Block::State {
                             phase: last,
                             node: n_last,
                         },
+                        Block::Params,
                     ],
-                    f: Arc::new(Linear::new(a, nu)),
+                    f: Arc::new(f),
                 },
-                lb: vec![0.0; nu],
-                ub: vec![0.0; nu],
+                lb: vec![0.0; nx - 1],
+                ub: vec![0.0; nx - 1],
             });
+            if spec.controls == ControlShape::Linear {
+                let mut a = vec![0.0; nu * 2 * nu];
+                for i in 0..nu {
+                    a[i * 2 * nu + i] = 1.0;
+                    a[i * 2 * nu + nu + umap[i]] = -1.0;
+                }
+                constraints.push(Constraint {
+                    term: Term {
+                        name: "control_periodicity".into(),
+                        args: vec![
+                            Block::Control { phase: 0, node: 0 },
+                            Block::Control {
+                                phase: last,
+                                node: n_last,
+                            },
+                        ],
+                        f: Arc::new(Linear::new(a, nu)),
+                    },
+                    lb: vec![0.0; nu],
+                    ub: vec![0.0; nu],
+                });
+            }
         }
     }
-    Ok(Ocp {
-        phases,
-        transitions,
-        ntheta: nt,
-        theta_guess: theta.clone(),
-        theta_lb: model
-            .free_parameters()
-            .iter()
-            .map(|&i| model.parameters()[i].lower)
-            .collect(),
-        theta_ub: model
-            .free_parameters()
-            .iter()
-            .map(|&i| model.parameters()[i].upper)
-            .collect(),
-        constraints,
-        least_squares: Vec::new(),
-        samples: Vec::new(),
-        checks: Vec::new(),
-        costs: Vec::new(),
-        integrator,
-    })
 }
 
 /// The unilateral-contact and friction-cone rows of a contact set as one function of

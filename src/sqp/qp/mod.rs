@@ -12,7 +12,9 @@
 mod active_set;
 
 use clarabel::algebra::CscMatrix;
-use clarabel::solver::{DefaultSettings, DefaultSolver, IPSolver, SolverStatus, SupportedConeT};
+use clarabel::solver::{
+    DefaultSettings, DefaultSolution, DefaultSolver, IPSolver, SolverStatus, SupportedConeT,
+};
 
 /// Sparse matrix as triplets (duplicates are summed).
 #[derive(Debug, Clone, Default)]
@@ -218,194 +220,254 @@ fn rows_of(q: &QpData<'_>) -> Vec<Vec<(usize, f64)>> {
 
 /// Solve a QP subproblem with Clarabel (`jrows`: the entries of J by row).
 fn interior_point(q: &QpData<'_>, jrows: &[Vec<(usize, f64)>]) -> Result<QpSolution, QpError> {
-    let n = q.g.len();
-    let m = q.c.len();
-    let ns = if q.elastic.is_some() { 2 * m } else { 0 };
-    let nt = n + ns;
-    let mut eq = Triplets::default();
-    let mut eq_b = Vec::new();
-    let mut eq_map = Vec::new();
-    let mut ineq = Triplets::default();
-    let mut ineq_b = Vec::new();
-    let mut ineq_map = Vec::new();
-    for i in 0..m {
-        let (lo, hi) = (q.c_lb[i] - q.c[i], q.c_ub[i] - q.c[i]);
-        let slack = |t: &mut Triplets, r: usize| {
-            if q.elastic.is_some() {
-                // J d − p + n
-                t.push(r, n + 2 * i, -1.0);
-                t.push(r, n + 2 * i + 1, 1.0);
-            }
+    let rows = ConeRows::new(q, jrows);
+    let sol = rows.solve(q)?;
+    Ok(rows.solution(q, &sol))
+}
+
+/// The QP's rows in Clarabel's form `A d + s = b`: equality rows (and fixed variables) in
+/// the zero cone, each finite inequality bound as one row of the nonnegative cone, and in
+/// elastic mode the slacks' own rows; each with the multiplier it gives.
+struct ConeRows {
+    /// Number of variables.
+    n: usize,
+    /// Number of constraints.
+    m: usize,
+    /// Number of elastic slacks (two per constraint in elastic mode, else none).
+    ns: usize,
+    eq: Triplets,
+    eq_b: Vec<f64>,
+    eq_map: Vec<RowMap>,
+    ineq: Triplets,
+    ineq_b: Vec<f64>,
+    ineq_map: Vec<RowMap>,
+}
+
+impl ConeRows {
+    /// The rows of `q` (`jrows`: the entries of J by row).
+    fn new(q: &QpData<'_>, jrows: &[Vec<(usize, f64)>]) -> Self {
+        let n = q.g.len();
+        let m = q.c.len();
+        let ns = if q.elastic.is_some() { 2 * m } else { 0 };
+        let mut rows = Self {
+            n,
+            m,
+            ns,
+            eq: Triplets::default(),
+            eq_b: Vec::new(),
+            eq_map: Vec::new(),
+            ineq: Triplets::default(),
+            ineq_b: Vec::new(),
+            ineq_map: Vec::new(),
         };
-        if q.c_lb[i] == q.c_ub[i] {
-            let r = eq_b.len();
-            for &(c, v) in &jrows[i] {
-                eq.push(r, c, v);
-            }
-            slack(&mut eq, r);
-            eq_b.push(lo);
-            eq_map.push(RowMap::Con(i, 1.0));
-        } else {
-            if hi.is_finite() {
-                let r = ineq_b.len();
-                for &(c, v) in &jrows[i] {
-                    ineq.push(r, c, v);
-                }
-                slack(&mut ineq, r);
-                ineq_b.push(hi);
-                ineq_map.push(RowMap::Con(i, 1.0));
-            }
-            if lo.is_finite() {
-                let r = ineq_b.len();
-                for &(c, v) in &jrows[i] {
-                    ineq.push(r, c, -v);
-                }
+        rows.add_constraints(q, jrows);
+        rows.add_bounds(q);
+        for s in 0..ns {
+            let r = rows.ineq_b.len();
+            rows.ineq.push(r, n + s, -1.0);
+            rows.ineq_b.push(0.0);
+            rows.ineq_map.push(RowMap::Slack);
+        }
+        rows
+    }
+
+    /// The constraint rows `c_lb − c ≤ J d ≤ c_ub − c`, in elastic mode with their slacks.
+    fn add_constraints(&mut self, q: &QpData<'_>, jrows: &[Vec<(usize, f64)>]) {
+        let n = self.n;
+        for i in 0..self.m {
+            let (lo, hi) = (q.c_lb[i] - q.c[i], q.c_ub[i] - q.c[i]);
+            let slack = |t: &mut Triplets, r: usize| {
                 if q.elastic.is_some() {
-                    ineq.push(r, n + 2 * i, 1.0);
-                    ineq.push(r, n + 2 * i + 1, -1.0);
+                    // J d − p + n
+                    t.push(r, n + 2 * i, -1.0);
+                    t.push(r, n + 2 * i + 1, 1.0);
                 }
-                ineq_b.push(-lo);
-                ineq_map.push(RowMap::Con(i, -1.0));
+            };
+            if q.c_lb[i] == q.c_ub[i] {
+                let r = self.eq_b.len();
+                for &(c, v) in &jrows[i] {
+                    self.eq.push(r, c, v);
+                }
+                slack(&mut self.eq, r);
+                self.eq_b.push(lo);
+                self.eq_map.push(RowMap::Con(i, 1.0));
+            } else {
+                if hi.is_finite() {
+                    let r = self.ineq_b.len();
+                    for &(c, v) in &jrows[i] {
+                        self.ineq.push(r, c, v);
+                    }
+                    slack(&mut self.ineq, r);
+                    self.ineq_b.push(hi);
+                    self.ineq_map.push(RowMap::Con(i, 1.0));
+                }
+                if lo.is_finite() {
+                    let r = self.ineq_b.len();
+                    for &(c, v) in &jrows[i] {
+                        self.ineq.push(r, c, -v);
+                    }
+                    if q.elastic.is_some() {
+                        self.ineq.push(r, n + 2 * i, 1.0);
+                        self.ineq.push(r, n + 2 * i + 1, -1.0);
+                    }
+                    self.ineq_b.push(-lo);
+                    self.ineq_map.push(RowMap::Con(i, -1.0));
+                }
             }
         }
     }
-    for j in 0..n {
-        if q.d_lb[j] == q.d_ub[j] {
-            let r = eq_b.len();
-            eq.push(r, j, 1.0);
-            eq_b.push(q.d_lb[j]);
-            eq_map.push(RowMap::Var(j, 1.0));
+
+    /// The variable bound rows `d_lb ≤ d ≤ d_ub` (a fixed variable as an equality).
+    fn add_bounds(&mut self, q: &QpData<'_>) {
+        for j in 0..self.n {
+            if q.d_lb[j] == q.d_ub[j] {
+                let r = self.eq_b.len();
+                self.eq.push(r, j, 1.0);
+                self.eq_b.push(q.d_lb[j]);
+                self.eq_map.push(RowMap::Var(j, 1.0));
+            } else {
+                if q.d_ub[j].is_finite() {
+                    let r = self.ineq_b.len();
+                    self.ineq.push(r, j, 1.0);
+                    self.ineq_b.push(q.d_ub[j]);
+                    self.ineq_map.push(RowMap::Var(j, 1.0));
+                }
+                if q.d_lb[j].is_finite() {
+                    let r = self.ineq_b.len();
+                    self.ineq.push(r, j, -1.0);
+                    self.ineq_b.push(-q.d_lb[j]);
+                    self.ineq_map.push(RowMap::Var(j, -1.0));
+                }
+            }
+        }
+    }
+
+    /// Clarabel's solution of the QP `q` on these rows: tight tolerances first (the SQP's
+    /// KKT test needs accurate multipliers), Clarabel's defaults as a fallback when it
+    /// stalls, then a robust attempt.
+    fn solve(&self, q: &QpData<'_>) -> Result<DefaultSolution<f64>, QpError> {
+        let (n, m, ns) = (self.n, self.m, self.ns);
+        let nt = n + ns;
+        let (neq, nin) = (self.eq_b.len(), self.ineq_b.len());
+        let mut a = self.eq.clone();
+        for k in 0..self.ineq.vals.len() {
+            a.push(
+                self.ineq.rows[k] + neq,
+                self.ineq.cols[k],
+                self.ineq.vals[k],
+            );
+        }
+        let mut b = self.eq_b.clone();
+        b.extend(self.ineq_b.iter().copied());
+        let mut p = Triplets::default();
+        for k in 0..q.h.vals.len() {
+            let (r, c) = (q.h.rows[k], q.h.cols[k]);
+            if r <= c {
+                p.push(r, c, q.h.vals[k]);
+            }
+        }
+        let mut qv = q.g.to_vec();
+        if let Some(rho) = q.elastic {
+            for i in 0..m {
+                let w = q.elastic_weights.get(i).copied().unwrap_or(1.0);
+                qv.push(rho * w);
+                qv.push(rho * w);
+            }
+        }
+        let pm = csc(nt, nt, &p);
+        let am = csc(neq + nin, nt, &a);
+        let cones = [
+            SupportedConeT::ZeroConeT(neq),
+            SupportedConeT::NonnegativeConeT(nin),
+        ];
+        // tight tolerances first (the SQP's KKT test needs accurate multipliers); Clarabel's
+        // defaults as a fallback when it stalls
+        let mut last = String::new();
+        // a third attempt for ill-conditioned QPs: stronger static regularisation of the KKT
+        // factorisation, more iterative refinement and more iterations
+        for (tol, robust) in [(1e-10, false), (1e-8, false), (1e-8, true)] {
+            let mut solver = DefaultSolver::new(&pm, &qv, &am, &b, &cones, settings(tol, robust))
+                .map_err(|e| QpError::Failed(e.to_string()))?;
+            // a solve asked to stop ends the QP at its next iteration
+            solver.set_termination_callback(|_| crate::interrupt::stop_now());
+            solver.solve();
+            let sol = solver.solution;
+            match sol.status {
+                SolverStatus::CallbackTerminated => {
+                    return Err(QpError::Failed(crate::interrupt::STOPPED.into()))
+                }
+                SolverStatus::Solved | SolverStatus::AlmostSolved => {
+                    return Ok(sol);
+                }
+                SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => {
+                    return Err(QpError::Infeasible)
+                }
+                SolverStatus::InsufficientProgress
+                | SolverStatus::MaxIterations
+                | SolverStatus::NumericalError
+                    if sol.r_prim < 1e-7 && sol.r_dual < 1e-7 =>
+                {
+                    return Ok(sol);
+                }
+                other => {
+                    last = format!(
+                        "{other:?} (primal residual {:.1e}, dual residual {:.1e})",
+                        sol.r_prim, sol.r_dual
+                    )
+                }
+            }
+        }
+        Err(QpError::Failed(last))
+    }
+
+    /// The step and the multipliers of `q` from Clarabel's solution `sol` on these rows.
+    fn solution(&self, q: &QpData<'_>, sol: &DefaultSolution<f64>) -> QpSolution {
+        let (n, m, ns) = (self.n, self.m, self.ns);
+        let mut lambda = vec![0.0; m];
+        let mut nu = vec![0.0; n];
+        for (r, map) in self.eq_map.iter().chain(self.ineq_map.iter()).enumerate() {
+            let z = sol.z[r];
+            match *map {
+                RowMap::Con(i, s) => lambda[i] += s * z,
+                RowMap::Var(j, s) => nu[j] += s * z,
+                RowMap::Slack => {}
+            }
+        }
+        let elastic_violation = (0..ns)
+            .map(|s| sol.x[n + s].max(0.0) * q.elastic_weights.get(s / 2).copied().unwrap_or(1.0))
+            .sum();
+        QpSolution {
+            d: sol.x[..n].to_vec(),
+            lambda,
+            nu,
+            elastic_violation,
+            iterations: sol.iterations,
+        }
+    }
+}
+
+/// Clarabel's settings for an attempt at tolerance `tol`; `robust`: stronger static
+/// regularisation of the KKT factorisation, more iterative refinement and more iterations.
+fn settings(tol: f64, robust: bool) -> DefaultSettings<f64> {
+    let base = DefaultSettings::<f64>::default();
+    DefaultSettings {
+        verbose: false,
+        max_threads: 1,
+        tol_gap_abs: tol,
+        tol_gap_rel: tol,
+        tol_feas: tol,
+        max_iter: if robust { 500 } else { 200 },
+        presolve_enable: false,
+        static_regularization_constant: if robust {
+            1e-6
         } else {
-            if q.d_ub[j].is_finite() {
-                let r = ineq_b.len();
-                ineq.push(r, j, 1.0);
-                ineq_b.push(q.d_ub[j]);
-                ineq_map.push(RowMap::Var(j, 1.0));
-            }
-            if q.d_lb[j].is_finite() {
-                let r = ineq_b.len();
-                ineq.push(r, j, -1.0);
-                ineq_b.push(-q.d_lb[j]);
-                ineq_map.push(RowMap::Var(j, -1.0));
-            }
-        }
+            base.static_regularization_constant
+        },
+        iterative_refinement_max_iter: if robust {
+            50
+        } else {
+            base.iterative_refinement_max_iter
+        },
+        ..base
     }
-    for s in 0..ns {
-        let r = ineq_b.len();
-        ineq.push(r, n + s, -1.0);
-        ineq_b.push(0.0);
-        ineq_map.push(RowMap::Slack);
-    }
-    let (neq, nin) = (eq_b.len(), ineq_b.len());
-    let mut a = eq;
-    for k in 0..ineq.vals.len() {
-        a.push(ineq.rows[k] + neq, ineq.cols[k], ineq.vals[k]);
-    }
-    let mut b = eq_b;
-    b.extend(ineq_b);
-    let mut p = Triplets::default();
-    for k in 0..q.h.vals.len() {
-        let (r, c) = (q.h.rows[k], q.h.cols[k]);
-        if r <= c {
-            p.push(r, c, q.h.vals[k]);
-        }
-    }
-    let mut qv = q.g.to_vec();
-    if let Some(rho) = q.elastic {
-        for i in 0..m {
-            let w = q.elastic_weights.get(i).copied().unwrap_or(1.0);
-            qv.push(rho * w);
-            qv.push(rho * w);
-        }
-    }
-    let pm = csc(nt, nt, &p);
-    let am = csc(neq + nin, nt, &a);
-    let cones = [
-        SupportedConeT::ZeroConeT(neq),
-        SupportedConeT::NonnegativeConeT(nin),
-    ];
-    // tight tolerances first (the SQP's KKT test needs accurate multipliers); Clarabel's
-    // defaults as a fallback when it stalls
-    let mut last = String::new();
-    let mut solved = None;
-    // a third attempt for ill-conditioned QPs: stronger static regularisation of the KKT
-    // factorisation, more iterative refinement and more iterations
-    for (tol, robust) in [(1e-10, false), (1e-8, false), (1e-8, true)] {
-        let base = DefaultSettings::<f64>::default();
-        let settings = DefaultSettings {
-            verbose: false,
-            max_threads: 1,
-            tol_gap_abs: tol,
-            tol_gap_rel: tol,
-            tol_feas: tol,
-            max_iter: if robust { 500 } else { 200 },
-            presolve_enable: false,
-            static_regularization_constant: if robust {
-                1e-6
-            } else {
-                base.static_regularization_constant
-            },
-            iterative_refinement_max_iter: if robust {
-                50
-            } else {
-                base.iterative_refinement_max_iter
-            },
-            ..base
-        };
-        let mut solver = DefaultSolver::new(&pm, &qv, &am, &b, &cones, settings)
-            .map_err(|e| QpError::Failed(e.to_string()))?;
-        // a solve asked to stop ends the QP at its next iteration
-        solver.set_termination_callback(|_| crate::interrupt::stop_now());
-        solver.solve();
-        let sol = solver.solution;
-        match sol.status {
-            SolverStatus::CallbackTerminated => {
-                return Err(QpError::Failed(crate::interrupt::STOPPED.into()))
-            }
-            SolverStatus::Solved | SolverStatus::AlmostSolved => {
-                solved = Some(sol);
-                break;
-            }
-            SolverStatus::PrimalInfeasible | SolverStatus::AlmostPrimalInfeasible => {
-                return Err(QpError::Infeasible)
-            }
-            SolverStatus::InsufficientProgress
-            | SolverStatus::MaxIterations
-            | SolverStatus::NumericalError
-                if sol.r_prim < 1e-7 && sol.r_dual < 1e-7 =>
-            {
-                solved = Some(sol);
-                break;
-            }
-            other => {
-                last = format!(
-                    "{other:?} (primal residual {:.1e}, dual residual {:.1e})",
-                    sol.r_prim, sol.r_dual
-                )
-            }
-        }
-    }
-    let Some(sol) = solved else {
-        return Err(QpError::Failed(last));
-    };
-    let mut lambda = vec![0.0; m];
-    let mut nu = vec![0.0; n];
-    for (r, map) in eq_map.iter().chain(ineq_map.iter()).enumerate() {
-        let z = sol.z[r];
-        match *map {
-            RowMap::Con(i, s) => lambda[i] += s * z,
-            RowMap::Var(j, s) => nu[j] += s * z,
-            RowMap::Slack => {}
-        }
-    }
-    let elastic_violation = (0..ns)
-        .map(|s| sol.x[n + s].max(0.0) * q.elastic_weights.get(s / 2).copied().unwrap_or(1.0))
-        .sum();
-    Ok(QpSolution {
-        d: sol.x[..n].to_vec(),
-        lambda,
-        nu,
-        elastic_violation,
-        iterations: sol.iterations,
-    })
 }
