@@ -205,7 +205,7 @@ pub fn predict(
     let ocp = build()?;
     let tr = Transcription::new(&ocp).context("transcribing the prediction problem")?;
     let (_, _, w0) = tr.variable_bounds_and_guess();
-    let hessian = o.hessian.into();
+    let hessian = o.hessian;
     let sqp_settings = SqpSettings {
         tol_kkt: o.tol,
         max_iter: o.max_iter,

@@ -117,7 +117,7 @@ pub fn run(args: &SimulateRequest, progress: &dyn Progress) -> anyhow::Result<()
         &seq,
         &sets,
         &res,
-        &args,
+        args,
         &tolerances,
         &warnings,
         started.elapsed().as_secs_f64(),

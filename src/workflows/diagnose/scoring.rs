@@ -77,7 +77,7 @@ pub(super) fn test_candidate(
         // residuals after this candidate's own re-fit
         let after = match noise {
             Some(full) => full.series.clone(),
-            None => residual_series(&prob, tr, &cycle.continuous, &w1)?,
+            None => residual_series(prob, tr, &cycle.continuous, &w1)?,
         };
         let phi = baseline.inflation_after(&after, &t.expected_channels);
         t.set_inflation(phi);

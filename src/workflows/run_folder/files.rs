@@ -35,16 +35,13 @@ impl Series {
             cmp.phase.iter().map(|&p| sets[p].name.clone()).collect(),
         )?;
         for i in 0..9 {
-            ts.push(&format!("model_{}", COORDINATES[i]), cmp.model_q[i].clone())?;
-            ts.push(&format!("data_{}", COORDINATES[i]), cmp.data_q[i].clone())?;
+            ts.push(format!("model_{}", COORDINATES[i]), cmp.model_q[i].clone())?;
+            ts.push(format!("data_{}", COORDINATES[i]), cmp.data_q[i].clone())?;
         }
         for (s, side) in ["r", "l"].iter().enumerate() {
             for (k, what) in LOAD_NAMES.iter().enumerate() {
-                ts.push(
-                    &format!("model_{what}_{side}"),
-                    cmp.model_feet[s][k].clone(),
-                )?;
-                ts.push(&format!("data_{what}_{side}"), cmp.data_feet[s][k].clone())?;
+                ts.push(format!("model_{what}_{side}"), cmp.model_feet[s][k].clone())?;
+                ts.push(format!("data_{what}_{side}"), cmp.data_feet[s][k].clone())?;
             }
         }
         let fine_ts = match (&ev.fine_run, &ev.fine_cmp) {
@@ -56,12 +53,12 @@ impl Series {
                     fc.phase.iter().map(|&p| sets[p].name.clone()).collect(),
                 )?;
                 for i in 0..9 {
-                    t.push(&format!("model_{}", COORDINATES[i]), fc.model_q[i].clone())?;
+                    t.push(format!("model_{}", COORDINATES[i]), fc.model_q[i].clone())?;
                 }
                 for (s, side) in ["r", "l"].iter().enumerate() {
                     for (k, what) in LOAD_NAMES.iter().enumerate() {
-                        t.push(&format!("model_{what}_{side}"), fc.model_feet[s][k].clone())?;
-                        t.push(&format!("data_{what}_{side}"), fc.data_feet[s][k].clone())?;
+                        t.push(format!("model_{what}_{side}"), fc.model_feet[s][k].clone())?;
+                        t.push(format!("data_{what}_{side}"), fc.data_feet[s][k].clone())?;
                     }
                 }
                 t.push(
