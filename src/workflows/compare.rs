@@ -77,8 +77,25 @@ fn check_feet(args: &CompareRequest) -> anyhow::Result<()> {
     Ok(())
 }
 
-/// Run `compare` as `args` describes, reporting to `progress`.
-pub fn run(args: &CompareRequest, progress: &dyn Progress) -> anyhow::Result<()> {
+impl Outcome {
+    /// Whether the prediction is physically valid on the 1 ms grid.
+    fn valid(&self) -> bool {
+        self.out.validity.as_ref().is_some_and(|v| v.is_valid())
+    }
+
+    /// The largest normal-force excess over the measurement on the fine grid (N).
+    fn excess(&self) -> Option<f64> {
+        self.out.fine_forces.as_ref().map(|f| f.max_excess(1).0)
+    }
+
+    /// `f` of the fine-grid forces, or a dash without them.
+    fn fine(&self, f: &dyn Fn(&super::run_folder::FineForces) -> String) -> String {
+        self.out.fine_forces.as_ref().map_or("—".to_string(), f)
+    }
+}
+
+/// The `--init` solutions by foot, the arguments checked before any work.
+fn check_request(args: &CompareRequest) -> anyhow::Result<Vec<(String, GaitSolution)>> {
     args.options.check_limits()?;
     if args.feet.len() < 2 {
         bail!(
@@ -106,7 +123,16 @@ pub fn run(args: &CompareRequest, progress: &dyn Progress) -> anyhow::Result<()>
         }
     }
     check_feet(args)?;
-    let folder = RunFolder::create(&args.out, args.overwrite)?;
+    Ok(inits)
+}
+
+/// Predict with every foot, each into a sub-folder of `folder` named after it.
+fn predict_each(
+    args: &CompareRequest,
+    inits: &[(String, GaitSolution)],
+    folder: &RunFolder,
+    progress: &dyn Progress,
+) -> anyhow::Result<Vec<Outcome>> {
     let mut outcomes = Vec::new();
     for spec in &args.feet {
         let (foot, phases) = foot_and_phases(spec);
@@ -132,17 +158,17 @@ pub fn run(args: &CompareRequest, progress: &dyn Progress) -> anyhow::Result<()>
             out,
         });
     }
+    Ok(outcomes)
+}
 
-    // side-by-side table
+/// The predictions side by side: solver figures, fine-grid forces, transients and errors.
+fn side_by_side(outcomes: &[Outcome]) -> Table {
     let mut headers = vec!["".to_string()];
     headers.extend(outcomes.iter().map(|o| o.name.clone()));
     let row = |label: &str, f: &dyn Fn(&Outcome) -> String| {
         let mut r = vec![label.to_string()];
         r.extend(outcomes.iter().map(f));
         r
-    };
-    let fine = |o: &Outcome, f: &dyn Fn(&super::run_folder::FineForces) -> String| {
-        o.out.fine_forces.as_ref().map_or("—".to_string(), f)
     };
     let mut rows = vec![
         row("status", &|o| o.status.clone()),
@@ -163,19 +189,19 @@ pub fn run(args: &CompareRequest, progress: &dyn Progress) -> anyhow::Result<()>
         row("objective", &|o| format!("{:.6}", o.objective)),
         row("KKT", &|o| format!("{:.1e}", o.kkt)),
         row("peak normal force (N)", &|o| {
-            fine(o, &|f| format!("{:.1}", f.peak(1)))
+            o.fine(&|f| format!("{:.1}", f.peak(1)))
         }),
         row("peak tangential force (N)", &|o| {
-            fine(o, &|f| format!("{:.1}", f.peak(0)))
+            o.fine(&|f| format!("{:.1}", f.peak(0)))
         }),
         row("normal-force excess over the measurement (N)", &|o| {
-            fine(o, &|f| {
+            o.fine(&|f| {
                 let (e, t, s) = f.max_excess(1);
                 format!("{e:.1} ({} foot, {t:.3} s)", ["right", "left"][s])
             })
         }),
         row("tangential-force excess (N)", &|o| {
-            fine(o, &|f| format!("{:.1}", f.max_excess(0).0))
+            o.fine(&|f| format!("{:.1}", f.max_excess(0).0))
         }),
         row("largest transient", &|o| {
             o.out.transients.first().map_or("none".into(), |t| {
@@ -212,9 +238,11 @@ pub fn run(args: &CompareRequest, progress: &dyn Progress) -> anyhow::Result<()>
             o.out.errors[c].runs[0].map_or("—".into(), |s| s.cell(1))
         }));
     }
-    let table = Table { title: "Prediction compared across feet (errors in the layout of Millard & Mombaur 2019, Table 4; forces on the 1 ms grid)".into(), headers, rows };
+    Table { title: "Prediction compared across feet (errors in the layout of Millard & Mombaur 2019, Table 4; forces on the 1 ms grid)".into(), headers, rows }
+}
 
-    // normal forces of all feet over the measurement
+/// The normal forces of all feet over the measurement, right foot then left (SVG).
+fn normal_force_plots(outcomes: &[Outcome]) -> Vec<String> {
     let mut plots = Vec::new();
     for (s, side) in ["right", "left"].iter().enumerate() {
         let mut p = LinePlot::new(
@@ -230,7 +258,7 @@ pub fn run(args: &CompareRequest, progress: &dyn Progress) -> anyhow::Result<()>
                 LineStyle::Dashed,
             ));
         }
-        for o in &outcomes {
+        for o in outcomes {
             if let Some(f) = &o.out.fine_forces {
                 p.series.push(Series::new(
                     o.name.clone(),
@@ -242,67 +270,79 @@ pub fn run(args: &CompareRequest, progress: &dyn Progress) -> anyhow::Result<()>
         }
         plots.push(p.to_svg());
     }
+    plots
+}
 
-    // the expectation
-    let valid = |o: &Outcome| o.out.validity.as_ref().is_some_and(|v| v.is_valid());
-    let excess = |o: &Outcome| o.out.fine_forces.as_ref().map(|f| f.max_excess(1).0);
-    let mut verdict: Option<(bool, String)> = None;
-    if let Some(e) = &args.expect_transient {
-        let key = std::path::Path::new(e)
-            .file_stem()
-            .map_or(e.clone(), |s| s.to_string_lossy().replace('_', "-"));
-        let expected = outcomes
-            .iter()
-            .find(|o| o.name == key)
-            .ok_or_else(|| anyhow!("--expect-transient {e}: no such foot in the comparison"))?;
-        let mut ok = outcomes.iter().all(|o| o.converged);
-        let mut lines = Vec::new();
-        if !ok {
-            lines.push("not every prediction converged".to_string());
-        }
-        // a transient of a solution that breaks physics between its nodes is not a finding
-        // of the model: the expectation fails on it
-        for o in outcomes.iter().filter(|o| !valid(o)) {
+/// Whether `--expect-transient` holds, and why (None without one).
+fn expectation(
+    args: &CompareRequest,
+    outcomes: &[Outcome],
+) -> anyhow::Result<Option<(bool, String)>> {
+    let Some(e) = &args.expect_transient else {
+        return Ok(None);
+    };
+    let key = std::path::Path::new(e)
+        .file_stem()
+        .map_or(e.clone(), |s| s.to_string_lossy().replace('_', "-"));
+    let expected = outcomes
+        .iter()
+        .find(|o| o.name == key)
+        .ok_or_else(|| anyhow!("--expect-transient {e}: no such foot in the comparison"))?;
+    let mut ok = outcomes.iter().all(|o| o.converged);
+    let mut lines = Vec::new();
+    if !ok {
+        lines.push("not every prediction converged".to_string());
+    }
+    // a transient of a solution that breaks physics between its nodes is not a finding
+    // of the model: the expectation fails on it
+    for o in outcomes.iter().filter(|o| !o.valid()) {
+        ok = false;
+        lines.push(format!(
+            "{}: physically invalid on the 1 ms grid, its transient not counted (see its report)",
+            o.name
+        ));
+    }
+    match expected.excess() {
+        None => {
             ok = false;
-            lines.push(format!(
-                "{}: physically invalid on the 1 ms grid, its transient not counted (see its report)",
-                o.name
-            ));
+            lines.push(format!("{}: no fine-grid forces", expected.name));
         }
-        match excess(expected) {
-            None => {
-                ok = false;
-                lines.push(format!("{}: no fine-grid forces", expected.name));
-            }
-            Some(ee) => {
-                for o in outcomes.iter().filter(|o| o.name != expected.name) {
-                    match excess(o) {
-                        Some(oe) => {
-                            let holds = ee >= args.expect_ratio * oe.max(0.0);
-                            ok &= holds;
-                            lines.push(format!(
-                                "{} excess {ee:.1} N {} {} × {} excess {oe:.1} N (ratio {:.2})",
-                                expected.name,
-                                if holds { "≥" } else { "<" },
-                                args.expect_ratio,
-                                o.name,
-                                ee / oe.max(f64::MIN_POSITIVE)
-                            ));
-                        }
-                        None => {
-                            ok = false;
-                            lines.push(format!("{}: no fine-grid forces", o.name));
-                        }
+        Some(ee) => {
+            for o in outcomes.iter().filter(|o| o.name != expected.name) {
+                match o.excess() {
+                    Some(oe) => {
+                        let holds = ee >= args.expect_ratio * oe.max(0.0);
+                        ok &= holds;
+                        lines.push(format!(
+                            "{} excess {ee:.1} N {} {} × {} excess {oe:.1} N (ratio {:.2})",
+                            expected.name,
+                            if holds { "≥" } else { "<" },
+                            args.expect_ratio,
+                            o.name,
+                            ee / oe.max(f64::MIN_POSITIVE)
+                        ));
+                    }
+                    None => {
+                        ok = false;
+                        lines.push(format!("{}: no fine-grid forces", o.name));
                     }
                 }
             }
         }
-        verdict = Some((ok, lines.join("; ")));
     }
+    Ok(Some((ok, lines.join("; "))))
+}
 
+/// The comparison's report: the verdict, the table side by side and the normal forces.
+fn report(
+    outcomes: &[Outcome],
+    verdict: &Option<(bool, String)>,
+    table: &Table,
+    plots: &[String],
+) -> Report {
     let all_converged = outcomes.iter().all(|o| o.converged);
     let mut summary = Summary::new(
-        match &verdict {
+        match verdict {
             Some((true, _)) => "expectation holds",
             Some((false, _)) => "expectation fails",
             None if all_converged => "all converged",
@@ -318,7 +358,7 @@ pub fn run(args: &CompareRequest, progress: &dyn Progress) -> anyhow::Result<()>
             .map_or_else(|| "comparison written".to_string(), |v| v.1.clone()),
     );
     summary.time_s = Some(outcomes.iter().map(|o| o.seconds).sum());
-    let report = Report {
+    Report {
         title: format!("footfall compare — {}", outcomes.iter().map(|o| o.name.as_str()).collect::<Vec<_>>().join(" vs ")),
         summary,
         sections: vec![
@@ -328,10 +368,18 @@ pub fn run(args: &CompareRequest, progress: &dyn Progress) -> anyhow::Result<()>
                 tables: vec![table.clone()],
                 svgs: vec![],
             },
-            Section { heading: "Normal ground forces".into(), paragraphs: vec!["1 ms re-integration of each prediction over the measurement.".into()], tables: vec![], svgs: plots.clone() },
+            Section { heading: "Normal ground forces".into(), paragraphs: vec!["1 ms re-integration of each prediction over the measurement.".into()], tables: vec![], svgs: plots.to_vec() },
         ],
-    };
-    let summary_json = serde_json::json!({
+    }
+}
+
+/// The comparison's `summary.json`.
+fn summary_json(
+    args: &CompareRequest,
+    outcomes: &[Outcome],
+    verdict: &Option<(bool, String)>,
+) -> serde_json::Value {
+    serde_json::json!({
         "command": "compare",
         "feet": outcomes.iter().map(|o| serde_json::json!({
             "name": o.name,
@@ -345,7 +393,7 @@ pub fn run(args: &CompareRequest, progress: &dyn Progress) -> anyhow::Result<()>
             "kkt": o.kkt,
             "peak_normal_force_n": o.out.fine_forces.as_ref().map(|f| f.peak(1)),
             "peak_tangential_force_n": o.out.fine_forces.as_ref().map(|f| f.peak(0)),
-            "normal_force_excess_n": excess(o),
+            "normal_force_excess_n": o.excess(),
             "tangential_force_excess_n": o.out.fine_forces.as_ref().map(|f| f.max_excess(0).0),
             "largest_transient": o.out.transients.first(),
         })).collect::<Vec<_>>(),
@@ -353,25 +401,18 @@ pub fn run(args: &CompareRequest, progress: &dyn Progress) -> anyhow::Result<()>
         "expect_ratio": args.expect_ratio,
         "expectation_holds": verdict.as_ref().map(|v| v.0),
         "verdict": verdict.as_ref().map(|v| v.1.clone()),
-    });
-    folder.write(
-        "summary.json",
-        serde_json::to_string_pretty(&summary_json)?.as_bytes(),
-    )?;
-    folder.write("compare.md", table.to_markdown().as_bytes())?;
-    folder.write("normal_force_right.svg", plots[0].as_bytes())?;
-    folder.write("normal_force_left.svg", plots[1].as_bytes())?;
-    folder.write("report.html", report.to_html().as_bytes())?;
-    let path = folder.commit()?;
-    {
-        note!(progress, "{}", table.to_markdown());
-        if let Some((_, v)) = &verdict {
-            note!(progress, "{v}");
-        }
-        note!(progress, "report: {}", path.join("report.html").display());
-    }
-    // a prediction that did not converge decides the exit code before the expectation
-    // (interrupted first, then infeasible, then any other stop)
+    })
+}
+
+/// The exit status of a written comparison: a prediction that did not converge decides
+/// it before the expectation (interrupted first, then infeasible, then any other stop),
+/// then a prediction that breaks physics between its nodes (exit 5), whose transient
+/// the expectation did not count, then the expectation.
+fn exit_status(
+    outcomes: &[Outcome],
+    verdict: Option<(bool, String)>,
+    path: &std::path::Path,
+) -> anyhow::Result<()> {
     let rank = |o: &Outcome| match o.result {
         SqpStatus::Interrupted => 0,
         SqpStatus::Infeasible => 1,
@@ -394,13 +435,40 @@ pub fn run(args: &CompareRequest, progress: &dyn Progress) -> anyhow::Result<()>
         }
         .into());
     }
-    // then a prediction that breaks physics between its nodes (exit 5), whose transient
-    // the expectation did not count
-    if let Some(o) = outcomes.iter().find(|o| !valid(o)) {
+    if let Some(o) = outcomes.iter().find(|o| !o.valid()) {
         super::Invalid::check(&o.out)?;
     }
     match verdict {
         Some((false, v)) => Err(anyhow!("expected transient ordering does not hold: {v}")),
         _ => Ok(()),
     }
+}
+
+/// Run `compare` as `args` describes, reporting to `progress`.
+pub fn run(args: &CompareRequest, progress: &dyn Progress) -> anyhow::Result<()> {
+    let inits = check_request(args)?;
+    let folder = RunFolder::create(&args.out, args.overwrite)?;
+    let outcomes = predict_each(args, &inits, &folder, progress)?;
+    let table = side_by_side(&outcomes);
+    let plots = normal_force_plots(&outcomes);
+    let verdict = expectation(args, &outcomes)?;
+    let report = report(&outcomes, &verdict, &table, &plots);
+    let summary_json = summary_json(args, &outcomes, &verdict);
+    folder.write(
+        "summary.json",
+        serde_json::to_string_pretty(&summary_json)?.as_bytes(),
+    )?;
+    folder.write("compare.md", table.to_markdown().as_bytes())?;
+    folder.write("normal_force_right.svg", plots[0].as_bytes())?;
+    folder.write("normal_force_left.svg", plots[1].as_bytes())?;
+    folder.write("report.html", report.to_html().as_bytes())?;
+    let path = folder.commit()?;
+    {
+        note!(progress, "{}", table.to_markdown());
+        if let Some((_, v)) = &verdict {
+            note!(progress, "{v}");
+        }
+        note!(progress, "report: {}", path.join("report.html").display());
+    }
+    exit_status(&outcomes, verdict, &path)
 }

@@ -14,25 +14,22 @@ use super::track::{read_run_setup, TrackingProblem};
 use super::{note, warn_note, Progress};
 use crate::model::effects::{catalog, EffectSpec};
 use crate::model::GaitModel;
-use crate::problems::diagnose::stats::{candidate_identifiability_at, variance_inflation};
-use crate::problems::diagnose::{
-    channel_means, channel_series, gauss_newton_decrease, refit_point, score_test_from, ScoreTest,
-    TrackingRunSetup,
-};
+use crate::problems::diagnose::{ScoreTest, TrackingRunSetup};
 
 mod heldout;
+mod noise;
 mod output;
 mod refit;
+mod scoring;
 mod starts;
 pub mod summary;
-use crate::ocp::Transcription;
 use crate::problems::evaluation::GaitSolution;
 use crate::report::diff::RunSummary;
 use crate::runfolder::RunFolder;
-use crate::sqp::linearised::GaussNewtonModel;
 use anyhow::anyhow;
-use rayon::prelude::*;
-use refit::{diff_with, refit, test_by_refit, Evidence, Verified};
+use noise::{baseline_residuals, linearisation};
+use refit::{diff_with, refit, Evidence, Verified};
+use scoring::score_all;
 use std::path::{Path, PathBuf};
 
 /// The `--candidate` name that stands for the default candidates: the catalog, the heel
@@ -89,292 +86,12 @@ impl DiagnoseRequest {
     }
 }
 
-/// The decrease of a truncated re-fit of a problem started at the run's solution (the
-/// baseline every candidate is measured against), its cost and its data residual count.
-fn decrease_at_solution(prob: &TrackingProblem) -> anyhow::Result<(f64, f64, usize)> {
-    prob.with_transcription(|tr, cycle, w| {
-        let (j, dec) = gauss_newton_decrease(tr, &w).map_err(|e| anyhow!(e))?;
-        Ok((
-            j,
-            dec,
-            prob.setup
-                .data_rows(&prob.model, &prob.sets, &cycle.continuous),
-        ))
-    })
-}
-
-/// Score test of candidate `effect` (its `k` parameters the last of θ); returns the test
-/// and the point its truncated re-fit reached, where a verifying re-fit starts.
-fn test_candidate(
-    prob: &TrackingProblem,
-    effect: &EffectSpec,
-    k: usize,
-    baseline: &Residuals,
-    noise: Option<&FullModel>,
-    hint: String,
-) -> anyhow::Result<(ScoreTest, GaitSolution)> {
-    let rows = baseline.rows;
-    prob.with_transcription(|tr, cycle, w| {
-        let free = prob.model.free_parameters();
-        let names: Vec<String> = free[free.len() - k..]
-            .iter()
-            .map(|&i| prob.model.parameters()[i].name.clone())
-            .collect();
-        // the Gauss–Newton model at the solution and its first step, shared by the score
-        // test (its truncated re-fit's first step) and the identifiability probes
-        let first = GaussNewtonModel::new(tr, &w, 1e-12).map_err(|e| anyhow!(e))?;
-        let first_step = first.step(None);
-        // the residual mean square every statistic is measured in
-        let s2 = baseline.mean_square(noise);
-        let (mut t, w1) = score_test_from(
-            effect,
-            names.clone(),
-            tr,
-            &first,
-            first_step.clone(),
-            baseline.decrease,
-            rows,
-            Some(s2),
-        )
-        .map_err(|e| anyhow!(e))?;
-        let means = |w: &[f64]| {
-            channel_means(
-                tr,
-                w,
-                &cycle.continuous,
-                prob.setup.window.0,
-                &prob.model,
-                &prob.sets,
-                &prob.data,
-            )
-            .map_err(|e| anyhow!(e))
-        };
-        let (before, after) = (means(&w)?, means(&w1)?);
-        t.expected_channels = before
-            .into_iter()
-            .zip(after)
-            .map(|((c, u, b), (_, _, a))| (c, u, b, a))
-            .collect();
-        // the autocorrelation of the noise is that of the residuals under the largest
-        // model (every candidate at once, [`full_model_series`]), as an F-test's variance
-        // is the larger model's: at the plain model's solution a missing effect's
-        // systematic misfit is itself a smooth, correlated residual, and so is a second
-        // missing effect's after this candidate's re-fit; without that model, the
-        // residuals after this candidate's own re-fit
-        let after = match noise {
-            Some(full) => full.series.clone(),
-            None => residual_series(&prob, tr, &cycle.continuous, &w1)?,
-        };
-        let phi = baseline.inflation_after(&after, &t.expected_channels);
-        t.set_inflation(phi);
-        // and so is the residual mean square
-        t.set_mean_square(s2);
-        let id = candidate_identifiability_at(tr, &first, first_step.as_ref(), names, s2, phi)
-            .map_err(|e| anyhow!(e))?;
-        t.set_identifiability(id, Some(hint));
-        let mut solution = GaitSolution::from_nlp(tr, &w1, &cycle.continuous, prob.setup.window.0);
-        // a plate's clock offset candidate moves the window's start with the events it gave
-        prob.setup.place(&prob.model, &mut solution);
-        Ok((t, solution))
-    })
-}
-
-/// `prob` for the Gauss–Newton linearisations of the score tests (the baseline, each
-/// candidate and the largest model): the sensitivities are left out of CVODES's local
-/// error test, so the steps follow the states' error only (an interval then takes about
-/// two thirds of the steps and time). The costs that
-/// decide a step are the states' (unchanged); the sensitivities only shape the
-/// Gauss–Newton model, whose step is then checked on the cost. Full re-fits (the heel
-/// pad's, the verifying ones) keep the run's settings: an SQP's convergence test needs
-/// the sensitivities' error controlled.
-fn linearisation(mut prob: TrackingProblem) -> TrackingProblem {
-    prob.integrator.sens_error_control = false;
-    prob
-}
-
-/// The Table 3 channels' residual series at the nodes of `prob` at the point `w` of its
-/// transcription `tr` (for their autocorrelation).
-fn residual_series(
-    prob: &TrackingProblem,
-    tr: &Transcription,
-    continuous: &[usize],
-    w: &[f64],
-) -> anyhow::Result<Vec<(String, Vec<f64>)>> {
-    channel_series(
-        tr,
-        w,
-        continuous,
-        prob.setup.window.0,
-        &prob.model,
-        &prob.sets,
-        &prob.data,
-    )
-    .map_err(|e| anyhow!(e))
-}
-
-/// Whether `c` is an instrument effect of both plates together (one clock, CoP offset or
-/// gain for both feet, or both plates' gains in one candidate), which the largest model
-/// replaces by one per plate.
-fn both_plates(c: &EffectSpec) -> bool {
-    matches!(
-        c,
-        EffectSpec::ForcePlateTimeOffset { side, .. }
-            | EffectSpec::CopOffset { side, .. }
-            | EffectSpec::ForcePlateGain { side, .. } if side == "both" || side == "each"
-    )
-}
-
-/// The Table 3 channels' residual series at the nodes after a truncated re-fit of the
-/// largest model the diagnosis considers: every score-tested candidate at once
-/// (`candidates`: those the run's model accepts and does not already hold), each kind
-/// once (each plate's instruments on their own rather than both plates together),
-/// started from the run's solution. Its residuals are the diagnosis's estimate of the
-/// noise: its mean square and autocorrelation are what every candidate's decrease is
-/// measured against. `None` when fewer than two candidates are scored (each candidate's
-/// own re-fit is then that model).
-fn full_model_series(
-    setup: &TrackingRunSetup,
-    solution: &GaitSolution,
-    candidates: &[&EffectSpec],
-) -> anyhow::Result<Option<FullModel>> {
-    // the volumetric contact law is score-tested but left out of the largest model
-    let mut order: Vec<&EffectSpec> = candidates
-        .iter()
-        .copied()
-        .filter(|c| c.kind() != "volumetric_contact")
-        .collect();
-    order.sort_by_key(|c| both_plates(c));
-    let mut chosen: Vec<EffectSpec> = Vec::new();
-    for c in order {
-        if !chosen.iter().any(|x| x.overlaps(c)) {
-            chosen.push(c.clone());
-        }
-    }
-    if chosen.len() < 2 {
-        return Ok(None);
-    }
-    let mut prob = linearisation(TrackingProblem::build(setup, &chosen)?);
-    prob.setup.start_from(solution).map_err(|e| anyhow!(e))?;
-    let (objective, series) = prob.with_transcription(|tr, cycle, w| {
-        let (j1, w1) = refit_point(tr, &w).map_err(|e| anyhow!(e))?;
-        let series = residual_series(&prob, tr, &cycle.continuous, &w1)?;
-        Ok((j1, series))
-    })?;
-    Ok(Some(FullModel {
-        effects: chosen.iter().map(|c| c.label()).collect(),
-        objective,
-        series,
-    }))
-}
-
-/// The largest model's truncated re-fit: the diagnosis's estimate of the noise.
-pub(super) struct FullModel {
-    /// Its effects' labels.
-    pub effects: Vec<String>,
-    /// Its cost after the re-fit.
-    pub objective: f64,
-    /// The Table 3 channels' residual series at the nodes.
-    pub series: Vec<(String, Vec<f64>)>,
-}
-
-/// The run's residuals: cost, count, the truncated re-fit's leftover decrease and the
-/// Table 3 channels' error series at the nodes (for their autocorrelation).
-pub(super) struct Residuals {
-    objective: f64,
-    decrease: f64,
-    rows: usize,
-    series: Vec<(String, Vec<f64>)>,
-    /// Each channel's variance inflation `N/N_eff`.
-    inflation: Vec<Option<f64>>,
-}
-
-impl Residuals {
-    /// The variance inflation φ a candidate's decrease is judged with: that of the
-    /// residual series `after` (by channel; the run's own where `after` lacks one),
-    /// averaged over the channels weighted by how much the candidate improves each
-    /// (`expected`: `(channel, unit, before, after)` mean errors), as the decrease's
-    /// variance is that of the channels it comes from.
-    fn inflation_after(
-        &self,
-        after: &[(String, Vec<f64>)],
-        expected: &[(String, String, f64, f64)],
-    ) -> f64 {
-        let weights: Vec<f64> = self
-            .series
-            .iter()
-            .map(|(name, _)| {
-                expected.iter().find(|c| &c.0 == name).map_or(0.0, |c| {
-                    if c.2 > 0.0 {
-                        (c.2 - c.3) / c.2
-                    } else {
-                        0.0
-                    }
-                })
-            })
-            .collect();
-        let series: Vec<Vec<f64>> = self
-            .series
-            .iter()
-            .map(|(name, own)| {
-                after
-                    .iter()
-                    .find(|a| &a.0 == name)
-                    .map_or_else(|| own.clone(), |a| a.1.clone())
-            })
-            .collect();
-        variance_inflation(&series, &weights).1
-    }
-
-    /// The residual mean square every statistic is measured in: the largest model's
-    /// (`noise`; an F-test's denominator), or the run's own without it.
-    fn mean_square(&self, noise: Option<&FullModel>) -> f64 {
-        let objective = noise.map_or(self.objective, |f| f.objective.min(self.objective));
-        objective / self.rows.max(1) as f64
-    }
-}
-
 /// The run being diagnosed: its solution, summary, cost and data residual count.
 pub(super) struct Baseline<'a> {
     solution: &'a GaitSolution,
     summary: &'a RunSummary,
     objective: f64,
     rows: usize,
-}
-
-/// A score-tested candidate (one without a null value is tested by a re-fit instead):
-/// its problem's build error (the model refuses it), or its test, the point its
-/// truncated re-fit reached and the seconds it took.
-enum Scored {
-    Unbuilt(anyhow::Error),
-    Tested(anyhow::Result<Box<(ScoreTest, GaitSolution, f64)>>),
-}
-
-/// One progress line per tested candidate: its (predicted or re-fit) decrease, the steps
-/// or iterations it took, its statistic against the threshold.
-fn print_progress(progress: &dyn Progress, t: &ScoreTest, converged: bool, seconds: f64) {
-    let (what, steps) = if t.refit {
-        ("re-fit decrease  ", "iterations")
-    } else {
-        ("expected decrease", "steps")
-    };
-    note!(progress,
-        "  {:<32} {what} {:>10.3e} ({:>5.1} % of J, {} {steps}{}), statistic {:>9.1} (φ {:.1}) vs {:.1}{}  [{seconds:.1} s]",
-        t.label,
-        t.predicted_decrease,
-        100.0 * t.predicted_fraction,
-        t.steps,
-        if converged { "" } else { ", not converged" },
-        t.statistic,
-        t.inflation,
-        t.threshold,
-        if !t.testable {
-            format!("  NOT TESTABLE: {}", t.identifiability.as_ref().and_then(|i| i.reason.clone()).unwrap_or_default())
-        } else if t.significant {
-            "  significant".into()
-        } else {
-            String::new()
-        },
-    );
 }
 
 fn sibling(run: &Path, suffix: &str) -> PathBuf {
@@ -384,20 +101,6 @@ fn sibling(run: &Path, suffix: &str) -> PathBuf {
         .unwrap_or_else(|| "run".into());
     run.with_file_name(format!("{name}{suffix}"))
 }
-
-/// Why heel-pad compliance is not scored on a run with interpolated node targets, and
-/// what to do instead (followed by the run).
-///
-/// The pad has no null value for a score test (the rigid heel is its limit of infinite
-/// stiffness), so `diagnose` tests it by a full re-fit ([`refit_test`]). With Millard & Mombaur's
-/// interpolated node targets that re-fit's decrease is no evidence: a free pad lowers J
-/// on data *without* a pad too (the double-circle trial without a hidden effect: J
-/// 0.3938 → 0.3696, a statistic of 34 against the χ²₂ 0.1 % point 13.8), even on
-/// noise-free data, because at the nodes on the contact changes the targets average
-/// across the jumps a rigid contact makes and a pad bends to meet them. With
-/// `track --sample-targets` (every sample compared at its own instant) it does not, on
-/// the 100 Hz noisy trials of tests/hidden_effects.rs; `docs/method.md` ("The heel pad") explains why.
-const UNSCORABLE_PAD: &str = "not scored — it has no null value (the rigid heel is its limit of infinite stiffness), so it is tested by a re-fit, and on a run with interpolated node targets a re-fit's decrease is no evidence (a free pad lowers J on data without one too, from the node targets on the contact changes; see docs/method.md, \"The heel pad\"); track with `--sample-targets` (every sample compared at its own instant; 100 Hz tested) and diagnose that run, or re-fit it with `footfall track --foot … --effect heel_pad_compliance --init RUN` and judge the identified stiffness and damping and the per-channel errors with `footfall diff`";
 
 /// The first stage: the run's trial checked against itself (whole-body Newton–Euler,
 /// no model fitted), reported before the model stage. Returns its text (`None` where the
@@ -528,31 +231,6 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
     output::write(&ctx, folder, progress)
 }
 
-/// The run's own residuals at its solution (`base`): its cost, the decrease a
-/// truncated re-fit still makes, and each channel's variance inflation; with the
-/// inflation over all channels alike.
-fn baseline_residuals(run: &RunInputs, base: &TrackingProblem) -> anyhow::Result<(Residuals, f64)> {
-    let (objective, base_decrease, rows) = decrease_at_solution(base)?;
-    let series =
-        base.with_transcription(|tr, cycle, w| residual_series(base, tr, &cycle.continuous, &w))?;
-    let values: Vec<Vec<f64>> = series.iter().map(|s| s.1.clone()).collect();
-    let (inflation, phi_all) = variance_inflation(&values, &[]);
-    let resid = Residuals {
-        objective,
-        decrease: base_decrease,
-        rows,
-        series,
-        inflation,
-    };
-    note!(run.progress,
-        "diagnosing {}: J = {objective:.6} over {rows} data residuals (mean square {:.3e}); Gauss–Newton decrease left at the solution {base_decrease:.2e}; variance inflation of the correlated residuals {phi_all:.1} ({})",
-        run.args.run.display(),
-        objective / rows as f64,
-        resid.series.iter().zip(&resid.inflation).map(|(s, p)| format!("{} {}", s.0, p.map_or("—".into(), |p| format!("{p:.1}")))).collect::<Vec<_>>().join(", ")
-    );
-    Ok((resid, phi_all))
-}
-
 /// The candidates to test: the named ones, and the default set (the catalog, the heel
 /// pad on a foot with a heel circle, the contact law on a volumetric foot) when none is
 /// named or [`CATALOG`] is among them.
@@ -586,177 +264,6 @@ fn candidates_of(args: &DiagnoseRequest, model: &GaitModel) -> anyhow::Result<Ve
         }
     }
     Ok(candidates)
-}
-
-/// Whether the run's model already holds an effect that candidate `c` would duplicate.
-fn in_the_model(setup: &TrackingRunSetup, c: &EffectSpec) -> bool {
-    setup
-        .effects
-        .iter()
-        .any(|e| e.overlaps(c) && !e.composes_with(c))
-}
-
-/// The largest model's residuals (every accepted candidate at once), said in a line;
-/// `None` with fewer than two, or where its re-fit failed (said as a warning).
-fn largest_model(run: &RunInputs, accepted: &[&EffectSpec], objective: f64) -> Option<FullModel> {
-    match full_model_series(run.setup, run.solution, accepted) {
-        Ok(Some(full)) => {
-            note!(run.progress,
-                "the largest model ({} candidates at once: {}) lowers J from {objective:.6} to {:.6}; its residuals are the noise every statistic is measured against",
-                full.effects.len(),
-                full.effects.join(", "),
-                full.objective
-            );
-            Some(full)
-        }
-        Ok(None) => None,
-        Err(e) => {
-            warn_note!(run.progress,
-                "the largest model (every candidate at once) could not be re-fitted ({e:#}); each candidate's statistic is corrected with the residuals after its own re-fit"
-            );
-            None
-        }
-    }
-}
-
-/// Every candidate's test, in rank order, with the evidence each rests on; the
-/// candidates not tested, and why; and the largest model's residuals.
-type Scores = (
-    Vec<ScoreTest>,
-    Vec<Evidence>,
-    Vec<String>,
-    Option<FullModel>,
-);
-
-/// Test every candidate: a score test at the run's solution for each with a null value
-/// (in parallel), a re-fit for the heel pad, and rank them.
-fn score_all(
-    run: &RunInputs,
-    base: &TrackingProblem,
-    resid: &Residuals,
-    phi_all: f64,
-    candidates: &[EffectSpec],
-) -> anyhow::Result<Scores> {
-    let (args, setup, progress) = (run.args, run.setup, run.progress);
-    let pad = EffectSpec::parse_cli("heel_pad_compliance").map_err(|e| anyhow!(e))?;
-    // each score-tested candidate's problem, built once (the model, phases and trial read
-    // from their files): the largest model is made of those the model accepts, and each
-    // is then score-tested
-    let problems: Vec<Option<anyhow::Result<TrackingProblem>>> = candidates
-        .iter()
-        .map(|c| {
-            (c.kind() != pad.kind() && !in_the_model(setup, c))
-                .then(|| TrackingProblem::build(setup, std::slice::from_ref(c)))
-        })
-        .collect();
-    let accepted: Vec<&EffectSpec> = candidates
-        .iter()
-        .zip(&problems)
-        .filter(|(_, p)| matches!(p, Some(Ok(_))))
-        .map(|(c, _)| c)
-        .collect();
-    let full = largest_model(run, &accepted, resid.objective);
-    // the run every candidate's re-fit (the pad's) is measured against
-    let baseline = Baseline {
-        solution: run.solution,
-        summary: run.before,
-        objective: resid.objective,
-        rows: resid.rows,
-    };
-    let scored_count = problems.iter().filter(|p| p.is_some()).count();
-    if scored_count > 1 {
-        note!(progress, "score-testing {scored_count} candidates");
-    }
-    let scored = score_tests(run, base, resid, full.as_ref(), candidates, problems);
-    let mut tests = Vec::new();
-    let mut skipped = Vec::new();
-    for (c, scored) in candidates.iter().zip(scored) {
-        if in_the_model(setup, c) {
-            skipped.push(format!("{}: already in the model", c.label()));
-            continue;
-        }
-        if c.kind() == pad.kind() {
-            // a foot without a heel circle has no place for the pad: the candidate is
-            // named with the model's reason, and the other candidates' scores stand
-            if let Err(e) = TrackingProblem::build(setup, std::slice::from_ref(c)) {
-                skipped.push(format!("{}: {e:#}", c.label()));
-                continue;
-            }
-            if !(setup.one_sided_targets || setup.sample_targets) {
-                skipped.push(format!(
-                    "{}: {}",
-                    c.label(),
-                    UNSCORABLE_PAD.replace("RUN", &args.run.display().to_string())
-                ));
-                continue;
-            }
-            let t0 = std::time::Instant::now();
-            let (mut t, refitted, diff) = test_by_refit(args, setup, c, &baseline, progress)?;
-            t.set_inflation(phi_all);
-            print_progress(progress, &t, refitted.converged, t0.elapsed().as_secs_f64());
-            tests.push((t, Evidence::Refit(Box::new(refitted), diff)));
-            continue;
-        }
-        // scored above for every candidate that gets here (neither in the model nor the pad)
-        let Some(scored) = scored else { continue };
-        let (t, start, seconds) = match scored {
-            Scored::Unbuilt(e) => {
-                skipped.push(format!("{}: {e:#}", c.label()));
-                continue;
-            }
-            Scored::Tested(result) => *result?,
-        };
-        print_progress(progress, &t, true, seconds);
-        tests.push((t, Evidence::Start(start)));
-    }
-    // testable candidates first, the untestable after them (their statistic says
-    // nothing), and the significant before the rest; among them by how much each explains, the
-    // decrease (its likelihood gain under the largest model's noise, which all share):
-    // the statistic's φ, weighted by the channels a candidate improves, decides whether
-    // it explains more than the noise, not which explains most
-    tests.sort_by(|a, b| {
-        b.0.testable
-            .cmp(&a.0.testable)
-            .then(b.0.significant.cmp(&a.0.significant))
-            .then(b.0.predicted_decrease.total_cmp(&a.0.predicted_decrease))
-    });
-    let (tests, evidence): (Vec<ScoreTest>, Vec<Evidence>) = tests.into_iter().unzip();
-    Ok((tests, evidence, skipped, full))
-}
-
-/// The score tests: each candidate's is independent of the others' (its own problem,
-/// started at the run's solution), so they run at once, as many as rayon has threads;
-/// each one's figures are the same whichever thread runs it and when, and they are
-/// returned in the candidates' order (`None` for those not built: in the model, or the
-/// pad).
-fn score_tests(
-    run: &RunInputs,
-    base: &TrackingProblem,
-    resid: &Residuals,
-    full: Option<&FullModel>,
-    candidates: &[EffectSpec],
-    problems: Vec<Option<anyhow::Result<TrackingProblem>>>,
-) -> Vec<Option<Scored>> {
-    let (setup, solution) = (run.setup, run.solution);
-    let base_theta = base.model.ntheta();
-    candidates
-        .par_iter()
-        .zip(problems.into_par_iter())
-        .map(|(c, built)| {
-            Some(match built? {
-                Err(e) => Scored::Unbuilt(e),
-                Ok(p) => Scored::Tested((|| {
-                    let mut prob = linearisation(p);
-                    let k = prob.model.ntheta() - base_theta;
-                    prob.setup.start_from(solution).map_err(|e| anyhow!(e))?;
-                    let t0 = std::time::Instant::now();
-                    let (t, start) =
-                        test_candidate(&prob, c, k, resid, full, heldout::hint(c, setup))?;
-                    Ok(Box::new((t, start, t0.elapsed().as_secs_f64())))
-                })()),
-            })
-        })
-        .collect()
 }
 
 /// The held-out half cycle's plain track, once (`None`: none was needed; `Err`: why the

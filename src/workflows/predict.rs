@@ -114,6 +114,70 @@ pub fn outcome_text(out: &GaitRunOutput, res: &SqpResult) -> String {
     text
 }
 
+/// A prediction's problem: the model with its phases, the measurement, and the targets
+/// and start the prediction is set up with.
+struct Problem {
+    /// The model and foot.
+    model: GaitModel,
+    /// The phase file.
+    phases: PathBuf,
+    /// Contact set of every phase of the phase file.
+    sets: Vec<crate::model::ConstraintSet>,
+    /// The measurement.
+    data: crate::data::GaitData,
+    /// The tracking problem of the measurement (its window, events and targets).
+    tracking: TrackingSetup,
+    /// Targets and weights.
+    settings: PredictionSettings,
+    /// The phase sequence, guess and bounds.
+    setup: PredictionSetup,
+}
+
+impl Problem {
+    /// Read the model, phases and trial of a prediction with `foot`, and set it up from
+    /// `init` (else from the data).
+    fn load(
+        o: &PredictionOptions,
+        foot: &str,
+        phases: Option<&Path>,
+        init: Option<&GaitSolution>,
+        progress: &dyn Progress,
+    ) -> anyhow::Result<Self> {
+        let foot_path = super::foot_path(foot);
+        let model = GaitModel::load(&o.model, &foot_path)?;
+        let phases = phases
+            .map(Path::to_path_buf)
+            .unwrap_or_else(|| super::default_phases(foot));
+        let seq = PhaseSequence::load(&phases)?;
+        let sets = seq.resolve(&model, &phases)?;
+        let trial = super::trial::load_trial(&o.trial)?;
+        for n in &trial.notes {
+            progress.note(n);
+        }
+        let data = trial.data;
+        let tracking = TrackingSetup::new(&model, &seq, &sets, &data)
+            .map_err(|e| anyhow!("{}: {e}", data.source.display()))?;
+        let mut settings = PredictionSettings::from_data(&tracking, &data);
+        settings.set_targets(o.step_length, o.speed)?;
+        settings.impulse_weight = o.impulse_weight;
+        settings.ankle_velocity_limit = o.ankle_velocity_limit;
+        let setup = match init {
+            Some(sol) => PredictionSetup::from_solution(&seq, &tracking, sol, settings.clone()),
+            None => PredictionSetup::from_data(&seq, &tracking, settings.clone()),
+        }
+        .map_err(|e| anyhow!("{}: {e}", phases.display()))?;
+        Ok(Problem {
+            model,
+            phases,
+            sets,
+            data,
+            tracking,
+            settings,
+            setup,
+        })
+    }
+}
+
 /// Solve one prediction and write its run folder.
 pub fn predict(
     o: &PredictionOptions,
@@ -124,30 +188,9 @@ pub fn predict(
     progress: &dyn Progress,
 ) -> anyhow::Result<(GaitRunOutput, SqpResult)> {
     o.check_limits()?;
-    let foot_path = super::foot_path(foot);
-    let model = GaitModel::load(&o.model, &foot_path)?;
-    let phases = phases
-        .map(Path::to_path_buf)
-        .unwrap_or_else(|| super::default_phases(foot));
-    let seq = PhaseSequence::load(&phases)?;
-    let sets = seq.resolve(&model, &phases)?;
-    let trial = super::trial::load_trial(&o.trial)?;
-    for n in &trial.notes {
-        progress.note(n);
-    }
-    let data = trial.data;
-    let tracking = TrackingSetup::new(&model, &seq, &sets, &data)
-        .map_err(|e| anyhow!("{}: {e}", data.source.display()))?;
-    let mut settings = PredictionSettings::from_data(&tracking, &data);
-    settings.set_targets(o.step_length, o.speed)?;
-    settings.impulse_weight = o.impulse_weight;
-    settings.ankle_velocity_limit = o.ankle_velocity_limit;
-    let setup = match init {
-        Some(sol) => PredictionSetup::from_solution(&seq, &tracking, sol, settings.clone()),
-        None => PredictionSetup::from_data(&seq, &tracking, settings.clone()),
-    }
-    .map_err(|e| anyhow!("{}: {e}", phases.display()))?;
-    let cycle = GaitCycle::new(&model, &setup.seq, &sets).map_err(|e| anyhow!(e))?;
+    let p = Problem::load(o, foot, phases, init, progress)?;
+    let (model, sets, settings) = (&p.model, &p.sets, &p.settings);
+    let cycle = GaitCycle::new(model, &p.setup.seq, sets).map_err(|e| anyhow!(e))?;
     let integrator = IntegratorSettings {
         rtol: o.integrator_tol,
         atol: o.integrator_tol,
@@ -155,14 +198,14 @@ pub fn predict(
     };
     integrator.validate().context("--integrator-tol")?;
     let build = || {
-        setup
-            .ocp(&cycle, &model, &sets, integrator.clone())
+        p.setup
+            .ocp(&cycle, model, sets, integrator.clone())
             .map_err(|e| anyhow!(e))
     };
     let ocp = build()?;
     let tr = Transcription::new(&ocp).context("transcribing the prediction problem")?;
     let (_, _, w0) = tr.variable_bounds_and_guess();
-    let hessian = o.hessian.into();
+    let hessian = o.hessian;
     let sqp_settings = SqpSettings {
         tol_kkt: o.tol,
         max_iter: o.max_iter,
@@ -189,77 +232,118 @@ pub fn predict(
     }
     let refinement = super::refine::Refinement {
         cycle: &cycle,
-        model: &model,
-        sets: &sets,
+        model,
+        sets,
         integrator: integrator.clone(),
-        t0: tracking.window.0,
+        t0: p.tracking.window.0,
         enabled: o.check_points,
         max_iter: sqp_settings.max_iter,
         tol_kkt: sqp_settings.tol_kkt,
-    };
-    // a failed line search of the exact Hessian goes on once from that iterate with block
-    // BFGS. Near a stationary point the inertia correction can shift the QP's Hessian by
-    // far more than its curvature, and the QP's step and multipliers with it: the CI's
-    // double-circle prediction stalled at KKT 3.7e-3 with steps of 1e-5, its integrator at
-    // 1e-10 or 1e-12, where block BFGS certifies the same point at KKT 2.4e-7 at once
-    let solve_staged = |tr: &Transcription,
-                        (w, lambda0): super::refine::RoundStart<'_>,
-                        tol_kkt: f64,
-                        max_iter: usize|
-     -> anyhow::Result<SqpResult> {
-        let sqp_settings = SqpSettings {
-            tol_kkt,
-            max_iter,
-            ..sqp_settings.clone()
-        };
-        let first = super::solve_interruptibly_warm(
-            tr,
-            w,
-            // the constraints' multipliers only (the bounds' too would move every
-            // prediction's iterates; not re-checked yet)
-            lambda0.map(|ws| crate::sqp::WarmStart::constraints(ws.lambda)),
-            &sqp_settings,
-            progress,
-        )?;
-        if first.status != SqpStatus::LineSearchFailure
-            || sqp_settings.hessian != HessianMode::Exact
-        {
-            return Ok(first);
-        }
-        {
-            note!(progress,
-                "line search failed at KKT {:.2e} with the exact Hessian: going on from there with block BFGS",
-                first.kkt
-            );
-        }
-        let used = first.history.len().saturating_sub(1);
-        let rest = SqpSettings {
-            max_iter: sqp_settings.max_iter.saturating_sub(used),
-            max_time: sqp_settings.max_time.map(|t| (t - first.seconds).max(0.0)),
-            hessian: HessianMode::Bfgs,
-            ..sqp_settings.clone()
-        };
-        let second = super::solve_interruptibly(tr, &first.w, &rest, progress)?;
-        Ok(first.followed_by(second))
     };
     let (sites, res) = refinement.solve(
         &build,
         &[],
         &w0,
-        &mut |tr, start, t, n| solve_staged(tr, start, t, n),
+        &mut |tr, start, t, n| solve_staged(tr, start, t, n, &sqp_settings, progress),
         progress,
     )?;
     let mut ocp = build()?;
     ocp.checks = cycle.checks_at(&sites);
     let tr = Transcription::new(&ocp).context("transcribing the prediction problem")?;
-    let solution = GaitSolution::from_nlp(&tr, &res.w, &cycle.continuous, tracking.window.0);
+    let solution = GaitSolution::from_nlp(&tr, &res.w, &cycle.continuous, p.tracking.window.0);
+    let solved = Solved {
+        result: &res,
+        solution: &solution,
+        integrator,
+        friction: cycle.friction(),
+        check_points: sites.len(),
+        from_solution: init.is_some(),
+    };
+    let out = write_run(o, foot, &p, solved, folder)?;
+    Ok((out, res))
+}
+
+/// One round of a prediction's solve from `(w, lambda0)`, to `tol_kkt` within `max_iter`
+/// iterations. A failed line search of the exact Hessian goes on once from that iterate
+/// with block BFGS. Near a stationary point the inertia correction can shift the QP's
+/// Hessian by far more than its curvature, and the QP's step and multipliers with it:
+/// the CI's double-circle prediction stalled at KKT 3.7e-3 with steps of 1e-5, its
+/// integrator at 1e-10 or 1e-12, where block BFGS certifies the same point at KKT 2.4e-7
+/// at once.
+fn solve_staged(
+    tr: &Transcription,
+    (w, lambda0): super::refine::RoundStart<'_>,
+    tol_kkt: f64,
+    max_iter: usize,
+    sqp_settings: &SqpSettings,
+    progress: &dyn Progress,
+) -> anyhow::Result<SqpResult> {
+    let sqp_settings = SqpSettings {
+        tol_kkt,
+        max_iter,
+        ..sqp_settings.clone()
+    };
+    let first = super::solve_interruptibly_warm(
+        tr,
+        w,
+        // the constraints' multipliers only (the bounds' too would move every
+        // prediction's iterates; not re-checked yet)
+        lambda0.map(|ws| crate::sqp::WarmStart::constraints(ws.lambda)),
+        &sqp_settings,
+        progress,
+    )?;
+    if first.status != SqpStatus::LineSearchFailure || sqp_settings.hessian != HessianMode::Exact {
+        return Ok(first);
+    }
+    {
+        note!(progress,
+            "line search failed at KKT {:.2e} with the exact Hessian: going on from there with block BFGS",
+            first.kkt
+        );
+    }
+    let used = first.history.len().saturating_sub(1);
+    let rest = SqpSettings {
+        max_iter: sqp_settings.max_iter.saturating_sub(used),
+        max_time: sqp_settings.max_time.map(|t| (t - first.seconds).max(0.0)),
+        hessian: HessianMode::Bfgs,
+        ..sqp_settings.clone()
+    };
+    let second = super::solve_interruptibly(tr, &first.w, &rest, progress)?;
+    Ok(first.followed_by(second))
+}
+
+/// A solved prediction, as its run folder records it.
+struct Solved<'a> {
+    /// The solver's result.
+    result: &'a SqpResult,
+    /// The solution read from it.
+    solution: &'a GaitSolution,
+    /// The shooting intervals' integrator.
+    integrator: IntegratorSettings,
+    /// Friction coefficient of the contacts' cone.
+    friction: f64,
+    /// Number of check points holding the contact constraints between the nodes.
+    check_points: usize,
+    /// Whether the prediction started from a given solution (else from the data).
+    from_solution: bool,
+}
+
+/// Write the run folder of the prediction `p` with `foot`, solved as `solved`.
+fn write_run(
+    o: &PredictionOptions,
+    foot: &str,
+    p: &Problem,
+    solved: Solved,
+    folder: RunFolder,
+) -> anyhow::Result<GaitRunOutput> {
+    let (model, settings, solution) = (&p.model, &p.settings, solved.solution);
     let durations: Vec<String> = solution
         .phases
         .iter()
         .map(|p| format!("{} {:.3} s", p.name, p.duration))
         .collect();
     let mut extra_json = serde_json::Map::new();
-    extra_json.insert("prediction".into(), serde_json::to_value(&settings)?);
+    extra_json.insert("prediction".into(), serde_json::to_value(settings)?);
     extra_json.insert(
         "durations_s".into(),
         solution
@@ -273,25 +357,25 @@ pub fn predict(
         &folder,
         &o.model,
         foot,
-        &phases,
+        &p.phases,
         o.trial.data.as_deref(),
         o.trial.forces.as_deref(),
     )?;
-    let out = super::run_folder::write(
+    super::run_folder::write(
         GaitRun {
             command: "predict",
-            title: format!("footfall prediction — {} foot, {}", model.foot_name, data.name),
-            data: &data,
-            model: &model,
-            sets: &sets,
-            phases_path: &phases,
+            title: format!("footfall prediction — {} foot, {}", model.foot_name, p.data.name),
+            data: &p.data,
+            model,
+            sets: &p.sets,
+            phases_path: &p.phases,
             inputs: Some(&inputs),
-            events: &tracking.events,
-            sequence: &setup.seq,
-            control_bounds: (&setup.guess.u_lb, &setup.guess.u_ub),
-            result: &res,
-            solution: &solution,
-            integrator,
+            events: &p.tracking.events,
+            sequence: &p.setup.seq,
+            control_bounds: (&p.setup.guess.u_lb, &p.setup.guess.u_ub),
+            result: solved.result,
+            solution,
+            integrator: solved.integrator,
             extra_summary: vec![
                 ("targets".into(), format!("step length {:.3} m, speed {:.3} m/s", settings.step_length, settings.speed)),
                 ("phase durations".into(), durations.join(", ")),
@@ -305,17 +389,16 @@ pub fn predict(
                     settings.step_length,
                     settings.speed,
                     settings.ankle_velocity_limit.map_or(String::new(), |w| format!(", ankle angular velocity bounded by {w} rad/s")),
-                    if init.is_some() { "the given solution" } else { "the data" }
+                    if solved.from_solution { "the given solution" } else { "the data" }
                 )],
                 tables: vec![],
                 svgs: vec![],
             }],
             extra_files: vec![],
-            friction: cycle.friction(),
-            check_points: sites.len(),
+            friction: solved.friction,
+            check_points: solved.check_points,
             transient_threshold_n: o.transient_threshold,
         },
         folder,
-    )?;
-    Ok((out, res))
+    )
 }

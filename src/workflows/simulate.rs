@@ -54,85 +54,9 @@ pub fn run(args: &SimulateRequest, progress: &dyn Progress) -> anyhow::Result<()
     let model = GaitModel::load(&args.model.model, &foot)?;
     let seq = PhaseSequence::load(&args.phase_set)?;
     let sets = seq.resolve(&model, &args.phase_set)?;
-    let init: InitialState = match &args.initial {
-        Some(p) => crate::model::spec::read_json(p)?,
-        None => seq.initial_state.clone().ok_or_else(|| {
-            anyhow!(
-                "{}: no `initial_state` in the phase file and no --initial given",
-                args.phase_set.display()
-            )
-        })?,
-    };
-    let src = args
-        .initial
-        .as_ref()
-        .unwrap_or(&args.phase_set)
-        .display()
-        .to_string();
-    let nq = model.nq();
-    for (field, v, n) in [("q", &init.q, nq), ("qd", &init.qd, nq)] {
-        if v.len() != n {
-            return Err(anyhow!(
-                "{src}: initial state field '{field}' has {} values, expected {n} ({})",
-                v.len(),
-                COORDINATES.join(", ")
-            ));
-        }
-        if let Some(i) = v.iter().position(|x| !x.is_finite()) {
-            return Err(anyhow!(
-                "{src}: initial state field '{field}[{i}]' is not finite"
-            ));
-        }
-    }
-    let a = match &init.a {
-        Some(a) if a.len() != model.na() => {
-            return Err(anyhow!(
-                "{src}: initial state field 'a' has {} values, expected {}",
-                a.len(),
-                model.na()
-            ))
-        }
-        Some(a) => a.clone(),
-        None => vec![0.01; model.na()],
-    };
     let theta = model.theta0();
-    let (q0, qd0) = if args.no_project {
-        (init.q.clone(), init.qd.clone())
-    } else {
-        let (q, qd, gap) = model
-            .project(&sets[0], &init.q, &init.qd, &theta)
-            .with_context(|| {
-                format!(
-                    "projecting the initial state onto phase '{}'",
-                    seq.phases[0].name()
-                )
-            })?;
-        if gap > 1e-9 {
-            return Err(anyhow!(
-                "{src}: the initial state cannot be placed on the contacts of phase '{}' (gap {gap:.3e} m remains)",
-                seq.phases[0].name()
-            ));
-        }
-        (q, qd)
-    };
-    let mut x0 = q0;
-    x0.extend(&qd0);
-    x0.extend(&a);
-    let controls = match &args.controls {
-        Some(p) => {
-            // excitations of muscle-torque generators are fractions of full activation
-            let names = model.control_names();
-            let mtg = matches!(model.actuation(), crate::model::gait::Actuation::Mtg(_));
-            let ranges: Vec<Option<(f64, f64, &str)>> = (0..names.len())
-                .map(|i| (mtg && i < model.nu_actuators()).then_some((0.0, 1.0, "an excitation")))
-                .collect();
-            ControlTable::load_csv_within(p, &names, &ranges)?
-        }
-        None => {
-            let v = if model.na() > 0 { 0.025 } else { 0.0 };
-            ControlTable::constant(model.control_names(), vec![v; model.nu()])
-        }
-    };
+    let x0 = initial_state(args, &model, &seq, &sets, &theta)?;
+    let controls = controls(args, &model)?;
     let settings = SimulationSettings {
         output_step: args.dt,
         integrator: IntegratorSettings {
@@ -193,7 +117,7 @@ pub fn run(args: &SimulateRequest, progress: &dyn Progress) -> anyhow::Result<()
         &seq,
         &sets,
         &res,
-        &args,
+        args,
         &tolerances,
         &warnings,
         started.elapsed().as_secs_f64(),
@@ -211,6 +135,101 @@ pub fn run(args: &SimulateRequest, progress: &dyn Progress) -> anyhow::Result<()
         );
     }
     Ok(())
+}
+
+/// The initial state `[q, q̇, a]`: `--initial` or the phase file's, checked against the
+/// model and (unless `--no-project`) projected onto the first phase's contacts.
+fn initial_state(
+    args: &SimulateRequest,
+    model: &GaitModel,
+    seq: &PhaseSequence,
+    sets: &[crate::model::ConstraintSet],
+    theta: &[f64],
+) -> anyhow::Result<Vec<f64>> {
+    let init: InitialState = match &args.initial {
+        Some(p) => crate::model::spec::read_json(p)?,
+        None => seq.initial_state.clone().ok_or_else(|| {
+            anyhow!(
+                "{}: no `initial_state` in the phase file and no --initial given",
+                args.phase_set.display()
+            )
+        })?,
+    };
+    let src = args
+        .initial
+        .as_ref()
+        .unwrap_or(&args.phase_set)
+        .display()
+        .to_string();
+    let nq = model.nq();
+    for (field, v, n) in [("q", &init.q, nq), ("qd", &init.qd, nq)] {
+        if v.len() != n {
+            return Err(anyhow!(
+                "{src}: initial state field '{field}' has {} values, expected {n} ({})",
+                v.len(),
+                COORDINATES.join(", ")
+            ));
+        }
+        if let Some(i) = v.iter().position(|x| !x.is_finite()) {
+            return Err(anyhow!(
+                "{src}: initial state field '{field}[{i}]' is not finite"
+            ));
+        }
+    }
+    let a = match &init.a {
+        Some(a) if a.len() != model.na() => {
+            return Err(anyhow!(
+                "{src}: initial state field 'a' has {} values, expected {}",
+                a.len(),
+                model.na()
+            ))
+        }
+        Some(a) => a.clone(),
+        None => vec![0.01; model.na()],
+    };
+    let (q0, qd0) = if args.no_project {
+        (init.q.clone(), init.qd.clone())
+    } else {
+        let (q, qd, gap) = model
+            .project(&sets[0], &init.q, &init.qd, theta)
+            .with_context(|| {
+                format!(
+                    "projecting the initial state onto phase '{}'",
+                    seq.phases[0].name()
+                )
+            })?;
+        if gap > 1e-9 {
+            return Err(anyhow!(
+                "{src}: the initial state cannot be placed on the contacts of phase '{}' (gap {gap:.3e} m remains)",
+                seq.phases[0].name()
+            ));
+        }
+        (q, qd)
+    };
+    let mut x0 = q0;
+    x0.extend(&qd0);
+    x0.extend(&a);
+    Ok(x0)
+}
+
+/// The controls: `--controls` read within their ranges, else every control at 0.025
+/// (excitations) or 0 (torques).
+fn controls(args: &SimulateRequest, model: &GaitModel) -> anyhow::Result<ControlTable> {
+    Ok(match &args.controls {
+        Some(p) => {
+            // excitations of muscle-torque generators are fractions of full activation
+            let names = model.control_names();
+            let mtg = matches!(model.actuation(), crate::model::gait::Actuation::Mtg(_));
+            let ranges: Vec<Option<(f64, f64, &str)>> = (0..names.len())
+                .map(|i| (mtg && i < model.nu_actuators()).then_some((0.0, 1.0, "an excitation")))
+                .collect();
+            ControlTable::load_csv_within(p, &names, &ranges)?
+        }
+        None => {
+            let v = if model.na() > 0 { 0.025 } else { 0.0 };
+            ControlTable::constant(model.control_names(), vec![v; model.nu()])
+        }
+    })
 }
 
 fn timeseries_csv(

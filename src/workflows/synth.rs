@@ -103,14 +103,11 @@ impl SynthRequest {
     }
 }
 
-/// Run `synth` as `args` describes, reporting to `progress`.
-pub fn run(args: &SynthRequest, progress: &dyn Progress) -> anyhow::Result<()> {
-    if !(args.half_cycles.is_finite() && args.half_cycles >= 2.5) {
-        bail!(
-            "--half-cycles {}: need at least 2.5 (a gait cycle plus margins for the event search)",
-            args.half_cycles
-        );
-    }
+/// The hidden effects of `--hidden-effect`: all of them as given, the offsets of both
+/// plates applied to the samples, and the model's effects.
+fn hidden_effects(
+    args: &SynthRequest,
+) -> anyhow::Result<(Vec<EffectSpec>, MeasurementOffsets, Vec<EffectSpec>)> {
     let hidden: Vec<EffectSpec> = args
         .hidden_effects
         .iter()
@@ -141,36 +138,82 @@ pub fn run(args: &SynthRequest, progress: &dyn Progress) -> anyhow::Result<()> {
             other => model_effects.push(other.clone()),
         }
     }
-    let mut solution = super::read_solution(&args.from)?;
-    // what the --from run was made with, unless given
-    let from_setup = if args.from.is_dir() && args.from.join("setup.json").is_file() {
-        Some(super::track::read_run_setup(&args.from)?)
-    } else {
-        None
-    };
-    let model_path = args
-        .model
-        .clone()
-        .or_else(|| from_setup.as_ref().map(|s| s.model.clone()))
-        .unwrap_or_else(|| PathBuf::from("models/opensim_subject01.json"));
-    let foot = args
-        .foot
-        .clone()
-        .or_else(|| from_setup.as_ref().map(|s| s.foot.clone()))
-        .unwrap_or_else(|| "ellipse".into());
-    let mut model = GaitModel::load(&model_path, &super::foot_path(&foot))?;
-    let mut phases = args
-        .phases
-        .clone()
-        .or_else(|| from_setup.as_ref().map(|s| s.phases.clone()))
-        .unwrap_or_else(|| super::default_phases(&foot));
-    if !model_effects.is_empty() {
-        // the truth: the --from run's problem re-solved with the effects in the model
+    Ok((hidden, offsets, model_effects))
+}
+
+/// The truth the trial is generated from: the model and foot, the phase file and the
+/// solution.
+struct Truth {
+    /// The model file.
+    model_path: PathBuf,
+    /// The foot (name or file).
+    foot: String,
+    /// The model with the foot (and the hidden model effects).
+    model: GaitModel,
+    /// The phase file.
+    phases: PathBuf,
+    /// The solution that drives the model.
+    solution: crate::problems::evaluation::GaitSolution,
+}
+
+impl Truth {
+    /// The `--from` solution with its model, foot and phases (given, else the `--from`
+    /// track run's, else the defaults); with `model_effects`, the `--from` run's problem
+    /// re-solved with the effects in the model.
+    fn read(
+        args: &SynthRequest,
+        model_effects: &[EffectSpec],
+        progress: &dyn Progress,
+    ) -> anyhow::Result<Self> {
+        let solution = super::read_solution(&args.from)?;
+        // what the --from run was made with, unless given
+        let from_setup = if args.from.is_dir() && args.from.join("setup.json").is_file() {
+            Some(super::track::read_run_setup(&args.from)?)
+        } else {
+            None
+        };
+        let model_path = args
+            .model
+            .clone()
+            .or_else(|| from_setup.as_ref().map(|s| s.model.clone()))
+            .unwrap_or_else(|| PathBuf::from("models/opensim_subject01.json"));
+        let foot = args
+            .foot
+            .clone()
+            .or_else(|| from_setup.as_ref().map(|s| s.foot.clone()))
+            .unwrap_or_else(|| "ellipse".into());
+        let model = GaitModel::load(&model_path, &super::foot_path(&foot))?;
+        let phases = args
+            .phases
+            .clone()
+            .or_else(|| from_setup.as_ref().map(|s| s.phases.clone()))
+            .unwrap_or_else(|| super::default_phases(&foot));
+        let mut truth = Truth {
+            model_path,
+            foot,
+            model,
+            phases,
+            solution,
+        };
+        if !model_effects.is_empty() {
+            truth.refit_with(args, model_effects, progress)?;
+        }
+        Ok(truth)
+    }
+
+    /// The truth with `model_effects` in the model: the --from run's problem re-solved
+    /// with them, from its solution.
+    fn refit_with(
+        &mut self,
+        args: &SynthRequest,
+        model_effects: &[EffectSpec],
+        progress: &dyn Progress,
+    ) -> anyhow::Result<()> {
         let run = super::track::read_run_setup(&args.from)
             .context("--hidden-effect with a model effect needs a track run folder as --from")?;
-        let mut prob = super::track::TrackingProblem::build(&run, &model_effects)?;
+        let mut prob = super::track::TrackingProblem::build(&run, model_effects)?;
         prob.setup
-            .start_from(&solution)
+            .start_from(&self.solution)
             .map_err(|e| anyhow!("{}: {e}", args.from.display()))?;
         {
             note!(
@@ -200,28 +243,53 @@ pub fn run(args: &SynthRequest, progress: &dyn Progress) -> anyhow::Result<()> {
             }
             .into());
         }
-        solution = sol;
-        phases = run.phases.clone();
-        model = prob.model;
+        self.solution = sol;
+        self.phases = run.phases.clone();
+        self.model = prob.model;
+        Ok(())
     }
-    let seq = PhaseSequence::load(&phases)?;
-    let sets = seq.resolve(&model, &phases)?;
-    if solution
-        .phases
-        .iter()
-        .any(|p| p.set >= sets.len() || p.x.iter().any(|x| x.len() != model.nx()))
-    {
-        bail!("{}: the solution does not belong to this model and phase graph ({} states, phases of {})", args.from.display(), model.nx(), phases.display());
+
+    /// Refuse a solution that does not belong to the model and phase graph.
+    fn check_fits(
+        &self,
+        args: &SynthRequest,
+        sets: &[crate::model::ConstraintSet],
+    ) -> anyhow::Result<()> {
+        let (model, solution) = (&self.model, &self.solution);
+        if solution
+            .phases
+            .iter()
+            .any(|p| p.set >= sets.len() || p.x.iter().any(|x| x.len() != model.nx()))
+        {
+            bail!("{}: the solution does not belong to this model and phase graph ({} states, phases of {})", args.from.display(), model.nx(), self.phases.display());
+        }
+        if solution.theta.len() != model.ntheta() {
+            bail!(
+                "{}: the solution has {} free parameters, the model {}",
+                args.from.display(),
+                solution.theta.len(),
+                model.ntheta()
+            );
+        }
+        Ok(())
     }
-    if solution.theta.len() != model.ntheta() {
+}
+
+/// Run `synth` as `args` describes, reporting to `progress`.
+pub fn run(args: &SynthRequest, progress: &dyn Progress) -> anyhow::Result<()> {
+    if !(args.half_cycles.is_finite() && args.half_cycles >= 2.5) {
         bail!(
-            "{}: the solution has {} free parameters, the model {}",
-            args.from.display(),
-            solution.theta.len(),
-            model.ntheta()
+            "--half-cycles {}: need at least 2.5 (a gait cycle plus margins for the event search)",
+            args.half_cycles
         );
     }
-    let mut truth_sol = solution.clone();
+    let (hidden, offsets, model_effects) = hidden_effects(args)?;
+    let truth_run = Truth::read(args, &model_effects, progress)?;
+    let (model, phases) = (&truth_run.model, &truth_run.phases);
+    let seq = PhaseSequence::load(phases)?;
+    let sets = seq.resolve(model, phases)?;
+    truth_run.check_fits(args, &sets)?;
+    let mut truth_sol = truth_run.solution.clone();
     let t0 = truth_sol.phases[0].t0;
     truth_sol.phases.iter_mut().for_each(|p| p.t0 -= t0);
     let half = truth_sol.span().1;
@@ -247,16 +315,16 @@ pub fn run(args: &SynthRequest, progress: &dyn Progress) -> anyhow::Result<()> {
         measurement: offsets,
     };
     let folder = RunFolder::create(&args.out, args.overwrite)?;
-    let (data, truth) = synthesize(&model, &sets, &truth_sol, &settings, "synthetic")
+    let (data, truth) = synthesize(model, &sets, &truth_sol, &settings, "synthetic")
         .map_err(|e| anyhow!("generating the trial: {e}"))?;
     let (csv, meta) = write_sagittal_csv(&data);
     let (clean_csv, _) = write_sagittal_csv(&truth.clean);
     // the trial's model, foot and phases, copied into the folder
     let (model_copy, foot_copy, phases_copy) =
-        super::inputs::copy_model_inputs(&folder, &model_path, &foot, &phases)?;
+        super::inputs::copy_model_inputs(&folder, &truth_run.model_path, &truth_run.foot, phases)?;
     let truth_json = serde_json::json!({
         "from": args.from,
-        "model": model_path,
+        "model": truth_run.model_path,
         "foot": model.foot_name,
         "phases": phases,
         "inputs": {"model": model_copy, "foot": foot_copy, "phases": phases_copy},

@@ -140,7 +140,7 @@ fn track_base(
     let (res, solution) = prob.solve(&settings, &super::super::Quiet)?;
     let mut at = TrackingProblem::build(&setup, &[])?;
     at.setup.start_from(&solution).map_err(|e| anyhow!(e))?;
-    let (objective, leftover, rows) = super::decrease_at_solution(&at)?;
+    let (objective, leftover, rows) = super::noise::decrease_at_solution(&at)?;
     {
         note!(
             progress,

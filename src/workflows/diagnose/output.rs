@@ -3,11 +3,12 @@
 
 #[allow(unused_imports)]
 use super::super::{note, Progress};
+use super::noise::{FullModel, Residuals};
 use super::summary::{
     self, ChannelInflation, DiagnosisSummary, NoiseModel, VarianceInflation, VerifiedParameter,
     VerifiedRecord,
 };
-use super::{DiagnoseRequest, Evidence, Residuals, Verified};
+use super::{DiagnoseRequest, Evidence, Verified};
 use crate::problems::diagnose::stats::variance_inflation;
 use crate::problems::diagnose::{HeldOut, ScoreTest, NOT_VALIDATABLE};
 use crate::report::diff::{fmt_value, RunSummary};
@@ -26,7 +27,7 @@ pub(super) struct Outcome<'a> {
     pub phi: f64,
     /// The largest model, whose residuals are the noise (when more than one candidate
     /// was scored).
-    pub noise: Option<&'a super::FullModel>,
+    pub noise: Option<&'a FullModel>,
     pub tests: &'a [ScoreTest],
     pub evidence: &'a [Evidence],
     pub verified: &'a [Verified],
@@ -81,7 +82,7 @@ pub(super) fn add_effects(tests: &[ScoreTest], clock_moves_events: bool) -> Vec<
 }
 
 /// Each channel's variance inflation in the largest model's residuals.
-fn noise_inflation(full: &super::FullModel) -> Vec<(String, Option<f64>)> {
+fn noise_inflation(full: &FullModel) -> Vec<(String, Option<f64>)> {
     let values: Vec<Vec<f64>> = full.series.iter().map(|s| s.1.clone()).collect();
     let (phis, _) = variance_inflation(&values, &[]);
     full.series.iter().map(|s| s.0.clone()).zip(phis).collect()
@@ -253,17 +254,10 @@ fn verdict(o: &Outcome<'_>) -> String {
     v
 }
 
-/// Write the diagnosis into `folder` and commit it.
-pub(super) fn write(
-    o: &Outcome<'_>,
-    folder: RunFolder,
-    progress: &dyn Progress,
-) -> anyhow::Result<()> {
-    let (args, tests, objective, rows) = (o.args, o.tests, o.objective, o.rows);
-    let significant = tests.iter().filter(|t| t.significant).count();
-    let found = tests.iter().filter(|t| t.found).count();
-    let verdict = verdict(o);
-    let ranking = Table {
+/// The ranking of the candidates: testability, in-sample statistic, held-out change and
+/// verdict.
+fn ranking_table(tests: &[ScoreTest]) -> Table {
+    Table {
         title: "Candidate effects ranked: testability, in-sample score statistic (predicted cost decrease / the largest model's residual mean square, divided by the variance inflation φ of correlated residuals), held-out change, verdict".into(),
         headers: ["rank", "effect", "testable", "parameters (truncated re-fit, ± sd)", "expected decrease", "% of J", "statistic", "φ", "χ² 0.1 % point", "held-out change vs noise band", "verdict"].map(String::from).to_vec(),
         rows: tests
@@ -286,8 +280,12 @@ pub(super) fn write(
                 ]
             })
             .collect(),
-    };
-    let untestable: Vec<String> = tests
+    }
+}
+
+/// One sentence per untestable candidate: why, and how to make it testable.
+fn untestable_sentences(tests: &[ScoreTest]) -> Vec<String> {
+    tests
         .iter()
         .filter(|t| !t.testable)
         .map(|t| {
@@ -301,8 +299,13 @@ pub(super) fn write(
                 t.hint.as_deref().unwrap_or("")
             )
         })
-        .collect();
-    let inflation = format!(
+        .collect()
+}
+
+/// The paragraph on correlated residuals: each channel's variance inflation, the plain
+/// model's and the largest model's, and how the statistics use them.
+fn inflation_paragraph(o: &Outcome<'_>) -> String {
+    format!(
         "Correlated residuals: per channel, the variance inflation φ = N/N_eff (N_eff = N/(1 + 2 Σ ρ_k), ρ_k the error's autocorrelation at the nodes, summed up to the first lag ≤ 0): {}; these are the plain model's; each candidate's statistic is divided by the φ of the residuals left after the truncated re-fit of the largest model (every scored candidate at once; as an F-test takes the larger model's variance), averaged over the channels the candidate's re-fit improves, weighted by their relative improvement.",
         o.resid
             .series
@@ -324,7 +327,11 @@ pub(super) fn write(
                 .join(", ")
         ),
         None => " Each candidate's own re-fit is the largest model; the residual mean square is the run's J/N.".into(),
-    };
+    }
+}
+
+/// Each candidate's expected mean error per channel, before → after its truncated re-fit.
+fn expected_table(tests: &[ScoreTest]) -> Table {
     // channels by name: a re-fit's come from its run summary, a score test's from the
     // problem
     let channels: Vec<(String, String)> = tests.first().map_or(vec![], |t| {
@@ -333,7 +340,7 @@ pub(super) fn write(
             .map(|c| (c.0.clone(), c.1.clone()))
             .collect()
     });
-    let expected = Table {
+    Table {
         title: "Expected mean error per channel after the truncated re-fit with each candidate (a full re-fit for the heel pad; before → after)".into(),
         headers: std::iter::once("effect".to_string()).chain(channels.iter().map(|(c, u)| format!("{c} ({u})"))).collect(),
         rows: tests
@@ -344,10 +351,14 @@ pub(super) fn write(
                     .collect()
             })
             .collect(),
-    };
-    let refits: Vec<String> = tests
+    }
+}
+
+/// One note per candidate tested by a full re-fit (no null value for a score test).
+fn refit_notes(tests: &[ScoreTest], evidence: &[Evidence]) -> Vec<String> {
+    tests
         .iter()
-        .zip(o.evidence)
+        .zip(evidence)
         .filter_map(|(t, e)| match e {
             Evidence::Refit(run, _) => Some(format!(
                 "{} was tested by a full re-fit ({}, {}), as it has no null value for a score test",
@@ -361,56 +372,42 @@ pub(super) fn write(
             )),
             Evidence::Start(_) => None,
         })
-        .collect();
-    let mut paragraphs: Vec<String> = o.measurement.iter().cloned().collect();
-    paragraphs.push(format!(
-        "Stage 2, the model against the measurement: {verdict}"
-    ));
-    if !o.held_out_note.is_empty() {
-        paragraphs.push(o.held_out_note.clone());
-    }
-    paragraphs.push(inflation.clone());
-    paragraphs.extend(untestable.iter().cloned());
-    paragraphs.extend(refits.iter().map(|r| format!("{r}.")));
-    let mut md = format!(
-        "# Diagnosis of {}\n\n{}\n\n{}\n\n{}\n",
-        args.run.display(),
-        paragraphs.join("\n\n"),
-        ranking.to_markdown(),
-        expected.to_markdown()
+        .collect()
+}
+
+/// A verified candidate's account: its re-fit and identified values, and the curves
+/// before and after side by side in a report of their own, written into `folder`.
+fn verified_text(
+    args: &DiagnoseRequest,
+    v: &Verified,
+    folder: &RunFolder,
+) -> anyhow::Result<String> {
+    let params = v
+        .parameters
+        .iter()
+        .map(|(n, val, sd, u)| {
+            format!(
+                "{n} = {val:.5}{} {u}",
+                sd.map_or(String::new(), |s| format!(" ± {s:.2e}"))
+            )
+        })
+        .collect::<Vec<_>>()
+        .join("; ");
+    let text = format!(
+        "Re-fit with {} ({}): J {:.6} → {:.6} ({:.1} % lower; expected {:.1} %), {}. Identified: {params}. {}.",
+        v.test.label,
+        v.folder.display(),
+        v.objective_before,
+        v.objective_after,
+        100.0 * (v.objective_before - v.objective_after) / v.objective_before,
+        100.0 * v.test.predicted_fraction,
+        if v.converged { "converged" } else { "did NOT converge" },
+        v.sentence
     );
-    let mut sections = vec![Section {
-        heading: "Ranking".into(),
-        paragraphs,
-        tables: vec![ranking.clone(), expected],
-        svgs: vec![],
-    }];
-    for v in o.verified {
-        let params = v
-            .parameters
-            .iter()
-            .map(|(n, val, sd, u)| {
-                format!(
-                    "{n} = {val:.5}{} {u}",
-                    sd.map_or(String::new(), |s| format!(" ± {s:.2e}"))
-                )
-            })
-            .collect::<Vec<_>>()
-            .join("; ");
-        let text = format!(
-            "Re-fit with {} ({}): J {:.6} → {:.6} ({:.1} % lower; expected {:.1} %), {}. Identified: {params}. {}.",
-            v.test.label,
-            v.folder.display(),
-            v.objective_before,
-            v.objective_after,
-            100.0 * (v.objective_before - v.objective_after) / v.objective_before,
-            100.0 * v.test.predicted_fraction,
-            if v.converged { "converged" } else { "did NOT converge" },
-            v.sentence
-        );
-        // the curves before and after, side by side, in a report of their own
-        let side_by_side = format!("before_after_{}.html", v.test.effect.kind());
-        let text = match [&args.run, &v.folder]
+    // the curves before and after, side by side, in a report of their own
+    let side_by_side = format!("before_after_{}.html", v.test.effect.kind());
+    Ok(
+        match [&args.run, &v.folder]
             .iter()
             .map(|p| crate::report::runs::RunCurves::read(p))
             .collect::<Result<Vec<_>, _>>()
@@ -425,27 +422,18 @@ pub(super) fn write(
                 format!("{text} The curves before and after, side by side: {side_by_side}.")
             }
             Err(e) => format!("{text} (No side-by-side curves: {e}.)"),
-        };
-        md += &format!(
-            "\n## {}\n\n{text}\n\n{}\n",
-            v.test.label,
-            v.diff.table().to_markdown()
-        );
-        sections.push(Section {
-            heading: format!("Verified: {}", v.test.label),
-            paragraphs: vec![text],
-            tables: vec![v.diff.table()],
-            svgs: vec![v.diff.chart().to_svg()],
-        });
-    }
-    if !o.skipped.is_empty() {
-        md += &format!("\nNot tested: {}\n", o.skipped.join("; "));
-    }
-    let summary = DiagnosisSummary {
+        },
+    )
+}
+
+/// The record of `summary.json`.
+fn summary_record(o: &Outcome<'_>, verdict: &str) -> DiagnosisSummary {
+    let tests = o.tests;
+    DiagnosisSummary {
         command: summary::COMMAND.into(),
-        run: args.run.clone(),
-        objective,
-        data_residuals: rows,
+        run: o.args.run.clone(),
+        objective: o.objective,
+        data_residuals: o.rows,
         baseline_decrease: o.resid.decrease,
         variance_inflation: VarianceInflation {
             all_channels: o.phi,
@@ -469,12 +457,12 @@ pub(super) fn write(
                 .collect(),
         }),
         ranking: tests.to_vec(),
-        significant,
-        found,
+        significant: tests.iter().filter(|t| t.significant).count(),
+        found: tests.iter().filter(|t| t.found).count(),
         untestable: tests.iter().filter(|t| !t.testable).count(),
         held_out_note: o.held_out_note.clone(),
         measurement: o.measurement.clone(),
-        verdict: verdict.clone(),
+        verdict: verdict.to_string(),
         add_effects: add_effects(tests, o.clock_moves_events),
         verified: o
             .verified
@@ -502,16 +490,16 @@ pub(super) fn write(
             })
             .collect(),
         skipped: o.skipped.to_vec(),
-    };
-    folder.write("diagnose.md", md.as_bytes())?;
-    if let Some(hb) = o.held_out {
-        hb.write_into(&folder.staging_path().join("held_out"))?;
     }
-    folder.write(
-        "summary.json",
-        serde_json::to_string_pretty(&summary)?.as_bytes(),
-    )?;
-    let summary_box = Summary {
+}
+
+/// The report's summary box: how many candidates were found, the verdict and the run's
+/// figures.
+fn summary_box(o: &Outcome<'_>, verdict: &str) -> Summary {
+    let tests = o.tests;
+    let significant = tests.iter().filter(|t| t.significant).count();
+    let found = tests.iter().filter(|t| t.found).count();
+    Summary {
         status: if found > 0 {
             format!("{found} found")
         } else if significant > 0 {
@@ -524,22 +512,87 @@ pub(super) fn write(
         } else {
             Tone::Warning
         },
-        stop_reason: verdict.clone(),
+        stop_reason: verdict.to_string(),
         iterations: None,
         time_s: None,
         extra: vec![
-            ("tracking cost J".into(), format!("{objective:.6}")),
-            ("data residuals".into(), rows.to_string()),
+            ("tracking cost J".into(), format!("{:.6}", o.objective)),
+            ("data residuals".into(), o.rows.to_string()),
             ("variance inflation φ".into(), format!("{:.1}", o.phi)),
             (
                 "untestable candidates".into(),
                 tests.iter().filter(|t| !t.testable).count().to_string(),
             ),
         ],
-    };
+    }
+}
+
+/// Write the diagnosis into `folder` and commit it.
+pub(super) fn write(
+    o: &Outcome<'_>,
+    folder: RunFolder,
+    progress: &dyn Progress,
+) -> anyhow::Result<()> {
+    let (args, tests) = (o.args, o.tests);
+    let verdict = verdict(o);
+    let ranking = ranking_table(tests);
+    let expected = expected_table(tests);
+    let mut paragraphs: Vec<String> = o.measurement.iter().cloned().collect();
+    paragraphs.push(format!(
+        "Stage 2, the model against the measurement: {verdict}"
+    ));
+    if !o.held_out_note.is_empty() {
+        paragraphs.push(o.held_out_note.clone());
+    }
+    paragraphs.push(inflation_paragraph(o));
+    paragraphs.extend(untestable_sentences(tests));
+    paragraphs.extend(
+        refit_notes(tests, o.evidence)
+            .iter()
+            .map(|r| format!("{r}.")),
+    );
+    let mut md = format!(
+        "# Diagnosis of {}\n\n{}\n\n{}\n\n{}\n",
+        args.run.display(),
+        paragraphs.join("\n\n"),
+        ranking.to_markdown(),
+        expected.to_markdown()
+    );
+    let mut sections = vec![Section {
+        heading: "Ranking".into(),
+        paragraphs,
+        tables: vec![ranking.clone(), expected],
+        svgs: vec![],
+    }];
+    for v in o.verified {
+        let text = verified_text(args, v, &folder)?;
+        md += &format!(
+            "\n## {}\n\n{text}\n\n{}\n",
+            v.test.label,
+            v.diff.table().to_markdown()
+        );
+        sections.push(Section {
+            heading: format!("Verified: {}", v.test.label),
+            paragraphs: vec![text],
+            tables: vec![v.diff.table()],
+            svgs: vec![v.diff.chart().to_svg()],
+        });
+    }
+    if !o.skipped.is_empty() {
+        md += &format!("\nNot tested: {}\n", o.skipped.join("; "));
+    }
+    let summary = summary_record(o, &verdict);
+    folder.write("diagnose.md", md.as_bytes())?;
+    if let Some(hb) = o.held_out {
+        hb.write_into(&folder.staging_path().join("held_out"))?;
+    }
+    folder.write(
+        "summary.json",
+        serde_json::to_string_pretty(&summary)?.as_bytes(),
+    )?;
     let report = Report {
         title: format!("footfall diagnose — {}", args.run.display()),
-        summary: summary_box,
+        summary: summary_box(o, &verdict),
         sections,
     };
     folder.write("report.html", report.to_html().as_bytes())?;

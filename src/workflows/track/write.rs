@@ -120,14 +120,7 @@ impl TrackingProblem {
         setup.place(model, &mut solution);
         let converged = res.status == SqpStatus::Converged;
         let data_rows = setup.data_rows(model, sets, &cycle.continuous);
-        let sd = if model.ntheta() > 0 && converged {
-            parameter_sd(tr, &res.w, data_rows).unwrap_or_else(|e| {
-                warn_note!(progress, "warning: no parameter uncertainty: {e}");
-                vec![None; model.ntheta()]
-            })
-        } else {
-            vec![None; model.ntheta()]
-        };
+        let sd = self.parameter_uncertainty(tr, &res, data_rows, progress);
         let record = self.record(base, extra, &solution.theta, &sd, check_sites);
         // the run folder holds its inputs; setup.json names them relative to it
         let inputs = crate::workflows::inputs::copy_inputs(
@@ -146,43 +139,15 @@ impl TrackingProblem {
             forces: inputs.forces.clone(),
             ..record.clone()
         };
-        let mut extra_json = serde_json::Map::new();
-        extra_json.insert("setup".into(), serde_json::to_value(&stored)?);
-        extra_json.insert("data_residuals".into(), data_rows.into());
-        extra_json.insert(
-            "integration".into(),
-            serde_json::to_value(self.integration.get())?,
-        );
-        let mut extra_sections = Vec::new();
-        let mut extra_summary = Vec::new();
-        if let Some(p) = &provenance {
-            extra_summary.push(("report".into(), p.clone()));
-        }
-        let breakdown =
-            match setup.cost_breakdown(model, sets, &cycle.continuous, &solution, integrator) {
-                Ok(b) => {
-                    extra_json.insert("cost_breakdown".into(), serde_json::to_value(&b)?);
-                    extra_sections.push(crate::report::tracking::where_it_fails(&b, &solution));
-                    Some(b)
-                }
-                Err(e) => {
-                    warn_note!(progress, "warning: no cost breakdown: {e}");
-                    None
-                }
-            };
-        let residuals = crate::report::tracking::residual_report(model, &solution);
-        if let Some((section, stats)) = &residuals {
-            extra_sections.push(section.clone());
-            extra_json.insert("residual_actuators".into(), stats.clone());
-        }
-        if !record.parameters.is_empty() {
-            extra_sections.push(crate::report::html::Section {
-                heading: "Effects".into(),
-                paragraphs: vec!["Effect parameters of the model; identified ones with an approximate standard deviation from the Gauss–Newton Hessian reduced to the constraints, s² = J/(N − p).".into()],
-                tables: vec![crate::report::tracking::parameter_table(&record.parameters)],
-                svgs: vec![],
-            });
-        }
+        let extras = self.report_extras(ReportInputs {
+            cycle,
+            solution: &solution,
+            record: &record,
+            stored: &stored,
+            data_rows,
+            provenance: provenance.as_ref(),
+            progress,
+        })?;
         let out = crate::workflows::run_folder::write(
             GaitRun {
                 command: "track",
@@ -201,9 +166,9 @@ impl TrackingProblem {
                 result: &res,
                 solution: &solution,
                 integrator: integrator.clone(),
-                extra_summary,
-                extra_json,
-                extra_sections,
+                extra_summary: extras.summary,
+                extra_json: extras.json,
+                extra_sections: extras.sections,
                 extra_files: vec![(
                     "setup.json".into(),
                     serde_json::to_string_pretty(&stored)?.into_bytes(),
@@ -214,38 +179,160 @@ impl TrackingProblem {
             },
             folder,
         )?;
-        {
-            if !record.parameters.is_empty() {
-                note!(
-                    progress,
-                    "{}",
-                    crate::report::tracking::parameter_table(&record.parameters).to_markdown()
-                );
-            }
-            note!(progress, "{}", out.solve_summary(&res));
-            if let Some(f) = &out.fine {
-                note!(progress,
-                    "1 ms re-integration: peak normal force {:.1} N (right), {:.1} N (left); largest Baumgarte force {:.1e} N; largest drift {:.2e} m",
-                    f.peak_normal_force_n[0], f.peak_normal_force_n[1], f.max_baumgarte_force_n, f.max_position_drift_m
-                );
-            }
-            note!(
-                progress,
-                "report: {}",
-                out.path.join("report.html").display()
-            );
-        }
+        print_outcome(progress, &record, &out, &res);
         Ok(TrackedRun {
             converged,
             result: res,
             output: out,
             record,
-            breakdown,
-            residuals: residuals.map(|r| r.0),
+            breakdown: extras.breakdown,
+            residuals: extras.residuals,
             state_names: model.state_names(),
             solution,
         })
     }
+}
+
+impl TrackingProblem {
+    /// The approximate standard deviation of each free parameter at the solution `res`
+    /// of `tr` (None where the solve did not converge or the Hessian gives none).
+    fn parameter_uncertainty(
+        &self,
+        tr: &Transcription,
+        res: &crate::sqp::SqpResult,
+        data_rows: usize,
+        progress: &dyn Progress,
+    ) -> Vec<Option<f64>> {
+        let model = &self.model;
+        let converged = res.status == SqpStatus::Converged;
+        if model.ntheta() > 0 && converged {
+            parameter_sd(tr, &res.w, data_rows).unwrap_or_else(|e| {
+                warn_note!(progress, "warning: no parameter uncertainty: {e}");
+                vec![None; model.ntheta()]
+            })
+        } else {
+            vec![None; model.ntheta()]
+        }
+    }
+
+    /// What a track run adds to the gait run folder: `summary.json`'s setup, data
+    /// residual count, integration figures, cost breakdown and residual actuators, and
+    /// the report's sections on them and on the effects.
+    fn report_extras(&self, r: ReportInputs) -> anyhow::Result<ReportExtras> {
+        let TrackingProblem {
+            model,
+            sets,
+            setup,
+            integrator,
+            ..
+        } = self;
+        let mut extra_json = serde_json::Map::new();
+        extra_json.insert("setup".into(), serde_json::to_value(r.stored)?);
+        extra_json.insert("data_residuals".into(), r.data_rows.into());
+        extra_json.insert(
+            "integration".into(),
+            serde_json::to_value(self.integration.get())?,
+        );
+        let mut extra_sections = Vec::new();
+        let mut extra_summary = Vec::new();
+        if let Some(p) = r.provenance {
+            extra_summary.push(("report".into(), p.clone()));
+        }
+        let solution = r.solution;
+        let breakdown =
+            match setup.cost_breakdown(model, sets, &r.cycle.continuous, solution, integrator) {
+                Ok(b) => {
+                    extra_json.insert("cost_breakdown".into(), serde_json::to_value(&b)?);
+                    extra_sections.push(crate::report::tracking::where_it_fails(&b, solution));
+                    Some(b)
+                }
+                Err(e) => {
+                    warn_note!(r.progress, "warning: no cost breakdown: {e}");
+                    None
+                }
+            };
+        let residuals = crate::report::tracking::residual_report(model, solution);
+        if let Some((section, stats)) = &residuals {
+            extra_sections.push(section.clone());
+            extra_json.insert("residual_actuators".into(), stats.clone());
+        }
+        if !r.record.parameters.is_empty() {
+            extra_sections.push(crate::report::html::Section {
+                heading: "Effects".into(),
+                paragraphs: vec!["Effect parameters of the model; identified ones with an approximate standard deviation from the Gauss–Newton Hessian reduced to the constraints, s² = J/(N − p).".into()],
+                tables: vec![crate::report::tracking::parameter_table(&r.record.parameters)],
+                svgs: vec![],
+            });
+        }
+        Ok(ReportExtras {
+            json: extra_json,
+            sections: extra_sections,
+            summary: extra_summary,
+            breakdown,
+            residuals: residuals.map(|r| r.0),
+        })
+    }
+}
+
+/// The progress lines after a track run is written: the identified parameters, the
+/// solver's stop, the 1 ms re-integration's figures and where the report is.
+fn print_outcome(
+    progress: &dyn Progress,
+    record: &TrackingRunSetup,
+    out: &crate::workflows::run_folder::GaitRunOutput,
+    res: &crate::sqp::SqpResult,
+) {
+    if !record.parameters.is_empty() {
+        note!(
+            progress,
+            "{}",
+            crate::report::tracking::parameter_table(&record.parameters).to_markdown()
+        );
+    }
+    note!(progress, "{}", out.solve_summary(res));
+    if let Some(f) = &out.fine {
+        note!(progress,
+            "1 ms re-integration: peak normal force {:.1} N (right), {:.1} N (left); largest Baumgarte force {:.1e} N; largest drift {:.2e} m",
+            f.peak_normal_force_n[0], f.peak_normal_force_n[1], f.max_baumgarte_force_n, f.max_position_drift_m
+        );
+    }
+    note!(
+        progress,
+        "report: {}",
+        out.path.join("report.html").display()
+    );
+}
+
+/// What [`TrackingProblem::report_extras`] reads.
+struct ReportInputs<'a> {
+    /// The problem's gait cycle.
+    cycle: &'a GaitCycle<'a>,
+    /// The solution, placed in the trial's time.
+    solution: &'a GaitSolution,
+    /// The run's description.
+    record: &'a TrackingRunSetup,
+    /// The description as `setup.json` stores it (inputs named as copied into the run).
+    stored: &'a TrackingRunSetup,
+    /// Number of data residuals of the cost.
+    data_rows: usize,
+    /// Where the figures come from, when not from a solve just made.
+    provenance: Option<&'a String>,
+    /// Where warnings go.
+    progress: &'a dyn Progress,
+}
+
+/// What a track run adds to the gait run folder's `summary.json`, summary box and report.
+struct ReportExtras {
+    /// Extra `summary.json` fields.
+    json: serde_json::Map<String, serde_json::Value>,
+    /// Extra report sections.
+    sections: Vec<crate::report::html::Section>,
+    /// Extra summary lines.
+    summary: Vec<(String, String)>,
+    /// Where the cost comes from (None when it could not be evaluated).
+    breakdown: Option<crate::problems::track::CostBreakdown>,
+    /// The residual actuators' section, for a model that has them.
+    residuals: Option<crate::report::html::Section>,
 }
 
 /// How [`TrackingProblem::write_run`] writes a run.
