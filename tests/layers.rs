@@ -1,8 +1,9 @@
 //! The crate's structure, read from the source text so that a change that breaks it fails
 //! here. Its layers point downward only (the map in `src/lib.rs`): every `crate::…` path in
 //! a top-level module's files names a module of a lower layer or of the bottom row. No file
-//! imports from a file that imports from it, through any chain of files. And only the
-//! command-line program prints, exits or handles signals.
+//! imports from a file that imports from it, through any chain of files. Only the
+//! command-line program prints, exits or handles signals. And no function is over 150
+//! lines, no file over 800.
 
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
@@ -462,5 +463,94 @@ fn only_the_command_line_prints_exits_or_handles_signals() {
     assert!(
         found.is_empty(),
         "the library prints, exits or handles signals: {found:?}"
+    );
+}
+
+/// The functions of a file's text with their lengths in lines, from the `fn` line to its
+/// closing brace (comments and blank lines included): `(name, first line, lines)`.
+fn function_lengths(text: &str) -> Vec<(String, usize, usize)> {
+    let lines: Vec<&str> = text.lines().collect();
+    let mut out = Vec::new();
+    for (i, line) in lines.iter().enumerate() {
+        let code = line.split("//").next().unwrap().trim_start();
+        let Some(at) = code.find("fn ") else {
+            continue;
+        };
+        let before = &code[..at];
+        let words_ok = before.split_whitespace().all(|w| {
+            matches!(w, "pub" | "const" | "async" | "unsafe" | "extern" | "\"C\"")
+                || w.starts_with("pub(")
+        });
+        if !words_ok {
+            continue;
+        }
+        let name: String = code[at + 3..]
+            .chars()
+            .take_while(|c| c.is_alphanumeric() || *c == '_')
+            .collect();
+        if name.is_empty() {
+            continue;
+        }
+        let (mut depth, mut opened) = (0i64, false);
+        for (j, l) in lines.iter().enumerate().skip(i) {
+            let code = l.split("//").next().unwrap();
+            for c in code.chars() {
+                match c {
+                    '{' => {
+                        depth += 1;
+                        opened = true;
+                    }
+                    '}' => depth -= 1,
+                    _ => {}
+                }
+            }
+            if opened && depth <= 0 {
+                out.push((name.clone(), i + 1, j - i + 1));
+                break;
+            }
+            if !opened && code.trim_end().ends_with(';') {
+                break;
+            }
+        }
+    }
+    out
+}
+
+/// Functions fit on a screen and files hold one concept: no function in `src/` is over
+/// 150 lines, no file over 800.
+#[test]
+fn no_function_is_over_150_lines_and_no_file_over_800() {
+    let src = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    rust_files(&src, &mut files);
+    files.sort();
+    let mut long = Vec::new();
+    for f in &files {
+        let text = std::fs::read_to_string(f).unwrap();
+        let name = f.strip_prefix(&src).unwrap().display().to_string();
+        let lines = text.lines().count();
+        if lines > 800 {
+            long.push(format!("{name}: {lines} lines"));
+        }
+        for (func, at, n) in function_lengths(&text) {
+            if n > 150 {
+                long.push(format!("{name}:{at} fn {func}: {n} lines"));
+            }
+        }
+    }
+    // the reading sees the functions: the SQP's driver has some
+    let driver = std::fs::read_to_string(src.join("sqp/driver.rs")).unwrap();
+    assert!(function_lengths(&driver).len() >= 5);
+    assert!(long.is_empty(), "too long: {long:#?}");
+}
+
+/// A function's length runs from its `fn` line to its closing brace, nested blocks and
+/// comments included; a declaration without a body is no function.
+#[test]
+fn function_lengths_are_counted_to_the_closing_brace() {
+    let text = "pub(crate) fn a(x: u8) -> u8 {\n    if x > 0 {\n        1 // }\n    } else {\n        0\n    }\n}\ntrait T {\n    fn b(&self);\n}\nunsafe extern \"C\" fn c() {}\n";
+    assert_eq!(
+        function_lengths(text),
+        [("a".to_string(), 1, 7), ("c".to_string(), 11, 1)]
     );
 }
