@@ -29,8 +29,8 @@ const RUN_BY_CI: &[(&str, &str)] = &[
     (".venv/bin/python -c", "the command guide's Python example"),
 ];
 
-/// The subcommands that solve, and take `--max-iter`.
-const SOLVING: &str = "track|predict|compare|compare-contact|diagnose|fit-foot|solve";
+/// The subcommands that solve, and take `--max-iter` (a study's tracks).
+const SOLVING: &str = "track|predict|compare|compare-contact|diagnose|fit-foot|solve|study";
 
 /// The shell that runs a document's lines: `footfall` and `cargo run --release --` call
 /// the test build's binary, solves capped, and any other exit than 0, 3 or 5 stops it.
