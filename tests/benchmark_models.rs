@@ -121,21 +121,28 @@ fn loaders_match_defaults_and_name_missing_fields() {
         assert_eq!(b, FiveLinkBiped::default());
     }
     let e = CartPole::from_problem_json(&serde_json::json!({"parameters": {"cart_mass": 1.0}}))
-        .unwrap_err();
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("parameters.pole_mass"), "{e}");
-    let e = CartPole::from_problem_json(&serde_json::json!({})).unwrap_err();
+    let e = CartPole::from_problem_json(&serde_json::json!({}))
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("`parameters`"), "{e}");
     let mut p = serde_json::json!({"parameters": {
         "m": [3.2, 6.8, 20.0, 6.8, 3.2], "I": [0.93, 1.08, 2.22, 1.08, 0.93],
         "l": [0.4, 0.4, 0.625, 0.4, 0.4], "c": [0.128, 0.163, 0.2, 0.163], "g": 9.81}});
-    let e = FiveLinkBiped::from_problem_json(&p).unwrap_err();
+    let e = FiveLinkBiped::from_problem_json(&p)
+        .unwrap_err()
+        .to_string();
     assert!(
         e.contains("parameters.c") && e.contains("array of 5"),
         "{e}"
     );
     p["parameters"]["c"] = serde_json::json!([0.128, 0.163, 0.2, 0.163, 0.128]);
     p["parameters"].as_object_mut().unwrap().remove("g");
-    let e = FiveLinkBiped::from_problem_json(&p).unwrap_err();
+    let e = FiveLinkBiped::from_problem_json(&p)
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("parameters.g"), "{e}");
     p["parameters"]["g"] = serde_json::json!(9.81);
     assert_eq!(
@@ -145,6 +152,7 @@ fn loaders_match_defaults_and_name_missing_fields() {
     p["parameters"]["m"][2] = serde_json::json!(-1.0);
     assert!(FiveLinkBiped::from_problem_json(&p)
         .unwrap_err()
+        .to_string()
         .contains("every m"));
 }
 

@@ -269,7 +269,11 @@ fn trial(name: &str) -> GaitData {
     d.to_overground(v).unwrap()
 }
 
-fn setup_of(m: &GaitModel, data: &GaitData, sides: TargetSides) -> Result<TrackingSetup, String> {
+fn setup_of(
+    m: &GaitModel,
+    data: &GaitData,
+    sides: TargetSides,
+) -> Result<TrackingSetup, footfall::problems::ProblemError> {
     let p = path("phases/ellipse_walk.json");
     let seq = footfall::phases::PhaseSequence::load(&p).unwrap();
     let sets = seq.resolve(m, &p).unwrap();

@@ -378,9 +378,15 @@ fn windows_are_chosen_among_the_half_cycles_with_measured_forces() {
         all[0]
     );
     // a window with no half cycle inside, a stride that does not exist: clear refusals
-    let e = build(WindowChoice::Within(a + 0.1, b + 0.1)).err().unwrap();
+    let e = build(WindowChoice::Within(a + 0.1, b + 0.1))
+        .err()
+        .unwrap()
+        .to_string();
     assert!(e.contains("no half cycle") && e.contains("1: "), "{e}");
-    let e = build(WindowChoice::Stride(all.len() + 1)).err().unwrap();
+    let e = build(WindowChoice::Stride(all.len() + 1))
+        .err()
+        .unwrap()
+        .to_string();
     assert!(e.contains("does not exist"), "{e}");
     // no plate under the left foot: no default window, and the refusal says why
     let mut off = d.clone();
@@ -399,7 +405,8 @@ fn windows_are_chosen_among_the_half_cycles_with_measured_forces() {
         WindowChoice::First,
     )
     .err()
-    .unwrap();
+    .unwrap()
+    .to_string();
     assert!(
         e.contains("Left foot loaded") && e.contains("left nowhere"),
         "{e}"

@@ -35,6 +35,7 @@ pub use held_out::{HeldOut, HeldOutReading, NOT_VALIDATABLE};
 pub use run_setup::TrackingRunSetup;
 
 use super::distributions::chi2_999;
+use super::error::DiagnoseError;
 use crate::model::effects::EffectSpec;
 use crate::ocp::{Block, Transcription};
 use crate::sqp::linearised::{GaussNewtonModel, GaussNewtonStep};
@@ -128,12 +129,11 @@ pub fn channel_means(
     model: &crate::model::GaitModel,
     sets: &[crate::model::ConstraintSet],
     data: &crate::data::GaitData,
-) -> Result<Vec<(String, String, f64)>, String> {
+) -> Result<Vec<(String, String, f64)>, DiagnoseError> {
     use super::evaluation::{channel_errors, Comparison, GaitSolution};
     let sol = GaitSolution::from_nlp(tr, w, continuous, t0);
-    let nodes = sol.node_samples(model, sets).map_err(|e| e.to_string())?;
-    let cmp =
-        Comparison::through_model(&nodes, data, model, &sol.theta).map_err(|e| e.to_string())?;
+    let nodes = sol.node_samples(model, sets)?;
+    let cmp = Comparison::through_model(&nodes, data, model, &sol.theta)?;
     let channels = cmp.table_channels();
     Ok(channel_errors(&channels, &cmp, None)
         .into_iter()
@@ -158,14 +158,14 @@ pub const REL_STOP: f64 = 0.05;
 pub const STEP_STOP_OF_THRESHOLD: f64 = 0.01;
 
 /// Cost decrease of the truncated re-fit from `w` ([`truncated_refit`]) and the cost.
-pub fn gauss_newton_decrease(tr: &Transcription, w: &[f64]) -> Result<(f64, f64), String> {
+pub fn gauss_newton_decrease(tr: &Transcription, w: &[f64]) -> Result<(f64, f64), DiagnoseError> {
     let (j, dec, _, _) = truncated_refit(tr, w, MAX_STEPS, REL_STOP)?;
     Ok((j, dec))
 }
 
 /// The point the truncated re-fit from `w` reaches ([`truncated_refit`] with the
 /// diagnosis's step limit and stopping rule) and the cost there.
-pub fn refit_point(tr: &Transcription, w: &[f64]) -> Result<(f64, Vec<f64>), String> {
+pub fn refit_point(tr: &Transcription, w: &[f64]) -> Result<(f64, Vec<f64>), DiagnoseError> {
     truncated_refit(tr, w, MAX_STEPS, REL_STOP).map(|(j, dec, w1, _)| (j - dec, w1))
 }
 
@@ -180,8 +180,8 @@ pub fn truncated_refit(
     w: &[f64],
     max_steps: usize,
     rel_stop: f64,
-) -> Result<(f64, f64, Vec<f64>, usize), String> {
-    let first = GaussNewtonModel::new(tr, w, 1e-12)?;
+) -> Result<(f64, f64, Vec<f64>, usize), DiagnoseError> {
+    let first = GaussNewtonModel::new(tr, w, 1e-12).map_err(DiagnoseError::gauss_newton)?;
     let step = first.step(None);
     truncated_refit_from(tr, &first, step, max_steps, rel_stop, 0.0)
 }
@@ -197,7 +197,7 @@ pub fn truncated_refit_from(
     max_steps: usize,
     rel_stop: f64,
     abs_stop: f64,
-) -> Result<(f64, f64, Vec<f64>, usize), String> {
+) -> Result<(f64, f64, Vec<f64>, usize), DiagnoseError> {
     let cost = |w: &[f64]| tr.evaluate(w, false).map(|e| e.f);
     let j0 = first.objective();
     let mut w = first.point().to_vec();
@@ -205,9 +205,10 @@ pub fn truncated_refit_from(
     let (mut f, mut total, mut steps) = (j0, 0.0, 0);
     while steps < max_steps {
         let s = match pending.take() {
-            Some(s) => s?,
-            None => GaussNewtonModel::new(tr, &w, 1e-12)?.step(None)?,
-        };
+            Some(s) => s,
+            None => GaussNewtonModel::new(tr, &w, 1e-12).and_then(|m| m.step(None)),
+        }
+        .map_err(DiagnoseError::gauss_newton)?;
         if !(s.predicted_decrease > 0.0) {
             break;
         }
@@ -248,8 +249,8 @@ pub fn score_test(
     w: &[f64],
     baseline_decrease: f64,
     data_rows: usize,
-) -> Result<(ScoreTest, Vec<f64>), String> {
-    let first = GaussNewtonModel::new(tr, w, 1e-12)?;
+) -> Result<(ScoreTest, Vec<f64>), DiagnoseError> {
+    let first = GaussNewtonModel::new(tr, w, 1e-12).map_err(DiagnoseError::gauss_newton)?;
     let step = first.step(None);
     score_test_from(
         effect,
@@ -277,7 +278,7 @@ pub fn score_test_from(
     baseline_decrease: f64,
     data_rows: usize,
     mean_square: Option<f64>,
-) -> Result<(ScoreTest, Vec<f64>), String> {
+) -> Result<(ScoreTest, Vec<f64>), DiagnoseError> {
     let k = parameters.len();
     let abs_stop = mean_square
         .filter(|s2| s2.is_finite() && *s2 > 0.0)
@@ -481,12 +482,11 @@ pub fn channel_series(
     model: &crate::model::GaitModel,
     sets: &[crate::model::ConstraintSet],
     data: &crate::data::GaitData,
-) -> Result<Vec<(String, Vec<f64>)>, String> {
+) -> Result<Vec<(String, Vec<f64>)>, DiagnoseError> {
     use super::evaluation::{Comparison, GaitSolution};
     let sol = GaitSolution::from_nlp(tr, w, continuous, t0);
-    let nodes = sol.node_samples(model, sets).map_err(|e| e.to_string())?;
-    let cmp =
-        Comparison::through_model(&nodes, data, model, &sol.theta).map_err(|e| e.to_string())?;
+    let nodes = sol.node_samples(model, sets)?;
+    let cmp = Comparison::through_model(&nodes, data, model, &sol.theta)?;
     let n = cmp.len();
     Ok(cmp
         .table_channels()
@@ -511,11 +511,11 @@ pub fn parameter_sd(
     tr: &Transcription,
     w: &[f64],
     data_rows: usize,
-) -> Result<Vec<Option<f64>>, String> {
+) -> Result<Vec<Option<f64>>, DiagnoseError> {
     let cols: Vec<usize> = tr.range(Block::Params).collect();
     let (w_lb, w_ub, _, _) = crate::sqp::Nlp::bounds(tr);
-    let m = GaussNewtonModel::new(tr, w, 0.0)?;
-    let base = m.step(None)?;
+    let m = GaussNewtonModel::new(tr, w, 0.0).map_err(DiagnoseError::gauss_newton)?;
+    let base = m.step(None).map_err(DiagnoseError::gauss_newton)?;
     let p = cols.len();
     let s2 = m.objective() / (data_rows.saturating_sub(p)).max(1) as f64;
     let at_bound = |col: usize| {
@@ -535,7 +535,7 @@ pub fn parameter_sd(
                     probed_inverse_diagonal(tr.n(), &m, &base, col, w_ub[col] - w_lb[col]).map(Some)
                 }
             })
-            .collect::<Result<_, String>>()?,
+            .collect::<Result<_, DiagnoseError>>()?,
     };
     Ok(cols
         .iter()
@@ -556,14 +556,15 @@ fn probed_inverse_diagonal(
     base: &GaussNewtonStep,
     col: usize,
     span: f64,
-) -> Result<f64, String> {
+) -> Result<f64, DiagnoseError> {
     let target = 1e-3 * span;
     let mut eps = 1.0;
     let mut inv = f64::NAN;
     for _ in 0..4 {
         let mut shift = vec![0.0; n];
         shift[col] = eps;
-        let dtheta = base.d[col] - m.step(Some(&shift))?.d[col];
+        let dtheta =
+            base.d[col] - m.step(Some(&shift)).map_err(DiagnoseError::gauss_newton)?.d[col];
         inv = dtheta / eps;
         let ratio = dtheta.abs() / target;
         if inv <= 0.0 || (0.1..=10.0).contains(&ratio) {

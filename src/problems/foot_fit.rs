@@ -13,6 +13,7 @@
 
 use crate::model::geometry::Shape;
 use crate::model::spec::FootSpec;
+use crate::problems::error::FootFitError;
 use argmin::core::{CostFunction, Executor};
 use argmin::solver::neldermead::NelderMead;
 
@@ -288,11 +289,11 @@ pub fn fit(
     ground: f64,
     tol: f64,
     max_iter: u64,
-) -> Result<FitResult, String> {
+) -> Result<FitResult, FootFitError> {
     let p0 = parameters(foot);
     let length = foot_length(foot);
     let before = fit_cost(foot, stances, ground)
-        .ok_or("the foot cannot roll along the measured CoP")?
+        .ok_or(FootFitError::CannotRoll)?
         .0;
     let mut simplex = vec![p0.clone()];
     for i in 0..p0.len() {
@@ -308,15 +309,15 @@ pub fn fit(
     };
     let solver = NelderMead::new(simplex)
         .with_sd_tolerance(tol)
-        .map_err(|e| e.to_string())?;
+        .map_err(|e| FootFitError::Search(e.into()))?;
     let res = Executor::new(problem, solver)
         .configure(|s| s.max_iters(max_iter))
         .run()
-        .map_err(|e| e.to_string())?;
+        .map_err(|e| FootFitError::Search(e.into()))?;
     let best = res.state().best_param.clone().unwrap_or(p0);
     let fitted = with_parameters(foot, &best);
     let (after, pos, ang) =
-        fit_cost(&fitted, stances, ground).ok_or("the fitted foot cannot roll")?;
+        fit_cost(&fitted, stances, ground).ok_or(FootFitError::FittedCannotRoll)?;
     Ok(FitResult {
         foot: fitted,
         cost: (before, after),
@@ -331,16 +332,17 @@ pub fn fit(
 pub fn stances_from_data(
     model: &crate::model::GaitModel,
     data: &crate::data::GaitData,
-) -> Result<Vec<StanceSamples>, String> {
+) -> Result<Vec<StanceSamples>, FootFitError> {
     use crate::data::{detect_events, DEFAULT_EVENT_FRACTION};
-    let events = detect_events(data, DEFAULT_EVENT_FRACTION).map_err(|e| e.to_string())?;
+    let events = detect_events(data, DEFAULT_EVENT_FRACTION)?;
     let peak = data.peak_vertical_force();
     let mut out = Vec::new();
     for (s, side) in ["r", "l"].iter().enumerate() {
+        let name = format!("foot_{side}");
         let body = model
             .tree()
-            .body_index(&format!("foot_{side}"))
-            .ok_or("the model has no foot body")?;
+            .body_index(&name)
+            .ok_or(FootFitError::NoFootBody { body: name })?;
         for &hs in &events.heel_strike[s] {
             let Some(&to) = events.toe_off[s].iter().find(|&&t| t > hs) else {
                 continue;
@@ -365,10 +367,7 @@ pub fn stances_from_data(
         }
     }
     if out.is_empty() {
-        return Err(
-            "the data contain no complete stance (heel strike to toe-off) with a measured CoP"
-                .into(),
-        );
+        return Err(FootFitError::NoStance);
     }
     Ok(out)
 }

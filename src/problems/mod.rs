@@ -6,6 +6,7 @@ pub mod benchmarks;
 pub mod check;
 pub mod diagnose;
 pub mod distributions;
+pub mod error;
 pub mod errors;
 pub mod evaluation;
 pub mod foot_fit;
@@ -19,6 +20,9 @@ pub mod tracking;
 pub mod transient;
 pub mod validity;
 
+pub use error::{
+    DiagnoseError, FieldError, FootFitError, PeerGaitError, ProblemError, SampleSpan, WindowError,
+};
 pub use gait_ode::GaitOde;
 
 use crate::model::ad::{self, AdChunk, AdNested};

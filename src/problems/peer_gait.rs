@@ -18,6 +18,7 @@
 //!
 //! over the 50 interval starts. The peer's optimum, J* = 1.2584987, is the check.
 
+use super::error::{FieldError, PeerGaitError, ProblemError};
 use super::gait::{GaitCycle, GaitGuess, ImpulseRows};
 use super::{AdTerm, GenericFunction};
 use crate::integrate::IntegratorSettings;
@@ -95,7 +96,7 @@ impl PeerGaitTrack {
     /// which the `footfall` block's files are resolved). Refuses a model whose mass matrix
     /// and bias forces differ from the file's check values: the problem is only the
     /// peer's if the body is.
-    pub fn from_json(json: &Value, path: &Path) -> Result<Self, String> {
+    pub fn from_json(json: &Value, path: &Path) -> Result<Self, PeerGaitError> {
         let (model, contacts) = peer_model(json, path)?;
         let PeerPhases {
             seq,
@@ -107,28 +108,24 @@ impl PeerGaitTrack {
         let unit = model.torque_unit().expect("checked above");
 
         // cost
+        let names = || FieldError::kind("/cost/tracked", "an array of coordinate names");
         let tracked_names: Vec<String> = field(json, "/cost/tracked")?
             .as_array()
-            .ok_or("field 'cost.tracked' must be an array")?
+            .ok_or_else(names)?
             .iter()
-            .map(|v| {
-                v.as_str()
-                    .map(String::from)
-                    .ok_or("field 'cost.tracked' must hold coordinate names".to_string())
-            })
+            .map(|v| v.as_str().map(String::from).ok_or_else(names))
             .collect::<Result<_, _>>()?;
         let tracked = tracked_names
             .iter()
             .map(|n| {
                 COORDINATES.iter().position(|c| c == n).ok_or_else(|| {
-                    format!(
-                        "field 'cost.tracked': unknown coordinate '{n}' (known: {})",
-                        COORDINATES.join(", ")
-                    )
+                    PeerGaitError::UnknownCoordinate {
+                        coordinate: n.clone(),
+                    }
                 })
             })
             .collect::<Result<Vec<_>, _>>()?;
-        let per = |ptr: &str| -> Result<Vec<f64>, String> {
+        let per = |ptr: &str| -> Result<Vec<f64>, FieldError> {
             tracked_names
                 .iter()
                 .map(|n| number(json, &format!("{ptr}/{n}")))
@@ -140,9 +137,7 @@ impl PeerGaitTrack {
         let w_torque = number(json, "/cost/w_tau")?;
         let tau_ref = number(json, "/cost/tau_ref_Nm")?;
         if (tau_ref - unit).abs() > 1e-12 * unit {
-            return Err(format!(
-                "field 'cost.tau_ref_Nm' is {tau_ref} N·m, but the model's torque controls are in units of {unit} N·m (its 'reference_torque'): make them equal"
-            ));
+            return Err(PeerGaitError::TorqueUnit { tau_ref, unit });
         }
         let w_impulse = number(json, "/cost/w_impulse")?;
         let nodes = cost_nodes(json, &tracked_names, &intervals)?;
@@ -168,7 +163,7 @@ impl PeerGaitTrack {
     }
 
     /// The walking cycle of the problem's phases.
-    pub fn cycle(&self) -> Result<GaitCycle<'_>, String> {
+    pub fn cycle(&self) -> Result<GaitCycle<'_>, ProblemError> {
         GaitCycle::new(&self.model, &self.seq, &self.sets)
     }
 
@@ -177,7 +172,7 @@ impl PeerGaitTrack {
         &'c self,
         cycle: &'c GaitCycle<'c>,
         integrator: IntegratorSettings,
-    ) -> Result<Ocp<'c>, String> {
+    ) -> Result<Ocp<'c>, ProblemError> {
         let model = &self.model;
         let mut ocp = cycle.ocp(&self.guess, integrator)?;
         let cont = &cycle.continuous;

@@ -10,6 +10,7 @@
 //! a least-squares term `r = √(c_k T_j/N_j) a` with exact derivatives in the node state
 //! and the phase duration.
 
+use super::error::ProblemError;
 use super::evaluation::GaitSolution;
 use super::gait::{GaitCycle, GaitGuess, ImpulseRows};
 use super::track::TrackingSetup;
@@ -127,15 +128,14 @@ impl PredictionSetup {
         tracking: &TrackingSetup,
         solution: &GaitSolution,
         settings: PredictionSettings,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, ProblemError> {
         let cont: Vec<usize> = original.continuous_indices();
         if cont.len() != solution.phases.len() {
-            return Err(format!(
-                "the initial solution has {} continuous phases, the phase file '{}' {}",
-                solution.phases.len(),
-                original.name,
-                cont.len()
-            ));
+            return Err(ProblemError::SolutionPhaseCount {
+                found: solution.phases.len(),
+                graph: original.name.clone(),
+                expected: cont.len(),
+            });
         }
         let mut seq = original.clone();
         for (&i, ph) in cont.iter().zip(&solution.phases) {
@@ -149,11 +149,12 @@ impl PredictionSetup {
                 unreachable!()
             };
             if *name != ph.name || *intervals != ph.intervals() {
-                return Err(format!(
-                    "the initial solution's phase '{}' ({} intervals) does not match the phase file's '{name}' ({intervals} intervals)",
-                    ph.name,
-                    ph.intervals()
-                ));
+                return Err(ProblemError::SolutionPhase {
+                    found: ph.name.clone(),
+                    found_intervals: ph.intervals(),
+                    expected: name.clone(),
+                    expected_intervals: *intervals,
+                });
             }
             *duration = match *duration {
                 Duration::Fixed(_) => Duration::Fixed(ph.duration),
@@ -176,7 +177,7 @@ impl PredictionSetup {
         original: &PhaseSequence,
         tracking: &TrackingSetup,
         settings: PredictionSettings,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, ProblemError> {
         let mut seq = original.clone();
         for (p, measured) in seq.phases.iter_mut().zip(&tracking.seq.phases) {
             if let (
@@ -203,25 +204,22 @@ impl PredictionSetup {
         mut guess: GaitGuess,
         settings: PredictionSettings,
         pelvis_x0: f64,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, ProblemError> {
         if !(settings.step_length.is_finite() && settings.speed.is_finite() && settings.speed > 0.0)
         {
-            return Err(format!(
-                "step length {} m and speed {} m/s: need finite values and a positive speed",
-                settings.step_length, settings.speed
-            ));
+            return Err(ProblemError::StepOrSpeed {
+                step_length: settings.step_length,
+                speed: settings.speed,
+            });
         }
         if !(settings.impulse_weight.is_finite() && settings.impulse_weight >= 0.0) {
-            return Err(format!(
-                "impulse weight {}: need a finite value ≥ 0",
-                settings.impulse_weight
-            ));
+            return Err(ProblemError::ImpulseWeight {
+                weight: settings.impulse_weight,
+            });
         }
         if let Some(w) = settings.ankle_velocity_limit {
             if !(w.is_finite() && w > 0.0) {
-                return Err(format!(
-                    "ankle angular velocity limit {w} rad/s: need a positive value"
-                ));
+                return Err(ProblemError::AnkleVelocityLimit { limit: w });
             }
             // ankle_r and ankle_l are coordinates 5 and 8; their velocities follow the nq positions
             let nq = crate::model::gait::COORDINATES.len();
@@ -252,7 +250,7 @@ impl PredictionSetup {
         model: &'c GaitModel,
         sets: &'c [ConstraintSet],
         integrator: IntegratorSettings,
-    ) -> Result<Ocp<'c>, String> {
+    ) -> Result<Ocp<'c>, ProblemError> {
         let mut ocp = cycle.ocp(&self.guess, integrator)?;
         ocp.phases[0].x_lb[0][0] = self.pelvis_x0;
         ocp.phases[0].x_ub[0][0] = self.pelvis_x0;

@@ -5,7 +5,7 @@
 use super::{note, warn_note, Progress};
 use crate::integrate::{IntegrationStats, IntegratorSettings, Method};
 use crate::ocp::{Block, Ocp, Transcription};
-use crate::problems::benchmarks::Benchmark;
+use crate::problems::benchmarks::{Benchmark, ProblemFileError};
 use crate::problems::peer_gait::{stages, STAGE2_TOL};
 use crate::runfolder::RunFolder;
 use crate::sqp::{ExactConvexification, HessianMode, SqpResult, SqpSettings, SqpStatus};
@@ -61,7 +61,10 @@ pub fn run(args: &SolveRequest, progress: &dyn Progress) -> anyhow::Result<()> {
         method,
         ..Default::default()
     };
-    let in_file = |e: String| anyhow!("{}: {e}", problem.display());
+    let in_file = |source| ProblemFileError::Invalid {
+        path: problem.clone(),
+        source,
+    };
     // the gait problem from its data guess: block BFGS, then the exact Hessian with tight
     // integration (peer_gait::stages), unless the Hessian or integrator is chosen
     let staged = matches!(bench, Benchmark::GaitTrack(_))

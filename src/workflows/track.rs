@@ -14,6 +14,7 @@ use crate::problems::evaluation::GaitSolution;
 use crate::problems::gait::GaitCycle;
 use crate::problems::track::start::{self, Guess};
 use crate::problems::track::{TrackingSetup, WindowChoice};
+use crate::problems::{ProblemError, WindowError};
 use crate::runfolder::RunFolder;
 use crate::sqp::{ExactConvexification, HessianMode, SqpSettings, SqpStatus, StallSwitch};
 use anyhow::{anyhow, Context};
@@ -138,7 +139,13 @@ impl TrackingProblem {
             .map_err(|e| {
                 // the data layer's errors name the file already
                 let source = data.source.display().to_string();
-                if e.starts_with(&format!("{source}: ")) {
+                let choose = matches!(
+                    e,
+                    ProblemError::Window(WindowError::NoMeasuredHalfCycle { .. })
+                );
+                if choose {
+                    anyhow!("{source}: {e} (--window T0,T1 or --stride N)")
+                } else if e.to_string().starts_with(&format!("{source}: ")) {
                     anyhow!(e)
                 } else {
                     anyhow!("{source}: {e}")

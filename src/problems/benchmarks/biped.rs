@@ -13,7 +13,7 @@
 use num_dual::DualSVec64;
 use serde_json::Value;
 
-use super::{number, numbers};
+use super::{number, numbers, ParameterError};
 use crate::integrate::{ControlledOde, OdeError};
 use crate::model::ad::{dense_jacobian, eps, seed};
 use crate::model::linalg::{cholesky, cholesky_solve};
@@ -101,19 +101,30 @@ impl FiveLinkBiped {
         l: [f64; NQ],
         c: [f64; NQ],
         g: f64,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, ParameterError> {
+        const MODEL: &str = "five-link biped";
         for (name, v) in [("m", &m), ("I", &inertia), ("l", &l)] {
             if let Some(x) = v.iter().find(|x| !(x.is_finite() && **x > 0.0)) {
-                return Err(format!(
-                    "five-link biped: every {name} must be positive and finite, got {x}"
-                ));
+                return Err(ParameterError::NotAllPositive {
+                    model: MODEL,
+                    parameter: name,
+                    value: *x,
+                });
             }
         }
         if let Some(x) = c.iter().find(|x| !x.is_finite()) {
-            return Err(format!("five-link biped: every c must be finite, got {x}"));
+            return Err(ParameterError::NotAllFinite {
+                model: MODEL,
+                parameter: "c",
+                value: *x,
+            });
         }
         if !g.is_finite() {
-            return Err(format!("five-link biped: g must be finite, got {g}"));
+            return Err(ParameterError::NotFinite {
+                model: MODEL,
+                parameter: "g",
+                value: g,
+            });
         }
         // Coefficients of ê(q_j) (sign of e_j folded in).
         let [l1, l2, l3, l4, _l5] = l;
@@ -148,7 +159,7 @@ impl FiveLinkBiped {
     /// Physical parameters from a problem JSON like the peer's `five_link_biped.json`:
     /// `parameters.{m, I, l, c}` (arrays of 5) and `parameters.g`.  The error names the
     /// missing or malformed field.
-    pub fn from_problem_json(problem: &Value) -> Result<Self, String> {
+    pub fn from_problem_json(problem: &Value) -> Result<Self, ParameterError> {
         const WHAT: &str = "five-link biped";
         let arr = |k: &str| numbers::<NQ>(problem, &["parameters", k], WHAT);
         Self::new(

@@ -3,7 +3,7 @@
 use num_dual::DualSVec64;
 use serde_json::Value;
 
-use super::number;
+use super::{number, ParameterError};
 use crate::integrate::{ControlledOde, OdeError};
 use crate::model::ad::{eps, seed};
 use crate::model::Scalar;
@@ -61,7 +61,7 @@ impl CartPole {
     /// `parameters.{cart_mass, pole_mass, pole_half_length, gravity}` and optionally
     /// `parameters.pole_inertia_about_com` (default: uniform rod).  The error names the
     /// missing or malformed field.
-    pub fn from_problem_json(problem: &Value) -> Result<Self, String> {
+    pub fn from_problem_json(problem: &Value) -> Result<Self, ParameterError> {
         const WHAT: &str = "cart-pole";
         let get = |k: &str| number(problem, &["parameters", k], WHAT);
         let mut cp = Self::uniform_rod(
@@ -81,7 +81,7 @@ impl CartPole {
     }
 
     /// Check that masses, length and inertia are positive and gravity is finite.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), ParameterError> {
         for (name, v) in [
             ("cart_mass", self.cart_mass),
             ("pole_mass", self.pole_mass),
@@ -89,16 +89,19 @@ impl CartPole {
             ("pole_inertia", self.pole_inertia),
         ] {
             if !(v.is_finite() && v > 0.0) {
-                return Err(format!(
-                    "cart-pole: {name} must be positive and finite, got {v}"
-                ));
+                return Err(ParameterError::NotPositive {
+                    model: "cart-pole",
+                    parameter: name,
+                    value: v,
+                });
             }
         }
         if !self.gravity.is_finite() {
-            return Err(format!(
-                "cart-pole: gravity must be finite, got {}",
-                self.gravity
-            ));
+            return Err(ParameterError::NotFinite {
+                model: "cart-pole",
+                parameter: "gravity",
+                value: self.gravity,
+            });
         }
         Ok(())
     }

@@ -74,55 +74,142 @@ pub mod problem;
 
 pub use biped::{FiveLinkBiped, HeelStrike};
 pub use cartpole::CartPole;
-pub use problem::{Benchmark, ProblemError, GAIT_TRACK, MAX_INTERVALS};
+pub use problem::{Benchmark, BenchmarkError, ProblemFileError, GAIT_TRACK, MAX_INTERVALS};
 
 use std::path::Path;
 
 use serde_json::Value;
 
+/// Why a benchmark model's physical parameters were refused (`model`: `cart-pole` or
+/// `five-link biped`; fields as dotted paths, e.g. `parameters.m`).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ParameterError {
+    /// A field of the problem JSON is absent.
+    #[error("{model} problem JSON: missing field `{field}`")]
+    Missing {
+        /// The model.
+        model: &'static str,
+        /// The field (the first absent part of its path).
+        field: String,
+    },
+    /// A field of the problem JSON is not a finite number.
+    #[error("{model} problem JSON: field `{field}` must be a finite number, got {value}")]
+    NotANumber {
+        /// The model.
+        model: &'static str,
+        /// The field.
+        field: String,
+        /// The value found.
+        value: Value,
+    },
+    /// A field of the problem JSON is not an array of finite numbers of the right length.
+    #[error("{model} problem JSON: field `{field}` must be an array of {len} finite numbers, got {value}")]
+    NotNumbers {
+        /// The model.
+        model: &'static str,
+        /// The field.
+        field: String,
+        /// Entries expected.
+        len: usize,
+        /// The value found.
+        value: Value,
+    },
+    /// A parameter (a mass, length or inertia) is not positive and finite.
+    #[error("{model}: {parameter} must be positive and finite, got {value}")]
+    NotPositive {
+        /// The model.
+        model: &'static str,
+        /// The parameter.
+        parameter: &'static str,
+        /// Its value (kg, m or kg m²).
+        value: f64,
+    },
+    /// An entry of a per-link parameter is not positive and finite.
+    #[error("{model}: every {parameter} must be positive and finite, got {value}")]
+    NotAllPositive {
+        /// The model.
+        model: &'static str,
+        /// The parameter.
+        parameter: &'static str,
+        /// The first entry refused (kg, m or kg m²).
+        value: f64,
+    },
+    /// A parameter (gravity) is not finite.
+    #[error("{model}: {parameter} must be finite, got {value}")]
+    NotFinite {
+        /// The model.
+        model: &'static str,
+        /// The parameter.
+        parameter: &'static str,
+        /// Its value (m/s²).
+        value: f64,
+    },
+    /// An entry of a per-link parameter is not finite.
+    #[error("{model}: every {parameter} must be finite, got {value}")]
+    NotAllFinite {
+        /// The model.
+        model: &'static str,
+        /// The parameter.
+        parameter: &'static str,
+        /// The first entry refused (m).
+        value: f64,
+    },
+}
+
 /// Read and parse a problem JSON file; errors name the file.
-pub fn read_problem_json(path: impl AsRef<Path>) -> Result<Value, String> {
+pub fn read_problem_json(path: impl AsRef<Path>) -> Result<Value, ProblemFileError> {
     let path = path.as_ref();
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| format!("cannot read problem file {}: {e}", path.display()))?;
-    serde_json::from_str(&text)
-        .map_err(|e| format!("problem file {} is not valid JSON: {e}", path.display()))
+    let text = std::fs::read_to_string(path).map_err(|source| ProblemFileError::Io {
+        path: path.into(),
+        source,
+    })?;
+    serde_json::from_str(&text).map_err(|source| ProblemFileError::Json {
+        path: path.into(),
+        source,
+    })
 }
 
 /// The value at the dotted `path` (e.g. `["parameters", "m"]`), or an error naming it.
-fn field<'a>(problem: &'a Value, path: &[&str], what: &str) -> Result<&'a Value, String> {
+fn field<'a>(
+    problem: &'a Value,
+    path: &[&str],
+    model: &'static str,
+) -> Result<&'a Value, ParameterError> {
     let mut v = problem;
     for (depth, key) in path.iter().enumerate() {
-        v = v.get(key).ok_or_else(|| {
-            format!(
-                "{what} problem JSON: missing field `{}`",
-                path[..=depth].join(".")
-            )
+        v = v.get(key).ok_or_else(|| ParameterError::Missing {
+            model,
+            field: path[..=depth].join("."),
         })?;
     }
     Ok(v)
 }
 
 /// A finite number at `path`.
-fn number(problem: &Value, path: &[&str], what: &str) -> Result<f64, String> {
-    let v = field(problem, path, what)?;
+fn number(problem: &Value, path: &[&str], model: &'static str) -> Result<f64, ParameterError> {
+    let v = field(problem, path, model)?;
     match v.as_f64() {
         Some(x) if x.is_finite() => Ok(x),
-        _ => Err(format!(
-            "{what} problem JSON: field `{}` must be a finite number, got {v}",
-            path.join(".")
-        )),
+        _ => Err(ParameterError::NotANumber {
+            model,
+            field: path.join("."),
+            value: v.clone(),
+        }),
     }
 }
 
 /// An array of `N` finite numbers at `path`.
-fn numbers<const N: usize>(problem: &Value, path: &[&str], what: &str) -> Result<[f64; N], String> {
-    let v = field(problem, path, what)?;
-    let bad = || {
-        format!(
-            "{what} problem JSON: field `{}` must be an array of {N} finite numbers, got {v}",
-            path.join(".")
-        )
+fn numbers<const N: usize>(
+    problem: &Value,
+    path: &[&str],
+    model: &'static str,
+) -> Result<[f64; N], ParameterError> {
+    let v = field(problem, path, model)?;
+    let bad = || ParameterError::NotNumbers {
+        model,
+        field: path.join("."),
+        len: N,
+        value: v.clone(),
     };
     let arr = v.as_array().ok_or_else(bad)?;
     if arr.len() != N {

@@ -2,10 +2,11 @@
 //! `problems/`), transcribed exactly as defined there: N equal intervals, piecewise-constant controls, objective
 //! `h Σ_k |u_k|²`, bounds and path constraints at the N + 1 nodes, the same initial guess.
 
-use super::{biped, CartPole, FiveLinkBiped};
+use super::{biped, CartPole, FiveLinkBiped, ParameterError};
 use crate::integrate::{ControlShape, IntegratorSettings};
 use crate::model::ad::dense_hessian;
 use crate::ocp::{Block, Constraint, Ocp, Phase, PhaseDuration, Term};
+use crate::problems::error::{dotted, FieldError, PeerGaitError, ProblemError};
 use crate::problems::peer_gait::PeerGaitTrack;
 use crate::problems::{FnTerm, Linear};
 use serde_json::Value;
@@ -14,7 +15,7 @@ use std::sync::Arc;
 
 /// Why a problem file was refused; every variant names the file.
 #[derive(Debug, thiserror::Error)]
-pub enum ProblemError {
+pub enum ProblemFileError {
     /// The file could not be read.
     #[error("cannot read problem file {path}: {source}")]
     Io {
@@ -32,12 +33,72 @@ pub enum ProblemError {
         source: serde_json::Error,
     },
     /// The problem is unknown or a field is missing or invalid.
-    #[error("{path}: {reason}")]
+    #[error("{path}: {source}")]
     Invalid {
         /// File.
         path: PathBuf,
         /// What is wrong (names the field).
-        reason: String,
+        source: BenchmarkError,
+    },
+}
+
+/// Why a benchmark problem (a problem file's JSON) cannot be built: an unknown problem, a
+/// field missing or invalid, or its optimal control problem refused.
+#[derive(Debug, thiserror::Error)]
+pub enum BenchmarkError {
+    /// A field is missing or of the wrong kind.
+    #[error(transparent)]
+    Field(#[from] FieldError),
+    /// The model's physical parameters are missing or invalid.
+    #[error(transparent)]
+    Parameters(#[from] ParameterError),
+    /// The CasADi gait peer's problem is refused.
+    #[error(transparent)]
+    PeerGait(#[from] PeerGaitError),
+    /// The gait peer's walking cycle or its optimal control problem cannot be built.
+    #[error(transparent)]
+    Problem(#[from] ProblemError),
+    /// The problem's name is none of the known problems'.
+    #[error("field 'name': unknown problem '{name}' (known: cartpole_swingup, five_link_biped, {GAIT_TRACK})")]
+    UnknownProblem {
+        /// The name found.
+        name: String,
+    },
+    /// The gait peer's problem was given without the path it resolves its files against.
+    #[error("{GAIT_TRACK} names its model files relative to the problem file: load it with Benchmark::load")]
+    NeedsPath,
+    /// The gait peer's OCP was asked for on its own, without the walking cycle it borrows.
+    #[error("the {GAIT_TRACK} OCP borrows its walking cycle: use Benchmark::with_ocp")]
+    BorrowsCycle,
+    /// The number of shooting intervals is not a whole number in range.
+    #[error(
+        "field 'discretization.N' must be a whole number of intervals from 1 to {max}, got {value}"
+    )]
+    Intervals {
+        /// The number found.
+        value: f64,
+        /// The most accepted.
+        max: usize,
+    },
+    /// The horizon is not a duration in range.
+    #[error("field 'horizon.T' must be a duration > 0 and ≤ {} s, got {}", crate::limits::show(*.max), crate::limits::show(*.value))]
+    Horizon {
+        /// The horizon found (s).
+        value: f64,
+        /// The longest accepted (s).
+        max: f64,
+    },
+    /// A lower bound is above its upper bound.
+    #[error("field 'bounds.{kind}_ub[{index}]' ({}) is below 'bounds.{kind}_lb[{index}]' ({}): the lower bound must be at most the upper one", crate::limits::show(*.upper), crate::limits::show(*.lower))]
+    CrossedBounds {
+        /// The bounded variables: `x` (states) or `u` (controls).
+        kind: &'static str,
+        /// Index of the entry.
+        index: usize,
+        /// The lower bound.
+        lower: f64,
+        /// The upper bound.
+        upper: f64,
     },
 }
 
@@ -65,13 +126,11 @@ pub enum Benchmark {
     GaitTrack(Box<PeerGaitTrack>),
 }
 
-fn num(v: &Value, ptr: &str) -> Result<f64, String> {
-    v.pointer(ptr).and_then(Value::as_f64).ok_or_else(|| {
-        format!(
-            "field '{}' missing or not a number",
-            ptr.trim_start_matches('/').replace('/', ".")
-        )
-    })
+fn num(v: &Value, ptr: &str) -> Result<f64, FieldError> {
+    v.pointer(ptr)
+        .ok_or_else(|| FieldError::missing(ptr))?
+        .as_f64()
+        .ok_or_else(|| FieldError::kind(ptr, "a number"))
 }
 
 /// Most shooting intervals a problem file may ask for: far more than any of these problems
@@ -80,10 +139,13 @@ pub const MAX_INTERVALS: usize = 100_000;
 
 /// The number of shooting intervals `discretization.N`: a whole number from 1 to
 /// [`MAX_INTERVALS`].
-fn intervals(v: &Value) -> Result<usize, String> {
+fn intervals(v: &Value) -> Result<usize, BenchmarkError> {
     let n = num(v, "/discretization/N")?;
     if !(n >= 1.0 && n <= MAX_INTERVALS as f64 && n.fract() == 0.0) {
-        return Err(format!("field 'discretization.N' must be a whole number of intervals from 1 to {MAX_INTERVALS}, got {n}"));
+        return Err(BenchmarkError::Intervals {
+            value: n,
+            max: MAX_INTERVALS,
+        });
     }
     Ok(n as usize)
 }
@@ -92,45 +154,49 @@ fn intervals(v: &Value) -> Result<usize, String> {
 pub const MAX_HORIZON: f64 = 1e4;
 
 /// The horizon `horizon.T`: finite, > 0 and at most [`MAX_HORIZON`] s.
-fn horizon(v: &Value) -> Result<f64, String> {
+fn horizon(v: &Value) -> Result<f64, BenchmarkError> {
     let t = num(v, "/horizon/T")?;
     if !(t > 0.0 && t <= MAX_HORIZON) {
-        return Err(format!(
-            "field 'horizon.T' must be a duration > 0 and ≤ {} s, got {}",
-            crate::limits::show(MAX_HORIZON),
-            crate::limits::show(t)
-        ));
+        return Err(BenchmarkError::Horizon {
+            value: t,
+            max: MAX_HORIZON,
+        });
     }
     Ok(t)
 }
 
 /// Lower and upper bounds `bounds.{kind}_lb`, `bounds.{kind}_ub` of `len` entries (null:
 /// unbounded), each lower bound at most its upper one.
-fn bounds(v: &Value, kind: &str, len: usize) -> Result<(Vec<f64>, Vec<f64>), String> {
+fn bounds(
+    v: &Value,
+    kind: &'static str,
+    len: usize,
+) -> Result<(Vec<f64>, Vec<f64>), BenchmarkError> {
     let lb = vecn(v, &format!("/bounds/{kind}_lb"), len)?;
     let ub = vecn(v, &format!("/bounds/{kind}_ub"), len)?;
     if let Some(i) = (0..len).find(|&i| lb[i] > ub[i]) {
-        return Err(format!(
-            "field 'bounds.{kind}_ub[{i}]' ({}) is below 'bounds.{kind}_lb[{i}]' ({}): the lower bound must be at most the upper one",
-            crate::limits::show(ub[i]),
-            crate::limits::show(lb[i])
-        ));
+        return Err(BenchmarkError::CrossedBounds {
+            kind,
+            index: i,
+            lower: lb[i],
+            upper: ub[i],
+        });
     }
     Ok((bound(lb, f64::NEG_INFINITY), bound(ub, f64::INFINITY)))
 }
 
-fn vecn(v: &Value, ptr: &str, len: usize) -> Result<Vec<f64>, String> {
-    let a = v.pointer(ptr).and_then(Value::as_array).ok_or_else(|| {
-        format!(
-            "field '{}' missing or not an array",
-            ptr.trim_start_matches('/').replace('/', ".")
-        )
-    })?;
+fn vecn(v: &Value, ptr: &str, len: usize) -> Result<Vec<f64>, FieldError> {
+    let a = v
+        .pointer(ptr)
+        .ok_or_else(|| FieldError::missing(ptr))?
+        .as_array()
+        .ok_or_else(|| FieldError::kind(ptr, "an array"))?;
     if a.len() != len {
-        return Err(format!(
-            "field '{}' must have {len} entries",
-            ptr.trim_start_matches('/').replace('/', ".")
-        ));
+        return Err(FieldError::Length {
+            field: dotted(ptr),
+            found: a.len(),
+            expected: len,
+        });
     }
     // null = unbounded
     a.iter()
@@ -139,11 +205,9 @@ fn vecn(v: &Value, ptr: &str, len: usize) -> Result<Vec<f64>, String> {
             if x.is_null() {
                 Ok(f64::NAN)
             } else {
-                x.as_f64().ok_or_else(|| {
-                    format!(
-                        "field '{}[{i}]' is not a number",
-                        ptr.trim_start_matches('/').replace('/', ".")
-                    )
+                x.as_f64().ok_or_else(|| FieldError::Kind {
+                    field: format!("{}[{i}]", dotted(ptr)),
+                    expected: "a number",
                 })
             }
         })
@@ -160,23 +224,24 @@ impl Benchmark {
     /// Read a problem file (e.g. `problems/cartpole_swingup.json`) and build its model;
     /// the fields of the optimal control problem are checked too (by building it once), so
     /// that [`ocp`](Self::ocp) succeeds on what this returns.
-    pub fn load(path: &Path) -> Result<Self, ProblemError> {
-        let text = std::fs::read_to_string(path).map_err(|source| ProblemError::Io {
+    pub fn load(path: &Path) -> Result<Self, ProblemFileError> {
+        let text = std::fs::read_to_string(path).map_err(|source| ProblemFileError::Io {
             path: path.into(),
             source,
         })?;
         let text = text.strip_prefix('\u{feff}').unwrap_or(&text);
-        let json: Value = serde_json::from_str(text).map_err(|source| ProblemError::Json {
+        let json: Value = serde_json::from_str(text).map_err(|source| ProblemFileError::Json {
             path: path.into(),
             source,
         })?;
-        let invalid = |reason| ProblemError::Invalid {
+        let invalid = |source| ProblemFileError::Invalid {
             path: path.into(),
-            reason,
+            source,
         };
         let bench = match json.get("name").and_then(Value::as_str) {
             Some(GAIT_TRACK) => Benchmark::GaitTrack(Box::new(
-                PeerGaitTrack::from_json(&json, path).map_err(invalid)?,
+                PeerGaitTrack::from_json(&json, path)
+                    .map_err(|e| invalid(BenchmarkError::from(e)))?,
             )),
             _ => Self::from_json(json).map_err(invalid)?,
         };
@@ -192,7 +257,7 @@ impl Benchmark {
         &self,
         integrator: IntegratorSettings,
         f: impl FnOnce(&Ocp<'_>) -> R,
-    ) -> Result<R, String> {
+    ) -> Result<R, BenchmarkError> {
         match self {
             Benchmark::GaitTrack(g) => {
                 let cycle = g.cycle()?;
@@ -205,13 +270,21 @@ impl Benchmark {
 
     /// Recognise a generic problem by its `name` and build its model (the gait problem
     /// names model files relative to its own: [`load`](Self::load) it).
-    pub fn from_json(json: Value) -> Result<Self, String> {
+    pub fn from_json(json: Value) -> Result<Self, BenchmarkError> {
         match json.get("name").and_then(Value::as_str) {
-            Some("cartpole_swingup") => Ok(Benchmark::CartPole { model: CartPole::from_problem_json(&json)?, json }),
-            Some("five_link_biped") => Ok(Benchmark::Biped { model: FiveLinkBiped::from_problem_json(&json)?, json }),
-            Some(GAIT_TRACK) => Err(format!("{GAIT_TRACK} names its model files relative to the problem file: load it with Benchmark::load")),
-            Some(other) => Err(format!("field 'name': unknown problem '{other}' (known: cartpole_swingup, five_link_biped, {GAIT_TRACK})")),
-            None => Err("field 'name' missing".into()),
+            Some("cartpole_swingup") => Ok(Benchmark::CartPole {
+                model: CartPole::from_problem_json(&json)?,
+                json,
+            }),
+            Some("five_link_biped") => Ok(Benchmark::Biped {
+                model: FiveLinkBiped::from_problem_json(&json)?,
+                json,
+            }),
+            Some(GAIT_TRACK) => Err(BenchmarkError::NeedsPath),
+            Some(other) => Err(BenchmarkError::UnknownProblem {
+                name: other.to_string(),
+            }),
+            None => Err(FieldError::missing("/name").into()),
         }
     }
 
@@ -226,13 +299,11 @@ impl Benchmark {
 
     /// The OCP with CVODES settings `integrator`, for the generic problems; the gait
     /// problem's OCP is lent by [`with_ocp`](Self::with_ocp).
-    pub fn ocp(&self, integrator: IntegratorSettings) -> Result<Ocp<'_>, String> {
+    pub fn ocp(&self, integrator: IntegratorSettings) -> Result<Ocp<'_>, BenchmarkError> {
         match self {
             Benchmark::CartPole { model, json } => cartpole(model, json, integrator),
             Benchmark::Biped { model, json } => five_link_biped(model, json, integrator),
-            Benchmark::GaitTrack(_) => Err(format!(
-                "the {GAIT_TRACK} OCP borrows its walking cycle: use Benchmark::with_ocp"
-            )),
+            Benchmark::GaitTrack(_) => Err(BenchmarkError::BorrowsCycle),
         }
     }
 }
@@ -258,7 +329,7 @@ fn cartpole<'a>(
     model: &'a CartPole,
     json: &Value,
     integrator: IntegratorSettings,
-) -> Result<Ocp<'a>, String> {
+) -> Result<Ocp<'a>, BenchmarkError> {
     let n = intervals(json)?;
     let t = horizon(json)?;
     let xi = vecn(json, "/boundary/x_initial", 4)?;
@@ -310,7 +381,7 @@ fn five_link_biped<'a>(
     model: &'a FiveLinkBiped,
     json: &Value,
     integrator: IntegratorSettings,
-) -> Result<Ocp<'a>, String> {
+) -> Result<Ocp<'a>, BenchmarkError> {
     use biped::{NQ, NU, NX};
     let n = intervals(json)?;
     let t = horizon(json)?;

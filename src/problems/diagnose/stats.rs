@@ -12,6 +12,7 @@
 //! inflation ([`variance_inflation`]).
 
 use crate::ocp::{Block, Transcription};
+use crate::problems::error::DiagnoseError;
 use crate::sqp::linearised::{GaussNewtonModel, GaussNewtonStep};
 use crate::sqp::Nlp;
 use serde::{Deserialize, Serialize};
@@ -83,9 +84,9 @@ pub fn reduced_inverse_hessian(
     tr: &dyn Nlp,
     w: &[f64],
     cols: &[usize],
-) -> Result<Vec<Vec<f64>>, String> {
-    let m = GaussNewtonModel::new(tr, w, 1e-12)?;
-    let base = m.step(None)?;
+) -> Result<Vec<Vec<f64>>, DiagnoseError> {
+    let m = GaussNewtonModel::new(tr, w, 1e-12).map_err(DiagnoseError::gauss_newton)?;
+    let base = m.step(None).map_err(DiagnoseError::gauss_newton)?;
     reduced_inverse_hessian_at(tr, &m, &base, cols)
 }
 
@@ -96,7 +97,7 @@ pub fn reduced_inverse_hessian_at(
     m: &GaussNewtonModel<'_>,
     base: &GaussNewtonStep,
     cols: &[usize],
-) -> Result<Vec<Vec<f64>>, String> {
+) -> Result<Vec<Vec<f64>>, DiagnoseError> {
     let (w_lb, w_ub, _, _) = tr.bounds();
     // the active set of the step without the parameters' bounds, unless the step stays
     // clear of them (the same step either way)
@@ -107,7 +108,9 @@ pub fn reduced_inverse_hessian_at(
     });
     let relaxed;
     let base = if near_bound {
-        relaxed = m.step_with(None, cols)?;
+        relaxed = m
+            .step_with(None, cols)
+            .map_err(DiagnoseError::gauss_newton)?;
         &relaxed
     } else {
         base
@@ -138,7 +141,7 @@ fn probe_reduced_inverse(
     m: &GaussNewtonModel<'_>,
     base: &GaussNewtonStep,
     cols: &[usize],
-) -> Result<Vec<Vec<f64>>, String> {
+) -> Result<Vec<Vec<f64>>, DiagnoseError> {
     let (w_lb, w_ub, _, _) = tr.bounds();
     let k = cols.len();
     let mut c = vec![vec![0.0; k]; k];
@@ -162,7 +165,10 @@ fn probe_reduced_inverse(
                 Err(e) => {
                     failures += 1;
                     if failures > 3 {
-                        return Err(format!("probing the information of column {col}: {e}"));
+                        return Err(DiagnoseError::Probe {
+                            column: col,
+                            reason: e,
+                        });
                     }
                     eps *= 1e-2;
                     continue;
@@ -180,9 +186,7 @@ fn probe_reduced_inverse(
             eps = target / h;
         }
         if !probed {
-            return Err(format!(
-                "probing the information of column {col}: no QP solved"
-            ));
+            return Err(DiagnoseError::ProbeUnsolved { column: col });
         }
         for i in 0..k {
             c[i][j] = column[i];
@@ -254,7 +258,8 @@ pub fn identifiability(
 
 /// Identifiability of the last `k` parameters of θ in `tr` ([`identifiability`]), from
 /// the Gauss–Newton model `m` at the run's solution and its unshifted step `base` (or the
-/// error computing it), computed once for the score test and the probes.
+/// error computing it), computed once for the score test and the probes. Parameters whose
+/// information cannot be computed are not testable, the reason saying why.
 pub fn candidate_identifiability_at(
     tr: &Transcription,
     m: &GaussNewtonModel<'_>,
@@ -262,19 +267,19 @@ pub fn candidate_identifiability_at(
     names: Vec<String>,
     s2: f64,
     phi: f64,
-) -> Result<Identifiability, String> {
+) -> Identifiability {
     let range = tr.range(Block::Params);
     let k = names.len();
     let cols: Vec<usize> = (range.end - k..range.end).collect();
     let (w_lb, w_ub, _, _) = crate::sqp::Nlp::bounds(tr);
     let span = cols.iter().map(|&c| w_ub[c] - w_lb[c]).collect();
     let probed = base
-        .map_err(|e| e.clone())
+        .map_err(|e| DiagnoseError::gauss_newton(e.clone()))
         .and_then(|base| reduced_inverse_hessian_at(tr, m, base, &cols));
-    Ok(match probed {
+    match probed {
         Ok(c) => identifiability(names, c, span, s2, phi),
         // an unbounded probe: nothing in the cost resists a change of the parameter
-        Err(e) if e.contains("DualInfeasible") => Identifiability::unknown(
+        Err(e) if e.to_string().contains("DualInfeasible") => Identifiability::unknown(
             names,
             span,
             format!("the cost has no curvature in it: the probing QP is unbounded along it ({e})"),
@@ -284,7 +289,7 @@ pub fn candidate_identifiability_at(
             span,
             format!("its information could not be computed ({e})"),
         ),
-    })
+    }
 }
 
 /// `θᵀ H θ` for parameters `theta` (the reduced curvature along them) from the reduced

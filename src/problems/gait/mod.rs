@@ -7,6 +7,7 @@
 //! Leading impact phases of a phase file (e.g. `1e*`) are realised by the trailing impact
 //! of the mirrored cycle: the state after the last impact, mirrored, is the first state.
 
+use super::error::ProblemError;
 use super::{AdTerm, GaitOde, Linear};
 use crate::integrate::{ControlShape, IntegratorSettings};
 use crate::model::gait::COORDINATES;
@@ -85,17 +86,16 @@ impl<'m> GaitCycle<'m> {
         model: &'m GaitModel,
         seq: &PhaseSequence,
         sets: &'m [ConstraintSet],
-    ) -> Result<Self, String> {
+    ) -> Result<Self, ProblemError> {
         if sets.len() != seq.phases.len() {
-            return Err(format!(
-                "{} constraint sets for {} phases",
-                sets.len(),
-                seq.phases.len()
-            ));
+            return Err(ProblemError::SetCount {
+                sets: sets.len(),
+                phases: seq.phases.len(),
+            });
         }
         let continuous: Vec<usize> = seq.continuous_indices();
         if continuous.is_empty() {
-            return Err("the phase file has no continuous phase".into());
+            return Err(ProblemError::NoContinuousPhase);
         }
         let odes = continuous
             .iter()
@@ -118,7 +118,7 @@ impl<'m> GaitCycle<'m> {
         &self,
         guess: &GaitGuess,
         integrator: IntegratorSettings,
-    ) -> Result<Ocp<'_>, String> {
+    ) -> Result<Ocp<'_>, ProblemError> {
         gait_ocp(
             self.model, &self.seq, self.sets, &self.odes, guess, integrator,
         )
@@ -187,7 +187,7 @@ fn gait_ocp<'a>(
     odes: &'a [GaitOde<'a>],
     guess: &GaitGuess,
     integrator: IntegratorSettings,
-) -> Result<Ocp<'a>, String> {
+) -> Result<Ocp<'a>, ProblemError> {
     let spec = seq
         .gait
         .clone()
@@ -196,14 +196,13 @@ fn gait_ocp<'a>(
     let nt = theta.len();
     let layout = PhaseLayout::of(seq);
     if layout.cont.is_empty() {
-        return Err("the phase file has no continuous phase".into());
+        return Err(ProblemError::NoContinuousPhase);
     }
     if guess.x.len() != layout.cont.len() || guess.u.len() != layout.cont.len() {
-        return Err(format!(
-            "the guess has {} phases, the file {} continuous phases",
-            guess.x.len(),
-            layout.cont.len()
-        ));
+        return Err(ProblemError::GuessPhases {
+            guess: guess.x.len(),
+            phases: layout.cont.len(),
+        });
     }
     let phases = layout.ocp_phases(&spec, odes, guess);
     let cont = &layout.cont;

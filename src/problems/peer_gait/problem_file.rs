@@ -5,87 +5,79 @@
 use super::{FootTarget, NodeTargets, FEET};
 use crate::model::{ConstraintSet, GaitModel};
 use crate::phases::PhaseSequence;
+use crate::problems::error::{dotted, FieldError, PeerGaitError};
 use crate::problems::gait::GaitGuess;
 use serde_json::{json, Value};
 use std::path::{Path, PathBuf};
 
 /// The value at the JSON pointer `ptr` of `v`.
-pub(super) fn field<'v>(v: &'v Value, ptr: &str) -> Result<&'v Value, String> {
-    v.pointer(ptr).ok_or_else(|| {
-        format!(
-            "field '{}' missing",
-            ptr.trim_start_matches('/').replace('/', ".")
-        )
-    })
+pub(super) fn field<'v>(v: &'v Value, ptr: &str) -> Result<&'v Value, FieldError> {
+    v.pointer(ptr).ok_or_else(|| FieldError::missing(ptr))
 }
 
 /// The number at the JSON pointer `ptr` of `v`.
-pub(super) fn number(v: &Value, ptr: &str) -> Result<f64, String> {
-    field(v, ptr)?.as_f64().ok_or_else(|| {
-        format!(
-            "field '{}' must be a number",
-            ptr.trim_start_matches('/').replace('/', ".")
-        )
-    })
+pub(super) fn number(v: &Value, ptr: &str) -> Result<f64, FieldError> {
+    field(v, ptr)?
+        .as_f64()
+        .ok_or_else(|| FieldError::kind(ptr, "a number"))
 }
 
 /// The array of numbers at the JSON pointer `ptr` of `v` (of `len` entries, where given).
-pub(super) fn numbers(v: &Value, ptr: &str, len: Option<usize>) -> Result<Vec<f64>, String> {
-    let name = ptr.trim_start_matches('/').replace('/', ".");
+pub(super) fn numbers(v: &Value, ptr: &str, len: Option<usize>) -> Result<Vec<f64>, FieldError> {
     let a = field(v, ptr)?
         .as_array()
-        .ok_or_else(|| format!("field '{name}' must be an array of numbers"))?;
+        .ok_or_else(|| FieldError::kind(ptr, "an array of numbers"))?;
     if let Some(n) = len {
         if a.len() != n {
-            return Err(format!(
-                "field '{name}' has {} entries, expected {n}",
-                a.len()
-            ));
+            return Err(FieldError::Length {
+                field: dotted(ptr),
+                found: a.len(),
+                expected: n,
+            });
         }
     }
     a.iter()
         .enumerate()
         .map(|(i, x)| {
-            x.as_f64()
-                .ok_or_else(|| format!("field '{name}[{i}]' must be a number"))
+            x.as_f64().ok_or_else(|| FieldError::Kind {
+                field: format!("{}[{i}]", dotted(ptr)),
+                expected: "a number",
+            })
         })
         .collect()
 }
 
 /// The string at the JSON pointer `ptr` of `v`.
-pub(super) fn string<'v>(v: &'v Value, ptr: &str) -> Result<&'v str, String> {
-    field(v, ptr)?.as_str().ok_or_else(|| {
-        format!(
-            "field '{}' must be a string",
-            ptr.trim_start_matches('/').replace('/', ".")
-        )
-    })
+pub(super) fn string<'v>(v: &'v Value, ptr: &str) -> Result<&'v str, FieldError> {
+    field(v, ptr)?
+        .as_str()
+        .ok_or_else(|| FieldError::kind(ptr, "a string"))
 }
 
 /// The model of the problem file's `footfall` block (its files resolved against the
 /// folder of `path`), refused unless torque driven and of the file's body, and the contact
 /// index of each foot's primitive (right, left).
-pub(super) fn peer_model(json: &Value, path: &Path) -> Result<(GaitModel, [usize; 2]), String> {
+pub(super) fn peer_model(
+    json: &Value,
+    path: &Path,
+) -> Result<(GaitModel, [usize; 2]), PeerGaitError> {
     let dir = path.parent().unwrap_or(Path::new("."));
-    let file = |ptr: &str| -> Result<PathBuf, String> { Ok(dir.join(string(json, ptr)?)) };
+    let file = |ptr: &str| -> Result<PathBuf, FieldError> { Ok(dir.join(string(json, ptr)?)) };
     let model_path = file("/footfall/model")?;
     let foot_path = file("/footfall/foot")?;
-    let model = GaitModel::load(&model_path, &foot_path).map_err(|e| e.to_string())?;
+    let model = GaitModel::load(&model_path, &foot_path)?;
     if model.na() > 0 || model.torque_unit().is_none() {
-        return Err(format!(
-            "field 'footfall.model': {} must be torque driven (\"actuators\": {{\"type\": \"joint_torques\"}}), as the problem is",
-            model_path.display()
-        ));
+        return Err(PeerGaitError::NotTorqueDriven { model: model_path });
     }
     check_body(&model, json)?;
     let [right, left] = [0, 1].map(|s| {
         let name = string(json, &format!("/footfall/contacts/{}", FEET[s]))?;
-        model.contact_index(name).ok_or_else(|| {
-            format!(
-                "field 'footfall.contacts.{}': the foot has no contact '{name}'",
-                FEET[s]
-            )
-        })
+        model
+            .contact_index(name)
+            .ok_or_else(|| PeerGaitError::UnknownContact {
+                side: FEET[s],
+                contact: name.to_string(),
+            })
     });
     Ok((model, [right?, left?]))
 }
@@ -109,17 +101,18 @@ fn contact_list(
     ptr: &str,
     model: &GaitModel,
     contacts: [usize; 2],
-) -> Result<Vec<Value>, String> {
+) -> Result<Vec<Value>, PeerGaitError> {
     let feet = field(json, ptr)?
         .as_array()
-        .ok_or_else(|| format!("field '{}' must be an array", &ptr[1..]))?;
+        .ok_or_else(|| FieldError::kind(ptr, "an array"))?;
     feet.iter()
         .map(|f| {
             let s = FEET
                 .iter()
                 .position(|n| Some(*n) == f.as_str())
-                .ok_or_else(|| {
-                    format!("field '{}': feet are \"r\" or \"l\", got {f}", &ptr[1..])
+                .ok_or_else(|| PeerGaitError::UnknownFoot {
+                    field: dotted(ptr),
+                    foot: f.clone(),
                 })?;
             Ok(json!({ "contact": model.contacts[contacts[s]].name }))
         })
@@ -133,22 +126,20 @@ pub(super) fn peer_phases(
     path: &Path,
     model: &GaitModel,
     contacts: [usize; 2],
-) -> Result<PeerPhases, String> {
+) -> Result<PeerPhases, PeerGaitError> {
     let phases = field(json, "/phases")?
         .as_array()
-        .ok_or("field 'phases' must be an array")?;
+        .ok_or_else(|| FieldError::kind("/phases", "an array"))?;
     let transitions = field(json, "/transitions")?
         .as_array()
-        .ok_or("field 'transitions' must be an array")?;
+        .ok_or_else(|| FieldError::kind("/transitions", "an array"))?;
     let impact_after = impacts_after(json, transitions, phases.len(), model, contacts)?;
     let mut seq_phases = Vec::new();
     let mut intervals = Vec::new();
     for (j, _) in phases.iter().enumerate() {
         let n = number(json, &format!("/phases/{j}/intervals"))?;
         if !(n >= 1.0 && n.fract() == 0.0) {
-            return Err(format!(
-                "field 'phases[{j}].intervals' must be a whole number ≥ 1"
-            ));
+            return Err(PeerGaitError::Intervals { phase: j });
         }
         intervals.push(n as usize);
         seq_phases.push(json!({
@@ -169,9 +160,9 @@ pub(super) fn peer_phases(
         "phases": seq_phases,
         "gait": { "friction": friction, "periodic": false, "clearance": true, "controls": "constant" },
     }))
-    .map_err(|e| format!("phases: {e}"))?;
-    seq.validate(path).map_err(|e| e.to_string())?;
-    let sets = seq.resolve(model, path).map_err(|e| e.to_string())?;
+    .map_err(|source| PeerGaitError::Phases { source })?;
+    seq.validate(path)?;
+    let sets = seq.resolve(model, path)?;
     Ok(PeerPhases {
         seq,
         sets,
@@ -190,7 +181,7 @@ fn impacts_after(
     phases: usize,
     model: &GaitModel,
     contacts: [usize; 2],
-) -> Result<Vec<Option<(String, Vec<Value>)>>, String> {
+) -> Result<Vec<Option<(String, Vec<Value>)>>, PeerGaitError> {
     let mut impact_after: Vec<Option<(String, Vec<Value>)>> = vec![None; phases];
     let mut j = 0usize;
     for (t, tr) in transitions.iter().enumerate() {
@@ -199,10 +190,13 @@ fn impacts_after(
             "continuous" => j += 1,
             "impact" | "terminal impact" => {
                 let at = string(tr, "/at").unwrap_or("impact");
-                let name = at.split('(').nth(1).map_or("impact", |s| s.trim_end_matches(')'));
-                let slot = impact_after.get_mut(j).ok_or_else(|| {
-                    format!("field 'transitions[{t}]': an impact after the last phase's end")
-                })?;
+                let name = at
+                    .split('(')
+                    .nth(1)
+                    .map_or("impact", |s| s.trim_end_matches(')'));
+                let slot = impact_after
+                    .get_mut(j)
+                    .ok_or(PeerGaitError::ImpactAfterEnd { transition: t })?;
                 *slot = Some((
                     name.to_string(),
                     contact_list(
@@ -215,9 +209,10 @@ fn impacts_after(
                 j += 1;
             }
             other => {
-                return Err(format!(
-                    "field 'transitions[{t}].type': unknown '{other}' (initial, continuous, impact, terminal impact)"
-                ))
+                return Err(PeerGaitError::UnknownTransition {
+                    transition: t,
+                    kind: other.to_string(),
+                })
             }
         }
     }
@@ -231,7 +226,7 @@ pub(super) fn initial_guess(
     json: &Value,
     model: &GaitModel,
     intervals: &[usize],
-) -> Result<GaitGuess, String> {
+) -> Result<GaitGuess, PeerGaitError> {
     let nq = model.nq();
     let mut x_lb = numbers(json, "/constraints/bounds/q_lb", Some(nq))?;
     x_lb.extend(numbers(json, "/constraints/bounds/qd_lb", Some(nq))?);
@@ -245,12 +240,12 @@ pub(super) fn initial_guess(
     let node_count: usize = intervals.iter().map(|n| n + 1).sum();
     let q = field(json, "/initial_guess/nodes/q")?
         .as_array()
-        .ok_or("field 'initial_guess.nodes.q' must be an array")?;
+        .ok_or_else(|| FieldError::kind("/initial_guess/nodes/q", "an array"))?;
     if q.len() != node_count {
-        return Err(format!(
-            "field 'initial_guess.nodes.q' has {} nodes, the phases {node_count} (intervals + 1 each)",
-            q.len()
-        ));
+        return Err(PeerGaitError::GuessNodes {
+            found: q.len(),
+            expected: node_count,
+        });
     }
     let (mut gx, mut gu) = (Vec::new(), Vec::new());
     let mut at = 0usize;
@@ -302,7 +297,7 @@ pub(super) fn cost_nodes(
     json: &Value,
     tracked_names: &[String],
     intervals: &[usize],
-) -> Result<Vec<NodeTargets>, String> {
+) -> Result<Vec<NodeTargets>, PeerGaitError> {
     let ncost: usize = intervals.iter().sum();
     let phase_of = numbers(json, "/references/phase", Some(ncost))?;
     let mut nodes = Vec::with_capacity(ncost);
@@ -310,9 +305,7 @@ pub(super) fn cost_nodes(
     for (i, p) in phase_of.iter().enumerate() {
         let j = *p as usize;
         if j >= intervals.len() || p.fract() != 0.0 {
-            return Err(format!(
-                "field 'references.phase[{i}]' must be a phase index"
-            ));
+            return Err(PeerGaitError::PhaseIndex { node: i });
         }
         let node = count[j];
         count[j] += 1;
@@ -357,22 +350,23 @@ pub(super) fn cost_nodes(
         });
     }
     if count != intervals {
-        return Err(format!(
-            "field 'references.phase': {count:?} cost nodes per phase, the phases have {intervals:?} intervals"
-        ));
+        return Err(PeerGaitError::CostNodes {
+            found: count,
+            intervals: intervals.to_vec(),
+        });
     }
     Ok(nodes)
 }
 
 /// Refuse a model whose mass matrix and bias forces at the file's check state differ from
 /// its check values by more than 1e-7 (relative to the largest entry).
-fn check_body(model: &GaitModel, json: &Value) -> Result<(), String> {
+fn check_body(model: &GaitModel, json: &Value) -> Result<(), PeerGaitError> {
     let nq = model.nq();
     let q = numbers(json, "/check_values/q", Some(nq))?;
     let qd = numbers(json, "/check_values/qd", Some(nq))?;
     let want_m: Vec<f64> = field(json, "/check_values/M")?
         .as_array()
-        .ok_or("field 'check_values.M' must be an array of rows")?
+        .ok_or_else(|| FieldError::kind("/check_values/M", "an array of rows"))?
         .iter()
         .enumerate()
         .map(|(r, _)| numbers(json, &format!("/check_values/M/{r}"), Some(nq)))
@@ -386,12 +380,13 @@ fn check_body(model: &GaitModel, json: &Value) -> Result<(), String> {
             .zip(b)
             .fold(0.0f64, |w, (x, y)| w.max((x - y).abs() / scale))
     };
-    if want_m.len() != m.len() || rel(&m, &want_m) > 1e-7 || rel(&c, &want_c) > 1e-7 {
-        return Err(format!(
-            "the model of field 'footfall.model' is not the problem's body: its mass matrix differs from 'check_values.M' by {:.1e} and its bias forces from 'check_values.bias' by {:.1e} (relative; at most 1e-7 allowed)",
-            rel(&m, &want_m),
-            rel(&c, &want_c)
-        ));
+    const TOLERANCE: f64 = 1e-7;
+    if want_m.len() != m.len() || rel(&m, &want_m) > TOLERANCE || rel(&c, &want_c) > TOLERANCE {
+        return Err(PeerGaitError::NotTheBody {
+            mass_matrix: rel(&m, &want_m),
+            bias: rel(&c, &want_c),
+            tolerance: TOLERANCE,
+        });
     }
     Ok(())
 }

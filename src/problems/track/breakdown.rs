@@ -3,6 +3,7 @@
 use super::{TrackingSetup, CLOCK_SHIFT_END};
 use crate::model::{ConstraintSet, GaitModel};
 use crate::ocp::shifted_instant;
+use crate::problems::error::ProblemError;
 use crate::problems::tracking::TrackingResidual;
 
 impl TrackingSetup {
@@ -16,7 +17,7 @@ impl TrackingSetup {
         continuous: &[usize],
         solution: &crate::problems::evaluation::GaitSolution,
         integrator: &crate::integrate::IntegratorSettings,
-    ) -> Result<CostBreakdown, String> {
+    ) -> Result<CostBreakdown, ProblemError> {
         let linear = solution
             .phases
             .first()
@@ -87,7 +88,7 @@ impl TrackingSetup {
             times.dedup();
             let states = solution
                 .sample_at(model, sets, &times, integrator)
-                .map_err(|e| format!("integrating to the samples: {e}"))?;
+                .map_err(|source| ProblemError::Sampling { source })?;
             let mut data_by_sample = vec![(0.0, String::new(), 0.0); self.samples.len()];
             for (i, phase, r, k, tau, time) in &parts {
                 let ph = &solution.phases[*phase];
@@ -151,9 +152,10 @@ fn add_costs(
     channels: &mut Vec<String>,
     cost: &mut Vec<Vec<f64>>,
     rows: &mut Vec<Vec<usize>>,
-) -> Result<(f64, String, f64), String> {
+) -> Result<(f64, String, f64), ProblemError> {
     let mut v = vec![0.0; crate::problems::GenericFunction::dim(r)];
-    crate::problems::GenericFunction::eval(r, z, &mut v)?;
+    crate::problems::GenericFunction::eval(r, z, &mut v)
+        .map_err(|message| ProblemError::Residual { message })?;
     let mut node_data: Vec<(String, f64)> = Vec::new();
     for (label, value) in r.row_channels().into_iter().zip(&v) {
         let c = match channels.iter().position(|x| *x == label) {

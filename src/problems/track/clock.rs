@@ -286,9 +286,9 @@ impl super::TrackingSetup {
         &self,
         model: &'c GaitModel,
         ocp: &mut crate::ocp::Ocp<'c>,
-    ) -> Result<(), String> {
+    ) {
         if !self.clock_moves(model) {
-            return Ok(());
+            return;
         }
         let d0 = model.measurement_adjust(&model.theta0()).force_time_offset;
         for (j, &c) in self.clock.durations.iter().enumerate() {
@@ -316,7 +316,6 @@ impl super::TrackingSetup {
                 ub: vec![measured],
             });
         }
-        Ok(())
     }
 
     /// Move `solution`'s phases to the instants its parameters' clock offsets put them at

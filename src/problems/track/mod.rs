@@ -3,6 +3,7 @@
 //! data, an initial guess from the data projected onto the contacts (activations 0.01,
 //! excitations 0.025, their §3.6), and the node-wise least-squares residuals of eq. 18.
 
+use super::error::{ProblemError, WindowError};
 use super::gait::GaitGuess;
 use super::tracking::{MeasuredLoads, NodeTarget, TrackingWeights};
 use crate::data::{CubicSpline, Events, GaitData};
@@ -15,7 +16,7 @@ use std::sync::Arc;
 
 /// A measured half cycle from a left heel strike to the next right heel strike (the
 /// span Millard & Mombaur's phase graphs describe: 1e*/1c* … 4e*/7c*).
-pub fn half_cycle(events: &Events) -> Result<(f64, f64), String> {
+pub fn half_cycle(events: &Events) -> Result<(f64, f64), WindowError> {
     // keep a margin from the start of the recording, where splines are least reliable
     let earliest = events.span.0 + 0.05;
     for &t0 in events.heel_strike[1].iter().filter(|&&t| t >= earliest) {
@@ -23,7 +24,9 @@ pub fn half_cycle(events: &Events) -> Result<(f64, f64), String> {
             return Ok((t0, t1));
         }
     }
-    Err("the data contain no left heel strike followed by a right heel strike".into())
+    Err(WindowError::NoHalfCycle {
+        heel_strike: events.heel_strike.clone(),
+    })
 }
 
 /// Which feet can carry a ground force in a phase with constraint set `set`:
@@ -84,7 +87,7 @@ pub fn fix_durations(
     events: &Events,
     t0: f64,
     t1: f64,
-) -> Result<PhaseSequence, String> {
+) -> Result<PhaseSequence, ProblemError> {
     let cont: Vec<usize> = seq.continuous_indices();
     if model.contacts.iter().all(|c| c.law.is_some()) {
         // compliant feet only: no contact changes to match; the continuous phases share
@@ -102,21 +105,16 @@ pub fn fix_durations(
             _ => groups.push((feet, vec![i])),
         }
     }
-    let pattern = |f: [bool; 2]| match f {
-        [true, true] => "double stance",
-        [true, false] => "right stance",
-        [false, true] => "left stance",
-        [false, false] => "flight",
-    };
-    let g: Vec<&str> = groups.iter().map(|(f, _)| pattern(*f)).collect();
-    let m: Vec<&str> = measured.iter().map(|p| pattern(p.contact)).collect();
+    let g: Vec<[bool; 2]> = groups.iter().map(|(f, _)| *f).collect();
+    let m: Vec<[bool; 2]> = measured.iter().map(|p| p.contact).collect();
     if g != m {
-        return Err(format!(
-            "phase graph '{}' ({}) does not match the measured contacts between {t0:.3} s and {t1:.3} s ({})",
-            seq.name,
-            g.join(" → "),
-            m.join(" → ")
-        ));
+        return Err(ProblemError::ContactsMismatch {
+            graph: seq.name.clone(),
+            phases: g,
+            measured: m,
+            start: t0,
+            end: t1,
+        });
     }
     let mut out = seq.clone();
     for ((_, idx), mp) in groups.iter().zip(&measured) {
@@ -175,15 +173,14 @@ pub const MAX_PLATE_GROUND_GAP: f64 = 0.01;
 /// Refuse a trial whose force-plate surface (`force_plate_surface_y_m` of its meta file,
 /// or the CoP height of its force file) is more than [`MAX_PLATE_GROUND_GAP`] from the
 /// model's `contact.ground_height`.
-fn check_plate_height(model: &GaitModel, data: &GaitData) -> Result<(), String> {
+fn check_plate_height(model: &GaitModel, data: &GaitData) -> Result<(), ProblemError> {
     let ground = model.contact_settings().ground_height;
     match data.force_plate_height {
-        Some(h) if (h - ground).abs() > MAX_PLATE_GROUND_GAP => Err(format!(
-            "the force-plate surface is at y = {} m (force_plate_surface_y_m of the meta file, or the force file's CoP height), but the model's ground (contact.ground_height) is at y = {} m; they may differ by at most {} mm: set the model's contact.ground_height to the plate surface",
-            crate::limits::show(h),
-            crate::limits::show(ground),
-            MAX_PLATE_GROUND_GAP * 1e3
-        )),
+        Some(h) if (h - ground).abs() > MAX_PLATE_GROUND_GAP => Err(ProblemError::PlateHeight {
+            plate: h,
+            ground,
+            max_gap: MAX_PLATE_GROUND_GAP,
+        }),
         _ => Ok(()),
     }
 }
@@ -197,7 +194,7 @@ impl TrackingSetup {
         seq: &PhaseSequence,
         sets: &[ConstraintSet],
         data: &GaitData,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, ProblemError> {
         Self::new_with_sides(model, seq, sets, data, TargetSides::Interpolated)
     }
 
@@ -210,7 +207,7 @@ impl TrackingSetup {
         sets: &[ConstraintSet],
         data: &GaitData,
         sides: TargetSides,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, ProblemError> {
         Self::for_window(model, seq, sets, data, sides, WindowChoice::First)
     }
 
@@ -224,7 +221,7 @@ impl TrackingSetup {
         data: &GaitData,
         sides: TargetSides,
         choice: WindowChoice,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, ProblemError> {
         check_plate_height(model, data)?;
         let (offsets, moved) =
             clock::start_offsets(model, data, sides == TargetSides::Interpolated);
@@ -246,7 +243,7 @@ impl TrackingSetup {
         sets: &[ConstraintSet],
         data: &GaitData,
         events: Events,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, ProblemError> {
         Self::with_events_and_sides(model, seq, sets, data, events, TargetSides::Interpolated)
     }
 
@@ -258,7 +255,7 @@ impl TrackingSetup {
         data: &GaitData,
         events: Events,
         sides: TargetSides,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, ProblemError> {
         Self::build(
             model,
             seq,
@@ -281,7 +278,7 @@ impl TrackingSetup {
         sides: TargetSides,
         choice: WindowChoice,
         mut notes: Vec<String>,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, ProblemError> {
         let ((t0, t1), gap) = choose_window(data, &events, choice)?;
         if let Some(g) = gap {
             notes.push(format!(
@@ -291,7 +288,7 @@ impl TrackingSetup {
         let seq = fix_durations(seq, model, sets, &events, t0, t1)?;
         let splines: Vec<CubicSpline> = COORDINATES
             .iter()
-            .map(|c| data.spline(c).map_err(|e| e.to_string()))
+            .map(|c| data.spline(c))
             .collect::<Result<_, _>>()?;
         let tracks = [
             ForceTrack::new(data, 0, (t0, t1))?,
@@ -375,7 +372,10 @@ impl TrackingSetup {
 
     /// Start from `solution` (a solution of the same phase graph, e.g. of a tracking run
     /// before an effect was added) instead of the data.
-    pub fn start_from(&mut self, solution: &super::evaluation::GaitSolution) -> Result<(), String> {
+    pub fn start_from(
+        &mut self,
+        solution: &super::evaluation::GaitSolution,
+    ) -> Result<(), ProblemError> {
         let cont: Vec<(&str, usize)> = self
             .seq
             .phases
@@ -388,16 +388,20 @@ impl TrackingSetup {
             })
             .collect();
         if cont.len() != solution.phases.len() {
-            return Err(format!(
-                "the initial solution has {} continuous phases, the phase graph '{}' {}",
-                solution.phases.len(),
-                self.seq.name,
-                cont.len()
-            ));
+            return Err(ProblemError::SolutionPhaseCount {
+                found: solution.phases.len(),
+                graph: self.seq.name.clone(),
+                expected: cont.len(),
+            });
         }
         for (((name, n), ph), gu) in cont.iter().zip(&solution.phases).zip(&self.guess.u) {
             if *name != ph.name || *n != ph.intervals() || ph.u.len() != gu.len() {
-                return Err(format!("the initial solution's phase '{}' ({} intervals) does not match the phase graph's '{name}' ({n} intervals)", ph.name, ph.intervals()));
+                return Err(ProblemError::SolutionPhase {
+                    found: ph.name.clone(),
+                    found_intervals: ph.intervals(),
+                    expected: name.to_string(),
+                    expected_intervals: *n,
+                });
             }
         }
         let nu = self
@@ -412,9 +416,7 @@ impl TrackingSetup {
             .flat_map(|p| &p.u)
             .any(|u| u.len() > nu)
         {
-            return Err(format!(
-                "the initial solution has more controls than the model's {nu}"
-            ));
+            return Err(ProblemError::SolutionControls { controls: nu });
         }
         self.guess.x = solution.phases.iter().map(|p| p.x.clone()).collect();
         // a solution without the residual actuators starts them at zero

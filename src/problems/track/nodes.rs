@@ -7,6 +7,7 @@ use crate::data::{interp_linear, CubicSpline, GaitData};
 use crate::model::gait::COORDINATES;
 use crate::model::{ConstraintSet, GaitModel, Side};
 use crate::phases::{Phase, PhaseSequence};
+use crate::problems::error::{ProblemError, SampleSpan};
 use crate::problems::tracking::NodeTarget;
 
 /// The fewest samples a phase (forces) or an impact-to-impact segment (angles) must hold
@@ -20,16 +21,19 @@ fn segment_splines(
     columns: &[&[f64]],
     (a, b): (f64, f64),
     cutoff_hz: Option<f64>,
-    what: &str,
-) -> Result<Vec<CubicSpline>, String> {
+    what: SampleSpan,
+) -> Result<Vec<CubicSpline>, ProblemError> {
     let idx: Vec<usize> = (0..data.time.len())
         .filter(|&k| data.time[k] > a + 1e-9 && data.time[k] < b - 1e-9)
         .collect();
     if idx.len() < MIN_SEGMENT_SAMPLES {
-        return Err(format!(
-            "one-sided targets: {what} ({a:.4}–{b:.4} s) holds {} samples, fewer than {MIN_SEGMENT_SAMPLES}; sample faster or use interpolated targets",
-            idx.len()
-        ));
+        return Err(ProblemError::TooFewSamples {
+            span: what,
+            start: a,
+            end: b,
+            samples: idx.len(),
+            min: MIN_SEGMENT_SAMPLES,
+        });
     }
     let t: Vec<f64> = idx.iter().map(|&k| data.time[k]).collect();
     let fs = (t.len() - 1) as f64 / (t[t.len() - 1] - t[0]);
@@ -41,7 +45,10 @@ fn segment_splines(
                 Some(fc) => crate::data::filter::low_pass(&y, fs, fc),
                 None => y,
             };
-            CubicSpline::new(&t, &y).map_err(|e| format!("{what}: {e}"))
+            CubicSpline::new(&t, &y).map_err(|source| ProblemError::SegmentSpline {
+                span: what.clone(),
+                source,
+            })
         })
         .collect()
 }
@@ -57,13 +64,17 @@ pub(super) struct ForceTrack {
 }
 
 impl ForceTrack {
-    pub(super) fn new(data: &GaitData, s: usize, (t0, t1): (f64, f64)) -> Result<Self, String> {
+    pub(super) fn new(
+        data: &GaitData,
+        s: usize,
+        (t0, t1): (f64, f64),
+    ) -> Result<Self, ProblemError> {
         let (time, feet) = data.force_record();
         let f = &feet[s];
         if f.fx.iter().chain(&f.fy).all(|v| v.is_finite()) {
             return Ok(Self {
-                fx: CubicSpline::new(time, &f.fx).map_err(|e| e.to_string())?,
-                fy: CubicSpline::new(time, &f.fy).map_err(|e| e.to_string())?,
+                fx: CubicSpline::new(time, &f.fx)?,
+                fy: CubicSpline::new(time, &f.fy)?,
                 stretch: (f64::NEG_INFINITY, f64::INFINITY),
             });
         }
@@ -80,7 +91,7 @@ impl ForceTrack {
             // never measured: zero splines that no target reads (every node is outside
             // the empty stretch)
             let z = vec![0.0; data.time.len()];
-            let zs = CubicSpline::new(&data.time, &z).map_err(|e| e.to_string())?;
+            let zs = CubicSpline::new(&data.time, &z)?;
             return Ok(Self {
                 fx: zs.clone(),
                 fy: zs,
@@ -93,8 +104,8 @@ impl ForceTrack {
         let t: Vec<f64> = idx.iter().map(|&k| time[k]).collect();
         let pick = |v: &[f64]| idx.iter().map(|&k| v[k]).collect::<Vec<f64>>();
         Ok(Self {
-            fx: CubicSpline::new(&t, &pick(&f.fx)).map_err(|e| e.to_string())?,
-            fy: CubicSpline::new(&t, &pick(&f.fy)).map_err(|e| e.to_string())?,
+            fx: CubicSpline::new(&t, &pick(&f.fx))?,
+            fy: CubicSpline::new(&t, &pick(&f.fy))?,
             stretch: (t[0], t[t.len() - 1]),
         })
     }
@@ -165,7 +176,7 @@ impl NodeSource<'_> {
     /// the window's start): their times, targets and initial guess, the data projected onto
     /// the contacts (activations 0.01, excitations 0.025, joint torques and residual
     /// actuators 0).
-    pub(super) fn nodes(&self, seq: &PhaseSequence) -> Result<Nodes, String> {
+    pub(super) fn nodes(&self, seq: &PhaseSequence) -> Result<Nodes, ProblemError> {
         let (t0, t1) = self.window;
         let mut node_times = Vec::new();
         let mut targets = Vec::new();
@@ -246,10 +257,10 @@ impl NodeSource<'_> {
         (t, end): (f64, f64),
         impacts: &[f64],
         cutoff_hz: Option<f64>,
-    ) -> Result<(Vec<CubicSpline>, Vec<CubicSpline>, Vec<CubicSpline>), String> {
+    ) -> Result<(Vec<CubicSpline>, Vec<CubicSpline>, Vec<CubicSpline>), ProblemError> {
         let (data, (t0, t1)) = (self.data, self.window);
         if data.feet.iter().any(|f| f.fy.iter().any(|v| v.is_nan())) {
-            return Err("one-sided targets read the forces at the kinematic instants and need them measured throughout; where they are not, use interpolated or sample targets".into());
+            return Err(ProblemError::OneSidedForcesMissing);
         }
         let a = impacts
             .iter()
@@ -263,18 +274,23 @@ impl NodeSource<'_> {
             .fold(t1, f64::min);
         let angles: Vec<&[f64]> = COORDINATES
             .iter()
-            .map(|c| data.channel(c).ok_or_else(|| format!("no channel {c}")))
+            .map(|&c| {
+                data.channel(c)
+                    .ok_or(ProblemError::NoChannel { channel: c })
+            })
             .collect::<Result<_, _>>()?;
-        let angles = segment_splines(
-            data,
-            &angles,
-            (a, b),
-            cutoff_hz,
-            &format!("the segment between the impacts around phase {name}"),
-        )?;
-        let (f, phase) = (&data.feet, format!("phase {name}"));
-        let fx = segment_splines(data, &[&f[0].fx, &f[1].fx], (t, end), None, &phase)?;
-        let fy = segment_splines(data, &[&f[0].fy, &f[1].fy], (t, end), None, &phase)?;
+        let between = SampleSpan::BetweenImpacts {
+            phase: name.to_string(),
+        };
+        let angles = segment_splines(data, &angles, (a, b), cutoff_hz, between)?;
+        let (f, phase) = (
+            &data.feet,
+            SampleSpan::Phase {
+                phase: name.to_string(),
+            },
+        );
+        let fx = segment_splines(data, &[&f[0].fx, &f[1].fx], (t, end), None, phase.clone())?;
+        let fy = segment_splines(data, &[&f[0].fy, &f[1].fy], (t, end), None, phase)?;
         Ok((angles, fx, fy))
     }
 
@@ -288,7 +304,7 @@ impl NodeSource<'_> {
         i: usize,
         times: &[f64],
         (splines, fx, fy): (&[CubicSpline], &[CubicSpline], &[CubicSpline]),
-    ) -> Result<(Vec<NodeTarget>, Vec<Vec<f64>>), String> {
+    ) -> Result<(Vec<NodeTarget>, Vec<Vec<f64>>), ProblemError> {
         let (model, data, sets) = (self.model, self.data, self.sets);
         let (nq, na) = (model.nq(), model.na());
         let untracked = NodeTarget {
@@ -333,7 +349,7 @@ impl NodeSource<'_> {
             });
             let (qp, qdp, _) = model
                 .project(&sets[i], &q, &qd, &self.theta)
-                .map_err(|e| format!("projecting the data at t = {tk:.3} s: {e}"))?;
+                .map_err(|source| ProblemError::Projection { time: tk, source })?;
             let mut x = qp;
             x.extend(qdp);
             x.extend(vec![0.01; na]);

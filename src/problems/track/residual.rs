@@ -145,9 +145,9 @@ impl TrackingSetup {
         model: &'c GaitModel,
         sets: &'c [ConstraintSet],
         integrator: crate::integrate::IntegratorSettings,
-    ) -> Result<Ocp<'c>, String> {
+    ) -> Result<Ocp<'c>, crate::problems::error::ProblemError> {
         let mut ocp = cycle.ocp(&self.guess, integrator)?;
-        self.free_moving_durations(model, &mut ocp)?;
+        self.free_moving_durations(model, &mut ocp);
         let linear = ocp
             .phases
             .iter()

@@ -6,6 +6,7 @@ use crate::data::GaitData;
 use crate::model::gait::COORDINATES;
 use crate::model::{ConstraintSet, GaitModel};
 use crate::phases::{Phase, PhaseSequence};
+use crate::problems::error::ProblemError;
 use crate::problems::tracking::NodeTarget;
 
 /// A measurement compared with the model inside a shooting interval
@@ -71,10 +72,13 @@ pub(super) fn sample_targets(
     data: &GaitData,
     t0: f64,
     load_offset: [f64; 2],
-) -> Result<Vec<SampleTarget>, String> {
+) -> Result<Vec<SampleTarget>, ProblemError> {
     let angles: Vec<&[f64]> = COORDINATES
         .iter()
-        .map(|c| data.channel(c).ok_or_else(|| format!("no channel {c}")))
+        .map(|&c| {
+            data.channel(c)
+                .ok_or(ProblemError::NoChannel { channel: c })
+        })
         .collect::<Result<_, _>>()?;
     let nq = angles.len();
     // each channel at its own instants: (time, kinematic row, force row)

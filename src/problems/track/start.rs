@@ -17,6 +17,7 @@ use crate::data::GaitData;
 use crate::model::GaitModel;
 use crate::problems::check::balance::{inverse_dynamics, Body};
 use crate::problems::check::signals::Signals;
+use crate::problems::error::ProblemError;
 use crate::problems::gait::GaitGuess;
 
 /// Where a tracking solve from the data starts.
@@ -74,9 +75,9 @@ pub fn from_inverse_dynamics(
     data: &GaitData,
     node_times: &[Vec<f64>],
     guess: &mut GaitGuess,
-) -> Result<StartReport, String> {
-    let body = Body::of(model).map_err(|e| e.to_string())?;
-    let signals = Signals::new(data, CUTOFF_HZ, 0.0).map_err(|e| e.to_string())?;
+) -> Result<StartReport, ProblemError> {
+    let body = Body::of(model)?;
+    let signals = Signals::new(data, CUTOFF_HZ, 0.0)?;
     let nq = model.nq();
     let bounds = if model.na() > 0 {
         (guess.x_lb[2 * nq..].to_vec(), guess.x_ub[2 * nq..].to_vec())

@@ -13,6 +13,7 @@
 
 use crate::data::{detect_events, Events, GaitData, DEFAULT_EVENT_FRACTION};
 use crate::model::{GaitModel, Side};
+use crate::problems::error::WindowError;
 
 /// Which half cycle (a left heel strike to the next right heel strike) is tracked.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
@@ -133,7 +134,7 @@ fn calibration(force: &[Vec<f64>; 2], kin: &[Vec<f64>; 2]) -> (f64, usize) {
 pub fn combined_events(
     model: &GaitModel,
     data: &GaitData,
-) -> Result<(Events, Vec<String>), String> {
+) -> Result<(Events, Vec<String>), WindowError> {
     combined_events_on_clocks(model, data, [0.0; 2])
 }
 
@@ -144,11 +145,11 @@ pub(super) fn combined_events_on_clocks(
     model: &GaitModel,
     data: &GaitData,
     offsets: [f64; 2],
-) -> Result<(Events, Vec<String>), String> {
+) -> Result<(Events, Vec<String>), WindowError> {
     if let Some(e) = &data.events {
         return Ok((e.clone(), Vec::new()));
     }
-    let mut ev = detect_events(data, DEFAULT_EVENT_FRACTION).map_err(|e| e.to_string())?;
+    let mut ev = detect_events(data, DEFAULT_EVENT_FRACTION)?;
     for (s, &d) in offsets.iter().enumerate().filter(|(_, &d)| d != 0.0) {
         for e in ev.heel_strike[s].iter_mut().chain(ev.toe_off[s].iter_mut()) {
             *e -= d;
@@ -237,7 +238,7 @@ pub(super) fn same_half_cycle(
     moved: &Events,
     offsets: [f64; 2],
     choice: WindowChoice,
-) -> Result<WindowChoice, String> {
+) -> Result<WindowChoice, WindowError> {
     let (plain, _) = combined_events_on_clocks(model, data, [0.0; 2])?;
     let ((t0, t1), _) = choose_window(data, &plain, choice)?;
     let target = t0 - offsets[1];
@@ -247,15 +248,11 @@ pub(super) fn same_half_cycle(
         .min_by(|a, b| (a.1 .0 - target).abs().total_cmp(&(b.1 .0 - target).abs()))
         .filter(|(_, w)| (w.0 - target).abs() < SAME_EVENT_S)
         .map(|(i, _)| WindowChoice::Stride(i + 1))
-        .ok_or_else(|| {
-            format!(
-                "the half cycle {t0:.3}–{t1:.3} s has no counterpart once the plates' clocks are moved by {:+.1} ms (right) and {:+.1} ms (left): its left heel strike would be near {target:.3} s, and the half cycles are then {:?}",
-                1e3 * offsets[0],
-                1e3 * offsets[1],
-                all.iter()
-                    .map(|&(a, b)| ((a * 1e3).round() / 1e3, (b * 1e3).round() / 1e3))
-                    .collect::<Vec<_>>()
-            )
+        .ok_or_else(|| WindowError::NoCounterpart {
+            window: (t0, t1),
+            offsets,
+            target,
+            half_cycles: all.clone(),
         })
 }
 
@@ -322,63 +319,34 @@ pub fn choose_window(
     data: &GaitData,
     events: &Events,
     choice: WindowChoice,
-) -> Result<((f64, f64), Option<String>), String> {
+) -> Result<((f64, f64), Option<String>), WindowError> {
     let all = half_cycles(events);
-    let list = || {
-        if all.is_empty() {
-            "none".to_string()
-        } else {
-            all.iter()
-                .enumerate()
-                .map(|(i, (a, b))| format!("{}: {a:.3}–{b:.3} s", i + 1))
-                .collect::<Vec<_>>()
-                .join(", ")
-        }
-    };
-    let events_desc = || {
-        format!(
-            "heel strikes right {:?}, left {:?} (s)",
-            events.heel_strike[0]
-                .iter()
-                .map(|t| (t * 1e3).round() / 1e3)
-                .collect::<Vec<_>>(),
-            events.heel_strike[1]
-                .iter()
-                .map(|t| (t * 1e3).round() / 1e3)
-                .collect::<Vec<_>>()
-        )
-    };
     if all.is_empty() {
-        return Err(format!(
-            "the data contain no left heel strike followed by a right heel strike ({})",
-            events_desc()
-        ));
+        return Err(WindowError::NoHalfCycle {
+            heel_strike: events.heel_strike.clone(),
+        });
     }
     let check = |w: (f64, f64)| missing_forces(data, events, w);
     match choice {
         WindowChoice::First => {
-            let mut why = Vec::new();
+            let mut gaps = Vec::new();
             for &w in &all {
                 match check(w) {
                     None => return Ok((w, None)),
-                    Some(m) => why.push(format!("{:.3}–{:.3} s: {m}", w.0, w.1)),
+                    Some(m) => gaps.push((w, m)),
                 }
             }
-            Err(format!(
-                "no half cycle has both feet's forces measured where the phases load them; {}. Choose one with --window T0,T1 or --stride N to track it with those force terms left out",
-                why.join("; ")
-            ))
+            Err(WindowError::NoMeasuredHalfCycle { gaps })
         }
         WindowChoice::Within(a, b) => {
             let w = all
                 .iter()
                 .copied()
                 .find(|&(t0, t1)| t0 >= a - 1e-9 && t1 <= b + 1e-9)
-                .ok_or_else(|| {
-                    format!(
-                        "no half cycle (left heel strike to right heel strike) lies inside the window {a}–{b} s; the half cycles are {}",
-                        list()
-                    )
+                .ok_or_else(|| WindowError::NotInWindow {
+                    start: a,
+                    end: b,
+                    half_cycles: all.clone(),
                 })?;
             Ok((w, check(w)))
         }
@@ -386,12 +354,9 @@ pub fn choose_window(
             let w = n
                 .checked_sub(1)
                 .and_then(|i| all.get(i).copied())
-                .ok_or_else(|| {
-                    format!(
-                        "stride {n} does not exist: strides are numbered from 1 and the data hold {} half cycle(s) ({})",
-                        all.len(),
-                        list()
-                    )
+                .ok_or_else(|| WindowError::NoStride {
+                    stride: n,
+                    half_cycles: all.clone(),
                 })?;
             Ok((w, check(w)))
         }

@@ -83,8 +83,7 @@ pub(super) fn test_candidate(
         t.set_inflation(phi);
         // and so is the residual mean square
         t.set_mean_square(s2);
-        let id = candidate_identifiability_at(tr, &first, first_step.as_ref(), names, s2, phi)
-            .map_err(|e| anyhow!(e))?;
+        let id = candidate_identifiability_at(tr, &first, first_step.as_ref(), names, s2, phi);
         t.set_identifiability(id, Some(hint));
         let mut solution = GaitSolution::from_nlp(tr, &w1, &cycle.continuous, prob.setup.window.0);
         // a plate's clock offset candidate moves the window's start with the events it gave
