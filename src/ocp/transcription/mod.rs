@@ -68,6 +68,7 @@ impl TranscriptionError {
                 IntegratorError::Failed { .. }
                 | IntegratorError::Rhs { .. }
                 | IntegratorError::NonFinite { .. }
+                | IntegratorError::SingularTransition { .. }
                 | IntegratorError::BadInterval { .. }
                 | IntegratorError::BadOutputTime { .. } => true,
                 // a check point's function failed at this point's states
