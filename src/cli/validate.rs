@@ -46,7 +46,9 @@ pub fn plate(s: &str) -> Result<String, String> {
 
 /// An `--effect NAME[:key=value,…]` text naming a known effect with valid parameters.
 pub fn effect(s: &str) -> Result<String, String> {
-    footfall::model::effects::EffectSpec::parse_cli(s).map(|_| s.to_string())
+    footfall::model::effects::EffectSpec::parse_cli(s)
+        .map(|_| s.to_string())
+        .map_err(|e| e.to_string())
 }
 
 /// An iteration limit: 0 to [`MAX_ITERATIONS`].

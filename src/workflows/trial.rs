@@ -112,7 +112,7 @@ pub fn load_trial(t: &TrialFiles) -> anyhow::Result<LoadedTrial> {
             bail!("--forces, --plate, --lab-axes and --belt-speed describe an OpenSim trial given with --data IK.mot (without --data the bundled trial is read, whose meta file gives all of it)");
         }
         // the compiled-in copy, wherever footfall is started
-        let root = crate::bundled::root().map_err(anyhow::Error::msg)?;
+        let root = crate::bundled::root()?;
         let data = GaitData::bundled(&root)?;
         check_trial(&data, t.overground)?;
         return Ok(LoadedTrial {
