@@ -36,8 +36,8 @@ pub(super) fn test_candidate(
             .collect();
         // the Gauss–Newton model at the solution and its first step, shared by the score
         // test (its truncated re-fit's first step) and the identifiability probes
-        let first = GaussNewtonModel::new(tr, &w, 1e-12).map_err(|e| anyhow!(e))?;
-        let first_step = first.step(None);
+        let first = GaussNewtonModel::new(tr, &w, 1e-12)?;
+        let first_step = first.step(None).map_err(|e| e.to_string());
         // the residual mean square every statistic is measured in
         let s2 = baseline.mean_square(noise);
         let (mut t, w1) = score_test_from(
