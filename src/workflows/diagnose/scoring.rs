@@ -193,7 +193,7 @@ pub(super) fn score_all(
     candidates: &[EffectSpec],
 ) -> anyhow::Result<Scores> {
     let (args, setup, progress) = (run.args, run.setup, run.progress);
-    let pad = EffectSpec::parse_cli("heel_pad_compliance").map_err(|e| anyhow!(e))?;
+    let pad = EffectSpec::parse_cli("heel_pad_compliance")?;
     // each score-tested candidate's problem, built once (the model, phases and trial read
     // from their files): the largest model is made of those the model accepts, and each
     // is then score-tested
