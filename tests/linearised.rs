@@ -332,7 +332,7 @@ fn the_truncated_re_fit_stops_on_a_small_relative_or_absolute_step() {
     );
     let run = |abs_stop: f64| {
         let first = GaussNewtonModel::new(&nlp, &[0.0], 0.0).unwrap();
-        let step = first.step(None);
+        let step = first.step(None).map_err(|e| e.to_string());
         truncated_refit_from(&nlp, &first, step, 5, 0.05, abs_stop).unwrap()
     };
     let (j0, dec, w, steps) = run(0.0);

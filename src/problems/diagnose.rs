@@ -181,8 +181,8 @@ pub fn truncated_refit(
     max_steps: usize,
     rel_stop: f64,
 ) -> Result<(f64, f64, Vec<f64>, usize), String> {
-    let first = GaussNewtonModel::new(tr, w, 1e-12)?;
-    let step = first.step(None);
+    let first = GaussNewtonModel::new(tr, w, 1e-12).map_err(|e| e.to_string())?;
+    let step = first.step(None).map_err(|e| e.to_string());
     truncated_refit_from(tr, &first, step, max_steps, rel_stop, 0.0)
 }
 
@@ -206,7 +206,9 @@ pub fn truncated_refit_from(
     while steps < max_steps {
         let s = match pending.take() {
             Some(s) => s?,
-            None => GaussNewtonModel::new(tr, &w, 1e-12)?.step(None)?,
+            None => GaussNewtonModel::new(tr, &w, 1e-12)
+                .and_then(|m| m.step(None))
+                .map_err(|e| e.to_string())?,
         };
         if !(s.predicted_decrease > 0.0) {
             break;
@@ -249,8 +251,8 @@ pub fn score_test(
     baseline_decrease: f64,
     data_rows: usize,
 ) -> Result<(ScoreTest, Vec<f64>), String> {
-    let first = GaussNewtonModel::new(tr, w, 1e-12)?;
-    let step = first.step(None);
+    let first = GaussNewtonModel::new(tr, w, 1e-12).map_err(|e| e.to_string())?;
+    let step = first.step(None).map_err(|e| e.to_string());
     score_test_from(
         effect,
         parameters,
@@ -514,8 +516,8 @@ pub fn parameter_sd(
 ) -> Result<Vec<Option<f64>>, String> {
     let cols: Vec<usize> = tr.range(Block::Params).collect();
     let (w_lb, w_ub, _, _) = crate::sqp::Nlp::bounds(tr);
-    let m = GaussNewtonModel::new(tr, w, 0.0)?;
-    let base = m.step(None)?;
+    let m = GaussNewtonModel::new(tr, w, 0.0).map_err(|e| e.to_string())?;
+    let base = m.step(None).map_err(|e| e.to_string())?;
     let p = cols.len();
     let s2 = m.objective() / (data_rows.saturating_sub(p)).max(1) as f64;
     let at_bound = |col: usize| {
@@ -563,7 +565,7 @@ fn probed_inverse_diagonal(
     for _ in 0..4 {
         let mut shift = vec![0.0; n];
         shift[col] = eps;
-        let dtheta = base.d[col] - m.step(Some(&shift))?.d[col];
+        let dtheta = base.d[col] - m.step(Some(&shift)).map_err(|e| e.to_string())?.d[col];
         inv = dtheta / eps;
         let ratio = dtheta.abs() / target;
         if inv <= 0.0 || (0.1..=10.0).contains(&ratio) {

@@ -84,8 +84,8 @@ pub fn reduced_inverse_hessian(
     w: &[f64],
     cols: &[usize],
 ) -> Result<Vec<Vec<f64>>, String> {
-    let m = GaussNewtonModel::new(tr, w, 1e-12)?;
-    let base = m.step(None)?;
+    let m = GaussNewtonModel::new(tr, w, 1e-12).map_err(|e| e.to_string())?;
+    let base = m.step(None).map_err(|e| e.to_string())?;
     reduced_inverse_hessian_at(tr, &m, &base, cols)
 }
 
@@ -107,7 +107,7 @@ pub fn reduced_inverse_hessian_at(
     });
     let relaxed;
     let base = if near_bound {
-        relaxed = m.step_with(None, cols)?;
+        relaxed = m.step_with(None, cols).map_err(|e| e.to_string())?;
         &relaxed
     } else {
         base

@@ -36,8 +36,8 @@ pub(super) fn test_candidate(
             .collect();
         // the Gauss–Newton model at the solution and its first step, shared by the score
         // test (its truncated re-fit's first step) and the identifiability probes
-        let first = GaussNewtonModel::new(tr, &w, 1e-12).map_err(|e| anyhow!(e))?;
-        let first_step = first.step(None);
+        let first = GaussNewtonModel::new(tr, &w, 1e-12)?;
+        let first_step = first.step(None).map_err(|e| e.to_string());
         // the residual mean square every statistic is measured in
         let s2 = baseline.mean_square(noise);
         let (mut t, w1) = score_test_from(
@@ -193,7 +193,7 @@ pub(super) fn score_all(
     candidates: &[EffectSpec],
 ) -> anyhow::Result<Scores> {
     let (args, setup, progress) = (run.args, run.setup, run.progress);
-    let pad = EffectSpec::parse_cli("heel_pad_compliance").map_err(|e| anyhow!(e))?;
+    let pad = EffectSpec::parse_cli("heel_pad_compliance")?;
     // each score-tested candidate's problem, built once (the model, phases and trial read
     // from their files): the largest model is made of those the model accepts, and each
     // is then score-tested
