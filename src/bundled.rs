@@ -12,7 +12,26 @@
 //! layout: a model's `"file": "../data/…"` finds its OpenSim model there too.
 
 use std::path::{Component, Path, PathBuf};
-use std::sync::OnceLock;
+use std::sync::{Arc, OnceLock};
+
+/// Why a bundled file cannot be had.
+#[derive(Debug, Clone, thiserror::Error)]
+pub enum BundledError {
+    /// The bundled files cannot be written into the system's temporary folder.
+    #[error("cannot unpack footfall's bundled files into {}: {source}", dir.display())]
+    Unpack {
+        /// The folder they were to be unpacked into.
+        dir: PathBuf,
+        /// The cause (shared: the outcome of unpacking is kept for the whole process).
+        source: Arc<std::io::Error>,
+    },
+    /// The name asked for is not one of [`FILES`].
+    #[error("{name} is not one of footfall's bundled files")]
+    NotBundled {
+        /// The name asked for.
+        name: String,
+    },
+}
 
 macro_rules! bundle {
     ($($p:literal),* $(,)?) => {
@@ -104,20 +123,20 @@ fn unpack(dir: &Path) -> std::io::Result<()> {
 /// The folder holding the unpacked bundled files, unpacked on first use.
 ///
 /// Errors: the system's temporary folder is not writable (the message names the folder).
-pub fn root() -> Result<PathBuf, String> {
-    static ROOT: OnceLock<Result<PathBuf, String>> = OnceLock::new();
+pub fn root() -> Result<PathBuf, BundledError> {
+    static ROOT: OnceLock<Result<PathBuf, BundledError>> = OnceLock::new();
     ROOT.get_or_init(|| {
         let dir = std::env::temp_dir().join(format!(
             "footfall-{}-bundled-{:016x}",
             env!("CARGO_PKG_VERSION"),
             fingerprint()
         ));
-        unpack(&dir).map(|_| dir.clone()).map_err(|e| {
-            format!(
-                "cannot unpack footfall's bundled files into {}: {e}",
-                dir.display()
-            )
-        })
+        unpack(&dir)
+            .map(|_| dir.clone())
+            .map_err(|e| BundledError::Unpack {
+                dir: dir.clone(),
+                source: Arc::new(e),
+            })
     })
     .clone()
 }
@@ -136,9 +155,11 @@ pub fn resolve(path: &Path) -> PathBuf {
 }
 
 /// The bundled file `name` (one of [`FILES`]) unpacked, whatever the current folder holds.
-pub fn path_of(name: &str) -> Result<PathBuf, String> {
+pub fn path_of(name: &str) -> Result<PathBuf, BundledError> {
     if !FILES.iter().any(|(n, _)| *n == name) {
-        return Err(format!("{name} is not one of footfall's bundled files"));
+        return Err(BundledError::NotBundled {
+            name: name.to_string(),
+        });
     }
     root().map(|r| r.join(name))
 }

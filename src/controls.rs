@@ -4,6 +4,45 @@
 use crate::model::ModelError;
 use std::path::Path;
 
+/// Why a control table built in code is refused ([`ControlTable::validate`]).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ControlsError {
+    /// No knot, or not one value row per knot time.
+    #[error("{times} knot times but {rows} value rows (need at least one)")]
+    Knots {
+        /// Number of knot times.
+        times: usize,
+        /// Number of value rows.
+        rows: usize,
+    },
+    /// A knot time is not finite or not larger than the previous one.
+    #[error("knot {knot}: time {time} is not finite or not increasing")]
+    Time {
+        /// Index of the knot (0-based).
+        knot: usize,
+        /// Its time (s).
+        time: f64,
+    },
+    /// A knot's value row does not hold one value per control name.
+    #[error("knot {knot}: {values} values for {controls} controls")]
+    RowLength {
+        /// Index of the knot (0-based).
+        knot: usize,
+        /// Number of values in its row.
+        values: usize,
+        /// Number of control names.
+        controls: usize,
+    },
+    /// A control value is NaN or infinite.
+    #[error("knot {knot}: control `{control}` is not finite")]
+    NotFinite {
+        /// Index of the knot (0-based).
+        knot: usize,
+        /// Name of the control.
+        control: String,
+    },
+}
+
 /// Piecewise-linear control table.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ControlTable {
@@ -229,32 +268,29 @@ impl ControlTable {
 
     /// Check a table built in code: at least one knot, strictly increasing finite times, and
     /// one finite value per name at every knot.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), ControlsError> {
         if self.times.is_empty() || self.times.len() != self.values.len() {
-            return Err(format!(
-                "{} knot times but {} value rows (need at least one)",
-                self.times.len(),
-                self.values.len()
-            ));
+            return Err(ControlsError::Knots {
+                times: self.times.len(),
+                rows: self.values.len(),
+            });
         }
         for (k, (t, v)) in self.times.iter().zip(&self.values).enumerate() {
             if !t.is_finite() || (k > 0 && *t <= self.times[k - 1]) {
-                return Err(format!(
-                    "knot {k}: time {t} is not finite or not increasing"
-                ));
+                return Err(ControlsError::Time { knot: k, time: *t });
             }
             if v.len() != self.names.len() {
-                return Err(format!(
-                    "knot {k}: {} values for {} controls",
-                    v.len(),
-                    self.names.len()
-                ));
+                return Err(ControlsError::RowLength {
+                    knot: k,
+                    values: v.len(),
+                    controls: self.names.len(),
+                });
             }
             if let Some(i) = v.iter().position(|x| !x.is_finite()) {
-                return Err(format!(
-                    "knot {k}: control `{}` is not finite",
-                    self.names[i]
-                ));
+                return Err(ControlsError::NotFinite {
+                    knot: k,
+                    control: self.names[i].clone(),
+                });
             }
         }
         Ok(())

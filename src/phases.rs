@@ -527,7 +527,7 @@ impl PhaseSequence {
                     .collect();
                 let set = model
                     .constraint_set(ph.name(), &list)
-                    .map_err(|r| ModelError::invalid(path, f("contacts".into()), r))?;
+                    .map_err(|r| ModelError::invalid(path, f("contacts".into()), r.to_string()))?;
                 if let Some(row) = model.dependent_row(&set) {
                     let r = &set.rows[row];
                     return Err(ModelError::invalid(

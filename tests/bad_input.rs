@@ -1276,6 +1276,7 @@ fn hand_built_control_table_does_not_panic() {
     assert!(t
         .validate()
         .unwrap_err()
+        .to_string()
         .contains("1 values for 2 controls"));
     t.at(0.5, &mut out);
 }

@@ -112,7 +112,7 @@ fn command_line_effects_parse_free_their_parameters_and_refuse_mistakes() {
         ("cop_offset:offset", "key=value"),
         ("trunk_mass:added_mass=abc", "'added_mass' must be a number"),
     ] {
-        let err = EffectSpec::parse_cli(bad).unwrap_err();
+        let err = EffectSpec::parse_cli(bad).unwrap_err().to_string();
         assert!(err.contains(needle), "{bad}: {err}");
     }
 }
@@ -498,7 +498,7 @@ fn heel_pad_needs_a_heel_primitive_and_sane_values() {
         ("heel_pad_compliance:stiffness=0", "stiffness"),
         ("heel_pad_compliance:damping=-1", "damping"),
     ] {
-        let err = EffectSpec::parse_cli(bad).unwrap_err();
+        let err = EffectSpec::parse_cli(bad).unwrap_err().to_string();
         assert!(err.contains(needle), "{bad}: {err}");
     }
 }

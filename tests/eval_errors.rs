@@ -5,7 +5,10 @@
 //! recoverable, invalid integrator settings are fatal.
 
 use footfall::integrate::{ControlShape, ControlledOde, IntegratorSettings, OdeError};
-use footfall::ocp::{Block, NodeFunction, Ocp, Phase, PhaseDuration, Term, Transcription};
+use footfall::ocp::{
+    Block, NodeFunction, Ocp, Phase, PhaseDuration, Term, TermError, Transcription,
+    TranscriptionError,
+};
 use footfall::sqp::{self, EvalError, HessianMode, Nlp, NlpEval, Silent, SqpSettings, SqpStatus};
 use std::cell::RefCell;
 use std::sync::Arc;
@@ -230,7 +233,7 @@ impl NodeFunction for Identity {
     fn dim(&self) -> usize {
         1
     }
-    fn eval(&self, z: &[f64], v: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), String> {
+    fn eval(&self, z: &[f64], v: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), TermError> {
         v[0] = z[0];
         if let Some(j) = jac {
             j[0] = 1.0;
@@ -305,6 +308,54 @@ fn the_transcription_tells_an_integrator_failure_from_a_specification_error() {
         SqpStatus::EvaluationFailure(why) => assert!(why.contains("rtol"), "{why}"),
         s => panic!("expected an evaluation failure, got {s:?}"),
     }
+}
+
+/// z ↦ z, defined only for z ≤ 5: a function of the user's that fails with its own
+/// error beyond it.
+struct IdentityUpToFive;
+impl NodeFunction for IdentityUpToFive {
+    fn dim(&self) -> usize {
+        1
+    }
+    fn eval(&self, z: &[f64], v: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), TermError> {
+        if z[0] > 5.0 {
+            return Err(TermError::external(format!("z = {} is beyond 5", z[0])));
+        }
+        Identity.eval(z, v, jac)
+    }
+}
+
+/// A term that fails at a point is a recoverable failure of that point, typed: the
+/// transcription's error names the term and holds the function's own error as its cause,
+/// and the solver's error reads both.
+#[test]
+fn a_term_failure_is_recoverable_and_names_the_term_and_its_cause() {
+    let ode = Bounded;
+    let mut problem = ocp(&ode, IntegratorSettings::default());
+    problem.least_squares[0].f = Arc::new(IdentityUpToFive);
+    let tr = Transcription::new(&problem).unwrap();
+    let (_, _, mut w) = tr.variable_bounds_and_guess();
+    assert!(Nlp::evaluate(&tr, &w, true).is_ok());
+    // the last node's state, which only the term and the last continuity row read
+    w[tr.range(Block::State { phase: 0, node: 4 })][0] = 6.0;
+    let e = tr.evaluate(&w, false).expect_err("the term fails");
+    match &e {
+        TranscriptionError::Term {
+            term,
+            source: TermError::External(cause),
+        } => {
+            assert_eq!(term, "end");
+            assert_eq!(cause.to_string(), "z = 6 is beyond 5");
+        }
+        other => panic!("expected the term's failure, got {other:?}"),
+    }
+    assert!(e.is_recoverable());
+    let e = EvalError::from(e);
+    assert!(e.is_recoverable(), "{}", e.chain());
+    assert_eq!(
+        e.chain(),
+        "the evaluation failed at this point: term 'end': z = 6 is beyond 5"
+    );
 }
 
 /// f(w) = (w₀ − 1)² with the constraint w₁ = 0, whose gradient carries an error of the

@@ -64,7 +64,9 @@ fn every_primitive_gets_its_centre_size_and_angle_within_bounds_of_the_files() {
         .free_parameters()
         .iter()
         .all(|&i| m.parameters()[i].name.ends_with(".radius")));
-    let e = EffectSpec::parse_cli("foot_geometry:free=width").unwrap_err();
+    let e = EffectSpec::parse_cli("foot_geometry:free=width")
+        .unwrap_err()
+        .to_string();
     assert!(
         e.contains("width") && e.contains("centre, size, angle"),
         "{e}"

@@ -680,7 +680,7 @@ fn per_plate_effects_parse_and_are_the_measurement_checks() {
         ("force_plate_gain:error=0.5", "error"),
         ("mtg_damping:change=-1.5", "change"),
     ] {
-        let err = EffectSpec::parse_cli(bad).unwrap_err();
+        let err = EffectSpec::parse_cli(bad).unwrap_err().to_string();
         assert!(err.contains(needle), "{bad}: {err}");
     }
     let labels: Vec<String> = measurement_effects().iter().map(|e| e.label()).collect();

@@ -281,7 +281,7 @@ fn interval_hessian_matches_finite_differences_of_sensitivities() {
 /// least-squares form h Σ u_k² (exact for piecewise-constant u).
 #[test]
 fn integrated_cost_by_quadrature_state_matches_the_least_squares_form() {
-    use footfall::ocp::{quadrature_cost, Integrand, WithQuadrature};
+    use footfall::ocp::{quadrature_cost, Integrand, TermError, WithQuadrature};
     struct USquared;
     impl Integrand for USquared {
         fn dim(&self) -> usize {
@@ -294,7 +294,7 @@ fn integrated_cost_by_quadrature_state_matches_the_least_squares_form() {
             _t: &[f64],
             v: &mut [f64],
             jac: Option<&mut [f64]>,
-        ) -> Result<(), String> {
+        ) -> Result<(), TermError> {
             v[0] = u[0] * u[0];
             if let Some(j) = jac {
                 j.iter_mut().for_each(|x| *x = 0.0);
@@ -309,7 +309,7 @@ fn integrated_cost_by_quadrature_state_matches_the_least_squares_form() {
             _t: &[f64],
             w: &[f64],
             out: &mut [f64],
-        ) -> Result<bool, String> {
+        ) -> Result<bool, TermError> {
             out.iter_mut().for_each(|x| *x = 0.0);
             out[4 + 4 * 5] = 2.0 * w[0];
             Ok(true)

@@ -2,7 +2,9 @@
 //! discrete Riccati solution of the exactly discretised system.
 
 use footfall::integrate::{ControlShape, ControlledOde, IntegratorSettings, OdeError};
-use footfall::ocp::{Block, NodeFunction, Ocp, Phase, PhaseDuration, Term, Transcription};
+use footfall::ocp::{
+    Block, NodeFunction, Ocp, Phase, PhaseDuration, Term, TermError, Transcription,
+};
 use footfall::sqp::{self, HessianMode, Silent, SqpSettings, SqpStatus};
 use nalgebra::{DMatrix, DVector};
 use std::sync::Arc;
@@ -54,7 +56,7 @@ impl NodeFunction for Weighted {
     fn dim(&self) -> usize {
         self.0.len()
     }
-    fn eval(&self, z: &[f64], v: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), String> {
+    fn eval(&self, z: &[f64], v: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), TermError> {
         let d = self.0.len();
         for i in 0..d {
             v[i] = self.0[i] * z[i];

@@ -5,7 +5,8 @@
 
 use footfall::integrate::{ControlShape, ControlledOde, IntegratorSettings, OdeError};
 use footfall::ocp::{
-    Block, CheckPoint, NodeFunction, Ocp, Phase, PhaseDuration, SampleTerm, Transcription,
+    Block, CheckPoint, NodeFunction, Ocp, Phase, PhaseDuration, SampleTerm, TermError,
+    Transcription,
 };
 use std::sync::Arc;
 
@@ -79,7 +80,7 @@ impl NodeFunction for Residual {
     fn dim(&self) -> usize {
         1
     }
-    fn eval(&self, z: &[f64], v: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), String> {
+    fn eval(&self, z: &[f64], v: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), TermError> {
         v[0] = Self::value(z);
         if let Some(j) = jac {
             j.copy_from_slice(&[
@@ -94,7 +95,12 @@ impl NodeFunction for Residual {
     fn has_hessian(&self) -> bool {
         true
     }
-    fn weighted_hessian(&self, z: &[f64], weights: &[f64], out: &mut [f64]) -> Result<(), String> {
+    fn weighted_hessian(
+        &self,
+        z: &[f64],
+        weights: &[f64],
+        out: &mut [f64],
+    ) -> Result<(), TermError> {
         // z = (x₀, x₁, u, θ): ∂²/∂x₀² = 2, ∂²/∂x₁² = −sin(x₁) u, ∂²/∂x₁∂u = cos x₁, ∂²/∂x₁∂θ = 1/4
         let w = weights[0];
         out.iter_mut().for_each(|v| *v = 0.0);
@@ -385,7 +391,7 @@ impl NodeFunction for Shift {
     fn dim(&self) -> usize {
         1
     }
-    fn eval(&self, z: &[f64], v: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), String> {
+    fn eval(&self, z: &[f64], v: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), TermError> {
         v[0] = self.0 + 0.05 * (z[0] - 2.0);
         if let Some(j) = jac {
             j[0] = 0.05;
@@ -482,7 +488,7 @@ fn a_zero_shift_leaves_the_sample_where_it_was() {
         fn dim(&self) -> usize {
             1
         }
-        fn eval(&self, _: &[f64], v: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), String> {
+        fn eval(&self, _: &[f64], v: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), TermError> {
             v[0] = 0.0;
             if let Some(j) = jac {
                 j[0] = 0.0;
@@ -698,7 +704,7 @@ impl NodeFunction for Position {
     fn dim(&self) -> usize {
         1
     }
-    fn eval(&self, z: &[f64], v: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), String> {
+    fn eval(&self, z: &[f64], v: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), TermError> {
         let t = if self.target.is_nan() {
             0.0
         } else {

@@ -465,7 +465,8 @@ fn a_bad_volumetric_foot_is_refused_naming_the_field() {
     .unwrap();
     let err = model
         .constraint_set("stance", &[("r.sole", true)])
-        .unwrap_err();
+        .unwrap_err()
+        .to_string();
     assert!(err.contains("'r.sole' is volumetric"), "{err}");
 }
 

@@ -63,9 +63,13 @@ fn the_effect_starts_from_the_foot_files_law_and_takes_given_values() {
     assert_eq!(m.theta0(), vec![1.0]);
     assert_eq!(m.parameters()[1].value, 0.5);
     // out of bounds and unknown parameters are refused naming the field
-    let e = EffectSpec::parse_cli("volumetric_contact:stiffness=500").unwrap_err();
+    let e = EffectSpec::parse_cli("volumetric_contact:stiffness=500")
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("stiffness") && e.contains("[0.05, 50]"), "{e}");
-    let e = EffectSpec::parse_cli("volumetric_contact:free=mu_static").unwrap_err();
+    let e = EffectSpec::parse_cli("volumetric_contact:free=mu_static")
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("mu_static") && e.contains("mu_dynamic"), "{e}");
 }
 

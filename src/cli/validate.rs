@@ -41,12 +41,16 @@ pub fn threshold(s: &str) -> Result<f64, String> {
 
 /// A `--plate FOOT=PREFIX|FOOT=N` item whose foot is r or l (the file checks the rest).
 pub fn plate(s: &str) -> Result<String, String> {
-    footfall::workflows::trial::split_plate(s).map(|_| s.to_string())
+    footfall::workflows::trial::split_plate(s)
+        .map(|_| s.to_string())
+        .map_err(|e| e.to_string())
 }
 
 /// An `--effect NAME[:key=value,…]` text naming a known effect with valid parameters.
 pub fn effect(s: &str) -> Result<String, String> {
-    footfall::model::effects::EffectSpec::parse_cli(s).map(|_| s.to_string())
+    footfall::model::effects::EffectSpec::parse_cli(s)
+        .map(|_| s.to_string())
+        .map_err(|e| e.to_string())
 }
 
 /// An iteration limit: 0 to [`MAX_ITERATIONS`].

@@ -363,7 +363,7 @@ fn cal_matrix(
 ) -> Result<[[f64; 6]; 6], DataError> {
     let what = "FORCE_PLATFORM:CAL_MATRIX";
     let raw = params::find(bytes, "FORCE_PLATFORM", "CAL_MATRIX")
-        .map_err(|e| c3d_err(path, what, e))?
+        .map_err(|e| c3d_err(path, what, e.to_string()))?
         .ok_or_else(|| {
             c3d_err(
                 path,

@@ -280,6 +280,15 @@ impl DataError {
     }
 }
 
+/// A text that is not a signed lab axis ([`LabAxis`](crate::data::c3d::LabAxis)'s
+/// `from_str`).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("'{text}' is not a lab axis; valid: +x, -x, +y, -y, +z, -z")]
+pub struct LabAxisError {
+    /// The text as given.
+    pub text: String,
+}
+
 /// The path used for data built in memory.
 pub(crate) fn memory_path() -> PathBuf {
     PathBuf::from("<memory>")

@@ -52,7 +52,7 @@ pub use csv::{
     read_meta, read_sagittal_csv, read_sagittal_csv_with, sibling_meta_path, write_sagittal_csv,
     MetaEvents, MetaSource, TrialMeta,
 };
-pub use error::DataError;
+pub use error::{DataError, LabAxisError};
 pub use events::{
     detect_events, gait_cycle, threshold_crossings, ContactPhase, Events, DEFAULT_EVENT_FRACTION,
 };

@@ -76,6 +76,7 @@ pub use published::{
 
 use serde::{Deserialize, Serialize};
 
+use crate::model::error::ActuatorError;
 use crate::model::scalar::Scalar;
 
 /// Gravitational acceleration used to de-normalise Anderson et al.'s torques
@@ -262,19 +263,24 @@ impl MtgParams {
     }
 
     /// Check the parameter ranges the curves need.
-    pub fn validate(&self) -> Result<(), String> {
-        let tag = format!("{} {}", self.joint.name(), self.side.name());
-        let finite_pos = |v: f64, what: &str| -> Result<(), String> {
-            if v.is_finite() && v > 0.0 {
+    pub fn validate(&self) -> Result<(), ActuatorError> {
+        let (joint, side) = (self.joint, self.side);
+        let finite_pos = |value: f64, parameter: &'static str| -> Result<(), ActuatorError> {
+            if value.is_finite() && value > 0.0 {
                 Ok(())
             } else {
-                Err(format!("{tag}: {what} must be finite and > 0, got {v}"))
+                Err(ActuatorError::NotPositive {
+                    joint,
+                    side,
+                    parameter,
+                    value,
+                })
             }
         };
         finite_pos(self.max_isometric_torque, "max_isometric_torque")?;
         finite_pos(self.omega_max, "omega_max")?;
         if !self.optimal_angle.is_finite() {
-            return Err(format!("{tag}: optimal_angle must be finite"));
+            return Err(ActuatorError::OptimalAngle { joint, side });
         }
         match self.active_curve {
             ActiveTorqueAngle::Anderson2007Cosine { angle_scale } => {
@@ -282,17 +288,20 @@ impl MtgParams {
             }
             ActiveTorqueAngle::Gaussian { std_dev } => finite_pos(std_dev, "std_dev")?,
         }
-        let tv = self.tv_at_half_omega_max;
-        if !(tv.is_finite() && tv > 0.0 && tv < 0.5) {
-            return Err(format!(
-                "{tag}: tv_at_half_omega_max must lie in (0, 0.5), got {tv}"
-            ));
-        }
-        let te = self.tv_max_eccentric;
-        if !(te.is_finite() && te > 1.0 && te < 2.0) {
-            return Err(format!(
-                "{tag}: tv_max_eccentric must lie in (1, 2), got {te}"
-            ));
+        for (parameter, value, low, high) in [
+            ("tv_at_half_omega_max", self.tv_at_half_omega_max, 0.0, 0.5),
+            ("tv_max_eccentric", self.tv_max_eccentric, 1.0, 2.0),
+        ] {
+            if !(value.is_finite() && value > low && value < high) {
+                return Err(ActuatorError::OutOfRange {
+                    joint,
+                    side,
+                    parameter,
+                    value,
+                    low,
+                    high,
+                });
+            }
         }
         Ok(())
     }
@@ -437,13 +446,13 @@ impl ActivationDynamics {
     }
 
     /// Positive, finite time constants.
-    pub fn validate(&self) -> Result<(), String> {
-        for (v, what) in [
+    pub fn validate(&self) -> Result<(), ActuatorError> {
+        for (value, parameter) in [
             (self.tau_activation, "tau_activation"),
             (self.tau_deactivation, "tau_deactivation"),
         ] {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(format!("{what} must be finite and > 0, got {v}"));
+            if !(value.is_finite() && value > 0.0) {
+                return Err(ActuatorError::TimeConstant { parameter, value });
             }
         }
         Ok(())
@@ -531,9 +540,11 @@ impl JointActuatorSet {
 
     /// Six valid MTGs, each (joint, side) exactly once; η ≥ 0 finite; positive time
     /// constants.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), ActuatorError> {
         if self.mtgs.len() != 6 {
-            return Err(format!("expected 6 MTGs, got {}", self.mtgs.len()));
+            return Err(ActuatorError::Count {
+                found: self.mtgs.len(),
+            });
         }
         for j in Joint::ALL {
             for s in [MuscleSide::Flexor, MuscleSide::Extensor] {
@@ -543,11 +554,11 @@ impl JointActuatorSet {
                     .filter(|m| m.joint == j && m.side == s)
                     .count();
                 if n != 1 {
-                    return Err(format!(
-                        "expected exactly one {} {} MTG, found {n}",
-                        j.name(),
-                        s.name()
-                    ));
+                    return Err(ActuatorError::MtgCount {
+                        joint: j,
+                        side: s,
+                        found: n,
+                    });
                 }
             }
         }
@@ -555,7 +566,7 @@ impl JointActuatorSet {
             m.validate()?;
         }
         if !(self.eta.is_finite() && self.eta >= 0.0) {
-            return Err(format!("eta must be finite and >= 0, got {}", self.eta));
+            return Err(ActuatorError::Eta { value: self.eta });
         }
         self.activation.validate()
     }

@@ -36,6 +36,7 @@
 //!
 //! The planar model's segments and bodies are built from these parameters in
 //! [`super::segments`].
+use crate::model::error::AnthropometryError;
 use serde::{Deserialize, Serialize};
 
 /// Sex of the de Leva reference population.
@@ -344,12 +345,12 @@ pub struct HatPart {
     pub inertia_com: f64,
 }
 
-fn check_inputs(mass_kg: f64, height_m: f64) -> Result<(), String> {
+fn check_inputs(mass_kg: f64, height_m: f64) -> Result<(), AnthropometryError> {
     if !(mass_kg.is_finite() && mass_kg > 0.0) {
-        return Err(format!("body mass must be finite and > 0, got {mass_kg}"));
+        return Err(AnthropometryError::Mass { mass_kg });
     }
     if !(height_m.is_finite() && height_m > 0.0) {
-        return Err(format!("height must be finite and > 0, got {height_m}"));
+        return Err(AnthropometryError::Height { height_m });
     }
     Ok(())
 }
@@ -374,7 +375,7 @@ pub fn de_leva_hat_parts(
     height_m: f64,
     sex: Sex,
     column: RadiusColumn,
-) -> Result<Vec<HatPart>, String> {
+) -> Result<Vec<HatPart>, AnthropometryError> {
     check_inputs(mass_kg, height_m)?;
     let t = DeLevaTable::for_sex(sex);
     let scale = height_m / (t.stature_mm * 1e-3); // height ratio
@@ -437,7 +438,11 @@ pub fn de_leva_hat_parts(
 
 /// Planar segment parameters for a subject of `mass_kg`, `height_m`, using de Leva's
 /// transverse (medio-lateral axis) radii — see the module docs.
-pub fn de_leva_planar(mass_kg: f64, height_m: f64, sex: Sex) -> Result<PlanarBodySegments, String> {
+pub fn de_leva_planar(
+    mass_kg: f64,
+    height_m: f64,
+    sex: Sex,
+) -> Result<PlanarBodySegments, AnthropometryError> {
     de_leva_planar_using(mass_kg, height_m, sex, RadiusColumn::Transverse)
 }
 
@@ -455,7 +460,7 @@ pub fn de_leva_planar_using(
     height_m: f64,
     sex: Sex,
     column: RadiusColumn,
-) -> Result<PlanarBodySegments, String> {
+) -> Result<PlanarBodySegments, AnthropometryError> {
     check_inputs(mass_kg, height_m)?;
     let t = DeLevaTable::for_sex(sex);
     let scale = height_m / (t.stature_mm * 1e-3);

@@ -1,5 +1,6 @@
 //! Errors of model construction and evaluation.
 
+use crate::model::actuators::{Joint, MuscleSide};
 use std::path::PathBuf;
 
 /// Failure to read, validate or assemble a model, foot or phase file.
@@ -96,5 +97,314 @@ pub enum DynamicsError {
     NonFinite {
         /// Which input.
         what: &'static str,
+    },
+}
+
+/// Why a muscle-torque-generator set is refused ([`JointActuatorSet::validate`],
+/// [`MtgParams::validate`], [`ActivationDynamics::validate`]).
+///
+/// [`JointActuatorSet::validate`]: crate::model::actuators::JointActuatorSet::validate
+/// [`MtgParams::validate`]: crate::model::actuators::MtgParams::validate
+/// [`ActivationDynamics::validate`]: crate::model::actuators::ActivationDynamics::validate
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ActuatorError {
+    /// The set does not hold six MTGs (hip, knee, ankle × flexor, extensor).
+    #[error("expected 6 MTGs, got {found}")]
+    Count {
+        /// Number of MTGs in the set.
+        found: usize,
+    },
+    /// A joint's flexor or extensor MTG is missing or given more than once.
+    #[error("expected exactly one {} {} MTG, found {found}", joint.name(), side.name())]
+    MtgCount {
+        /// The joint.
+        joint: Joint,
+        /// Flexor or extensor.
+        side: MuscleSide,
+        /// How many the set has.
+        found: usize,
+    },
+    /// A parameter of one MTG that must be finite and positive is not.
+    #[error("{} {}: {parameter} must be finite and > 0, got {value}", joint.name(), side.name())]
+    NotPositive {
+        /// The MTG's joint.
+        joint: Joint,
+        /// The MTG's side (flexor or extensor).
+        side: MuscleSide,
+        /// The parameter (`max_isometric_torque`, `omega_max`, the curve's width).
+        parameter: &'static str,
+        /// Its value (in the parameter's unit: N·m, rad/s, 1/rad or rad).
+        value: f64,
+    },
+    /// One MTG's optimal angle is NaN or infinite.
+    #[error("{} {}: optimal_angle must be finite", joint.name(), side.name())]
+    OptimalAngle {
+        /// The MTG's joint.
+        joint: Joint,
+        /// The MTG's side (flexor or extensor).
+        side: MuscleSide,
+    },
+    /// A dimensionless torque–velocity parameter of one MTG lies outside its open range.
+    #[error("{} {}: {parameter} must lie in ({low}, {high}), got {value}", joint.name(), side.name())]
+    OutOfRange {
+        /// The MTG's joint.
+        joint: Joint,
+        /// The MTG's side (flexor or extensor).
+        side: MuscleSide,
+        /// The parameter (`tv_at_half_omega_max`, `tv_max_eccentric`).
+        parameter: &'static str,
+        /// Its value (dimensionless).
+        value: f64,
+        /// Lower end of the open range.
+        low: f64,
+        /// Upper end of the open range.
+        high: f64,
+    },
+    /// The damping factor η is negative or not finite.
+    #[error("eta must be finite and >= 0, got {value}")]
+    Eta {
+        /// η (dimensionless).
+        value: f64,
+    },
+    /// An activation time constant is not finite and positive.
+    #[error("{parameter} must be finite and > 0, got {value}")]
+    TimeConstant {
+        /// `tau_activation` or `tau_deactivation`.
+        parameter: &'static str,
+        /// Its value (s).
+        value: f64,
+    },
+}
+
+/// Why a contact primitive's shape is refused ([`Shape::validate`]).
+///
+/// [`Shape::validate`]: crate::model::geometry::Shape::validate
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{field}: {reason}")]
+pub struct ShapeError {
+    /// The offending field: `radius`, `semi_axes`, `centre`, `angle` or `position`.
+    pub field: &'static str,
+    /// What is wrong and what would be valid.
+    pub reason: String,
+}
+
+/// Why bodies do not form a kinematic tree ([`Tree::new`]).
+///
+/// [`Tree::new`]: crate::model::multibody::Tree::new
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum TreeError {
+    /// A body's parent does not come before it.
+    #[error(
+        "body '{body}' (index {index}) has parent index {parent}, which does not come before it"
+    )]
+    ParentOrder {
+        /// The body's name.
+        body: String,
+        /// Its index.
+        index: usize,
+        /// Its parent's index.
+        parent: usize,
+    },
+    /// A prismatic joint's axis is not a unit vector.
+    #[error("body '{body}': prismatic axis must be a unit vector")]
+    PrismaticAxis {
+        /// The body's name.
+        body: String,
+        /// The axis as given (parent frame).
+        axis: [f64; 2],
+    },
+}
+
+/// Why de Leva's tables cannot be scaled to a subject ([`de_leva_planar`] and kin).
+///
+/// [`de_leva_planar`]: crate::model::anthropometry::de_leva_planar
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum AnthropometryError {
+    /// The body mass is not finite and positive.
+    #[error("body mass must be finite and > 0, got {mass_kg}")]
+    Mass {
+        /// The body mass (kg).
+        mass_kg: f64,
+    },
+    /// The height is not finite and positive.
+    #[error("height must be finite and > 0, got {height_m}")]
+    Height {
+        /// The height (m).
+        height_m: f64,
+    },
+}
+
+/// Why an effect parameter's value cannot be set ([`GaitModel::set_parameter_value`]).
+///
+/// [`GaitModel::set_parameter_value`]: crate::model::GaitModel::set_parameter_value
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ParameterError {
+    /// No effect of the model has a parameter of this name.
+    #[error("the model has no parameter '{name}'")]
+    Unknown {
+        /// The name asked for.
+        name: String,
+    },
+    /// The value is not finite or lies outside the parameter's bounds.
+    #[error("parameter '{name}': {value} is outside its bounds [{lower}, {upper}]")]
+    OutOfBounds {
+        /// The parameter.
+        name: String,
+        /// The value asked for (in the parameter's unit).
+        value: f64,
+        /// Its lower bound.
+        lower: f64,
+        /// Its upper bound.
+        upper: f64,
+    },
+}
+
+/// Why a constraint set cannot be built from contact names ([`GaitModel::constraint_set`]).
+///
+/// [`GaitModel::constraint_set`]: crate::model::GaitModel::constraint_set
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ContactSetError {
+    /// The foot has no contact of this name.
+    #[error("constraint set '{set}': unknown contact '{contact}' (this foot has: {})", known.join(", "))]
+    UnknownContact {
+        /// The constraint set's name.
+        set: String,
+        /// The contact asked for.
+        contact: String,
+        /// The model's contacts.
+        known: Vec<String>,
+    },
+    /// The contact is volumetric: a force in every phase, never a constraint.
+    #[error("constraint set '{set}': contact '{contact}' is volumetric: its force acts in every phase and it is never a constraint; leave it out of the phase file's contacts")]
+    Volumetric {
+        /// The constraint set's name.
+        set: String,
+        /// The contact.
+        contact: String,
+    },
+    /// The contact is listed more than once.
+    #[error("constraint set '{set}': contact '{contact}' is listed twice")]
+    Repeated {
+        /// The constraint set's name.
+        set: String,
+        /// The contact.
+        contact: String,
+    },
+}
+
+/// Why an effect entry cannot be read from its text or built for a model
+/// ([`EffectSpec::parse_cli`], [`EffectSpec::build`]).
+///
+/// [`EffectSpec::parse_cli`]: crate::model::effects::EffectSpec::parse_cli
+/// [`EffectSpec::build`]: crate::model::effects::EffectSpec::build
+#[derive(Debug, thiserror::Error)]
+pub enum EffectError {
+    /// A field of the entry is invalid.
+    #[error("{field}: {reason}")]
+    Field {
+        /// The entry's field (`joint`, `side`, `free`, a parameter).
+        field: &'static str,
+        /// What is wrong and what would be valid.
+        reason: String,
+    },
+    /// The entry acts on the trunk but the model has no trunk body.
+    #[error("the model has no trunk body 'hat'")]
+    NoTrunk,
+    /// The entry names a foot primitive the foot lacks.
+    #[error("primitive: this foot has no primitive '{primitive}' (it has: {}); the pad goes under a heel circle", primitives.join(", "))]
+    NoPrimitive {
+        /// The primitive named.
+        primitive: String,
+        /// The foot's primitives.
+        primitives: Vec<String>,
+    },
+    /// The entry names a joint whose coordinate the model lacks.
+    #[error("joint: the model has no coordinate '{coordinate}'")]
+    NoCoordinate {
+        /// The coordinate looked for (e.g. `knee_r`).
+        coordinate: String,
+    },
+    /// The contact law is freed but the foot has no volumetric primitive.
+    #[error("volumetric_contact: the foot {foot} has no volumetric primitive (its primitives {} are rigid), so there is no contact law to free; use a volumetric foot, e.g. --foot models/feet/volumetric_ellipse.json, or give a primitive \"contact\": {{\"type\": \"volumetric\", …}} in the foot file", primitives.join(", "))]
+    NoVolumetricPrimitive {
+        /// The foot file.
+        foot: String,
+        /// The foot's (rigid) primitives.
+        primitives: Vec<String>,
+    },
+    /// A volumetric primitive's law, as the foot file gives it, lies outside the bounds
+    /// an identification may use.
+    #[error("volumetric_contact: primitive '{primitive}' of the foot {foot} has {parameter} {value} (in the effect's units), outside the bounds [{lower}, {upper}] an identification may use; give a start value with {parameter}=…")]
+    LawOutOfBounds {
+        /// The primitive.
+        primitive: String,
+        /// The foot file.
+        foot: String,
+        /// `stiffness`, `damping` or `mu_dynamic`.
+        parameter: &'static str,
+        /// Its value (stiffness in the effect's unit, damping s/m, friction dimensionless).
+        value: f64,
+        /// Lower bound.
+        lower: f64,
+        /// Upper bound.
+        upper: f64,
+    },
+    /// The text names no known effect.
+    #[error("'{name}' is not a known effect; use one of {}", crate::model::effects::EFFECT_KINDS.join(", "))]
+    UnknownKind {
+        /// The name given.
+        name: String,
+    },
+    /// An item of the text is not `key=value`.
+    #[error("'{item}' in '{text}' is not key=value")]
+    NotKeyValue {
+        /// The item.
+        item: String,
+        /// The whole text.
+        text: String,
+    },
+    /// A key is given twice.
+    #[error("'{key}' is given twice in '{text}'; give each parameter once")]
+    RepeatedKey {
+        /// The key.
+        key: String,
+        /// The whole text.
+        text: String,
+    },
+    /// A parameter's value is not a number.
+    #[error("effect '{text}': '{key}' must be a number (for example {key}=0.02), got '{value}'")]
+    NotANumber {
+        /// The whole text.
+        text: String,
+        /// The parameter.
+        key: String,
+        /// The value given.
+        value: String,
+    },
+    /// The text does not describe an entry of this kind (an unknown parameter, a wrong type).
+    #[error("effect '{text}': {source}")]
+    Schema {
+        /// The whole text.
+        text: String,
+        /// serde's description.
+        source: serde_json::Error,
+    },
+    /// The text's entry is invalid.
+    #[error("effect '{text}': {source}")]
+    Entry {
+        /// The whole text.
+        text: String,
+        /// What is invalid (an [`EffectError::Field`]).
+        source: Box<EffectError>,
+    },
+    /// Two texts add the same effect.
+    #[error("'{first}' and '{second}' both add the effect '{effect}'; give it once")]
+    Twice {
+        /// The first text.
+        first: String,
+        /// The second text.
+        second: String,
+        /// The effect both add.
+        effect: String,
     },
 }

@@ -22,7 +22,7 @@ use super::anthropometry;
 use super::effects::{
     ActuatorAdjust, DynEffect, MeasurementAdjust, ModelAdjust, ModelScalar, ParamSpec,
 };
-use super::error::ModelError;
+use super::error::{ModelError, ParameterError};
 use super::geometry::{Shape, ShapeScalars};
 use super::multibody::{Inertia, Tree, V2};
 use super::segments::{build_bodies, estimated_stature, segments_from_de_leva};
@@ -164,17 +164,21 @@ impl GaitModel {
 
     /// Set the value of the effect parameter `name` (e.g. an identified value read back
     /// from a run), within its bounds.
-    pub fn set_parameter_value(&mut self, name: &str, value: f64) -> Result<(), String> {
+    pub fn set_parameter_value(&mut self, name: &str, value: f64) -> Result<(), ParameterError> {
         let p = self
             .params
             .iter_mut()
             .find(|p| p.name == name)
-            .ok_or_else(|| format!("the model has no parameter '{name}'"))?;
+            .ok_or_else(|| ParameterError::Unknown {
+                name: name.to_string(),
+            })?;
         if !(value.is_finite() && value >= p.lower && value <= p.upper) {
-            return Err(format!(
-                "parameter '{name}': {value} is outside its bounds [{}, {}]",
-                p.lower, p.upper
-            ));
+            return Err(ParameterError::OutOfBounds {
+                name: name.to_string(),
+                value,
+                lower: p.lower,
+                upper: p.upper,
+            });
         }
         p.value = value;
         Ok(())
@@ -192,7 +196,7 @@ impl GaitModel {
         foot.validate(foot_path)?;
         let seg = body_segments(spec, model_path)?;
         let tree = Tree::new(build_bodies(&seg))
-            .map_err(|r| ModelError::invalid(model_path, "body", r))?;
+            .map_err(|r| ModelError::invalid(model_path, "body", r.to_string()))?;
         let contacts = foot_contacts(&tree, foot);
         let actuation = actuation(spec, &seg, model_path)?;
         let effects = build_effects(spec, model_path, &tree, foot, foot_path)?;
@@ -525,7 +529,7 @@ fn body_segments(spec: &ModelSpec, model_path: &Path) -> Result<Segments, ModelE
         }
         BodySpec::DeLeva { mass, height, sex } => {
             let p = anthropometry::de_leva_planar(*mass, *height, *sex)
-                .map_err(|r| ModelError::invalid(model_path, "body", r))?;
+                .map_err(|r| ModelError::invalid(model_path, "body", r.to_string()))?;
             segments_from_de_leva(&p)
         }
     })
@@ -577,7 +581,7 @@ fn actuation(spec: &ModelSpec, seg: &Segments, model_path: &Path) -> Result<Actu
             set.activation.tau_activation = *tau_activation;
             set.activation.tau_deactivation = *tau_deactivation;
             set.validate()
-                .map_err(|r| ModelError::invalid(model_path, "actuators", r))?;
+                .map_err(|r| ModelError::invalid(model_path, "actuators", r.to_string()))?;
             Actuation::Mtg(set)
         }
         ActuatorSpec::JointTorques {
@@ -621,10 +625,9 @@ fn build_effects(
     };
     let mut effects = Vec::new();
     for (i, e) in spec.effects.iter().enumerate() {
-        effects.extend(
-            e.build(&ctx)
-                .map_err(|r| ModelError::invalid(model_path, format!("effects[{i}]"), r))?,
-        );
+        effects.extend(e.build(&ctx).map_err(|r| {
+            ModelError::invalid(model_path, format!("effects[{i}]"), r.to_string())
+        })?);
     }
     Ok(effects)
 }

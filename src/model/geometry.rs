@@ -53,9 +53,9 @@ impl Shape {
     }
 
     /// Check physical validity: positive finite sizes, finite positions.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), crate::model::ShapeError> {
         self.check()
-            .map_err(|(field, reason)| format!("{field}: {reason}"))
+            .map_err(|(field, reason)| crate::model::ShapeError { field, reason })
     }
 
     /// Largest size (radius, semi-axis) and distance from the foot frame's origin (m) a

@@ -14,6 +14,9 @@ pub mod segments;
 pub mod spec;
 pub mod volumetric;
 
-pub use error::{DynamicsError, ModelError};
+pub use error::{
+    ActuatorError, AnthropometryError, ContactSetError, DynamicsError, EffectError, ModelError,
+    ParameterError, ShapeError, TreeError,
+};
 pub use gait::{ConstraintSet, ContactReport, FootLoad, GaitModel, RowKind, Side};
 pub use scalar::Scalar;

@@ -15,6 +15,7 @@
 //!
 //! All functions are generic over [`Scalar`]; derivatives come from forward-mode AD.
 
+use super::error::TreeError;
 use super::Scalar;
 use serde::{Deserialize, Serialize};
 
@@ -125,17 +126,18 @@ pub struct Kinematics<S> {
 
 impl Tree {
     /// Build a tree; bodies must be ordered parent before child.
-    pub fn new(bodies: Vec<Body>) -> Result<Self, String> {
+    pub fn new(bodies: Vec<Body>) -> Result<Self, TreeError> {
         let mut ancestors: Vec<Vec<usize>> = Vec::with_capacity(bodies.len());
         for (b, body) in bodies.iter().enumerate() {
             let mut chain = match body.parent {
                 None => Vec::new(),
                 Some(p) if p < b => ancestors[p].clone(),
                 Some(p) => {
-                    return Err(format!(
-                        "body '{}' (index {b}) has parent index {p}, which does not come before it",
-                        body.name
-                    ))
+                    return Err(TreeError::ParentOrder {
+                        body: body.name.clone(),
+                        index: b,
+                        parent: p,
+                    })
                 }
             };
             chain.push(b);
@@ -143,10 +145,10 @@ impl Tree {
             if let Joint::Prismatic { axis } = body.joint {
                 let n = (axis[0] * axis[0] + axis[1] * axis[1]).sqrt();
                 if (n - 1.0).abs() > 1e-9 {
-                    return Err(format!(
-                        "body '{}': prismatic axis must be a unit vector",
-                        body.name
-                    ));
+                    return Err(TreeError::PrismaticAxis {
+                        body: body.name.clone(),
+                        axis,
+                    });
                 }
             }
         }

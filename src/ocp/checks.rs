@@ -2,8 +2,9 @@
 //! shooting intervals, and the chain rule they share with sample terms.
 
 use super::problem::Ocp;
+use super::term_error::{with_causes, TermError};
 use super::transcription::TranscriptionError;
-use crate::integrate::ShootingInterval;
+use crate::integrate::{IntegratorError, ShootingInterval};
 
 /// A check point's values and, with derivatives, its Jacobian over the interval's columns
 /// (d × ncols, column-major), with its first constraint row.
@@ -118,9 +119,9 @@ pub(super) fn check_values(
         let mut values = vec![0.0; d];
         let mut jz = vec![0.0; d * nz];
         cp.f.eval(&z, &mut values, ss.is_some().then_some(&mut jz[..]))
-            .map_err(|reason| TranscriptionError::Term {
+            .map_err(|source| TranscriptionError::Term {
                 term: cp.name.clone(),
-                reason,
+                source,
             })?;
         let jac = match ss {
             Some(ss) => instant_jacobian(
@@ -167,6 +168,7 @@ pub(super) fn instant_args<O: crate::integrate::ControlledOde + ?Sized>(
 /// The weights `Σ_c Σ_r ν_r ∂g_r/∂x` (nx) on the state at `tau` of the check points of an
 /// interval there, with their multipliers `lambda` (the NLP's, by row): the state part of
 /// the checks' curvature comes from the interval's second-order pass with these weights.
+/// A check point's failure is the integrator's, as the pass asks for the weights.
 pub(super) fn state_weights(
     ocp: &Ocp<'_>,
     phase: usize,
@@ -175,7 +177,7 @@ pub(super) fn state_weights(
     p: &[f64],
     x: &[f64],
     lambda: &[f64],
-) -> Result<Vec<f64>, String> {
+) -> Result<Vec<f64>, IntegratorError> {
     let ph = &ocp.phases[phase];
     let interval = ShootingInterval::new(ph.ode, ph.controls);
     let nx = ph.ode.nx();
@@ -188,7 +190,7 @@ pub(super) fn state_weights(
         let mut v = vec![0.0; d];
         let mut jz = vec![0.0; d * nz];
         cp.f.eval(&z, &mut v, Some(&mut jz))
-            .map_err(|e| format!("check point '{}': {e}", cp.name))?;
+            .map_err(|e| check_point_failure(&cp.name, &e))?;
         for (k, wk) in w.iter_mut().enumerate() {
             *wk += (0..d).map(|i| lambda[row + i] * jz[i + k * d]).sum::<f64>();
         }
@@ -199,7 +201,8 @@ pub(super) fn state_weights(
 /// Add the direct part of the check points' curvature, `Dᵀ (Σ ν ∇²g) D` with
 /// `D = ∂(x(τ), u(τ), θ)/∂(x0, p)`, to an interval's Hessian `hess` ((nx+np)²,
 /// column-major), from the states `xs` and sensitivities `ss` at `taus`. Functions without
-/// second derivatives add nothing.
+/// second derivatives add nothing; a check point's failure is the integrator's, as for
+/// [`state_weights`].
 #[allow(clippy::too_many_arguments)]
 pub(super) fn add_direct_curvature(
     ocp: &Ocp<'_>,
@@ -211,7 +214,7 @@ pub(super) fn add_direct_curvature(
     ss: &[f64],
     lambda: &[f64],
     hess: &mut [f64],
-) -> Result<(), String> {
+) -> Result<(), IntegratorError> {
     let ph = &ocp.phases[phase];
     let interval = ShootingInterval::new(ph.ode, ph.controls);
     let (nx, nu, nt) = (ph.ode.nx(), ph.ode.nu(), ocp.ntheta);
@@ -231,11 +234,21 @@ pub(super) fn add_direct_curvature(
         let z = instant_args(&interval, &xs[q * nx..(q + 1) * nx], p, tau);
         let mut g = vec![0.0; nw * nw];
         cp.f.weighted_hessian(&z, weights, &mut g)
-            .map_err(|e| format!("check point '{}': {e}", cp.name))?;
+            .map_err(|e| check_point_failure(&cp.name, &e))?;
         let s = &ss[q * nx * ncols..(q + 1) * nx * ncols];
         add_instant_curvature(&interval, (nx, nu, nt), tau, s, &g, hess);
     }
     Ok(())
+}
+
+/// The integrator's error for check point `name`, whose function failed with `e` in the
+/// interval's curvature pass: a failure at this point's states, which the transcription
+/// takes as recoverable (the integrator's errors hold their reason as text).
+fn check_point_failure(name: &str, e: &TermError) -> IntegratorError {
+    IntegratorError::BadSettings {
+        field: "check point",
+        reason: format!("check point '{name}': {}", with_causes(e)),
+    }
 }
 
 /// Add `Dᵀ g D` to an interval's Hessian `hess` ((nx+np)², column-major, over the

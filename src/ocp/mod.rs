@@ -8,10 +8,12 @@
 mod checks;
 pub mod problem;
 pub mod quadrature;
+mod term_error;
 pub mod transcription;
 
 pub use problem::{
     Block, CheckPoint, Constraint, NodeFunction, Ocp, Phase, PhaseDuration, SampleTerm, Term,
 };
 pub use quadrature::{quadrature_cost, Integrand, WithQuadrature};
+pub use term_error::{ExternalCause, TermError};
 pub use transcription::{shifted_instant, Evaluation, RowLabel, Transcription, TranscriptionError};

@@ -2,6 +2,7 @@
 //! dynamics, shooting grids, bounds and initial guesses; functions of node variables for
 //! transitions, constraints and costs. Nothing here knows about gait.
 
+use super::TermError;
 use crate::integrate::{ControlShape, ControlledOde, IntegratorSettings};
 use std::sync::Arc;
 
@@ -38,7 +39,7 @@ pub trait NodeFunction: Send + Sync {
     /// Output dimension.
     fn dim(&self) -> usize;
     /// Evaluate; fill `jac` when given.
-    fn eval(&self, z: &[f64], value: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), String>;
+    fn eval(&self, z: &[f64], value: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), TermError>;
     /// Whether [`weighted_hessian`](Self::weighted_hessian) is provided.
     fn has_hessian(&self) -> bool {
         false
@@ -50,8 +51,8 @@ pub trait NodeFunction: Send + Sync {
         _z: &[f64],
         _weights: &[f64],
         _out: &mut [f64],
-    ) -> Result<(), String> {
-        Err("no Hessian provided".into())
+    ) -> Result<(), TermError> {
+        Err(TermError::NoHessian)
     }
 }
 

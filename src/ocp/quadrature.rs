@@ -7,6 +7,8 @@
 //! objective (see [`quadrature_cost`]).
 
 use super::problem::{Block, NodeFunction, Term};
+use super::term_error::with_causes;
+use super::TermError;
 use crate::integrate::{ControlledOde, OdeError};
 use std::sync::Arc;
 
@@ -23,7 +25,7 @@ pub trait Integrand: Send + Sync {
         theta: &[f64],
         value: &mut [f64],
         jac: Option<&mut [f64]>,
-    ) -> Result<(), String>;
+    ) -> Result<(), TermError>;
     /// `Σ_i w_i ∇²L_i` with respect to `(x, u, θ)`; `Ok(false)` if not provided.
     fn weighted_hessian(
         &self,
@@ -32,7 +34,7 @@ pub trait Integrand: Send + Sync {
         _theta: &[f64],
         _w: &[f64],
         _out: &mut [f64],
-    ) -> Result<bool, String> {
+    ) -> Result<bool, TermError> {
         Ok(false)
     }
 }
@@ -65,7 +67,7 @@ impl ControlledOde for WithQuadrature<'_> {
         self.ode.f(&x[..n], u, theta, &mut xdot[..n])?;
         self.integrand
             .eval(&x[..n], u, theta, &mut xdot[n..], None)
-            .map_err(OdeError::Fatal)
+            .map_err(|e| OdeError::Fatal(with_causes(&e)))
     }
     fn f_jac(
         &self,
@@ -90,7 +92,7 @@ impl ControlledOde for WithQuadrature<'_> {
         let mut lj = vec![0.0; nl * (n + nu + nt)];
         self.integrand
             .eval(&x[..n], u, theta, &mut xdot[n..], Some(&mut lj))
-            .map_err(OdeError::Fatal)?;
+            .map_err(|e| OdeError::Fatal(with_causes(&e)))?;
         fx.iter_mut().for_each(|v| *v = 0.0);
         for c in 0..n {
             fx[c * na..c * na + n].copy_from_slice(&gx[c * n..(c + 1) * n]);
@@ -138,7 +140,7 @@ impl ControlledOde for WithQuadrature<'_> {
         if !self
             .integrand
             .weighted_hessian(&x[..n], u, theta, &mu[n..n + nl], &mut hl)
-            .map_err(OdeError::Fatal)?
+            .map_err(|e| OdeError::Fatal(with_causes(&e)))?
         {
             return Ok(false);
         }
@@ -166,7 +168,7 @@ pub fn quadrature_cost<'a>(phase: usize, node: usize, offset: usize, nl: usize) 
         fn dim(&self) -> usize {
             1
         }
-        fn eval(&self, z: &[f64], v: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), String> {
+        fn eval(&self, z: &[f64], v: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), TermError> {
             v[0] = z[self.range.clone()].iter().sum();
             if let Some(j) = jac {
                 j.iter_mut().for_each(|x| *x = 0.0);
@@ -179,7 +181,12 @@ pub fn quadrature_cost<'a>(phase: usize, node: usize, offset: usize, nl: usize) 
         fn has_hessian(&self) -> bool {
             true
         }
-        fn weighted_hessian(&self, _z: &[f64], _w: &[f64], out: &mut [f64]) -> Result<(), String> {
+        fn weighted_hessian(
+            &self,
+            _z: &[f64],
+            _w: &[f64],
+            out: &mut [f64],
+        ) -> Result<(), TermError> {
             out.iter_mut().for_each(|v| *v = 0.0);
             Ok(())
         }

@@ -181,7 +181,7 @@ pub fn truncated_refit(
     max_steps: usize,
     rel_stop: f64,
 ) -> Result<(f64, f64, Vec<f64>, usize), DiagnoseError> {
-    let first = GaussNewtonModel::new(tr, w, 1e-12).map_err(DiagnoseError::gauss_newton)?;
+    let first = GaussNewtonModel::new(tr, w, 1e-12)?;
     let step = first.step(None);
     truncated_refit_from(tr, &first, step, max_steps, rel_stop, 0.0)
 }
@@ -193,7 +193,7 @@ pub fn truncated_refit(
 pub fn truncated_refit_from(
     tr: &dyn crate::sqp::Nlp,
     first: &GaussNewtonModel<'_>,
-    first_step: Result<GaussNewtonStep, String>,
+    first_step: Result<GaussNewtonStep, impl Into<DiagnoseError>>,
     max_steps: usize,
     rel_stop: f64,
     abs_stop: f64,
@@ -205,10 +205,9 @@ pub fn truncated_refit_from(
     let (mut f, mut total, mut steps) = (j0, 0.0, 0);
     while steps < max_steps {
         let s = match pending.take() {
-            Some(s) => s,
-            None => GaussNewtonModel::new(tr, &w, 1e-12).and_then(|m| m.step(None)),
-        }
-        .map_err(DiagnoseError::gauss_newton)?;
+            Some(s) => s.map_err(Into::into)?,
+            None => GaussNewtonModel::new(tr, &w, 1e-12).and_then(|m| m.step(None))?,
+        };
         if !(s.predicted_decrease > 0.0) {
             break;
         }
@@ -250,7 +249,7 @@ pub fn score_test(
     baseline_decrease: f64,
     data_rows: usize,
 ) -> Result<(ScoreTest, Vec<f64>), DiagnoseError> {
-    let first = GaussNewtonModel::new(tr, w, 1e-12).map_err(DiagnoseError::gauss_newton)?;
+    let first = GaussNewtonModel::new(tr, w, 1e-12)?;
     let step = first.step(None);
     score_test_from(
         effect,
@@ -274,7 +273,7 @@ pub fn score_test_from(
     parameters: Vec<String>,
     tr: &Transcription,
     first: &GaussNewtonModel<'_>,
-    first_step: Result<GaussNewtonStep, String>,
+    first_step: Result<GaussNewtonStep, impl Into<DiagnoseError>>,
     baseline_decrease: f64,
     data_rows: usize,
     mean_square: Option<f64>,
@@ -514,8 +513,8 @@ pub fn parameter_sd(
 ) -> Result<Vec<Option<f64>>, DiagnoseError> {
     let cols: Vec<usize> = tr.range(Block::Params).collect();
     let (w_lb, w_ub, _, _) = crate::sqp::Nlp::bounds(tr);
-    let m = GaussNewtonModel::new(tr, w, 0.0).map_err(DiagnoseError::gauss_newton)?;
-    let base = m.step(None).map_err(DiagnoseError::gauss_newton)?;
+    let m = GaussNewtonModel::new(tr, w, 0.0)?;
+    let base = m.step(None)?;
     let p = cols.len();
     let s2 = m.objective() / (data_rows.saturating_sub(p)).max(1) as f64;
     let at_bound = |col: usize| {
@@ -563,8 +562,7 @@ fn probed_inverse_diagonal(
     for _ in 0..4 {
         let mut shift = vec![0.0; n];
         shift[col] = eps;
-        let dtheta =
-            base.d[col] - m.step(Some(&shift)).map_err(DiagnoseError::gauss_newton)?.d[col];
+        let dtheta = base.d[col] - m.step(Some(&shift))?.d[col];
         inv = dtheta / eps;
         let ratio = dtheta.abs() / target;
         if inv <= 0.0 || (0.1..=10.0).contains(&ratio) {

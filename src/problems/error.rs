@@ -6,9 +6,12 @@
 use crate::data::DataError;
 use crate::model::gait::COORDINATES;
 use crate::model::{DynamicsError, ModelError};
+use crate::ocp::TermError;
 use crate::problems::check::CheckError;
 use crate::simulate::SimulationError;
+use crate::sqp::linearised::LinearisedError;
 use std::path::PathBuf;
+use std::sync::Arc;
 
 /// Why a walking-cycle, tracking or prediction problem could not be built from its model,
 /// phase file, data and settings.
@@ -157,11 +160,8 @@ pub enum ProblemError {
         source: SimulationError,
     },
     /// A tracking residual could not be evaluated.
-    #[error("{message}")]
-    Residual {
-        /// What the residual's evaluation said.
-        message: String,
-    },
+    #[error(transparent)]
+    Residual(#[from] TermError),
     /// No half cycle to track.
     #[error(transparent)]
     Window(#[from] WindowError),
@@ -464,19 +464,18 @@ pub enum DiagnoseError {
     /// The solution could not be compared with the data.
     #[error(transparent)]
     Data(#[from] DataError),
-    /// The Gauss–Newton model or step could not be computed.
-    #[error("{message}")]
-    GaussNewton {
-        /// What the Gauss–Newton model said.
-        message: String,
-    },
+    /// The Gauss–Newton model or one of its steps could not be computed (shared: the
+    /// first step at a solution serves the score test and the identifiability probes).
+    #[error(transparent)]
+    GaussNewton(Arc<LinearisedError>),
     /// A probe of a parameter's information failed.
-    #[error("probing the information of column {column}: {reason}")]
+    #[error("probing the information of column {column}: {source}")]
     Probe {
         /// The variable probed.
         column: usize,
-        /// What the shifted step said.
-        reason: String,
+        /// Why the step with the shifted gradient failed.
+        #[source]
+        source: LinearisedError,
     },
     /// No probe of a parameter's information solved its QP.
     #[error("probing the information of column {column}: no QP solved")]
@@ -486,10 +485,15 @@ pub enum DiagnoseError {
     },
 }
 
-impl DiagnoseError {
-    /// A Gauss–Newton failure with its message.
-    pub(crate) fn gauss_newton(message: String) -> Self {
-        DiagnoseError::GaussNewton { message }
+impl From<LinearisedError> for DiagnoseError {
+    fn from(e: LinearisedError) -> Self {
+        DiagnoseError::GaussNewton(Arc::new(e))
+    }
+}
+
+impl From<Arc<LinearisedError>> for DiagnoseError {
+    fn from(e: Arc<LinearisedError>) -> Self {
+        DiagnoseError::GaussNewton(e)
     }
 }
 

@@ -27,7 +27,7 @@ pub use gait_ode::GaitOde;
 
 use crate::model::ad::{self, AdChunk, AdNested};
 use crate::model::effects::ModelScalar;
-use crate::ocp::NodeFunction;
+use crate::ocp::{NodeFunction, TermError};
 
 /// A vector function written once over any model scalar, so that its value, its exact
 /// Jacobian (chunked forward AD) and its exact weighted Hessian (nested forward AD) all
@@ -36,7 +36,7 @@ pub trait GenericFunction: Send + Sync {
     /// Output dimension.
     fn dim(&self) -> usize;
     /// Evaluate at `z` into `out`.
-    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), String>;
+    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), TermError>;
     /// Whether the function is affine in `z` (zero Hessian, no AD pass needed).
     fn is_linear(&self) -> bool {
         false
@@ -58,7 +58,7 @@ impl<T: GenericFunction> NodeFunction for AdTerm<T> {
     fn dim(&self) -> usize {
         self.0.dim()
     }
-    fn eval(&self, z: &[f64], value: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), String> {
+    fn eval(&self, z: &[f64], value: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), TermError> {
         match jac {
             None => self.0.eval(z, value),
             Some(j) => ad::jacobian(
@@ -73,7 +73,12 @@ impl<T: GenericFunction> NodeFunction for AdTerm<T> {
     fn has_hessian(&self) -> bool {
         true
     }
-    fn weighted_hessian(&self, z: &[f64], weights: &[f64], out: &mut [f64]) -> Result<(), String> {
+    fn weighted_hessian(
+        &self,
+        z: &[f64],
+        weights: &[f64],
+        out: &mut [f64],
+    ) -> Result<(), TermError> {
         if self.0.is_linear() || weights.iter().all(|w| *w == 0.0) {
             out.iter_mut().for_each(|v| *v = 0.0);
             return Ok(());
@@ -99,7 +104,7 @@ impl<T: GenericFunction> NodeFunction for AdTerm<T> {
 }
 
 /// Callback computing `Σ w_i ∇²f_i(z)` (nz × nz column-major) for an [`FnTerm`].
-pub type HessianFn = Box<dyn Fn(&[f64], &[f64], &mut [f64]) -> Result<(), String> + Send + Sync>;
+pub type HessianFn = Box<dyn Fn(&[f64], &[f64], &mut [f64]) -> Result<(), TermError> + Send + Sync>;
 
 /// A [`NodeFunction`] from a closure `(z, value, jacobian)`, optionally with an exact
 /// weighted Hessian.
@@ -111,7 +116,7 @@ pub struct FnTerm<F> {
 
 impl<F> FnTerm<F>
 where
-    F: Fn(&[f64], &mut [f64], Option<&mut [f64]>) -> Result<(), String> + Send + Sync,
+    F: Fn(&[f64], &mut [f64], Option<&mut [f64]>) -> Result<(), TermError> + Send + Sync,
 {
     /// Wrap `f` with output dimension `dim`.
     pub fn new(dim: usize, f: F) -> Self {
@@ -131,21 +136,26 @@ where
 
 impl<F> NodeFunction for FnTerm<F>
 where
-    F: Fn(&[f64], &mut [f64], Option<&mut [f64]>) -> Result<(), String> + Send + Sync,
+    F: Fn(&[f64], &mut [f64], Option<&mut [f64]>) -> Result<(), TermError> + Send + Sync,
 {
     fn dim(&self) -> usize {
         self.dim
     }
-    fn eval(&self, z: &[f64], value: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), String> {
+    fn eval(&self, z: &[f64], value: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), TermError> {
         (self.f)(z, value, jac)
     }
     fn has_hessian(&self) -> bool {
         self.hessian.is_some()
     }
-    fn weighted_hessian(&self, z: &[f64], weights: &[f64], out: &mut [f64]) -> Result<(), String> {
+    fn weighted_hessian(
+        &self,
+        z: &[f64],
+        weights: &[f64],
+        out: &mut [f64],
+    ) -> Result<(), TermError> {
         match &self.hessian {
             Some(h) => h(z, weights, out),
-            None => Err("no Hessian provided".into()),
+            None => Err(TermError::NoHessian),
         }
     }
 }
@@ -177,11 +187,11 @@ impl NodeFunction for Linear {
         _z: &[f64],
         _weights: &[f64],
         out: &mut [f64],
-    ) -> Result<(), String> {
+    ) -> Result<(), TermError> {
         out.iter_mut().for_each(|v| *v = 0.0);
         Ok(())
     }
-    fn eval(&self, z: &[f64], value: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), String> {
+    fn eval(&self, z: &[f64], value: &mut [f64], jac: Option<&mut [f64]>) -> Result<(), TermError> {
         for i in 0..self.dim {
             value[i] = (0..self.nz).map(|j| self.a[i * self.nz + j] * z[j]).sum();
         }

@@ -350,7 +350,7 @@ impl GenericFunction for ContactVelocity<'_> {
     fn dim(&self) -> usize {
         self.set.rows.len()
     }
-    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), String> {
+    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), crate::ocp::TermError> {
         let nx = self.model.nx();
         let v = self
             .model
@@ -384,7 +384,7 @@ impl GenericFunction for NodeResidual<'_> {
             .sum();
         2 * self.tracked.len() + feet + self.model.nu()
     }
-    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), String> {
+    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), crate::ocp::TermError> {
         let (nx, nu, nq) = (self.model.nx(), self.model.nu(), self.model.nq());
         let (x, rest) = z.split_at(nx);
         let (u, th) = rest.split_at(nu);
@@ -396,10 +396,7 @@ impl GenericFunction for NodeResidual<'_> {
             o += 2;
         }
         if !t.feet.is_empty() {
-            let loads = self
-                .model
-                .foot_loads_generic(&self.set, x, u, th)
-                .map_err(|e| e.to_string())?;
+            let loads = self.model.foot_loads_generic(&self.set, x, u, th)?;
             for f in &t.feet {
                 let s = f.side;
                 out[o] = (loads[s].0 - S::c(f.fx)) * S::c(self.sw_force);
@@ -438,7 +435,7 @@ impl GenericFunction for TerminalResidual {
     fn dim(&self) -> usize {
         2 * self.tracked.len()
     }
-    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), String> {
+    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), crate::ocp::TermError> {
         for (a, &c) in self.tracked.iter().enumerate() {
             out[2 * a] = (z[c] - S::c(self.theta[a])) * S::c(self.sw_theta[a]);
             out[2 * a + 1] = (z[self.nq + c] - S::c(self.omega[a])) * S::c(self.sw_omega[a]);

@@ -340,7 +340,7 @@ impl GenericFunction for ActivationEffort {
     fn dim(&self) -> usize {
         self.na
     }
-    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), String> {
+    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), crate::ocp::TermError> {
         let t = z[self.nx];
         let s = (t * self.weight).sqrt();
         for (o, a) in out.iter_mut().zip(&z[self.offset..self.offset + self.na]) {

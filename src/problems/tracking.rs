@@ -264,7 +264,7 @@ impl GenericFunction for ForceClockShift<'_> {
     fn dim(&self) -> usize {
         1
     }
-    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), String> {
+    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), crate::ocp::TermError> {
         out[0] =
             S::from(self.placed) - self.model.measurement_adjust(z).force_time_offset[self.side];
         Ok(())
@@ -407,7 +407,7 @@ impl<'a> TrackingResidual<'a> {
         u: &[S],
         th: &[S],
         out: &mut [S],
-    ) -> Result<(), String> {
+    ) -> Result<(), crate::ocp::TermError> {
         let (nq, w) = (self.model.nq(), &self.weights);
         // the node's instant on the motion capture's clock, moved with the plates' clocks
         let moved = self.clock.as_ref().map(|c| {
@@ -441,10 +441,7 @@ impl<'a> TrackingResidual<'a> {
             }
         }
         if self.target.feet.iter().any(Option::is_some) {
-            let loads = self
-                .model
-                .foot_loads_generic(&self.set, x, u, th)
-                .map_err(|e| e.to_string())?;
+            let loads = self.model.foot_loads_generic(&self.set, x, u, th)?;
             let adjust = self
                 .measured
                 .as_ref()
@@ -512,7 +509,7 @@ impl GenericFunction for TrackingResidual<'_> {
     fn dim(&self) -> usize {
         self.dim
     }
-    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), String> {
+    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), crate::ocp::TermError> {
         let (x, rest) = z.split_at(self.model.nx());
         let (u, th) = rest.split_at(self.model.nu());
         self.residual(x, u, th, out)

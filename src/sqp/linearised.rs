@@ -8,8 +8,30 @@
 //! to the constraints active at the step, from equality-constrained QPs on those
 //! constraints.
 
-use super::qp::{self, QpData, Triplets};
-use super::{Nlp, NlpEval};
+use super::qp::{self, QpData, QpError, Triplets};
+use super::{EvalError, Nlp, NlpEval};
+
+/// Why the Gauss–Newton model cannot be built or asked.
+#[derive(Debug, thiserror::Error)]
+pub enum LinearisedError {
+    /// The NLP cannot be evaluated at the point.
+    #[error("{}", .0.chain())]
+    Evaluation(#[source] EvalError),
+    /// A QP of the model (a step or a column of the reduced inverse) failed.
+    #[error(transparent)]
+    Qp(#[from] QpError),
+    /// The step given is not one of this model (its sizes differ from the model's).
+    #[error("the step is not one of this model")]
+    ForeignStep,
+    /// A column asked for is not a variable of the NLP.
+    #[error("column {column} is not a variable (n = {n})")]
+    Column {
+        /// The column asked for.
+        column: usize,
+        /// Number of variables.
+        n: usize,
+    },
+}
 
 /// One Gauss–Newton step at a point.
 #[derive(Debug, Clone)]
@@ -38,14 +60,16 @@ impl<'a> GaussNewtonModel<'a> {
     /// Evaluate `nlp` at `w` (clamped into its bounds). `regularization` (≥ 0) is added
     /// to the diagonal of H, relative to its largest entry, so variables the cost does not
     /// see (e.g. a parameter with no effect) stay put instead of making the QP singular.
-    pub fn new(nlp: &'a dyn Nlp, w: &[f64], regularization: f64) -> Result<Self, String> {
+    pub fn new(nlp: &'a dyn Nlp, w: &[f64], regularization: f64) -> Result<Self, LinearisedError> {
         let bounds = nlp.bounds();
         let w: Vec<f64> = w
             .iter()
             .zip(bounds.0.iter().zip(&bounds.1))
             .map(|(&v, (&l, &u))| v.max(l).min(u))
             .collect();
-        let ev = nlp.evaluate(&w, true).map_err(|e| e.chain())?;
+        let ev = nlp
+            .evaluate(&w, true)
+            .map_err(LinearisedError::Evaluation)?;
         let (hr, hc) = nlp.gauss_newton_pattern();
         let mut h = Triplets {
             rows: hr,
@@ -85,7 +109,7 @@ impl<'a> GaussNewtonModel<'a> {
     /// The step from the point with the objective gradient plus `gradient_shift` (if
     /// any). The shift probes the inverse of the reduced Hessian: with `ε e_j` the step
     /// changes by `−ε (H⁻¹)_{·j}` while the active set stays.
-    pub fn step(&self, gradient_shift: Option<&[f64]>) -> Result<GaussNewtonStep, String> {
+    pub fn step(&self, gradient_shift: Option<&[f64]>) -> Result<GaussNewtonStep, LinearisedError> {
         self.step_with(gradient_shift, &[])
     }
 
@@ -98,7 +122,7 @@ impl<'a> GaussNewtonModel<'a> {
         &self,
         gradient_shift: Option<&[f64]>,
         unbounded: &[usize],
-    ) -> Result<GaussNewtonStep, String> {
+    ) -> Result<GaussNewtonStep, LinearisedError> {
         let n = self.nlp.n();
         let g: Vec<f64> = match gradient_shift {
             Some(s) => self.ev.grad.iter().zip(s).map(|(a, b)| a + b).collect(),
@@ -123,8 +147,7 @@ impl<'a> GaussNewtonModel<'a> {
             d_ub: &d_ub,
             elastic: None,
             elastic_weights: &weights,
-        })
-        .map_err(|e| e.to_string())?;
+        })?;
         let mut hd = vec![0.0; n];
         for ((&r, &c), &v) in self.h.rows.iter().zip(&self.h.cols).zip(&self.h.vals) {
             hd[r] += v * sol.d[c];
@@ -156,16 +179,16 @@ impl<'a> GaussNewtonModel<'a> {
         &self,
         step: &GaussNewtonStep,
         cols: &[usize],
-    ) -> Result<Vec<Vec<f64>>, String> {
+    ) -> Result<Vec<Vec<f64>>, LinearisedError> {
         let n = self.nlp.n();
         let (w_lb, w_ub, c_lb, c_ub) = &self.bounds;
         if step.d.len() != n || step.nu.len() != n || step.lambda.len() != c_lb.len() {
-            return Err("the step is not one of this model".into());
+            return Err(LinearisedError::ForeignStep);
         }
         let mut free = vec![false; n];
         for &c in cols {
             if c >= n {
-                return Err(format!("column {c} is not a variable (n = {n})"));
+                return Err(LinearisedError::Column { column: c, n });
             }
             free[c] = true;
         }
@@ -220,8 +243,7 @@ impl<'a> GaussNewtonModel<'a> {
                 d_ub: &d_ub,
                 elastic: None,
                 elastic_weights: &weights,
-            })
-            .map_err(|e| e.to_string())?;
+            })?;
             for (i, &ci) in cols.iter().enumerate() {
                 out[i][j] = -sol.d[ci];
             }

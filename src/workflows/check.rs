@@ -35,12 +35,12 @@ pub struct CheckRequest {
 }
 
 /// One half cycle read on its own.
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 pub struct HalfCycle {
     /// From one heel strike to the next (either foot's) (s).
     pub span: (f64, f64),
     /// Its reading, or why it has none.
-    pub result: Result<MeasurementCheck, String>,
+    pub result: Result<MeasurementCheck, CheckError>,
 }
 
 /// The outcome of `check`.
@@ -68,7 +68,7 @@ pub fn read(req: &CheckRequest) -> anyhow::Result<(GaitData, MeasurementCheck, V
         .into_iter()
         .map(|span| HalfCycle {
             span,
-            result: check(&data, &model, &req.settings, Some(span)).map_err(|e| e.to_string()),
+            result: check(&data, &model, &req.settings, Some(span)),
         })
         .collect();
     Ok((data, whole, half_cycles))

@@ -222,7 +222,7 @@ pub fn compare_contact(
                 (&req.rigid_foot, &req.rigid_phases)
             };
             let effects = match plan.effect {
-                Some(e) => vec![EffectSpec::parse_cli(e).map_err(|r| anyhow::anyhow!(r))?],
+                Some(e) => vec![EffectSpec::parse_cli(e)?],
                 None => vec![],
             };
             let run = TrackingRunSetup {

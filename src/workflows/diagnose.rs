@@ -258,7 +258,7 @@ fn candidates_of(args: &DiagnoseRequest, model: &GaitModel) -> anyhow::Result<Ve
         extra.push("volumetric_contact");
     }
     for name in extra {
-        let spec = EffectSpec::parse_cli(name).map_err(|e| anyhow!(e))?;
+        let spec = EffectSpec::parse_cli(name)?;
         if !candidates.contains(&spec) {
             candidates.push(spec);
         }
@@ -268,7 +268,7 @@ fn candidates_of(args: &DiagnoseRequest, model: &GaitModel) -> anyhow::Result<Ve
 
 /// The held-out half cycle's plain track, once (`None`: none was needed; `Err`: why the
 /// trial has none).
-type HeldOutTrack = Option<Result<heldout::HeldOutBase, String>>;
+type HeldOutTrack = Option<Result<heldout::HeldOutBase, heldout::NoHeldOut>>;
 
 /// Validate the significant candidates of `tests` on another half cycle of the trial
 /// than the run's (`window`, s): the note that says how it went, and that half cycle's

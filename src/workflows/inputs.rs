@@ -109,8 +109,7 @@ pub fn copy_inputs(
     let csv = match data {
         Some(p) => p.to_path_buf(),
         None => {
-            crate::bundled::path_of(&format!("data/{}_sagittal.csv", crate::data::BUNDLED_TRIAL))
-                .map_err(anyhow::Error::msg)?
+            crate::bundled::path_of(&format!("data/{}_sagittal.csv", crate::data::BUNDLED_TRIAL))?
         }
     };
     let data = copy(folder, "data", &csv, None)?;

@@ -118,10 +118,8 @@ impl Observer for Interruptible<'_> {
             return;
         };
         let written = serde_json::to_string(state)
-            .map_err(|e| e.to_string())
-            .and_then(|text| {
-                runfolder::write_atomic(dir, name, text.as_bytes()).map_err(|e| e.to_string())
-            });
+            .map_err(anyhow::Error::from)
+            .and_then(|text| Ok(runfolder::write_atomic(dir, name, text.as_bytes())?));
         if let Err(e) = written {
             // the solve goes on; only resuming it would be lost
             warn_note!(

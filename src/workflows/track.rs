@@ -99,9 +99,7 @@ impl TrackingProblem {
                 .iter()
                 .any(|q| q.name == p.name && q.free)
             {
-                model
-                    .set_parameter_value(&p.name, p.value)
-                    .map_err(|e| anyhow!(e))?;
+                model.set_parameter_value(&p.name, p.value)?;
             }
         }
         let seq = PhaseSequence::load(&run.phases)?;
@@ -304,9 +302,7 @@ impl TrackingProblem {
             .map(|&i| self.model.parameters()[i].name.clone())
             .collect();
         for (name, &v) in names.iter().zip(&start.theta) {
-            self.model
-                .set_parameter_value(name, v)
-                .map_err(|e| anyhow!(e))?;
+            self.model.set_parameter_value(name, v)?;
         }
         Ok(())
     }

@@ -112,7 +112,7 @@ pub fn load_trial(t: &TrialFiles) -> anyhow::Result<LoadedTrial> {
             bail!("--forces, --plate, --lab-axes and --belt-speed describe an OpenSim trial given with --data IK.mot (without --data the bundled trial is read, whose meta file gives all of it)");
         }
         // the compiled-in copy, wherever footfall is started
-        let root = crate::bundled::root().map_err(anyhow::Error::msg)?;
+        let root = crate::bundled::root()?;
         let data = GaitData::bundled(&root)?;
         check_trial(&data, t.overground)?;
         return Ok(LoadedTrial {
@@ -183,16 +183,37 @@ fn load_csv(path: &Path, t: &TrialFiles) -> anyhow::Result<LoadedTrial> {
     })
 }
 
+/// Why a plate item `FOOT=VALUE` is refused ([`split_plate`]).
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum PlateItemError {
+    /// The item has no `=`.
+    #[error("expected FOOT=PREFIX (OpenSim loads, e.g. r=1_ or l=2_; r= for the unprefixed ground_force_*) or FOOT=N (a C3D plate number, e.g. r=1)")]
+    NoValue {
+        /// The item as given.
+        item: String,
+    },
+    /// The foot is neither right nor left.
+    #[error("foot '{foot}' is neither r (right) nor l (left)")]
+    Foot {
+        /// The foot as given (trimmed, lower case).
+        foot: String,
+    },
+}
+
 /// A `--plate FOOT=VALUE` item split into its foot (`r`/`right`, `l`/`left`, any case)
 /// and its value (trimmed); the error says what the item should look like.
-pub fn split_plate(p: &str) -> Result<(crate::model::Side, &str), String> {
+pub fn split_plate(p: &str) -> Result<(crate::model::Side, &str), PlateItemError> {
     let Some((side, value)) = p.split_once('=') else {
-        return Err("expected FOOT=PREFIX (OpenSim loads, e.g. r=1_ or l=2_; r= for the unprefixed ground_force_*) or FOOT=N (a C3D plate number, e.g. r=1)".into());
+        return Err(PlateItemError::NoValue {
+            item: p.to_string(),
+        });
     };
     match side.trim().to_ascii_lowercase().as_str() {
         "r" | "right" => Ok((crate::model::Side::Right, value.trim())),
         "l" | "left" => Ok((crate::model::Side::Left, value.trim())),
-        other => Err(format!("foot '{other}' is neither r (right) nor l (left)")),
+        other => Err(PlateItemError::Foot {
+            foot: other.to_string(),
+        }),
     }
 }
 

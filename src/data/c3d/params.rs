@@ -19,6 +19,42 @@ enum Processor {
     Mips,
 }
 
+/// Why a C3D file's parameter section cannot be read.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub(super) enum ParameterSectionError {
+    /// The file has no bytes.
+    #[error("the file is empty")]
+    Empty,
+    /// The header's pointer to the parameter section is 0.
+    #[error("the header's first byte (parameter block) is 0")]
+    ZeroBlock,
+    /// The processor byte is none of the three C3D knows.
+    #[error("processor type {code} is not 84, 85 or 86")]
+    Processor {
+        /// The byte found.
+        code: u8,
+    },
+    /// The file ends before the block the header points to.
+    #[error("the file ends before the parameter block {block}")]
+    NoBlock {
+        /// The parameter section's block (1-based, 512 bytes each).
+        block: usize,
+    },
+    /// A record is cut off by the end of the file.
+    #[error("the parameter section ends inside a record")]
+    Truncated,
+    /// A parameter's data type is unknown or its data run past the end of the file.
+    #[error("{group}:{name} has data type {data_type} or runs past the file")]
+    Data {
+        /// The parameter's group.
+        group: String,
+        /// The parameter's name.
+        name: String,
+        /// Its data type byte (−1 char, 1 byte, 2 i16, 4 f32).
+        data_type: i8,
+    },
+}
+
 /// One parameter's raw values.
 #[derive(Debug, Clone, PartialEq)]
 pub(super) struct RawParameter {
@@ -54,20 +90,24 @@ fn f32_at(b: &[u8], at: usize, p: Processor) -> Option<f32> {
 
 /// The parameter `group:name` (case-insensitive) of the C3D file `bytes`, `Ok(None)` if
 /// absent; `Err` with the reason if the parameter section is malformed.
-pub(super) fn find(bytes: &[u8], group: &str, name: &str) -> Result<Option<RawParameter>, String> {
-    let block = *bytes.first().ok_or("the file is empty")? as usize;
+pub(super) fn find(
+    bytes: &[u8],
+    group: &str,
+    name: &str,
+) -> Result<Option<RawParameter>, ParameterSectionError> {
+    let block = *bytes.first().ok_or(ParameterSectionError::Empty)? as usize;
     if block == 0 {
-        return Err("the header's first byte (parameter block) is 0".into());
+        return Err(ParameterSectionError::ZeroBlock);
     }
     let start = (block - 1) * 512;
     let p = match bytes.get(start + 3) {
         Some(84) => Processor::Intel,
         Some(85) => Processor::Dec,
         Some(86) => Processor::Mips,
-        Some(x) => return Err(format!("processor type {x} is not 84, 85 or 86")),
-        None => return Err(format!("the file ends before the parameter block {block}")),
+        Some(&code) => return Err(ParameterSectionError::Processor { code }),
+        None => return Err(ParameterSectionError::NoBlock { block }),
     };
-    let short = || "the parameter section ends inside a record".to_string();
+    let short = || ParameterSectionError::Truncated;
     // First pass: group ids by name; parameters are matched by (group id, name).
     let mut records = Vec::new();
     let mut at = start + 4;
@@ -117,6 +157,10 @@ pub(super) fn find(bytes: &[u8], group: &str, name: &str) -> Result<Option<RawPa
             _ => None,
         })
         .collect::<Option<Vec<f64>>>()
-        .ok_or_else(|| format!("{group}:{name} has data type {ty} or runs past the file"))?;
+        .ok_or_else(|| ParameterSectionError::Data {
+            group: group.to_string(),
+            name: name.to_string(),
+            data_type: ty,
+        })?;
     Ok(Some(RawParameter { dims, values }))
 }

@@ -2,7 +2,7 @@
 //! each plate's sagittal components, and each foot's forces and CoP from its plates.
 
 use super::{C3dForces, PlateForces};
-use crate::data::error::DataError;
+use crate::data::error::{DataError, LabAxisError};
 use crate::data::{interp_linear, side_index, FootData};
 use crate::model::Side;
 use std::str::FromStr;
@@ -23,9 +23,9 @@ impl LabAxis {
 }
 
 impl FromStr for LabAxis {
-    type Err = String;
+    type Err = LabAxisError;
     /// `+x`, `x`, `-x`, … `-z` (case-insensitive).
-    fn from_str(s: &str) -> Result<Self, String> {
+    fn from_str(s: &str) -> Result<Self, LabAxisError> {
         let t = s.trim().to_ascii_lowercase();
         let (sign, rest) = match t.strip_prefix('-') {
             Some(r) => (-1, r),
@@ -36,9 +36,9 @@ impl FromStr for LabAxis {
             "y" => 1,
             "z" => 2,
             _ => {
-                return Err(format!(
-                    "'{s}' is not a lab axis; valid: +x, -x, +y, -y, +z, -z"
-                ))
+                return Err(LabAxisError {
+                    text: s.to_string(),
+                })
             }
         };
         Ok(LabAxis { index, sign })
@@ -80,10 +80,10 @@ impl AxisMap {
         let mem = crate::data::error::memory_path();
         let f = forward
             .parse::<LabAxis>()
-            .map_err(|e| DataError::invalid(&mem, "forward", e))?;
+            .map_err(|e| DataError::invalid(&mem, "forward", e.to_string()))?;
         let u = up
             .parse::<LabAxis>()
-            .map_err(|e| DataError::invalid(&mem, "up", e))?;
+            .map_err(|e| DataError::invalid(&mem, "up", e.to_string()))?;
         if f.index == u.index {
             return Err(DataError::invalid(
                 &mem,

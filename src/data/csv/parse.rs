@@ -248,18 +248,19 @@ fn read_rows<'a>(
         DataError::check_row_length(&p, row, ncol, fields.len())?;
         for (j, f) in fields.iter().enumerate() {
             let t = f.trim();
-            let v = if t.is_empty() {
-                Err("empty field (write NaN for a missing value)".to_string())
-            } else {
-                t.parse::<f64>().map_err(|e| e.to_string())
-            }
-            .map_err(|reason| DataError::Parse {
+            let refused = |reason: String| DataError::Parse {
                 path: p.clone(),
                 row,
                 column: cols.names[j].clone(),
                 text: t.to_string(),
                 reason,
-            })?;
+            };
+            if t.is_empty() {
+                return Err(refused(
+                    "empty field (write NaN for a missing value)".to_string(),
+                ));
+            }
+            let v = t.parse::<f64>().map_err(|e| refused(e.to_string()))?;
             table[j].push(v);
         }
         rows.push(row);

@@ -248,4 +248,11 @@ pub enum IntegratorError {
         /// Time of the offending value.
         t: f64,
     },
+    /// The state transition matrix `Ψ(t) = ∂x(t)/∂x(t0)` is singular at `t`, so an adjoint
+    /// cannot be found from its inverse.
+    #[error("the state transition matrix is singular at t = {t}")]
+    SingularTransition {
+        /// Time (within the interval's normalised time).
+        t: f64,
+    },
 }

@@ -33,6 +33,7 @@ pub use kinds::{
     CopOffset, ForcePlateTimeOffset, GroundSlope, HeelPadCompliance, PassiveJointStiffness,
     TrunkMass,
 };
+pub(crate) use spec::EFFECT_KINDS;
 pub use spec::{BuildContext, EffectSpec};
 pub use volumetric::{VolumetricContact, VolumetricStart};
 

@@ -4,7 +4,7 @@
 
 use super::{GaitModel, Side};
 use crate::model::effects::ModelScalar;
-use crate::model::error::DynamicsError;
+use crate::model::error::{ContactSetError, DynamicsError};
 use crate::model::geometry::Shape;
 use crate::model::linalg::{cholesky, cholesky_solve};
 use crate::model::multibody::{add, dot, Kinematics, V2};
@@ -104,25 +104,27 @@ impl GaitModel {
         &self,
         name: &str,
         contacts: &[(&str, bool)],
-    ) -> Result<ConstraintSet, String> {
+    ) -> Result<ConstraintSet, ContactSetError> {
         let mut rows = Vec::new();
         for (i, (c, rolling)) in contacts.iter().enumerate() {
-            let idx = self.contact_index(c).ok_or_else(|| {
-                let known: Vec<&str> = self.contacts.iter().map(|c| c.name.as_str()).collect();
-                format!(
-                    "constraint set '{name}': unknown contact '{c}' (this foot has: {})",
-                    known.join(", ")
-                )
-            })?;
+            let idx = self
+                .contact_index(c)
+                .ok_or_else(|| ContactSetError::UnknownContact {
+                    set: name.to_string(),
+                    contact: c.to_string(),
+                    known: self.contacts.iter().map(|c| c.name.clone()).collect(),
+                })?;
             if self.contacts[idx].law.is_some() {
-                return Err(format!(
-                    "constraint set '{name}': contact '{c}' is volumetric: its force acts in every phase and it is never a constraint; leave it out of the phase file's contacts"
-                ));
+                return Err(ContactSetError::Volumetric {
+                    set: name.to_string(),
+                    contact: c.to_string(),
+                });
             }
             if contacts[..i].iter().any(|(o, _)| o == c) {
-                return Err(format!(
-                    "constraint set '{name}': contact '{c}' is listed twice"
-                ));
+                return Err(ContactSetError::Repeated {
+                    set: name.to_string(),
+                    contact: c.to_string(),
+                });
             }
             if *rolling {
                 rows.push(ConstraintRow {

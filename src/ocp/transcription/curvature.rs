@@ -17,12 +17,7 @@ impl<'o, 'a> Transcription<'o, 'a> {
         lambda: &[f64],
     ) -> Result<(Evaluation, (Vec<usize>, Vec<usize>, Vec<f64>)), TranscriptionError> {
         let (ev, blocks) = self.evaluate_inner(w, true, Some(lambda))?;
-        let (mut rows, mut cols, mut vals) =
-            self.term_curvature(w, lambda, true)
-                .map_err(|reason| TranscriptionError::Term {
-                    term: "hessian".into(),
-                    reason,
-                })?;
+        let (mut rows, mut cols, mut vals) = self.term_curvature(w, lambda, true)?;
         for (iv, h) in self.intervals.iter().zip(blocks) {
             let Some(h) = h else { continue };
             let ph = &self.ocp.phases[iv.phase];
@@ -79,15 +74,16 @@ impl<'o, 'a> Transcription<'o, 'a> {
     /// constraints and transitions `Σ λ_i ∇²c_i`, and with `objective` also of the
     /// objective (`2 Σ r_i ∇²r_i` of least-squares terms, whose `2 JᵀJ` part is the
     /// Gauss–Newton matrix, and `∇²f` of general costs). Terms are evaluated in parallel
-    /// and assembled in term order, so the result does not depend on the thread count.
+    /// and assembled in term order, so the result does not depend on the thread count. A
+    /// failure names its term.
     #[allow(clippy::type_complexity)]
     pub(super) fn term_curvature(
         &self,
         w: &[f64],
         lambda: &[f64],
         objective: bool,
-    ) -> Result<(Vec<usize>, Vec<usize>, Vec<f64>), String> {
-        let blocks: Vec<Result<Option<(&TermRef, Vec<f64>)>, String>> = self
+    ) -> Result<(Vec<usize>, Vec<usize>, Vec<f64>), TranscriptionError> {
+        let blocks: Vec<Result<Option<(&TermRef, Vec<f64>)>, TranscriptionError>> = self
             .terms
             .par_iter()
             .map(|t| {
@@ -118,7 +114,7 @@ impl<'o, 'a> Transcription<'o, 'a> {
                         let mut r = vec![0.0; term.f.dim()];
                         term.f
                             .eval(&z, &mut r, None)
-                            .map_err(|e| format!("term '{}': {e}", term.name))?;
+                            .map_err(TranscriptionError::of_term(&term.name))?;
                         (&*term.f, &term.name, r.iter().map(|v| 2.0 * v).collect())
                     }
                     TermKind::Cost if objective => {
@@ -133,7 +129,7 @@ impl<'o, 'a> Transcription<'o, 'a> {
                 let nz = z.len();
                 let mut hm = vec![0.0; nz * nz];
                 f.weighted_hessian(&z, &weights, &mut hm)
-                    .map_err(|e| format!("term '{name}': {e}"))?;
+                    .map_err(TranscriptionError::of_term(name))?;
                 Ok(Some((t, hm)))
             })
             .collect();

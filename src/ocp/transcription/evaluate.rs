@@ -318,9 +318,9 @@ fn eval_term(
 ) -> Result<(), TranscriptionError> {
     term.f
         .eval(z, out, jac)
-        .map_err(|reason| TranscriptionError::Term {
+        .map_err(|source| TranscriptionError::Term {
             term: term.name.clone(),
-            reason,
+            source,
         })
 }
 

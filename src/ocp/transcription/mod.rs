@@ -23,6 +23,7 @@ mod sweep;
 pub use sweep::shifted_instant;
 
 use super::problem::{Block, Ocp};
+use super::TermError;
 use crate::integrate::{IntegrationStats, Integrator, IntegratorError};
 use crate::sqp::EvalError;
 use std::ops::Range;
@@ -46,13 +47,15 @@ pub enum TranscriptionError {
         #[source]
         source: IntegratorError,
     },
-    /// A user function failed.
-    #[error("term '{term}': {reason}")]
+    /// A function of the problem (a term, a check point, a sample term or its shift)
+    /// failed at this point.
+    #[error("term '{term}'")]
     Term {
-        /// Term name.
+        /// Term name (a shift's is its sample term's, with ` (shift)`).
         term: String,
         /// Cause.
-        reason: String,
+        #[source]
+        source: TermError,
     },
 }
 
@@ -63,11 +66,12 @@ impl TranscriptionError {
     pub fn is_recoverable(&self) -> bool {
         match self {
             TranscriptionError::Invalid(_) => false,
-            TranscriptionError::Term { .. } => true,
+            TranscriptionError::Term { source, .. } => source.is_recoverable(),
             TranscriptionError::Integrator { source, .. } => match source {
                 IntegratorError::Failed { .. }
                 | IntegratorError::Rhs { .. }
                 | IntegratorError::NonFinite { .. }
+                | IntegratorError::SingularTransition { .. }
                 | IntegratorError::BadInterval { .. }
                 | IntegratorError::BadOutputTime { .. } => true,
                 // a check point's function failed at this point's states
@@ -79,6 +83,15 @@ impl TranscriptionError {
                 | IntegratorError::Dimension { .. }
                 | IntegratorError::BadSettings { .. } => false,
             },
+        }
+    }
+
+    /// The failure of term `name` with its cause, for `map_err` (the name is copied only
+    /// on failure).
+    fn of_term(name: &str) -> impl FnOnce(TermError) -> TranscriptionError + '_ {
+        move |source| TranscriptionError::Term {
+            term: name.to_string(),
+            source,
         }
     }
 }

@@ -103,8 +103,7 @@ impl crate::sqp::Nlp for Transcription<'_, '_> {
         w: &[f64],
         lambda: &[f64],
     ) -> Result<(Vec<usize>, Vec<usize>, Vec<f64>), EvalError> {
-        self.term_curvature(w, lambda, false)
-            .map_err(EvalError::recoverable)
+        Ok(self.term_curvature(w, lambda, false)?)
     }
     fn row_name(&self, i: usize) -> String {
         let l = &self.labels[i];

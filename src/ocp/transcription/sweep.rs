@@ -8,6 +8,8 @@ use crate::integrate::{
 };
 use crate::ocp::checks::{self, CheckValues};
 use crate::ocp::problem::Block;
+use crate::ocp::term_error::with_causes;
+use crate::ocp::TermError;
 use std::sync::Mutex;
 
 /// Instants of the sample terms at one evaluation, per interval in transcription order
@@ -92,14 +94,14 @@ impl<'o, 'a> Transcription<'o, 'a> {
             let mut g = vec![0.0; self.ocp.ntheta];
             shift
                 .eval(theta, &mut s, Some(&mut g))
-                .map_err(|reason| TranscriptionError::Term {
+                .map_err(|source| TranscriptionError::Term {
                     term: format!("{} (shift)", st.name),
-                    reason,
+                    source,
                 })?;
             if !s[0].is_finite() || g.iter().any(|v| !v.is_finite()) {
                 return Err(TranscriptionError::Term {
                     term: format!("{} (shift)", st.name),
-                    reason: format!("shift {} s is not finite", s[0]),
+                    source: TermError::NonFiniteShift { shift: s[0] },
                 });
             }
             let (k, tau, moves) = shifted_instant(st.interval, st.tau, s[0], h, n);
@@ -282,16 +284,12 @@ impl<'o, 'a> Transcription<'o, 'a> {
         let mut check_weights = |i: usize, x: &[f64]| {
             let tau = interior[i];
             // zero where no check point is at τ
-            let mut w = checks::state_weights(self.ocp, iv.phase, &iv.checks, tau, p, x, lam)
-                .map_err(|reason| IntegratorError::BadSettings {
-                    field: "check point",
-                    reason,
-                })?;
+            let mut w = checks::state_weights(self.ocp, iv.phase, &iv.checks, tau, p, x, lam)?;
             if let Some((_, terms)) = sample_taus.iter().find(|e| e.0 == tau) {
                 self.sample_state_weights(interval, terms, tau, p, x, &mut w)
                     .map_err(|e| IntegratorError::BadSettings {
                         field: "sample term",
-                        reason: e.to_string(),
+                        reason: with_causes(&e),
                     })?;
             }
             Ok(w)
@@ -311,18 +309,13 @@ impl<'o, 'a> Transcription<'o, 'a> {
             &own_span,
             &mut check_weights,
         ) {
-            Ok(true) => match checks::add_direct_curvature(
-                self.ocp, iv.phase, &iv.checks, &run.taus, p, &out.xs, &out.ss, lam, &mut h,
-            ) {
-                Ok(()) => {
-                    out.hess = Some(h);
-                    Ok(integ.stats_snapshot())
-                }
-                Err(reason) => Err(IntegratorError::BadSettings {
-                    field: "check point",
-                    reason,
-                }),
-            },
+            Ok(true) => {
+                checks::add_direct_curvature(
+                    self.ocp, iv.phase, &iv.checks, &run.taus, p, &out.xs, &out.ss, lam, &mut h,
+                )?;
+                out.hess = Some(h);
+                Ok(integ.stats_snapshot())
+            }
             Ok(false) => Err(IntegratorError::BadSettings {
                 field: "hessian",
                 reason: format!(
@@ -406,9 +399,9 @@ impl<'o, 'a> Transcription<'o, 'a> {
         };
         term.f
             .eval(z, &mut r, jac.then_some(&mut jz[..]))
-            .map_err(|reason| TranscriptionError::Term {
+            .map_err(|source| TranscriptionError::Term {
                 term: term.name.clone(),
-                reason,
+                source,
             })?;
         Ok((r, jz))
     }
@@ -474,9 +467,9 @@ impl<'o, 'a> Transcription<'o, 'a> {
                         let mut g = vec![0.0; nz * nz];
                         term.f
                             .weighted_hessian(&z, &weights, &mut g)
-                            .map_err(|reason| TranscriptionError::Term {
+                            .map_err(|source| TranscriptionError::Term {
                                 term: term.name.clone(),
-                                reason,
+                                source,
                             })?;
                         checks::add_instant_curvature(&interval, (nx, nu, nt), *tau, s, &g, h);
                     }
@@ -490,7 +483,7 @@ impl<'o, 'a> Transcription<'o, 'a> {
                         .f(x, &u, theta, &mut xdot)
                         .map_err(|e| TranscriptionError::Term {
                             term: term.name.clone(),
-                            reason: e.to_string(),
+                            source: TermError::Ode(e),
                         })?;
                     let udot: Vec<f64> = match u1 {
                         Some(u1) => u0.iter().zip(u1).map(|(a, b)| (b - a) / h).collect(),

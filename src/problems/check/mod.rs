@@ -24,10 +24,11 @@ pub use balance::{Param, NPARAM};
 pub use thresholds::Thresholds;
 
 use crate::data::{DataError, GaitData};
-use crate::model::GaitModel;
+use crate::model::{GaitModel, Side};
 use balance::{Body, Instant};
 use fit::{Fit, Problem};
 use signals::Signals;
+use std::path::PathBuf;
 
 /// Why the balance cannot be read.
 #[derive(Debug, thiserror::Error)]
@@ -53,11 +54,16 @@ pub enum CheckError {
     #[error("the model has no trunk body 'hat'")]
     NoTrunk,
     /// A foot has no measured loads at all.
-    #[error("{0}")]
-    Forces(String),
+    #[error("{}: the {} foot has no measured load: the balance needs both feet's ground forces (a foot in swing reads 0 N, a foot off the plates NaN)", path.display(), foot_word(*side))]
+    Forces {
+        /// The trial's file.
+        path: PathBuf,
+        /// The foot without loads.
+        side: Side,
+    },
     /// The data cannot be right as declared (units, signs, the body's mass).
-    #[error("{0}")]
-    Implausible(String),
+    #[error(transparent)]
+    Implausible(#[from] Implausible),
     /// Too few instants where both feet's loads are known.
     #[error("only {instants} force samples ({seconds:.3} s) have both feet's loads known inside the motion (the balance needs both feet's loads at once, and {margin_s} s of margin at either end for the filter and any clock shift); at least {needed} are needed")]
     TooShort {
@@ -70,6 +76,39 @@ pub enum CheckError {
         /// Instants needed.
         needed: usize,
     },
+}
+
+/// Why a trial's forces cannot belong to the model's body ([`gate`], [`check`]).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum Implausible {
+    /// The body mass the vertical forces imply lies more than
+    /// [`plausibility::MASS_REFUSED`] from the model's.
+    #[error("{}: the vertical forces imply a body of {implied_kg:.1} kg, the model's is {model_kg:.1} kg ({:+.0} %): the forces are in another unit, belong to another subject, or the model does (give the subject's model with --model)", path.display(), 100.0 * (implied_kg / model_kg - 1.0))]
+    Mass {
+        /// The trial's file.
+        path: PathBuf,
+        /// The mass the vertical forces imply (kg).
+        implied_kg: f64,
+        /// The model's mass (kg).
+        model_kg: f64,
+    },
+    /// The horizontal ground force runs against the body's horizontal acceleration.
+    #[error("{}: columns 'grf_x_r', 'grf_x_l': the horizontal ground force runs against the body's horizontal acceleration (correlation {correlation:.2}); footfall reads grf_x as the ground's force on the foot, + forward: the sign looks flipped", path.display())]
+    HorizontalSign {
+        /// The trial's file.
+        path: PathBuf,
+        /// Correlation of the horizontal force with the body's mass times its
+        /// horizontal acceleration (below −0.5).
+        correlation: f64,
+    },
+}
+
+/// `right` or `left`.
+fn foot_word(side: Side) -> &'static str {
+    match side {
+        Side::Right => "right",
+        Side::Left => "left",
+    }
 }
 
 /// How the balance is read.
@@ -334,13 +373,13 @@ fn balance_inputs(
     model: &GaitModel,
     settings: &CheckSettings,
 ) -> Result<(Signals, Body), CheckError> {
-    for (s, name) in [(0, "right"), (1, "left")] {
+    for (s, side) in [(0, Side::Right), (1, Side::Left)] {
         let (_, feet) = data.force_record();
         if !feet[s].fy.iter().any(|v| v.is_finite() && v.abs() > 0.0) {
-            return Err(CheckError::Forces(format!(
-                "{}: the {name} foot has no measured load: the balance needs both feet's ground forces (a foot in swing reads 0 N, a foot off the plates NaN)",
-                data.source.display()
-            )));
+            return Err(CheckError::Forces {
+                path: data.source.clone(),
+                side,
+            });
         }
     }
     let signals = Signals::new(data, settings.cutoff_hz, settings.clock_limit_s)?;

@@ -7,7 +7,7 @@
 //! force's sign are checked where every trial is read as well
 //! ([`GaitData::check_conventions`]).
 
-use super::CheckError;
+use super::{CheckError, Implausible};
 use crate::data::{median_step, DataError, FootData, GaitData, SideSource};
 
 /// How far the mass the forces imply may lie from the model's before the trial is
@@ -26,18 +26,22 @@ pub fn check_balance(
     implied_mass: f64,
     horizontal_correlation: f64,
 ) -> Result<Vec<String>, CheckError> {
-    let path = data.source.display();
+    let path = &data.source;
     let ratio = implied_mass / model_mass;
     if !ratio.is_finite() || (ratio - 1.0).abs() > MASS_REFUSED {
-        return Err(CheckError::Implausible(format!(
-            "{path}: the vertical forces imply a body of {implied_mass:.1} kg, the model's is {model_mass:.1} kg ({:+.0} %): the forces are in another unit, belong to another subject, or the model does (give the subject's model with --model)",
-            100.0 * (ratio - 1.0)
-        )));
+        return Err(Implausible::Mass {
+            path: path.clone(),
+            implied_kg: implied_mass,
+            model_kg: model_mass,
+        }
+        .into());
     }
     if horizontal_correlation < -0.5 {
-        return Err(CheckError::Implausible(format!(
-            "{path}: columns 'grf_x_r', 'grf_x_l': the horizontal ground force runs against the body's horizontal acceleration (correlation {horizontal_correlation:.2}); footfall reads grf_x as the ground's force on the foot, + forward: the sign looks flipped"
-        )));
+        return Err(Implausible::HorizontalSign {
+            path: path.clone(),
+            correlation: horizontal_correlation,
+        }
+        .into());
     }
     let mut warnings = Vec::new();
     if (ratio - 1.0).abs() > MASS_WARNED {

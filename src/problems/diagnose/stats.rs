@@ -13,7 +13,7 @@
 
 use crate::ocp::{Block, Transcription};
 use crate::problems::error::DiagnoseError;
-use crate::sqp::linearised::{GaussNewtonModel, GaussNewtonStep};
+use crate::sqp::linearised::{GaussNewtonModel, GaussNewtonStep, LinearisedError};
 use crate::sqp::Nlp;
 use serde::{Deserialize, Serialize};
 
@@ -85,8 +85,8 @@ pub fn reduced_inverse_hessian(
     w: &[f64],
     cols: &[usize],
 ) -> Result<Vec<Vec<f64>>, DiagnoseError> {
-    let m = GaussNewtonModel::new(tr, w, 1e-12).map_err(DiagnoseError::gauss_newton)?;
-    let base = m.step(None).map_err(DiagnoseError::gauss_newton)?;
+    let m = GaussNewtonModel::new(tr, w, 1e-12)?;
+    let base = m.step(None)?;
     reduced_inverse_hessian_at(tr, &m, &base, cols)
 }
 
@@ -108,9 +108,7 @@ pub fn reduced_inverse_hessian_at(
     });
     let relaxed;
     let base = if near_bound {
-        relaxed = m
-            .step_with(None, cols)
-            .map_err(DiagnoseError::gauss_newton)?;
+        relaxed = m.step_with(None, cols)?;
         &relaxed
     } else {
         base
@@ -167,7 +165,7 @@ fn probe_reduced_inverse(
                     if failures > 3 {
                         return Err(DiagnoseError::Probe {
                             column: col,
-                            reason: e,
+                            source: e,
                         });
                     }
                     eps *= 1e-2;
@@ -263,7 +261,7 @@ pub fn identifiability(
 pub fn candidate_identifiability_at(
     tr: &Transcription,
     m: &GaussNewtonModel<'_>,
-    base: Result<&GaussNewtonStep, &String>,
+    base: Result<&GaussNewtonStep, &LinearisedError>,
     names: Vec<String>,
     s2: f64,
     phi: f64,
@@ -273,22 +271,26 @@ pub fn candidate_identifiability_at(
     let cols: Vec<usize> = (range.end - k..range.end).collect();
     let (w_lb, w_ub, _, _) = crate::sqp::Nlp::bounds(tr);
     let span = cols.iter().map(|&c| w_ub[c] - w_lb[c]).collect();
-    let probed = base
-        .map_err(|e| DiagnoseError::gauss_newton(e.clone()))
-        .and_then(|base| reduced_inverse_hessian_at(tr, m, base, &cols));
-    match probed {
-        Ok(c) => identifiability(names, c, span, s2, phi),
+    let failure = match base.map(|base| reduced_inverse_hessian_at(tr, m, base, &cols)) {
+        Ok(Ok(c)) => return identifiability(names, c, span, s2, phi),
+        Ok(Err(e)) => e.to_string(),
+        Err(e) => e.to_string(),
+    };
+    if failure.contains("DualInfeasible") {
         // an unbounded probe: nothing in the cost resists a change of the parameter
-        Err(e) if e.to_string().contains("DualInfeasible") => Identifiability::unknown(
+        Identifiability::unknown(
             names,
             span,
-            format!("the cost has no curvature in it: the probing QP is unbounded along it ({e})"),
-        ),
-        Err(e) => Identifiability::unknown(
+            format!(
+                "the cost has no curvature in it: the probing QP is unbounded along it ({failure})"
+            ),
+        )
+    } else {
+        Identifiability::unknown(
             names,
             span,
-            format!("its information could not be computed ({e})"),
-        ),
+            format!("its information could not be computed ({failure})"),
+        )
     }
 }
 

@@ -3,6 +3,7 @@
 
 use crate::model::effects::ModelScalar;
 use crate::model::{ConstraintSet, GaitModel};
+use crate::ocp::TermError;
 use crate::problems::GenericFunction;
 
 /// Constraint forces of a contact set combined row-wise (`Σ_r c_r λ_r` per output):
@@ -17,15 +18,14 @@ impl GenericFunction for ContactForceRows<'_> {
     fn dim(&self) -> usize {
         self.rows.len()
     }
-    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), String> {
+    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), TermError> {
         let (nx, nu) = (self.model.nx(), self.model.nu());
         let (x, rest) = z.split_at(nx);
         let (u, th) = rest.split_at(nu);
         let mut xdot = vec![S::c(0.0); nx];
         let mut lam = vec![S::c(0.0); self.set.rows.len()];
         self.model
-            .dynamics(&self.set, x, u, th, &mut xdot, &mut lam, None)
-            .map_err(|e| e.to_string())?;
+            .dynamics(&self.set, x, u, th, &mut xdot, &mut lam, None)?;
         for (o, row) in self.rows.iter().enumerate() {
             out[o] = row.iter().fold(S::c(0.0), |acc, &(r, c)| acc + lam[r] * c);
         }
@@ -47,7 +47,7 @@ impl GenericFunction for GapOfState<'_> {
     fn dim(&self) -> usize {
         1
     }
-    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), String> {
+    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), TermError> {
         let (nx, nu, nq) = (self.model.nx(), self.model.nu(), self.model.nq());
         out[0] = self.model.gap(self.contact, &z[..nq], &z[nx + nu..]);
         Ok(())
@@ -93,13 +93,10 @@ impl GenericFunction for ImpulseRows<'_> {
     fn dim(&self) -> usize {
         self.rows.len()
     }
-    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), String> {
+    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), TermError> {
         let (nx, nq) = (self.model.nx(), self.model.nq());
         let (x, th) = z.split_at(nx);
-        let (_, imp) = self
-            .model
-            .impact(&self.set, &x[..nq], &x[nq..2 * nq], th)
-            .map_err(|e| e.to_string())?;
+        let (_, imp) = self.model.impact(&self.set, &x[..nq], &x[nq..2 * nq], th)?;
         for (o, row) in self.rows.iter().enumerate() {
             out[o] = row.iter().fold(S::c(0.0), |acc, &(r, c)| acc + imp[r] * c);
         }
@@ -118,13 +115,10 @@ impl GenericFunction for ImpactMap<'_> {
     fn dim(&self) -> usize {
         self.model.nx()
     }
-    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), String> {
+    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), TermError> {
         let (nx, nq) = (self.model.nx(), self.model.nq());
         let (x, th) = z.split_at(nx);
-        let (qd_plus, _) = self
-            .model
-            .impact(&self.set, &x[..nq], &x[nq..2 * nq], th)
-            .map_err(|e| e.to_string())?;
+        let (qd_plus, _) = self.model.impact(&self.set, &x[..nq], &x[nq..2 * nq], th)?;
         out.copy_from_slice(x);
         out[nq..2 * nq].copy_from_slice(&qd_plus);
         Ok(())
@@ -145,16 +139,13 @@ impl GenericFunction for Periodicity<'_> {
     fn dim(&self) -> usize {
         self.model.nx() - 1
     }
-    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), String> {
+    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), TermError> {
         let (nx, nq) = (self.model.nx(), self.model.nq());
         let (x0, rest) = z.split_at(nx);
         let (xe, th) = rest.split_at(nx);
         let mut xp = xe.to_vec();
         if let Some(set) = &self.impact {
-            let (qd_plus, _) = self
-                .model
-                .impact(set, &xe[..nq], &xe[nq..2 * nq], th)
-                .map_err(|e| e.to_string())?;
+            let (qd_plus, _) = self.model.impact(set, &xe[..nq], &xe[nq..2 * nq], th)?;
             xp[nq..2 * nq].copy_from_slice(&qd_plus);
         }
         for (o, i) in (0..nx).filter(|&i| i != self.skip).enumerate() {
@@ -174,7 +165,7 @@ impl GenericFunction for Gap<'_> {
     fn dim(&self) -> usize {
         1
     }
-    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), String> {
+    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), TermError> {
         let (nx, nq) = (self.model.nx(), self.model.nq());
         out[0] = self.model.gap(self.contact, &z[..nq], &z[nx..]);
         Ok(())

@@ -154,8 +154,7 @@ fn add_costs(
     rows: &mut Vec<Vec<usize>>,
 ) -> Result<(f64, String, f64), ProblemError> {
     let mut v = vec![0.0; crate::problems::GenericFunction::dim(r)];
-    crate::problems::GenericFunction::eval(r, z, &mut v)
-        .map_err(|message| ProblemError::Residual { message })?;
+    crate::problems::GenericFunction::eval(r, z, &mut v)?;
     let mut node_data: Vec<(String, f64)> = Vec::new();
     for (label, value) in r.row_channels().into_iter().zip(&v) {
         let c = match channels.iter().position(|x| *x == label) {

@@ -226,7 +226,7 @@ impl GenericFunction for DurationClock<'_> {
     fn dim(&self) -> usize {
         1
     }
-    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), String> {
+    fn eval<S: ModelScalar>(&self, z: &[S], out: &mut [S]) -> Result<(), crate::ocp::TermError> {
         let d = self.model.measurement_adjust(&z[1..]).force_time_offset;
         out[0] = z[0] - d[0] * self.coeff[0] - d[1] * self.coeff[1];
         Ok(())

@@ -332,7 +332,7 @@ fn summary_json(
             Ok(c) => json!({"span_s": [h.span.0, h.span.1], "found": c.found().map(|r| r.param.name()).collect::<Vec<_>>(),
                 "readings": c.readings.iter().map(reading).collect::<Vec<_>>(),
                 "alone": c.alone.iter().map(reading).collect::<Vec<_>>()}),
-            Err(e) => json!({"span_s": [h.span.0, h.span.1], "error": e}),
+            Err(e) => json!({"span_s": [h.span.0, h.span.1], "error": e.to_string()}),
         })
         .collect();
     let found_total: usize = half

@@ -48,6 +48,34 @@ pub(super) struct HeldOutBase {
     pub converged: bool,
 }
 
+/// A half cycle tried as held-out and passed over.
+#[derive(Debug, thiserror::Error)]
+pub(super) enum PassedOver {
+    /// Its problem cannot be built (the trial does not hold it, or its data are unusable).
+    #[error("{name}: {source:#}")]
+    Unusable {
+        /// The half cycle ([`half_cycle_name`]).
+        name: String,
+        /// Why its problem cannot be built.
+        source: anyhow::Error,
+    },
+    /// It is the run's own half cycle.
+    #[error("{name} is the run's own")]
+    RunsOwn {
+        /// The half cycle ([`half_cycle_name`]).
+        name: String,
+    },
+}
+
+/// Why a trial has no held-out half cycle: each half cycle tried, in order, and why it
+/// was passed over.
+#[derive(Debug, thiserror::Error)]
+#[error("{}", passed_over.iter().map(ToString::to_string).collect::<Vec<_>>().join("; "))]
+pub(super) struct NoHeldOut {
+    /// The half cycles tried.
+    pub passed_over: Vec<PassedOver>,
+}
+
 /// The half cycles tried as held-out, in order, as (stride, legs swapped against the
 /// run's): the next one, the ones before, then the other leg's (the first three), then
 /// the one after next.
@@ -67,24 +95,24 @@ pub(super) fn held_out_base(
     run: &TrackingRunSetup,
     run_window: (f64, f64),
     progress: &dyn Progress,
-) -> anyhow::Result<Result<HeldOutBase, String>> {
-    let mut why = Vec::new();
+) -> anyhow::Result<Result<HeldOutBase, NoHeldOut>> {
+    let mut passed_over = Vec::new();
     for (stride, mirrored) in strides(run) {
         let name = half_cycle_name(stride, mirrored);
         let (setup, prob) = match half_cycle(run, stride, mirrored) {
             Ok(p) => p,
-            Err(e) => {
-                why.push(format!("{name}: {e:#}"));
+            Err(source) => {
+                passed_over.push(PassedOver::Unusable { name, source });
                 continue;
             }
         };
         if !mirrored && (prob.setup.window.0 - run_window.0).abs() < 1e-6 {
-            why.push(format!("{name} is the run's own"));
+            passed_over.push(PassedOver::RunsOwn { name });
             continue;
         }
         return track_base(args, setup, prob, stride, mirrored, progress).map(Ok);
     }
-    Ok(Err(why.join("; ")))
+    Ok(Err(NoHeldOut { passed_over }))
 }
 
 /// The setup and the plain problem of `run`'s half cycle `stride` (legs swapped against

@@ -16,6 +16,7 @@ use crate::problems::evaluation::GaitSolution;
 use crate::sqp::linearised::GaussNewtonModel;
 use anyhow::anyhow;
 use rayon::prelude::*;
+use std::sync::Arc;
 
 /// Score test of candidate `effect` (its `k` parameters the last of θ); returns the test
 /// and the point its truncated re-fit reached, where a verifying re-fit starts.
@@ -36,8 +37,8 @@ pub(super) fn test_candidate(
             .collect();
         // the Gauss–Newton model at the solution and its first step, shared by the score
         // test (its truncated re-fit's first step) and the identifiability probes
-        let first = GaussNewtonModel::new(tr, &w, 1e-12).map_err(|e| anyhow!(e))?;
-        let first_step = first.step(None);
+        let first = GaussNewtonModel::new(tr, &w, 1e-12)?;
+        let first_step = first.step(None).map_err(Arc::new);
         // the residual mean square every statistic is measured in
         let s2 = baseline.mean_square(noise);
         let (mut t, w1) = score_test_from(
@@ -83,7 +84,8 @@ pub(super) fn test_candidate(
         t.set_inflation(phi);
         // and so is the residual mean square
         t.set_mean_square(s2);
-        let id = candidate_identifiability_at(tr, &first, first_step.as_ref(), names, s2, phi);
+        let base = first_step.as_ref().map_err(|e| e.as_ref());
+        let id = candidate_identifiability_at(tr, &first, base, names, s2, phi);
         t.set_identifiability(id, Some(hint));
         let mut solution = GaitSolution::from_nlp(tr, &w1, &cycle.continuous, prob.setup.window.0);
         // a plate's clock offset candidate moves the window's start with the events it gave
@@ -192,7 +194,7 @@ pub(super) fn score_all(
     candidates: &[EffectSpec],
 ) -> anyhow::Result<Scores> {
     let (args, setup, progress) = (run.args, run.setup, run.progress);
-    let pad = EffectSpec::parse_cli("heel_pad_compliance").map_err(|e| anyhow!(e))?;
+    let pad = EffectSpec::parse_cli("heel_pad_compliance")?;
     // each score-tested candidate's problem, built once (the model, phases and trial read
     // from their files): the largest model is made of those the model accepts, and each
     // is then score-tested

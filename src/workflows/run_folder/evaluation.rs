@@ -9,9 +9,15 @@ use crate::problems::evaluation::{
 use crate::problems::transient::{force_transients, ForceTransient};
 use crate::problems::validity::Validity;
 use crate::report::table::{error_table, Table};
-use crate::simulate::Sample;
+use crate::simulate::{Sample, SimulationError};
 use crate::sqp::{SqpResult, SqpStatus};
 use anyhow::Context;
+
+/// The 1 ms re-integration of a run's solution failed (e.g. that of an interrupted early
+/// iterate): reported with the run, not fatal.
+#[derive(Debug, thiserror::Error)]
+#[error("the 1 ms re-integration failed: {0}")]
+pub(super) struct FineGridError(#[source] pub SimulationError);
 
 /// Model against measurement, at the nodes and on the fine grid.
 pub(super) struct Evaluation {
@@ -30,7 +36,7 @@ pub(super) struct Evaluation {
     /// Each solved phase's name.
     pub phase_names: Vec<String>,
     /// The 1 ms re-integration, or why it failed.
-    pub fine_run: Result<Reintegration, String>,
+    pub fine_run: Result<Reintegration, FineGridError>,
     /// Its figures (None when it failed).
     pub fine: Option<FineGridFigures>,
     /// Model against measurement on the fine grid (None when it failed).
@@ -73,9 +79,9 @@ impl Evaluation {
         );
 
         // fine grid: a failure (e.g. of an interrupted early iterate) is reported, not fatal
-        let fine_run: Result<Reintegration, String> = sol
+        let fine_run = sol
             .reintegrate(model, sets, FINE_STEP, &run.integrator)
-            .map_err(|e| format!("the 1 ms re-integration failed: {e}"));
+            .map_err(FineGridError);
         let fine = fine_run.as_ref().ok().map(|f| f.figures(sets, FINE_STEP));
         let fine_cmp = match &fine_run {
             Ok(f) => Some(Comparison::through_model(

@@ -167,7 +167,7 @@ pub(super) fn summary_file(
                 .collect(),
         ),
         fine_grid: ev.fine.clone(),
-        fine_grid_error: ev.fine_run.as_ref().err().cloned(),
+        fine_grid_error: ev.fine_run.as_ref().err().map(ToString::to_string),
         transient_threshold_n: Some(run.transient_threshold_n),
         transients: ev.transients.clone(),
         most_violated: res.most_violated.clone(),

@@ -97,7 +97,7 @@ fn summary_box(run: &GaitRun, ev: &Evaluation, verdict: &Verdict) -> (Summary, S
         (None, Err(e)) => {
             summary
                 .extra
-                .push(("1 ms re-integration".into(), e.clone()));
+                .push(("1 ms re-integration".into(), e.to_string()));
             format!("{e}; the plots show the shooting nodes only.")
         }
         (None, Ok(_)) => String::new(),

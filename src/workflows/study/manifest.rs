@@ -44,7 +44,15 @@ pub enum ManifestError {
         "manifest {0}: cannot tell the format from the extension: give a .csv or a .json file"
     )]
     Format(PathBuf),
-    /// The JSON is malformed or not an array of objects.
+    /// The JSON does not parse.
+    #[error("manifest {path}: {source}")]
+    JsonSyntax {
+        /// The manifest.
+        path: PathBuf,
+        /// serde's description (with line and column).
+        source: serde_json::Error,
+    },
+    /// The JSON is not an array of objects.
     #[error("manifest {path}: {message}")]
     Json {
         /// The manifest.
@@ -209,7 +217,11 @@ fn json_records(path: &Path, text: &str) -> Result<Vec<Record>, ManifestError> {
         path: path.to_path_buf(),
         message,
     };
-    let v: serde_json::Value = serde_json::from_str(text).map_err(|e| bad(e.to_string()))?;
+    let v: serde_json::Value =
+        serde_json::from_str(text).map_err(|source| ManifestError::JsonSyntax {
+            path: path.to_path_buf(),
+            source,
+        })?;
     let list = match &v {
         serde_json::Value::Array(a) => a,
         serde_json::Value::Object(o) => match o.get("trials") {

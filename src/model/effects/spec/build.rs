@@ -13,13 +13,14 @@ use crate::model::effects::kinds::{
 };
 use crate::model::effects::volumetric::{VolumetricContact, VolumetricStart};
 use crate::model::effects::DynEffect;
+use crate::model::error::EffectError;
 use crate::model::geometry::Shape;
 
 impl EffectSpec {
     /// Build the effect instances for a model.
-    pub fn build(&self, ctx: &BuildContext<'_>) -> Result<Vec<Box<dyn DynEffect>>, String> {
+    pub fn build(&self, ctx: &BuildContext<'_>) -> Result<Vec<Box<dyn DynEffect>>, EffectError> {
         self.check()
-            .map_err(|(field, reason)| format!("{field}: {reason}"))?;
+            .map_err(|(field, reason)| EffectError::Field { field, reason })?;
         Ok(match self {
             EffectSpec::PassiveJointStiffness {
                 joint,
@@ -40,7 +41,7 @@ impl EffectSpec {
                     .bodies
                     .iter()
                     .position(|b| b == "hat")
-                    .ok_or("the model has no trunk body 'hat'")?;
+                    .ok_or(EffectError::NoTrunk)?;
                 vec![Box::new(TrunkMass::new(
                     body,
                     *added_mass,
@@ -107,7 +108,10 @@ impl EffectSpec {
                 ..
             } => {
                 if !ctx.primitives.contains(primitive) {
-                    return Err(format!("primitive: this foot has no primitive '{primitive}' (it has: {}); the pad goes under a heel circle", ctx.primitives.join(", ")));
+                    return Err(EffectError::NoPrimitive {
+                        primitive: primitive.clone(),
+                        primitives: ctx.primitives.to_vec(),
+                    });
                 }
                 vec![Box::new(HeelPadCompliance::new(
                     primitive,
@@ -151,7 +155,7 @@ impl EffectSpec {
         side: &str,
         stiffness: f64,
         rest_angle: f64,
-    ) -> Result<Vec<Box<dyn DynEffect>>, String> {
+    ) -> Result<Vec<Box<dyn DynEffect>>, EffectError> {
         let (sides, name): (&[&str], String) = match side {
             "right" => (&["r"], format!("{joint}_r")),
             "left" => (&["l"], format!("{joint}_l")),
@@ -164,7 +168,9 @@ impl EffectSpec {
                 ctx.coordinates
                     .iter()
                     .position(|x| *x == c)
-                    .ok_or_else(|| format!("joint: the model has no coordinate '{c}'"))?,
+                    .ok_or_else(|| EffectError::NoCoordinate {
+                        coordinate: c.clone(),
+                    })?,
             );
         }
         Ok(vec![Box::new(PassiveJointStiffness::new(
@@ -186,7 +192,7 @@ impl EffectSpec {
         stiffness: Option<f64>,
         damping: Option<f64>,
         mu_dynamic: Option<f64>,
-    ) -> Result<Vec<Box<dyn DynEffect>>, String> {
+    ) -> Result<Vec<Box<dyn DynEffect>>, EffectError> {
         let starts: Vec<(String, VolumetricStart)> = ctx
             .primitives
             .iter()
@@ -205,23 +211,29 @@ impl EffectSpec {
             })
             .collect();
         if starts.is_empty() {
-            return Err(format!(
-                "volumetric_contact: the foot {} has no volumetric primitive (its primitives {} are rigid), so there is no contact law to free; use a volumetric foot, e.g. --foot models/feet/volumetric_ellipse.json, or give a primitive \"contact\": {{\"type\": \"volumetric\", …}} in the foot file",
-                ctx.foot,
-                ctx.primitives.join(", ")
-            ));
+            return Err(EffectError::NoVolumetricPrimitive {
+                foot: ctx.foot.to_string(),
+                primitives: ctx.primitives.to_vec(),
+            });
         }
         // a value outside the bounds from the foot file (the effect's own values
         // are checked by `check`)
         for (name, s) in &starts {
             let k = s.stiffness / VolumetricContact::STIFFNESS_UNIT;
-            for (field, v, (lo, hi)) in [
+            for (parameter, value, (lower, upper)) in [
                 ("stiffness", k, VolumetricContact::STIFFNESS_BOUNDS),
                 ("damping", s.damping, VolumetricContact::DAMPING_BOUNDS),
                 ("mu_dynamic", s.mu_dynamic, VolumetricContact::MU_BOUNDS),
             ] {
-                if !(lo..=hi).contains(&v) {
-                    return Err(format!("volumetric_contact: primitive '{name}' of the foot {} has {field} {v} (in the effect's units), outside the bounds [{lo}, {hi}] an identification may use; give a start value with {field}=…", ctx.foot));
+                if !(lower..=upper).contains(&value) {
+                    return Err(EffectError::LawOutOfBounds {
+                        primitive: name.clone(),
+                        foot: ctx.foot.to_string(),
+                        parameter,
+                        value,
+                        lower,
+                        upper,
+                    });
                 }
             }
         }

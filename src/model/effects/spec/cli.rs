@@ -2,6 +2,7 @@
 //! entry written back in that form.
 
 use super::{EffectSpec, EFFECT_KINDS};
+use crate::model::error::EffectError;
 
 impl EffectSpec {
     /// The command-line form of the effect, `NAME:key=value,…,free=a+b`, that
@@ -40,25 +41,26 @@ impl EffectSpec {
     /// `passive_joint_stiffness:joint=knee`, `ground_slope:angle=0.03,free=`. Without a
     /// `free` key every parameter is freed ([`free_all`](Self::free_all)); `free=a+b`
     /// frees the listed ones, `free=` none.
-    pub fn parse_cli(text: &str) -> Result<Self, String> {
+    pub fn parse_cli(text: &str) -> Result<Self, EffectError> {
         let (name, rest) = text.split_once(':').unwrap_or((text, ""));
         if !EFFECT_KINDS.contains(&name) {
-            return Err(format!(
-                "'{name}' is not a known effect; use one of {}",
-                EFFECT_KINDS.join(", ")
-            ));
+            return Err(EffectError::UnknownKind {
+                name: name.to_string(),
+            });
         }
         let mut obj = serde_json::Map::new();
         obj.insert("type".into(), name.into());
         let mut free_given = false;
         for kv in rest.split(',').filter(|s| !s.is_empty()) {
-            let (k, v) = kv
-                .split_once('=')
-                .ok_or_else(|| format!("'{kv}' in '{text}' is not key=value"))?;
+            let (k, v) = kv.split_once('=').ok_or_else(|| EffectError::NotKeyValue {
+                item: kv.to_string(),
+                text: text.to_string(),
+            })?;
             if obj.contains_key(k) {
-                return Err(format!(
-                    "'{k}' is given twice in '{text}'; give each parameter once"
-                ));
+                return Err(EffectError::RepeatedKey {
+                    key: k.to_string(),
+                    text: text.to_string(),
+                });
             }
             let value = if k == "free" {
                 free_given = true;
@@ -72,35 +74,40 @@ impl EffectSpec {
         }
         let mut spec: EffectSpec = serde_json::from_value(serde_json::Value::Object(obj.clone()))
             .map_err(|e| match not_a_number(&obj, &e.to_string()) {
-            Some(k) => format!(
-                "effect '{text}': '{k}' must be a number (for example {k}=0.02), got '{}'",
-                obj[k].as_str().unwrap_or_default()
-            ),
-            None => format!("effect '{text}': {e}"),
+            Some(k) => EffectError::NotANumber {
+                text: text.to_string(),
+                key: k.to_string(),
+                value: obj[k].as_str().unwrap_or_default().to_string(),
+            },
+            None => EffectError::Schema {
+                text: text.to_string(),
+                source: e,
+            },
         })?;
         if !free_given {
             spec.free_all();
         }
-        spec.check()
-            .map_err(|(f, r)| format!("effect '{text}': {f}: {r}"))?;
+        spec.check().map_err(|(field, reason)| EffectError::Entry {
+            text: text.to_string(),
+            source: Box::new(EffectError::Field { field, reason }),
+        })?;
         Ok(spec)
     }
 
     /// Parse several `--effect` texts, refusing two that add the same effect (two sides
     /// of a held measurement effect compose, as in a model file).
-    pub fn parse_cli_all(texts: &[String]) -> Result<Vec<Self>, String> {
+    pub fn parse_cli_all(texts: &[String]) -> Result<Vec<Self>, EffectError> {
         let specs = texts
             .iter()
             .map(|t| Self::parse_cli(t))
             .collect::<Result<Vec<_>, _>>()?;
         for (j, b) in specs.iter().enumerate() {
             if let Some(i) = (0..j).find(|&i| specs[i].overlaps(b) && !specs[i].composes_with(b)) {
-                return Err(format!(
-                    "'{}' and '{}' both add the effect '{}'; give it once",
-                    texts[i],
-                    texts[j],
-                    b.label()
-                ));
+                return Err(EffectError::Twice {
+                    first: texts[i].clone(),
+                    second: texts[j].clone(),
+                    effect: b.label(),
+                });
             }
         }
         Ok(specs)
