@@ -554,3 +554,83 @@ fn function_lengths_are_counted_to_the_closing_brace() {
         [("a".to_string(), 1, 7), ("c".to_string(), 11, 1)]
     );
 }
+
+/// The error types of every `Result<T, E>` written in `code`, as written (`E` trimmed).
+fn result_error_types(code: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut rest = code;
+    while let Some(at) = rest.find("Result<") {
+        let args = &rest[at + "Result<".len()..];
+        let (mut depth, mut comma) = (0i64, None);
+        let (mut end, mut previous) = (args.len(), ' ');
+        for (i, c) in args.char_indices() {
+            let arrow = previous == '-';
+            previous = c;
+            match c {
+                '>' if arrow => {}
+                '<' | '(' | '[' => depth += 1,
+                '>' if depth == 0 => {
+                    end = i;
+                    break;
+                }
+                '>' | ')' | ']' => depth -= 1,
+                ',' if depth == 0 => comma = Some(i),
+                _ => {}
+            }
+        }
+        if let Some(c) = comma {
+            out.push(
+                args[c + 1..end]
+                    .split_whitespace()
+                    .collect::<Vec<_>>()
+                    .join(" "),
+            );
+        }
+        rest = &args[..];
+    }
+    out
+}
+
+/// The library's errors are typed: no `Result` in `src/` (outside the command line and
+/// the files' tests) carries its error as a bare `String`, so that a caller can tell one
+/// failure from another and the command line decides how to say it.
+#[test]
+fn no_library_result_carries_a_string_error() {
+    let src = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    rust_files(&src, &mut files);
+    files.sort();
+    let mut found = Vec::new();
+    for f in &files {
+        if f.ends_with("main.rs") || f.starts_with(src.join("cli")) {
+            continue;
+        }
+        let code = code_of(&std::fs::read_to_string(f).unwrap());
+        let strings = result_error_types(&code)
+            .into_iter()
+            .filter(|e| e == "String" || e == "std::string::String")
+            .count();
+        if strings > 0 {
+            let name = f.strip_prefix(&src).unwrap().display();
+            found.push(format!("{name}: {strings}"));
+        }
+    }
+    assert!(
+        found.is_empty(),
+        "Result<_, String> in the library: {found:#?}"
+    );
+}
+
+/// The reading of `Result`'s error type sees through nested generics and tuples, and
+/// counts a `Result` with its error type left to an alias as none.
+#[test]
+fn result_error_types_are_read_at_the_top_level_of_the_arguments() {
+    let code = "fn a() -> Result<Vec<(String, f64)>, String> {}\n\
+                fn b() -> anyhow::Result<Result<HashMap<u8, String>, io::Error>> {}\n\
+                fn c() -> io::Result<()> {}\n\
+                type D = Result<Box<dyn Fn(u8) -> Vec<u8>>, String>;";
+    assert_eq!(
+        result_error_types(code),
+        ["String", "io::Error", "String"].map(String::from)
+    );
+}

@@ -67,8 +67,10 @@
 //! * The Hill hyperbola becomes negative (the muscle would push) beyond ω_max → smooth
 //!   positive part with width [`TV_FLOOR_EPS`].
 
+mod error;
 mod published;
 
+pub use error::ActuatorError;
 pub use published::{
     Anderson2007Coefficients, GymnastMtgRow, ANDERSON2007_YOUNG_FEMALE, ANDERSON2007_YOUNG_MALE,
     MILLARD2019_GYMNAST,
@@ -76,7 +78,6 @@ pub use published::{
 
 use serde::{Deserialize, Serialize};
 
-use crate::model::error::ActuatorError;
 use crate::model::scalar::Scalar;
 
 /// Gravitational acceleration used to de-normalise Anderson et al.'s torques

@@ -14,9 +14,10 @@ pub mod segments;
 pub mod spec;
 pub mod volumetric;
 
+pub use actuators::ActuatorError;
 pub use error::{
-    ActuatorError, AnthropometryError, ContactSetError, DynamicsError, EffectError, ModelError,
-    ParameterError, ShapeError, TreeError,
+    AnthropometryError, ContactSetError, DynamicsError, EffectError, ModelError, ParameterError,
+    ShapeError, TreeError,
 };
 pub use gait::{ConstraintSet, ContactReport, FootLoad, GaitModel, RowKind, Side};
 pub use scalar::Scalar;
