@@ -3,7 +3,7 @@
 //! OpenCap subject 4's two overground walks (two plates, forces off the plates missing,
 //! 100 Hz, its own scaled model) and the Plug-in Gait trial converted from its C3D file
 //! (120 Hz markers, three plates at 1,800 Hz, its own model). The bundled subject's double-circle track is here
-//! too; its ellipse track is `validity::the_bundled_tracks_kkt_residual_falls_over_its_last_five_iterations_to_below_1e_6`.
+//! too; its ellipse track is `validity::the_bundled_tracks_kkt_residual_falls_over_its_last_four_iterations_to_below_1e_6`.
 //!
 //! On these recordings shifted exact-Hessian steps creep near a KKT residual of 1e-3
 //! until the iteration limit; the tracking solves switch to Gauss–Newton steps where the

@@ -54,7 +54,8 @@ pub trait ControlledOde: Sync {
 
     /// Whether the dynamics can be so stiff that a shooting interval's state transition
     /// matrix Ψ(τ) becomes singular to working precision (a compliant contact's damping:
-    /// eigenvalues of ∂f/∂x near −1e5 1/s). The interval curvature then integrates its
+    /// eigenvalues of ∂f/∂x near −1e5 1/s; a swing foot's small inertia against its
+    /// actuators' damping). The interval curvature then integrates its
     /// adjoint backward instead of inverting Ψ(τ), and with it the adjoint's moments over
     /// each cell of the rule, so that the fast mode's boundary layers before the jumps are
     /// integrated, not sampled ([`Integrator::adjoints`](super::Integrator::adjoints)); it
@@ -399,11 +400,6 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
     /// one node per millisecond instead of four per sample). `weights(i, x(τ_i))` gives
     /// `w_i` (nx) once the state there is known (e.g. the multipliers of a constraint on
     /// `x(τ_i)` times its gradient).
-    ///
-    /// The single pass needs `Ψ(τ)⁻¹`. Where `Ψ(τ)` is singular at a node (a direction of
-    /// the start state that no longer reaches the state there), the interval's curvature is
-    /// computed again with the adjoint integrated backward, as for a stiff model, which
-    /// needs no inverse.
     #[allow(clippy::too_many_arguments)]
     pub fn integrate_with_hessian_interior(
         &self,
@@ -421,51 +417,6 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
         own_span: &[bool],
         weights: &mut dyn FnMut(usize, &[f64]) -> Result<Vec<f64>, IntegratorError>,
     ) -> Result<bool, IntegratorError> {
-        let (lx, ls) = (xs_out.len(), ss_out.len());
-        let stiff = self.model.stiff_transition();
-        let mut pass = |stiff: bool, xs_out: &mut Vec<f64>, ss_out: &mut Vec<f64>| {
-            self.hessian_pass(
-                stiff,
-                integ,
-                x0,
-                p,
-                lambda,
-                (x1, s1),
-                hess,
-                outputs,
-                (xs_out, ss_out),
-                (interior, own_span),
-                weights,
-            )
-        };
-        match pass(stiff, xs_out, ss_out) {
-            Err(IntegratorError::SingularTransition { .. }) if !stiff => {
-                xs_out.truncate(lx);
-                ss_out.truncate(ls);
-                pass(true, xs_out, ss_out)
-            }
-            result => result,
-        }
-    }
-
-    /// One pass of [`integrate_with_hessian_interior`](Self::integrate_with_hessian_interior):
-    /// with the adjoint from `Ψ(τ)⁻¹` (`stiff` false) or integrated backward on finer
-    /// cells (`stiff` true).
-    #[allow(clippy::too_many_arguments)]
-    fn hessian_pass(
-        &self,
-        stiff: bool,
-        integ: &mut super::Integrator,
-        x0: &[f64],
-        p: &[f64],
-        lambda: &[f64],
-        (x1, s1): (&mut [f64], &mut [f64]),
-        hess: &mut [f64],
-        outputs: &[f64],
-        (xs_out, ss_out): (&mut Vec<f64>, &mut Vec<f64>),
-        (interior, own_span): (&[f64], &[bool]),
-        weights: &mut dyn FnMut(usize, &[f64]) -> Result<Vec<f64>, IntegratorError>,
-    ) -> Result<bool, IntegratorError> {
         let m = self.model;
         let nx = m.nx();
         let np = self.np();
@@ -478,9 +429,9 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
             .map(|i| interior[i])
             .collect();
         // a stiff model's contact transients need finer pieces (STIFF_SPLIT)
-        let split = if stiff { STIFF_SPLIT } else { 1 };
+        let split = if m.stiff_transition() { STIFF_SPLIT } else { 1 };
         let mut cells = piece_cells(&folded, split);
-        if stiff {
+        if m.stiff_transition() {
             grade_start(&mut cells);
         }
         let nodes = flatten(&cells);
@@ -490,7 +441,7 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
             .filter(|&i| own(i))
             .map(|i| {
                 let mut cells = span_cells(interior[i], split);
-                if stiff {
+                if m.stiff_transition() {
                     grade_start(&mut cells);
                 }
                 cells
@@ -534,7 +485,7 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
         }
         // a stiff model's adjoint moments on the cells, by backward integration: one
         // sweep for the folded spans, one for each span of its own
-        let backward: Option<Vec<Vec<Vec<f64>>>> = if stiff {
+        let backward: Option<Vec<Vec<Vec<f64>>>> = if m.stiff_transition() {
             let sweep = |spans: &[(f64, Vec<f64>)], cells: &[Cell]| AdjointSweep {
                 jumps: spans.to_vec(),
                 cells: cells

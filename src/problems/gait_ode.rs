@@ -43,8 +43,18 @@ impl ControlledOde for GaitOde<'_> {
         }
         Ok(())
     }
+    /// With a compliant contact (its damping), and with muscle-torque generators: a swing
+    /// foot's small inertia against the generators' damping decays within milliseconds,
+    /// so Ψ(τ) is ill-conditioned on rigid feet too (condition numbers up to 1e12 on the
+    /// bundled model, 1e21 on OpenCap subject 4), and the adjoint from its inverse was
+    /// wrong by up to 37 % of the Hessian's largest entry (`gait_hessian::`). A
+    /// torque-driven model keeps the single pass.
     fn stiff_transition(&self) -> bool {
         self.model.has_volumetric_contacts()
+            || matches!(
+                self.model.actuation(),
+                crate::model::gait::Actuation::Mtg(_)
+            )
     }
     fn weighted_hessian(
         &self,
