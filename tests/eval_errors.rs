@@ -136,6 +136,35 @@ fn a_fatal_failure_at_a_trial_point_stops_the_solve_with_its_cause() {
     assert_eq!(res.w[0], 0.0);
 }
 
+/// A solve whose start lies outside the domain has no objective to report: its stop line
+/// says so instead of printing NaN.
+#[test]
+fn a_start_that_cannot_be_evaluated_reports_no_objective() {
+    let nlp = OutsideTheDomain {
+        fatal: false,
+        evaluated: RefCell::new(Vec::new()),
+    };
+    let res = sqp::solve(&nlp, &[5.0, 0.0], &settings(), &mut Silent);
+    assert!(
+        matches!(res.status, SqpStatus::EvaluationFailure(_)),
+        "{:?}",
+        res.status
+    );
+    assert!(!res.objective.is_finite(), "{}", res.objective);
+    let line = res.objective_and_kkt(6);
+    assert!(
+        line.contains("not evaluated") && !line.contains("NaN"),
+        "{line}"
+    );
+    // a solve that evaluated its start reports both
+    let ok = sqp::solve(&nlp, &[0.0, 0.0], &settings(), &mut Silent);
+    assert!(
+        ok.objective_and_kkt(6).starts_with("J = 0.000000, KKT "),
+        "{}",
+        ok.objective_and_kkt(6)
+    );
+}
+
 /// f(w) = (w₀ − 10)² with the constraint w₁ = 0 and a Gauss–Newton Hessian twice the true
 /// one, so every step goes half-way to the optimum: the first from w₀ = 0 to w₀ = 5,
 /// where the plain evaluation succeeds but the derivatives fail (as sensitivities can

@@ -545,6 +545,17 @@ impl IterationRecord {
 }
 
 impl SqpResult {
+    /// `J = …, KKT …` with the objective to `digits` decimals, or, when the solve stopped
+    /// before its start could be evaluated (no finite objective), says so instead of
+    /// printing NaN.
+    pub fn objective_and_kkt(&self, digits: usize) -> String {
+        if self.objective.is_finite() && self.kkt.is_finite() {
+            format!("J = {:.digits$}, KKT {:.2e}", self.objective, self.kkt)
+        } else {
+            "J and KKT not evaluated (the start could not be evaluated)".to_string()
+        }
+    }
+
     /// One result of two solves, `second` started where this one stopped: the second's
     /// point and status, the iteration history of both (the second's numbered on, without
     /// its repeated initial point), their times added up. A second solve that stopped

@@ -52,11 +52,10 @@ impl GaitRunOutput {
     /// iterations, seconds), as printed after a gait run.
     pub fn solve_summary(&self, res: &SqpResult) -> String {
         format!(
-            "{}\n{}: J = {:.6}, KKT {:.2e}, {} iterations, {:.1} s",
+            "{}\n{}: {}, {} iterations, {:.1} s",
             self.table.to_markdown(),
             res.status,
-            res.objective,
-            res.kkt,
+            res.objective_and_kkt(6),
             res.history.len().saturating_sub(1),
             res.seconds
         )

@@ -316,10 +316,9 @@ fn write_run(
     {
         note!(
             progress,
-            "{}: J = {:.9}, KKT {:.2e}, {} iterations, {:.2} s → {}",
+            "{}: {}, {} iterations, {:.2} s → {}",
             res.status,
-            res.objective,
-            res.kkt,
+            res.objective_and_kkt(9),
             res.history.len().saturating_sub(1),
             res.seconds,
             out.display()

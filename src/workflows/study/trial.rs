@@ -256,10 +256,12 @@ fn run_track(
         std::fs::remove_dir_all(&run.output.path)?;
         anyhow::bail!("interrupted: the track runs again when the study is run again");
     }
-    Ok(format!(
-        "{}, J = {:.4}",
-        run.result.status, run.result.objective
-    ))
+    let objective = run.result.objective;
+    Ok(if objective.is_finite() {
+        format!("{}, J = {objective:.4}", run.result.status)
+    } else {
+        format!("{}, J not evaluated", run.result.status)
+    })
 }
 
 /// The diagnosis of the trial's track: `diagnose` written into this stage's folder, its
