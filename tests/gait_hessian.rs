@@ -91,6 +91,37 @@ fn hessian_error(
     (worst, scale)
 }
 
+/// For multipliers λ drawn from `rng` (uniform in ±1), the assembled Hessian of the
+/// Lagrangian `f + λᵀc` at `w0` against central differences (step 1e-5) of its exact
+/// gradient `∇f + Jᵀλ`, along `directions` random directions drawn after λ: per direction
+/// `(worst, scale)` as [`hessian_error`] gives them.
+fn lagrangian_hessian_errors(
+    tr: &Transcription,
+    w0: &[f64],
+    rng: &mut Rng,
+    directions: usize,
+) -> Vec<(f64, f64)> {
+    let lambda: Vec<f64> = (0..tr.m()).map(|_| rng.uniform(-1.0, 1.0)).collect();
+    let (ev, (hr, hc, hv)) =
+        Nlp::evaluate_with_hessian(tr, w0, &lambda).unwrap_or_else(|e| panic!("{}", e.chain()));
+    let (gr, gc) = tr.gauss_newton_pattern();
+    let (jr, jc) = tr.jacobian_pattern();
+    let grad_l = |w: &[f64]| {
+        let e = Nlp::evaluate(tr, w, true).unwrap();
+        let mut g = e.grad.clone();
+        for k in 0..jr.len() {
+            g[jc[k]] += lambda[jr[k]] * e.jac[k];
+        }
+        g
+    };
+    (0..directions)
+        .map(|_| {
+            let d: Vec<f64> = (0..tr.n()).map(|_| rng.uniform(-1.0, 1.0)).collect();
+            hessian_error((gr, gc, &ev.gn), (&hr, &hc, &hv), w0, &d, 1e-5, &grad_l)
+        })
+        .collect()
+}
+
 #[test]
 fn gait_term_hessians_match_finite_differences() {
     for (foot, phases) in [
@@ -158,30 +189,14 @@ fn tracking_lagrangian_hessian_matches_finite_differences() {
     let ocp = setup.ocp(&cycle, &m, &sets, tight).unwrap();
     let tr = Transcription::new(&ocp).unwrap();
     let (_, _, w0) = tr.variable_bounds_and_guess();
-    let mut rng = Rng::new(11);
-    let lambda: Vec<f64> = (0..tr.m()).map(|_| rng.uniform(-1.0, 1.0)).collect();
-    let (ev, (hr, hc, hv)) = Nlp::evaluate_with_hessian(&tr, &w0, &lambda).unwrap();
-    let (gr, gc) = tr.gauss_newton_pattern();
-    let (jr, jc) = tr.jacobian_pattern();
-    let grad_l = |w: &[f64]| {
-        let e = Nlp::evaluate(&tr, w, true).unwrap();
-        let mut g = e.grad.clone();
-        for k in 0..jr.len() {
-            g[jc[k]] += lambda[jr[k]] * e.jac[k];
-        }
-        g
-    };
-    for trial in 0..2 {
-        let d: Vec<f64> = (0..tr.n()).map(|_| rng.uniform(-1.0, 1.0)).collect();
-        let (worst, scale) =
-            hessian_error((gr, gc, &ev.gn), (&hr, &hc, &hv), &w0, &d, 1e-5, grad_l);
+    let errors = lagrangian_hessian_errors(&tr, &w0, &mut Rng::new(11), 2);
+    for (trial, (worst, scale)) in errors.into_iter().enumerate() {
         eprintln!("direction {trial}: |Hd − FD| / |FD|∞ = {worst:.2e} (|FD|∞ = {scale:.3e})");
-        // the interval curvature is a 4-point Gauss–Legendre quadrature of the
-        // second-order adjoint identity; with these draws its error is largest in the
-        // first interval after the impact (the states at nodes 0–1 of 2e and the phase
-        // duration): 6.2e-5 and 1.5e-4, independent of the difference step (the same to
-        // three digits at 3e-6 and 3e-5), against 1e-5 to 3e-5 with two other seeds.
-        // Term Hessians alone are checked to 1e-5 above.
+        // the interval curvature is a Gauss–Legendre quadrature of the second-order
+        // adjoint identity, the adjoint integrated backward: with these draws 4.7e-6 and
+        // 1.5e-5 (6.2e-5 and 1.5e-4, largest in the first interval after the impact, with
+        // the adjoint from the inverse of the transition matrix). Term Hessians alone are
+        // checked to 1e-5 above.
         assert!(
             worst < 2e-4,
             "assembled Hessian differs from FD of the gradient by {worst:e} (relative)"
@@ -334,24 +349,8 @@ fn an_ill_conditioned_transition_matrix_leaves_the_curvature_exact() {
     prob.integrator.rtol = 1e-10;
     prob.integrator.atol = 1e-10;
     prob.with_transcription(|tr, _, w0| {
-        let mut rng = Rng::new(3);
-        let lambda: Vec<f64> = (0..tr.m()).map(|_| rng.uniform(-1.0, 1.0)).collect();
-        let (ev, (hr, hc, hv)) =
-            Nlp::evaluate_with_hessian(tr, &w0, &lambda).map_err(|e| anyhow::anyhow!(e.chain()))?;
-        let (gr, gc) = tr.gauss_newton_pattern();
-        let (jr, jc) = tr.jacobian_pattern();
-        let grad_l = |w: &[f64]| {
-            let e = Nlp::evaluate(tr, w, true).unwrap();
-            let mut g = e.grad.clone();
-            for k in 0..jr.len() {
-                g[jc[k]] += lambda[jr[k]] * e.jac[k];
-            }
-            g
-        };
-        for trial in 0..2 {
-            let d: Vec<f64> = (0..tr.n()).map(|_| rng.uniform(-1.0, 1.0)).collect();
-            let (worst, scale) =
-                hessian_error((gr, gc, &ev.gn), (&hr, &hc, &hv), &w0, &d, 1e-5, &grad_l);
+        let errors = lagrangian_hessian_errors(tr, &w0, &mut Rng::new(3), 2);
+        for (trial, (worst, scale)) in errors.into_iter().enumerate() {
             eprintln!("direction {trial}: |Hd − FD| / |FD|∞ = {worst:.2e} (|FD|∞ = {scale:.3e})");
             assert!(
                 worst < 1e-4,
