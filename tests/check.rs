@@ -557,3 +557,165 @@ fn mass_added_to_a_model_made_trials_trunk_is_read_as_the_balances_scale() {
         );
     }
 }
+
+/// Each shipped recording with the model of its subject (data/README.md, models/).
+const SHIPPED: [(&str, &str); 4] = [
+    (
+        "data/opensim_subject01_sagittal.csv",
+        "models/opensim_subject01.json",
+    ),
+    (
+        "data/opencap_s4_walking1_sagittal.csv",
+        "models/opencap_s4.json",
+    ),
+    (
+        "data/opencap_s4_walking2_sagittal.csv",
+        "models/opencap_s4.json",
+    ),
+    (
+        "data/pig_c3dorg_D123_sagittal.csv",
+        "models/pig_c3dorg_D123.json",
+    ),
+];
+
+/// The library's verdict on `trial` (a file under the repository) checked with `model`.
+fn checked_in_library(
+    trial: &str,
+    model: &str,
+) -> Result<footfall::problems::check::MeasurementCheck, footfall::problems::check::CheckError> {
+    use footfall::problems::check::{check, CheckSettings};
+    let loaded = load_trial(&TrialFiles {
+        data: Some(root().join(trial)),
+        ..TrialFiles::default()
+    })
+    .expect("trial");
+    let model = crate::common::model(model.trim_start_matches("models/"), "ellipse.json");
+    let data = hips_on_measured_centres(loaded.data, &model);
+    check(&data, &model, &CheckSettings::default(), None)
+}
+
+/// A body file of another subject whose mass the forces pass (within 25 %) is refused:
+/// posed by the trial's coordinates, its legs do not stand the loaded feet on the floor.
+/// The refusal is typed, and its message names the trial, the model and the ankle
+/// height measured; each shipped recording with its own model passes, with no warning
+/// about the body.
+#[test]
+fn a_body_file_of_another_subject_is_refused_naming_both_files() {
+    use footfall::problems::check::footing::{ANKLE_REFUSED, ANKLE_WARNED};
+    use footfall::problems::check::{CheckError, Implausible};
+    let wrong = [
+        (
+            "data/opensim_subject01_sagittal.csv",
+            "models/opencap_s4.json",
+        ),
+        (
+            "data/opencap_s4_walking1_sagittal.csv",
+            "models/opensim_subject01.json",
+        ),
+    ];
+    for (trial, model) in wrong {
+        let height = match checked_in_library(trial, model) {
+            Err(CheckError::Implausible(Implausible::Footing {
+                path,
+                model: file,
+                ankle_height,
+                ..
+            })) => {
+                assert!(
+                    path.ends_with(trial) && file.ends_with(model),
+                    "{path:?} {file:?}"
+                );
+                ankle_height
+            }
+            other => panic!("{trial} with {model}: not refused for its footing: {other:?}"),
+        };
+        assert!(
+            !(ANKLE_REFUSED.0..=ANKLE_REFUSED.1).contains(&height),
+            "{trial} with {model}: ankle {height} m"
+        );
+        let dir = tempfile::tempdir().unwrap();
+        let out = dir.path().join("check");
+        let o = footfall(&[
+            "check",
+            trial,
+            "--model",
+            model,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        assert_eq!(o.status.code(), Some(1), "{}", stderr(&o));
+        let e = stderr(&o);
+        for w in [
+            trial,
+            model,
+            &format!("ankle lies {:.1} cm above the floor", 100.0 * height),
+            "does not match this trial's subject",
+        ] {
+            assert!(e.contains(w), "'{w}' missing from: {e}");
+        }
+        assert!(!out.exists(), "{trial} with {model}: a folder written");
+    }
+    for (trial, model) in SHIPPED {
+        let s = check(trial, model);
+        let warnings = s["warnings"].as_array().expect("warnings listed");
+        assert!(
+            warnings
+                .iter()
+                .all(|w| !w.as_str().unwrap().contains("ankle")),
+            "{trial} with {model}: {warnings:?}"
+        );
+        let c = checked_in_library(trial, model).expect("not refused");
+        assert!(
+            c.warnings.iter().all(|w| !w.contains("ankle")),
+            "{:?}",
+            c.warnings
+        );
+    }
+    assert!(ANKLE_REFUSED.0 < ANKLE_WARNED.0 && ANKLE_WARNED.1 < ANKLE_REFUSED.1);
+}
+
+/// The bundled 600 Hz trial with the right and left force columns swapped: each loaded
+/// foot then swings above the floor while the other stands on it, and the refusal names
+/// the swap as a cause besides the body file.
+#[test]
+fn loads_of_the_other_foot_are_named_as_a_cause_when_the_loaded_foot_stands_off_the_floor() {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let text = std::fs::read_to_string(root().join(BUNDLED_600)).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let other = |h: &str| {
+        let (stem, side) = h.rsplit_once('_')?;
+        let swapped = match side {
+            "r" => "l",
+            "l" => "r",
+            _ => return None,
+        };
+        let partner = format!("{stem}_{swapped}");
+        (h.starts_with("grf_") || h.starts_with("cop_"))
+            .then(|| header.iter().position(|c| *c == partner))
+            .flatten()
+    };
+    let mut out = header.join(",") + "\n";
+    for l in lines {
+        let cells: Vec<&str> = l.split(',').collect();
+        let row: Vec<&str> = (0..cells.len())
+            .map(|i| other(header[i]).map_or(cells[i], |j| cells[j]))
+            .collect();
+        out += &(row.join(",") + "\n");
+    }
+    let path = dir.path().join("trial.csv");
+    std::fs::write(&path, out).unwrap();
+    std::fs::copy(
+        root().join("tests/data/check/opensim_subject01_600hz_meta.json"),
+        dir.path().join("trial_meta.json"),
+    )
+    .unwrap();
+    refused(
+        path.to_str().unwrap(),
+        &[
+            "models/opensim_subject01.json",
+            "above the swinging foot's",
+            "swapped",
+        ],
+    );
+}

@@ -28,7 +28,7 @@ use super::multibody::{Inertia, Tree, V2};
 use super::segments::{build_bodies, estimated_stature, segments_from_de_leva};
 use super::spec::{self, ActuatorSpec, BodySpec, ContactSettings, FootSpec, ModelSpec, Segments};
 use super::Scalar;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Names of the generalised coordinates, in state order.
 pub const COORDINATES: [&str; 9] = [
@@ -93,6 +93,8 @@ const LEG_JOINTS: [(usize, MtgJoint); 6] = [
 pub struct GaitModel {
     /// Model name.
     pub name: String,
+    /// The model file it was built from.
+    source: PathBuf,
     tree: Tree,
     gravity: f64,
     /// Foot-ground contact primitives of both feet.
@@ -209,6 +211,7 @@ impl GaitModel {
         let slots = ContactSlots::new(&contacts, &effects);
         let model = Self {
             name: spec.name.clone(),
+            source: model_path.to_path_buf(),
             tree,
             gravity: spec.gravity,
             contacts,
@@ -242,6 +245,11 @@ impl GaitModel {
             return Err(ModelError::foot_above_ankle(foot_path, lowest));
         }
         Ok(())
+    }
+
+    /// The model file it was built from (as given, or footfall's copy of a bundled one).
+    pub fn source(&self) -> &Path {
+        &self.source
     }
 
     /// The multibody tree.

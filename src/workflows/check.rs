@@ -17,6 +17,7 @@ use anyhow::Context;
 use std::path::PathBuf;
 
 pub mod output;
+pub use crate::problems::check::footing::hips_on_measured_centres;
 pub use output::write_folder;
 
 /// What `check` does: the arguments of `footfall check`.
@@ -111,34 +112,6 @@ fn checked(e: CheckError, data: &GaitData) -> anyhow::Error {
             }
         }
     }
-}
-
-/// The trial with the model's hips on the measured hip centres where the trial gives
-/// them (`hip_center_x`, `hip_center_y`): the pelvis reference point of a model whose
-/// pelvis frame differs from the lab's (a hip-centred body, say) is placed so that its
-/// hips are where the markers put them.
-pub fn hips_on_measured_centres(mut data: GaitData, model: &GaitModel) -> GaitData {
-    let (Some(hx), Some(hy)) = (
-        data.extra.get("hip_center_x"),
-        data.extra.get("hip_center_y"),
-    ) else {
-        return data;
-    };
-    if hx.iter().chain(hy).any(|v| !v.is_finite()) {
-        return data;
-    }
-    let tree = model.tree();
-    let Some(thigh) = tree.body_index("thigh_r") else {
-        return data;
-    };
-    let h = tree.bodies()[thigh].joint_in_parent;
-    let (hx, hy) = (hx.clone(), hy.clone());
-    for k in 0..data.time.len() {
-        let (s, c) = data.q[2][k].sin_cos();
-        data.q[0][k] = hx[k] - (c * h[0] - s * h[1]);
-        data.q[1][k] = hy[k] - (s * h[0] + c * h[1]);
-    }
-    data
 }
 
 /// From each heel strike to the next (either foot's), over the trial's force record.

@@ -430,8 +430,10 @@ impl TrackingProblem {
 
 /// The measurement check's gate ([`crate::problems::check::gate`]): a trial whose forces
 /// cannot belong to the model's body (the mass they imply more than 25 % off, the
-/// horizontal force against the body's acceleration) is refused before the solve; one
-/// more than 10 % off is tracked with a note. A trial whose balance cannot be read (a
+/// horizontal force against the body's acceleration), or whose loaded feet the model
+/// posed by its coordinates does not stand on the floor, is refused before the solve;
+/// one more than 10 % off, or with an ankle height near the limits, is tracked with a
+/// note. A trial whose balance cannot be read (a
 /// foot never loaded, too short) is not judged here.
 fn forces_fit_the_body(data: &GaitData, model: &GaitModel) -> anyhow::Result<Vec<String>> {
     use crate::problems::check::{gate, CheckError, CheckSettings};

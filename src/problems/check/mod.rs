@@ -16,6 +16,7 @@
 
 pub mod balance;
 pub mod fit;
+pub mod footing;
 pub mod plausibility;
 pub mod signals;
 pub mod thresholds;
@@ -91,6 +92,23 @@ pub enum Implausible {
         implied_kg: f64,
         /// The model's mass (kg).
         model_kg: f64,
+    },
+    /// The model posed by the trial's coordinates holds a loaded foot's ankle outside
+    /// [`footing::ANKLE_REFUSED`] above the floor in mid-stance: the body file is
+    /// not the trial's subject's, or (where that ankle lies above the swinging foot's)
+    /// the loads are the other foot's.
+    #[error("{}", footing::refusal(path, model, *side, *ankle_height, *other_height))]
+    Footing {
+        /// The trial's file.
+        path: PathBuf,
+        /// The model file.
+        model: PathBuf,
+        /// The loaded foot.
+        side: Side,
+        /// Median height of its ankle joint centre above the floor in mid-stance (m).
+        ankle_height: f64,
+        /// Median height of the other foot's ankle joint centre at the same instants (m).
+        other_height: f64,
     },
     /// The horizontal ground force runs against the body's horizontal acceleration.
     #[error("{}: columns 'grf_x_r', 'grf_x_l': the horizontal ground force runs against the body's horizontal acceleration (correlation {correlation:.2}); footfall reads grf_x as the ground's force on the foot, + forward: the sign looks flipped", path.display())]
@@ -311,8 +329,9 @@ pub fn check(
     let instants = balance_instants(&signals, &body, settings, window)?;
     let problem = Problem::new(&body, &signals, &instants, settings);
     let mass = (body.mass(), implied_mass(&problem));
-    let warnings =
+    let mut warnings =
         plausibility::check_balance(data, mass.0, mass.1, horizontal_correlation(&problem))?;
+    warnings.extend(footing::check_footing(data, model)?);
     let (readings, alone, fit) = stepwise(&problem, settings);
     let zero = [0.0; NPARAM];
     let before = problem.linearise(&zero, &[]).r;
@@ -346,8 +365,10 @@ pub fn check(
 /// Whether the trial's forces can belong to the body of `model`, as the measurement
 /// check judges them before it reads anything (the mass the vertical forces imply within
 /// 25 % of the model's, the horizontal force not running against the body's
-/// acceleration): the gate a solve passes before it starts. `Ok` holds the warnings (a
-/// mass more than 10 % off); `Err(CheckError::Implausible)` refuses the trial; any other
+/// acceleration, the model posed by the trial's coordinates standing each loaded foot on
+/// the floor: [`footing::check_footing`]): the gate a solve passes before it
+/// starts. `Ok` holds the warnings (a mass more than 10 % off, an ankle height near the
+/// limits); `Err(CheckError::Implausible)` refuses the trial; any other
 /// error says that the balance cannot be read on this trial (a foot without forces, too
 /// short), and so cannot judge it.
 pub fn gate(
@@ -358,12 +379,14 @@ pub fn gate(
     let (signals, body) = balance_inputs(data, model, settings)?;
     let instants = balance_instants(&signals, &body, settings, None)?;
     let problem = Problem::new(&body, &signals, &instants, settings);
-    plausibility::check_balance(
+    let mut warnings = plausibility::check_balance(
         data,
         body.mass(),
         implied_mass(&problem),
         horizontal_correlation(&problem),
-    )
+    )?;
+    warnings.extend(footing::check_footing(data, model)?);
+    Ok(warnings)
 }
 
 /// The trial's filtered signals and the model's segments, once both feet are known to

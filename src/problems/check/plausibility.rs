@@ -2,7 +2,8 @@
 //! then propulsion), checked where every trial is read for every command
 //! ([`check_forward_force_sign`]); and, in the measurement check, against the body by
 //! the whole-body balance: the body mass they imply against the model's, and the
-//! horizontal force's run against the body's acceleration ([`check_balance`]). Units
+//! horizontal force's run against the body's acceleration ([`check_balance`]); the body
+//! against the trial is judged by its geometry ([`footing`](super::footing)). Units
 //! (times in seconds, positions and CoP in metres, angles in radians) and the vertical
 //! force's sign are checked where every trial is read as well
 //! ([`GaitData::check_conventions`]).
@@ -62,9 +63,10 @@ pub const FLIPPED_FORWARD_SHARE: f64 = 0.01;
 /// Shortest stance judged (s): a running stance lasts about 0.2 s, a walking one 0.5 s
 /// or more; shorter loaded stretches are a foot's brush of the plate.
 pub const MIN_STANCE_S: f64 = 0.1;
-/// Normal force (N) and share of the foot's peak that a loaded foot exceeds.
-const LOADED_N: f64 = 20.0;
-const LOADED_SHARE: f64 = 0.05;
+/// Normal force (N) that a loaded foot exceeds (the usual CoP threshold).
+pub const LOADED_N: f64 = 20.0;
+/// Share of the foot's peak normal force that a loaded foot exceeds.
+pub const LOADED_SHARE: f64 = 0.05;
 
 /// The forward impulses of a foot's complete stances (loaded between two unloaded
 /// samples, with no gap): the first halves' and the second halves' sums along the
@@ -81,40 +83,53 @@ pub struct StanceImpulses {
     pub stances: usize,
 }
 
+/// The normal force (N) above which foot `foot` counts as loaded: [`LOADED_N`], or
+/// [`LOADED_SHARE`] of the foot's peak where that is more.
+pub fn loaded_threshold(foot: &FootData) -> f64 {
+    let peak = foot
+        .fy
+        .iter()
+        .copied()
+        .filter(|v| v.is_finite())
+        .fold(0.0, f64::max);
+    LOADED_N.max(LOADED_SHARE * peak)
+}
+
+/// The complete stances of foot `foot` sampled at `t`: index ranges `(a, b)` from the
+/// last unloaded sample before each loaded run ([`loaded_threshold`]) to the first
+/// unloaded one after it, with nothing missing in between.
+pub fn complete_stances(t: &[f64], foot: &FootData) -> Vec<(usize, usize)> {
+    let n = t.len().min(foot.fy.len());
+    let threshold = loaded_threshold(foot);
+    let gap = median_step(&t[..n]).map_or(f64::INFINITY, |m| 1.5 * m);
+    let unloaded = |k: usize| foot.fy[k].is_finite() && foot.fy[k] <= threshold;
+    let mut out = Vec::new();
+    let mut k = 1;
+    while k < n {
+        if !(unloaded(k - 1) && foot.fy[k] > threshold) {
+            k += 1;
+            continue;
+        }
+        let mut j = k;
+        while j < n && foot.fy[j] > threshold && t[j] - t[j - 1] <= gap {
+            j += 1;
+        }
+        if j < n && unloaded(j) && t[j] - t[j - 1] <= gap {
+            out.push((k - 1, j));
+        }
+        k = j.max(k + 1);
+    }
+    out
+}
+
 impl StanceImpulses {
     /// The impulses of foot `foot` sampled at `t`, along `forward`.
     pub fn of(t: &[f64], foot: &FootData, forward: f64) -> Self {
-        let n = t.len().min(foot.fy.len()).min(foot.fx.len());
-        let peak = foot.fy[..n]
-            .iter()
-            .copied()
-            .filter(|v| v.is_finite())
-            .fold(0.0, f64::max);
-        let threshold = LOADED_N.max(LOADED_SHARE * peak);
-        let gap = median_step(&t[..n]).map_or(f64::INFINITY, |m| 1.5 * m);
-        let unloaded = |k: usize| foot.fy[k].is_finite() && foot.fy[k] <= threshold;
         let mut out = Self::default();
-        let mut k = 1;
-        while k < n {
-            if !(unloaded(k - 1) && foot.fy[k] > threshold) {
-                k += 1;
-                continue;
+        for (a, b) in complete_stances(t, foot) {
+            if b < foot.fx.len() {
+                out.add(&t[a..=b], &foot.fx[a..=b], &foot.fy[a..=b], forward);
             }
-            // the stance from sample k-1 (the last unloaded one) to the first unloaded
-            // sample after it, if nothing is missing in between
-            let mut j = k;
-            while j < n && foot.fy[j] > threshold && t[j] - t[j - 1] <= gap {
-                j += 1;
-            }
-            if j < n && unloaded(j) && t[j] - t[j - 1] <= gap {
-                out.add(
-                    &t[k - 1..=j],
-                    &foot.fx[k - 1..=j],
-                    &foot.fy[k - 1..=j],
-                    forward,
-                );
-            }
-            k = j.max(k + 1);
         }
         out
     }
