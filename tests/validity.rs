@@ -393,8 +393,10 @@ fn the_iteration_limit_holds_across_the_rounds_of_check_points() {
 /// interior point, and the QP's bound multiplier balanced the curvature of that slack
 /// instead of the gradient (`sqp::kkt::residual`). With the intervals' curvature from the
 /// inverse of their transition matrices the tail took 30 iterations (last five 2.0e-5,
-/// 7.8e-6, 4.7e-6, 1.3e-6, 8.4e-8); with the adjoint integrated backward (release build):
-/// 19 iterations, the last four 3.2e-2, 1.1e-3, 4.3e-6, 5.1e-7, J = 7.915125. The track is
+/// 7.8e-6, 4.7e-6, 1.3e-6, 8.4e-8); with the adjoint integrated backward and the
+/// sensitivities at a tenth of the KKT tolerance, the last four 1.0e-3, 4.3e-6, 2.1e-6,
+/// 2.2e-8 (with them at 1e-6, a tenth of the default tolerance only: 1.0e-3, 4.3e-6,
+/// 5.5e-5, 4.7e-8, not monotone), J = 7.915125. The track is
 /// also physically valid on the 1 ms grid: the bundled recording's ellipse case of
 /// `every_recording`.
 #[test]

@@ -48,9 +48,11 @@ pub struct Args {
     /// Relative and absolute CVODES tolerance of the shooting intervals.
     #[arg(long, default_value_t = 1e-8, value_parser = super::validate::positive)]
     integrator_tol: f64,
-    /// CVODES tolerance of the forward sensitivities (default: the states'; with a heel
-    /// pad, whose states are integrated at 1e-10, `--integrator-tol`). The KKT residual is
-    /// computed from them: tighten it if a fit stalls just above `--tol`.
+    /// CVODES tolerance of the forward sensitivities (default: on rigid feet a tenth of
+    /// `--tol`, at most 1e-6, or the states' where looser; with a heel pad, whose states
+    /// are integrated at 1e-10, `--integrator-tol`; with residual actuators the states').
+    /// The KKT residual is computed from them: tighten it if a fit stalls just above
+    /// `--tol`.
     #[arg(long, value_parser = super::validate::positive)]
     sensitivity_tol: Option<f64>,
     #[command(flatten)]

@@ -58,11 +58,18 @@ pub trait ControlledOde: Sync {
     /// actuators' damping). The interval curvature then integrates its
     /// adjoint backward instead of inverting Ψ(τ), and with it the adjoint's moments over
     /// each cell of the rule, so that the fast mode's boundary layers before the jumps are
-    /// integrated, not sampled ([`Integrator::adjoints`](super::Integrator::adjoints)); it
-    /// takes twice the nodes, since its integrand changes within milliseconds at the
-    /// contacts' onsets, and cells shrinking toward the interval's start, where the
-    /// sensitivities' own layer lies (default: false, the single pass).
+    /// integrated, not sampled ([`Integrator::adjoints`](super::Integrator::adjoints)),
+    /// and the rule takes twice the nodes ([`STIFF_SPLIT`]) (default: false, the single
+    /// pass).
     fn stiff_transition(&self) -> bool {
+        false
+    }
+    /// Whether, besides, the curvature's integrand has a layer of microseconds at the
+    /// interval's start, where the sensitivities leave `[I | 0]` along a mode that fast (a
+    /// compliant contact): the rule's first cell then shrinks toward the start
+    /// (`quadrature::grade_start`). Only with [`stiff_transition`](Self::stiff_transition)
+    /// (default: false).
+    fn fast_curvature_layers(&self) -> bool {
         false
     }
 }
@@ -428,10 +435,12 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
             .filter(|&i| !own(i))
             .map(|i| interior[i])
             .collect();
-        // a stiff model's contact transients need finer pieces (STIFF_SPLIT)
+        // a stiff model's transients need finer pieces (STIFF_SPLIT), a compliant
+        // contact's also cells shrinking toward the start
         let split = if m.stiff_transition() { STIFF_SPLIT } else { 1 };
+        let layers = m.stiff_transition() && m.fast_curvature_layers();
         let mut cells = piece_cells(&folded, split);
-        if m.stiff_transition() {
+        if layers {
             grade_start(&mut cells);
         }
         let nodes = flatten(&cells);
@@ -441,7 +450,7 @@ impl<O: ControlledOde + ?Sized> ShootingInterval<'_, O> {
             .filter(|&i| own(i))
             .map(|i| {
                 let mut cells = span_cells(interior[i], split);
-                if m.stiff_transition() {
+                if layers {
                     grade_start(&mut cells);
                 }
                 cells

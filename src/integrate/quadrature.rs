@@ -22,7 +22,9 @@ pub(super) const GAUSS4: [(f64, f64); 4] = [
 /// largest entry undivided (the first interval, at heel strike), 0.20 in two parts, 4e-3
 /// in four. With the undivided rule the SQP's KKT residual fell by 7 % per iteration near
 /// the optimum, steps alternating in sign (the Hessian too flat along the pelvis height);
-/// in two parts the same track converges.
+/// in two parts the same track converges. The generators' fast mode on a rigid foot
+/// (the bundled tracking problem at 1e-12, tests/gait_hessian.rs): 1.4e-4 and 4.9e-4 of
+/// the differences' largest entry undivided, 4.7e-6 and 1.5e-5 in two parts.
 pub(super) const STIFF_SPLIT: usize = 2;
 
 /// Gauss–Legendre rules of 1 to 3 points on [0, 1] (nodes, weights).

@@ -62,6 +62,9 @@ impl ControlledOde for WithQuadrature<'_> {
     fn stiff_transition(&self) -> bool {
         self.ode.stiff_transition()
     }
+    fn fast_curvature_layers(&self) -> bool {
+        self.ode.fast_curvature_layers()
+    }
     fn f(&self, x: &[f64], u: &[f64], theta: &[f64], xdot: &mut [f64]) -> Result<(), OdeError> {
         let n = self.ode.nx();
         self.ode.f(&x[..n], u, theta, &mut xdot[..n])?;

@@ -506,8 +506,8 @@ pub enum FootFitError {
     /// The fitted foot cannot roll along the measured CoP.
     #[error("the fitted foot cannot roll")]
     FittedCannotRoll,
-    /// The Nelder–Mead search failed.
-    #[error("{0}")]
+    /// The Nelder–Mead search failed (its reason is the source).
+    #[error("the Nelder–Mead search of the foot's shape failed")]
     Search(#[source] Box<dyn std::error::Error + Send + Sync + 'static>),
     /// The gait events could not be detected.
     #[error(transparent)]
