@@ -549,11 +549,26 @@ impl SqpResult {
     /// before its start could be evaluated (no finite objective), says so instead of
     /// printing NaN.
     pub fn objective_and_kkt(&self, digits: usize) -> String {
-        if self.objective.is_finite() && self.kkt.is_finite() {
+        if self.evaluated() {
             format!("J = {:.digits$}, KKT {:.2e}", self.objective, self.kkt)
         } else {
             "J and KKT not evaluated (the start could not be evaluated)".to_string()
         }
+    }
+
+    /// `J = …` with the objective to `digits` decimals, or `J not evaluated` (as
+    /// [`objective_and_kkt`](Self::objective_and_kkt), for a table's cell).
+    pub fn objective_text(&self, digits: usize) -> String {
+        if self.evaluated() {
+            format!("J = {:.digits$}", self.objective)
+        } else {
+            "J not evaluated".to_string()
+        }
+    }
+
+    /// Whether the solve evaluated its start: a finite objective and KKT residual.
+    fn evaluated(&self) -> bool {
+        self.objective.is_finite() && self.kkt.is_finite()
     }
 
     /// One result of two solves, `second` started where this one stopped: the second's

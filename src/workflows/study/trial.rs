@@ -256,12 +256,11 @@ fn run_track(
         std::fs::remove_dir_all(&run.output.path)?;
         anyhow::bail!("interrupted: the track runs again when the study is run again");
     }
-    let objective = run.result.objective;
-    Ok(if objective.is_finite() {
-        format!("{}, J = {objective:.4}", run.result.status)
-    } else {
-        format!("{}, J not evaluated", run.result.status)
-    })
+    Ok(format!(
+        "{}, {}",
+        run.result.status,
+        run.result.objective_text(4)
+    ))
 }
 
 /// The diagnosis of the trial's track: `diagnose` written into this stage's folder, its
