@@ -114,7 +114,7 @@ impl GaitModel {
     }
 
     /// Generalised joint forces of the actuators (and passive damping) and effects.
-    fn generalized_forces<S: ModelScalar>(
+    pub(super) fn generalized_forces<S: ModelScalar>(
         &self,
         q: &[S],
         qd: &[S],
@@ -146,6 +146,21 @@ impl GaitModel {
         theta: &[S],
         xdot: &mut [S],
         lambda: &mut [S],
+        report: Option<&mut ContactReport>,
+    ) -> Result<(), DynamicsError> {
+        self.dynamics_with_torques(set, (x, u, theta), &[], xdot, lambda, report)
+    }
+
+    /// [`Self::dynamics`] with the generalised forces `extra` (pairs of coordinate and
+    /// force, N or N·m) added to the model's own: the Jacobian's torque directions
+    /// (`jacobians.rs`), through which the activations act.
+    pub(super) fn dynamics_with_torques<S: ModelScalar>(
+        &self,
+        set: &ConstraintSet,
+        (x, u, theta): (&[S], &[S], &[S]),
+        extra: &[(usize, S)],
+        xdot: &mut [S],
+        lambda: &mut [S],
         mut report: Option<&mut ContactReport>,
     ) -> Result<(), DynamicsError> {
         let nq = self.nq();
@@ -159,6 +174,9 @@ impl GaitModel {
         self.tree
             .mass_matrix_and_bias(&k, &inertia, gravity, &mut m, &mut c);
         let mut tau = self.generalized_forces(q, qd, a, u, &p);
+        for &(j, f) in extra {
+            tau[j] += f;
+        }
         // volumetric primitives: a ground force in every phase, applied at the centroid of
         // the penetrated area
         let volumetric = self.volumetric_forces(&k, ground_h, n, &p);

@@ -33,6 +33,28 @@ impl GaitModel {
         (order, lead)
     }
 
+    /// `∂τ/∂a` (nq × na, column-major, N·m per unit activation): how the joint torques
+    /// of the actuators, damping and effects at `(x, u, θ)` move with each activation.
+    fn torque_activation_jacobian(&self, x: &[f64], u: &[f64], theta: &[f64]) -> Vec<f64> {
+        let (nq, a0) = (self.nq(), 2 * self.nq());
+        let na = x.len() - a0;
+        let c = |v: &[f64]| -> Vec<AdChunk> { v.iter().map(|&w| AdChunk::from(w)).collect() };
+        let (q, qd, uc) = (c(&x[..nq]), c(&x[nq..a0]), c(u));
+        let p = self.full_params(&c(theta));
+        let mut out = vec![0.0; nq * na];
+        let mut a = Vec::with_capacity(na);
+        for start in (0..na).step_by(ad::CHUNK) {
+            ad::seed_chunk(&x[a0..], start, &mut a);
+            let tau = self.generalized_forces(&q, &qd, &a, &uc, &p);
+            for k in 0..ad::CHUNK.min(na - start) {
+                for (j, t) in tau.iter().enumerate() {
+                    out[j + (start + k) * nq] = ad::eps(t, k);
+                }
+            }
+        }
+        out
+    }
+
     /// Evaluate `ẋ` and its Jacobians with respect to `(x, u, θ)` by chunked forward AD;
     /// `jac` is nx × (nx + nu + nθ), column-major.
     pub fn dynamics_jacobian(
@@ -47,32 +69,66 @@ impl GaitModel {
         let (nx, nu, nt) = (self.nx(), self.nu(), theta.len());
         let mut lam = vec![AdChunk::from(0.0); set.rows.len()];
         match &self.actuation {
-            // Excitations enter only the activation dynamics ȧ = rate(u, a): their columns
-            // are diagonal and come from a scalar dual evaluation; AD runs over (x, θ) only
-            // (residual actuators' controls enter the dynamics: the general path below).
+            // Excitations enter only the activation dynamics ȧ = rate(u, a), and the
+            // activations only that and the joint torques τ(q, q̇, a): AD runs over
+            // (q, q̇, θ) and the torques of the joints the activations move, and the
+            // activation and excitation columns follow by the chain rule from ∂τ/∂a and
+            // the rate's scalar derivatives (residual actuators' controls enter the
+            // dynamics: the general path below).
             Actuation::Mtg(mtg) if self.residuals.is_none() => {
-                let mut z = Vec::with_capacity(nx + nt);
-                z.extend_from_slice(x);
+                let (nq, a0) = (self.nq(), 2 * self.nq());
+                let na = nx - a0;
+                let dtau_da = self.torque_activation_jacobian(x, u, theta);
+                let joints: Vec<usize> = (0..nq)
+                    .filter(|&j| (0..na).any(|i| dtau_da[j + i * nq] != 0.0))
+                    .collect();
+                let nj = joints.len();
+                let mut z = Vec::with_capacity(a0 + nj + nt);
+                z.extend_from_slice(&x[..a0]);
+                z.extend(std::iter::repeat_n(0.0, nj));
                 z.extend_from_slice(theta);
-                let mut jz = vec![0.0; nx * (nx + nt)];
+                let mut jz = vec![0.0; nx * z.len()];
                 let uc: Vec<AdChunk> = u.iter().map(|&v| AdChunk::from(v)).collect();
+                let ac: Vec<AdChunk> = x[a0..].iter().map(|&v| AdChunk::from(v)).collect();
+                let mut xs = Vec::with_capacity(nx);
+                let mut extra = Vec::with_capacity(nj);
                 ad::jacobian(
                     &z,
                     nx,
                     |zs, out| {
-                        let (xs, ts) = zs.split_at(nx);
-                        self.dynamics(set, xs, &uc, ts, out, &mut lam, None)
+                        let (qs, rest) = zs.split_at(a0);
+                        let (taus, ts) = rest.split_at(nj);
+                        xs.clear();
+                        xs.extend_from_slice(qs);
+                        xs.extend_from_slice(&ac);
+                        extra.clear();
+                        extra.extend(joints.iter().copied().zip(taus.iter().copied()));
+                        self.dynamics_with_torques(set, (&xs, &uc, ts), &extra, out, &mut lam, None)
                     },
                     xdot,
                     &mut jz,
                 )?;
-                jac[..nx * nx].copy_from_slice(&jz[..nx * nx]);
-                jac[nx * (nx + nu)..].copy_from_slice(&jz[nx * nx..]);
+                // (q, q̇) and θ columns as computed
+                jac[..nx * a0].copy_from_slice(&jz[..nx * a0]);
+                jac[nx * (nx + nu)..].copy_from_slice(&jz[nx * (a0 + nj)..]);
+                // activation columns: Σ_j ∂ẋ/∂τ_j ∂τ_j/∂a_i, and the rate's own
+                let time = self.actuator_factors(theta).time;
+                for i in 0..na {
+                    let col = &mut jac[nx * (a0 + i)..nx * (a0 + i + 1)];
+                    col.iter_mut().for_each(|v| *v = 0.0);
+                    for (k, &j) in joints.iter().enumerate() {
+                        let d = dtau_da[j + i * nq];
+                        if d != 0.0 {
+                            let dj = &jz[nx * (a0 + k)..nx * (a0 + k + 1)];
+                            col.iter_mut().zip(dj).for_each(|(c, v)| *c += d * v);
+                        }
+                    }
+                    let e = num_dual::Dual64::from(u[i]);
+                    let a = num_dual::Dual64::new(x[a0 + i], 1.0);
+                    col[a0 + i] += mtg.activation.rate(e, a).eps / time;
+                }
                 let fu = &mut jac[nx * nx..nx * (nx + nu)];
                 fu.iter_mut().for_each(|v| *v = 0.0);
-                let a0 = 2 * self.nq();
-                // the activation time constants' factor (an effect's) divides the rate
-                let time = self.actuator_factors(theta).time;
                 for i in 0..nu {
                     let e = num_dual::Dual64::new(u[i], 1.0);
                     let a = num_dual::Dual64::from(x[a0 + i]);
