@@ -281,15 +281,10 @@ fn untouched_half_cycles_checked_out_of_sample_find_no_more_than_the_level_allow
 /// The bundled 600 Hz trial with `edit` applied to every data row's cells, written to a
 /// temporary folder with its meta file.
 fn edited(edit: impl Fn(&str, &mut f64)) -> (tempfile::TempDir, String) {
-    let dir = tempfile::tempdir().expect("temp dir");
-    let text = std::fs::read_to_string(root().join(BUNDLED_600)).unwrap();
-    let mut lines = text.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let mut out = header.join(",") + "\n";
-    for l in lines {
-        let cells: Vec<String> = l
-            .split(',')
-            .zip(&header)
+    rewritten(|header, cells| {
+        cells
+            .iter()
+            .zip(header)
             .map(|(c, h)| {
                 let mut v: f64 = c.parse().unwrap();
                 edit(h, &mut v);
@@ -299,8 +294,21 @@ fn edited(edit: impl Fn(&str, &mut f64)) -> (tempfile::TempDir, String) {
                     v.to_string()
                 }
             })
-            .collect();
-        out += &(cells.join(",") + "\n");
+            .collect()
+    })
+}
+
+/// The bundled 600 Hz trial with each data row's cells replaced by `row(header, cells)`,
+/// written to a temporary folder with its meta file.
+fn rewritten(row: impl Fn(&[&str], &[&str]) -> Vec<String>) -> (tempfile::TempDir, String) {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let text = std::fs::read_to_string(root().join(BUNDLED_600)).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
+    let mut out = header.join(",") + "\n";
+    for l in lines {
+        let cells: Vec<&str> = l.split(',').collect();
+        out += &(row(&header, &cells).join(",") + "\n");
     }
     let path = dir.path().join("trial.csv");
     std::fs::write(&path, out).unwrap();
@@ -668,11 +676,8 @@ fn a_body_file_of_another_subject_is_refused_naming_both_files() {
 /// the swap as a cause besides the body file.
 #[test]
 fn loads_of_the_other_foot_are_named_as_a_cause_when_the_loaded_foot_stands_off_the_floor() {
-    let dir = tempfile::tempdir().expect("temp dir");
-    let text = std::fs::read_to_string(root().join(BUNDLED_600)).unwrap();
-    let mut lines = text.lines();
-    let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let other = |h: &str| {
+    // the column of the other foot's force or CoP of the same name
+    let other = |header: &[&str], h: &str| {
         let (stem, side) = h.rsplit_once('_')?;
         let swapped = match side {
             "r" => "l",
@@ -684,23 +689,17 @@ fn loads_of_the_other_foot_are_named_as_a_cause_when_the_loaded_foot_stands_off_
             .then(|| header.iter().position(|c| *c == partner))
             .flatten()
     };
-    let mut out = header.join(",") + "\n";
-    for l in lines {
-        let cells: Vec<&str> = l.split(',').collect();
-        let row: Vec<&str> = (0..cells.len())
-            .map(|i| other(header[i]).map_or(cells[i], |j| cells[j]))
-            .collect();
-        out += &(row.join(",") + "\n");
-    }
-    let path = dir.path().join("trial.csv");
-    std::fs::write(&path, out).unwrap();
-    std::fs::copy(
-        root().join("tests/data/check/opensim_subject01_600hz_meta.json"),
-        dir.path().join("trial_meta.json"),
-    )
-    .unwrap();
+    let (_dir, trial) = rewritten(|header, cells| {
+        (0..cells.len())
+            .map(|i| {
+                other(header, header[i])
+                    .map_or(cells[i], |j| cells[j])
+                    .to_string()
+            })
+            .collect()
+    });
     refused(
-        path.to_str().unwrap(),
+        &trial,
         &[
             "models/opensim_subject01.json",
             "above the swinging foot's",
