@@ -37,6 +37,18 @@ fn converges_from_the_data(data: Option<&str>, model: &str, foot: &str) {
     assert!(kkt <= 1e-5, "{what}: KKT {kkt:.2e}");
     assert_eq!(summary["physically_valid"], true, "{what}: {stderr}");
     assert_eq!(out.status.code(), Some(0), "{what}: {stderr}");
+    // from the data, the contact constraints hold a third into the first interval of the
+    // first phase an impact starts (2e, 2c) from the first solve on
+    let setup: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(run.join("setup.json")).unwrap()).unwrap();
+    assert!(
+        setup["check_points"]
+            .as_array()
+            .unwrap()
+            .contains(&serde_json::json!([0, 0, 1.0 / 3.0])),
+        "{what}: check points {}",
+        setup["check_points"]
+    );
 }
 
 #[test]

@@ -44,13 +44,15 @@ fn guess(m: &GaitModel, seq: &PhaseSequence, sets: &[footfall::model::Constraint
 
 #[test]
 fn seed_phase_graphs_transcribe_with_the_seed_interval_counts() {
-    for (foot, phases, intervals, n_cont) in [
-        ("ellipse.json", "phases/ellipse_walk.json", 25, 2),
+    // the continuous phases an impact starts: 2e after 1e*; 2c after 1c*, 4c after 3c*
+    for (foot, phases, intervals, n_cont, after_impact) in [
+        ("ellipse.json", "phases/ellipse_walk.json", 25, 2, &[0][..]),
         (
             "double_circle.json",
             "phases/double_circle_walk.json",
             31,
             4,
+            &[0, 1][..],
         ),
     ] {
         let m = model("opensim_subject01.json", foot);
@@ -59,6 +61,9 @@ fn seed_phase_graphs_transcribe_with_the_seed_interval_counts() {
         let sets = seq.resolve(&m, &p).unwrap();
         let cycle = GaitCycle::new(&m, &seq, &sets).unwrap();
         assert_eq!(cycle.continuous.len(), n_cont);
+        let sites: Vec<(usize, usize, f64)> =
+            after_impact.iter().map(|&j| (j, 0, 1.0 / 3.0)).collect();
+        assert_eq!(cycle.impact_sites(), sites, "{phases}");
         let g = guess(&m, &seq, &sets);
         let ocp = cycle.ocp(&g, IntegratorSettings::default()).unwrap();
         let total: usize = ocp.phases.iter().map(|p| p.intervals).sum();

@@ -262,6 +262,12 @@ pub struct SqpSettings {
     /// and then cycled at violations of 2e-3 to 1e-2, above any fixed switch.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub exact_hessian_on_stall: Option<StallSwitch>,
+    /// Exact mode: once a step has used the constraint curvature, the next uses it too
+    /// while the violation is at most this multiple of `exact_hessian_below` (default:
+    /// 10). A full exact step near the switch can raise the violation just above it;
+    /// answering with a Gauss–Newton step threw away the curvature's local convergence
+    /// and the steps alternated between the two Hessians.
+    pub exact_hessian_hold: f64,
     /// How the exact mode keeps its QPs convex (default: augmented).
     pub exact_convexification: ExactConvexification,
     /// Use the exact curvature of constraint terms that provide it (convexified per
@@ -321,6 +327,7 @@ impl Default for SqpSettings {
             exact_term_hessians: false,
             exact_hessian_below: f64::INFINITY,
             exact_hessian_on_stall: None,
+            exact_hessian_hold: 10.0,
             exact_convexification: ExactConvexification::Augmented,
             inexact_integration: 1e-5,
             violation_growth: None,

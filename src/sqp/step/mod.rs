@@ -103,13 +103,16 @@ pub(super) struct Step {
 /// Whether the exact mode uses the constraint curvature at an iterate of largest violation
 /// `infeas` after the iterations `history`: far from feasibility the multipliers (and so
 /// the curvature) are unreliable, so only below `exact_hessian_below`, or once the
-/// Gauss–Newton steps have stalled ([`SqpSettings::exact_hessian_on_stall`]).
+/// Gauss–Newton steps have stalled ([`SqpSettings::exact_hessian_on_stall`]); after a
+/// step that used it, up to [`SqpSettings::exact_hessian_hold`] times that violation.
 pub(super) fn curvature_in_use(
     settings: &SqpSettings,
     infeas: f64,
     history: &[IterationRecord],
 ) -> bool {
     infeas <= settings.exact_hessian_below
+        || (history.last().is_some_and(|r| r.hessian_shift.is_some())
+            && infeas <= settings.exact_hessian_hold * settings.exact_hessian_below)
         || settings
             .exact_hessian_on_stall
             .is_some_and(|rule| rule.stalled_at(history).is_some())
@@ -652,5 +655,15 @@ mod tests {
         // sticky: still in use at a violation above the rule's bound after the stall
         assert!(curvature_in_use(&settings, 0.5, &h));
         assert!(!curvature_in_use(&settings, 1e-2, &h[..4]));
+
+        // held after a step that used it: up to exact_hessian_hold × the switch
+        settings.exact_hessian_on_stall = None;
+        let mut after_exact = history(&[(1.0, 1e-4)]);
+        assert!(!curvature_in_use(&settings, 5e-3, &after_exact));
+        after_exact[0].hessian_shift = Some(0.0);
+        assert!(curvature_in_use(&settings, 5e-3, &after_exact));
+        assert!(!curvature_in_use(&settings, 2e-2, &after_exact));
+        settings.exact_hessian_hold = 1.0;
+        assert!(!curvature_in_use(&settings, 5e-3, &after_exact));
     }
 }
