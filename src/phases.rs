@@ -258,6 +258,19 @@ impl PhaseSequence {
             .collect()
     }
 
+    /// One check site `(continuous phase, interval, τ)` a third into the first interval of
+    /// every continuous phase an impact starts: where the contact forces build up from the
+    /// impact, and where they dip below zero between the nodes when only the nodes hold
+    /// them.
+    pub fn impact_sites(&self) -> Vec<(usize, usize, f64)> {
+        self.continuous_indices()
+            .into_iter()
+            .enumerate()
+            .filter(|&(_, i)| i > 0 && matches!(self.phases[i - 1], Phase::Impact { .. }))
+            .map(|(j, _)| (j, 0, 1.0 / 3.0))
+            .collect()
+    }
+
     /// Read a phase file (structure only; see [`resolve`](Self::resolve)).
     pub fn load(path: &Path) -> Result<Self, ModelError> {
         // a bundled name missing from the current folder is read from footfall's copy

@@ -63,7 +63,7 @@ fn seed_phase_graphs_transcribe_with_the_seed_interval_counts() {
         assert_eq!(cycle.continuous.len(), n_cont);
         let sites: Vec<(usize, usize, f64)> =
             after_impact.iter().map(|&j| (j, 0, 1.0 / 3.0)).collect();
-        assert_eq!(cycle.impact_sites(), sites, "{phases}");
+        assert_eq!(seq.impact_sites(), sites, "{phases}");
         let g = guess(&m, &seq, &sets);
         let ocp = cycle.ocp(&g, IntegratorSettings::default()).unwrap();
         let total: usize = ocp.phases.iter().map(|p| p.intervals).sum();

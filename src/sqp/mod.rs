@@ -264,9 +264,9 @@ pub struct SqpSettings {
     pub exact_hessian_on_stall: Option<StallSwitch>,
     /// Exact mode: once a step has used the constraint curvature, the next uses it too
     /// while the violation is at most this multiple of `exact_hessian_below` (default:
-    /// 10). A full exact step near the switch can raise the violation just above it;
-    /// answering with a Gauss–Newton step threw away the curvature's local convergence
-    /// and the steps alternated between the two Hessians.
+    /// 10). A full exact step near the switch can raise the violation just above it; a
+    /// Gauss–Newton step in reply throws away the curvature's local convergence, and the
+    /// steps alternate between the two Hessians.
     pub exact_hessian_hold: f64,
     /// How the exact mode keeps its QPs convex (default: augmented).
     pub exact_convexification: ExactConvexification,

@@ -576,9 +576,7 @@ pub fn track(
     // from the data, a refined solve starts with the impact sites; a kept run's solution
     // keeps the sites that run was checked with on the 1 ms grid
     if prob.refine && req.init.is_none() && prob.check_sites.is_empty() {
-        prob.check_sites = GaitCycle::new(&prob.model, &prob.setup.seq, &prob.sets)
-            .map_err(|e| anyhow!(e))?
-            .impact_sites();
+        prob.check_sites = prob.setup.seq.impact_sites();
     }
     for n in &prob.trial_notes {
         progress.note(n);

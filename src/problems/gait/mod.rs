@@ -634,21 +634,6 @@ impl<'m> GaitCycle<'m> {
         self.seq.gait.as_ref().map_or(0.8, |g| g.friction)
     }
 
-    /// One site `(continuous phase, interval, τ)` a third into the first interval of every
-    /// continuous phase an impact starts: where the contact forces build up from the
-    /// impact, and where they dip below zero between the nodes when only the nodes hold
-    /// them.
-    pub fn impact_sites(&self) -> Vec<(usize, usize, f64)> {
-        self.continuous
-            .iter()
-            .enumerate()
-            .filter(|(_, &i)| {
-                i > 0 && matches!(self.seq.phases[i - 1], crate::phases::Phase::Impact { .. })
-            })
-            .map(|(j, _)| (j, 0, 1.0 / 3.0))
-            .collect()
-    }
-
     /// The check points at every site `(continuous phase, interval, τ)` of `sites`
     /// ([`contact_checks`](Self::contact_checks) of each).
     pub fn checks_at(&self, sites: &[(usize, usize, f64)]) -> Vec<CheckPoint<'m>> {
