@@ -81,6 +81,8 @@ struct Progress {
     last_step: f64,
     /// Whether the observer has been told that the Gauss–Newton steps stalled.
     stall_told: bool,
+    /// Whether the observer said at the milestone to go on.
+    milestone_passed: bool,
 }
 
 /// The result of a solve that failed before its first iteration, at `w` (`n` variables,
@@ -332,6 +334,13 @@ impl<'a> Solver<'a> {
         }
         if !go_on {
             return Err(SqpStatus::Interrupted);
+        }
+        let milestone = settings.milestone_tol.filter(|_| !p.milestone_passed);
+        if milestone.is_some_and(|tol| kkt::converged(p.kkt, tol, elastic)) {
+            if !observer.milestone(&st.w) {
+                return Err(SqpStatus::Converged);
+            }
+            p.milestone_passed = true;
         }
         if iter == settings.max_iter {
             return Err(SqpStatus::MaxIterations);
@@ -607,6 +616,7 @@ impl Progress {
             kkt: f64::INFINITY,
             last_step: 0.0,
             stall_told: false,
+            milestone_passed: false,
         };
         if let Some(cp) = resume {
             p.nu = cp.nu.values();

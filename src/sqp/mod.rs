@@ -306,6 +306,13 @@ pub struct SqpSettings {
     /// curvature anyway.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub gauss_newton_check: bool,
+    /// A KKT tolerance looser than `tol_kkt` at which the solve asks its observer
+    /// ([`Observer::milestone`]) whether to go on (default: none). A solve whose solution
+    /// is checked elsewhere (the check-point rounds, `workflows::refine`) ends there when
+    /// the check adds constraints, and otherwise goes on in place to `tol_kkt`: a restart
+    /// would transcribe and evaluate its start point again.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub milestone_tol: Option<f64>,
     /// Fault injection for tests: the QP solves (numbered from 0 over the whole solve,
     /// elastic and second-order-correction QPs included) that fail as if Clarabel had
     /// stopped with a numerical error, so that the recovery path can be shown to work.
@@ -332,6 +339,7 @@ impl Default for SqpSettings {
             inexact_integration: 1e-5,
             violation_growth: None,
             gauss_newton_check: false,
+            milestone_tol: None,
             inject_qp_failures: Vec::new(),
         }
     }
@@ -626,6 +634,13 @@ pub trait Observer {
     /// A turn in the solve worth telling the user (e.g. that the Gauss–Newton steps
     /// stalled and the exact Hessian took over), before the iteration it affects.
     fn note(&mut self, _text: &str) {}
+    /// Called with the iterate at an iteration whose KKT residual is within
+    /// [`SqpSettings::milestone_tol`] (at every such iteration until it returns `true`):
+    /// whether the solve goes on to `tol_kkt`; `false` ends it there, converged at the
+    /// milestone's tolerance.
+    fn milestone(&mut self, _w: &[f64]) -> bool {
+        true
+    }
 }
 
 /// An observer that does nothing.

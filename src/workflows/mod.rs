@@ -33,7 +33,7 @@ use crate::sqp::{IterationRecord, SqpStatus};
 use anyhow::{bail, Context};
 use std::path::{Path, PathBuf};
 
-pub use session::{solve_interruptibly, solve_interruptibly_warm};
+pub use session::{solve_interruptibly, solve_interruptibly_warm, Judge};
 
 /// Where a workflow reports what it is doing.
 ///

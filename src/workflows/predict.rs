@@ -244,7 +244,7 @@ pub fn predict(
         &build,
         &[],
         &w0,
-        &mut |tr, start, t, n| solve_staged(tr, start, t, n, &sqp_settings, progress),
+        &mut |tr, round| solve_staged(tr, round, &sqp_settings, progress),
         progress,
     )?;
     let mut ocp = build()?;
@@ -263,8 +263,8 @@ pub fn predict(
     Ok((out, res))
 }
 
-/// One round of a prediction's solve from `(w, lambda0)`, to `tol_kkt` within `max_iter`
-/// iterations. A failed line search of the exact Hessian goes on once from that iterate
+/// One round of a prediction's solve ([`super::refine::Round`]). A failed line search of
+/// the exact Hessian goes on once from that iterate
 /// with block BFGS. Near a stationary point the inertia correction can shift the QP's
 /// Hessian by far more than its curvature, and the QP's step and multipliers with it:
 /// the CI's double-circle prediction stalled at KKT 3.7e-3 with steps of 1e-5, its
@@ -272,25 +272,24 @@ pub fn predict(
 /// at once.
 fn solve_staged(
     tr: &Transcription,
-    (w, lambda0): super::refine::RoundStart<'_>,
-    tol_kkt: f64,
-    max_iter: usize,
+    round: super::refine::Round<'_>,
     sqp_settings: &SqpSettings,
     progress: &dyn Progress,
 ) -> anyhow::Result<SqpResult> {
     let sqp_settings = SqpSettings {
-        tol_kkt,
-        max_iter,
+        tol_kkt: round.tol_kkt,
+        max_iter: round.max_iter,
+        milestone_tol: round.milestone,
         ..sqp_settings.clone()
     };
+    let judge = round.judge;
     let first = super::solve_interruptibly_warm(
         tr,
-        w,
-        // the constraints' multipliers only (the bounds' too would move every
-        // prediction's iterates; not re-checked yet)
-        lambda0.map(|ws| crate::sqp::WarmStart::constraints(ws.lambda)),
+        round.w0,
+        None,
         &sqp_settings,
         progress,
+        Some(&mut *judge),
     )?;
     if first.status != SqpStatus::LineSearchFailure || sqp_settings.hessian != HessianMode::Exact {
         return Ok(first);
@@ -308,7 +307,7 @@ fn solve_staged(
         hessian: HessianMode::Bfgs,
         ..sqp_settings.clone()
     };
-    let second = super::solve_interruptibly(tr, &first.w, &rest, progress)?;
+    let second = super::solve_interruptibly_warm(tr, &first.w, None, &rest, progress, Some(judge))?;
     Ok(first.followed_by(second))
 }
 

@@ -22,19 +22,30 @@ pub const MAX_ROUNDS: usize = 6;
 /// Step of the validity grid (s).
 pub const GRID_STEP: f64 = 1e-3;
 
-/// KKT tolerance of a round that may still be followed by another: its solution only
-/// says where check points are needed, and the next round moves it anyway. Solving it
-/// to the run's tolerance spent 5–11 iterations of the bundled ellipse track's 29–36 on
-/// a problem it then left. A round that adds nothing is finished at the run's
-/// tolerance, and checked again.
+/// KKT tolerance at which a round that may still be followed by another is judged on the
+/// validity grid: a solution that needs more check points there ends the round (the next
+/// round moves it anyway), and one that needs none goes on in place to the run's
+/// tolerance, and is checked again. Solving every round to the run's tolerance spent 5–11
+/// iterations of the bundled ellipse track's 29–36 on problems it then left.
 pub const ROUND_TOL: f64 = 1e-3;
 
 /// Where check points hold the contact constraints: (continuous phase, interval, τ).
 pub type CheckSites = Vec<(usize, usize, f64)>;
 
-/// Where a round starts: the point and, for a round that only finishes the last one's
-/// problem, that round's multipliers (constraints' and bounds').
-pub type RoundStart<'a> = (&'a [f64], Option<crate::sqp::WarmStart<'a>>);
+/// One round's solve, as [`Refinement::solve`] asks for it.
+pub struct Round<'a> {
+    /// The start point: the data's guess, or the last round's solution.
+    pub w0: &'a [f64],
+    /// The run's KKT tolerance.
+    pub tol_kkt: f64,
+    /// The iterations the round may make (what the earlier rounds left).
+    pub max_iter: usize,
+    /// The KKT tolerance at which the solve asks `judge` whether to go on
+    /// ([`crate::sqp::SqpSettings::milestone_tol`]).
+    pub milestone: Option<f64>,
+    /// Whether the solve at the milestone goes on, given its iterate.
+    pub judge: super::Judge<'a>,
+}
 
 /// What the problem needs for its check points and the validity grid.
 pub struct Refinement<'c, 'm> {
@@ -56,29 +67,21 @@ pub struct Refinement<'c, 'm> {
     pub tol_kkt: f64,
 }
 
+/// A solution's validity on the grid and the check sites it asks for beyond those held.
+type Verdict = (validity::Validity, CheckSites);
+
 impl<'m> Refinement<'_, 'm> {
     /// Solve with `solve` (on the problem `build` makes, with the check points so far, from
     /// the last solution), starting with the check points at `initial` and adding more
-    /// while the re-integration breaks a contact constraint. `solve`'s last argument is the
-    /// KKT tolerance of the round: [`ROUND_TOL`] (or the run's, if looser) for a round that
-    /// may be followed by another, the run's own otherwise; its last, the iterations the
-    /// round may make (what the earlier rounds left of [`Refinement::max_iter`]); its
-    /// second, for a round that only finishes the last one's problem at the run's
-    /// tolerance, that round's multipliers (the caller may start from them instead of
-    /// zero). Returns
-    /// the check sites and the result of the last solve, its history following the
-    /// earlier rounds'.
+    /// while the re-integration breaks a contact constraint. A round that may be followed
+    /// by another is judged at [`ROUND_TOL`] ([`Round::milestone`]). Returns the check
+    /// sites and the result of the last solve, its history following the earlier rounds'.
     pub fn solve<'o>(
         &self,
         build: &dyn Fn() -> anyhow::Result<Ocp<'o>>,
         initial: &[(usize, usize, f64)],
         w0: &[f64],
-        solve: &mut dyn FnMut(
-            &Transcription,
-            RoundStart<'_>,
-            f64,
-            usize,
-        ) -> anyhow::Result<SqpResult>,
+        solve: &mut dyn FnMut(&Transcription, Round<'_>) -> anyhow::Result<SqpResult>,
         progress: &dyn Progress,
     ) -> anyhow::Result<(CheckSites, SqpResult)>
     where
@@ -87,42 +90,42 @@ impl<'m> Refinement<'_, 'm> {
         let mut sites: CheckSites = initial.to_vec();
         let mut w = w0.to_vec();
         let mut merged: Option<SqpResult> = None;
-        // whether the last round was solved to ROUND_TOL only
-        let mut finishing = false;
         for round in 0..=MAX_ROUNDS {
             let mut ocp = build()?;
             ocp.checks = self.cycle.checks_at(&sites);
             let tr = Transcription::new(&ocp)
                 .context("transcribing the problem with its check points")?;
-            let loose = self.enabled && !finishing && round < MAX_ROUNDS;
-            let tol = if loose {
-                ROUND_TOL.max(self.tol_kkt)
-            } else {
-                self.tol_kkt
-            };
+            let loose = self.enabled && round < MAX_ROUNDS;
             // the iteration limit is the whole solve's, not each round's
             let done = merged
                 .as_ref()
                 .map_or(0, |m| m.history.len().saturating_sub(1));
-            // a finishing round continues the last round's problem: its multipliers (the
-            // merged result's are the last solve's)
-            let warm = merged
-                .as_ref()
-                .filter(|_| finishing)
-                .map(|m| crate::sqp::WarmStart {
-                    lambda: &m.lambda,
-                    nu: &m.nu,
-                });
-            let res = solve(&tr, (&w, warm), tol, self.max_iter.saturating_sub(done))?;
+            let mut judged: Option<(Vec<f64>, anyhow::Result<Verdict>)> = None;
+            let mut judge = |w: &[f64]| {
+                let verdict = self.judge(&tr, w, &sites);
+                let go_on = matches!(&verdict, Ok((_, new)) if new.is_empty());
+                judged = Some((w.to_vec(), verdict));
+                go_on
+            };
+            let res = solve(
+                &tr,
+                Round {
+                    w0: &w,
+                    tol_kkt: self.tol_kkt,
+                    max_iter: self.max_iter.saturating_sub(done),
+                    milestone: (loose && ROUND_TOL > self.tol_kkt).then_some(ROUND_TOL),
+                    judge: &mut judge,
+                },
+            )?;
             let converged = res.status == SqpStatus::Converged;
+            // ended at the milestone: the judge asked for check points
+            let short = converged && !(res.kkt <= self.tol_kkt);
             let next = res.w.clone();
             let mut all = match merged {
                 None => res,
                 Some(first) => first.followed_by(res),
             };
             let used = all.history.len().saturating_sub(1);
-            // whether the solution is still short of the run's own tolerance
-            let short = loose && converged && !(all.kkt <= self.tol_kkt);
             if short && used >= self.max_iter {
                 // converged only to the round's tolerance, with no iterations left
                 all.status = SqpStatus::MaxIterations;
@@ -131,37 +134,18 @@ impl<'m> Refinement<'_, 'm> {
             if !converged || !self.enabled || round == MAX_ROUNDS || used >= self.max_iter {
                 break;
             }
-            let solution = GaitSolution::from_nlp(&tr, &next, &self.cycle.continuous, self.t0);
-            let found = self.validity(&solution)?;
-            // one check point per instant: a pulling ground and a broken cone are often
-            // worst at the same instant
-            let same = |o: &(usize, usize, f64), s: &(usize, usize, f64)| {
-                o.0 == s.0 && o.1 == s.1 && (o.2 - s.2).abs() < 1e-3
+            let (found, new) = match judged {
+                Some((at, verdict)) if at == next => verdict?,
+                _ => self.judge(&tr, &next, &sites)?,
             };
-            let mut new: CheckSites = Vec::new();
-            for s in found
-                .refinement()
-                .iter()
-                .filter_map(|&(set, t)| locate_instant(&solution, set, t))
-            {
-                if !sites.iter().chain(&new).any(|o| same(o, &s)) {
-                    new.push(s);
-                }
-            }
             if new.is_empty() {
-                if !short {
-                    break;
-                }
-                // valid at the round's tolerance: finish at the run's, and check again
-                finishing = true;
-                w = next;
-                continue;
+                break;
             }
-            finishing = false;
             {
                 for v in &found.violations {
                     note!(progress, "between the nodes: {v}");
                 }
+                let solution = GaitSolution::from_nlp(&tr, &next, &self.cycle.continuous, self.t0);
                 let at: Vec<String> = new
                     .iter()
                     .map(|&(j, k, tau)| {
@@ -180,6 +164,33 @@ impl<'m> Refinement<'_, 'm> {
             w = next;
         }
         Ok((sites, merged.ok_or_else(|| anyhow!("no solve was made"))?))
+    }
+
+    /// The validity on the grid of the solution `w` of `tr`, and the check sites it asks
+    /// for beyond `sites`: one per instant (a pulling ground and a broken cone are often
+    /// worst at the same instant).
+    fn judge(
+        &self,
+        tr: &Transcription,
+        w: &[f64],
+        sites: &[(usize, usize, f64)],
+    ) -> anyhow::Result<Verdict> {
+        let solution = GaitSolution::from_nlp(tr, w, &self.cycle.continuous, self.t0);
+        let found = self.validity(&solution)?;
+        let same = |o: &(usize, usize, f64), s: &(usize, usize, f64)| {
+            o.0 == s.0 && o.1 == s.1 && (o.2 - s.2).abs() < 1e-3
+        };
+        let mut new: CheckSites = Vec::new();
+        for s in found
+            .refinement()
+            .iter()
+            .filter_map(|&(set, t)| locate_instant(&solution, set, t))
+        {
+            if !sites.iter().chain(&new).any(|o| same(o, &s)) {
+                new.push(s);
+            }
+        }
+        Ok((found, new))
     }
 
     /// The validity of `solution` on the 1 ms grid.

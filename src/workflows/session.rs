@@ -97,12 +97,18 @@ pub fn create_checkpointed_run_folder(out: &Path, overwrite: bool) -> anyhow::Re
 
 /// Wraps an SQP observer: a stop asked ends the solve (at the latest after the current
 /// iteration), and checkpoints go to the run's staging folder.
-struct Interruptible<'a> {
+struct Interruptible<'a, 'j> {
     progress: &'a dyn Progress,
     checkpoints: Option<(PathBuf, String)>,
+    /// The judge at the solve's milestone ([`crate::sqp::Observer::milestone`]).
+    judge: Option<Judge<'j>>,
 }
 
-impl Observer for Interruptible<'_> {
+/// Whether a solve at its milestone ([`SqpSettings::milestone_tol`]) goes on, given its
+/// iterate.
+pub type Judge<'a> = &'a mut dyn FnMut(&[f64]) -> bool;
+
+impl Observer for Interruptible<'_, '_> {
     fn iteration(&mut self, rec: &IterationRecord) -> bool {
         self.progress.iteration(rec);
         !crate::interrupt::requested()
@@ -112,6 +118,9 @@ impl Observer for Interruptible<'_> {
     }
     fn note(&mut self, text: &str) {
         self.progress.note(text);
+    }
+    fn milestone(&mut self, w: &[f64]) -> bool {
+        self.judge.as_mut().is_none_or(|judge| judge(w))
     }
     fn checkpoint(&mut self, state: &SqpCheckpoint) {
         let Some((dir, name)) = &self.checkpoints else {
@@ -140,7 +149,7 @@ pub fn solve_interruptibly(
     settings: &SqpSettings,
     progress: &dyn Progress,
 ) -> anyhow::Result<SqpResult> {
-    solve_interruptibly_warm(nlp, w0, None, settings, progress)
+    solve_interruptibly_warm(nlp, w0, None, settings, progress, None)
 }
 
 /// [`solve_interruptibly`] from the multipliers `warm` ([`crate::sqp::solve_warm`]).
@@ -150,6 +159,7 @@ pub fn solve_interruptibly_warm(
     warm: Option<crate::sqp::WarmStart<'_>>,
     settings: &SqpSettings,
     progress: &dyn Progress,
+    judge: Option<Judge<'_>>,
 ) -> anyhow::Result<SqpResult> {
     let index = SOLVES.fetch_add(1, Ordering::SeqCst);
     let (resume, checkpoints) = {
@@ -164,6 +174,7 @@ pub fn solve_interruptibly_warm(
     let mut observer = Interruptible {
         progress,
         checkpoints,
+        judge,
     };
     let res = match &resume {
         Some(cp) => {

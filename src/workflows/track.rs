@@ -346,7 +346,7 @@ impl TrackingProblem {
         progress: &dyn Progress,
     ) -> anyhow::Result<(crate::sqp::SqpResult, GaitSolution)> {
         self.with_transcription(|tr, cycle, w0| {
-            self.solve_staged(tr, cycle, (&w0, None), settings, progress, |tr, res| {
+            self.solve_staged(tr, cycle, &w0, settings, progress, None, |tr, res| {
                 let mut sol =
                     GaitSolution::from_nlp(tr, &res.w, &cycle.continuous, self.setup.window.0);
                 self.setup.place(&self.model, &mut sol);
@@ -355,8 +355,8 @@ impl TrackingProblem {
         })
     }
 
-    /// Solve on `tr` from `w0` (and the multipliers `warm`, if given) and hand the result,
-    /// with the transcription it was last iterated on, to `finish`. When the line search
+    /// Solve on `tr` from `w0` (asking `judge` at the milestone, if any) and hand the
+    /// result, with the transcription it was last iterated on, to `finish`. When the line search
     /// fails, the solve goes on once from that iterate and its multipliers with more
     /// precise integration, because near an optimum the integrator's error is what stops
     /// it:
@@ -372,12 +372,14 @@ impl TrackingProblem {
         &self,
         tr: &Transcription,
         cycle: &GaitCycle,
-        (w0, warm): super::refine::RoundStart<'_>,
+        w0: &[f64],
         settings: &SqpSettings,
         progress: &dyn Progress,
+        mut judge: Option<super::Judge<'_>>,
         finish: impl FnOnce(&Transcription, crate::sqp::SqpResult) -> anyhow::Result<R>,
     ) -> anyhow::Result<R> {
-        let first = super::solve_interruptibly_warm(tr, w0, warm, settings, progress);
+        let first =
+            super::solve_interruptibly_warm(tr, w0, None, settings, progress, reborrow(&mut judge));
         self.count_integration(tr);
         let first = first?;
         if first.status != crate::sqp::SqpStatus::LineSearchFailure {
@@ -422,13 +424,13 @@ impl TrackingProblem {
             ..settings.clone()
         };
         // from the first stage's multipliers: the same problem, integrated more precisely,
-        // keeps its constraints' curvature and the bounds it held (as a finishing round of
-        // check points does, `track/write.rs`)
+        // keeps its constraints' curvature and the bounds it held
         let warm = crate::sqp::WarmStart {
             lambda: &first.lambda,
             nu: &first.nu,
         };
-        let second = super::solve_interruptibly_warm(&tr2, &first.w, Some(warm), &rest, progress);
+        let second =
+            super::solve_interruptibly_warm(&tr2, &first.w, Some(warm), &rest, progress, judge);
         self.count_integration(&tr2);
         finish(&tr2, first.followed_by(second?))
     }
@@ -451,6 +453,14 @@ impl TrackingProblem {
         let mut total = self.integration.get();
         total += tr.integration_totals();
         self.integration.set(total);
+    }
+}
+
+/// The judge `judge` holds, for one solve of several.
+fn reborrow<'s>(judge: &'s mut Option<super::Judge<'_>>) -> Option<super::Judge<'s>> {
+    match judge {
+        Some(j) => Some(&mut **j),
+        None => None,
     }
 }
 

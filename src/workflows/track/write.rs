@@ -53,19 +53,23 @@ impl TrackingProblem {
                 .ocp(&cycle, &self.model, &self.sets, self.integrator.clone())
                 .map_err(|e| anyhow!(e))
         };
-        // a finishing round starts from the last round's multipliers (constraints' and
-        // bounds'): from zero, the compliant foot's finishing rounds began with an inertia
-        // shift of 0.16 that took them 9 iterations to shed
-        let mut solve = |tr: &Transcription,
-                         (w, warm): crate::workflows::refine::RoundStart<'_>,
-                         tol_kkt: f64,
-                         max_iter: usize| {
+        let mut solve = |tr: &Transcription, round: crate::workflows::refine::Round<'_>| {
             let settings = SqpSettings {
-                tol_kkt,
-                max_iter,
+                tol_kkt: round.tol_kkt,
+                max_iter: round.max_iter,
+                milestone_tol: round.milestone,
                 ..settings.clone()
             };
-            self.solve_staged(tr, &cycle, (w, warm), &settings, progress, |_, res| Ok(res))
+            let judge = Some(round.judge);
+            self.solve_staged(
+                tr,
+                &cycle,
+                round.w0,
+                &settings,
+                progress,
+                judge,
+                |_, res| Ok(res),
+            )
         };
         let (sites, res) =
             refinement.solve(&build, &self.check_sites, &w0, &mut solve, progress)?;
