@@ -313,11 +313,18 @@ pub const EXACT_BELOW_KKT: f64 = 1e-3;
 ///    integration keeps its noise below the line search's (at 1e-8 both Hessians stall
 ///    at KKT 1e-5 to 1e-6 with every step rejected, at 1e-10 the exact one at 3e-5;
 ///    at 1e-12 it converges in about 10 iterations).
+///
+/// In both the sensitivities are integrated at a tenth of the stage's KKT tolerance
+/// ([`IntegratorSettings::sensitivities_for_kkt_tol`]): from the data guess, 174 block
+/// BFGS iterations took 40 s instead of 53 s with them at the states' tolerance, and the
+/// exact stage 11 iterations of 1.1 s instead of 9 of 1.5 s, to the same optimum.
 pub fn stages(tol: f64) -> [SolveStage; 2] {
     let base = IntegratorSettings::default();
     [
         SolveStage {
-            integrator: base.clone(),
+            integrator: base
+                .clone()
+                .sensitivities_for_kkt_tol(tol.max(EXACT_BELOW_KKT)),
             settings: SqpSettings {
                 tol_kkt: tol.max(EXACT_BELOW_KKT),
                 hessian: HessianMode::Bfgs,
@@ -329,7 +336,8 @@ pub fn stages(tol: f64) -> [SolveStage; 2] {
                 rtol: STAGE2_TOL,
                 atol: STAGE2_TOL,
                 ..base
-            },
+            }
+            .sensitivities_for_kkt_tol(tol),
             settings: SqpSettings {
                 tol_kkt: tol,
                 hessian: HessianMode::Exact,

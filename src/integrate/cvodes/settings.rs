@@ -85,6 +85,18 @@ impl Default for IntegratorSettings {
 }
 
 impl IntegratorSettings {
+    /// These settings with the sensitivities at a tenth of the KKT tolerance `tol_kkt` a
+    /// solve is held to, never tighter than the states: the KKT residual is computed from
+    /// the sensitivities, the function values a line search compares from the states, and
+    /// looser sensitivities take fewer steps.
+    pub fn sensitivities_for_kkt_tol(self, tol_kkt: f64) -> Self {
+        let want = 0.1 * tol_kkt;
+        Self {
+            sens_tol: (want > self.rtol).then_some(want),
+            ..self
+        }
+    }
+
     /// Check every option; [`Integrator::new`](super::Integrator::new) calls this.
     pub fn validate(&self) -> Result<(), IntegratorError> {
         let bad = |field: &'static str, reason: String| {
