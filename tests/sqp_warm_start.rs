@@ -1,7 +1,9 @@
 //! A solve started with the multipliers of the problem it continues (`sqp::solve_warm`,
-//! used when a round of check points only has to be finished at the run's tolerance)
-//! starts with the curvature of the Lagrangian, not the objective's alone, and holds the
-//! bounds the problem held.
+//! used when a solve goes on at a tighter integrator tolerance) starts with the curvature
+//! of the Lagrangian, not the objective's alone, and holds the bounds the problem held.
+//! A solve asked at its milestone (`SqpSettings::milestone_tol`, where a round of check
+//! points is judged) ends there when told to, and otherwise goes on in place as if it had
+//! not been asked.
 //!
 //! The problem: minimise −x − y on the circle x² + y² = 2, whose solution is (1, 1) with
 //! the multiplier λ = ½. The objective is linear, so its Hessian is zero; the Lagrangian's
@@ -10,8 +12,8 @@
 //! first QP sees no curvature along the circle, and it needs more.
 
 use footfall::sqp::{
-    self, EvalError, ExactConvexification, HessianMode, Nlp, NlpEval, Silent, SqpSettings,
-    SqpStatus, WarmStart,
+    self, EvalError, ExactConvexification, HessianMode, IterationRecord, Nlp, NlpEval, Observer,
+    Silent, SqpSettings, SqpStatus, WarmStart,
 };
 
 /// A linear objective on a curve of two variables, one equality row.
@@ -347,4 +349,82 @@ fn a_continuation_that_fails_at_its_start_keeps_the_first_solves_point() {
     assert_eq!(joined.objective.to_bits(), objective.to_bits());
     assert_eq!(joined.kkt.to_bits(), kkt.to_bits());
     assert_eq!(joined.history.len(), 4);
+}
+
+/// An observer that answers `go_on` at the milestone and keeps the iterates it was asked
+/// about.
+struct Judge {
+    go_on: bool,
+    asked: Vec<Vec<f64>>,
+}
+
+impl Observer for Judge {
+    fn iteration(&mut self, _: &IterationRecord) -> bool {
+        true
+    }
+    fn milestone(&mut self, w: &[f64]) -> bool {
+        self.asked.push(w.to_vec());
+        self.go_on
+    }
+}
+
+/// The circle's solve from a start far enough away to take several iterations, with a
+/// milestone at a KKT residual of 1e-3 and `judge` as its observer.
+fn solve_with_milestone(judge: &mut Judge) -> sqp::SqpResult {
+    let angle = std::f64::consts::FRAC_PI_4 + 0.6;
+    let w0 = [2f64.sqrt() * angle.cos(), 2f64.sqrt() * angle.sin()];
+    let settings = SqpSettings {
+        milestone_tol: Some(1e-3),
+        ..settings()
+    };
+    sqp::solve(&OnA::Circle, &w0, &settings, judge)
+}
+
+#[test]
+fn a_solve_told_to_end_at_its_milestone_ends_there_converged_to_its_tolerance() {
+    let mut judge = Judge {
+        go_on: false,
+        asked: Vec::new(),
+    };
+    let res = solve_with_milestone(&mut judge);
+    assert_eq!(res.status, SqpStatus::Converged, "{res:?}");
+    assert!(res.kkt <= 1e-3 && res.kkt > 1e-10, "KKT {:e}", res.kkt);
+    assert_eq!(
+        judge.asked,
+        vec![res.w.clone()],
+        "asked once, at the point it ends at"
+    );
+    // the KKT residual was above the milestone at every earlier iteration
+    let history = &res.history;
+    assert!(history.len() >= 3, "{} iterations", history.len() - 1);
+    assert!(history[..history.len() - 1].iter().all(|r| r.kkt > 1e-3));
+}
+
+#[test]
+fn a_solve_told_to_go_on_at_its_milestone_follows_the_iterates_of_one_not_asked() {
+    let mut judge = Judge {
+        go_on: true,
+        asked: Vec::new(),
+    };
+    let res = solve_with_milestone(&mut judge);
+    let angle = std::f64::consts::FRAC_PI_4 + 0.6;
+    let w0 = [2f64.sqrt() * angle.cos(), 2f64.sqrt() * angle.sin()];
+    let plain = sqp::solve(&OnA::Circle, &w0, &settings(), &mut Silent);
+    assert_eq!(res.status, SqpStatus::Converged, "{res:?}");
+    assert!(res.kkt <= 1e-10, "KKT {:e}", res.kkt);
+    assert_eq!(judge.asked.len(), 1, "asked once, then not again");
+    let asked_at = res
+        .history
+        .iter()
+        .position(|r| r.kkt <= 1e-3)
+        .expect("an iteration within the milestone");
+    assert!(
+        asked_at < res.history.len() - 1,
+        "the milestone before the end"
+    );
+    assert_eq!(res.w, plain.w, "the same solution, bit for bit");
+    assert_eq!(res.history.len(), plain.history.len());
+    for (a, b) in res.history.iter().zip(&plain.history) {
+        assert_eq!(a.kkt.to_bits(), b.kkt.to_bits(), "iteration {}", a.iter);
+    }
 }
