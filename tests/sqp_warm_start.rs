@@ -396,7 +396,7 @@ fn a_solve_told_to_end_at_its_milestone_ends_there_converged_to_its_tolerance() 
     );
     // the KKT residual was above the milestone at every earlier iteration
     let history = &res.history;
-    assert!(history.len() >= 3, "{} iterations", history.len() - 1);
+    assert!(history.len() >= 3, "{} iterations: {history:?}", history.len() - 1);
     assert!(history[..history.len() - 1].iter().all(|r| r.kkt > 1e-3));
 }
 

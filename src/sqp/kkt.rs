@@ -32,7 +32,8 @@ pub(super) struct KktPoint<'a> {
 /// The KKT residual: the largest of the scaled stationarity
 /// `‖∇f + Jᵀλ + ν‖∞ / s_d` (IPOPT's scaling, `s_d = max(1, ‖(λ, ν)‖₁ / ((m + n) 100))`),
 /// the constraint violation and the scaled complementarity of the inequality rows
-/// (`|λ_i|` times the distance to the bound its sign says is active).
+/// (`|λ_i|` times the distance to the bound its sign says is active) and of the variables'
+/// bounds ([`bound_complementarity`]).
 ///
 /// A variable at one of its bounds (within [`AT_BOUND`] of it) may take the bound
 /// multiplier that cancels `∇f + Jᵀλ` there, when its sign fits that bound, instead of
@@ -85,7 +86,33 @@ pub(super) fn residual(p: &KktPoint<'_>) -> f64 {
             }
         })
         .fold(0.0, f64::max);
-    stat_inf.max(p.infeasibility).max(compl / sd)
+    stat_inf
+        .max(p.infeasibility)
+        .max(compl / sd)
+        .max(bound_complementarity(p) / sd)
+}
+
+/// The largest `|ν_i|` times the distance from `w_i` to the bound the sign of `ν_i` says
+/// is active (ν ≤ 0 at a lower bound, ν ≥ 0 at an upper one; 0 where the point's bounds
+/// are not looked at). A QP step that runs into a bound the point is far from gives that
+/// bound a multiplier which cancels `∇f + Jᵀλ` in the stationarity: without this term a
+/// linear objective's first iterate, nowhere near its optimum, read 1e-8.
+fn bound_complementarity(p: &KktPoint<'_>) -> f64 {
+    if p.w.is_empty() {
+        return 0.0;
+    }
+    p.nu.iter()
+        .zip(p.w)
+        .zip(p.w_lb.iter().zip(p.w_ub))
+        .map(|((&v, &w), (&lb, &ub))| {
+            let bound = if v < 0.0 { lb } else { ub };
+            if v == 0.0 || !bound.is_finite() {
+                0.0
+            } else {
+                (v * (w - bound)).abs()
+            }
+        })
+        .fold(0.0, f64::max)
 }
 
 /// How close to a bound (relative to `max(1, |bound|)`) a variable counts as at it for
@@ -224,6 +251,30 @@ mod tests {
         // ∇f + Jᵀλ = (0.8 − 1.5, 1.2 − 1.5) = (−0.7, −0.3); y's −0.3 points up, away
         let r = at(0.6, -1.5, 0.0);
         assert!((r - 0.7).abs() < 1e-12, "{r}");
+    }
+
+    /// At the feasible (0.7, 0.3), not optimal, λ = (−1, 0) leaves ∇f + Jᵀλ = (0.4, −0.4),
+    /// which ν = (−0.4, 0.4) cancels: the multipliers of a QP step that ran into x ≥ −10
+    /// and y ≤ 10. The point is 10.7 and 9.7 from those bounds, so their complementarity
+    /// is 0.4 · 10.7 = 4.28, the residual.
+    #[test]
+    fn bound_multipliers_of_bounds_the_point_is_far_from_do_not_make_it_stationary() {
+        let w = [0.7, 0.3];
+        let (lambda, nu) = ([-1.0, 0.0], [-0.4, 0.4]);
+        let mut s = Default::default();
+        let p = point(w, &lambda, &nu, &mut s);
+        assert!(
+            residual(&p) < 1e-15,
+            "the bounds not looked at: {}",
+            residual(&p)
+        );
+        let r = residual(&KktPoint {
+            w: &w,
+            w_lb: &[-10.0, -10.0],
+            w_ub: &[10.0, 10.0],
+            ..p
+        });
+        assert!((r - 0.4 * 10.7).abs() < 1e-12, "{r}");
     }
 
     #[test]
