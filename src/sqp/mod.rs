@@ -299,11 +299,11 @@ pub struct SqpSettings {
     /// curvature, most of a compliant foot's evaluation (the gain trial at 600 Hz: 3.4 s
     /// of 4.5 s), where a solve starts at a kept solution of its own problem, as a
     /// diagnosis's clock-profile points do from an earlier diagnosis's (`diagnose
-    /// --start`). Off where a looser round is followed by a tighter one (check-point
-    /// rounds, `workflows::refine`): there the Gauss–Newton multipliers' residual often
-    /// meets the loose tolerance and not the tight one (the gain trial's kept track:
-    /// 2.9e-5 against the exact QP's 4.7e-6), and the second round then needs the
-    /// curvature anyway.
+    /// --start`). Off where a solve is judged at a looser tolerance and then goes on to a
+    /// tighter one (check-point rounds, `workflows::refine`): there the Gauss–Newton
+    /// multipliers' residual often meets the loose tolerance and not the tight one (the
+    /// gain trial's kept track: 2.9e-5 against the exact QP's 4.7e-6), and the solve then
+    /// needs the curvature anyway.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub gauss_newton_check: bool,
     /// A KKT tolerance looser than `tol_kkt` at which the solve asks its observer
