@@ -1,12 +1,14 @@
 //! Criterion benchmarks of the OCP engine on the generic problems (same definitions as the
 //! CasADi peer of the cart-pole and five-link biped): one forward-sensitivity sweep over all intervals,
 //! one QP subproblem, and full solves from the problem's initial guess; and the
-//! per-iteration evaluations of the CasADi gait peer's tracking problem.
+//! per-iteration evaluations and the whole solve of the CasADi gait peer's tracking
+//! problem.
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use footfall::integrate::IntegratorSettings;
 use footfall::ocp::Transcription;
 use footfall::problems::benchmarks::{read_problem_json, Benchmark};
+use footfall::problems::peer_gait::stages;
 use footfall::sqp::qp::{self, QpData, Triplets};
 use footfall::sqp::{self, HessianMode, Nlp, Silent, SqpSettings};
 use std::time::Duration;
@@ -97,10 +99,31 @@ fn bench(c: &mut Criterion) {
     }
 }
 
+/// The CasADi gait peer's tracking problem solved from its data guess in the two stages
+/// `footfall solve` takes (`problems::peer_gait::stages`): the results of both.
+fn peer_solve(bench: &Benchmark) -> (sqp::SqpResult, sqp::SqpResult) {
+    let [first, second] = stages(1e-6);
+    let r1 = bench
+        .with_ocp(first.integrator.clone(), |ocp| {
+            let tr = Transcription::new(ocp).expect("transcription");
+            let (_, _, w0) = tr.variable_bounds_and_guess();
+            sqp::solve(&tr, &w0, &first.settings, &mut Silent)
+        })
+        .expect("ocp");
+    let r2 = bench
+        .with_ocp(second.integrator.clone(), |ocp| {
+            let tr = Transcription::new(ocp).expect("transcription");
+            sqp::solve(&tr, &r1.w, &second.settings, &mut Silent)
+        })
+        .expect("ocp");
+    (r1, r2)
+}
+
 /// The CasADi gait peer's tracking problem: what one SQP iteration costs at the data
 /// guess (the sweep with first-order sensitivities of all 50 intervals, the same with the
-/// exact Hessian of the Lagrangian, and the plain sweep of a line-search trial). The whole
-/// solve (about 185 iterations in two stages) is measured by `footfall solve`.
+/// exact Hessian of the Lagrangian, and the plain sweep of a line-search trial), and the
+/// whole solve from the data guess as `footfall solve` takes it (about 50 s a sample, ten
+/// samples: pick it with a filter, `cargo bench --bench ocp -- gait_track_ellipse/full_solve`).
 fn gait(c: &mut Criterion) {
     let bench = Benchmark::load(std::path::Path::new(
         "problems/peer_gait_track_ellipse.json",
@@ -125,6 +148,31 @@ fn gait(c: &mut Criterion) {
             g.finish();
         })
         .expect("ocp");
+    let mut g = c.benchmark_group("gait_track_ellipse");
+    // ten samples of one solve each (criterion's least)
+    g.sample_size(10).measurement_time(Duration::from_secs(60));
+    // criterion calls the routine again for each round of samples: the first run reports
+    let reported = std::cell::Cell::new(false);
+    g.bench_function("full_solve", |b| {
+        b.iter(|| {
+            let (r1, r2) = peer_solve(&bench);
+            if !reported.replace(true) {
+                for (stage, r) in [("block BFGS", &r1), ("exact Hessian", &r2)] {
+                    eprintln!(
+                        "{stage}: {} after {} iterations, J = {:.9}, KKT {:.2e}; {:.1} s: integration {:.1} s, QP {:.1} s",
+                        r.status,
+                        r.history.len().saturating_sub(1),
+                        r.objective,
+                        r.kkt,
+                        r.seconds,
+                        r.timings.evaluation_s,
+                        r.timings.qp_s
+                    );
+                }
+            }
+        })
+    });
+    g.finish();
 }
 
 criterion_group!(benches, bench, gait);
