@@ -368,24 +368,34 @@ impl Observer for Judge {
     }
 }
 
-/// The circle's solve from a start far enough away to take several iterations, with a
-/// milestone at a KKT residual of 1e-3 and `judge` as its observer.
-fn solve_with_milestone(judge: &mut Judge) -> sqp::SqpResult {
+impl Judge {
+    fn answering(go_on: bool) -> Self {
+        Self {
+            go_on,
+            asked: Vec::new(),
+        }
+    }
+}
+
+/// A start on the circle far enough from the solution to take several iterations.
+fn far_start() -> [f64; 2] {
     let angle = std::f64::consts::FRAC_PI_4 + 0.6;
-    let w0 = [2f64.sqrt() * angle.cos(), 2f64.sqrt() * angle.sin()];
+    [2f64.sqrt() * angle.cos(), 2f64.sqrt() * angle.sin()]
+}
+
+/// The circle's solve from [`far_start`], with a milestone at a KKT residual of 1e-3 and
+/// `judge` as its observer.
+fn solve_with_milestone(judge: &mut Judge) -> sqp::SqpResult {
     let settings = SqpSettings {
         milestone_tol: Some(1e-3),
         ..settings()
     };
-    sqp::solve(&OnA::Circle, &w0, &settings, judge)
+    sqp::solve(&OnA::Circle, &far_start(), &settings, judge)
 }
 
 #[test]
 fn a_solve_told_to_end_at_its_milestone_ends_there_converged_to_its_tolerance() {
-    let mut judge = Judge {
-        go_on: false,
-        asked: Vec::new(),
-    };
+    let mut judge = Judge::answering(false);
     let res = solve_with_milestone(&mut judge);
     assert_eq!(res.status, SqpStatus::Converged, "{res:?}");
     assert!(res.kkt <= 1e-3 && res.kkt > 1e-10, "KKT {:e}", res.kkt);
@@ -396,20 +406,19 @@ fn a_solve_told_to_end_at_its_milestone_ends_there_converged_to_its_tolerance() 
     );
     // the KKT residual was above the milestone at every earlier iteration
     let history = &res.history;
-    assert!(history.len() >= 3, "{} iterations: {history:?}", history.len() - 1);
+    assert!(
+        history.len() >= 3,
+        "{} iterations: {history:?}",
+        history.len() - 1
+    );
     assert!(history[..history.len() - 1].iter().all(|r| r.kkt > 1e-3));
 }
 
 #[test]
 fn a_solve_told_to_go_on_at_its_milestone_follows_the_iterates_of_one_not_asked() {
-    let mut judge = Judge {
-        go_on: true,
-        asked: Vec::new(),
-    };
+    let mut judge = Judge::answering(true);
     let res = solve_with_milestone(&mut judge);
-    let angle = std::f64::consts::FRAC_PI_4 + 0.6;
-    let w0 = [2f64.sqrt() * angle.cos(), 2f64.sqrt() * angle.sin()];
-    let plain = sqp::solve(&OnA::Circle, &w0, &settings(), &mut Silent);
+    let plain = sqp::solve(&OnA::Circle, &far_start(), &settings(), &mut Silent);
     assert_eq!(res.status, SqpStatus::Converged, "{res:?}");
     assert!(res.kkt <= 1e-10, "KKT {:e}", res.kkt);
     assert_eq!(judge.asked.len(), 1, "asked once, then not again");

@@ -276,12 +276,7 @@ fn solve_staged(
     sqp_settings: &SqpSettings,
     progress: &dyn Progress,
 ) -> anyhow::Result<SqpResult> {
-    let sqp_settings = SqpSettings {
-        tol_kkt: round.tol_kkt,
-        max_iter: round.max_iter,
-        milestone_tol: round.milestone,
-        ..sqp_settings.clone()
-    };
+    let sqp_settings = round.settings(sqp_settings);
     let judge = round.judge;
     let first = super::solve_interruptibly_warm(
         tr,

@@ -13,7 +13,7 @@ use crate::ocp::{Ocp, Transcription};
 use crate::problems::evaluation::GaitSolution;
 use crate::problems::gait::{locate_instant, GaitCycle};
 use crate::problems::validity::{self, ValidityLimits};
-use crate::sqp::{SqpResult, SqpStatus};
+use crate::sqp::{SqpResult, SqpSettings, SqpStatus};
 use anyhow::{anyhow, Context};
 
 /// Most rounds of check points after the first solve.
@@ -47,6 +47,18 @@ pub struct Round<'a> {
     pub judge: super::Judge<'a>,
 }
 
+impl Round<'_> {
+    /// `base` with this round's KKT tolerance, iteration limit and milestone.
+    pub fn settings(&self, base: &SqpSettings) -> SqpSettings {
+        SqpSettings {
+            tol_kkt: self.tol_kkt,
+            max_iter: self.max_iter,
+            milestone_tol: self.milestone,
+            ..base.clone()
+        }
+    }
+}
+
 /// What the problem needs for its check points and the validity grid.
 pub struct Refinement<'c, 'm> {
     /// The walking cycle.
@@ -67,8 +79,8 @@ pub struct Refinement<'c, 'm> {
     pub tol_kkt: f64,
 }
 
-/// A solution's validity on the grid and the check sites it asks for beyond those held.
-type Verdict = (validity::Validity, CheckSites);
+/// A solution, its validity on the grid and the check sites it asks for beyond those held.
+type Verdict = (GaitSolution, validity::Validity, CheckSites);
 
 impl<'m> Refinement<'_, 'm> {
     /// Solve with `solve` (on the problem `build` makes, with the check points so far, from
@@ -103,7 +115,7 @@ impl<'m> Refinement<'_, 'm> {
             let mut judged: Option<(Vec<f64>, anyhow::Result<Verdict>)> = None;
             let mut judge = |w: &[f64]| {
                 let verdict = self.judge(&tr, w, &sites);
-                let go_on = matches!(&verdict, Ok((_, new)) if new.is_empty());
+                let go_on = matches!(&verdict, Ok((_, _, new)) if new.is_empty());
                 judged = Some((w.to_vec(), verdict));
                 go_on
             };
@@ -134,7 +146,7 @@ impl<'m> Refinement<'_, 'm> {
             if !converged || !self.enabled || round == MAX_ROUNDS || used >= self.max_iter {
                 break;
             }
-            let (found, new) = match judged {
+            let (solution, found, new) = match judged {
                 Some((at, verdict)) if at == next => verdict?,
                 _ => self.judge(&tr, &next, &sites)?,
             };
@@ -145,7 +157,6 @@ impl<'m> Refinement<'_, 'm> {
                 for v in &found.violations {
                     note!(progress, "between the nodes: {v}");
                 }
-                let solution = GaitSolution::from_nlp(&tr, &next, &self.cycle.continuous, self.t0);
                 let at: Vec<String> = new
                     .iter()
                     .map(|&(j, k, tau)| {
@@ -166,7 +177,7 @@ impl<'m> Refinement<'_, 'm> {
         Ok((sites, merged.ok_or_else(|| anyhow!("no solve was made"))?))
     }
 
-    /// The validity on the grid of the solution `w` of `tr`, and the check sites it asks
+    /// The solution `w` of `tr`, its validity on the grid and the check sites it asks
     /// for beyond `sites`: one per instant (a pulling ground and a broken cone are often
     /// worst at the same instant).
     fn judge(
@@ -190,7 +201,7 @@ impl<'m> Refinement<'_, 'm> {
                 new.push(s);
             }
         }
-        Ok((found, new))
+        Ok((solution, found, new))
     }
 
     /// The validity of `solution` on the 1 ms grid.

@@ -439,12 +439,12 @@ impl TrackingProblem {
     /// default left them looser ([`RIGID_SENSITIVITY_TOL`] is a tenth of the default
     /// 1e-5): the KKT residual is computed from them. Never tighter than the states.
     pub fn sensitivities_for_kkt_tol(&mut self, tol_kkt: f64) {
-        if self
-            .integrator
-            .sens_tol
-            .is_some_and(|sens| sens > 0.1 * tol_kkt)
-        {
-            self.integrator = self.integrator.clone().sensitivities_for_kkt_tol(tol_kkt);
+        let Some(sens) = self.integrator.sens_tol else {
+            return;
+        };
+        let held = self.integrator.clone().sensitivities_for_kkt_tol(tol_kkt);
+        if held.sens_tol.unwrap_or(held.rtol) < sens {
+            self.integrator = held;
         }
     }
 

@@ -54,12 +54,7 @@ impl TrackingProblem {
                 .map_err(|e| anyhow!(e))
         };
         let mut solve = |tr: &Transcription, round: crate::workflows::refine::Round<'_>| {
-            let settings = SqpSettings {
-                tol_kkt: round.tol_kkt,
-                max_iter: round.max_iter,
-                milestone_tol: round.milestone,
-                ..settings.clone()
-            };
+            let settings = round.settings(settings);
             let judge = Some(round.judge);
             self.solve_staged(
                 tr,
