@@ -44,57 +44,79 @@ fn dynamics_jacobian_matches_central_differences() {
     let mut rng = Rng::new(3);
     for foot in ["ellipse.json", "double_circle.json"] {
         let m = stiff_model(foot);
-        let (nx, nu, nt) = (m.nx(), m.nu(), m.ntheta());
-        assert_eq!(nt, 1, "one knee stiffness shared by both legs is free");
-        for (name, contacts) in constraint_sets(foot) {
-            let set = m.constraint_set(name, &contacts).unwrap();
-            for _ in 0..5 {
-                let x = random_state(&m, &mut rng, contacts.first().map(|c| c.0));
-                let u: Vec<f64> = (0..nu).map(|_| rng.uniform(0.0, 1.0)).collect();
-                let th = vec![rng.uniform(5.0, 50.0)];
-                let mut f0 = vec![0.0; nx];
-                let mut jac = vec![0.0; nx * (nx + nu + nt)];
-                m.dynamics_jacobian(&set, &x, &u, &th, &mut f0, &mut jac)
-                    .unwrap();
-                let mut z: Vec<f64> = x.iter().chain(&u).chain(&th).copied().collect();
-                let eval = |z: &[f64]| {
-                    let mut f = vec![0.0; nx];
-                    let mut lam = vec![0.0; set.rows.len()];
-                    m.dynamics(
-                        &set,
-                        &z[..nx],
-                        &z[nx..nx + nu],
-                        &z[nx + nu..],
-                        &mut f,
-                        &mut lam,
-                        None,
-                    )
-                    .unwrap();
+        assert_eq!(
+            m.ntheta(),
+            1,
+            "one knee stiffness shared by both legs is free"
+        );
+        jacobian_matches_central_differences(&m, foot, &mut rng, 5);
+    }
+}
+
+/// The torque-driven model (the CasADi gait peer's actuation): its torque columns come
+/// from the accelerations' response to a unit torque, not from AD.
+#[test]
+fn torque_driven_dynamics_jacobian_matches_central_differences() {
+    let mut rng = Rng::new(5);
+    for foot in ["ellipse.json", "double_circle.json"] {
+        let m = model_with_effects("opensim_subject01_torque.json", foot, serde_json::json!([]));
+        assert_eq!(m.na(), 0, "no activations");
+        jacobian_matches_central_differences(&m, foot, &mut rng, 2);
+    }
+}
+
+/// `draws` random states, controls and parameters in every constraint set of `foot`:
+/// each column of the dynamics Jacobian against fourth-order central differences.
+fn jacobian_matches_central_differences(m: &GaitModel, foot: &str, rng: &mut Rng, draws: usize) {
+    let (nx, nu, nt) = (m.nx(), m.nu(), m.ntheta());
+    for (name, contacts) in constraint_sets(foot) {
+        let set = m.constraint_set(name, &contacts).unwrap();
+        for _ in 0..draws {
+            let x = random_state(m, rng, contacts.first().map(|c| c.0));
+            let u: Vec<f64> = (0..nu).map(|_| rng.uniform(0.0, 1.0)).collect();
+            let th: Vec<f64> = (0..nt).map(|_| rng.uniform(5.0, 50.0)).collect();
+            let mut f0 = vec![0.0; nx];
+            let mut jac = vec![0.0; nx * (nx + nu + nt)];
+            m.dynamics_jacobian(&set, &x, &u, &th, &mut f0, &mut jac)
+                .unwrap();
+            let mut z: Vec<f64> = x.iter().chain(&u).chain(&th).copied().collect();
+            let eval = |z: &[f64]| {
+                let mut f = vec![0.0; nx];
+                let mut lam = vec![0.0; set.rows.len()];
+                m.dynamics(
+                    &set,
+                    &z[..nx],
+                    &z[nx..nx + nu],
+                    &z[nx + nu..],
+                    &mut f,
+                    &mut lam,
+                    None,
+                )
+                .unwrap();
+                f
+            };
+            for j in 0..z.len() {
+                // fourth-order central differences: truncation O(h⁴), round-off ~ ε|f|/h
+                let h = 1e-4 * z[j].abs().max(1.0);
+                let z0 = z[j];
+                let mut at = |k: f64| {
+                    z[j] = z0 + k * h;
+                    let f = eval(&z);
+                    z[j] = z0;
                     f
                 };
-                for j in 0..z.len() {
-                    // fourth-order central differences: truncation O(h⁴), round-off ~ ε|f|/h
-                    let h = 1e-4 * z[j].abs().max(1.0);
-                    let z0 = z[j];
-                    let mut at = |k: f64| {
-                        z[j] = z0 + k * h;
-                        let f = eval(&z);
-                        z[j] = z0;
-                        f
-                    };
-                    let (f2, f1, m1, m2) = (at(2.0), at(1.0), at(-1.0), at(-2.0));
-                    let fd: Vec<f64> = (0..nx)
-                        .map(|i| (-f2[i] + 8.0 * f1[i] - 8.0 * m1[i] + m2[i]) / (12.0 * h))
-                        .collect();
-                    let col = &jac[j * nx..(j + 1) * nx];
-                    // FD round-off grows with |f|/h: scale the floor with the function's size
-                    let fscale = f0.iter().map(|v| v.abs()).fold(1.0, f64::max);
-                    let err = rel_diff(col, &fd, (1e-3 * fscale).max(1.0));
-                    assert!(
-                        err < 1e-6,
-                        "{foot}/{name}: column {j} differs from FD by {err:e}"
-                    );
-                }
+                let (f2, f1, m1, m2) = (at(2.0), at(1.0), at(-1.0), at(-2.0));
+                let fd: Vec<f64> = (0..nx)
+                    .map(|i| (-f2[i] + 8.0 * f1[i] - 8.0 * m1[i] + m2[i]) / (12.0 * h))
+                    .collect();
+                let col = &jac[j * nx..(j + 1) * nx];
+                // FD round-off grows with |f|/h: scale the floor with the function's size
+                let fscale = f0.iter().map(|v| v.abs()).fold(1.0, f64::max);
+                let err = rel_diff(col, &fd, (1e-3 * fscale).max(1.0));
+                assert!(
+                    err < 1e-6,
+                    "{foot}/{name}: column {j} differs from FD by {err:e}"
+                );
             }
         }
     }

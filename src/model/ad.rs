@@ -11,8 +11,9 @@
 use nalgebra::SVector;
 use num_dual::{Derivative, Dual2SVec64, DualSVec64, DualStruct};
 
-/// Number of derivative directions carried by one [`AdChunk`].
-pub const CHUNK: usize = 8;
+/// Number of derivative directions carried by one [`AdChunk`]: the gait model's nine
+/// coordinates, so that the dynamics' Jacobian in `(q, q̇)` takes two evaluations.
+pub const CHUNK: usize = 9;
 
 /// Dual number carrying [`CHUNK`] directional derivatives.
 pub type AdChunk = DualSVec64<CHUNK>;

@@ -66,6 +66,25 @@ pub fn cholesky_solve<S: Scalar>(l: &[S], n: usize, b: &mut [S]) {
     }
 }
 
+/// [`cholesky_solve`] with a real factor `l` and a right-hand side `b` of any scalar
+/// type: each derivative part of `b` is solved with the same real factor.
+pub fn cholesky_solve_real<S: Scalar>(l: &[f64], n: usize, b: &mut [S]) {
+    for i in 0..n {
+        let mut s = b[i];
+        for k in 0..i {
+            s -= b[k] * l[i * n + k];
+        }
+        b[i] = s / l[i * n + i];
+    }
+    for i in (0..n).rev() {
+        let mut s = b[i];
+        for k in (i + 1)..n {
+            s -= b[k] * l[k * n + i];
+        }
+        b[i] = s / l[i * n + i];
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -15,10 +15,11 @@
 //! over the foot surface while it rolls). $\lambda$ is the ground force on the foot at $P$
 //! (N) along the row's direction.
 
+use super::volumetric::GroundForce;
 use super::{Actuation, ConstraintSet, ContactReport, GaitModel, RowKind, LEG_JOINTS};
 use crate::model::effects::{EffectState, ModelScalar};
 use crate::model::error::DynamicsError;
-use crate::model::linalg::{cholesky, cholesky_solve};
+use crate::model::linalg::{cholesky, cholesky_solve, cholesky_solve_real};
 use crate::model::multibody::{add, dot, perp, scale, Kinematics, V2};
 use crate::model::Scalar;
 
@@ -161,8 +162,28 @@ impl GaitModel {
         extra: &[(usize, S)],
         xdot: &mut [S],
         lambda: &mut [S],
-        mut report: Option<&mut ContactReport>,
+        report: Option<&mut ContactReport>,
     ) -> Result<(), DynamicsError> {
+        let nq = self.nq();
+        let mut terms = self.assemble(set, (x, u, theta), extra, lambda);
+        let adot = std::mem::take(&mut terms.adot);
+        let (qdd, _) = self.solve_terms(terms, set, lambda, report)?;
+        xdot[..nq].copy_from_slice(&x[nq..2 * nq]);
+        xdot[nq..2 * nq].copy_from_slice(&qdd);
+        xdot[2 * nq..].copy_from_slice(&adot);
+        Ok(())
+    }
+
+    /// The terms of the dynamics at `(x, u, θ)` with the forces `extra` added, before
+    /// they are solved for the accelerations: the mass matrix, τ − c, the contact rows
+    /// (the compliant rows' forces written to `lambda`), the volumetric forces and ȧ.
+    fn assemble<S: ModelScalar>(
+        &self,
+        set: &ConstraintSet,
+        (x, u, theta): (&[S], &[S], &[S]),
+        extra: &[(usize, S)],
+        lambda: &mut [S],
+    ) -> Terms<S> {
         let nq = self.nq();
         let (q, rest) = x.split_at(nq);
         let (qd, a) = rest.split_at(nq);
@@ -190,40 +211,106 @@ impl GaitModel {
                 }
             }
         }
-        cholesky(&mut m, nq, 1e-14).map_err(|e| DynamicsError::MassMatrix { pivot: e.pivot })?;
-        let mut qdd: Vec<S> = tau.iter().zip(&c).map(|(t, c)| *t - *c).collect();
-        cholesky_solve(&m, nq, &mut qdd);
-
-        let nc = set.rows.len();
-        if nc > 0 {
-            let mut rows = self.contact_rows(set, &k, qd, &p, (ground_h, n), lambda);
-            if rows.rigid.len() < nc {
-                cholesky_solve(&m, nq, &mut rows.compliant_force);
-                for (a, f) in qdd.iter_mut().zip(&rows.compliant_force) {
-                    *a += *f;
-                }
-            }
-            let b_baum_rigid =
-                solve_rigid_rows(&m, &rows, &set.name, &mut qdd, lambda, report.is_some())?;
-            if let Some(rep) = report.as_deref_mut() {
-                self.fill_contact_report(rep, set, &rows, &b_baum_rigid, lambda);
-            }
-        } else if let Some(rep) = report.as_deref_mut() {
-            *rep = ContactReport::default();
-        }
-        if let Some(rep) = report {
-            rep.volumetric = volumetric.iter().map(|(c, f)| f.report(*c)).collect();
-        }
-
-        xdot[..nq].copy_from_slice(qd);
-        xdot[nq..2 * nq].copy_from_slice(&qdd);
+        let force = tau.iter().zip(&c).map(|(t, c)| *t - *c).collect();
+        let rows = (!set.rows.is_empty())
+            .then(|| self.contact_rows(set, &k, qd, &p, (ground_h, n), lambda));
+        let mut adot = vec![S::c(0.0); self.na()];
         if let Actuation::Mtg(set) = &self.actuation {
             let time = self.actuator_adjust(&p).time;
-            for i in 0..self.na() {
-                xdot[2 * nq + i] = set.activation.rate(u[i], a[i]) / time;
+            for (i, d) in adot.iter_mut().enumerate() {
+                *d = set.activation.rate(u[i], a[i]) / time;
             }
         }
-        Ok(())
+        Terms {
+            m,
+            force,
+            rows,
+            volumetric,
+            adot,
+        }
+    }
+
+    /// The accelerations' and activations' derivatives at `(x, u, θ)` by implicit
+    /// differentiation of the dynamics about their solution `at` (computed in f64 at
+    /// the same point): the terms are evaluated in `S` with `q̈` and λ held at their
+    /// values, the residuals
+    /// $r_1 = \tau - c + f_c + G^T\lambda - M\ddot q$ and $r_2 = b - G\ddot q$
+    /// differentiated, and $[M\;-G^T;\,G\;0]\,[d\ddot q; d\lambda] = [dr_1; dr_2]$
+    /// solved with the real factors of `at`: no factorisation in `S`. `xdot` gets `ẋ`'s
+    /// values from `at` and its derivatives in the dual parts.
+    pub(super) fn dynamics_tangent<S: ModelScalar>(
+        &self,
+        set: &ConstraintSet,
+        inputs: (&[S], &[S], &[S]),
+        extra: &[(usize, S)],
+        at: &Solution,
+        xdot: &mut [S],
+        lambda: &mut [S],
+    ) {
+        let nq = self.nq();
+        let x = inputs.0;
+        let terms = self.assemble(set, inputs, extra, lambda);
+        let f = &at.factors;
+        let mut r1 = terms.force;
+        for i in 0..nq {
+            r1[i] -= (0..nq).map(|j| terms.m[i * nq + j] * at.qdd[j]).sum::<S>();
+        }
+        let mut r2 = Vec::with_capacity(f.rigid.len());
+        if let Some(rows) = &terms.rows {
+            for (r1, c) in r1.iter_mut().zip(&rows.compliant_force) {
+                *r1 += *c;
+            }
+            for &r in &f.rigid {
+                let g = &rows.g[r * nq..(r + 1) * nq];
+                for (r1, gl) in r1.iter_mut().zip(g) {
+                    *r1 += *gl * at.lambda[r];
+                }
+                let gq: S = g.iter().zip(&at.qdd).map(|(gl, a)| *gl * *a).sum();
+                r2.push(rows.b[r] - gq);
+            }
+        }
+        // w = M⁻¹ r1, dλ = A⁻¹ (r2 − G w), dq̈ = w + Y dλ
+        cholesky_solve_real(&f.m_chol, nq, &mut r1);
+        let nr = f.rigid.len();
+        for (i, r2) in r2.iter_mut().enumerate() {
+            *r2 -= (0..nq).map(|l| r1[l] * f.g_rigid[i * nq + l]).sum::<S>();
+        }
+        cholesky_solve_real(&f.a_chol, nr, &mut r2);
+        for (i, dl) in r2.iter().enumerate() {
+            for l in 0..nq {
+                r1[l] += *dl * f.y[i * nq + l];
+            }
+        }
+        xdot[..nq].copy_from_slice(&x[nq..2 * nq]);
+        for (o, (d, v)) in xdot[nq..2 * nq].iter_mut().zip(r1.iter().zip(&at.qdd)) {
+            // the value from `at`, the derivative parts from the solve
+            *o = *d - S::c(d.value()) + *v;
+        }
+        xdot[2 * nq..].copy_from_slice(&terms.adot);
+    }
+
+    /// The dynamics at `(x, u, θ)` in f64 with the factors their derivatives need
+    /// ([`dynamics_tangent`](Self::dynamics_tangent)); `xdot` gets `ẋ`.
+    pub(super) fn solution(
+        &self,
+        set: &ConstraintSet,
+        inputs: (&[f64], &[f64], &[f64]),
+        extra: &[(usize, f64)],
+        xdot: &mut [f64],
+    ) -> Result<Solution, DynamicsError> {
+        let nq = self.nq();
+        let mut lambda = vec![0.0; set.rows.len()];
+        let mut terms = self.assemble(set, inputs, extra, &mut lambda);
+        let adot = std::mem::take(&mut terms.adot);
+        let (qdd, factors) = self.solve_terms(terms, set, &mut lambda, None)?;
+        xdot[..nq].copy_from_slice(&inputs.0[nq..2 * nq]);
+        xdot[nq..2 * nq].copy_from_slice(&qdd);
+        xdot[2 * nq..].copy_from_slice(&adot);
+        Ok(Solution {
+            qdd,
+            lambda,
+            factors,
+        })
     }
 
     /// The rows of `set` at kinematics `k` and velocities `qd`, on the ground `(h, n)`
@@ -429,6 +516,127 @@ impl GaitModel {
     }
 }
 
+/// The terms of the dynamics at one state, before they are solved.
+struct Terms<S> {
+    /// Mass matrix (nq × nq, row-major).
+    m: Vec<S>,
+    /// The generalised forces less the bias forces, τ − c (N or N·m per coordinate).
+    force: Vec<S>,
+    /// The constraint set's rows (none without contact).
+    rows: Option<ContactRows<S>>,
+    /// The volumetric primitives' ground forces, by contact.
+    volumetric: Vec<(usize, GroundForce<S>)>,
+    /// The activations' rates ȧ (1/s).
+    adot: Vec<S>,
+}
+
+/// The factors of one solve of the dynamics.
+pub(super) struct Factors<S> {
+    /// Cholesky factor of M (row-major, lower).
+    m_chol: Vec<S>,
+    /// The rigid rows' indices among the set's rows.
+    rigid: Vec<usize>,
+    /// The rigid rows of G (nr × nq, row-major).
+    g_rigid: Vec<S>,
+    /// Y = M⁻¹ G_rigidᵀ (row r = column r).
+    y: Vec<S>,
+    /// Cholesky factor of G_rigid M⁻¹ G_rigidᵀ.
+    a_chol: Vec<S>,
+}
+
+/// The dynamics solved in f64 at one point: what their derivatives are taken about.
+pub(super) struct Solution {
+    /// The accelerations (m/s² or rad/s²).
+    qdd: Vec<f64>,
+    /// Every row's force (N).
+    lambda: Vec<f64>,
+    /// The solve's factors.
+    factors: Factors<f64>,
+}
+
+impl Solution {
+    /// The accelerations' response to a unit generalised force at coordinate `j`
+    /// (∂q̈/∂τ_j, per N·m or N): $M^{-1}e_j + Y\,d\lambda$ with
+    /// $A\,d\lambda = -G M^{-1} e_j$, the contact rows held.
+    pub(super) fn unit_torque_response(&self, j: usize) -> Vec<f64> {
+        let f = &self.factors;
+        let nq = self.qdd.len();
+        let mut w = vec![0.0; nq];
+        w[j] = 1.0;
+        cholesky_solve(&f.m_chol, nq, &mut w);
+        let nr = f.rigid.len();
+        let mut dl: Vec<f64> = (0..nr)
+            .map(|i| -(0..nq).map(|l| f.g_rigid[i * nq + l] * w[l]).sum::<f64>())
+            .collect();
+        cholesky_solve(&f.a_chol, nr, &mut dl);
+        for (i, d) in dl.iter().enumerate() {
+            for l in 0..nq {
+                w[l] += d * f.y[i * nq + l];
+            }
+        }
+        w
+    }
+}
+
+impl GaitModel {
+    /// Solve `terms` for the accelerations: the rigid rows' forces are written to `lambda`
+    /// (the compliant rows' are there already) and, with `report`, the contact details. Also
+    /// returns the solve's factors.
+    fn solve_terms<S: ModelScalar>(
+        &self,
+        terms: Terms<S>,
+        set: &ConstraintSet,
+        lambda: &mut [S],
+        mut report: Option<&mut ContactReport>,
+    ) -> Result<(Vec<S>, Factors<S>), DynamicsError> {
+        let Terms {
+            mut m,
+            force: mut qdd,
+            rows,
+            volumetric,
+            ..
+        } = terms;
+        let nq = qdd.len();
+        cholesky(&mut m, nq, 1e-14).map_err(|e| DynamicsError::MassMatrix { pivot: e.pivot })?;
+        cholesky_solve(&m, nq, &mut qdd);
+        let mut factors = Factors {
+            m_chol: Vec::new(),
+            rigid: Vec::new(),
+            g_rigid: Vec::new(),
+            y: Vec::new(),
+            a_chol: Vec::new(),
+        };
+        if let Some(mut rows) = rows {
+            if rows.rigid.len() < set.rows.len() {
+                cholesky_solve(&m, nq, &mut rows.compliant_force);
+                for (a, f) in qdd.iter_mut().zip(&rows.compliant_force) {
+                    *a += *f;
+                }
+            }
+            let b_baum_rigid = solve_rigid_rows(
+                &m,
+                &rows,
+                &set.name,
+                &mut qdd,
+                lambda,
+                report.is_some(),
+                &mut factors,
+            )?;
+            if let Some(rep) = report.as_deref_mut() {
+                self.fill_contact_report(rep, set, &rows, &b_baum_rigid, lambda);
+            }
+            factors.rigid = rows.rigid;
+        } else if let Some(rep) = report.as_deref_mut() {
+            *rep = ContactReport::default();
+        }
+        if let Some(rep) = report {
+            rep.volumetric = volumetric.iter().map(|(c, f)| f.report(*c)).collect();
+        }
+        factors.m_chol = m;
+        Ok((qdd, factors))
+    }
+}
+
 /// The rows of a constraint set at one state, before the rigid ones are solved.
 struct ContactRows<S> {
     /// Number of coordinates.
@@ -449,7 +657,8 @@ struct ContactRows<S> {
 
 /// Solve the rigid rows for their forces by the Schur complement of `m` (the mass
 /// matrix's Cholesky factor): add their accelerations to `qdd` and write their forces to
-/// `lambda`. With `want_baum`, returns each rigid row's Baumgarte force (else zeros).
+/// `lambda`, and its factors to `factors`. With `want_baum`, returns each rigid row's
+/// Baumgarte force (else zeros).
 fn solve_rigid_rows<S: Scalar>(
     m: &[S],
     rows: &ContactRows<S>,
@@ -457,6 +666,7 @@ fn solve_rigid_rows<S: Scalar>(
     qdd: &mut [S],
     lambda: &mut [S],
     want_baum: bool,
+    factors: &mut Factors<S>,
 ) -> Result<Vec<f64>, DynamicsError> {
     let (nq, rigid, b, g) = (rows.nq, &rows.rigid, &rows.b, &rows.g);
     let nr = rigid.len();
@@ -489,6 +699,9 @@ fn solve_rigid_rows<S: Scalar>(
                 cholesky_solve(&af, nr, &mut b_baum_rigid);
             }
         }
+        factors.g_rigid = g_rigid;
+        factors.y = y;
+        factors.a_chol = amat;
     }
     Ok(b_baum_rigid)
 }

@@ -1,7 +1,8 @@
 //! Derivatives of the gait dynamics: which inputs can appear in a second derivative,
-//! and the Jacobian of `ẋ` with respect to `(x, u, θ)` by chunked forward AD.
+//! and the Jacobian of `ẋ` with respect to `(x, u, θ)` by chunked forward AD through
+//! the implicit derivatives of the dynamics (`GaitModel::dynamics_tangent`).
 
-use super::{Actuation, ConstraintSet, GaitModel};
+use super::{Actuation, ConstraintSet, GaitModel, LEG_JOINTS};
 use crate::model::ad::{self, AdChunk};
 use crate::model::error::DynamicsError;
 
@@ -55,6 +56,28 @@ impl GaitModel {
         out
     }
 
+    /// Per control, the coordinate it pushes and its force per unit control (N·m or N)
+    /// if it enters the dynamics only so: the joint torques and the residual actuators;
+    /// `None` for the excitations of muscle-torque generators.
+    fn control_pushes(&self) -> Vec<Option<(usize, f64)>> {
+        let mut pushes = vec![None; self.nu()];
+        if let Actuation::Torques {
+            reference_torque, ..
+        } = &self.actuation
+        {
+            for (k, &(c, _)) in LEG_JOINTS.iter().enumerate() {
+                pushes[k] = Some((c, *reference_torque));
+            }
+        }
+        if let Some(scales) = &self.residuals {
+            let base = self.nu_actuators();
+            for (i, &sc) in scales.iter().enumerate() {
+                pushes[base + i] = Some((i, sc));
+            }
+        }
+        pushes
+    }
+
     /// Evaluate `ẋ` and its Jacobians with respect to `(x, u, θ)` by chunked forward AD;
     /// `jac` is nx × (nx + nu + nθ), column-major.
     pub fn dynamics_jacobian(
@@ -71,56 +94,55 @@ impl GaitModel {
         match &self.actuation {
             // Excitations enter only the activation dynamics ȧ = rate(u, a), and the
             // activations only that and the joint torques τ(q, q̇, a): AD runs over
-            // (q, q̇, θ) and the torques of the joints the activations move, and the
-            // activation and excitation columns follow by the chain rule from ∂τ/∂a and
-            // the rate's scalar derivatives (residual actuators' controls enter the
-            // dynamics: the general path below).
+            // (q, q̇, θ), and the activation and excitation columns follow by the chain
+            // rule from ∂τ/∂a, the accelerations' response to a unit torque (one real
+            // solve with the dynamics' factors) and the rate's scalar derivatives
+            // (residual actuators' controls enter the dynamics: the general path below).
             Actuation::Mtg(mtg) if self.residuals.is_none() => {
                 let (nq, a0) = (self.nq(), 2 * self.nq());
                 let na = nx - a0;
+                let at = self.solution(set, (x, u, theta), &[], xdot)?;
                 let dtau_da = self.torque_activation_jacobian(x, u, theta);
-                let joints: Vec<usize> = (0..nq)
-                    .filter(|&j| (0..na).any(|i| dtau_da[j + i * nq] != 0.0))
-                    .collect();
-                let nj = joints.len();
-                let mut z = Vec::with_capacity(a0 + nj + nt);
+                let mut z = Vec::with_capacity(a0 + nt);
                 z.extend_from_slice(&x[..a0]);
-                z.extend(std::iter::repeat_n(0.0, nj));
                 z.extend_from_slice(theta);
                 let mut jz = vec![0.0; nx * z.len()];
                 let uc: Vec<AdChunk> = u.iter().map(|&v| AdChunk::from(v)).collect();
                 let ac: Vec<AdChunk> = x[a0..].iter().map(|&v| AdChunk::from(v)).collect();
                 let mut xs = Vec::with_capacity(nx);
-                let mut extra = Vec::with_capacity(nj);
                 ad::jacobian(
                     &z,
                     nx,
                     |zs, out| {
-                        let (qs, rest) = zs.split_at(a0);
-                        let (taus, ts) = rest.split_at(nj);
+                        let (qs, ts) = zs.split_at(a0);
                         xs.clear();
                         xs.extend_from_slice(qs);
                         xs.extend_from_slice(&ac);
-                        extra.clear();
-                        extra.extend(joints.iter().copied().zip(taus.iter().copied()));
-                        self.dynamics_with_torques(set, (&xs, &uc, ts), &extra, out, &mut lam, None)
+                        self.dynamics_tangent(set, (&xs, &uc, ts), &[], &at, out, &mut lam);
+                        Ok::<(), DynamicsError>(())
                     },
                     xdot,
                     &mut jz,
                 )?;
                 // (q, q̇) and θ columns as computed
                 jac[..nx * a0].copy_from_slice(&jz[..nx * a0]);
-                jac[nx * (nx + nu)..].copy_from_slice(&jz[nx * (a0 + nj)..]);
-                // activation columns: Σ_j ∂ẋ/∂τ_j ∂τ_j/∂a_i, and the rate's own
+                jac[nx * (nx + nu)..].copy_from_slice(&jz[nx * a0..]);
+                // activation columns: Σ_j ∂q̈/∂τ_j ∂τ_j/∂a_i, and the rate's own
                 let time = self.actuator_factors(theta).time;
+                let responses: Vec<Option<Vec<f64>>> = (0..nq)
+                    .map(|j| {
+                        (0..na)
+                            .any(|i| dtau_da[j + i * nq] != 0.0)
+                            .then(|| at.unit_torque_response(j))
+                    })
+                    .collect();
                 for i in 0..na {
                     let col = &mut jac[nx * (a0 + i)..nx * (a0 + i + 1)];
                     col.iter_mut().for_each(|v| *v = 0.0);
-                    for (k, &j) in joints.iter().enumerate() {
+                    for (j, response) in responses.iter().enumerate() {
                         let d = dtau_da[j + i * nq];
-                        if d != 0.0 {
-                            let dj = &jz[nx * (a0 + k)..nx * (a0 + k + 1)];
-                            col.iter_mut().zip(dj).for_each(|(c, v)| *c += d * v);
+                        if let (Some(r), true) = (response, d != 0.0) {
+                            col[nq..a0].iter_mut().zip(r).for_each(|(c, v)| *c += d * v);
                         }
                     }
                     let e = num_dual::Dual64::from(u[i]);
@@ -136,22 +158,57 @@ impl GaitModel {
                 }
                 Ok(())
             }
+            // the controls that push one coordinate with a constant factor (joint
+            // torques, residual actuators) by the accelerations' response to a unit
+            // force; AD over (x, θ) and the other controls (excitations)
             _ => {
-                let mut z = Vec::with_capacity(nx + nu + nt);
+                let (nq, a0) = (self.nq(), 2 * self.nq());
+                let at = self.solution(set, (x, u, theta), &[], xdot)?;
+                let pushes = self.control_pushes();
+                let free: Vec<usize> = (0..nu).filter(|&k| pushes[k].is_none()).collect();
+                let mut z = Vec::with_capacity(nx + free.len() + nt);
                 z.extend_from_slice(x);
-                z.extend_from_slice(u);
+                z.extend(free.iter().map(|&k| u[k]));
                 z.extend_from_slice(theta);
+                let mut jz = vec![0.0; nx * z.len()];
+                let mut us: Vec<AdChunk> = u.iter().map(|&v| AdChunk::from(v)).collect();
                 ad::jacobian(
                     &z,
                     nx,
                     |zs, out| {
                         let (xs, rest) = zs.split_at(nx);
-                        let (us, ts) = rest.split_at(nu);
-                        self.dynamics(set, xs, us, ts, out, &mut lam, None)
+                        let (fs, ts) = rest.split_at(free.len());
+                        for (&k, v) in free.iter().zip(fs) {
+                            us[k] = *v;
+                        }
+                        self.dynamics_tangent(set, (xs, &us, ts), &[], &at, out, &mut lam);
+                        Ok::<(), DynamicsError>(())
                     },
                     xdot,
-                    jac,
-                )
+                    &mut jz,
+                )?;
+                jac[..nx * nx].copy_from_slice(&jz[..nx * nx]);
+                jac[nx * (nx + nu)..].copy_from_slice(&jz[nx * (nx + free.len())..]);
+                let mut next_free = 0;
+                for (k, push) in pushes.iter().enumerate() {
+                    let col = &mut jac[nx * (nx + k)..nx * (nx + k + 1)];
+                    match push {
+                        Some((c, factor)) => {
+                            col.iter_mut().for_each(|v| *v = 0.0);
+                            let r = at.unit_torque_response(*c);
+                            col[nq..a0]
+                                .iter_mut()
+                                .zip(&r)
+                                .for_each(|(o, v)| *o = factor * v);
+                        }
+                        None => {
+                            let j = nx + next_free;
+                            col.copy_from_slice(&jz[nx * j..nx * (j + 1)]);
+                            next_free += 1;
+                        }
+                    }
+                }
+                Ok(())
             }
         }
     }
