@@ -5,12 +5,11 @@
 //! [`Primitive::contact_offset`] returns the world vector $d(\psi)$ from the primitive's
 //! reference point (its centre) to that point, where $\psi$ is the body's world angle.
 //!
-//! The ellipse has no closed form in the polar angle used by Millard & Mombaur (2019, eq. 3–4): the
-//! polar angle $\phi$ of the lowest point, $p(\phi) = r(\phi)(\cos\phi, \sin\phi)$ with
-//! $r(\phi) = ab/\sqrt{b^2\cos^2\phi + a^2\sin^2\phi}$, is bracketed by sampling, narrowed by
-//! bisection on $h'(\phi)$ and polished by Newton's method to 1e-12 rad in `f64`. Derivative
-//! parts are then obtained by further Newton steps in the generic scalar, which by the
-//! implicit function theorem yield the exact derivatives of the converged root.
+//! The ellipse's lowest point has a closed form: with $A = \mathrm{diag}(a^2, b^2)$ and
+//! $n_e$ the normal in the ellipse frame, the point of $p^T A^{-1} p = 1$ that minimises
+//! $n_e \cdot p$ is $p = -A n_e / \sqrt{n_e^T A n_e}$ (a Lagrange multiplier argument). It is
+//! the point Millard & Mombaur (2019, eq. 3–4) find by a root search in the polar angle,
+//! and every derivative follows from it by AD, with no iteration.
 
 use super::multibody::{rotate, V2};
 use super::Scalar;
@@ -226,118 +225,15 @@ impl<S: Scalar> ShapeScalars<S> {
             ShapeScalars::Ellipse {
                 angle, semi_axes, ..
             } => {
-                let (a, b) = (semi_axes[0], semi_axes[1]);
+                let (a2, b2) = (semi_axes[0] * semi_axes[0], semi_axes[1] * semi_axes[1]);
                 let ang = psi + angle;
                 let (s, c) = (ang.sin(), ang.cos());
-                // normal in the ellipse frame: Rᵀ n
+                // normal in the ellipse frame: Rᵀ n; the support point −A nₑ/√(nₑᵀ A nₑ)
                 let ne = [c * n[0] + s * n[1], -s * n[0] + c * n[1]];
-                let phi0 =
-                    cached_lowest_polar_angle(a.value(), b.value(), [ne[0].value(), ne[1].value()]);
-                let mut phi = S::c(phi0);
-                for _ in 0..3 {
-                    let (_, h1, h2) = ellipse_height_derivatives(a, b, ne, phi);
-                    phi -= h1 / h2;
-                }
-                let (p, _, _) = ellipse_point(a, b, phi);
+                let scale = -(ne[0] * ne[0] * a2 + ne[1] * ne[1] * b2).sqrt().recip();
+                let p = [ne[0] * a2 * scale, ne[1] * b2 * scale];
                 rotate(c, s, p)
             }
         }
     }
-}
-
-/// Point on the ellipse at polar angle `phi` and its first two derivatives in `phi`.
-fn ellipse_point<S: Scalar>(a: S, b: S, phi: S) -> (V2<S>, V2<S>, V2<S>) {
-    let (s, c) = (phi.sin(), phi.cos());
-    let d = s * s * (a * a) + c * c * (b * b);
-    let two_phi = phi * 2.0;
-    let d1 = two_phi.sin() * (a * a - b * b);
-    let d2 = two_phi.cos() * ((a * a - b * b) * 2.0);
-    let ab = a * b;
-    let inv_sqrt = d.sqrt().recip();
-    let r = inv_sqrt * ab;
-    let d32 = inv_sqrt / d; // D^{-3/2}
-    let r1 = -(d32 * d1) * (ab * 0.5);
-    let r2 = (d32 / d * d1 * d1 * 0.75 - d32 * d2 * 0.5) * ab;
-    let p = [r * c, r * s];
-    let p1 = [r1 * c - r * s, r1 * s + r * c];
-    let p2 = [r2 * c - r1 * s * 2.0 - r * c, r2 * s + r1 * c * 2.0 - r * s];
-    (p, p1, p2)
-}
-
-/// Height `h = ne·p(φ)` along the ellipse-frame normal and its derivatives in `φ`.
-fn ellipse_height_derivatives<S: Scalar>(a: S, b: S, ne: V2<S>, phi: S) -> (S, S, S) {
-    let (p, p1, p2) = ellipse_point(a, b, phi);
-    (
-        ne[0] * p[0] + ne[1] * p[1],
-        ne[0] * p1[0] + ne[1] * p1[1],
-        ne[0] * p2[0] + ne[1] * p2[1],
-    )
-}
-
-thread_local! {
-    static ROOT_CACHE: std::cell::RefCell<([([u64; 4], f64); 4], usize)> =
-        const { std::cell::RefCell::new(([([u64::MAX; 4], 0.0); 4], 0)) };
-}
-
-/// [`ellipse_lowest_polar_angle`] with a small per-thread cache: one dynamics Jacobian
-/// evaluates the same contact at the same values once per AD chunk. The cache returns
-/// the bit-identical value a fresh solve would, so results stay deterministic.
-fn cached_lowest_polar_angle(a: f64, b: f64, ne: [f64; 2]) -> f64 {
-    let key = [a.to_bits(), b.to_bits(), ne[0].to_bits(), ne[1].to_bits()];
-    ROOT_CACHE.with(|c| {
-        let mut c = c.borrow_mut();
-        if let Some(&(_, phi)) = c.0.iter().find(|(k, _)| *k == key) {
-            return phi;
-        }
-        let phi = ellipse_lowest_polar_angle(a, b, ne);
-        let slot = c.1;
-        c.0[slot] = (key, phi);
-        c.1 = (slot + 1) % 4;
-        phi
-    })
-}
-
-/// Polar angle (in the ellipse frame) of the ellipse point furthest along `-ne`:
-/// sampling bracket, bisection on h'(φ), Newton polish to 1e-12 rad.
-pub fn ellipse_lowest_polar_angle(a: f64, b: f64, ne: [f64; 2]) -> f64 {
-    // 16 samples bracket the single minimum of h(φ) = ne·p(φ) to within ±2π/16; twelve
-    // bisection steps on h'(φ) narrow the bracket to ~2e-4 rad, well inside Newton's
-    // region of quadratic convergence; Newton then polishes to 1e-12 rad.
-    const SAMPLES: usize = 16;
-    let step = std::f64::consts::TAU / SAMPLES as f64;
-    let height = |phi: f64| ellipse_height_derivatives(a, b, ne, phi).0;
-    let mut k_min = 0;
-    let mut h_min = f64::INFINITY;
-    for k in 0..SAMPLES {
-        let h = height(k as f64 * step);
-        if h < h_min {
-            h_min = h;
-            k_min = k;
-        }
-    }
-    let mut lo = (k_min as f64 - 1.0) * step;
-    let mut hi = (k_min as f64 + 1.0) * step;
-    let dh = |phi: f64| ellipse_height_derivatives(a, b, ne, phi).1;
-    // bisection on h' (negative left of the minimum, positive right of it)
-    for _ in 0..12 {
-        let mid = 0.5 * (lo + hi);
-        if dh(mid) > 0.0 {
-            hi = mid;
-        } else {
-            lo = mid;
-        }
-    }
-    let mut phi = 0.5 * (lo + hi);
-    for _ in 0..20 {
-        let (_, h1, h2) = ellipse_height_derivatives(a, b, ne, phi);
-        if !(h2 > 0.0) {
-            break;
-        }
-        let dphi = h1 / h2;
-        phi -= dphi;
-        if dphi.abs() < 1e-12 {
-            break;
-        }
-    }
-    phi
 }
