@@ -296,6 +296,9 @@ pub struct SolveStage {
     pub settings: SqpSettings,
 }
 
+/// CVODES tolerance (relative and absolute) of the first stage of [`stages`].
+pub const STAGE1_TOL: f64 = 1e-6;
+
 /// CVODES tolerance (relative and absolute) of the second stage of [`stages`].
 pub const STAGE2_TOL: f64 = 1e-12;
 
@@ -303,11 +306,13 @@ pub const STAGE2_TOL: f64 = 1e-12;
 pub const EXACT_BELOW_KKT: f64 = 1e-3;
 
 /// How the problem is solved from its data guess, to the KKT tolerance `tol`:
-/// 1. block BFGS (per node) with CVODES at 1e-8, until the KKT residual is
+/// 1. block BFGS (per node) with CVODES at [`STAGE1_TOL`], until the KKT residual is
 ///    [`EXACT_BELOW_KKT`]. The exact Hessian of the Lagrangian is far from convex on the
 ///    way: from the data its inertia correction needed shifts of 1e2–4e3 and crawled at
 ///    J = 1.3096 (KKT 2e-2) for hundreds of iterations, where BFGS walks on to the
-///    peer's optimum;
+///    peer's optimum. Its line search compares objectives that differ by far more than
+///    the states' error at that tolerance, and a shooting interval takes about half the
+///    steps it takes at 1e-8;
 /// 2. the exact Hessian (inertia correction) with CVODES at [`STAGE2_TOL`]: near the
 ///    optimum it is convex on the active constraints' null space, and the tight
 ///    integration keeps its noise below the line search's (at 1e-8 both Hessians stall
@@ -315,16 +320,17 @@ pub const EXACT_BELOW_KKT: f64 = 1e-3;
 ///    at 1e-12 it converges in about 10 iterations).
 ///
 /// In both the sensitivities are integrated at a tenth of the stage's KKT tolerance
-/// ([`IntegratorSettings::sensitivities_for_kkt_tol`]): from the data guess, 174 block
-/// BFGS iterations took 40 s instead of 53 s with them at the states' tolerance, and the
-/// exact stage 11 iterations of 1.1 s instead of 9 of 1.5 s, to the same optimum.
+/// ([`IntegratorSettings::sensitivities_for_kkt_tol`]), never tighter than the states.
 pub fn stages(tol: f64) -> [SolveStage; 2] {
     let base = IntegratorSettings::default();
     [
         SolveStage {
-            integrator: base
-                .clone()
-                .sensitivities_for_kkt_tol(tol.max(EXACT_BELOW_KKT)),
+            integrator: IntegratorSettings {
+                rtol: STAGE1_TOL,
+                atol: STAGE1_TOL,
+                ..base.clone()
+            }
+            .sensitivities_for_kkt_tol(tol.max(EXACT_BELOW_KKT)),
             settings: SqpSettings {
                 tol_kkt: tol.max(EXACT_BELOW_KKT),
                 hessian: HessianMode::Bfgs,
