@@ -1,5 +1,6 @@
 //! Criterion benchmarks of the model layer: one dynamics evaluation, one dynamics +
-//! exact Jacobian evaluation (what the sensitivity right-hand side needs), and one 40 ms
+//! exact Jacobian evaluation (what the sensitivity right-hand side needs), one weighted
+//! Hessian of the dynamics (what the exact Hessian's adjoint needs), and one 40 ms
 //! shooting interval with full forward sensitivities (x0, piecewise-linear controls,
 //! duration), alone and with the states and sensitivities at the samples inside it that
 //! `track --sample-targets` compares (4 at 100 Hz, 40 at 1 kHz; CVODES dense output), for
@@ -63,6 +64,20 @@ fn bench(c: &mut Criterion) {
             b.iter(|| {
                 m.dynamics_jacobian(&set, black_box(&x), black_box(&u), &[], &mut xdot, &mut jac)
                     .expect("jacobian")
+            })
+        });
+        let mu: Vec<f64> = (0..nx).map(|i| 1.0 + 0.1 * i as f64).collect();
+        let nz = nx + nu;
+        let mut hess = vec![0.0; nz * nz];
+        c.bench_function(&format!("weighted_dynamics_hessian/{label}"), |b| {
+            b.iter(|| {
+                m.weighted_dynamics_hessian(
+                    &set,
+                    (black_box(&x), black_box(&u), &[]),
+                    &mu,
+                    &mut hess,
+                )
+                .expect("hessian")
             })
         });
         let ode = GaitOde {

@@ -238,6 +238,12 @@ fn dynamics_second_derivatives_match_finite_differences() {
     use footfall::integrate::ControlledOde;
     let mut rng = Rng::new(21);
     let knee = serde_json::json!([{ "type": "passive_joint_stiffness", "joint": "knee", "stiffness": 20.0, "rest_angle": -0.2, "free": ["stiffness"] }]);
+    // the generators' parameters scale the torques the activations make: the Hessian's
+    // (activation, parameter) block
+    let actuators = serde_json::json!([
+        { "type": "mtg_strength", "free": ["change"] },
+        { "type": "mtg_damping", "free": ["change"] },
+    ]);
     for (m, foot, contacts) in [
         (
             stiff_model("ellipse.json"),
@@ -259,6 +265,11 @@ fn dynamics_second_derivatives_match_finite_differences() {
             "ellipse.json, joint torques",
             vec![("r.sole", true)],
         ),
+        (
+            model_with_effects("opensim_subject01.json", "double_circle.json", actuators),
+            "double_circle.json, free generator strength and damping",
+            vec![("r.heel", true), ("r.forefoot", false)],
+        ),
     ] {
         let set = m.constraint_set("s", &contacts).unwrap();
         let ode = GaitOde {
@@ -269,7 +280,7 @@ fn dynamics_second_derivatives_match_finite_differences() {
         let nw = nx + nu + nt;
         let x = random_state(&m, &mut rng, Some(contacts[0].0));
         let u: Vec<f64> = (0..nu).map(|_| rng.uniform(0.0, 1.0)).collect();
-        let th = vec![25.0];
+        let th: Vec<f64> = if nt == 1 { vec![25.0] } else { vec![0.1, 0.3] };
         let mu: Vec<f64> = (0..nx).map(|_| rng.uniform(-1.0, 1.0)).collect();
         let mut h = vec![0.0; nw * nw];
         assert!(ode.weighted_hessian(&x, &u, &th, &mu, &mut h).unwrap());

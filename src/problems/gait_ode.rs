@@ -4,7 +4,6 @@
 //! on the layers that use it.
 
 use crate::integrate::{ControlledOde, OdeError};
-use crate::model::ad;
 use crate::model::{ConstraintSet, DynamicsError, GaitModel};
 
 /// `ControlledOde` view of the model under one constraint set.
@@ -72,28 +71,9 @@ impl ControlledOde for GaitOde<'_> {
         mu: &[f64],
         out: &mut [f64],
     ) -> Result<bool, OdeError> {
-        let (nx, nu) = (self.model.nx(), self.model.nu());
-        let mut xdot = vec![ad::AdNested::from(0.0); nx];
-        let mut lam = vec![ad::AdNested::from(0.0); self.set.rows.len()];
-        let z: Vec<f64> = x.iter().chain(u).chain(theta).copied().collect();
-        let (curved, lead) = self.model.curved_inputs();
-        ad::hessian_over(
-            &z,
-            &curved,
-            lead,
-            |zs| {
-                let (xs, rest) = zs.split_at(nx);
-                let (us, ts) = rest.split_at(nu);
-                self.model
-                    .dynamics(self.set, xs, us, ts, &mut xdot, &mut lam, None)?;
-                Ok(xdot
-                    .iter()
-                    .zip(mu)
-                    .fold(ad::AdNested::from(0.0), |acc, (f, m)| acc + *f * *m))
-            },
-            out,
-        )
-        .map_err(ode_err)?;
+        self.model
+            .weighted_dynamics_hessian(self.set, (x, u, theta), mu, out)
+            .map_err(ode_err)?;
         if out.iter().any(|v| !v.is_finite()) {
             return Err(OdeError::Recoverable("non-finite Hessian".into()));
         }

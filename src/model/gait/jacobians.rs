@@ -3,7 +3,7 @@
 //! the implicit derivatives of the dynamics (`GaitModel::dynamics_tangent`).
 
 use super::{Actuation, ConstraintSet, GaitModel, LEG_JOINTS};
-use crate::model::ad::{self, AdChunk};
+use crate::model::ad::{self, AdChunk, AdNested};
 use crate::model::error::DynamicsError;
 
 impl GaitModel {
@@ -76,6 +76,150 @@ impl GaitModel {
             }
         }
         pushes
+    }
+
+    /// `Σ μ_i ∇²ẋ_i` over `(x, u, θ)` (column-major, nz × nz) by nested forward AD.
+    /// With muscle-torque generators (no residual actuators, activation time not free)
+    /// the activations act only through the joint torques, linearly: the accelerations
+    /// are differentiated along the joints' torques instead of the twelve activations
+    /// (`H[a_i, w] = Σ_j ∂τ_j/∂a_i H[τ_j, w] + Σ_j γ_j ∂²τ_j/∂a_i∂w` with
+    /// `γ_j = μ_q · ∂q̈/∂τ_j`), and ȧ, affine in (e, a) with constant coefficients,
+    /// adds nothing.
+    pub fn weighted_dynamics_hessian(
+        &self,
+        set: &ConstraintSet,
+        (x, u, theta): (&[f64], &[f64], &[f64]),
+        mu: &[f64],
+        out: &mut [f64],
+    ) -> Result<(), DynamicsError> {
+        let (nx, nu, nt) = (self.nx(), self.nu(), theta.len());
+        let nz = nx + nu + nt;
+        let mut lam = vec![AdNested::from(0.0); set.rows.len()];
+        let mut xdot = vec![AdNested::from(0.0); nx];
+        let weighted = |xdot: &[AdNested]| {
+            xdot.iter()
+                .zip(mu)
+                .fold(AdNested::from(0.0), |acc, (f, m)| acc + *f * *m)
+        };
+        let through_torques = matches!(self.actuation, Actuation::Mtg(_))
+            && self.residuals.is_none()
+            && !self.scales_activation_time();
+        if !through_torques {
+            let z: Vec<f64> = x.iter().chain(u).chain(theta).copied().collect();
+            let (curved, lead) = self.curved_inputs();
+            return ad::hessian_over(
+                &z,
+                &curved,
+                lead,
+                |zs| {
+                    let (xs, rest) = zs.split_at(nx);
+                    let (us, ts) = rest.split_at(nu);
+                    self.dynamics(set, xs, us, ts, &mut xdot, &mut lam, None)?;
+                    Ok(weighted(&xdot))
+                },
+                out,
+            );
+        }
+        let (nq, a0) = (self.nq(), 2 * self.nq());
+        let na = nx - a0;
+        let dtau_da = self.torque_activation_jacobian(x, u, theta);
+        let joints: Vec<usize> = (0..nq)
+            .filter(|&j| (0..na).any(|i| dtau_da[j + i * nq] != 0.0))
+            .collect();
+        let nj = joints.len();
+        let uc: Vec<AdNested> = u.iter().map(|&v| AdNested::from(v)).collect();
+        let ac: Vec<AdNested> = x[a0..].iter().map(|&v| AdNested::from(v)).collect();
+        // over (q, q̇, δτ, θ): the activations held, torques δτ added at the joints
+        let mut z = x[..a0].to_vec();
+        z.extend(std::iter::repeat_n(0.0, nj));
+        z.extend_from_slice(theta);
+        let nzt = z.len();
+        let mut curved: Vec<usize> = (a0..a0 + nj).collect();
+        curved.extend(0..a0);
+        curved.extend(a0 + nj..nzt);
+        let mut ht = vec![0.0; nzt * nzt];
+        let mut xs = Vec::with_capacity(nx);
+        let mut extra = Vec::with_capacity(nj);
+        ad::hessian_over(
+            &z,
+            &curved,
+            nj,
+            |zs| {
+                let (qs, rest) = zs.split_at(a0);
+                let (taus, ts) = rest.split_at(nj);
+                xs.clear();
+                xs.extend_from_slice(qs);
+                xs.extend_from_slice(&ac);
+                extra.clear();
+                extra.extend(joints.iter().copied().zip(taus.iter().copied()));
+                self.dynamics_with_torques(set, (&xs, &uc, ts), &extra, &mut xdot, &mut lam, None)?;
+                Ok(weighted(&xdot))
+            },
+            &mut ht,
+        )?;
+        // γ_j, and Σ_j γ_j (τ_j(w, a) − τ_j(w, a*)) over (q, q̇, a, θ): its (a, w) block
+        let mut xd = vec![0.0; nx];
+        let at = self.solution(set, (x, u, theta), &[], &mut xd)?;
+        let gamma: Vec<f64> = joints
+            .iter()
+            .map(|&j| {
+                let r = at.unit_torque_response(j);
+                r.iter().zip(&mu[nq..a0]).map(|(r, m)| r * m).sum()
+            })
+            .collect();
+        let zw: Vec<f64> = x.iter().chain(theta).copied().collect();
+        let nzw = zw.len();
+        let mut curved_w: Vec<usize> = (a0..nx).collect();
+        curved_w.extend(0..a0);
+        curved_w.extend(nx..nzw);
+        let mut hw = vec![0.0; nzw * nzw];
+        ad::hessian_over(
+            &zw,
+            &curved_w,
+            na,
+            |zs| {
+                let (w, ts) = zs.split_at(nx);
+                let (q, rest) = w.split_at(nq);
+                let (qd, a) = rest.split_at(nq);
+                let p = self.full_params(ts);
+                let tau = self.generalized_forces(q, qd, a, &uc, &p);
+                let tau0 = self.generalized_forces(q, qd, &ac, &uc, &p);
+                Ok(joints
+                    .iter()
+                    .zip(&gamma)
+                    .fold(AdNested::from(0.0), |acc, (&j, g)| {
+                        acc + (tau[j] - tau0[j]) * *g
+                    }))
+            },
+            &mut hw,
+        )?;
+        // assembled over (x, u, θ): w = (q, q̇, θ) rows and columns from `ht`, the
+        // activations' from the chain rule
+        out.iter_mut().for_each(|v| *v = 0.0);
+        // w's entries as (index in zw, in z, in the output)
+        let ws: Vec<(usize, usize, usize)> = (0..a0 + nt)
+            .map(|k| match k.checked_sub(a0) {
+                None => (k, k, k),
+                Some(t) => (nx + t, a0 + nj + t, nx + nu + t),
+            })
+            .collect();
+        for &(_, tr, or) in &ws {
+            for &(_, tc, oc) in &ws {
+                out[or + oc * nz] = ht[tr + tc * nzt];
+            }
+        }
+        for i in 0..na {
+            let oa = a0 + i;
+            for &(wi, tw, ow) in &ws {
+                let mut v = hw[(a0 + i) + wi * nzw];
+                for (k, &j) in joints.iter().enumerate() {
+                    v += dtau_da[j + i * nq] * ht[(a0 + k) + tw * nzt];
+                }
+                out[oa + ow * nz] = v;
+                out[ow + oa * nz] = v;
+            }
+        }
+        Ok(())
     }
 
     /// Evaluate `ẋ` and its Jacobians with respect to `(x, u, θ)` by chunked forward AD;
