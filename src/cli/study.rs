@@ -20,7 +20,7 @@ pub struct Args {
     /// Build the study table from the finished trial folders of DIR (after a Slurm array).
     #[arg(long, value_name = "DIR", conflicts_with_all = ["manifest", "slurm", "only_row", "track", "diagnose"])]
     collect: Option<PathBuf>,
-    /// Track each trial after its check (40–250 s a trial).
+    /// Track each trial after its check (tens of seconds a trial).
     #[arg(long)]
     track: bool,
     /// Diagnose each track (`footfall diagnose`: score tests, held-out validation, a
