@@ -164,14 +164,28 @@ impl GaitModel {
         lambda: &mut [S],
         report: Option<&mut ContactReport>,
     ) -> Result<(), DynamicsError> {
+        self.forward(set, (x, u, theta), extra, xdot, lambda, report)
+            .map(|_| ())
+    }
+
+    /// [`Self::dynamics_with_torques`], also returning the solve's factors.
+    fn forward<S: ModelScalar>(
+        &self,
+        set: &ConstraintSet,
+        (x, u, theta): (&[S], &[S], &[S]),
+        extra: &[(usize, S)],
+        xdot: &mut [S],
+        lambda: &mut [S],
+        report: Option<&mut ContactReport>,
+    ) -> Result<(Vec<S>, Factors<S>), DynamicsError> {
         let nq = self.nq();
         let mut terms = self.assemble(set, (x, u, theta), extra, lambda);
         let adot = std::mem::take(&mut terms.adot);
-        let (qdd, _) = self.solve_terms(terms, set, lambda, report)?;
+        let (qdd, factors) = self.solve_terms(terms, set, lambda, report)?;
         xdot[..nq].copy_from_slice(&x[nq..2 * nq]);
         xdot[nq..2 * nq].copy_from_slice(&qdd);
         xdot[2 * nq..].copy_from_slice(&adot);
-        Ok(())
+        Ok((qdd, factors))
     }
 
     /// The terms of the dynamics at `(x, u, θ)` with the forces `extra` added, before
@@ -242,14 +256,13 @@ impl GaitModel {
         &self,
         set: &ConstraintSet,
         inputs: (&[S], &[S], &[S]),
-        extra: &[(usize, S)],
         at: &Solution,
         xdot: &mut [S],
         lambda: &mut [S],
     ) {
         let nq = self.nq();
         let x = inputs.0;
-        let terms = self.assemble(set, inputs, extra, lambda);
+        let terms = self.assemble(set, inputs, &[], lambda);
         let f = &at.factors;
         let mut r1 = terms.force;
         for i in 0..nq {
@@ -295,17 +308,10 @@ impl GaitModel {
         &self,
         set: &ConstraintSet,
         inputs: (&[f64], &[f64], &[f64]),
-        extra: &[(usize, f64)],
         xdot: &mut [f64],
     ) -> Result<Solution, DynamicsError> {
-        let nq = self.nq();
         let mut lambda = vec![0.0; set.rows.len()];
-        let mut terms = self.assemble(set, inputs, extra, &mut lambda);
-        let adot = std::mem::take(&mut terms.adot);
-        let (qdd, factors) = self.solve_terms(terms, set, &mut lambda, None)?;
-        xdot[..nq].copy_from_slice(&inputs.0[nq..2 * nq]);
-        xdot[nq..2 * nq].copy_from_slice(&qdd);
-        xdot[2 * nq..].copy_from_slice(&adot);
+        let (qdd, factors) = self.forward(set, inputs, &[], xdot, &mut lambda, None)?;
         Ok(Solution {
             qdd,
             lambda,

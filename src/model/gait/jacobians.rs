@@ -123,9 +123,7 @@ impl GaitModel {
         let (nq, a0) = (self.nq(), 2 * self.nq());
         let na = nx - a0;
         let dtau_da = self.torque_activation_jacobian(x, u, theta);
-        let joints: Vec<usize> = (0..nq)
-            .filter(|&j| (0..na).any(|i| dtau_da[j + i * nq] != 0.0))
-            .collect();
+        let joints = moved_joints(&dtau_da, nq);
         let nj = joints.len();
         let uc: Vec<AdNested> = u.iter().map(|&v| AdNested::from(v)).collect();
         let ac: Vec<AdNested> = x[a0..].iter().map(|&v| AdNested::from(v)).collect();
@@ -134,9 +132,7 @@ impl GaitModel {
         z.extend(std::iter::repeat_n(0.0, nj));
         z.extend_from_slice(theta);
         let nzt = z.len();
-        let mut curved: Vec<usize> = (a0..a0 + nj).collect();
-        curved.extend(0..a0);
-        curved.extend(a0 + nj..nzt);
+        let curved = lead_first(a0..a0 + nj, nzt);
         let mut ht = vec![0.0; nzt * nzt];
         let mut xs = Vec::with_capacity(nx);
         let mut extra = Vec::with_capacity(nj);
@@ -159,7 +155,7 @@ impl GaitModel {
         )?;
         // γ_j, and Σ_j γ_j (τ_j(w, a) − τ_j(w, a*)) over (q, q̇, a, θ): its (a, w) block
         let mut xd = vec![0.0; nx];
-        let at = self.solution(set, (x, u, theta), &[], &mut xd)?;
+        let at = self.solution(set, (x, u, theta), &mut xd)?;
         let gamma: Vec<f64> = joints
             .iter()
             .map(|&j| {
@@ -169,9 +165,7 @@ impl GaitModel {
             .collect();
         let zw: Vec<f64> = x.iter().chain(theta).copied().collect();
         let nzw = zw.len();
-        let mut curved_w: Vec<usize> = (a0..nx).collect();
-        curved_w.extend(0..a0);
-        curved_w.extend(nx..nzw);
+        let curved_w = lead_first(a0..nx, nzw);
         let mut hw = vec![0.0; nzw * nzw];
         ad::hessian_over(
             &zw,
@@ -245,7 +239,7 @@ impl GaitModel {
             Actuation::Mtg(mtg) if self.residuals.is_none() => {
                 let (nq, a0) = (self.nq(), 2 * self.nq());
                 let na = nx - a0;
-                let at = self.solution(set, (x, u, theta), &[], xdot)?;
+                let at = self.solution(set, (x, u, theta), xdot)?;
                 let dtau_da = self.torque_activation_jacobian(x, u, theta);
                 let mut z = Vec::with_capacity(a0 + nt);
                 z.extend_from_slice(&x[..a0]);
@@ -262,7 +256,7 @@ impl GaitModel {
                         xs.clear();
                         xs.extend_from_slice(qs);
                         xs.extend_from_slice(&ac);
-                        self.dynamics_tangent(set, (&xs, &uc, ts), &[], &at, out, &mut lam);
+                        self.dynamics_tangent(set, (&xs, &uc, ts), &at, out, &mut lam);
                         Ok::<(), DynamicsError>(())
                     },
                     xdot,
@@ -273,19 +267,15 @@ impl GaitModel {
                 jac[nx * (nx + nu)..].copy_from_slice(&jz[nx * a0..]);
                 // activation columns: Σ_j ∂q̈/∂τ_j ∂τ_j/∂a_i, and the rate's own
                 let time = self.actuator_factors(theta).time;
-                let responses: Vec<Option<Vec<f64>>> = (0..nq)
-                    .map(|j| {
-                        (0..na)
-                            .any(|i| dtau_da[j + i * nq] != 0.0)
-                            .then(|| at.unit_torque_response(j))
-                    })
-                    .collect();
+                let joints = moved_joints(&dtau_da, nq);
+                let responses: Vec<Vec<f64>> =
+                    joints.iter().map(|&j| at.unit_torque_response(j)).collect();
                 for i in 0..na {
                     let col = &mut jac[nx * (a0 + i)..nx * (a0 + i + 1)];
                     col.iter_mut().for_each(|v| *v = 0.0);
-                    for (j, response) in responses.iter().enumerate() {
+                    for (&j, r) in joints.iter().zip(&responses) {
                         let d = dtau_da[j + i * nq];
-                        if let (Some(r), true) = (response, d != 0.0) {
+                        if d != 0.0 {
                             col[nq..a0].iter_mut().zip(r).for_each(|(c, v)| *c += d * v);
                         }
                     }
@@ -307,7 +297,7 @@ impl GaitModel {
             // force; AD over (x, θ) and the other controls (excitations)
             _ => {
                 let (nq, a0) = (self.nq(), 2 * self.nq());
-                let at = self.solution(set, (x, u, theta), &[], xdot)?;
+                let at = self.solution(set, (x, u, theta), xdot)?;
                 let pushes = self.control_pushes();
                 let free: Vec<usize> = (0..nu).filter(|&k| pushes[k].is_none()).collect();
                 let mut z = Vec::with_capacity(nx + free.len() + nt);
@@ -325,7 +315,7 @@ impl GaitModel {
                         for (&k, v) in free.iter().zip(fs) {
                             us[k] = *v;
                         }
-                        self.dynamics_tangent(set, (xs, &us, ts), &[], &at, out, &mut lam);
+                        self.dynamics_tangent(set, (xs, &us, ts), &at, out, &mut lam);
                         Ok::<(), DynamicsError>(())
                     },
                     xdot,
@@ -356,4 +346,19 @@ impl GaitModel {
             }
         }
     }
+}
+
+/// The joints whose torque some activation moves, from `∂τ/∂a` (nq × na, column-major).
+fn moved_joints(dtau_da: &[f64], nq: usize) -> Vec<usize> {
+    (0..nq)
+        .filter(|&j| dtau_da.chunks_exact(nq).any(|col| col[j] != 0.0))
+        .collect()
+}
+
+/// All of `0..n` with the inputs of `lead` first: the order [`ad::hessian_over`] takes
+/// an affine leading group in.
+fn lead_first(lead: std::ops::Range<usize>, n: usize) -> Vec<usize> {
+    lead.clone()
+        .chain((0..n).filter(|i| !lead.contains(i)))
+        .collect()
 }
