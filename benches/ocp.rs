@@ -68,6 +68,7 @@ fn bench(c: &mut Criterion) {
             d_ub: &d_ub,
             elastic: Some(1e4),
             elastic_weights: &weights,
+            hint: None,
         };
         g.bench_function("qp_solve_elastic", |b| {
             b.iter(|| qp::solve(&data).expect("qp"))

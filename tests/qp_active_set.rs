@@ -1,5 +1,6 @@
 //! The QP subproblem solved on a guessed active set (`sqp::qp::solve_near_solution`'s
-//! first try, for the Gauss–Newton model's questions at a solution) is the QP's solution:
+//! first try, for the Gauss–Newton model's questions at a solution, and `sqp::qp::solve`'s
+//! given the last SQP iteration's multipliers) is the QP's solution:
 //! on random convex QPs built around a known solution whose point sits on some of its
 //! bounds, it finds that solution and its multipliers, and agrees with Clarabel's
 //! interior-point solution; whenever it answers a random QP, its answer meets the KKT
@@ -8,7 +9,7 @@
 //! from is released, a bound the step would cross is added); and where the Hessian is not
 //! convex on the guessed active set, the guess is not taken.
 
-use footfall::sqp::qp::{self, QpData, QpSolution, Triplets};
+use footfall::sqp::qp::{self, ActiveHint, QpData, QpSolution, Triplets};
 
 /// xorshift, so the QPs are the same on every machine.
 struct Rng(u64);
@@ -48,9 +49,17 @@ impl Qp {
                 d_ub: &self.d_ub,
                 elastic: None,
                 elastic_weights: &[],
+                hint: None,
             },
             weights,
         )
+    }
+    /// `qp::solve` given the multipliers `(λ, ν)` of a previous QP.
+    fn solve_hinted(&self, lambda: &[f64], nu: &[f64]) -> QpSolution {
+        let (mut d, w) = self.data();
+        d.elastic_weights = &w;
+        d.hint = Some(ActiveHint { lambda, nu });
+        qp::solve(&d).unwrap()
     }
     fn solve(&self, interior: bool) -> QpSolution {
         let (mut d, w) = self.data();
@@ -250,6 +259,48 @@ fn a_random_qp_is_solved_on_the_active_set_only_at_its_kkt_point() {
         }
     }
     eprintln!("{taken} of 40 solved on the active set");
+}
+
+#[test]
+fn the_next_sqp_qp_is_solved_on_the_active_set_its_predecessors_multipliers_hold() {
+    // an SQP iteration's QP differs from the last one by a small change of its data; the
+    // last QP's multipliers name the bounds and rows that hold, where the point is not on
+    // them (a step rarely lands exactly on a row)
+    let mut rng = Rng(0xD1B54A32D192ED03);
+    let mut taken = 0;
+    for case in 0..20 {
+        let (mut q, ..) = qp_with_known_solution(&mut rng, 30, 12, 5, 8, 20);
+        let last = q.solve(true);
+        // the next QP: the gradient and the constraint values moved, the point off its
+        // bounds by the last step's distance
+        for g in q.g.iter_mut() {
+            *g += 1e-3 * rng.uniform();
+        }
+        for c in q.c.iter_mut() {
+            *c += 1e-3 * rng.uniform();
+        }
+        for j in 0..8 {
+            q.d_lb[j] -= 1e-3 * rng.uniform().abs();
+        }
+        let reference = q.solve(true);
+        let hinted = q.solve_hinted(&last.lambda, &last.nu);
+        assert!(kkt_violation(&q, &hinted) < 1e-9, "case {case}");
+        let dd = largest_difference(&hinted.d, &reference.d);
+        assert!(dd < 1e-6, "case {case}: step {dd:.1e} from Clarabel's");
+        if hinted.iterations == 0 {
+            taken += 1;
+        }
+    }
+    assert_eq!(taken, 20, "solved on the hinted active set");
+    // a hint that holds every bound is corrected or left to Clarabel, never taken wrong
+    let (mut q, ..) = qp_with_known_solution(&mut rng, 30, 12, 5, 8, 20);
+    for g in q.g.iter_mut() {
+        *g += 2.0 * rng.uniform();
+    }
+    let reference = q.solve(true);
+    let wrong = q.solve_hinted(&vec![1.0; q.c.len()], &vec![-1.0; q.g.len()]);
+    assert!(kkt_violation(&q, &wrong) < 1e-6);
+    assert!(largest_difference(&wrong.d, &reference.d) < 1e-6);
 }
 
 #[test]

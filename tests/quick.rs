@@ -2,12 +2,10 @@
 //! physics and derivatives piece by piece, the QP and SQP pieces, the report's files.
 //! The tests that run whole solves are in `suite.rs`.
 //!
-//! Two test crates, not one, because they compile side by side after the library, one
-//! core each (footfall's crates are built in one codegen unit, Cargo.toml): as one crate
-//! the tests compiled in 343 s on one core of the slowest two-core machines while the
-//! other core had nothing to do. This one runs first and its tests are short, so the
-//! harness leaves a core idle only for seconds at its end. Run one module with a filter:
-//! `cargo test --test quick fuzz::`.
+//! Two test crates, not one, so that they compile side by side after the library (each
+//! in few codegen units, Cargo.toml) and `cargo test` runs the short ones first: the
+//! harness leaves a core idle only for seconds at this crate's end. Run one module with
+//! a filter: `cargo test --test quick fuzz::`.
 
 mod common;
 

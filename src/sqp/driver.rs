@@ -9,7 +9,7 @@ use super::hessian::BlockBfgs;
 use super::iterate::{State, Structure};
 use super::kkt::{self, KktPoint};
 use super::line_search::{self, Filter, Search, Trial};
-use super::qp::{QpData, QpSolution, Triplets};
+use super::qp::{ActiveHint, QpData, QpSolution, Triplets};
 use super::step::{self, Step, StepMemory, Subproblem};
 use super::ExactConvexification;
 use super::{
@@ -398,8 +398,13 @@ impl<'a> Solver<'a> {
                 max_step,
                 &|w| eval.plain(w),
                 &|c_soc| {
+                    // the correction's active set is most likely the step's
                     eval.qp(&QpData {
                         c: c_soc,
+                        hint: Some(ActiveHint {
+                            lambda: &sol.lambda,
+                            nu: &sol.nu,
+                        }),
                         ..sub.data(None)
                     })
                     .ok()

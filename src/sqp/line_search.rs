@@ -363,6 +363,7 @@ mod tests {
                 d_ub: &[10.0],
                 elastic: None,
                 elastic_weights: &[1.0],
+                hint: None,
             })
             .ok()
             .map(|q| q.d)

@@ -147,6 +147,7 @@ impl<'a> GaussNewtonModel<'a> {
             d_ub: &d_ub,
             elastic: None,
             elastic_weights: &weights,
+            hint: None,
         })?;
         let mut hd = vec![0.0; n];
         for ((&r, &c), &v) in self.h.rows.iter().zip(&self.h.cols).zip(&self.h.vals) {
@@ -243,6 +244,7 @@ impl<'a> GaussNewtonModel<'a> {
                 d_ub: &d_ub,
                 elastic: None,
                 elastic_weights: &weights,
+                hint: None,
             })?;
             for (i, &ci) in cols.iter().enumerate() {
                 out[i][j] = -sol.d[ci];

@@ -3,7 +3,8 @@
 //!
 //! Near a solution, and in every question asked at one (a score test's Gauss–Newton
 //! steps, the identifiability probes), the bounds and inequality rows that hold at the
-//! step are those that hold at the point. The QP restricted to them is an
+//! step are those that hold at the point; from one SQP iteration to the next, they are
+//! mostly those the last QP held (its multipliers). The QP restricted to them is an
 //! equality-constrained QP: one factorisation of its KKT matrix
 //! $\begin{pmatrix} H & A^T \\ A & 0 \end{pmatrix}$, where Clarabel factorises a larger
 //! one 10–25 times. The guess is corrected for a few rounds, in the manner of a
@@ -15,7 +16,7 @@
 //! precision of the factorisation with iterative refinement. Otherwise the caller solves
 //! the QP with Clarabel, so a wrong guess costs time, never a different answer.
 
-use super::{CscPattern, QpData, QpSolution};
+use super::{ActiveHint, CscPattern, QpData, QpSolution};
 use clarabel::qdldl::{QDLDLFactorisation, QDLDLSettings};
 
 /// How a bound pair holds in the guess.
@@ -62,35 +63,40 @@ enum Row {
     Variable(usize),
 }
 
-/// The QP `q` (not in elastic mode) on a guessed active set, or `None` when the guess
-/// does not settle on a KKT point within [`ROUNDS`] (the caller then solves it with the
-/// interior-point solver). `jrows` holds the entries of each constraint row.
-pub(super) fn solve(q: &QpData<'_>, jrows: &[Vec<(usize, f64)>]) -> Option<QpSolution> {
+/// A multiplier of a previous QP counts as holding its bound beyond this fraction of the
+/// largest one (an interior-point solution leaves the free ones near zero, not at it).
+const HELD: f64 = 1e-8;
+
+/// Where the first guess of the active set comes from.
+#[derive(Debug, Clone, Copy)]
+pub(super) enum Guess<'a> {
+    /// The bounds and rows that hold at the point (a question asked at a solution).
+    AtPoint,
+    /// The bounds and rows a previous QP of the same shape held (its multipliers).
+    Held(ActiveHint<'a>),
+}
+
+/// The QP `q` (not in elastic mode) on the active set guessed by `guess`, or `None` when
+/// the guess does not settle on a KKT point within [`ROUNDS`] (the caller then solves it
+/// with the interior-point solver). `jrows` holds the entries of each constraint row.
+pub(super) fn solve(
+    q: &QpData<'_>,
+    jrows: &[Vec<(usize, f64)>],
+    guess: Guess<'_>,
+) -> Option<QpSolution> {
+    let (n, m) = (q.g.len(), q.c.len());
     if q.elastic.is_some() {
         return None;
     }
-    let (n, m) = (q.g.len(), q.c.len());
+    let (mut rows, mut vars) = match guess {
+        Guess::AtPoint => held_at_point(q),
+        Guess::Held(hint) if hint.lambda.len() == m && hint.nu.len() == n => {
+            held_by_multipliers(q, hint)
+        }
+        Guess::Held(_) => return None,
+    };
     let lo = |i: usize| q.c_lb[i] - q.c[i];
     let hi = |i: usize| q.c_ub[i] - q.c[i];
-    let near = |distance: f64, bound: f64| distance.abs() <= AT_BOUND * (1.0 + bound.abs());
-    // `lower`, `upper`: the distances to the bounds `l`, `u`
-    let guess = |lower: f64, upper: f64, l: f64, u: f64| {
-        if l == u {
-            Held::Fixed
-        } else if upper.is_finite() && near(upper, u) {
-            Held::Upper
-        } else if lower.is_finite() && near(lower, l) {
-            Held::Lower
-        } else {
-            Held::Free
-        }
-    };
-    let mut rows: Vec<Held> = (0..m)
-        .map(|i| guess(lo(i), hi(i), q.c_lb[i], q.c_ub[i]))
-        .collect();
-    let mut vars: Vec<Held> = (0..n)
-        .map(|j| guess(q.d_lb[j], q.d_ub[j], q.d_lb[j], q.d_ub[j]))
-        .collect();
     // the Hessian's upper triangle, as Clarabel reads it
     let h: Vec<(usize, usize, f64)> = (0..q.h.vals.len())
         .filter(|&k| q.h.rows[k] <= q.h.cols[k])
@@ -121,6 +127,19 @@ pub(super) fn solve(q: &QpData<'_>, jrows: &[Vec<(usize, f64)>]) -> Option<QpSol
             .iter()
             .map(|r| r.iter().map(|&(j, v)| v * d[j]).sum())
             .collect();
+        // the held rows met: rows that contradict each other (an inconsistent
+        // linearisation) leave a KKT matrix the refinement solves only relative to its huge
+        // multipliers, and are the interior-point solver's to call infeasible
+        let met = held.iter().all(|&(row, b)| {
+            let value = match row {
+                Row::Constraint(i) => jd[i],
+                Row::Variable(j) => d[j],
+            };
+            (value - b).abs() <= FEASIBLE * (1.0 + b.abs())
+        });
+        if !met {
+            return None;
+        }
         // the multipliers by row and by variable (0 where nothing is held)
         let mut lambda = vec![0.0; m];
         let mut nu = vec![0.0; n];
@@ -163,6 +182,58 @@ pub(super) fn solve(q: &QpData<'_>, jrows: &[Vec<(usize, f64)>]) -> Option<QpSol
         });
     }
     None
+}
+
+/// The rows and bounds of `q` that hold at the point (within [`AT_BOUND`]).
+fn held_at_point(q: &QpData<'_>) -> (Vec<Held>, Vec<Held>) {
+    let near = |distance: f64, bound: f64| distance.abs() <= AT_BOUND * (1.0 + bound.abs());
+    // `lower`, `upper`: the distances to the bounds `l`, `u`
+    let guess = |lower: f64, upper: f64, l: f64, u: f64| {
+        if l == u {
+            Held::Fixed
+        } else if upper.is_finite() && near(upper, u) {
+            Held::Upper
+        } else if lower.is_finite() && near(lower, l) {
+            Held::Lower
+        } else {
+            Held::Free
+        }
+    };
+    let rows = (0..q.c.len())
+        .map(|i| guess(q.c_lb[i] - q.c[i], q.c_ub[i] - q.c[i], q.c_lb[i], q.c_ub[i]))
+        .collect();
+    let vars = (0..q.g.len())
+        .map(|j| guess(q.d_lb[j], q.d_ub[j], q.d_lb[j], q.d_ub[j]))
+        .collect();
+    (rows, vars)
+}
+
+/// The rows and bounds of `q` whose multipliers in `hint` hold them (beyond [`HELD`] of
+/// the largest), on the side their sign gives; equalities always.
+fn held_by_multipliers(q: &QpData<'_>, hint: ActiveHint<'_>) -> (Vec<Held>, Vec<Held>) {
+    let largest = hint
+        .lambda
+        .iter()
+        .chain(hint.nu)
+        .fold(1.0f64, |a, v| a.max(v.abs()));
+    let guess = |y: f64, l: f64, u: f64| {
+        if l == u {
+            Held::Fixed
+        } else if y > HELD * largest && u.is_finite() {
+            Held::Upper
+        } else if y < -HELD * largest && l.is_finite() {
+            Held::Lower
+        } else {
+            Held::Free
+        }
+    };
+    let rows = (0..q.c.len())
+        .map(|i| guess(hint.lambda[i], q.c_lb[i], q.c_ub[i]))
+        .collect();
+    let vars = (0..q.g.len())
+        .map(|j| guess(hint.nu[j], q.d_lb[j], q.d_ub[j]))
+        .collect();
+    (rows, vars)
 }
 
 /// The solution `(d, y)` of `H d + Aᵀ y = −g`, `A d = b` for the held rows `held`

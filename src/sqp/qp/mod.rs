@@ -6,8 +6,9 @@
 //! variables) in the zero cone, each finite inequality bound as one row of the
 //! nonnegative cone. In elastic mode every constraint row gets a pair of non-negative
 //! slacks $p, n$ penalised by $\rho \sum (p + n)$, so the QP is always feasible (used when
-//! the linearised constraints are inconsistent). A QP asked at a solution is solved on
-//! its guessed active set first ([`active_set`]).
+//! the linearised constraints are inconsistent). A QP asked at a solution, or given the
+//! multipliers of a previous QP of the same shape, is solved on its guessed active set
+//! first ([`active_set`]).
 
 mod active_set;
 
@@ -153,6 +154,21 @@ pub struct QpData<'a> {
     pub elastic: Option<f64>,
     /// Per-row multipliers of ρ in elastic mode.
     pub elastic_weights: &'a [f64],
+    /// The multipliers (λ of the rows, ν of the bounds) of a previous QP of the same
+    /// shape, the last SQP iteration's: the rows and bounds they hold are the first guess
+    /// of this QP's active set ([`solve`]).
+    pub hint: Option<ActiveHint<'a>>,
+}
+
+/// The multipliers of a previous QP of the same shape (Lagrangian `f + λᵀc + νᵀw`): a
+/// row or bound with a positive multiplier held its upper bound, with a negative one its
+/// lower bound.
+#[derive(Debug, Clone, Copy)]
+pub struct ActiveHint<'a> {
+    /// Constraint multipliers λ.
+    pub lambda: &'a [f64],
+    /// Bound multipliers ν.
+    pub nu: &'a [f64],
 }
 
 /// Solution of a QP subproblem.
@@ -190,20 +206,29 @@ enum RowMap {
     Slack,
 }
 
-/// Solve a QP subproblem with Clarabel.
+/// Solve a QP subproblem: given a [`QpData::hint`], first on the active set the previous
+/// QP held (one sparse LDLᵀ, `sqp::qp::active_set`; across SQP iterations the active
+/// set mostly stays), else with Clarabel.
 pub fn solve(q: &QpData<'_>) -> Result<QpSolution, QpError> {
-    interior_point(q, &rows_of(q))
+    let jrows = rows_of(q);
+    let guessed = q
+        .hint
+        .and_then(|hint| active_set::solve(q, &jrows, active_set::Guess::Held(hint)));
+    match guessed {
+        Some(sol) => Ok(sol),
+        None => interior_point(q, &jrows),
+    }
 }
 
 /// Solve a QP subproblem asked at a solution (a Gauss–Newton model's steps and probes):
 /// first on the active set guessed from the bounds and rows that hold at the point (one
 /// sparse LDLᵀ, `sqp::qp::active_set`), which settles on the QP's KKT point
 /// in a few corrections when the point is a solution of a nearby problem; else with
-/// Clarabel, as [`solve`]. Not used inside the SQP's iterations: there the guess rarely
-/// holds (the CI's predictions took Clarabel's path at every QP, 2 % slower).
+/// Clarabel. Inside the SQP's iterations this guess rarely holds (a step moves the
+/// point off the rows it reaches); there [`solve`] guesses from the last QP's multipliers.
 pub fn solve_near_solution(q: &QpData<'_>) -> Result<QpSolution, QpError> {
     let jrows = rows_of(q);
-    match active_set::solve(q, &jrows) {
+    match active_set::solve(q, &jrows, active_set::Guess::AtPoint) {
         Some(sol) => Ok(sol),
         None => interior_point(q, &jrows),
     }

@@ -12,7 +12,7 @@ mod exact;
 use super::evaluator::Evaluator;
 use super::hessian::BlockBfgs;
 use super::iterate::{State, Structure};
-use super::qp::{QpData, QpError, QpSolution, Triplets};
+use super::qp::{ActiveHint, QpData, QpError, QpSolution, Triplets};
 use super::{
     ExactConvexification, HessianMode, IterationRecord, Nlp, QpRoute, SqpSettings, SqpStatus,
 };
@@ -65,6 +65,9 @@ pub(super) struct Subproblem<'a> {
     c: &'a [f64],
     d_lb: Vec<f64>,
     d_ub: Vec<f64>,
+    /// The multipliers of the last QP (λ, ν): its active set is the first guess of this
+    /// one's.
+    last: (Vec<f64>, Vec<f64>),
 }
 
 impl Subproblem<'_> {
@@ -85,6 +88,10 @@ impl Subproblem<'_> {
             d_ub: &self.d_ub,
             elastic,
             elastic_weights: &self.s.elastic_weights,
+            hint: Some(ActiveHint {
+                lambda: &self.last.0,
+                nu: &self.last.1,
+            }),
         }
     }
 }
@@ -232,6 +239,7 @@ pub(super) fn subproblem<'a>(
         c: &st.ev.c,
         d_lb: (0..n).map(|i| s.w_lb[i] - st.w[i]).collect(),
         d_ub: (0..n).map(|i| s.w_ub[i] - st.w[i]).collect(),
+        last: (lambda.to_vec(), nu.to_vec()),
     })
 }
 
@@ -409,6 +417,7 @@ mod tests {
             c,
             d_lb: s.w_lb.clone(),
             d_ub: s.w_ub.clone(),
+            last: (vec![0.0; s.m], vec![0.0; s.n]),
         }
     }
 
