@@ -236,7 +236,13 @@ fn diagnose(
     summary
 }
 
-type Floor = (Vec<(String, f64)>, Value, Vec<((String, String), f64)>);
+/// The noise floor of a setup: the trial without a hidden effect tracked (its run
+/// folder), its mean error per channel, and per channel and phase.
+struct Floor {
+    run: PathBuf,
+    channels: Vec<(String, f64)>,
+    phases: Vec<((String, String), f64)>,
+}
 
 /// The trials whose diagnosis also validates the found candidate on a held-out half
 /// cycle (the plain model tracked there from the data, about a minute in the test
@@ -255,9 +261,8 @@ const SCORED_CANDIDATES: [&str; 3] = [
     "passive_joint_stiffness:joint=ankle",
 ];
 
-/// The noise floor (mean error per channel on the trial without a hidden effect), the
-/// diagnosis of that trial and the floor phase by phase, computed once for all tests
-/// (per setup).
+/// The noise floor (mean error per channel, and per channel and phase, on the trial
+/// without a hidden effect), computed once for all tests of a process (per setup).
 fn floor(how: Setup) -> &'static Floor {
     static FLOOR: [OnceLock<Floor>; 5] = [
         OnceLock::new(),
@@ -269,21 +274,29 @@ fn floor(how: Setup) -> &'static Floor {
     FLOOR[how.index()].get_or_init(|| {
         let dir = tempfile::tempdir().unwrap().keep();
         let run = baseline(how.none(), &dir, how);
-        let d = diagnose(
-            &run,
-            1,
-            if how == Setup::ForcePlateRate {
-                &SCORED_CANDIDATES
-            } else {
-                &[]
-            },
-            // nothing should be significant here; anything that is must also pass the
-            // held-out half cycle
-            true,
-            starts(how.none(), how),
-        );
-        (channel_means(&run), d, phase_means(&run))
+        Floor {
+            channels: channel_means(&run),
+            phases: phase_means(&run),
+            run,
+        }
     })
+}
+
+/// The diagnosis of the trial without a hidden effect, under setup `how`.
+fn diagnose_floor(how: Setup) -> Value {
+    diagnose(
+        &floor(how).run,
+        1,
+        if how == Setup::ForcePlateRate {
+            &SCORED_CANDIDATES
+        } else {
+            &[]
+        },
+        // nothing should be significant here; anything that is must also pass the
+        // held-out half cycle
+        true,
+        starts(how.none(), how),
+    )
 }
 
 /// The hidden values of trial `name`: `(field, value)` of every hidden effect.
@@ -310,7 +323,7 @@ fn hidden_values(name: &str) -> Vec<(String, String, f64)> {
 
 /// Every channel's mean error within `factor` × the floor.
 fn within_floor(run: &Path, factor: f64, how: Setup) -> Result<(), String> {
-    let (floor, _, _) = floor(how);
+    let floor = &floor(how).channels;
     let mut bad = Vec::new();
     for ((c, e), (_, f)) in channel_means(run).iter().zip(floor) {
         if *e > factor * f {
@@ -353,7 +366,7 @@ fn check_parameters(verified: &Value, hidden: &[(String, String, f64)]) {
 /// 1.5× the floor, over the whole window or in one phase (an effect confined to part of
 /// the cycle, as the heel pad's to heel contact, is diluted in the window's mean).
 fn above_floor(run: &Path, how: Setup) -> Option<String> {
-    let (floor, _, by_phase) = floor(how);
+    let (floor, by_phase) = (&floor(how).channels, &floor(how).phases);
     let whole = channel_means(run)
         .into_iter()
         .zip(floor)
@@ -419,7 +432,7 @@ fn single_effect(name: &str, how: Setup, floor_factor: f64, named: &[&str]) {
             "{c}: {before:.3} → {after:.3} (floor ×{:.2})",
             after
                 / floor(how)
-                    .0
+                    .channels
                     .iter()
                     .find(|f| f.0 == *c)
                     .map_or(f64::NAN, |f| f.1)
@@ -499,8 +512,8 @@ fn without_a_hidden_effect_nothing_is_significant() {
         Setup::Samples,
         Setup::ForcePlateRate,
     ] {
-        let (floor, d, _) = floor(how);
-        eprintln!("noise floor ({how:?}): {floor:?}");
+        let d = diagnose_floor(how);
+        eprintln!("noise floor ({how:?}): {:?}", floor(how).channels);
         assert_eq!(
             d["significant"], 0,
             "an effect was invented: {}",

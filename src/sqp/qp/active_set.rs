@@ -43,9 +43,16 @@ const AT_BOUND: f64 = 1e-8;
 const FEASIBLE: f64 = 1e-9;
 /// A multiplier has the wrong sign beyond this fraction of the largest one.
 const SIGN: f64 = 1e-9;
-/// Static regularisation of the KKT matrix (relative to its largest entry), removed by
-/// iterative refinement against the unregularised matrix.
-const REGULARISATION: f64 = 1e-10;
+/// Static regularisations of the KKT matrix (relative to its largest entry), tried in
+/// turn, removed by iterative refinement against the unregularised matrix. Each
+/// refinement step shrinks the error by about δ / (δ + |λ|min(K)): an SQP's QP whose
+/// reduced Hessian has curvature near the Hessian's own regularisation (a quasi-Newton
+/// model along directions it has not yet seen) has |λ|min(K) near 1e-8, where δ = 1e-10
+/// of the largest entry stalled the refinement and left most of the CasADi gait peer's
+/// QPs to Clarabel; held rows that repeat each other (a bound on a variable an equality
+/// row also fixes) leave pivots near −δ, whose growth at the smaller δ the larger one
+/// tames.
+const REGULARISATIONS: [f64; 2] = [1e-13, 1e-10];
 /// Iterative refinement steps at most, and the residual it must reach (relative to the
 /// right-hand side and the products making up the matrix–vector product).
 const REFINEMENTS: usize = 10;
@@ -237,8 +244,9 @@ fn held_by_multipliers(q: &QpData<'_>, hint: ActiveHint<'_>) -> (Vec<Held>, Vec<
 }
 
 /// The solution `(d, y)` of `H d + Aᵀ y = −g`, `A d = b` for the held rows `held`
-/// (`(row, b)`), or `None` when the reduced Hessian is not positive definite on them or
-/// the refinement does not reach [`RESIDUAL`].
+/// (`(row, b)`) at the first of [`REGULARISATIONS`] (times `scale`) that gives it, or
+/// `None` when the reduced Hessian is not positive definite on them or the refinement
+/// does not reach [`RESIDUAL`].
 fn solve_equality_qp(
     q: &QpData<'_>,
     jrows: &[Vec<(usize, f64)>],
@@ -246,9 +254,21 @@ fn solve_equality_qp(
     held: &[(Row, f64)],
     scale: f64,
 ) -> Option<Vec<f64>> {
+    REGULARISATIONS
+        .iter()
+        .find_map(|&r| solve_regularised(q, jrows, h, held, r * scale))
+}
+
+/// [`solve_equality_qp`] with the static regularisation `delta`.
+fn solve_regularised(
+    q: &QpData<'_>,
+    jrows: &[Vec<(usize, f64)>],
+    h: &[(usize, usize, f64)],
+    held: &[(Row, f64)],
+    delta: f64,
+) -> Option<Vec<f64>> {
     let n = q.g.len();
     let size = n + held.len();
-    let delta = REGULARISATION * scale;
     // the upper triangle of the regularised KKT matrix, as triplets
     let (mut r, mut c, mut v) = (Vec::new(), Vec::new(), Vec::new());
     let mut push = |i: usize, j: usize, x: f64| {
