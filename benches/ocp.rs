@@ -123,7 +123,7 @@ fn peer_solve(bench: &Benchmark) -> (sqp::SqpResult, sqp::SqpResult) {
 /// The CasADi gait peer's tracking problem: what one SQP iteration costs at the data
 /// guess (the sweep with first-order sensitivities of all 50 intervals, the same with the
 /// exact Hessian of the Lagrangian, and the plain sweep of a line-search trial), and the
-/// whole solve from the data guess as `footfall solve` takes it (about 25 s a sample, ten
+/// whole solve from the data guess as `footfall solve` takes it (about 13 s a sample, ten
 /// samples: pick it with a filter, `cargo bench --bench ocp -- gait_track_ellipse/full_solve`).
 fn gait(c: &mut Criterion) {
     let bench = Benchmark::load(std::path::Path::new(

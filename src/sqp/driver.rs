@@ -207,7 +207,7 @@ impl<'a> Solver<'a> {
             infeas = self.add_curvature((iter, infeas), st, p, observer)?;
         }
         self.note_switches(iter, (curvature, infeas), p, observer);
-        let sub = step::subproblem(
+        let mut sub = step::subproblem(
             self.nlp,
             self.settings,
             &self.s,
@@ -217,6 +217,9 @@ impl<'a> Solver<'a> {
             (&p.bfgs, &p.zero_blocks),
             &mut p.mem,
         )?;
+        if !step::guess_active_set(iter, &p.history) {
+            sub.without_guess();
+        }
         let step = step::solve(&self.eval, &sub, &mut p.mem)?;
         let tightened = self.conclude_step((iter, infeas, curvature), st, &step, p, observer)?;
         let accepted = self.line_search(st, &sub, &step, &mut p.filter, (curvature, tightened))?;

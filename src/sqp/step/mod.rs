@@ -71,6 +71,11 @@ pub(super) struct Subproblem<'a> {
 }
 
 impl Subproblem<'_> {
+    /// Solve the QP without a guess of its active set: straight to Clarabel.
+    pub(super) fn without_guess(&mut self) {
+        self.last = (Vec::new(), Vec::new());
+    }
+
     /// The QP; in elastic mode (penalty ρ) with the convexified Hessian if there is one.
     pub(super) fn data(&self, elastic: Option<f64>) -> QpData<'_> {
         QpData {
@@ -88,7 +93,7 @@ impl Subproblem<'_> {
             d_ub: &self.d_ub,
             elastic,
             elastic_weights: &self.s.elastic_weights,
-            hint: Some(ActiveHint {
+            hint: (!self.last.0.is_empty() || !self.last.1.is_empty()).then_some(ActiveHint {
                 lambda: &self.last.0,
                 nu: &self.last.1,
             }),
@@ -123,6 +128,20 @@ pub(super) fn curvature_in_use(
         || settings
             .exact_hessian_on_stall
             .is_some_and(|rule| rule.stalled_at(history).is_some())
+}
+
+/// Whether iteration `iter`'s QP is tried first on the active set the last QP's
+/// multipliers hold: unless the last two QPs both left it to Clarabel (far from a
+/// solution, where the active set changes more between iterations than a few corrections
+/// mend), and then every third iteration. A miss costs a few sparse factorisations.
+pub(super) fn guess_active_set(iter: usize, history: &[IterationRecord]) -> bool {
+    let missed = history
+        .iter()
+        .rev()
+        .take(2)
+        .filter(|r| r.qp_iterations > 0)
+        .count();
+    missed < 2 || iter % 3 == 0
 }
 
 /// Build the QP at `st` with multipliers `lambda`, `nu` of the last QP; `curvature`: whether
