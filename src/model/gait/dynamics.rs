@@ -149,27 +149,15 @@ impl GaitModel {
         lambda: &mut [S],
         report: Option<&mut ContactReport>,
     ) -> Result<(), DynamicsError> {
-        self.dynamics_with_torques(set, (x, u, theta), &[], xdot, lambda, report)
-    }
-
-    /// [`Self::dynamics`] with the generalised forces `extra` (pairs of coordinate and
-    /// force, N or N·m) added to the model's own: the Jacobian's torque directions
-    /// (`jacobians.rs`), through which the activations act.
-    pub(super) fn dynamics_with_torques<S: ModelScalar>(
-        &self,
-        set: &ConstraintSet,
-        (x, u, theta): (&[S], &[S], &[S]),
-        extra: &[(usize, S)],
-        xdot: &mut [S],
-        lambda: &mut [S],
-        report: Option<&mut ContactReport>,
-    ) -> Result<(), DynamicsError> {
-        self.forward(set, (x, u, theta), extra, xdot, lambda, report)
+        self.forward(set, (x, u, theta), &[], xdot, lambda, report)
             .map(|_| ())
     }
 
-    /// [`Self::dynamics_with_torques`], also returning the solve's factors.
-    fn forward<S: ModelScalar>(
+    /// [`Self::dynamics`] with the generalised forces `extra` (pairs of coordinate and
+    /// force, N or N·m) added to the model's own (the Jacobian's torque directions,
+    /// `jacobians.rs`, through which the activations act), also returning the
+    /// accelerations and the solve's factors.
+    pub(super) fn forward<S: ModelScalar>(
         &self,
         set: &ConstraintSet,
         (x, u, theta): (&[S], &[S], &[S]),

@@ -148,7 +148,7 @@ impl GaitModel {
                 xs.extend_from_slice(&ac);
                 extra.clear();
                 extra.extend(joints.iter().copied().zip(taus.iter().copied()));
-                self.dynamics_with_torques(set, (&xs, &uc, ts), &extra, &mut xdot, &mut lam, None)?;
+                self.forward(set, (&xs, &uc, ts), &extra, &mut xdot, &mut lam, None)?;
                 Ok(weighted(&xdot))
             },
             &mut ht,

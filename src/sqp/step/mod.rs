@@ -66,14 +66,14 @@ pub(super) struct Subproblem<'a> {
     d_lb: Vec<f64>,
     d_ub: Vec<f64>,
     /// The multipliers of the last QP (λ, ν): its active set is the first guess of this
-    /// one's.
-    last: (Vec<f64>, Vec<f64>),
+    /// one's (`None`: no guess, straight to Clarabel).
+    last: Option<(Vec<f64>, Vec<f64>)>,
 }
 
 impl Subproblem<'_> {
     /// Solve the QP without a guess of its active set: straight to Clarabel.
     pub(super) fn without_guess(&mut self) {
-        self.last = (Vec::new(), Vec::new());
+        self.last = None;
     }
 
     /// The QP; in elastic mode (penalty ρ) with the convexified Hessian if there is one.
@@ -93,10 +93,10 @@ impl Subproblem<'_> {
             d_ub: &self.d_ub,
             elastic,
             elastic_weights: &self.s.elastic_weights,
-            hint: (!self.last.0.is_empty() || !self.last.1.is_empty()).then_some(ActiveHint {
-                lambda: &self.last.0,
-                nu: &self.last.1,
-            }),
+            hint: self
+                .last
+                .as_ref()
+                .map(|(lambda, nu)| ActiveHint { lambda, nu }),
         }
     }
 }
@@ -258,7 +258,7 @@ pub(super) fn subproblem<'a>(
         c: &st.ev.c,
         d_lb: (0..n).map(|i| s.w_lb[i] - st.w[i]).collect(),
         d_ub: (0..n).map(|i| s.w_ub[i] - st.w[i]).collect(),
-        last: (lambda.to_vec(), nu.to_vec()),
+        last: Some((lambda.to_vec(), nu.to_vec())),
     })
 }
 
@@ -436,7 +436,7 @@ mod tests {
             c,
             d_lb: s.w_lb.clone(),
             d_ub: s.w_ub.clone(),
-            last: (vec![0.0; s.m], vec![0.0; s.n]),
+            last: Some((vec![0.0; s.m], vec![0.0; s.n])),
         }
     }
 
