@@ -272,7 +272,20 @@ fn floor(how: Setup) -> &'static Floor {
         OnceLock::new(),
     ];
     FLOOR[how.index()].get_or_init(|| {
-        let dir = tempfile::tempdir().unwrap().keep();
+        // a fixed folder per test and setup, replaced on the next run: a temporary one
+        // would outlive the process (a static is never dropped)
+        let test = std::thread::current()
+            .name()
+            .unwrap_or("main")
+            .replace("::", "-");
+        let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR"))
+            .join("hidden_effects_floor")
+            .join(test)
+            .join(how.slug());
+        if dir.exists() {
+            std::fs::remove_dir_all(&dir).unwrap();
+        }
+        std::fs::create_dir_all(&dir).unwrap();
         let run = baseline(how.none(), &dir, how);
         Floor {
             channels: channel_means(&run),

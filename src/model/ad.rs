@@ -64,7 +64,7 @@ pub fn hessian_over<E>(
     // position of each input among the curved ones
     let mut slot = vec![usize::MAX; n];
     for (s, &i) in curved.iter().enumerate() {
-        debug_assert!(
+        assert!(
             i < n && slot[i] == usize::MAX,
             "curved inputs out of range or repeated"
         );
@@ -184,7 +184,7 @@ pub fn jacobian<E>(
     jac: &mut [f64],
 ) -> Result<(), E> {
     let n = x.len();
-    debug_assert_eq!(jac.len(), m * n);
+    assert_eq!(jac.len(), m * n);
     let mut xs = Vec::with_capacity(n);
     let mut ys = vec![AdChunk::from_re(0.0); m];
     let mut start = 0;

@@ -406,7 +406,7 @@ impl GaitModel {
 
     /// Full parameter vector in scalar `S`: fixed values as constants, free ones from θ.
     fn full_params<S: Scalar>(&self, theta: &[S]) -> Vec<S> {
-        debug_assert_eq!(
+        assert_eq!(
             theta.len(),
             self.free.len(),
             "θ must hold the model's free parameters"

@@ -18,7 +18,7 @@ pub struct NotPositiveDefinite {
 /// matrix; on return the lower triangle holds `L`. A pivot below `rel_tol · max|A_ii|`
 /// is reported as rank deficiency (e.g. an over-constrained contact set).
 pub fn cholesky<S: Scalar>(a: &mut [S], n: usize, rel_tol: f64) -> Result<(), NotPositiveDefinite> {
-    debug_assert_eq!(a.len(), n * n);
+    assert_eq!(a.len(), n * n);
     let scale = (0..n)
         .map(|i| a[i * n + i].value().abs())
         .fold(0.0, f64::max)

@@ -486,7 +486,7 @@ impl<'a> TrackingResidual<'a> {
             }
         }
         if !self.regularised {
-            debug_assert_eq!(o, self.dim);
+            assert_eq!(o, self.dim);
             return Ok(());
         }
         let n_act = self.model.nu_actuators();
@@ -499,7 +499,7 @@ impl<'a> TrackingResidual<'a> {
             out[o] = x[2 * nq + i] * w.activation.sqrt();
             o += 1;
         }
-        debug_assert_eq!(o, self.dim);
+        assert_eq!(o, self.dim);
         Ok(())
     }
 }

@@ -50,7 +50,7 @@ impl<'o, 'a> Transcription<'o, 'a> {
             }
             map.push((self.duration_off[iv.phase], 1.0 / ph.intervals as f64));
             map.extend(self.range(Block::Params).map(|c| (c, 1.0)));
-            debug_assert_eq!(map.len(), nz);
+            assert_eq!(map.len(), nz);
             for a in 0..nz {
                 for b in a..nz {
                     let (ca, sa) = map[a];

@@ -113,7 +113,7 @@ impl<'o, 'a> Transcription<'o, 'a> {
                 }
                 order.push((nx + dur, hscale));
                 order.extend(interval.p_theta().map(|c| (nx + c, 1.0)));
-                debug_assert_eq!(order.len(), nx + np);
+                assert_eq!(order.len(), nx + np);
                 for i in 0..nx {
                     for &(c, sc) in &order {
                         ev.jac.push(-s[c * nx + i] * sc);

@@ -61,6 +61,18 @@ const RESIDUAL: f64 = 1e-12;
 /// [`RESIDUAL`]): Clarabel's own tolerances are 1e-10 on scaled residuals.
 const STALLED: f64 = 1e-9;
 
+/// A held row or bound is met when the step reaches it within a tolerance relative to
+/// 1 + |bound| + the largest of the row's products `J_ij d_j`. Held rows that contradict
+/// each other (an inconsistent linearisation) miss by about the constraint error; rows
+/// that repeat each other stall the refinement at its round-off, a few 1e-9 on the
+/// tracks' score tests. An SQP step meets its rows within `MET_STEP`: near convergence,
+/// looser steps leave errors the line search's merit function sees (the five-link
+/// biped's solve stops in its line search at 1e-8).
+const MET_STEP: f64 = 1e-9;
+/// A question asked at a solution (a Gauss–Newton step or probe) meets its rows within
+/// `MET_QUESTION`, Clarabel's own feasibility tolerance.
+const MET_QUESTION: f64 = 1e-8;
+
 /// One held bound or row of the equality-constrained QP.
 #[derive(Debug, Clone, Copy)]
 enum Row {
@@ -95,6 +107,10 @@ pub(super) fn solve(
     if q.elastic.is_some() {
         return None;
     }
+    let met_within = match guess {
+        Guess::AtPoint => MET_QUESTION,
+        Guess::Held(_) => MET_STEP,
+    };
     let (mut rows, mut vars) = match guess {
         Guess::AtPoint => held_at_point(q),
         Guess::Held(hint) if hint.lambda.len() == m && hint.nu.len() == n => {
@@ -127,7 +143,18 @@ pub(super) fn solve(
                 Held::Lower | Held::Fixed => Some((Row::Variable(j), q.d_lb[j])),
             }))
             .collect();
-        let x = solve_equality_qp(q, jrows, &h, &held, scale)?;
+        // a held row whose variables the held bounds all fix repeats them (its value is
+        // theirs): it stays out of the KKT matrix, which it would make singular, and is
+        // checked with the others below
+        let solved: Vec<(Row, f64)> = held
+            .iter()
+            .copied()
+            .filter(|&(row, _)| match row {
+                Row::Constraint(i) => jrows[i].iter().any(|&(j, _)| vars[j] == Held::Free),
+                Row::Variable(_) => true,
+            })
+            .collect();
+        let x = solve_equality_qp(q, jrows, &h, &solved, scale)?;
         let (d, y) = x.split_at(n);
         // the step on the rows, for the feasibility of the inactive ones
         let jd: Vec<f64> = jrows
@@ -138,11 +165,11 @@ pub(super) fn solve(
         // linearisation) leave a KKT matrix the refinement solves only relative to its huge
         // multipliers, and are the interior-point solver's to call infeasible
         let met = held.iter().all(|&(row, b)| {
-            let value = match row {
-                Row::Constraint(i) => jd[i],
-                Row::Variable(j) => d[j],
+            let (value, terms) = match row {
+                Row::Constraint(i) => (jd[i], row_terms(&jrows[i], d)),
+                Row::Variable(j) => (d[j], d[j].abs()),
             };
-            (value - b).abs() <= FEASIBLE * (1.0 + b.abs())
+            (value - b).abs() <= met_within * (1.0 + b.abs() + terms)
         });
         if !met {
             return None;
@@ -150,7 +177,7 @@ pub(super) fn solve(
         // the multipliers by row and by variable (0 where nothing is held)
         let mut lambda = vec![0.0; m];
         let mut nu = vec![0.0; n];
-        for (&(row, _), &y) in held.iter().zip(y) {
+        for (&(row, _), &y) in solved.iter().zip(y) {
             match row {
                 Row::Constraint(i) => lambda[i] = y,
                 Row::Variable(j) => nu[j] = y,
@@ -189,6 +216,14 @@ pub(super) fn solve(
         });
     }
     None
+}
+
+/// The largest of the products `J_ij d_j` of a row with `entries` (the size of the terms
+/// its value sums).
+fn row_terms(entries: &[(usize, f64)], d: &[f64]) -> f64 {
+    entries
+        .iter()
+        .fold(0.0f64, |a, &(j, v)| a.max((v * d[j]).abs()))
 }
 
 /// The rows and bounds of `q` that hold at the point (within [`AT_BOUND`]).

@@ -411,7 +411,7 @@ impl Integrator {
     }
 
     pub(super) fn sensitivity(&self, i: usize) -> &[f64] {
-        debug_assert!(i < self.ns as usize);
+        assert!(i < self.ns as usize);
         // SAFETY: `ys` holds `ns` serial vectors of length nx owned by `self`.
         unsafe { nv_slice(*self.ys.add(i), self.nx) }
     }
