@@ -5,11 +5,14 @@
 //! command can use what an earlier one of the same document wrote, as a reader following
 //! the page would. `footfall` (and `cargo run --release --`) is the binary this test build
 //! made. What each command checks is its own test's job; here each must start, read its
-//! files, build its problem and write its output, so the solving commands run with
-//! `--max-iter 1` (a `--resume` runs with the options it was started with) and end with
-//! exit 0, 3 (not converged) or 5 (physically invalid), the codes of a run that solved and
-//! wrote its folder. `synth` runs in full: its re-fit with a hidden model effect is what
-//! the next command of the guide tracks.
+//! files, build its problem and write its output, so the solving commands stop at their
+//! start (`--max-iter 0`: evaluated, checked and written) and end with exit 0, 3 (not
+//! converged) or 5 (physically invalid), the codes of a run that solved and wrote its
+//! folder. A `track` takes one iteration, `--max-iter 1`: later commands build on its
+//! solution (`synth` makes a trial from it and refuses the data guess's forces, which
+//! imply another body weight), and a `--resume` runs with the options it was started
+//! with. `synth` runs in full: its re-fit with a hidden model effect is what the next
+//! command of the guide tracks.
 //!
 //! The lines that build the project or install the Python binding are not run here:
 //! `.ci/run` runs them, and [`RUN_BY_CI`] names the text of `.ci/run` that does.
@@ -29,18 +32,22 @@ const RUN_BY_CI: &[(&str, &str)] = &[
     (".venv/bin/python -c", "the command guide's Python example"),
 ];
 
-/// The subcommands that solve, and take `--max-iter` (a study's tracks).
-const SOLVING: &str = "track|predict|compare|compare-contact|diagnose|fit-foot|solve|study";
+/// The subcommands that solve, and take `--max-iter` (a study's tracks), besides `track`.
+const SOLVING: &str = "predict|compare|compare-contact|diagnose|fit-foot|solve|study";
 
 /// The shell that runs a document's lines: `footfall` and `cargo run --release --` call
-/// the test build's binary, solves capped, and any other exit than 0, 3 or 5 stops it.
+/// the test build's binary, solves capped (tracks at one iteration, the others at their
+/// start), and any other exit than 0, 3 or 5 stops it.
 fn preamble(bin: &str) -> String {
     format!(
         r#"set -u
 footfall() {{
     local cap=()
-    case "$1" in {SOLVING})
-        case " $* " in *" --resume "*) ;; *) cap=(--max-iter 1) ;; esac ;;
+    case " $* " in *" --resume "*) ;; *)
+        case "$1" in
+            track) cap=(--max-iter 1) ;;
+            {SOLVING}) cap=(--max-iter 0) ;;
+        esac ;;
     esac
     "{bin}" "$@" "${{cap[@]}}" </dev/null
     local rc=$?
