@@ -355,6 +355,28 @@ fn track_interrupted_by_ctrl_c_writes_the_last_iterate() {
     assert!(n("rhs_evals") >= n("steps") && n("nonlinear_iters") >= n("steps"));
     assert!(n("sens_nonlinear_iters") > 0 && n("sens_rhs_evals") > 0);
     assert!(n("linear_setups") >= 1 && n("linear_setups") <= n("steps"));
+    // written at once: the 1 ms re-integration (seconds to minutes on a fine mesh far
+    // from a solution) is left to `footfall report`, which runs it
+    assert!(summary["fine_grid"].is_null());
+    let why = summary["fine_grid_error"].as_str().unwrap();
+    assert!(
+        why.contains("interrupted") && why.contains("footfall report"),
+        "{why}"
+    );
+    let report = Command::new(env!("CARGO_BIN_EXE_footfall"))
+        .current_dir(root())
+        .args(["report", s(&out)])
+        .output()
+        .unwrap();
+    assert!(report.status.success(), "{report:?}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["status"], "interrupted");
+    assert!(
+        summary["fine_grid"]["step_s"].is_number(),
+        "{}",
+        summary["fine_grid"]
+    );
     assert_all_finite(&summary, "summary");
     for f in ["tracking.csv", "kinematics.sto", "table3.md", "report.html"] {
         assert!(out.join(f).is_file(), "{f} missing");

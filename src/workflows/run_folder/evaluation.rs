@@ -13,11 +13,18 @@ use crate::simulate::{Sample, SimulationError};
 use crate::sqp::{SqpResult, SqpStatus};
 use anyhow::Context;
 
-/// The 1 ms re-integration of a run's solution failed (e.g. that of an interrupted early
-/// iterate): reported with the run, not fatal.
+/// Why a run has no 1 ms re-integration: reported with the run, not fatal.
 #[derive(Debug, thiserror::Error)]
-#[error("the 1 ms re-integration failed: {0}")]
-pub(super) struct FineGridError(#[source] pub SimulationError);
+pub(super) enum FineGridError {
+    /// It failed (e.g. that of an early iterate).
+    #[error("the 1 ms re-integration failed: {0}")]
+    Failed(#[source] SimulationError),
+    /// The run was interrupted: it is written from its last iterate at once, and the
+    /// re-integration (seconds to minutes on a fine mesh far from a solution) is left to
+    /// `footfall report`.
+    #[error("the 1 ms re-integration was not run: the run was interrupted (`footfall report RUN` runs it)")]
+    Interrupted,
+}
 
 /// Model against measurement, at the nodes and on the fine grid.
 pub(super) struct Evaluation {
@@ -78,10 +85,13 @@ impl Evaluation {
             &channel_errors(&channels, &cmp, Some(&phase_ids)),
         );
 
-        // fine grid: a failure (e.g. of an interrupted early iterate) is reported, not fatal
-        let fine_run = sol
-            .reintegrate(model, sets, FINE_STEP, &run.integrator)
-            .map_err(FineGridError);
+        // fine grid: a failure (e.g. of an early iterate) is reported, not fatal
+        let fine_run = if crate::interrupt::requested() {
+            Err(FineGridError::Interrupted)
+        } else {
+            sol.reintegrate(model, sets, FINE_STEP, &run.integrator)
+                .map_err(FineGridError::Failed)
+        };
         let fine = fine_run.as_ref().ok().map(|f| f.figures(sets, FINE_STEP));
         let fine_cmp = match &fine_run {
             Ok(f) => Some(Comparison::through_model(
