@@ -4,6 +4,7 @@
 //! Matrices are row-major `n × n` slices; sizes here are at most a few dozen.
 
 use super::Scalar;
+use std::ops::{Div, Mul, SubAssign};
 
 /// Failure of a factorisation: the matrix is not positive definite at `pivot`.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -48,27 +49,14 @@ pub fn cholesky<S: Scalar>(a: &mut [S], n: usize, rel_tol: f64) -> Result<(), No
     Ok(())
 }
 
-/// Solve `L Lᵀ x = b` in place with the factor from [`cholesky`].
-pub fn cholesky_solve<S: Scalar>(l: &[S], n: usize, b: &mut [S]) {
-    for i in 0..n {
-        let mut s = b[i];
-        for k in 0..i {
-            s -= l[i * n + k] * b[k];
-        }
-        b[i] = s / l[i * n + i];
-    }
-    for i in (0..n).rev() {
-        let mut s = b[i];
-        for k in (i + 1)..n {
-            s -= l[k * n + i] * b[k];
-        }
-        b[i] = s / l[i * n + i];
-    }
-}
-
-/// [`cholesky_solve`] with a real factor `l` and a right-hand side `b` of any scalar
-/// type: each derivative part of `b` is solved with the same real factor.
-pub fn cholesky_solve_real<S: Scalar>(l: &[f64], n: usize, b: &mut [S]) {
+/// Solve `L Lᵀ x = b` in place with the factor from [`cholesky`]. The factor's entries
+/// `F` may be real where `b` carries derivative parts (`F = f64`): each part is then
+/// solved with the same factor.
+pub fn cholesky_solve<F, S>(l: &[F], n: usize, b: &mut [S])
+where
+    F: Copy,
+    S: Copy + SubAssign + Mul<F, Output = S> + Div<F, Output = S>,
+{
     for i in 0..n {
         let mut s = b[i];
         for k in 0..i {

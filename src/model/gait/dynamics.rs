@@ -19,7 +19,7 @@ use super::volumetric::GroundForce;
 use super::{Actuation, ConstraintSet, ContactReport, GaitModel, RowKind, LEG_JOINTS};
 use crate::model::effects::{EffectState, ModelScalar};
 use crate::model::error::DynamicsError;
-use crate::model::linalg::{cholesky, cholesky_solve, cholesky_solve_real};
+use crate::model::linalg::{cholesky, cholesky_solve};
 use crate::model::multibody::{add, dot, perp, scale, Kinematics, V2};
 use crate::model::Scalar;
 
@@ -271,12 +271,12 @@ impl GaitModel {
             }
         }
         // w = M⁻¹ r1, dλ = A⁻¹ (r2 − G w), dq̈ = w + Y dλ
-        cholesky_solve_real(&f.m_chol, nq, &mut r1);
+        cholesky_solve(&f.m_chol, nq, &mut r1);
         let nr = f.rigid.len();
         for (i, r2) in r2.iter_mut().enumerate() {
             *r2 -= (0..nq).map(|l| r1[l] * f.g_rigid[i * nq + l]).sum::<S>();
         }
-        cholesky_solve_real(&f.a_chol, nr, &mut r2);
+        cholesky_solve(&f.a_chol, nr, &mut r2);
         for (i, dl) in r2.iter().enumerate() {
             for l in 0..nq {
                 r1[l] += *dl * f.y[i * nq + l];
