@@ -49,9 +49,9 @@ const SIGN: f64 = 1e-9;
 /// reduced Hessian has curvature near the Hessian's own regularisation (a quasi-Newton
 /// model along directions it has not yet seen) has |λ|min(K) near 1e-8, where δ = 1e-10
 /// of the largest entry stalled the refinement and left most of the CasADi gait peer's
-/// QPs to Clarabel; held rows that repeat each other (a bound on a variable an equality
-/// row also fixes) leave pivots near −δ, whose growth at the smaller δ the larger one
-/// tames.
+/// QPs to Clarabel; held rows that repeat each other (an equality row the other held
+/// rows imply) leave pivots near −δ, whose growth at the smaller δ the larger one tames.
+/// (A row whose variables held bounds all fix is kept out of the matrix.)
 const REGULARISATIONS: [f64; 2] = [1e-13, 1e-10];
 /// Iterative refinement steps at most, and the residual it must reach (relative to the
 /// right-hand side and the products making up the matrix–vector product).
@@ -378,9 +378,9 @@ fn solve_regularised(
         let (kx, terms) = product(&x);
         let mut res: Vec<f64> = rhs.iter().zip(&kx).map(|(b, k)| b - k).collect();
         let (size, scale) = (size_of(&res), 1.0 + size_of(&rhs) + terms);
-        // refined to the round-off, or stalled (rows held twice, e.g. a bound on a
-        // variable an equality row also fixes, whose right-hand sides differ by the
-        // point's constraint error) within what the interior-point solver would leave
+        // refined to the round-off, or stalled (rows held twice, e.g. an equality row
+        // the other held rows imply, whose right-hand sides differ by the point's
+        // constraint error) within what the interior-point solver would leave
         if size <= RESIDUAL * scale || (size > 0.5 * last && size <= STALLED * scale) {
             return Some(x);
         }
