@@ -103,10 +103,11 @@ const READ_EDITS: [(&str, &[&str]); 3] = [
     (
         "opensim_subject01",
         &[
-            "clock_l-10ms",
+            "clock_both+20ms",
             "clock_l-20ms",
             "clock_l-40ms",
-            "gain_l-3pct",
+            "clock_r+20ms",
+            "clock_r+40ms",
             "gain_l-7pct",
             "gain_r+3pct",
             "gain_r+7pct",
@@ -118,21 +119,32 @@ const READ_EDITS: [(&str, &[&str]); 3] = [
         "opencap_s4_walking1",
         &[
             "clock_both+20ms",
+            "clock_l-20ms",
             "clock_l-40ms",
             "clock_r+10ms",
             "clock_r+20ms",
             "clock_r+40ms",
+            "gain_l-7pct",
+            "gain_r+3pct",
             "gain_r+7pct",
+            "mass+5pct",
+            "mass-5pct",
         ],
     ),
     (
         "opencap_s4_walking2",
         &[
             "clock_both+20ms",
+            "clock_l-10ms",
+            "clock_l-20ms",
+            "clock_l-40ms",
             "clock_r+10ms",
             "clock_r+20ms",
             "clock_r+40ms",
+            "gain_l-7pct",
+            "gain_r+3pct",
             "gain_r+7pct",
+            "mass+5pct",
             "mass-5pct",
         ],
     ),
@@ -202,9 +214,9 @@ fn testable(effect: &str) -> f64 {
     }
 }
 
-/// Each candidate's spread beyond its own noise over the half cycles of `summaries`, as
-/// `tools/calibrate-check` computes it: √max(0, mean(estimate² − sd_within²)).
-fn null_spread(summaries: &[&serde_json::Value]) -> serde_json::Map<String, serde_json::Value> {
+/// Each candidate's band over the half cycles of `summaries`, as `tools/calibrate-check`
+/// computes it: centred on zero, the spread the root mean square of the readings alone.
+fn null_band(summaries: &[&serde_json::Value]) -> serde_json::Map<String, serde_json::Value> {
     let mut sums: std::collections::BTreeMap<String, (f64, usize)> = Default::default();
     for s in summaries {
         for h in s["half_cycles"].as_array().unwrap() {
@@ -215,14 +227,17 @@ fn null_spread(summaries: &[&serde_json::Value]) -> serde_json::Map<String, serd
                 let name = r["effect"].as_str().unwrap().to_string();
                 if w <= testable(&name) {
                     let x = sums.entry(name).or_default();
-                    x.0 += e * e - w * w;
+                    x.0 += e * e;
                     x.1 += 1;
                 }
             }
         }
     }
     sums.into_iter()
-        .map(|(k, (s, n))| (k, serde_json::json!((s / n as f64).max(0.0).sqrt())))
+        .map(|(k, (s, n))| {
+            let band = serde_json::json!({"mean": 0.0, "sd": (s / n as f64).sqrt()});
+            (k, band)
+        })
         .collect()
 }
 
@@ -243,7 +258,7 @@ fn untouched_half_cycles_checked_out_of_sample_find_no_more_than_the_level_allow
         let null = dir.path().join("null.json");
         std::fs::write(
             &null,
-            serde_json::Value::Object(null_spread(&others)).to_string(),
+            serde_json::Value::Object(null_band(&others)).to_string(),
         )
         .unwrap();
         let out = dir.path().join("check");
@@ -253,7 +268,7 @@ fn untouched_half_cycles_checked_out_of_sample_find_no_more_than_the_level_allow
             trial,
             "--model",
             model,
-            "--null-sd",
+            "--null",
             null.to_str().unwrap(),
             "--out",
             out.to_str().unwrap(),
@@ -482,23 +497,25 @@ fn a_check_writes_its_run_folder_and_says_how_to_add_what_it_found() {
 }
 
 #[test]
-fn a_plate_clock_read_on_the_other_plate_names_the_true_one_as_its_look_alike() {
-    // the right plate made 20 ms late reads best as the left plate early; the check must
-    // then say that these data cannot tell it from the right plate's clock
+fn a_treadmill_plates_clock_is_read_on_its_plate_with_the_other_plates_named_as_its_look_alike() {
+    // the bundled walk is a treadmill trial: its plate moments are read in the plates'
+    // frame, so the right plate made 20 ms late shifts what that plate measured and not
+    // the belt's travel; in double support the left plate early by as much looks alike,
+    // and the check must say so
     let s = check(
         "tests/data/check/trials/opensim_subject01/clock_r+20ms/trial.csv",
         "models/opensim_subject01.json",
     );
-    let left = candidate(&s, "clock_left");
-    assert_eq!(left["verdict"], "found", "{left}");
-    let alternatives = left["alternatives"]
+    let right = candidate(&s, "clock_right");
+    assert_eq!(right["verdict"], "found", "{right}");
+    let alternatives = right["alternatives"]
         .as_array()
         .expect("alternatives listed");
     assert!(
         alternatives
             .iter()
-            .any(|a| a["effect"] == "clock_right" && a["estimate"].as_f64().unwrap() > 0.0),
-        "{left}"
+            .any(|a| a["effect"] == "clock_left" && a["estimate"].as_f64().unwrap() < 0.0),
+        "{right}"
     );
 }
 

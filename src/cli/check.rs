@@ -31,11 +31,12 @@ pub struct Args {
     /// Family-wise significance level of the readings.
     #[arg(long, default_value_t = 0.05, value_parser = super::validate::positive)]
     level: f64,
-    /// The spread of each candidate's reading on your own untouched trials (a JSON object
-    /// of effect name to value in SI units, e.g. {"shared_clock": 0.004}), replacing the
-    /// shipped calibration for the effects it names.
+    /// What your own untouched trials read as each candidate: a JSON object of effect
+    /// name to its centre and spread in SI units, e.g. {"shared_clock": {"mean": 0.008,
+    /// "sd": 0.002}} (`tools/calibrate-check` writes one), replacing the shipped
+    /// calibration for the effects it names.
     #[arg(long, value_name = "FILE.json")]
-    null_sd: Option<PathBuf>,
+    null: Option<PathBuf>,
 }
 
 pub fn run(args: Args, progress: &CliProgress) -> Result<(), Failure> {
@@ -48,9 +49,8 @@ pub fn run(args: Args, progress: &CliProgress) -> Result<(), Failure> {
         level: args.level,
         ..CheckSettings::default()
     };
-    if let Some(path) = &args.null_sd {
-        footfall::workflows::check::read_null_sd(path, &mut settings.null_sd)
-            .map_err(Failure::Input)?;
+    if let Some(path) = &args.null {
+        footfall::workflows::check::read_null(path, &mut settings.null).map_err(Failure::Input)?;
     }
     let req = CheckRequest {
         trial: files,

@@ -11,7 +11,9 @@ use super::Progress;
 use crate::data::{detect_events, GaitData, DEFAULT_EVENT_FRACTION};
 use crate::model::effects::EffectSpec;
 use crate::model::GaitModel;
-use crate::problems::check::{check, CheckError, CheckSettings, MeasurementCheck, Param, Reading};
+use crate::problems::check::{
+    check, CheckError, CheckSettings, MeasurementCheck, NullBand, Param, Reading,
+};
 use crate::runfolder::RunFolder;
 use anyhow::Context;
 use std::path::PathBuf;
@@ -124,36 +126,47 @@ pub fn half_cycles(data: &GaitData) -> Vec<(f64, f64)> {
     hs.windows(2).map(|w| (w[0], w[1])).collect()
 }
 
-/// Replace entries of `null_sd` by those a JSON file names (`{"shared_clock": 0.004}`,
-/// SI units, each finite and ≥ 0).
-pub fn read_null_sd(
+/// Replace entries of `null` by those a JSON file names (`{"shared_clock": {"mean":
+/// 0.008, "sd": 0.002}}`, SI units, each finite, the spread ≥ 0).
+pub fn read_null(
     path: &std::path::Path,
-    null_sd: &mut [f64; crate::problems::check::NPARAM],
+    null: &mut [NullBand; crate::problems::check::NPARAM],
 ) -> anyhow::Result<()> {
+    #[derive(serde::Deserialize)]
+    #[serde(deny_unknown_fields)]
+    struct Entry {
+        mean: f64,
+        sd: f64,
+    }
     let text =
-        std::fs::read_to_string(path).with_context(|| format!("--null-sd {}", path.display()))?;
-    let map: std::collections::BTreeMap<String, f64> =
+        std::fs::read_to_string(path).with_context(|| format!("--null {}", path.display()))?;
+    let map: std::collections::BTreeMap<String, Entry> =
         serde_json::from_str(text.trim_start_matches('\u{feff}')).with_context(|| {
             format!(
-                "--null-sd {}: expected a JSON object of effect name to a number",
+                "--null {}: expected a JSON object of effect name to {{\"mean\": number, \"sd\": number}}",
                 path.display()
             )
         })?;
-    for (name, v) in map {
+    for (name, e) in map {
         let Some(p) = Param::ALL.iter().find(|p| p.name() == name) else {
             anyhow::bail!(
-                "--null-sd {}: '{name}' is not a candidate; use one of {}",
+                "--null {}: '{name}' is not a candidate; use one of {}",
                 path.display(),
                 Param::ALL.map(|p| p.name()).join(", ")
             );
         };
-        if !(v.is_finite() && v >= 0.0) {
+        if !(e.mean.is_finite() && e.sd.is_finite() && e.sd >= 0.0) {
             anyhow::bail!(
-                "--null-sd {}: '{name}': {v} is not a finite spread ≥ 0",
-                path.display()
+                "--null {}: '{name}': mean {} and sd {} must be finite, the sd ≥ 0",
+                path.display(),
+                e.mean,
+                e.sd
             );
         }
-        null_sd[p.index()] = v;
+        null[p.index()] = NullBand {
+            mean: e.mean,
+            sd: e.sd,
+        };
     }
     Ok(())
 }

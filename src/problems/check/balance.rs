@@ -303,9 +303,7 @@ pub fn measured<S: Scalar>(signals: &Signals, at: &Instant, theta: &[S]) -> Opti
     ];
     let mut out = [S::c(0.0); 3];
     for (s, (clock, gain, cop)) in sides.into_iter().enumerate() {
-        let t = S::c(at.t) + p(Param::SharedClock) + p(clock);
-        let stretch = signals.stretch(s, t.value())?;
-        let [fx, fy, mz] = stretch.eval(t);
+        let [fx, fy, mz] = signals.load(s, at.t, p(Param::SharedClock) + p(clock))?;
         let inv = (S::c(1.0) + p(gain)).recip();
         let mz = (mz - fy * p(cop)) * inv;
         let (fx, fy) = (fx * inv, fy * inv);
@@ -354,7 +352,7 @@ pub fn inverse_dynamics(
     let mut jac = vec![0.0; 2 * n];
     for (s, prefix) in ["r", "l"].into_iter().enumerate() {
         let foot = tree.body_index(&format!("foot_{prefix}"))?;
-        let [fx, fy, mz] = signals.stretch(s, t)?.eval(t);
+        let [fx, fy, mz] = signals.load(s, t, 0.0_f64)?;
         // a point of the load's line of action (where it crosses y = 0, the moment being
         // about the origin); at the ankle where the foot is unloaded
         let p = if fy.abs() > 1.0 {

@@ -1,9 +1,13 @@
 //! Least-squares readings of the balance's parameters, with uncertainties that honour the
 //! residual's autocorrelation.
 //!
-//! The residual $r_k(\theta)$ (three components per instant, each weighted by the inverse
-//! of its own mean square, re-estimated once at the fit: feasible weighted least squares)
-//! is minimised by Gauss–Newton with the exact Jacobian. The covariance is the sandwich
+//! The residual $r_k(\theta)$ (three components per instant) is minimised by Gauss–Newton
+//! with the exact Jacobian. Each component is weighted by the inverse of its own mean
+//! square once the largest model is fitted ([`LARGEST`], feasible weighted least squares):
+//! the weights are the body model's own misfit in each component, the same whichever
+//! effect the data carry. Weights taken before any effect is read would shrink the
+//! component that carries the effect (a plate's clock inflates the vertical force's
+//! residual most) and hand the reading to the components the body model fits worst. The covariance is the sandwich
 //! $B^{-1}\Omega B^{-1}$, $B = \sum_k J_k^T W J_k$, with $\Omega$ the Newey–West
 //! (Bartlett-kernel) long-run covariance of the scores $s_k = J_k^T W r_k$ (Newey and West
 //! 1987): neighbouring force samples of a smoothed residual are far from independent, and
@@ -27,7 +31,25 @@ pub struct Problem<'a> {
     pub bandwidth: usize,
     /// Largest clock magnitude (s): clocks are held within it.
     pub clock_limit: f64,
+    /// Weights of the three components (1/N², 1/N², 1/(N·m)²): the inverse mean squares
+    /// of the residual with the [`LARGEST`] model read.
+    pub weights: [f64; 3],
 }
+
+/// The largest model whose parameters can be read together: each plate's clock, gain
+/// and CoP offset, the trunk's centre of mass and the slope (the shared clock is the two
+/// plates' clocks alike, the body mass the two gains alike, the trunk's mass the body
+/// mass but for the limbs).
+pub const LARGEST: [Param; 8] = [
+    Param::ClockRight,
+    Param::ClockLeft,
+    Param::GainRight,
+    Param::GainLeft,
+    Param::CopRight,
+    Param::CopLeft,
+    Param::TrunkCom,
+    Param::Slope,
+];
 
 /// Residual and Jacobian (in the listed parameters) at every instant.
 pub struct Linearised {
@@ -73,13 +95,20 @@ impl<'a> Problem<'a> {
         instants: &'a [Instant],
         settings: &super::CheckSettings,
     ) -> Self {
-        Problem {
+        let mut p = Problem {
             body,
             signals,
             instants,
             bandwidth: (settings.bandwidth_s * signals.force_rate).round() as usize,
             clock_limit: settings.clock_limit_s - 1.5 / signals.force_rate,
+            weights: [1.0; 3],
+        };
+        p.weights = p.weights_at(&[0.0; NPARAM]);
+        for _ in 0..3 {
+            let theta = p.descend(&LARGEST, &[0.0; NPARAM], 1e-6);
+            p.weights = p.weights_at(&theta);
         }
+        p
     }
 }
 
@@ -127,35 +156,39 @@ impl Problem<'_> {
         Linearised { r, jac }
     }
 
-    /// Read the parameters `active` (the others held at `start`) by Gauss–Newton with
-    /// weights re-estimated from the fitted residual once.
+    /// Read the parameters `active` (the others held at `start`) by Gauss–Newton.
     pub fn fit(&self, active: &[Param], start: &[f64; NPARAM]) -> Fit {
+        let theta = self.descend(active, start, 0.0);
+        self.finish(active, theta, self.weights)
+    }
+
+    /// θ after Gauss–Newton in `active` from `start`, each step's normal matrix with
+    /// `ridge` times its diagonal added (a window that cannot read some of them still
+    /// moves the others).
+    fn descend(&self, active: &[Param], start: &[f64; NPARAM], ridge: f64) -> [f64; NPARAM] {
         let mut theta = *start;
-        let mut weights = self.weights_at(&theta);
-        for round in 0..2 {
-            for _ in 0..25 {
-                let lin = self.linearise(&theta, active);
-                let (b, g) = normal_equations(&lin, &weights, active.len());
-                let Some(step) = b.clone().cholesky().map(|c| c.solve(&(-g))) else {
-                    break;
-                };
-                for (k, c) in active.iter().enumerate() {
-                    theta[c.index()] += step[k];
-                }
-                self.hold_in_range(&mut theta);
-                if step
-                    .iter()
-                    .zip(active)
-                    .all(|(s, c)| s.abs() < 1e-9 * scale(*c))
-                {
-                    break;
-                }
+        for _ in 0..25 {
+            let lin = self.linearise(&theta, active);
+            let (mut b, g) = normal_equations(&lin, &self.weights, active.len());
+            for k in 0..active.len() {
+                b[(k, k)] *= 1.0 + ridge;
             }
-            if round == 0 {
-                weights = self.weights_at(&theta);
+            let Some(step) = b.cholesky().map(|c| c.solve(&(-g))) else {
+                break;
+            };
+            for (k, c) in active.iter().enumerate() {
+                theta[c.index()] += step[k];
+            }
+            self.hold_in_range(&mut theta);
+            if step
+                .iter()
+                .zip(active)
+                .all(|(s, c)| s.abs() < 1e-9 * scale(*c))
+            {
+                break;
             }
         }
-        self.finish(active, theta, weights)
+        theta
     }
 
     /// The fit's covariance, residual and weighted sum of squares at θ.

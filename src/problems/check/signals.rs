@@ -8,7 +8,10 @@
 //! Bogert 2012, "Effect of low pass filtering on joint moments from inverse dynamics").
 //!
 //! A plate's moment about the world origin, $M_s = x_{cop} F_y - y_{cop} F_x$, is filtered
-//! rather than its CoP: the moment is smooth where the CoP jumps or is undefined (below
+//! rather than its CoP, in the plate's own frame: on a treadmill the belt's travel
+//! $v t$ that moves the trial overground is taken out before filtering and put back at
+//! the kinematics' instant, so that a plate's clock shifts what the plate measured and
+//! not the belt's travel. The moment is smooth where the CoP jumps or is undefined (below
 //! the CoP threshold the nearest defined CoP of the stretch is held; the moment there is
 //! under 20 N times a lever arm).
 
@@ -51,6 +54,8 @@ pub struct Signals {
     pub force_rate: f64,
     /// Sample rate of the kinematics (Hz).
     pub kinematic_rate: f64,
+    /// Belt speed (m/s) the trial was moved overground with; 0 overground.
+    belt_speed: f64,
 }
 
 /// Median sample rate (Hz) of increasing instants `t`.
@@ -87,9 +92,15 @@ impl Signals {
         let (ft, feet) = data.force_record();
         let force_rate = median_rate(ft);
         let height = data.force_plate_height.unwrap_or(0.0);
+        let belt_speed = data.belt_speed.unwrap_or(0.0);
         let mut loads: [Vec<LoadStretch>; 2] = [vec![], vec![]];
         for s in 0..2 {
-            loads[s] = foot_stretches(ft, &feet[s], height, force_rate, cutoff_hz)?;
+            let plate = Plate {
+                height,
+                belt_speed,
+                rate: force_rate,
+            };
+            loads[s] = foot_stretches(ft, &feet[s], &plate, cutoff_hz)?;
         }
         let (k0, k1) = (
             data.time[0] + margin,
@@ -111,6 +122,7 @@ impl Signals {
             instants,
             force_rate,
             kinematic_rate,
+            belt_speed,
         })
     }
 
@@ -133,14 +145,32 @@ impl Signals {
             .iter()
             .find(|l| l.span.0 <= t && l.span.1 >= t)
     }
+
+    /// Foot `s`'s loads `[fx, fy (N), mz about the world origin (N·m)]` at the instant
+    /// `t` (s) of a plate whose clock reads `shift` (s) late: what the plate measured
+    /// at `t + shift`, with the belt's travel to `t` on a treadmill. `None` where that
+    /// instant has no measured loads.
+    pub fn load<S: crate::model::Scalar>(&self, s: usize, t: f64, shift: S) -> Option<[S; 3]> {
+        let at = S::c(t) + shift;
+        let [fx, fy, mz] = self.stretch(s, at.value())?.eval(at);
+        Some([fx, fy, mz + fy * (self.belt_speed * t)])
+    }
 }
 
-/// Each measured stretch of one foot's record, filtered and splined.
+/// What a plate's moment is read with: its surface height (m), the belt speed (m/s, 0
+/// overground) and its sample rate (Hz).
+struct Plate {
+    height: f64,
+    belt_speed: f64,
+    rate: f64,
+}
+
+/// Each measured stretch of one foot's record, filtered and splined, its moment in the
+/// plate's frame (the belt's travel taken out).
 fn foot_stretches(
     t: &[f64],
     foot: &FootData,
-    height: f64,
-    rate: f64,
+    plate: &Plate,
     cutoff_hz: f64,
 ) -> Result<Vec<LoadStretch>, CheckError> {
     let mut out = Vec::new();
@@ -156,9 +186,14 @@ fn foot_stretches(
         let fy = &foot.fy[a..=b];
         let cop = held_cop(&foot.cop_x[a..=b]);
         let mz: Vec<f64> = (0..tt.len())
-            .map(|k| cop.as_ref().map_or(0.0, |c| c[k] * fy[k]) - height * fx[k])
+            .map(|k| {
+                let x = cop
+                    .as_ref()
+                    .map_or(0.0, |c| c[k] - plate.belt_speed * tt[k]);
+                x * fy[k] - plate.height * fx[k]
+            })
             .collect();
-        let f = |v: &[f64]| CubicSpline::new(tt, &low_pass(v, rate, cutoff_hz));
+        let f = |v: &[f64]| CubicSpline::new(tt, &low_pass(v, plate.rate, cutoff_hz));
         out.push(LoadStretch {
             span: (tt[0], tt[tt.len() - 1]),
             fx: f(&fx)?,

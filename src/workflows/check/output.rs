@@ -123,12 +123,23 @@ pub fn alternatives_text(r: &Reading) -> String {
         .join(", ")
 }
 
+/// The null band a reading is judged against, in the reading's unit.
+fn baseline_text(r: &Reading) -> String {
+    if !r.baseline.mean.is_finite() {
+        return "—".into();
+    }
+    let (m, unit) = r.param.display_value(r.baseline.mean);
+    let (sd, _) = r.param.display_value(r.baseline.sd);
+    format!("{m:+.2} ± {sd:.2} {unit}")
+}
+
 fn readings_table(c: &MeasurementCheck) -> Table {
     Table {
         title: "Readings of the whole-body balance".into(),
         headers: [
             "candidate",
             "estimate ± sd",
+            "untouched trials read",
             "z",
             "threshold |z|",
             "explains",
@@ -144,6 +155,7 @@ fn readings_table(c: &MeasurementCheck) -> Table {
                 vec![
                     r.param.label().into(),
                     estimate_text(r),
+                    baseline_text(r),
                     fmt(r.z, 2),
                     fmt(r.threshold, 2),
                     format!("{:.1} %", 100.0 * r.explained),
@@ -312,6 +324,7 @@ fn summary_json(
             "effect": r.param.name(), "label": r.param.label(), "estimate": finite(r.estimate), "sd": finite(r.sd), "sd_within": finite(r.sd_within),
             "display": {"estimate": finite(v), "sd": finite(sd), "unit": unit},
             "z": finite(r.z), "threshold": finite(r.threshold), "explained": r.explained,
+            "untouched": {"mean": finite(r.baseline.mean), "sd": finite(r.baseline.sd)},
             "verdict": r.verdict.text(), "look_alikes": r.param.look_alikes(),
         });
         if !r.alternatives.is_empty() {
