@@ -784,8 +784,11 @@ fn stepwise(p: &Problem, settings: &CheckSettings) -> (Vec<Reading>, Vec<Reading
     for c in BASELINE {
         let r = judged(c, fit.theta[c.index()], fit.sd(c), 0.0, &null[c.index()]);
         first_readings.push(r.clone());
+        // the baseline's own uncertainty: it is shown, not judged
         last.push(Reading {
             verdict: Verdict::Baseline,
+            sd: r.sd_within,
+            z: f64::NAN,
             ..r
         });
     }

@@ -56,6 +56,17 @@ pub fn verdict_text(c: &MeasurementCheck) -> String {
         }
         s.push('\n');
     }
+    for r in c.readings.iter().filter(|r| r.verdict == Verdict::Baseline) {
+        writeln!(
+            s,
+            "baseline (read beside every candidate, not tested): {} {}, where untouched trials read {}; or: {}",
+            r.param.label(),
+            estimate_text(r),
+            baseline_text(r),
+            r.param.look_alikes()
+        )
+        .ok();
+    }
     s.push_str(&coverage_text(c));
     let [before, after] = &c.thresholds;
     writeln!(
