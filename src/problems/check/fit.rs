@@ -32,7 +32,7 @@ pub struct Problem<'a> {
     /// Largest clock magnitude (s): clocks are held within it.
     pub clock_limit: f64,
     /// Weights of the three components (1/N², 1/N², 1/(N·m)²): the inverse mean squares
-    /// of the residual with the [`LARGEST`] model read.
+    /// of the residual with the [`LARGEST`] model read ([`Problem::weighted`]).
     pub weights: [f64; 3],
 }
 
@@ -88,27 +88,32 @@ impl Fit {
 
 impl<'a> Problem<'a> {
     /// The balance of `instants`, with the settings' Bartlett bandwidth and clock limit
-    /// (1.5 force samples inside the stated one).
+    /// (1.5 force samples inside the stated one), each component weighing 1.
     pub fn new(
         body: &'a Body,
         signals: &'a Signals,
         instants: &'a [Instant],
         settings: &super::CheckSettings,
     ) -> Self {
-        let mut p = Problem {
+        Problem {
             body,
             signals,
             instants,
             bandwidth: (settings.bandwidth_s * signals.force_rate).round() as usize,
             clock_limit: settings.clock_limit_s - 1.5 / signals.force_rate,
             weights: [1.0; 3],
-        };
-        p.weights = p.weights_at(&[0.0; NPARAM]);
-        for _ in 0..3 {
-            let theta = p.descend(&LARGEST, &[0.0; NPARAM], 1e-6);
-            p.weights = p.weights_at(&theta);
         }
-        p
+    }
+
+    /// The same balance with each component weighted by the inverse of its mean square
+    /// once the [`LARGEST`] model is read (until then every component weighs 1).
+    pub fn weighted(mut self) -> Self {
+        self.weights = self.weights_at(&[0.0; NPARAM]);
+        for _ in 0..3 {
+            let theta = self.descend(&LARGEST, &[0.0; NPARAM], 1e-6);
+            self.weights = self.weights_at(&theta);
+        }
+        self
     }
 }
 

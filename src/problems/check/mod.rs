@@ -356,7 +356,7 @@ pub fn check(
 ) -> Result<MeasurementCheck, CheckError> {
     let (signals, body) = balance_inputs(data, model, settings)?;
     let instants = balance_instants(&signals, &body, settings, window)?;
-    let problem = Problem::new(&body, &signals, &instants, settings);
+    let problem = Problem::new(&body, &signals, &instants, settings).weighted();
     let mass = (body.mass(), implied_mass(&problem));
     let mut warnings =
         plausibility::check_balance(data, mass.0, mass.1, horizontal_correlation(&problem))?;
