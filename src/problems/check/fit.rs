@@ -7,8 +7,8 @@
 //! the weights are the body model's own misfit in each component, the same whichever
 //! effect the data carry. Weights taken before any effect is read would shrink the
 //! component that carries the effect (a plate's clock inflates the vertical force's
-//! residual most) and hand the reading to the components the body model fits worst. The covariance is the sandwich
-//! $B^{-1}\Omega B^{-1}$, $B = \sum_k J_k^T W J_k$, with $\Omega$ the Newey–West
+//! residual most) and hand the reading to the components the body model fits worst.
+//! The covariance is the sandwich $B^{-1}\Omega B^{-1}$, $B = \sum_k J_k^T W J_k$, with $\Omega$ the Newey–West
 //! (Bartlett-kernel) long-run covariance of the scores $s_k = J_k^T W r_k$ (Newey and West
 //! 1987): neighbouring force samples of a smoothed residual are far from independent, and
 //! an ordinary least-squares standard error would be too small by the square root of the
@@ -68,8 +68,6 @@ pub struct Fit {
     pub theta: [f64; NPARAM],
     /// Covariance of the active parameters (row-major).
     pub cov: Vec<f64>,
-    /// Weights of the three components (1/N², 1/N², 1/(N·m)²).
-    pub weights: [f64; 3],
     /// Weighted residual sum of squares.
     pub rss: f64,
     /// Residual at each instant.
@@ -164,7 +162,7 @@ impl Problem<'_> {
     /// Read the parameters `active` (the others held at `start`) by Gauss–Newton.
     pub fn fit(&self, active: &[Param], start: &[f64; NPARAM]) -> Fit {
         let theta = self.descend(active, start, 0.0);
-        self.finish(active, theta, self.weights)
+        self.finish(active, theta)
     }
 
     /// θ after Gauss–Newton in `active` from `start`, each step's normal matrix with
@@ -197,17 +195,16 @@ impl Problem<'_> {
     }
 
     /// The fit's covariance, residual and weighted sum of squares at θ.
-    pub fn finish(&self, active: &[Param], theta: [f64; NPARAM], weights: [f64; 3]) -> Fit {
+    pub fn finish(&self, active: &[Param], theta: [f64; NPARAM]) -> Fit {
         let lin = self.linearise(&theta, active);
         let p = active.len();
-        let (b, _) = normal_equations(&lin, &weights, p);
-        let cov = sandwich(&lin, &weights, p, &b, self.bandwidth);
+        let (b, _) = normal_equations(&lin, &self.weights, p);
+        let cov = sandwich(&lin, &self.weights, p, &b, self.bandwidth);
         Fit {
             active: active.to_vec(),
             theta,
             cov,
-            weights,
-            rss: weighted_rss(&lin.r, &weights),
+            rss: weighted_rss(&lin.r, &self.weights),
             residual: lin.r,
         }
     }

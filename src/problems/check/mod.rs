@@ -12,8 +12,9 @@
 //! band, the one that explains most of the residual is read jointly with those already
 //! found; a reading is beyond its band when its distance from what untouched trials read
 //! ([`NULL`]) exceeds its Newey–West standard deviation and their spread, in quadrature,
-//! by the Bonferroni-corrected point of the stated family-wise level. Residual thresholds labs use are checked before and after
-//! ([`thresholds`]); implausible units and signs are refused first ([`plausibility`]).
+//! by the Bonferroni-corrected point of the stated family-wise level. Residual
+//! thresholds labs use are checked before and after ([`thresholds`]); implausible units
+//! and signs are refused first ([`plausibility`]).
 
 pub mod balance;
 pub mod fit;
@@ -145,9 +146,9 @@ pub struct CheckSettings {
     pub bandwidth_s: f64,
     /// Largest plate clock read (s) and the margin kept at either end of the loads.
     pub clock_limit_s: f64,
-    /// What untouched trials read as each candidate, in θ order ([`NULL`]): readings
-    /// start from the centres and are judged by their distance from them, the spread
-    /// added in quadrature to the reading's Newey–West standard deviation.
+    /// What untouched trials read as each candidate, in θ order ([`NULL`]): readings are
+    /// judged by their distance from the centres, the spread added in quadrature to the
+    /// reading's Newey–West standard deviation.
     pub null: [NullBand; NPARAM],
 }
 
@@ -160,7 +161,8 @@ pub struct CheckSettings {
 pub struct NullBand {
     /// Centre (the parameter's unit).
     pub mean: f64,
-    /// Spread beyond the readings' own noise (the parameter's unit).
+    /// Spread of the untouched readings about the centre, their own noise included (the
+    /// parameter's unit).
     pub sd: f64,
 }
 

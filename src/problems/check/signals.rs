@@ -91,15 +91,14 @@ impl Signals {
         }
         let (ft, feet) = data.force_record();
         let force_rate = median_rate(ft);
-        let height = data.force_plate_height.unwrap_or(0.0);
         let belt_speed = data.belt_speed.unwrap_or(0.0);
+        let plate = Plate {
+            height: data.force_plate_height.unwrap_or(0.0),
+            belt_speed,
+            rate: force_rate,
+        };
         let mut loads: [Vec<LoadStretch>; 2] = [vec![], vec![]];
         for s in 0..2 {
-            let plate = Plate {
-                height,
-                belt_speed,
-                rate: force_rate,
-            };
             loads[s] = foot_stretches(ft, &feet[s], &plate, cutoff_hz)?;
         }
         let (k0, k1) = (

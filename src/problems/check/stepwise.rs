@@ -101,7 +101,7 @@ fn one_step(p: &Problem, fit: &Fit, c: Param) -> (f64, f64, f64) {
     cols.push(c);
     let k = cols.len();
     let lin = p.linearise(&fit.theta, &cols);
-    let (b, g) = fit::normal_equations(&lin, &fit.weights, k);
+    let (b, g) = fit::normal_equations(&lin, &p.weights, k);
     let Some(chol) = b.clone().cholesky() else {
         return (f64::NAN, f64::NAN, 0.0);
     };
@@ -113,7 +113,7 @@ fn one_step(p: &Problem, fit: &Fit, c: Param) -> (f64, f64, f64) {
             r[i] += (0..k).map(|a| j[i * k + a] * step[a]).sum::<f64>();
         }
     }
-    let cov = fit::sandwich(&moved, &fit.weights, k, &b, p.bandwidth);
+    let cov = fit::sandwich(&moved, &p.weights, k, &b, p.bandwidth);
     let est = fit.theta[c.index()] + step[k - 1];
     let sd = cov[(k - 1) * k + (k - 1)].max(0.0).sqrt();
     (est, sd, decrease / fit.rss)
@@ -122,8 +122,9 @@ fn one_step(p: &Problem, fit: &Fit, c: Param) -> (f64, f64, f64) {
 /// Read beside every candidate from the start, as the trial's baseline: the moment
 /// balance's constant. The body model's own centre-of-mass error and a CoP offset common
 /// to both plates both add a near-constant moment, which untouched recordings read as
-/// several centimetres either way ([`super::NULL`]); read beside every candidate, it leaves a
-/// one-plate CoP offset to be told by how that plate's load differs from the other's.
+/// several centimetres either way ([`super::NULL`]); read beside every candidate, it
+/// leaves a one-plate CoP offset to be told by how that plate's load differs from the
+/// other's.
 pub const BASELINE: [Param; 1] = [Param::TrunkCom];
 
 /// One candidate's reading judged against its null band.
@@ -164,9 +165,9 @@ fn unreadable(p: &Problem, fit: &Fit, b: &nalgebra::DMatrix<f64>, c: Param) -> O
     unloaded(p, c).map(|reason| Verdict::NotTestable { reason })
 }
 
-/// Forward stepwise reading of every candidate from the null bands' centres, the
-/// [`BASELINE`] read throughout: the readings, the first step's (each candidate read
-/// alone beside the baseline), and the final fit.
+/// Forward stepwise reading of every candidate, the [`BASELINE`] read throughout, each
+/// reading judged against its null band: the readings, the first step's (each candidate
+/// read alone beside the baseline), and the final fit.
 pub(super) fn read(p: &Problem, settings: &CheckSettings) -> (Vec<Reading>, Vec<Reading>, Fit) {
     let null = &settings.null;
     let mut fit = p.fit(&BASELINE, &[0.0; NPARAM]);
@@ -176,7 +177,7 @@ pub(super) fn read(p: &Problem, settings: &CheckSettings) -> (Vec<Reading>, Vec<
     let mut first = true;
     loop {
         let lin = p.linearise(&fit.theta, &Param::ALL);
-        let (b, _) = fit::normal_equations(&lin, &fit.weights, NPARAM);
+        let (b, _) = fit::normal_equations(&lin, &p.weights, NPARAM);
         let mut tested = Vec::new();
         last.clear();
         for c in Param::ALL.into_iter().filter(|c| !fit.active.contains(c)) {
