@@ -536,6 +536,43 @@ fn without_a_hidden_effect_nothing_is_significant() {
     }
 }
 
+/// A free MTG damping on the model-made trial without a hidden effect, whose damping is
+/// the model's own, lowers J by about a third: less damping relieves the effort of
+/// following the trial's noise. Against the χ²₁ point alone that is a finding (the
+/// statistic is far beyond it). Judged against what it lowers on the model's own trial at
+/// the noise this trial shows (the model null), it is not significant.
+#[test]
+fn a_free_mtg_damping_on_data_without_one_is_no_finding_against_the_model_null() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = baseline("none", dir.path(), Setup::Seed);
+    let d = diagnose(&run, 0, &["mtg_damping"], false, vec![]);
+    let t = &d["ranking"][0];
+    assert_eq!(t["effect"]["type"], "mtg_damping");
+    assert_eq!(t["testable"], true);
+    let statistic = t["statistic"].as_f64().unwrap();
+    let central = footfall::problems::distributions::chi2_999(1);
+    assert!(
+        statistic > central,
+        "the central χ² would not have called it: statistic {statistic}"
+    );
+    assert!(
+        t["model_null"].as_f64().is_some_and(|d0| d0 > 0.0),
+        "measured on the model's own trial: {t}"
+    );
+    assert_eq!(t["significant"], false, "{t}");
+    assert!(t["threshold"].as_f64().unwrap() > statistic);
+    assert_eq!(
+        t["verdict"],
+        footfall::problems::diagnose::BELOW_MODEL_NULL,
+        "not the verdict of an effect shown absent"
+    );
+    // the trial it was measured on carries the noise this trial was made with (synth's
+    // default: 0.5°, 2 mm, 5 N, 5 mm), read back from the samples
+    let out = PathBuf::from(format!("{}-diagnose", run.display()));
+    assert!(out.join("model_null/trial.csv").is_file());
+    assert!(out.join("model_null/solution.json").is_file());
+}
+
 #[test]
 fn hidden_ground_slope_is_found_and_identified() {
     single_effect("ground_slope", Setup::Seed, 1.5, &["ground_slope"]);

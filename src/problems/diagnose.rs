@@ -34,7 +34,7 @@ pub mod stats;
 pub use held_out::{HeldOut, HeldOutReading, NOT_VALIDATABLE};
 pub use run_setup::TrackingRunSetup;
 
-use super::distributions::chi2_999;
+use super::distributions::{chi2_999, noncentral_chi2_point};
 use super::error::DiagnoseError;
 use crate::model::effects::EffectSpec;
 use crate::ocp::{Block, Transcription};
@@ -56,6 +56,10 @@ pub struct IdentifiedParameter {
     /// Whether it was identified.
     pub free: bool,
 }
+
+/// The verdict of a candidate whose decrease clears the χ²ₖ point but not what it lowers
+/// on the model's own trial: not told apart from that, which is not evidence of absence.
+pub const BELOW_MODEL_NULL: &str = "not told apart from what it lowers on the model's own trial";
 
 /// Result of a score test of one candidate.
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -79,8 +83,23 @@ pub struct ScoreTest {
     pub predicted_fraction: f64,
     /// Predicted decrease in units of the residual mean square `J/N`.
     pub statistic: f64,
-    /// The χ²ₖ 0.1 % point it is compared with.
+    /// The 0.1 % point it is compared with: of the χ²ₖ distribution, or of the noncentral
+    /// χ²ₖ(λ) where the candidate lowers the cost on the model's own data too
+    /// (`noncentrality`).
     pub threshold: f64,
+    /// The residual mean square the statistic is measured in (cost units per residual).
+    #[serde(default)]
+    pub mean_square: f64,
+    /// How far the candidate, freed the same way, lowers the cost of a trial the run's own
+    /// model made without noise from the run's solution (cost units; `None`: not
+    /// measured): the decrease it makes with nothing missing, by relieving the effort
+    /// regularisation or the targets' interpolation, which no data ask for.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub model_null: Option<f64>,
+    /// `model_null` in the statistic's units (`model_null / (mean_square φ)`): the
+    /// noncentrality λ of the statistic's distribution when the model lacks nothing.
+    #[serde(default)]
+    pub noncentrality: f64,
     /// Whether the statistic exceeds the threshold.
     pub significant: bool,
     /// Gauss–Newton steps taken ([`truncated_refit`]), or the SQP iterations of a full
@@ -114,7 +133,8 @@ pub struct ScoreTest {
     /// Significant in-sample and validated on the held-out half cycle (or significant
     /// where the trial has no other half cycle: see `held_out`).
     pub found: bool,
-    /// One of `not testable with this run's cost`, `not significant`, `significant at
+    /// One of `not testable with this run's cost`, [`BELOW_MODEL_NULL`], `not
+    /// significant`, `significant at
     /// its bound, not a reading`, `not confirmed on the held-out half cycle`,
     /// [`NOT_VALIDATABLE`], `found`, `significant, not validated`.
     pub verdict: String,
@@ -402,6 +422,9 @@ impl ScoreTest {
             predicted_fraction: decrease / objective,
             statistic,
             threshold,
+            mean_square: objective / data_rows.max(1) as f64,
+            model_null: None,
+            noncentrality: 0.0,
             significant: statistic > threshold,
             expected_channels: Vec::new(),
             steps: 0,
@@ -422,6 +445,7 @@ impl ScoreTest {
     /// variance inflation, and judge it again.
     pub fn set_mean_square(&mut self, mean_square: f64) {
         if mean_square > 0.0 && mean_square.is_finite() {
+            self.mean_square = mean_square;
             self.statistic_independent = self.predicted_decrease / mean_square;
             self.set_inflation(self.inflation);
         }
@@ -432,7 +456,7 @@ impl ScoreTest {
     pub fn set_inflation(&mut self, phi: f64) {
         self.inflation = phi.max(1.0);
         self.statistic = self.statistic_independent / self.inflation;
-        self.significant = self.testable && self.statistic > self.threshold;
+        self.judge();
     }
 
     /// Record whether the candidate is identifiable; an untestable one is not
@@ -441,6 +465,35 @@ impl ScoreTest {
         self.testable = id.testable;
         self.identifiability = Some(id);
         self.hint = if self.testable { None } else { hint };
+        self.judge();
+    }
+
+    /// Record the candidate's decrease on the model's own noise-free data (cost units):
+    /// its statistic is then judged against the noncentral χ²ₖ(λ), λ that decrease in
+    /// the statistic's units. With noise, the statistic of a candidate whose fitted values
+    /// relieve the cost by a decrease `d₀` is `(√(d₀/σ²φ) + z)²`-like: noncentral χ².
+    pub fn set_model_null(&mut self, decrease: f64) {
+        self.model_null = Some(decrease.max(0.0));
+        self.judge();
+    }
+
+    /// Whether the statistic clears the central χ²ₖ point but not the model null's.
+    fn beyond_central_only(&self) -> bool {
+        self.model_null.is_some() && self.statistic > chi2_999(self.parameters.len())
+    }
+
+    /// The threshold at the noncentrality the model null gives, and the verdict on it.
+    fn judge(&mut self) {
+        let k = self.parameters.len();
+        self.noncentrality = match self.model_null {
+            Some(d0) if self.mean_square > 0.0 => d0 / (self.mean_square * self.inflation),
+            _ => 0.0,
+        };
+        self.threshold = if self.noncentrality > 0.0 {
+            noncentral_chi2_point(k, self.noncentrality, 0.001)
+        } else {
+            chi2_999(k)
+        };
         self.significant = self.testable && self.statistic > self.threshold;
     }
 
@@ -448,6 +501,8 @@ impl ScoreTest {
     pub fn settle(&mut self) {
         let (found, verdict) = if !self.testable {
             (false, "not testable with this run's cost".to_string())
+        } else if !self.significant && self.beyond_central_only() {
+            (false, BELOW_MODEL_NULL.into())
         } else if !self.significant {
             (false, "not significant".into())
         } else if !self.at_bound.is_empty() {

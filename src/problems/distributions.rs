@@ -1,6 +1,6 @@
 //! The distributions the tests of significance read: the χ² distribution's upper tail
-//! and its points (through the complementary error function, the regularised incomplete
-//! gamma function and ln Γ).
+//! and its points, central and noncentral (through the complementary error function, the
+//! regularised incomplete gamma function and ln Γ).
 
 /// The χ² 99.9 % point for `k` degrees of freedom (k ≥ 6 by the Wilson–Hilferty
 /// approximation).
@@ -24,6 +24,67 @@ pub fn chi2_1_upper(alpha: f64) -> f64 {
             lo = mid;
         } else {
             hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// `P(χ'²_k(λ) > x)`: the upper tail of the noncentral χ² distribution with `k` degrees
+/// of freedom and noncentrality `λ ≥ 0`, the Poisson(λ/2) mixture of central χ²_{k+2j}
+/// tails (summed from the Poisson mode outwards until the weights left are below 1e-15).
+pub fn noncentral_chi2_upper(x: f64, k: f64, lambda: f64) -> f64 {
+    if !(lambda > 0.0) {
+        return chi2_upper(x, k);
+    }
+    let m = 0.5 * lambda;
+    let mode = m.floor();
+    let weight = |j: f64| (j * m.ln() - m - ln_gamma(j + 1.0)).exp();
+    let mut sum = 0.0;
+    let mut mass = 0.0;
+    // upwards from the mode, then downwards: each side's weights fall monotonically
+    let mut j = mode;
+    loop {
+        let w = weight(j);
+        sum += w * chi2_upper(x, k + 2.0 * j);
+        mass += w;
+        if w < 1e-16 || 1.0 - mass < 1e-15 {
+            break;
+        }
+        j += 1.0;
+    }
+    let mut j = mode - 1.0;
+    while j >= 0.0 && 1.0 - mass >= 1e-15 {
+        let w = weight(j);
+        sum += w * chi2_upper(x, k + 2.0 * j);
+        mass += w;
+        if w < 1e-16 {
+            break;
+        }
+        j -= 1.0;
+    }
+    sum.clamp(0.0, 1.0)
+}
+
+/// The upper `alpha` point of the noncentral χ² distribution with `k` degrees of freedom
+/// and noncentrality `λ`: the `x` with `P(χ'²_k(λ) > x) = alpha` (bisection; `alpha` in
+/// (0, 1)). At `λ = 0` it is the central point.
+pub fn noncentral_chi2_point(k: usize, lambda: f64, alpha: f64) -> f64 {
+    let kf = k.max(1) as f64;
+    let lambda = lambda.max(0.0);
+    let mut hi = kf + lambda + 10.0;
+    while noncentral_chi2_upper(hi, kf, lambda) > alpha {
+        hi *= 2.0;
+    }
+    let mut lo = 0.0;
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if noncentral_chi2_upper(mid, kf, lambda) > alpha {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+        if hi - lo < 1e-10 * hi {
+            break;
         }
     }
     0.5 * (lo + hi)
@@ -146,5 +207,38 @@ mod tests {
             assert!((got - x).abs() < 2e-3, "α = {alpha}: {got} against {x}");
         }
         assert!((chi2_1_upper(0.001) - chi2_999(1)).abs() < 2e-3);
+    }
+
+    /// With one degree of freedom the noncentral χ² is the square of a normal variable of
+    /// mean √λ, so its tail is `Φ̄(√x − √λ) + Φ̄(√x + √λ)` in closed form; at λ = 0 the
+    /// noncentral tail and points are the central ones.
+    #[test]
+    fn noncentral_chi2_matches_the_closed_form_of_one_degree_of_freedom() {
+        let normal_upper = |z: f64| 0.5 * erfc(z / std::f64::consts::SQRT_2);
+        for lambda in [0.3f64, 1.0, 4.0, 25.0, 120.0] {
+            for x in [0.5f64, 3.0, 10.8, 40.0, 200.0] {
+                let exact =
+                    normal_upper(x.sqrt() - lambda.sqrt()) + normal_upper(x.sqrt() + lambda.sqrt());
+                let got = noncentral_chi2_upper(x, 1.0, lambda);
+                assert!(
+                    (got - exact).abs() < 1e-6 * exact.max(1e-3),
+                    "λ {lambda}, x {x}: {got} against {exact}"
+                );
+            }
+            let x = noncentral_chi2_point(1, lambda, 0.001);
+            let tail =
+                normal_upper(x.sqrt() - lambda.sqrt()) + normal_upper(x.sqrt() + lambda.sqrt());
+            assert!(
+                (tail - 0.001).abs() < 1e-8,
+                "λ {lambda}: point {x}, tail {tail}"
+            );
+        }
+        for k in 1..=5 {
+            assert!((noncentral_chi2_point(k, 0.0, 0.001) - chi2_999(k)).abs() < 2e-3);
+            assert!(
+                (noncentral_chi2_upper(7.0, k as f64, 0.0) - chi2_upper(7.0, k as f64)).abs()
+                    < 1e-15
+            );
+        }
     }
 }

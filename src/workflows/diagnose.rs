@@ -17,6 +17,7 @@ use crate::model::GaitModel;
 use crate::problems::diagnose::{ScoreTest, TrackingRunSetup};
 
 mod heldout;
+mod model_null;
 mod noise;
 mod output;
 mod refit;
@@ -204,8 +205,14 @@ pub fn run(args: &DiagnoseRequest, progress: &dyn Progress) -> anyhow::Result<()
         .map_err(|e| anyhow!("{}: {e}", args.run.display()))?;
     let (resid, phi_all) = baseline_residuals(&run, &base)?;
     let candidates = candidates_of(args, &base.model)?;
-    let (mut tests, evidence, skipped, full) =
-        score_all(&run, &base, &resid, phi_all, &candidates)?;
+    let (mut tests, evidence, skipped, full) = score_all(
+        &run,
+        &base,
+        &resid,
+        phi_all,
+        &candidates,
+        &folder.staging_path().join("model_null"),
+    )?;
     let (held_out_note, held_base) = validate_held_out(&run, base.setup.window, &mut tests)?;
     for t in &mut tests {
         t.settle();

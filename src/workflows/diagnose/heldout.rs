@@ -305,7 +305,9 @@ fn judged(base: &HeldOutBase, t: &ScoreTest, change: f64) -> HeldOut {
 /// [`judged`] with the band at curvature `q` along the fitted values (the held-out half
 /// cycle's own, where it was measured; without curvature, `q = 0`, nothing is found).
 fn judged_at(base: &HeldOutBase, t: &ScoreTest, change: f64, q: f64) -> HeldOut {
-    let band = held_out_band(q, base.s2, t.inflation);
+    // what the candidate lowers on the model's own data, it lowers here too without the
+    // data asking for it
+    let band = held_out_band(q, base.s2, t.inflation) + t.model_null.unwrap_or(0.0);
     HeldOut {
         stride: base.stride,
         mirrored: base.mirrored,

@@ -160,7 +160,7 @@ fn found_sentence(tests: &[ScoreTest]) -> String {
     let significant = tests.iter().filter(|t| t.significant).count();
     if found.is_empty() {
         return if significant == 0 {
-            "No testable candidate explains more than the noise: every statistic (corrected for correlated residuals) is below its χ² 0.1 % point. No effect is suggested.".to_string()
+            "No testable candidate explains more than the noise: every statistic (corrected for correlated residuals) is below its 0.1 % point. No effect is suggested.".to_string()
         } else {
             format!("{significant} candidate(s) are significant in-sample, but none is found: each fails to lower the error of the held-out half cycle beyond its noise band, or that half cycle cannot tell, or it reads a value at its bound (the verdicts say which).")
         };
@@ -258,8 +258,8 @@ fn verdict(o: &Outcome<'_>) -> String {
 /// verdict.
 fn ranking_table(tests: &[ScoreTest]) -> Table {
     Table {
-        title: "Candidate effects ranked: testability, in-sample score statistic (predicted cost decrease / the largest model's residual mean square, divided by the variance inflation φ of correlated residuals), held-out change, verdict".into(),
-        headers: ["rank", "effect", "testable", "parameters (truncated re-fit, ± sd)", "expected decrease", "% of J", "statistic", "φ", "χ² 0.1 % point", "held-out change vs noise band", "verdict"].map(String::from).to_vec(),
+        title: "Candidate effects ranked: testability, in-sample score statistic (predicted cost decrease / the largest model's residual mean square, divided by the variance inflation φ of correlated residuals), its decrease on the model's own trial (made at the trial's noise) and the 0.1 % point that sets (χ²ₖ, or the noncentral χ²ₖ(λ)), held-out change, verdict".into(),
+        headers: ["rank", "effect", "testable", "parameters (truncated re-fit, ± sd)", "expected decrease", "% of J", "statistic", "φ", "on the model's own trial (λ)", "0.1 % point", "held-out change vs noise band", "verdict"].map(String::from).to_vec(),
         rows: tests
             .iter()
             .enumerate()
@@ -274,6 +274,9 @@ fn ranking_table(tests: &[ScoreTest]) -> Table {
                     // an untestable candidate's statistic is no evidence of absence
                     if t.testable { format!("{:.1}", t.statistic) } else { "n/a".into() },
                     format!("{:.1}", t.inflation),
+                    t.model_null.map_or("—".into(), |d0| {
+                        format!("{d0:.3e} ({:.1})", t.noncentrality)
+                    }),
                     format!("{:.1}", t.threshold),
                     held_out_cell(t),
                     t.verdict.clone(),

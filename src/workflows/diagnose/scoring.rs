@@ -185,13 +185,15 @@ type Scores = (
 );
 
 /// Test every candidate: a score test at the run's solution for each with a null value
-/// (in parallel), a re-fit for the heel pad, and rank them.
+/// (in parallel), judged against what it lowers on the model's own trial (kept in
+/// `null_dir`, [`super::model_null`]), a re-fit for the heel pad, and rank them.
 pub(super) fn score_all(
     run: &RunInputs,
     base: &TrackingProblem,
     resid: &Residuals,
     phi_all: f64,
     candidates: &[EffectSpec],
+    null_dir: &std::path::Path,
 ) -> anyhow::Result<Scores> {
     let (args, setup, progress) = (run.args, run.setup, run.progress);
     let pad = EffectSpec::parse_cli("heel_pad_compliance")?;
@@ -265,6 +267,10 @@ pub(super) fn score_all(
         print_progress(progress, &t, true, seconds);
         tests.push((t, Evidence::Start(start)));
     }
+    // each score-tested candidate judged against what it lowers on the model's own data
+    let (mut judged, evidence): (Vec<ScoreTest>, Vec<Evidence>) = tests.into_iter().unzip();
+    super::model_null::judge_against_model_null(run, base, null_dir, &mut judged)?;
+    let mut tests: Vec<(ScoreTest, Evidence)> = judged.into_iter().zip(evidence).collect();
     // testable candidates first, the untestable after them (their statistic says
     // nothing), and the significant before the rest; among them by how much each explains, the
     // decrease (its likelihood gain under the largest model's noise, which all share):
