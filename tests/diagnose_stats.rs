@@ -291,7 +291,9 @@ fn swapping_the_legs_gives_the_other_legs_half_cycles() {
 /// model's own trial at the noise this trial shows (the model null: a free damping lowers
 /// what the effort regularisation charges on any trial), and its fitted values, applied
 /// to the other leg's half cycle before the run's (0.624–1.252 s), whose data the fit
-/// never saw, lower that half cycle's cost beyond its band and that model null.
+/// never saw, lower that half cycle's cost beyond its band and that model null. Its
+/// direction (less damping than the model's) is found; its value is reported as no
+/// reading, since on the model's own trial a free damping runs to its bound too.
 #[test]
 fn the_real_trials_mtg_damping_is_confirmed_on_the_other_legs_half_cycle() {
     let dir = tempfile::tempdir().unwrap();
@@ -329,7 +331,11 @@ fn the_real_trials_mtg_damping_is_confirmed_on_the_other_legs_half_cycle() {
         h["change"].as_f64().unwrap() > h["band"].as_f64().unwrap(),
         "{h}"
     );
-    assert_eq!(t["verdict"], "found");
+    let verdict = t["verdict"].as_str().unwrap();
+    assert!(verdict.starts_with("found"), "{verdict}");
+    // its value is the cost's lean: on the model's own trial a free damping runs to its
+    // bound as well
+    assert!(verdict.contains("its value is not a reading"), "{verdict}");
     let model_null = t["model_null"]
         .as_f64()
         .expect("measured on the model's own trial");

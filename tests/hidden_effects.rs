@@ -573,6 +573,40 @@ fn a_free_mtg_damping_on_data_without_one_is_no_finding_against_the_model_null()
     assert!(out.join("model_null/solution.json").is_file());
 }
 
+/// The MTG damping halved in the trial (`mtg_damping:change=-0.5`). A free damping is
+/// significant beyond what it lowers on the model's own trial, and confirmed in its
+/// direction (less damping than the model's), but its value is no reading: on the
+/// model's own trial, whose damping is the model's, its re-fit runs to the lower bound too
+/// (the muscles can cancel any damping, and only the effort term, which always prefers
+/// less, tells values apart). The diagnosis says so rather than report the value.
+#[test]
+fn hidden_mtg_damping_is_found_in_its_direction_and_its_value_is_said_to_be_no_reading() {
+    let name = "mtg_damping";
+    let dir = tempfile::tempdir().unwrap();
+    let run = baseline(name, dir.path(), Setup::Seed);
+    let d = diagnose(&run, 0, &["mtg_damping"], false, vec![]);
+    let t = &d["ranking"][0];
+    assert_eq!(t["effect"]["type"], "mtg_damping");
+    assert_eq!(t["significant"], true, "{t}");
+    assert!(
+        t["threshold"].as_f64().unwrap() > footfall::problems::distributions::chi2_999(1),
+        "judged against the model null: {t}"
+    );
+    let hidden = hidden_values(name);
+    assert_eq!(hidden[0].2, -0.5);
+    let read = t["step_values"][0].as_f64().unwrap();
+    assert!(read < 0.0, "less damping than the model's: {read}");
+    let verdict = t["verdict"].as_str().unwrap();
+    assert!(
+        verdict.contains("its value is not a reading"),
+        "the value is the cost's lean, not the trial's: {verdict}"
+    );
+    assert!(d["verdict"]
+        .as_str()
+        .unwrap()
+        .contains("Its direction is found, not its value"));
+}
+
 #[test]
 fn hidden_ground_slope_is_found_and_identified() {
     single_effect("ground_slope", Setup::Seed, 1.5, &["ground_slope"]);

@@ -61,6 +61,17 @@ pub struct IdentifiedParameter {
 /// on the model's own trial: not told apart from that, which is not evidence of absence.
 pub const BELOW_MODEL_NULL: &str = "not told apart from what it lowers on the model's own trial";
 
+/// What a candidate's truncated re-fit reads on the model's own trial.
+#[derive(Debug, Clone, Default)]
+pub struct ModelNullReading {
+    /// The values it reaches.
+    pub values: Vec<f64>,
+    /// Its null values, where it starts (the truth there).
+    pub start: Vec<f64>,
+    /// Whether some value lies at a bound of its range.
+    pub at_bound: bool,
+}
+
 /// Result of a score test of one candidate.
 #[derive(Debug, Clone, Serialize, Deserialize)]
 pub struct ScoreTest {
@@ -96,6 +107,16 @@ pub struct ScoreTest {
     /// regularisation or the targets' interpolation, which no data ask for.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub model_null: Option<f64>,
+    /// The values the candidate's truncated re-fit reads on the model's own trial, where
+    /// its true values are its null values, `null_values` (both empty: not measured).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub model_null_values: Vec<f64>,
+    /// The candidate's null values, where its re-fits start.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub null_values: Vec<f64>,
+    /// Whether a value read on the model's own trial lies at a bound of its range.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub model_null_at_bound: bool,
     /// `model_null` in the statistic's units (`model_null / (mean_square φ)`): the
     /// noncentrality λ of the statistic's distribution when the model lacks nothing.
     #[serde(default)]
@@ -349,7 +370,7 @@ pub(crate) fn significant_slope() -> ScoreTest {
 
 /// Which of `names`, the last parameters of θ in `tr` with `values`, lie within 1e-6 of
 /// their bound span of a bound.
-fn parameters_at_bound(tr: &Transcription, names: &[String], values: &[f64]) -> Vec<String> {
+pub fn parameters_at_bound(tr: &Transcription, names: &[String], values: &[f64]) -> Vec<String> {
     let (w_lb, w_ub, _, _) = crate::sqp::Nlp::bounds(tr);
     let end = tr.range(Block::Params).end;
     let first = end - names.len();
@@ -424,6 +445,9 @@ impl ScoreTest {
             threshold,
             mean_square: objective / data_rows.max(1) as f64,
             model_null: None,
+            model_null_values: Vec::new(),
+            null_values: Vec::new(),
+            model_null_at_bound: false,
             noncentrality: 0.0,
             significant: statistic > threshold,
             expected_channels: Vec::new(),
@@ -468,13 +492,51 @@ impl ScoreTest {
         self.judge();
     }
 
-    /// Record the candidate's decrease on the model's own noise-free data (cost units):
-    /// its statistic is then judged against the noncentral χ²ₖ(λ), λ that decrease in
-    /// the statistic's units. With noise, the statistic of a candidate whose fitted values
-    /// relieve the cost by a decrease `d₀` is `(√(d₀/σ²φ) + z)²`-like: noncentral χ².
-    pub fn set_model_null(&mut self, decrease: f64) {
+    /// Record the candidate's decrease on the model's own trial (cost units) and what its
+    /// truncated re-fit reads there: its statistic is then judged against the noncentral
+    /// χ²ₖ(λ), λ that decrease in the statistic's units. With noise, the statistic of a
+    /// candidate whose fitted values relieve the cost by a decrease `d₀` is
+    /// `(√(d₀/σ²φ) + z)²`-like: noncentral χ².
+    pub fn set_model_null(&mut self, decrease: f64, reading: ModelNullReading) {
         self.model_null = Some(decrease.max(0.0));
+        self.model_null_values = reading.values;
+        self.null_values = reading.start;
+        self.model_null_at_bound = reading.at_bound;
         self.judge();
+    }
+
+    /// Whether the candidate's reading is biased: on the model's own trial, where its true
+    /// values are its null values, some parameter reads away from its null value by more
+    /// than 20 % of the run's reading (both measured from the null value), and by more
+    /// than 2 sd or as far as a bound of its range.
+    pub fn reading_biased(&self) -> bool {
+        let sd = self.identifiability.as_ref().map(|i| i.sd.clone());
+        (0..self.model_null_values.len().min(self.null_values.len())).any(|i| {
+            let null = self.model_null_values[i] - self.null_values[i];
+            let run = self
+                .step_values
+                .get(i)
+                .map_or(0.0, |v| v - self.null_values[i]);
+            let sd = sd.as_ref().and_then(|s| s.get(i).copied().flatten());
+            let beyond_noise = self.model_null_at_bound || null.abs() > 2.0 * sd.unwrap_or(0.0);
+            null.abs() > 0.2 * run.abs() && beyond_noise
+        })
+    }
+
+    /// What the candidate reads on the model's own trial: `where it is 0.0000, it reads
+    /// -0.9800`.
+    pub fn model_null_text(&self) -> String {
+        let list = |v: &[f64]| {
+            v.iter()
+                .map(|x| format!("{x:.4}"))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        format!(
+            "where it is {}, it reads {}",
+            list(&self.null_values),
+            list(&self.model_null_values)
+        )
     }
 
     /// Whether the statistic clears the central χ²ₖ point but not the model null's.
@@ -522,6 +584,12 @@ impl ScoreTest {
         };
         self.found = found;
         self.verdict = verdict;
+        if self.significant && self.at_bound.is_empty() && self.reading_biased() {
+            self.verdict += &format!(
+                "; its value is not a reading (on the model's own trial, {})",
+                self.model_null_text()
+            );
+        }
     }
 }
 

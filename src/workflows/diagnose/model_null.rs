@@ -17,6 +17,14 @@
 //! ([`ScoreTest::set_model_null`]). The held-out validation asks the same margin again
 //! (`heldout::validate`).
 //!
+//! The same trial checks the candidate's reading: there its true value is the model's
+//! (the null value), so where its re-fit reads it away from that by more than 20 % of the
+//! run's reading, and by more than 2 sd or as far as a bound, the run's value is biased
+//! the same way (a free MTG damping
+//! runs towards zero on any trial: the muscles can cancel any damping, and only the
+//! effort term, which always prefers less, tells values apart). Such a candidate's value
+//! is reported as not a reading.
+//!
 //! The trial and its track are kept in the diagnosis folder (`model_null/`).
 
 use super::super::track::TrackingProblem;
@@ -26,7 +34,10 @@ use super::noise::{decrease_at_solution, linearisation};
 use super::RunInputs;
 use crate::data::write_sagittal_csv;
 use crate::integrate::IntegratorSettings;
-use crate::problems::diagnose::{gauss_newton_decrease, ScoreTest, TrackingRunSetup};
+use crate::problems::diagnose::{
+    parameters_at_bound, theta_of, truncated_refit, ModelNullReading, ScoreTest, TrackingRunSetup,
+    MAX_STEPS, REL_STOP,
+};
 use crate::problems::evaluation::GaitSolution;
 use crate::problems::synth::{synthesize, MeasurementOffsets, NoiseModel, SynthSettings};
 use anyhow::anyhow;
@@ -94,11 +105,11 @@ pub(super) fn judge_against_model_null(
             .map_err(|e| anyhow!(e))?;
         decrease_at_solution(&linearisation(at))?.1
     };
-    let decreases: Vec<anyhow::Result<f64>> = tests
+    let decreases: Vec<anyhow::Result<(f64, ModelNullReading)>> = tests
         .par_iter()
         .map(|t| {
             if !judged(t) {
-                return Ok(0.0);
+                return Ok((0.0, ModelNullReading::default()));
             }
             let mut prob = linearisation(TrackingProblem::build(
                 &null.setup,
@@ -107,10 +118,28 @@ pub(super) fn judge_against_model_null(
             prob.setup
                 .start_from(&null.solution)
                 .map_err(|e| anyhow!(e))?;
-            let (_, dec) = prob.with_transcription(|tr, _, w| {
-                gauss_newton_decrease(tr, &w).map_err(|e| anyhow!(e))
+            // the decrease and the values the candidate's truncated re-fit reaches there,
+            // from its null values
+            let k = t.parameters.len();
+            let (dec, reading) = prob.with_transcription(|tr, _, w| {
+                let (_, dec, w1, _) =
+                    truncated_refit(tr, &w, MAX_STEPS, REL_STOP).map_err(|e| anyhow!(e))?;
+                let last = |w: &[f64]| {
+                    let theta = theta_of(tr, w);
+                    theta[theta.len() - k..].to_vec()
+                };
+                let values = last(&w1);
+                let at_bound = !parameters_at_bound(tr, &t.parameters, &values).is_empty();
+                Ok((
+                    dec,
+                    ModelNullReading {
+                        start: last(&w),
+                        values,
+                        at_bound,
+                    },
+                ))
             })?;
-            Ok(dec - leftover)
+            Ok((dec - leftover, reading))
         })
         .collect();
     for (t, d) in tests.iter_mut().zip(decreases) {
@@ -118,17 +147,18 @@ pub(super) fn judge_against_model_null(
             continue;
         }
         match d {
-            Ok(d0) => {
-                t.set_model_null(d0);
+            Ok((d0, reading)) => {
+                t.set_model_null(d0, reading);
                 note!(
                     progress,
-                    "  {:<32} on the model's own trial  {:>10.3e} (λ {:.1}): threshold {:.1}, statistic {:.1}{}",
+                    "  {:<32} on the model's own trial  {:>10.3e} (λ {:.1}): threshold {:.1}, statistic {:.1}{}{}",
                     t.label,
                     d0.max(0.0),
                     t.noncentrality,
                     t.threshold,
                     t.statistic,
-                    if t.significant { "  significant" } else { "" }
+                    if t.significant { "  significant" } else { "" },
+                    if t.reading_biased() { "; its value there is not the model's: not a reading" } else { "" }
                 );
             }
             Err(e) => warn_note!(

@@ -200,6 +200,16 @@ fn verdict(o: &Outcome<'_>) -> String {
     let untestable: Vec<&ScoreTest> = tests.iter().filter(|t| !t.testable).collect();
     let mut v = found_sentence(tests);
     let add = add_effects(tests, o.clock_moves_events);
+    if let Some(t) = tests
+        .iter()
+        .find(|t| t.found)
+        .filter(|t| t.reading_biased())
+    {
+        v += &format!(
+            " Its direction is found, not its value: on the model's own trial, {}, so the run's value says how far the cost leans, not the subject's.",
+            t.model_null_text()
+        );
+    }
     if !add.is_empty() {
         v += &format!(
             " Add it with one line and re-fit: `footfall track <the run's options> --init {} {}`{}; then diagnose that run, where what it explained is the model's and the next missing effect can show.",
