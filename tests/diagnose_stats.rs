@@ -350,3 +350,45 @@ fn the_real_trials_mtg_damping_is_confirmed_on_the_other_legs_half_cycle() {
         t["step_values"]
     );
 }
+
+/// Held-out validation on another recording of the same subject (`--held-out-data`). The
+/// OpenCap subject's first walk holds one half cycle from a left heel strike to a right
+/// one and none of the other leg, so it has no held-out half cycle of its own; its
+/// second walk is another recording of the same subject. The MTG damping, significant
+/// on the first walk beyond what it lowers on the model's own trial, is applied with its
+/// fitted value to the second walk's first half cycle, which the fit never saw, and
+/// lowers that cost beyond its band.
+#[test]
+fn a_candidate_is_validated_on_another_recording_of_the_same_subject() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = dir.path().join("walk1");
+    let mut req = TrackRequest::new("ellipse");
+    req.run.data = Some(root().join("data/opencap_s4_walking1_sagittal.csv"));
+    req.run.model = root().join("models/opencap_s4.json");
+    let tracked = track(&req, RunFolder::create(&run, false).unwrap(), &Quiet).unwrap();
+    assert!(tracked.converged, "{}", tracked.result.status);
+    let walk2 = root().join("data/opencap_s4_walking2_sagittal.csv");
+    let d = diagnose_with(&DiagnoseRequest {
+        held_out: true,
+        held_out_data: Some(walk2.clone()),
+        ..request(&run, &["mtg_damping"])
+    });
+    print_ranking(&d);
+    let t = &d["ranking"][0];
+    assert_eq!(t["significant"], true, "{t}");
+    let h = &t["held_out"];
+    assert_eq!(h["trial"].as_str().unwrap(), walk2.to_str().unwrap());
+    let window = (
+        h["window"][0].as_f64().unwrap(),
+        h["window"][1].as_f64().unwrap(),
+    );
+    assert!(
+        (window.0 - 0.533).abs() < 0.02 && (window.1 - 1.079).abs() < 0.02,
+        "the second walk's half cycle: {window:?}"
+    );
+    assert!(
+        h["change"].as_f64().unwrap() > h["band"].as_f64().unwrap(),
+        "{h}"
+    );
+    assert!(t["verdict"].as_str().unwrap().starts_with("found"), "{t}");
+}

@@ -35,6 +35,11 @@ pub struct Args {
     /// cycle of the trial once); they are then reported as not validated.
     #[arg(long)]
     no_held_out: bool,
+    /// Validate on another recording of the same subject instead of another half cycle of
+    /// the run's trial: its first half cycle is tracked with the run's model and cost and
+    /// held out (a file as `track --data` takes it, without a forces file)
+    #[arg(long, value_name = "FILE")]
+    held_out_data: Option<PathBuf>,
     /// Start the diagnosis's own solves from kept solutions of the same problems
     /// (repeatable): an earlier re-fit's run folder (`<RUN>+<effect>`) starts the re-fit
     /// with the same effects, an earlier diagnosis folder (`<RUN>-diagnose`) gives its
@@ -55,6 +60,7 @@ impl From<Args> for DiagnoseRequest {
             tol: a.tol,
             max_iter: a.max_iter,
             held_out: !a.no_held_out,
+            held_out_data: a.held_out_data,
             starts: a.starts,
         }
     }

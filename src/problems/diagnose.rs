@@ -708,6 +708,7 @@ mod tests {
         let held = |reading: Option<HeldOutReading>, beyond: bool| HeldOut {
             stride: 1,
             mirrored: true,
+            trial: None,
             window: (0.6, 1.2),
             values: vec![0.01],
             objective: 1.0,

@@ -59,6 +59,10 @@ pub struct DiagnoseRequest {
     /// Validate significant candidates on another half cycle of the trial (default on;
     /// off: they are reported "significant, not validated").
     pub held_out: bool,
+    /// Another recording of the same subject to validate on (`--held-out-data`): its
+    /// first half cycle is held out instead of one of the run's own trial. It is read as
+    /// the run's trial is (`--data`), without a forces file.
+    pub held_out_data: Option<PathBuf>,
     /// Kept solutions to start the diagnosis's own solves from (`--start`): run folders
     /// with `setup.json` and `solution.json` (an earlier re-fit `<RUN>+<effect>`), or
     /// folders of them (an earlier `<RUN>-diagnose`, whose `held_out` is its held-out
@@ -82,6 +86,7 @@ impl DiagnoseRequest {
             tol: 1e-5,
             max_iter: 200,
             held_out: true,
+            held_out_data: None,
             starts: Vec::new(),
         }
     }
@@ -311,7 +316,7 @@ fn validate_held_out(
         " Held-out: each significant candidate, with the values fitted on this run's half cycle ({:.3}–{:.3} s), applied to {} ({:.3}–{:.3} s; the plain model tracked there: J = {:.6}, {} iterations{}) with the other variables re-fitted; it is found if it lowers that cost beyond its noise band (2 sd, inflated by φ, above the mean change a fit to noise makes, which is a rise). Each is applied at the opposite values too: the two changes give that half cycle's own curvature along the candidate, which sets its band, and its own reading of the candidate as a fraction of the fitted values (found: that reading lies beyond 2 sd). Where a true effect of the fitted size would not clear the band on average (the reading's sd above one half), that half cycle is too weakly informed to confirm or refute it: not validatable.",
         window.0,
         window.1,
-        heldout::half_cycle_name(hb.stride, hb.mirrored),
+        hb.name(),
         hb.window.0,
         hb.window.1,
         hb.objective,

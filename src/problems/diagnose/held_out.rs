@@ -16,6 +16,10 @@ pub struct HeldOut {
     /// Whether it is the other leg's half cycle, the legs swapped (`--mirror`).
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub mirrored: bool,
+    /// Another recording of the subject whose first half cycle was held out
+    /// (`--held-out-data`; `None`: a half cycle of the run's own trial).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub trial: Option<std::path::PathBuf>,
     /// Its time span (s).
     pub window: (f64, f64),
     /// The parameter values fitted on the run's half cycle.

@@ -32,6 +32,9 @@ pub(super) struct HeldOutBase {
     pub stride: usize,
     /// Whether it is the other leg's (legs swapped against the run's).
     pub mirrored: bool,
+    /// Another recording of the subject, whose first half cycle it is (`None`: the run's
+    /// own trial).
+    pub trial: Option<std::path::PathBuf>,
     /// Its span (s).
     pub window: (f64, f64),
     /// The plain model's solution there.
@@ -88,14 +91,35 @@ fn strides(run: &TrackingRunSetup) -> Vec<(usize, bool)> {
     s
 }
 
-/// Track the plain model on the first half cycle of the trial other than the run's
-/// (`run_window`) that the trial holds; `None` (with why) when there is none.
+/// Track the plain model on the held-out half cycle: the first of another recording of
+/// the subject where the request names one (`--held-out-data`), else the first half cycle
+/// of the trial other than the run's (`run_window`) that the trial holds; `None` (with
+/// why) when there is none.
 pub(super) fn held_out_base(
     args: &DiagnoseRequest,
     run: &TrackingRunSetup,
     run_window: (f64, f64),
     progress: &dyn Progress,
 ) -> anyhow::Result<Result<HeldOutBase, NoHeldOut>> {
+    if let Some(data) = &args.held_out_data {
+        let setup = TrackingRunSetup {
+            data: Some(data.clone()),
+            forces: None,
+            plates: Vec::new(),
+            lab_axes: None,
+            belt_speed: None,
+            stride: None,
+            window: None,
+            check_points: vec![],
+            guess: Default::default(),
+            ..run.clone()
+        };
+        let prob = TrackingProblem::build(&setup, &[])
+            .map_err(|e| anyhow!("--held-out-data {}: {e:#}", data.display()))?;
+        let mut base = track_base(args, setup, prob, 1, false, progress)?;
+        base.trial = Some(data.clone());
+        return Ok(Ok(base));
+    }
     let mut passed_over = Vec::new();
     for (stride, mirrored) in strides(run) {
         let name = half_cycle_name(stride, mirrored);
@@ -148,7 +172,10 @@ fn track_base(
         note!(
             progress,
             "held-out {} ({:.3}–{:.3} s): tracking the plain model there",
-            half_cycle_name(stride, mirrored),
+            match &args.held_out_data {
+                Some(data) => other_recording_name(data),
+                None => half_cycle_name(stride, mirrored),
+            },
             window.0,
             window.1
         );
@@ -180,6 +207,7 @@ fn track_base(
     Ok(HeldOutBase {
         stride,
         mirrored,
+        trial: None,
         window,
         objective,
         leftover,
@@ -198,6 +226,22 @@ impl HeldOutBase {
     pub(super) fn write_into(&self, dir: &std::path::Path) -> anyhow::Result<()> {
         super::starts::keep(dir, &self.setup, &self.solution)
     }
+}
+
+impl HeldOutBase {
+    /// How this held-out half cycle is named ([`half_cycle_name`],
+    /// [`other_recording_name`]).
+    pub(super) fn name(&self) -> String {
+        match &self.trial {
+            Some(data) => other_recording_name(data),
+            None => half_cycle_name(self.stride, self.mirrored),
+        }
+    }
+}
+
+/// How the first half cycle of another recording is named.
+pub(super) fn other_recording_name(data: &std::path::Path) -> String {
+    format!("the first half cycle of {}", data.display())
 }
 
 /// How a held-out half cycle is named: `half cycle 2`, or `half cycle 1 of the other
@@ -311,6 +355,7 @@ fn judged_at(base: &HeldOutBase, t: &ScoreTest, change: f64, q: f64) -> HeldOut 
     HeldOut {
         stride: base.stride,
         mirrored: base.mirrored,
+        trial: base.trial.clone(),
         window: base.window,
         values: t.step_values.clone(),
         objective: base.objective,

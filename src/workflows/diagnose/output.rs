@@ -630,6 +630,7 @@ mod tests {
         t.held_out = held_out.map(|beyond| HeldOut {
             stride: 1,
             mirrored: false,
+            trial: None,
             window: (0.0, 0.5),
             values: vec![0.01],
             objective: 1.0,
