@@ -172,10 +172,9 @@ fn track_base(
         note!(
             progress,
             "held-out {} ({:.3}–{:.3} s): tracking the plain model there",
-            match &args.held_out_data {
-                Some(data) => other_recording_name(data),
-                None => half_cycle_name(stride, mirrored),
-            },
+            args.held_out_data
+                .as_deref()
+                .map_or_else(|| half_cycle_name(stride, mirrored), other_recording_name),
             window.0,
             window.1
         );
@@ -226,9 +225,7 @@ impl HeldOutBase {
     pub(super) fn write_into(&self, dir: &std::path::Path) -> anyhow::Result<()> {
         super::starts::keep(dir, &self.setup, &self.solution)
     }
-}
 
-impl HeldOutBase {
     /// How this held-out half cycle is named ([`half_cycle_name`],
     /// [`other_recording_name`]).
     pub(super) fn name(&self) -> String {

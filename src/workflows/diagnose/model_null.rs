@@ -10,20 +10,19 @@
 //! and 5.4 with 0.5°). So the diagnosis measures it. The run's own model drives a trial
 //! made from the run's solution, at the run's sampling rate, with the noise the run's
 //! trial shows ([`measured_noise`]); the plain model is tracked on it with the run's
-//! cost; and each candidate is freed there as in its score test. Its decrease `d₀` there is what the candidate gives with
-//! nothing missing. On the run, the statistic of such a candidate is then a noncentral
-//! χ²ₖ with noncentrality `λ = d₀/(s²φ)` (the run's residual mean square and variance
-//! inflation), and it is judged against that distribution's 0.1 % point
-//! ([`ScoreTest::set_model_null`]). The held-out validation asks the same margin again
-//! (`heldout::validate`).
+//! cost; and each candidate is freed there as in its score test. Its decrease `d₀` there
+//! is what the candidate gives with nothing missing. On the run, the statistic of such a
+//! candidate is then a noncentral χ²ₖ with noncentrality `λ = d₀/(s²φ)` (the run's
+//! residual mean square and variance inflation), and it is judged against that
+//! distribution's 0.1 % point ([`ScoreTest::set_model_null`]). The held-out validation
+//! asks the same margin again (`heldout::validate`).
 //!
 //! The same trial checks the candidate's reading: there its true value is the model's
 //! (the null value), so where its re-fit reads it away from that by more than 20 % of the
 //! run's reading, and by more than 2 sd or as far as a bound, the run's value is biased
-//! the same way (a free MTG damping
-//! runs towards zero on any trial: the muscles can cancel any damping, and only the
-//! effort term, which always prefers less, tells values apart). Such a candidate's value
-//! is reported as not a reading.
+//! the same way (a free MTG damping runs towards zero on any trial: the muscles can
+//! cancel any damping, and only the effort term, which always prefers less, tells values
+//! apart). Such a candidate's value is reported as not a reading.
 //!
 //! The trial and its track are kept in the diagnosis folder (`model_null/`).
 
@@ -63,8 +62,8 @@ struct NullTrack {
 
 /// Measure every candidate of `tests` that a score test found significant against the
 /// central χ² (not one tested by a full re-fit) on the model's own trial, kept in `dir`,
-/// and judge it again against its model null. Where the trial cannot be made or tracked, says why and leaves the tests
-/// against the central χ².
+/// and judge it again against its model null. Where the trial cannot be made or
+/// tracked, says why and leaves the tests against the central χ².
 pub(super) fn judge_against_model_null(
     run: &RunInputs,
     base: &TrackingProblem,
@@ -172,8 +171,8 @@ pub(super) fn judge_against_model_null(
 }
 
 /// Make the trial the run's model gives from its solution (at the run's sampling rate,
-/// with the noise the run's trial shows: [`measured_noise`]), keep it in `dir`, and track the plain model on it with the run's cost, from
-/// the run's solution.
+/// with the noise the run's trial shows: [`measured_noise`]), keep it in `dir`, and
+/// track the plain model on it with the run's cost, from the run's solution.
 fn track_model_trial(
     run: &RunInputs,
     base: &TrackingProblem,
