@@ -284,6 +284,23 @@ fn swapping_the_legs_gives_the_other_legs_half_cycles() {
     }
 }
 
+/// The held-out validation `h` was made on the half cycle spanning `window` (s, to 20 ms;
+/// `what` names it) and lowered its cost beyond the band.
+fn confirmed_on(h: &Value, window: (f64, f64), what: &str) {
+    let got = (
+        h["window"][0].as_f64().unwrap(),
+        h["window"][1].as_f64().unwrap(),
+    );
+    assert!(
+        (got.0 - window.0).abs() < 0.02 && (got.1 - window.1).abs() < 0.02,
+        "{what}: {got:?}"
+    );
+    assert!(
+        h["change"].as_f64().unwrap() > h["band"].as_f64().unwrap(),
+        "{h}"
+    );
+}
+
 /// Held-out validation on the real bundled trial. Its kinematics hold one half cycle
 /// from a left heel strike to a right one, which the run tracks, and the other leg's two
 /// (mirrored), which held-out validation may use. The MTG damping (an opt-in candidate,
@@ -319,17 +336,10 @@ fn the_real_trials_mtg_damping_is_confirmed_on_the_other_legs_half_cycle() {
     assert_eq!(t["significant"], true, "statistic {}", t["statistic"]);
     let h = &t["held_out"];
     assert_eq!(h["mirrored"], true, "{h}");
-    let window = (
-        h["window"][0].as_f64().unwrap(),
-        h["window"][1].as_f64().unwrap(),
-    );
-    assert!(
-        (window.0 - 0.624).abs() < 0.02 && (window.1 - 1.252).abs() < 0.02,
-        "the other leg's half cycle before the run's: {window:?}"
-    );
-    assert!(
-        h["change"].as_f64().unwrap() > h["band"].as_f64().unwrap(),
-        "{h}"
+    confirmed_on(
+        h,
+        (0.624, 1.252),
+        "the other leg's half cycle before the run's",
     );
     let verdict = t["verdict"].as_str().unwrap();
     assert!(verdict.starts_with("found"), "{verdict}");
@@ -378,17 +388,6 @@ fn a_candidate_is_validated_on_another_recording_of_the_same_subject() {
     assert_eq!(t["significant"], true, "{t}");
     let h = &t["held_out"];
     assert_eq!(h["trial"].as_str().unwrap(), walk2.to_str().unwrap());
-    let window = (
-        h["window"][0].as_f64().unwrap(),
-        h["window"][1].as_f64().unwrap(),
-    );
-    assert!(
-        (window.0 - 0.533).abs() < 0.02 && (window.1 - 1.079).abs() < 0.02,
-        "the second walk's half cycle: {window:?}"
-    );
-    assert!(
-        h["change"].as_f64().unwrap() > h["band"].as_f64().unwrap(),
-        "{h}"
-    );
+    confirmed_on(h, (0.533, 1.079), "the second walk's half cycle");
     assert!(t["verdict"].as_str().unwrap().starts_with("found"), "{t}");
 }

@@ -61,14 +61,26 @@ pub struct IdentifiedParameter {
 /// on the model's own trial: not told apart from that, which is not evidence of absence.
 pub const BELOW_MODEL_NULL: &str = "not told apart from what it lowers on the model's own trial";
 
-/// What a candidate's truncated re-fit reads on the model's own trial.
-#[derive(Debug, Clone, Default)]
+/// What a candidate's truncated re-fit reads on the model's own trial (all empty: not
+/// measured).
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
 pub struct ModelNullReading {
     /// The values it reaches.
+    #[serde(
+        rename = "model_null_values",
+        default,
+        skip_serializing_if = "Vec::is_empty"
+    )]
     pub values: Vec<f64>,
     /// Its null values, where it starts (the truth there).
+    #[serde(rename = "null_values", default, skip_serializing_if = "Vec::is_empty")]
     pub start: Vec<f64>,
     /// Whether some value lies at a bound of its range.
+    #[serde(
+        rename = "model_null_at_bound",
+        default,
+        skip_serializing_if = "std::ops::Not::not"
+    )]
     pub at_bound: bool,
 }
 
@@ -102,21 +114,15 @@ pub struct ScoreTest {
     #[serde(default)]
     pub mean_square: f64,
     /// How far the candidate, freed the same way, lowers the cost of a trial the run's own
-    /// model made without noise from the run's solution (cost units; `None`: not
+    /// model made from the run's solution at the trial's noise (cost units; `None`: not
     /// measured): the decrease it makes with nothing missing, by relieving the effort
     /// regularisation or the targets' interpolation, which no data ask for.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub model_null: Option<f64>,
-    /// The values the candidate's truncated re-fit reads on the model's own trial, where
-    /// its true values are its null values, `null_values` (both empty: not measured).
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub model_null_values: Vec<f64>,
-    /// The candidate's null values, where its re-fits start.
-    #[serde(default, skip_serializing_if = "Vec::is_empty")]
-    pub null_values: Vec<f64>,
-    /// Whether a value read on the model's own trial lies at a bound of its range.
-    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
-    pub model_null_at_bound: bool,
+    /// What its truncated re-fit reads on that trial, where its true values are its null
+    /// values.
+    #[serde(flatten)]
+    pub model_null_reading: ModelNullReading,
     /// `model_null` in the statistic's units (`model_null / (mean_square φ)`): the
     /// noncentrality λ of the statistic's distribution when the model lacks nothing.
     #[serde(default)]
@@ -445,9 +451,7 @@ impl ScoreTest {
             threshold,
             mean_square: objective / data_rows.max(1) as f64,
             model_null: None,
-            model_null_values: Vec::new(),
-            null_values: Vec::new(),
-            model_null_at_bound: false,
+            model_null_reading: ModelNullReading::default(),
             noncentrality: 0.0,
             significant: statistic > threshold,
             expected_channels: Vec::new(),
@@ -499,9 +503,7 @@ impl ScoreTest {
     /// `(√(d₀/σ²φ) + z)²`-like: noncentral χ².
     pub fn set_model_null(&mut self, decrease: f64, reading: ModelNullReading) {
         self.model_null = Some(decrease.max(0.0));
-        self.model_null_values = reading.values;
-        self.null_values = reading.start;
-        self.model_null_at_bound = reading.at_bound;
+        self.model_null_reading = reading;
         self.judge();
     }
 
@@ -510,15 +512,16 @@ impl ScoreTest {
     /// than 20 % of the run's reading (both measured from the null value), and by more
     /// than 2 sd or as far as a bound of its range.
     pub fn reading_biased(&self) -> bool {
+        let reading = &self.model_null_reading;
         let sd = self.identifiability.as_ref().map(|i| i.sd.clone());
-        (0..self.model_null_values.len().min(self.null_values.len())).any(|i| {
-            let null = self.model_null_values[i] - self.null_values[i];
+        (0..reading.values.len().min(reading.start.len())).any(|i| {
+            let null = reading.values[i] - reading.start[i];
             let run = self
                 .step_values
                 .get(i)
-                .map_or(0.0, |v| v - self.null_values[i]);
+                .map_or(0.0, |v| v - reading.start[i]);
             let sd = sd.as_ref().and_then(|s| s.get(i).copied().flatten());
-            let beyond_noise = self.model_null_at_bound || null.abs() > 2.0 * sd.unwrap_or(0.0);
+            let beyond_noise = reading.at_bound || null.abs() > 2.0 * sd.unwrap_or(0.0);
             null.abs() > 0.2 * run.abs() && beyond_noise
         })
     }
@@ -534,8 +537,8 @@ impl ScoreTest {
         };
         format!(
             "where it is {}, it reads {}",
-            list(&self.null_values),
-            list(&self.model_null_values)
+            list(&self.model_null_reading.start),
+            list(&self.model_null_reading.values)
         )
     }
 
