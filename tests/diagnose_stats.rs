@@ -303,9 +303,9 @@ fn confirmed_on(h: &Value, window: (f64, f64), what: &str) {
 
 /// Held-out validation on the real bundled trial. Its kinematics hold one half cycle
 /// from a left heel strike to a right one, which the run tracks, and the other leg's two
-/// (mirrored), which held-out validation may use. The MTG damping (an opt-in candidate,
-/// `--candidate mtg_damping`) is significant in-sample beyond what it lowers on the
-/// model's own trial at the noise this trial shows (the model null: a free damping lowers
+/// (mirrored), which held-out validation may use. Diagnosed by default (every candidate
+/// of the catalog), the MTG damping ranks first: it is significant in-sample beyond what
+/// it lowers on the model's own trial at the noise this trial shows (the model null: a free damping lowers
 /// what the effort regularisation charges on any trial), and its fitted values, applied
 /// to the other leg's half cycle before the run's (0.624–1.252 s), whose data the fit
 /// never saw, lower that half cycle's cost beyond its band and that model null. Its
@@ -328,7 +328,7 @@ fn the_real_trials_mtg_damping_is_confirmed_on_the_other_legs_half_cycle() {
         tracked.result.objective
     );
     assert!(tracked.converged, "{}", tracked.result.status);
-    let d = diagnose(&run, &["mtg_damping"], "base_starts");
+    let d = diagnose(&run, &[], "base_starts");
     print_ranking(&d);
     let t = &d["ranking"][0];
     assert_eq!(t["effect"]["type"], "mtg_damping");
@@ -364,10 +364,10 @@ fn the_real_trials_mtg_damping_is_confirmed_on_the_other_legs_half_cycle() {
 /// Held-out validation on another recording of the same subject (`--held-out-data`). The
 /// OpenCap subject's first walk holds one half cycle from a left heel strike to a right
 /// one and none of the other leg, so it has no held-out half cycle of its own; its
-/// second walk is another recording of the same subject. The MTG damping, significant
-/// on the first walk beyond what it lowers on the model's own trial, is applied with its
-/// fitted value to the second walk's first half cycle, which the fit never saw, and
-/// lowers that cost beyond its band.
+/// second walk is another recording of the same subject. Diagnosed by default, the MTG
+/// damping ranks first on the first walk, significant beyond what it lowers on the
+/// model's own trial; applied with its fitted value to the second walk's first half
+/// cycle, which the fit never saw, it lowers that cost beyond its band.
 #[test]
 fn a_candidate_is_validated_on_another_recording_of_the_same_subject() {
     let dir = tempfile::tempdir().unwrap();
@@ -381,10 +381,11 @@ fn a_candidate_is_validated_on_another_recording_of_the_same_subject() {
     let d = diagnose_with(&DiagnoseRequest {
         held_out: true,
         held_out_data: Some(walk2.clone()),
-        ..request(&run, &["mtg_damping"])
+        ..request(&run, &[])
     });
     print_ranking(&d);
     let t = &d["ranking"][0];
+    assert_eq!(t["effect"]["type"], "mtg_damping", "{t}");
     assert_eq!(t["significant"], true, "{t}");
     let h = &t["held_out"];
     assert_eq!(h["trial"].as_str().unwrap(), walk2.to_str().unwrap());

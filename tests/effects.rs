@@ -132,9 +132,19 @@ fn the_catalog_builds_into_the_model_with_free_parameters_at_their_null_values()
     }
     // the model's physics are the diagnosis's candidates; the instruments and the body
     // are the measurement check's
-    assert!(catalog()
-        .iter()
-        .all(|e| e.kind() == "passive_joint_stiffness"));
+    let physics = [
+        "passive_joint_stiffness",
+        "mtg_damping",
+        "mtg_strength",
+        "activation_time_constants",
+    ];
+    assert!(catalog().iter().all(|e| physics.contains(&e.kind())));
+    for k in physics {
+        assert!(
+            catalog().iter().any(|e| e.kind() == k),
+            "{k} not a candidate"
+        );
+    }
     for e in &cat {
         let m = model_with_effects(
             "opensim_subject01.json",

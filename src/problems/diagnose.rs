@@ -75,6 +75,14 @@ pub struct ModelNullReading {
     /// Its null values, where it starts (the truth there).
     #[serde(rename = "null_values", default, skip_serializing_if = "Vec::is_empty")]
     pub start: Vec<f64>,
+    /// Each value's sd there, in that trial's own noise (`None` where the information
+    /// is not positive; empty: not measured).
+    #[serde(
+        rename = "model_null_sd",
+        default,
+        skip_serializing_if = "Vec::is_empty"
+    )]
+    pub sd: Vec<Option<f64>>,
     /// Whether some value lies at a bound of its range.
     #[serde(
         rename = "model_null_at_bound",
@@ -507,20 +515,32 @@ impl ScoreTest {
         self.judge();
     }
 
+    /// The decrease the candidate explains beyond what it lowers on the model's own trial
+    /// (cost units): what the data ask of it, without the relief it gives on any trial.
+    pub fn decrease_beyond_model_null(&self) -> f64 {
+        self.predicted_decrease - self.model_null.unwrap_or(0.0)
+    }
+
     /// Whether the candidate's reading is biased: on the model's own trial, where its true
     /// values are its null values, some parameter reads away from its null value by more
     /// than 20 % of the run's reading (both measured from the null value), and by more
-    /// than 2 sd or as far as a bound of its range.
+    /// than 2 sd (its sd there, in that trial's noise; the run's where that is unknown) or
+    /// as far as a bound of its range.
     pub fn reading_biased(&self) -> bool {
         let reading = &self.model_null_reading;
-        let sd = self.identifiability.as_ref().map(|i| i.sd.clone());
+        let run_sd = self.identifiability.as_ref().map(|i| i.sd.clone());
         (0..reading.values.len().min(reading.start.len())).any(|i| {
             let null = reading.values[i] - reading.start[i];
             let run = self
                 .step_values
                 .get(i)
                 .map_or(0.0, |v| v - reading.start[i]);
-            let sd = sd.as_ref().and_then(|s| s.get(i).copied().flatten());
+            let sd = reading
+                .sd
+                .get(i)
+                .copied()
+                .flatten()
+                .or_else(|| run_sd.as_ref().and_then(|s| s.get(i).copied().flatten()));
             let beyond_noise = reading.at_bound || null.abs() > 2.0 * sd.unwrap_or(0.0);
             null.abs() > 0.2 * run.abs() && beyond_noise
         })

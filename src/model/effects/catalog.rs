@@ -5,8 +5,9 @@ use super::EffectSpec;
 
 /// The candidate effects `footfall diagnose` tries, each at its null value (no effect)
 /// with its identifiable parameters free: passive stiffness of hip, knee and ankle (both
-/// legs, rest angle 0). The diagnosis adds the heel pad on a foot with a heel circle and
-/// the contact law on a volumetric foot.
+/// legs, rest angle 0) and the actuators' properties (the MTGs' damping and strength, the
+/// activation time constants). The diagnosis adds the heel pad on a foot with a heel
+/// circle and the contact law on a volumetric foot.
 ///
 /// The instruments (the plates' clocks, gains and CoP offsets) and the body (its mass,
 /// the trunk, the ground's slope) are not candidates here: the measurement stage
@@ -14,15 +15,12 @@ use super::EffectSpec;
 /// contact model whose misfit confounds them in a track. They can still be named with
 /// `--candidate`.
 ///
-/// The actuator properties (`mtg_damping`, `mtg_strength`,
-/// `activation_time_constants`) are not default candidates either. They change what the
-/// effort regularisation charges, so they lower J whether or not the data ask for them;
-/// the diagnosis judges that against what they lower on the model's own trial (the model
-/// null, `workflows::diagnose::model_null`). But one that explains most of J shrinks
-/// the largest model's residual, in which every other candidate's statistic is measured,
-/// while each other's decrease is measured alone (on the bundled trial a free damping
-/// takes the largest model's J from 7.9 to 0.85, and the hip stiffness's 8 % of J reads as
-/// a finding). Ask for them with `--candidate`, and add what is found one at a time.
+/// An actuator property changes what the effort regularisation charges, so it lowers J
+/// whether or not the data ask for it: the diagnosis judges it against what it lowers
+/// on the model's own trial (the model null, `workflows::diagnose::model_null`), and
+/// leaves it out of the largest model whose residuals are the noise (one that explains
+/// most of J would shrink that noise, and another candidate sharing part of its
+/// signature would read as a finding).
 pub fn catalog() -> Vec<EffectSpec> {
     let mut out: Vec<EffectSpec> = ["hip", "knee", "ankle"]
         .into_iter()
@@ -34,6 +32,20 @@ pub fn catalog() -> Vec<EffectSpec> {
             free: vec![],
         })
         .collect();
+    out.extend([
+        EffectSpec::MtgDamping {
+            change: 0.0,
+            free: vec![],
+        },
+        EffectSpec::MtgStrength {
+            change: 0.0,
+            free: vec![],
+        },
+        EffectSpec::ActivationTimeConstants {
+            change: 0.0,
+            free: vec![],
+        },
+    ]);
     for e in &mut out {
         e.free_all();
     }

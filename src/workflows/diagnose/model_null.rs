@@ -33,15 +33,18 @@ use super::noise::{decrease_at_solution, linearisation};
 use super::RunInputs;
 use crate::data::write_sagittal_csv;
 use crate::integrate::IntegratorSettings;
+use crate::problems::diagnose::stats::candidate_identifiability_at;
 use crate::problems::diagnose::{
-    parameters_at_bound, theta_of, truncated_refit, ModelNullReading, ScoreTest, TrackingRunSetup,
-    MAX_STEPS, REL_STOP,
+    parameters_at_bound, theta_of, truncated_refit_from, ModelNullReading, ScoreTest,
+    TrackingRunSetup, MAX_STEPS, REL_STOP,
 };
 use crate::problems::evaluation::GaitSolution;
 use crate::problems::synth::{synthesize, MeasurementOffsets, NoiseModel, SynthSettings};
+use crate::sqp::linearised::GaussNewtonModel;
 use anyhow::anyhow;
 use rayon::prelude::*;
 use std::path::Path;
+use std::sync::Arc;
 
 /// Length of the model's trial in half cycles of the run's solution: the half cycle the
 /// track reads, with room for the event search on both sides.
@@ -120,9 +123,21 @@ pub(super) fn judge_against_model_null(
             // the decrease and the values the candidate's truncated re-fit reaches there,
             // from its null values
             let k = t.parameters.len();
-            let (dec, reading) = prob.with_transcription(|tr, _, w| {
+            let (dec, reading) = prob.with_transcription(|tr, cycle, w| {
+                let first = GaussNewtonModel::new(tr, &w, 1e-12).map_err(|e| anyhow!(e))?;
+                let step = first.step(None).map_err(Arc::new);
+                // each parameter's sd there, in that trial's own noise, which tells a
+                // reading the cost leans to from one that noise gives
+                let rows = prob
+                    .setup
+                    .data_rows(&prob.model, &prob.sets, &cycle.continuous);
+                let s2 = first.objective() / rows.max(1) as f64;
+                let names = t.parameters.clone();
+                let base = step.as_ref().map_err(|e| e.as_ref());
+                let sd = candidate_identifiability_at(tr, &first, base, names, s2, t.inflation).sd;
                 let (_, dec, w1, _) =
-                    truncated_refit(tr, &w, MAX_STEPS, REL_STOP).map_err(|e| anyhow!(e))?;
+                    truncated_refit_from(tr, &first, step, MAX_STEPS, REL_STOP, 0.0)
+                        .map_err(|e| anyhow!(e))?;
                 let last = |w: &[f64]| {
                     let theta = theta_of(tr, w);
                     theta[theta.len() - k..].to_vec()
@@ -134,6 +149,7 @@ pub(super) fn judge_against_model_null(
                     ModelNullReading {
                         start: last(&w),
                         values,
+                        sd,
                         at_bound,
                     },
                 ))

@@ -176,7 +176,7 @@ fn found_sentence(tests: &[ScoreTest]) -> String {
         )
     } else if confirmed == 0 {
         format!(
-            "{} of {} candidates are significant in-sample, none validated on a held-out half cycle (the verdicts say why): the first by the decrease it explains is {first}, which a held-out half cycle would have to confirm.",
+            "{} of {} candidates are significant in-sample, none validated on a held-out half cycle (the verdicts say why): the first by the decrease it explains (beyond what it lowers on the model's own trial) is {first}, which a held-out half cycle would have to confirm.",
             found.len(),
             tests.len()
         )
@@ -329,7 +329,7 @@ fn inflation_paragraph(o: &Outcome<'_>) -> String {
             .join(", ")
     ) + &match o.noise {
         Some(full) => format!(
-            " The largest model ({}) lowers J from {:.6} to {:.6}; its residuals' φ per channel: {}; every statistic's residual mean square is its J/N.",
+            " The largest model ({}) lowers J from {:.6} to {:.6}; its residuals' φ per channel: {}; every statistic's residual mean square is its J/N. The actuator properties are left out of it: they lower J on data that do not ask for them (they relieve the effort term), which would pass for a smaller noise.",
             full.effects.join(", "),
             o.objective,
             full.objective,

@@ -272,15 +272,21 @@ pub(super) fn score_all(
     super::model_null::judge_against_model_null(run, base, null_dir, &mut judged)?;
     let mut tests: Vec<(ScoreTest, Evidence)> = judged.into_iter().zip(evidence).collect();
     // testable candidates first, the untestable after them (their statistic says
-    // nothing), and the significant before the rest; among them by how much each explains, the
-    // decrease (its likelihood gain under the largest model's noise, which all share):
-    // the statistic's φ, weighted by the channels a candidate improves, decides whether
-    // it explains more than the noise, not which explains most
+    // nothing), and the significant before the rest; among them by how much each explains:
+    // the decrease (its likelihood gain under the largest model's noise, which all share)
+    // beyond what it lowers on the model's own trial (an actuator property relieves the
+    // effort term on any trial; a damping standing in for a missing heel pad lowers more
+    // than the pad, but less beyond its relief). The statistic's φ, weighted by the
+    // channels a candidate improves, decides whether it explains more than the noise, not
+    // which explains most
     tests.sort_by(|a, b| {
         b.0.testable
             .cmp(&a.0.testable)
             .then(b.0.significant.cmp(&a.0.significant))
-            .then(b.0.predicted_decrease.total_cmp(&a.0.predicted_decrease))
+            .then(
+                b.0.decrease_beyond_model_null()
+                    .total_cmp(&a.0.decrease_beyond_model_null()),
+            )
     });
     let (tests, evidence): (Vec<ScoreTest>, Vec<Evidence>) = tests.into_iter().unzip();
     Ok((tests, evidence, skipped, full))

@@ -502,6 +502,18 @@ impl EffectSpec {
         Ok(())
     }
 
+    /// Whether the effect is a property of the actuators (the MTGs' damping or strength,
+    /// the activation time constants): it changes what the effort regularisation charges,
+    /// so freeing it lowers a track's cost on data that do not ask for it.
+    pub fn is_actuator_property(&self) -> bool {
+        matches!(
+            self,
+            EffectSpec::MtgDamping { .. }
+                | EffectSpec::MtgStrength { .. }
+                | EffectSpec::ActivationTimeConstants { .. }
+        )
+    }
+
     /// Whether `other`, an instrument effect of this held one's kind (no free parameter)
     /// on another side, adds to it in one model: clock and CoP offsets add, gains
     /// multiply, and their parameters are named by side. So a correction held for both
