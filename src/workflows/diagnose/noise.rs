@@ -78,9 +78,9 @@ fn both_plates(c: &EffectSpec) -> bool {
 /// largest model the diagnosis considers: every score-tested candidate but the actuator
 /// properties at once (`candidates`: those the run's model accepts and does not already
 /// hold), each kind once (each plate's instruments on their own rather than both plates
-/// together), started from the run's solution. Its residuals are the diagnosis's estimate of the
-/// noise: its mean square and autocorrelation are what every candidate's decrease is
-/// measured against. `None` when fewer than two candidates are scored (each candidate's
+/// together), started from the run's solution. Its residuals are the diagnosis's
+/// estimate of the noise: its mean square and autocorrelation are what every candidate's
+/// decrease is measured against. `None` when fewer than two candidates are scored (each candidate's
 /// own re-fit is then that model).
 pub(super) fn full_model_series(
     setup: &TrackingRunSetup,
