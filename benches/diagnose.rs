@@ -1,8 +1,8 @@
 //! Criterion benchmark of the default diagnosis of the bundled trial's ellipse track, every
 //! step run: the measurement stage, the model stage (the default candidates, of which the
-//! MTG damping is found there), what each significant candidate adds to the others, the
-//! model's own trial made and tracked (the model null), the held-out half cycle tracked,
-//! and one verifying re-fit. The track itself is made once, outside the measurement.
+//! MTG damping is found there), the model's own trial made and tracked (the model null),
+//! the held-out half cycle tracked, and one verifying re-fit. The track itself is made
+//! once, outside the measurement.
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use footfall::runfolder::RunFolder;

@@ -80,8 +80,8 @@ fn both_plates(c: &EffectSpec) -> bool {
 /// hold), each kind once (each plate's instruments on their own rather than both plates
 /// together), started from the run's solution. Its residuals are the diagnosis's
 /// estimate of the noise: its mean square and autocorrelation are what every candidate's
-/// decrease is measured against. `None` when fewer than two candidates are scored (each candidate's
-/// own re-fit is then that model).
+/// decrease is measured against. `None` when fewer than two candidates are scored (each
+/// candidate's own re-fit is then that model).
 pub(super) fn full_model_series(
     setup: &TrackingRunSetup,
     solution: &GaitSolution,
