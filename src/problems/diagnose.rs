@@ -384,7 +384,7 @@ pub(crate) fn significant_slope() -> ScoreTest {
 
 /// Which of `names`, the last parameters of θ in `tr` with `values`, lie within 1e-6 of
 /// their bound span of a bound.
-pub fn parameters_at_bound(tr: &Transcription, names: &[String], values: &[f64]) -> Vec<String> {
+fn parameters_at_bound(tr: &Transcription, names: &[String], values: &[f64]) -> Vec<String> {
     let (w_lb, w_ub, _, _) = crate::sqp::Nlp::bounds(tr);
     let end = tr.range(Block::Params).end;
     let first = end - names.len();

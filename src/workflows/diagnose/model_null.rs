@@ -35,8 +35,7 @@ use crate::data::write_sagittal_csv;
 use crate::integrate::IntegratorSettings;
 use crate::problems::diagnose::stats::candidate_identifiability_at;
 use crate::problems::diagnose::{
-    parameters_at_bound, theta_of, truncated_refit_from, ModelNullReading, ScoreTest,
-    TrackingRunSetup, MAX_STEPS, REL_STOP,
+    score_test_from, theta_of, ModelNullReading, ScoreTest, TrackingRunSetup,
 };
 use crate::problems::evaluation::GaitSolution;
 use crate::problems::synth::{synthesize, MeasurementOffsets, NoiseModel, SynthSettings};
@@ -120,41 +119,41 @@ pub(super) fn judge_against_model_null(
             prob.setup
                 .start_from(&null.solution)
                 .map_err(|e| anyhow!(e))?;
-            // the decrease and the values the candidate's truncated re-fit reaches there,
-            // from its null values
             let k = t.parameters.len();
-            let (dec, reading) = prob.with_transcription(|tr, cycle, w| {
+            prob.with_transcription(|tr, cycle, w| {
                 let first = GaussNewtonModel::new(tr, &w, 1e-12).map_err(|e| anyhow!(e))?;
                 let step = first.step(None).map_err(Arc::new);
-                // each parameter's sd there, in that trial's own noise, which tells a
-                // reading the cost leans to from one that noise gives
                 let rows = prob
                     .setup
                     .data_rows(&prob.model, &prob.sets, &cycle.continuous);
+                // each parameter's sd there, in that trial's own noise, which tells a
+                // reading the cost leans to from one that noise gives
                 let s2 = first.objective() / rows.max(1) as f64;
                 let names = t.parameters.clone();
                 let base = step.as_ref().map_err(|e| e.as_ref());
                 let sd = candidate_identifiability_at(tr, &first, base, names, s2, t.inflation).sd;
-                let (_, dec, w1, _) =
-                    truncated_refit_from(tr, &first, step, MAX_STEPS, REL_STOP, 0.0)
-                        .map_err(|e| anyhow!(e))?;
-                let last = |w: &[f64]| {
-                    let theta = theta_of(tr, w);
-                    theta[theta.len() - k..].to_vec()
+                // the candidate's truncated re-fit there from its null values, as in its
+                // score test: its decrease beyond the plain model's leftover, its values
+                let (there, _) = score_test_from(
+                    &t.effect,
+                    t.parameters.clone(),
+                    tr,
+                    &first,
+                    step,
+                    leftover,
+                    rows,
+                    None,
+                )
+                .map_err(|e| anyhow!(e))?;
+                let theta = theta_of(tr, &w);
+                let reading = ModelNullReading {
+                    start: theta[theta.len() - k..].to_vec(),
+                    values: there.step_values,
+                    sd,
+                    at_bound: !there.at_bound.is_empty(),
                 };
-                let values = last(&w1);
-                let at_bound = !parameters_at_bound(tr, &t.parameters, &values).is_empty();
-                Ok((
-                    dec,
-                    ModelNullReading {
-                        start: last(&w),
-                        values,
-                        sd,
-                        at_bound,
-                    },
-                ))
-            })?;
-            Ok((dec - leftover, reading))
+                Ok((there.predicted_decrease, reading))
+            })
         })
         .collect();
     for (t, d) in tests.iter_mut().zip(decreases) {
