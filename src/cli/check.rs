@@ -37,6 +37,13 @@ pub struct Args {
     /// calibration for the effects it names.
     #[arg(long, value_name = "FILE.json")]
     null: Option<PathBuf>,
+    /// Move the trunk above the lumbar joint by the trial's `lumbar_extension` column
+    /// instead of freezing it in the rigid HAT (needs a body that describes its trunk: an
+    /// OpenSim model summary or de Leva's tables). The trunk's rocking carries most of a
+    /// rigid HAT's horizontal residual; the shipped bands are calibrated with the rigid
+    /// HAT, so judge with your own (`--null`, from `tools/calibrate-check --lumbar`).
+    #[arg(long)]
+    lumbar: bool,
 }
 
 pub fn run(args: Args, progress: &CliProgress) -> Result<(), Failure> {
@@ -47,6 +54,7 @@ pub fn run(args: Args, progress: &CliProgress) -> Result<(), Failure> {
     let mut settings = CheckSettings {
         cutoff_hz: args.cutoff,
         level: args.level,
+        lumbar: args.lumbar,
         ..CheckSettings::default()
     };
     if let Some(path) = &args.null {

@@ -27,6 +27,7 @@ use super::geometry::{Shape, ShapeScalars};
 use super::multibody::{Inertia, Tree, V2};
 use super::segments::{build_bodies, estimated_stature, segments_from_de_leva};
 use super::spec::{self, ActuatorSpec, BodySpec, ContactSettings, FootSpec, ModelSpec, Segments};
+use super::torso::{self, Torso};
 use super::Scalar;
 use std::path::{Path, PathBuf};
 
@@ -118,6 +119,8 @@ pub struct GaitModel {
     geometry_params: Vec<Option<(usize, usize)>>,
     params: Vec<ParamSpec>,
     free: Vec<usize>,
+    /// The HAT's trunk above the lumbar joint, where the body's source describes it.
+    torso: Option<Torso>,
 }
 
 impl GaitModel {
@@ -197,6 +200,7 @@ impl GaitModel {
         spec.validate(model_path)?;
         foot.validate(foot_path)?;
         let seg = body_segments(spec, model_path)?;
+        let torso = body_torso(spec, model_path)?;
         let tree = Tree::new(build_bodies(&seg))
             .map_err(|r| ModelError::invalid(model_path, "body", r.to_string()))?;
         let contacts = foot_contacts(&tree, foot);
@@ -226,6 +230,7 @@ impl GaitModel {
             geometry_params: slots.geometry,
             params,
             free,
+            torso,
         };
         model.check_foot_reaches_ground(foot_path)?;
         Ok(model)
@@ -255,6 +260,13 @@ impl GaitModel {
     /// The multibody tree.
     pub fn tree(&self) -> &Tree {
         &self.tree
+    }
+
+    /// The HAT's trunk above the lumbar joint (part of the rigid HAT), where the body's
+    /// source describes it: OpenSim models and de Leva's tables do, explicit segments
+    /// do not.
+    pub fn torso(&self) -> Option<&Torso> {
+        self.torso.as_ref()
     }
     /// Gravitational acceleration of the model file (m/s², before any effect tilts it).
     pub fn gravity(&self) -> f64 {
@@ -540,6 +552,26 @@ fn body_segments(spec: &ModelSpec, model_path: &Path) -> Result<Segments, ModelE
                 .map_err(|r| ModelError::invalid(model_path, "body", r.to_string()))?;
             segments_from_de_leva(&p)
         }
+    })
+}
+
+/// The HAT's trunk above the lumbar joint, where the body's source describes it (an
+/// OpenSim summary without a torso body does not).
+fn body_torso(spec: &ModelSpec, model_path: &Path) -> Result<Option<Torso>, ModelError> {
+    Ok(match &spec.body {
+        BodySpec::Explicit { .. } => None,
+        BodySpec::OpensimModel { file, lumbar } => {
+            let path = spec::relative_to(model_path, file);
+            let v: serde_json::Value = super::json::read_json(&path)?;
+            match v.pointer("/bodies/torso") {
+                Some(_) => Some(torso::opensim_torso(&v, &path, *lumbar)?),
+                None => None,
+            }
+        }
+        BodySpec::DeLeva { mass, height, sex } => Some(
+            torso::de_leva_torso(*mass, *height, *sex)
+                .map_err(|r| ModelError::invalid(model_path, "body", r.to_string()))?,
+        ),
     })
 }
 

@@ -12,6 +12,7 @@ pub mod multibody;
 pub mod scalar;
 pub mod segments;
 pub mod spec;
+pub mod torso;
 pub mod volumetric;
 
 pub use actuators::ActuatorError;

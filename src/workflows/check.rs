@@ -104,6 +104,8 @@ pub fn run(req: &CheckRequest, progress: &dyn Progress) -> anyhow::Result<CheckO
 fn checked(e: CheckError, data: &GaitData) -> anyhow::Error {
     match e {
         CheckError::Data(d) => d.into(),
+        // names the model file, which is at fault
+        e @ CheckError::NoTorso { .. } => e.into(),
         other => {
             let text = other.to_string();
             let file = data.source.display().to_string();

@@ -21,6 +21,7 @@
 use super::signals::Signals;
 use super::CheckError;
 use crate::model::multibody::{Joint, Tree};
+use crate::model::torso::Torso;
 use crate::model::{GaitModel, Scalar};
 
 /// The parameters of the balance, in this order in every θ vector.
@@ -137,7 +138,7 @@ impl Param {
 }
 
 /// One massive body's motion at one instant: origin, orientation, angular velocity and
-/// acceleration, origin acceleration (world frame).
+/// acceleration, origin velocity and acceleration (world frame).
 #[derive(Debug, Clone, Copy)]
 struct BodyMotion {
     body: usize,
@@ -145,7 +146,19 @@ struct BodyMotion {
     cs: (f64, f64),
     omega: f64,
     alpha: f64,
+    vel: [f64; 2],
     acc: [f64; 2],
+}
+
+impl BodyMotion {
+    /// The world position of the point `com` of the body's frame (m).
+    fn com_at(&self, com: [f64; 2]) -> [f64; 2] {
+        let (c, s) = self.cs;
+        [
+            self.origin[0] + com[0] * c - com[1] * s,
+            self.origin[1] + com[0] * s + com[1] * c,
+        ]
+    }
 }
 
 /// The body's side of the balance at one instant, ready for any θ.
@@ -154,22 +167,28 @@ pub struct Instant {
     /// Time (s).
     pub t: f64,
     bodies: Vec<BodyMotion>,
-    /// The model's whole-body centre of mass (m).
+    /// The whole-body centre of mass (m).
     pub com: [f64; 2],
 }
 
-/// The body of the model as the balance sees it.
+/// The body of the model as the balance sees it: the model's rigid segments and, where
+/// the model describes its trunk above the lumbar joint and the trial measures the
+/// lumbar angle, that trunk moved by it ([`crate::model::torso`]). The moved trunk enters
+/// as itself at its measured pose plus a copy of negative mass and inertia at the pose the
+/// rigid HAT froze, so that the HAT's own parameters stay those of the model.
 #[derive(Debug, Clone)]
 pub struct Body {
     tree: Tree,
-    /// `(mass, com, izz)` of each body.
+    /// `(mass, com, izz)` of each body; with a torso, the moved trunk and its frozen
+    /// negative copy last.
     inertia: Vec<(f64, [f64; 2], f64)>,
     trunk: usize,
+    torso: Option<Torso>,
     gravity: f64,
 }
 
 impl Body {
-    /// The body of `model`.
+    /// The body of `model`, its HAT rigid as the solvers have it.
     pub fn of(model: &GaitModel) -> Result<Self, CheckError> {
         let tree = model.tree().clone();
         let trunk = tree.body_index("hat").ok_or(CheckError::NoTrunk)?;
@@ -182,8 +201,22 @@ impl Body {
             tree,
             inertia,
             trunk,
+            torso: None,
             gravity: model.gravity(),
         })
+    }
+
+    /// The body of `model` with the HAT's trunk above the lumbar joint moving by the
+    /// trial's lumbar angle wherever the signals measure it; `None` when the model does
+    /// not describe that trunk.
+    pub fn with_torso(model: &GaitModel) -> Option<Result<Self, CheckError>> {
+        let t = *model.torso()?;
+        Some(Self::of(model).map(|mut body| {
+            body.inertia.push((t.mass, t.com, t.izz));
+            body.inertia.push((-t.mass, t.com, -t.izz));
+            body.torso = Some(t);
+            body
+        }))
     }
 
     /// Total mass (kg).
@@ -206,49 +239,112 @@ impl Body {
         &self.tree
     }
 
+    /// Whether the trunk above the lumbar joint moves by the trial's lumbar angle: the
+    /// model describes it and `signals` measure the angle.
+    pub fn moves_trunk(&self, signals: &Signals) -> bool {
+        self.torso.is_some() && signals.has_lumbar()
+    }
+
     /// The motion of every massive body at `t`.
     pub fn instant(&self, signals: &Signals, t: f64) -> Instant {
         let (q, qd, qdd) = signals.motion(t);
         let k = self.tree.kinematics::<f64>(&q, &qd);
         let n = self.tree.nq();
         let mut jac = vec![0.0; 2 * n];
-        let mut bodies = Vec::new();
-        let (mut m, mut mc) = (0.0, [0.0, 0.0]);
-        for (b, &(mass, com, _)) in self.inertia.iter().enumerate() {
-            if mass == 0.0 {
-                continue;
-            }
-            let o = k.origin[b];
+        // a world point fixed to body b: its velocity and acceleration
+        let mut point = |b: usize, o: [f64; 2]| {
             self.tree.point_jacobian(&k, b, o, &mut jac);
-            let (_, bias) = self.tree.point_motion(&k, b, o);
-            let mut acc = bias;
-            let mut alpha = 0.0;
+            let (vel, mut acc) = self.tree.point_motion(&k, b, o);
             for j in 0..n {
                 acc[0] += jac[j] * qdd[j];
                 acc[1] += jac[n + j] * qdd[j];
             }
-            for &j in self.tree.ancestors(b) {
-                if matches!(self.tree.bodies()[j].joint, Joint::Revolute) {
-                    alpha += qdd[j];
-                }
+            (vel, acc)
+        };
+        let mut bodies = Vec::new();
+        for (b, &(mass, _, _)) in self
+            .inertia
+            .iter()
+            .enumerate()
+            .take(self.tree.bodies().len())
+        {
+            if mass == 0.0 {
+                continue;
             }
-            let c = self.tree.point(&k, b, com);
-            m += mass;
-            mc = [mc[0] + mass * c[0], mc[1] + mass * c[1]];
+            let o = k.origin[b];
+            let (vel, acc) = point(b, o);
+            let alpha = self
+                .tree
+                .ancestors(b)
+                .iter()
+                .filter(|&&j| matches!(self.tree.bodies()[j].joint, Joint::Revolute))
+                .map(|&j| qdd[j])
+                .sum();
             bodies.push(BodyMotion {
                 body: b,
                 origin: o,
                 cs: k.cs[b],
                 omega: k.omega[b],
                 alpha,
+                vel,
                 acc,
             });
+        }
+        if let (Some(torso), Some(hat)) = (self.torso, bodies.iter().find(|m| m.body == self.trunk))
+        {
+            if let Some([d, dd, ddd]) = signals.lumbar(t, torso.frozen) {
+                let hat = *hat;
+                let o = self.tree.point(&k, self.trunk, torso.joint);
+                let (vel, acc) = point(self.trunk, o);
+                let (c, s) = hat.cs;
+                let (sd, cd) = d.sin_cos();
+                let nb = self.tree.bodies().len();
+                let frozen = BodyMotion {
+                    body: nb + 1,
+                    origin: o,
+                    vel,
+                    acc,
+                    ..hat
+                };
+                let moved = BodyMotion {
+                    body: nb,
+                    cs: (c * cd - s * sd, s * cd + c * sd),
+                    omega: hat.omega + dd,
+                    alpha: hat.alpha + ddd,
+                    ..frozen
+                };
+                bodies.extend([moved, frozen]);
+            }
+        }
+        let (mut m, mut mc) = (0.0, [0.0, 0.0]);
+        for bm in &bodies {
+            let (mass, com, _) = self.inertia[bm.body];
+            let c = bm.com_at(com);
+            m += mass;
+            mc = [mc[0] + mass * c[0], mc[1] + mass * c[1]];
         }
         Instant {
             t,
             bodies,
             com: [mc[0] / m, mc[1] / m],
         }
+    }
+
+    /// Linear momentum (N·s, x and y) and angular momentum about the centre of mass
+    /// (N·m·s) at one instant.
+    pub fn momentum(&self, at: &Instant) -> [f64; 3] {
+        let mut out = [0.0; 3];
+        for bm in &at.bodies {
+            let (mass, com, izz) = self.inertia[bm.body];
+            let c = bm.com_at(com);
+            let r = [c[0] - bm.origin[0], c[1] - bm.origin[1]];
+            let v = [bm.vel[0] - bm.omega * r[1], bm.vel[1] + bm.omega * r[0]];
+            out[0] += mass * v[0];
+            out[1] += mass * v[1];
+            out[2] +=
+                mass * ((c[0] - at.com[0]) * v[1] - (c[1] - at.com[1]) * v[0]) + izz * bm.omega;
+        }
+        out
     }
 
     /// The body's side `[Σ m (a − g) (N, 2), Σ (c_b − c) × m (a − g) + I α (N·m)]` at one

@@ -58,6 +58,20 @@ pub enum CheckError {
     /// The model has no trunk body.
     #[error("the model has no trunk body 'hat'")]
     NoTrunk,
+    /// The trunk was asked to move by the trial's lumbar angle, and the model does not
+    /// describe its trunk above the lumbar joint.
+    #[error("{}: its body does not describe the trunk above the lumbar joint (explicit segments do not; an OpenSim model summary with a torso body or de Leva's tables do): the trunk cannot follow the trial's lumbar_extension", path.display())]
+    NoTorso {
+        /// The model file.
+        path: PathBuf,
+    },
+    /// The trunk was asked to move by the trial's lumbar angle, and the trial does not
+    /// measure it at every kinematic instant.
+    #[error("{}: column 'lumbar_extension' is missing or has missing (NaN) samples: the trunk can follow the trial's lumbar angle only where it is measured at every kinematic instant", path.display())]
+    NoLumbar {
+        /// The trial's file.
+        path: PathBuf,
+    },
     /// A foot has no measured loads at all.
     #[error("{}: the {} foot has no measured load: the balance needs both feet's ground forces (a foot in swing reads 0 N, a foot off the plates NaN)", path.display(), foot_word(*side))]
     Forces {
@@ -150,6 +164,11 @@ pub struct CheckSettings {
     /// judged by their distance from the centres, the spread added in quadrature to the
     /// reading's Newey–West standard deviation.
     pub null: [NullBand; NPARAM],
+    /// Whether the HAT's trunk above the lumbar joint follows the trial's
+    /// `lumbar_extension` ([`crate::model::torso`]) rather than staying frozen as in the
+    /// model the solvers use (false by default: [`NULL`] is calibrated with the rigid
+    /// HAT).
+    pub lumbar: bool,
 }
 
 /// What untouched recordings read as one candidate: a centre and the spread of their
@@ -199,6 +218,7 @@ impl Default for CheckSettings {
             bandwidth_s: 0.2,
             clock_limit_s: 0.06,
             null: NULL,
+            lumbar: false,
         }
     }
 }
@@ -363,6 +383,12 @@ pub fn check(
     let mut warnings =
         plausibility::check_balance(data, mass.0, mass.1, horizontal_correlation(&problem))?;
     warnings.extend(footing::check_footing(data, model)?);
+    if settings.lumbar && settings.null == NULL {
+        warnings.push(
+            "the trunk follows the trial's lumbar angle, and the shipped bands are calibrated with the rigid HAT: the readings' verdicts are approximate (give bands of untouched trials checked with --lumbar: --null)"
+                .into(),
+        );
+    }
     let (readings, alone, fit) = stepwise::read(&problem, settings);
     let zero = [0.0; NPARAM];
     let before = problem.linearise(&zero, &[]).r;
@@ -375,10 +401,7 @@ pub fn check(
         Thresholds::of(&before, &problem),
         Thresholds::of(&after, &problem),
     ];
-    let momentum = instants
-        .iter()
-        .map(|at| momentum(&body, &signals, at))
-        .collect();
+    let momentum = instants.iter().map(|at| body.momentum(at)).collect();
     Ok(MeasurementCheck {
         time: instants.iter().map(|i| i.t).collect(),
         before,
@@ -442,7 +465,19 @@ fn balance_inputs(
         }
     }
     let signals = Signals::new(data, settings.cutoff_hz, settings.clock_limit_s)?;
-    let body = Body::of(model)?;
+    let body = if settings.lumbar {
+        let body = Body::with_torso(model).ok_or_else(|| CheckError::NoTorso {
+            path: model.source().to_path_buf(),
+        })??;
+        if !body.moves_trunk(&signals) {
+            return Err(CheckError::NoLumbar {
+                path: data.source.clone(),
+            });
+        }
+        body
+    } else {
+        Body::of(model)?
+    };
     Ok((signals, body))
 }
 
@@ -513,24 +548,4 @@ fn implied_mass(p: &Problem) -> f64 {
         }
     }
     f / a
-}
-
-/// Linear momentum (N·s) and angular momentum about the centre of mass (N·m·s).
-fn momentum(body: &Body, signals: &Signals, at: &Instant) -> [f64; 3] {
-    let tree = body.tree();
-    let (q, qd, _) = signals.motion(at.t);
-    let k = tree.kinematics::<f64>(&q, &qd);
-    let mut out = [0.0; 3];
-    for (b, i) in tree.inertias::<f64>().iter().enumerate() {
-        if i.mass == 0.0 {
-            continue;
-        }
-        let c = tree.point(&k, b, i.com);
-        let (v, _) = tree.point_motion(&k, b, c);
-        out[0] += i.mass * v[0];
-        out[1] += i.mass * v[1];
-        out[2] +=
-            i.mass * ((c[0] - at.com[0]) * v[1] - (c[1] - at.com[1]) * v[0]) + i.izz * k.omega[b];
-    }
-    out
 }

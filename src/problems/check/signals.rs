@@ -45,6 +45,9 @@ impl LoadStretch {
 #[derive(Debug, Clone)]
 pub struct Signals {
     q: Vec<CubicSpline>,
+    /// The trunk's angle on the pelvis (`lumbar_extension`, rad) and its mean over the
+    /// trial, where the trial has it at every kinematic instant.
+    lumbar: Option<(CubicSpline, f64)>,
     /// `[right, left]` measured stretches of each foot's loads.
     pub loads: [Vec<LoadStretch>; 2],
     /// The force record's instants (s) at which the balance can be read: inside the
@@ -89,6 +92,16 @@ impl Signals {
                 &low_pass(c, kinematic_rate, cutoff_hz),
             )?);
         }
+        let lumbar = match data.extra.get("lumbar_extension") {
+            Some(l) if l.len() == data.time.len() && l.iter().all(|v| v.is_finite()) => {
+                let mean = l.iter().sum::<f64>() / l.len() as f64;
+                Some((
+                    CubicSpline::new(&data.time, &low_pass(l, kinematic_rate, cutoff_hz))?,
+                    mean,
+                ))
+            }
+            _ => None,
+        };
         let (ft, feet) = data.force_record();
         let force_rate = median_rate(ft);
         let belt_speed = data.belt_speed.unwrap_or(0.0);
@@ -117,6 +130,7 @@ impl Signals {
             .collect();
         Ok(Self {
             q,
+            lumbar,
             loads,
             instants,
             force_rate,
@@ -136,6 +150,23 @@ impl Signals {
             qdd[i] = s.second_derivative(t);
         }
         (q, qd, qdd)
+    }
+
+    /// The trunk's angle on the pelvis at `t` less `frozen` (the trial's mean when
+    /// `None`), and its first two derivatives (rad, /s, /s²); `None` where the trial has
+    /// no `lumbar_extension` at every kinematic instant.
+    pub fn lumbar(&self, t: f64, frozen: Option<f64>) -> Option<[f64; 3]> {
+        let (s, mean) = self.lumbar.as_ref()?;
+        Some([
+            s.eval(t) - frozen.unwrap_or(*mean),
+            s.derivative(t),
+            s.second_derivative(t),
+        ])
+    }
+
+    /// Whether the trial has the trunk's angle on the pelvis at every kinematic instant.
+    pub fn has_lumbar(&self) -> bool {
+        self.lumbar.is_some()
     }
 
     /// The load stretch of foot `s` that holds `t` (s).

@@ -368,7 +368,7 @@ fn summary_json(
         "command": "check",
         "trial": data.source.display().to_string(),
         "model": req.model.display().to_string(),
-        "settings": {"cutoff_hz": req.settings.cutoff_hz, "level": req.settings.level, "bandwidth_s": req.settings.bandwidth_s, "clock_limit_s": req.settings.clock_limit_s},
+        "settings": {"cutoff_hz": req.settings.cutoff_hz, "level": req.settings.level, "bandwidth_s": req.settings.bandwidth_s, "clock_limit_s": req.settings.clock_limit_s, "lumbar": req.settings.lumbar},
         "rates_hz": {"forces": c.rates.0, "kinematics": c.rates.1},
         "window_s": [c.time.first(), c.time.last()],
         "instants": c.time.len(),
