@@ -104,6 +104,8 @@ const READ_EDITS: [(&str, &[&str]); 3] = [
         "opensim_subject01",
         &[
             "clock_both+20ms",
+            "clock_both-20ms",
+            "clock_l-10ms",
             "clock_l-20ms",
             "clock_l-40ms",
             "clock_r+20ms",
@@ -119,6 +121,8 @@ const READ_EDITS: [(&str, &[&str]); 3] = [
         "opencap_s4_walking1",
         &[
             "clock_both+20ms",
+            "clock_both-20ms",
+            "clock_l-10ms",
             "clock_l-20ms",
             "clock_l-40ms",
             "clock_r+10ms",
@@ -135,6 +139,7 @@ const READ_EDITS: [(&str, &[&str]); 3] = [
         "opencap_s4_walking2",
         &[
             "clock_both+20ms",
+            "clock_both-20ms",
             "clock_l-10ms",
             "clock_l-20ms",
             "clock_l-40ms",
@@ -215,10 +220,13 @@ fn testable(effect: &str) -> f64 {
 }
 
 /// Each candidate's band over the half cycles of `summaries`, as `tools/calibrate-check`
-/// computes it: centred on zero, the spread the root mean square of the readings alone.
+/// computes it: centred on zero but for both plates' clock (the mean of each recording's
+/// mean reading), the spread the root mean square of the readings alone about the centre.
 fn null_band(summaries: &[&serde_json::Value]) -> serde_json::Map<String, serde_json::Value> {
-    let mut sums: std::collections::BTreeMap<String, (f64, usize)> = Default::default();
+    // per candidate, per recording: its half-cycle readings
+    let mut readings: std::collections::BTreeMap<String, Vec<Vec<f64>>> = Default::default();
     for s in summaries {
+        let mut own: std::collections::BTreeMap<String, Vec<f64>> = Default::default();
         for h in s["half_cycles"].as_array().unwrap() {
             for r in h["alone"].as_array().into_iter().flatten() {
                 let (Some(e), Some(w)) = (r["estimate"].as_f64(), r["sd_within"].as_f64()) else {
@@ -226,16 +234,27 @@ fn null_band(summaries: &[&serde_json::Value]) -> serde_json::Map<String, serde_
                 };
                 let name = r["effect"].as_str().unwrap().to_string();
                 if w <= testable(&name) {
-                    let x = sums.entry(name).or_default();
-                    x.0 += e * e;
-                    x.1 += 1;
+                    own.entry(name).or_default().push(e);
                 }
             }
         }
+        for (k, v) in own {
+            readings.entry(k).or_default().push(v);
+        }
     }
-    sums.into_iter()
-        .map(|(k, (s, n))| {
-            let band = serde_json::json!({"mean": 0.0, "sd": (s / n as f64).sqrt()});
+    let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
+    readings
+        .into_iter()
+        .map(|(k, per)| {
+            let centre = if k == "shared_clock" {
+                mean(&per.iter().map(|r| mean(r)).collect::<Vec<_>>())
+            } else {
+                0.0
+            };
+            let all: Vec<f64> = per.into_iter().flatten().collect();
+            let spread =
+                (all.iter().map(|e| (e - centre).powi(2)).sum::<f64>() / all.len() as f64).sqrt();
+            let band = serde_json::json!({"mean": centre, "sd": spread});
             (k, band)
         })
         .collect()

@@ -125,7 +125,7 @@ impl Param {
     /// by the equations alone: what else could produce this reading.
     pub fn look_alikes(self) -> &'static str {
         match self {
-            Param::SharedClock => "the kinematics' own timing (a filter or marker-processing lag moves the motion against the forces the same way)",
+            Param::SharedClock => "the kinematics' own timing (a filter or marker-processing lag moves the motion against the forces the same way), or the soft tissue's lag behind the rigid segments (the forces move the whole mass, the model only its skeleton's motion)",
             Param::ClockRight | Param::ClockLeft => "a lag of that plate's own signal chain, or the other plate's clock of the opposite sign (in double support one plate's rise mirrors the other's fall, so the force balance sees mostly their sum; only the moment balance tells the plates apart)",
             Param::GainRight | Param::GainLeft => "a calibration error of that plate alone",
             Param::BodyMass => "the same gain error on both plates (the whole-body balance scales with mass and forces alike), or a trunk mass error",
