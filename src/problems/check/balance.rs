@@ -161,6 +161,21 @@ impl BodyMotion {
     }
 }
 
+/// The trunk above the lumbar joint turned from its `frozen` motion (the HAT's, about the
+/// lumbar joint) by the lumbar angle less the frozen one `[δ, δ̇, δ̈]` (rad, /s, /s²); its
+/// inertia is the one before the frozen copy's.
+fn moved_trunk(frozen: &BodyMotion, [d, dd, ddd]: [f64; 3]) -> BodyMotion {
+    let (c, s) = frozen.cs;
+    let (sd, cd) = d.sin_cos();
+    BodyMotion {
+        body: frozen.body - 1,
+        cs: (c * cd - s * sd, s * cd + c * sd),
+        omega: frozen.omega + dd,
+        alpha: frozen.alpha + ddd,
+        ..*frozen
+    }
+}
+
 /// The body's side of the balance at one instant, ready for any θ.
 #[derive(Debug, Clone)]
 pub struct Instant {
@@ -292,28 +307,18 @@ impl Body {
         }
         if let (Some(torso), Some(hat)) = (self.torso, bodies.iter().find(|m| m.body == self.trunk))
         {
-            if let Some([d, dd, ddd]) = signals.lumbar(t, torso.frozen) {
+            if let Some(lumbar) = signals.lumbar(t, torso.frozen) {
                 let hat = *hat;
                 let o = self.tree.point(&k, self.trunk, torso.joint);
                 let (vel, acc) = point(self.trunk, o);
-                let (c, s) = hat.cs;
-                let (sd, cd) = d.sin_cos();
-                let nb = self.tree.bodies().len();
                 let frozen = BodyMotion {
-                    body: nb + 1,
+                    body: self.tree.bodies().len() + 1,
                     origin: o,
                     vel,
                     acc,
                     ..hat
                 };
-                let moved = BodyMotion {
-                    body: nb,
-                    cs: (c * cd - s * sd, s * cd + c * sd),
-                    omega: hat.omega + dd,
-                    alpha: hat.alpha + ddd,
-                    ..frozen
-                };
-                bodies.extend([moved, frozen]);
+                bodies.extend([moved_trunk(&frozen, lumbar), frozen]);
             }
         }
         let (mut m, mut mc) = (0.0, [0.0, 0.0]);
