@@ -102,6 +102,19 @@ fn the_bundled_trunks_rocking_carries_most_of_the_rigid_hats_horizontal_residual
         rms(&rigid, 0)
     );
     assert!(peak(&moving) < peak(&rigid));
+    // the rigid run says what the moving trunk would leave, and the moving run what the
+    // frozen one leaves
+    for run in [&rigid, &moving] {
+        let t = &run["trunk_rocking"];
+        assert_eq!(
+            t["frozen"]["rms_force"][0].as_f64().unwrap(),
+            rms(&rigid, 0)
+        );
+        assert_eq!(
+            t["moving"]["rms_force"][0].as_f64().unwrap(),
+            rms(&moving, 0)
+        );
+    }
     // the shipped bands are the rigid HAT's: the run says its verdicts are approximate
     let warned = moving["warnings"].as_array().unwrap();
     assert!(warned
@@ -113,6 +126,7 @@ fn the_bundled_trunks_rocking_carries_most_of_the_rigid_hats_horizontal_residual
 fn lumbar_needs_the_trials_lumbar_angle_and_a_body_that_describes_its_trunk() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("c");
+    let refused = dir.path().join("refused");
     let o = footfall(&[
         "check",
         "data/pig_c3dorg_D123_sagittal.csv",
@@ -129,6 +143,18 @@ fn lumbar_needs_the_trials_lumbar_angle_and_a_body_that_describes_its_trunk() {
         "{e}"
     );
     assert!(!out.exists());
+    // without --lumbar the same trial is checked, and nothing is said of its trunk
+    let o = footfall(&[
+        "--quiet",
+        "check",
+        "data/pig_c3dorg_D123_sagittal.csv",
+        "--model",
+        "models/pig_c3dorg_D123.json",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(json(&out.join("summary.json"))["trunk_rocking"].is_null());
     // a body of explicit segments has no trunk above a lumbar joint
     let model = dir.path().join("explicit.json");
     let text = std::fs::read_to_string(root().join("models/opensim_subject01.json")).unwrap();
@@ -149,7 +175,7 @@ fn lumbar_needs_the_trials_lumbar_angle_and_a_body_that_describes_its_trunk() {
         model.to_str().unwrap(),
         "--lumbar",
         "--out",
-        out.to_str().unwrap(),
+        refused.to_str().unwrap(),
     ]);
     assert!(!o.status.success());
     let e = stderr(&o);

@@ -327,6 +327,11 @@ pub struct MeasurementCheck {
     pub warnings: Vec<String>,
     /// The kinematics' first and last instants (s): the motion the instants read lie in.
     pub motion: (f64, f64),
+    /// The residual thresholds as measured with the trunk above the lumbar joint frozen in
+    /// the HAT and moving by the trial's lumbar angle, where the model describes that trunk
+    /// and the trial measures the angle: how much of the residual the body model's rigid
+    /// trunk leaves.
+    pub trunk: Option<[Thresholds; 2]>,
 }
 
 /// Where the balance was read: its first and last instants (s), how many there are, and
@@ -405,6 +410,7 @@ pub fn check(
         Thresholds::of(&after, &problem),
     ];
     let momentum = instants.iter().map(|at| body.momentum(at)).collect();
+    let trunk = trunk_rocking(model, &signals, settings, window)?;
     Ok(MeasurementCheck {
         time: instants.iter().map(|i| i.t).collect(),
         before,
@@ -421,7 +427,37 @@ pub fn check(
             data.time.first().copied().unwrap_or(f64::NAN),
             data.time.last().copied().unwrap_or(f64::NAN),
         ),
+        trunk,
     })
+}
+
+/// The residual thresholds as measured with the HAT's trunk frozen and moving by the
+/// trial's lumbar angle; `None` where the model does not describe the trunk or the trial
+/// does not measure the angle.
+fn trunk_rocking(
+    model: &GaitModel,
+    signals: &Signals,
+    settings: &CheckSettings,
+    window: Option<(f64, f64)>,
+) -> Result<Option<[Thresholds; 2]>, CheckError> {
+    let Some(moving) = Body::with_torso(model).transpose()? else {
+        return Ok(None);
+    };
+    if !moving.moves_trunk(signals) {
+        return Ok(None);
+    }
+    let as_measured = |body: &Body| -> Result<Thresholds, CheckError> {
+        let instants = balance_instants(signals, body, settings, window)?;
+        let problem = Problem::new(body, signals, &instants, settings);
+        Ok(Thresholds::of(
+            &problem.linearise(&[0.0; NPARAM], &[]).r,
+            &problem,
+        ))
+    };
+    Ok(Some([
+        as_measured(&Body::of(model)?)?,
+        as_measured(&moving)?,
+    ]))
 }
 
 /// Whether the trial's forces can belong to the body of `model`, as the measurement

@@ -75,6 +75,14 @@ pub fn verdict_text(c: &MeasurementCheck) -> String {
         before.peak_force, after.peak_force, after.force_limit, before.rms_moment, after.rms_moment, after.moment_limit
     )
     .ok();
+    if let Some([frozen, moving]) = &c.trunk {
+        writeln!(
+            s,
+            "the trunk's rocking on the pelvis (lumbar_extension): residual {:.1} N horizontal, {:.2} N·m moment (RMS) with the trunk frozen in the HAT, {:.1} N and {:.2} N·m with it moving (check --lumbar)",
+            frozen.rms_force[0], frozen.rms_moment, moving.rms_force[0], moving.rms_moment
+        )
+        .ok();
+    }
     s
 }
 
@@ -379,6 +387,7 @@ fn summary_json(
         "found": c.found().map(|r| r.param.name()).collect::<Vec<_>>(),
         "add_effects": effect_lines(c),
         "thresholds": {"as_measured": c.thresholds[0], "corrected": c.thresholds[1]},
+        "trunk_rocking": c.trunk.map(|[frozen, moving]| serde_json::json!({"frozen": frozen, "moving": moving})),
         "half_cycles": half_json,
         "half_cycles_found_total": found_total,
     })
