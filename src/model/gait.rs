@@ -22,11 +22,13 @@ use super::anthropometry;
 use super::effects::{
     ActuatorAdjust, DynEffect, MeasurementAdjust, ModelAdjust, ModelScalar, ParamSpec,
 };
-use super::error::{ModelError, ParameterError};
+use super::error::{AnthropometryError, ModelError, ParameterError};
 use super::geometry::{Shape, ShapeScalars};
 use super::multibody::{Inertia, Tree, V2};
 use super::segments::{build_bodies, estimated_stature, segments_from_de_leva};
-use super::spec::{self, ActuatorSpec, BodySpec, ContactSettings, FootSpec, ModelSpec, Segments};
+use super::spec::{
+    self, ActuatorSpec, BodySpec, ContactSettings, FootSpec, ModelSpec, OpensimSummary, Segments,
+};
 use super::torso::{self, Torso};
 use super::Scalar;
 use std::path::{Path, PathBuf};
@@ -199,8 +201,7 @@ impl GaitModel {
     ) -> Result<Self, ModelError> {
         spec.validate(model_path)?;
         foot.validate(foot_path)?;
-        let seg = body_segments(spec, model_path)?;
-        let torso = body_torso(spec, model_path)?;
+        let (seg, torso) = body(spec, model_path)?;
         let tree = Tree::new(build_bodies(&seg))
             .map_err(|r| ModelError::invalid(model_path, "body", r.to_string()))?;
         let contacts = foot_contacts(&tree, foot);
@@ -540,37 +541,25 @@ impl GaitModel {
     }
 }
 
-/// The body's segments: as given, from an OpenSim model, or from de Leva's tables.
-fn body_segments(spec: &ModelSpec, model_path: &Path) -> Result<Segments, ModelError> {
+/// The body's segments, and the HAT's trunk above the lumbar joint where the body's
+/// source describes it: as given (no trunk), from an OpenSim model summary (its torso
+/// body, if it has one), or from de Leva's tables.
+fn body(spec: &ModelSpec, model_path: &Path) -> Result<(Segments, Option<Torso>), ModelError> {
+    let de_leva = |r: AnthropometryError| ModelError::invalid(model_path, "body", r.to_string());
     Ok(match &spec.body {
-        BodySpec::Explicit { segments } => segments.clone(),
+        BodySpec::Explicit { segments } => (segments.clone(), None),
         BodySpec::OpensimModel { file, lumbar } => {
-            spec::opensim_segments(&spec::relative_to(model_path, file), *lumbar)?
+            let summary = OpensimSummary::load(&spec::relative_to(model_path, file))?;
+            (
+                spec::opensim_segments(&summary, *lumbar)?,
+                torso::opensim_torso(&summary, *lumbar)?,
+            )
         }
-        BodySpec::DeLeva { mass, height, sex } => {
-            let p = anthropometry::de_leva_planar(*mass, *height, *sex)
-                .map_err(|r| ModelError::invalid(model_path, "body", r.to_string()))?;
-            segments_from_de_leva(&p)
-        }
-    })
-}
-
-/// The HAT's trunk above the lumbar joint, where the body's source describes it (an
-/// OpenSim summary without a torso body does not).
-fn body_torso(spec: &ModelSpec, model_path: &Path) -> Result<Option<Torso>, ModelError> {
-    Ok(match &spec.body {
-        BodySpec::Explicit { .. } => None,
-        BodySpec::OpensimModel { file, lumbar } => {
-            let path = spec::relative_to(model_path, file);
-            let v: serde_json::Value = super::json::read_json(&path)?;
-            match v.pointer("/bodies/torso") {
-                Some(_) => Some(torso::opensim_torso(&v, &path, *lumbar)?),
-                None => None,
-            }
-        }
-        BodySpec::DeLeva { mass, height, sex } => Some(
-            torso::de_leva_torso(*mass, *height, *sex)
-                .map_err(|r| ModelError::invalid(model_path, "body", r.to_string()))?,
+        BodySpec::DeLeva { mass, height, sex } => (
+            segments_from_de_leva(
+                &anthropometry::de_leva_planar(*mass, *height, *sex).map_err(de_leva)?,
+            ),
+            Some(torso::de_leva_torso(*mass, *height, *sex).map_err(de_leva)?),
         ),
     })
 }

@@ -586,21 +586,63 @@ pub fn relative_to(file: &Path, p: &Path) -> PathBuf {
     }
 }
 
-/// Read the derived 9-DoF segments from an OpenSim model summary JSON.
-pub fn opensim_segments(path: &Path, lumbar: LumbarChoice) -> Result<Segments, ModelError> {
-    let v: serde_json::Value = read_json(path)?;
-    let get = |ptr: &str| -> Result<f64, ModelError> {
-        v.pointer(ptr).and_then(|x| x.as_f64()).ok_or_else(|| {
-            ModelError::invalid(
-                path,
-                ptr.trim_start_matches('/').replace('/', "."),
-                "missing or not a number",
-            )
+/// An OpenSim model summary JSON (as shipped in `data/`), read once: its numbers by JSON
+/// pointer, an error naming the file and the field where one is missing.
+#[derive(Debug, Clone)]
+pub struct OpensimSummary {
+    path: PathBuf,
+    value: serde_json::Value,
+}
+
+impl OpensimSummary {
+    /// Read the summary at `path`.
+    pub fn load(path: &Path) -> Result<Self, ModelError> {
+        Ok(Self {
+            path: path.to_path_buf(),
+            value: read_json(path)?,
         })
-    };
-    let pair = |ptr: &str| -> Result<[f64; 2], ModelError> {
-        Ok([get(&format!("{ptr}/0"))?, get(&format!("{ptr}/1"))?])
-    };
+    }
+
+    /// The file it was read from.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Whether the summary has an entry at `ptr` (a JSON pointer).
+    pub fn has(&self, ptr: &str) -> bool {
+        self.value.pointer(ptr).is_some()
+    }
+
+    /// The number at `ptr` (a JSON pointer).
+    pub fn number(&self, ptr: &str) -> Result<f64, ModelError> {
+        self.value
+            .pointer(ptr)
+            .and_then(|x| x.as_f64())
+            .ok_or_else(|| {
+                ModelError::invalid(
+                    &self.path,
+                    ptr.trim_start_matches('/').replace('/', "."),
+                    "missing or not a number",
+                )
+            })
+    }
+
+    /// The first two numbers of the array at `ptr` (a JSON pointer).
+    pub fn pair(&self, ptr: &str) -> Result<[f64; 2], ModelError> {
+        Ok([
+            self.number(&format!("{ptr}/0"))?,
+            self.number(&format!("{ptr}/1"))?,
+        ])
+    }
+}
+
+/// The derived 9-DoF segments of an OpenSim model summary.
+pub fn opensim_segments(
+    summary: &OpensimSummary,
+    lumbar: LumbarChoice,
+) -> Result<Segments, ModelError> {
+    let get = |ptr: &str| summary.number(ptr);
+    let pair = |ptr: &str| summary.pair(ptr);
     let hat = match lumbar {
         LumbarChoice::TrialMean => "/nine_dof_mapping/HAT_at_trial_mean_lumbar",
         LumbarChoice::Zero => "/nine_dof_mapping/HAT_at_default_lumbar_0",
@@ -632,6 +674,6 @@ pub fn opensim_segments(path: &Path, lumbar: LumbarChoice) -> Result<Segments, M
         )?,
         ankle_in_shank: pair("/derived_planar/shank_vector_in_tibia_frame_m")?,
     };
-    seg.validate(path)?;
+    seg.validate(summary.path())?;
     Ok(seg)
 }

@@ -7,12 +7,9 @@
 //! measurement check) that know the trial's lumbar angle move this part by it; the
 //! optimal control problems keep the HAT rigid.
 
-use serde_json::Value;
-use std::path::Path;
-
 use super::anthropometry::{de_leva_hat_parts, DeLevaTable, RadiusColumn, Sex};
 use super::error::{AnthropometryError, ModelError};
-use super::spec::LumbarChoice;
+use super::spec::{LumbarChoice, OpensimSummary};
 
 /// The trunk above the lumbar joint, in the HAT (pelvis) frame with the lumbar joint at
 /// the angle the rigid HAT froze it at. Its mass, centre of mass and inertia are part of
@@ -34,20 +31,17 @@ pub struct Torso {
 }
 
 /// The torso of an OpenSim model summary (`bodies.torso`, `joints.back`): rotated into
-/// the pelvis frame at the lumbar angle the rigid HAT uses.
-pub fn opensim_torso(v: &Value, path: &Path, lumbar: LumbarChoice) -> Result<Torso, ModelError> {
-    let get = |ptr: &str| -> Result<f64, ModelError> {
-        v.pointer(ptr).and_then(|x| x.as_f64()).ok_or_else(|| {
-            ModelError::invalid(
-                path,
-                ptr.trim_start_matches('/').replace('/', "."),
-                "missing or not a number",
-            )
-        })
-    };
-    let pair = |ptr: &str| -> Result<[f64; 2], ModelError> {
-        Ok([get(&format!("{ptr}/0"))?, get(&format!("{ptr}/1"))?])
-    };
+/// the pelvis frame at the lumbar angle the rigid HAT uses; `None` for a summary without
+/// a torso body.
+pub fn opensim_torso(
+    summary: &OpensimSummary,
+    lumbar: LumbarChoice,
+) -> Result<Option<Torso>, ModelError> {
+    if !summary.has("/bodies/torso") {
+        return Ok(None);
+    }
+    let get = |ptr: &str| summary.number(ptr);
+    let pair = |ptr: &str| summary.pair(ptr);
     let frozen = match lumbar {
         LumbarChoice::TrialMean => {
             get("/nine_dof_mapping/HAT_at_trial_mean_lumbar/lumbar_extension_rad")?
@@ -58,13 +52,13 @@ pub fn opensim_torso(v: &Value, path: &Path, lumbar: LumbarChoice) -> Result<Tor
     let in_child = pair("/joints/back/location_in_child_m")?;
     let local = [com[0] - in_child[0], com[1] - in_child[1]];
     let (s, c) = frozen.sin_cos();
-    Ok(Torso {
+    Ok(Some(Torso {
         mass: get("/bodies/torso/mass_kg")?,
         joint: pair("/joints/back/location_in_parent_m")?,
         com: [c * local[0] - s * local[1], s * local[0] + c * local[1]],
         izz: get("/bodies/torso/inertia_about_com_kg_m2/zz")?,
         frozen: Some(frozen),
-    })
+    }))
 }
 
 /// The torso of de Leva's HAT ([`de_leva_hat_parts`]): the middle and upper trunk, the
