@@ -327,10 +327,10 @@ pub struct MeasurementCheck {
     pub warnings: Vec<String>,
     /// The kinematics' first and last instants (s): the motion the instants read lie in.
     pub motion: (f64, f64),
-    /// The residual thresholds as measured with the trunk above the lumbar joint frozen in
-    /// the HAT and moving by the trial's lumbar angle, where the model describes that trunk
-    /// and the trial measures the angle: how much of the residual the body model's rigid
-    /// trunk leaves.
+    /// The residual thresholds as measured over the whole trial with the trunk above the
+    /// lumbar joint frozen in the HAT and moving by the trial's lumbar angle, where the
+    /// model describes that trunk and the trial measures the angle: how much of the
+    /// residual the body model's rigid trunk leaves. `None` for a window of the trial.
     pub trunk: Option<[Thresholds; 2]>,
 }
 
@@ -410,7 +410,11 @@ pub fn check(
         Thresholds::of(&after, &problem),
     ];
     let momentum = instants.iter().map(|at| body.momentum(at)).collect();
-    let trunk = trunk_rocking(model, &signals, settings, window)?;
+    // a property of the body model over the trial, not repeated for each window of it
+    let trunk = match window {
+        None => trunk_rocking(model, &signals, settings)?,
+        Some(_) => None,
+    };
     Ok(MeasurementCheck {
         time: instants.iter().map(|i| i.t).collect(),
         before,
@@ -431,14 +435,13 @@ pub fn check(
     })
 }
 
-/// The residual thresholds as measured with the HAT's trunk frozen and moving by the
-/// trial's lumbar angle; `None` where the model does not describe the trunk or the trial
-/// does not measure the angle.
+/// The residual thresholds as measured over the whole trial with the HAT's trunk frozen
+/// and moving by the trial's lumbar angle; `None` where the model does not describe the
+/// trunk or the trial does not measure the angle.
 fn trunk_rocking(
     model: &GaitModel,
     signals: &Signals,
     settings: &CheckSettings,
-    window: Option<(f64, f64)>,
 ) -> Result<Option<[Thresholds; 2]>, CheckError> {
     let Some(moving) = Body::with_torso(model).transpose()? else {
         return Ok(None);
@@ -447,7 +450,7 @@ fn trunk_rocking(
         return Ok(None);
     }
     let as_measured = |body: &Body| -> Result<Thresholds, CheckError> {
-        let instants = balance_instants(signals, body, settings, window)?;
+        let instants = balance_instants(signals, body, settings, None)?;
         let problem = Problem::new(body, signals, &instants, settings);
         Ok(Thresholds::of(
             &problem.linearise(&[0.0; NPARAM], &[]).r,
