@@ -11,7 +11,7 @@ use footfall::workflows::check::hips_on_measured_centres;
 use footfall::workflows::trial::{load_trial, TrialFiles};
 use std::path::{Path, PathBuf};
 
-const BUNDLED_600: &str = "tests/data/check/opensim_subject01_600hz.csv";
+pub(crate) const BUNDLED_600: &str = "tests/data/check/opensim_subject01_600hz.csv";
 
 fn model_of(recording: &str) -> &'static str {
     if recording.starts_with("opencap") {
@@ -55,16 +55,22 @@ fn candidate<'a>(summary: &'a serde_json::Value, effect: &str) -> &'a serde_json
         .unwrap_or_else(|| panic!("no candidate {effect}"))
 }
 
-#[test]
-fn the_residuals_exact_jacobian_matches_central_differences() {
+/// The bundled 600 Hz trial's signals as the check reads them (6 Hz, 60 ms margin), its
+/// hips on the centres it measures for `model`.
+pub(crate) fn bundled_600_signals(model: &footfall::model::GaitModel) -> Signals {
     let loaded = load_trial(&TrialFiles {
         data: Some(root().join(BUNDLED_600)),
         ..TrialFiles::default()
     })
     .expect("trial");
+    let data = hips_on_measured_centres(loaded.data, model);
+    Signals::new(&data, 6.0, 0.06).expect("signals")
+}
+
+#[test]
+fn the_residuals_exact_jacobian_matches_central_differences() {
     let model = crate::common::model("opensim_subject01.json", "ellipse.json");
-    let data = hips_on_measured_centres(loaded.data, &model);
-    let signals = Signals::new(&data, 6.0, 0.06).expect("signals");
+    let signals = bundled_600_signals(&model);
     let body = Body::of(&model).expect("body");
     let theta = [
         0.004, -0.003, 0.002, 0.02, -0.03, 0.01, -0.02, 0.03, 0.02, 1.5, 0.02,

@@ -3,24 +3,16 @@
 //! the body's own positions and momenta, what it does to the bundled trial's residual,
 //! and the refusals when the trunk's angle or description is missing.
 
+use crate::check::{bundled_600_signals, BUNDLED_600};
 use crate::common::{footfall, json, root, stderr};
 use footfall::problems::check::balance::{Body, NPARAM};
 use footfall::problems::check::signals::Signals;
-use footfall::workflows::check::hips_on_measured_centres;
-use footfall::workflows::trial::{load_trial, TrialFiles};
-
-const BUNDLED_600: &str = "tests/data/check/opensim_subject01_600hz.csv";
+use std::path::Path;
 
 /// The bundled 600 Hz trial's signals and its body with the trunk moving.
 fn moving_trunk() -> (Signals, Body) {
-    let loaded = load_trial(&TrialFiles {
-        data: Some(root().join(BUNDLED_600)),
-        ..TrialFiles::default()
-    })
-    .expect("trial");
     let model = crate::common::model("opensim_subject01.json", "ellipse.json");
-    let data = hips_on_measured_centres(loaded.data, &model);
-    let signals = Signals::new(&data, 6.0, 0.06).expect("signals");
+    let signals = bundled_600_signals(&model);
     let body = Body::with_torso(&model)
         .expect("the OpenSim summary describes its torso")
         .expect("body");
@@ -60,19 +52,25 @@ fn a_moving_trunks_balance_is_the_rate_of_the_bodys_momentum() {
     }
 }
 
-/// `footfall check` of the bundled 600 Hz trial, with `extra` arguments.
-fn bundled_check(extra: &[&str]) -> serde_json::Value {
-    let dir = tempfile::tempdir().expect("temp dir");
-    let out = dir.path().join("check");
+/// `footfall check TRIAL --model MODEL --out OUT`, with `extra` arguments.
+fn run_check(trial: &str, model: &str, out: &Path, extra: &[&str]) -> std::process::Output {
     let mut args = vec![
-        "--quiet",
         "check",
-        BUNDLED_600,
+        trial,
+        "--model",
+        model,
         "--out",
         out.to_str().unwrap(),
     ];
     args.extend_from_slice(extra);
-    let o = footfall(&args);
+    footfall(&args)
+}
+
+/// `footfall check` of the bundled 600 Hz trial, with `extra` arguments: its summary.
+fn bundled_check(extra: &[&str]) -> serde_json::Value {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = dir.path().join("check");
+    let o = run_check(BUNDLED_600, "models/opensim_subject01.json", &out, extra);
     assert!(o.status.success(), "{}", stderr(&o));
     json(&out.join("summary.json"))
 }
@@ -127,15 +125,11 @@ fn lumbar_needs_the_trials_lumbar_angle_and_a_body_that_describes_its_trunk() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("c");
     let refused = dir.path().join("refused");
-    let o = footfall(&[
-        "check",
+    let (d123, d123_model) = (
         "data/pig_c3dorg_D123_sagittal.csv",
-        "--model",
         "models/pig_c3dorg_D123.json",
-        "--lumbar",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    );
+    let o = run_check(d123, d123_model, &out, &["--lumbar"]);
     assert!(!o.status.success());
     let e = stderr(&o);
     assert!(
@@ -144,15 +138,7 @@ fn lumbar_needs_the_trials_lumbar_angle_and_a_body_that_describes_its_trunk() {
     );
     assert!(!out.exists());
     // without --lumbar the same trial is checked, and nothing is said of its trunk
-    let o = footfall(&[
-        "--quiet",
-        "check",
-        "data/pig_c3dorg_D123_sagittal.csv",
-        "--model",
-        "models/pig_c3dorg_D123.json",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
+    let o = run_check(d123, d123_model, &out, &[]);
     assert!(o.status.success(), "{}", stderr(&o));
     assert!(json(&out.join("summary.json"))["trunk_rocking"].is_null());
     // a body of explicit segments has no trunk above a lumbar joint
@@ -168,15 +154,12 @@ fn lumbar_needs_the_trials_lumbar_angle_and_a_body_that_describes_its_trunk() {
         "knee_in_thigh": [0.0, -0.40],
         "ankle_in_shank": [0.0, -0.43]}});
     std::fs::write(&model, spec.to_string()).unwrap();
-    let o = footfall(&[
-        "check",
+    let o = run_check(
         BUNDLED_600,
-        "--model",
         model.to_str().unwrap(),
-        "--lumbar",
-        "--out",
-        refused.to_str().unwrap(),
-    ]);
+        &refused,
+        &["--lumbar"],
+    );
     assert!(!o.status.success());
     let e = stderr(&o);
     assert!(
