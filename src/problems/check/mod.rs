@@ -298,6 +298,16 @@ pub struct Reading {
     pub alternatives: Vec<(Param, f64, f64)>,
 }
 
+impl Reading {
+    /// The smallest effect this reading would call found, as a distance from what
+    /// untouched trials read (the parameter's unit): the threshold times the reading's
+    /// sd. An effect this size or smaller may be there unseen; NaN where the candidate
+    /// was not tested.
+    pub fn smallest_found(&self) -> f64 {
+        self.threshold * self.sd
+    }
+}
+
 /// The balance of one trial, read.
 #[derive(Debug, Clone)]
 pub struct MeasurementCheck {

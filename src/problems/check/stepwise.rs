@@ -194,10 +194,7 @@ pub(super) fn read(p: &Problem, settings: &CheckSettings) -> (Vec<Reading>, Vec<
                 last.push(untested(
                     c,
                     Verdict::NotTestable {
-                        reason: format!(
-                            "read only to ±{} here: the window's loads do not carry its signature",
-                            fmt_sd(c, r.sd)
-                        ),
+                        reason: too_loose(&r),
                     },
                 ));
                 continue;
@@ -273,6 +270,24 @@ pub(super) fn read(p: &Problem, settings: &CheckSettings) -> (Vec<Reading>, Vec<
     last.sort_by_key(|r| r.param);
     found.extend(last);
     (found, first_readings, fit)
+}
+
+/// Why a reading looser than [`testable_sd`] says nothing: the window's own noise, or
+/// the spread of untouched trials (the body model's error), whichever is the wider.
+fn too_loose(r: &Reading) -> String {
+    let c = r.param;
+    if !r.sd_within.is_finite() || r.sd_within >= r.baseline.sd {
+        format!(
+            "read only to ±{} here: the window's loads do not carry its signature",
+            fmt_sd(c, r.sd)
+        )
+    } else {
+        format!(
+            "read to ±{} here, but untouched trials read it to ±{} (the body model's own error), so it can say nothing a lab could act on",
+            fmt_sd(c, r.sd_within),
+            fmt_sd(c, r.baseline.sd)
+        )
+    }
 }
 
 fn untested(c: Param, verdict: Verdict) -> Reading {

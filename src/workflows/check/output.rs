@@ -67,6 +67,7 @@ pub fn verdict_text(c: &MeasurementCheck) -> String {
         )
         .ok();
     }
+    s.push_str(&limits_text(c));
     s.push_str(&coverage_text(c));
     let [before, after] = &c.thresholds;
     writeln!(
@@ -82,6 +83,39 @@ pub fn verdict_text(c: &MeasurementCheck) -> String {
             frozen.rms_force[0], frozen.rms_moment, moving.rms_force[0], moving.rms_moment
         )
         .ok();
+    }
+    s
+}
+
+/// What the check could not have seen: each candidate not found, with the smallest
+/// effect it would have called found here, and those it could not test at all.
+pub fn limits_text(c: &MeasurementCheck) -> String {
+    let unseen = |r: &&Reading| r.verdict != Verdict::Found && r.verdict != Verdict::Baseline;
+    let sized: Vec<String> = c
+        .readings
+        .iter()
+        .filter(unseen)
+        .filter(|r| r.smallest_found().is_finite())
+        .map(|r| format!("{} {}", r.param.label(), smallest_found_text(r)))
+        .collect();
+    let untested: Vec<&str> = c
+        .readings
+        .iter()
+        .filter(unseen)
+        .filter(|r| matches!(r.verdict, Verdict::NotTestable { .. }))
+        .map(|r| r.param.label())
+        .collect();
+    let mut s = String::new();
+    if !sized.is_empty() {
+        writeln!(
+            s,
+            "smallest effects it would have found here, beyond what untouched trials read: {}",
+            sized.join(", ")
+        )
+        .ok();
+    }
+    if !untested.is_empty() {
+        writeln!(s, "not testable here: {}", untested.join(", ")).ok();
     }
     s
 }
@@ -142,6 +176,17 @@ pub fn alternatives_text(r: &Reading) -> String {
         .join(", ")
 }
 
+/// The smallest effect a reading would call found, about the untouched trials' centre,
+/// e.g. `±9.75 ms`; `—` where the candidate was not tested.
+pub fn smallest_found_text(r: &Reading) -> String {
+    let v = r.smallest_found();
+    if !v.is_finite() {
+        return "—".into();
+    }
+    let (v, unit) = r.param.display_value(v);
+    format!("±{v:.2} {unit}")
+}
+
 /// The null band a reading is judged against, in the reading's unit.
 fn baseline_text(r: &Reading) -> String {
     if !r.baseline.mean.is_finite() {
@@ -161,6 +206,7 @@ fn readings_table(c: &MeasurementCheck) -> Table {
             "untouched trials read",
             "z",
             "threshold |z|",
+            "found beyond",
             "explains",
             "verdict",
             "what else could produce it",
@@ -177,6 +223,7 @@ fn readings_table(c: &MeasurementCheck) -> Table {
                     baseline_text(r),
                     fmt(r.z, 2),
                     fmt(r.threshold, 2),
+                    smallest_found_text(r),
                     format!("{:.1} %", 100.0 * r.explained),
                     if r.alternatives.is_empty() {
                         r.verdict.text()
@@ -339,10 +386,11 @@ fn summary_json(
     let reading = |r: &Reading| {
         let (v, unit) = r.param.display_value(r.estimate);
         let (sd, _) = r.param.display_value(r.sd);
+        let (least, _) = r.param.display_value(r.smallest_found());
         let mut j = json!({
             "effect": r.param.name(), "label": r.param.label(), "estimate": finite(r.estimate), "sd": finite(r.sd), "sd_within": finite(r.sd_within),
-            "display": {"estimate": finite(v), "sd": finite(sd), "unit": unit},
-            "z": finite(r.z), "threshold": finite(r.threshold), "explained": r.explained,
+            "display": {"estimate": finite(v), "sd": finite(sd), "smallest_found": finite(least), "unit": unit},
+            "z": finite(r.z), "threshold": finite(r.threshold), "smallest_found": finite(r.smallest_found()), "explained": r.explained,
             "untouched": {"mean": finite(r.baseline.mean), "sd": finite(r.baseline.sd)},
             "verdict": r.verdict.text(), "look_alikes": r.param.look_alikes(),
         });
