@@ -109,7 +109,7 @@ pub fn limits_text(c: &MeasurementCheck) -> String {
     if !sized.is_empty() {
         writeln!(
             s,
-            "smallest effects it would have found here, beyond what untouched trials read: {}",
+            "found here only beyond (from what untouched trials read): {}",
             sized.join(", ")
         )
         .ok();
