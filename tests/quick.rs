@@ -14,6 +14,7 @@ mod benchmark_models;
 mod c3d;
 mod c3d_damaged;
 mod check;
+mod check_torques;
 mod check_trunk;
 mod cli_exit_codes;
 mod cli_solve;

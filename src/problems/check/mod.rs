@@ -324,6 +324,11 @@ pub struct MeasurementCheck {
     pub alone: Vec<Reading>,
     /// The final joint fit of the found effects.
     pub fit: Fit,
+    /// The leg joints' torques of the inverse dynamics over the whole trial, as measured,
+    /// each in its coordinate's positive sense: `(t (s), [N·m; 6])`, the coordinates after
+    /// the pelvis's in [`crate::model::gait::COORDINATES`] order (empty for a window of
+    /// the trial).
+    pub torques: Vec<(f64, [f64; 6])>,
     /// The labs' thresholds before and after correction.
     pub thresholds: [Thresholds; 2],
     /// The model's mass (kg) and the mass the vertical forces imply over the window.
@@ -420,10 +425,13 @@ pub fn check(
         Thresholds::of(&after, &problem),
     ];
     let momentum = instants.iter().map(|at| body.momentum(at)).collect();
-    // a property of the body model over the trial, not repeated for each window of it
-    let trunk = match window {
-        None => trunk_rocking(model, &signals, settings)?,
-        Some(_) => None,
+    // properties of the body model over the trial, not repeated for each window of it
+    let (trunk, torques) = match window {
+        None => (
+            trunk_rocking(model, &signals, settings)?,
+            joint_torques(&body, &signals, model, &instants),
+        ),
+        Some(_) => (None, vec![]),
     };
     Ok(MeasurementCheck {
         time: instants.iter().map(|i| i.t).collect(),
@@ -442,7 +450,26 @@ pub fn check(
             data.time.last().copied().unwrap_or(f64::NAN),
         ),
         trunk,
+        torques,
     })
+}
+
+/// The leg joints' torques of the inverse dynamics at each instant read, as measured
+/// ([`balance::inverse_dynamics`]): `(t, [N·m; 6])`, the coordinates after the pelvis's
+/// in [`crate::model::gait::COORDINATES`] order.
+fn joint_torques(
+    body: &Body,
+    signals: &Signals,
+    model: &GaitModel,
+    instants: &[Instant],
+) -> Vec<(f64, [f64; 6])> {
+    instants
+        .iter()
+        .filter_map(|at| {
+            let tau = balance::inverse_dynamics(body, signals, model, at.t)?;
+            Some((at.t, std::array::from_fn(|j| tau[3 + j])))
+        })
+        .collect()
 }
 
 /// The residual thresholds as measured over the whole trial with the HAT's trunk frozen

@@ -1,5 +1,6 @@
 //! The check's run folder: `summary.json`, `readings.md`/`.csv`, `half_cycles.csv`,
-//! `residual.csv`, `residual.svg`, `momentum.svg`, `effects.txt`, the corrected trial
+//! `residual.csv`, `residual.svg`, `momentum.svg`, `joint_torques.csv`/`.svg`,
+//! `effects.txt`, the corrected trial
 //! (`corrected/trial.csv` with its meta file) and `report.html`.
 
 use super::{corrected, effect_lines, CheckRequest, HalfCycle};
@@ -363,6 +364,46 @@ fn momentum_plots(c: &MeasurementCheck) -> String {
     })
 }
 
+/// The leg joints' names, in the order of [`MeasurementCheck::torques`].
+fn joint_names() -> &'static [&'static str] {
+    &crate::model::gait::COORDINATES[3..]
+}
+
+/// Hip, knee and ankle torques against time, right and left in each panel.
+fn torque_plots(c: &MeasurementCheck) -> String {
+    let time: Vec<f64> = c.torques.iter().map(|(t, _)| *t).collect();
+    let plots: Vec<LinePlot> = ["hip", "knee", "ankle"]
+        .iter()
+        .enumerate()
+        .map(|(j, joint)| {
+            let mut p = LinePlot::new(&format!("{joint} torque"), "time (s)", "N·m");
+            for (side, name) in [(0, "right"), (3, "left")] {
+                let y = c.torques.iter().map(|(_, tau)| tau[side + j]).collect();
+                p.series
+                    .push(Series::new(name, time.clone(), y, LineStyle::Solid));
+            }
+            p
+        })
+        .collect();
+    grid(&plots, 1)
+}
+
+fn torques_csv(c: &MeasurementCheck) -> String {
+    let mut s = String::from("time");
+    for name in joint_names() {
+        write!(s, ",{name}_Nm").ok();
+    }
+    s.push('\n');
+    for (t, tau) in &c.torques {
+        write!(s, "{t}").ok();
+        for v in tau {
+            write!(s, ",{v}").ok();
+        }
+        s.push('\n');
+    }
+    s
+}
+
 fn residual_csv(c: &MeasurementCheck) -> String {
     let mut s = String::from("time,fx_measured,fy_measured,m_measured,fx_corrected,fy_corrected,m_corrected,px,py,h_com\n");
     for k in 0..c.time.len() {
@@ -462,6 +503,7 @@ pub fn write_folder(
     let halves = half_cycle_table(half);
     let residual_svg = residual_plots(c);
     let momentum_svg = momentum_plots(c);
+    let torque_svg = torque_plots(c);
     let verdict = verdict_text(c);
     folder.write(
         "summary.json",
@@ -482,6 +524,8 @@ pub fn write_folder(
     folder.write("residual.csv", residual_csv(c).as_bytes())?;
     folder.write("residual.svg", residual_svg.as_bytes())?;
     folder.write("momentum.svg", momentum_svg.as_bytes())?;
+    folder.write("joint_torques.csv", torques_csv(c).as_bytes())?;
+    folder.write("joint_torques.svg", torque_svg.as_bytes())?;
     folder.write(
         "effects.txt",
         effect_lines(c)
@@ -532,6 +576,7 @@ pub fn write_folder(
             },
             Section { heading: "Residual wrench".into(), paragraphs: vec!["The force and moment the measured loads leave unexplained, as measured and with the found effects corrected.".into()], tables: vec![], svgs: vec![residual_svg] },
             Section { heading: "Whole-body momentum".into(), paragraphs: vec!["Linear momentum and angular momentum about the centre of mass, from the measured motion and the model's segments.".into()], tables: vec![], svgs: vec![momentum_svg] },
+            Section { heading: "Joint torques".into(), paragraphs: vec!["The inverse dynamics of the measured trial as recorded (nothing corrected): each leg joint's torque in its coordinate's positive sense, each foot's load applied at its centre of pressure.".into()], tables: vec![], svgs: vec![torque_svg] },
             Section { heading: "Each half cycle on its own".into(), paragraphs: vec![], tables: vec![halves], svgs: vec![] },
         ],
     };
