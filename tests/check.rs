@@ -29,10 +29,8 @@ fn untouched_of(recording: &str) -> String {
     }
 }
 
-/// `footfall check TRIAL --model MODEL` into a fresh folder; its summary.json.
-fn check(trial: &str, model: &str) -> serde_json::Value {
-    let dir = tempfile::tempdir().expect("temp dir");
-    let out = dir.path().join("check");
+/// `footfall check TRIAL --model MODEL --out OUT`, which must succeed.
+pub(crate) fn check_to(trial: &str, model: &str, out: &Path) {
     let o = footfall(&[
         "--quiet",
         "check",
@@ -43,6 +41,13 @@ fn check(trial: &str, model: &str) -> serde_json::Value {
         out.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "check {trial}: {}", stderr(&o));
+}
+
+/// `footfall check TRIAL --model MODEL` into a fresh folder; its summary.json.
+fn check(trial: &str, model: &str) -> serde_json::Value {
+    let dir = tempfile::tempdir().expect("temp dir");
+    let out = dir.path().join("check");
+    check_to(trial, model, &out);
     json(&out.join("summary.json"))
 }
 

@@ -2,8 +2,7 @@
 //! the principle of virtual work evaluated from the bodies' positions alone, and the run
 //! folder's file against the library's figures.
 
-use crate::check::{bundled_600_signals, BUNDLED_600};
-use crate::common::{footfall, stderr};
+use crate::check::{bundled_600_signals, check_to, BUNDLED_600};
 use footfall::model::gait::COORDINATES;
 use footfall::problems::check::balance::{inverse_dynamics, Body};
 
@@ -98,16 +97,7 @@ fn the_check_writes_the_trials_joint_torques() {
     // check's instants, every leg joint, every value finite.
     let dir = tempfile::tempdir().expect("temp dir");
     let out = dir.path().join("check");
-    let o = footfall(&[
-        "--quiet",
-        "check",
-        BUNDLED_600,
-        "--model",
-        "models/opensim_subject01.json",
-        "--out",
-        out.to_str().unwrap(),
-    ]);
-    assert!(o.status.success(), "{}", stderr(&o));
+    check_to(BUNDLED_600, "models/opensim_subject01.json", &out);
     let text = std::fs::read_to_string(out.join("joint_torques.csv")).expect("joint_torques.csv");
     let mut lines = text.lines();
     assert_eq!(
