@@ -21,6 +21,7 @@ print(f"python binding: {run['status']}, J = {run['objective']:.4f}, states {sta
 
 # a study of the shipped manifest (checks only): the table returned is the one written
 import csv
+import json
 
 study_out = tempfile.mkdtemp() + "/study"
 table = footfall.study("tests/data/study/clock_edit.csv", out=study_out, quiet=True)
@@ -31,3 +32,23 @@ assert list(table["status"]) == ["done"] * len(rows), table["status"]
 clock = np.asarray(table["clock_right"], dtype=float)
 assert np.array_equal(clock, [float(r["clock_right"]) for r in rows]), clock
 print(f"python binding: a study of {len(rows)} trials, right plate's clock {np.round(clock * 1e3, 2)} ms")
+
+# the measurement check of an edit with its truth beside it: the right plate's clock 20 ms
+# late, read against the untouched recording; the joint torques are the run folder's
+edit = "tests/data/check/trials/opencap_s4_walking1/clock_r+20ms"
+with open(edit + "/truth.json") as f:
+    truth = json.load(f)
+checked = footfall.check(edit + "/trial.csv", model="models/opencap_s4.json",
+                         out=tempfile.mkdtemp() + "/check", quiet=True)
+untouched = footfall.check("data/opencap_s4_walking1_sagittal.csv", model="models/opencap_s4.json",
+                           out=tempfile.mkdtemp() + "/check", quiet=True)
+assert truth["effect"] in checked["found"], checked["found"]
+reading = {r["effect"]: r for r in checked["readings"]}[truth["effect"]]
+base = {r["effect"]: r for r in untouched["readings"]}[truth["effect"]]
+read = reading["estimate"] - base["estimate"]
+assert abs(read - truth["value"]) <= max(0.2 * abs(truth["value"]), 2 * reading["sd"]), read
+torques = checked["joint_torques"]
+assert torques.shape == (len(checked["torque_time"]), 6) and np.all(np.isfinite(torques))
+written = np.loadtxt(checked["run_folder"] + "/joint_torques.csv", delimiter=",", skiprows=1)
+assert np.array_equal(written[:, 1:], torques), "joint_torques.csv differs from the binding's"
+print(f"python binding: check read the right plate's clock {read * 1e3:+.2f} ms (edit {truth['value'] * 1e3:+.0f} ms)")

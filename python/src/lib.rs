@@ -5,19 +5,25 @@
 //! run = footfall.track(foot="ellipse", out="runs/py_track")
 //! print(run["status"], run["objective"], run["states"].shape)
 //! table = footfall.study("tests/data/study/clock_edit.csv", out="runs/py_study")
+//! checked = footfall.check(out="runs/py_check")
+//! print(checked["found"], checked["joint_torques"].shape)
 //! ```
 //!
 //! Paths are relative to the working folder (the repository root for the bundled model
 //! and trial), as for the command line.
 
+use footfall::model::gait::COORDINATES;
+use footfall::problems::check::CheckSettings;
 use footfall::runfolder::RunFolder;
+use footfall::workflows::check::{self as check_workflow, CheckRequest};
 use footfall::workflows::study::{self as study_workflow, StudyRequest, StudySettings};
 use footfall::workflows::track::{track as track_workflow, TrackRequest};
+use footfall::workflows::trial::TrialFiles;
 use footfall::workflows::{Stream, TextProgress};
 use numpy::{PyArray1, PyArray2};
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
-use pyo3::types::PyDict;
+use pyo3::types::{PyDict, PyList};
 use std::path::PathBuf;
 
 /// The binding's progress, as a terminal shows it: results on standard output, news, the
@@ -122,6 +128,102 @@ fn track<'py>(
     Ok(d)
 }
 
+/// Check the measurement against itself (as `footfall check`): the trial's whole-body
+/// balance read for instrument and body effects, written to the run folder `out`.
+///
+/// Returns a dict: `found` (effect names), `readings` (one dict per candidate: `effect`,
+/// `label`, `estimate`, `sd`, `z`, `threshold`, `smallest_found` in SI units, NaN where
+/// not read, and `verdict`), `add_effects` (the `--effect` lines for `track`),
+/// `run_folder`, and at the instants read `time` (s, n), `residual` and
+/// `residual_corrected` (n × 3: Fx, Fy in N, moment about the COM in N·m) and
+/// `joint_torques` (n × 6, N·m, the inverse dynamics as recorded) with `joint_names`.
+#[pyfunction]
+#[pyo3(signature = (trial=None, model="models/opensim_subject01.json", out="runs/py_check", forces=None, plates=vec![], overground=false, cutoff=6.0, level=0.05, lumbar=false, overwrite=true, quiet=false))]
+#[allow(clippy::too_many_arguments)]
+fn check<'py>(
+    py: Python<'py>,
+    trial: Option<PathBuf>,
+    model: &str,
+    out: &str,
+    forces: Option<PathBuf>,
+    plates: Vec<String>,
+    overground: bool,
+    cutoff: f64,
+    level: f64,
+    lumbar: bool,
+    overwrite: bool,
+    quiet: bool,
+) -> PyResult<Bound<'py, PyDict>> {
+    for (name, v) in [("cutoff", cutoff), ("level", level)] {
+        if !(v.is_finite() && v > 0.0) {
+            return Err(PyValueError::new_err(format!(
+                "{name} = {v}: expected a positive number"
+            )));
+        }
+    }
+    let req = CheckRequest {
+        trial: TrialFiles {
+            data: trial,
+            forces,
+            plates,
+            overground,
+            ..TrialFiles::default()
+        },
+        model: PathBuf::from(model),
+        out: Some(PathBuf::from(out)),
+        overwrite,
+        settings: CheckSettings {
+            cutoff_hz: cutoff,
+            level,
+            lumbar,
+            ..CheckSettings::default()
+        },
+    };
+    let outcome = py
+        .detach(|| check_workflow::run(&req, &printed(quiet)))
+        .map_err(|e| PyRuntimeError::new_err(format!("{e:#}")))?;
+    let c = &outcome.check;
+    let d = PyDict::new(py);
+    let found: Vec<&str> = c.found().map(|r| r.param.name()).collect();
+    d.set_item("found", found)?;
+    let readings = PyList::empty(py);
+    for r in &c.readings {
+        let e = PyDict::new(py);
+        e.set_item("effect", r.param.name())?;
+        e.set_item("label", r.param.label())?;
+        e.set_item("estimate", r.estimate)?;
+        e.set_item("sd", r.sd)?;
+        e.set_item("z", r.z)?;
+        e.set_item("threshold", r.threshold)?;
+        e.set_item("smallest_found", r.smallest_found())?;
+        e.set_item("verdict", r.verdict.text())?;
+        readings.append(e)?;
+    }
+    d.set_item("readings", readings)?;
+    d.set_item("add_effects", check_workflow::effect_lines(c))?;
+    d.set_item(
+        "run_folder",
+        outcome.folder.as_ref().map(|f| f.display().to_string()),
+    )?;
+    let rows = |v: &[[f64; 3]]| v.iter().map(|r| r.to_vec()).collect::<Vec<_>>();
+    let matrix = |m: Vec<Vec<f64>>| {
+        PyArray2::from_vec2(py, &m).map_err(|e| PyValueError::new_err(e.to_string()))
+    };
+    d.set_item("time", PyArray1::from_vec(py, c.time.clone()))?;
+    d.set_item("residual", matrix(rows(&c.before))?)?;
+    d.set_item("residual_corrected", matrix(rows(&c.after))?)?;
+    d.set_item(
+        "torque_time",
+        PyArray1::from_vec(py, c.torques.iter().map(|(t, _)| *t).collect()),
+    )?;
+    d.set_item(
+        "joint_torques",
+        matrix(c.torques.iter().map(|(_, tau)| tau.to_vec()).collect())?,
+    )?;
+    d.set_item("joint_names", COORDINATES[3..].to_vec())?;
+    Ok(d)
+}
+
 /// Run the study of a manifest into `out` (as `footfall study`) and return its table,
 /// one row per trial: a pandas DataFrame where pandas is installed, else a dict of
 /// columns (numbers as numpy arrays, NaN where absent; text as lists). The columns are
@@ -200,5 +302,6 @@ fn study<'py>(
 fn footfall_module(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(track, m)?)?;
     m.add_function(wrap_pyfunction!(study, m)?)?;
+    m.add_function(wrap_pyfunction!(check, m)?)?;
     Ok(())
 }
