@@ -376,7 +376,7 @@ fn torque_plots(c: &MeasurementCheck) -> String {
         .iter()
         .enumerate()
         .map(|(j, joint)| {
-            let mut p = LinePlot::new(&format!("{joint} torque"), "time (s)", "N·m");
+            let mut p = LinePlot::new(format!("{joint} torque"), "time (s)", "N·m");
             for (side, name) in [(0, "right"), (3, "left")] {
                 let y = c.torques.iter().map(|(_, tau)| tau[side + j]).collect();
                 p.series
