@@ -36,6 +36,7 @@ fn readings_pool_as_computed_by_hand() {
         estimate: x,
         sd: within.hypot(3.0),
         sd_within: within,
+        centre: 0.0,
     };
     let p = pool(&[s(10.0, 1.0), s(13.0, 2.0)]).unwrap();
     // w = 1, 1/4: mean (10 + 13/4)/(5/4) = 10.6; 1/Σw = 0.8; the shared 3 added once
@@ -54,10 +55,19 @@ fn readings_pool_as_computed_by_hand() {
     assert!((same.p_heterogeneity - 1.0).abs() < 1e-12);
     assert!((same.sd - (1.0f64 / 3.0 + 9.0).sqrt()).abs() < 1e-12);
     // a reading without a finite estimate is left out
+    // judged from what untouched trials read: the same readings about a centre of 4
+    let centred = |x: f64, within: f64| Sample {
+        centre: 4.0,
+        ..s(x, within)
+    };
+    let c = pool(&[centred(10.0, 1.0), centred(13.0, 2.0)]).unwrap();
+    assert_eq!((c.estimate, c.sd, c.q), (p.estimate, p.sd, p.q));
+    assert!((c.z - 6.6 / 9.8f64.sqrt()).abs() < 1e-12);
     let nan = Sample {
         estimate: f64::NAN,
         sd: 1.0,
         sd_within: 1.0,
+        centre: 0.0,
     };
     let one = pool(&[s(2.0, 1.0), nan]).unwrap();
     assert_eq!(
@@ -274,6 +284,19 @@ fn a_clock_edit_shared_by_a_sessions_trials_is_found_in_each_and_pooled_and_unto
     assert_eq!(a.shared, None, "{:?}", a.statements);
     assert!(a.readings.iter().all(|r| !r.beyond), "{:?}", a.readings);
     assert_eq!(a.readings.len(), 7);
+    // each pooled reading judged, as the check judges each trial's, from the band's centre
+    let band = &footfall::problems::check::NULL;
+    for r in &a.readings {
+        let p = footfall::problems::check::Param::ALL
+            .into_iter()
+            .find(|p| p.name() == r.effect)
+            .unwrap();
+        assert_eq!(r.pooled.centre, band[p.index()].mean, "{}", r.effect);
+        assert_eq!(
+            r.pooled.z,
+            (r.pooled.estimate - r.pooled.centre) / r.pooled.sd
+        );
+    }
     // one trial of a session pools nothing
     assert!(group(&t, "lab-d").readings.is_empty());
     // the files agree with the table

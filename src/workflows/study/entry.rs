@@ -37,6 +37,8 @@ pub struct Reading {
     pub sd: Option<f64>,
     /// The window's own standard deviation.
     pub sd_within: Option<f64>,
+    /// What untouched trials read as it: the centre of the check's band (SI units).
+    pub centre: Option<f64>,
     /// Share of the trial's residual it explains, read alone.
     pub explained: Option<f64>,
     /// The check's verdict.

@@ -155,6 +155,7 @@ fn pool_group(
                     estimate: r.estimate?,
                     sd: r.sd?,
                     sd_within: r.sd_within?,
+                    centre: r.centre?,
                 })
             })
             .collect();
@@ -273,6 +274,7 @@ fn joint(read: &[&TrialEntry], p: Param) -> Option<Pooled> {
                 estimate: r.estimate?,
                 sd: r.sd?,
                 sd_within: r.sd_within?,
+                centre: r.centre?,
             })
         })
         .collect();

@@ -6,7 +6,8 @@
 //! inverse-variance mean $\bar x = \sum w_i x_i / \sum w_i$ with $w_i = 1/s_i^2$. The body
 //! model's error is the same in every trial of a subject, so it does not average out: it
 //! is added once, $\sigma_{\bar x}^2 = 1/\sum w_i + n^2$ (with $n$ the largest of the
-//! trials'). Heterogeneity is Cochran's $Q = \sum w_i (x_i - \bar x)^2$ on $k - 1$ degrees
+//! trials'). It is judged by its distance from what untouched trials read, $c$ (the
+//! check's band centre): $z = (\bar x - c)/\sigma_{\bar x}$. Heterogeneity is Cochran's $Q = \sum w_i (x_i - \bar x)^2$ on $k - 1$ degrees
 //! of freedom, its upper-tail probability under $\chi^2_{k-1}$, and
 //! $I^2 = \max(0, (Q - (k-1))/Q)$.
 
@@ -23,6 +24,8 @@ pub struct Sample {
     pub sd: f64,
     /// The window's own (Newey–West) standard deviation.
     pub sd_within: f64,
+    /// What untouched trials read as the candidate: the centre of the check's band.
+    pub centre: f64,
 }
 
 /// Several trials' readings of one candidate, pooled.
@@ -36,7 +39,9 @@ pub struct Pooled {
     pub sd: f64,
     /// Its standard deviation from the trials' own noise alone, `1/√Σw`.
     pub sd_within: f64,
-    /// `estimate / sd`.
+    /// What untouched trials read as the candidate (the check's band centre).
+    pub centre: f64,
+    /// `(estimate − centre) / sd`.
     pub z: f64,
     /// Cochran's Q.
     pub q: f64,
@@ -48,12 +53,17 @@ pub struct Pooled {
     pub i2: f64,
 }
 
-/// Pool `samples` (each with finite estimate and positive finite `sd_within`; others
-/// are left out). `None` when fewer than one sample is usable.
+/// Pool `samples` (each with finite estimate and centre and positive finite
+/// `sd_within`; others are left out). `None` when fewer than one sample is usable.
 pub fn pool(samples: &[Sample]) -> Option<Pooled> {
     let ok: Vec<&Sample> = samples
         .iter()
-        .filter(|s| s.estimate.is_finite() && s.sd_within.is_finite() && s.sd_within > 0.0)
+        .filter(|s| {
+            s.estimate.is_finite()
+                && s.centre.is_finite()
+                && s.sd_within.is_finite()
+                && s.sd_within > 0.0
+        })
         .collect();
     if ok.is_empty() {
         return None;
@@ -72,13 +82,15 @@ pub fn pool(samples: &[Sample]) -> Option<Pooled> {
     let shared = ok.iter().map(|s| shared_spread(s)).fold(0.0f64, f64::max);
     let sd_within = sw.recip().sqrt();
     let sd = sd_within.hypot(shared);
+    let centre = ok.iter().map(|s| s.centre).sum::<f64>() / ok.len() as f64;
     let df = ok.len() - 1;
     Some(Pooled {
         trials: ok.len(),
         estimate: mean,
         sd,
         sd_within,
-        z: mean / sd,
+        centre,
+        z: (mean - centre) / sd,
         q,
         df,
         p_heterogeneity: if df == 0 {

@@ -261,6 +261,7 @@ fn group_table(g: &GroupFindings) -> Table {
         headers: [
             "candidate",
             "pooled",
+            "untouched trials read",
             "z",
             "trials",
             "Cochran's Q (df)",
@@ -284,6 +285,7 @@ fn group_table(g: &GroupFindings) -> Table {
                         .map_or("?", |x| x.label())
                         .into(),
                     value_text(&r.effect, p.estimate, p.sd),
+                    centre_text(&r.effect, p.centre),
                     format!("{:.2}", p.z),
                     p.trials.to_string(),
                     format!("{:.2} ({})", p.q, p.df),
@@ -437,5 +439,16 @@ mod tests {
         );
         let checks_only = summary_text(&table(vec![entry("a", None)]));
         assert!(!checks_only.contains("tracks"), "{checks_only}");
+    }
+}
+
+/// A band's centre in the candidate's reporting unit, e.g. `+5.58 ms`.
+fn centre_text(effect: &str, centre: f64) -> String {
+    match Param::ALL.iter().find(|p| p.name() == effect) {
+        Some(p) => {
+            let (v, unit) = p.display_value(centre);
+            format!("{v:+.2} {unit}")
+        }
+        None => format!("{centre:+.4}"),
     }
 }

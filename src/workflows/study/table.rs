@@ -119,6 +119,7 @@ fn reading(v: &serde_json::Value) -> Reading {
         estimate: v["estimate"].as_f64(),
         sd: v["sd"].as_f64(),
         sd_within: v["sd_within"].as_f64(),
+        centre: v["untouched"]["mean"].as_f64(),
         explained: v["explained"].as_f64(),
         verdict: v["verdict"].as_str().unwrap_or_default().to_string(),
     }
