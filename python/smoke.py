@@ -52,3 +52,17 @@ assert torques.shape == (len(checked["torque_time"]), 6) and np.all(np.isfinite(
 written = np.loadtxt(checked["run_folder"] + "/joint_torques.csv", delimiter=",", skiprows=1)
 assert np.array_equal(written[:, 1:], torques), "joint_torques.csv differs from the binding's"
 print(f"python binding: check read the right plate's clock {read * 1e3:+.2f} ms (edit {truth['value'] * 1e3:+.0f} ms)")
+
+# bad input: an error naming what is wrong, raised as a Python exception
+for call, kind, words in [
+    (lambda: footfall.check("tests/data/no_such_trial.csv", out=tempfile.mkdtemp() + "/c", quiet=True),
+     RuntimeError, "no_such_trial.csv"),
+    (lambda: footfall.check(cutoff=-1.0, out=tempfile.mkdtemp() + "/c", quiet=True), ValueError, "cutoff"),
+]:
+    try:
+        call()
+    except kind as e:
+        assert words in str(e), e
+    else:
+        raise AssertionError(f"no {kind.__name__} naming {words}")
+print("python binding: bad input to check raises an error naming it")
