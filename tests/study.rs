@@ -311,6 +311,12 @@ fn a_clock_edit_shared_by_a_sessions_trials_is_found_in_each_and_pooled_and_unto
     assert!(
         html.contains("session lab-b: instruments") && html.contains("shared instrument effect")
     );
+    // each pooled reading with the smallest pooled effect that would be beyond its band
+    let least = a.readings[0].pooled.sd * t.threshold.expect("a threshold");
+    assert!(
+        html.contains("beyond its band from") && html.contains(&format!("±{:.2} ms", 1e3 * least)),
+        "{least}"
+    );
     // the shared effect's chart: one bar per trial of the session, the pooled value drawn
     assert_eq!(
         html.matches("<svg").count(),

@@ -255,7 +255,9 @@ fn trials_table(t: &StudyTable) -> Table {
     }
 }
 
-fn group_table(g: &GroupFindings) -> Table {
+/// One group's pooled readings; `threshold` is the study's |z| point, so that each row
+/// says the smallest pooled effect, from what untouched trials read, it would be beyond.
+fn group_table(g: &GroupFindings, threshold: Option<f64>) -> Table {
     Table {
         title: group_heading(g),
         headers: [
@@ -263,6 +265,7 @@ fn group_table(g: &GroupFindings) -> Table {
             "pooled",
             "untouched trials read",
             "z",
+            "beyond its band from",
             "trials",
             "Cochran's Q (df)",
             "p",
@@ -287,6 +290,12 @@ fn group_table(g: &GroupFindings) -> Table {
                     value_text(&r.effect, p.estimate, p.sd),
                     centre_text(&r.effect, p.centre),
                     format!("{:.2}", p.z),
+                    threshold.map_or("—".into(), |z| {
+                        format!(
+                            "±{}",
+                            centre_text(&r.effect, z * p.sd).trim_start_matches('+')
+                        )
+                    }),
                     p.trials.to_string(),
                     format!("{:.2} ({})", p.q, p.df),
                     format!("{:.3}", p.p_heterogeneity),
@@ -372,7 +381,7 @@ pub fn html(t: &StudyTable) -> String {
     sections.push(Section {
         heading: "Across trials".into(),
         paragraphs: vec!["Each candidate read alone in every trial, pooled by inverse-variance weighting over a lab session's trials (the plates) and a subject's (the body). The body model's own error, the spread untouched trials show, is common to a subject's trials and is added once to the pooled sd. Cochran's Q and I² say whether the trials read the same value.".into()],
-        tables: t.pooled.iter().filter(|g| !g.readings.is_empty()).map(group_table).collect(),
+        tables: t.pooled.iter().filter(|g| !g.readings.is_empty()).map(|g| group_table(g, t.threshold)).collect(),
         svgs: vec![],
     });
     for g in &t.pooled {
