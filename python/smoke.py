@@ -47,8 +47,9 @@ reading = {r["effect"]: r for r in checked["readings"]}[truth["effect"]]
 base = {r["effect"]: r for r in untouched["readings"]}[truth["effect"]]
 read = reading["estimate"] - base["estimate"]
 assert abs(read - truth["value"]) <= max(0.2 * abs(truth["value"]), 2 * reading["sd"]), read
-torques = checked["joint_torques"]
-assert torques.shape == (len(checked["torque_time"]), 6) and np.all(np.isfinite(torques))
+torques, powers = checked["joint_torques"], checked["joint_powers"]
+assert torques.shape == powers.shape == (len(checked["torque_time"]), 6)
+assert np.all(np.isfinite(torques)) and np.all(np.isfinite(powers))
 written = np.loadtxt(checked["run_folder"] + "/joint_torques.csv", delimiter=",", skiprows=1)
 assert np.array_equal(written[:, 1:], torques), "joint_torques.csv differs from the binding's"
 print(f"python binding: check read the right plate's clock {read * 1e3:+.2f} ms (edit {truth['value'] * 1e3:+.0f} ms)")

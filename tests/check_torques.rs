@@ -1,6 +1,7 @@
-//! The check's inverse dynamics (`joint_torques.csv`): each leg joint's torque against
-//! the principle of virtual work evaluated from the bodies' positions alone, and the run
-//! folder's file against the library's figures.
+//! The check's inverse dynamics (`joint_torques.csv`, `joint_powers.csv`): each leg
+//! joint's torque against the principle of virtual work evaluated from the bodies'
+//! positions alone, the generalised forces' power against the rate of the body's energy,
+//! and the run folder's files against the library's figures.
 
 use crate::check::{bundled_600_signals, check_to, BUNDLED_600};
 use footfall::model::gait::COORDINATES;
@@ -92,6 +93,51 @@ fn joint_torques_do_the_virtual_work_of_the_bodies_motion_and_the_measured_loads
 }
 
 #[test]
+fn the_generalised_forces_power_with_the_loads_is_the_rate_of_the_bodys_energy() {
+    // Σ τ_j q̇_j over every coordinate (the leg joints' powers and the pelvis rows', the
+    // residual's) and the measured loads' power F·v at their points make d(KE + PE)/dt,
+    // the body's energy differenced centrally in time: no mass matrix, no bias forces.
+    let model = crate::common::model("opensim_subject01.json", "ellipse.json");
+    let signals = bundled_600_signals(&model);
+    let body = Body::of(&model).expect("body");
+    let tree = body.tree();
+    let inertia = tree.inertias::<f64>();
+    let gravity = [0.0, -model.gravity()];
+    let energy = |t: f64| {
+        let (q, qd, _) = signals.motion(t);
+        let (ke, pe) = tree.energy(&tree.kinematics::<f64>(&q, &qd), &inertia, gravity);
+        ke + pe
+    };
+    let h = 2e-4;
+    let mut checked = 0;
+    for &t in signals.instants.iter().step_by(97) {
+        let tau = inverse_dynamics(&body, &signals, &model, t).expect("loads at t");
+        let (q, qd, _) = signals.motion(t);
+        let k = tree.kinematics::<f64>(&q, &qd);
+        let generalised: f64 = (0..9).map(|j| tau[j] * qd[j]).sum();
+        let mut loads = 0.0;
+        for (s, foot) in ["foot_r", "foot_l"].into_iter().enumerate() {
+            let b = tree.body_index(foot).expect("foot");
+            let [fx, fy, mz] = signals.load(s, t, 0.0_f64).expect("load");
+            let p = if fy.abs() > 1.0 {
+                [mz / fy, 0.0]
+            } else {
+                k.origin[b]
+            };
+            let (v, _) = tree.point_motion(&k, b, p);
+            loads += fx * v[0] + fy * v[1];
+        }
+        let rate = (energy(t + h) - energy(t - h)) / (2.0 * h);
+        assert!(
+            (generalised + loads - rate).abs() < 0.1 + 1e-3 * rate.abs(),
+            "t {t}: Σ τ q̇ {generalised} W and the loads' {loads} W against dE/dt {rate} W"
+        );
+        checked += 1;
+    }
+    assert!(checked >= 10, "{checked} instants checked");
+}
+
+#[test]
 fn the_check_writes_the_trials_joint_torques() {
     // The run folder's joint_torques.csv holds the library's inverse dynamics at the
     // check's instants, every leg joint, every value finite.
@@ -122,6 +168,29 @@ fn the_check_writes_the_trials_joint_torques() {
                 COORDINATES[3 + j],
                 row[1 + j],
                 want[3 + j]
+            );
+        }
+    }
+    // the powers are the torques times the joints' angular velocities
+    let powers = std::fs::read_to_string(out.join("joint_powers.csv")).expect("joint_powers.csv");
+    let mut lines = powers.lines();
+    assert_eq!(
+        lines.next(),
+        Some("time,hip_r_W,knee_r_W,ankle_r_W,hip_l_W,knee_l_W,ankle_l_W")
+    );
+    for (line, row) in lines.zip(&rows).step_by(101) {
+        let p: Vec<f64> = line
+            .split(',')
+            .map(|v| v.parse().expect("a number"))
+            .collect();
+        let (_, qd, _) = signals.motion(row[0]);
+        assert_eq!(p[0], row[0]);
+        for j in 0..6 {
+            let want = row[1 + j] * qd[3 + j];
+            assert!(
+                (p[1 + j] - want).abs() < 1e-9 * (1.0 + want.abs()),
+                "{}",
+                COORDINATES[3 + j]
             );
         }
     }

@@ -136,7 +136,8 @@ fn track<'py>(
 /// not read, and `verdict`), `add_effects` (the `--effect` lines for `track`),
 /// `run_folder`, and at the instants read `time` (s, n), `residual` and
 /// `residual_corrected` (n × 3: Fx, Fy in N, moment about the COM in N·m) and
-/// `joint_torques` (n × 6, N·m, the inverse dynamics as recorded) with `joint_names`.
+/// `joint_torques` (n × 6, N·m, the inverse dynamics as recorded) and `joint_powers`
+/// (n × 6, W) at `torque_time`, with `joint_names`.
 #[pyfunction]
 #[pyo3(signature = (trial=None, model="models/opensim_subject01.json", out="runs/py_check", forces=None, plates=vec![], overground=false, cutoff=6.0, level=0.05, lumbar=false, overwrite=true, quiet=false))]
 #[allow(clippy::too_many_arguments)]
@@ -214,11 +215,15 @@ fn check<'py>(
     d.set_item("residual_corrected", matrix(rows(&c.after))?)?;
     d.set_item(
         "torque_time",
-        PyArray1::from_vec(py, c.torques.iter().map(|(t, _)| *t).collect()),
+        PyArray1::from_vec(py, c.joints.iter().map(|k| k.t).collect()),
     )?;
     d.set_item(
         "joint_torques",
-        matrix(c.torques.iter().map(|(_, tau)| tau.to_vec()).collect())?,
+        matrix(c.joints.iter().map(|k| k.torque.to_vec()).collect())?,
+    )?;
+    d.set_item(
+        "joint_powers",
+        matrix(c.joints.iter().map(|k| k.power.to_vec()).collect())?,
     )?;
     d.set_item("joint_names", COORDINATES[3..].to_vec())?;
     Ok(d)

@@ -324,11 +324,9 @@ pub struct MeasurementCheck {
     pub alone: Vec<Reading>,
     /// The final joint fit of the found effects.
     pub fit: Fit,
-    /// The leg joints' torques of the inverse dynamics over the whole trial, as measured,
-    /// each in its coordinate's positive sense: `(t (s), [N·m; 6])`, the coordinates after
-    /// the pelvis's in [`crate::model::gait::COORDINATES`] order (empty for a window of
-    /// the trial).
-    pub torques: Vec<(f64, [f64; 6])>,
+    /// The leg joints' inverse dynamics over the whole trial, as measured, at each
+    /// instant read (empty for a window of the trial).
+    pub joints: Vec<JointKinetics>,
     /// The labs' thresholds before and after correction.
     pub thresholds: [Thresholds; 2],
     /// The model's mass (kg) and the mass the vertical forces imply over the window.
@@ -426,10 +424,10 @@ pub fn check(
     ];
     let momentum = instants.iter().map(|at| body.momentum(at)).collect();
     // properties of the body model over the trial, not repeated for each window of it
-    let (trunk, torques) = match window {
+    let (trunk, joints) = match window {
         None => (
             trunk_rocking(model, &signals, settings)?,
-            joint_torques(&body, &signals, model, &instants),
+            joint_kinetics(&body, &signals, model, &instants),
         ),
         Some(_) => (None, vec![]),
     };
@@ -450,24 +448,41 @@ pub fn check(
             data.time.last().copied().unwrap_or(f64::NAN),
         ),
         trunk,
-        torques,
+        joints,
     })
 }
 
-/// The leg joints' torques of the inverse dynamics at each instant read, as measured
-/// ([`balance::inverse_dynamics`]): `(t, [N·m; 6])`, the coordinates after the pelvis's
+/// The leg joints' inverse dynamics at one instant: the coordinates after the pelvis's,
 /// in [`crate::model::gait::COORDINATES`] order.
-fn joint_torques(
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct JointKinetics {
+    /// Time (s).
+    pub t: f64,
+    /// Each joint's torque, in its coordinate's positive sense (N·m).
+    pub torque: [f64; 6],
+    /// Each joint's power, its torque times its angular velocity (W): positive where the
+    /// joint's torque does work on the body.
+    pub power: [f64; 6],
+}
+
+/// The leg joints' inverse dynamics at each instant read, as measured
+/// ([`balance::inverse_dynamics`]).
+fn joint_kinetics(
     body: &Body,
     signals: &Signals,
     model: &GaitModel,
     instants: &[Instant],
-) -> Vec<(f64, [f64; 6])> {
+) -> Vec<JointKinetics> {
     instants
         .iter()
         .filter_map(|at| {
             let tau = balance::inverse_dynamics(body, signals, model, at.t)?;
-            Some((at.t, std::array::from_fn(|j| tau[3 + j])))
+            let (_, qd, _) = signals.motion(at.t);
+            Some(JointKinetics {
+                t: at.t,
+                torque: std::array::from_fn(|j| tau[3 + j]),
+                power: std::array::from_fn(|j| tau[3 + j] * qd[3 + j]),
+            })
         })
         .collect()
 }

@@ -1,11 +1,14 @@
 //! The check's run folder: `summary.json`, `readings.md`/`.csv`, `half_cycles.csv`,
 //! `residual.csv`, `residual.svg`, `momentum.svg`, `joint_torques.csv`/`.svg`,
+//! `joint_powers.csv`/`.svg`,
 //! `effects.txt`, the corrected trial
 //! (`corrected/trial.csv` with its meta file) and `report.html`.
 
 use super::{corrected, effect_lines, CheckRequest, HalfCycle};
 use crate::data::{write_sagittal_csv, GaitData};
-use crate::problems::check::{MeasurementCheck, Param, Reading, Thresholds, Verdict};
+use crate::problems::check::{
+    JointKinetics, MeasurementCheck, Param, Reading, Thresholds, Verdict,
+};
 use crate::report::html::{Report, Section, Summary, Tone};
 use crate::report::plot::{grid, LinePlot, LineStyle, Series};
 use crate::report::table::Table;
@@ -364,21 +367,35 @@ fn momentum_plots(c: &MeasurementCheck) -> String {
     })
 }
 
-/// The leg joints' names, in the order of [`MeasurementCheck::torques`].
-fn joint_names() -> &'static [&'static str] {
-    &crate::model::gait::COORDINATES[3..]
+/// One quantity of the leg joints' inverse dynamics: its name, unit and values.
+struct JointQuantity {
+    what: &'static str,
+    unit: &'static str,
+    of: fn(&JointKinetics) -> [f64; 6],
 }
 
-/// Hip, knee and ankle torques against time, right and left in each panel.
-fn torque_plots(c: &MeasurementCheck) -> String {
-    let time: Vec<f64> = c.torques.iter().map(|(t, _)| *t).collect();
+const TORQUE: JointQuantity = JointQuantity {
+    what: "torque",
+    unit: "N·m",
+    of: |k| k.torque,
+};
+
+const POWER: JointQuantity = JointQuantity {
+    what: "power",
+    unit: "W",
+    of: |k| k.power,
+};
+
+/// Hip, knee and ankle against time, right and left in each panel.
+fn joint_plots(c: &MeasurementCheck, q: &JointQuantity) -> String {
+    let time: Vec<f64> = c.joints.iter().map(|k| k.t).collect();
     let plots: Vec<LinePlot> = ["hip", "knee", "ankle"]
         .iter()
         .enumerate()
         .map(|(j, joint)| {
-            let mut p = LinePlot::new(format!("{joint} torque"), "time (s)", "N·m");
+            let mut p = LinePlot::new(format!("{joint} {}", q.what), "time (s)", q.unit);
             for (side, name) in [(0, "right"), (3, "left")] {
-                let y = c.torques.iter().map(|(_, tau)| tau[side + j]).collect();
+                let y = c.joints.iter().map(|k| (q.of)(k)[side + j]).collect();
                 p.series
                     .push(Series::new(name, time.clone(), y, LineStyle::Solid));
             }
@@ -388,15 +405,17 @@ fn torque_plots(c: &MeasurementCheck) -> String {
     grid(&plots, 1)
 }
 
-fn torques_csv(c: &MeasurementCheck) -> String {
+/// `time` and each leg joint's value, columns named `<joint>_<unit>` (`hip_r_Nm`).
+fn joint_csv(c: &MeasurementCheck, q: &JointQuantity) -> String {
+    let unit = q.unit.replace('·', "");
     let mut s = String::from("time");
-    for name in joint_names() {
-        write!(s, ",{name}_Nm").ok();
+    for name in &crate::model::gait::COORDINATES[3..] {
+        write!(s, ",{name}_{unit}").ok();
     }
     s.push('\n');
-    for (t, tau) in &c.torques {
-        write!(s, "{t}").ok();
-        for v in tau {
+    for k in &c.joints {
+        write!(s, "{}", k.t).ok();
+        for v in (q.of)(k) {
             write!(s, ",{v}").ok();
         }
         s.push('\n');
@@ -503,7 +522,8 @@ pub fn write_folder(
     let halves = half_cycle_table(half);
     let residual_svg = residual_plots(c);
     let momentum_svg = momentum_plots(c);
-    let torque_svg = torque_plots(c);
+    let torque_svg = joint_plots(c, &TORQUE);
+    let power_svg = joint_plots(c, &POWER);
     let verdict = verdict_text(c);
     folder.write(
         "summary.json",
@@ -524,8 +544,10 @@ pub fn write_folder(
     folder.write("residual.csv", residual_csv(c).as_bytes())?;
     folder.write("residual.svg", residual_svg.as_bytes())?;
     folder.write("momentum.svg", momentum_svg.as_bytes())?;
-    folder.write("joint_torques.csv", torques_csv(c).as_bytes())?;
+    folder.write("joint_torques.csv", joint_csv(c, &TORQUE).as_bytes())?;
     folder.write("joint_torques.svg", torque_svg.as_bytes())?;
+    folder.write("joint_powers.csv", joint_csv(c, &POWER).as_bytes())?;
+    folder.write("joint_powers.svg", power_svg.as_bytes())?;
     folder.write(
         "effects.txt",
         effect_lines(c)
@@ -576,7 +598,7 @@ pub fn write_folder(
             },
             Section { heading: "Residual wrench".into(), paragraphs: vec!["The force and moment the measured loads leave unexplained, as measured and with the found effects corrected.".into()], tables: vec![], svgs: vec![residual_svg] },
             Section { heading: "Whole-body momentum".into(), paragraphs: vec!["Linear momentum and angular momentum about the centre of mass, from the measured motion and the model's segments.".into()], tables: vec![], svgs: vec![momentum_svg] },
-            Section { heading: "Joint torques".into(), paragraphs: vec!["The inverse dynamics of the measured trial as recorded (nothing corrected): each leg joint's torque in its coordinate's positive sense, each foot's load applied at its centre of pressure.".into()], tables: vec![], svgs: vec![torque_svg] },
+            Section { heading: "Joint torques and powers".into(), paragraphs: vec!["The inverse dynamics of the measured trial as recorded (nothing corrected): each leg joint's torque in its coordinate's positive sense, each foot's load applied at its centre of pressure, and its power, the torque times the joint's angular velocity (positive where the torque does work on the body).".into()], tables: vec![], svgs: vec![torque_svg, power_svg] },
             Section { heading: "Each half cycle on its own".into(), paragraphs: vec![], tables: vec![halves], svgs: vec![] },
         ],
     };

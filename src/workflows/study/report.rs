@@ -400,6 +400,17 @@ pub fn html(t: &StudyTable) -> String {
     .to_html()
 }
 
+/// A band's centre in the candidate's reporting unit, e.g. `+5.58 ms`.
+fn centre_text(effect: &str, centre: f64) -> String {
+    match Param::ALL.iter().find(|p| p.name() == effect) {
+        Some(p) => {
+            let (v, unit) = p.display_value(centre);
+            format!("{v:+.2} {unit}")
+        }
+        None => format!("{centre:+.4}"),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -448,16 +459,5 @@ mod tests {
         );
         let checks_only = summary_text(&table(vec![entry("a", None)]));
         assert!(!checks_only.contains("tracks"), "{checks_only}");
-    }
-}
-
-/// A band's centre in the candidate's reporting unit, e.g. `+5.58 ms`.
-fn centre_text(effect: &str, centre: f64) -> String {
-    match Param::ALL.iter().find(|p| p.name() == effect) {
-        Some(p) => {
-            let (v, unit) = p.display_value(centre);
-            format!("{v:+.2} {unit}")
-        }
-        None => format!("{centre:+.4}"),
     }
 }
