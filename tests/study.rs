@@ -287,10 +287,7 @@ fn a_clock_edit_shared_by_a_sessions_trials_is_found_in_each_and_pooled_and_unto
     // each pooled reading judged, as the check judges each trial's, from the band's centre
     let band = &footfall::problems::check::NULL;
     for r in &a.readings {
-        let p = footfall::problems::check::Param::ALL
-            .into_iter()
-            .find(|p| p.name() == r.effect)
-            .unwrap();
+        let p = footfall::problems::check::Param::from_name(&r.effect).unwrap();
         assert_eq!(r.pooled.centre, band[p.index()].mean, "{}", r.effect);
         assert_eq!(
             r.pooled.z,

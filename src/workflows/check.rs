@@ -150,7 +150,7 @@ pub fn read_null(
             )
         })?;
     for (name, e) in map {
-        let Some(p) = Param::ALL.iter().find(|p| p.name() == name) else {
+        let Some(p) = Param::from_name(&name) else {
             anyhow::bail!(
                 "--null {}: '{name}' is not a candidate; use one of {}",
                 path.display(),

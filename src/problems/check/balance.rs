@@ -93,6 +93,11 @@ impl Param {
         }
     }
 
+    /// The candidate whose [`Param::name`] is `name`.
+    pub fn from_name(name: &str) -> Option<Param> {
+        Param::ALL.into_iter().find(|p| p.name() == name)
+    }
+
     /// What it is, for people.
     pub fn label(self) -> &'static str {
         match self {

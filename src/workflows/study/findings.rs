@@ -306,11 +306,7 @@ fn decide(g: &mut GroupFindings, threshold: f64, level: f64) {
 }
 
 fn label(effect: &str) -> &'static str {
-    param(effect).map_or("?", |p| p.label())
-}
-
-fn param(effect: &str) -> Option<Param> {
-    Param::ALL.into_iter().find(|p| p.name() == effect)
+    Param::from_name(effect).map_or("?", |p| p.label())
 }
 
 /// The shared effect: pooled value, z, how many checks found it, whether the trials
@@ -406,7 +402,7 @@ fn partly_text(g: &GroupFindings, r: &PooledReading) -> Option<String> {
 
 /// `+23.16 ± 2.74 ms`
 pub fn value_text(effect: &str, v: f64, sd: f64) -> String {
-    match param(effect) {
+    match Param::from_name(effect) {
         Some(p) => {
             let (v, unit) = p.display_value(v);
             let (sd, _) = p.display_value(sd);

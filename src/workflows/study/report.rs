@@ -282,9 +282,7 @@ fn group_table(g: &GroupFindings, threshold: Option<f64>) -> Table {
             .map(|r| {
                 let p = &r.pooled;
                 vec![
-                    Param::ALL
-                        .iter()
-                        .find(|x| x.name() == r.effect)
+                    Param::from_name(&r.effect)
                         .map_or("?", |x| x.label())
                         .into(),
                     value_text(&r.effect, p.estimate, p.sd),
@@ -314,7 +312,7 @@ fn group_table(g: &GroupFindings, threshold: Option<f64>) -> Table {
 /// the pooled value.
 fn shared_chart(t: &StudyTable, g: &GroupFindings) -> Option<String> {
     let effect = g.shared.as_deref()?;
-    let p = Param::ALL.into_iter().find(|p| p.name() == effect)?;
+    let p = Param::from_name(effect)?;
     let pooled = g.readings.iter().find(|r| r.effect == effect)?.pooled;
     let (mut values, mut labels) = (Vec::new(), Vec::new());
     for id in &g.trials {
@@ -402,7 +400,7 @@ pub fn html(t: &StudyTable) -> String {
 
 /// A band's centre in the candidate's reporting unit, e.g. `+5.58 ms`.
 fn centre_text(effect: &str, centre: f64) -> String {
-    match Param::ALL.iter().find(|p| p.name() == effect) {
+    match Param::from_name(effect) {
         Some(p) => {
             let (v, unit) = p.display_value(centre);
             format!("{v:+.2} {unit}")

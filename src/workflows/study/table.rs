@@ -132,7 +132,7 @@ fn check_result(s: &serde_json::Value) -> CheckResult {
             .map(|a| a.iter().map(reading).collect())
             .unwrap_or_default();
         // in θ order, whatever order the check found them in
-        r.sort_by_key(|x| Param::ALL.iter().position(|p| p.name() == x.effect));
+        r.sort_by_key(|x| Param::from_name(&x.effect));
         r
     };
     CheckResult {
