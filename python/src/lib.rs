@@ -12,8 +12,7 @@
 //! Paths are relative to the working folder (the repository root for the bundled model
 //! and trial), as for the command line.
 
-use footfall::model::gait::COORDINATES;
-use footfall::problems::check::CheckSettings;
+use footfall::problems::check::{CheckSettings, JointKinetics};
 use footfall::runfolder::RunFolder;
 use footfall::workflows::check::{self as check_workflow, CheckRequest};
 use footfall::workflows::study::{self as study_workflow, StudyRequest, StudySettings};
@@ -225,7 +224,7 @@ fn check<'py>(
         "joint_powers",
         matrix(c.joints.iter().map(|k| k.power.to_vec()).collect())?,
     )?;
-    d.set_item("joint_names", COORDINATES[3..].to_vec())?;
+    d.set_item("joint_names", JointKinetics::names().to_vec())?;
     Ok(d)
 }
 

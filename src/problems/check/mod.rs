@@ -465,6 +465,17 @@ pub struct JointKinetics {
     pub power: [f64; 6],
 }
 
+impl JointKinetics {
+    /// Index of the first leg joint's coordinate among the model's: the pelvis's three
+    /// come first.
+    const FIRST: usize = 3;
+
+    /// The leg joints' coordinate names, in the order of `torque` and `power`.
+    pub fn names() -> &'static [&'static str] {
+        &crate::model::gait::COORDINATES[Self::FIRST..]
+    }
+}
+
 /// The leg joints' inverse dynamics at each instant read, as measured
 /// ([`balance::inverse_dynamics`]).
 fn joint_kinetics(
@@ -478,10 +489,11 @@ fn joint_kinetics(
         .filter_map(|at| {
             let tau = balance::inverse_dynamics(body, signals, model, at.t)?;
             let (_, qd, _) = signals.motion(at.t);
+            let first = JointKinetics::FIRST;
             Some(JointKinetics {
                 t: at.t,
-                torque: std::array::from_fn(|j| tau[3 + j]),
-                power: std::array::from_fn(|j| tau[3 + j] * qd[3 + j]),
+                torque: std::array::from_fn(|j| tau[first + j]),
+                power: std::array::from_fn(|j| tau[first + j] * qd[first + j]),
             })
         })
         .collect()

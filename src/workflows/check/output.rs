@@ -1,8 +1,7 @@
 //! The check's run folder: `summary.json`, `readings.md`/`.csv`, `half_cycles.csv`,
 //! `residual.csv`, `residual.svg`, `momentum.svg`, `joint_torques.csv`/`.svg`,
-//! `joint_powers.csv`/`.svg`,
-//! `effects.txt`, the corrected trial
-//! (`corrected/trial.csv` with its meta file) and `report.html`.
+//! `joint_powers.csv`/`.svg`, `effects.txt`, the corrected trial (`corrected/trial.csv`
+//! with its meta file) and `report.html`.
 
 use super::{corrected, effect_lines, CheckRequest, HalfCycle};
 use crate::data::{write_sagittal_csv, GaitData};
@@ -409,7 +408,7 @@ fn joint_plots(c: &MeasurementCheck, q: &JointQuantity) -> String {
 fn joint_csv(c: &MeasurementCheck, q: &JointQuantity) -> String {
     let unit = q.unit.replace('·', "");
     let mut s = String::from("time");
-    for name in &crate::model::gait::COORDINATES[3..] {
+    for name in JointKinetics::names() {
         write!(s, ",{name}_{unit}").ok();
     }
     s.push('\n');

@@ -7,9 +7,9 @@
 //! model's error is the same in every trial of a subject, so it does not average out: it
 //! is added once, $\sigma_{\bar x}^2 = 1/\sum w_i + n^2$ (with $n$ the largest of the
 //! trials'). It is judged by its distance from what untouched trials read, $c$ (the
-//! check's band centre): $z = (\bar x - c)/\sigma_{\bar x}$. Heterogeneity is Cochran's $Q = \sum w_i (x_i - \bar x)^2$ on $k - 1$ degrees
-//! of freedom, its upper-tail probability under $\chi^2_{k-1}$, and
-//! $I^2 = \max(0, (Q - (k-1))/Q)$.
+//! check's band centre): $z = (\bar x - c)/\sigma_{\bar x}$. Heterogeneity is Cochran's
+//! $Q = \sum w_i (x_i - \bar x)^2$ on $k - 1$ degrees of freedom, its upper-tail
+//! probability under $\chi^2_{k-1}$, and $I^2 = \max(0, (Q - (k-1))/Q)$.
 
 use crate::problems::distributions::chi2_upper;
 use serde::Serialize;
