@@ -6,6 +6,7 @@
 use crate::check::{bundled_600_signals, check_to, BUNDLED_600};
 use footfall::model::gait::COORDINATES;
 use footfall::problems::check::balance::{inverse_dynamics, Body};
+use footfall::problems::check::signals::Signals;
 
 /// Each massive body's centre of mass and world angle at `q` (m, rad).
 fn pose(body: &Body, q: &[f64; 9]) -> Vec<([f64; 2], f64)> {
@@ -26,6 +27,27 @@ fn carried(body: &Body, b: usize, p: [f64; 2], q0: &[f64; 9], q: &[f64; 9]) -> [
     let d = [p[0] - k0.origin[b][0], p[1] - k0.origin[b][1]];
     let local = [c * d[0] + s * d[1], -s * d[0] + c * d[1]];
     tree.point(&tree.kinematics::<f64>(q, &[0.0; 9]), b, local)
+}
+
+/// Foot `s`'s body, its measured load `[Fx, Fy]` at `t` and the point the load acts at
+/// with the body at `q`: where its line of action crosses the floor, or the ankle (the
+/// foot's origin) for an unloaded foot's few newtons, as the inverse dynamics applies it.
+fn load_at(
+    body: &Body,
+    signals: &Signals,
+    q: &[f64; 9],
+    s: usize,
+    t: f64,
+) -> (usize, [f64; 2], [f64; 2]) {
+    let tree = body.tree();
+    let b = tree.body_index(["foot_r", "foot_l"][s]).expect("foot");
+    let [fx, fy, mz] = signals.load(s, t, 0.0_f64).expect("load");
+    let p = if fy.abs() > 1.0 {
+        [mz / fy, 0.0]
+    } else {
+        tree.kinematics::<f64>(q, &[0.0; 9]).origin[b]
+    };
+    (b, [fx, fy], p)
 }
 
 #[test]
@@ -63,17 +85,8 @@ fn joint_torques_do_the_virtual_work_of_the_bodies_motion_and_the_measured_loads
                 let dtheta = (pa[b].1 - pb[b].1) / (2.0 * e);
                 work += i.mass * (acc(0) * dc(0) + (acc(1) + g) * dc(1)) + i.izz * alpha * dtheta;
             }
-            for (s, foot) in ["foot_r", "foot_l"].into_iter().enumerate() {
-                let b = body.tree().body_index(foot).expect("foot");
-                let [fx, fy, mz] = signals.load(s, t, 0.0_f64).expect("load");
-                // where the load's line of action crosses the floor; an unloaded foot's
-                // few newtons at its ankle, as the inverse dynamics applies them
-                let p = if fy.abs() > 1.0 {
-                    [mz / fy, 0.0]
-                } else {
-                    let k = body.tree().kinematics::<f64>(&q0, &[0.0; 9]);
-                    k.origin[b]
-                };
+            for s in 0..2 {
+                let (b, [fx, fy], p) = load_at(&body, &signals, &q0, s, t);
                 let (a, bb) = (
                     carried(&body, b, p, &q0, &qa),
                     carried(&body, b, p, &q0, &qb),
@@ -116,14 +129,8 @@ fn the_generalised_forces_power_with_the_loads_is_the_rate_of_the_bodys_energy()
         let k = tree.kinematics::<f64>(&q, &qd);
         let generalised: f64 = (0..9).map(|j| tau[j] * qd[j]).sum();
         let mut loads = 0.0;
-        for (s, foot) in ["foot_r", "foot_l"].into_iter().enumerate() {
-            let b = tree.body_index(foot).expect("foot");
-            let [fx, fy, mz] = signals.load(s, t, 0.0_f64).expect("load");
-            let p = if fy.abs() > 1.0 {
-                [mz / fy, 0.0]
-            } else {
-                k.origin[b]
-            };
+        for s in 0..2 {
+            let (b, [fx, fy], p) = load_at(&body, &signals, &q, s, t);
             let (v, _) = tree.point_motion(&k, b, p);
             loads += fx * v[0] + fy * v[1];
         }
